@@ -1,0 +1,102 @@
+# bkfront: library libbkfront, CLI bkfront, tests and benchmarks.
+#
+# `make run` and `make test` install missing Debian packages first (deps),
+# then build.  Flags come from pkg-config and are expanded only when a recipe
+# runs, after deps has installed what pkg-config needs.
+
+DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
+                libinih-dev gnuplot-nox
+PKGS         := gsl nlopt
+
+CC       ?= cc
+OPT      ?= -O2
+BUILD    ?= build
+PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS))
+PKG_LIBS   = $(shell pkg-config --libs $(PKGS))
+CFLAGS   += -std=c11 $(OPT) -g -Wall -Wextra -Werror -Iinclude $(PKG_CFLAGS)
+LDLIBS   += $(PKG_LIBS) -lm
+
+LIB_SRC   := $(wildcard src/*.c)
+CLI_SRC   := $(wildcard src/cli/*.c)
+TEST_SRC  := $(wildcard tests/*.c)
+BENCH_SRC := $(wildcard tests/bench/*.c)
+
+LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
+CLI_OBJ   := $(CLI_SRC:%.c=$(BUILD)/%.o)
+TEST_OBJ  := $(TEST_SRC:%.c=$(BUILD)/%.o)
+BENCH_OBJ := $(BENCH_SRC:%.c=$(BUILD)/%.o)
+
+LIB   := $(BUILD)/libbkfront.a
+CLI   := $(BUILD)/bkfront
+TESTS := $(BUILD)/run_tests
+BENCH := $(BUILD)/run_bench
+
+.PHONY: all test run bench sanitize deps clean build-all check-built bench-built \
+        sanitize-built valgrind
+
+all: deps
+	@$(MAKE) --no-print-directory build-all
+
+build-all: $(LIB) $(CLI)
+
+deps:
+	@missing=""; \
+	for p in $(DEB_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'ok installed' || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "deps: installing$$missing"; \
+	  SUDO=""; [ "$$(id -u)" -ne 0 ] && SUDO=sudo; \
+	  $$SUDO apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null || exit 1; \
+	fi
+
+test: deps
+	@$(MAKE) --no-print-directory check-built
+
+check-built: $(CLI) $(TESTS)
+	./$(TESTS)
+
+run: deps
+	@$(MAKE) --no-print-directory build-all
+	./$(CLI) period --mu 1e-1:1e4:13 --log --nu -0.96 --tol 1e-10
+
+bench: deps
+	@$(MAKE) --no-print-directory bench-built
+
+bench-built: $(BENCH)
+	./$(BENCH)
+
+# The whole suite under AddressSanitizer and UndefinedBehaviorSanitizer, in a
+# build folder of its own.
+sanitize: deps
+	@$(MAKE) --no-print-directory BUILD=build/sanitize OPT="-O1" \
+	  CFLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all" \
+	  LDFLAGS="-fsanitize=address,undefined" check-built
+
+valgrind: deps
+	@$(MAKE) --no-print-directory BUILD=build/valgrind OPT="-O1" $(BUILD)/valgrind/bkfront build/valgrind/run_tests
+	valgrind --error-exitcode=1 --leak-check=full --trace-children=yes -q ./build/valgrind/run_tests
+
+$(LIB): $(LIB_OBJ)
+	$(AR) rcs $@ $^
+
+$(CLI): $(CLI_OBJ) $(LIB)
+	$(CC) $(LDFLAGS) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
+
+$(TESTS): $(TEST_OBJ) $(LIB) $(CLI)
+	$(CC) $(LDFLAGS) -o $@ $(TEST_OBJ) $(LIB) $(LDLIBS)
+
+$(BENCH): $(BENCH_OBJ) $(LIB)
+	$(CC) $(LDFLAGS) -o $@ $(BENCH_OBJ) $(LIB) $(LDLIBS)
+
+$(BUILD)/tests/%.o: CFLAGS += -DBKF_CLI_PATH='"$(abspath $(CLI))"'
+
+$(BUILD)/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -MMD -MP -c -o $@ $<
+
+clean:
+	rm -rf build plots/out
+
+-include $(shell find $(BUILD) -name '*.d' 2>/dev/null)

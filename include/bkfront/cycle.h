@@ -1,0 +1,93 @@
+/* The limit cycle of the rescaled van der Pol equation
+ *     f'' + mu (f^2 - 1) f' + f = nu,     mu > 0, |nu| < 1,
+ * its period T(mu, nu), amplitude, nontrivial Floquet multiplier and profile.
+ *
+ * Method (DESIGN.md section 2): Newton shooting on the Poincare section f = nu,
+ * f' > 0, with the variational equations, in scaled Lienard coordinates
+ *     x' = a (y - b F(x)),  y' = (nu - x)/a,   F(x) = x^3/3 - x,
+ *     a = sqrt(1 + mu^2),   b = mu/a           (so a b = mu),
+ * which are the phase plane (x, x') for small mu and the Lienard plane for
+ * large mu, smoothly in between.  An explicit Runge-Kutta (rk8pd) stepper is
+ * used for mu <= BKF_CYCLE_STIFF_MU, an implicit Bader-Deuflhard stepper with
+ * the analytic Jacobian above.  The error estimate comes from two solves at
+ * integration tolerances a factor BKF_CYCLE_TOL_RATIO apart; the reported
+ * values are those of the tighter solve. */
+#ifndef BKFRONT_CYCLE_H
+#define BKFRONT_CYCLE_H
+
+#include <stddef.h>
+#include "bkfront/status.h"
+
+#define BKF_CYCLE_MU_MIN 1e-6
+#define BKF_CYCLE_MU_MAX 1e6
+
+typedef enum {
+    BKF_STEPPER_AUTO = 0,     /* explicit below the stiffness threshold */
+    BKF_STEPPER_EXPLICIT = 1, /* gsl rk8pd */
+    BKF_STEPPER_IMPLICIT = 2  /* gsl bsimp with analytic Jacobian */
+} bkf_stepper_kind;
+
+typedef struct {
+    double tol;               /* requested relative accuracy of T, [1e-14, 1e-1] */
+    bkf_stepper_kind stepper;
+    int warm_start;           /* start Newton from the previous solution in the object */
+} bkf_cycle_options;
+
+/* tol 1e-10, automatic stepper, warm start on. */
+bkf_cycle_options bkf_cycle_options_default(void);
+
+typedef struct {
+    double mu, nu;
+    double period;            /* T, period in z */
+    double period_err;        /* estimated absolute error of T */
+    double xmax, xmin;        /* max and min of f over the cycle */
+    double multiplier;        /* nontrivial Floquet multiplier, exp(log_multiplier) */
+    double log_multiplier;    /* = integral over a period of -mu (f^2 - 1) dz (Liouville) */
+    double log_multiplier_err;
+    double section_y;         /* scaled Lienard y where the cycle crosses f = nu upward */
+    double section_slope;     /* f'(z) at that crossing */
+    /* work counters, summed over every integration of the solve */
+    size_t steps;
+    size_t rhs_calls;
+    size_t jacobian_calls;
+    size_t newton_iterations;
+    const char *stepper;      /* "rk8pd" or "bsimp" */
+} bkf_cycle_result;
+
+typedef struct bkf_cycle bkf_cycle;
+
+bkf_cycle *bkf_cycle_alloc(void);
+void bkf_cycle_free(bkf_cycle *cycle);
+
+/* Solve for the cycle at (mu, nu).  Inputs are validated (mu in
+ * [BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX], |nu| < 1, tol in range).  On
+ * BKF_ENUMERIC the previous solution in the object is kept. */
+int bkf_cycle_solve(bkf_cycle *cycle, double mu, double nu,
+                    const bkf_cycle_options *options, bkf_error *err);
+
+/* The last successful solution, or NULL if there is none. */
+const bkf_cycle_result *bkf_cycle_get(const bkf_cycle *cycle);
+
+/* Profile of the last solution: f(z) and f'(z) for any real z (periodic,
+ * z = 0 on the section f = nu, f' > 0), accurate to the solve's tolerance. */
+int bkf_cycle_profile(bkf_cycle *cycle, double z, double *f, double *fprime,
+                      bkf_error *err);
+
+/* One-shot convenience: solve into *result without keeping an object. */
+int bkf_cycle_period(double mu, double nu, const bkf_cycle_options *options,
+                     bkf_cycle_result *result, bkf_error *err);
+
+/* The branch of cycles along mu (parameter BKF_CYCLE_ALONG_MU, continued in
+ * ln mu) or along nu (BKF_CYCLE_ALONG_NU) from `from` to `to`, the other
+ * parameter held at `fixed`, by pseudo-arclength continuation (module
+ * continuation) on the shooting equations with warm starts and step control.
+ * Every accepted point is solved to options->tol (with its error estimate) and
+ * passed to `visit`, in order from `from` to `to`; both ends are included.
+ * At most max_points points (0: no limit, beyond the driver's own). */
+typedef enum { BKF_CYCLE_ALONG_MU = 0, BKF_CYCLE_ALONG_NU = 1 } bkf_cycle_param;
+typedef int (*bkf_cycle_visit)(const bkf_cycle_result *point, void *data);
+int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed,
+                     const bkf_cycle_options *options, size_t max_points,
+                     bkf_cycle_visit visit, void *data, bkf_error *err);
+
+#endif

@@ -1,0 +1,30 @@
+/* The model's parameters, their validation and the friction law.
+ *
+ * Dimensionless continuum Burridge-Knopoff model (DESIGN.md section 1):
+ *   psi_t = gamma (eta - phi(psi)),  eta_t = -(psi - nu - c^2 psi_xx)/gamma,
+ * phi(psi) = psi^3/3 - psi.  The active range, where the uniform slip psi = nu
+ * is unstable and a limit cycle exists, is |nu| < 1. */
+#ifndef BKFRONT_MODEL_H
+#define BKFRONT_MODEL_H
+
+#include "bkfront/status.h"
+
+/* Creep-slip friction phi(psi) = psi^3/3 - psi and its slope. */
+double bkf_model_friction(double psi);
+double bkf_model_friction_slope(double psi);
+
+/* Carlson-Langer velocity-weakening law F0 sgn(v)/(1+|v|), with F0 = 1, for
+ * comparison figures. */
+double bkf_model_friction_carlson_langer(double v);
+
+/* Validators: BKF_OK or BKF_EINPUT with a message naming the parameter and its
+ * valid range.  NaN and infinities are always rejected. */
+int bkf_model_check_nu_active(double nu, bkf_error *err);   /* |nu| < 1 */
+int bkf_model_check_positive(const char *name, double value, bkf_error *err);
+int bkf_model_check_nonnegative(const char *name, double value, bkf_error *err);
+int bkf_model_check_tol(double tol, bkf_error *err);        /* [1e-14, 1e-1] */
+
+#define BKF_TOL_MIN 1e-14
+#define BKF_TOL_MAX 1e-1
+
+#endif
