@@ -1,0 +1,50 @@
+/* Asymptotic expansions of the van der Pol period T(mu, nu).
+ *
+ * Large mu (relaxation oscillations), derived in README.md: the slow branches
+ * give k(nu) mu; each fold ("knee") at x = +-1 adds an Airy delay a1 theta
+ * plus the shift of the landing point on the opposite branch, where
+ * theta = mu^(-1/3) (1 -+ nu)^(-1/3); the next-order slow manifold diverges
+ * logarithmically at each knee and, cut off at the knee's inner scale
+ * ((1 -+ nu)/mu^2)^(1/3), gives -(1/3) ln(mu) / (mu (1 -+ nu)).
+ *
+ * Small mu (Lindstedt-Poincare to second order about the harmonic oscillator
+ * of amplitude 2 sqrt(1 - nu^2)): omega = 1 - s2 mu^2 + O(mu^4). */
+#include "bkfront/asymptotics.h"
+
+#include <gsl/gsl_math.h>
+#include <math.h>
+
+double bkf_asym_k(double nu)
+{
+    double nu2 = nu * nu;
+    return 3.0 + (nu2 - 1.0) * log((4.0 - nu2) / (1.0 - nu2));
+}
+
+double bkf_asym_period_leading(double mu, double nu) { return bkf_asym_k(nu) * mu; }
+
+double bkf_asym_knee_coefficient(double nu)
+{
+    double right = 1.0 - nu, left = 1.0 + nu;
+    double delays = cbrt(1.0 / right) + cbrt(1.0 / left);
+    double landings = cbrt(right * right) / (2.0 + nu) + cbrt(left * left) / (2.0 - nu);
+    return BKF_AIRY_A1 * (delays + landings);
+}
+
+double bkf_asym_log_coefficient(double nu) { return -2.0 / (3.0 * (1.0 - nu * nu)); }
+
+double bkf_asym_period_large(double mu, double nu)
+{
+    return bkf_asym_k(nu) * mu + bkf_asym_knee_coefficient(nu) * pow(mu, -1.0 / 3.0) +
+           bkf_asym_log_coefficient(nu) * log(mu) / mu;
+}
+
+double bkf_asym_small_coefficient(double nu)
+{
+    double nu2 = nu * nu;
+    return (1.0 - nu2) * (3.0 + 29.0 * nu2) / 48.0;
+}
+
+double bkf_asym_period_small(double mu, double nu)
+{
+    return 2.0 * M_PI * (1.0 + bkf_asym_small_coefficient(nu) * mu * mu);
+}

@@ -1,0 +1,567 @@
+/* Limit cycle of f'' + mu (f^2 - 1) f' + f = nu by Newton shooting.
+ *
+ * Coordinates (see cycle.h): x' = a (y - b F(x)), y' = (nu - x)/a with
+ * a = sqrt(1 + mu^2), b = mu/a.  They interpolate between the phase plane,
+ * where a small-mu cycle is a circle of radius ~2, and the Lienard plane,
+ * where a large-mu cycle has y = O(1) and its fast jumps are horizontal.  In
+ * either limit the state stays O(1), which keeps the absolute tolerance
+ * meaningful over mu in [1e-6, 1e6].
+ *
+ * The integrated state is (x, y, dx/dy0, dy/dy0, L): the variational column
+ * with respect to the section coordinate y0 gives the Newton derivative, and
+ * L = integral of the Jacobian's trace, -mu (x^2 - 1), gives the nontrivial
+ * Floquet multiplier by Liouville's formula (the trivial one is 1).  L stays
+ * finite where the multiplier itself underflows (large mu).
+ *
+ * The return to the section x = nu is located by Newton in time, each
+ * iterate integrated afresh from the last step's start, so the event is as
+ * accurate as the integration itself (GSL steppers have no dense output). */
+#include "bkfront/cycle.h"
+
+#include "bkfront/asymptotics.h"
+#include "bkfront/model.h"
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_math.h>
+#include <gsl/gsl_odeiv2.h>
+#include <math.h>
+#include <stdlib.h>
+#ifdef BKF_DEBUG_CYCLE
+#include <stdio.h>
+#endif
+#include <string.h>
+
+enum { DIM = 5, IX = 0, IY = 1, IVX = 2, IVY = 3, IL = 4 };
+
+/* Above this mu the explicit stepper's step is limited by stability, not
+ * accuracy (the fast rate is ~mu); measured crossover, see README benchmark. */
+#define STIFF_MU 10.0
+/* Ratio of the two integration tolerances whose answers give the error
+ * estimate. */
+#define TOL_RATIO 10.0
+#define MAX_STEPS_PER_PERIOD 2000000
+#define MAX_NEWTON 60
+
+typedef struct {
+    double mu, nu, a, b;
+    size_t rhs_calls, jacobian_calls;
+} flow_params;
+
+/* An integrator: one GSL step/control/evolve set for one tolerance. */
+typedef struct {
+    gsl_odeiv2_step *step;
+    gsl_odeiv2_control *control;
+    gsl_odeiv2_evolve *evolve;
+    gsl_odeiv2_system system;
+    double tol;
+    size_t steps;
+} integrator;
+
+typedef struct {
+    double t;
+    double s[2];
+} node;
+
+struct bkf_cycle {
+    flow_params flow;
+    int have_solution;
+    bkf_cycle_result result;
+    double section_y; /* section y of the last solution, in its own coordinates */
+    /* nodes of the final integration, for the profile */
+    node *nodes;
+    size_t node_count, node_capacity;
+    double profile_tol;
+    bkf_stepper_kind profile_stepper;
+};
+
+/* ---------------------------------------------------------------- flow */
+
+static double lienard_F(double x) { return x * x * x / 3.0 - x; }
+
+static int flow_rhs(double t, const double s[], double ds[], void *params)
+{
+    (void)t;
+    flow_params *p = params;
+    double x = s[IX];
+    double damping = p->mu * (x * x - 1.0);
+    p->rhs_calls++;
+    ds[IX] = p->a * (s[IY] - p->b * lienard_F(x));
+    ds[IY] = (p->nu - x) / p->a;
+    ds[IVX] = -damping * s[IVX] + p->a * s[IVY];
+    ds[IVY] = -s[IVX] / p->a;
+    ds[IL] = -damping;
+    return GSL_SUCCESS;
+}
+
+static int flow_jacobian(double t, const double s[], double *dfds, double dfdt[], void *params)
+{
+    (void)t;
+    flow_params *p = params;
+    double x = s[IX];
+    double damping = p->mu * (x * x - 1.0);
+    double ddamping = 2.0 * p->mu * x;
+    p->jacobian_calls++;
+    memset(dfds, 0, sizeof(double) * DIM * DIM);
+    dfds[IX * DIM + IX] = -damping;
+    dfds[IX * DIM + IY] = p->a;
+    dfds[IY * DIM + IX] = -1.0 / p->a;
+    dfds[IVX * DIM + IX] = -ddamping * s[IVX];
+    dfds[IVX * DIM + IVX] = -damping;
+    dfds[IVX * DIM + IVY] = p->a;
+    dfds[IVY * DIM + IVX] = -1.0 / p->a;
+    dfds[IL * DIM + IX] = -ddamping;
+    for (int i = 0; i < DIM; i++) dfdt[i] = 0.0;
+    return GSL_SUCCESS;
+}
+
+static double flow_xdot(const flow_params *p, const double *s)
+{
+    return p->a * (s[IY] - p->b * lienard_F(s[IX]));
+}
+
+static double flow_xddot(const flow_params *p, const double *s)
+{
+    double x = s[IX];
+    return p->a * ((p->nu - x) / p->a - p->b * (x * x - 1.0) * flow_xdot(p, s));
+}
+
+static void flow_set(flow_params *p, double mu, double nu)
+{
+    p->mu = mu;
+    p->nu = nu;
+    p->a = sqrt(1.0 + mu * mu);
+    p->b = mu / p->a;
+}
+
+/* ---------------------------------------------------------- integrator */
+
+static int integrator_init(integrator *in, flow_params *flow, bkf_stepper_kind kind, double tol)
+{
+    static const double scale[DIM] = {1.0, 1.0, 1.0, 1.0, 1.0};
+    const gsl_odeiv2_step_type *type =
+        kind == BKF_STEPPER_IMPLICIT ? gsl_odeiv2_step_bsimp : gsl_odeiv2_step_rk8pd;
+    in->system = (gsl_odeiv2_system){flow_rhs, flow_jacobian, DIM, flow};
+    in->step = gsl_odeiv2_step_alloc(type, DIM);
+    in->control = gsl_odeiv2_control_scaled_new(tol, tol, 1.0, 0.0, scale, DIM);
+    in->evolve = gsl_odeiv2_evolve_alloc(DIM);
+    in->tol = tol;
+    in->steps = 0;
+    if (!in->step || !in->control || !in->evolve) return BKF_ENOMEM;
+    return BKF_OK;
+}
+
+static void integrator_free(integrator *in)
+{
+    if (in->evolve) gsl_odeiv2_evolve_free(in->evolve);
+    if (in->control) gsl_odeiv2_control_free(in->control);
+    if (in->step) gsl_odeiv2_step_free(in->step);
+    memset(in, 0, sizeof *in);
+}
+
+/* Advance s from t0 to exactly t1 under error control. */
+static int integrator_to(integrator *in, double t0, double *s, double t1)
+{
+    double t = t0, h = t1 - t0;
+    if (h == 0.0) return BKF_OK;
+    gsl_odeiv2_evolve_reset(in->evolve);
+    gsl_odeiv2_step_reset(in->step);
+    for (int guard = 0; t != t1; guard++) {
+        if (guard > 100000) return BKF_ENUMERIC;
+        if (gsl_odeiv2_evolve_apply(in->evolve, in->control, in->step, &in->system, &t, t1, &h, s) !=
+            GSL_SUCCESS)
+            return BKF_ENUMERIC;
+        in->steps++;
+    }
+    return BKF_OK;
+}
+
+/* Root in [t0, t1] of g(t) = component value - target, with g' given by the
+ * flow, by Newton in time safeguarded by the bracket; each trial state is
+ * integrated afresh from (t0, s0).  On return s holds the state at the root. */
+typedef double (*event_fn)(const flow_params *p, const double *s, double *gdot);
+
+static int locate_event(integrator *in, const flow_params *p, event_fn g, double t0,
+                        const double *s0, double t1, const double *s1, double *t_root,
+                        double *s)
+{
+    double unused;
+    double g0 = g(p, s0, &unused), g1 = g(p, s1, &unused);
+    double lo = t0, hi = t1, glo = g0;
+    double t = t0 + (t1 - t0) * g0 / (g0 - g1);
+    if (!(t > t0 && t < t1)) t = 0.5 * (t0 + t1);
+    for (int iter = 0; iter < 60; iter++) {
+        memcpy(s, s0, sizeof(double) * DIM);
+        if (integrator_to(in, t0, s, t) != BKF_OK) return BKF_ENUMERIC;
+        double gdot, gt = g(p, s, &gdot);
+#ifdef BKF_DEBUG_CYCLE
+        fprintf(stderr, "  locate %d t0=%.17g t=%.17g t1=%.17g g=%.3g gdot=%.3g\n", iter, t0, t, t1, gt, gdot);
+#endif
+        if (gt == 0.0) break;
+        if ((gt > 0) == (glo > 0)) {
+            lo = t;
+            glo = gt;
+        } else {
+            hi = t;
+        }
+        double next = t - gt / gdot;
+        /* converged: the Newton correction is at rounding level, so keep t
+         * (whose state s is in hand) rather than risk the bracket test */
+        if (fabs(next - t) <= 4.0 * DBL_EPSILON * fabs(t)) break;
+        if (!(next > lo && next < hi) || !isfinite(next)) next = 0.5 * (lo + hi);
+        if (hi - lo <= 4.0 * DBL_EPSILON * fabs(t)) break;
+        t = next;
+    }
+    *t_root = t;
+    return BKF_OK;
+}
+
+static double event_section(const flow_params *p, const double *s, double *gdot)
+{
+    *gdot = flow_xdot(p, s);
+    return s[IX] - p->nu;
+}
+
+static double event_extremum(const flow_params *p, const double *s, double *gdot)
+{
+    *gdot = flow_xddot(p, s);
+    return flow_xdot(p, s);
+}
+
+/* ------------------------------------------------------------ one period */
+
+typedef struct {
+    double period;       /* return time */
+    double y_return;     /* P(y0) */
+    double dP;           /* P'(y0) = dy/dy0 at the return (y' = 0 on the section) */
+    double dT;           /* dT/dy0 */
+    double log_mult;     /* L at the return */
+    double xmax, xmin;
+} shot;
+
+static int node_push(bkf_cycle *c, double t, const double *s)
+{
+    if (c->node_count == c->node_capacity) {
+        size_t cap = c->node_capacity ? 2 * c->node_capacity : 256;
+        node *grown = realloc(c->nodes, cap * sizeof *grown);
+        if (!grown) return BKF_ENOMEM;
+        c->nodes = grown;
+        c->node_capacity = cap;
+    }
+    c->nodes[c->node_count++] = (node){t, {s[IX], s[IY]}};
+    return BKF_OK;
+}
+
+/* Integrate one turn from (nu, y0) back to the section.  With `keep` the
+ * accepted steps are stored for the profile and the extrema of x located. */
+static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0, bkf_cycle *keep,
+                 shot *out, bkf_error *err)
+{
+    double s[DIM] = {p->nu, y0, 0.0, 1.0, 0.0}, s_prev[DIM];
+    double t = 0.0, t_prev, h = 0.01 / fmax(1.0, p->mu);
+    int went_below = 0;
+    double xmax = p->nu, xmin = p->nu;
+    if (keep) {
+        keep->node_count = 0;
+        if (node_push(keep, t, s) != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    gsl_odeiv2_evolve_reset(main_in->evolve);
+    gsl_odeiv2_step_reset(main_in->step);
+    for (size_t n = 0;; n++) {
+        if (n > MAX_STEPS_PER_PERIOD)
+            return bkf_error_set(err, BKF_ENUMERIC,
+                                 "cycle at mu = %g, nu = %g: no return to the section after %d steps",
+                                 p->mu, p->nu, MAX_STEPS_PER_PERIOD);
+        memcpy(s_prev, s, sizeof s);
+        t_prev = t;
+        int rc = gsl_odeiv2_evolve_apply(main_in->evolve, main_in->control, main_in->step,
+                                         &main_in->system, &t, GSL_POSINF, &h, s);
+        main_in->steps++;
+        if (rc != GSL_SUCCESS || !isfinite(s[IX]) || !isfinite(s[IY]))
+            return bkf_error_set(err, BKF_ENUMERIC,
+                                 "cycle at mu = %g, nu = %g: integration failed at z = %g (%s)",
+                                 p->mu, p->nu, t, gsl_strerror(rc));
+        if (keep) {
+            double xd_prev = flow_xdot(p, s_prev), xd = flow_xdot(p, s);
+            if ((xd_prev > 0) != (xd > 0)) {
+                double te, se[DIM];
+                if (locate_event(aux, p, event_extremum, t_prev, s_prev, t, s, &te, se) != BKF_OK)
+                    return bkf_error_set(err, BKF_ENUMERIC,
+                                         "cycle at mu = %g, nu = %g: extremum not located", p->mu,
+                                         p->nu);
+                if (se[IX] > xmax) xmax = se[IX];
+                if (se[IX] < xmin) xmin = se[IX];
+            }
+        }
+        if (s[IX] < p->nu) went_below = 1;
+        if (went_below && s[IX] >= p->nu) break;
+        if (keep && node_push(keep, t, s) != BKF_OK)
+            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    double T, sr[DIM];
+    if (locate_event(aux, p, event_section, t_prev, s_prev, t, s, &T, sr) != BKF_OK)
+        return bkf_error_set(err, BKF_ENUMERIC,
+                             "cycle at mu = %g, nu = %g: return to the section not located", p->mu,
+                             p->nu);
+    out->period = T;
+    out->y_return = sr[IY];
+    out->dP = sr[IVY];
+    out->dT = -sr[IVX] / flow_xdot(p, sr);
+    out->log_mult = sr[IL];
+    out->xmax = xmax;
+    out->xmin = xmin;
+    return BKF_OK;
+}
+
+/* --------------------------------------------------------------- solve */
+
+bkf_cycle_options bkf_cycle_options_default(void)
+{
+    return (bkf_cycle_options){.tol = 1e-10, .stepper = BKF_STEPPER_AUTO, .warm_start = 1};
+}
+
+bkf_cycle *bkf_cycle_alloc(void) { return calloc(1, sizeof(bkf_cycle)); }
+
+void bkf_cycle_free(bkf_cycle *cycle)
+{
+    if (!cycle) return;
+    free(cycle->nodes);
+    free(cycle);
+}
+
+const bkf_cycle_result *bkf_cycle_get(const bkf_cycle *cycle)
+{
+    return cycle && cycle->have_solution ? &cycle->result : NULL;
+}
+
+/* Section coordinate y0 of a starting guess with slope f'(0) = w. */
+static double section_y_of_slope(const flow_params *p, double w)
+{
+    return w / p->a + p->b * lienard_F(p->nu);
+}
+
+/* Slope f' at the upward crossing of f = nu: from the small-mu harmonic
+ * cycle of radius 2 sqrt(1 - nu^2), or from the large-mu jump, which leaves
+ * the left knee at Lienard height 2/3 plus the Airy overshoot. */
+static double guess_slope(double mu, double nu)
+{
+    if (mu < 1.0) return 2.0 * sqrt(1.0 - nu * nu);
+    double jump_height = 2.0 / 3.0 + BKF_AIRY_A1 * cbrt((1.0 + nu) * (1.0 + nu)) * pow(mu, -4.0 / 3.0);
+    double w = mu * (jump_height - lienard_F(nu));
+    return w > 0 ? w : 2.0 * sqrt(1.0 - nu * nu);
+}
+
+typedef struct {
+    double period, log_mult, y0, xmax, xmin;
+} converged;
+
+/* Newton on g(y0) = P(y0) - y0 at one integration tolerance, from y0,
+ * safeguarded by the bracket that each return gives: P is increasing and the
+ * cycle attracting, so g(y0) > 0 puts the cycle above both y0 and P(y0).
+ *
+ * The period is corrected to first order in the last Newton step, so the
+ * iteration may stop once that step's square is negligible (|dT step| <=
+ * t_goal T) and the step is either below y_goal or no longer shrinking
+ * quadratically, i.e. down to the integration's noise. */
+static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, double t_goal,
+                     double y_goal, int keep, size_t *iterations, converged *out, bkf_error *err)
+{
+    flow_params *p = &c->flow;
+    double lo = p->b * lienard_F(p->nu), hi = GSL_POSINF;
+    double previous_step = GSL_POSINF;
+    for (int iter = 0; iter < MAX_NEWTON; iter++) {
+        shot sh = {0};
+        int rc = shoot(in, aux, p, *y0, keep ? c : NULL, &sh, err);
+        if (rc != BKF_OK) return rc;
+        (*iterations)++;
+        double g = sh.y_return - *y0;
+        double step = -g / (sh.dP - 1.0);
+        if (g > 0) lo = fmax(lo, sh.y_return);
+        else if (g < 0) hi = fmin(hi, sh.y_return);
+        double next = *y0 + step;
+        int safeguarded = 0, inverted = lo >= hi;
+        if (inverted) {
+            /* integration noise exceeds the distance to the cycle: the
+             * bracket carries no information any more */
+            lo = p->b * lienard_F(p->nu);
+            hi = GSL_POSINF;
+        } else if (!(next > lo && next < hi) || !isfinite(next)) {
+            next = isfinite(hi) ? 0.5 * (lo + hi) : sh.y_return + 2.0 * fabs(g);
+            step = next - *y0;
+            safeguarded = 1;
+        }
+        double t_corr = sh.dT * step;
+#ifdef BKF_DEBUG_CYCLE
+        fprintf(stderr, "newton tol=%g y0=%.17g P=%.17g dP=%.6g T=%.17g dT=%.6g step=%.3g lo=%.17g hi=%.17g sg=%d\n",
+                in->tol, *y0, sh.y_return, sh.dP, sh.period, sh.dT, step, lo, hi, safeguarded);
+#endif
+        int small = fabs(t_corr) <= t_goal * sh.period;
+        int at_noise = inverted || fabs(step) <= y_goal || fabs(step) > 0.25 * previous_step;
+        if (!safeguarded && small && at_noise) {
+            out->period = sh.period + t_corr;
+            out->log_mult = sh.log_mult;
+            out->y0 = next;
+            out->xmax = sh.xmax;
+            out->xmin = sh.xmin;
+            *y0 = next;
+            return BKF_OK;
+        }
+        previous_step = safeguarded ? GSL_POSINF : fabs(step);
+        *y0 = next;
+    }
+    return bkf_error_set(err, BKF_ENUMERIC,
+                         "cycle at mu = %g, nu = %g: shooting did not converge in %d Newton steps",
+                         p->mu, p->nu, MAX_NEWTON);
+}
+
+static int check_inputs(double mu, double nu, const bkf_cycle_options *o, bkf_error *err)
+{
+    if (!isfinite(mu) || mu < BKF_CYCLE_MU_MIN || mu > BKF_CYCLE_MU_MAX)
+        return bkf_error_set(err, BKF_EINPUT, "mu = %g is outside [%g, %g]", mu, BKF_CYCLE_MU_MIN,
+                             BKF_CYCLE_MU_MAX);
+    int rc = bkf_model_check_nu_active(nu, err);
+    if (rc != BKF_OK) return rc;
+    if (!o) return BKF_OK;
+    rc = bkf_model_check_tol(o->tol, err);
+    if (rc != BKF_OK) return rc;
+    if (o->stepper != BKF_STEPPER_AUTO && o->stepper != BKF_STEPPER_EXPLICIT &&
+        o->stepper != BKF_STEPPER_IMPLICIT)
+        return bkf_error_set(err, BKF_EINPUT, "stepper must be auto, explicit or implicit");
+    return BKF_OK;
+}
+
+int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
+                    bkf_error *err)
+{
+    if (!c) return bkf_error_set(err, BKF_EINPUT, "cycle object is NULL");
+    bkf_cycle_options opt = options ? *options : bkf_cycle_options_default();
+    int rc = check_inputs(mu, nu, &opt, err);
+    if (rc != BKF_OK) return rc;
+
+    flow_params previous = c->flow;
+    double warm_slope = c->have_solution ? c->result.section_slope : 0.0;
+    flow_set(&c->flow, mu, nu);
+    flow_params *p = &c->flow;
+    p->rhs_calls = p->jacobian_calls = 0;
+    bkf_stepper_kind kind = opt.stepper;
+    if (kind == BKF_STEPPER_AUTO) kind = mu > STIFF_MU ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
+
+    double slope = opt.warm_start && c->have_solution ? warm_slope : guess_slope(mu, nu);
+    double y0 = section_y_of_slope(p, slope);
+    double y_scale = fmax(fabs(y0), 1e-3);
+
+    /* The global error of T is a modest multiple of the local tolerance; the
+     * safety factor was measured over the benchmark box (README). */
+    double tol_int = 0.1 * opt.tol;
+    double tol_loose = fmax(tol_int, 1e-5);
+    integrator coarse = {0}, fine = {0}, finer = {0}, aux = {0};
+    size_t iterations = 0;
+    converged a, b;
+    rc = BKF_ENOMEM;
+    if (integrator_init(&coarse, p, kind, tol_loose) != BKF_OK) goto fail_mem;
+
+    rc = newton_at(c, &coarse, &coarse, &y0, 1e-3, 1e-4 * y_scale, 0, &iterations, &a, err);
+    if (rc != BKF_OK) goto done;
+    for (int attempt = 0; attempt < 4; attempt++) {
+        integrator_free(&fine);
+        integrator_free(&finer);
+        integrator_free(&aux);
+        if (integrator_init(&fine, p, kind, tol_int) != BKF_OK ||
+            integrator_init(&finer, p, kind, tol_int / TOL_RATIO) != BKF_OK ||
+            integrator_init(&aux, p, kind, tol_int / TOL_RATIO) != BKF_OK)
+            goto fail_mem;
+        rc = newton_at(c, &fine, &fine, &y0, 0.1 * sqrt(opt.tol), opt.tol * y_scale, 0, &iterations, &a, err);
+        if (rc != BKF_OK) goto done;
+        rc = newton_at(c, &finer, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, 1, &iterations, &b, err);
+        if (rc != BKF_OK) goto done;
+        double period_err = fabs(a.period - b.period) + 8.0 * DBL_EPSILON * b.period;
+        if (period_err <= opt.tol * b.period || attempt == 3 || tol_int / TOL_RATIO < 1e-16) {
+            if (period_err > opt.tol * b.period) {
+                rc = bkf_error_set(err, BKF_ENUMERIC,
+                                   "cycle at mu = %g, nu = %g: estimated relative error %.2g of T "
+                                   "exceeds tol = %g",
+                                   mu, nu, period_err / b.period, opt.tol);
+                goto done;
+            }
+            bkf_cycle_result *r = &c->result;
+            r->mu = mu;
+            r->nu = nu;
+            r->period = b.period;
+            r->period_err = period_err;
+            r->xmax = b.xmax;
+            r->xmin = b.xmin;
+            r->log_multiplier = b.log_mult;
+            r->log_multiplier_err = fabs(a.log_mult - b.log_mult) + 8.0 * DBL_EPSILON * fabs(b.log_mult);
+            r->multiplier = exp(b.log_mult);
+            r->section_y = y0;
+            r->section_slope = p->a * (y0 - p->b * lienard_F(nu));
+            r->steps = coarse.steps + fine.steps + finer.steps + aux.steps;
+            r->rhs_calls = p->rhs_calls;
+            r->jacobian_calls = p->jacobian_calls;
+            r->newton_iterations = iterations;
+            r->stepper = kind == BKF_STEPPER_IMPLICIT ? "bsimp" : "rk8pd";
+            c->have_solution = 1;
+            c->profile_tol = tol_int / TOL_RATIO;
+            c->profile_stepper = kind;
+            rc = BKF_OK;
+            goto done;
+        }
+        tol_int *= fmax(0.01, 0.3 * opt.tol * b.period / period_err);
+    }
+    goto done;
+fail_mem:
+    rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+done:
+    integrator_free(&coarse);
+    integrator_free(&fine);
+    integrator_free(&finer);
+    integrator_free(&aux);
+    if (rc != BKF_OK) {
+        /* keep the previous solution usable: restore its flow */
+        if (c->have_solution) c->flow = previous;
+    }
+    return rc;
+}
+
+int bkf_cycle_period(double mu, double nu, const bkf_cycle_options *options,
+                     bkf_cycle_result *result, bkf_error *err)
+{
+    if (!result) return bkf_error_set(err, BKF_EINPUT, "result pointer is NULL");
+    bkf_cycle *c = bkf_cycle_alloc();
+    if (!c) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    int rc = bkf_cycle_solve(c, mu, nu, options, err);
+    if (rc == BKF_OK) *result = c->result;
+    bkf_cycle_free(c);
+    return rc;
+}
+
+/* ------------------------------------------------------------- profile */
+
+int bkf_cycle_profile(bkf_cycle *c, double z, double *f, double *fprime, bkf_error *err)
+{
+    if (!c || !c->have_solution)
+        return bkf_error_set(err, BKF_EINPUT, "profile requested before a successful solve");
+    if (!isfinite(z)) return bkf_error_set(err, BKF_EINPUT, "z must be finite");
+    double T = c->result.period;
+    double zr = fmod(z, T);
+    if (zr < 0) zr += T;
+    /* last node at or before zr (nodes are in increasing time) */
+    size_t lo = 0, hi = c->node_count;
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (c->nodes[mid].t <= zr) lo = mid;
+        else hi = mid;
+    }
+    integrator in = {0};
+    if (integrator_init(&in, &c->flow, c->profile_stepper, c->profile_tol) != BKF_OK) {
+        integrator_free(&in);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    double s[DIM] = {c->nodes[lo].s[0], c->nodes[lo].s[1], 0.0, 0.0, 0.0};
+    int rc = integrator_to(&in, c->nodes[lo].t, s, zr);
+    integrator_free(&in);
+    if (rc != BKF_OK)
+        return bkf_error_set(err, BKF_ENUMERIC, "profile integration failed at z = %g", z);
+    if (f) *f = s[IX];
+    if (fprime) *fprime = flow_xdot(&c->flow, s);
+    return BKF_OK;
+}
