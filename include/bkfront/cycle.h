@@ -44,6 +44,8 @@ typedef struct {
     double multiplier;        /* nontrivial Floquet multiplier, exp(log_multiplier) */
     double log_multiplier;    /* = integral over a period of -mu (f^2 - 1) dz (Liouville) */
     double log_multiplier_err;
+    double return_map_slope;  /* P'(y*) from the variational equations: the same
+                                 multiplier by another route (a check) */
     double section_y;         /* scaled Lienard y where the cycle crosses f = nu upward */
     double section_slope;     /* f'(z) at that crossing */
     /* work counters, summed over every integration of the solve */

@@ -1,0 +1,251 @@
+/* The limit-cycle engine against independent values: a published period,
+ * the small- and large-mu expansions, the nu -> -nu symmetry, Liouville's
+ * formula against the variational equations, and the tolerance contract. */
+#include "harness.h"
+
+#include "bkfront/asymptotics.h"
+#include "bkfront/cycle.h"
+
+#include <gsl/gsl_math.h>
+#include <string.h>
+
+static bkf_cycle_result solve(double mu, double nu, double tol)
+{
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = tol;
+    bkf_cycle_result r;
+    bkf_error e;
+    int rc = bkf_cycle_period(mu, nu, &o, &r, &e);
+    CHECK_MSG(rc == BKF_OK, "mu = %g nu = %g tol = %g: %s", mu, nu, tol, e.message);
+    return r;
+}
+
+/* T(1, 0) = 6.663286859323130 (published, e.g. Buonomo; Tobias et al.) */
+TEST(cycle_period_matches_published_mu_1)
+{
+    const double published = 6.663286859323130;
+    bkf_cycle_result r = solve(1.0, 0.0, 1e-12);
+    CHECK_CLOSE(r.period, published, 1e-12, 0.0);
+    CHECK(r.period_err >= fabs(r.period - published) / 10.0);
+    bkf_test_note("T(1,0) = %.16g, err est %.2g, true err %.2g", r.period, r.period_err,
+                  fabs(r.period - published));
+}
+
+/* T = 2 pi (1 + s2(nu) mu^2 + O(mu^4)): at mu = 1e-3 the remainder is ~1e-12. */
+TEST(cycle_small_mu_limit)
+{
+    const double nus[] = {0.0, -0.5, 0.7, -0.96, 0.999};
+    for (size_t i = 0; i < sizeof nus / sizeof nus[0]; i++) {
+        bkf_cycle_result r = solve(1e-3, nus[i], 1e-12);
+        CHECK_CLOSE(r.period, bkf_asym_period_small(1e-3, nus[i]), 2e-11, 0.0);
+        /* harmonic amplitude 2 sqrt(1 - nu^2) about x = nu */
+        double amp = 2.0 * sqrt(1.0 - nus[i] * nus[i]);
+        CHECK_CLOSE(r.xmax, nus[i] + amp, 1e-3, 1e-3 * amp);
+        CHECK_CLOSE(r.xmin, nus[i] - amp, 1e-3, 1e-3 * amp);
+        /* Floquet exponent of the harmonic cycle: -2 pi mu (1 - nu^2) */
+        CHECK_CLOSE(r.log_multiplier, -2.0 * M_PI * 1e-3 * (1.0 - nus[i] * nus[i]), 2e-3, 0.0);
+    }
+}
+
+/* The derived mu^2 coefficient s2(nu) = (1 - nu^2)(3 + 29 nu^2)/48, checked
+ * by the difference quotient (T/2pi - 1)/mu^2 at mu = 0.01, whose own
+ * O(mu^2) error is ~1e-4 relative. */
+TEST(cycle_small_mu_coefficient_derived_for_every_nu)
+{
+    const double nus[] = {0.0, 0.3, -0.6, 0.9};
+    for (size_t i = 0; i < sizeof nus / sizeof nus[0]; i++) {
+        double mu = 0.01;
+        bkf_cycle_result r = solve(mu, nus[i], 1e-13);
+        double quotient = (r.period / (2.0 * M_PI) - 1.0) / (mu * mu);
+        CHECK_CLOSE(quotient, bkf_asym_small_coefficient(nus[i]), 2e-3, 0.0);
+    }
+}
+
+/* nu = 0, large mu (Dorodnitsyn): T = (3 - 2 ln 2) mu + 3 a1 mu^(-1/3)
+ * - (2/3) ln(mu)/mu + D/mu + ...; D = -1.3246 in the literature.  The
+ * remainder after the log term is within 2/mu at mu = 1e3 and 1e4. */
+TEST(cycle_large_mu_series_nu_0)
+{
+    const double mus[] = {1e3, 1e4};
+    for (size_t i = 0; i < 2; i++) {
+        bkf_cycle_result r = solve(mus[i], 0.0, 1e-11);
+        double series = (3.0 - 2.0 * log(2.0)) * mus[i] + 3.0 * BKF_AIRY_A1 * pow(mus[i], -1.0 / 3.0) -
+                        (2.0 / 3.0) * log(mus[i]) / mus[i];
+        CHECK_CLOSE(bkf_asym_period_large(mus[i], 0.0), series, 1e-15, 0.0);
+        double remainder = (r.period - series) * mus[i];
+        bkf_test_note("mu = %g: T = %.15g, mu (T - series) = %.4f (literature D = -1.3246)", mus[i],
+                      r.period, remainder);
+        CHECK(fabs(remainder + 1.3246) < 0.2);
+    }
+}
+
+/* T/mu -> k(nu), with the derived knee and log terms: the remainder of the
+ * corrected series is O(1/mu), so T - T_asym2 shrinks about tenfold per
+ * decade of mu, while T - k mu shrinks only as mu^(-1/3). */
+TEST(cycle_large_mu_tends_to_k_nu)
+{
+    const double nus[] = {-0.96, -0.5, 0.3, 0.9};
+    for (size_t i = 0; i < sizeof nus / sizeof nus[0]; i++) {
+        bkf_cycle_result a = solve(1e3, nus[i], 1e-11), b = solve(1e4, nus[i], 1e-11);
+        CHECK_CLOSE(b.period / 1e4, bkf_asym_k(nus[i]), 1e-3, 0.0);
+        double ra = fabs(a.period - bkf_asym_period_large(1e3, nus[i]));
+        double rb = fabs(b.period - bkf_asym_period_large(1e4, nus[i]));
+        bkf_test_note("nu = %g: |T - T_asym2| = %.3g at 1e3, %.3g at 1e4", nus[i], ra, rb);
+        CHECK(rb < ra / 4.0);
+        CHECK(rb * 1e4 < 20.0);
+    }
+}
+
+/* x -> -x, nu -> -nu maps the equation to itself with the same period. */
+TEST(cycle_symmetry_nu_to_minus_nu)
+{
+    const double mus[] = {0.05, 2.0, 300.0};
+    for (size_t i = 0; i < 3; i++) {
+        bkf_cycle_result p = solve(mus[i], 0.8, 1e-10), m = solve(mus[i], -0.8, 1e-10);
+        CHECK_CLOSE(p.period, m.period, 2e-10, 0.0);
+        CHECK_CLOSE(p.xmax, -m.xmin, 1e-8, 1e-9);
+        CHECK_CLOSE(p.log_multiplier, m.log_multiplier, 1e-8, 1e-12);
+    }
+}
+
+/* Liouville (integral of the trace) and the variational return-map slope are
+ * two independent routes to the nontrivial multiplier. */
+TEST(cycle_multiplier_liouville_equals_variational)
+{
+    const double cases[][2] = {{0.1, 0.0}, {0.5, -0.9}, {1.0, 0.0}, {2.0, 0.5}, {1e-3, 0.999}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        bkf_cycle_result r = solve(cases[i][0], cases[i][1], 1e-11);
+        CHECK_CLOSE(r.return_map_slope, r.multiplier, 1e-6, 1e-12);
+        CHECK(r.multiplier > 0.0 && r.multiplier < 1.0);
+    }
+}
+
+/* The contract: |T(tol) - T(1e-13)| <= tol T on a grid with every extreme,
+ * and the estimate is never optimistic by more than 10.  Where 1e-13 itself
+ * is refused as unreachable (the canard region, mu = 10, nu = 0.999, whose
+ * rounding noise is ~2e-12 relative) the reference is T(1e-12); the refusal
+ * is itself part of the contract: an error, not wrong digits. */
+static bkf_cycle_result reference(double mu, double nu)
+{
+    bkf_cycle_options o = bkf_cycle_options_default();
+    bkf_cycle_result r;
+    bkf_error e;
+    for (o.tol = 1e-13; o.tol < 2e-11; o.tol *= 10.0) {
+        int rc = bkf_cycle_period(mu, nu, &o, &r, &e);
+        if (rc == BKF_OK) {
+            if (o.tol > 1e-13) bkf_test_note("mu %g nu %g: reference at tol %g", mu, nu, o.tol);
+            return r;
+        }
+        CHECK_MSG(rc == BKF_ENUMERIC, "unexpected failure: %s", e.message);
+    }
+    bkf_test_fail(__FILE__, __LINE__, "mu %g nu %g: no reference below 1e-11", mu, nu);
+}
+
+TEST(cycle_tolerance_honoured_on_extremes)
+{
+    const double mus[] = {1e-3, 0.1, 1.0, 10.0, 100.0, 1e4};
+    const double nus[] = {0.0, -0.96, 0.999, -0.999};
+    const double tols[] = {1e-4, 1e-7, 1e-10};
+    double worst_ratio = 0.0;
+    for (size_t i = 0; i < 6; i++)
+        for (size_t j = 0; j < 4; j++) {
+            bkf_cycle_result ref = reference(mus[i], nus[j]);
+            for (size_t k = 0; k < 3; k++) {
+                bkf_cycle_result r = solve(mus[i], nus[j], tols[k]);
+                double true_err = fabs(r.period - ref.period);
+                CHECK_MSG(true_err <= tols[k] * ref.period,
+                          "mu %g nu %g tol %g: |T - Tref| = %.3g > tol T", mus[i], nus[j], tols[k],
+                          true_err);
+                CHECK_MSG(true_err <= 10.0 * r.period_err + ref.period_err,
+                          "mu %g nu %g tol %g: true error %.3g, estimate %.3g", mus[i], nus[j],
+                          tols[k], true_err, r.period_err);
+                double ratio = true_err / r.period_err;
+                if (ratio > worst_ratio) worst_ratio = ratio;
+            }
+        }
+    bkf_test_note("largest true/estimated error ratio: %.3g", worst_ratio);
+}
+
+/* From scratch (fresh object, no guess) over the whole box. */
+TEST(cycle_converges_from_scratch_on_the_box)
+{
+    const double mus[] = {1e-3, 1e-2, 0.3, 3.0, 30.0, 300.0, 3e3, 1e4};
+    const double nus[] = {-0.999, -0.99, -0.9, -0.5, 0.0, 0.5, 0.9, 0.99, 0.999};
+    for (size_t i = 0; i < 8; i++)
+        for (size_t j = 0; j < 9; j++) {
+            bkf_cycle_result r = solve(mus[i], nus[j], 1e-8);
+            CHECK(r.period > 2.0 * M_PI * 0.999);
+            CHECK(r.xmax > nus[j] && r.xmin < nus[j]);
+        }
+}
+
+TEST(cycle_profile_is_the_cycle)
+{
+    bkf_cycle *c = bkf_cycle_alloc();
+    bkf_error e;
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = 1e-11;
+    CHECK_STATUS(bkf_cycle_solve(c, 3.0, -0.4, &o, &e), BKF_OK);
+    const bkf_cycle_result *r = bkf_cycle_get(c);
+    double f, fp, f2, fp2;
+    CHECK_STATUS(bkf_cycle_profile(c, 0.0, &f, &fp, &e), BKF_OK);
+    CHECK_CLOSE(f, -0.4, 0.0, 1e-12);
+    CHECK(fp > 0.0);
+    CHECK_STATUS(bkf_cycle_profile(c, 2.0 * r->period, &f2, &fp2, &e), BKF_OK);
+    CHECK_CLOSE(f2, f, 0.0, 1e-9);
+    CHECK_CLOSE(fp2, fp, 0.0, 1e-8);
+    /* f' is the derivative of f (central differences) and the sampled
+     * extremes approach xmax, xmin */
+    double fmax = -10, fmin = 10;
+    for (int i = 0; i < 4000; i++) {
+        double z = r->period * i / 4000.0, h = 1e-5, fa, fb;
+        CHECK_STATUS(bkf_cycle_profile(c, z, &f, &fp, &e), BKF_OK);
+        if (i % 100 == 0) {
+            CHECK_STATUS(bkf_cycle_profile(c, z + h, &fa, NULL, &e), BKF_OK);
+            CHECK_STATUS(bkf_cycle_profile(c, z - h, &fb, NULL, &e), BKF_OK);
+            CHECK_CLOSE((fa - fb) / (2 * h), fp, 1e-6, 1e-6);
+        }
+        if (f > fmax) fmax = f;
+        if (f < fmin) fmin = f;
+    }
+    CHECK(fmax <= r->xmax + 1e-10 && fmax > r->xmax - 1e-4);
+    CHECK(fmin >= r->xmin - 1e-10 && fmin < r->xmin + 1e-4);
+    bkf_cycle_free(c);
+}
+
+TEST(cycle_warm_start_agrees_with_cold)
+{
+    bkf_cycle *c = bkf_cycle_alloc();
+    bkf_error e;
+    bkf_cycle_options o = bkf_cycle_options_default();
+    for (double mu = 0.5; mu < 60.0; mu *= 1.7) {
+        CHECK_STATUS(bkf_cycle_solve(c, mu, -0.96, &o, &e), BKF_OK);
+        bkf_cycle_result cold = solve(mu, -0.96, 1e-10);
+        CHECK_CLOSE(bkf_cycle_get(c)->period, cold.period, 2e-10, 0.0);
+    }
+    bkf_cycle_free(c);
+}
+
+TEST(cycle_rejects_bad_input)
+{
+    bkf_cycle_options o = bkf_cycle_options_default();
+    bkf_cycle_result r;
+    bkf_error e;
+    CHECK_STATUS(bkf_cycle_period(0.0, 0.0, &o, &r, &e), BKF_EINPUT);
+    CHECK(strstr(e.message, "mu"));
+    CHECK_STATUS(bkf_cycle_period(-1.0, 0.0, &o, &r, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_cycle_period(NAN, 0.0, &o, &r, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_cycle_period(INFINITY, 0.0, &o, &r, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_cycle_period(1.0, 1.0, &o, &r, &e), BKF_EINPUT);
+    CHECK(strstr(e.message, "nu") && strstr(e.message, "continuous slip"));
+    CHECK_STATUS(bkf_cycle_period(1.0, -1.2, &o, &r, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_cycle_period(1.0, NAN, &o, &r, &e), BKF_EINPUT);
+    o.tol = 1.0;
+    CHECK_STATUS(bkf_cycle_period(1.0, 0.0, &o, &r, &e), BKF_EINPUT);
+    CHECK(strstr(e.message, "tol"));
+    o.tol = 1e-15;
+    CHECK_STATUS(bkf_cycle_period(1.0, 0.0, &o, &r, &e), BKF_EINPUT);
+    bkf_cycle *c = bkf_cycle_alloc();
+    CHECK_STATUS(bkf_cycle_profile(c, 0.0, NULL, NULL, &e), BKF_EINPUT);
+    bkf_cycle_free(c);
+}
