@@ -19,6 +19,7 @@
 #include "bkfront/cycle.h"
 
 #include "bkfront/asymptotics.h"
+#include "bkfront/continuation.h"
 #include "bkfront/model.h"
 
 #include <gsl/gsl_errno.h>
@@ -65,6 +66,7 @@ struct bkf_cycle {
     int have_solution;
     bkf_cycle_result result;
     double section_y; /* section y of the last solution, in its own coordinates */
+    double warm_slope; /* if > 0: start the next solve from this f'(0) (branches) */
     /* nodes of the final integration, for the profile */
     node *nodes;
     size_t node_count, node_capacity;
@@ -387,13 +389,16 @@ static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, 
         if (g > 0) lo = fmax(lo, sh.y_return);
         else if (g < 0) hi = fmin(hi, sh.y_return);
         double next = *y0 + step;
+        /* P' ~ 0 at large mu, where integration error can make it slightly
+         * negative and put the Newton point a hair beyond P itself */
+        double slack = 1e-3 * fabs(g) + 4.0 * DBL_EPSILON * fabs(*y0);
         int safeguarded = 0, inverted = lo >= hi;
         if (inverted) {
             /* integration noise exceeds the distance to the cycle: the
              * bracket carries no information any more */
             lo = p->b * lienard_F(p->nu);
             hi = GSL_POSINF;
-        } else if (!(next >= lo && next <= hi) || !isfinite(next)) {
+        } else if (!(next >= lo - slack && next <= hi + slack) || !isfinite(next)) {
             /* Newton points the wrong way where the map is locally
              * expanding (orbits inside the cycle near the unstable
              * equilibrium): bisect, or walk outward with growing strides */
@@ -464,7 +469,10 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
     bkf_stepper_kind kind = opt.stepper;
     if (kind == BKF_STEPPER_AUTO) kind = mu > STIFF_MU ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
 
-    double slope = opt.warm_start && c->have_solution ? warm_slope : guess_slope(mu, nu);
+    double slope = c->warm_slope > 0 ? c->warm_slope
+                   : opt.warm_start && c->have_solution ? warm_slope
+                                                        : guess_slope(mu, nu);
+    c->warm_slope = 0.0;
     double y0 = section_y_of_slope(p, slope);
     double y_scale = fmax(fabs(y0), 1e-3);
 
@@ -593,4 +601,141 @@ int bkf_cycle_profile(bkf_cycle *c, double z, double *f, double *fprime, bkf_err
     if (f) *f = s[IX];
     if (fprime) *fprime = flow_xdot(&c->flow, s);
     return BKF_OK;
+}
+
+/* -------------------------------------------------------------- branch */
+
+/* Continuation unknowns u = (ln w0, q): w0 = f'(0) > 0 on the section, q =
+ * ln mu or nu.  ln w0 is free of the coordinate scaling (a, b change with
+ * mu) and stays O(1) from w0 ~ 2 at small mu to w0 ~ mu at large mu. */
+typedef struct {
+    bkf_cycle_param along;
+    double fixed;
+    bkf_cycle_options options;
+    bkf_cycle *cycle;
+    bkf_cycle_visit visit;
+    void *visit_data;
+    int visit_status;
+    bkf_error *err;
+} branch_ctx;
+
+static void branch_params(const branch_ctx *b, double q, double *mu, double *nu)
+{
+    *mu = b->along == BKF_CYCLE_ALONG_MU ? exp(q) : b->fixed;
+    *nu = b->along == BKF_CYCLE_ALONG_MU ? b->fixed : q;
+}
+
+/* G = ln w(P) - ln w0 and dG/d ln w0 from one shot at (w0, q). */
+static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, double *dg,
+                       bkf_error *err)
+{
+    double mu, nu;
+    branch_params(b, q, &mu, &nu);
+    if (check_inputs(mu, nu, NULL, err) != BKF_OK)
+        return bkf_error_set(err, BKF_ENUMERIC, "branch left the valid range at mu = %g, nu = %g", mu,
+                             nu);
+    flow_params p = {0};
+    flow_set(&p, mu, nu);
+    bkf_stepper_kind kind = b->options.stepper;
+    if (kind == BKF_STEPPER_AUTO) kind = mu > STIFF_MU ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
+    integrator in = {0}, aux = {0};
+    double tol = fmax(0.1 * b->options.tol, 1e-13);
+    int rc = BKF_ENOMEM;
+    if (integrator_init(&in, &p, kind, 0, tol) == BKF_OK && integrator_init(&aux, &p, kind, 1, tol) == BKF_OK) {
+        double w0 = exp(ln_w0);
+        shot sh = {0};
+        rc = shoot(&in, &aux, &p, section_y_of_slope(&p, w0), NULL, &sh, err);
+        if (rc == BKF_OK) {
+            double w_return = p.a * (sh.y_return - p.b * lienard_F(nu));
+            if (!(w_return > 0)) rc = bkf_error_set(err, BKF_ENUMERIC, "return below the section");
+            else {
+                *g = log(w_return) - ln_w0;
+                if (dg) *dg = sh.dP * w0 / w_return - 1.0;
+            }
+        }
+    }
+    integrator_free(&in);
+    integrator_free(&aux);
+    return rc == BKF_ENOMEM ? bkf_error_set(err, BKF_ENOMEM, "out of memory") : rc;
+}
+
+static int branch_residual(const double *u, double *g, double *jac, void *data, bkf_error *err)
+{
+    const branch_ctx *b = data;
+    double dg;
+    int rc = branch_shot(b, u[0], u[1], g, jac ? &dg : NULL, err);
+    if (rc != BKF_OK || !jac) return rc == BKF_ENOMEM ? rc : (rc ? BKF_ENUMERIC : BKF_OK);
+    /* the parameter derivative by a forward difference: one more shot */
+    double h = 1e-6 * fmax(1.0, fabs(u[1])), g2;
+    rc = branch_shot(b, u[0], u[1] + h, &g2, NULL, err);
+    if (rc != BKF_OK) return rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
+    jac[0] = dg;
+    jac[1] = (g2 - g[0]) / h;
+    return BKF_OK;
+}
+
+static int branch_accept(const double *u, const double *tangent, int is_fold, void *data)
+{
+    (void)tangent;
+    (void)is_fold; /* T(mu) and T(nu) have no folds; a located one is still a valid point */
+    branch_ctx *b = data;
+    double mu, nu;
+    branch_params(b, u[1], &mu, &nu);
+    b->cycle->warm_slope = exp(u[0]);
+    int rc = bkf_cycle_solve(b->cycle, mu, nu, &b->options, b->err);
+    if (rc != BKF_OK) {
+        b->visit_status = rc;
+        return 1;
+    }
+    if (b->visit(&b->cycle->result, b->visit_data) != 0) {
+        b->visit_status = -1;
+        return 1;
+    }
+    return 0;
+}
+
+int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed,
+                     const bkf_cycle_options *options, size_t max_points, bkf_cycle_visit visit,
+                     void *data, bkf_error *err)
+{
+    if (!visit) return bkf_error_set(err, BKF_EINPUT, "visit callback is NULL");
+    if (along != BKF_CYCLE_ALONG_MU && along != BKF_CYCLE_ALONG_NU)
+        return bkf_error_set(err, BKF_EINPUT, "branch parameter must be mu or nu");
+    bkf_cycle_options opt = options ? *options : bkf_cycle_options_default();
+    opt.warm_start = 1;
+    double mu_from = along == BKF_CYCLE_ALONG_MU ? from : fixed;
+    double nu_from = along == BKF_CYCLE_ALONG_MU ? fixed : from;
+    double mu_to = along == BKF_CYCLE_ALONG_MU ? to : fixed;
+    double nu_to = along == BKF_CYCLE_ALONG_MU ? fixed : to;
+    int rc = check_inputs(mu_from, nu_from, &opt, err);
+    if (rc == BKF_OK) rc = check_inputs(mu_to, nu_to, NULL, err);
+    if (rc != BKF_OK) return rc;
+    if (from == to) return bkf_error_set(err, BKF_EINPUT, "branch needs from != to");
+
+    branch_ctx b = {along, fixed, opt, bkf_cycle_alloc(), visit, data, 0, err};
+    if (!b.cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    rc = bkf_cycle_solve(b.cycle, mu_from, nu_from, &opt, err);
+    if (rc != BKF_OK) {
+        bkf_cycle_free(b.cycle);
+        return rc;
+    }
+    double q_from = along == BKF_CYCLE_ALONG_MU ? log(from) : from;
+    double q_to = along == BKF_CYCLE_ALONG_MU ? log(to) : to;
+    double u0[2] = {log(b.cycle->result.section_slope), q_from};
+    b.cycle->have_solution = 0; /* the first accepted point solves it again, from u0 */
+
+    bkf_cont_options co = bkf_cont_options_default(1);
+    co.step_max = along == BKF_CYCLE_ALONG_MU ? 0.7 : 0.05;
+    co.step_initial = 0.5 * co.step_max;
+    co.newton_tol = fmax(1e-10, 10.0 * opt.tol);
+    co.stop_index = 1;
+    co.stop_min = fmin(q_from, q_to);
+    co.stop_max = fmax(q_from, q_to);
+    if (max_points) co.max_points = max_points;
+    bkf_cont_report report;
+    rc = bkf_cont_run(branch_residual, branch_accept, &b, u0, 1, q_to > q_from ? 1 : -1, &co, &report, err);
+    bkf_cycle_free(b.cycle);
+    if (b.visit_status > 0) return b.visit_status;
+    if (b.visit_status < 0) return BKF_OK;
+    return rc;
 }
