@@ -13,7 +13,10 @@ OPT      ?= -O2
 BUILD    ?= build
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS))
 PKG_LIBS   = $(shell pkg-config --libs $(PKGS))
-CFLAGS   += -std=c11 $(OPT) -g -Wall -Wextra -Werror -Iinclude $(PKG_CFLAGS)
+# SANITIZE carries instrumentation flags (make sanitize); CFLAGS from the
+# command line add to, never replace, the project's own.
+override CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -Iinclude $(PKG_CFLAGS) $(SANITIZE)
+override LDFLAGS += $(SANITIZE)
 LDLIBS   += $(PKG_LIBS) -lm
 
 LIB_SRC   := $(wildcard src/*.c)
@@ -71,11 +74,11 @@ bench-built: $(BENCH)
 # build folder of its own.
 sanitize: deps
 	@$(MAKE) --no-print-directory BUILD=build/sanitize OPT="-O1" \
-	  CFLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all" \
-	  LDFLAGS="-fsanitize=address,undefined" check-built
+	  SANITIZE="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all" \
+	  check-built
 
 valgrind: deps
-	@$(MAKE) --no-print-directory BUILD=build/valgrind OPT="-O1" $(BUILD)/valgrind/bkfront build/valgrind/run_tests
+	@$(MAKE) --no-print-directory BUILD=build/valgrind OPT="-O1" build/valgrind/bkfront build/valgrind/run_tests
 	valgrind --error-exitcode=1 --leak-check=full --trace-children=yes -q ./build/valgrind/run_tests
 
 $(LIB): $(LIB_OBJ)
@@ -84,13 +87,16 @@ $(LIB): $(LIB_OBJ)
 $(CLI): $(CLI_OBJ) $(LIB)
 	$(CC) $(LDFLAGS) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
 
-$(TESTS): $(TEST_OBJ) $(LIB) $(CLI)
-	$(CC) $(LDFLAGS) -o $@ $(TEST_OBJ) $(LIB) $(LDLIBS)
+# The tests link the CLI's parsing code too (everything but its main).
+CLI_TESTABLE := $(filter-out $(BUILD)/src/cli/main.o,$(CLI_OBJ))
+
+$(TESTS): $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(CLI)
+	$(CC) $(LDFLAGS) -o $@ $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(LDLIBS)
 
 $(BENCH): $(BENCH_OBJ) $(LIB)
 	$(CC) $(LDFLAGS) -o $@ $(BENCH_OBJ) $(LIB) $(LDLIBS)
 
-$(BUILD)/tests/%.o: CFLAGS += -DBKF_CLI_PATH='"$(abspath $(CLI))"'
+$(BUILD)/tests/%.o: override CFLAGS += -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"'
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)

@@ -617,6 +617,7 @@ typedef struct {
     void *visit_data;
     int visit_status;
     bkf_error *err;
+    double from, to, q_from, q_to;
 } branch_ctx;
 
 static void branch_params(const branch_ctx *b, double q, double *mu, double *nu)
@@ -679,8 +680,13 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     (void)tangent;
     (void)is_fold; /* T(mu) and T(nu) have no folds; a located one is still a valid point */
     branch_ctx *b = data;
-    double mu, nu;
-    branch_params(b, u[1], &mu, &nu);
+    double mu, nu, q = u[1];
+    /* the ends are requested values: give them back exactly, not exp(ln A) */
+    if (fabs(q - b->q_from) <= 1e-12 * fmax(1.0, fabs(q))) q = b->q_from;
+    if (fabs(q - b->q_to) <= 1e-12 * fmax(1.0, fabs(q))) q = b->q_to;
+    branch_params(b, q, &mu, &nu);
+    if (q == b->q_from) *(b->along == BKF_CYCLE_ALONG_MU ? &mu : &nu) = b->from;
+    if (q == b->q_to) *(b->along == BKF_CYCLE_ALONG_MU ? &mu : &nu) = b->to;
     b->cycle->warm_slope = exp(u[0]);
     int rc = bkf_cycle_solve(b->cycle, mu, nu, &b->options, b->err);
     if (rc != BKF_OK) {
@@ -712,7 +718,7 @@ int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed
     if (rc != BKF_OK) return rc;
     if (from == to) return bkf_error_set(err, BKF_EINPUT, "branch needs from != to");
 
-    branch_ctx b = {along, fixed, opt, bkf_cycle_alloc(), visit, data, 0, err};
+    branch_ctx b = {along, fixed, opt, bkf_cycle_alloc(), visit, data, 0, err, 0.0, 0.0, 0.0, 0.0};
     if (!b.cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     rc = bkf_cycle_solve(b.cycle, mu_from, nu_from, &opt, err);
     if (rc != BKF_OK) {
@@ -721,6 +727,10 @@ int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed
     }
     double q_from = along == BKF_CYCLE_ALONG_MU ? log(from) : from;
     double q_to = along == BKF_CYCLE_ALONG_MU ? log(to) : to;
+    b.from = from;
+    b.to = to;
+    b.q_from = q_from;
+    b.q_to = q_to;
     double u0[2] = {log(b.cycle->result.section_slope), q_from};
     b.cycle->have_solution = 0; /* the first accepted point solves it again, from u0 */
 

@@ -1,0 +1,97 @@
+/* Table output (TSV and JSON) and atomic file replacement.
+ *
+ * A table has named columns, each holding numbers or text.  The writer
+ * streams to a FILE* the caller owns; it never opens, prints to or closes a
+ * stream on its own.  Layout:
+ *
+ *   TSV   "# " comment lines, then one header line naming the columns
+ *         (tab-separated), then one line per row.  Numbers are "%.17g", so
+ *         they read back bit for bit; NaN is "nan", infinities "inf"/"-inf".
+ *         In text cells a backslash, tab, newline and carriage return are
+ *         written as \\, \t, \n, \r so that a row stays one line.
+ *   JSON  one object {"comments": [...], "columns": [...], "rows": [{...}]},
+ *         each row an object keyed by column name; numbers "%.17g",
+ *         non-finite numbers and NULL text are null; strings are escaped and
+ *         invalid UTF-8 is replaced by U+FFFD, so the output is always valid
+ *         JSON.
+ *
+ * Comments must all come before the first row (both formats put them first).
+ *
+ * The atomic writer gives a stream on a temporary file beside the target;
+ * commit makes it the target in one rename, abort removes it, so a failed or
+ * interrupted run never leaves a truncated target behind. */
+#ifndef BKFRONT_IO_H
+#define BKFRONT_IO_H
+
+#include <stddef.h>
+#include <stdio.h>
+#include "bkfront/status.h"
+
+typedef enum { BKF_IO_NUMBER = 0, BKF_IO_TEXT = 1 } bkf_io_kind;
+
+typedef struct {
+    const char *name;   /* non-empty, no control characters, not starting with '#' */
+    bkf_io_kind kind;
+} bkf_io_column;
+
+typedef enum { BKF_IO_TSV = 0, BKF_IO_JSON = 1 } bkf_io_format;
+
+/* "tsv" or "json"; anything else is BKF_EINPUT. */
+int bkf_io_format_parse(const char *name, bkf_io_format *format, bkf_error *err);
+const char *bkf_io_format_name(bkf_io_format format);
+
+/* One cell: `number` is read for BKF_IO_NUMBER columns, `text` (NULL allowed:
+ * empty in TSV, null in JSON) for BKF_IO_TEXT columns. */
+typedef struct {
+    double number;
+    const char *text;
+} bkf_io_value;
+
+typedef struct bkf_io_table bkf_io_table;
+
+/* The column array is copied.  NULL (with err filled) on bad columns
+ * (BKF_EINPUT: none, empty or duplicate names) or out of memory. */
+bkf_io_table *bkf_io_table_alloc(FILE *out, bkf_io_format format,
+                                 const bkf_io_column *columns, size_t ncolumns,
+                                 bkf_error *err);
+void bkf_io_table_free(bkf_io_table *table);
+
+/* A comment; text with newlines becomes several comment lines.  BKF_EINPUT
+ * once a row has been written. */
+int bkf_io_table_comment(bkf_io_table *table, const char *text, bkf_error *err);
+
+/* One row: ncolumns values in column order. */
+int bkf_io_table_row(bkf_io_table *table, const bkf_io_value *values, bkf_error *err);
+
+/* Writes what is still due (the header of an empty table, the end of the
+ * JSON object) and flushes.  Write errors anywhere in the table's life are
+ * reported here, if not earlier, as BKF_ENUMERIC.  Further calls fail. */
+int bkf_io_table_finish(bkf_io_table *table, bkf_error *err);
+
+size_t bkf_io_table_rows(const bkf_io_table *table);
+
+/* Atomic replacement of the file at `path`. */
+typedef struct bkf_io_atomic bkf_io_atomic;
+
+/* Creates the temporary file (in the target's directory, following a
+ * symbolic link to its target, with the mode of an existing target or else
+ * 0666 less the umask).  BKF_EINPUT when the target cannot be written there:
+ * missing directory, no permission, the target is a directory or another
+ * non-regular file such as a device. */
+bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err);
+
+FILE *bkf_io_atomic_stream(bkf_io_atomic *file);
+
+/* The temporary file's name, stable until commit or abort, so that a signal
+ * handler can unlink() it. */
+const char *bkf_io_atomic_temp_path(const bkf_io_atomic *file);
+
+/* fflush, fsync, close, rename over the target, fsync the directory.  On any
+ * failure the temporary file is removed and the target left as it was
+ * (BKF_ENUMERIC).  Frees `file` in every case. */
+int bkf_io_atomic_commit(bkf_io_atomic *file, bkf_error *err);
+
+/* Closes and removes the temporary file and frees `file` (NULL is a no-op). */
+void bkf_io_atomic_abort(bkf_io_atomic *file);
+
+#endif

@@ -1,0 +1,103 @@
+/* What the bkfront subcommands share: strict parsing of option values, a
+ * small flag table, the subcommand descriptor and all-or-nothing output.
+ *
+ * Every parse error is one line of the form "--flag: <what is wrong>
+ * (<valid form or range>)", ready to print after "bkfront CMD: ". */
+#ifndef BKFRONT_CLI_ARGS_H
+#define BKFRONT_CLI_ARGS_H
+
+#include <stddef.h>
+#include <stdio.h>
+#include "bkfront/io.h"
+#include "bkfront/status.h"
+
+#define CLI_PROGRAM "bkfront"
+#define CLI_VERSION "0.1.0"
+
+/* Largest number of points a range or a grid may have: a typo such as
+ * 1:2:1e9 should be an error, not an hour of work and a huge table. */
+#define CLI_MAX_POINTS 1000000u
+
+/* A subcommand.  run() gets argv[0] = the subcommand's name and returns a
+ * bkf_status, with err filled on failure; main prints "bkfront NAME: message"
+ * and maps the status to the exit code.  run() is not called for --help. */
+typedef struct {
+    const char *name;
+    const char *summary;                 /* one line for `bkfront --help` */
+    int (*run)(int argc, char **argv, bkf_error *err);
+    void (*help)(FILE *out);
+} cli_command;
+
+/* A finite decimal number, the whole string: no leading or trailing space,
+ * no hex floats, no nan/inf, no overflow. */
+int cli_parse_double(const char *flag, const char *text, double *value, bkf_error *err);
+
+/* A decimal integer in [1, max], digits only. */
+int cli_parse_count(const char *flag, const char *text, size_t max, size_t *value,
+                    bkf_error *err);
+
+/* One of `choices` (NULL-terminated); *index is its position. */
+int cli_parse_choice(const char *flag, const char *text, const char *const *choices,
+                     int *index, bkf_error *err);
+
+/* "A" (one point) or "A:B:N" (N points from A to B, both included, N in
+ * [1, CLI_MAX_POINTS]; N = 1 needs A == B).  Points are evenly spaced, or
+ * geometric when `geometric` is set, which needs A, B > 0.  A > B runs
+ * downward.  The ends are exactly A and B. */
+typedef struct {
+    double *values;   /* count points, owned */
+    size_t count;
+    double from, to;  /* A and B; both A for a single value */
+    int is_range;     /* written as A:B:N */
+} cli_range;
+
+int cli_parse_range(const char *flag, const char *text, int geometric, cli_range *range,
+                    bkf_error *err);
+void cli_range_free(cli_range *range);
+
+/* Flag table.  "--name VALUE" and "--name=VALUE" both work; a value is the
+ * next argument whatever it looks like, so "--nu -0.5" is a value.  A flag
+ * given twice, an unknown flag, a missing value, a value given to a switch or
+ * a positional argument is an error naming it. */
+typedef struct {
+    const char *name;     /* "--mu" */
+    const char **value;   /* receives the value text; NULL makes a switch */
+    const char *form;     /* the value's form, for messages: "M or A:B:N" */
+    int *seen;            /* set to 1 when given; may be NULL */
+} cli_flag;
+
+int cli_parse_flags(const cli_flag *flags, size_t nflags, int argc, char **argv,
+                    bkf_error *err);
+
+/* Whether argv (after argv[0]) asks for help: "--help" or "-h". */
+int cli_wants_help(int argc, char **argv);
+
+/* The command line, shell-quoted and on one line, for a provenance comment.
+ * Caller frees; NULL when out of memory. */
+char *cli_command_line(int argc, char **argv);
+
+/* All-or-nothing output: standard output, or a file replaced atomically.
+ * Open before computing (so a bad path fails before any work), write the
+ * finished buffer once, or abort.  While a file is open its temporary is
+ * removed if SIGINT, SIGTERM or SIGHUP ends the process. */
+typedef struct {
+    bkf_io_atomic *file;  /* NULL: standard output */
+} cli_output;
+
+int cli_output_open(cli_output *out, const char *path, const char *flag, bkf_error *err);
+int cli_output_write(cli_output *out, const char *data, size_t size, bkf_error *err);
+void cli_output_abort(cli_output *out);
+
+/* An in-memory stream (open_memstream) to build the whole output in. */
+typedef struct {
+    FILE *stream;
+    char *data;
+    size_t size;
+} cli_buffer;
+
+int cli_buffer_open(cli_buffer *buf, bkf_error *err);
+/* Closes the stream; data and size are then final.  Nonzero on error. */
+int cli_buffer_close(cli_buffer *buf, bkf_error *err);
+void cli_buffer_free(cli_buffer *buf);
+
+#endif

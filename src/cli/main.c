@@ -1,0 +1,117 @@
+/* bkfront SUBCOMMAND [options]: dispatch, help, version, and the one place
+ * where a status becomes an error line and an exit code.
+ *
+ * A subcommand is a cli_command (args.h) defined in its own cmd_NAME.c; adding
+ * one is an extern declaration and an entry in `commands` below. */
+#include "args.h"
+
+#include <string.h>
+
+extern const cli_command cli_cmd_period;
+
+static const cli_command *const commands[] = {
+    &cli_cmd_period,
+};
+
+#define NCOMMANDS (sizeof commands / sizeof commands[0])
+
+static const cli_command *find_command(const char *name)
+{
+    for (size_t i = 0; i < NCOMMANDS; i++)
+        if (strcmp(commands[i]->name, name) == 0) return commands[i];
+    return NULL;
+}
+
+static void print_usage(FILE *out)
+{
+    fprintf(out,
+            "usage: " CLI_PROGRAM " SUBCOMMAND [options]\n"
+            "       " CLI_PROGRAM " help SUBCOMMAND\n"
+            "       " CLI_PROGRAM " --help | --version\n"
+            "\n"
+            "Fronts and oscillations of the elastic excitable medium (Burridge-Knopoff\n"
+            "model with creep-slip friction), built on the period T(mu, nu) of\n"
+            "    f'' + mu (f^2 - 1) f' + f = nu.\n"
+            "\n"
+            "subcommands:\n");
+    for (size_t i = 0; i < NCOMMANDS; i++)
+        fprintf(out, "  %-10s %s\n", commands[i]->name, commands[i]->summary);
+    fprintf(out,
+            "\n"
+            "Output is TSV (comment lines start with '#', then a header line naming the\n"
+            "columns; numbers as %%.17g) or JSON with --format json.\n"
+            "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
+}
+
+/* The names, for error lines that say what would have been valid. */
+static void command_list(char *buf, size_t size)
+{
+    buf[0] = '\0';
+    for (size_t i = 0; i < NCOMMANDS; i++) {
+        size_t used = strlen(buf);
+        snprintf(buf + used, size - used, "%s%s", i ? ", " : "", commands[i]->name);
+    }
+}
+
+static int unknown_command(const char *name)
+{
+    char list[256];
+    command_list(list, sizeof list);
+    /* The name is user text: keep the line one line. */
+    char shown[64];
+    size_t n = 0;
+    for (; name[n] && n < sizeof shown - 1; n++)
+        shown[n] = ((unsigned char)name[n] < 0x20 || name[n] == 0x7f) ? '?' : name[n];
+    shown[n] = '\0';
+    fprintf(stderr, CLI_PROGRAM ": unknown subcommand '%s' (one of: %s; see '" CLI_PROGRAM
+                    " --help')\n", shown, list);
+    return 2;
+}
+
+/* Help goes to stdout and succeeds even if stdout is closed: nothing useful
+ * can be said about that on the same broken channel. */
+static int print_help(const cli_command *cmd)
+{
+    if (cmd)
+        cmd->help(stdout);
+    else
+        print_usage(stdout);
+    return fflush(stdout) == 0 ? 0 : 1;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        print_usage(stderr);
+        return 2;
+    }
+    const char *first = argv[1];
+    if (strcmp(first, "--help") == 0 || strcmp(first, "-h") == 0) return print_help(NULL);
+    if (strcmp(first, "--version") == 0) {
+        printf(CLI_PROGRAM " " CLI_VERSION "\n");
+        return fflush(stdout) == 0 ? 0 : 1;
+    }
+    if (strcmp(first, "help") == 0) {
+        if (argc == 2) return print_help(NULL);
+        if (argc > 3) {
+            fprintf(stderr, CLI_PROGRAM " help: give one subcommand name\n");
+            return 2;
+        }
+        const cli_command *cmd = find_command(argv[2]);
+        return cmd ? print_help(cmd) : unknown_command(argv[2]);
+    }
+
+    const cli_command *cmd = find_command(first);
+    if (!cmd) return unknown_command(first);
+    int sub_argc = argc - 1;
+    char **sub_argv = argv + 1;
+    if (cli_wants_help(sub_argc, sub_argv)) return print_help(cmd);
+
+    bkf_error err = {{0}};
+    int status = cmd->run(sub_argc, sub_argv, &err);
+    if (status != BKF_OK) {
+        fprintf(stderr, CLI_PROGRAM " %s: %s\n", cmd->name,
+                err.message[0] ? err.message : "failed");
+    }
+    return bkf_status_exit_code(status);
+}

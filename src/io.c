@@ -1,0 +1,549 @@
+/* realpath() is X/Open; _XOPEN_SOURCE 700 also brings POSIX 2008 (fsync,
+ * O_CLOEXEC). */
+#define _XOPEN_SOURCE 700
+#include "bkfront/io.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+/* ------------------------------------------------------------------ tables */
+
+struct bkf_io_table {
+    FILE *out;
+    bkf_io_format format;
+    size_t ncolumns;
+    bkf_io_column *columns;  /* names point into `names` */
+    char *names;
+    size_t rows;
+    size_t comments;
+    int header_done;         /* TSV header / JSON "columns" written */
+    int finished;
+    int write_failed;
+    int write_errno;
+};
+
+int bkf_io_format_parse(const char *name, bkf_io_format *format, bkf_error *err)
+{
+    if (name && strcmp(name, "tsv") == 0) {
+        *format = BKF_IO_TSV;
+        return BKF_OK;
+    }
+    if (name && strcmp(name, "json") == 0) {
+        *format = BKF_IO_JSON;
+        return BKF_OK;
+    }
+    return bkf_error_set(err, BKF_EINPUT, "format must be tsv or json");
+}
+
+const char *bkf_io_format_name(bkf_io_format format)
+{
+    return format == BKF_IO_JSON ? "json" : "tsv";
+}
+
+/* Every write goes through here so that one failed write (a full disk, a
+ * closed pipe) is remembered and reported by finish even if the caller
+ * ignores the row's status. */
+static void put(bkf_io_table *t, const char *s, size_t n)
+{
+    if (t->write_failed || n == 0) return;
+    if (fwrite(s, 1, n, t->out) != n) {
+        t->write_failed = 1;
+        t->write_errno = errno;
+    }
+}
+
+static void puts_(bkf_io_table *t, const char *s) { put(t, s, strlen(s)); }
+
+static int write_status(const bkf_io_table *t, bkf_error *err)
+{
+    if (!t->write_failed) return BKF_OK;
+    return bkf_error_set(err, BKF_ENUMERIC, "writing the table failed: %s",
+                         t->write_errno ? strerror(t->write_errno) : "write error");
+}
+
+/* JSON needs "null" where TSV has a spelling for non-finite values. */
+static void put_number(bkf_io_table *t, double x)
+{
+    char buf[40];
+    if (isnan(x))
+        puts_(t, t->format == BKF_IO_JSON ? "null" : "nan");
+    else if (isinf(x))
+        puts_(t, t->format == BKF_IO_JSON ? "null" : (x > 0 ? "inf" : "-inf"));
+    else {
+        int n = snprintf(buf, sizeof buf, "%.17g", x);
+        put(t, buf, (size_t)n);
+    }
+}
+
+static void put_tsv_text(bkf_io_table *t, const char *s)
+{
+    const char *run = s;
+    for (; *s; s++) {
+        const char *esc = NULL;
+        switch (*s) {
+        case '\\': esc = "\\\\"; break;
+        case '\t': esc = "\\t"; break;
+        case '\n': esc = "\\n"; break;
+        case '\r': esc = "\\r"; break;
+        default: continue;
+        }
+        put(t, run, (size_t)(s - run));
+        puts_(t, esc);
+        run = s + 1;
+    }
+    put(t, run, (size_t)(s - run));
+}
+
+/* Length of the well-formed UTF-8 sequence at s (RFC 3629: no overlong forms,
+ * no surrogates, nothing above U+10FFFF), or 0. */
+static size_t utf8_sequence(const unsigned char *s)
+{
+    unsigned char c = s[0];
+    size_t len;
+    unsigned char lo = 0x80, hi = 0xBF;
+    if (c >= 0xC2 && c <= 0xDF) len = 2;
+    else if (c >= 0xE0 && c <= 0xEF) {
+        len = 3;
+        if (c == 0xE0) lo = 0xA0;
+        if (c == 0xED) hi = 0x9F;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+        len = 4;
+        if (c == 0xF0) lo = 0x90;
+        if (c == 0xF4) hi = 0x8F;
+    } else
+        return 0;
+    if (s[1] < lo || s[1] > hi) return 0;
+    for (size_t i = 2; i < len; i++)
+        if (s[i] < 0x80 || s[i] > 0xBF) return 0;
+    return len;
+}
+
+static void put_json_string(bkf_io_table *t, const char *str)
+{
+    const unsigned char *s = (const unsigned char *)str;
+    puts_(t, "\"");
+    while (*s) {
+        unsigned char c = *s;
+        if (c >= 0x80) {
+            size_t len = utf8_sequence(s);
+            if (len) {
+                put(t, (const char *)s, len);
+                s += len;
+            } else {
+                puts_(t, "\\ufffd");
+                s++;
+            }
+            continue;
+        }
+        char buf[8];
+        switch (c) {
+        case '"': puts_(t, "\\\""); break;
+        case '\\': puts_(t, "\\\\"); break;
+        case '\n': puts_(t, "\\n"); break;
+        case '\t': puts_(t, "\\t"); break;
+        case '\r': puts_(t, "\\r"); break;
+        case '\b': puts_(t, "\\b"); break;
+        case '\f': puts_(t, "\\f"); break;
+        default:
+            if (c < 0x20) {
+                snprintf(buf, sizeof buf, "\\u%04x", c);
+                puts_(t, buf);
+            } else
+                put(t, (const char *)s, 1);
+        }
+        s++;
+    }
+    puts_(t, "\"");
+}
+
+bkf_io_table *bkf_io_table_alloc(FILE *out, bkf_io_format format,
+                                 const bkf_io_column *columns, size_t ncolumns,
+                                 bkf_error *err)
+{
+    if (!out) {
+        bkf_error_set(err, BKF_EINPUT, "table output stream is NULL");
+        return NULL;
+    }
+    if (format != BKF_IO_TSV && format != BKF_IO_JSON) {
+        bkf_error_set(err, BKF_EINPUT, "table format %d is not tsv or json", (int)format);
+        return NULL;
+    }
+    if (ncolumns == 0 || !columns) {
+        bkf_error_set(err, BKF_EINPUT, "a table needs at least one column");
+        return NULL;
+    }
+    size_t total = 0;
+    for (size_t i = 0; i < ncolumns; i++) {
+        const char *name = columns[i].name;
+        if (!name || !*name) {
+            bkf_error_set(err, BKF_EINPUT, "column %zu has no name", i + 1);
+            return NULL;
+        }
+        /* A header starting with '#' would read as a comment, and a control
+         * character would break the one-line header. */
+        if (name[0] == '#') {
+            bkf_error_set(err, BKF_EINPUT, "column name '%s' must not start with '#'", name);
+            return NULL;
+        }
+        for (const unsigned char *p = (const unsigned char *)name; *p; p++)
+            if (*p < 0x20 || *p == 0x7f) {
+                bkf_error_set(err, BKF_EINPUT,
+                              "column %zu's name contains a control character", i + 1);
+                return NULL;
+            }
+        if (columns[i].kind != BKF_IO_NUMBER && columns[i].kind != BKF_IO_TEXT) {
+            bkf_error_set(err, BKF_EINPUT, "column '%s' has an unknown kind", name);
+            return NULL;
+        }
+        for (size_t j = 0; j < i; j++)
+            if (strcmp(columns[j].name, name) == 0) {
+                bkf_error_set(err, BKF_EINPUT, "column name '%s' is used twice", name);
+                return NULL;
+            }
+        total += strlen(name) + 1;
+    }
+    bkf_io_table *t = calloc(1, sizeof *t);
+    if (t) {
+        t->columns = malloc(ncolumns * sizeof *t->columns);
+        t->names = malloc(total);
+    }
+    if (!t || !t->columns || !t->names) {
+        bkf_io_table_free(t);
+        bkf_error_set(err, BKF_ENOMEM, "out of memory allocating a table");
+        return NULL;
+    }
+    char *p = t->names;
+    for (size_t i = 0; i < ncolumns; i++) {
+        size_t n = strlen(columns[i].name) + 1;
+        memcpy(p, columns[i].name, n);
+        t->columns[i].name = p;
+        t->columns[i].kind = columns[i].kind;
+        p += n;
+    }
+    t->out = out;
+    t->format = format;
+    t->ncolumns = ncolumns;
+    return t;
+}
+
+void bkf_io_table_free(bkf_io_table *table)
+{
+    if (!table) return;
+    free(table->columns);
+    free(table->names);
+    free(table);
+}
+
+size_t bkf_io_table_rows(const bkf_io_table *table) { return table ? table->rows : 0; }
+
+static int check_usable(const bkf_io_table *t, bkf_error *err)
+{
+    if (!t) return bkf_error_set(err, BKF_EINPUT, "table is NULL");
+    if (t->finished) return bkf_error_set(err, BKF_EINPUT, "table is already finished");
+    return BKF_OK;
+}
+
+int bkf_io_table_comment(bkf_io_table *t, const char *text, bkf_error *err)
+{
+    int s = check_usable(t, err);
+    if (s) return s;
+    if (t->header_done)
+        return bkf_error_set(err, BKF_EINPUT, "comments must come before the first row");
+    if (!text) text = "";
+    /* Each line its own comment: a newline inside one would end the comment
+     * line in TSV and start an uncommented line. */
+    for (;;) {
+        const char *nl = strchr(text, '\n');
+        size_t len = nl ? (size_t)(nl - text) : strlen(text);
+        if (len > 0 && text[len - 1] == '\r') len--;
+        if (t->format == BKF_IO_TSV) {
+            puts_(t, "# ");
+            for (size_t i = 0; i < len; i++) {
+                /* keep the comment on its line */
+                char c = text[i] == '\r' ? ' ' : text[i];
+                put(t, &c, 1);
+            }
+            puts_(t, "\n");
+        } else {
+            char *line = malloc(len + 1);
+            if (!line) return bkf_error_set(err, BKF_ENOMEM, "out of memory writing a comment");
+            memcpy(line, text, len);
+            line[len] = '\0';
+            puts_(t, t->comments == 0 ? "{\n  \"comments\": [\n    " : ",\n    ");
+            put_json_string(t, line);
+            free(line);
+        }
+        t->comments++;
+        if (!nl) break;
+        text = nl + 1;
+    }
+    return write_status(t, err);
+}
+
+static void write_header(bkf_io_table *t)
+{
+    if (t->format == BKF_IO_TSV) {
+        for (size_t i = 0; i < t->ncolumns; i++) {
+            if (i) puts_(t, "\t");
+            puts_(t, t->columns[i].name);
+        }
+        puts_(t, "\n");
+    } else {
+        puts_(t, t->comments == 0 ? "{\n  \"comments\": [],\n  \"columns\": ["
+                                  : "\n  ],\n  \"columns\": [");
+        for (size_t i = 0; i < t->ncolumns; i++) {
+            if (i) puts_(t, ", ");
+            put_json_string(t, t->columns[i].name);
+        }
+        puts_(t, "],\n  \"rows\": [");
+    }
+    t->header_done = 1;
+}
+
+int bkf_io_table_row(bkf_io_table *t, const bkf_io_value *values, bkf_error *err)
+{
+    int s = check_usable(t, err);
+    if (s) return s;
+    if (!values) return bkf_error_set(err, BKF_EINPUT, "row values are NULL");
+    if (!t->header_done) write_header(t);
+    if (t->format == BKF_IO_TSV) {
+        for (size_t i = 0; i < t->ncolumns; i++) {
+            if (i) puts_(t, "\t");
+            if (t->columns[i].kind == BKF_IO_NUMBER)
+                put_number(t, values[i].number);
+            else if (values[i].text)
+                put_tsv_text(t, values[i].text);
+        }
+        puts_(t, "\n");
+    } else {
+        puts_(t, t->rows == 0 ? "\n    {" : ",\n    {");
+        for (size_t i = 0; i < t->ncolumns; i++) {
+            if (i) puts_(t, ", ");
+            put_json_string(t, t->columns[i].name);
+            puts_(t, ": ");
+            if (t->columns[i].kind == BKF_IO_NUMBER)
+                put_number(t, values[i].number);
+            else if (values[i].text)
+                put_json_string(t, values[i].text);
+            else
+                puts_(t, "null");
+        }
+        puts_(t, "}");
+    }
+    t->rows++;
+    return write_status(t, err);
+}
+
+int bkf_io_table_finish(bkf_io_table *t, bkf_error *err)
+{
+    int s = check_usable(t, err);
+    if (s) return s;
+    if (!t->header_done) write_header(t);
+    if (t->format == BKF_IO_JSON) puts_(t, t->rows ? "\n  ]\n}\n" : "]\n}\n");
+    t->finished = 1;
+    if (!t->write_failed && (fflush(t->out) != 0 || ferror(t->out))) {
+        t->write_failed = 1;
+        t->write_errno = errno;
+    }
+    return write_status(t, err);
+}
+
+/* ------------------------------------------------------- atomic replacement */
+
+struct bkf_io_atomic {
+    FILE *stream;
+    char *target;    /* where commit renames to (symbolic links resolved) */
+    char *temp;
+    char *dir;       /* the target's directory, fsynced after the rename */
+};
+
+static void atomic_free(bkf_io_atomic *a)
+{
+    if (!a) return;
+    free(a->target);
+    free(a->temp);
+    free(a->dir);
+    free(a);
+}
+
+static char *dup_string(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    if (d) memcpy(d, s, n);
+    return d;
+}
+
+/* A symbolic link's target is replaced, not the link: rename() over the link
+ * would silently turn it into a regular file. */
+static char *resolve_target(const char *path, bkf_error *err, int *status)
+{
+    struct stat st;
+    *status = BKF_OK;
+    if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
+        char *real = realpath(path, NULL);
+        if (real) return real;
+        /* A dangling link: write where it points, relative to its directory. */
+        char buf[PATH_MAX];
+        ssize_t n = readlink(path, buf, sizeof buf - 1);
+        if (n < 0 || (size_t)n >= sizeof buf - 1) {
+            *status = bkf_error_set(err, BKF_EINPUT, "cannot resolve the symbolic link '%s'", path);
+            return NULL;
+        }
+        buf[n] = '\0';
+        const char *slash = strrchr(path, '/');
+        if (buf[0] == '/' || !slash) return dup_string(buf);
+        size_t dlen = (size_t)(slash - path) + 1;
+        char *joined = malloc(dlen + (size_t)n + 1);
+        if (joined) {
+            memcpy(joined, path, dlen);
+            memcpy(joined + dlen, buf, (size_t)n + 1);
+        }
+        return joined;
+    }
+    return dup_string(path);
+}
+
+bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
+{
+    if (!path || !*path) {
+        bkf_error_set(err, BKF_EINPUT, "output file name is empty");
+        return NULL;
+    }
+    bkf_io_atomic *a = calloc(1, sizeof *a);
+    if (!a) {
+        bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        return NULL;
+    }
+    int status = BKF_OK;
+    a->target = resolve_target(path, err, &status);
+    if (!a->target) {
+        if (!status) bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        atomic_free(a);
+        return NULL;
+    }
+    size_t tlen = strlen(a->target);
+    if (a->target[tlen - 1] == '/') {
+        bkf_error_set(err, BKF_EINPUT, "output '%s' names a directory, not a file", path);
+        atomic_free(a);
+        return NULL;
+    }
+
+    mode_t mode = 0666;  /* open() applies the umask */
+    struct stat st;
+    int exists = stat(a->target, &st) == 0;
+    if (exists && !S_ISREG(st.st_mode)) {
+        /* rename() would replace a device or FIFO with a regular file. */
+        bkf_error_set(err, BKF_EINPUT, "output '%s' exists and is not a regular file", path);
+        atomic_free(a);
+        return NULL;
+    }
+
+    const char *slash = strrchr(a->target, '/');
+    size_t dlen = slash ? (size_t)(slash - a->target) + 1 : 0;
+    const char *base = a->target + dlen;
+    a->dir = malloc(dlen + 2);
+    a->temp = malloc(tlen + 64);
+    if (!a->dir || !a->temp) {
+        bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        atomic_free(a);
+        return NULL;
+    }
+    if (dlen) {
+        memcpy(a->dir, a->target, dlen);
+        a->dir[dlen] = '\0';
+    } else
+        strcpy(a->dir, ".");
+
+    /* O_EXCL with a fresh name rather than mkstemp(): mkstemp forces mode
+     * 0600, and the umask cannot be read without changing it. */
+    static unsigned counter;
+    struct timespec now;
+    clock_gettime(CLOCK_REALTIME, &now);
+    int fd = -1, open_errno = 0;
+    for (int attempt = 0; attempt < 100 && fd < 0; attempt++) {
+        unsigned long tag = (unsigned long)now.tv_nsec ^ ((unsigned long)counter++ * 2654435761u);
+        snprintf(a->temp, tlen + 64, "%.*s.%s.tmp.%ld.%lx", (int)dlen, a->target, base,
+                 (long)getpid(), tag & 0xffffffffUL);
+        fd = open(a->temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
+        open_errno = errno;
+        if (fd < 0 && open_errno != EEXIST) break;
+    }
+    if (fd < 0) {
+        bkf_error_set(err, BKF_EINPUT, "cannot write '%s': %s", path, strerror(open_errno));
+        atomic_free(a);
+        return NULL;
+    }
+    if (exists) (void)fchmod(fd, st.st_mode & 07777); /* best effort: keep the old mode */
+    a->stream = fdopen(fd, "w");
+    if (!a->stream) {
+        int e = errno;
+        close(fd);
+        unlink(a->temp);
+        bkf_error_set(err, BKF_ENOMEM, "cannot open a stream on '%s': %s", a->temp, strerror(e));
+        atomic_free(a);
+        return NULL;
+    }
+    return a;
+}
+
+FILE *bkf_io_atomic_stream(bkf_io_atomic *file) { return file ? file->stream : NULL; }
+
+const char *bkf_io_atomic_temp_path(const bkf_io_atomic *file)
+{
+    return file ? file->temp : NULL;
+}
+
+int bkf_io_atomic_commit(bkf_io_atomic *a, bkf_error *err)
+{
+    if (!a) return bkf_error_set(err, BKF_EINPUT, "atomic file is NULL");
+    int status = BKF_OK;
+    const char *step = NULL;
+    int e = 0;
+    if (fflush(a->stream) != 0 || ferror(a->stream)) {
+        step = "write";
+        e = errno;
+    } else if (fsync(fileno(a->stream)) != 0) {
+        step = "fsync";
+        e = errno;
+    }
+    if (fclose(a->stream) != 0 && !step) {
+        step = "close";
+        e = errno;
+    }
+    a->stream = NULL;
+    if (!step && rename(a->temp, a->target) != 0) {
+        step = "rename";
+        e = errno;
+    }
+    if (step) {
+        unlink(a->temp);
+        status = bkf_error_set(err, BKF_ENUMERIC, "writing '%s' failed (%s): %s", a->target,
+                               step, e ? strerror(e) : "I/O error");
+    } else {
+        /* The rename is durable only once the directory entry is on disk;
+         * some file systems cannot fsync a directory, which is no error. */
+        int dfd = open(a->dir, O_RDONLY | O_CLOEXEC);
+        if (dfd >= 0) {
+            (void)fsync(dfd);
+            close(dfd);
+        }
+    }
+    atomic_free(a);
+    return status;
+}
+
+void bkf_io_atomic_abort(bkf_io_atomic *a)
+{
+    if (!a) return;
+    if (a->stream) fclose(a->stream);
+    unlink(a->temp);
+    atomic_free(a);
+}

@@ -1,0 +1,384 @@
+/* `bkfront period` as a user sees it: the built binary (BKF_CLI_PATH), its
+ * stdout, stderr and exit status. */
+#define _POSIX_C_SOURCE 200809L
+#include "harness.h"
+
+#include <fcntl.h>
+#include <stdarg.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#ifndef BKF_CLI_PATH
+#error "BKF_CLI_PATH (the built bkfront binary) is defined by the Makefile for tests"
+#endif
+
+/* In test_io.c. */
+int bkf_test_json_valid(const char *text);
+
+typedef struct {
+    char *out, *err;
+    int code;      /* exit status, or -1 if killed by a signal */
+} run_result;
+
+static char *read_all(int fd)
+{
+    size_t cap = 4096, n = 0;
+    char *buf = malloc(cap);
+    CHECK(buf);
+    lseek(fd, 0, SEEK_SET);
+    for (;;) {
+        if (n + 1 >= cap) {
+            buf = realloc(buf, cap *= 2);
+            CHECK(buf);
+        }
+        ssize_t k = read(fd, buf + n, cap - n - 1);
+        if (k <= 0) break;
+        n += (size_t)k;
+    }
+    buf[n] = '\0';
+    return buf;
+}
+
+static int temp_fd(void)
+{
+    char name[] = "/tmp/bkf_cli_test_XXXXXX";
+    int fd = mkstemp(name);
+    CHECK(fd >= 0);
+    unlink(name);
+    return fd;
+}
+
+/* Runs bkfront with the given arguments (NULL-terminated). Output goes to
+ * unlinked temporary files rather than pipes: no deadlock however much the
+ * child writes. */
+static run_result run_argv(const char *const *args)
+{
+    char *argv[64];
+    int argc = 0;
+    argv[argc++] = BKF_CLI_PATH;
+    /* execv's argv is char *const[] for history's sake; it does not write. */
+    for (; args[argc - 1] && argc < 63; argc++) argv[argc] = (char *)args[argc - 1];
+    argv[argc] = NULL;
+    int out = temp_fd(), err = temp_fd();
+    fflush(stdout);
+    pid_t pid = fork();
+    CHECK(pid >= 0);
+    if (pid == 0) {
+        dup2(out, 1);
+        dup2(err, 2);
+        execv(BKF_CLI_PATH, argv);
+        _exit(127);
+    }
+    int status = 0;
+    CHECK(waitpid(pid, &status, 0) == pid);
+    run_result r = {read_all(out), read_all(err), WIFEXITED(status) ? WEXITSTATUS(status) : -1};
+    close(out);
+    close(err);
+    return r;
+}
+
+#define RUN(...) run_argv((const char *const[]){__VA_ARGS__, NULL})
+
+static void run_free(run_result *r)
+{
+    free(r->out);
+    free(r->err);
+}
+
+static int count_lines(const char *s)
+{
+    int n = 0;
+    for (; *s; s++) n += *s == '\n';
+    return n;
+}
+
+/* Bad input: exit 2, nothing on stdout, one line on stderr that starts
+ * "bkfront period: " and contains `names`. */
+static void check_bad_input(run_result r, const char *names, const char *what)
+{
+    CHECK_MSG(r.code == 2, "%s: exit %d, stderr: %s", what, r.code, r.err);
+    CHECK_MSG(r.out[0] == '\0', "%s: stdout not empty: %s", what, r.out);
+    CHECK_MSG(count_lines(r.err) == 1, "%s: stderr is not one line: %s", what, r.err);
+    CHECK_MSG(strncmp(r.err, "bkfront period: ", 16) == 0, "%s: %s", what, r.err);
+    CHECK_MSG(strstr(r.err, names), "%s: '%s' not named in: %s", what, names, r.err);
+    run_free(&r);
+}
+
+/* Splits the TSV on stdout: the header's fields and the first row's. */
+static int tsv_field(const char *tsv, int row, const char *column, double *value)
+{
+    const char *p = tsv;
+    while (*p == '#') p = strchr(p, '\n') + 1;
+    const char *header = p;
+    int col = 0, found = -1;
+    size_t clen = strlen(column);
+    for (const char *q = header; *q && *q != '\n'; col++) {
+        size_t len = strcspn(q, "\t\n");
+        if (len == clen && strncmp(q, column, len) == 0) found = col;
+        q += len;
+        if (*q == '\t') q++;
+    }
+    if (found < 0) return 0;
+    p = strchr(header, '\n');
+    for (int r = 0; r <= row; r++) {
+        if (!p || !p[1]) return 0;
+        if (r < row) p = strchr(p + 1, '\n');
+    }
+    p++;
+    for (int c = 0; c < found; c++) p = strchr(p, '\t') + 1;
+    char *end;
+    *value = strtod(p, &end);
+    return *end == '\t' || *end == '\n';
+}
+
+static const char *const expected_columns =
+    "mu\tnu\tT\tT_err\tT_asym\tT_asym2\txmax\txmin\tmultiplier\tlog_multiplier\tsteps\t"
+    "rhs_calls\tnewton_iterations\tstepper\n";
+
+TEST(cli_period_rejects_nu_outside_active_range)
+{
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "1"), "nu", "--nu 1");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "-1.5"), "nu", "--nu -1.5");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "-1:0:3"), "nu", "--nu -1:0:3");
+    run_result r = RUN("period", "--mu", "1", "--nu", "1");
+    CHECK_MSG(strstr(r.err, "no limit cycle") && strstr(r.err, "continuous slip"), "%s", r.err);
+    run_free(&r);
+}
+
+TEST(cli_period_rejects_bad_mu)
+{
+    check_bad_input(RUN("period", "--mu", "0", "--nu", "0"), "--mu", "--mu 0");
+    check_bad_input(RUN("period", "--mu", "-1", "--nu", "0"), "--mu", "--mu -1");
+    check_bad_input(RUN("period", "--mu", "nan", "--nu", "0"), "--mu", "--mu nan");
+    check_bad_input(RUN("period", "--mu", "1e", "--nu", "0"), "--mu", "--mu 1e");
+    check_bad_input(RUN("period", "--mu", "inf", "--nu", "0"), "--mu", "--mu inf");
+    check_bad_input(RUN("period", "--mu", "0x1p0", "--nu", "0"), "--mu", "--mu 0x1p0");
+    check_bad_input(RUN("period", "--mu", "2e6", "--nu", "0"), "--mu", "--mu 2e6");
+    check_bad_input(RUN("period", "--mu", "1:2e6:3", "--nu", "0"), "--mu", "--mu 1:2e6:3");
+    check_bad_input(RUN("period", "--mu", "1:2", "--nu", "0"), "--mu", "--mu 1:2");
+    check_bad_input(RUN("period", "--mu", "0:1:3", "--log", "--nu", "0"), "--mu", "--log 0:1:3");
+    check_bad_input(RUN("period", "--mu", "", "--nu", "0"), "--mu", "--mu ''");
+}
+
+TEST(cli_period_rejects_bad_tol)
+{
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "--tol", "1"), "--tol", "--tol 1");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "--tol", "1e-20"), "--tol",
+                    "--tol 1e-20");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "--tol", "-1e-3"), "--tol",
+                    "--tol -1e-3");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "--tol", "nan"), "--tol", "--tol nan");
+}
+
+TEST(cli_period_rejects_bad_options)
+{
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "--bogus"), "--bogus", "--bogus");
+    check_bad_input(RUN("period", "--nu", "0"), "--mu", "missing --mu");
+    check_bad_input(RUN("period", "--mu", "1"), "--nu", "missing --nu");
+    check_bad_input(RUN("period", "--mu", "1", "--nu"), "--nu", "--nu without a value");
+    check_bad_input(RUN("period", "--mu", "1", "--mu", "2", "--nu", "0"), "--mu", "--mu twice");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "extra"), "extra", "positional");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "--format", "csv"), "--format",
+                    "--format csv");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "--stepper", "rk4"), "--stepper",
+                    "--stepper rk4");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "-0.5:0.5:3", "--log"), "--log",
+                    "--log with a nu range");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "--continue", "mu"), "--mu",
+                    "--continue mu without a range");
+    check_bad_input(RUN("period", "--mu", "1:2:3", "--nu", "0:0.5:3", "--continue", "mu"),
+                    "--nu", "--continue mu with a nu range");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "--continue", "tau"), "--continue",
+                    "--continue tau");
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "--out", "/nonexistent_bkf/x.tsv"),
+                    "--out", "--out in a missing directory");
+}
+
+TEST(cli_usage_help_and_version)
+{
+    run_result r = RUN("period", "--help");
+    CHECK_MSG(r.code == 0 && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    const char *needles[] = {"--mu", "--nu", "--tol", "--log", "--continue", "--stepper",
+                             "--format", "--out", "1e-10", "T_err", "newton_iterations",
+                             "stepper"};
+    for (size_t i = 0; i < sizeof needles / sizeof needles[0]; i++)
+        CHECK_MSG(strstr(r.out, needles[i]), "help lacks %s", needles[i]);
+    char *period_help = r.out;
+    free(r.err);
+
+    r = RUN("help", "period");
+    CHECK(r.code == 0 && strcmp(r.out, period_help) == 0);
+    run_free(&r);
+    free(period_help);
+
+    r = RUN("--help");
+    CHECK(r.code == 0 && strstr(r.out, "period") && strstr(r.out, "usage"));
+    run_free(&r);
+
+    r = RUN("--version");
+    CHECK(r.code == 0 && strncmp(r.out, "bkfront ", 8) == 0 && count_lines(r.out) == 1);
+    run_free(&r);
+
+    r = RUN("frobnicate");
+    CHECK_MSG(r.code == 2 && r.out[0] == '\0' && count_lines(r.err) == 1 &&
+                  strstr(r.err, "frobnicate"),
+              "exit %d: %s", r.code, r.err);
+    run_free(&r);
+
+    r = RUN("help", "frobnicate");
+    CHECK(r.code == 2 && r.out[0] == '\0' && count_lines(r.err) == 1);
+    run_free(&r);
+
+    const char *none[] = {NULL};
+    r = run_argv(none);
+    CHECK(r.code == 2 && r.out[0] == '\0' && strstr(r.err, "usage"));
+    run_free(&r);
+}
+
+TEST(cli_period_published_value)
+{
+    run_result r = RUN("period", "--mu", "1", "--nu", "0");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK_MSG(r.err[0] == '\0', "stderr: %s", r.err);
+    CHECK_MSG(strstr(r.out, expected_columns), "no header line in:\n%s", r.out);
+    CHECK(strstr(r.out, "# command: bkfront period --mu 1 --nu 0\n"));
+    double mu, nu, T, T_err, T_asym, T_asym2;
+    CHECK(tsv_field(r.out, 0, "mu", &mu) && mu == 1);
+    CHECK(tsv_field(r.out, 0, "nu", &nu) && nu == 0);
+    CHECK(tsv_field(r.out, 0, "T", &T));
+    CHECK_CLOSE(T, 6.663286859323130, 1e-9, 0);
+    CHECK(tsv_field(r.out, 0, "T_err", &T_err) && T_err >= 0 && T_err < 1e-8);
+    CHECK(tsv_field(r.out, 0, "T_asym", &T_asym));
+    CHECK_CLOSE(T_asym, 3 - 2 * log(2.0), 1e-15, 0);
+    CHECK(tsv_field(r.out, 0, "T_asym2", &T_asym2) && isfinite(T_asym2));
+    CHECK(!tsv_field(r.out, 1, "T", &T)); /* exactly one row */
+    bkf_test_note("T(1, 0) = %.17g, T_err = %.3g", T, T_err);
+    run_free(&r);
+}
+
+TEST(cli_period_grid_mu_fastest)
+{
+    run_result r = RUN("period", "--mu", "0.5:1:2", "--nu", "-0.2:0.2:2", "--tol", "1e-8");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    double want_mu[] = {0.5, 1, 0.5, 1}, want_nu[] = {-0.2, -0.2, 0.2, 0.2};
+    for (int i = 0; i < 4; i++) {
+        double mu, nu, T;
+        CHECK(tsv_field(r.out, i, "mu", &mu) && mu == want_mu[i]);
+        CHECK(tsv_field(r.out, i, "nu", &nu) && nu == want_nu[i]);
+        CHECK(tsv_field(r.out, i, "T", &T) && T > 6 && T < 8);
+    }
+    CHECK(!tsv_field(r.out, 4, "mu", &(double){0}));
+    run_free(&r);
+}
+
+TEST(cli_period_json)
+{
+    run_result r = RUN("period", "--mu", "1", "--nu", "0", "--format", "json");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK(r.out[0] == '{');
+    CHECK(strstr(r.out, "\"rows\""));
+    CHECK(strstr(r.out, "\"columns\": [\"mu\", \"nu\", \"T\", \"T_err\""));
+    CHECK_MSG(bkf_test_json_valid(r.out), "invalid JSON:\n%s", r.out);
+    const char *t = strstr(r.out, "\"T\": ");
+    CHECK(t);
+    CHECK_CLOSE(strtod(t + 5, NULL), 6.663286859323130, 1e-9, 0);
+    run_free(&r);
+}
+
+TEST(cli_period_out_file_is_atomic)
+{
+    char dir[] = "/tmp/bkf_cli_out_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/period.tsv", dir);
+
+    run_result r = RUN("period", "--mu", "1", "--nu", "0", "--out", path);
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK_MSG(r.out[0] == '\0' && r.err[0] == '\0', "stdout: %s stderr: %s", r.out, r.err);
+    run_free(&r);
+    int fd = open(path, O_RDONLY);
+    CHECK(fd >= 0);
+    char *text = read_all(fd);
+    close(fd);
+    CHECK(strstr(text, expected_columns));
+    double T;
+    CHECK(tsv_field(text, 0, "T", &T));
+    CHECK_CLOSE(T, 6.663286859323130, 1e-9, 0);
+
+    /* Bad input after --out: the old file stays, no temporary is left. */
+    r = RUN("period", "--out", path, "--mu", "1", "--nu", "2");
+    CHECK(r.code == 2 && r.out[0] == '\0');
+    run_free(&r);
+    fd = open(path, O_RDONLY);
+    char *again = read_all(fd);
+    close(fd);
+    CHECK(strcmp(text, again) == 0);
+    free(again);
+    free(text);
+
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "ls -A '%s' | wc -l", dir);
+    FILE *p = popen(cmd, "r");
+    int n = -1;
+    CHECK(p && fscanf(p, "%d", &n) == 1);
+    pclose(p);
+    CHECK_MSG(n == 1, "%d files in %s", n, dir);
+    unlink(path);
+    rmdir(dir);
+}
+
+/* The rows of a --continue run: the parameter runs from A to B,
+ * monotonically, the other stays fixed, and the ends agree with point solves. */
+static void check_branch(const char *along, const char *range, const char *fixed,
+                         double from, double to)
+{
+    int mu_along = strcmp(along, "mu") == 0;
+    run_result r = mu_along ? RUN("period", "--mu", range, "--nu", fixed, "--continue", along)
+                            : RUN("period", "--mu", fixed, "--nu", range, "--continue", along);
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    const char *p_name = mu_along ? "mu" : "nu", *o_name = mu_along ? "nu" : "mu";
+    double fixed_value = strtod(fixed, NULL), prev = 0, p, o, T = 0, T_first = 0;
+    int rows = 0;
+    for (; tsv_field(r.out, rows, p_name, &p); rows++) {
+        CHECK(tsv_field(r.out, rows, o_name, &o) && o == fixed_value);
+        CHECK(tsv_field(r.out, rows, "T", &T) && T > 0);
+        if (rows == 0) {
+            /* within rounding: mu is continued in ln mu */
+            CHECK_CLOSE(p, from, 1e-15, 0);
+            T_first = T;
+        } else
+            CHECK_MSG((to > from) ? p > prev : p < prev, "%s not monotone at row %d", p_name, rows);
+        prev = p;
+    }
+    CHECK_MSG(rows >= 3, "%d rows", rows);
+    CHECK_CLOSE(prev, to, 1e-15, 0);
+    bkf_test_note("--continue %s %s: %d rows", along, range, rows);
+    run_free(&r);
+
+    char a[32], b[32];
+    snprintf(a, sizeof a, "%.17g", from);
+    snprintf(b, sizeof b, "%.17g", to);
+    double ends[2] = {T_first, T};
+    const char *at[2] = {a, b};
+    for (int i = 0; i < 2; i++) {
+        r = mu_along ? RUN("period", "--mu", at[i], "--nu", fixed)
+                     : RUN("period", "--mu", fixed, "--nu", at[i]);
+        double T_point;
+        CHECK(r.code == 0 && tsv_field(r.out, 0, "T", &T_point));
+        CHECK_CLOSE(ends[i], T_point, 1e-9, 0);
+        run_free(&r);
+    }
+}
+
+TEST(cli_period_continue_mu)
+{
+    check_branch("mu", "0.5:2:3", "0", 0.5, 2);
+    check_branch("mu", "20:2:7", "-0.5", 20, 2);
+}
+
+TEST(cli_period_continue_nu)
+{
+    check_branch("nu", "-0.5:0.5:3", "1", -0.5, 0.5);
+}
