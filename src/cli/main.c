@@ -8,9 +8,11 @@
 #include <string.h>
 
 extern const cli_command cli_cmd_period;
+extern const cli_command cli_cmd_asymptotics;
 
 static const cli_command *const commands[] = {
     &cli_cmd_period,
+    &cli_cmd_asymptotics,
 };
 
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
@@ -35,7 +37,7 @@ static void print_usage(FILE *out)
             "\n"
             "subcommands:\n");
     for (size_t i = 0; i < NCOMMANDS; i++)
-        fprintf(out, "  %-10s %s\n", commands[i]->name, commands[i]->summary);
+        fprintf(out, "  %-12s %s\n", commands[i]->name, commands[i]->summary);
     fprintf(out,
             "\n"
             "Output is TSV (comment lines start with '#', then a header line naming the\n"
