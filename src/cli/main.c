@@ -9,10 +9,12 @@
 
 extern const cli_command cli_cmd_period;
 extern const cli_command cli_cmd_asymptotics;
+extern const cli_command cli_cmd_floquet;
 
 static const cli_command *const commands[] = {
     &cli_cmd_period,
     &cli_cmd_asymptotics,
+    &cli_cmd_floquet,
 };
 
 #define NCOMMANDS (sizeof commands / sizeof commands[0])

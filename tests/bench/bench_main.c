@@ -66,9 +66,12 @@ static void bench_period(void)
     printf("\n");
 }
 
+void bench_floquet(void);
+
 int main(int argc, char **argv)
 {
     const char *only = argc > 1 ? argv[1] : NULL;
     if (!only || strcmp(only, "period") == 0) bench_period();
+    if (!only || strcmp(only, "floquet") == 0) bench_floquet();
     return 0;
 }

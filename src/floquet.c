@@ -1,0 +1,1268 @@
+/* Floquet stability of the global oscillations (floquet.h).
+ *
+ * Per wavenumber the cycle and the 2x2 fundamental matrix are integrated
+ * together (7 components: x, y, M, L), in plain Lienard coordinates with
+ * mu = gamma, from the cycle's section point over exactly the cycle's period.
+ * Integrating the cycle again rather than storing it costs two components
+ * and keeps psi*(t) as accurate as the integration itself, with no
+ * interpolation error (GSL steppers have no dense output).  When the
+ * derivative with respect to K = 1 + c^2 q^2 is wanted (long-wave
+ * coefficient, continuation), dM/dK rides along (4 more components).
+ *
+ * Peaks of lambda over K are peaks of s * trace(M), s the sign of the
+ * trace there: lambda is a monotone function of |trace| where the
+ * multipliers are real and flat (L/2) where they are complex, so the trace
+ * is the smooth function to maximise.  Instability boundaries in nu are
+ * zeros of an indicator that is continuous in nu: the long-wave coefficient,
+ * or the height of one tracked peak of lambda. */
+#include "bkfront/floquet.h"
+
+#include "bkfront/continuation.h"
+#include "bkfront/model.h"
+
+#include <float.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_odeiv2.h>
+#include <math.h>
+#include <nlopt.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* State layout: M is stored by columns, column j = (d_psi, d_eta) from the
+ * unit start vector e_j; P = dM/dK the same way. */
+enum { IX = 0, IY = 1, IM = 2, IL = 6, IP = 7 };
+enum { DIM_PLAIN = 7, DIM_DK = 11 };
+
+/* As in cycle.c: above this gamma the explicit stepper's step is limited by
+ * stability, not accuracy. */
+#define STIFF_GAMMA 30.0
+#define TOL_RATIO 10.0
+/* Beyond K ~ 1e8 a period holds ~1e4 oscillations of the perturbation: the
+ * integration is no longer a sensible way to get the answer. */
+#define K_MAX 1e8
+#define MAX_STEPS 5000000
+#define MAX_PEAKS 64
+/* Grid peaks lower than this are not refined: a refined peak rises above
+ * its grid value by far less than this on any grid fine enough to see it. */
+#define PEAK_FLOOR (-1.0)
+/* Scans only locate peaks, refined afterwards, so they run loose. */
+#define SCAN_TOL 1e-7
+
+/* ------------------------------------------------------------ the flow */
+
+typedef struct {
+    double gamma, nu, K;
+    size_t rhs_calls;
+} lin_params;
+
+static double lienard_F(double x) { return x * x * x / 3.0 - x; }
+
+static int lin_rhs(double t, const double s[], double ds[], void *params, size_t dim)
+{
+    (void)t;
+    lin_params *p = params;
+    double g = p->gamma, x = s[IX], damp = g * (x * x - 1.0);
+    p->rhs_calls++;
+    ds[IX] = g * (s[IY] - lienard_F(x));
+    ds[IY] = (p->nu - x) / g;
+    for (int j = 0; j < 2; j++) {
+        double u = s[IM + 2 * j], e = s[IM + 2 * j + 1];
+        ds[IM + 2 * j] = g * e - damp * u;
+        ds[IM + 2 * j + 1] = -p->K * u / g;
+    }
+    ds[IL] = -damp;
+    if (dim == DIM_DK)
+        for (int j = 0; j < 2; j++) {
+            double pu = s[IP + 2 * j], pe = s[IP + 2 * j + 1];
+            ds[IP + 2 * j] = g * pe - damp * pu;
+            ds[IP + 2 * j + 1] = -(p->K * pu + s[IM + 2 * j]) / g;
+        }
+    return GSL_SUCCESS;
+}
+
+static int lin_jac(double t, const double s[], double *J, double dfdt[], void *params, size_t dim)
+{
+    (void)t;
+    lin_params *p = params;
+    double g = p->gamma, x = s[IX], damp = g * (x * x - 1.0), ddamp = 2.0 * g * x;
+    size_t n = dim;
+    memset(J, 0, sizeof(double) * n * n);
+    memset(dfdt, 0, sizeof(double) * n);
+    J[IX * n + IX] = -damp;
+    J[IX * n + IY] = g;
+    J[IY * n + IX] = -1.0 / g;
+    for (int j = 0; j < 2; j++) {
+        size_t iu = IM + 2 * j, ie = iu + 1;
+        J[iu * n + IX] = -ddamp * s[iu];
+        J[iu * n + iu] = -damp;
+        J[iu * n + ie] = g;
+        J[ie * n + iu] = -p->K / g;
+    }
+    J[IL * n + IX] = -ddamp;
+    if (dim == DIM_DK)
+        for (int j = 0; j < 2; j++) {
+            size_t iu = IP + 2 * j, ie = iu + 1;
+            J[iu * n + IX] = -ddamp * s[iu];
+            J[iu * n + iu] = -damp;
+            J[iu * n + ie] = g;
+            J[ie * n + iu] = -p->K / g;
+            J[ie * n + IM + 2 * j] = -1.0 / g;
+        }
+    return GSL_SUCCESS;
+}
+
+static int rhs_plain(double t, const double s[], double ds[], void *p) { return lin_rhs(t, s, ds, p, DIM_PLAIN); }
+static int rhs_dk(double t, const double s[], double ds[], void *p) { return lin_rhs(t, s, ds, p, DIM_DK); }
+static int jac_plain(double t, const double s[], double *J, double d[], void *p) { return lin_jac(t, s, J, d, p, DIM_PLAIN); }
+static int jac_dk(double t, const double s[], double *J, double d[], void *p) { return lin_jac(t, s, J, d, p, DIM_DK); }
+
+/* ------------------------------------------------------------- object */
+
+/* One integration at one tolerance: the GSL driver is kept between
+ * wavenumbers, so its step-size guess carries over. */
+typedef struct {
+    gsl_odeiv2_driver *driver;
+    gsl_odeiv2_system system;
+    double tol;
+} engine;
+
+struct bkf_floquet {
+    double gamma, c, nu;
+    bkf_floquet_options opt;
+    bkf_cycle *cycle;
+    int ready;
+    double x0, y0, T, T_err, L;
+    lin_params lp;
+    bkf_stepper_kind kind;
+    engine eng[2][3];         /* [with dM/dK][scan, coarse, fine] */
+    double tol_int;           /* coarse integration tolerance; fine = /TOL_RATIO */
+};
+
+enum { ENG_SCAN = 0, ENG_COARSE = 1, ENG_FINE = 2 };
+
+bkf_floquet_options bkf_floquet_options_default(void)
+{
+    return (bkf_floquet_options){.tol = 1e-10,
+                                 .stepper = BKF_STEPPER_AUTO,
+                                 .p_max = 6.0,
+                                 .scan_points = 120,
+                                 .nu_step = 0.01,
+                                 .nu_edge = 1e-3};
+}
+
+const char *bkf_floquet_kind_name(bkf_floquet_kind kind)
+{
+    switch (kind) {
+    case BKF_FLOQUET_REAL_POSITIVE: return "real_positive";
+    case BKF_FLOQUET_REAL_NEGATIVE: return "real_negative";
+    case BKF_FLOQUET_COMPLEX: return "complex";
+    }
+    return "?";
+}
+
+const char *bkf_floquet_boundary_name(bkf_floquet_boundary kind)
+{
+    switch (kind) {
+    case BKF_BOUNDARY_PERIOD_DOUBLING: return "period_doubling";
+    case BKF_BOUNDARY_LONG_WAVE: return "long_wave";
+    case BKF_BOUNDARY_OTHER: return "other";
+    case BKF_BOUNDARY_SCAN_END: return "scan_end";
+    }
+    return "?";
+}
+
+bkf_floquet *bkf_floquet_alloc(void)
+{
+    bkf_floquet *f = calloc(1, sizeof *f);
+    if (!f) return NULL;
+    f->cycle = bkf_cycle_alloc();
+    if (!f->cycle) {
+        free(f);
+        return NULL;
+    }
+    return f;
+}
+
+static void engines_free(bkf_floquet *f)
+{
+    for (int d = 0; d < 2; d++)
+        for (int k = 0; k < 3; k++) {
+            if (f->eng[d][k].driver) gsl_odeiv2_driver_free(f->eng[d][k].driver);
+            f->eng[d][k].driver = NULL;
+        }
+}
+
+void bkf_floquet_free(bkf_floquet *f)
+{
+    if (!f) return;
+    engines_free(f);
+    bkf_cycle_free(f->cycle);
+    free(f);
+}
+
+const bkf_cycle_result *bkf_floquet_cycle(const bkf_floquet *f)
+{
+    return f && f->ready ? bkf_cycle_get(f->cycle) : NULL;
+}
+
+static int check_options(const bkf_floquet_options *o, bkf_error *err)
+{
+    int rc = bkf_model_check_tol(o->tol, err);
+    if (rc != BKF_OK) return rc;
+    if (o->stepper != BKF_STEPPER_AUTO && o->stepper != BKF_STEPPER_EXPLICIT &&
+        o->stepper != BKF_STEPPER_IMPLICIT)
+        return bkf_error_set(err, BKF_EINPUT, "stepper must be auto, explicit or implicit");
+    if (!isfinite(o->p_max) || o->p_max <= 0.0 || o->p_max > 1e4)
+        return bkf_error_set(err, BKF_EINPUT, "p_max = %g must be in (0, 1e4]", o->p_max);
+    if (o->scan_points < 4 || o->scan_points > 100000)
+        return bkf_error_set(err, BKF_EINPUT, "scan_points = %zu must be in [4, 100000]",
+                             o->scan_points);
+    if (!isfinite(o->nu_step) || o->nu_step <= 0.0 || o->nu_step > 1.0)
+        return bkf_error_set(err, BKF_EINPUT, "nu_step = %g must be in (0, 1]", o->nu_step);
+    if (!isfinite(o->nu_edge) || o->nu_edge <= 0.0 || o->nu_edge >= 0.5)
+        return bkf_error_set(err, BKF_EINPUT, "nu_edge = %g must be in (0, 0.5)", o->nu_edge);
+    return BKF_OK;
+}
+
+static int check_gamma_c(double gamma, double c, bkf_error *err)
+{
+    if (!isfinite(gamma) || gamma < BKF_CYCLE_MU_MIN || gamma > BKF_CYCLE_MU_MAX)
+        return bkf_error_set(err, BKF_EINPUT, "gamma = %g is outside [%g, %g]", gamma,
+                             BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
+    return bkf_model_check_nonnegative("c", c, err);
+}
+
+static int engine_get(bkf_floquet *f, int dk, int which, engine **out)
+{
+    double tol = which == ENG_SCAN ? fmax(SCAN_TOL, f->tol_int)
+                 : which == ENG_COARSE ? f->tol_int
+                                       : f->tol_int / TOL_RATIO;
+    engine *e = &f->eng[dk][which];
+    if (!e->driver || e->tol != tol) {
+        if (e->driver) gsl_odeiv2_driver_free(e->driver);
+        e->system = dk ? (gsl_odeiv2_system){rhs_dk, jac_dk, DIM_DK, &f->lp}
+                       : (gsl_odeiv2_system){rhs_plain, jac_plain, DIM_PLAIN, &f->lp};
+        const gsl_odeiv2_step_type *type =
+            f->kind == BKF_STEPPER_IMPLICIT ? gsl_odeiv2_step_bsimp : gsl_odeiv2_step_rk8pd;
+        e->driver = gsl_odeiv2_driver_alloc_standard_new(&e->system, type, 1e-2, tol, tol, 1.0, 0.0);
+        if (!e->driver) return BKF_ENOMEM;
+        gsl_odeiv2_driver_set_nmax(e->driver, MAX_STEPS);
+        e->tol = tol;
+    }
+    *out = e;
+    return BKF_OK;
+}
+
+int bkf_floquet_set(bkf_floquet *f, double gamma, double c, double nu,
+                    const bkf_floquet_options *options, bkf_error *err)
+{
+    if (!f) return bkf_error_set(err, BKF_EINPUT, "floquet object is NULL");
+    bkf_floquet_options o = options ? *options : bkf_floquet_options_default();
+    int rc = check_options(&o, err);
+    if (rc == BKF_OK) rc = check_gamma_c(gamma, c, err);
+    if (rc == BKF_OK) rc = bkf_model_check_nu_active(nu, err);
+    if (rc != BKF_OK) return rc;
+    gsl_set_error_handler_off();
+    f->ready = 0;
+    bkf_cycle_options co = bkf_cycle_options_default();
+    /* the cycle's error moves lambda by |A| T_err and more through the start
+     * point (measured ~20 |A| T_err at gamma 2): keep the cycle two orders
+     * tighter than lambda, which costs little (one solve per nu) */
+    co.tol = fmax(0.01 * o.tol, 1e-13);
+    co.stepper = o.stepper;
+    co.warm_start = 1;
+    /* Near the canard (large gamma, |nu| -> 1) the cycle engine can refuse
+     * a tight tolerance; a looser cycle is still usable because its error
+     * enters lambda_err through T_err. */
+    for (int attempt = 0;; attempt++) {
+        rc = bkf_cycle_solve(f->cycle, gamma, nu, &co, err);
+        if (rc != BKF_ENUMERIC || attempt == 3) break;
+        /* a warm start from across a canard explosion (large gamma, the
+         * small and the relaxation cycle nu-close) can fail: start cold */
+        if (co.warm_start) co.warm_start = 0;
+        else if (co.tol < 0.01) co.tol *= 10.0;
+        else break;
+    }
+    if (rc != BKF_OK) return rc;
+    const bkf_cycle_result *r = bkf_cycle_get(f->cycle);
+    f->gamma = gamma;
+    f->c = c;
+    f->nu = nu;
+    f->opt = o;
+    f->x0 = nu;
+    f->y0 = r->section_slope / gamma + lienard_F(nu);
+    f->T = r->period;
+    f->T_err = r->period_err;
+    f->L = r->log_multiplier;
+    f->lp = (lin_params){gamma, nu, 1.0, 0};
+    bkf_stepper_kind kind = o.stepper;
+    if (kind == BKF_STEPPER_AUTO) kind = gamma > STIFF_GAMMA ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
+    /* below these local tolerances the steppers only accumulate rounding */
+    double floor_tol = kind == BKF_STEPPER_IMPLICIT ? 1e-14 : 1e-16;
+    double tol_int = fmax(0.1 * o.tol, floor_tol * TOL_RATIO);
+    if (kind != f->kind || tol_int != f->tol_int) engines_free(f);
+    f->kind = kind;
+    f->tol_int = tol_int;
+    f->ready = 1;
+    return BKF_OK;
+}
+
+/* ------------------------------------------------------------ monodromy */
+
+typedef struct {
+    double M[4];      /* row-major */
+    double tr, L, det;
+    double dtr;       /* d trace / dK (with dk) */
+    size_t steps;
+} raw;
+
+static double k2_of(const bkf_floquet *f, double q) { return 1.0 + f->c * f->c * q * q; }
+
+static int integrate(bkf_floquet *f, double K, int dk, int which, raw *out, bkf_error *err)
+{
+    engine *e;
+    if (engine_get(f, dk, which, &e) != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    double s[DIM_DK] = {f->x0, f->y0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    double t = 0.0;
+    f->lp.K = K;
+    gsl_odeiv2_driver_reset(e->driver);
+    int rc = gsl_odeiv2_driver_apply(e->driver, &t, f->T, s);
+    if (rc != GSL_SUCCESS || !isfinite(s[IM]) || !isfinite(s[IM + 3]))
+        return bkf_error_set(err, BKF_ENUMERIC,
+                             "monodromy at gamma = %g, nu = %g, K = %g: integration failed at t = %g "
+                             "(%s)",
+                             f->gamma, f->nu, K, t, gsl_strerror(rc));
+    out->M[0] = s[IM];
+    out->M[1] = s[IM + 2];
+    out->M[2] = s[IM + 1];
+    out->M[3] = s[IM + 3];
+    out->tr = s[IM] + s[IM + 3];
+    out->L = s[IL];
+    out->det = s[IM] * s[IM + 3] - s[IM + 2] * s[IM + 1];
+    out->dtr = dk ? s[IP] + s[IP + 3] : NAN;
+    out->steps = e->driver->n;
+    return BKF_OK;
+}
+
+typedef struct {
+    double m1_re, m1_im, m2_re, m2_im, lambda;
+    bkf_floquet_kind kind;
+} mults;
+
+/* Eigenvalues of a real 2x2 from its trace and ln det.  The determinant is
+ * Liouville's, exact where the matrix's own would cancel (det ~ 1e-50 from
+ * entries of order 1), and the small multiplier is det/m1. */
+static mults multipliers(double tr, double L)
+{
+    mults m = {0};
+    double D = exp(L), half = 0.5 * tr, disc = half * half - D;
+    if (disc >= 0.0) {
+        double r = sqrt(disc);
+        double m1 = half >= 0.0 ? half + r : half - r;
+        m.m1_re = m1;
+        m.m2_re = m1 != 0.0 ? D / m1 : 0.0;
+        m.lambda = m1 != 0.0 ? log(fabs(m1)) : 0.5 * L;
+        m.kind = m1 >= 0.0 ? BKF_FLOQUET_REAL_POSITIVE : BKF_FLOQUET_REAL_NEGATIVE;
+    } else {
+        double im = sqrt(-disc);
+        m.m1_re = m.m2_re = half;
+        m.m1_im = im;
+        m.m2_im = -im;
+        m.lambda = 0.5 * L;
+        m.kind = BKF_FLOQUET_COMPLEX;
+    }
+    return m;
+}
+
+/* How far lambda may move with the cycle's own error: the end time moves
+ * M by A(0) M dT; the start point's error, of the same order in the cycle's
+ * accuracy, was measured to move it up to ~20 times more (gamma 2, nu
+ * -0.94, cycle tol 1e-7), hence the factor. */
+static double cycle_term(const bkf_floquet *f, double K, const double *M, double m1_abs)
+{
+    double g = f->gamma;
+    double normA = g * fabs(f->nu * f->nu - 1.0) + g + (1.0 + K) / g;
+    double normM = sqrt(M[0] * M[0] + M[1] * M[1] + M[2] * M[2] + M[3] * M[3]);
+    double cond = m1_abs > 0.0 ? fmax(1.0, normM / m1_abs) : 1.0;
+    return 30.0 * f->T_err * normA * cond;
+}
+
+static int eval_k2(bkf_floquet *f, double K, bkf_floquet_point *pt, bkf_error *err)
+{
+    raw a, b;
+    int rc = integrate(f, K, 0, ENG_COARSE, &a, err);
+    if (rc == BKF_OK) rc = integrate(f, K, 0, ENG_FINE, &b, err);
+    if (rc != BKF_OK) return rc;
+    mults ma = multipliers(a.tr, a.L), mb = multipliers(b.tr, b.L);
+    memset(pt, 0, sizeof *pt);
+    pt->k2 = K;
+    pt->q = f->c > 0.0 ? sqrt(fmax(K - 1.0, 0.0)) / f->c : 0.0;
+    pt->m1_re = mb.m1_re;
+    pt->m1_im = mb.m1_im;
+    pt->m2_re = mb.m2_re;
+    pt->m2_im = mb.m2_im;
+    pt->lambda = mb.lambda;
+    pt->kind = mb.kind;
+    pt->trace = b.tr;
+    pt->log_det = b.L;
+    pt->det_direct = b.det;
+    memcpy(pt->monodromy, b.M, sizeof b.M);
+    double m1_abs = hypot(mb.m1_re, mb.m1_im);
+    double cyc = cycle_term(f, K, b.M, m1_abs);
+    pt->lambda_err = fabs(ma.lambda - mb.lambda) + cyc + 4.0 * DBL_EPSILON * fabs(mb.lambda);
+    pt->m1_err = hypot(ma.m1_re - mb.m1_re, ma.m1_im - mb.m1_im) + cyc * m1_abs;
+    pt->steps = a.steps + b.steps;
+    return BKF_OK;
+}
+
+int bkf_floquet_eval(bkf_floquet *f, double q, bkf_floquet_point *pt, bkf_error *err)
+{
+    if (!f || !f->ready) return bkf_error_set(err, BKF_EINPUT, "floquet: eval before a successful set");
+    if (!pt) return bkf_error_set(err, BKF_EINPUT, "floquet: point is NULL");
+    int rc = bkf_model_check_nonnegative("q", q, err);
+    if (rc != BKF_OK) return rc;
+    double K = k2_of(f, q);
+    if (!(K <= K_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "c q = %g is too large (at most %g)", f->c * q,
+                             sqrt(K_MAX - 1.0));
+    rc = eval_k2(f, K, pt, err);
+    if (rc == BKF_OK) pt->q = q;
+    return rc;
+}
+
+static int longwave_at(bkf_floquet *f, int which, double *a, bkf_error *err)
+{
+    raw r;
+    int rc = integrate(f, 1.0, 1, which, &r, err);
+    if (rc != BKF_OK) return rc;
+    /* m1 + D/m1 = trace with D independent of K, so at m1 = 1:
+     * dm1/dK = (dtrace/dK)/(1 - D) */
+    double one_minus_D = -expm1(r.L);
+    if (!(one_minus_D > 0.0))
+        return bkf_error_set(err, BKF_ENUMERIC,
+                             "long-wave coefficient at gamma = %g, nu = %g: cycle multiplier %g "
+                             "is not below 1",
+                             f->gamma, f->nu, exp(r.L));
+    *a = r.dtr / one_minus_D;
+    return BKF_OK;
+}
+
+int bkf_floquet_longwave(bkf_floquet *f, double *a, double *a_err, bkf_error *err)
+{
+    if (!f || !f->ready)
+        return bkf_error_set(err, BKF_EINPUT, "floquet: longwave before a successful set");
+    double ac, af;
+    int rc = longwave_at(f, ENG_COARSE, &ac, err);
+    if (rc == BKF_OK) rc = longwave_at(f, ENG_FINE, &af, err);
+    if (rc != BKF_OK) return rc;
+    if (a) *a = af;
+    if (a_err) {
+        double g = f->gamma;
+        /* dM/dK moves with the end time as M does */
+        double normA = g * fabs(f->nu * f->nu - 1.0) + g + 2.0 / g;
+        *a_err = fabs(ac - af) + 30.0 * f->T_err * normA * fmax(1.0, fabs(af)) +
+                 4.0 * DBL_EPSILON * fabs(af);
+    }
+    return BKF_OK;
+}
+
+double bkf_floquet_slip_rate(double gamma, double c, double nu, double q)
+{
+    double K = 1.0 + c * c * q * q;
+    double b = gamma * (1.0 - nu * nu); /* -gamma phi'(nu) */
+    double disc = b * b - 4.0 * K;
+    return disc > 0.0 ? 0.5 * (b + sqrt(disc)) : 0.5 * b;
+}
+
+/* ---------------------------------------------------------------- peaks */
+
+typedef struct {
+    bkf_floquet *f;
+    nlopt_opt opt;
+    double sign;
+    int status;
+    bkf_error *err;
+} peak_ctx;
+
+static double peak_objective(unsigned n, const double *x, double *grad, void *data)
+{
+    (void)n;
+    (void)grad;
+    peak_ctx *pc = data;
+    raw r;
+    if (pc->status == BKF_OK) pc->status = integrate(pc->f, x[0], 0, ENG_FINE, &r, pc->err);
+    /* NLopt's objective cannot fail: stop it, the status is read afterwards */
+    if (pc->status != BKF_OK) {
+        nlopt_force_stop(pc->opt);
+        return 0.0;
+    }
+    return pc->sign * r.tr;
+}
+
+/* The K in [lo, hi] maximising sign * trace, searched from *K. */
+static int maximise_trace(bkf_floquet *f, double sign, double lo, double hi, double *K,
+                          double *value, bkf_error *err)
+{
+    nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, 1);
+    if (!opt) return bkf_error_set(err, BKF_ENOMEM, "out of memory (NLopt)");
+    peak_ctx pc = {f, opt, sign, BKF_OK, err};
+    nlopt_set_max_objective(opt, peak_objective, &pc);
+    nlopt_set_lower_bounds1(opt, lo);
+    nlopt_set_upper_bounds1(opt, hi);
+    /* the peak's height is quadratic in the error of its place: a relative
+     * 1e-7 in K is far below any tolerance in lambda */
+    nlopt_set_xtol_rel(opt, 1e-7);
+    nlopt_set_maxeval(opt, 200);
+    nlopt_set_initial_step1(opt, 0.25 * (hi - lo));
+    double x = fmin(fmax(*K, lo), hi), fx = 0.0;
+    nlopt_result res = nlopt_optimize(opt, &x, &fx);
+    nlopt_destroy(opt);
+    if (pc.status != BKF_OK) return pc.status;
+    if (res < 0 && res != NLOPT_ROUNDOFF_LIMITED)
+        return bkf_error_set(err, BKF_ENUMERIC,
+                             "peak of lambda at gamma = %g, nu = %g near K = %g: NLopt failed (%d)",
+                             f->gamma, f->nu, *K, (int)res);
+    *K = x;
+    *value = fx;
+    return BKF_OK;
+}
+
+/* Local peak of sign * trace near K, searched in windows of half-width w,
+ * moved while the maximum sits on a window's edge.  K never goes below 1. */
+static int track_peak(bkf_floquet *f, double sign, double *K, double w, double *value,
+                      bkf_error *err)
+{
+    double center = *K;
+    for (int attempt = 0; attempt < 8; attempt++) {
+        double lo = fmax(1.0, center - w), hi = fmin(K_MAX, center + w);
+        double x = center;
+        int rc = maximise_trace(f, sign, lo, hi, &x, value, err);
+        if (rc != BKF_OK) return rc;
+        double edge_tol = 1e-6 * (hi - lo);
+        int at_lo = x - lo <= edge_tol && lo > 1.0;
+        int at_hi = hi - x <= edge_tol && hi < K_MAX;
+        *K = x;
+        if (!at_lo && !at_hi) return BKF_OK;
+        center = x;
+        w *= 1.5;
+    }
+    return BKF_OK;
+}
+
+typedef struct {
+    double K, lambda, lambda_err, m_re, m_im;
+    double sign;
+    int region;      /* sign region of the trace counted from K = 1 */
+} peak;
+
+typedef struct {
+    bkf_floquet_stability s;
+    peak peaks[MAX_PEAKS];
+    size_t npeaks;   /* refined peaks (region-0 band peak excluded when a > 0) */
+} stability_full;
+
+static double dk_of_p(double p, double dp) { return fmax(2.0 * p * dp, dp * dp); }
+
+/* A refined peak: the K of the maximum, then lambda with its error there. */
+static int refine_peak(bkf_floquet *f, double sign, double K_guess, double w, peak *out,
+                       bkf_error *err)
+{
+    double K = K_guess, value;
+    int rc = track_peak(f, sign, &K, w, &value, err);
+    if (rc != BKF_OK) return rc;
+    bkf_floquet_point pt;
+    rc = eval_k2(f, K, &pt, err);
+    if (rc != BKF_OK) return rc;
+    out->K = K;
+    out->lambda = pt.lambda;
+    out->lambda_err = pt.lambda_err;
+    out->m_re = pt.m1_re;
+    out->m_im = pt.m1_im;
+    out->sign = sign;
+    return BKF_OK;
+}
+
+static int stability_scan(bkf_floquet *f, stability_full *sf, bkf_error *err)
+{
+    memset(sf, 0, sizeof *sf);
+    bkf_floquet_stability *s = &sf->s;
+    s->nu = f->nu;
+    int rc = bkf_floquet_longwave(f, &s->longwave, &s->longwave_err, err);
+    if (rc != BKF_OK) return rc;
+    size_t n = f->opt.scan_points;
+    double dp = f->opt.p_max / (double)n;
+    double *tr = malloc((n + 1) * sizeof *tr);
+    if (!tr) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    for (size_t j = 0; j <= n && rc == BKF_OK; j++) {
+        raw r;
+        double p = dp * (double)j;
+        rc = integrate(f, 1.0 + p * p, 0, ENG_SCAN, &r, err);
+        tr[j] = r.tr;
+    }
+    int region = 0;
+    double best = -HUGE_VAL;
+    for (size_t j = 1; j < n && rc == BKF_OK; j++) {
+        if ((tr[j] > 0.0) != (tr[j - 1] > 0.0)) region++;
+        double here = fabs(tr[j]);
+        if (!(here >= fabs(tr[j - 1]) && here > fabs(tr[j + 1]))) continue;
+        double sign = tr[j] > 0.0 ? 1.0 : -1.0;
+        /* the long-wave band's own peak is the long-wave instability */
+        if (region == 0 && s->longwave > 0.0) continue;
+        mults m = multipliers(tr[j], f->L);
+        if (m.lambda < PEAK_FLOOR || sf->npeaks == MAX_PEAKS) continue;
+        double p = dp * (double)j;
+        peak pk;
+        rc = refine_peak(f, sign, 1.0 + p * p, dk_of_p(p, dp), &pk, err);
+        if (rc != BKF_OK) break;
+        pk.region = region;
+        sf->peaks[sf->npeaks++] = pk;
+        if (pk.lambda > best) {
+            best = pk.lambda;
+            s->lambda_peak = pk.lambda;
+            s->lambda_peak_err = pk.lambda_err;
+            s->k2_peak = pk.K;
+            s->q_peak = f->c > 0.0 ? sqrt(fmax(pk.K - 1.0, 0.0)) / f->c : 0.0;
+            s->m_re = pk.m_re;
+            s->m_im = pk.m_im;
+        }
+    }
+    free(tr);
+    if (rc != BKF_OK) return rc;
+    s->peaks = sf->npeaks;
+    if (sf->npeaks == 0) s->lambda_peak = s->lambda_peak_err = s->q_peak = s->k2_peak = s->m_re = s->m_im = NAN;
+    s->stable = s->longwave < 0.0 && !(best >= 0.0);
+    return BKF_OK;
+}
+
+int bkf_floquet_stability_at(bkf_floquet *f, bkf_floquet_stability *out, bkf_error *err)
+{
+    if (!f || !f->ready)
+        return bkf_error_set(err, BKF_EINPUT, "floquet: stability before a successful set");
+    if (!out) return bkf_error_set(err, BKF_EINPUT, "floquet: stability result is NULL");
+    stability_full *sf = malloc(sizeof *sf);
+    if (!sf) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    int rc = stability_scan(f, sf, err);
+    if (rc == BKF_OK) *out = sf->s;
+    free(sf);
+    return rc;
+}
+
+/* ----------------------------------------------------------- boundaries */
+
+/* One indicator whose zero in nu is a stability boundary: the long-wave
+ * coefficient, or the height of the peak of sign * trace tracked from K_a
+ * (at nu_a) to K_b (at nu_b). */
+typedef struct {
+    bkf_floquet *f;
+    const bkf_floquet_options *opt;
+    double gamma, c;
+    int longwave;
+    double sign;
+    double nu_a, K_a, nu_b, K_b, w;
+    double K_last;   /* where the last evaluation found the peak */
+    int status;
+    bkf_error err;
+} indicator;
+
+static int indicator_eval(indicator *ind, double nu, double *value)
+{
+    int rc = bkf_floquet_set(ind->f, ind->gamma, ind->c, nu, ind->opt, &ind->err);
+    if (rc != BKF_OK) return rc;
+    if (ind->longwave) return longwave_at(ind->f, ENG_FINE, value, &ind->err);
+    double t = ind->nu_b != ind->nu_a ? (nu - ind->nu_a) / (ind->nu_b - ind->nu_a) : 0.0;
+    double K = ind->K_a + t * (ind->K_b - ind->K_a), v;
+    rc = track_peak(ind->f, ind->sign, &K, ind->w, &v, &ind->err);
+    if (rc != BKF_OK) return rc;
+    ind->K_last = K;
+    *value = multipliers(ind->sign * v, ind->f->L).lambda;
+    return BKF_OK;
+}
+
+/* Brent's method on the indicator over [lo, hi] (values f_lo, f_hi of
+ * opposite signs), to |hi - lo| <= xtol.  On return (success or not)
+ * root/f_root are the best point and its value, other/f_other the opposite
+ * end of the last bracket. */
+typedef struct {
+    double root, f_root, other, f_other, slope;
+} bracket;
+
+static int indicator_root(indicator *ind, double lo, double f_lo, double hi, double f_hi,
+                          double xtol, bracket *br)
+{
+    /* Brent (1973), as in zeroin: b the best, c the opposite end */
+    double a = lo, b = hi, c = hi, fa = f_lo, fb = f_hi, fc = f_hi, d = 0.0, e = 0.0;
+    int rc = BKF_OK;
+    br->slope = (f_hi - f_lo) / (hi - lo);
+    for (int iter = 0; iter < 100; iter++) {
+        if ((fb > 0.0) == (fc > 0.0)) {
+            c = a;
+            fc = fa;
+            d = e = b - a;
+        }
+        if (fabs(fc) < fabs(fb)) {
+            a = b;
+            b = c;
+            c = a;
+            fa = fb;
+            fb = fc;
+            fc = fa;
+        }
+        double tol1 = 2.0 * DBL_EPSILON * fabs(b) + 0.5 * xtol;
+        double xm = 0.5 * (c - b);
+        if (fabs(xm) <= tol1 || fb == 0.0) break;
+        if (fabs(e) >= tol1 && fabs(fa) > fabs(fb)) {
+            double s = fb / fa, p, q, r;
+            if (a == c) {
+                p = 2.0 * xm * s;
+                q = 1.0 - s;
+            } else {
+                q = fa / fc;
+                r = fb / fc;
+                p = s * (2.0 * xm * q * (q - r) - (b - a) * (r - 1.0));
+                q = (q - 1.0) * (r - 1.0) * (s - 1.0);
+            }
+            if (p > 0.0) q = -q;
+            p = fabs(p);
+            if (2.0 * p < fmin(3.0 * xm * q - fabs(tol1 * q), fabs(e * q))) {
+                e = d;
+                d = p / q;
+            } else {
+                d = xm;
+                e = d;
+            }
+        } else {
+            d = xm;
+            e = d;
+        }
+        double from = b, f_from = fb, trial = b + (fabs(d) > tol1 ? d : (xm > 0.0 ? tol1 : -tol1));
+        double f_trial = 0.0;
+        rc = indicator_eval(ind, trial, &f_trial);
+        /* a cycle the engine cannot solve (the inside of a canard explosion
+         * is exponentially thin in nu) need not stop the search: the bracket
+         * still holds a root, try points nearer the bracket's middle */
+        for (int retry = 0; rc == BKF_ENUMERIC && retry < 4; retry++) {
+            trial = from + (0.5 + 0.1 * retry) * (c - from);
+            rc = indicator_eval(ind, trial, &f_trial);
+        }
+        if (rc != BKF_OK) {
+            b = from;
+            fb = f_from;
+            break;
+        }
+        a = from;
+        fa = f_from;
+        b = trial;
+        fb = f_trial;
+        if (c != b && fc != fb) br->slope = (fc - fb) / (c - b);
+    }
+    br->root = b;
+    br->f_root = fb;
+    br->other = c;
+    br->f_other = fc;
+    return rc;
+}
+
+/* Past this the indicator did not go to zero in the final bracket: it
+ * jumps there.  A continuous crossing with the bracket at the tolerance
+ * would need a slope beyond 1e5 per unit nu to leave such a value. */
+#define JUMP_VALUE 1e-3
+
+/* Locate one indicator's zero in [nu_a, nu_b] and describe it.  On failure
+ * *fail_near is the end of the last bracket nearest nu_a. */
+static int locate(indicator *ind, double f_a, double f_b, bkf_floquet_threshold *th,
+                  double *fail_near)
+{
+    bkf_floquet *f = ind->f;
+    double lo = fmin(ind->nu_a, ind->nu_b), hi = fmax(ind->nu_a, ind->nu_b);
+    double f_lo = ind->nu_a < ind->nu_b ? f_a : f_b, f_hi = ind->nu_a < ind->nu_b ? f_b : f_a;
+    double xtol = fmax(0.5 * f->opt.tol, 1e-13);
+    bracket br;
+    int rc = indicator_root(ind, lo, f_lo, hi, f_hi, xtol, &br);
+    if (rc != BKF_OK) {
+        if (fail_near)
+            *fail_near = fabs(br.root - ind->nu_a) < fabs(br.other - ind->nu_a) ? br.root : br.other;
+        return rc;
+    }
+    double nu = br.root, v;
+    int jump = fmin(fabs(br.f_root), fabs(br.f_other)) > JUMP_VALUE;
+    rc = indicator_eval(ind, nu, &v);
+    if (rc != BKF_OK) return rc;
+    memset(th, 0, sizeof *th);
+    th->gamma = ind->gamma;
+    th->c = ind->c;
+    th->nu = nu;
+    th->discontinuous = jump;
+    double value_err;
+    if (ind->longwave) {
+        double a, a_err;
+        rc = bkf_floquet_longwave(f, &a, &a_err, &ind->err);
+        if (rc != BKF_OK) return rc;
+        th->kind = BKF_BOUNDARY_LONG_WAVE;
+        th->k2 = 1.0;
+        th->q = 0.0;
+        th->m_re = 1.0;
+        th->lambda = 0.0;
+        th->longwave = a;
+        value_err = a_err + fabs(a - v);
+    } else {
+        bkf_floquet_point pt;
+        rc = eval_k2(f, ind->K_last, &pt, &ind->err);
+        if (rc != BKF_OK) return rc;
+        th->kind = ind->sign < 0.0 ? BKF_BOUNDARY_PERIOD_DOUBLING : BKF_BOUNDARY_OTHER;
+        th->k2 = pt.k2;
+        th->q = pt.q;
+        th->m_re = pt.m1_re;
+        th->m_im = pt.m1_im;
+        th->lambda = pt.lambda;
+        value_err = pt.lambda_err + fabs(pt.lambda - v);
+        rc = bkf_floquet_longwave(f, &th->longwave, NULL, &ind->err);
+        if (rc != BKF_OK) return rc;
+    }
+    if (jump) th->kind = BKF_BOUNDARY_OTHER;
+    double slope = br.slope;
+    th->nu_err = fabs(br.root - br.other) +
+                 (!jump && slope != 0.0 && isfinite(slope) ? value_err / fabs(slope) : 0.0);
+    return BKF_OK;
+}
+
+/* The indicators that could explain the change between a stable and an
+ * unstable end; the one whose zero lies nearest the stable end is the
+ * boundary (a second zero further in is inside the unstable interval). */
+static int boundary_between(bkf_floquet *f, double gamma, double c, double nu_s,
+                            const stability_full *st_s, double nu_u, const stability_full *st_u,
+                            bkf_floquet_threshold *th, bkf_error *err)
+{
+    int found = 0, failed = 0;
+    double fail_dist = HUGE_VAL;
+    bkf_error fail_err = {{0}};
+    double dp = f->opt.p_max / (double)f->opt.scan_points;
+    indicator ind;
+    bkf_floquet_threshold cand;
+    if (st_u->s.longwave > 0.0 && st_s->s.longwave < 0.0) {
+        memset(&ind, 0, sizeof ind);
+        ind = (indicator){.f = f, .opt = &f->opt, .gamma = gamma, .c = c, .longwave = 1,
+                          .nu_a = nu_s, .nu_b = nu_u};
+        double near = nu_s;
+        int rc = locate(&ind, st_s->s.longwave, st_u->s.longwave, &cand, &near);
+        if (rc == BKF_OK) {
+            *th = cand;
+            found = 1;
+        } else if (rc == BKF_ENUMERIC) {
+            failed = 1;
+            fail_dist = fabs(near - nu_s);
+            fail_err = ind.err;
+        } else {
+            *err = ind.err;
+            return rc;
+        }
+    }
+    for (size_t i = 0; i < st_u->npeaks; i++) {
+        const peak *pu = &st_u->peaks[i];
+        if (!(pu->lambda >= 0.0)) continue;
+        /* the same tongue at the stable end: same sign, nearest K */
+        double K_s = pu->K, best = HUGE_VAL;
+        for (size_t j = 0; j < st_s->npeaks; j++) {
+            const peak *ps = &st_s->peaks[j];
+            if (ps->sign != pu->sign) continue;
+            if (fabs(ps->K - pu->K) < best) {
+                best = fabs(ps->K - pu->K);
+                K_s = ps->K;
+            }
+        }
+        double p = sqrt(fmax(pu->K - 1.0, 0.0));
+        double w = fmax(fabs(K_s - pu->K), 2.0 * dk_of_p(p, dp));
+        memset(&ind, 0, sizeof ind);
+        ind = (indicator){.f = f, .opt = &f->opt, .gamma = gamma, .c = c, .sign = pu->sign,
+                          .nu_a = nu_s, .K_a = K_s, .nu_b = nu_u, .K_b = pu->K, .w = w};
+        double v_s, v_u, near = nu_s;
+        int rc = indicator_eval(&ind, nu_s, &v_s);
+        if (rc == BKF_OK) rc = indicator_eval(&ind, nu_u, &v_u);
+        if (rc == BKF_OK && !(v_s < 0.0 && v_u >= 0.0)) continue;
+        if (rc == BKF_OK) rc = locate(&ind, v_s, v_u, &cand, &near);
+        if (rc == BKF_OK) {
+            if (!found || fabs(cand.nu - nu_s) < fabs(th->nu - nu_s)) *th = cand;
+            found = 1;
+        } else if (rc == BKF_ENUMERIC) {
+            failed = 1;
+            fail_dist = fmin(fail_dist, fabs(near - nu_s));
+            fail_err = ind.err;
+        } else {
+            *err = ind.err;
+            return rc;
+        }
+    }
+    /* a candidate that failed matters only if its zero could lie nearer the
+     * stable end than the boundary found */
+    if (failed && (!found || fail_dist < fabs(th->nu - nu_s))) {
+        *err = fail_err;
+        return BKF_ENUMERIC;
+    }
+    if (!found)
+        return bkf_error_set(err, BKF_ENUMERIC,
+                             "stability changes between nu = %.10g and %.10g (gamma = %g) but no "
+                             "indicator changes sign there",
+                             nu_s, nu_u, gamma);
+    th->stable_above = nu_s > nu_u;
+    return BKF_OK;
+}
+
+static int check_scan_inputs(double gamma, double c, double nu_lo, double nu_hi,
+                             const bkf_floquet_options *o, bkf_error *err)
+{
+    int rc = check_options(o, err);
+    if (rc == BKF_OK) rc = check_gamma_c(gamma, c, err);
+    if (rc != BKF_OK) return rc;
+    if (!(c > 0.0))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "c = %g: thresholds need c > 0 (with c = 0 every wavenumber is the "
+                             "neutral q = 0 mode)",
+                             c);
+    if ((rc = bkf_model_check_nu_active(nu_lo, err)) || (rc = bkf_model_check_nu_active(nu_hi, err)))
+        return rc;
+    if (!(nu_lo < nu_hi))
+        return bkf_error_set(err, BKF_EINPUT, "the nu range needs lo < hi (got %g, %g)", nu_lo, nu_hi);
+    return BKF_OK;
+}
+
+/* Scan [nu_lo, nu_hi] upward; `each_boundary` is called for every change of
+ * stability (located), `until_first` stops after the first. */
+typedef int (*boundary_fn)(const bkf_floquet_threshold *th, double nu_prev, int stable_prev,
+                           void *data);
+
+static int scan_nu(double gamma, double c, double nu_lo, double nu_hi,
+                   const bkf_floquet_options *o, boundary_fn each, void *data, int *first_stable,
+                   int *last_stable, size_t *changes, bkf_error *err)
+{
+    int rc = check_scan_inputs(gamma, c, nu_lo, nu_hi, o, err);
+    if (rc != BKF_OK) return rc;
+    bkf_floquet *f = bkf_floquet_alloc();
+    stability_full *prev = malloc(sizeof *prev), *cur = malloc(sizeof *cur);
+    if (!f || !prev || !cur) {
+        bkf_floquet_free(f);
+        free(prev);
+        free(cur);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    size_t n = (size_t)ceil((nu_hi - nu_lo) / o->nu_step - 1e-9);
+    if (n < 1) n = 1;
+    *changes = 0;
+    for (size_t i = 0; i <= n && rc == BKF_OK; i++) {
+        double nu = i == n ? nu_hi : nu_lo + (nu_hi - nu_lo) * (double)i / (double)n;
+        rc = bkf_floquet_set(f, gamma, c, nu, o, err);
+        if (rc == BKF_OK) rc = stability_scan(f, cur, err);
+        if (rc != BKF_OK) break;
+        if (i == 0) *first_stable = cur->s.stable;
+        if (i > 0 && cur->s.stable != prev->s.stable) {
+            bkf_floquet_threshold th;
+            const stability_full *st_s = cur->s.stable ? cur : prev;
+            const stability_full *st_u = cur->s.stable ? prev : cur;
+            rc = boundary_between(f, gamma, c, st_s->s.nu, st_s, st_u->s.nu, st_u, &th, err);
+            if (rc != BKF_OK) break;
+            (*changes)++;
+            if (each(&th, prev->s.nu, prev->s.stable, data)) break;
+        }
+        *last_stable = cur->s.stable;
+        stability_full *t = prev;
+        prev = cur;
+        cur = t;
+    }
+    bkf_floquet_free(f);
+    free(prev);
+    free(cur);
+    return rc;
+}
+
+static int keep_first(const bkf_floquet_threshold *th, double nu_prev, int stable_prev, void *data)
+{
+    (void)nu_prev;
+    (void)stable_prev;
+    *(bkf_floquet_threshold *)data = *th;
+    return 1;
+}
+
+int bkf_floquet_threshold_find(double gamma, double c, double nu_lo, double nu_hi,
+                               const bkf_floquet_options *options, bkf_floquet_threshold *out,
+                               bkf_error *err)
+{
+    if (!out) return bkf_error_set(err, BKF_EINPUT, "threshold result is NULL");
+    bkf_floquet_options o = options ? *options : bkf_floquet_options_default();
+    int first = 0, last = 0;
+    size_t changes = 0;
+    int rc = scan_nu(gamma, c, nu_lo, nu_hi, &o, keep_first, out, &first, &last, &changes, err);
+    if (rc != BKF_OK) return rc;
+    if (changes == 0)
+        return bkf_error_set(err, BKF_ENUMERIC,
+                             "no change of stability for nu in [%g, %g] at gamma = %g: global "
+                             "oscillations are %s throughout (scan step %g)",
+                             nu_lo, nu_hi, gamma, first ? "stable" : "unstable", o.nu_step);
+    return BKF_OK;
+}
+
+/* --------------------------------------------------------------- diagram */
+
+typedef struct {
+    double gamma, c, nu_lo, nu_hi;
+    bkf_floquet_interval current;
+    bkf_floquet_interval_visit visit;
+    void *data;
+    int stopped;
+} diagram_ctx;
+
+static bkf_floquet_threshold scan_end(double gamma, double c, double nu)
+{
+    bkf_floquet_threshold t;
+    memset(&t, 0, sizeof t);
+    t.gamma = gamma;
+    t.c = c;
+    t.nu = nu;
+    t.kind = BKF_BOUNDARY_SCAN_END;
+    t.q = t.k2 = t.m_re = t.m_im = t.lambda = t.longwave = NAN;
+    return t;
+}
+
+static int diagram_boundary(const bkf_floquet_threshold *th, double nu_prev, int stable_prev,
+                            void *data)
+{
+    (void)nu_prev;
+    diagram_ctx *d = data;
+    d->current.stable = stable_prev;
+    d->current.to = *th;
+    d->current.nu_to = th->nu;
+    if (d->visit(&d->current, d->data)) {
+        d->stopped = 1;
+        return 1;
+    }
+    d->current.from = *th;
+    d->current.nu_from = th->nu;
+    return 0;
+}
+
+int bkf_floquet_diagram(double gamma, double c, double nu_lo, double nu_hi,
+                        const bkf_floquet_options *options, bkf_floquet_interval_visit visit,
+                        void *data, bkf_error *err)
+{
+    if (!visit) return bkf_error_set(err, BKF_EINPUT, "diagram visit callback is NULL");
+    bkf_floquet_options o = options ? *options : bkf_floquet_options_default();
+    diagram_ctx d;
+    memset(&d, 0, sizeof d);
+    d.gamma = gamma;
+    d.c = c;
+    d.nu_lo = nu_lo;
+    d.nu_hi = nu_hi;
+    d.visit = visit;
+    d.data = data;
+    d.current.from = scan_end(gamma, c, nu_lo);
+    d.current.nu_from = nu_lo;
+    int first = 0, last = 0;
+    size_t changes = 0;
+    int rc = scan_nu(gamma, c, nu_lo, nu_hi, &o, diagram_boundary, &d, &first, &last, &changes, err);
+    if (rc != BKF_OK || d.stopped) return rc;
+    d.current.stable = last;
+    d.current.to = scan_end(gamma, c, nu_hi);
+    d.current.nu_to = nu_hi;
+    visit(&d.current, data);
+    return BKF_OK;
+}
+
+/* ------------------------------------------------------- threshold curve */
+
+/* Continuation unknowns: finite-q boundary u = (K, nu, s), equations
+ * sign * trace - (1 + D) = 0 (a multiplier at sign * 1) and dtrace/dK = 0
+ * (at the peak); long-wave boundary u = (nu, s), equation a = 0.  s is c or
+ * ln gamma. */
+typedef struct {
+    bkf_floquet_param along;
+    double gamma, c;           /* the fixed one is used */
+    bkf_floquet_options opt;
+    bkf_floquet *f;
+    int longwave;
+    double sign;
+    double from, to, s_from, s_to;
+    double w;                  /* peak window for polishing */
+    int stable_above;
+    bkf_floquet_threshold_visit visit;
+    void *visit_data;
+    int visit_status;
+    bkf_error *err;
+} branch_ctx;
+
+static void branch_params(const branch_ctx *b, double s, double *gamma, double *c)
+{
+    *gamma = b->along == BKF_FLOQUET_ALONG_GAMMA ? exp(s) : b->gamma;
+    *c = b->along == BKF_FLOQUET_ALONG_C ? s : b->c;
+}
+
+static int branch_eval(branch_ctx *b, double K, double nu, double s, double *g, bkf_error *err)
+{
+    double gamma, c;
+    branch_params(b, s, &gamma, &c);
+    if (!(fabs(nu) < 1.0) || !(K >= 1.0) || !(K <= K_MAX))
+        return bkf_error_set(err, BKF_ENUMERIC, "threshold curve left the valid range");
+    int rc = bkf_floquet_set(b->f, gamma, c, nu, &b->opt, err);
+    if (rc != BKF_OK) return rc == BKF_EINPUT ? BKF_ENUMERIC : rc;
+    if (b->longwave) return longwave_at(b->f, ENG_FINE, &g[0], err);
+    raw r;
+    rc = integrate(b->f, K, 1, ENG_FINE, &r, err);
+    if (rc != BKF_OK) return rc;
+    g[0] = b->sign * r.tr - (1.0 + exp(r.L));
+    g[1] = r.dtr;
+    return BKF_OK;
+}
+
+static int branch_residual(const double *u, double *g, double *jac, void *data, bkf_error *err)
+{
+    branch_ctx *b = data;
+    int lw = b->longwave;
+    size_t n = lw ? 1 : 2, N = n + 1;
+    double K = lw ? 1.0 : u[0], nu = u[N - 2], s = u[N - 1];
+    int rc = branch_eval(b, K, nu, s, g, err);
+    if (rc != BKF_OK || !jac) return rc == BKF_ENOMEM ? rc : (rc ? BKF_ENUMERIC : BKF_OK);
+    /* forward differences with steps well above the integration noise
+     * (the driver's own would be ~1e-8, where noise of 1e-12 in g is a
+     * 1e-4 error in the Jacobian) */
+    double uh[3], g2[2];
+    for (size_t j = 0; j < N; j++) {
+        memcpy(uh, u, N * sizeof *u);
+        double h = 1e-6 * fmax(1.0, fabs(u[j]));
+        uh[j] += h;
+        h = uh[j] - u[j];
+        rc = branch_eval(b, lw ? 1.0 : uh[0], uh[N - 2], uh[N - 1], g2, err);
+        if (rc != BKF_OK) return rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
+        for (size_t i = 0; i < n; i++) jac[i * N + j] = (g2[i] - g[i]) / h;
+    }
+    /* put the cycle back at u: the polish after acceptance starts from it */
+    return BKF_OK;
+}
+
+/* At fixed parameter, the boundary near nu0 by root finding in a bracket
+ * widened until the indicator changes sign. */
+static int polish(const branch_ctx *b, double gamma, double c, double K0, double nu0,
+                  bkf_floquet_threshold *th, bkf_error *err)
+{
+    indicator ind;
+    memset(&ind, 0, sizeof ind);
+    ind = (indicator){.f = b->f, .opt = &b->opt, .gamma = gamma, .c = c, .longwave = b->longwave, .sign = b->sign,
+                      .K_a = K0, .K_b = K0, .w = b->w};
+    double delta = 1e-4;
+    for (int attempt = 0; attempt < 5; attempt++, delta *= 8.0) {
+        double lo = fmax(nu0 - delta, -1.0 + 1e-9), hi = fmin(nu0 + delta, 1.0 - 1e-9);
+        ind.nu_a = lo;
+        ind.nu_b = hi;
+        double f_lo, f_hi;
+        int rc = indicator_eval(&ind, lo, &f_lo);
+        if (rc == BKF_OK) rc = indicator_eval(&ind, hi, &f_hi);
+        if (rc != BKF_OK) {
+            *err = ind.err;
+            return rc;
+        }
+        if ((f_lo < 0.0) == (f_hi < 0.0)) continue;
+        rc = locate(&ind, f_lo, f_hi, th, NULL);
+        if (rc != BKF_OK) {
+            *err = ind.err;
+            return rc;
+        }
+        th->stable_above = b->stable_above;
+        return BKF_OK;
+    }
+    return bkf_error_set(err, BKF_ENUMERIC,
+                         "threshold curve: no sign change of the indicator near nu = %.10g", nu0);
+}
+
+static int branch_accept(const double *u, const double *tangent, int is_fold, void *data)
+{
+    (void)tangent;
+    (void)is_fold;
+    branch_ctx *b = data;
+    size_t N = b->longwave ? 2 : 3;
+    double s = u[N - 1];
+    /* the ends are requested values: give them back exactly */
+    double par;
+    if (fabs(s - b->s_from) <= 1e-12 * fmax(1.0, fabs(s))) s = b->s_from;
+    if (fabs(s - b->s_to) <= 1e-12 * fmax(1.0, fabs(s))) s = b->s_to;
+    par = s == b->s_from ? b->from : s == b->s_to ? b->to
+          : b->along == BKF_FLOQUET_ALONG_GAMMA ? exp(s)
+                                                : s;
+    double gamma = b->along == BKF_FLOQUET_ALONG_GAMMA ? par : b->gamma;
+    double c = b->along == BKF_FLOQUET_ALONG_C ? par : b->c;
+    bkf_floquet_threshold th;
+    int rc = polish(b, gamma, c, b->longwave ? 1.0 : u[0], u[N - 2], &th, b->err);
+    if (rc != BKF_OK) {
+        b->visit_status = rc;
+        return 1;
+    }
+    if (b->visit(&th, b->visit_data) != 0) {
+        b->visit_status = -1;
+        return 1;
+    }
+    return 0;
+}
+
+int bkf_floquet_threshold_branch(bkf_floquet_param along, double from, double to, double gamma,
+                                 double c, double nu_lo, double nu_hi,
+                                 const bkf_floquet_options *options, size_t max_points,
+                                 bkf_floquet_threshold_visit visit, void *data, bkf_error *err)
+{
+    if (!visit) return bkf_error_set(err, BKF_EINPUT, "threshold visit callback is NULL");
+    if (along != BKF_FLOQUET_ALONG_C && along != BKF_FLOQUET_ALONG_GAMMA)
+        return bkf_error_set(err, BKF_EINPUT, "threshold curve parameter must be c or gamma");
+    bkf_floquet_options o = options ? *options : bkf_floquet_options_default();
+    double g_from = along == BKF_FLOQUET_ALONG_GAMMA ? from : gamma;
+    double c_from = along == BKF_FLOQUET_ALONG_C ? from : c;
+    double g_to = along == BKF_FLOQUET_ALONG_GAMMA ? to : gamma;
+    double c_to = along == BKF_FLOQUET_ALONG_C ? to : c;
+    int rc = check_scan_inputs(g_from, c_from, nu_lo, nu_hi, &o, err);
+    if (rc == BKF_OK) rc = check_scan_inputs(g_to, c_to, nu_lo, nu_hi, &o, err);
+    if (rc != BKF_OK) return rc;
+    if (from == to) return bkf_error_set(err, BKF_EINPUT, "threshold curve needs from != to");
+
+    bkf_floquet_threshold start;
+    rc = bkf_floquet_threshold_find(g_from, c_from, nu_lo, nu_hi, &o, &start, err);
+    if (rc != BKF_OK) return rc;
+
+    branch_ctx b;
+    memset(&b, 0, sizeof b);
+    b.along = along;
+    b.gamma = gamma;
+    b.c = c;
+    b.opt = o;
+    b.f = bkf_floquet_alloc();
+    if (!b.f) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    b.longwave = start.kind == BKF_BOUNDARY_LONG_WAVE;
+    b.sign = start.kind == BKF_BOUNDARY_PERIOD_DOUBLING ? -1.0 : 1.0;
+    b.from = from;
+    b.to = to;
+    b.s_from = along == BKF_FLOQUET_ALONG_GAMMA ? log(from) : from;
+    b.s_to = along == BKF_FLOQUET_ALONG_GAMMA ? log(to) : to;
+    double dp = o.p_max / (double)o.scan_points;
+    b.w = 2.0 * dk_of_p(sqrt(fmax(start.k2 - 1.0, 0.0)), dp);
+    b.stable_above = start.stable_above;
+    b.visit = visit;
+    b.visit_data = data;
+    b.err = err;
+
+    double u0[3];
+    size_t n = b.longwave ? 1 : 2;
+    if (b.longwave) {
+        u0[0] = start.nu;
+        u0[1] = b.s_from;
+    } else {
+        u0[0] = start.k2;
+        u0[1] = start.nu;
+        u0[2] = b.s_from;
+    }
+    bkf_cont_options co = bkf_cont_options_default(n);
+    co.step_max = 0.1;
+    co.step_initial = 0.02;
+    co.newton_tol = fmax(1e-9, 10.0 * o.tol);
+    co.stop_index = (int)n;
+    co.stop_min = fmin(b.s_from, b.s_to);
+    co.stop_max = fmax(b.s_from, b.s_to);
+    if (max_points) co.max_points = max_points;
+    bkf_cont_report report;
+    rc = bkf_cont_run(branch_residual, branch_accept, &b, u0, (int)n, b.s_to > b.s_from ? 1 : -1,
+                      &co, &report, err);
+    bkf_floquet_free(b.f);
+    if (b.visit_status > 0) return b.visit_status;
+    if (b.visit_status < 0) return BKF_OK;
+    return rc;
+}

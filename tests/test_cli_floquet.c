@@ -1,0 +1,322 @@
+/* `bkfront floquet` as a user sees it: the built binary (BKF_CLI_PATH), its
+ * stdout, stderr and exit status, in its three modes. */
+#define _POSIX_C_SOURCE 200809L
+#include "harness.h"
+
+#include <fcntl.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#ifndef BKF_CLI_PATH
+#error "BKF_CLI_PATH (the built bkfront binary) is defined by the Makefile for tests"
+#endif
+
+/* In test_io.c. */
+int bkf_test_json_valid(const char *text);
+
+typedef struct {
+    char *out, *err;
+    int code;
+} fq_run;
+
+static char *fq_read_all(int fd)
+{
+    size_t cap = 4096, n = 0;
+    char *buf = malloc(cap);
+    CHECK(buf);
+    lseek(fd, 0, SEEK_SET);
+    for (;;) {
+        if (n + 1 >= cap) {
+            buf = realloc(buf, cap *= 2);
+            CHECK(buf);
+        }
+        ssize_t k = read(fd, buf + n, cap - n - 1);
+        if (k <= 0) break;
+        n += (size_t)k;
+    }
+    buf[n] = '\0';
+    return buf;
+}
+
+static int fq_temp_fd(void)
+{
+    char name[] = "/tmp/bkf_floquet_test_XXXXXX";
+    int fd = mkstemp(name);
+    CHECK(fd >= 0);
+    unlink(name);
+    return fd;
+}
+
+static fq_run fq_argv(const char *const *args)
+{
+    char *argv[64];
+    int argc = 0;
+    argv[argc++] = BKF_CLI_PATH;
+    for (; args[argc - 1] && argc < 63; argc++) argv[argc] = (char *)args[argc - 1];
+    argv[argc] = NULL;
+    int out = fq_temp_fd(), err = fq_temp_fd();
+    fflush(stdout);
+    pid_t pid = fork();
+    CHECK(pid >= 0);
+    if (pid == 0) {
+        dup2(out, 1);
+        dup2(err, 2);
+        execv(BKF_CLI_PATH, argv);
+        _exit(127);
+    }
+    int status = 0;
+    CHECK(waitpid(pid, &status, 0) == pid);
+    fq_run r = {fq_read_all(out), fq_read_all(err), WIFEXITED(status) ? WEXITSTATUS(status) : -1};
+    close(out);
+    close(err);
+    return r;
+}
+
+#define FQ(...) fq_argv((const char *const[]){"floquet", __VA_ARGS__, NULL})
+
+static void fq_free(fq_run *r)
+{
+    free(r->out);
+    free(r->err);
+}
+
+static int fq_lines(const char *s)
+{
+    int n = 0;
+    for (; *s; s++) n += *s == '\n';
+    return n;
+}
+
+static void fq_bad(fq_run r, const char *names, const char *what)
+{
+    CHECK_MSG(r.code == 2, "%s: exit %d, stderr: %s", what, r.code, r.err);
+    CHECK_MSG(r.out[0] == '\0', "%s: stdout not empty: %s", what, r.out);
+    CHECK_MSG(fq_lines(r.err) == 1, "%s: stderr is not one line: %s", what, r.err);
+    CHECK_MSG(strncmp(r.err, "bkfront floquet: ", 17) == 0, "%s: %s", what, r.err);
+    CHECK_MSG(strstr(r.err, names), "%s: '%s' not named in: %s", what, names, r.err);
+    fq_free(&r);
+}
+
+/* Field `column` of data row `row` (0-based) of a TSV table; text fields
+ * are copied into `text` when given. */
+static int fq_field(const char *tsv, int row, const char *column, double *value, char *text,
+                    size_t text_size)
+{
+    const char *p = tsv;
+    while (*p == '#') p = strchr(p, '\n') + 1;
+    const char *header = p;
+    int col = 0, found = -1;
+    size_t clen = strlen(column);
+    for (const char *q = header; *q && *q != '\n'; col++) {
+        size_t len = strcspn(q, "\t\n");
+        if (len == clen && strncmp(q, column, len) == 0) found = col;
+        q += len;
+        if (*q == '\t') q++;
+    }
+    if (found < 0) return 0;
+    p = strchr(header, '\n');
+    for (int r = 0; r < row; r++) {
+        if (!p || !p[1]) return 0;
+        p = strchr(p + 1, '\n');
+    }
+    if (!p || !p[1]) return 0;
+    p++;
+    for (int c = 0; c < found; c++) p = strchr(p, '\t') + 1;
+    size_t len = strcspn(p, "\t\n");
+    if (text) {
+        size_t n = len < text_size - 1 ? len : text_size - 1;
+        memcpy(text, p, n);
+        text[n] = '\0';
+    }
+    if (value) {
+        char *end;
+        *value = strtod(p, &end);
+        if (end != p + len) return text != NULL;
+    }
+    return 1;
+}
+
+TEST(cli_floquet_help)
+{
+    fq_run r = FQ("--help");
+    CHECK_MSG(r.code == 0 && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    const char *needles[] = {"--gamma", "--c", "--nu", "--q", "--S", "--threshold", "--along",
+                             "--from", "--to", "--diagram", "--search", "--tol", "--cq-max",
+                             "--nu-step", "--format", "--out", "m1_re", "m2_im", "kind",
+                             "allowed", "lambda_slip", "nu_pd", "q_c", "period_doubling",
+                             "long_wave"};
+    for (size_t i = 0; i < sizeof needles / sizeof needles[0]; i++)
+        CHECK_MSG(strstr(r.out, needles[i]), "help lacks %s", needles[i]);
+    fq_free(&r);
+}
+
+TEST(cli_floquet_rejects_bad_input)
+{
+    fq_bad(FQ("--c", "0.3", "--nu", "-0.9", "--q", "1"), "--gamma", "missing --gamma");
+    fq_bad(FQ("--gamma", "2", "--nu", "-0.9", "--q", "1"), "--c", "missing --c");
+    fq_bad(FQ("--gamma", "2", "--c", "0.3", "--q", "1"), "--nu", "missing --nu");
+    fq_bad(FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9"), "--q", "missing --q");
+    fq_bad(FQ("--gamma", "0", "--c", "0.3", "--nu", "-0.9", "--q", "1"), "--gamma", "gamma 0");
+    fq_bad(FQ("--gamma", "2", "--c", "-1", "--nu", "-0.9", "--q", "1"), "--c", "c < 0");
+    fq_bad(FQ("--gamma", "2", "--c", "0.3", "--nu", "1", "--q", "1"), "--nu", "nu 1");
+    fq_bad(FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "-1:2:4"), "--q", "q < 0");
+    fq_bad(FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "1e6"), "--q", "c q huge");
+    fq_bad(FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "1", "--S", "0"), "--S", "S 0");
+    fq_bad(FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "1", "--tol", "1"), "--tol",
+           "tol 1");
+    fq_bad(FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "1", "--search", "-1:0"),
+           "--search", "--search in dispersion mode");
+    fq_bad(FQ("--threshold", "--diagram", "--gamma", "2", "--c", "0.3"), "--diagram",
+           "two modes");
+    fq_bad(FQ("--threshold", "--gamma", "2", "--c", "0.3", "--nu", "-0.9"), "--nu",
+           "--nu with --threshold");
+    fq_bad(FQ("--threshold", "--gamma", "2", "--c", "0"), "--c", "c = 0 with --threshold");
+    fq_bad(FQ("--threshold", "--gamma", "2", "--c", "0.3", "--search", "-1:0"), "--search",
+           "--search reaching -1");
+    fq_bad(FQ("--threshold", "--gamma", "2", "--c", "0.3", "--search", "0:-0.5"), "--search",
+           "--search backwards");
+    fq_bad(FQ("--threshold", "--along", "c", "--from", "0.1", "--gamma", "2"), "--to",
+           "--along without --to");
+    fq_bad(FQ("--threshold", "--along", "c", "--from", "0.1", "--to", "1", "--gamma", "2", "--c",
+              "0.3"),
+           "--c", "--along c with --c");
+    fq_bad(FQ("--threshold", "--along", "mu", "--from", "1", "--to", "2", "--c", "0.3"),
+           "--along", "--along mu");
+    fq_bad(FQ("--threshold", "--along", "gamma", "--from", "2", "--to", "2", "--c", "0.3"),
+           "--from", "--from = --to");
+    fq_bad(FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "1", "--from", "1"), "--from",
+           "--from without --threshold");
+    fq_bad(FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "1", "--out",
+              "/nonexistent_bkf/x.tsv"),
+           "--out", "--out in a missing directory");
+}
+
+/* The paper's parameters: stable at nu = -0.92, period doubling at q ~ 3
+ * at nu = -0.94, and the modes of S = 20 marked. */
+TEST(cli_floquet_dispersion)
+{
+    fq_run r = FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.94", "--q", "0:6:25", "--S", "20");
+    CHECK_MSG(r.code == 0 && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, "q\tK\tlambda\tlambda_err\tm1_re\tm1_im\tm2_re\tm2_im\tm1_err\tkind\tallowed\t"
+                        "lambda_slip\tdet\tdet_direct\n"));
+    CHECK(strstr(r.out, "# command: bkfront floquet --gamma 2 --c 0.3 --nu -0.94 --q 0:6:25 --S 20\n"));
+    int rows = 0, allowed = 0, unstable_pd = 0;
+    double q, lambda, m1, al, prev = -1, slip;
+    char kind[32];
+    for (; fq_field(r.out, rows, "q", &q, NULL, 0); rows++) {
+        CHECK(q > prev);
+        prev = q;
+        CHECK(fq_field(r.out, rows, "lambda", &lambda, NULL, 0));
+        CHECK(fq_field(r.out, rows, "m1_re", &m1, NULL, 0));
+        CHECK(fq_field(r.out, rows, "allowed", &al, NULL, 0));
+        CHECK(fq_field(r.out, rows, "kind", NULL, kind, sizeof kind));
+        CHECK(fq_field(r.out, rows, "lambda_slip", &slip, NULL, 0) && slip > 0);
+        if (al == 1) {
+            double j = q * 20.0 / (2.0 * 3.14159265358979323846);
+            CHECK_MSG(fabs(j - nearbyint(j)) < 1e-9, "q %.17g marked allowed", q);
+            allowed++;
+        }
+        if (lambda > 0 && m1 < -1 && q > 2.5 && q < 3.5) {
+            CHECK(strcmp(kind, "real_negative") == 0);
+            unstable_pd++;
+        }
+        if (q == 0) CHECK_CLOSE(m1, 1.0, 0, 1e-9);
+    }
+    /* 25 grid points plus the 20 modes 2 pi j/20 <= 6, of which only q = 0
+     * (j = 0) is on the grid */
+    CHECK_MSG(allowed == 20, "%d allowed rows", allowed);
+    CHECK_MSG(rows == 25 + 19, "%d rows", rows);
+    CHECK(unstable_pd >= 1);
+    fq_free(&r);
+
+    r = FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.92", "--q", "0.1:6:60");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    for (int i = 0; fq_field(r.out, i, "lambda", &lambda, NULL, 0); i++) {
+        CHECK_MSG(lambda < 0, "row %d: lambda %g at nu = -0.92", i, lambda);
+        CHECK(fq_field(r.out, i, "allowed", &al, NULL, 0) && isnan(al));
+    }
+    fq_free(&r);
+}
+
+TEST(cli_floquet_threshold)
+{
+    fq_run r = FQ("--threshold", "--gamma", "2", "--c", "0.3", "--tol", "1e-9");
+    CHECK_MSG(r.code == 0 && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    double nu, err, q, m, stable_above;
+    char kind[32];
+    CHECK(fq_field(r.out, 0, "nu_pd", &nu, NULL, 0) && nu > -0.94 && nu < -0.92);
+    CHECK(fq_field(r.out, 0, "nu_pd_err", &err, NULL, 0) && err > 0 && err < 1e-8);
+    CHECK(fq_field(r.out, 0, "q_c", &q, NULL, 0) && q > 2.5 && q < 3.5);
+    CHECK(fq_field(r.out, 0, "m_c_re", &m, NULL, 0));
+    CHECK_CLOSE(m, -1.0, 0, 1e-7);
+    CHECK(fq_field(r.out, 0, "kind", NULL, kind, sizeof kind) && strcmp(kind, "period_doubling") == 0);
+    CHECK(fq_field(r.out, 0, "stable_above", &stable_above, NULL, 0) && stable_above == 1);
+    CHECK(!fq_field(r.out, 1, "nu_pd", &nu, NULL, 0));
+    bkf_test_note("nu_pd = %.12f +- %.2g, q_c = %.6f", nu, err, q);
+    fq_free(&r);
+
+    /* the curve against c: nu_pd does not move, q_c goes as 1/c */
+    r = FQ("--threshold", "--along", "c", "--from", "0.3", "--to", "0.6", "--gamma", "2", "--tol",
+           "1e-8");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    double c0, q0, c, nu0;
+    CHECK(fq_field(r.out, 0, "c", &c0, NULL, 0) && c0 == 0.3);
+    CHECK(fq_field(r.out, 0, "q_c", &q0, NULL, 0));
+    CHECK(fq_field(r.out, 0, "nu_pd", &nu0, NULL, 0));
+    int rows = 0;
+    for (; fq_field(r.out, rows, "c", &c, NULL, 0); rows++) {
+        CHECK(fq_field(r.out, rows, "nu_pd", &nu, NULL, 0));
+        CHECK_CLOSE(nu, nu0, 0, 1e-8);
+        CHECK(fq_field(r.out, rows, "q_c", &q, NULL, 0));
+        CHECK_CLOSE(q * c, q0 * c0, 1e-6, 0);
+    }
+    CHECK(rows >= 3 && c == 0.6);
+    fq_free(&r);
+}
+
+TEST(cli_floquet_diagram_json)
+{
+    fq_run r = FQ("--diagram", "--gamma", "2", "--c", "0.3", "--search", "-0.999:-0.5",
+                  "--format", "json", "--tol", "1e-8");
+    CHECK_MSG(r.code == 0 && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    CHECK_MSG(bkf_test_json_valid(r.out), "invalid JSON:\n%s", r.out);
+    CHECK(strstr(r.out, "\"columns\": [\"nu_from\", \"nu_to\", \"stability\""));
+    /* unstable, stable (period doubling .. long wave), unstable */
+    const char *a = strstr(r.out, "\"stability\": \"unstable\"");
+    const char *b = a ? strstr(a, "\"stability\": \"stable\"") : NULL;
+    const char *c = b ? strstr(b, "\"stability\": \"unstable\"") : NULL;
+    CHECK(a && b && c);
+    CHECK(strstr(r.out, "\"from_kind\": \"period_doubling\", \"to_kind\": \"long_wave\""));
+    fq_free(&r);
+}
+
+TEST(cli_floquet_out_file_is_atomic)
+{
+    char dir[] = "/tmp/bkf_floquet_out_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/d.tsv", dir);
+    fq_run r = FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "0:3:4", "--out", path);
+    CHECK_MSG(r.code == 0 && r.out[0] == '\0' && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    fq_free(&r);
+    int fd = open(path, O_RDONLY);
+    CHECK(fd >= 0);
+    char *text = fq_read_all(fd);
+    close(fd);
+    double q;
+    CHECK(fq_field(text, 3, "q", &q, NULL, 0) && q == 3);
+    /* a failed run leaves it as it was */
+    r = FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "-1", "--out", path);
+    CHECK(r.code == 2);
+    fq_free(&r);
+    fd = open(path, O_RDONLY);
+    char *again = fq_read_all(fd);
+    close(fd);
+    CHECK(strcmp(text, again) == 0);
+    free(text);
+    free(again);
+    unlink(path);
+    CHECK(rmdir(dir) == 0); /* no temporary left behind */
+}

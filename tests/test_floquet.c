@@ -1,0 +1,467 @@
+/* The Floquet module against what must hold whatever the numerics: the
+ * trivial multiplier at q = 0, Liouville's formula at every q, the
+ * nu -> -nu symmetry, c entering only through K = 1 + c^2 q^2; against an
+ * independent computation (a direct simulation of the nonlinear PDE on a
+ * small periodic domain); against the paper (gamma 2, c 0.3); and the
+ * tolerance contract of its error estimates. */
+#include "harness.h"
+
+#include "bkfront/floquet.h"
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_odeiv2.h>
+#include <string.h>
+
+static bkf_floquet *setup(double gamma, double c, double nu, double tol)
+{
+    bkf_floquet_options o = bkf_floquet_options_default();
+    o.tol = tol;
+    bkf_floquet *f = bkf_floquet_alloc();
+    CHECK(f);
+    bkf_error e;
+    int rc = bkf_floquet_set(f, gamma, c, nu, &o, &e);
+    CHECK_MSG(rc == BKF_OK, "gamma %g c %g nu %g: %s", gamma, c, nu, e.message);
+    return f;
+}
+
+static bkf_floquet_point eval(bkf_floquet *f, double q)
+{
+    bkf_floquet_point p;
+    bkf_error e;
+    int rc = bkf_floquet_eval(f, q, &p, &e);
+    CHECK_MSG(rc == BKF_OK, "q %g: %s", q, e.message);
+    return p;
+}
+
+TEST(floquet_q0_has_the_trivial_multiplier)
+{
+    const double gammas[] = {0.1, 1.0, 2.0, 10.0, 50.0};
+    const double nus[] = {0.0, -0.5, -0.94, 0.99};
+    for (size_t i = 0; i < sizeof gammas / sizeof gammas[0]; i++)
+        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+            bkf_floquet *f = setup(gammas[i], 0.3, nus[j], 1e-10);
+            bkf_floquet_point p = eval(f, 0.0);
+            CHECK_MSG(fabs(p.m1_re - 1.0) <= 1e-9 && p.m1_im == 0.0,
+                      "gamma %g nu %g: m1 = %.17g", gammas[i], nus[j], p.m1_re);
+            CHECK(fabs(p.m1_re - 1.0) <= fmax(p.m1_err, 1e-12));
+            CHECK(fabs(p.lambda) <= 1e-9);
+            CHECK(p.kind == BKF_FLOQUET_REAL_POSITIVE);
+            /* the other one is the cycle's own nontrivial multiplier */
+            const bkf_cycle_result *cy = bkf_floquet_cycle(f);
+            CHECK_CLOSE(p.log_det, cy->log_multiplier, 1e-8, 1e-10);
+            bkf_floquet_free(f);
+        }
+}
+
+/* m1 m2 = exp(integral of the trace) for every q: the determinant of the
+ * integrated matrix against Liouville's value, to the cancellation its
+ * entries allow; and the trace integral is the same for every q. */
+TEST(floquet_liouville_holds_for_every_q)
+{
+    const double cases[][3] = {{2.0, 0.3, -0.94}, {2.0, 0.3, 0.0}, {0.5, 1.0, 0.5}, {10.0, 0.5, -0.9}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        double gamma = cases[k][0], c = cases[k][1], nu = cases[k][2];
+        bkf_floquet *f = setup(gamma, c, nu, 1e-10);
+        double L0 = eval(f, 0.0).log_det, worst = 0.0;
+        for (int i = 0; i <= 60; i++) {
+            double q = 20.0 * i / 60.0;
+            bkf_floquet_point p = eval(f, q);
+            const double *M = p.monodromy;
+            double D = exp(p.log_det);
+            /* errors e |M| + e' in the entries (relative and absolute
+             * integration tolerances) move det by ~2 (e |M| + e') |M| */
+            double norm = fabs(M[0]) + fabs(M[1]) + fabs(M[2]) + fabs(M[3]);
+            double scale = norm * (norm + 0.1);
+            double dev = fabs(p.det_direct - D);
+            CHECK_MSG(dev <= 1e-9 * scale + 1e-300,
+                      "gamma %g nu %g q %g: det %.6g, exp(L) %.6g (entries %.3g)", gamma, nu, q,
+                      p.det_direct, D, scale);
+            if (scale > 0 && dev / scale > worst) worst = dev / scale;
+            /* the product of the reported multipliers is Liouville's */
+            double pr = p.m1_re * p.m2_re - p.m1_im * p.m2_im;
+            double pi = p.m1_re * p.m2_im + p.m1_im * p.m2_re;
+            CHECK_CLOSE(pr, D, 1e-12, 1e-300);
+            CHECK(fabs(pi) <= 1e-12 * D + 1e-300);
+            CHECK_CLOSE(p.log_det, L0, 1e-9, 1e-10);
+        }
+        bkf_test_note("gamma %g nu %g: |det - exp(L)| <= %.2g x entries", gamma, nu, worst);
+        bkf_floquet_free(f);
+    }
+}
+
+/* phi is odd: (psi, eta, nu) -> (-psi, -eta, -nu) maps the model to itself,
+ * so lambda_q(nu) = lambda_q(-nu), computed from a different cycle. */
+TEST(floquet_symmetric_in_nu)
+{
+    bkf_floquet *a = setup(2.0, 0.3, -0.7, 1e-10), *b = setup(2.0, 0.3, 0.7, 1e-10);
+    for (int i = 0; i <= 20; i++) {
+        double q = 0.5 * i;
+        bkf_floquet_point pa = eval(a, q), pb = eval(b, q);
+        CHECK_CLOSE(pa.m1_re, pb.m1_re, 0, 10.0 * (pa.m1_err + pb.m1_err) + 1e-12);
+        CHECK(pa.kind == pb.kind);
+    }
+    bkf_floquet_free(a);
+    bkf_floquet_free(b);
+}
+
+/* Only K = 1 + c^2 q^2 matters; with c = 0 every q is the q = 0 mode. */
+TEST(floquet_c_enters_only_through_K)
+{
+    bkf_floquet *a = setup(2.0, 0.3, -0.93, 1e-10), *b = setup(2.0, 0.9, -0.93, 1e-10);
+    bkf_floquet *z = setup(2.0, 0.0, -0.93, 1e-10);
+    for (int i = 0; i <= 10; i++) {
+        double q = 0.6 * i;
+        bkf_floquet_point pa = eval(a, q), pb = eval(b, q / 3.0), pz = eval(z, q);
+        CHECK_CLOSE(pa.k2, pb.k2, 1e-15, 0);
+        CHECK_CLOSE(pa.lambda, pb.lambda, 0, 1e-9);
+        CHECK(fabs(pz.m1_re - 1.0) <= 1e-9 && pz.k2 == 1.0);
+    }
+    bkf_floquet_free(a);
+    bkf_floquet_free(b);
+    bkf_floquet_free(z);
+}
+
+/* The tolerance contract: against a reference at 1e-13, the error of
+ * lambda is within its estimate where it matters (lambda > -2: elsewhere
+ * |m1| < 0.14 and the contract is on m1, checked too), and both
+ * shrink with tol. */
+TEST(floquet_error_estimates_hold)
+{
+    const double cases[][3] = {{2.0, 0.3, -0.94}, {2.0, 0.3, -0.5}, {0.5, 1.0, 0.2}, {10.0, 1.0, -0.95}};
+    const double tols[] = {1e-6, 1e-8, 1e-10};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        bkf_floquet *ref = setup(cases[k][0], cases[k][1], cases[k][2], 1e-13);
+        for (size_t t = 0; t < sizeof tols / sizeof tols[0]; t++) {
+            bkf_floquet *f = setup(cases[k][0], cases[k][1], cases[k][2], tols[t]);
+            double worst = 0, worst_m = 0;
+            for (int i = 0; i <= 40; i++) {
+                double q = 0.2 * i;
+                bkf_floquet_point p = eval(f, q), r = eval(ref, q);
+                double dm = hypot(p.m1_re - r.m1_re, p.m1_im - r.m1_im);
+                CHECK_MSG(dm <= fmax(p.m1_err, 1e-13) && dm <= 10.0 * tols[t],
+                          "case %zu tol %g q %g: |dm1| %.3g, estimate %.3g", k, tols[t], q, dm,
+                          p.m1_err);
+                if (r.lambda > -2.0) {
+                    double d = fabs(p.lambda - r.lambda);
+                    CHECK_MSG(d <= fmax(p.lambda_err, 1e-13) && d <= 10.0 * tols[t],
+                              "case %zu tol %g q %g: |dlambda| %.3g, estimate %.3g", k, tols[t],
+                              q, d, p.lambda_err);
+                    if (d > worst) worst = d;
+                }
+                if (dm > worst_m) worst_m = dm;
+            }
+            bkf_test_note("gamma %g nu %g tol %g: worst |dlambda| %.2g, |dm1| %.2g", cases[k][0],
+                          cases[k][2], tols[t], worst, worst_m);
+            bkf_floquet_free(f);
+        }
+        bkf_floquet_free(ref);
+    }
+}
+
+/* lambda_q = a c^2 q^2 + O(q^4): the coefficient from dM/dK against the
+ * difference quotient at small q, on both sides of a = 0. */
+TEST(floquet_longwave_coefficient_matches_small_q)
+{
+    const double nus[] = {-0.9, -0.5, 0.0, -0.95};
+    for (size_t i = 0; i < sizeof nus / sizeof nus[0]; i++) {
+        bkf_floquet *f = setup(2.0, 0.5, nus[i], 1e-12);
+        double a, a_err;
+        bkf_error e;
+        CHECK_STATUS(bkf_floquet_longwave(f, &a, &a_err, &e), BKF_OK);
+        double p = 1e-3, q = p / 0.5;
+        double quotient = eval(f, q).lambda / (p * p);
+        CHECK_CLOSE(quotient, a, 1e-3, 1e-6);
+        CHECK(a_err < 1e-8 * fmax(1.0, fabs(a)));
+        bkf_test_note("nu %g: a = %.10g, lambda/(cq)^2 at cq = 1e-3: %.10g", nus[i], a, quotient);
+        bkf_floquet_free(f);
+    }
+}
+
+/* --------------------------------------- independent: the nonlinear PDE */
+
+/* psi_t = gamma (eta - phi(psi)), eta_t = -(psi - nu - c^2 psi_xx)/gamma on
+ * N collocation points of a periodic domain of length S = 2 pi/q, psi_xx
+ * spectral.  Started on the global oscillation plus 1e-8 cos(qx), the
+ * cos(qx) part of psi, sampled once a period, must grow by m1 each period
+ * once the other multiplier has died out.  No variational equations, no
+ * monodromy: a different computation of the same number. */
+#define SIM_N 8
+typedef struct {
+    double gamma, nu, c, D2[SIM_N][SIM_N];
+} sim_params;
+
+static int sim_rhs(double t, const double s[], double d[], void *pp)
+{
+    (void)t;
+    const sim_params *p = pp;
+    for (int i = 0; i < SIM_N; i++) {
+        double xx = 0.0;
+        for (int k = 0; k < SIM_N; k++) xx += p->D2[i][k] * s[k];
+        double x = s[i];
+        d[i] = p->gamma * (s[SIM_N + i] - (x * x * x / 3.0 - x));
+        d[SIM_N + i] = -(x - p->nu - p->c * p->c * xx) / p->gamma;
+    }
+    return GSL_SUCCESS;
+}
+
+static double simulated_ratio(double gamma, double c, double nu, double q, int periods)
+{
+    const double pi = 3.14159265358979323846;
+    bkf_floquet *f = setup(gamma, c, nu, 1e-12);
+    const bkf_cycle_result *cy = bkf_floquet_cycle(f);
+    sim_params p = {.gamma = gamma, .nu = nu, .c = c};
+    /* second derivative of the trigonometric interpolant, modes |m| < N/2
+     * and the Nyquist cosine */
+    for (int i = 0; i < SIM_N; i++)
+        for (int k = 0; k < SIM_N; k++) {
+            double sum = 0.0, dx = 2.0 * pi * (i - k) / SIM_N;
+            for (int m = 1; m < SIM_N / 2; m++) sum -= 2.0 * (m * q) * (m * q) * cos(m * dx);
+            sum -= (SIM_N / 2 * q) * (SIM_N / 2 * q) * cos(SIM_N / 2 * dx);
+            p.D2[i][k] = sum / SIM_N;
+        }
+    double s[2 * SIM_N], y0 = cy->section_slope / gamma + (nu * nu * nu / 3.0 - nu);
+    for (int i = 0; i < SIM_N; i++) {
+        s[i] = nu + 1e-8 * cos(2.0 * pi * i / SIM_N);
+        s[SIM_N + i] = y0;
+    }
+    gsl_odeiv2_system sys = {sim_rhs, NULL, 2 * SIM_N, &p};
+    gsl_odeiv2_driver *d =
+        gsl_odeiv2_driver_alloc_standard_new(&sys, gsl_odeiv2_step_rk8pd, 1e-3, 1e-13, 1e-13, 1, 0);
+    CHECK(d);
+    double t = 0.0, prev = 0.0, ratio = 0.0;
+    for (int k = 0; k <= periods; k++) {
+        CHECK(gsl_odeiv2_driver_apply(d, &t, k * cy->period, s) == GSL_SUCCESS);
+        double amp = 0.0;
+        for (int i = 0; i < SIM_N; i++) amp += s[i] * cos(2.0 * pi * i / SIM_N) * 2.0 / SIM_N;
+        if (k > 0) ratio = amp / prev;
+        prev = amp;
+    }
+    gsl_odeiv2_driver_free(d);
+    bkf_floquet_free(f);
+    return ratio;
+}
+
+TEST(floquet_matches_direct_simulation_of_the_pde)
+{
+    /* stable, period-doubling unstable (multiplier through -1) and
+     * long-wave unstable (gamma 2, c 0.3) */
+    const double cases[][2] = {{-0.90, 1.0}, {-0.94, 2.89}, {-0.5, 1.633}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        double nu = cases[i][0], q = cases[i][1];
+        bkf_floquet *f = setup(2.0, 0.3, nu, 1e-10);
+        bkf_floquet_point pt = eval(f, q);
+        bkf_floquet_free(f);
+        double ratio = simulated_ratio(2.0, 0.3, nu, q, 5);
+        CHECK_MSG(fabs(ratio - pt.m1_re) <= 1e-5, "nu %g q %g: simulated %.10g, Floquet %.10g", nu,
+                  q, ratio, pt.m1_re);
+        bkf_test_note("nu %g q %g: per-period ratio simulated %.8f, Floquet m1 %.8f", nu, q, ratio,
+                      pt.m1_re);
+    }
+}
+
+/* ---------------------------------------------------------- the paper */
+
+/* gamma 2, c 0.3: stable at nu = -0.90 and -0.92 (lambda < 0 at every
+ * q > 0), unstable at -0.94 at q ~ 3 through a multiplier beyond -1. */
+TEST(floquet_paper_dispersion_relations)
+{
+    const double nus[] = {-0.90, -0.92, -0.94};
+    for (size_t i = 0; i < 3; i++) {
+        bkf_floquet *f = setup(2.0, 0.3, nus[i], 1e-10);
+        double best = -HUGE_VAL, q_best = 0, m_best = 0;
+        for (int j = 1; j <= 240; j++) {
+            double q = 10.0 * j / 240.0;
+            bkf_floquet_point p = eval(f, q);
+            /* the finite-q peak: in the tongue where m1 < 0 */
+            if (q > 2.4 && q < 4.0 && p.lambda > best) {
+                best = p.lambda;
+                q_best = q;
+                m_best = p.m1_re;
+            }
+            if (i < 2) CHECK_MSG(p.lambda < 0, "nu %g q %g: lambda %g", nus[i], q, p.lambda);
+        }
+        bkf_floquet_stability s;
+        bkf_error e;
+        CHECK_STATUS(bkf_floquet_stability_at(f, &s, &e), BKF_OK);
+        CHECK(s.stable == (i < 2));
+        CHECK(s.q_peak > 2.5 && s.q_peak < 3.5);
+        CHECK(s.lambda_peak >= best - 1e-12);
+        CHECK(s.m_re < 0 && s.m_im == 0);
+        if (i < 2) {
+            CHECK(best < 0 && s.lambda_peak < 0 && s.longwave < 0);
+        } else {
+            CHECK(best > 0 && m_best < -1.0);
+            CHECK(q_best > 2.5 && q_best < 3.5);
+        }
+        bkf_test_note("nu %.2f: peak lambda %.6f at q %.4f, m1 %.6f; long-wave a %.4f", nus[i],
+                      s.lambda_peak, s.q_peak, s.m_re, s.longwave);
+        bkf_floquet_free(f);
+    }
+}
+
+TEST(floquet_paper_threshold_between_092_and_094)
+{
+    bkf_floquet_options o = bkf_floquet_options_default();
+    o.tol = 1e-10;
+    bkf_floquet_threshold th;
+    bkf_error e;
+    int rc = bkf_floquet_threshold_find(2.0, 0.3, -0.999, 0.0, &o, &th, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    CHECK(th.kind == BKF_BOUNDARY_PERIOD_DOUBLING);
+    CHECK(th.nu > -0.94 && th.nu < -0.92);
+    CHECK(th.q > 2.5 && th.q < 3.5);
+    CHECK_CLOSE(th.m_re, -1.0, 0, 1e-8);
+    CHECK(th.stable_above && !th.discontinuous);
+    CHECK(th.longwave < 0); /* the period doubling comes first */
+    CHECK(th.nu_err > 0 && th.nu_err < 1e-9);
+    /* independently: stable just above, unstable just below */
+    for (int side = -1; side <= 1; side += 2) {
+        bkf_floquet *f = setup(2.0, 0.3, th.nu + side * 1e-7, 1e-10);
+        bkf_floquet_stability s;
+        CHECK_STATUS(bkf_floquet_stability_at(f, &s, &e), BKF_OK);
+        CHECK_MSG(s.stable == (side > 0), "nu_pd %+g: stable %d, peak %g", side * 1e-7, s.stable,
+                  s.lambda_peak);
+        bkf_floquet_free(f);
+    }
+    /* and c only rescales q_c: K_c and nu_pd do not move */
+    bkf_floquet_threshold t2;
+    CHECK_STATUS(bkf_floquet_threshold_find(2.0, 0.9, -0.999, 0.0, &o, &t2, &e), BKF_OK);
+    CHECK_CLOSE(t2.nu, th.nu, 0, 1e-9);
+    CHECK_CLOSE(t2.k2, th.k2, 1e-5, 0);
+    CHECK_CLOSE(t2.q * 0.9, th.q * 0.3, 1e-5, 0);
+    bkf_test_note("gamma 2 c 0.3: nu_pd = %.12f +- %.2g, q_c = %.8f, K_c = %.8f, m = %.12f, a = %.6f",
+                  th.nu, th.nu_err, th.q, th.k2, th.m_re, th.longwave);
+}
+
+/* The diagram for gamma = 2 over the whole active range: symmetric in nu,
+ * a stable window on each side bounded by period doubling (below) and the
+ * long-wave instability (above), unstable around nu = 0. */
+typedef struct {
+    bkf_floquet_interval iv[16];
+    int n;
+} intervals;
+
+static int keep_interval(const bkf_floquet_interval *iv, void *data)
+{
+    intervals *x = data;
+    if (x->n < 16) x->iv[x->n++] = *iv;
+    return 0;
+}
+
+TEST(floquet_diagram_gamma2)
+{
+    bkf_floquet_options o = bkf_floquet_options_default();
+    o.tol = 1e-9;
+    intervals x = {.n = 0};
+    bkf_error e;
+    int rc = bkf_floquet_diagram(2.0, 0.3, -0.999, 0.999, &o, keep_interval, &x, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    CHECK_MSG(x.n == 5, "%d intervals", x.n);
+    const int stable[5] = {0, 1, 0, 1, 0};
+    for (int i = 0; i < x.n; i++) {
+        CHECK(x.iv[i].stable == stable[i]);
+        if (i > 0) CHECK(x.iv[i].nu_from == x.iv[i - 1].nu_to);
+        bkf_test_note("[%.10f, %.10f] %s (%s .. %s)", x.iv[i].nu_from, x.iv[i].nu_to,
+                      x.iv[i].stable ? "stable" : "unstable",
+                      bkf_floquet_boundary_name(x.iv[i].from.kind),
+                      bkf_floquet_boundary_name(x.iv[i].to.kind));
+    }
+    CHECK(x.iv[0].from.kind == BKF_BOUNDARY_SCAN_END && x.iv[4].to.kind == BKF_BOUNDARY_SCAN_END);
+    CHECK(x.iv[1].from.kind == BKF_BOUNDARY_PERIOD_DOUBLING);
+    CHECK(x.iv[1].to.kind == BKF_BOUNDARY_LONG_WAVE);
+    CHECK(x.iv[3].from.kind == BKF_BOUNDARY_LONG_WAVE);
+    CHECK(x.iv[3].to.kind == BKF_BOUNDARY_PERIOD_DOUBLING);
+    /* the symmetry, to the located accuracy */
+    CHECK_CLOSE(x.iv[1].nu_from, -x.iv[3].nu_to, 0, 1e-8);
+    CHECK_CLOSE(x.iv[1].nu_to, -x.iv[3].nu_from, 0, 1e-8);
+    CHECK(x.iv[1].nu_from > -0.94 && x.iv[1].nu_from < -0.92);
+    /* the long-wave boundary is where a changes sign */
+    bkf_floquet *f = setup(2.0, 0.3, x.iv[1].nu_to, 1e-10);
+    double a;
+    CHECK_STATUS(bkf_floquet_longwave(f, &a, NULL, &e), BKF_OK);
+    CHECK(fabs(a) < 1e-6);
+    bkf_floquet_free(f);
+}
+
+/* The curve nu_pd(gamma): its ends agree with the boundary found afresh,
+ * and it is a period-doubling curve throughout. */
+typedef struct {
+    bkf_floquet_threshold first, last;
+    int n;
+} curve;
+
+static int keep_curve(const bkf_floquet_threshold *th, void *data)
+{
+    curve *cv = data;
+    if (cv->n++ == 0) cv->first = *th;
+    cv->last = *th;
+    CHECK(th->kind == BKF_BOUNDARY_PERIOD_DOUBLING);
+    CHECK_CLOSE(th->m_re, -1.0, 0, 1e-7);
+    return 0;
+}
+
+TEST(floquet_threshold_curve_along_gamma)
+{
+    bkf_floquet_options o = bkf_floquet_options_default();
+    o.tol = 1e-9;
+    curve cv = {.n = 0};
+    bkf_error e;
+    int rc = bkf_floquet_threshold_branch(BKF_FLOQUET_ALONG_GAMMA, 2.0, 2.5, 0.0, 0.3, -0.999, 0.0,
+                                          &o, 0, keep_curve, &cv, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    CHECK(cv.n >= 3);
+    CHECK(cv.first.gamma == 2.0 && cv.last.gamma == 2.5);
+    bkf_floquet_threshold th;
+    CHECK_STATUS(bkf_floquet_threshold_find(2.5, 0.3, -0.999, 0.0, &o, &th, &e), BKF_OK);
+    CHECK_CLOSE(cv.last.nu, th.nu, 0, 1e-8);
+    CHECK(cv.last.nu < cv.first.nu);
+    bkf_test_note("nu_pd(2) = %.10f, nu_pd(2.5) = %.10f, %d points", cv.first.nu, cv.last.nu, cv.n);
+}
+
+/* ----------------------------------------------------------- the rest */
+
+TEST(floquet_slip_rate_is_the_larger_root)
+{
+    const double cases[][4] = {{2.0, 0.3, -0.94, 3.0}, {10.0, 0.3, 0.0, 1.0}, {2.0, 1.0, 0.5, 0.0}};
+    for (size_t i = 0; i < 3; i++) {
+        double g = cases[i][0], c = cases[i][1], nu = cases[i][2], q = cases[i][3];
+        double s = bkf_floquet_slip_rate(g, c, nu, q);
+        double b = g * (nu * nu - 1.0), K = 1.0 + c * c * q * q;
+        /* s solves s^2 + b s + K = 0 (its real part, for a complex pair) */
+        if (b * b > 4.0 * K)
+            CHECK_CLOSE(s * s + b * s + K, 0.0, 0, 1e-12 * (s * s + K));
+        else
+            CHECK_CLOSE(s, -0.5 * b, 1e-15, 0);
+        CHECK(s > 0); /* continuous slip is unstable at every q for |nu| < 1 */
+    }
+}
+
+TEST(floquet_rejects_bad_input)
+{
+    bkf_floquet *f = bkf_floquet_alloc();
+    bkf_error e;
+    bkf_floquet_options o = bkf_floquet_options_default();
+    CHECK_STATUS(bkf_floquet_set(f, 0.0, 0.3, 0.0, NULL, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_floquet_set(f, NAN, 0.3, 0.0, NULL, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_floquet_set(f, 2.0, -0.1, 0.0, NULL, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_floquet_set(f, 2.0, 0.3, 1.0, NULL, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_floquet_set(f, 2.0, 0.3, -1.2, NULL, &e), BKF_EINPUT);
+    o.tol = 1e-20;
+    CHECK_STATUS(bkf_floquet_set(f, 2.0, 0.3, 0.0, &o, &e), BKF_EINPUT);
+    bkf_floquet_point p;
+    CHECK_STATUS(bkf_floquet_eval(f, 1.0, &p, &e), BKF_EINPUT); /* before a set */
+    CHECK_STATUS(bkf_floquet_set(f, 2.0, 0.3, 0.0, NULL, &e), BKF_OK);
+    CHECK_STATUS(bkf_floquet_eval(f, -1.0, &p, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_floquet_eval(f, NAN, &p, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_floquet_eval(f, 1e6, &p, &e), BKF_EINPUT);
+    CHECK(strstr(e.message, "c q"));
+    bkf_floquet_free(f);
+    bkf_floquet_threshold th;
+    CHECK_STATUS(bkf_floquet_threshold_find(2.0, 0.0, -0.99, 0.0, NULL, &th, &e), BKF_EINPUT);
+    CHECK(strstr(e.message, "c > 0"));
+    CHECK_STATUS(bkf_floquet_threshold_find(2.0, 0.3, 0.0, -0.5, NULL, &th, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_floquet_threshold_find(2.0, 0.3, -1.0, 0.0, NULL, &th, &e), BKF_EINPUT);
+    /* no change of stability in the range: a numerical verdict, said so */
+    CHECK_STATUS(bkf_floquet_threshold_find(2.0, 0.3, -0.5, 0.5, NULL, &th, &e), BKF_ENUMERIC);
+    CHECK(strstr(e.message, "unstable throughout"));
+}
