@@ -10,10 +10,14 @@
 extern const cli_command cli_cmd_period;
 extern const cli_command cli_cmd_asymptotics;
 extern const cli_command cli_cmd_floquet;
+extern const cli_command cli_cmd_speeds;
+extern const cli_command cli_cmd_branch;
 
 static const cli_command *const commands[] = {
     &cli_cmd_period,
     &cli_cmd_asymptotics,
+    &cli_cmd_speeds,
+    &cli_cmd_branch,
     &cli_cmd_floquet,
 };
 

@@ -67,11 +67,13 @@ static void bench_period(void)
 }
 
 void bench_floquet(void);
+void bench_speeds(void);
 
 int main(int argc, char **argv)
 {
     const char *only = argc > 1 ? argv[1] : NULL;
     if (!only || strcmp(only, "period") == 0) bench_period();
+    if (!only || strcmp(only, "speeds") == 0) bench_speeds();
     if (!only || strcmp(only, "floquet") == 0) bench_floquet();
     return 0;
 }

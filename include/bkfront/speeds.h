@@ -1,0 +1,160 @@
+/* Allowed front speeds: every root of the speed-selection condition
+ *     n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)),   mu(v) = gamma / sqrt(1 - c^2/v^2),
+ * for n = 1, 2, ..., and the branches v_n(p) along one parameter p.
+ *
+ * With c > 0 the unknown is s = ln sqrt(mu^2 - gamma^2) in (-inf, inf):
+ *     mu = sqrt(gamma^2 + e^(2s)),   v = c sqrt(1 + gamma^2 e^(-2s)),
+ * and the condition for n reads
+ *     ln T(mu) - s = ln R_n,         R_n = S / (n c gamma),
+ * i.e. every n is a level of the same function g = T(mu) / sqrt(mu^2 - gamma^2).
+ * s -> -inf is infinite speed (mu -> gamma+), s -> +inf the sonic limit
+ * v -> c+ (mu -> inf), where g -> k(nu).  The levels above k always have a
+ * root; the ones at or below k have one only where g dips below k.
+ *
+ * With c = 0, mu = gamma and v = S / (n T(gamma)) for every n >= 1.
+ *
+ * How the roots are bracketed, and why none is missed, is in README.md
+ * ("Allowed front speeds").  The library never prints and never exits. */
+#ifndef BKFRONT_SPEEDS_H
+#define BKFRONT_SPEEDS_H
+
+#include <stddef.h>
+#include "bkfront/status.h"
+
+typedef struct {
+    double gamma;  /* friction strength, in [1e-6, 1e6] (mu >= gamma must be solvable) */
+    double c;      /* sound speed, >= 0 */
+    double nu;     /* pulling rate, |nu| < 1 */
+    double S;      /* system size, > 0 */
+} bkf_speeds_params;
+
+/* Rows when n_to is 0 and c = 0 (every n has a root, there is no n_max). */
+#define BKF_SPEEDS_ROWS_C0 10
+/* Values of n at most when n_to is 0 and c > 0 (one n may give several rows). */
+#define BKF_SPEEDS_MAX_ROWS 1000
+
+typedef struct {
+    double tol;      /* [1e-14, 1e-1]: the relative accuracy asked of v, and the
+                        bound on |residual|; T is solved at each root to what v
+                        needs (tol/10 .. 10 tol); default 1e-10 */
+    size_t n_from;   /* rows for n in [n_from, n_to]; n_from >= 1 (default 1) */
+    size_t n_to;     /* 0: up to n_max, but no more than BKF_SPEEDS_MAX_ROWS
+                        values of n (BKF_SPEEDS_ROWS_C0 when c = 0) */
+} bkf_speeds_options;
+
+bkf_speeds_options bkf_speeds_options_default(void);
+
+/* Root flags. */
+#define BKF_SPEEDS_NEAR_TANGENT 1u /* another root of the same n is close, or the
+                                      bracketing reached its finest cell here: the
+                                      root is near a fold and v_err is large */
+#define BKF_SPEEDS_ASYMPTOTIC 2u   /* mu beyond 1e5 (or 2 gamma), where the grid ends:
+                                      T from the large-mu expansion, T_err from its
+                                      next order fitted at the grid's end */
+
+typedef struct {
+    size_t n;
+    double v;
+    double mu;
+    double T, T_err;        /* period in z and its estimated absolute error */
+    double v_over_c;        /* inf when c = 0 */
+    double wavelength;      /* S / n */
+    double period_fixed;    /* T sqrt(1 - c^2/v^2): period in t at a fixed point */
+    double v_asym;          /* S / (n k gamma), the large-mu quantization */
+    double deviation;       /* (v - v_asym) / v */
+    double v_err;           /* estimated absolute error of v (from T_err and the
+                               residual, through the local slope of the condition) */
+    double residual;        /* n T v sqrt(1 - c^2/v^2) / S - 1 at the reported root */
+    double slope;           /* d ln g / ds at the root (c > 0; 0 when c = 0):
+                               negative where v_n decreases with n, zero at a fold */
+    unsigned flags;
+} bkf_speeds_root;
+
+#define BKF_SPEEDS_NOTE_LEN 512
+
+typedef struct {
+    bkf_speeds_root *roots;  /* ordered by n, then by decreasing v */
+    size_t count;
+    double k;                /* k(nu) */
+    double n_bound;          /* S / (k c gamma); inf when c = 0 */
+    long n_max;              /* largest n with a root; 0: none; -1: every n (c = 0) */
+    double g_inf;            /* inf over mu > gamma of T / sqrt(mu^2 - gamma^2):
+                                k, or the interior minimum when g dips below k
+                                (c > 0; NaN when c = 0) */
+    int dips_below_k;        /* g dips below k: n_max may exceed n_bound */
+    int truncated;           /* n_to = 0 and n_max beyond n_from + BKF_SPEEDS_MAX_ROWS - 1 */
+    size_t unresolved;       /* places left unresolved, where a root or a pair
+                                could be missing: a pair not excluded at the
+                                finest cell, or T not computable (inside a
+                                canard explosion); the first is in note */
+    char note[BKF_SPEEDS_NOTE_LEN]; /* one line: why there is no row, what was
+                                       flagged, or empty */
+    /* work */
+    size_t samples;          /* grid points of the bracketing */
+    size_t coarse_solves, precise_solves;
+    double mu_grid_max;      /* largest mu sampled */
+} bkf_speeds_table;
+
+/* Validation alone: BKF_EINPUT with a one-line message naming the parameter
+ * and its range, BKF_OK otherwise.  |nu| >= 1 is refused because there are no
+ * fronts at all: uniform continuous slip is stable. */
+int bkf_speeds_check(const bkf_speeds_params *params, const bkf_speeds_options *options,
+                     bkf_error *err);
+
+/* Every root for n in the options' range.  *table is overwritten (free it
+ * with bkf_speeds_table_free, also after a failure).  BKF_OK with count = 0
+ * and a note when no n in the range has a root. */
+int bkf_speeds_find(const bkf_speeds_params *params, const bkf_speeds_options *options,
+                    bkf_speeds_table *table, bkf_error *err);
+void bkf_speeds_table_free(bkf_speeds_table *table);
+
+/* ------------------------------------------------------------ branches */
+
+typedef enum {
+    BKF_SPEEDS_ALONG_S = 0,
+    BKF_SPEEDS_ALONG_NU = 1,
+    BKF_SPEEDS_ALONG_GAMMA = 2,
+    BKF_SPEEDS_ALONG_C = 3
+} bkf_speeds_param;
+
+typedef enum {
+    BKF_SPEEDS_POINT = 0,  /* a regular point of the branch */
+    BKF_SPEEDS_FOLD = 1,   /* the parameter turns back: two roots meet */
+    BKF_SPEEDS_SONIC = 2   /* the limit v -> c+ (mu -> inf): the branch ends at
+                              S = n k(nu) c gamma; mu and T are inf there */
+} bkf_speeds_point_kind;
+
+typedef struct {
+    bkf_speeds_params params;   /* with the continued parameter at this point */
+    bkf_speeds_root root;
+    bkf_speeds_point_kind kind;
+} bkf_speeds_branch_point;
+
+/* Return nonzero to stop the run (bkf_speeds_branch then returns BKF_OK). */
+typedef int (*bkf_speeds_visit)(const bkf_speeds_branch_point *point, void *data);
+
+typedef struct {
+    size_t points;       /* regular points */
+    size_t folds;
+    int sonic;           /* the branch ended at the sonic limit */
+    int reached_end;     /* the branch ended on `to` or back on the start value */
+    double sonic_value;  /* the parameter's value at the sonic limit, if any */
+    size_t solves;
+} bkf_speeds_branch_report;
+
+/* The branch of roots for one n through the root number root_index (1: the
+ * fastest, in the order of bkf_speeds_find) at `start`, continued in the
+ * parameter `along` from its value in `start` towards `to` by pseudo-
+ * arclength continuation (module continuation) in (s, p).  It passes folds
+ * (visited as BKF_SPEEDS_FOLD points) and ends where p leaves the interval
+ * between the start value and `to`, or at the sonic limit (visited as a
+ * BKF_SPEEDS_SONIC point), or after max_points points (0: no limit of ours).
+ * Needs c > 0 all along (for c = 0, v = S/(n T(gamma)) in closed form);
+ * along c the interval must stay in c > 0, along nu in (-1, 1), along S and
+ * gamma in their ranges.  BKF_EINPUT when there is no such root at start. */
+int bkf_speeds_branch(const bkf_speeds_params *start, size_t n, size_t root_index,
+                      bkf_speeds_param along, double to, const bkf_speeds_options *options,
+                      size_t max_points, bkf_speeds_visit visit, void *data,
+                      bkf_speeds_branch_report *report, bkf_error *err);
+
+#endif

@@ -1,0 +1,385 @@
+/* `bkfront speeds` and `bkfront branch` as a user sees them: the built
+ * binary (BKF_CLI_PATH), its stdout, stderr and exit status. */
+#define _POSIX_C_SOURCE 200809L
+#include "harness.h"
+
+#include <fcntl.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "bkfront/asymptotics.h"
+#include "bkfront/speeds.h"
+
+#ifndef BKF_CLI_PATH
+#error "BKF_CLI_PATH (the built bkfront binary) is defined by the Makefile for tests"
+#endif
+
+/* In test_io.c. */
+int bkf_test_json_valid(const char *text);
+
+typedef struct {
+    char *out, *err;
+    int code;
+} run_result;
+
+static char *slurp(int fd)
+{
+    size_t cap = 4096, n = 0;
+    char *buf = malloc(cap);
+    CHECK(buf);
+    lseek(fd, 0, SEEK_SET);
+    for (;;) {
+        if (n + 1 >= cap) {
+            buf = realloc(buf, cap *= 2);
+            CHECK(buf);
+        }
+        ssize_t k = read(fd, buf + n, cap - n - 1);
+        if (k <= 0) break;
+        n += (size_t)k;
+    }
+    buf[n] = '\0';
+    return buf;
+}
+
+static int scratch_fd(void)
+{
+    char name[] = "/tmp/bkf_cli_speeds_XXXXXX";
+    int fd = mkstemp(name);
+    CHECK(fd >= 0);
+    unlink(name);
+    return fd;
+}
+
+static run_result run_args(const char *const *args)
+{
+    char *argv[64];
+    int argc = 0;
+    argv[argc++] = BKF_CLI_PATH;
+    for (; args[argc - 1] && argc < 63; argc++) argv[argc] = (char *)args[argc - 1];
+    argv[argc] = NULL;
+    int out = scratch_fd(), err = scratch_fd();
+    fflush(stdout);
+    pid_t pid = fork();
+    CHECK(pid >= 0);
+    if (pid == 0) {
+        dup2(out, 1);
+        dup2(err, 2);
+        execv(BKF_CLI_PATH, argv);
+        _exit(127);
+    }
+    int status = 0;
+    CHECK(waitpid(pid, &status, 0) == pid);
+    run_result r = {slurp(out), slurp(err), WIFEXITED(status) ? WEXITSTATUS(status) : -1};
+    close(out);
+    close(err);
+    return r;
+}
+
+#define RUN(...) run_args((const char *const[]){__VA_ARGS__, NULL})
+
+static void run_free(run_result *r)
+{
+    free(r->out);
+    free(r->err);
+}
+
+static int lines(const char *s)
+{
+    int n = 0;
+    for (; *s; s++) n += *s == '\n';
+    return n;
+}
+
+/* Bad input: exit 2, nothing on stdout, one line on stderr naming `names`. */
+static void bad_input(run_result r, const char *cmd, const char *names, const char *what)
+{
+    char prefix[64];
+    snprintf(prefix, sizeof prefix, "bkfront %s: ", cmd);
+    CHECK_MSG(r.code == 2, "%s: exit %d, stderr: %s", what, r.code, r.err);
+    CHECK_MSG(r.out[0] == '\0', "%s: stdout not empty: %s", what, r.out);
+    CHECK_MSG(lines(r.err) == 1, "%s: stderr is not one line: %s", what, r.err);
+    CHECK_MSG(strncmp(r.err, prefix, strlen(prefix)) == 0, "%s: %s", what, r.err);
+    CHECK_MSG(strstr(r.err, names), "%s: '%s' not named in: %s", what, names, r.err);
+    run_free(&r);
+}
+
+/* Field `column` of data row `row` (0-based) of a TSV table; text fields
+ * are returned in *text when asked for. */
+static int field(const char *tsv, int row, const char *column, double *value, char *text,
+                 size_t size)
+{
+    const char *p = tsv;
+    while (*p == '#') p = strchr(p, '\n') + 1;
+    const char *header = p;
+    int col = 0, found = -1;
+    size_t clen = strlen(column);
+    for (const char *q = header; *q && *q != '\n'; col++) {
+        size_t len = strcspn(q, "\t\n");
+        if (len == clen && strncmp(q, column, len) == 0) found = col;
+        q += len;
+        if (*q == '\t') q++;
+    }
+    if (found < 0) return 0;
+    p = strchr(header, '\n');
+    for (int r = 0; r <= row; r++) {
+        if (!p || !p[1]) return 0;
+        if (r < row) p = strchr(p + 1, '\n');
+    }
+    p++;
+    for (int c = 0; c < found; c++) p = strchr(p, '\t') + 1;
+    size_t len = strcspn(p, "\t\n");
+    if (text) {
+        size_t n = len < size - 1 ? len : size - 1;
+        memcpy(text, p, n);
+        text[n] = '\0';
+    }
+    if (value) {
+        char *end;
+        *value = strtod(p, &end);
+        if (end != p + len) return 0;
+    }
+    return 1;
+}
+
+static int rows(const char *tsv)
+{
+    int n = 0;
+    while (field(tsv, n, "n", NULL, NULL, 0)) n++;
+    return n;
+}
+
+static const char *const speeds_header =
+    "n\tv\tmu\tT\tT_err\tv_over_c\twavelength\tperiod_fixed\tv_asym\tdeviation\tv_err\t"
+    "residual\tslope\tflags\n";
+
+TEST(cli_speeds_paper_table)
+{
+    run_result r = RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20");
+    CHECK_MSG(r.code == 0 && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    CHECK_MSG(strstr(r.out, speeds_header), "no header in:\n%s", r.out);
+    CHECK(strstr(r.out, "# n_max 12; n_bound = S/(k c gamma) = 12.28994"));
+    CHECK(strstr(r.out, "# command: bkfront speeds --gamma 2 --c 0.3 --nu -0.96 --S 20\n"));
+    CHECK(rows(r.out) == 12);
+    /* the same numbers as the library, bit for bit (%.17g) */
+    bkf_speeds_params p = {2, 0.3, -0.96, 20};
+    bkf_speeds_table t;
+    bkf_error e;
+    CHECK(bkf_speeds_find(&p, NULL, &t, &e) == BKF_OK && t.count == 12);
+    for (int i = 0; i < 12; i++) {
+        double n, v, res, verr;
+        CHECK(field(r.out, i, "n", &n, NULL, 0) && n == i + 1);
+        CHECK(field(r.out, i, "v", &v, NULL, 0) && v == t.roots[i].v);
+        CHECK(field(r.out, i, "residual", &res, NULL, 0) && fabs(res) <= 1e-10);
+        CHECK(field(r.out, i, "v_err", &verr, NULL, 0) && verr <= 1e-10 * v);
+        char flags[32];
+        CHECK(field(r.out, i, "flags", NULL, flags, sizeof flags) && flags[0] == '\0');
+    }
+    bkf_speeds_table_free(&t);
+    run_free(&r);
+}
+
+TEST(cli_speeds_n_and_nmax)
+{
+    run_result r = RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20", "--n",
+                       "7", "--tol", "1e-8");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    double n, v;
+    CHECK(rows(r.out) == 1 && field(r.out, 0, "n", &n, NULL, 0) && n == 7);
+    CHECK(field(r.out, 0, "v", &v, NULL, 0));
+    CHECK_CLOSE(v, 0.34755127499805, 1e-8, 0); /* asked: 1e-8 relative */
+    run_free(&r);
+
+    r = RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20", "--nmax", "3");
+    CHECK(r.code == 0 && rows(r.out) == 3);
+    run_free(&r);
+
+    /* three roots for one n, the middle one rising */
+    r = RUN("speeds", "--gamma", "1.5", "--c", "0.3", "--nu", "-0.96", "--S", "20", "--n", "6");
+    CHECK(r.code == 0 && rows(r.out) == 3);
+    double slope;
+    CHECK(field(r.out, 1, "slope", &slope, NULL, 0) && slope > 0);
+    run_free(&r);
+}
+
+TEST(cli_speeds_no_front_is_an_empty_table)
+{
+    run_result r = RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "1");
+    CHECK_MSG(r.code == 0 && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, speeds_header) && rows(r.out) == 0);
+    CHECK(strstr(r.out, "# note: no front: S = 1 <= k(nu) c gamma"));
+    run_free(&r);
+
+    r = RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "1", "--format", "json");
+    CHECK(r.code == 0 && bkf_test_json_valid(r.out) && strstr(r.out, "\"rows\": []"));
+    run_free(&r);
+}
+
+TEST(cli_speeds_c0_closed_form_and_json)
+{
+    run_result r = RUN("speeds", "--gamma", "2", "--c", "0", "--nu", "-0.96", "--S", "20", "--format",
+                       "json");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK_MSG(bkf_test_json_valid(r.out), "invalid JSON:\n%s", r.out);
+    CHECK(strstr(r.out, "\"v_over_c\": null"));
+    CHECK(strstr(r.out, "every n has a front"));
+    run_free(&r);
+
+    r = RUN("speeds", "--gamma", "2", "--c", "0", "--nu", "-0.96", "--S", "20");
+    CHECK(r.code == 0 && rows(r.out) == BKF_SPEEDS_ROWS_C0);
+    double T, v;
+    CHECK(field(r.out, 3, "T", &T, NULL, 0) && field(r.out, 3, "v", &v, NULL, 0));
+    CHECK_CLOSE(v, 20.0 / (4.0 * T), 1e-15, 0);
+    run_free(&r);
+}
+
+TEST(cli_speeds_nu_outside_active_range_has_no_fronts)
+{
+    bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "1", "--S", "20"), "speeds",
+              "no fronts", "--nu 1");
+    bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-1.2", "--S", "20"), "speeds",
+              "--nu", "--nu -1.2");
+}
+
+TEST(cli_speeds_rejects_bad_input)
+{
+    bad_input(RUN("speeds", "--gamma", "0", "--c", "0.3", "--nu", "-0.96", "--S", "20"), "speeds",
+              "--gamma", "--gamma 0");
+    bad_input(RUN("speeds", "--gamma", "2e6", "--c", "0.3", "--nu", "-0.96", "--S", "20"), "speeds",
+              "--gamma", "--gamma 2e6");
+    bad_input(RUN("speeds", "--gamma", "2", "--c", "-0.3", "--nu", "-0.96", "--S", "20"), "speeds",
+              "--c", "--c -0.3");
+    bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "0"), "speeds",
+              "--S", "--S 0");
+    bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "nan", "--S", "20"), "speeds",
+              "--nu", "--nu nan");
+    bad_input(RUN("speeds", "--c", "0.3", "--nu", "-0.96", "--S", "20"), "speeds", "--gamma",
+              "missing --gamma");
+    bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20", "--tol",
+                  "1"),
+              "speeds", "--tol", "--tol 1");
+    bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20", "--n", "0"),
+              "speeds", "--n", "--n 0");
+    bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20", "--n", "2",
+                  "--nmax", "3"),
+              "speeds", "--nmax", "--n with --nmax");
+    bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20", "--bogus"),
+              "speeds", "--bogus", "--bogus");
+    bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20", "--format",
+                  "csv"),
+              "speeds", "--format", "--format csv");
+    bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20", "--out",
+                  "/nonexistent_bkf/x.tsv"),
+              "speeds", "--out", "--out in a missing directory");
+}
+
+TEST(cli_speeds_out_file_is_atomic)
+{
+    char dir[] = "/tmp/bkf_cli_speeds_out_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/speeds.tsv", dir);
+    run_result r = RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20", "--out",
+                       path, "--tol", "1e-8");
+    CHECK_MSG(r.code == 0 && r.out[0] == '\0' && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    run_free(&r);
+    int fd = open(path, O_RDONLY);
+    CHECK(fd >= 0);
+    char *text = slurp(fd);
+    close(fd);
+    CHECK(rows(text) == 12);
+    r = RUN("speeds", "--out", path, "--gamma", "2", "--c", "0.3", "--nu", "-1", "--S", "20");
+    CHECK(r.code == 2 && r.out[0] == '\0');
+    run_free(&r);
+    fd = open(path, O_RDONLY);
+    char *again = slurp(fd);
+    close(fd);
+    CHECK(strcmp(text, again) == 0);
+    free(text);
+    free(again);
+    unlink(path);
+    CHECK(rmdir(dir) == 0); /* no temporary left behind */
+}
+
+TEST(cli_speeds_and_branch_help)
+{
+    run_result r = RUN("speeds", "--help");
+    CHECK(r.code == 0 && r.err[0] == '\0');
+    const char *needles[] = {"--gamma", "--c", "--nu", "--S", "--n", "--nmax", "--tol", "--format",
+                             "--out", "n_max", "v_err", "residual", "near-tangent", "period_fixed"};
+    for (size_t i = 0; i < sizeof needles / sizeof needles[0]; i++)
+        CHECK_MSG(strstr(r.out, needles[i]), "speeds help lacks %s", needles[i]);
+    run_free(&r);
+    r = RUN("branch", "--help");
+    CHECK(r.code == 0 && r.err[0] == '\0');
+    const char *more[] = {"--param", "--from", "--to", "--root", "--max-points", "fold", "sonic"};
+    for (size_t i = 0; i < sizeof more / sizeof more[0]; i++)
+        CHECK_MSG(strstr(r.out, more[i]), "branch help lacks %s", more[i]);
+    run_free(&r);
+    r = RUN("--help");
+    CHECK(r.code == 0 && strstr(r.out, "speeds") && strstr(r.out, "branch"));
+    run_free(&r);
+}
+
+TEST(cli_branch_through_folds_to_sonic)
+{
+    run_result r = RUN("branch", "--param", "S", "--from", "30", "--to", "5", "--n", "6", "--gamma",
+                       "1.5", "--c", "0.3", "--nu", "-0.96", "--tol", "1e-8");
+    CHECK_MSG(r.code == 0 && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, "point\tS\tgamma\tc\tnu\tn\tv\t"));
+    CHECK(strstr(r.out, "2 fold(s) at S = "));
+    CHECK(strstr(r.out, "ends at the sonic limit v -> c+ at S = 7.32"));
+    int n = 0, folds = 0;
+    char kind[16];
+    double S, first_S = 0;
+    while (field(r.out, n, "point", NULL, kind, sizeof kind)) {
+        CHECK(field(r.out, n, "S", &S, NULL, 0));
+        if (n == 0) first_S = S;
+        folds += strcmp(kind, "fold") == 0;
+        n++;
+    }
+    CHECK(first_S == 30 && folds == 2 && strcmp(kind, "sonic") == 0);
+    CHECK_CLOSE(S, 6 * bkf_asym_k(-0.96) * 0.3 * 1.5, 1e-14, 0);
+    double mu;
+    CHECK(field(r.out, n - 1, "mu", &mu, NULL, 0) && isinf(mu));
+    run_free(&r);
+
+    r = RUN("branch", "--param", "c", "--from", "0.3", "--to", "0.25", "--n", "12", "--gamma", "2",
+            "--nu", "-0.96", "--S", "20", "--format", "json", "--tol", "1e-8");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK(bkf_test_json_valid(r.out) && strstr(r.out, "\"point\": \"point\""));
+    CHECK(strstr(r.out, "ends on the range's boundary"));
+    run_free(&r);
+}
+
+TEST(cli_branch_rejects_bad_input)
+{
+    bad_input(RUN("branch", "--param", "x", "--from", "1", "--to", "2", "--gamma", "2", "--c", "0.3",
+                  "--nu", "-0.96"),
+              "branch", "--param", "--param x");
+    bad_input(RUN("branch", "--from", "1", "--to", "2", "--gamma", "2", "--c", "0.3", "--nu",
+                  "-0.96"),
+              "branch", "--param", "missing --param");
+    bad_input(RUN("branch", "--param", "S", "--to", "2", "--gamma", "2", "--c", "0.3", "--nu",
+                  "-0.96"),
+              "branch", "--from", "missing --from");
+    bad_input(RUN("branch", "--param", "S", "--from", "20", "--to", "30", "--S", "20", "--gamma",
+                  "2", "--c", "0.3", "--nu", "-0.96"),
+              "branch", "--S", "--S with --param S");
+    bad_input(RUN("branch", "--param", "S", "--from", "20", "--to", "20", "--gamma", "2", "--c",
+                  "0.3", "--nu", "-0.96"),
+              "branch", "--from", "equal ends");
+    bad_input(RUN("branch", "--param", "nu", "--from", "-0.96", "--to", "-1", "--gamma", "2", "--c",
+                  "0.3", "--S", "20"),
+              "branch", "--to", "--to -1 along nu");
+    bad_input(RUN("branch", "--param", "S", "--from", "20", "--to", "30", "--gamma", "2", "--c", "0",
+                  "--nu", "-0.96"),
+              "branch", "closed form", "c = 0");
+    bad_input(RUN("branch", "--param", "c", "--from", "0.3", "--to", "0", "--gamma", "2", "--S",
+                  "20", "--nu", "-0.96"),
+              "branch", "c must stay > 0", "c to 0");
+    bad_input(RUN("branch", "--param", "S", "--from", "20", "--to", "30", "--n", "13", "--gamma",
+                  "2", "--c", "0.3", "--nu", "-0.96"),
+              "branch", "no front with n = 13", "no root at the start");
+}

@@ -1,0 +1,511 @@
+/* The allowed front speeds (module speeds): every root of
+ *     n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)),   mu(v) = gamma / sqrt(1 - c^2/v^2),
+ * checked against values computed here independently, the closed form at
+ * c = 0, the large-gamma quantization, the existence bound, a brute-force
+ * count of roots, and branches through folds to the sonic limit. */
+#include "harness.h"
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_roots.h>
+#include <string.h>
+
+#include "bkfront/asymptotics.h"
+#include "bkfront/cycle.h"
+#include "bkfront/speeds.h"
+
+static const bkf_speeds_params paper = {2.0, 0.3, -0.96, 20.0};
+
+static bkf_speeds_table find(bkf_speeds_params p, double tol, size_t n_from, size_t n_to)
+{
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.tol = tol;
+    o.n_from = n_from;
+    o.n_to = n_to;
+    bkf_speeds_table t;
+    bkf_error e = {{0}};
+    int rc = bkf_speeds_find(&p, &o, &t, &e);
+    CHECK_MSG(rc == BKF_OK, "find(gamma %g, c %g, nu %g, S %g): %s", p.gamma, p.c, p.nu, p.S,
+              e.message);
+    return t;
+}
+
+/* ------------------------------------------------ an independent root */
+
+typedef struct {
+    bkf_speeds_params p;
+    double n;
+} cond;
+
+/* n T v sqrt(1 - c^2/v^2) / S - 1 with v itself as the unknown and T at
+ * tol 1e-12, in a fresh solve every time: nothing shared with the module
+ * but the cycle solver. */
+static double condition_in_v(double v, void *data)
+{
+    const cond *c = data;
+    double w = sqrt(1.0 - (c->p.c / v) * (c->p.c / v));
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = 1e-12;
+    o.warm_start = 0;
+    bkf_cycle_result r;
+    bkf_error e;
+    CHECK_MSG(bkf_cycle_period(c->p.gamma / w, c->p.nu, &o, &r, &e) == BKF_OK, "%s", e.message);
+    return c->n * r.period * v * w / c->p.S - 1.0;
+}
+
+/* The root in v within a relative distance `width` of v0, by Brent. */
+static double reference_v(bkf_speeds_params p, double n, double v0, double width)
+{
+    gsl_set_error_handler_off();
+    cond c = {p, n};
+    gsl_function F = {condition_in_v, &c};
+    double lo = v0 * (1.0 - width), hi = v0 * (1.0 + width);
+    if (lo <= p.c) lo = 0.5 * (v0 + p.c);
+    gsl_root_fsolver *s = gsl_root_fsolver_alloc(gsl_root_fsolver_brent);
+    CHECK(s);
+    CHECK_MSG(gsl_root_fsolver_set(s, &F, lo, hi) == GSL_SUCCESS, "no bracket around v = %.17g", v0);
+    for (int it = 0; it < 100; it++) {
+        CHECK(gsl_root_fsolver_iterate(s) == GSL_SUCCESS);
+        double a = gsl_root_fsolver_x_lower(s), b = gsl_root_fsolver_x_upper(s);
+        if (b - a <= 1e-14 * b) break;
+    }
+    double v = gsl_root_fsolver_root(s);
+    gsl_root_fsolver_free(s);
+    return v;
+}
+
+/* Every row: a root of the condition as written in v (its residual,
+ * recomputed here from the row's T), supersonic, consistent columns. */
+static void check_rows(const bkf_speeds_params *p, const bkf_speeds_table *t, double tol)
+{
+    for (size_t i = 0; i < t->count; i++) {
+        const bkf_speeds_root *r = &t->roots[i];
+        double n = (double)r->n;
+        CHECK_MSG(fabs(r->residual) <= tol, "n = %zu, v = %.17g: residual %.3g > tol %.3g", r->n,
+                  r->v, r->residual, tol);
+        /* w = sqrt(1 - c^2/v^2) recomputed from the printed v loses digits
+         * near the sonic limit: about eps / w^2 relatively */
+        double w2 = p->c > 0 ? 1.0 - (p->c / r->v) * (p->c / r->v) : 1.0, w = sqrt(w2);
+        double slack = 1e-15 / w2 + 1e-13;
+        double again = n * r->T * r->v * w / p->S - 1.0;
+        CHECK_MSG(fabs(again) <= tol + slack, "n = %zu: recomputed residual %.3g", r->n, again);
+        CHECK(r->v > p->c);
+        if (p->c > 0) {
+            CHECK_CLOSE(r->mu, p->gamma / w, slack, 0);
+            CHECK_CLOSE(r->v_over_c, r->v / p->c, 1e-14, 0);
+        }
+        CHECK_CLOSE(r->wavelength, p->S / n, 1e-15, 0);
+        CHECK_CLOSE(r->period_fixed, r->T * w, slack, 0);
+        CHECK_CLOSE(r->v_asym, p->S / (n * bkf_asym_k(p->nu) * p->gamma), 1e-14, 0);
+        CHECK_CLOSE(r->deviation, (r->v - r->v_asym) / r->v, 1e-12, 1e-15);
+        CHECK(r->v_err >= 0 && r->T_err >= 0);
+        if (i > 0) {
+            const bkf_speeds_root *q = &t->roots[i - 1];
+            CHECK(q->n < r->n || (q->n == r->n && q->v > r->v));
+        }
+    }
+}
+
+TEST(speeds_paper_table_every_v_to_1e9)
+{
+    bkf_speeds_table t = find(paper, 1e-10, 1, 0);
+    CHECK_MSG(t.n_max == 12 && t.count == 12, "n_max %ld, %zu rows", t.n_max, t.count);
+    CHECK(!t.dips_below_k && !t.truncated && t.unresolved == 0 && t.note[0] == '\0');
+    CHECK_CLOSE(t.n_bound, paper.S / (bkf_asym_k(paper.nu) * paper.c * paper.gamma), 1e-15, 0);
+    check_rows(&paper, &t, 1e-10);
+    double worst = 0;
+    for (size_t i = 0; i < t.count; i++) {
+        const bkf_speeds_root *r = &t.roots[i];
+        CHECK(r->n == i + 1 && r->flags == 0);
+        double v_ref = reference_v(paper, (double)r->n, r->v, 1e-7);
+        double rel = fabs(r->v - v_ref) / v_ref;
+        CHECK_MSG(rel <= 1e-9, "n = %zu: v = %.17g, reference %.17g (rel %.2g)", r->n, r->v, v_ref,
+                  rel);
+        /* the error estimate is honest: within a few times of the truth */
+        CHECK_MSG(rel <= 3.0 * r->v_err / r->v + 1e-14, "n = %zu: rel %.2g, v_err/v %.2g", r->n, rel,
+                  r->v_err / r->v);
+        if (rel > worst) worst = rel;
+    }
+    bkf_test_note("gamma 2, c 0.3, nu -0.96, S 20: 12 roots, worst |v - v_ref|/v = %.2g; "
+                  "%zu coarse + %zu precise solves",
+                  worst, t.coarse_solves, t.precise_solves);
+    bkf_speeds_table_free(&t);
+}
+
+TEST(speeds_residuals_below_tolerance)
+{
+    const struct {
+        bkf_speeds_params p;
+        double tol;
+    } cases[] = {
+        {{1.0, 0.5, 0.0, 30.0}, 1e-10},
+        {{0.5, 1.0, 0.5, 10.0}, 1e-10},
+        {{2.0, 0.3, -0.96, 20.0}, 1e-6},
+        {{2.0, 0.3, 0.96, 20.0}, 1e-12},
+        {{1.5, 0.3, -0.96, 20.0}, 1e-10},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        bkf_speeds_table t = find(cases[i].p, cases[i].tol, 1, 0);
+        CHECK(t.count >= (size_t)t.n_max && t.n_max >= 1);
+        check_rows(&cases[i].p, &t, cases[i].tol);
+        bkf_test_note("gamma %g c %g nu %g S %g tol %g: %zu roots, n_max %ld", cases[i].p.gamma,
+                      cases[i].p.c, cases[i].p.nu, cases[i].p.S, cases[i].tol, t.count, t.n_max);
+        bkf_speeds_table_free(&t);
+    }
+}
+
+/* nu -> -nu leaves T (and so every speed) unchanged: f -> -f. */
+TEST(speeds_symmetric_in_nu)
+{
+    bkf_speeds_params q = paper;
+    q.nu = -paper.nu;
+    bkf_speeds_table a = find(paper, 1e-10, 1, 0), b = find(q, 1e-10, 1, 0);
+    CHECK(a.count == b.count && a.n_max == b.n_max);
+    for (size_t i = 0; i < a.count; i++) CHECK_CLOSE(a.roots[i].v, b.roots[i].v, 1e-9, 0);
+    bkf_speeds_table_free(&a);
+    bkf_speeds_table_free(&b);
+}
+
+TEST(speeds_c0_closed_form)
+{
+    bkf_speeds_params p = {2.0, 0.0, -0.96, 20.0};
+    bkf_speeds_table t = find(p, 1e-10, 1, 0);
+    CHECK(t.n_max == -1 && t.count == BKF_SPEEDS_ROWS_C0 && isinf(t.n_bound));
+    bkf_cycle_options o = bkf_cycle_options_default();
+    bkf_cycle_result r;
+    bkf_error e;
+    CHECK(bkf_cycle_period(p.gamma, p.nu, &o, &r, &e) == BKF_OK);
+    for (size_t i = 0; i < t.count; i++) {
+        const bkf_speeds_root *x = &t.roots[i];
+        double n = (double)(i + 1);
+        CHECK(x->n == i + 1 && x->mu == p.gamma && isinf(x->v_over_c));
+        CHECK_CLOSE(x->T, r.period, 1e-10, 0);
+        CHECK_CLOSE(x->v, p.S / (n * x->T), 1e-15, 0);
+        CHECK_CLOSE(x->period_fixed, x->T, 0, 0);
+        CHECK(fabs(x->residual) < 1e-15);
+    }
+    check_rows(&p, &t, 1e-10);
+    bkf_speeds_table_free(&t);
+
+    /* c -> 0+: the speeds go over continuously into the closed form (the
+     * correction is O(c^2)) */
+    bkf_speeds_params q = p;
+    q.c = 1e-4;
+    bkf_speeds_table a = find(p, 1e-10, 1, 5), b = find(q, 1e-10, 1, 5);
+    CHECK(a.count == 5 && b.count == 5);
+    for (size_t i = 0; i < 5; i++) CHECK_CLOSE(b.roots[i].v, a.roots[i].v, 1e-6, 0);
+    bkf_speeds_table_free(&a);
+    bkf_speeds_table_free(&b);
+
+    /* a row range */
+    t = find(p, 1e-8, 7, 9);
+    CHECK(t.count == 3 && t.roots[0].n == 7 && t.roots[2].n == 9);
+    bkf_speeds_table_free(&t);
+}
+
+/* gamma -> inf at fixed S/gamma: mu >= gamma is large, T ~ k mu, and the
+ * speeds approach the quantization S/(n k gamma) with a relative deviation
+ * ~ (b/k) mu^(-4/3), i.e. down by 2^(-4/3) ~ 0.40 per doubling of gamma. */
+TEST(speeds_large_gamma_limit)
+{
+    const double gammas[] = {100.0, 200.0, 400.0};
+    double previous[12] = {0};
+    for (int i = 0; i < 3; i++) {
+        bkf_speeds_params p = {gammas[i], 0.3, -0.96, 10.0 * gammas[i]};
+        bkf_speeds_table t = find(p, 1e-10, 1, 0);
+        CHECK(t.n_max == 12 && t.count == 12);
+        check_rows(&p, &t, 1e-10);
+        for (size_t j = 0; j < 12; j++) {
+            double dev = fabs(t.roots[j].deviation);
+            CHECK_MSG(dev < 0.05 * pow(gammas[i] / 100.0, -4.0 / 3.0),
+                      "gamma %g n %zu: deviation %.3g", gammas[i], j + 1, dev);
+            if (i > 0) {
+                double ratio = dev / previous[j];
+                CHECK_MSG(ratio > 0.33 && ratio < 0.45, "gamma %g n %zu: ratio %.3f", gammas[i],
+                          j + 1, ratio);
+            }
+            previous[j] = dev;
+        }
+        bkf_test_note("gamma %g: |v - S/(n k gamma)|/v = %.3g (n = 1) .. %.3g (n = 12)", gammas[i],
+                      fabs(t.roots[0].deviation), fabs(t.roots[11].deviation));
+        bkf_speeds_table_free(&t);
+    }
+}
+
+/* S > n k c gamma is the large-mu bound: every n below n_bound has a root,
+ * and (where g does not dip below k) none above it. */
+TEST(speeds_existence_bound)
+{
+    double k = bkf_asym_k(-0.96), kcg = k * 0.3 * 2.0;
+    const double factors[] = {0.5, 0.999, 1.001, 2.5, 7.3, 12.0001};
+    for (size_t i = 0; i < sizeof factors / sizeof factors[0]; i++) {
+        bkf_speeds_params p = {2.0, 0.3, -0.96, factors[i] * kcg};
+        bkf_speeds_table t = find(p, 1e-8, 1, 0);
+        long want = (long)ceil(factors[i]) - 1;
+        CHECK_MSG(t.n_max == want, "S = %g kcg: n_max %ld, want %ld", factors[i], t.n_max, want);
+        CHECK(t.count == (size_t)want && !t.dips_below_k);
+        CHECK_CLOSE(t.n_bound, factors[i], 1e-12, 0);
+        if (want == 0) CHECK(strstr(t.note, "no front") && strstr(t.note, "k(nu) c gamma"));
+        else check_rows(&p, &t, 1e-8);
+        /* just above the bound the root is near the sonic limit */
+        if (want >= 1 && factors[i] - floor(factors[i]) < 0.01)
+            CHECK(t.roots[want - 1].v_over_c < 1.001);
+        bkf_speeds_table_free(&t);
+    }
+    /* asking beyond n_max gives nothing, with the reason */
+    bkf_speeds_table t = find(paper, 1e-8, 13, 20);
+    CHECK(t.count == 0 && t.n_max == 12 && strstr(t.note, "n_max = 12"));
+    bkf_speeds_table_free(&t);
+}
+
+/* Near |nu| -> 1 the canard makes T(mu) rise steeply (even overshoot):
+ * g = T/sqrt(mu^2 - gamma^2) dips below k, and n beyond n_bound have roots
+ * (two each), while lower n have three. */
+TEST(speeds_dip_below_k_beyond_n_bound)
+{
+    bkf_speeds_params p = {1.0, 0.3, -0.99, 20.0};
+    bkf_speeds_table t = find(p, 1e-10, 1, 0);
+    CHECK(t.dips_below_k && t.g_inf < t.k);
+    CHECK_MSG(t.n_max > (long)ceil(t.n_bound), "n_max %ld, n_bound %g", t.n_max, t.n_bound);
+    check_rows(&p, &t, 1e-10);
+    size_t per_n[64] = {0};
+    for (size_t i = 0; i < t.count; i++)
+        if (t.roots[i].n < 64) per_n[t.roots[i].n]++;
+    for (long n = (long)ceil(t.n_bound); n <= t.n_max; n++)
+        CHECK_MSG(per_n[n] == 2, "n = %ld: %zu roots", n, per_n[n]);
+    CHECK(per_n[t.n_max + 1] == 0);
+    bkf_test_note("gamma 1, c 0.3, nu -0.99, S 20: n_bound %.4g, n_max %ld, %zu roots", t.n_bound,
+                  t.n_max, t.count);
+    bkf_speeds_table_free(&t);
+}
+
+/* One n with three roots: gamma 1.5 puts the steep rise of T(mu) at
+ * nu = -0.96 (mu ~ 2) inside mu > gamma, where g turns up between a
+ * local minimum and maximum. */
+TEST(speeds_three_roots_for_one_n)
+{
+    bkf_speeds_params p = {1.5, 0.3, -0.96, 20.0};
+    bkf_speeds_table t = find(p, 1e-10, 6, 6);
+    CHECK_MSG(t.count == 3, "%zu roots for n = 6", t.count);
+    check_rows(&p, &t, 1e-10);
+    CHECK(t.roots[0].slope < 0 && t.roots[1].slope > 0 && t.roots[2].slope < 0);
+    for (size_t i = 0; i < 3; i++) {
+        double v_ref = reference_v(p, 6, t.roots[i].v, 1e-8);
+        CHECK_CLOSE(t.roots[i].v, v_ref, 1e-9, 0);
+    }
+    bkf_speeds_table_free(&t);
+}
+
+/* The count of roots against a brute-force scan: g on 3000 points evenly
+ * spaced in s = ln sqrt(mu^2 - gamma^2), each solved afresh, and its sign
+ * changes against every level ln(S/(n c gamma)). */
+TEST(speeds_no_root_missed_against_dense_scan)
+{
+    bkf_speeds_params p = {1.5, 0.3, -0.96, 20.0};
+    bkf_speeds_table t = find(p, 1e-10, 1, 0);
+    enum { M = 3000 };
+    static double lng[M + 1];
+    double s_lo = -4.0, s_hi = log(200.0);
+    bkf_cycle *c = bkf_cycle_alloc();
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = 1e-8;
+    for (int j = 0; j <= M; j++) {
+        double s = s_lo + (s_hi - s_lo) * j / M, mu = hypot(p.gamma, exp(s));
+        bkf_error e;
+        CHECK_MSG(bkf_cycle_solve(c, mu, p.nu, &o, &e) == BKF_OK, "%s", e.message);
+        lng[j] = log(bkf_cycle_get(c)->period) - s;
+    }
+    bkf_cycle_free(c);
+    /* below s_lo, g > level 1; above s_hi, g < level n_max (checked) */
+    double lnA = log(p.S / (p.c * p.gamma));
+    CHECK(lng[0] > lnA && lng[M] < lnA - log((double)t.n_max));
+    for (long n = 1; n <= t.n_max + 1; n++) {
+        double ell = lnA - log((double)n);
+        size_t crossings = 0, listed = 0;
+        for (int j = 0; j < M; j++) crossings += (lng[j] > ell) != (lng[j + 1] > ell);
+        for (size_t i = 0; i < t.count; i++) listed += t.roots[i].n == (size_t)n;
+        CHECK_MSG(crossings == listed, "n = %ld: scan %zu crossings, table %zu roots", n, crossings,
+                  listed);
+    }
+    bkf_speeds_table_free(&t);
+}
+
+TEST(speeds_rejects_bad_input)
+{
+    bkf_speeds_table t;
+    bkf_error e;
+    struct {
+        bkf_speeds_params p;
+        const char *name;
+    } bad[] = {
+        {{0.0, 0.3, -0.96, 20}, "gamma"},  {{-1.0, 0.3, -0.96, 20}, "gamma"},
+        {{2e6, 0.3, -0.96, 20}, "gamma"},  {{NAN, 0.3, -0.96, 20}, "gamma"},
+        {{2.0, -0.1, -0.96, 20}, "c"},     {{2.0, INFINITY, -0.96, 20}, "c"},
+        {{2.0, 0.3, 1.0, 20}, "no fronts"}, {{2.0, 0.3, -1.5, 20}, "no fronts"},
+        {{2.0, 0.3, NAN, 20}, "nu"},       {{2.0, 0.3, -0.96, 0}, "S"},
+        {{2.0, 1e-300, -0.96, 20}, "c = 0"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        CHECK_STATUS(bkf_speeds_find(&bad[i].p, NULL, &t, &e), BKF_EINPUT);
+        CHECK_MSG(strstr(e.message, bad[i].name), "case %zu: %s", i, e.message);
+        CHECK(t.count == 0 && t.roots == NULL);
+    }
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.tol = 1.0;
+    CHECK_STATUS(bkf_speeds_find(&paper, &o, &t, &e), BKF_EINPUT);
+    CHECK(strstr(e.message, "tol"));
+    o = bkf_speeds_options_default();
+    o.n_from = 0;
+    CHECK_STATUS(bkf_speeds_find(&paper, &o, &t, &e), BKF_EINPUT);
+    o.n_from = 5;
+    o.n_to = 4;
+    CHECK_STATUS(bkf_speeds_find(&paper, &o, &t, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_speeds_find(&paper, NULL, NULL, &e), BKF_EINPUT);
+}
+
+/* --------------------------------------------------------------- branch */
+
+typedef struct {
+    bkf_speeds_branch_point pts[1024];
+    size_t count;
+} collected;
+
+static int collect(const bkf_speeds_branch_point *pt, void *data)
+{
+    collected *c = data;
+    if (c->count < 1024) c->pts[c->count++] = *pt;
+    return 0;
+}
+
+static size_t roots_at(bkf_speeds_params p, size_t n)
+{
+    bkf_speeds_table t = find(p, 1e-8, n, n);
+    size_t count = t.count;
+    bkf_speeds_table_free(&t);
+    return count;
+}
+
+/* Along S at gamma 1.5, nu -0.96, n = 6: from one root at S = 30 down
+ * through a fold (the fast and middle roots meet), back up through a second
+ * (middle and slow), then down to the sonic limit S = 6 k c gamma. */
+TEST(branch_passes_two_folds_to_the_sonic_limit)
+{
+    static collected c;
+    c.count = 0;
+    bkf_speeds_params p = {1.5, 0.3, -0.96, 30.0};
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.tol = 1e-8;
+    bkf_speeds_branch_report rep;
+    bkf_error e = {{0}};
+    int rc = bkf_speeds_branch(&p, 6, 1, BKF_SPEEDS_ALONG_S, 5.0, &o, 0, collect, &c, &rep, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    CHECK_MSG(rep.folds == 2 && rep.sonic, "folds %zu sonic %d", rep.folds, rep.sonic);
+    double S_sonic = 6 * bkf_asym_k(p.nu) * p.c * p.gamma;
+    CHECK_CLOSE(rep.sonic_value, S_sonic, 1e-14, 0);
+    CHECK(c.count >= 10 && c.pts[0].params.S == 30.0);
+    const bkf_speeds_branch_point *last = &c.pts[c.count - 1];
+    CHECK(last->kind == BKF_SPEEDS_SONIC && last->root.v == p.c && isinf(last->root.mu));
+    CHECK_CLOSE(last->params.S, S_sonic, 1e-14, 0);
+    double folds[2];
+    size_t nf = 0;
+    for (size_t i = 0; i < c.count; i++) {
+        const bkf_speeds_branch_point *x = &c.pts[i];
+        if (x->kind == BKF_SPEEDS_FOLD) {
+            CHECK(fabs(x->root.slope) < 1e-5);
+            folds[nf++] = x->params.S;
+        }
+        if (x->kind != BKF_SPEEDS_SONIC) {
+            CHECK(fabs(x->root.residual) < 1e-8);
+            CHECK(x->params.gamma == p.gamma && x->params.c == p.c && x->params.nu == p.nu);
+        }
+        /* v decreases along the branch, whichever way S goes */
+        if (i > 0) CHECK(x->root.v < c.pts[i - 1].root.v);
+    }
+    CHECK(nf == 2 && folds[0] < folds[1] && folds[1] < 30.0);
+    /* the folds bound the window of three roots */
+    CHECK(roots_at((bkf_speeds_params){1.5, 0.3, -0.96, folds[0] - 0.02}, 6) == 1);
+    CHECK(roots_at((bkf_speeds_params){1.5, 0.3, -0.96, 0.5 * (folds[0] + folds[1])}, 6) == 3);
+    CHECK(roots_at((bkf_speeds_params){1.5, 0.3, -0.96, folds[1] + 0.02}, 6) == 1);
+    bkf_test_note("folds at S = %.10g and %.10g, sonic at S = %.10g; %zu points, %zu solves",
+                  folds[0], folds[1], rep.sonic_value, rep.points, rep.solves);
+}
+
+/* Along c from 0.3 down to 0.1 for the paper's n = 12: the last point sits
+ * exactly on c = 0.1 and agrees with the root found there directly. */
+TEST(branch_lands_on_its_end_and_agrees_with_speeds)
+{
+    static collected c;
+    c.count = 0;
+    bkf_speeds_options o = bkf_speeds_options_default();
+    bkf_speeds_branch_report rep;
+    bkf_error e = {{0}};
+    int rc = bkf_speeds_branch(&paper, 12, 1, BKF_SPEEDS_ALONG_C, 0.1, &o, 0, collect, &c, &rep, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    CHECK(rep.reached_end && !rep.sonic && rep.folds == 0);
+    CHECK(c.pts[0].params.c == 0.3 && c.pts[c.count - 1].params.c == 0.1);
+    bkf_speeds_table t0 = find(paper, 1e-10, 12, 12);
+    CHECK_CLOSE(c.pts[0].root.v, t0.roots[0].v, 1e-9, 0);
+    bkf_speeds_table_free(&t0);
+    bkf_speeds_params q = paper;
+    q.c = 0.1;
+    bkf_speeds_table t1 = find(q, 1e-10, 12, 12);
+    CHECK(t1.count == 1);
+    CHECK_CLOSE(c.pts[c.count - 1].root.v, t1.roots[0].v, 1e-9, 0);
+    for (size_t i = 0; i < c.count; i++) CHECK(fabs(c.pts[i].root.residual) <= 1e-10);
+    bkf_speeds_table_free(&t1);
+}
+
+TEST(branch_in_nu_and_gamma)
+{
+    static collected c;
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.tol = 1e-9;
+    bkf_speeds_branch_report rep;
+    bkf_error e = {{0}};
+    const struct {
+        bkf_speeds_param along;
+        double to;
+    } runs[] = {{BKF_SPEEDS_ALONG_NU, -0.5}, {BKF_SPEEDS_ALONG_GAMMA, 1.8}};
+    for (int r = 0; r < 2; r++) {
+        c.count = 0;
+        int rc = bkf_speeds_branch(&paper, 6, 1, runs[r].along, runs[r].to, &o, 0, collect, &c,
+                                   &rep, &e);
+        CHECK_MSG(rc == BKF_OK, "%s", e.message);
+        CHECK(rep.reached_end && c.count >= 3);
+        const bkf_speeds_branch_point *last = &c.pts[c.count - 1];
+        double end = runs[r].along == BKF_SPEEDS_ALONG_NU ? last->params.nu : last->params.gamma;
+        CHECK(end == runs[r].to);
+        bkf_speeds_table t = find(last->params, 1e-10, 6, 6);
+        CHECK(t.count == 1);
+        CHECK_CLOSE(last->root.v, t.roots[0].v, 1e-8, 0);
+        bkf_speeds_table_free(&t);
+    }
+}
+
+TEST(branch_rejects_bad_input)
+{
+    static collected c;
+    bkf_error e;
+    bkf_speeds_params p = paper;
+    CHECK_STATUS(bkf_speeds_branch(&p, 6, 1, BKF_SPEEDS_ALONG_S, 20.0, NULL, 0, collect, &c, NULL, &e),
+                 BKF_EINPUT);
+    CHECK(strstr(e.message, "equals"));
+    CHECK_STATUS(bkf_speeds_branch(&p, 6, 1, BKF_SPEEDS_ALONG_NU, 1.0, NULL, 0, collect, &c, NULL, &e),
+                 BKF_EINPUT);
+    CHECK(strstr(e.message, "nu"));
+    CHECK_STATUS(bkf_speeds_branch(&p, 6, 1, BKF_SPEEDS_ALONG_C, 0.0, NULL, 0, collect, &c, NULL, &e),
+                 BKF_EINPUT);
+    CHECK(strstr(e.message, "c > 0"));
+    p.c = 0;
+    CHECK_STATUS(bkf_speeds_branch(&p, 6, 1, BKF_SPEEDS_ALONG_S, 10.0, NULL, 0, collect, &c, NULL, &e),
+                 BKF_EINPUT);
+    CHECK(strstr(e.message, "closed form"));
+    p = paper;
+    /* no root for n = 13 at S = 20 */
+    CHECK_STATUS(bkf_speeds_branch(&p, 13, 1, BKF_SPEEDS_ALONG_S, 30.0, NULL, 0, collect, &c, NULL, &e),
+                 BKF_EINPUT);
+    CHECK(strstr(e.message, "no front with n = 13"));
+    CHECK_STATUS(bkf_speeds_branch(&p, 6, 2, BKF_SPEEDS_ALONG_S, 30.0, NULL, 0, collect, &c, NULL, &e),
+                 BKF_EINPUT);
+    CHECK_STATUS(bkf_speeds_branch(&p, 6, 1, BKF_SPEEDS_ALONG_S, 30.0, NULL, 0, NULL, NULL, NULL, &e),
+                 BKF_EINPUT);
+}
