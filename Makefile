@@ -6,7 +6,7 @@
 
 DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
                 libinih-dev gnuplot-nox
-PKGS         := gsl nlopt
+PKGS         := gsl nlopt fftw3
 
 CC       ?= cc
 OPT      ?= -O2

@@ -12,6 +12,8 @@ extern const cli_command cli_cmd_asymptotics;
 extern const cli_command cli_cmd_floquet;
 extern const cli_command cli_cmd_speeds;
 extern const cli_command cli_cmd_branch;
+extern const cli_command cli_cmd_simulate;
+extern const cli_command cli_cmd_check;
 
 static const cli_command *const commands[] = {
     &cli_cmd_period,
@@ -19,6 +21,8 @@ static const cli_command *const commands[] = {
     &cli_cmd_speeds,
     &cli_cmd_branch,
     &cli_cmd_floquet,
+    &cli_cmd_simulate,
+    &cli_cmd_check,
 };
 
 #define NCOMMANDS (sizeof commands / sizeof commands[0])

@@ -68,6 +68,7 @@ static void bench_period(void)
 
 void bench_floquet(void);
 void bench_speeds(void);
+void bench_pde(void);
 
 int main(int argc, char **argv)
 {
@@ -75,5 +76,6 @@ int main(int argc, char **argv)
     if (!only || strcmp(only, "period") == 0) bench_period();
     if (!only || strcmp(only, "speeds") == 0) bench_speeds();
     if (!only || strcmp(only, "floquet") == 0) bench_floquet();
+    if (!only || strcmp(only, "pde") == 0) bench_pde();
     return 0;
 }

@@ -1,0 +1,847 @@
+/* Direct simulation: pseudo-spectral continuum and finite-difference chain,
+ * explicit embedded Runge-Kutta in time with quintic Hermite dense output.
+ * See include/bkfront/pde.h for the model and the conventions. */
+#include "bkfront/pde.h"
+
+#include <fftw3.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_math.h>
+#include <gsl/gsl_odeiv2.h>
+#include <gsl/gsl_randist.h>
+#include <gsl/gsl_rng.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bkfront/cycle.h"
+#include "bkfront/model.h"
+#include "bkfront/speeds.h"
+
+/* A field this large has left the model's attractor for good (the cycle
+ * stays within |psi| < 2.1); stopping beats integrating an overflow. */
+#define BLOWUP 1e6
+
+struct bkf_pde {
+    bkf_pde_params p;
+    bkf_pde_options o;
+    size_t N, dim;     /* dim = 2N + 2: psi, eta, Q, D */
+    double h;          /* grid spacing S/N */
+    double t;
+    double *y;         /* current state */
+    double *f;         /* y' at the current state (valid when have_f) */
+    int have_f;
+    double hstep;      /* step size proposed for the next step */
+    double hcap;       /* stability cap on the step (see bkf_pde_alloc) */
+
+    /* FFTW: aligned buffers, plans made once */
+    double *rbuf, *lap;
+    fftw_complex *cbuf;
+    fftw_plan fwd, bwd;
+    double *symbol;    /* -q_k^2 / N, k = 0 .. N/2 */
+    double *fsymbol;   /* filter rates sigma_k / N (NULL: no filter) */
+    fftw_complex *cbuf2;
+    size_t keep;       /* modes kept by the 2/3 rule (k < keep) */
+
+    /* integrator */
+    gsl_odeiv2_system sys;
+    gsl_odeiv2_step *step;
+    gsl_odeiv2_control *control;
+    double *ytry, *yerr, *f1, *g0, *g1, *sample, *psit;
+
+    /* reference values for the residuals */
+    double t_set, H_set, mean_eta_set;
+
+    bkf_pde_stats stats;
+};
+
+bkf_pde_options bkf_pde_options_default(void)
+{
+    bkf_pde_options o = {1e-9, BKF_PDE_RK8PD, 0, 4.0, 0};
+    return o;
+}
+
+bkf_pde_front_spec bkf_pde_front_spec_default(void)
+{
+    bkf_pde_front_spec s = {1, 1, -1, 0.0, 1, 1e-12};
+    return s;
+}
+
+int bkf_pde_check(const bkf_pde_params *p, const bkf_pde_options *o, bkf_error *err)
+{
+    if (!p) return bkf_error_set(err, BKF_EINPUT, "parameters are NULL");
+    int s;
+    if ((s = bkf_model_check_positive("gamma", p->gamma, err))) return s;
+    if ((s = bkf_model_check_nonnegative("c", p->c, err))) return s;
+    if (!isfinite(p->nu)) return bkf_error_set(err, BKF_EINPUT, "nu must be a finite number");
+    if ((s = bkf_model_check_positive("S", p->S, err))) return s;
+    if (p->model != BKF_PDE_CONTINUUM && p->model != BKF_PDE_CHAIN)
+        return bkf_error_set(err, BKF_EINPUT, "model must be continuum or chain");
+    if (p->N < BKF_PDE_N_MIN || p->N > BKF_PDE_N_MAX)
+        return bkf_error_set(err, BKF_EINPUT, "N = %zu is outside [%d, %d]", p->N,
+                             BKF_PDE_N_MIN, BKF_PDE_N_MAX);
+    if (p->model == BKF_PDE_CONTINUUM && p->N % 2)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "N = %zu must be even for the spectral continuum model", p->N);
+    if (!o) return BKF_OK;
+    if (!isfinite(o->tol) || o->tol < BKF_PDE_TOL_MIN || o->tol > BKF_PDE_TOL_MAX)
+        return bkf_error_set(err, BKF_EINPUT, "tol = %g is outside [%g, %g]", o->tol,
+                             BKF_PDE_TOL_MIN, BKF_PDE_TOL_MAX);
+    if (o->stepper != BKF_PDE_RK8PD && o->stepper != BKF_PDE_RKCK &&
+        o->stepper != BKF_PDE_RKF45)
+        return bkf_error_set(err, BKF_EINPUT, "stepper must be rk8pd, rkck or rkf45");
+    if (!isfinite(o->filter) || o->filter < 0 || o->filter > 1e3)
+        return bkf_error_set(err, BKF_EINPUT, "filter = %g is outside [0, 1000]", o->filter);
+    if (o->dealias && p->model != BKF_PDE_CONTINUUM)
+        return bkf_error_set(err, BKF_EINPUT, "dealiasing applies to the continuum model only");
+    return BKF_OK;
+}
+
+/* ------------------------------------------------------------- operators */
+
+/* out = L in (N values) and, when the filter is on and filt is non-NULL,
+ * filt = F in (the damping term); in, out and filt are not the FFT buffers. */
+static void operators(bkf_pde *m, const double *in, double *out, double *filt)
+{
+    size_t N = m->N;
+    if (m->p.model == BKF_PDE_CHAIN) {
+        double w = 1.0 / (m->h * m->h);
+        for (size_t i = 0; i < N; i++) {
+            double l = in[i == 0 ? N - 1 : i - 1], r = in[i + 1 == N ? 0 : i + 1];
+            out[i] = w * (l - 2.0 * in[i] + r);
+        }
+        return;
+    }
+    memcpy(m->rbuf, in, N * sizeof *in);
+    fftw_execute_dft_r2c(m->fwd, m->rbuf, m->cbuf);
+    int both = filt && m->fsymbol;
+    for (size_t k = 0; k <= N / 2; k++) {
+        if (both) {
+            m->cbuf2[k][0] = m->cbuf[k][0] * m->fsymbol[k];
+            m->cbuf2[k][1] = m->cbuf[k][1] * m->fsymbol[k];
+        }
+        m->cbuf[k][0] *= m->symbol[k];
+        m->cbuf[k][1] *= m->symbol[k];
+    }
+    fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
+    memcpy(out, m->lap, N * sizeof *out);
+    if (both) {
+        fftw_execute_dft_c2r(m->bwd, m->cbuf2, m->lap);
+        memcpy(filt, m->lap, N * sizeof *filt);
+    }
+}
+
+static void laplacian(bkf_pde *m, const double *in, double *out) { operators(m, in, out, NULL); }
+
+/* 2/3 rule: keep the modes k < keep of v, in place. */
+static void project(bkf_pde *m, double *v)
+{
+    size_t N = m->N;
+    memcpy(m->rbuf, v, N * sizeof *v);
+    fftw_execute_dft_r2c(m->fwd, m->rbuf, m->cbuf);
+    double scale = 1.0 / (double)N;
+    for (size_t k = 0; k <= N / 2; k++) {
+        double w = k < m->keep ? scale : 0.0;
+        m->cbuf[k][0] *= w;
+        m->cbuf[k][1] *= w;
+    }
+    fftw_execute_dft_c2r(m->bwd, m->cbuf, m->rbuf);
+    memcpy(v, m->rbuf, N * sizeof *v);
+}
+
+static int rhs(double t, const double y[], double dydt[], void *params)
+{
+    (void)t;
+    bkf_pde *m = params;
+    size_t N = m->N;
+    const double *restrict psi = y, *restrict eta = y + N;
+    double *restrict dpsi = dydt, *restrict deta = dydt + N;
+    double g = m->p.gamma, ig = 1.0 / g, c2 = m->p.c * m->p.c, nu = m->p.nu;
+    m->stats.rhs_calls++;
+    /* deta holds L psi and dpsi holds F psi for a moment */
+    operators(m, psi, deta, m->fsymbol ? dpsi : NULL);
+    double mean = 0.0, work = 0.0, big = 0.0;
+    if (m->fsymbol && !m->o.dealias) {
+        /* The filter's work joins the friction's in D, so that H - D stays
+         * conserved: dH/dt = -sum h [gamma phi' u psi_t + (psi - nu - c^2 L psi) F psi]
+         * with u = gamma (eta - phi(psi)) and psi_t = u - F psi. */
+        for (size_t i = 0; i < N; i++) {
+            double x = psi[i], fx = dpsi[i], lx = deta[i];
+            double u = g * (eta[i] - (x * x * x * (1.0 / 3.0) - x));
+            double xt = u - fx;
+            dpsi[i] = xt;
+            deta[i] = (nu - x + c2 * lx) * ig;
+            mean += x;
+            work += g * (x * x - 1.0) * u * xt + (x - nu - c2 * lx) * fx;
+            big = fmax(big, fabs(x));
+        }
+        if (!isfinite(mean) || !isfinite(work) || !(big <= BLOWUP)) return GSL_EBADFUNC;
+        dydt[2 * N] = mean / (double)N;
+        dydt[2 * N + 1] = -m->h * work;
+        return GSL_SUCCESS;
+    }
+    if (!m->o.dealias) {
+        /* One fused pass; a NaN or inf anywhere reaches mean or work. */
+        for (size_t i = 0; i < N; i++) {
+            double x = psi[i];
+            double xt = g * (eta[i] - (x * x * x * (1.0 / 3.0) - x));
+            dpsi[i] = xt;
+            deta[i] = (nu - x + c2 * deta[i]) * ig;
+            mean += x;
+            work += (x * x - 1.0) * xt * xt;
+            big = fmax(big, fabs(x));
+        }
+    } else {
+        for (size_t i = 0; i < N; i++) {
+            double x = psi[i];
+            double fx = m->fsymbol ? dpsi[i] : 0.0;
+            dpsi[i] = g * (eta[i] - (x * x * x * (1.0 / 3.0) - x)) - fx;
+            deta[i] = (nu - x + c2 * deta[i]) * ig;
+        }
+        project(m, dpsi);
+        project(m, deta);
+        for (size_t i = 0; i < N; i++) {
+            double x = psi[i];
+            mean += x;
+            work += (x * x - 1.0) * dpsi[i] * dpsi[i];
+            big = fmax(big, fabs(x));
+        }
+    }
+    if (!isfinite(mean) || !isfinite(work) || !(big <= BLOWUP)) return GSL_EBADFUNC;
+    dydt[2 * N] = mean / (double)N;
+    dydt[2 * N + 1] = -g * m->h * work;
+    return GSL_SUCCESS;
+}
+
+/* y'' = J(y) y' for the Hermite interpolant. */
+static void second_derivative(bkf_pde *m, const double *y, const double *f, double *out)
+{
+    size_t N = m->N;
+    const double *psi = y, *eta = y + N, *dpsi = f, *deta = f + N;
+    double g = m->p.gamma, c2 = m->p.c * m->p.c;
+    int filt = m->fsymbol != NULL;
+    operators(m, dpsi, out + N, filt ? out : NULL);
+    double mean = 0.0, dwork = 0.0;
+    for (size_t i = 0; i < N; i++) {
+        double x = psi[i], xt = dpsi[i], et = deta[i];
+        double fxt = filt ? out[i] : 0.0;
+        double ph1 = x * x - 1.0;
+        double u = g * (eta[i] - (x * x * x * (1.0 / 3.0) - x));
+        double ut = g * (et - ph1 * xt);
+        /* psi_t = u - F psi */
+        double xtt = ut - fxt;
+        double ett = -(xt - c2 * out[N + i]) / g;
+        out[i] = xtt;
+        out[N + i] = ett;
+        mean += xt;
+        /* derivative of the work term of rhs() */
+        double fx = u - xt;
+        dwork += g * (2.0 * x * xt * u * xt + ph1 * ut * xt + ph1 * u * xtt) -
+                 g * (ett * fx + et * fxt);
+    }
+    out[2 * N] = mean / (double)N;
+    out[2 * N + 1] = -m->h * dwork;
+}
+
+/* --------------------------------------------------------- object life */
+
+void bkf_pde_free(bkf_pde *m)
+{
+    if (!m) return;
+    if (m->fwd) fftw_destroy_plan(m->fwd);
+    if (m->bwd) fftw_destroy_plan(m->bwd);
+    fftw_free(m->rbuf);
+    fftw_free(m->lap);
+    fftw_free(m->cbuf);
+    free(m->symbol);
+    free(m->fsymbol);
+    fftw_free(m->cbuf2);
+    if (m->step) gsl_odeiv2_step_free(m->step);
+    if (m->control) gsl_odeiv2_control_free(m->control);
+    free(m->y);
+    free(m->f);
+    free(m->ytry);
+    free(m->yerr);
+    free(m->f1);
+    free(m->g0);
+    free(m->g1);
+    free(m->sample);
+    free(m->psit);
+    free(m);
+}
+
+static const gsl_odeiv2_step_type *step_type(bkf_pde_stepper s)
+{
+    switch (s) {
+    case BKF_PDE_RKCK: return gsl_odeiv2_step_rkck;
+    case BKF_PDE_RKF45: return gsl_odeiv2_step_rkf45;
+    default: return gsl_odeiv2_step_rk8pd;
+    }
+}
+
+static void mark_set(bkf_pde *m);
+
+bkf_pde *bkf_pde_alloc(const bkf_pde_params *params, const bkf_pde_options *options,
+                       bkf_error *err)
+{
+    bkf_pde_options o = options ? *options : bkf_pde_options_default();
+    if (bkf_pde_check(params, &o, err) != BKF_OK) return NULL;
+    gsl_set_error_handler_off();
+    bkf_pde *m = calloc(1, sizeof *m);
+    if (!m) {
+        bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        return NULL;
+    }
+    m->p = *params;
+    m->o = o;
+    size_t N = params->N;
+    m->N = N;
+    m->dim = 2 * N + 2;
+    m->h = params->S / (double)N;
+    m->keep = N / 3 + 1;
+    size_t nc = N / 2 + 1;
+    m->rbuf = fftw_malloc(N * sizeof(double));
+    m->lap = fftw_malloc(N * sizeof(double));
+    m->cbuf = fftw_malloc(nc * sizeof(fftw_complex));
+    m->symbol = malloc(nc * sizeof(double));
+    m->cbuf2 = fftw_malloc(nc * sizeof(fftw_complex));
+    m->y = calloc(m->dim, sizeof(double));
+    m->f = calloc(m->dim, sizeof(double));
+    m->ytry = calloc(m->dim, sizeof(double));
+    m->yerr = calloc(m->dim, sizeof(double));
+    m->f1 = calloc(m->dim, sizeof(double));
+    m->g0 = calloc(m->dim, sizeof(double));
+    m->g1 = calloc(m->dim, sizeof(double));
+    m->sample = calloc(m->dim, sizeof(double));
+    m->psit = calloc(N, sizeof(double));
+    if (!m->rbuf || !m->lap || !m->cbuf || !m->cbuf2 || !m->symbol || !m->y || !m->f || !m->ytry ||
+        !m->yerr || !m->f1 || !m->g0 || !m->g1 || !m->sample || !m->psit)
+        goto nomem;
+    /* ESTIMATE: planning by measurement costs more than a short run gains
+     * and would make runs differ in the last bits from one call to another. */
+    m->fwd = fftw_plan_dft_r2c_1d((int)N, m->rbuf, m->cbuf, FFTW_ESTIMATE);
+    m->bwd = fftw_plan_dft_c2r_1d((int)N, m->cbuf, m->lap, FFTW_ESTIMATE);
+    if (!m->fwd || !m->bwd) goto nomem;
+    for (size_t k = 0; k < nc; k++) {
+        double q = 2.0 * M_PI * (double)k / params->S;
+        m->symbol[k] = -q * q / (double)N;
+    }
+    if (params->model == BKF_PDE_CONTINUUM && o.filter > 0) {
+        m->fsymbol = malloc(nc * sizeof(double));
+        if (!m->fsymbol) goto nomem;
+        /* top: the highest mode the state holds (the cutoff with the 2/3 rule) */
+        double top = o.dealias ? (double)(m->keep - 1) : (double)(N / 2);
+        for (size_t k = 0; k < nc; k++) {
+            double r = (double)k / top, r2 = r * r, r4 = r2 * r2, r8 = r4 * r4;
+            m->fsymbol[k] = o.filter * r8 * r8 / (double)N;
+        }
+    }
+    m->step = gsl_odeiv2_step_alloc(step_type(o.stepper), m->dim);
+    m->control = gsl_odeiv2_control_y_new(o.tol, o.tol);
+    if (!m->step || !m->control) goto nomem;
+    m->sys = (gsl_odeiv2_system){rhs, NULL, m->dim, m};
+
+    /* The highest mode oscillates at omega = sqrt(1 + c^2 q_max^2) with
+     * q_max = pi/h (spectral) or 2/h (the chain's Laplacian), far from the
+     * physics when N is large.  The error control does not see that mode
+     * while its amplitude is at rounding level, so it may choose steps where
+     * the method's amplification on the imaginary axis exceeds 1: the mode
+     * then grows from rounding and wrecks the run after ~100 time units
+     * (seen with rk8pd at omega h ~ 4).  The cap keeps omega h where the
+     * method damps (rk8pd: |R(iy)| < 1 for 2 < y < 3.8) or nearly so (the
+     * 5th-order pairs have |R(iy)| > 1 for every y; at y = 0.5 the spurious
+     * growth is ~1e-5 omega per unit time). */
+    double qmax = params->model == BKF_PDE_CHAIN ? 2.0 / m->h : M_PI / m->h;
+    double omega = sqrt(1.0 + params->c * params->c * qmax * qmax);
+    double kappa = o.stepper == BKF_PDE_RK8PD ? 3.0 : 0.5;
+    m->hcap = kappa / omega;
+    /* A first step well inside the explicit stability limit; the control
+     * finds the right size within a few steps. */
+    m->hstep = 0.1 / (omega + params->gamma * 3.0);
+
+    for (size_t i = 0; i < N; i++) {
+        m->y[i] = params->nu;
+        m->y[N + i] = bkf_model_friction(params->nu);
+    }
+    m->t = 0.0;
+    mark_set(m);
+    m->stats.h_min = INFINITY;
+    return m;
+nomem:
+    bkf_pde_free(m);
+    bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    return NULL;
+}
+
+const bkf_pde_params *bkf_pde_get_params(const bkf_pde *m) { return &m->p; }
+size_t bkf_pde_size(const bkf_pde *m) { return m->N; }
+double bkf_pde_spacing(const bkf_pde *m) { return m->h; }
+double bkf_pde_time(const bkf_pde *m) { return m->t; }
+const double *bkf_pde_psi(const bkf_pde *m) { return m->y; }
+const double *bkf_pde_eta(const bkf_pde *m) { return m->y + m->N; }
+const bkf_pde_stats *bkf_pde_get_stats(const bkf_pde *m) { return &m->stats; }
+
+void bkf_pde_stats_reset(bkf_pde *m)
+{
+    memset(&m->stats, 0, sizeof m->stats);
+    m->stats.h_min = INFINITY;
+}
+
+/* ------------------------------------------------------------ energy */
+
+double bkf_pde_energy_of(bkf_pde *m, const double *psi, const double *eta)
+{
+    size_t N = m->N;
+    double g = m->p.gamma, nu = m->p.nu, c2 = m->p.c * m->p.c;
+    laplacian(m, psi, m->psit);
+    double H = 0.0;
+    for (size_t i = 0; i < N; i++) {
+        double x = psi[i];
+        double xt = g * (eta[i] - (x * x * x / 3.0 - x));
+        H += 0.5 * xt * xt + 0.5 * (x - nu) * (x - nu) - 0.5 * c2 * x * m->psit[i];
+    }
+    return H * m->h;
+}
+
+double bkf_pde_spectral_tail(bkf_pde *m, const double *field)
+{
+    size_t N = m->N;
+    memcpy(m->rbuf, field, N * sizeof *field);
+    fftw_execute_dft_r2c(m->fwd, m->rbuf, m->cbuf);
+    double top = 0, tail = 0;
+    for (size_t k = 1; k <= N / 2; k++) {
+        double a = hypot(m->cbuf[k][0], m->cbuf[k][1]);
+        if (3 * k <= N) top = fmax(top, a);
+        else tail = fmax(tail, a);
+    }
+    double all = fmax(top, tail);
+    return all > 0 ? tail / all : 0.0;
+}
+
+double bkf_pde_energy(bkf_pde *m) { return bkf_pde_energy_of(m, m->y, m->y + m->N); }
+double bkf_pde_dissipation(const bkf_pde *m) { return m->y[2 * m->N + 1]; }
+double bkf_pde_mean_integral(const bkf_pde *m) { return m->y[2 * m->N]; }
+
+static double mean_of(const double *v, size_t N)
+{
+    double s = 0.0;
+    for (size_t i = 0; i < N; i++) s += v[i];
+    return s / (double)N;
+}
+
+static void mark_set(bkf_pde *m)
+{
+    size_t N = m->N;
+    if (m->o.dealias) {
+        project(m, m->y);
+        project(m, m->y + N);
+    }
+    m->y[2 * N] = 0.0;
+    m->y[2 * N + 1] = 0.0;
+    m->t_set = m->t;
+    m->H_set = bkf_pde_energy(m);
+    m->mean_eta_set = mean_of(m->y + N, N);
+    m->have_f = 0;
+}
+
+double bkf_pde_energy_residual(bkf_pde *m)
+{
+    return bkf_pde_energy(m) - m->H_set - m->y[2 * m->N + 1];
+}
+
+double bkf_pde_mean_residual(const bkf_pde *m)
+{
+    size_t N = m->N;
+    return mean_of(m->y + N, N) - m->mean_eta_set +
+           (m->y[2 * N] - m->p.nu * (m->t - m->t_set)) / m->p.gamma;
+}
+
+double bkf_pde_sample_energy_residual(bkf_pde *m, const bkf_pde_sample *s)
+{
+    return bkf_pde_energy_of(m, s->psi, s->eta) - m->H_set - s->D;
+}
+
+double bkf_pde_sample_mean_residual(const bkf_pde *m, const bkf_pde_sample *s)
+{
+    return mean_of(s->eta, m->N) - m->mean_eta_set + (s->Q - m->p.nu * (s->t - m->t_set)) / m->p.gamma;
+}
+
+/* The observer's view of a full state vector. */
+static int emit(bkf_pde *m, bkf_pde_observer observer, void *data, double t, const double *y)
+{
+    size_t N = m->N;
+    bkf_pde_sample s = {t, y, y + N, y[2 * N], y[2 * N + 1]};
+    m->stats.samples++;
+    return observer(&s, data);
+}
+
+int bkf_pde_set_state(bkf_pde *m, const double *psi, const double *eta, double t,
+                      bkf_error *err)
+{
+    if (!m || !psi || !eta) return bkf_error_set(err, BKF_EINPUT, "NULL state");
+    if (!isfinite(t)) return bkf_error_set(err, BKF_EINPUT, "t must be finite");
+    for (size_t i = 0; i < m->N; i++)
+        if (!isfinite(psi[i]) || !isfinite(eta[i]))
+            return bkf_error_set(err, BKF_EINPUT, "the state has a non-finite value at i = %zu",
+                                 i);
+    memcpy(m->y, psi, m->N * sizeof *psi);
+    memcpy(m->y + m->N, eta, m->N * sizeof *eta);
+    m->t = t;
+    mark_set(m);
+    return BKF_OK;
+}
+
+/* ------------------------------------------------- initial conditions */
+
+/* Band-limited noise of rms `amp` into out (N values): modes 1..J, with
+ * coefficients drawn in mode order so the function of x does not depend
+ * on N. */
+static int noise(bkf_pde *m, double amp, unsigned long seed, double *out, bkf_error *err)
+{
+    size_t N = m->N;
+    size_t J = (size_t)floor(m->p.S / 2.0);
+    if (J < 1) J = 1;
+    if (J > N / 2 - 1) J = N / 2 - 1;
+    gsl_rng *r = gsl_rng_alloc(gsl_rng_mt19937);
+    if (!r) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    gsl_rng_set(r, seed);
+    for (size_t k = 0; k <= N / 2; k++) m->cbuf[k][0] = m->cbuf[k][1] = 0.0;
+    double power = 0.0;
+    for (size_t j = 1; j <= J; j++) {
+        double a = gsl_ran_gaussian(r, 1.0), b = gsl_ran_gaussian(r, 1.0);
+        m->cbuf[j][0] = a;
+        m->cbuf[j][1] = b;
+        power += 2.0 * (a * a + b * b); /* mean square of 2 Re(c e^{iqx}) */
+    }
+    gsl_rng_free(r);
+    double scale = power > 0 ? amp / sqrt(power) : 0.0;
+    for (size_t j = 1; j <= J; j++) {
+        m->cbuf[j][0] *= scale;
+        m->cbuf[j][1] *= scale;
+    }
+    fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
+    memcpy(out, m->lap, N * sizeof *out);
+    return BKF_OK;
+}
+
+static int check_amp(const char *name, double a, bkf_error *err)
+{
+    if (!isfinite(a) || a < 0 || a > 10)
+        return bkf_error_set(err, BKF_EINPUT, "%s = %g is outside [0, 10]", name, a);
+    return BKF_OK;
+}
+
+int bkf_pde_init_uniform(bkf_pde *m, double amp, unsigned long seed, bkf_error *err)
+{
+    int s = check_amp("amp", amp, err);
+    if (s) return s;
+    size_t N = m->N;
+    if ((s = noise(m, amp, seed, m->y, err))) return s;
+    for (size_t i = 0; i < N; i++) {
+        m->y[i] += m->p.nu;
+        m->y[N + i] = bkf_model_friction(m->y[i]);
+    }
+    m->t = 0.0;
+    mark_set(m);
+    return BKF_OK;
+}
+
+int bkf_pde_init_oscillation(bkf_pde *m, size_t j, double amp, bkf_error *err)
+{
+    int s;
+    if ((s = check_amp("amp", amp, err))) return s;
+    if (j >= m->N / 2)
+        return bkf_error_set(err, BKF_EINPUT, "mode j = %zu is outside [0, %zu] (N/2 - 1)", j,
+                             m->N / 2 - 1);
+    bkf_error e;
+    if (bkf_model_check_nu_active(m->p.nu, &e) != BKF_OK)
+        return bkf_error_set(err, BKF_EINPUT, "the global oscillation needs a limit cycle: %s",
+                             e.message);
+    bkf_cycle *cy = bkf_cycle_alloc();
+    if (!cy) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    bkf_cycle_options co = bkf_cycle_options_default();
+    co.tol = 1e-12;
+    s = bkf_cycle_solve(cy, m->p.gamma, m->p.nu, &co, &e);
+    if (s) {
+        co.tol = 1e-10;
+        s = bkf_cycle_solve(cy, m->p.gamma, m->p.nu, &co, &e);
+    }
+    if (s) {
+        bkf_cycle_free(cy);
+        return bkf_error_set(err, s, "limit cycle at mu = gamma = %g: %s", m->p.gamma,
+                             e.message);
+    }
+    double slope = bkf_cycle_get(cy)->section_slope;
+    bkf_cycle_free(cy);
+    size_t N = m->N;
+    double q = 2.0 * M_PI * (double)j / m->p.S;
+    double eta0 = slope / m->p.gamma + bkf_model_friction(m->p.nu);
+    for (size_t i = 0; i < N; i++) {
+        m->y[i] = m->p.nu + amp * cos(q * (double)i * m->h);
+        m->y[N + i] = eta0;
+    }
+    m->t = 0.0;
+    mark_set(m);
+    return BKF_OK;
+}
+
+int bkf_pde_init_front(bkf_pde *m, const bkf_pde_front_spec *spec, bkf_pde_front_info *info,
+                       double *clean_psi, bkf_error *err)
+{
+    bkf_pde_front_spec sp = spec ? *spec : bkf_pde_front_spec_default();
+    int s;
+    if (sp.n < 1) return bkf_error_set(err, BKF_EINPUT, "the number of fronts n must be >= 1");
+    if (sp.root < 1) return bkf_error_set(err, BKF_EINPUT, "root must be >= 1");
+    if (sp.direction != -1 && sp.direction != 1)
+        return bkf_error_set(err, BKF_EINPUT, "direction must be -1 or +1");
+    if ((s = check_amp("noise", sp.noise, err))) return s;
+    if (!isfinite(sp.tol) || sp.tol < 1e-14 || sp.tol > 1e-4)
+        return bkf_error_set(err, BKF_EINPUT, "front tol = %g is outside [1e-14, 1e-4]", sp.tol);
+    bkf_error e;
+    if (bkf_model_check_nu_active(m->p.nu, &e) != BKF_OK)
+        return bkf_error_set(err, BKF_EINPUT, "fronts need a limit cycle: %s", e.message);
+
+    bkf_speeds_params sp_p = {m->p.gamma, m->p.c, m->p.nu, m->p.S};
+    bkf_speeds_options so = bkf_speeds_options_default();
+    so.tol = sp.tol;
+    so.n_from = so.n_to = sp.n;
+    bkf_speeds_table tab;
+    memset(&tab, 0, sizeof tab);
+    s = bkf_speeds_find(&sp_p, &so, &tab, &e);
+    if (s) {
+        bkf_speeds_table_free(&tab);
+        return bkf_error_set(err, s, "speeds for n = %zu: %s", sp.n, e.message);
+    }
+    if (tab.count < sp.root) {
+        long n_max = tab.n_max;
+        size_t have = tab.count;
+        bkf_speeds_table_free(&tab);
+        if (have == 0)
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "no front speed for n = %zu (fronts exist for n <= %ld here)",
+                                 sp.n, n_max);
+        return bkf_error_set(err, BKF_EINPUT, "n = %zu has %zu root(s), not root %zu", sp.n,
+                             have, sp.root);
+    }
+    bkf_speeds_root root = tab.roots[sp.root - 1];
+    size_t roots_for_n = tab.count;
+    bkf_speeds_table_free(&tab);
+    if (root.flags & BKF_SPEEDS_ASYMPTOTIC)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "n = %zu: mu = %g is beyond the cycle engine's range; the front "
+                             "cannot be built", sp.n, root.mu);
+
+    bkf_cycle *cy = bkf_cycle_alloc();
+    if (!cy) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    bkf_cycle_options co = bkf_cycle_options_default();
+    co.tol = sp.tol;
+    s = bkf_cycle_solve(cy, root.mu, m->p.nu, &co, &e);
+    if (s) {
+        co.tol = fmax(sp.tol, 1e-10);
+        s = bkf_cycle_solve(cy, root.mu, m->p.nu, &co, &e);
+    }
+    if (s) {
+        bkf_cycle_free(cy);
+        return bkf_error_set(err, s, "cycle at mu = %g: %s", root.mu, e.message);
+    }
+    double v = root.v, c = m->p.c;
+    /* sqrt(1 - c^2/v^2) without the cancellation near the sonic limit */
+    double stretch = sqrt((v - c) * (v + c)) / v;
+    size_t N = m->N;
+    double g = m->p.gamma;
+    for (size_t i = 0; i < N; i++) {
+        double x = (double)i * m->h;
+        double z = (double)sp.direction * -1.0 * (x / v) / stretch;
+        double f, fp;
+        s = bkf_cycle_profile(cy, z, &f, &fp, &e);
+        if (s) {
+            bkf_cycle_free(cy);
+            return bkf_error_set(err, s, "cycle profile: %s", e.message);
+        }
+        m->y[i] = f;
+        m->y[N + i] = fp / stretch / g + bkf_model_friction(f);
+    }
+    const bkf_cycle_result *cr = bkf_cycle_get(cy);
+    if (info) {
+        info->v = v;
+        info->v_err = root.v_err;
+        info->mu = root.mu;
+        info->T = cr->period;
+        info->stretch = stretch;
+        info->period_fixed = cr->period * stretch;
+        info->wavelength = m->p.S / (double)sp.n;
+        info->residual = (double)sp.n * cr->period * v * stretch / m->p.S - 1.0;
+        info->roots_for_n = roots_for_n;
+    }
+    bkf_cycle_free(cy);
+    if (clean_psi) memcpy(clean_psi, m->y, N * sizeof *clean_psi);
+    if (sp.noise > 0) {
+        if ((s = noise(m, sp.noise, sp.seed, m->psit, err))) return s;
+        for (size_t i = 0; i < N; i++) m->y[i] += m->psit[i];
+    }
+    m->t = 0.0;
+    mark_set(m);
+    if (clean_psi && m->o.dealias) project(m, clean_psi);
+    return BKF_OK;
+}
+
+/* ---------------------------------------------------------------- run */
+
+/* State at w in [0, 1] of the step [t0, t0 + dt] into m->sample (psi, eta). */
+static void hermite(bkf_pde *m, double w, double dt, const double *y0, const double *f0,
+                    const double *y1, const double *f1)
+{
+    double w2 = w * w, w3 = w2 * w, w4 = w3 * w, w5 = w4 * w;
+    double h0 = 1 - 10 * w3 + 15 * w4 - 6 * w5;
+    double h1 = (w - 6 * w3 + 8 * w4 - 3 * w5) * dt;
+    double h2 = (0.5 * w2 - 1.5 * w3 + 1.5 * w4 - 0.5 * w5) * dt * dt;
+    double h3 = 10 * w3 - 15 * w4 + 6 * w5;
+    double h4 = (-4 * w3 + 7 * w4 - 3 * w5) * dt;
+    double h5 = (0.5 * w3 - w4 + 0.5 * w5) * dt * dt;
+    const double *g0 = m->g0, *g1 = m->g1;
+    for (size_t i = 0; i < m->dim; i++)
+        m->sample[i] = h0 * y0[i] + h1 * f0[i] + h2 * g0[i] + h3 * y1[i] + h4 * f1[i] +
+                       h5 * g1[i];
+}
+
+static int blown_up(const double *y, size_t N)
+{
+    for (size_t i = 0; i < 2 * N; i++)
+        if (!(fabs(y[i]) <= BLOWUP)) return 1;
+    return 0;
+}
+
+int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer observer,
+                void *odata, bkf_pde_progress progress, void *pdata, bkf_error *err)
+{
+    if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
+    double t0 = m->t;
+    if (!isfinite(t_end) || !(t_end > t0))
+        return bkf_error_set(err, BKF_EINPUT, "t_end = %g must be finite and > t = %g", t_end,
+                             t0);
+    if (!isfinite(sample_dt) || !(sample_dt > 0))
+        return bkf_error_set(err, BKF_EINPUT, "sample_dt = %g must be finite and > 0",
+                             sample_dt);
+    size_t N = m->N, dim = m->dim;
+    m->stats.stopped = 0;
+    /* Samples closer than this to t_end are t_end: rounding in t0 + k dt
+     * must not add a sliver of a step or a duplicate sample. */
+    double slack = 1e-9 * fmax(sample_dt, 1e-300) + 4 * 2.2e-16 * fabs(t_end);
+    size_t k_next = 0;
+    int end_emitted = 0;
+
+    if (!m->have_f) {
+        if (rhs(m->t, m->y, m->f, m) != GSL_SUCCESS)
+            return bkf_error_set(err, BKF_ENUMERIC, "the initial state is not finite or too large");
+        m->have_f = 1;
+    }
+    if (observer) {
+        k_next = 1;
+        if (emit(m, observer, odata, m->t, m->y)) {
+            m->stats.stopped = 1;
+            return BKF_OK;
+        }
+    }
+    size_t steps_here = 0;
+    int g0_valid = 0;
+    double h_floor = 1e-12 * fmax(1.0, fabs(t_end));
+    while (m->t < t_end) {
+        double natural = fmin(m->hstep, m->hcap);
+        double dt = natural;
+        int last = 0;
+        if (m->t + dt >= t_end - slack) {
+            dt = t_end - m->t;
+            last = 1;
+        }
+        memcpy(m->ytry, m->y, dim * sizeof *m->y);
+        int s = gsl_odeiv2_step_apply(m->step, m->t, dt, m->ytry, m->yerr, m->f, m->f1, &m->sys);
+        if (s != GSL_SUCCESS) {
+            /* The trial state left the finite range: a step far too long. */
+            m->stats.rejected++;
+            m->hstep = 0.25 * dt;
+            if (m->hstep < h_floor)
+                return bkf_error_set(err, BKF_ENUMERIC,
+                                     "the field blew up at t = %.6g (|psi| > %g or not finite)",
+                                     m->t, BLOWUP);
+            continue;
+        }
+        double hnew = dt;
+        int adj = gsl_odeiv2_control_hadjust(m->control, m->step, m->ytry, m->yerr, m->f1, &hnew);
+        if (adj == GSL_ODEIV_HADJ_DEC) {
+            m->stats.rejected++;
+            m->hstep = hnew;
+            if (hnew < h_floor)
+                return bkf_error_set(err, BKF_ENUMERIC,
+                                     "step size underflow at t = %.6g (tol %g cannot be met)",
+                                     m->t, m->o.tol);
+            continue;
+        }
+        double t1 = last ? t_end : m->t + dt;
+        m->stats.steps++;
+        steps_here++;
+        m->stats.h_last = dt;
+        if (!last || dt >= natural) {
+            if (dt < m->stats.h_min) m->stats.h_min = dt;
+        }
+        if (dt > m->stats.h_max) m->stats.h_max = dt;
+
+        if (observer) {
+            int need = 0;
+            for (;;) {
+                double tk = t0 + (double)k_next * sample_dt;
+                if (tk > t1 + slack || tk > t_end + slack) break;
+                if (!need) {
+                    if (!g0_valid) second_derivative(m, m->y, m->f, m->g0);
+                    second_derivative(m, m->ytry, m->f1, m->g1);
+                    need = 1;
+                }
+                const double *state;
+                double ts = tk;
+                if (fabs(tk - t1) <= slack) {
+                    state = m->ytry;
+                    ts = t1;
+                } else {
+                    hermite(m, (tk - m->t) / dt, dt, m->y, m->f, m->ytry, m->f1);
+                    state = m->sample;
+                }
+                if (fabs(ts - t_end) <= slack) {
+                    ts = t_end;
+                    end_emitted = 1;
+                }
+                k_next++;
+                if (emit(m, observer, odata, ts, state)) {
+                    m->stats.stopped = 1;
+                    break;
+                }
+            }
+            if (need) {
+                double *tmp = m->g0;
+                m->g0 = m->g1;
+                m->g1 = tmp;
+            }
+            g0_valid = need;
+        }
+        /* accept */
+        double *tmp = m->y;
+        m->y = m->ytry;
+        m->ytry = tmp;
+        tmp = m->f;
+        m->f = m->f1;
+        m->f1 = tmp;
+        m->t = t1;
+        m->hstep = last ? fmax(hnew, natural) : hnew;
+        if (m->stats.stopped) return BKF_OK;
+        if (blown_up(m->y, N))
+            return bkf_error_set(err, BKF_ENUMERIC,
+                                 "the field blew up at t = %.6g (|psi| > %g or not finite)", m->t,
+                                 BLOWUP);
+        if (progress && progress((m->t - t0) / (t_end - t0), pdata)) {
+            m->stats.stopped = 1;
+            return BKF_OK;
+        }
+        if (m->o.max_steps && steps_here >= m->o.max_steps && m->t < t_end)
+            return bkf_error_set(err, BKF_ENUMERIC, "more than %zu steps before t = %g",
+                                 m->o.max_steps, t_end);
+    }
+    if (observer && !end_emitted && emit(m, observer, odata, m->t, m->y)) m->stats.stopped = 1;
+    return BKF_OK;
+}

@@ -1,0 +1,395 @@
+/* `bkfront simulate` and `bkfront check` as a user sees them: the built
+ * binary (BKF_CLI_PATH), its outputs, stderr and exit status. */
+#define _POSIX_C_SOURCE 200809L
+#include "harness.h"
+
+#include <fcntl.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#ifndef BKF_CLI_PATH
+#error "BKF_CLI_PATH (the built bkfront binary) is defined by the Makefile for tests"
+#endif
+
+/* In test_io.c. */
+int bkf_test_json_valid(const char *text);
+
+typedef struct {
+    char *out, *err;
+    int code;
+} sim_result;
+
+static char *slurp_fd(int fd)
+{
+    size_t cap = 4096, n = 0;
+    char *buf = malloc(cap);
+    CHECK(buf);
+    lseek(fd, 0, SEEK_SET);
+    for (;;) {
+        if (n + 1 >= cap) {
+            buf = realloc(buf, cap *= 2);
+            CHECK(buf);
+        }
+        ssize_t k = read(fd, buf + n, cap - n - 1);
+        if (k <= 0) break;
+        n += (size_t)k;
+    }
+    buf[n] = '\0';
+    return buf;
+}
+
+static char *slurp(const char *path)
+{
+    int fd = open(path, O_RDONLY);
+    CHECK_MSG(fd >= 0, "cannot open %s", path);
+    char *s = slurp_fd(fd);
+    close(fd);
+    return s;
+}
+
+static int scratch_fd(void)
+{
+    char name[] = "/tmp/bkf_sim_test_XXXXXX";
+    int fd = mkstemp(name);
+    CHECK(fd >= 0);
+    unlink(name);
+    return fd;
+}
+
+static sim_result run_cli(const char *const *args)
+{
+    char *argv[64];
+    int argc = 0;
+    argv[argc++] = BKF_CLI_PATH;
+    for (; args[argc - 1] && argc < 63; argc++) argv[argc] = (char *)args[argc - 1];
+    argv[argc] = NULL;
+    int out = scratch_fd(), err = scratch_fd();
+    fflush(stdout);
+    pid_t pid = fork();
+    CHECK(pid >= 0);
+    if (pid == 0) {
+        dup2(out, 1);
+        dup2(err, 2);
+        execv(BKF_CLI_PATH, argv);
+        _exit(127);
+    }
+    int status = 0;
+    CHECK(waitpid(pid, &status, 0) == pid);
+    sim_result r = {slurp_fd(out), slurp_fd(err), WIFEXITED(status) ? WEXITSTATUS(status) : -1};
+    close(out);
+    close(err);
+    return r;
+}
+
+#define SIM(...) run_cli((const char *const[]){__VA_ARGS__, NULL})
+
+static void sim_free(sim_result *r)
+{
+    free(r->out);
+    free(r->err);
+}
+
+static int lines_in(const char *s)
+{
+    int n = 0;
+    for (; *s; s++) n += *s == '\n';
+    return n;
+}
+
+static void expect_bad_input(sim_result r, const char *cmd, const char *names, const char *what)
+{
+    char prefix[64];
+    snprintf(prefix, sizeof prefix, "bkfront %s: ", cmd);
+    CHECK_MSG(r.code == 2, "%s: exit %d, stderr: %s", what, r.code, r.err);
+    CHECK_MSG(r.out[0] == '\0', "%s: stdout not empty", what);
+    CHECK_MSG(lines_in(r.err) == 1, "%s: stderr is not one line: %s", what, r.err);
+    CHECK_MSG(strncmp(r.err, prefix, strlen(prefix)) == 0, "%s: %s", what, r.err);
+    CHECK_MSG(strstr(r.err, names), "%s: '%s' not named in: %s", what, names, r.err);
+    sim_free(&r);
+}
+
+/* The value of `column` in data row `row` (0-based) of a TSV. */
+static int field(const char *tsv, int row, const char *column, double *value)
+{
+    const char *p = tsv;
+    while (*p == '#') p = strchr(p, '\n') + 1;
+    const char *header = p;
+    int col = 0, found = -1;
+    size_t clen = strlen(column);
+    for (const char *q = header; *q && *q != '\n'; col++) {
+        size_t len = strcspn(q, "\t\n");
+        if (len == clen && strncmp(q, column, len) == 0) found = col;
+        q += len;
+        if (*q == '\t') q++;
+    }
+    if (found < 0) return 0;
+    p = strchr(header, '\n');
+    for (int r = 0; r < row && p; r++) p = strchr(p + 1, '\n');
+    if (!p || !p[1]) return 0;
+    p++;
+    for (int c = 0; c < found; c++) p = strchr(p, '\t') + 1;
+    char *end;
+    *value = strtod(p, &end);
+    return *end == '\t' || *end == '\n';
+}
+
+/* The text in column `column` of data row `row`, copied into buf. */
+static int text_field(const char *tsv, int row, const char *column, char *buf, size_t size)
+{
+    const char *p = tsv;
+    while (*p == '#') p = strchr(p, '\n') + 1;
+    const char *header = p;
+    int col = 0, found = -1;
+    size_t clen = strlen(column);
+    for (const char *q = header; *q && *q != '\n'; col++) {
+        size_t len = strcspn(q, "\t\n");
+        if (len == clen && strncmp(q, column, len) == 0) found = col;
+        q += len;
+        if (*q == '\t') q++;
+    }
+    if (found < 0) return 0;
+    p = strchr(header, '\n');
+    for (int r = 0; r < row && p; r++) p = strchr(p + 1, '\n');
+    if (!p || !p[1]) return 0;
+    p++;
+    for (int c = 0; c < found; c++) p = strchr(p, '\t') + 1;
+    size_t len = strcspn(p, "\t\n");
+    if (len >= size) len = size - 1;
+    memcpy(buf, p, len);
+    buf[len] = '\0';
+    return 1;
+}
+
+TEST(cli_simulate_front_outputs_and_restart)
+{
+    char dir[] = "/tmp/bkf_sim_out_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char diag[256], st[256], snap[256];
+    snprintf(diag, sizeof diag, "%s/diag.tsv", dir);
+    snprintf(st, sizeof st, "%s/st.dat", dir);
+    snprintf(snap, sizeof snap, "%s/snap.tsv", dir);
+    sim_result r = SIM("simulate", "--init", "front:n=2", "--N", "256", "--tmax", "20", "--frames",
+                       "40", "--spacetime", st, "--snapshots", snap, "--snapshot-count", "3",
+                       "--out", diag);
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK_MSG(r.out[0] == '\0' && r.err[0] == '\0', "stdout %s stderr %s", r.out, r.err);
+    sim_free(&r);
+
+    char *d = slurp(diag);
+    CHECK(strstr(d, "\nt\tmean\tvariance\tmin\tmax\tprobe\tfronts\tdisplacement\tdeviation\t"
+                    "energy\tenergy_residual\tmean_residual\n"));
+    CHECK(strstr(d, "# regime: propagating_fronts"));
+    CHECK(strstr(d, "# command: bkfront simulate --init front:n=2"));
+    double t, fronts, res;
+    CHECK(field(d, 40, "t", &t) && t == 20);
+    CHECK(!field(d, 41, "t", &t)); /* 41 rows: t = 0, 0.5, ..., 20 */
+    CHECK(field(d, 40, "fronts", &fronts) && fronts == 2);
+    CHECK(field(d, 40, "energy_residual", &res) && fabs(res) < 1e-6);
+    const char *sp = strstr(d, "# speed vs prediction: ");
+    CHECK(sp);
+    const char *rd = strstr(sp, "relative difference ");
+    CHECK(rd && fabs(strtod(rd + 20, NULL)) < 1e-8);
+    free(d);
+
+    /* spacetime: nonuniform matrix, first row N x_0 .. x_{N-1}, then t psi */
+    char *s = slurp(st);
+    const char *row = s;
+    while (*row == '#') row = strchr(row, '\n') + 1;
+    CHECK(strncmp(row, "256 0 0.078125 ", 15) == 0);
+    int rows = 0;
+    for (const char *q = row; *q; q++) rows += *q == '\n';
+    CHECK_MSG(rows == 42, "%d rows", rows);
+    free(s);
+
+    /* snapshots restart a run */
+    char *sn = slurp(snap);
+    CHECK(strstr(sn, "t\tx\tpsi\teta\n"));
+    free(sn);
+    char init[300];
+    snprintf(init, sizeof init, "file:%s", snap);
+    r = SIM("simulate", "--init", init, "--tmax", "1", "--frames", "2");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, "N 256"));
+    double mean0;
+    CHECK(field(r.out, 0, "fronts", &fronts) && fronts == 2);
+    CHECK(field(r.out, 0, "mean", &mean0) && fabs(mean0 + 0.96) < 1e-6);
+    sim_free(&r);
+    /* with a different --N the file does not fit */
+    r = SIM("simulate", "--init", init, "--N", "128");
+    expect_bad_input(r, "simulate", "--N", "file with other N");
+
+    unlink(diag);
+    unlink(st);
+    unlink(snap);
+    rmdir(dir);
+}
+
+TEST(cli_simulate_binary_spacetime_and_json)
+{
+    char path[] = "/tmp/bkf_sim_bin_XXXXXX";
+    int fd = mkstemp(path);
+    CHECK(fd >= 0);
+    close(fd);
+    sim_result r = SIM("simulate", "--nu", "-0.92", "--init", "oscillation:j=0", "--N", "16",
+                       "--tmax", "30", "--frames", "10", "--spacetime", path,
+                       "--spacetime-format", "binary", "--format", "json");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK(r.out[0] == '{' && bkf_test_json_valid(r.out));
+    CHECK(strstr(r.out, "regime: global_oscillation"));
+    sim_free(&r);
+    struct stat stt;
+    CHECK(stat(path, &stt) == 0);
+    CHECK_MSG(stt.st_size == (off_t)((1 + 11) * 17 * 4), "size %lld", (long long)stt.st_size);
+    FILE *f = fopen(path, "rb");
+    float head[17];
+    CHECK(f && fread(head, sizeof(float), 17, f) == 17);
+    CHECK(head[0] == 16.0f && head[2] == 1.25f);
+    fclose(f);
+    unlink(path);
+}
+
+TEST(cli_simulate_chain_and_continuous_slip)
+{
+    sim_result r = SIM("simulate", "--model", "chain", "--nu", "-1.2", "--tmax", "40", "--frames",
+                       "20");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, "model chain:"));
+    CHECK(strstr(r.out, "N 20 (h = 1)"));
+    CHECK(strstr(r.out, "# regime: continuous_slip"));
+    sim_free(&r);
+}
+
+TEST(cli_simulate_rejects_bad_input)
+{
+    expect_bad_input(SIM("simulate", "--N", "7"), "simulate", "--N", "odd N");
+    expect_bad_input(SIM("simulate", "--N", "4"), "simulate", "--N", "N < 8");
+    expect_bad_input(SIM("simulate", "--gamma", "0"), "simulate", "--gamma", "gamma 0");
+    expect_bad_input(SIM("simulate", "--c", "-1"), "simulate", "--c", "c < 0");
+    expect_bad_input(SIM("simulate", "--S", "0"), "simulate", "--S", "S 0");
+    expect_bad_input(SIM("simulate", "--nu", "nan"), "simulate", "--nu", "nu nan");
+    expect_bad_input(SIM("simulate", "--tmax", "0"), "simulate", "--tmax", "tmax 0");
+    expect_bad_input(SIM("simulate", "--tol", "1"), "simulate", "--tol", "tol 1");
+    expect_bad_input(SIM("simulate", "--init", "front:n=2", "--nu", "1.2"), "simulate", "--nu",
+                     "front beyond the threshold");
+    expect_bad_input(SIM("simulate", "--init", "oscillation", "--nu", "-1"), "simulate",
+                     "limit cycle", "oscillation without a cycle");
+    expect_bad_input(SIM("simulate", "--init", "bogus"), "simulate", "--init", "unknown init");
+    expect_bad_input(SIM("simulate", "--init", "front"), "simulate", "n=K", "front without n");
+    expect_bad_input(SIM("simulate", "--init", "front:n=x"), "simulate", "front n", "front n=x");
+    expect_bad_input(SIM("simulate", "--init", "front:n=1,speed=2"), "simulate", "speed",
+                     "unknown key");
+    expect_bad_input(SIM("simulate", "--init", "front:n=40"), "simulate", "n = 40",
+                     "n beyond n_max");
+    expect_bad_input(SIM("simulate", "--init", "oscillation:q=200"), "simulate", "N/2",
+                     "mode above Nyquist");
+    expect_bad_input(SIM("simulate", "--init", "file:/nonexistent_bkf/x.tsv"), "simulate",
+                     "file:", "missing file");
+    expect_bad_input(SIM("simulate", "--model", "chain", "--S", "20.5"), "simulate", "--N",
+                     "chain needs N");
+    expect_bad_input(SIM("simulate", "--model", "chain", "--dealias"), "simulate", "--dealias",
+                     "dealias chain");
+    expect_bad_input(SIM("simulate", "--spacetime-format", "binary"), "simulate", "--spacetime",
+                     "format without file");
+    expect_bad_input(SIM("simulate", "--spacetime", "/nonexistent_bkf/st.dat"), "simulate",
+                     "--spacetime", "spacetime in a missing directory");
+    expect_bad_input(SIM("simulate", "--out", "/nonexistent_bkf/d.tsv"), "simulate", "--out",
+                     "out in a missing directory");
+    expect_bad_input(SIM("simulate", "--seed", "-3"), "simulate", "--seed", "negative seed");
+    expect_bad_input(SIM("simulate", "--bogus"), "simulate", "--bogus", "unknown flag");
+    expect_bad_input(SIM("simulate", "--model", "lattice"), "simulate", "--model", "model");
+}
+
+TEST(cli_simulate_and_check_help)
+{
+    sim_result r = SIM("simulate", "--help");
+    CHECK(r.code == 0 && r.err[0] == '\0');
+    const char *need[] = {"--gamma", "--c", "--nu", "--S", "--N", "--tmax", "--tol", "--init",
+                          "--model", "--out", "--spacetime", "nonuniform matrix", "front:n=K",
+                          "energy_residual"};
+    for (size_t i = 0; i < sizeof need / sizeof need[0]; i++)
+        CHECK_MSG(strstr(r.out, need[i]), "simulate help lacks %s", need[i]);
+    sim_free(&r);
+    r = SIM("check", "--help");
+    CHECK(r.code == 0 && strstr(r.out, "--rel-tol") && strstr(r.out, "verdict") &&
+          strstr(r.out, "unresolved"));
+    sim_free(&r);
+}
+
+/* A stable front (n = 4 at the paper's parameters) agrees; a tolerance no
+ * simulation can meet turns the same row into a failed check (exit 1, the
+ * table still written). */
+TEST(cli_check_stable_front_agrees)
+{
+    sim_result r = SIM("check", "--n", "4", "--tmax", "60", "--no-progress");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    double rel, stable, fs, fe, N;
+    char verdict[32];
+    CHECK(field(r.out, 0, "rel_err", &rel) && fabs(rel) < 1e-6);
+    CHECK(field(r.out, 0, "stable", &stable) && stable == 1);
+    CHECK(field(r.out, 0, "fronts_start", &fs) && fs == 4);
+    CHECK(field(r.out, 0, "fronts_end", &fe) && fe == 4);
+    CHECK(field(r.out, 0, "N", &N) && N == 1024);
+    CHECK(text_field(r.out, 0, "verdict", verdict, sizeof verdict) &&
+          strcmp(verdict, "agrees") == 0);
+    bkf_test_note("n = 4: rel_err %.2g on N = %.0f", rel, N);
+    sim_free(&r);
+
+    r = SIM("check", "--n", "4", "--tmax", "60", "--rel-tol", "1e-15", "--no-progress");
+    CHECK_MSG(r.code == 1, "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, "disagrees"));
+    CHECK(lines_in(r.err) == 1 && strstr(r.err, "disagree"));
+    sim_free(&r);
+}
+
+/* n = 2 is unstable here: the perturbation grows, the verdict says so and
+ * the exit status does not fail on it; its speed still agrees while the
+ * wave is coherent. */
+TEST(cli_check_unstable_front_is_reported)
+{
+    sim_result r = SIM("check", "--n", "2", "--tmax", "80", "--no-progress");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    double rel, stable, growth;
+    char verdict[32];
+    CHECK(field(r.out, 0, "stable", &stable) && stable == 0);
+    CHECK(field(r.out, 0, "growth", &growth) && growth > 0.02);
+    CHECK(text_field(r.out, 0, "verdict", verdict, sizeof verdict) &&
+          strcmp(verdict, "unstable") == 0);
+    CHECK(field(r.out, 0, "rel_err", &rel) && fabs(rel) < 1e-6);
+    bkf_test_note("n = 2: growth %.3g per unit time, rel_err %.2g", growth, rel);
+    sim_free(&r);
+}
+
+TEST(cli_check_rejects_bad_input)
+{
+    expect_bad_input(SIM("check", "--nu", "1"), "check", "--nu", "nu 1");
+    expect_bad_input(SIM("check", "--n", "0"), "check", "--n", "n 0");
+    expect_bad_input(SIM("check", "--N-max", "256"), "check", "--N-max", "N-max < N");
+    expect_bad_input(SIM("check", "--perturb", "1"), "check", "--perturb", "perturb 1");
+    expect_bad_input(SIM("check", "--rel-tol", "0"), "check", "--rel-tol", "rel-tol 0");
+    expect_bad_input(SIM("check", "--tmax", "-5"), "check", "--tmax", "tmax -5");
+    expect_bad_input(SIM("check", "--init", "uniform"), "check", "--init", "no --init here");
+}
+
+/* The paper's three regimes at gamma 2, c 0.3, S 20 (Figs. 2b, 3a, 3b). */
+TEST(cli_simulate_paper_regimes)
+{
+    sim_result r = SIM("simulate", "--N", "128", "--nu", "-0.92", "--init",
+                       "oscillation:q=2.83,amp=0.05", "--tmax", "200", "--frames", "50");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK_MSG(strstr(r.out, "# regime: global_oscillation"), "%s", r.out);
+    sim_free(&r);
+    r = SIM("simulate", "--N", "256", "--nu", "-0.94", "--init", "oscillation:q=2.83,amp=0.3",
+            "--tmax", "400", "--frames", "50");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK_MSG(strstr(r.out, "# regime: period_doubled_pacemakers"), "%s", r.out);
+    CHECK(strstr(r.out, "(multiplicity 2,"));
+    sim_free(&r);
+    r = SIM("simulate", "--N", "1024", "--nu", "-0.96", "--init", "front:n=5,noise=1e-6",
+            "--tmax", "60", "--frames", "30");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK_MSG(strstr(r.out, "# regime: propagating_fronts"), "%s", r.out);
+    CHECK(strstr(r.out, "# fronts: 5 at start, 5 at end"));
+    sim_free(&r);
+}
