@@ -6,7 +6,7 @@
 
 DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
                 libinih-dev gnuplot-nox
-PKGS         := gsl nlopt fftw3
+PKGS         := gsl nlopt fftw3 inih
 
 CC       ?= cc
 OPT      ?= -O2

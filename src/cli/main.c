@@ -2,37 +2,11 @@
  * where a status becomes an error line and an exit code.
  *
  * A subcommand is a cli_command (args.h) defined in its own cmd_NAME.c; adding
- * one is an extern declaration and an entry in `commands` below. */
+ * one is an extern declaration and an entry in commands.c. */
 #include "args.h"
+#include "commands.h"
 
 #include <string.h>
-
-extern const cli_command cli_cmd_period;
-extern const cli_command cli_cmd_asymptotics;
-extern const cli_command cli_cmd_floquet;
-extern const cli_command cli_cmd_speeds;
-extern const cli_command cli_cmd_branch;
-extern const cli_command cli_cmd_simulate;
-extern const cli_command cli_cmd_check;
-
-static const cli_command *const commands[] = {
-    &cli_cmd_period,
-    &cli_cmd_asymptotics,
-    &cli_cmd_speeds,
-    &cli_cmd_branch,
-    &cli_cmd_floquet,
-    &cli_cmd_simulate,
-    &cli_cmd_check,
-};
-
-#define NCOMMANDS (sizeof commands / sizeof commands[0])
-
-static const cli_command *find_command(const char *name)
-{
-    for (size_t i = 0; i < NCOMMANDS; i++)
-        if (strcmp(commands[i]->name, name) == 0) return commands[i];
-    return NULL;
-}
 
 static void print_usage(FILE *out)
 {
@@ -46,8 +20,8 @@ static void print_usage(FILE *out)
             "    f'' + mu (f^2 - 1) f' + f = nu.\n"
             "\n"
             "subcommands:\n");
-    for (size_t i = 0; i < NCOMMANDS; i++)
-        fprintf(out, "  %-12s %s\n", commands[i]->name, commands[i]->summary);
+    for (size_t i = 0; i < cli_command_count(); i++)
+        fprintf(out, "  %-12s %s\n", cli_command_at(i)->name, cli_command_at(i)->summary);
     fprintf(out,
             "\n"
             "Output is TSV (comment lines start with '#', then a header line naming the\n"
@@ -59,9 +33,9 @@ static void print_usage(FILE *out)
 static void command_list(char *buf, size_t size)
 {
     buf[0] = '\0';
-    for (size_t i = 0; i < NCOMMANDS; i++) {
+    for (size_t i = 0; i < cli_command_count(); i++) {
         size_t used = strlen(buf);
-        snprintf(buf + used, size - used, "%s%s", i ? ", " : "", commands[i]->name);
+        snprintf(buf + used, size - used, "%s%s", i ? ", " : "", cli_command_at(i)->name);
     }
 }
 
@@ -109,11 +83,11 @@ int main(int argc, char **argv)
             fprintf(stderr, CLI_PROGRAM " help: give one subcommand name\n");
             return 2;
         }
-        const cli_command *cmd = find_command(argv[2]);
+        const cli_command *cmd = cli_find_command(argv[2]);
         return cmd ? print_help(cmd) : unknown_command(argv[2]);
     }
 
-    const cli_command *cmd = find_command(first);
+    const cli_command *cmd = cli_find_command(first);
     if (!cmd) return unknown_command(first);
     int sub_argc = argc - 1;
     char **sub_argv = argv + 1;

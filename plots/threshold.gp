@@ -1,0 +1,15 @@
+# The period-doubling threshold nu_pd and the critical wavenumber q_c
+# along c or gamma (data: bkfront floquet --threshold --along).
+load plotdir.'/common.gp'
+f = word(files, 1)
+pname = (param eq 'gamma' ? '{/Symbol g}' : (param eq '' ? 'c' : param))
+x = (param eq '' ? 'c' : param)
+set title (title ne '' ? title : 'Stability threshold of the global oscillation')
+set xlabel pname
+set ylabel 'threshold {/Symbol n}_{pd}'
+set y2label 'critical wavenumber q_c'
+set ytics nomirror
+set y2tics
+set key top right
+plot f using x:'nu_pd' with linespoints pt 7 lw 2 lc rgb '#d62728' title '{/Symbol n}_{pd}', \
+     f using x:'q_c' axes x1y2 with linespoints pt 6 dt 2 lc rgb '#1f77b4' title 'q_c'
