@@ -62,7 +62,7 @@ check-built: $(CLI) $(TESTS)
 
 run: deps
 	@$(MAKE) --no-print-directory build-all
-	./$(CLI) period --mu 1e-1:1e4:13 --log --nu -0.96 --tol 1e-10
+	./$(CLI) run fronts/paper.scene
 
 bench: deps
 	@$(MAKE) --no-print-directory bench-built
@@ -96,7 +96,7 @@ $(TESTS): $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(CLI)
 $(BENCH): $(BENCH_OBJ) $(LIB)
 	$(CC) $(LDFLAGS) -o $@ $(BENCH_OBJ) $(LIB) $(LDLIBS)
 
-$(BUILD)/tests/%.o: override CFLAGS += -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"'
+$(BUILD)/tests/%.o: override CFLAGS += -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' -DBKF_SOURCE_DIR='"$(CURDIR)"'
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)

@@ -6,7 +6,7 @@ pname = (param eq 'nu' ? '{/Symbol n}' : (param eq 'gamma' ? '{/Symbol g}' : par
 set title (title ne '' ? title : sprintf('Front-speed branches along %s', pname))
 set xlabel pname
 set ylabel 'front speed v'
-set key top right
+set key top left
 plot for [i=1:nfiles] word(files, i) using param:'v' with lines lw 2 \
        lc rgb word(colors, (i-1)%6+1) title sprintf('n = %s', word(values, i)), \
      for [i=1:nfiles] word(files, i) using param:(strcol('point') eq 'fold' ? column('v') : NaN) \

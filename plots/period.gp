@@ -27,5 +27,5 @@ plot for [i=1:nfiles] word(files, i) using 'mu':(abs(column('T_asym') - column('
        with linespoints pt 7 ps 0.5 lc rgb word(colors, (i-1)%6+1) \
        title sprintf('{/Symbol n} = %s', word(values, i)), \
      NaN with lines dt 2 lc rgb 'black' title 'k {/Symbol m}', \
-     NaN with linespoints pt 7 ps 0.5 lc rgb 'black' title 'small-{/Symbol m} / corrected large-{/Symbol m}'
+     NaN with linespoints pt 7 ps 0.5 lc rgb 'black' title 'small-{/Symbol m} ({/Symbol m} < 1), corrected ({/Symbol m} {/Symbol \263} 1)'
 unset multiplot

@@ -8,6 +8,8 @@ set multiplot layout 1, 3 title (title ne '' ? title : \
 set xlabel 'log_{10} {/Symbol m}'
 set ylabel '{/Symbol n}'
 set cbrange [-12:0]
+set autoscale xfix
+set autoscale yfix
 set cblabel 'log_{10} |T_{formula} - T| / T'
 set palette defined (0 '#00441b', 3 '#41ab5d', 6 '#f7fcb9', 9 '#fd8d3c', 12 '#67000d')
 set key off

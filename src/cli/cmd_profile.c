@@ -46,7 +46,7 @@ static void profile_help(FILE *out)
         "  --n LIST      numbers of fronts: K, K1,K2,... or A:B:N (at most %u)\n"
         "  --root I      which root of each n, 1 the fastest; default 1\n"
         "  --mu M        the cycle at mu = M instead, in [1e-06, 1e+06]\n"
-        "  --points P    samples per period, in [2, %u]; default 400\n"
+        "  --points P    samples per period, in [2, %u]; default 2000\n"
         "  --tol E       relative accuracy of the cycle and the speed, in [1e-14, 0.1];\n"
         "                default 1e-10\n"
         "  --format tsv|json, --out FILE   as in bkfront speeds\n"
@@ -161,7 +161,7 @@ static int plan_profile(int argc, char **argv, profile_plan *p, bkf_error *err)
         p->root = 1;
         if (root && (s = cli_parse_count("--root", root, 1000, &p->root, err))) return s;
     }
-    p->points = 400;
+    p->points = 2000;
     if (points && (s = cli_parse_count("--points", points, MAX_POINTS, &p->points, err))) return s;
     if (p->points < 2) return bkf_error_set(err, BKF_EINPUT, "--points: %s is below 2", points);
     p->tol = 1e-10;

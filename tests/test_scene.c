@@ -1,0 +1,546 @@
+/* Scenes: parsing (good files and bad ones, with line numbers), the lazy
+ * plan (products asked for -> computations, counted), `bkfront run` with
+ * real gnuplot figures, and `bkfront profile`. */
+#define _POSIX_C_SOURCE 200809L
+#include "harness.h"
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "bkfront/plot.h"
+#include "scene.h"
+
+#ifndef BKF_SOURCE_DIR
+#define BKF_SOURCE_DIR "."
+#endif
+
+static scene *parse_ok(const char *text)
+{
+    scene *s = NULL;
+    bkf_error e = {{0}};
+    int status = scene_parse_string(text, "t.scene", &s, &e);
+    CHECK_MSG(status == BKF_OK, "parse failed: %s", e.message);
+    return s;
+}
+
+/* The scene is refused with a message starting "t.scene:LINE:" and holding
+ * `part`. */
+static void parse_bad(const char *text, int line, const char *part)
+{
+    scene *s = (scene *)1;
+    bkf_error e = {{0}};
+    CHECK_STATUS(scene_parse_string(text, "t.scene", &s, &e), BKF_EINPUT);
+    CHECK(s == NULL);
+    char prefix[32];
+    snprintf(prefix, sizeof prefix, "t.scene:%d: ", line);
+    CHECK_MSG(strncmp(e.message, prefix, strlen(prefix)) == 0, "want '%s...', got '%s'", prefix,
+              e.message);
+    CHECK_MSG(strstr(e.message, part) != NULL, "want '%s' in '%s'", part, e.message);
+    CHECK_MSG(strchr(e.message, '\n') == NULL, "two lines: %s", e.message);
+}
+
+#define MODEL "[model]\ngamma = 2\nc = 0.3\nnu = -0.96\nS = 20\n"
+
+TEST(scene_parses_the_paper_scene)
+{
+    scene *s = NULL;
+    bkf_error e = {{0}};
+    CHECK_STATUS(scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
+    size_t figures = 0, kinds[SCENE_NKINDS] = {0};
+    for (size_t i = 0; i < s->nproducts; i++) {
+        kinds[s->products[i].kind]++;
+        figures += s->products[i].kind == SCENE_FIGURE;
+    }
+    /* every paper figure and every figure the issue lists beyond it */
+    CHECK(kinds[SCENE_FRICTION] == 1 && kinds[SCENE_SPACETIME] == 3);
+    CHECK(kinds[SCENE_DISPERSION] == 1 && kinds[SCENE_SPEEDS] == 1);
+    CHECK(kinds[SCENE_PERIOD] == 1 && kinds[SCENE_VALIDITY] == 1);
+    CHECK(kinds[SCENE_PROFILE] == 1 && kinds[SCENE_BRANCH] == 1);
+    CHECK(figures == s->nproducts - figures);
+    const scene_product *fig3a = scene_find(s, "fig3a", 0);
+    CHECK(fig3a && fig3a->kind == SCENE_SPACETIME);
+    CHECK(strcmp(scene_value(s, fig3a, "nu"), "-0.92") == 0);   /* its own */
+    CHECK(strcmp(scene_value(s, fig3a, "gamma"), "2") == 0);    /* from [model] */
+    CHECK(strcmp(scene_value(s, fig3a, "N"), "512") == 0);      /* from [accuracy] */
+    /* a Runge-Kutta tolerance is not the accuracy asked of a result */
+    CHECK(scene_value(s, fig3a, "tol") == NULL);
+    const scene_product *table = scene_find(s, "table", 0);
+    CHECK(strcmp(scene_value(s, table, "tol"), "1e-10") == 0);
+    CHECK(scene_find(s, "fig3a", 1) && scene_find(s, "fig3a", 1)->kind == SCENE_FIGURE);
+    scene_free(s);
+}
+
+TEST(scene_keys_inherit_and_sections_keep_their_lines)
+{
+    scene *s = parse_ok("# comment\n" MODEL "\n[accuracy]\ntol = 1e-8 ; inline\n"
+                        "[speeds]\n\n[speeds second]\nn = 3\nS = 30\n");
+    CHECK(s->nproducts == 2);
+    CHECK(strcmp(s->products[0].name, "speeds") == 0 && s->products[0].line == 10);
+    CHECK(strcmp(s->products[1].name, "second") == 0 && s->products[1].line == 12);
+    CHECK(strcmp(scene_value(s, &s->products[0], "tol"), "1e-8") == 0);
+    CHECK(strcmp(scene_value(s, &s->products[1], "S"), "30") == 0);
+    CHECK(strcmp(scene_value(s, &s->products[0], "S"), "20") == 0);
+    CHECK(s->products[1].nentries == 2 && s->products[1].entries[0].line == 13);
+    scene_free(s);
+}
+
+TEST(scene_errors_name_the_file_and_line)
+{
+    parse_bad(MODEL "[spedes]\n", 6, "unknown section [spedes]");
+    parse_bad(MODEL "[speeds]\nnmx = 3\n", 7, "unknown key 'nmx'");
+    parse_bad(MODEL "[speeds]\nnmax = three\n", 7, "nmax");
+    parse_bad("[model]\ngamma = 2\nc = 0.3\nnu = -1.2\nS = 20\n[speeds]\n", 4, "(-1, 1)");
+    parse_bad("[model]\ngamma = nan\n", 2, "not a finite number");
+    parse_bad("[model]\nc = -1\n", 2, "must be >= 0");
+    parse_bad("[model]\nS = 0\n", 2, "must be > 0");
+    parse_bad(MODEL "S = 3\n[speeds]\n", 6, "already set on line 5");
+    parse_bad(MODEL "[speeds]\n[speeds]\n", 7, "already used on line 6");
+    parse_bad(MODEL "[speeds a]\n[figure f]\ntitle = x\n", 7, "give data = NAME");
+    parse_bad(MODEL "[speeds a]\n[figure f]\ndata = b\n", 8, "no product named 'b'");
+    parse_bad("gamma = 2\n[model]\n", 1, "before any [section]");
+    parse_bad(MODEL "[branch b]\nto = 30\n", 6, "give param");
+    parse_bad(MODEL "[speeds]\nn = 3\nnmax = 4\n", 8, "n or nmax, not both");
+    parse_bad(MODEL "[speeds]\nthis line has no equals sign\n", 7, "not a section header");
+    parse_bad(MODEL "[speeds two words]\n", 6, "[KIND] or [KIND NAME]");
+    parse_bad(MODEL "[accuracy]\ntol = 1\n[speeds]\n", 7, "tol: 1 is outside");
+    parse_bad(MODEL "[period p]\nnu = 0,1.5\n", 7, "outside (-1, 1)");
+    parse_bad(MODEL "[period p]\nmu = 1:2:1e9\n", 7, "mu");
+    parse_bad(MODEL "[spacetime s]\ninit = sine\n", 7, "init: 'sine'");
+    parse_bad(MODEL "[figure f]\ndata = f\n", 7, "no product named 'f'");
+    parse_bad(MODEL, 5, "asks for no product");
+    parse_bad("[speeds]\n", 1, "no [model] section");
+    parse_bad("[model]\ngamma = 2\n[speeds]\n", 3, "c is not set here nor in [model]");
+    char longline[400];
+    memset(longline, 'x', sizeof longline);
+    memcpy(longline, "title = ", 8);
+    longline[sizeof longline - 1] = '\0';
+    char text[600];
+    snprintf(text, sizeof text, MODEL "[speeds]\n[figure f]\ndata = speeds\n%s\n", longline);
+    parse_bad(text, 9, "longer than");
+}
+
+TEST(scene_file_errors)
+{
+    scene *s = NULL;
+    bkf_error e = {{0}};
+    CHECK_STATUS(scene_parse_file("/nonexistent/x.scene", &s, &e), BKF_EINPUT);
+    CHECK(strstr(e.message, "cannot open"));
+}
+
+/* ------------------------------------------------------------------ plan */
+
+typedef struct {
+    size_t steps, figures, by_label[16];
+    size_t deduplicated;
+} plan_count;
+
+static const char *const labels[] = {"speeds", "period", "floquet", "branch", "profile",
+                                     "asymptotics", "friction", "simulate", "check", "figure",
+                                     NULL};
+
+static plan_count count_plan(const char *text, int figures)
+{
+    scene *s = parse_ok(text);
+    scene_plan plan;
+    bkf_error e = {{0}};
+    scene_plan_options o = {.outdir = "out", .formats = 1, .figures = figures};
+    CHECK_STATUS(scene_make_plan(s, &o, &plan, &e), BKF_OK);
+    plan_count c = {.steps = plan.nsteps, .deduplicated = plan.deduplicated};
+    for (size_t i = 0; i < plan.nsteps; i++) {
+        const char *l = scene_step_label(&plan.steps[i]);
+        int found = 0;
+        for (int k = 0; labels[k]; k++)
+            if (strcmp(l, labels[k]) == 0) c.by_label[k]++, found = 1;
+        CHECK_MSG(found, "unknown step %s", l);
+        c.figures += plan.steps[i].kind == STEP_FIGURE;
+        /* every step serves some product, and every product has a step */
+        CHECK(plan.steps[i].nusers >= 1);
+    }
+    for (size_t i = 0; i < s->nproducts; i++)
+        if (figures || s->products[i].kind != SCENE_FIGURE) CHECK(plan.products[i].nsteps >= 1);
+    scene_plan_free(&plan);
+    scene_free(s);
+    return c;
+}
+
+static size_t count_of(const plan_count *c, const char *label)
+{
+    for (int k = 0; labels[k]; k++)
+        if (strcmp(labels[k], label) == 0) return c->by_label[k];
+    return 0;
+}
+
+TEST(plan_runs_only_what_the_products_need)
+{
+    /* a speeds table: one speeds solve, no simulation, no Floquet */
+    plan_count c = count_plan(MODEL "[speeds]\n", 1);
+    CHECK(c.steps == 1 && count_of(&c, "speeds") == 1 && count_of(&c, "simulate") == 0);
+
+    /* a spacetime plot seeded with front n = 3: one simulation, which finds
+     * the root of n = 3 alone; no speeds table */
+    c = count_plan(MODEL "[spacetime s]\ninit = front:n=3\n[figure s]\ndata = s\n", 1);
+    CHECK(c.steps == 2 && count_of(&c, "simulate") == 1 && count_of(&c, "speeds") == 0);
+    CHECK(c.figures == 1);
+
+    /* three dispersion relations and their figure */
+    c = count_plan(MODEL "[dispersion d]\nnu = -0.9,-0.92,-0.94\n[figure d]\ndata = d\n", 1);
+    CHECK(count_of(&c, "floquet") == 3 && c.figures == 1 && c.steps == 4);
+
+    /* the same computation asked for twice runs once */
+    c = count_plan(MODEL "[speeds a]\n[speeds b]\n[figure fa]\ndata = a\n[figure fb]\ndata = b\n", 1);
+    CHECK(count_of(&c, "speeds") == 1 && c.deduplicated == 1 && c.figures == 2);
+    /* ... but not when a setting differs */
+    c = count_plan(MODEL "[speeds a]\n[speeds b]\ntol = 1e-6\n", 1);
+    CHECK(count_of(&c, "speeds") == 2 && c.deduplicated == 0);
+
+    /* --no-figures: the data alone */
+    c = count_plan(MODEL "[friction f]\n[figure f]\ndata = f\n", 0);
+    CHECK(c.steps == 1 && count_of(&c, "friction") == 1 && c.figures == 0);
+
+    /* branches: one continuation per n; a range of n */
+    c = count_plan(MODEL "[branch b]\nparam = S\nto = 30\nn = 4:6:3\n", 1);
+    CHECK(count_of(&c, "branch") == 3);
+
+    /* the paper scene: every figure, one computation per curve */
+    scene *s = NULL;
+    bkf_error e = {{0}};
+    CHECK_STATUS(scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
+    scene_plan plan;
+    scene_plan_options o = {.outdir = "out", .formats = 1, .figures = 1};
+    CHECK_STATUS(scene_make_plan(s, &o, &plan, &e), BKF_OK);
+    size_t sims = 0, figs = 0;
+    for (size_t i = 0; i < plan.nsteps; i++) {
+        sims += strcmp(scene_step_label(&plan.steps[i]), "simulate") == 0;
+        figs += plan.steps[i].kind == STEP_FIGURE;
+    }
+    CHECK(sims == 3 && figs == 11);
+    bkf_test_note("paper scene: %zu computations (%zu simulations, %zu figures)", plan.nsteps,
+                  sims, figs);
+    scene_plan_free(&plan);
+    scene_free(s);
+}
+
+TEST(plan_refuses_an_output_folder_figures_cannot_list)
+{
+    scene *s = parse_ok(MODEL "[speeds]\n");
+    scene_plan plan;
+    bkf_error e = {{0}};
+    scene_plan_options o = {.outdir = "my out", .figures = 1};
+    CHECK_STATUS(scene_make_plan(s, &o, &plan, &e), BKF_EINPUT);
+    CHECK(strstr(e.message, "space"));
+    scene_free(s);
+}
+
+/* ------------------------------------------------------------------- run */
+
+#ifdef BKF_CLI_PATH
+
+typedef struct {
+    char out[65536], err[8192];
+    int code;
+} run_result;
+
+static void read_all(int fd, char *buf, size_t size)
+{
+    lseek(fd, 0, SEEK_SET);
+    size_t n = 0;
+    ssize_t k;
+    while (n + 1 < size && (k = read(fd, buf + n, size - 1 - n)) > 0) n += (size_t)k;
+    buf[n] = '\0';
+    close(fd);
+}
+
+static run_result *run_cli(char *const *args)
+{
+    run_result *r = calloc(1, sizeof *r);
+    CHECK(r);
+    char *argv[32];
+    int argc = 0;
+    argv[argc++] = BKF_CLI_PATH;
+    for (; *args && argc < 31; args++) argv[argc++] = *args;
+    argv[argc] = NULL;
+    FILE *o = tmpfile(), *e = tmpfile();
+    CHECK(o && e);
+    fflush(stdout);
+    pid_t pid = fork();
+    CHECK(pid >= 0);
+    if (pid == 0) {
+        dup2(fileno(o), 1);
+        dup2(fileno(e), 2);
+        execv(BKF_CLI_PATH, argv);
+        _exit(127);
+    }
+    int status = 0;
+    CHECK(waitpid(pid, &status, 0) == pid);
+    r->code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    read_all(dup(fileno(o)), r->out, sizeof r->out);
+    read_all(dup(fileno(e)), r->err, sizeof r->err);
+    fclose(o);
+    fclose(e);
+    return r;
+}
+
+static char *temp_dir(void)
+{
+    char *d = strdup("/tmp/bkfront-scene-XXXXXX");
+    CHECK(d && mkdtemp(d));
+    return d;
+}
+
+static char *write_scene(const char *dir, const char *text)
+{
+    char *path = malloc(strlen(dir) + 16);
+    CHECK(path);
+    sprintf(path, "%s/t.scene", dir);
+    FILE *f = fopen(path, "w");
+    CHECK(f);
+    fputs(text, f);
+    fclose(f);
+    return path;
+}
+
+static long file_size(const char *dir, const char *name)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%.600s/%.500s", dir, name);
+    struct stat st;
+    return stat(path, &st) == 0 ? (long)st.st_size : -1;
+}
+
+static int starts_with_bytes(const char *dir, const char *name, const char *magic, size_t n)
+{
+    char path[1200], buf[16] = {0};
+    snprintf(path, sizeof path, "%.600s/%.500s", dir, name);
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    size_t k = fread(buf, 1, n, f);
+    fclose(f);
+    return k == n && memcmp(buf, magic, n) == 0;
+}
+
+static void remove_tree(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (d) {
+        struct dirent *ent;
+        while ((ent = readdir(d))) {
+            if (ent->d_name[0] == '.') continue;
+            char path[1024];
+            snprintf(path, sizeof path, "%s/%s", dir, ent->d_name);
+            struct stat st;
+            if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
+                remove_tree(path);
+            else
+                unlink(path);
+        }
+        closedir(d);
+    }
+    rmdir(dir);
+}
+
+/* The friction table against the closed forms, read back from the file. */
+static void check_friction_table(const char *dir)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/out/fric.tsv", dir);
+    FILE *f = fopen(path, "r");
+    CHECK(f);
+    char line[512];
+    size_t rows = 0, checked = 0;
+    while (fgets(line, sizeof line, f)) {
+        if (line[0] == '#' || line[0] == 'v') continue;
+        double v, psi, cs, cl;
+        rows++;
+        CHECK(sscanf(line, "%lf %lf %lf %lf", &v, &psi, &cs, &cl) == 4);
+        CHECK(isnan(cl) == (v == 0));
+        if (isnan(cl)) continue;
+        CHECK_CLOSE(psi, v - 1, 0, 1e-15);
+        CHECK_CLOSE(cs, 1.5 * (psi * psi * psi / 3 - psi), 1e-14, 1e-15);
+        CHECK_CLOSE(cl, (v > 0 ? 1.0 : -1.0) / (1 + fabs(v)), 1e-14, 0);
+        checked++;
+    }
+    fclose(f);
+    CHECK(rows == 11 && checked == 10);  /* v = 0 is the gap of the jump (nan) */
+}
+
+TEST(run_scene_writes_data_and_figures_in_every_format)
+{
+    char *dir = temp_dir();
+    char *path = write_scene(dir, MODEL
+                             "[friction fric]\nfrom = -2\nto = 3\npoints = 11\n"
+                             "[figure fric]\ndata = fric\nformats = png,pdf,svg\n"
+                             "[speeds table]\nn = 3\n[figure tablefig]\ndata = table\n");
+    char outdir[512];
+    snprintf(outdir, sizeof outdir, "%s/out", dir);
+    run_result *r = run_cli((char *[]){"run", "--out", outdir, "--plots",
+                                       BKF_SOURCE_DIR "/plots", path, NULL});
+    CHECK_MSG(r->code == 0, "exit %d: %s\n%s", r->code, r->err, r->out);
+    CHECK(strstr(r->out, "4 computations"));
+    CHECK(strstr(r->out, "== [speeds table]"));   /* the table is shown */
+    char sub[600];
+    snprintf(sub, sizeof sub, "%s/out", dir);
+    CHECK(starts_with_bytes(sub, "fric.png", "\x89PNG", 4));
+    CHECK(starts_with_bytes(sub, "fric.pdf", "%PDF", 4));
+    CHECK(file_size(sub, "fric.svg") > 1000);
+    CHECK(starts_with_bytes(sub, "tablefig.png", "\x89PNG", 4));
+    CHECK(file_size(sub, "fric.png") > 5000 && file_size(sub, "tablefig.png") > 5000);
+    CHECK(file_size(sub, "fric.png.part") < 0);    /* nothing half-written left */
+    check_friction_table(dir);
+    free(r);
+    remove_tree(dir);
+    free(path);
+    free(dir);
+}
+
+TEST(run_plan_computes_nothing)
+{
+    char *dir = temp_dir();
+    char *path = write_scene(dir, MODEL "[spacetime s]\ninit = front:n=3\n[figure s]\ndata = s\n");
+    char outdir[512];
+    snprintf(outdir, sizeof outdir, "%s/out", dir);
+    run_result *r = run_cli((char *[]){"run", "--plan", "--out", outdir, path, NULL});
+    CHECK_MSG(r->code == 0, "exit %d: %s", r->code, r->err);
+    CHECK(strstr(r->out, "2 computations for 2 products"));
+    CHECK(strstr(r->out, "simulate --gamma 2 --c 0.3 --nu -0.96 --S 20"));
+    CHECK(strstr(r->out, "--init front:n=3"));
+    CHECK(!strstr(r->out, "\tspeeds\t"));
+    struct stat st;
+    CHECK(stat(outdir, &st) != 0);   /* not even the folder */
+    free(r);
+    remove_tree(dir);
+    free(path);
+    free(dir);
+}
+
+TEST(run_refuses_a_bad_scene_with_its_line)
+{
+    char *dir = temp_dir();
+    char *path = write_scene(dir, MODEL "[speeds]\nnmax = -3\n");
+    char outdir[512];
+    snprintf(outdir, sizeof outdir, "%s/out", dir);
+    run_result *r = run_cli((char *[]){"run", "--out", outdir, path, NULL});
+    CHECK(r->code == 2);
+    CHECK(r->out[0] == '\0');
+    char want[600];
+    snprintf(want, sizeof want, "bkfront run: %s:7: nmax", path);
+    CHECK_MSG(strncmp(r->err, want, strlen(want)) == 0, "stderr: %s", r->err);
+    CHECK(strchr(r->err, '\n') == r->err + strlen(r->err) - 1);
+    struct stat st;
+    CHECK(stat(outdir, &st) != 0);
+    free(r);
+
+    r = run_cli((char *[]){"run", "--frobnicate", path, NULL});
+    CHECK(r->code == 2 && strstr(r->err, "--frobnicate"));
+    free(r);
+    r = run_cli((char *[]){"run", NULL});
+    CHECK(r->code == 2 && strstr(r->err, "SCENE"));
+    free(r);
+    r = run_cli((char *[]){"run", "--formats", "gif", path, NULL});
+    CHECK(r->code == 2 && strstr(r->err, "--formats"));
+    free(r);
+    remove_tree(dir);
+    free(path);
+    free(dir);
+}
+
+TEST(run_keeps_going_past_a_failed_product)
+{
+    char *dir = temp_dir();
+    /* n = 40 has no front at these parameters (n_max is 12) */
+    char *path = write_scene(dir, MODEL "[profile p]\nn = 40\n[figure p]\ndata = p\n"
+                                        "[friction f]\n[figure f]\ndata = f\n");
+    char outdir[512];
+    snprintf(outdir, sizeof outdir, "%s/out", dir);
+    run_result *r = run_cli((char *[]){"run", "--out", outdir, "--plots",
+                                       BKF_SOURCE_DIR "/plots", path, NULL});
+    CHECK_MSG(r->code == 2, "exit %d: %s", r->code, r->err);
+    CHECK(strstr(r->out, "skipped: its data failed"));
+    CHECK(strstr(r->err, "[profile p]") && strstr(r->err, "n = 40"));
+    CHECK(file_size(outdir, "f.png") > 0);
+    CHECK(file_size(outdir, "p.tsv") < 0 && file_size(outdir, "p.png") < 0);
+    free(r);
+    remove_tree(dir);
+    free(path);
+    free(dir);
+}
+
+/* x over one period is one wavelength: n T v sqrt(1 - c^2/v^2) = S, the
+ * speed condition itself; and f(0) = nu rising (the section). */
+TEST(profile_spans_one_wavelength)
+{
+    run_result *r = run_cli((char *[]){"profile", "--gamma", "2", "--c", "0.3", "--nu", "-0.96",
+                                       "--S", "20", "--n", "4,10", "--points", "100", NULL});
+    CHECK_MSG(r->code == 0, "exit %d: %s", r->code, r->err);
+    char *line = r->out;
+    size_t rows = 0;
+    double last_x[2] = {0, 0};
+    while (line && *line) {
+        char *next = strchr(line, '\n');
+        if (next) *next++ = '\0';
+        double n, root, v, mu, T, z, x, f, fp;
+        if (line[0] != '#' &&
+            sscanf(line, "%lf %lf %lf %lf %lf %lf %lf %lf %lf", &n, &root, &v, &mu, &T, &z, &x,
+                   &f, &fp) == 9) {
+            int k = n == 10;
+            if (z == 0) {
+                CHECK_CLOSE(f, -0.96, 0, 1e-9);
+                CHECK(fp > 0);
+            }
+            last_x[k] = x;
+            rows++;
+        }
+        line = next;
+    }
+    CHECK(rows == 202);
+    CHECK_CLOSE(last_x[0], 20.0 / 4, 1e-9, 0);
+    CHECK_CLOSE(last_x[1], 20.0 / 10, 1e-9, 0);
+    free(r);
+    r = run_cli((char *[]){"profile", "--nu", "0", "--mu", "1", "--n", "3", NULL});
+    CHECK(r->code == 2 && strstr(r->err, "--mu"));
+    free(r);
+    r = run_cli((char *[]){"profile", "--nu", "1.5", "--mu", "1", NULL});
+    CHECK(r->code == 2 && strstr(r->err, "--nu"));
+    free(r);
+}
+
+#endif
+
+/* --------------------------------------------------------------- gnuplot */
+
+TEST(plot_failure_reports_gnuplot_and_leaves_no_image)
+{
+    char dir[] = "/tmp/bkfront-plot-XXXXXX";
+    CHECK(mkdtemp(dir));
+    char script[256], out[256];
+    snprintf(script, sizeof script, "%s/bad.gp", dir);
+    snprintf(out, sizeof out, "%s/bad.png", dir);
+    FILE *f = fopen(script, "w");
+    CHECK(f);
+    fputs("set terminal pngcairo\nset output out\nplot sin(x) with linez\n", f);
+    fclose(f);
+    bkf_error e = {{0}};
+    bkf_plot_job *job = bkf_plot_job_alloc(script, &e);
+    CHECK(job);
+    CHECK_STATUS(bkf_plot_add_output(job, BKF_PLOT_PNG, out, &e), BKF_OK);
+    bkf_plot_report rep;
+    CHECK_STATUS(bkf_plot_run(job, NULL, &rep, &e), BKF_ENUMERIC);
+    CHECK(rep.exit_code != 0);
+    CHECK_MSG(strstr(e.message, "line 3"), "message: %s", e.message);
+    struct stat st;
+    CHECK(stat(out, &st) != 0);
+    char part[300];
+    snprintf(part, sizeof part, "%s.part", out);
+    CHECK(stat(part, &st) != 0);
+    /* a variable that is not an identifier, a string with a newline */
+    CHECK_STATUS(bkf_plot_set_number(job, "1x", 1, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_plot_set_string(job, "t", "a\nb", &e), BKF_EINPUT);
+    bkf_plot_job_free(job);
+    unlink(script);
+    rmdir(dir);
+    CHECK(bkf_plot_job_alloc("/nonexistent.gp", &e) == NULL);
+}
