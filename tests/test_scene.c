@@ -544,3 +544,31 @@ TEST(plot_failure_reports_gnuplot_and_leaves_no_image)
     rmdir(dir);
     CHECK(bkf_plot_job_alloc("/nonexistent.gp", &e) == NULL);
 }
+
+/* Every scene shipped in fronts/ parses and plans (a typo there would be
+ * the first thing a user meets). */
+TEST(shipped_scenes_parse_and_plan)
+{
+    DIR *d = opendir(BKF_SOURCE_DIR "/fronts");
+    CHECK(d);
+    struct dirent *ent;
+    size_t scenes = 0;
+    while ((ent = readdir(d))) {
+        size_t n = strlen(ent->d_name);
+        if (n < 7 || strcmp(ent->d_name + n - 6, ".scene") != 0) continue;
+        char path[1200];
+        snprintf(path, sizeof path, "%s/fronts/%.500s", BKF_SOURCE_DIR, ent->d_name);
+        scene *s = NULL;
+        bkf_error e = {{0}};
+        CHECK_MSG(scene_parse_file(path, &s, &e) == BKF_OK, "%s", e.message);
+        scene_plan plan;
+        scene_plan_options o = {.outdir = "out", .formats = 1, .figures = 1};
+        CHECK_STATUS(scene_make_plan(s, &o, &plan, &e), BKF_OK);
+        CHECK(plan.nsteps >= 1);
+        scene_plan_free(&plan);
+        scene_free(s);
+        scenes++;
+    }
+    closedir(d);
+    CHECK(scenes >= 7);
+}
