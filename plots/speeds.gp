@@ -9,6 +9,7 @@ set xlabel 'number of fronts n'
 set ylabel 'front speed v'
 set key top right
 set logscale y
+set yrange [0.2:5]
 set xrange [0:*]
 set offsets 0.5, 0.5, 0, 0
 plot f using 'n':'v_asym' with linespoints dt 2 pt 6 lc rgb '#777777' \

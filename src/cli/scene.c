@@ -942,9 +942,9 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         /* argv holds the settings, for the plan's listing and the runner */
         ARG("friction");
         v = OWN(0, "from");
-        PAIR("--from", v ? v : "-3");
+        PAIR("--from", v ? v : "-1");
         v = OWN(0, "to");
-        PAIR("--to", v ? v : "3");
+        PAIR("--to", v ? v : "4");
         v = OWN(0, "points");
         PAIR("--points", v ? v : "601");
         char *out = out_path(dir, p->name, ".tsv");
