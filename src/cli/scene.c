@@ -370,7 +370,7 @@ static void header_line(parse_state *st, const char *line)
     s->products = grown;
     scene_product *prod = &s->products[s->nproducts];
     *prod = (scene_product){.kind = (scene_kind)k, .line = st->line};
-    snprintf(prod->name, sizeof prod->name, "%s", name);
+    snprintf(prod->name, sizeof prod->name, "%.*s", SCENE_NAME_LEN - 1, name);
     st->section_kind = (int)s->nproducts++;
 }
 
