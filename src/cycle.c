@@ -485,6 +485,7 @@ static void store_result(bkf_cycle *c, const converged *a, const converged *b, d
     r->jacobian_calls = p->jacobian_calls;
     r->newton_iterations = iterations;
     r->stepper = kind == BKF_STEPPER_IMPLICIT ? "bsimp" : "rk8pd";
+    r->model = "shooting";
     c->have_solution = 1;
     c->profile_tol = profile_tol;
     c->profile_stepper = kind;
@@ -623,6 +624,69 @@ int bkf_cycle_period(double mu, double nu, const bkf_cycle_options *options,
     int rc = bkf_cycle_solve(c, mu, nu, options, err);
     if (rc == BKF_OK) *result = c->result;
     bkf_cycle_free(c);
+    return rc;
+}
+
+/* ------------------------------------------------------ model choice */
+
+const char *bkf_cycle_method_name(bkf_cycle_method method)
+{
+    switch (method) {
+    case BKF_METHOD_AUTO: return "auto";
+    case BKF_METHOD_ASYMPTOTIC: return "asymptotic";
+    case BKF_METHOD_LEADING: return "leading";
+    case BKF_METHOD_SHOOTING: return "shooting";
+    }
+    return NULL;
+}
+
+int bkf_cycle_estimate(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
+                       bkf_cycle_method method, bkf_cycle_result *out, bkf_error *err)
+{
+    if (!out) return bkf_error_set(err, BKF_EINPUT, "result pointer is NULL");
+    if (!bkf_cycle_method_name(method))
+        return bkf_error_set(err, BKF_EINPUT, "method must be auto, asymptotic, leading or shooting");
+    bkf_cycle_options opt = options ? *options : bkf_cycle_options_default();
+    int rc = check_inputs(mu, nu, &opt, err);
+    if (rc != BKF_OK) return rc;
+    if (method != BKF_METHOD_SHOOTING) {
+        double T = NAN, bound = INFINITY;
+        int f = -1;
+        if (method == BKF_METHOD_LEADING) {
+            bound = bkf_asym_error_bound(BKF_ASYM_LEADING, mu, nu);
+            T = bkf_asym_period_leading(mu, nu);
+            f = BKF_ASYM_LEADING;
+        } else {
+            f = bkf_asym_choose(mu, nu, opt.tol, method == BKF_METHOD_AUTO, &T, &bound);
+            if (f < 0 && method == BKF_METHOD_ASYMPTOTIC) {
+                /* report the better of the two bounds in the refusal */
+                bound = fmin(bkf_asym_error_bound(BKF_ASYM_LARGE, mu, nu),
+                             bkf_asym_error_bound(BKF_ASYM_SMALL, mu, nu));
+            }
+        }
+        if (f >= 0 && bound <= opt.tol) {
+            memset(out, 0, sizeof *out);
+            out->mu = mu;
+            out->nu = nu;
+            out->period = T;
+            out->period_err = bound * T;
+            out->xmax = out->xmin = out->multiplier = out->log_multiplier = NAN;
+            out->log_multiplier_err = out->return_map_slope = NAN;
+            out->section_y = out->section_slope = NAN;
+            out->stepper = "none";
+            out->model = f == BKF_ASYM_LEADING ? "leading" : "asymptotic";
+            return BKF_OK;
+        }
+        if (method != BKF_METHOD_AUTO)
+            return bkf_error_set(err, BKF_ENUMERIC,
+                                 "%s formula at mu = %g, nu = %g: error bound %.2g exceeds tol = %g "
+                                 "(outside its validity; use shooting)",
+                                 method == BKF_METHOD_LEADING ? "leading" : "asymptotic", mu, nu,
+                                 bound, opt.tol);
+    }
+    if (!c) return bkf_error_set(err, BKF_EINPUT, "cycle object is NULL (needed for shooting)");
+    rc = bkf_cycle_solve(c, mu, nu, &opt, err);
+    if (rc == BKF_OK) *out = c->result;
     return rc;
 }
 
