@@ -456,3 +456,27 @@ TEST(cli_period_method_auto_and_forced)
                         "leading"),
                     "--method", "formula with --continue");
 }
+
+/* bkfront bench --quick: the work-precision table, one row per method and
+ * setting, every achieved error finite and within 10x of the method's own
+ * estimate wherever the estimate is finite (honest estimates). */
+TEST(cli_bench_quick_work_precision)
+{
+    run_result r = RUN("bench", "--quick");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, "product\tcase\tmethod\ttol\tN\terror\testimate\tcpu_seconds\twork\tstatus\n"));
+    int rows = 0;
+    for (int i = 0; i < 64; i++) {
+        double err, est, t;
+        if (!tsv_field(r.out, i, "error", &err)) break;
+        CHECK(tsv_field(r.out, i, "estimate", &est) && tsv_field(r.out, i, "cpu_seconds", &t));
+        CHECK_MSG(isfinite(err) && err >= 0 && t > 0, "row %d: error %g time %g", i, err, t);
+        if (isfinite(est)) CHECK_MSG(err <= 10 * est + 1e-15, "row %d: error %g estimate %g", i, err, est);
+        rows++;
+    }
+    CHECK_MSG(rows >= 15, "%d rows", rows);
+    run_free(&r);
+    run_result b = RUN("bench", "--product", "nothing");
+    CHECK_MSG(b.code == 2 && strstr(b.err, "--product") && b.out[0] == 0, "exit %d: %s", b.code, b.err);
+    run_free(&b);
+}

@@ -14,6 +14,7 @@ extern const cli_command cli_cmd_speeds;
 extern const cli_command cli_cmd_branch;
 extern const cli_command cli_cmd_simulate;
 extern const cli_command cli_cmd_check;
+extern const cli_command cli_cmd_bench;
 
 static const cli_command *const commands[] = {
     &cli_cmd_period,
@@ -23,6 +24,7 @@ static const cli_command *const commands[] = {
     &cli_cmd_floquet,
     &cli_cmd_simulate,
     &cli_cmd_check,
+    &cli_cmd_bench,
 };
 
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
