@@ -67,8 +67,11 @@ run: deps
 bench: deps
 	@$(MAKE) --no-print-directory bench-built
 
-bench-built: $(BENCH)
+bench-built: $(BENCH) $(CLI)
 	./$(BENCH)
+	@mkdir -p plots/out
+	./$(CLI) bench --out plots/out/work_precision.tsv
+	for g in plots/work_precision_*.gp; do gnuplot $$g || exit 1; done
 
 # The whole suite under AddressSanitizer and UndefinedBehaviorSanitizer, in a
 # build folder of its own.

@@ -48,3 +48,80 @@ double bkf_asym_period_small(double mu, double nu)
 {
     return 2.0 * M_PI * (1.0 + bkf_asym_small_coefficient(nu) * mu * mu);
 }
+
+/* --------------------------------------------------------- error bounds */
+
+/* Envelope of mu |T - T_large| (see asymptotics.h). */
+static double large_remainder_envelope(double nu)
+{
+    double d = 1.0 - fabs(nu);
+    return 2.0 + 0.35 * (1.0 + log(1.0 / d)) / d;
+}
+
+static int large_valid(double mu, double nu)
+{
+    return mu >= 10.0 && mu * mu * (1.0 - fabs(nu)) >= 1.0;
+}
+
+double bkf_asym_period(bkf_asym_formula formula, double mu, double nu)
+{
+    switch (formula) {
+    case BKF_ASYM_LEADING: return bkf_asym_period_leading(mu, nu);
+    case BKF_ASYM_LARGE: return bkf_asym_period_large(mu, nu);
+    case BKF_ASYM_SMALL: return bkf_asym_period_small(mu, nu);
+    }
+    return NAN;
+}
+
+double bkf_asym_error_bound(bkf_asym_formula formula, double mu, double nu)
+{
+    if (!(mu > 0) || !(fabs(nu) < 1.0) || !isfinite(mu)) return INFINITY;
+    const double safety = 2.0, rounding = 8.0 * DBL_EPSILON;
+    switch (formula) {
+    case BKF_ASYM_LARGE:
+    case BKF_ASYM_LEADING: {
+        if (!large_valid(mu, nu)) return INFINITY;
+        double abs_err = safety * large_remainder_envelope(nu) / mu;
+        if (formula == BKF_ASYM_LEADING)
+            abs_err += fabs(bkf_asym_period_large(mu, nu) - bkf_asym_period_leading(mu, nu));
+        double T = bkf_asym_period(formula, mu, nu);
+        /* relative to the true T >= T - abs_err */
+        return T > 2.0 * abs_err ? abs_err / (T - abs_err) + rounding : INFINITY;
+    }
+    case BKF_ASYM_SMALL: {
+        if (mu > 1.0) return INFINITY;
+        double nu2 = nu * nu, w = 1.0 - nu2;
+        double s4 = w * w * (0.05 + 1.1 * nu2 * nu2);
+        double m2 = mu * mu;
+        double rel = safety * s4 * m2 * m2 / (1.0 + bkf_asym_small_coefficient(nu) * m2);
+        return rel / (1.0 - rel) + rounding;
+    }
+    }
+    return INFINITY;
+}
+
+int bkf_asym_choose(double mu, double nu, double tol, int allow_leading, double *T,
+                    double *rel_bound)
+{
+    int best = -1;
+    double bound = INFINITY;
+    if (allow_leading && bkf_asym_error_bound(BKF_ASYM_LEADING, mu, nu) <= tol) {
+        best = BKF_ASYM_LEADING;
+        bound = bkf_asym_error_bound(BKF_ASYM_LEADING, mu, nu);
+    } else {
+        double bl = bkf_asym_error_bound(BKF_ASYM_LARGE, mu, nu);
+        double bs = bkf_asym_error_bound(BKF_ASYM_SMALL, mu, nu);
+        if (bl <= bs && bl <= tol) {
+            best = BKF_ASYM_LARGE;
+            bound = bl;
+        } else if (bs < bl && bs <= tol) {
+            best = BKF_ASYM_SMALL;
+            bound = bs;
+        }
+    }
+    if (best >= 0) {
+        if (T) *T = bkf_asym_period((bkf_asym_formula)best, mu, nu);
+        if (rel_bound) *rel_bound = bound;
+    }
+    return best;
+}

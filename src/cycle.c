@@ -39,6 +39,9 @@ enum { DIM = 5, IX = 0, IY = 1, IVX = 2, IVY = 3, IL = 4 };
 #define TOL_RATIO 10.0
 #define MAX_STEPS_PER_PERIOD 200000
 #define MAX_NEWTON 60
+/* Largest ratio of the coarse tolerance to the integration tolerance for which
+ * the coarse solve serves as the looser solve of the error estimate. */
+#define FAST_SPAN 100.0
 
 typedef struct {
     double mu, nu, a, b;
@@ -374,7 +377,7 @@ typedef struct {
  * t_goal T) and the step is either below y_goal or no longer shrinking
  * quadratically, i.e. down to the integration's noise. */
 static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, double t_goal,
-                     double y_goal, int keep, size_t *iterations, converged *out, bkf_error *err)
+                     double y_goal, double y_scale, double q_goal, int keep, size_t *iterations, converged *out, bkf_error *err)
 {
     flow_params *p = &c->flow;
     double lo = p->b * lienard_F(p->nu), hi = GSL_POSINF;
@@ -415,8 +418,14 @@ static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, 
         int small = fabs(t_corr) <= t_goal * sh.period;
         /* what the integration error alone moves the fixed point by */
         double noise = 10.0 * in->tol * fmax(1.0, fabs(*y0)) / (1.0 - fmin(sh.dP, 0.999999));
+        /* or the step is so small that what the first-order correction
+         * leaves, ~ step^2 amplified by 1/(1 - P'), is far below the goal */
+        double rel_step = fabs(step) / y_scale;
+        /* (not when keeping the trajectory: the stored profile is that of
+         * this shot, which must itself be within y_goal of the cycle) */
+        int quadratic = !keep && q_goal > 0 && rel_step * rel_step <= q_goal * (1.0 - fmin(sh.dP, 0.999999));
         int at_noise = inverted || fabs(step) <= fmax(y_goal, noise) ||
-                       fabs(step) > 0.25 * previous_step;
+                       fabs(step) > 0.25 * previous_step || quadratic;
         if (!safeguarded && small && at_noise) {
             out->period = sh.period + t_corr;
             out->log_mult = sh.log_mult;
@@ -451,6 +460,37 @@ static int check_inputs(double mu, double nu, const bkf_cycle_options *o, bkf_er
     return BKF_OK;
 }
 
+/* The accepted solve b, with a the looser solve of the error estimate. */
+static void store_result(bkf_cycle *c, const converged *a, const converged *b, double period_err,
+                         double y0, bkf_stepper_kind kind, double profile_tol,
+                         const integrator *i1, const integrator *i2, const integrator *i3,
+                         const integrator *i4, size_t iterations)
+{
+    const flow_params *p = &c->flow;
+    bkf_cycle_result *r = &c->result;
+    r->mu = p->mu;
+    r->nu = p->nu;
+    r->period = b->period;
+    r->period_err = period_err;
+    r->xmax = b->xmax;
+    r->xmin = b->xmin;
+    r->log_multiplier = b->log_mult;
+    r->log_multiplier_err = fabs(a->log_mult - b->log_mult) + 8.0 * DBL_EPSILON * fabs(b->log_mult);
+    r->multiplier = exp(b->log_mult);
+    r->return_map_slope = b->return_slope;
+    r->section_y = y0;
+    r->section_slope = p->a * (y0 - p->b * lienard_F(p->nu));
+    r->steps = i1->steps + i2->steps + i3->steps + i4->steps;
+    r->rhs_calls = p->rhs_calls;
+    r->jacobian_calls = p->jacobian_calls;
+    r->newton_iterations = iterations;
+    r->stepper = kind == BKF_STEPPER_IMPLICIT ? "bsimp" : "rk8pd";
+    r->model = "shooting";
+    c->have_solution = 1;
+    c->profile_tol = profile_tol;
+    c->profile_stepper = kind;
+}
+
 int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
                     bkf_error *err)
 {
@@ -479,11 +519,16 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
     /* The global error of T is a modest multiple of the local tolerance; the
      * safety factor was measured over the benchmark box (README). */
     double tol_int = 0.1 * opt.tol;
+    /* Looser local tolerances buy almost nothing with these steppers, and
+     * near |nu| = 1 the cycle is small (radius 2 sqrt(1 - nu^2)): at
+     * mu = 1e-3, nu = 0.999, tol_int = 1e-3 let the orbit drift off the
+     * weakly attracting cycle and never return to the section. */
+    tol_int = fmin(tol_int, 1e-5 * fmin(1.0, sqrt(1.0 - nu * nu)));
     /* Below these local tolerances the steppers only accumulate rounding
      * (measured: bsimp at 1e-15 takes ~1e5 steps a period at mu = 1e4). */
     const double tol_floor = kind == BKF_STEPPER_IMPLICIT ? 1e-14 : 1e-16;
     if (tol_int / TOL_RATIO < tol_floor) tol_int = tol_floor * TOL_RATIO;
-    double tol_loose = fmax(tol_int, 1e-5);
+    double tol_loose = fmax(tol_int, 1e-5 * fmin(1.0, sqrt(1.0 - nu * nu)));
     integrator coarse = {0}, fine = {0}, finer = {0}, aux = {0};
     size_t iterations = 0;
     converged a, b;
@@ -492,8 +537,43 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
         integrator_init(&aux, p, kind, 1, tol_loose) != BKF_OK)
         goto fail_mem;
 
-    rc = newton_at(c, &coarse, &aux, &y0, 1e-3, 1e-4 * y_scale, 0, &iterations, &a, err);
+    /* a Newton step whose square (relative, amplified by 1/(1 - P')) is
+     * below q_goal needs no confirming shot: the first-order correction
+     * leaves an error of that order */
+    double q_goal = 1e-2 * opt.tol;
+    rc = newton_at(c, &coarse, &aux, &y0, 1e-3, 1e-4 * y_scale, y_scale, 0.0, 0, &iterations, &a, err);
     if (rc != BKF_OK) goto done;
+    /* Fast path for loose tolerances: when the coarse solve is within a
+     * factor FAST_SPAN of the integration tolerance asked, it serves as the
+     * looser of the two solves of the error estimate, and one Newton solve
+     * at tol_b (usually a single shot from the converged coarse point) is
+     * all the extra work.  Its estimate |T_a - T_b| is of the coarse error,
+     * a larger one than the classic pair gives; if it does not meet tol,
+     * the classic pair below runs.  Explicit stepper only: rk8pd's errors
+     * are far below its tolerance (measured 1e-3 of it), bsimp's are not,
+     * and there the classic pair was cheaper (make bench). */
+    if (kind == BKF_STEPPER_EXPLICIT && tol_loose <= 1.01 * FAST_SPAN * tol_int) {
+        double tol_b = fmin(tol_int, tol_loose / TOL_RATIO);
+        if (tol_b >= tol_floor) {
+            size_t aux_steps = aux.steps;
+            integrator_free(&aux);
+            if (integrator_init(&fine, p, kind, 0, tol_b) != BKF_OK ||
+                integrator_init(&aux, p, kind, 1, tol_b) != BKF_OK)
+                goto fail_mem;
+            aux.steps = aux_steps;
+            rc = newton_at(c, &fine, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, y_scale, q_goal, 1,
+                           &iterations, &b, err);
+            if (rc != BKF_OK) goto done;
+            double period_err = fabs(a.period - b.period) + 8.0 * DBL_EPSILON * b.period;
+            if (period_err <= opt.tol * b.period) {
+                store_result(c, &a, &b, period_err, y0, kind, tol_b, &coarse, &fine, &finer, &aux,
+                             iterations);
+                rc = BKF_OK;
+                goto done;
+            }
+            integrator_free(&fine);
+        }
+    }
     for (int attempt = 0; attempt < 4; attempt++) {
         integrator_free(&fine);
         integrator_free(&finer);
@@ -504,9 +584,9 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
             integrator_init(&aux, p, kind, 1, tol_int / TOL_RATIO) != BKF_OK)
             goto fail_mem;
         aux.steps = aux_steps;
-        rc = newton_at(c, &fine, &aux, &y0, 0.1 * sqrt(opt.tol), opt.tol * y_scale, 0, &iterations, &a, err);
+        rc = newton_at(c, &fine, &aux, &y0, 0.1 * sqrt(opt.tol), opt.tol * y_scale, y_scale, q_goal, 0, &iterations, &a, err);
         if (rc != BKF_OK) goto done;
-        rc = newton_at(c, &finer, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, 1, &iterations, &b, err);
+        rc = newton_at(c, &finer, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, y_scale, q_goal, 1, &iterations, &b, err);
         if (rc != BKF_OK) goto done;
         double period_err = fabs(a.period - b.period) + 8.0 * DBL_EPSILON * b.period;
         if (period_err <= opt.tol * b.period || attempt == 3 || tol_int / TOL_RATIO <= tol_floor) {
@@ -517,27 +597,8 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
                                    mu, nu, period_err / b.period, opt.tol);
                 goto done;
             }
-            bkf_cycle_result *r = &c->result;
-            r->mu = mu;
-            r->nu = nu;
-            r->period = b.period;
-            r->period_err = period_err;
-            r->xmax = b.xmax;
-            r->xmin = b.xmin;
-            r->log_multiplier = b.log_mult;
-            r->log_multiplier_err = fabs(a.log_mult - b.log_mult) + 8.0 * DBL_EPSILON * fabs(b.log_mult);
-            r->multiplier = exp(b.log_mult);
-            r->return_map_slope = b.return_slope;
-            r->section_y = y0;
-            r->section_slope = p->a * (y0 - p->b * lienard_F(nu));
-            r->steps = coarse.steps + fine.steps + finer.steps + aux.steps;
-            r->rhs_calls = p->rhs_calls;
-            r->jacobian_calls = p->jacobian_calls;
-            r->newton_iterations = iterations;
-            r->stepper = kind == BKF_STEPPER_IMPLICIT ? "bsimp" : "rk8pd";
-            c->have_solution = 1;
-            c->profile_tol = tol_int / TOL_RATIO;
-            c->profile_stepper = kind;
+            store_result(c, &a, &b, period_err, y0, kind, tol_int / TOL_RATIO, &coarse, &fine,
+                         &finer, &aux, iterations);
             rc = BKF_OK;
             goto done;
         }
@@ -568,6 +629,69 @@ int bkf_cycle_period(double mu, double nu, const bkf_cycle_options *options,
     int rc = bkf_cycle_solve(c, mu, nu, options, err);
     if (rc == BKF_OK) *result = c->result;
     bkf_cycle_free(c);
+    return rc;
+}
+
+/* ------------------------------------------------------ model choice */
+
+const char *bkf_cycle_method_name(bkf_cycle_method method)
+{
+    switch (method) {
+    case BKF_METHOD_AUTO: return "auto";
+    case BKF_METHOD_ASYMPTOTIC: return "asymptotic";
+    case BKF_METHOD_LEADING: return "leading";
+    case BKF_METHOD_SHOOTING: return "shooting";
+    }
+    return NULL;
+}
+
+int bkf_cycle_estimate(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
+                       bkf_cycle_method method, bkf_cycle_result *out, bkf_error *err)
+{
+    if (!out) return bkf_error_set(err, BKF_EINPUT, "result pointer is NULL");
+    if (!bkf_cycle_method_name(method))
+        return bkf_error_set(err, BKF_EINPUT, "method must be auto, asymptotic, leading or shooting");
+    bkf_cycle_options opt = options ? *options : bkf_cycle_options_default();
+    int rc = check_inputs(mu, nu, &opt, err);
+    if (rc != BKF_OK) return rc;
+    if (method != BKF_METHOD_SHOOTING) {
+        double T = NAN, bound = INFINITY;
+        int f = -1;
+        if (method == BKF_METHOD_LEADING) {
+            bound = bkf_asym_error_bound(BKF_ASYM_LEADING, mu, nu);
+            T = bkf_asym_period_leading(mu, nu);
+            f = BKF_ASYM_LEADING;
+        } else {
+            f = bkf_asym_choose(mu, nu, opt.tol, method == BKF_METHOD_AUTO, &T, &bound);
+            if (f < 0 && method == BKF_METHOD_ASYMPTOTIC) {
+                /* report the better of the two bounds in the refusal */
+                bound = fmin(bkf_asym_error_bound(BKF_ASYM_LARGE, mu, nu),
+                             bkf_asym_error_bound(BKF_ASYM_SMALL, mu, nu));
+            }
+        }
+        if (f >= 0 && bound <= opt.tol) {
+            memset(out, 0, sizeof *out);
+            out->mu = mu;
+            out->nu = nu;
+            out->period = T;
+            out->period_err = bound * T;
+            out->xmax = out->xmin = out->multiplier = out->log_multiplier = NAN;
+            out->log_multiplier_err = out->return_map_slope = NAN;
+            out->section_y = out->section_slope = NAN;
+            out->stepper = "none";
+            out->model = f == BKF_ASYM_LEADING ? "leading" : "asymptotic";
+            return BKF_OK;
+        }
+        if (method != BKF_METHOD_AUTO)
+            return bkf_error_set(err, BKF_ENUMERIC,
+                                 "%s formula at mu = %g, nu = %g: error bound %.2g exceeds tol = %g "
+                                 "(outside its validity; use shooting)",
+                                 method == BKF_METHOD_LEADING ? "leading" : "asymptotic", mu, nu,
+                                 bound, opt.tol);
+    }
+    if (!c) return bkf_error_set(err, BKF_EINPUT, "cycle object is NULL (needed for shooting)");
+    rc = bkf_cycle_solve(c, mu, nu, &opt, err);
+    if (rc == BKF_OK) *out = c->result;
     return rc;
 }
 

@@ -409,8 +409,18 @@ static int eval_k2(bkf_floquet *f, double K, bkf_floquet_point *pt, bkf_error *e
     memcpy(pt->monodromy, b.M, sizeof b.M);
     double m1_abs = hypot(mb.m1_re, mb.m1_im);
     double cyc = cycle_term(f, K, b.M, m1_abs);
-    pt->lambda_err = fabs(ma.lambda - mb.lambda) + cyc + 4.0 * DBL_EPSILON * fabs(mb.lambda);
-    pt->m1_err = hypot(ma.m1_re - mb.m1_re, ma.m1_im - mb.m1_im) + cyc * m1_abs;
+    /* An absolute floor: m1 comes from the trace of M, whose entries carry
+     * an error of about the integration tolerance times their size whatever
+     * the two integrations' difference says.  Where |m1| << |M| (lambda < -8,
+     * |m1| < 3e-4) the difference alone was up to 70 times optimistic at tol
+     * 1e-6; the coarse tolerance (10 times the fine one) times |M| is the
+     * floor on m1, and lambda = ln|m1| inherits it divided by |m1|. */
+    double normM = sqrt(b.M[0] * b.M[0] + b.M[1] * b.M[1] + b.M[2] * b.M[2] + b.M[3] * b.M[3]);
+    double m_floor = f->tol_int * fmax(1.0, normM);
+    double lambda_floor = m1_abs > 0.0 ? fmin(m_floor / m1_abs, 1.0) : 1.0;
+    pt->lambda_err = fabs(ma.lambda - mb.lambda) + cyc + lambda_floor +
+                     4.0 * DBL_EPSILON * fabs(mb.lambda);
+    pt->m1_err = hypot(ma.m1_re - mb.m1_re, ma.m1_im - mb.m1_im) + cyc * m1_abs + m_floor;
     pt->steps = a.steps + b.steps;
     return BKF_OK;
 }

@@ -563,14 +563,17 @@ static int track_speeds(const bkf_measure *m, size_t a, size_t b, double *mean, 
         return -2;
     }
     for (size_t r = a; r < b; r++) t[r - a] = m->rec[r].t;
-    double sum = 0, sum2 = 0, se2 = 0;
+    /* sums of the slopes' deviations from the first one: the textbook
+     * sum2 - n mean^2 cancels to sqrt(eps) |v| when the slopes agree */
+    double sum = 0, sum2 = 0, se2 = 0, first = 0;
     size_t mi = 0, pl = 0;
     for (size_t i = 0; i < n; i++) {
         for (size_t r = a; r < b; r++) y[r - a] = m->X[m->off[r] + i];
         double sl, se;
         fit_line(t, y, len, &sl, &se);
-        sum += sl;
-        sum2 += sl * sl;
+        if (i == 0) first = sl;
+        sum += sl - first;
+        sum2 += (sl - first) * (sl - first);
         se2 += se * se;
         if (sl < 0) mi++;
         else pl++;
@@ -578,7 +581,7 @@ static int track_speeds(const bkf_measure *m, size_t a, size_t b, double *mean, 
     free(t);
     free(y);
     double mu = sum / (double)n;
-    *mean = mu;
+    *mean = first + mu;
     *se_rms = sqrt(se2 / (double)n);
     *spread = n > 1 ? sqrt(fmax(0.0, (sum2 - (double)n * mu * mu) / (double)(n - 1))) : 0.0;
     if (minus) *minus = mi;

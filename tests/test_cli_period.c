@@ -135,7 +135,7 @@ static int tsv_field(const char *tsv, int row, const char *column, double *value
 
 static const char *const expected_columns =
     "mu\tnu\tT\tT_err\tT_asym\tT_asym2\txmax\txmin\tmultiplier\tlog_multiplier\tsteps\t"
-    "rhs_calls\tnewton_iterations\tstepper\n";
+    "rhs_calls\tnewton_iterations\tstepper\tmodel\n";
 
 TEST(cli_period_rejects_nu_outside_active_range)
 {
@@ -381,4 +381,102 @@ TEST(cli_period_continue_mu)
 TEST(cli_period_continue_nu)
 {
     check_branch("nu", "-0.5:0.5:3", "1", -0.5, 0.5);
+}
+
+/* Text field of row `row` in `column`, into buf. */
+static int tsv_text(const char *tsv, int row, const char *column, char *buf, size_t size)
+{
+    const char *p = tsv;
+    while (*p == '#') p = strchr(p, '\n') + 1;
+    int col = 0, found = -1;
+    size_t clen = strlen(column);
+    for (const char *q = p; *q && *q != '\n'; col++) {
+        size_t len = strcspn(q, "\t\n");
+        if (len == clen && strncmp(q, column, len) == 0) found = col;
+        q += len;
+        if (*q == '\t') q++;
+    }
+    if (found < 0) return 0;
+    for (int r = 0; r <= row; r++) {
+        p = strchr(p, '\n');
+        if (!p || !p[1]) return 0;
+        p++;
+    }
+    for (int c = 0; c < found; c++) p = strchr(p, '\t') + 1;
+    size_t len = strcspn(p, "\t\n");
+    if (len >= size) return 0;
+    memcpy(buf, p, len);
+    buf[len] = '\0';
+    return 1;
+}
+
+/* --method auto at tol 1e-2 and mu >= 100 answers from a formula, whose
+ * value is within its bound of the published / shooting value; a formula
+ * forced where its bound fails is a numerical failure; a bad method is bad
+ * input. */
+TEST(cli_period_method_auto_and_forced)
+{
+    run_result r = RUN("period", "--mu", "100:1e4:3", "--log", "--nu", "0", "--tol", "1e-2");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    for (int i = 0; i < 3; i++) {
+        char model[32];
+        double rhs, T, T_err;
+        CHECK(tsv_text(r.out, i, "model", model, sizeof model));
+        CHECK_MSG(strcmp(model, "leading") == 0 || strcmp(model, "asymptotic") == 0, "row %d: %s", i, model);
+        CHECK(tsv_field(r.out, i, "rhs_calls", &rhs) && rhs == 0);
+        CHECK(tsv_field(r.out, i, "T", &T) && tsv_field(r.out, i, "T_err", &T_err));
+        CHECK(T_err > 0 && T_err <= 1e-2 * T);
+    }
+    run_free(&r);
+    /* the published T(1, 0) needs shooting at the default tol */
+    r = RUN("period", "--mu", "1", "--nu", "0");
+    char model[32];
+    CHECK(r.code == 0 && tsv_text(r.out, 0, "model", model, sizeof model));
+    CHECK(strcmp(model, "shooting") == 0);
+    run_free(&r);
+    /* small mu, loose tol: the small-mu formula, against the published value
+     * at mu = 1 it is not allowed (bound above 1e-6) */
+    r = RUN("period", "--mu", "0.01", "--nu", "0", "--tol", "1e-8");
+    double T;
+    CHECK(r.code == 0 && tsv_text(r.out, 0, "model", model, sizeof model));
+    CHECK(strcmp(model, "asymptotic") == 0);
+    CHECK(tsv_field(r.out, 0, "T", &T));
+    CHECK_CLOSE(T, 2 * 3.14159265358979323846 * (1 + 1e-4 / 16), 1e-15, 0);
+    run_free(&r);
+    r = RUN("period", "--mu", "1", "--nu", "0", "--method", "leading", "--tol", "1e-2");
+    CHECK_MSG(r.code == 1 && r.out[0] == '\0', "exit %d", r.code);
+    CHECK_MSG(strstr(r.err, "bound") && count_lines(r.err) == 1, "%s", r.err);
+    run_free(&r);
+    r = RUN("period", "--mu", "1e4", "--nu", "0", "--method", "asymptotic", "--tol", "1e-12");
+    CHECK_MSG(r.code == 1 && r.out[0] == '\0', "exit %d", r.code);
+    run_free(&r);
+    check_bad_input(RUN("period", "--mu", "1", "--nu", "0", "--method", "magic"), "--method",
+                    "unknown method");
+    check_bad_input(RUN("period", "--mu", "1:2:3", "--nu", "0", "--continue", "mu", "--method",
+                        "leading"),
+                    "--method", "formula with --continue");
+}
+
+/* bkfront bench --quick: the work-precision table, one row per method and
+ * setting, every achieved error finite and within 10x of the method's own
+ * estimate wherever the estimate is finite (honest estimates). */
+TEST(cli_bench_quick_work_precision)
+{
+    run_result r = RUN("bench", "--quick");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, "product\tcase\tmethod\ttol\tN\terror\testimate\tcpu_seconds\twork\tstatus\n"));
+    int rows = 0;
+    for (int i = 0; i < 64; i++) {
+        double err, est, t;
+        if (!tsv_field(r.out, i, "error", &err)) break;
+        CHECK(tsv_field(r.out, i, "estimate", &est) && tsv_field(r.out, i, "cpu_seconds", &t));
+        CHECK_MSG(isfinite(err) && err >= 0 && t > 0, "row %d: error %g time %g", i, err, t);
+        if (isfinite(est)) CHECK_MSG(err <= 10 * est + 1e-15, "row %d: error %g estimate %g", i, err, est);
+        rows++;
+    }
+    CHECK_MSG(rows >= 15, "%d rows", rows);
+    run_free(&r);
+    run_result b = RUN("bench", "--product", "nothing");
+    CHECK_MSG(b.code == 2 && strstr(b.err, "--product") && b.out[0] == 0, "exit %d: %s", b.code, b.err);
+    run_free(&b);
 }

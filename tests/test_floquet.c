@@ -465,3 +465,36 @@ TEST(floquet_rejects_bad_input)
     CHECK_STATUS(bkf_floquet_threshold_find(2.0, 0.3, -0.5, 0.5, NULL, &th, &e), BKF_ENUMERIC);
     CHECK(strstr(e.message, "unstable throughout"));
 }
+
+/* Honest estimates everywhere, including multipliers far inside the unit
+ * circle (lambda < -8): the true error (against tol 1e-13) is never more
+ * than 10 times the estimate, for m1 and lambda. */
+TEST(floquet_estimates_never_optimistic_by_10)
+{
+    const double cases[][3] = {{2.0, 0.3, -0.94}, {10.0, 1.0, -0.95}, {0.5, 1.0, 0.2}};
+    const double tols[] = {1e-6, 1e-8, 1e-10};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        bkf_floquet *ref = setup(cases[k][0], cases[k][1], cases[k][2], 1e-13);
+        for (size_t t = 0; t < sizeof tols / sizeof tols[0]; t++) {
+            bkf_floquet *f = setup(cases[k][0], cases[k][1], cases[k][2], tols[t]);
+            double worst = 0, worst_m = 0, at = 0;
+            for (int i = 0; i <= 40; i++) {
+                double q = 0.2 * i;
+                bkf_floquet_point p = eval(f, q), r = eval(ref, q);
+                double dm = hypot(p.m1_re - r.m1_re, p.m1_im - r.m1_im);
+                double dl = fabs(p.lambda - r.lambda);
+                /* the reference's own error, ~1e-13 relative */
+                double rl = fmax(dl - 1e-12, 0.0) / p.lambda_err;
+                double rm = fmax(dm - 1e-13, 0.0) / p.m1_err;
+                CHECK_MSG(rl <= 10 && rm <= 10, "case %zu tol %g q %g lambda %g: true/estimated %.3g (lambda), %.3g (m1)",
+                          k, tols[t], q, r.lambda, rl, rm);
+                if (rl > worst) { worst = rl; at = r.lambda; }
+                if (rm > worst_m) worst_m = rm;
+            }
+            bkf_test_note("gamma %g nu %g tol %g: largest true/estimated %.2f (lambda, at lambda %.3g), %.2f (m1)",
+                          cases[k][0], cases[k][2], tols[t], worst, at, worst_m);
+            bkf_floquet_free(f);
+        }
+        bkf_floquet_free(ref);
+    }
+}

@@ -53,7 +53,11 @@ typedef struct {
     size_t rhs_calls;
     size_t jacobian_calls;
     size_t newton_iterations;
-    const char *stepper;      /* "rk8pd" or "bsimp" */
+    const char *stepper;      /* "rk8pd" or "bsimp"; "none" for a formula */
+    const char *model;        /* "shooting", or for bkf_cycle_estimate "asymptotic"
+                                 or "leading" (then period_err is the formula's
+                                 error bound, the work counters are 0 and the
+                                 fields the formula does not give are NaN) */
 } bkf_cycle_result;
 
 typedef struct bkf_cycle bkf_cycle;
@@ -78,6 +82,27 @@ int bkf_cycle_profile(bkf_cycle *cycle, double z, double *f, double *fprime,
 /* One-shot convenience: solve into *result without keeping an object. */
 int bkf_cycle_period(double mu, double nu, const bkf_cycle_options *options,
                      bkf_cycle_result *result, bkf_error *err);
+
+/* How bkf_cycle_estimate obtains T. */
+typedef enum {
+    BKF_METHOD_AUTO = 0,       /* the cheapest that meets tol: leading, then
+                                  asymptotic, then shooting */
+    BKF_METHOD_ASYMPTOTIC = 1, /* corrected large-mu or small-mu formula */
+    BKF_METHOD_LEADING = 2,    /* k(nu) mu */
+    BKF_METHOD_SHOOTING = 3    /* bkf_cycle_solve */
+} bkf_cycle_method;
+
+/* "auto", "asymptotic", "leading", "shooting"; NULL otherwise. */
+const char *bkf_cycle_method_name(bkf_cycle_method method);
+
+/* T(mu, nu) to options->tol by `method` into *out.  A formula is used only
+ * where its error bound (bkf_asym_error_bound) meets tol; a formula asked
+ * for explicitly where it does not is a BKF_ENUMERIC failure, never a silent
+ * answer.  Shooting (and auto when no formula qualifies) is bkf_cycle_solve
+ * on `cycle`, which must then be non-NULL; formulas leave `cycle` alone and
+ * integrate nothing (all work counters 0). */
+int bkf_cycle_estimate(bkf_cycle *cycle, double mu, double nu, const bkf_cycle_options *options,
+                       bkf_cycle_method method, bkf_cycle_result *out, bkf_error *err);
 
 /* The branch of cycles along mu (parameter BKF_CYCLE_ALONG_MU, continued in
  * ln mu) or along nu (BKF_CYCLE_ALONG_NU) from `from` to `to`, the other

@@ -31,6 +31,7 @@ static const bkf_io_column columns[] = {
     {"rhs_calls", BKF_IO_NUMBER},
     {"newton_iterations", BKF_IO_NUMBER},
     {"stepper", BKF_IO_TEXT},
+    {"model", BKF_IO_TEXT},
 };
 #define NCOLUMNS (sizeof columns / sizeof columns[0])
 
@@ -38,6 +39,9 @@ static const char *const stepper_names[] = {"auto", "explicit", "implicit", NULL
 static const bkf_stepper_kind stepper_kinds[] = {BKF_STEPPER_AUTO, BKF_STEPPER_EXPLICIT,
                                                  BKF_STEPPER_IMPLICIT};
 static const char *const format_names[] = {"tsv", "json", NULL};
+static const char *const method_names[] = {"auto", "asymptotic", "leading", "shooting", NULL};
+static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYMPTOTIC,
+                                                BKF_METHOD_LEADING, BKF_METHOD_SHOOTING};
 static const char *const continue_names[] = {"mu", "nu", NULL};
 
 #define MU_FORM "M or A:B:N, each in [1e-06, 1e+06]"
@@ -47,6 +51,7 @@ static void period_help(FILE *out)
 {
     fprintf(out,
         "usage: bkfront period --mu M --nu V [--tol E] [--log] [--continue mu|nu]\n"
+        "                      [--method auto|asymptotic|leading|shooting]\n"
         "                      [--stepper auto|explicit|implicit] [--format tsv|json]\n"
         "                      [--out FILE]\n"
         "\n"
@@ -69,6 +74,14 @@ static void period_help(FILE *out)
         "                    (N is ignored: the rows are the continuation's points);\n"
         "                    the other option must be a single value. Default: solve\n"
         "                    at the given points only\n"
+        "  --method auto|asymptotic|leading|shooting\n"
+        "                    how T is obtained: shooting (Newton, integrating the ODE),\n"
+        "                    asymptotic (the corrected large-mu or the small-mu formula),\n"
+        "                    leading (k(nu) mu), or auto: the cheapest whose error bound\n"
+        "                    meets --tol (leading, then asymptotic, then shooting).\n"
+        "                    A formula asked for where its bound exceeds --tol is a\n"
+        "                    numerical failure (exit 1). --continue needs shooting or\n"
+        "                    auto (then it shoots). Default auto\n"
         "  --stepper auto|explicit|implicit\n"
         "                    integrator: rk8pd (explicit), bsimp with the analytic\n"
         "                    Jacobian (implicit), or chosen by stiffness; default auto\n"
@@ -80,7 +93,8 @@ static void period_help(FILE *out)
         "columns:\n"
         "  mu, nu              the point\n"
         "  T                   period in z\n"
-        "  T_err               estimated absolute error of T\n"
+        "  T_err               estimated absolute error of T (for a formula: its\n"
+        "                      error bound times T)\n"
         "  T_asym              k(nu) mu, the leading large-mu term,\n"
         "                      k = 3 + (nu^2 - 1) ln[(4 - nu^2)/(1 - nu^2)]\n"
         "  T_asym2             for mu >= 1 the large-mu expansion\n"
@@ -91,7 +105,10 @@ static void period_help(FILE *out)
         "  log_multiplier      its natural logarithm\n"
         "  steps, rhs_calls, newton_iterations\n"
         "                      work summed over the solve\n"
-        "  stepper             GSL stepper used: rk8pd or bsimp\n"
+        "  stepper             GSL stepper used: rk8pd or bsimp (none for a formula)\n"
+        "  model               what answered: shooting, asymptotic or leading; for a\n"
+        "                      formula xmax, xmin and the multipliers are NaN and the\n"
+        "                      work counters 0\n"
         "\n"
         "Output is all or nothing: on any failure nothing is written.\n"
         "exit status: 0 ok, 1 numerical failure, 2 bad input\n",
@@ -108,7 +125,7 @@ static const char *num(double x, char *buf, size_t size)
 }
 
 typedef struct {
-    const char *mu, *nu, *tol, *continue_, *stepper, *format, *out;
+    const char *mu, *nu, *tol, *continue_, *stepper, *format, *out, *method;
     int log, help;
 } period_flags;
 
@@ -116,6 +133,7 @@ typedef struct {
     cli_range mu, nu;
     bkf_cycle_options options;
     bkf_io_format format;
+    bkf_cycle_method method;
     int along;               /* -1: points; else BKF_CYCLE_ALONG_MU / _NU */
     const char *out_path;
 } period_plan;
@@ -153,6 +171,7 @@ static int plan_period(int argc, char **argv, period_plan *plan, bkf_error *err)
         {"--log", NULL, NULL, &f.log},
         {"--continue", &f.continue_, "mu or nu", NULL},
         {"--stepper", &f.stepper, "auto, explicit or implicit", NULL},
+        {"--method", &f.method, "auto, asymptotic, leading or shooting", NULL},
         {"--format", &f.format, "tsv or json", NULL},
         {"--out", &f.out, "a file name", NULL},
         {"--help", NULL, NULL, &f.help},
@@ -192,6 +211,12 @@ static int plan_period(int argc, char **argv, period_plan *plan, bkf_error *err)
         if ((s = cli_parse_choice("--stepper", f.stepper, stepper_names, &k, err))) return s;
         plan->options.stepper = stepper_kinds[k];
     }
+    plan->method = BKF_METHOD_AUTO;
+    if (f.method) {
+        int k;
+        if ((s = cli_parse_choice("--method", f.method, method_names, &k, err))) return s;
+        plan->method = method_kinds[k];
+    }
     plan->format = BKF_IO_TSV;
     if (f.format) {
         int k;
@@ -216,6 +241,10 @@ static int plan_period(int argc, char **argv, period_plan *plan, bkf_error *err)
             return bkf_error_set(err, BKF_EINPUT,
                                  "--continue %s: %s must be a single value, not a range",
                                  continue_names[k], other_flag);
+        if (plan->method == BKF_METHOD_ASYMPTOTIC || plan->method == BKF_METHOD_LEADING)
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "--method %s: --continue follows the shooting equations; use "
+                                 "--method shooting or auto", method_names[plan->method]);
         plan->along = k == 0 ? BKF_CYCLE_ALONG_MU : BKF_CYCLE_ALONG_NU;
     }
     if (f.out && !*f.out)
@@ -248,6 +277,7 @@ static int add_row(period_sink *sink, const bkf_cycle_result *r)
         {.number = (double)r->rhs_calls},
         {.number = (double)r->newton_iterations},
         {.text = r->stepper},
+        {.text = r->model ? r->model : "shooting"},
     };
     int s = bkf_io_table_row(sink->table, v, &sink->err);
     if (s && !sink->status) sink->status = s;
@@ -272,7 +302,8 @@ static int write_comments(bkf_io_table *table, const period_plan *plan, int argc
         "T_asym2: large-mu expansion (mu >= 1) or small-mu expansion (mu < 1)\n"
         "xmax, xmin: extremes of f; multiplier: nontrivial Floquet multiplier, "
         "log_multiplier: its logarithm; steps, rhs_calls, newton_iterations: work of the "
-        "solve; stepper: GSL stepper used",
+        "solve; stepper: GSL stepper used; model: what answered (shooting, asymptotic, leading; "
+        "for a formula T_err is its error bound)",
         err);
     if (s) return s;
     if (plan->along < 0)
@@ -320,11 +351,12 @@ static int compute(const period_plan *plan, int argc, char **argv, FILE *stream,
             for (size_t i = 0; !s && i < plan->mu.count; i++) {
                 double mu = plan->mu.values[i], nu = plan->nu.values[j];
                 bkf_error e;
-                s = bkf_cycle_solve(cycle, mu, nu, &plan->options, &e);
+                bkf_cycle_result r;
+                s = bkf_cycle_estimate(cycle, mu, nu, &plan->options, plan->method, &r, &e);
                 if (s)
                     bkf_error_set(err, s, "at mu = %s, nu = %s: %s", num(mu, a, sizeof a),
                                   num(nu, b, sizeof b), e.message);
-                else if ((s = add_row(&sink, bkf_cycle_get(cycle))))
+                else if ((s = add_row(&sink, &r)))
                     *err = sink.err;
             }
         bkf_cycle_free(cycle);

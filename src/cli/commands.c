@@ -13,6 +13,7 @@ extern const cli_command cli_cmd_profile;
 extern const cli_command cli_cmd_simulate;
 extern const cli_command cli_cmd_check;
 extern const cli_command cli_cmd_run;
+extern const cli_command cli_cmd_bench;
 
 static const cli_command *const commands[] = {
     &cli_cmd_period,
@@ -24,6 +25,7 @@ static const cli_command *const commands[] = {
     &cli_cmd_simulate,
     &cli_cmd_check,
     &cli_cmd_run,
+    &cli_cmd_bench,
 };
 
 #define NCOMMANDS (sizeof commands / sizeof commands[0])

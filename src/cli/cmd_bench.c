@@ -1,0 +1,357 @@
+/* bkfront bench: work-precision measurements.  For each product (the period
+ * T(mu, nu), the speeds table, the PDE simulation) and every method and
+ * tolerance the tool offers, the achieved error against an independent or
+ * tight-tolerance reference, beside the CPU time it took.  One TSV row per
+ * (case, method, setting); plots/work_precision_*.gp draw them. */
+#define _POSIX_C_SOURCE 200809L
+#include "args.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "bkfront/asymptotics.h"
+#include "bkfront/cycle.h"
+#include "bkfront/io.h"
+#include "bkfront/measure.h"
+#include "bkfront/pde.h"
+#include "bkfront/speeds.h"
+
+static const bkf_io_column columns[] = {
+    {"product", BKF_IO_TEXT},  {"case", BKF_IO_TEXT},     {"method", BKF_IO_TEXT},
+    {"tol", BKF_IO_NUMBER},    {"N", BKF_IO_NUMBER},      {"error", BKF_IO_NUMBER},
+    {"estimate", BKF_IO_NUMBER}, {"cpu_seconds", BKF_IO_NUMBER}, {"work", BKF_IO_NUMBER},
+    {"status", BKF_IO_TEXT},
+};
+#define NCOLUMNS (sizeof columns / sizeof columns[0])
+
+static const char *const product_names[] = {"period", "speeds", "pde", "all", NULL};
+static const char *const format_names[] = {"tsv", "json", NULL};
+
+static void bench_help(FILE *out)
+{
+    fprintf(out,
+        "usage: bkfront bench [--product period|speeds|pde|all] [--quick]\n"
+        "                     [--format tsv|json] [--out FILE]\n"
+        "\n"
+        "Work-precision measurement: achieved error against CPU time for every\n"
+        "method and tolerance of each product.\n"
+        "  period  T(mu, nu) at mu in {1, 10, 100, 1e4}, nu in {0, -0.96}: the\n"
+        "          leading term k mu, the corrected asymptotics (T_asym2), shooting\n"
+        "          with rk8pd (explicit) and bsimp (implicit) at tol 1e-2 .. 1e-12.\n"
+        "          Reference: the published T(1, 0) = 6.663286859323130, else a\n"
+        "          solve at tol 1e-13 (1e-12, 1e-11 where refused) with the OTHER\n"
+        "          stepper than the row's where it can (bsimp for mu = 1e4).\n"
+        "  speeds  the paper's table (gamma 2, c 0.3, nu -0.96, S 20) at tol\n"
+        "          1e-4 .. 1e-12; error: largest |v - v_ref|/v_ref over the roots,\n"
+        "          v_ref from the same solver at tol 1e-13.\n"
+        "  pde     a seeded n = 4 front (paper's parameters), N in {256, 512, 1024},\n"
+        "          tol in {1e-5, 1e-7, 1e-9}, t in [0, 30]; error: |v_meas - v_pred|/v_pred,\n"
+        "          v_pred from the speeds solver at tol 1e-12; time: the run only.\n"
+        "options:\n"
+        "  --product P   which product; default all\n"
+        "  --quick       fewer cases and tolerances (for tests)\n"
+        "  --format tsv|json, --out FILE   as for period\n"
+        "columns: product, case, method, tol, N (pde; NaN otherwise), error (relative,\n"
+        "  achieved), estimate (the method's own relative error estimate or bound),\n"
+        "  cpu_seconds (process CPU time per call, averaged over repeats), work\n"
+        "  (right-hand-side calls for shooting, steps for the PDE, solves for\n"
+        "  speeds), status (ok or refused: the method reported it cannot reach tol)\n"
+        "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
+}
+
+static double cpu_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+typedef struct {
+    bkf_io_table *table;
+    int quick;
+} bench_ctx;
+
+static int emit(bench_ctx *b, const char *product, const char *kase, const char *method,
+                double tol, double N, double error, double estimate, double seconds, double work,
+                const char *status, bkf_error *err)
+{
+    bkf_io_value v[NCOLUMNS] = {
+        {.text = product}, {.text = kase},       {.text = method},   {.number = tol},
+        {.number = N},     {.number = error},    {.number = estimate}, {.number = seconds},
+        {.number = work},  {.text = status},
+    };
+    return bkf_io_table_row(b->table, v, err);
+}
+
+/* ------------------------------------------------------------- period */
+
+static int period_reference(double mu, double nu, bkf_stepper_kind kind, double *T)
+{
+    if (mu == 1.0 && nu == 0.0) {
+        *T = 6.663286859323130;
+        return BKF_OK;
+    }
+    const double tols[] = {1e-13, 1e-12, 1e-11};
+    for (int k = 0; k < 3; k++) {
+        bkf_cycle_options o = bkf_cycle_options_default();
+        o.tol = tols[k];
+        o.stepper = kind;
+        bkf_cycle_result r;
+        bkf_error e;
+        if (bkf_cycle_period(mu, nu, &o, &r, &e) == BKF_OK) {
+            *T = r.period;
+            return BKF_OK;
+        }
+    }
+    return BKF_ENUMERIC;
+}
+
+/* CPU seconds per cold solve (repeated to at least 20 ms), or -1 if refused. */
+static double time_solve(double mu, double nu, double tol, bkf_stepper_kind kind,
+                         bkf_cycle_result *r)
+{
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = tol;
+    o.stepper = kind;
+    bkf_error e;
+    int reps = 0;
+    double t0 = cpu_now(), t = 0;
+    do {
+        if (bkf_cycle_period(mu, nu, &o, r, &e) != BKF_OK) return -1;
+        reps++;
+        t = cpu_now() - t0;
+    } while (t < 0.02 && reps < 1000);
+    return t / reps;
+}
+
+static int bench_period(bench_ctx *b, bkf_error *err)
+{
+    const double mus[] = {1, 10, 100, 1e4};
+    const double nus[] = {0, -0.96};
+    const double tols_full[] = {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
+    const double tols_quick[] = {1e-2, 1e-6, 1e-12};
+    const double *tols = b->quick ? tols_quick : tols_full;
+    size_t ntol = b->quick ? 3 : sizeof tols_full / sizeof tols_full[0];
+    size_t nmu = b->quick ? 2 : 4, nnu = b->quick ? 1 : 2;
+    int s = BKF_OK;
+    for (size_t j = 0; j < nnu && !s; j++)
+        for (size_t i = 0; i < nmu && !s; i++) {
+            double mu = mus[i], nu = nus[j];
+            char kase[64];
+            snprintf(kase, sizeof kase, "mu=%g,nu=%g", mu, nu);
+            /* formulas: their error, their bound, and the (tiny) cost of a call */
+            for (int f = 0; f < 2 && !s; f++) {
+                bkf_asym_formula form = f == 0 ? BKF_ASYM_LEADING
+                                        : mu >= 1 ? BKF_ASYM_LARGE
+                                                  : BKF_ASYM_SMALL;
+                double Tref;
+                if (period_reference(mu, nu, mu > 30 ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT,
+                                     &Tref))
+                    return bkf_error_set(err, BKF_ENUMERIC, "no reference at %s", kase);
+                volatile double sink = 0;
+                double t0 = cpu_now();
+                for (int k = 0; k < 100000; k++) sink += bkf_asym_period(form, mu + 1e-300 * k, nu);
+                double t = (cpu_now() - t0) / 100000;
+                (void)sink;
+                double T = bkf_asym_period(form, mu, nu);
+                s = emit(b, "period", kase, f == 0 ? "leading" : "asymptotic", NAN, NAN,
+                         fabs(T - Tref) / Tref, bkf_asym_error_bound(form, mu, nu), t, 0, "ok", err);
+            }
+            for (int k = 0; k < 2 && !s; k++) {
+                bkf_stepper_kind kind = k == 0 ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_IMPLICIT;
+                /* rk8pd at mu = 1e4 takes ~1e6 steps a period: not offered there */
+                if (kind == BKF_STEPPER_EXPLICIT && mu > 1e3) continue;
+                bkf_stepper_kind other = kind == BKF_STEPPER_EXPLICIT && mu <= 1e3
+                                             ? BKF_STEPPER_IMPLICIT
+                                             : BKF_STEPPER_EXPLICIT;
+                if (mu > 1e3) other = BKF_STEPPER_IMPLICIT;
+                double Tref;
+                if (period_reference(mu, nu, other, &Tref))
+                    return bkf_error_set(err, BKF_ENUMERIC, "no reference at %s", kase);
+                for (size_t q = 0; q < ntol && !s; q++) {
+                    bkf_cycle_result r;
+                    double t = time_solve(mu, nu, tols[q], kind, &r);
+                    const char *name = kind == BKF_STEPPER_EXPLICIT ? "rk8pd" : "bsimp";
+                    if (t < 0)
+                        s = emit(b, "period", kase, name, tols[q], NAN, NAN, NAN, NAN, NAN,
+                                 "refused", err);
+                    else
+                        s = emit(b, "period", kase, name, tols[q], NAN,
+                                 fabs(r.period - Tref) / Tref, r.period_err / r.period, t,
+                                 (double)r.rhs_calls, "ok", err);
+                }
+            }
+        }
+    return s;
+}
+
+/* ------------------------------------------------------------- speeds */
+
+static int bench_speeds(bench_ctx *b, bkf_error *err)
+{
+    bkf_speeds_params p = {2.0, 0.3, -0.96, 20.0};
+    bkf_speeds_options o = bkf_speeds_options_default();
+    bkf_speeds_table ref = {0};
+    o.tol = 1e-13;
+    int s = bkf_speeds_find(&p, &o, &ref, err);
+    if (s) {
+        bkf_speeds_table_free(&ref);
+        o.tol = 1e-12;
+        if ((s = bkf_speeds_find(&p, &o, &ref, err))) {
+            bkf_speeds_table_free(&ref);
+            return s;
+        }
+    }
+    const double tols_full[] = {1e-4, 1e-6, 1e-8, 1e-10, 1e-12};
+    const double tols_quick[] = {1e-6};
+    const double *tols = b->quick ? tols_quick : tols_full;
+    size_t ntol = b->quick ? 1 : 5;
+    for (size_t q = 0; q < ntol && !s; q++) {
+        bkf_speeds_table t = {0};
+        o.tol = tols[q];
+        bkf_error e;
+        int reps = 0;
+        double t0 = cpu_now(), dt = 0;
+        int rc = BKF_OK;
+        do {
+            bkf_speeds_table_free(&t);
+            memset(&t, 0, sizeof t);
+            rc = bkf_speeds_find(&p, &o, &t, &e);
+            reps++;
+            dt = cpu_now() - t0;
+        } while (rc == BKF_OK && dt < 0.1 && reps < 50);
+        if (rc != BKF_OK || t.count != ref.count) {
+            s = emit(b, "speeds", "paper", "speeds", tols[q], NAN, NAN, NAN, NAN, NAN, "refused",
+                     err);
+        } else {
+            double worst = 0, est = 0;
+            for (size_t i = 0; i < t.count; i++) {
+                worst = fmax(worst, fabs(t.roots[i].v - ref.roots[i].v) / ref.roots[i].v);
+                est = fmax(est, t.roots[i].v_err / t.roots[i].v);
+            }
+            s = emit(b, "speeds", "paper", "speeds", tols[q], NAN, worst, est, dt / reps,
+                     (double)(t.coarse_solves + t.precise_solves), "ok", err);
+        }
+        bkf_speeds_table_free(&t);
+    }
+    bkf_speeds_table_free(&ref);
+    return s;
+}
+
+/* --------------------------------------------------------------- pde */
+
+static int observe(const bkf_pde_sample *s, void *data)
+{
+    bkf_error e;
+    return bkf_measure_add(data, s->t, s->psi, s->eta, &e) != BKF_OK;
+}
+
+static int bench_pde(bench_ctx *b, bkf_error *err)
+{
+    const size_t Ns_full[] = {256, 512, 1024}, Ns_quick[] = {256};
+    const double tols_full[] = {1e-5, 1e-7, 1e-9}, tols_quick[] = {1e-7};
+    const size_t *Ns = b->quick ? Ns_quick : Ns_full;
+    const double *tols = b->quick ? tols_quick : tols_full;
+    size_t nN = b->quick ? 1 : 3, ntol = b->quick ? 1 : 3;
+    double tmax = b->quick ? 5.0 : 30.0;
+    int s = BKF_OK;
+    for (size_t i = 0; i < nN && !s; i++)
+        for (size_t q = 0; q < ntol && !s; q++) {
+            bkf_pde_params p = {2.0, 0.3, -0.96, 20.0, Ns[i], BKF_PDE_CONTINUUM};
+            bkf_pde_options o = bkf_pde_options_default();
+            o.tol = tols[q];
+            bkf_pde *m = bkf_pde_alloc(&p, &o, err);
+            if (!m) return BKF_ENOMEM;
+            bkf_pde_front_spec fs = bkf_pde_front_spec_default();
+            fs.n = 4;
+            bkf_pde_front_info fi;
+            s = bkf_pde_init_front(m, &fs, &fi, NULL, err);
+            bkf_measure_params mp = bkf_measure_params_default();
+            mp.N = Ns[i];
+            mp.S = 20;
+            mp.gamma = 2;
+            mp.nu = -0.96;
+            bkf_measure *ms = s ? NULL : bkf_measure_alloc(&mp, err);
+            if (!s && !ms) s = BKF_ENOMEM;
+            double t0 = cpu_now();
+            bkf_error e;
+            int rc = s ? s : bkf_pde_run(m, tmax, 0.1, observe, ms, NULL, NULL, &e);
+            double dt = cpu_now() - t0;
+            bkf_measure_summary sum;
+            if (!s && rc == BKF_OK) rc = bkf_measure_summarize(ms, &sum, &e);
+            if (!s) {
+                if (rc != BKF_OK)
+                    s = emit(b, "pde", "front n=4", "rk8pd", tols[q], (double)Ns[i], NAN, NAN, dt,
+                             NAN, "refused", err);
+                else
+                    s = emit(b, "pde", "front n=4", "rk8pd", tols[q], (double)Ns[i],
+                             fabs(-sum.speed - fi.v) / fi.v, sum.speed_err / fi.v, dt,
+                             (double)bkf_pde_get_stats(m)->steps, "ok", err);
+            }
+            bkf_measure_free(ms);
+            bkf_pde_free(m);
+        }
+    return s;
+}
+
+/* ------------------------------------------------------------ command */
+
+static int bench_run(int argc, char **argv, bkf_error *err)
+{
+    const char *product = NULL, *format = NULL, *out_path = NULL;
+    int quick = 0, help = 0;
+    const cli_flag flags[] = {
+        {"--product", &product, "period, speeds, pde or all", NULL},
+        {"--quick", NULL, NULL, &quick},
+        {"--format", &format, "tsv or json", NULL},
+        {"--out", &out_path, "a file name", NULL},
+        {"--help", NULL, NULL, &help},
+    };
+    int s = cli_parse_flags(flags, sizeof flags / sizeof flags[0], argc, argv, err);
+    if (s) return s;
+    int which = 3, fmt = 0;
+    if (product && (s = cli_parse_choice("--product", product, product_names, &which, err)))
+        return s;
+    if (format && (s = cli_parse_choice("--format", format, format_names, &fmt, err))) return s;
+    if (out_path && !*out_path)
+        return bkf_error_set(err, BKF_EINPUT, "--out: the file name is empty");
+
+    cli_output out = {0};
+    cli_buffer buf = {0};
+    s = cli_output_open(&out, out_path, "--out", err);
+    if (!s) s = cli_buffer_open(&buf, err);
+    if (!s) {
+        bench_ctx b = {bkf_io_table_alloc(buf.stream, fmt ? BKF_IO_JSON : BKF_IO_TSV, columns,
+                                          NCOLUMNS, err),
+                       quick};
+        if (!b.table) s = BKF_ENOMEM;
+        if (!s)
+            s = bkf_io_table_comment(
+                b.table,
+                CLI_PROGRAM " " CLI_VERSION " bench: work-precision (achieved relative error "
+                "against CPU seconds per call, one core)",
+                err);
+        if (!s && (which == 0 || which == 3)) s = bench_period(&b, err);
+        if (!s && (which == 1 || which == 3)) s = bench_speeds(&b, err);
+        if (!s && (which == 2 || which == 3)) s = bench_pde(&b, err);
+        if (!s) s = bkf_io_table_finish(b.table, err);
+        bkf_io_table_free(b.table);
+        int c = cli_buffer_close(&buf, s ? NULL : err);
+        if (!s) s = c;
+    }
+    if (!s)
+        s = cli_output_write(&out, buf.data, buf.size, err);
+    else
+        cli_output_abort(&out);
+    cli_buffer_free(&buf);
+    return s;
+}
+
+const cli_command cli_cmd_bench = {
+    "bench",
+    "work-precision: achieved error against CPU time for every method and tolerance",
+    bench_run,
+    bench_help,
+};
