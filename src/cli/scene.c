@@ -26,7 +26,7 @@ const char *scene_kind_name(scene_kind kind)
 typedef enum {
     V_GAMMA, V_C, V_NU, V_NU_ANY, V_S, V_TOL, V_PDE_TOL, V_GRID_N, V_MODEL,
     V_COUNT, V_SEED, V_NUMBER, V_POSITIVE, V_NU_LIST, V_COUNT_LIST, V_RANGE_LOG,
-    V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_FORMATS, V_TEXT, V_NAME, V_INIT
+    V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_METHOD, V_FORMATS, V_TEXT, V_NAME, V_INIT
 } value_type;
 
 #define K(kind) (1u << (kind))
@@ -71,6 +71,7 @@ static const key_spec keys[] = {
     {"search", V_SEARCH, K(SCENE_THRESHOLD), "A:B with -1 < A < B < 1"},
     {"along", V_ALONG, K(SCENE_THRESHOLD), "c or gamma"},
     {"param", V_PARAM, K(SCENE_BRANCH), "S, nu, gamma or c"},
+    {"method", V_METHOD, K(SCENE_PERIOD), "auto, asymptotic, leading or shooting"},
     {"from", V_NUMBER, K(SCENE_THRESHOLD) | K(SCENE_BRANCH) | K(SCENE_FRICTION),
      "a finite number"},
     {"to", V_NUMBER, K(SCENE_THRESHOLD) | K(SCENE_BRANCH) | K(SCENE_FRICTION),
@@ -186,6 +187,11 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
     }
     case V_ALONG: {
         static const char *const m[] = {"c", "gamma", NULL};
+        int i;
+        return cli_parse_choice(k, v, m, &i, err);
+    }
+    case V_METHOD: {
+        static const char *const m[] = {"auto", "asymptotic", "leading", "shooting", NULL};
         int i;
         return cli_parse_choice(k, v, m, &i, err);
     }
@@ -830,6 +836,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
                 const char *mu = OWN(0, "mu");
                 PAIR("--mu", mu ? mu : "0.1:1e4:41");
                 if (!mu || strchr(mu, ':')) ARG("--log");
+                PAIR("--method", OWN(0, "method"));
             } else {
                 ARG("floquet");
                 PAIR("--gamma", scene_value(s, p, "gamma"));
