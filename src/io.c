@@ -381,11 +381,27 @@ static char *dup_string(const char *s)
     return d;
 }
 
+/* A path inside a one-line message: control characters become '?', and a
+ * long one is cut with "...". */
+static const char *shown(const char *text, char *buf, size_t size)
+{
+    size_t n = 0;
+    const unsigned char *s = (const unsigned char *)text;
+    for (; *s && n < size - 4; s++) buf[n++] = (*s < 0x20 || *s == 0x7f) ? '?' : (char)*s;
+    if (*s) {
+        memcpy(buf + n, "...", 3);
+        n += 3;
+    }
+    buf[n] = '\0';
+    return buf;
+}
+
 /* A symbolic link's target is replaced, not the link: rename() over the link
  * would silently turn it into a regular file. */
 static char *resolve_target(const char *path, bkf_error *err, int *status)
 {
     struct stat st;
+    char sp[200];
     *status = BKF_OK;
     if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
         char *real = realpath(path, NULL);
@@ -394,7 +410,8 @@ static char *resolve_target(const char *path, bkf_error *err, int *status)
         char buf[PATH_MAX];
         ssize_t n = readlink(path, buf, sizeof buf - 1);
         if (n < 0 || (size_t)n >= sizeof buf - 1) {
-            *status = bkf_error_set(err, BKF_EINPUT, "cannot resolve the symbolic link '%s'", path);
+            *status = bkf_error_set(err, BKF_EINPUT, "cannot resolve the symbolic link '%s'",
+                                    shown(path, sp, sizeof sp));
             return NULL;
         }
         buf[n] = '\0';
@@ -413,6 +430,7 @@ static char *resolve_target(const char *path, bkf_error *err, int *status)
 
 bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
 {
+    char sp[200];
     if (!path || !*path) {
         bkf_error_set(err, BKF_EINPUT, "output file name is empty");
         return NULL;
@@ -431,7 +449,8 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
     }
     size_t tlen = strlen(a->target);
     if (a->target[tlen - 1] == '/') {
-        bkf_error_set(err, BKF_EINPUT, "output '%s' names a directory, not a file", path);
+        bkf_error_set(err, BKF_EINPUT, "output '%s' names a directory, not a file",
+                      shown(path, sp, sizeof sp));
         atomic_free(a);
         return NULL;
     }
@@ -441,7 +460,8 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
     int exists = stat(a->target, &st) == 0;
     if (exists && !S_ISREG(st.st_mode)) {
         /* rename() would replace a device or FIFO with a regular file. */
-        bkf_error_set(err, BKF_EINPUT, "output '%s' exists and is not a regular file", path);
+        bkf_error_set(err, BKF_EINPUT, "output '%s' exists and is not a regular file",
+                      shown(path, sp, sizeof sp));
         atomic_free(a);
         return NULL;
     }
@@ -477,7 +497,8 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
         if (fd < 0 && open_errno != EEXIST) break;
     }
     if (fd < 0) {
-        bkf_error_set(err, BKF_EINPUT, "cannot write '%s': %s", path, strerror(open_errno));
+        bkf_error_set(err, BKF_EINPUT, "cannot write '%s': %s", shown(path, sp, sizeof sp),
+                      strerror(open_errno));
         atomic_free(a);
         return NULL;
     }
@@ -487,7 +508,8 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
         int e = errno;
         close(fd);
         unlink(a->temp);
-        bkf_error_set(err, BKF_ENOMEM, "cannot open a stream on '%s': %s", a->temp, strerror(e));
+        bkf_error_set(err, BKF_ENOMEM, "cannot open a stream on '%s': %s",
+                      shown(a->temp, sp, sizeof sp), strerror(e));
         atomic_free(a);
         return NULL;
     }
@@ -503,6 +525,7 @@ const char *bkf_io_atomic_temp_path(const bkf_io_atomic *file)
 
 int bkf_io_atomic_commit(bkf_io_atomic *a, bkf_error *err)
 {
+    char sp[200];
     if (!a) return bkf_error_set(err, BKF_EINPUT, "atomic file is NULL");
     int status = BKF_OK;
     const char *step = NULL;
@@ -525,7 +548,8 @@ int bkf_io_atomic_commit(bkf_io_atomic *a, bkf_error *err)
     }
     if (step) {
         unlink(a->temp);
-        status = bkf_error_set(err, BKF_ENUMERIC, "writing '%s' failed (%s): %s", a->target,
+        status = bkf_error_set(err, BKF_ENUMERIC, "writing '%s' failed (%s): %s",
+                               shown(a->target, sp, sizeof sp),
                                step, e ? strerror(e) : "I/O error");
     } else {
         /* The rename is durable only once the directory entry is on disk;

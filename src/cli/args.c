@@ -26,6 +26,11 @@ static const char *shown(const char *text, char *buf, size_t size)
     return buf;
 }
 
+const char *cli_shown(const char *text, char *buf, size_t size)
+{
+    return shown(text ? text : "", buf, size);
+}
+
 static int is_nonfinite_word(const char *s)
 {
     if (*s == '+' || *s == '-') s++;
@@ -90,7 +95,7 @@ static int read_count(const char *text, size_t max, size_t *value)
     size_t n = 0;
     for (const char *p = text; *p; p++) {
         size_t d = (size_t)(*p - '0');
-        if (n > (max - d) / 10) return 0;  /* n * 10 + d > max */
+        if (d > max || n > (max - d) / 10) return 0;  /* n * 10 + d > max */
         n = n * 10 + d;
     }
     if (n < 1) return 0;

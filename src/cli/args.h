@@ -28,6 +28,10 @@ typedef struct {
     void (*help)(FILE *out);
 } cli_command;
 
+/* User text for a one-line message: control characters become '?' and text
+ * longer than about size - 4 bytes is cut with "...".  Returns buf. */
+const char *cli_shown(const char *text, char *buf, size_t size);
+
 /* A finite decimal number, the whole string: no leading or trailing space,
  * no hex floats, no nan/inf, no overflow. */
 int cli_parse_double(const char *flag, const char *text, double *value, bkf_error *err);

@@ -306,7 +306,7 @@ static int parse_pairs(const char *text, const char *kind,
                        int (*take)(const char *key, const char *value, void *data, bkf_error *err),
                        void *data, bkf_error *err)
 {
-    char buf[256];
+    char buf[256], shown[72];
     if (strlen(text) >= sizeof buf)
         return bkf_error_set(err, BKF_EINPUT, "--init: the %s options are too long", kind);
     strcpy(buf, text);
@@ -315,7 +315,7 @@ static int parse_pairs(const char *text, const char *kind,
         char *eq = strchr(tok, '=');
         if (!eq || eq == tok || !eq[1])
             return bkf_error_set(err, BKF_EINPUT, "--init %s: '%s' is not key=value (%s)", kind,
-                                 tok, INIT_FORM);
+                                 cli_shown(tok, shown, sizeof shown), INIT_FORM);
         *eq = '\0';
         int s = take(tok, eq + 1, data, err);
         if (s) return s;
@@ -339,7 +339,9 @@ static int take_uniform(const char *key, const char *value, void *data, bkf_erro
 {
     init_plan *p = data;
     if (strcmp(key, "amp") == 0) return init_amp("uniform", key, value, &p->amp, err);
-    return bkf_error_set(err, BKF_EINPUT, "--init uniform: unknown key '%s' (amp)", key);
+    char a[72];
+    return bkf_error_set(err, BKF_EINPUT, "--init uniform: unknown key '%s' (amp)",
+                         cli_shown(key, a, sizeof a));
 }
 
 static int take_oscillation(const char *key, const char *value, void *data, bkf_error *err)
@@ -362,12 +364,15 @@ static int take_oscillation(const char *key, const char *value, void *data, bkf_
         }
         return cli_parse_count("--init oscillation j", value, BKF_PDE_N_MAX, &p->j, err);
     }
-    return bkf_error_set(err, BKF_EINPUT, "--init oscillation: unknown key '%s' (q, j, amp)", key);
+    char a[72];
+    return bkf_error_set(err, BKF_EINPUT, "--init oscillation: unknown key '%s' (q, j, amp)",
+                         cli_shown(key, a, sizeof a));
 }
 
 static int take_front(const char *key, const char *value, void *data, bkf_error *err)
 {
     init_plan *p = data;
+    char a[72];
     if (strcmp(key, "n") == 0) return cli_parse_count("--init front n", value, 100000, &p->front.n, err);
     if (strcmp(key, "root") == 0)
         return cli_parse_count("--init front root", value, 100, &p->front.root, err);
@@ -377,20 +382,19 @@ static int take_front(const char *key, const char *value, void *data, bkf_error 
         else if (strcmp(value, "right") == 0) p->front.direction = 1;
         else
             return bkf_error_set(err, BKF_EINPUT, "--init front dir: '%s' is not left or right",
-                                 value);
+                                 cli_shown(value, a, sizeof a));
         return BKF_OK;
     }
     return bkf_error_set(err, BKF_EINPUT, "--init front: unknown key '%s' (n, root, dir, noise)",
-                         key);
+                         cli_shown(key, a, sizeof a));
 }
 
 /* A TSV whose header names psi and eta (snapshots of bkfront simulate are
  * such files); with a t column, the rows of the last t are taken. */
-static int read_state_file(init_plan *p, bkf_error *err)
+static int read_state_stream(init_plan *p, FILE *f, bkf_error *err)
 {
-    FILE *f = fopen(p->path, "r");
-    if (!f)
-        return bkf_error_set(err, BKF_EINPUT, "--init file:%s: %s", p->path, strerror(errno));
+    char path[72], a[72];
+    cli_shown(p->path, path, sizeof path);
     char *line = NULL;
     size_t cap = 0;
     ssize_t len;
@@ -414,7 +418,7 @@ static int read_state_file(init_plan *p, bkf_error *err)
             if (ipsi < 0 || ieta < 0) {
                 status = bkf_error_set(err, BKF_EINPUT,
                                        "--init file:%s: the header (line %zu) must name the "
-                                       "columns psi and eta", p->path, lineno);
+                                       "columns psi and eta", path, lineno);
                 break;
             }
             continue;
@@ -442,7 +446,7 @@ static int read_state_file(init_plan *p, bkf_error *err)
             if (*end || end == tok || !isfinite(v) || errno) {
                 status = bkf_error_set(err, BKF_EINPUT,
                                        "--init file:%s: line %zu: '%s' is not a finite number",
-                                       p->path, lineno, tok);
+                                       path, lineno, cli_shown(tok, a, sizeof a));
                 break;
             }
             if (col == ipsi) vp = v;
@@ -452,7 +456,7 @@ static int read_state_file(init_plan *p, bkf_error *err)
         if (status) break;
         if (col != ncol) {
             status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: line %zu has %d fields, not %d",
-                                   p->path, lineno, col, ncol);
+                                   path, lineno, col, ncol);
             break;
         }
         psi[rows] = vp;
@@ -462,10 +466,9 @@ static int read_state_file(init_plan *p, bkf_error *err)
     }
     free(line);
     if (!status && ferror(f))
-        status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: read error", p->path);
-    fclose(f);
+        status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: read error", path);
     if (!status && !header)
-        status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: no header line", p->path);
+        status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: no header line", path);
     size_t first = 0;
     if (!status && it >= 0 && rows) {
         double tl = tt[rows - 1];
@@ -475,7 +478,7 @@ static int read_state_file(init_plan *p, bkf_error *err)
     }
     if (!status && rows - first < BKF_PDE_N_MIN)
         status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: %zu rows, need at least %d",
-                               p->path, rows - first, BKF_PDE_N_MIN);
+                               path, rows - first, BKF_PDE_N_MIN);
     if (!status) {
         p->rows = rows - first;
         p->psi = malloc(p->rows * sizeof *p->psi);
@@ -490,6 +493,20 @@ static int read_state_file(init_plan *p, bkf_error *err)
     free(eta);
     free(tt);
     return status;
+}
+
+static int read_state_file(init_plan *p, bkf_error *err)
+{
+    FILE *f = fopen(p->path, "r");
+    if (!f)
+    {
+        char a[72];
+        return bkf_error_set(err, BKF_EINPUT, "--init file:%s: %s",
+                             cli_shown(p->path, a, sizeof a), strerror(errno));
+    }
+    int s = read_state_stream(p, f, err);
+    fclose(f);
+    return s;
 }
 
 static int parse_init(const char *text, init_plan *p, bkf_error *err)
@@ -524,21 +541,24 @@ static int parse_init(const char *text, init_plan *p, bkf_error *err)
         p->path = rest;
         return read_state_file(p, err);
     }
-    return bkf_error_set(err, BKF_EINPUT, "--init: '%s' is not one of %s", text, INIT_FORM);
+    char a[72];
+    return bkf_error_set(err, BKF_EINPUT, "--init: '%s' is not one of %s",
+                         cli_shown(text, a, sizeof a), INIT_FORM);
 }
 
 /* Cross-checks that need the model parameters. */
 static int check_init(init_plan *ip, model_plan *mp, bkf_error *err)
 {
-    char a[32], b[32];
+    char a[32], b[32], path[72];
     bkf_error e;
     if (ip->kind == INIT_FILE) {
+        cli_shown(ip->path, path, sizeof path);
         if (mp->N_given && mp->params.N != ip->rows)
             return bkf_error_set(err, BKF_EINPUT, "--N: %zu differs from the %zu rows of --init "
-                                                  "file:%s", mp->params.N, ip->rows, ip->path);
+                                                  "file:%s", mp->params.N, ip->rows, path);
         mp->params.N = ip->rows;
         if (bkf_pde_check(&mp->params, &mp->options, &e))
-            return bkf_error_set(err, BKF_EINPUT, "--init file:%s: %s", ip->path, e.message);
+            return bkf_error_set(err, BKF_EINPUT, "--init file:%s: %s", path, e.message);
     }
     if (ip->kind == INIT_OSCILLATION || ip->kind == INIT_FRONT) {
         if (bkf_model_check_nu_active(mp->params.nu, &e))
