@@ -3,8 +3,10 @@
 #define _XOPEN_SOURCE 700
 #include "bkfront/io.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <limits.h>
 #include <math.h>
 #include <stdlib.h>
@@ -428,6 +430,42 @@ static char *resolve_target(const char *path, bkf_error *err, int *status)
     return dup_string(path);
 }
 
+/* Temporaries are named DIR/.BASE.tmp.PID.TAG (TAG: up to 8 hex digits).
+ * One whose process no longer exists on this machine was left by a run that
+ * was killed (SIGKILL, power loss): remove it.  Best effort, silent. */
+static void remove_stale_temps(const char *dir, const char *base)
+{
+    DIR *d = opendir(dir);
+    if (!d) return;
+    size_t blen = strlen(base), dlen = strlen(dir);
+    struct dirent *de;
+    while ((de = readdir(d)) != NULL) {
+        const char *n = de->d_name;
+        if (n[0] != '.' || strncmp(n + 1, base, blen) != 0 || strncmp(n + 1 + blen, ".tmp.", 5))
+            continue;
+        const char *p = n + 1 + blen + 5;
+        if (*p < '1' || *p > '9') continue;
+        char *end;
+        errno = 0;
+        long pid = strtol(p, &end, 10);
+        if (errno || *end != '.' || pid <= 0 || pid == (long)getpid()) continue;
+        const char *tag = end + 1;
+        size_t tlen = strlen(tag);
+        if (tlen == 0 || tlen > 8 || strspn(tag, "0123456789abcdef") != tlen) continue;
+        if (kill((pid_t)pid, 0) == 0 || errno != ESRCH) continue; /* alive, or not ours */
+        size_t nlen = strlen(n);
+        char *full = malloc(dlen + nlen + 2);
+        if (!full) break;
+        memcpy(full, dir, dlen);
+        size_t k = dlen;
+        if (k && full[k - 1] != '/') full[k++] = '/';
+        memcpy(full + k, n, nlen + 1);
+        (void)unlink(full);
+        free(full);
+    }
+    closedir(d);
+}
+
 bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
 {
     char sp[200];
@@ -481,6 +519,7 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
         a->dir[dlen] = '\0';
     } else
         strcpy(a->dir, ".");
+    remove_stale_temps(a->dir, base);
 
     /* O_EXCL with a fresh name rather than mkstemp(): mkstemp forces mode
      * 0600, and the umask cannot be read without changing it. */

@@ -56,7 +56,7 @@ struct bkf_pde {
 
 bkf_pde_options bkf_pde_options_default(void)
 {
-    bkf_pde_options o = {1e-9, BKF_PDE_RK8PD, 0, 4.0, 0};
+    bkf_pde_options o = {1e-9, BKF_PDE_RK8PD, 0, 4.0, 0, NULL};
     return o;
 }
 
@@ -837,6 +837,11 @@ int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer obs
         if (progress && progress((m->t - t0) / (t_end - t0), pdata)) {
             m->stats.stopped = 1;
             return BKF_OK;
+        }
+        if (m->o.cancel && *m->o.cancel && m->t < t_end) {
+            m->stats.stopped = 1;
+            return bkf_error_set(err, BKF_ECANCELED, "canceled at t = %.9g of %.9g", m->t,
+                                 t_end);
         }
         if (m->o.max_steps && steps_here >= m->o.max_steps && m->t < t_end)
             return bkf_error_set(err, BKF_ENUMERIC, "more than %zu steps before t = %g",

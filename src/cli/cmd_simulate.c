@@ -700,6 +700,9 @@ static void simulate_help(FILE *out)
         "uncertainty, period at x = 0, and the work of the run.\n"
         "\n"
         "Output is all or nothing for each file: nothing is written on failure.\n"
+        "Ctrl-C (SIGINT) or SIGTERM stops the run cleanly: the frames completed so far are\n"
+        "written (each output with a comment 'interrupted ... at t = ...'), one line on\n"
+        "stderr says so, exit status 130 (143 for SIGTERM); a second signal ends it at once.\n"
         "exit status: 0 ok, 1 numerical failure, 2 bad input\n",
         BKF_PDE_N_MIN, BKF_PDE_N_MAX, TMAX_MAX, BKF_PDE_TOL_MIN, BKF_PDE_TOL_MAX, DEF_FRAMES);
 }
@@ -860,8 +863,9 @@ static int sim_observe(const bkf_pde_sample *smp, void *data)
     return 0;
 }
 
-static int write_spacetime(const sim_plan *p, const sim_run *r, size_t frames, FILE *out,
-                           bkf_error *err)
+/* `note`, if not NULL, becomes a comment line (text format only). */
+static int write_spacetime(const sim_plan *p, const sim_run *r, size_t frames, const char *note,
+                           FILE *out, bkf_error *err)
 {
     size_t N = p->m.params.N;
     double h = p->m.params.S / (double)N;
@@ -883,6 +887,7 @@ static int write_spacetime(const sim_plan *p, const sim_run *r, size_t frames, F
     fprintf(out, "# bkfront simulate: psi(x, t), gnuplot nonuniform matrix: first row N x_0 .. "
                  "x_{N-1}, then one row per t: t psi(x_0) .. psi(x_{N-1})\n"
                  "# plot 'FILE' nonuniform matrix using 1:2:3 with image\n");
+    if (note) fprintf(out, "# %s\n", note);
     fprintf(out, "%zu", N);
     for (size_t i = 0; i < N; i++) fprintf(out, " %.9g", (double)i * h);
     fputc('\n', out);
@@ -894,7 +899,8 @@ static int write_spacetime(const sim_plan *p, const sim_run *r, size_t frames, F
     return BKF_OK;
 }
 
-static int write_snapshots(const sim_plan *p, const sim_run *r, FILE *out, bkf_error *err)
+static int write_snapshots(const sim_plan *p, const sim_run *r, const char *note, FILE *out,
+                           bkf_error *err)
 {
     static const bkf_io_column cols[] = {
         {"t", BKF_IO_NUMBER}, {"x", BKF_IO_NUMBER}, {"psi", BKF_IO_NUMBER}, {"eta", BKF_IO_NUMBER}};
@@ -904,6 +910,7 @@ static int write_snapshots(const sim_plan *p, const sim_run *r, FILE *out, bkf_e
     if (!t) return BKF_ENOMEM;
     int s = bkf_io_table_comment(t, CLI_PROGRAM " " CLI_VERSION " simulate: snapshots of the "
                                     "field; readable by --init file:PATH (the last t)", err);
+    if (!s && note) s = bkf_io_table_comment(t, note, err);
     if (!s) s = comment_model(t, &p->m, err);
     for (size_t k = 0; !s && k < r->snap_next; k++) {
         const double *sn = r->snap + k * (2 * N + 1);
@@ -1048,21 +1055,36 @@ static int simulate_compute(sim_plan *p, int argc, char **argv, progress_bar *ba
         *err = r.err;
         goto done;
     }
-    if (s) {
+    /* Interrupted (SIGINT/SIGTERM through options.cancel): the frames
+     * recorded so far are complete rows; they are written, marked. */
+    int canceled = s == BKF_ECANCELED;
+    if (s && !canceled) {
         bkf_error_set(err, s, "%s", e.message);
         goto done;
     }
+    char interrupted[160] = "";
+    if (canceled)
+        snprintf(interrupted, sizeof interrupted,
+                 "interrupted (%s) at t = %.9g of %.9g: %zu complete frames kept",
+                 cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT", bkf_pde_time(r.pde),
+                 t0 + p->m.tmax, r.frame_index);
     bkf_measure_summary ms;
+    int have_summary = 0;
     if ((s = bkf_measure_summarize(r.meas, &ms, &e))) {
-        bkf_error_set(err, BKF_ENUMERIC, "measurements: %s", e.message);
-        goto done;
-    }
+        if (!canceled) {
+            bkf_error_set(err, BKF_ENUMERIC, "measurements: %s", e.message);
+            goto done;
+        }
+    } else
+        have_summary = 1;
+    s = BKF_OK;
     t = bkf_io_table_alloc(out, p->m.format, sim_columns, SIM_NCOLUMNS, err);
     if (!t) {
         s = BKF_ENOMEM;
         goto done;
     }
-    s = write_summary(t, p, &r, &ms, &fi, period_ref, argc, argv, err);
+    if (canceled) s = bkf_io_table_comment(t, interrupted, err);
+    if (!s && have_summary) s = write_summary(t, p, &r, &ms, &fi, period_ref, argc, argv, err);
     if (!s && p->spacetime_path)
         s = commentf(t, err, "spacetime: %s (%s)", p->spacetime_path,
                      p->spacetime_binary ? "binary matrix, float32" : "text nonuniform matrix");
@@ -1072,8 +1094,12 @@ static int simulate_compute(sim_plan *p, int argc, char **argv, progress_bar *ba
         s = bkf_io_table_row(t, v, err);
     }
     if (!s) s = bkf_io_table_finish(t, err);
-    if (!s && p->spacetime_path) s = write_spacetime(p, &r, r.frame_index, st_buf->stream, err);
-    if (!s && p->snapshots_path) s = write_snapshots(p, &r, sn_buf->stream, err);
+    if (!s && p->spacetime_path)
+        s = write_spacetime(p, &r, r.frame_index, canceled ? interrupted : NULL, st_buf->stream,
+                            err);
+    if (!s && p->snapshots_path)
+        s = write_snapshots(p, &r, canceled ? interrupted : NULL, sn_buf->stream, err);
+    if (!s && canceled) s = bkf_error_set(err, BKF_ECANCELED, "%s", interrupted);
 done:
     bkf_io_table_free(t);
     bkf_measure_free(r.meas);
@@ -1110,18 +1136,30 @@ static int simulate_run(int argc, char **argv, bkf_error *err)
     if (!s && plan.snapshots_path) s = cli_buffer_open(&sn, err);
     if (!s) {
         progress_init(&bar, CLI_PROGRAM " simulate", plan.progress);
+        plan.m.options.cancel = cli_cancel_begin();
         s = simulate_compute(&plan, argc, argv, &bar, buf.stream, &st, &sn, err);
-        int c1 = cli_buffer_close(&buf, s ? NULL : err);
-        int c2 = cli_buffer_close(&st, s ? NULL : err);
-        int c3 = cli_buffer_close(&sn, s ? NULL : err);
-        if (!s) s = c1 ? c1 : c2 ? c2 : c3;
+        cli_cancel_end();
+        int ok = !s || s == BKF_ECANCELED;
+        int c1 = cli_buffer_close(&buf, ok ? err : NULL);
+        int c2 = cli_buffer_close(&st, ok ? err : NULL);
+        int c3 = cli_buffer_close(&sn, ok ? err : NULL);
+        if (ok && (c1 || c2 || c3)) s = c1 ? c1 : c2 ? c2 : c3;
     }
+    /* An interrupted run writes what was complete (marked as interrupted),
+     * then reports BKF_ECANCELED; its message is kept for the end. */
+    int canceled = s == BKF_ECANCELED;
+    bkf_error cancel_msg = *err;
+    if (canceled) s = BKF_OK;
     if (!s && plan.spacetime_path) s = write_file(plan.spacetime_path, "--spacetime", &st, err);
     if (!s && plan.snapshots_path) s = write_file(plan.snapshots_path, "--snapshots", &sn, err);
     if (!s)
         s = cli_output_write(&out, buf.data, buf.size, err);
     else
         cli_output_abort(&out);
+    if (!s && canceled) {
+        s = BKF_ECANCELED;
+        *err = cancel_msg;
+    }
     cli_buffer_free(&buf);
     cli_buffer_free(&st);
     cli_buffer_free(&sn);
