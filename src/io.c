@@ -33,6 +33,7 @@ struct bkf_io_table {
 
 int bkf_io_format_parse(const char *name, bkf_io_format *format, bkf_error *err)
 {
+    if (!format) return bkf_error_set(err, BKF_EINPUT, "format pointer is NULL");
     if (name && strcmp(name, "tsv") == 0) {
         *format = BKF_IO_TSV;
         return BKF_OK;

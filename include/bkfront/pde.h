@@ -122,7 +122,8 @@ double bkf_pde_time(const bkf_pde *pde);
 const double *bkf_pde_psi(const bkf_pde *pde);  /* N values at x_i = i h */
 const double *bkf_pde_eta(const bkf_pde *pde);
 
-/* Sets the field (arrays of N finite values) and the time; the quadratures
+/* Sets the field (arrays of N finite values, |value| <= 1e6, the bound
+ * beyond which a run counts as blown up) and the time; the quadratures
  * Q and D restart from 0. */
 int bkf_pde_set_state(bkf_pde *pde, const double *psi, const double *eta, double t,
                       bkf_error *err);
