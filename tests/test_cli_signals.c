@@ -169,7 +169,8 @@ static void check_interrupted(int sig, const char *name, int want_code)
 {
     char dir[] = "/tmp/bkf_sig_XXXXXX";
     make_dir(dir);
-    const char *args[] = {LONG_RUN, "--out", "d.tsv", "--spacetime", "st.txt", NULL};
+    const char *args[] = {LONG_RUN, "--out", "d.tsv", "--spacetime", "st.txt", "--snapshots",
+                          "sn.tsv", NULL};
     pid_t pid = spawn_cli(dir, args);
     wait_computing(pid, dir, "d.tsv", 1.0);
     CHECK(kill(pid, sig) == 0);
@@ -229,12 +230,42 @@ static void check_interrupted(int sig, const char *name, int want_code)
     }
     CHECK_MSG(st_rows == kept + 1, "%zu spacetime rows, want %zu + the x row", st_rows, kept);
 
+    /* snapshots: t = 0 (the first of the 2 asked), then the state where the
+     * run stopped, 128 rows each */
+    snprintf(path, sizeof path, "%s/sn.tsv", dir);
+    char *sn = slurp(path);
+    CHECK_MSG(sn, "no snapshots file");
+    CHECK(strstr(sn, want) != NULL);
+    line = strstr(sn, "\nt\tx\tpsi\teta\n");
+    CHECK(line);
+    line += strlen("\nt\tx\tpsi\teta\n");
+    size_t at0 = 0, at_stop = 0, other = 0;
+    for (char *p = line; *p;) {
+        char *nl = strchr(p, '\n');
+        CHECK(nl);
+        double t = strtod(p, NULL);
+        if (t == 0) at0++;
+        else if (fabs(t - t_stop) <= 1e-8 * t_stop) at_stop++;
+        else other++;
+        p = nl + 1;
+    }
+    CHECK_MSG(at0 == 128 && at_stop == 128 && other == 0, "snapshot rows %zu, %zu, %zu", at0,
+              at_stop, other);
+    /* and a run continues from it */
+    const char *resume[] = {"simulate", "--init", "file:sn.tsv", "--tmax", "0.5", "--frames", "2",
+                            "--no-progress", "--out", "r.tsv", NULL};
+    pid = spawn_cli(dir, resume);
+    status = wait_status(pid);
+    CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 0, "resume: status 0x%x", status);
+
     CHECK(count_entries(dir, ".d.tsv.tmp.", NULL, 0) == 0);
     CHECK(count_entries(dir, ".st.txt.tmp.", NULL, 0) == 0);
+    CHECK(count_entries(dir, ".sn.tsv.tmp.", NULL, 0) == 0);
     bkf_test_note("%s after %.6g time units: %zu frames kept", name, t_stop, kept);
     free(err);
     free(d);
     free(st);
+    free(sn);
     remove_dir(dir);
 }
 

@@ -911,6 +911,9 @@ static int write_snapshots(const sim_plan *p, const sim_run *r, const char *note
     int s = bkf_io_table_comment(t, CLI_PROGRAM " " CLI_VERSION " simulate: snapshots of the "
                                     "field; readable by --init file:PATH (the last t)", err);
     if (!s && note) s = bkf_io_table_comment(t, note, err);
+    if (!s && note)
+        s = bkf_io_table_comment(t, "the last snapshot is the state where the run stopped: "
+                                    "--init file:PATH continues from it", err);
     if (!s) s = comment_model(t, &p->m, err);
     for (size_t k = 0; !s && k < r->snap_next; k++) {
         const double *sn = r->snap + k * (2 * N + 1);
@@ -1008,7 +1011,8 @@ static int simulate_compute(sim_plan *p, int argc, char **argv, progress_bar *ba
     r.diag = malloc((p->frames + 1) * SIM_NCOLUMNS * sizeof *r.diag);
     if (p->spacetime_path) r.field = malloc((p->frames + 1) * N * sizeof *r.field);
     if (p->snapshots_path) {
-        r.snap = malloc(p->snapshots * (2 * N + 1) * sizeof *r.snap);
+        /* one more: the state where an interrupted run stopped */
+        r.snap = malloc((p->snapshots + 1) * (2 * N + 1) * sizeof *r.snap);
         r.snap_frame = malloc(p->snapshots * sizeof *r.snap_frame);
     }
     if (!clean || !r.diag || (p->spacetime_path && !r.field) ||
@@ -1068,6 +1072,16 @@ static int simulate_compute(sim_plan *p, int argc, char **argv, progress_bar *ba
                  "interrupted (%s) at t = %.9g of %.9g: %zu complete frames kept",
                  cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT", bkf_pde_time(r.pde),
                  t0 + p->m.tmax, r.frame_index);
+    /* The snapshots end with the state where the run stopped, so that
+     * --init file:SNAPSHOTS continues from there. */
+    if (canceled && r.snap && (r.snap_next == 0 ||
+                               r.snap[(r.snap_next - 1) * (2 * N + 1)] < bkf_pde_time(r.pde))) {
+        double *sn = r.snap + r.snap_next * (2 * N + 1);
+        sn[0] = bkf_pde_time(r.pde);
+        memcpy(sn + 1, bkf_pde_psi(r.pde), N * sizeof *sn);
+        memcpy(sn + 1 + N, bkf_pde_eta(r.pde), N * sizeof *sn);
+        r.snap_next++;
+    }
     bkf_measure_summary ms;
     int have_summary = 0;
     if ((s = bkf_measure_summarize(r.meas, &ms, &e))) {
