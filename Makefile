@@ -6,6 +6,10 @@
 
 DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
                 libinih-dev gnuplot-nox
+# Only for `make valgrind` and `make fuzz` (libFuzzer ships with clang's
+# runtime), so that `make test` needs neither.
+VALGRIND_PACKAGES := valgrind
+FUZZ_PACKAGES     := clang libclang-rt-dev
 PKGS         := gsl nlopt fftw3 inih
 
 CC       ?= cc
@@ -35,24 +39,30 @@ TESTS := $(BUILD)/run_tests
 BENCH := $(BUILD)/run_bench
 
 .PHONY: all test run bench sanitize deps clean build-all check-built bench-built \
-        sanitize-built valgrind
+        sanitize-built valgrind fuzz fuzz-built
 
 all: deps
 	@$(MAKE) --no-print-directory build-all
 
 build-all: $(LIB) $(CLI)
 
+# The missing ones among the Debian packages $(1): apt-get update first, then
+# install (root, or sudo if not root).
+define install_missing
+missing=""; \
+for p in $(1); do \
+  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'ok installed' || missing="$$missing $$p"; \
+done; \
+if [ -n "$$missing" ]; then \
+  echo "deps: installing$$missing"; \
+  SUDO=""; [ "$$(id -u)" -ne 0 ] && SUDO=sudo; \
+  $$SUDO apt-get update -qq && \
+  DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null || exit 1; \
+fi
+endef
+
 deps:
-	@missing=""; \
-	for p in $(DEB_PACKAGES); do \
-	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'ok installed' || missing="$$missing $$p"; \
-	done; \
-	if [ -n "$$missing" ]; then \
-	  echo "deps: installing$$missing"; \
-	  SUDO=""; [ "$$(id -u)" -ne 0 ] && SUDO=sudo; \
-	  $$SUDO apt-get update -qq && \
-	  DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null || exit 1; \
-	fi
+	@$(call install_missing,$(DEB_PACKAGES))
 
 test: deps
 	@$(MAKE) --no-print-directory check-built
@@ -81,8 +91,37 @@ sanitize: deps
 	  check-built
 
 valgrind: deps
+	@$(call install_missing,$(VALGRIND_PACKAGES))
 	@$(MAKE) --no-print-directory BUILD=build/valgrind OPT="-O1" build/valgrind/bkfront build/valgrind/run_tests
 	valgrind --error-exitcode=1 --leak-check=full --trace-children=yes -q ./build/valgrind/run_tests
+
+# libFuzzer targets (tests/fuzz/) for the parsers of user text, built with
+# clang, ASan and UBSan in a build folder of their own; each runs for
+# FUZZ_SECONDS on its seed corpus tests/fuzz/corpus/NAME (new inputs go to
+# build/fuzz/corpus/NAME); a crash, sanitizer report or failed check stops
+# make with the input saved in build/fuzz/artifacts/.
+FUZZ_SECONDS ?= 60
+FUZZ_NAMES := args init lists scene
+
+fuzz: deps
+	@$(call install_missing,$(FUZZ_PACKAGES))
+	@$(MAKE) --no-print-directory BUILD=build/fuzz CC=clang OPT="-O1" \
+	  SANITIZE="-fsanitize=address,undefined -fsanitize=fuzzer-no-link -fno-omit-frame-pointer -fno-sanitize-recover=all" \
+	  fuzz-built
+
+fuzz-built: $(FUZZ_NAMES:%=$(BUILD)/fuzz_%)
+	@for t in $(FUZZ_NAMES); do \
+	  mkdir -p $(BUILD)/corpus/$$t $(BUILD)/artifacts; \
+	  log=$(BUILD)/fuzz_$$t.log; \
+	  ./$(BUILD)/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 \
+	    -artifact_prefix=$(BUILD)/artifacts/$$t- $(BUILD)/corpus/$$t tests/fuzz/corpus/$$t \
+	    >$$log 2>&1 || { tail -n 30 $$log; echo "fuzz_$$t: FINDING (input saved in $(BUILD)/artifacts/)"; exit 1; }; \
+	  echo "fuzz_$$t: $$(sed -n 's/^stat::number_of_executed_units: *//p' $$log) executions in $(FUZZ_SECONDS) s, $$(ls $(BUILD)/corpus/$$t | wc -l) corpus inputs, no findings"; \
+	done
+
+.SECONDARY: $(FUZZ_NAMES:%=$(BUILD)/tests/fuzz/fuzz_%.o)
+$(BUILD)/fuzz_%: $(BUILD)/tests/fuzz/fuzz_%.o $(BUILD)/src/cli/args.o $(LIB)
+	$(CC) $(LDFLAGS) -fsanitize=fuzzer -o $@ $^ $(LDLIBS)
 
 $(LIB): $(LIB_OBJ)
 	$(AR) rcs $@ $^

@@ -14,38 +14,55 @@
 #include <gsl/gsl_math.h>
 #include <math.h>
 
+/* Outside the domain (|nu| < 1, mu > 0, both finite) every formula is NaN:
+ * the expressions would otherwise give finite numbers or infinities that
+ * look like periods. */
+static int bad_nu(double nu) { return !(fabs(nu) < 1.0); }
+static int bad_mu(double mu) { return !(mu > 0.0) || !isfinite(mu); }
+
 double bkf_asym_k(double nu)
 {
+    if (bad_nu(nu)) return NAN;
     double nu2 = nu * nu;
     return 3.0 + (nu2 - 1.0) * log((4.0 - nu2) / (1.0 - nu2));
 }
 
-double bkf_asym_period_leading(double mu, double nu) { return bkf_asym_k(nu) * mu; }
+double bkf_asym_period_leading(double mu, double nu)
+{
+    return bad_mu(mu) ? NAN : bkf_asym_k(nu) * mu;
+}
 
 double bkf_asym_knee_coefficient(double nu)
 {
+    if (bad_nu(nu)) return NAN;
     double right = 1.0 - nu, left = 1.0 + nu;
     double delays = cbrt(1.0 / right) + cbrt(1.0 / left);
     double landings = cbrt(right * right) / (2.0 + nu) + cbrt(left * left) / (2.0 - nu);
     return BKF_AIRY_A1 * (delays + landings);
 }
 
-double bkf_asym_log_coefficient(double nu) { return -2.0 / (3.0 * (1.0 - nu * nu)); }
+double bkf_asym_log_coefficient(double nu)
+{
+    return bad_nu(nu) ? NAN : -2.0 / (3.0 * (1.0 - nu * nu));
+}
 
 double bkf_asym_period_large(double mu, double nu)
 {
+    if (bad_mu(mu) || bad_nu(nu)) return NAN;
     return bkf_asym_k(nu) * mu + bkf_asym_knee_coefficient(nu) * pow(mu, -1.0 / 3.0) +
            bkf_asym_log_coefficient(nu) * log(mu) / mu;
 }
 
 double bkf_asym_small_coefficient(double nu)
 {
+    if (bad_nu(nu)) return NAN;
     double nu2 = nu * nu;
     return (1.0 - nu2) * (3.0 + 29.0 * nu2) / 48.0;
 }
 
 double bkf_asym_period_small(double mu, double nu)
 {
+    if (bad_mu(mu) || bad_nu(nu)) return NAN;
     return 2.0 * M_PI * (1.0 + bkf_asym_small_coefficient(nu) * mu * mu);
 }
 

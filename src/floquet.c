@@ -478,6 +478,7 @@ int bkf_floquet_longwave(bkf_floquet *f, double *a, double *a_err, bkf_error *er
 
 double bkf_floquet_slip_rate(double gamma, double c, double nu, double q)
 {
+    if (!(gamma > 0) || !(c >= 0) || !isfinite(gamma + c + nu + q)) return NAN;
     double K = 1.0 + c * c * q * q;
     double b = gamma * (1.0 - nu * nu); /* -gamma phi'(nu) */
     double disc = b * b - 4.0 * K;

@@ -3,8 +3,10 @@
 #define _XOPEN_SOURCE 700
 #include "bkfront/io.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <limits.h>
 #include <math.h>
 #include <stdlib.h>
@@ -31,6 +33,7 @@ struct bkf_io_table {
 
 int bkf_io_format_parse(const char *name, bkf_io_format *format, bkf_error *err)
 {
+    if (!format) return bkf_error_set(err, BKF_EINPUT, "format pointer is NULL");
     if (name && strcmp(name, "tsv") == 0) {
         *format = BKF_IO_TSV;
         return BKF_OK;
@@ -381,11 +384,27 @@ static char *dup_string(const char *s)
     return d;
 }
 
+/* A path inside a one-line message: control characters become '?', and a
+ * long one is cut with "...". */
+static const char *shown(const char *text, char *buf, size_t size)
+{
+    size_t n = 0;
+    const unsigned char *s = (const unsigned char *)text;
+    for (; *s && n < size - 4; s++) buf[n++] = (*s < 0x20 || *s == 0x7f) ? '?' : (char)*s;
+    if (*s) {
+        memcpy(buf + n, "...", 3);
+        n += 3;
+    }
+    buf[n] = '\0';
+    return buf;
+}
+
 /* A symbolic link's target is replaced, not the link: rename() over the link
  * would silently turn it into a regular file. */
 static char *resolve_target(const char *path, bkf_error *err, int *status)
 {
     struct stat st;
+    char sp[200];
     *status = BKF_OK;
     if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
         char *real = realpath(path, NULL);
@@ -394,7 +413,8 @@ static char *resolve_target(const char *path, bkf_error *err, int *status)
         char buf[PATH_MAX];
         ssize_t n = readlink(path, buf, sizeof buf - 1);
         if (n < 0 || (size_t)n >= sizeof buf - 1) {
-            *status = bkf_error_set(err, BKF_EINPUT, "cannot resolve the symbolic link '%s'", path);
+            *status = bkf_error_set(err, BKF_EINPUT, "cannot resolve the symbolic link '%s'",
+                                    shown(path, sp, sizeof sp));
             return NULL;
         }
         buf[n] = '\0';
@@ -411,8 +431,45 @@ static char *resolve_target(const char *path, bkf_error *err, int *status)
     return dup_string(path);
 }
 
+/* Temporaries are named DIR/.BASE.tmp.PID.TAG (TAG: up to 8 hex digits).
+ * One whose process no longer exists on this machine was left by a run that
+ * was killed (SIGKILL, power loss): remove it.  Best effort, silent. */
+static void remove_stale_temps(const char *dir, const char *base)
+{
+    DIR *d = opendir(dir);
+    if (!d) return;
+    size_t blen = strlen(base), dlen = strlen(dir);
+    struct dirent *de;
+    while ((de = readdir(d)) != NULL) {
+        const char *n = de->d_name;
+        if (n[0] != '.' || strncmp(n + 1, base, blen) != 0 || strncmp(n + 1 + blen, ".tmp.", 5))
+            continue;
+        const char *p = n + 1 + blen + 5;
+        if (*p < '1' || *p > '9') continue;
+        char *end;
+        errno = 0;
+        long pid = strtol(p, &end, 10);
+        if (errno || *end != '.' || pid <= 0 || pid == (long)getpid()) continue;
+        const char *tag = end + 1;
+        size_t tlen = strlen(tag);
+        if (tlen == 0 || tlen > 8 || strspn(tag, "0123456789abcdef") != tlen) continue;
+        if (kill((pid_t)pid, 0) == 0 || errno != ESRCH) continue; /* alive, or not ours */
+        size_t nlen = strlen(n);
+        char *full = malloc(dlen + nlen + 2);
+        if (!full) break;
+        memcpy(full, dir, dlen);
+        size_t k = dlen;
+        if (k && full[k - 1] != '/') full[k++] = '/';
+        memcpy(full + k, n, nlen + 1);
+        (void)unlink(full);
+        free(full);
+    }
+    closedir(d);
+}
+
 bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
 {
+    char sp[200];
     if (!path || !*path) {
         bkf_error_set(err, BKF_EINPUT, "output file name is empty");
         return NULL;
@@ -431,7 +488,8 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
     }
     size_t tlen = strlen(a->target);
     if (a->target[tlen - 1] == '/') {
-        bkf_error_set(err, BKF_EINPUT, "output '%s' names a directory, not a file", path);
+        bkf_error_set(err, BKF_EINPUT, "output '%s' names a directory, not a file",
+                      shown(path, sp, sizeof sp));
         atomic_free(a);
         return NULL;
     }
@@ -441,7 +499,8 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
     int exists = stat(a->target, &st) == 0;
     if (exists && !S_ISREG(st.st_mode)) {
         /* rename() would replace a device or FIFO with a regular file. */
-        bkf_error_set(err, BKF_EINPUT, "output '%s' exists and is not a regular file", path);
+        bkf_error_set(err, BKF_EINPUT, "output '%s' exists and is not a regular file",
+                      shown(path, sp, sizeof sp));
         atomic_free(a);
         return NULL;
     }
@@ -461,6 +520,7 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
         a->dir[dlen] = '\0';
     } else
         strcpy(a->dir, ".");
+    remove_stale_temps(a->dir, base);
 
     /* O_EXCL with a fresh name rather than mkstemp(): mkstemp forces mode
      * 0600, and the umask cannot be read without changing it. */
@@ -477,7 +537,8 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
         if (fd < 0 && open_errno != EEXIST) break;
     }
     if (fd < 0) {
-        bkf_error_set(err, BKF_EINPUT, "cannot write '%s': %s", path, strerror(open_errno));
+        bkf_error_set(err, BKF_EINPUT, "cannot write '%s': %s", shown(path, sp, sizeof sp),
+                      strerror(open_errno));
         atomic_free(a);
         return NULL;
     }
@@ -487,7 +548,8 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
         int e = errno;
         close(fd);
         unlink(a->temp);
-        bkf_error_set(err, BKF_ENOMEM, "cannot open a stream on '%s': %s", a->temp, strerror(e));
+        bkf_error_set(err, BKF_ENOMEM, "cannot open a stream on '%s': %s",
+                      shown(a->temp, sp, sizeof sp), strerror(e));
         atomic_free(a);
         return NULL;
     }
@@ -503,6 +565,7 @@ const char *bkf_io_atomic_temp_path(const bkf_io_atomic *file)
 
 int bkf_io_atomic_commit(bkf_io_atomic *a, bkf_error *err)
 {
+    char sp[200];
     if (!a) return bkf_error_set(err, BKF_EINPUT, "atomic file is NULL");
     int status = BKF_OK;
     const char *step = NULL;
@@ -525,7 +588,8 @@ int bkf_io_atomic_commit(bkf_io_atomic *a, bkf_error *err)
     }
     if (step) {
         unlink(a->temp);
-        status = bkf_error_set(err, BKF_ENUMERIC, "writing '%s' failed (%s): %s", a->target,
+        status = bkf_error_set(err, BKF_ENUMERIC, "writing '%s' failed (%s): %s",
+                               shown(a->target, sp, sizeof sp),
                                step, e ? strerror(e) : "I/O error");
     } else {
         /* The rename is durable only once the directory entry is on disk;

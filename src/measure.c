@@ -697,7 +697,9 @@ int bkf_measure_fit_speed(const bkf_measure *m, double t_from, double t_to, doub
                           double *speed_err, size_t *tracks, bkf_error *err)
 {
     if (!m || !speed || !speed_err) return bkf_error_set(err, BKF_EINPUT, "NULL argument");
-    if (!(t_from < t_to)) return bkf_error_set(err, BKF_EINPUT, "need t_from < t_to");
+    if (!isfinite(t_from) || !isfinite(t_to) || !(t_from < t_to))
+        return bkf_error_set(err, BKF_EINPUT, "need finite t_from < t_to (have %g, %g)", t_from,
+                             t_to);
     size_t a = 0;
     while (a < m->nrec && m->rec[a].t < t_from) a++;
     size_t b = a;

@@ -56,7 +56,7 @@ struct bkf_pde {
 
 bkf_pde_options bkf_pde_options_default(void)
 {
-    bkf_pde_options o = {1e-9, BKF_PDE_RK8PD, 0, 4.0, 0};
+    bkf_pde_options o = {1e-9, BKF_PDE_RK8PD, 0, 4.0, 0, NULL};
     return o;
 }
 
@@ -372,16 +372,19 @@ nomem:
     return NULL;
 }
 
-const bkf_pde_params *bkf_pde_get_params(const bkf_pde *m) { return &m->p; }
-size_t bkf_pde_size(const bkf_pde *m) { return m->N; }
-double bkf_pde_spacing(const bkf_pde *m) { return m->h; }
-double bkf_pde_time(const bkf_pde *m) { return m->t; }
-const double *bkf_pde_psi(const bkf_pde *m) { return m->y; }
-const double *bkf_pde_eta(const bkf_pde *m) { return m->y + m->N; }
-const bkf_pde_stats *bkf_pde_get_stats(const bkf_pde *m) { return &m->stats; }
+/* Accessors and diagnostics of a NULL object (or field) give NULL, 0 or
+ * NaN rather than crash. */
+const bkf_pde_params *bkf_pde_get_params(const bkf_pde *m) { return m ? &m->p : NULL; }
+size_t bkf_pde_size(const bkf_pde *m) { return m ? m->N : 0; }
+double bkf_pde_spacing(const bkf_pde *m) { return m ? m->h : NAN; }
+double bkf_pde_time(const bkf_pde *m) { return m ? m->t : NAN; }
+const double *bkf_pde_psi(const bkf_pde *m) { return m ? m->y : NULL; }
+const double *bkf_pde_eta(const bkf_pde *m) { return m ? m->y + m->N : NULL; }
+const bkf_pde_stats *bkf_pde_get_stats(const bkf_pde *m) { return m ? &m->stats : NULL; }
 
 void bkf_pde_stats_reset(bkf_pde *m)
 {
+    if (!m) return;
     memset(&m->stats, 0, sizeof m->stats);
     m->stats.h_min = INFINITY;
 }
@@ -390,6 +393,7 @@ void bkf_pde_stats_reset(bkf_pde *m)
 
 double bkf_pde_energy_of(bkf_pde *m, const double *psi, const double *eta)
 {
+    if (!m || !psi || !eta) return NAN;
     size_t N = m->N;
     double g = m->p.gamma, nu = m->p.nu, c2 = m->p.c * m->p.c;
     laplacian(m, psi, m->psit);
@@ -404,6 +408,7 @@ double bkf_pde_energy_of(bkf_pde *m, const double *psi, const double *eta)
 
 double bkf_pde_spectral_tail(bkf_pde *m, const double *field)
 {
+    if (!m || !field) return NAN;
     size_t N = m->N;
     memcpy(m->rbuf, field, N * sizeof *field);
     fftw_execute_dft_r2c(m->fwd, m->rbuf, m->cbuf);
@@ -417,9 +422,9 @@ double bkf_pde_spectral_tail(bkf_pde *m, const double *field)
     return all > 0 ? tail / all : 0.0;
 }
 
-double bkf_pde_energy(bkf_pde *m) { return bkf_pde_energy_of(m, m->y, m->y + m->N); }
-double bkf_pde_dissipation(const bkf_pde *m) { return m->y[2 * m->N + 1]; }
-double bkf_pde_mean_integral(const bkf_pde *m) { return m->y[2 * m->N]; }
+double bkf_pde_energy(bkf_pde *m) { return m ? bkf_pde_energy_of(m, m->y, m->y + m->N) : NAN; }
+double bkf_pde_dissipation(const bkf_pde *m) { return m ? m->y[2 * m->N + 1] : NAN; }
+double bkf_pde_mean_integral(const bkf_pde *m) { return m ? m->y[2 * m->N] : NAN; }
 
 static double mean_of(const double *v, size_t N)
 {
@@ -445,11 +450,13 @@ static void mark_set(bkf_pde *m)
 
 double bkf_pde_energy_residual(bkf_pde *m)
 {
+    if (!m) return NAN;
     return bkf_pde_energy(m) - m->H_set - m->y[2 * m->N + 1];
 }
 
 double bkf_pde_mean_residual(const bkf_pde *m)
 {
+    if (!m) return NAN;
     size_t N = m->N;
     return mean_of(m->y + N, N) - m->mean_eta_set +
            (m->y[2 * N] - m->p.nu * (m->t - m->t_set)) / m->p.gamma;
@@ -457,11 +464,13 @@ double bkf_pde_mean_residual(const bkf_pde *m)
 
 double bkf_pde_sample_energy_residual(bkf_pde *m, const bkf_pde_sample *s)
 {
+    if (!m || !s) return NAN;
     return bkf_pde_energy_of(m, s->psi, s->eta) - m->H_set - s->D;
 }
 
 double bkf_pde_sample_mean_residual(const bkf_pde *m, const bkf_pde_sample *s)
 {
+    if (!m || !s || !s->eta) return NAN;
     return mean_of(s->eta, m->N) - m->mean_eta_set + (s->Q - m->p.nu * (s->t - m->t_set)) / m->p.gamma;
 }
 
@@ -480,9 +489,10 @@ int bkf_pde_set_state(bkf_pde *m, const double *psi, const double *eta, double t
     if (!m || !psi || !eta) return bkf_error_set(err, BKF_EINPUT, "NULL state");
     if (!isfinite(t)) return bkf_error_set(err, BKF_EINPUT, "t must be finite");
     for (size_t i = 0; i < m->N; i++)
-        if (!isfinite(psi[i]) || !isfinite(eta[i]))
-            return bkf_error_set(err, BKF_EINPUT, "the state has a non-finite value at i = %zu",
-                                 i);
+        if (!(fabs(psi[i]) <= BLOWUP) || !(fabs(eta[i]) <= BLOWUP))
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "the state at i = %zu is not finite or beyond %g, where a run "
+                                 "counts as blown up", i, BLOWUP);
     memcpy(m->y, psi, m->N * sizeof *psi);
     memcpy(m->y + m->N, eta, m->N * sizeof *eta);
     m->t = t;
@@ -532,6 +542,7 @@ static int check_amp(const char *name, double a, bkf_error *err)
 
 int bkf_pde_init_uniform(bkf_pde *m, double amp, unsigned long seed, bkf_error *err)
 {
+    if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
     int s = check_amp("amp", amp, err);
     if (s) return s;
     size_t N = m->N;
@@ -547,6 +558,7 @@ int bkf_pde_init_uniform(bkf_pde *m, double amp, unsigned long seed, bkf_error *
 
 int bkf_pde_init_oscillation(bkf_pde *m, size_t j, double amp, bkf_error *err)
 {
+    if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
     int s;
     if ((s = check_amp("amp", amp, err))) return s;
     if (j >= m->N / 2)
@@ -587,6 +599,7 @@ int bkf_pde_init_oscillation(bkf_pde *m, size_t j, double amp, bkf_error *err)
 int bkf_pde_init_front(bkf_pde *m, const bkf_pde_front_spec *spec, bkf_pde_front_info *info,
                        double *clean_psi, bkf_error *err)
 {
+    if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
     bkf_pde_front_spec sp = spec ? *spec : bkf_pde_front_spec_default();
     int s;
     if (sp.n < 1) return bkf_error_set(err, BKF_EINPUT, "the number of fronts n must be >= 1");
@@ -837,6 +850,11 @@ int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer obs
         if (progress && progress((m->t - t0) / (t_end - t0), pdata)) {
             m->stats.stopped = 1;
             return BKF_OK;
+        }
+        if (m->o.cancel && *m->o.cancel && m->t < t_end) {
+            m->stats.stopped = 1;
+            return bkf_error_set(err, BKF_ECANCELED, "canceled at t = %.9g of %.9g", m->t,
+                                 t_end);
         }
         if (m->o.max_steps && steps_here >= m->o.max_steps && m->t < t_end)
             return bkf_error_set(err, BKF_ENUMERIC, "more than %zu steps before t = %g",

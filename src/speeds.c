@@ -1307,7 +1307,8 @@ int bkf_speeds_branch(const bkf_speeds_params *start, size_t n, size_t root_inde
     int rc = bkf_speeds_check(start, &o, err);
     if (rc) return rc;
     if (n < 1) return bkf_error_set(err, BKF_EINPUT, "n = 0 must be >= 1");
-    if (root_index < 1) root_index = 1;
+    if (root_index < 1)
+        return bkf_error_set(err, BKF_EINPUT, "root_index = 0 must be >= 1 (1: the fastest)");
     if (!(start->c > 0))
         return bkf_error_set(err, BKF_EINPUT,
                              "c = 0: no continuation needed, v = S/(n T(gamma)) in closed form "

@@ -19,6 +19,7 @@ int bkf_status_exit_code(int status)
     switch (status) {
     case BKF_OK: return 0;
     case BKF_EINPUT: return 2;
+    case BKF_ECANCELED: return 130;
     default: return 1;
     }
 }

@@ -4,6 +4,8 @@
 #ifndef BKFRONT_ASYMPTOTICS_H
 #define BKFRONT_ASYMPTOTICS_H
 
+/* Every function is NaN outside the domain |nu| < 1, mu > 0 (finite). */
+
 /* First zero of Ai(-x). */
 #define BKF_AIRY_A1 2.338107410459767
 

@@ -102,7 +102,7 @@ int bkf_floquet_longwave(bkf_floquet *floquet, double *a, double *a_err, bkf_err
 /* Growth rate of a perturbation of continuous slip psi = nu, per unit
  * time: the largest Re s of s^2 + gamma phi'(nu) s + (1 + c^2 q^2) = 0.
  * Times the oscillation's period T it is the growth per period comparable
- * with lambda_q. */
+ * with lambda_q.  NaN unless gamma > 0, c >= 0 and every argument finite. */
 double bkf_floquet_slip_rate(double gamma, double c, double nu, double q);
 
 /* ------------------------------------------------------------ stability */

@@ -75,7 +75,10 @@ typedef struct bkf_io_atomic bkf_io_atomic;
 
 /* Creates the temporary file (in the target's directory, following a
  * symbolic link to its target, with the mode of an existing target or else
- * 0666 less the umask).  BKF_EINPUT when the target cannot be written there:
+ * 0666 less the umask), named DIR/.BASE.tmp.PID.TAG for the target DIR/BASE
+ * (PID the writing process, TAG up to 8 hex digits).  A process killed
+ * outright (SIGKILL) leaves its temporary; the next open for the same target
+ * removes every such temporary whose PID no longer exists on this machine.  BKF_EINPUT when the target cannot be written there:
  * missing directory, no permission, the target is a directory or another
  * non-regular file such as a device. */
 bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err);

@@ -55,6 +55,7 @@
 #ifndef BKFRONT_PDE_H
 #define BKFRONT_PDE_H
 
+#include <signal.h>
 #include <stddef.h>
 #include "bkfront/status.h"
 
@@ -91,6 +92,12 @@ typedef struct {
                                 default 4 (see below); the chain
                                 ignores it */
     size_t max_steps;        /* per run call; 0: no limit */
+    /* Cancellation: when non-NULL and *cancel becomes nonzero (e.g. set by a
+     * signal handler), bkf_pde_run stops after the step in progress and
+     * returns BKF_ECANCELED; the state is that of the last accepted step
+     * (bkf_pde_time), every sample up to it has been delivered.  Default
+     * NULL. */
+    const volatile sig_atomic_t *cancel;
 } bkf_pde_options;
 
 bkf_pde_options bkf_pde_options_default(void);
@@ -115,7 +122,8 @@ double bkf_pde_time(const bkf_pde *pde);
 const double *bkf_pde_psi(const bkf_pde *pde);  /* N values at x_i = i h */
 const double *bkf_pde_eta(const bkf_pde *pde);
 
-/* Sets the field (arrays of N finite values) and the time; the quadratures
+/* Sets the field (arrays of N finite values, |value| <= 1e6, the bound
+ * beyond which a run counts as blown up) and the time; the quadratures
  * Q and D restart from 0. */
 int bkf_pde_set_state(bkf_pde *pde, const double *psi, const double *eta, double t,
                       bkf_error *err);
@@ -198,7 +206,8 @@ typedef struct {
  * <= t_end, and at t_end (once, also when it falls on the grid).
  * sample_dt > 0.  Stats accumulate over calls (reset with _stats_reset).
  * BKF_ENUMERIC if the step size underflows, the field blows up (non-finite
- * or |psi| > 1e6) or max_steps is exceeded. */
+ * or |psi| > 1e6) or max_steps is exceeded; BKF_ECANCELED when
+ * options.cancel was raised (see above). */
 int bkf_pde_run(bkf_pde *pde, double t_end, double sample_dt, bkf_pde_observer observer,
                 void *observer_data, bkf_pde_progress progress, void *progress_data,
                 bkf_error *err);

@@ -11,7 +11,9 @@ typedef enum {
     BKF_OK = 0,
     BKF_ENUMERIC = 1, /* numerical failure: no convergence, tolerance not met */
     BKF_EINPUT = 2,   /* bad input: parameter outside its valid range */
-    BKF_ENOMEM = 3
+    BKF_ENOMEM = 3,
+    BKF_ECANCELED = 4 /* stopped by the caller's cancellation flag; the work
+                         done so far is kept (the message says how far) */
 } bkf_status;
 
 #define BKF_ERROR_LEN 320
@@ -25,7 +27,8 @@ typedef struct {
 int bkf_error_set(bkf_error *err, int status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
-/* Exit code the CLI uses for a status: 0 ok, 1 numerical, 2 input. */
+/* Exit code the CLI uses for a status: 0 ok, 1 numerical, 2 input,
+ * 130 canceled (128 + SIGINT, as a shell reports Ctrl-C). */
 int bkf_status_exit_code(int status);
 
 #endif

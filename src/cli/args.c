@@ -26,6 +26,11 @@ static const char *shown(const char *text, char *buf, size_t size)
     return buf;
 }
 
+const char *cli_shown(const char *text, char *buf, size_t size)
+{
+    return shown(text ? text : "", buf, size);
+}
+
 static int is_nonfinite_word(const char *s)
 {
     if (*s == '+' || *s == '-') s++;
@@ -90,7 +95,7 @@ static int read_count(const char *text, size_t max, size_t *value)
     size_t n = 0;
     for (const char *p = text; *p; p++) {
         size_t d = (size_t)(*p - '0');
-        if (n > (max - d) / 10) return 0;  /* n * 10 + d > max */
+        if (d > max || n > (max - d) / 10) return 0;  /* n * 10 + d > max */
         n = n * 10 + d;
     }
     if (n < 1) return 0;
@@ -313,39 +318,98 @@ char *cli_command_line(int argc, char **argv)
 
 /* --------------------------------------------------------------- output */
 
-static char pending_temp[4096];
-static volatile sig_atomic_t pending_armed;
-static const int cleanup_signals[] = {SIGINT, SIGTERM, SIGHUP};
-static struct sigaction saved_actions[3];
+/* Signals.  While an output file's temporary exists (at most
+ * CLI_MAX_PENDING at once) or a cancellable computation runs, SIGINT,
+ * SIGTERM and SIGHUP are caught by on_signal:
+ *  - during a cancellable computation the first SIGINT or SIGTERM only
+ *    records itself in cancel_flag (the computation stops at its next check
+ *    and the command keeps what was complete);
+ *  - otherwise (a second signal, SIGHUP, or nothing cancellable) every
+ *    pending temporary is unlinked and the process dies of the signal, so
+ *    the exit status still says which signal it was.
+ * Only async-signal-safe calls in the handler: unlink, signal, raise.
+ * A signal that was ignored when the handlers went in (nohup) stays ignored. */
+#define CLI_MAX_PENDING 4
+static char pending_temp[CLI_MAX_PENDING][4096];
+static volatile sig_atomic_t pending_armed[CLI_MAX_PENDING];
+static volatile sig_atomic_t cancel_active, cancel_flag;
+static const int caught_signals[] = {SIGINT, SIGTERM, SIGHUP};
+#define NCAUGHT (sizeof caught_signals / sizeof caught_signals[0])
+static struct sigaction saved_actions[NCAUGHT];
+static int handlers_installed;
 
-/* Only async-signal-safe calls: unlink, then die of the same signal
- * (SA_RESETHAND restored the default action, delivered on return). */
-static void remove_pending(int sig)
+static void on_signal(int sig)
 {
-    if (pending_armed) unlink(pending_temp);
-    raise(sig);
+    if (cancel_active && !cancel_flag && sig != SIGHUP) {
+        cancel_flag = sig;
+        return;
+    }
+    for (size_t i = 0; i < CLI_MAX_PENDING; i++)
+        if (pending_armed[i]) unlink(pending_temp[i]);
+    signal(sig, SIG_DFL);
+    raise(sig); /* delivered when the handler returns (sig is blocked in it) */
 }
 
-static void arm_cleanup(const char *temp)
+static void update_handlers(void)
+{
+    int needed = cancel_active;
+    for (size_t i = 0; i < CLI_MAX_PENDING; i++) needed |= pending_armed[i];
+    if (needed && !handlers_installed) {
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_signal;
+        sigfillset(&sa.sa_mask); /* one handler at a time */
+        for (size_t i = 0; i < NCAUGHT; i++) {
+            sigaction(caught_signals[i], &sa, &saved_actions[i]);
+            if (saved_actions[i].sa_handler == SIG_IGN)
+                sigaction(caught_signals[i], &saved_actions[i], NULL);
+        }
+        handlers_installed = 1;
+    } else if (!needed && handlers_installed) {
+        for (size_t i = 0; i < NCAUGHT; i++) sigaction(caught_signals[i], &saved_actions[i], NULL);
+        handlers_installed = 0;
+    }
+}
+
+/* The slot now guarding `temp`, or -1 (no slot free, or a path too long:
+ * the file is still written atomically, only a signal may leave its
+ * temporary behind, as SIGKILL may). */
+static int arm_cleanup(const char *temp)
 {
     size_t n = strlen(temp);
-    if (n >= sizeof pending_temp) return;
-    memcpy(pending_temp, temp, n + 1);
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = remove_pending;
-    sigemptyset(&sa.sa_mask);
-    sa.sa_flags = SA_RESETHAND;
-    for (size_t i = 0; i < 3; i++) sigaction(cleanup_signals[i], &sa, &saved_actions[i]);
-    pending_armed = 1;
+    if (n >= sizeof pending_temp[0]) return -1;
+    for (int i = 0; i < CLI_MAX_PENDING; i++)
+        if (!pending_armed[i]) {
+            memcpy(pending_temp[i], temp, n + 1);
+            pending_armed[i] = 1;
+            update_handlers();
+            return i;
+        }
+    return -1;
 }
 
-static void disarm_cleanup(void)
+static void disarm_cleanup(int slot)
 {
-    if (!pending_armed) return;
-    pending_armed = 0;
-    for (size_t i = 0; i < 3; i++) sigaction(cleanup_signals[i], &saved_actions[i], NULL);
+    if (slot < 0 || slot >= CLI_MAX_PENDING || !pending_armed[slot]) return;
+    pending_armed[slot] = 0;
+    update_handlers();
 }
+
+const volatile sig_atomic_t *cli_cancel_begin(void)
+{
+    cancel_flag = 0;
+    cancel_active = 1;
+    update_handlers();
+    return &cancel_flag;
+}
+
+void cli_cancel_end(void)
+{
+    cancel_active = 0;
+    update_handlers();
+}
+
+int cli_cancel_signal(void) { return (int)cancel_flag; }
 
 int cli_output_open(cli_output *out, const char *path, const char *flag, bkf_error *err)
 {
@@ -354,7 +418,7 @@ int cli_output_open(cli_output *out, const char *path, const char *flag, bkf_err
     bkf_error e;
     out->file = bkf_io_atomic_open(path, &e);
     if (!out->file) return bkf_error_set(err, BKF_EINPUT, "%s: %s", flag, e.message);
-    arm_cleanup(bkf_io_atomic_temp_path(out->file));
+    out->slot = arm_cleanup(bkf_io_atomic_temp_path(out->file));
     return BKF_OK;
 }
 
@@ -375,7 +439,7 @@ int cli_output_write(cli_output *out, const char *data, size_t size, bkf_error *
     } else
         status = bkf_io_atomic_commit(out->file, err);
     out->file = NULL;
-    disarm_cleanup();
+    disarm_cleanup(out->slot);
     return status;
 }
 
@@ -384,7 +448,7 @@ void cli_output_abort(cli_output *out)
     if (!out || !out->file) return;
     bkf_io_atomic_abort(out->file);
     out->file = NULL;
-    disarm_cleanup();
+    disarm_cleanup(out->slot);
 }
 
 int cli_buffer_open(cli_buffer *buf, bkf_error *err)

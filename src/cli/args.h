@@ -6,6 +6,7 @@
 #ifndef BKFRONT_CLI_ARGS_H
 #define BKFRONT_CLI_ARGS_H
 
+#include <signal.h>
 #include <stddef.h>
 #include <stdio.h>
 #include "bkfront/io.h"
@@ -27,6 +28,10 @@ typedef struct {
     int (*run)(int argc, char **argv, bkf_error *err);
     void (*help)(FILE *out);
 } cli_command;
+
+/* User text for a one-line message: control characters become '?' and text
+ * longer than about size - 4 bytes is cut with "...".  Returns buf. */
+const char *cli_shown(const char *text, char *buf, size_t size);
 
 /* A finite decimal number, the whole string: no leading or trailing space,
  * no hex floats, no nan/inf, no overflow. */
@@ -79,14 +84,26 @@ char *cli_command_line(int argc, char **argv);
 /* All-or-nothing output: standard output, or a file replaced atomically.
  * Open before computing (so a bad path fails before any work), write the
  * finished buffer once, or abort.  While a file is open its temporary is
- * removed if SIGINT, SIGTERM or SIGHUP ends the process. */
+ * removed if SIGINT, SIGTERM or SIGHUP ends the process (up to 4 files open
+ * at once; SIGKILL cannot be caught, see bkf_io_atomic_open for what
+ * happens to its temporary). */
 typedef struct {
     bkf_io_atomic *file;  /* NULL: standard output */
+    int slot;             /* the signal cleanup's slot for its temporary */
 } cli_output;
 
 int cli_output_open(cli_output *out, const char *path, const char *flag, bkf_error *err);
 int cli_output_write(cli_output *out, const char *data, size_t size, bkf_error *err);
 void cli_output_abort(cli_output *out);
+
+/* Cancellation by SIGINT or SIGTERM: between cli_cancel_begin and
+ * cli_cancel_end the first such signal sets the returned flag (give it to a
+ * library call that checks one, e.g. bkf_pde_options.cancel) instead of
+ * ending the process; a second one ends it (temporaries removed).
+ * cli_cancel_signal is the signal that set the flag, or 0. */
+const volatile sig_atomic_t *cli_cancel_begin(void);
+void cli_cancel_end(void);
+int cli_cancel_signal(void);
 
 /* An in-memory stream (open_memstream) to build the whole output in. */
 typedef struct {

@@ -203,20 +203,21 @@ static int parse_c(const char *flag, const char *text, int positive, double *c, 
 static int parse_search(const char *text, double *lo, double *hi, bkf_error *err)
 {
     const char *form = "A:B with -1 < A < B < 1";
+    char a[72];
     const char *colon = text ? strchr(text, ':') : NULL;
     if (!colon || strchr(colon + 1, ':'))
-        return bkf_error_set(err, BKF_EINPUT, "--search: '%.60s' is not %s", text ? text : "", form);
+        return bkf_error_set(err, BKF_EINPUT, "--search: '%s' is not %s", cli_shown(text, a, sizeof a), form);
     char left[64];
     size_t n = (size_t)(colon - text);
     if (n >= sizeof left)
-        return bkf_error_set(err, BKF_EINPUT, "--search: '%.60s...' is not %s", text, form);
+        return bkf_error_set(err, BKF_EINPUT, "--search: '%s' is not %s", cli_shown(text, a, sizeof a), form);
     memcpy(left, text, n);
     left[n] = '\0';
     int s = cli_parse_double("--search", left, lo, err);
     if (!s) s = cli_parse_double("--search", colon + 1, hi, err);
     if (s) return s;
     if (!(*lo > -1.0 && *hi < 1.0 && *lo < *hi))
-        return bkf_error_set(err, BKF_EINPUT, "--search: '%.60s' is not %s", text, form);
+        return bkf_error_set(err, BKF_EINPUT, "--search: '%s' is not %s", cli_shown(text, a, sizeof a), form);
     return BKF_OK;
 }
 

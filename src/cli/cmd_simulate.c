@@ -306,7 +306,7 @@ static int parse_pairs(const char *text, const char *kind,
                        int (*take)(const char *key, const char *value, void *data, bkf_error *err),
                        void *data, bkf_error *err)
 {
-    char buf[256];
+    char buf[256], shown[72];
     if (strlen(text) >= sizeof buf)
         return bkf_error_set(err, BKF_EINPUT, "--init: the %s options are too long", kind);
     strcpy(buf, text);
@@ -315,7 +315,7 @@ static int parse_pairs(const char *text, const char *kind,
         char *eq = strchr(tok, '=');
         if (!eq || eq == tok || !eq[1])
             return bkf_error_set(err, BKF_EINPUT, "--init %s: '%s' is not key=value (%s)", kind,
-                                 tok, INIT_FORM);
+                                 cli_shown(tok, shown, sizeof shown), INIT_FORM);
         *eq = '\0';
         int s = take(tok, eq + 1, data, err);
         if (s) return s;
@@ -339,7 +339,9 @@ static int take_uniform(const char *key, const char *value, void *data, bkf_erro
 {
     init_plan *p = data;
     if (strcmp(key, "amp") == 0) return init_amp("uniform", key, value, &p->amp, err);
-    return bkf_error_set(err, BKF_EINPUT, "--init uniform: unknown key '%s' (amp)", key);
+    char a[72];
+    return bkf_error_set(err, BKF_EINPUT, "--init uniform: unknown key '%s' (amp)",
+                         cli_shown(key, a, sizeof a));
 }
 
 static int take_oscillation(const char *key, const char *value, void *data, bkf_error *err)
@@ -362,12 +364,15 @@ static int take_oscillation(const char *key, const char *value, void *data, bkf_
         }
         return cli_parse_count("--init oscillation j", value, BKF_PDE_N_MAX, &p->j, err);
     }
-    return bkf_error_set(err, BKF_EINPUT, "--init oscillation: unknown key '%s' (q, j, amp)", key);
+    char a[72];
+    return bkf_error_set(err, BKF_EINPUT, "--init oscillation: unknown key '%s' (q, j, amp)",
+                         cli_shown(key, a, sizeof a));
 }
 
 static int take_front(const char *key, const char *value, void *data, bkf_error *err)
 {
     init_plan *p = data;
+    char a[72];
     if (strcmp(key, "n") == 0) return cli_parse_count("--init front n", value, 100000, &p->front.n, err);
     if (strcmp(key, "root") == 0)
         return cli_parse_count("--init front root", value, 100, &p->front.root, err);
@@ -377,20 +382,19 @@ static int take_front(const char *key, const char *value, void *data, bkf_error 
         else if (strcmp(value, "right") == 0) p->front.direction = 1;
         else
             return bkf_error_set(err, BKF_EINPUT, "--init front dir: '%s' is not left or right",
-                                 value);
+                                 cli_shown(value, a, sizeof a));
         return BKF_OK;
     }
     return bkf_error_set(err, BKF_EINPUT, "--init front: unknown key '%s' (n, root, dir, noise)",
-                         key);
+                         cli_shown(key, a, sizeof a));
 }
 
 /* A TSV whose header names psi and eta (snapshots of bkfront simulate are
  * such files); with a t column, the rows of the last t are taken. */
-static int read_state_file(init_plan *p, bkf_error *err)
+static int read_state_stream(init_plan *p, FILE *f, bkf_error *err)
 {
-    FILE *f = fopen(p->path, "r");
-    if (!f)
-        return bkf_error_set(err, BKF_EINPUT, "--init file:%s: %s", p->path, strerror(errno));
+    char path[72], a[72];
+    cli_shown(p->path, path, sizeof path);
     char *line = NULL;
     size_t cap = 0;
     ssize_t len;
@@ -414,7 +418,7 @@ static int read_state_file(init_plan *p, bkf_error *err)
             if (ipsi < 0 || ieta < 0) {
                 status = bkf_error_set(err, BKF_EINPUT,
                                        "--init file:%s: the header (line %zu) must name the "
-                                       "columns psi and eta", p->path, lineno);
+                                       "columns psi and eta", path, lineno);
                 break;
             }
             continue;
@@ -442,7 +446,7 @@ static int read_state_file(init_plan *p, bkf_error *err)
             if (*end || end == tok || !isfinite(v) || errno) {
                 status = bkf_error_set(err, BKF_EINPUT,
                                        "--init file:%s: line %zu: '%s' is not a finite number",
-                                       p->path, lineno, tok);
+                                       path, lineno, cli_shown(tok, a, sizeof a));
                 break;
             }
             if (col == ipsi) vp = v;
@@ -452,7 +456,7 @@ static int read_state_file(init_plan *p, bkf_error *err)
         if (status) break;
         if (col != ncol) {
             status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: line %zu has %d fields, not %d",
-                                   p->path, lineno, col, ncol);
+                                   path, lineno, col, ncol);
             break;
         }
         psi[rows] = vp;
@@ -462,10 +466,9 @@ static int read_state_file(init_plan *p, bkf_error *err)
     }
     free(line);
     if (!status && ferror(f))
-        status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: read error", p->path);
-    fclose(f);
+        status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: read error", path);
     if (!status && !header)
-        status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: no header line", p->path);
+        status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: no header line", path);
     size_t first = 0;
     if (!status && it >= 0 && rows) {
         double tl = tt[rows - 1];
@@ -475,7 +478,7 @@ static int read_state_file(init_plan *p, bkf_error *err)
     }
     if (!status && rows - first < BKF_PDE_N_MIN)
         status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: %zu rows, need at least %d",
-                               p->path, rows - first, BKF_PDE_N_MIN);
+                               path, rows - first, BKF_PDE_N_MIN);
     if (!status) {
         p->rows = rows - first;
         p->psi = malloc(p->rows * sizeof *p->psi);
@@ -490,6 +493,20 @@ static int read_state_file(init_plan *p, bkf_error *err)
     free(eta);
     free(tt);
     return status;
+}
+
+static int read_state_file(init_plan *p, bkf_error *err)
+{
+    FILE *f = fopen(p->path, "r");
+    if (!f)
+    {
+        char a[72];
+        return bkf_error_set(err, BKF_EINPUT, "--init file:%s: %s",
+                             cli_shown(p->path, a, sizeof a), strerror(errno));
+    }
+    int s = read_state_stream(p, f, err);
+    fclose(f);
+    return s;
 }
 
 static int parse_init(const char *text, init_plan *p, bkf_error *err)
@@ -524,21 +541,24 @@ static int parse_init(const char *text, init_plan *p, bkf_error *err)
         p->path = rest;
         return read_state_file(p, err);
     }
-    return bkf_error_set(err, BKF_EINPUT, "--init: '%s' is not one of %s", text, INIT_FORM);
+    char a[72];
+    return bkf_error_set(err, BKF_EINPUT, "--init: '%s' is not one of %s",
+                         cli_shown(text, a, sizeof a), INIT_FORM);
 }
 
 /* Cross-checks that need the model parameters. */
 static int check_init(init_plan *ip, model_plan *mp, bkf_error *err)
 {
-    char a[32], b[32];
+    char a[32], b[32], path[72];
     bkf_error e;
     if (ip->kind == INIT_FILE) {
+        cli_shown(ip->path, path, sizeof path);
         if (mp->N_given && mp->params.N != ip->rows)
             return bkf_error_set(err, BKF_EINPUT, "--N: %zu differs from the %zu rows of --init "
-                                                  "file:%s", mp->params.N, ip->rows, ip->path);
+                                                  "file:%s", mp->params.N, ip->rows, path);
         mp->params.N = ip->rows;
         if (bkf_pde_check(&mp->params, &mp->options, &e))
-            return bkf_error_set(err, BKF_EINPUT, "--init file:%s: %s", ip->path, e.message);
+            return bkf_error_set(err, BKF_EINPUT, "--init file:%s: %s", path, e.message);
     }
     if (ip->kind == INIT_OSCILLATION || ip->kind == INIT_FRONT) {
         if (bkf_model_check_nu_active(mp->params.nu, &e))
@@ -680,6 +700,9 @@ static void simulate_help(FILE *out)
         "uncertainty, period at x = 0, and the work of the run.\n"
         "\n"
         "Output is all or nothing for each file: nothing is written on failure.\n"
+        "Ctrl-C (SIGINT) or SIGTERM stops the run cleanly: the frames completed so far are\n"
+        "written (each output with a comment 'interrupted ... at t = ...'), one line on\n"
+        "stderr says so, exit status 130 (143 for SIGTERM); a second signal ends it at once.\n"
         "exit status: 0 ok, 1 numerical failure, 2 bad input\n",
         BKF_PDE_N_MIN, BKF_PDE_N_MAX, TMAX_MAX, BKF_PDE_TOL_MIN, BKF_PDE_TOL_MAX, DEF_FRAMES);
 }
@@ -840,8 +863,9 @@ static int sim_observe(const bkf_pde_sample *smp, void *data)
     return 0;
 }
 
-static int write_spacetime(const sim_plan *p, const sim_run *r, size_t frames, FILE *out,
-                           bkf_error *err)
+/* `note`, if not NULL, becomes a comment line (text format only). */
+static int write_spacetime(const sim_plan *p, const sim_run *r, size_t frames, const char *note,
+                           FILE *out, bkf_error *err)
 {
     size_t N = p->m.params.N;
     double h = p->m.params.S / (double)N;
@@ -863,6 +887,7 @@ static int write_spacetime(const sim_plan *p, const sim_run *r, size_t frames, F
     fprintf(out, "# bkfront simulate: psi(x, t), gnuplot nonuniform matrix: first row N x_0 .. "
                  "x_{N-1}, then one row per t: t psi(x_0) .. psi(x_{N-1})\n"
                  "# plot 'FILE' nonuniform matrix using 1:2:3 with image\n");
+    if (note) fprintf(out, "# %s\n", note);
     fprintf(out, "%zu", N);
     for (size_t i = 0; i < N; i++) fprintf(out, " %.9g", (double)i * h);
     fputc('\n', out);
@@ -874,7 +899,8 @@ static int write_spacetime(const sim_plan *p, const sim_run *r, size_t frames, F
     return BKF_OK;
 }
 
-static int write_snapshots(const sim_plan *p, const sim_run *r, FILE *out, bkf_error *err)
+static int write_snapshots(const sim_plan *p, const sim_run *r, const char *note, FILE *out,
+                           bkf_error *err)
 {
     static const bkf_io_column cols[] = {
         {"t", BKF_IO_NUMBER}, {"x", BKF_IO_NUMBER}, {"psi", BKF_IO_NUMBER}, {"eta", BKF_IO_NUMBER}};
@@ -884,6 +910,10 @@ static int write_snapshots(const sim_plan *p, const sim_run *r, FILE *out, bkf_e
     if (!t) return BKF_ENOMEM;
     int s = bkf_io_table_comment(t, CLI_PROGRAM " " CLI_VERSION " simulate: snapshots of the "
                                     "field; readable by --init file:PATH (the last t)", err);
+    if (!s && note) s = bkf_io_table_comment(t, note, err);
+    if (!s && note)
+        s = bkf_io_table_comment(t, "the last snapshot is the state where the run stopped: "
+                                    "--init file:PATH continues from it", err);
     if (!s) s = comment_model(t, &p->m, err);
     for (size_t k = 0; !s && k < r->snap_next; k++) {
         const double *sn = r->snap + k * (2 * N + 1);
@@ -981,7 +1011,8 @@ static int simulate_compute(sim_plan *p, int argc, char **argv, progress_bar *ba
     r.diag = malloc((p->frames + 1) * SIM_NCOLUMNS * sizeof *r.diag);
     if (p->spacetime_path) r.field = malloc((p->frames + 1) * N * sizeof *r.field);
     if (p->snapshots_path) {
-        r.snap = malloc(p->snapshots * (2 * N + 1) * sizeof *r.snap);
+        /* one more: the state where an interrupted run stopped */
+        r.snap = malloc((p->snapshots + 1) * (2 * N + 1) * sizeof *r.snap);
         r.snap_frame = malloc(p->snapshots * sizeof *r.snap_frame);
     }
     if (!clean || !r.diag || (p->spacetime_path && !r.field) ||
@@ -1028,21 +1059,46 @@ static int simulate_compute(sim_plan *p, int argc, char **argv, progress_bar *ba
         *err = r.err;
         goto done;
     }
-    if (s) {
+    /* Interrupted (SIGINT/SIGTERM through options.cancel): the frames
+     * recorded so far are complete rows; they are written, marked. */
+    int canceled = s == BKF_ECANCELED;
+    if (s && !canceled) {
         bkf_error_set(err, s, "%s", e.message);
         goto done;
     }
-    bkf_measure_summary ms;
-    if ((s = bkf_measure_summarize(r.meas, &ms, &e))) {
-        bkf_error_set(err, BKF_ENUMERIC, "measurements: %s", e.message);
-        goto done;
+    char interrupted[160] = "";
+    if (canceled)
+        snprintf(interrupted, sizeof interrupted,
+                 "interrupted (%s) at t = %.9g of %.9g: %zu complete frames kept",
+                 cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT", bkf_pde_time(r.pde),
+                 t0 + p->m.tmax, r.frame_index);
+    /* The snapshots end with the state where the run stopped, so that
+     * --init file:SNAPSHOTS continues from there. */
+    if (canceled && r.snap && (r.snap_next == 0 ||
+                               r.snap[(r.snap_next - 1) * (2 * N + 1)] < bkf_pde_time(r.pde))) {
+        double *sn = r.snap + r.snap_next * (2 * N + 1);
+        sn[0] = bkf_pde_time(r.pde);
+        memcpy(sn + 1, bkf_pde_psi(r.pde), N * sizeof *sn);
+        memcpy(sn + 1 + N, bkf_pde_eta(r.pde), N * sizeof *sn);
+        r.snap_next++;
     }
+    bkf_measure_summary ms;
+    int have_summary = 0;
+    if ((s = bkf_measure_summarize(r.meas, &ms, &e))) {
+        if (!canceled) {
+            bkf_error_set(err, BKF_ENUMERIC, "measurements: %s", e.message);
+            goto done;
+        }
+    } else
+        have_summary = 1;
+    s = BKF_OK;
     t = bkf_io_table_alloc(out, p->m.format, sim_columns, SIM_NCOLUMNS, err);
     if (!t) {
         s = BKF_ENOMEM;
         goto done;
     }
-    s = write_summary(t, p, &r, &ms, &fi, period_ref, argc, argv, err);
+    if (canceled) s = bkf_io_table_comment(t, interrupted, err);
+    if (!s && have_summary) s = write_summary(t, p, &r, &ms, &fi, period_ref, argc, argv, err);
     if (!s && p->spacetime_path)
         s = commentf(t, err, "spacetime: %s (%s)", p->spacetime_path,
                      p->spacetime_binary ? "binary matrix, float32" : "text nonuniform matrix");
@@ -1052,8 +1108,12 @@ static int simulate_compute(sim_plan *p, int argc, char **argv, progress_bar *ba
         s = bkf_io_table_row(t, v, err);
     }
     if (!s) s = bkf_io_table_finish(t, err);
-    if (!s && p->spacetime_path) s = write_spacetime(p, &r, r.frame_index, st_buf->stream, err);
-    if (!s && p->snapshots_path) s = write_snapshots(p, &r, sn_buf->stream, err);
+    if (!s && p->spacetime_path)
+        s = write_spacetime(p, &r, r.frame_index, canceled ? interrupted : NULL, st_buf->stream,
+                            err);
+    if (!s && p->snapshots_path)
+        s = write_snapshots(p, &r, canceled ? interrupted : NULL, sn_buf->stream, err);
+    if (!s && canceled) s = bkf_error_set(err, BKF_ECANCELED, "%s", interrupted);
 done:
     bkf_io_table_free(t);
     bkf_measure_free(r.meas);
@@ -1090,18 +1150,30 @@ static int simulate_run(int argc, char **argv, bkf_error *err)
     if (!s && plan.snapshots_path) s = cli_buffer_open(&sn, err);
     if (!s) {
         progress_init(&bar, CLI_PROGRAM " simulate", plan.progress);
+        plan.m.options.cancel = cli_cancel_begin();
         s = simulate_compute(&plan, argc, argv, &bar, buf.stream, &st, &sn, err);
-        int c1 = cli_buffer_close(&buf, s ? NULL : err);
-        int c2 = cli_buffer_close(&st, s ? NULL : err);
-        int c3 = cli_buffer_close(&sn, s ? NULL : err);
-        if (!s) s = c1 ? c1 : c2 ? c2 : c3;
+        cli_cancel_end();
+        int ok = !s || s == BKF_ECANCELED;
+        int c1 = cli_buffer_close(&buf, ok ? err : NULL);
+        int c2 = cli_buffer_close(&st, ok ? err : NULL);
+        int c3 = cli_buffer_close(&sn, ok ? err : NULL);
+        if (ok && (c1 || c2 || c3)) s = c1 ? c1 : c2 ? c2 : c3;
     }
+    /* An interrupted run writes what was complete (marked as interrupted),
+     * then reports BKF_ECANCELED; its message is kept for the end. */
+    int canceled = s == BKF_ECANCELED;
+    bkf_error cancel_msg = *err;
+    if (canceled) s = BKF_OK;
     if (!s && plan.spacetime_path) s = write_file(plan.spacetime_path, "--spacetime", &st, err);
     if (!s && plan.snapshots_path) s = write_file(plan.snapshots_path, "--snapshots", &sn, err);
     if (!s)
         s = cli_output_write(&out, buf.data, buf.size, err);
     else
         cli_output_abort(&out);
+    if (!s && canceled) {
+        s = BKF_ECANCELED;
+        *err = cancel_msg;
+    }
     cli_buffer_free(&buf);
     cli_buffer_free(&st);
     cli_buffer_free(&sn);

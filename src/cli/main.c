@@ -99,5 +99,8 @@ int main(int argc, char **argv)
         fprintf(stderr, CLI_PROGRAM " %s: %s\n", cmd->name,
                 err.message[0] ? err.message : "failed");
     }
+    /* A canceled run exits as the shell reports the signal: 130 for SIGINT,
+     * 143 for SIGTERM. */
+    if (status == BKF_ECANCELED && cli_cancel_signal()) return 128 + cli_cancel_signal();
     return bkf_status_exit_code(status);
 }
