@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "scene.h"
 
+#include <ctype.h>
 #include <ini.h>
 #include <math.h>
 #include <stdarg.h>
@@ -295,6 +296,9 @@ static int fail(parse_state *st, int line, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
+    /* the message quotes the user's text: keep it one printable line */
+    for (char *c = msg; *c; c++)
+        if ((unsigned char)*c < 0x20 || *c == 0x7f) *c = '?';
     st->status = bkf_error_set(st->err, BKF_EINPUT, "%s:%d: %s", st->name, line, msg);
     return 0;
 }
@@ -314,8 +318,10 @@ static int valid_name(const char *name)
 static void header_line(parse_state *st, const char *line)
 {
     if (st->status) return;
+    /* inih skips what isspace() calls space: so must we, to see the same
+     * section headers */
     const char *p = line;
-    while (*p == ' ' || *p == '\t') p++;
+    while (isspace((unsigned char)*p)) p++;
     if (*p != '[') return;
     const char *end = strchr(p, ']');
     if (!end) return;  /* inih reports it */
@@ -323,9 +329,9 @@ static void header_line(parse_state *st, const char *line)
     snprintf(inner, sizeof inner, "%.*s", (int)(end - p - 1), p + 1);
     /* inih strips the section name's ends too */
     char *a = inner;
-    while (*a == ' ' || *a == '\t') a++;
+    while (isspace((unsigned char)*a)) a++;
     size_t n = strlen(a);
-    while (n && (a[n - 1] == ' ' || a[n - 1] == '\t')) a[--n] = '\0';
+    while (n && isspace((unsigned char)a[n - 1])) a[--n] = '\0';
     snprintf(st->section, sizeof st->section, "%s", a);
 
     if (strcmp(a, "model") == 0 || strcmp(a, "accuracy") == 0) {
@@ -418,6 +424,10 @@ static int handler(void *user, const char *section, const char *name, const char
     parse_state *st = user;
     if (st->status) return 1;
     if (!*section) return fail(st, st->line, "'%s' comes before any [section]", name);
+    /* a header inih accepted but the line reader did not recognise */
+    if (st->section_kind < -2 || st->section_kind >= (int)st->s->nproducts ||
+        strcmp(section, st->section) != 0)
+        return fail(st, st->line, "the section header before '%s' is not understood", name);
     unsigned where;
     scene_entry **list;
     size_t *count;
