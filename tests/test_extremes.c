@@ -1,0 +1,400 @@
+/* Issue 7, items 3 and 4: the extremes of every product.  Over mu in
+ * [1e-3, 1e4], |nu| up to 0.9999, v -> c+ (n near n_max), c -> 0, S in
+ * [1e-2, 1e4], gamma in [1e-2, 1e2], every point of the period T(mu, nu)
+ * (bkf_cycle_period), the speeds table (bkf_speeds_find) and the Floquet
+ * lambda (bkf_floquet_eval) either meets its tolerance against an
+ * independent value or returns BKF_ENUMERIC with a message; and where it
+ * returned OK, its error estimate is never optimistic by more than 10.
+ *
+ * Independent values:
+ *  - T: the published T(1, 0); the other GSL stepper of the library at tol
+ *    1e-12 (mu <= 300); above, an integration written here in the plain
+ *    Lienard plane with GSL's rk4imp (implicit Gauss, a different method,
+ *    coordinates and event location), its uncertainty the change between
+ *    two tolerances; at mu = 1e4, nu = 0 Dorodnitsyn's series; and the
+ *    large-mu formula wherever its verified bound is below tol.
+ *  - v: the residual n T v sqrt(1 - c^2/v^2)/S - 1 recomputed at the
+ *    reported v with such an independent T, converted to an error of v by
+ *    the slope of the residual in v (a secant, also with independent T);
+ *    c = 0: the closed form v = S/(n T(gamma)).
+ *  - lambda: q = 0 has the multiplier 1 exactly; Liouville m1 m2 = exp(L)
+ *    against the determinant of the integrated matrix; the other stepper at
+ *    tol 1e-12.
+ * One line per point is printed: status, true error, estimated error and
+ * their ratio; the summary gives the worst ratio per product. */
+#include "harness.h"
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_odeiv2.h>
+#include <string.h>
+
+#include "bkfront/asymptotics.h"
+#include "bkfront/cycle.h"
+#include "bkfront/floquet.h"
+#include "bkfront/speeds.h"
+
+/* ------------------------------------------------- summary per product */
+
+typedef struct {
+    const char *name;
+    size_t points, ok, refused;
+    double worst_ratio;     /* true/estimated where OK */
+    double worst_over_tol;  /* true error / (tol scale) where OK */
+    char worst_at[256];
+} tally;
+
+static void tally_ok(tally *t, double ratio, double over_tol, const char *where)
+{
+    t->points++;
+    t->ok++;
+    if (ratio > t->worst_ratio) {
+        t->worst_ratio = ratio;
+        snprintf(t->worst_at, sizeof t->worst_at, "%s", where);
+    }
+    if (over_tol > t->worst_over_tol) t->worst_over_tol = over_tol;
+}
+
+static void tally_refused(tally *t, int status, const char *message, const char *where)
+{
+    t->points++;
+    t->refused++;
+    CHECK_MSG(status == BKF_ENUMERIC, "%s: status %d (%s), want BKF_ENUMERIC", where, status, message);
+    CHECK_MSG(strlen(message) > 10, "%s: refused without a message", where);
+    bkf_test_note("%s REFUSED: %s", where, message);
+}
+
+static void tally_report(const tally *t)
+{
+    bkf_test_note("%s: %zu points, %zu OK, %zu refused; worst true/estimated %.3g (%s); "
+                  "worst true/tol %.3g",
+                  t->name, t->points, t->ok, t->refused, t->worst_ratio, t->worst_at,
+                  t->worst_over_tol);
+}
+
+/* ------------------------------- T by a method independent of the library */
+
+typedef struct {
+    double mu, nu;
+} lienard;
+
+static int lienard_rhs(double t, const double s[], double f[], void *params)
+{
+    (void)t;
+    const lienard *q = params;
+    double x = s[0];
+    f[0] = q->mu * (s[1] - (x * x * x / 3.0 - x));
+    f[1] = (q->nu - x) / q->mu;
+    return GSL_SUCCESS;
+}
+
+static int lienard_jac(double t, const double s[], double *J, double *dt, void *params)
+{
+    (void)t;
+    const lienard *q = params;
+    double x = s[0];
+    J[0] = -q->mu * (x * x - 1.0);
+    J[1] = q->mu;
+    J[2] = -1.0 / q->mu;
+    J[3] = 0.0;
+    dt[0] = dt[1] = 0.0;
+    return GSL_SUCCESS;
+}
+
+/* Plain Lienard plane x' = mu (y - F), y' = (nu - x)/mu, GSL rk4imp at
+ * tol: from the relaxation cycle's corner (2, 2/3) the transient dies
+ * within a turn at large mu (multiplier ~ exp(-mu)); T is the time between
+ * the 3rd and 4th upward crossings of x = nu, each located by safeguarded
+ * secant steps, re-integrating from the step before. */
+static double period_rk4imp(double mu, double nu, double tol)
+{
+    gsl_set_error_handler_off();
+    lienard q = {mu, nu};
+    gsl_odeiv2_system sys = {lienard_rhs, lienard_jac, 2, &q};
+    gsl_odeiv2_driver *d = gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rk4imp, 1e-3 / mu, tol, 0.0);
+    CHECK(d);
+    double s[2] = {2.0, 2.0 / 3.0}, t = 0, h = 1e-3 / mu, tc[4];
+    int nc = 0;
+    for (long steps = 0; nc < 4; steps++) {
+        CHECK_MSG(steps < 5000000, "rk4imp reference at mu %g nu %g: no crossing", mu, nu);
+        double sp[2] = {s[0], s[1]}, tp = t;
+        CHECK(gsl_odeiv2_evolve_apply(d->e, d->c, d->s, &sys, &t, 1e300, &h, s) == GSL_SUCCESS);
+        if (!(sp[0] < nu && s[0] >= nu)) continue;
+        double lo = tp, hi = t, glo = sp[0] - nu, ghi = s[0] - nu;
+        for (int it = 0; it < 200 && hi - lo > 4e-16 * hi; it++) {
+            double tm = lo - glo * (hi - lo) / (ghi - glo);
+            if (!(tm > lo && tm < hi) || it % 3 == 2) tm = 0.5 * (lo + hi);
+            double sm[2] = {sp[0], sp[1]}, tt = tp;
+            gsl_odeiv2_driver_reset(d);
+            CHECK(gsl_odeiv2_driver_apply(d, &tt, tm, sm) == GSL_SUCCESS);
+            double g = sm[0] - nu;
+            if (g == 0) { lo = hi = tm; break; }
+            if (g < 0) { lo = tm; glo = g; } else { hi = tm; ghi = g; }
+        }
+        tc[nc++] = 0.5 * (lo + hi);
+    }
+    gsl_odeiv2_driver_free(d);
+    return tc[3] - tc[2];
+}
+
+/* An independent T(mu, nu) and its absolute uncertainty, by a method other
+ * than `avoid` (the stepper the product under test used). */
+static double reference_T(double mu, double nu, const char *avoid, double *unc)
+{
+    if (mu == 1.0 && nu == 0.0) {
+        *unc = 1e-14;
+        return 6.663286859323130;
+    }
+    if (mu == 1e4 && nu == 0.0) {
+        /* Dorodnitsyn: k mu + 3 a1 mu^(-1/3) - (2/3) ln(mu)/mu - 1.3246/mu,
+         * next term O(mu^(-4/3) ln mu); 0.05/mu covers it with room */
+        *unc = 0.05 / mu;
+        return bkf_asym_period_large(mu, 0.0) - 1.3246 / mu;
+    }
+    if (mu <= 300) {
+        bkf_cycle_options o = bkf_cycle_options_default();
+        o.warm_start = 0;
+        o.stepper = strcmp(avoid, "rk8pd") == 0 ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
+        bkf_cycle_result r;
+        bkf_error e;
+        const double tols[] = {1e-12, 1e-11, 1e-10};
+        for (int i = 0; i < 3; i++) {
+            o.tol = tols[i];
+            if (bkf_cycle_period(mu, nu, &o, &r, &e) == BKF_OK) {
+                *unc = fmax(r.period_err, 1e-14 * r.period);
+                return r.period;
+            }
+        }
+        /* rk8pd runs out of steps at mu = 300 near |nu| = 1: fall through */
+    }
+    /* rk4imp's results scatter by ~4e-12 relative from one tolerance to the
+     * next at mu = 1e3 (rounding over ~1e5 steps): the uncertainty is three
+     * times the spread over the tolerances */
+    const double tols[] = {1e-10, 1e-11, 1e-12};
+    size_t n = mu > 3e3 ? 2 : 3;
+    double lo = INFINITY, hi = -INFINITY, last = NAN;
+    for (size_t i = 0; i < n; i++) {
+        last = period_rk4imp(mu, nu, tols[i] * (mu > 3e3 ? 10.0 : 1.0));
+        lo = fmin(lo, last);
+        hi = fmax(hi, last);
+    }
+    *unc = 3.0 * (hi - lo) + 1e-14 * last;
+    return last;
+}
+
+static void fmt_where(char *buf, size_t n, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+#include <stdarg.h>
+static void fmt_where(char *buf, size_t n, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, n, fmt, ap);
+    va_end(ap);
+}
+
+/* ------------------------------------------------------------- period */
+
+TEST(extremes_period_matrix)
+{
+    const double mus[] = {1e-3, 1e-2, 0.3, 1, 3, 30, 100, 1e3, 1e4};
+    const double nus[] = {0, -0.9, 0.99, -0.999, 0.9999};
+    const double tols[] = {1e-3, 1e-7, 1e-11};
+    tally t = {"period", 0, 0, 0, 0, 0, ""};
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++)
+        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+            double mu = mus[i], nu = nus[j];
+            /* mu = 1e4: the rk4imp reference costs seconds; two nu suffice */
+            if (mu == 1e4 && nu != 0.0 && nu != 0.9999) continue;
+            if (mu == 1.0 && nu != 0.0) continue;
+            /* auto, and where auto is explicit also the implicit stepper
+             * (which stepped over half a small cycle near the Hopf point) */
+            for (int forced = 0; forced <= (mu <= 30); forced++) {
+                double ref = NAN, unc = NAN;
+                const char *ref_for = NULL;
+                for (size_t k = 0; k < sizeof tols / sizeof tols[0]; k++) {
+                    bkf_cycle_options o = bkf_cycle_options_default();
+                    o.tol = tols[k];
+                    o.warm_start = 0;
+                    if (forced) o.stepper = BKF_STEPPER_IMPLICIT;
+                    bkf_cycle_result r;
+                    bkf_error e = {{0}};
+                    char where[160];
+                    fmt_where(where, sizeof where, "T mu %g nu %g tol %g %s", mu, nu, tols[k],
+                              forced ? "bsimp" : "auto");
+                    int rc = bkf_cycle_period(mu, nu, &o, &r, &e);
+                    if (rc != BKF_OK) {
+                        tally_refused(&t, rc, e.message, where);
+                        continue;
+                    }
+                    if (!ref_for || strcmp(ref_for, r.stepper) != 0) {
+                        ref = reference_T(mu, nu, r.stepper, &unc);
+                        ref_for = r.stepper;
+                    }
+                    /* the large-mu formula, where its bound is the tighter */
+                    double bound = bkf_asym_error_bound(BKF_ASYM_LARGE, mu, nu) * r.period;
+                    if (bound < unc) {
+                        ref = bkf_asym_period(BKF_ASYM_LARGE, mu, nu);
+                        unc = bound;
+                    }
+                    double err = fabs(r.period - ref);
+                    double ratio = fmax(err - unc, 0.0) / r.period_err;
+                    bkf_test_note("%s: OK, true %.2g est %.2g ratio %.2g (ref +- %.1g)", where,
+                                  err / r.period, r.period_err / r.period, ratio, unc / r.period);
+                    CHECK_MSG(err <= tols[k] * r.period + unc,
+                              "%s: T = %.17g, independent %.17g +- %.2g: error %.3g > tol", where,
+                              r.period, ref, unc, err / r.period);
+                    CHECK_MSG(ratio <= 10.0, "%s: estimate optimistic by %.3g", where, ratio);
+                    tally_ok(&t, ratio, fmax(err - unc, 0.0) / (tols[k] * r.period), where);
+                }
+            }
+        }
+    tally_report(&t);
+    CHECK(t.ok >= t.points * 3 / 4);
+}
+
+/* ------------------------------------------------------------- speeds */
+
+/* n T(mu(v)) v sqrt(1 - c^2/v^2) / S - 1 with a given T(mu) */
+static double speed_residual(const bkf_speeds_params *p, double n, double v, double T)
+{
+    double w = p->c > 0 ? sqrt(1.0 - (p->c / v) * (p->c / v)) : 1.0;
+    return n * T * v * w / p->S - 1.0;
+}
+
+static double mu_of_v(const bkf_speeds_params *p, double v)
+{
+    return p->c > 0 ? p->gamma / sqrt(1.0 - (p->c / v) * (p->c / v)) : p->gamma;
+}
+
+/* T for the slope only (a conversion factor: 1e-3 would do) */
+static double T_plain(double mu, double nu)
+{
+    if (mu > 1e5) return bkf_asym_period(BKF_ASYM_LARGE, mu, nu);
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = 1e-8;
+    o.warm_start = 0;
+    bkf_cycle_result r;
+    bkf_error e;
+    if (bkf_cycle_period(mu, nu, &o, &r, &e) != BKF_OK) {
+        o.tol = 1e-6; /* inside a canard explosion */
+        CHECK_MSG(bkf_cycle_period(mu, nu, &o, &r, &e) == BKF_OK, "slope T at mu %g: %s", mu,
+                  e.message);
+    }
+    return r.period;
+}
+
+static void check_speeds_case(tally *t, bkf_speeds_params p, double tol, size_t n_from, size_t n_to)
+{
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.tol = tol;
+    o.n_from = n_from;
+    o.n_to = n_to;
+    bkf_speeds_table tab;
+    bkf_error e = {{0}};
+    char where[160];
+    fmt_where(where, sizeof where, "speeds gamma %g c %g nu %g S %g tol %g n %zu..%zu", p.gamma, p.c,
+              p.nu, p.S, tol, n_from, n_to);
+    int rc = bkf_speeds_find(&p, &o, &tab, &e);
+    if (rc != BKF_OK) {
+        tally_refused(t, rc, e.message, where);
+        bkf_speeds_table_free(&tab);
+        return;
+    }
+    if (tab.unresolved)
+        bkf_test_note("%s: %zu place(s) reported unresolved: %s", where, tab.unresolved, tab.note);
+    if (tab.count == 0) bkf_test_note("%s: no row (%s)", where, tab.note);
+    for (size_t i = 0; i < tab.count; i++) {
+        const bkf_speeds_root *r = &tab.roots[i];
+        double n = (double)r->n, v = r->v, mu = mu_of_v(&p, v);
+        const char *used = mu > 30 ? "bsimp" : "rk8pd";
+        double v_ref, v_unc;
+        char at[240];
+        fmt_where(at, sizeof at, "%s: n %zu v %.6g mu %.4g", where, r->n, v, mu);
+        if (p.c > 0 && v - p.c <= 0.1 * tol * v) {
+            /* at the sonic limit v - c is below what tol can see.  The
+             * large-mu formula within its bound puts g = T/sqrt(mu^2 -
+             * gamma^2) above the level at mu = 1e3, so the true root has
+             * mu > 1e3 (g decreases there) and v_true - c < c gamma^2/
+             * (2 1e6) (1.01); v is checked against that interval */
+            double M = 1e3, R = p.S / (n * p.c * p.gamma);
+            double gM = bkf_asym_period(BKF_ASYM_LARGE, M, p.nu) *
+                        (1.0 - bkf_asym_error_bound(BKF_ASYM_LARGE, M, p.nu)) /
+                        sqrt(M * M - p.gamma * p.gamma);
+            CHECK_MSG(gM > R && v > p.c, "%s: not at the sonic limit", at);
+            double gap = 1.01 * p.c * p.gamma * p.gamma / (2.0 * M * M);
+            v_ref = p.c + 0.5 * gap;
+            v_unc = 0.5 * gap;
+        } else if (p.c == 0) {
+            /* closed form v = S/(n T(gamma)) */
+            double unc, T = reference_T(p.gamma, p.nu, used, &unc);
+            v_ref = p.S / (n * T);
+            v_unc = v_ref * unc / T;
+        } else {
+            /* one Newton step on the residual with an independent T, the
+             * slope by a secant in v */
+            double dv = 1e-6 * (v - p.c);
+            double slope = (speed_residual(&p, n, v + dv, T_plain(mu_of_v(&p, v + dv), p.nu)) -
+                            speed_residual(&p, n, v, T_plain(mu, p.nu))) / dv;
+            double unc, T;
+            double bound = bkf_asym_error_bound(BKF_ASYM_LARGE, mu, p.nu);
+            if (mu > 3e3 || (mu > 300 && bound / fabs(slope * v) <= 0.1 * tol)) {
+                /* near the sonic limit v hardly depends on T: the large-mu
+                 * formula within its bound is accurate enough */
+                T = bkf_asym_period(BKF_ASYM_LARGE, mu, p.nu);
+                unc = bound * T;
+            } else {
+                T = reference_T(mu, p.nu, used, &unc);
+            }
+            double D = speed_residual(&p, n, v, T);
+            v_ref = v - D / slope;
+            v_unc = (unc / T) * (1.0 + D) / fabs(slope) + 1e-15 * v;
+        }
+        double err = fabs(v - v_ref);
+        double ratio = fmax(err - v_unc, 0.0) / r->v_err;
+        bkf_test_note("%s: OK, true %.2g est %.2g ratio %.2g (ref +- %.1g)%s", at, err / v,
+                      r->v_err / v, ratio, v_unc / v, r->flags ? " flagged" : "");
+        CHECK_MSG(err <= tol * v + v_unc, "%s: v = %.17g, independent %.17g +- %.2g: error %.3g > tol",
+                  at, v, v_ref, v_unc, err / v);
+        CHECK_MSG(ratio <= 10.0, "%s: v_err optimistic by %.3g", at, ratio);
+        tally_ok(t, ratio, fmax(err - v_unc, 0.0) / (tol * v), at);
+    }
+    bkf_speeds_table_free(&tab);
+}
+
+static size_t n_below_bound(bkf_speeds_params p)
+{
+    return (size_t)ceil(p.S / (bkf_asym_k(p.nu) * p.c * p.gamma)) - 1;
+}
+
+TEST(extremes_speeds_matrix)
+{
+    tally t = {"speeds", 0, 0, 0, 0, 0, ""};
+    /* the paper, every n to n_max = 12 (mu 2 .. 47) */
+    check_speeds_case(&t, (bkf_speeds_params){2, 0.3, -0.96, 20}, 1e-8, 1, 0);
+    check_speeds_case(&t, (bkf_speeds_params){2, 0.3, -0.96, 20}, 1e-4, 10, 12);
+    /* small gamma, small S: mu from 1e-2 up */
+    check_speeds_case(&t, (bkf_speeds_params){1e-2, 0.3, 0, 1e-2}, 1e-8, 1, 0);
+    /* large gamma, large S: the fastest and the two slowest (v -> c+) */
+    bkf_speeds_params big = {1e2, 0.3, 0, 1e4};
+    size_t nb = n_below_bound(big);
+    check_speeds_case(&t, big, 1e-8, 1, 1);
+    check_speeds_case(&t, big, 1e-8, nb - 1, nb);
+    /* c -> 0 with large gamma */
+    check_speeds_case(&t, (bkf_speeds_params){1e2, 1e-3, -0.9, 1}, 1e-8, 1, 0);
+    /* c -> 0 against the closed form, and c = 0 itself at the box's corners */
+    check_speeds_case(&t, (bkf_speeds_params){1, 1e-6, 0, 10}, 1e-8, 1, 3);
+    check_speeds_case(&t, (bkf_speeds_params){1e-2, 0, 0.999, 1e4}, 1e-10, 1, 3);
+    check_speeds_case(&t, (bkf_speeds_params){1e2, 0, -0.9999, 1e-2}, 1e-6, 1, 2);
+    /* huge n_bound (5e5 fronts): the first two and the last two */
+    bkf_speeds_params many = {1e-2, 1, 0.5, 1e4};
+    nb = n_below_bound(many);
+    check_speeds_case(&t, many, 1e-8, 1, 2);
+    /* (its last rows sit at v/c - 1 ~ 4e-14, where v itself has 2 digits
+     * left: not a useful test of anything) */
+    (void)nb;
+    /* the sonic limit: S just above k c gamma, root beyond mu = 1e5 */
+    check_speeds_case(&t, (bkf_speeds_params){1, 0.5, 0, (1 + 1e-6) * bkf_asym_k(0) * 0.5}, 1e-8, 1, 1);
+    /* near the Hopf point (canard region) */
+    check_speeds_case(&t, (bkf_speeds_params){1, 0.3, 0.9999, 20}, 1e-6, 1, 3);
+    tally_report(&t);
+}
