@@ -40,6 +40,10 @@ struct bkf_pde {
     double *symbol;    /* -q_k^2 / N, k = 0 .. N/2 */
     double *fsymbol;   /* filter rates sigma_k / N (NULL: no filter) */
     fftw_complex *cbuf2;
+    /* moving frame (V = o.frame_speed != 0): V q_k / N, 0 at Nyquist */
+    double *dsymbol;
+    fftw_complex *cbuf3;
+    double *scr;       /* N scratch values for second_derivative */
     size_t keep;       /* modes kept by the 2/3 rule (k < keep) */
 
     /* integrator */
@@ -56,7 +60,7 @@ struct bkf_pde {
 
 bkf_pde_options bkf_pde_options_default(void)
 {
-    bkf_pde_options o = {1e-9, BKF_PDE_RK8PD, 0, 4.0, 0, NULL};
+    bkf_pde_options o = {1e-9, BKF_PDE_RK8PD, 0, 4.0, 0, NULL, 0.0};
     return o;
 }
 
@@ -93,6 +97,13 @@ int bkf_pde_check(const bkf_pde_params *p, const bkf_pde_options *o, bkf_error *
         return bkf_error_set(err, BKF_EINPUT, "filter = %g is outside [0, 1000]", o->filter);
     if (o->dealias && p->model != BKF_PDE_CONTINUUM)
         return bkf_error_set(err, BKF_EINPUT, "dealiasing applies to the continuum model only");
+    if (!isfinite(o->frame_speed) || fabs(o->frame_speed) > 1e3)
+        return bkf_error_set(err, BKF_EINPUT, "frame speed = %g is outside [-1000, 1000]",
+                             o->frame_speed);
+    if (o->frame_speed != 0 && p->model != BKF_PDE_CONTINUUM)
+        return bkf_error_set(err, BKF_EINPUT, "a moving frame applies to the continuum model only");
+    if (o->frame_speed != 0 && o->dealias)
+        return bkf_error_set(err, BKF_EINPUT, "a moving frame is not combined with dealiasing");
     return BKF_OK;
 }
 
@@ -132,6 +143,65 @@ static void operators(bkf_pde *m, const double *in, double *out, double *filt)
 
 static void laplacian(bkf_pde *m, const double *in, double *out) { operators(m, in, out, NULL); }
 
+/* The moving frame's operators, two transforms in and three out:
+ * lap = L psi, lin = (-F + V d/dx) psi, adv = V d/dx eta. */
+static void operators_frame(bkf_pde *m, const double *psi, const double *eta, double *lap,
+                            double *lin, double *adv)
+{
+    size_t N = m->N;
+    memcpy(m->rbuf, psi, N * sizeof *psi);
+    fftw_execute_dft_r2c(m->fwd, m->rbuf, m->cbuf);
+    for (size_t k = 0; k <= N / 2; k++) {
+        double ar = m->cbuf[k][0], ai = m->cbuf[k][1];
+        double fs = m->fsymbol ? m->fsymbol[k] : 0.0, dq = m->dsymbol[k];
+        m->cbuf2[k][0] = ar * m->symbol[k];
+        m->cbuf2[k][1] = ai * m->symbol[k];
+        m->cbuf3[k][0] = -fs * ar - dq * ai;
+        m->cbuf3[k][1] = -fs * ai + dq * ar;
+    }
+    fftw_execute_dft_c2r(m->bwd, m->cbuf2, m->lap);
+    memcpy(lap, m->lap, N * sizeof *lap);
+    fftw_execute_dft_c2r(m->bwd, m->cbuf3, m->lap);
+    memcpy(lin, m->lap, N * sizeof *lin);
+    memcpy(m->rbuf, eta, N * sizeof *eta);
+    fftw_execute_dft_r2c(m->fwd, m->rbuf, m->cbuf);
+    for (size_t k = 0; k <= N / 2; k++) {
+        double ar = m->cbuf[k][0], ai = m->cbuf[k][1], dq = m->dsymbol[k];
+        m->cbuf[k][0] = -dq * ai;
+        m->cbuf[k][1] = dq * ar;
+    }
+    fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
+    memcpy(adv, m->lap, N * sizeof *adv);
+}
+
+/* rhs in the moving frame; D' is the general dH/dt (see pde.h). */
+static int rhs_frame(bkf_pde *m, const double *restrict y, double *restrict dydt)
+{
+    size_t N = m->N;
+    const double *restrict psi = y, *restrict eta = y + N;
+    double *restrict dpsi = dydt, *restrict deta = dydt + N;
+    double g = m->p.gamma, ig = 1.0 / g, c2 = m->p.c * m->p.c, nu = m->p.nu;
+    double *restrict lap = m->scr;
+    operators_frame(m, psi, eta, lap, dpsi, deta);
+    double mean = 0.0, work = 0.0, big = 0.0;
+    for (size_t i = 0; i < N; i++) {
+        double x = psi[i], lx = lap[i];
+        double u = g * (eta[i] - (x * x * x * (1.0 / 3.0) - x));
+        double xt = u + dpsi[i];
+        double force = x - nu - c2 * lx;
+        double et = -force * ig + deta[i];
+        dpsi[i] = xt;
+        deta[i] = et;
+        mean += x;
+        work += u * g * (et - (x * x - 1.0) * xt) + force * xt;
+        big = fmax(big, fabs(x));
+    }
+    if (!isfinite(mean) || !isfinite(work) || !(big <= BLOWUP)) return GSL_EBADFUNC;
+    dydt[2 * N] = mean / (double)N;
+    dydt[2 * N + 1] = m->h * work;
+    return GSL_SUCCESS;
+}
+
 /* 2/3 rule: keep the modes k < keep of v, in place. */
 static void project(bkf_pde *m, double *v)
 {
@@ -152,11 +222,12 @@ static int rhs(double t, const double y[], double dydt[], void *params)
 {
     (void)t;
     bkf_pde *m = params;
+    m->stats.rhs_calls++;
+    if (m->dsymbol) return rhs_frame(m, y, dydt);
     size_t N = m->N;
     const double *restrict psi = y, *restrict eta = y + N;
     double *restrict dpsi = dydt, *restrict deta = dydt + N;
     double g = m->p.gamma, ig = 1.0 / g, c2 = m->p.c * m->p.c, nu = m->p.nu;
-    m->stats.rhs_calls++;
     /* deta holds L psi and dpsi holds F psi for a moment */
     operators(m, psi, deta, m->fsymbol ? dpsi : NULL);
     double mean = 0.0, work = 0.0, big = 0.0;
@@ -212,9 +283,46 @@ static int rhs(double t, const double y[], double dydt[], void *params)
     return GSL_SUCCESS;
 }
 
+/* y'' in the moving frame. */
+static void second_derivative_frame(bkf_pde *m, const double *y, const double *f, double *out)
+{
+    size_t N = m->N;
+    const double *psi = y, *eta = y + N, *dpsi = f, *deta = f + N;
+    double g = m->p.gamma, ig = 1.0 / g, c2 = m->p.c * m->p.c, nu = m->p.nu;
+    /* out: lap of psi_t into out + N for now, the linear parts of psi_tt
+     * and eta_tt into scr and out */
+    double *lapt = out + N, *lin = m->scr, *adv = out;
+    operators_frame(m, dpsi, deta, lapt, lin, adv);
+    /* L psi, needed by D'' */
+    double *lap = m->psit;
+    laplacian(m, psi, lap);
+    double mean = 0.0, dwork = 0.0;
+    for (size_t i = 0; i < N; i++) {
+        double x = psi[i], xt = dpsi[i], et = deta[i];
+        double ph1 = x * x - 1.0;
+        double u = g * (eta[i] - (x * x * x * (1.0 / 3.0) - x));
+        double ut = g * (et - ph1 * xt);
+        double xtt = ut + lin[i];
+        double ftt = xt - c2 * lapt[i];
+        double ett = -ftt * ig + adv[i];
+        double utt = g * (ett - 2.0 * x * xt * xt - ph1 * xtt);
+        double force = x - nu - c2 * lap[i];
+        out[i] = xtt;
+        out[N + i] = ett;
+        mean += xt;
+        dwork += ut * ut + u * utt + ftt * xt + force * xtt;
+    }
+    out[2 * N] = mean / (double)N;
+    out[2 * N + 1] = m->h * dwork;
+}
+
 /* y'' = J(y) y' for the Hermite interpolant. */
 static void second_derivative(bkf_pde *m, const double *y, const double *f, double *out)
 {
+    if (m->dsymbol) {
+        second_derivative_frame(m, y, f, out);
+        return;
+    }
     size_t N = m->N;
     const double *psi = y, *eta = y + N, *dpsi = f, *deta = f + N;
     double g = m->p.gamma, c2 = m->p.c * m->p.c;
@@ -255,6 +363,9 @@ void bkf_pde_free(bkf_pde *m)
     free(m->symbol);
     free(m->fsymbol);
     fftw_free(m->cbuf2);
+    free(m->dsymbol);
+    fftw_free(m->cbuf3);
+    free(m->scr);
     if (m->step) gsl_odeiv2_step_free(m->step);
     if (m->control) gsl_odeiv2_control_free(m->control);
     free(m->y);
@@ -335,6 +446,16 @@ bkf_pde *bkf_pde_alloc(const bkf_pde_params *params, const bkf_pde_options *opti
             m->fsymbol[k] = o.filter * r8 * r8 / (double)N;
         }
     }
+    if (o.frame_speed != 0) {
+        m->dsymbol = malloc(nc * sizeof(double));
+        m->cbuf3 = fftw_malloc(nc * sizeof(fftw_complex));
+        m->scr = calloc(N, sizeof(double));
+        if (!m->dsymbol || !m->cbuf3 || !m->scr) goto nomem;
+        for (size_t k = 0; k < nc; k++) {
+            double q = 2.0 * M_PI * (double)k / params->S;
+            m->dsymbol[k] = 2 * k == N ? 0.0 : o.frame_speed * q / (double)N;
+        }
+    }
     m->step = gsl_odeiv2_step_alloc(step_type(o.stepper), m->dim);
     m->control = gsl_odeiv2_control_y_new(o.tol, o.tol);
     if (!m->step || !m->control) goto nomem;
@@ -351,7 +472,8 @@ bkf_pde *bkf_pde_alloc(const bkf_pde_params *params, const bkf_pde_options *opti
      * 5th-order pairs have |R(iy)| > 1 for every y; at y = 0.5 the spurious
      * growth is ~1e-5 omega per unit time). */
     double qmax = params->model == BKF_PDE_CHAIN ? 2.0 / m->h : M_PI / m->h;
-    double omega = sqrt(1.0 + params->c * params->c * qmax * qmax);
+    /* In a moving frame the advection adds |V| q to the frequency. */
+    double omega = sqrt(1.0 + params->c * params->c * qmax * qmax) + fabs(o.frame_speed) * qmax;
     double kappa = o.stepper == BKF_PDE_RK8PD ? 3.0 : 0.5;
     m->hcap = kappa / omega;
     /* A first step well inside the explicit stability limit; the control

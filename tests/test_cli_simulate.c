@@ -370,6 +370,8 @@ TEST(cli_check_rejects_bad_input)
     expect_bad_input(SIM("check", "--rel-tol", "0"), "check", "--rel-tol", "rel-tol 0");
     expect_bad_input(SIM("check", "--tmax", "-5"), "check", "--tmax", "tmax -5");
     expect_bad_input(SIM("check", "--init", "uniform"), "check", "--init", "no --init here");
+    expect_bad_input(SIM("check", "--frame", "rotating"), "check", "--frame", "frame rotating");
+    expect_bad_input(SIM("check", "--resolution", "2"), "check", "--resolution", "resolution 2");
 }
 
 /* The paper's three regimes at gamma 2, c 0.3, S 20 (Figs. 2b, 3a, 3b). */

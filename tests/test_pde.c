@@ -340,3 +340,47 @@ TEST(pde_rejects_bad_input)
     CHECK_STATUS(bkf_pde_set_state(m, bad_state, bad_state, 0, &e), BKF_EINPUT);
     bkf_pde_free(m);
 }
+
+/* In the frame moving with the predicted speed the seeded wave is a steady
+ * state: the fronts stay put (their speed in the frame is the lab speed minus
+ * the speeds solver's v, an independent value), the shape is kept, and H - D
+ * (D now the general dH/dt of the frame's right-hand side) is conserved. */
+TEST(pde_moving_frame_holds_the_front_still)
+{
+    bkf_pde *lab = make(2, 0.3, -0.96, 20, 512, BKF_PDE_CONTINUUM, 1e-9);
+    bkf_pde_front_spec fs = bkf_pde_front_spec_default();
+    fs.n = 2;
+    bkf_pde_front_info fi;
+    bkf_error e;
+    CHECK_STATUS(bkf_pde_init_front(lab, &fs, &fi, NULL, &e), BKF_OK);
+    bkf_pde_free(lab);
+    bkf_pde_params p = {2, 0.3, -0.96, 20, 512, BKF_PDE_CONTINUUM};
+    bkf_pde_options o = bkf_pde_options_default();
+    o.frame_speed = -fi.v;
+    bkf_pde *m = bkf_pde_alloc(&p, &o, &e);
+    CHECK_MSG(m, "alloc: %s", e.message);
+    double clean[512];
+    CHECK_STATUS(bkf_pde_init_front(m, &fs, &fi, clean, &e), BKF_OK);
+    bkf_measure *ms = make_measure(m, clean);
+    CHECK_STATUS(bkf_pde_run(m, 40, 0.1, measure_sample, ms, NULL, NULL, &e), BKF_OK);
+    bkf_measure_summary s;
+    CHECK_STATUS(bkf_measure_summarize(ms, &s, &e), BKF_OK);
+    CHECK(s.fronts_start == 2 && s.fronts_end == 2 && s.count_constant);
+    double rel = -s.speed / fi.v;
+    CHECK_MSG(fabs(rel) < 1e-8, "speed in the frame %.3g (relative %.3g)", s.speed, rel);
+    CHECK(s.deviation_end < 1e-5);
+    double res = bkf_pde_energy_residual(m), H = bkf_pde_energy(m);
+    CHECK_MSG(fabs(res) < 1e-8 * fabs(H), "H - H0 - D = %g (H %g)", res, H);
+    CHECK(fabs(bkf_pde_mean_residual(m)) < 1e-12);
+    bkf_test_note("n = 2 in the frame of v_pred: drift %.2g relative, H - H0 - D %.2g, "
+                  "%zu steps", rel, res, bkf_pde_get_stats(m)->steps);
+    bkf_measure_free(ms);
+    bkf_pde_free(m);
+
+    /* the frame is refused where it does not apply */
+    p.model = BKF_PDE_CHAIN;
+    CHECK(bkf_pde_check(&p, &o, &e) == BKF_EINPUT && strstr(e.message, "continuum"));
+    p.model = BKF_PDE_CONTINUUM;
+    o.frame_speed = NAN;
+    CHECK(bkf_pde_check(&p, &o, &e) == BKF_EINPUT && strstr(e.message, "frame"));
+}

@@ -50,6 +50,19 @@
  *          so that H(t) - D(t) is conserved, with the energy
  *          H = h sum_i [u^2/2 + (psi - nu)^2/2 - c^2 psi (L psi)/2].
  *
+ * The moving frame (frame_speed V != 0, continuum only).  The fields are
+ * psi(xi, t) with xi = x - V t, so both equations get the advection term
+ * + V d/dxi (spectral; the Nyquist mode's derivative is 0).  A travelling
+ * wave moving at velocity V is then a steady state, and an explicit
+ * Runge-Kutta method keeps a steady state exactly (every stage is 0): the
+ * error control no longer sees the jumps sweep past, and the steps grow to
+ * the stability cap, which becomes kappa/(omega_max + |V| q_max).  Front
+ * positions and speeds measured on such a run are relative to the frame
+ * (add V for the lab).  The quadrature D is then the general
+ * dH/dt = h sum [u u_t + (psi - nu - c^2 L psi) psi_t] with the actual
+ * psi_t and eta_t (the advection's discrete work included), so H - D stays
+ * conserved to the time integration's error.
+ *
  * The library never prints and never exits; long runs report progress
  * through a callback. */
 #ifndef BKFRONT_PDE_H
@@ -98,6 +111,9 @@ typedef struct {
      * (bkf_pde_time), every sample up to it has been delivered.  Default
      * NULL. */
     const volatile sig_atomic_t *cancel;
+    double frame_speed;      /* continuum only: velocity V of the frame the
+                                fields live in, xi = x - V t (see below);
+                                default 0, the lab frame */
 } bkf_pde_options;
 
 bkf_pde_options bkf_pde_options_default(void);
