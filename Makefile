@@ -93,7 +93,7 @@ sanitize: deps
 valgrind: deps
 	@$(call install_missing,$(VALGRIND_PACKAGES))
 	@$(MAKE) --no-print-directory BUILD=build/valgrind OPT="-O1" build/valgrind/bkfront build/valgrind/run_tests
-	valgrind --error-exitcode=1 --leak-check=full --trace-children=yes -q ./build/valgrind/run_tests
+	BKF_TEST_TIME_LIMIT=7200 valgrind --error-exitcode=1 --leak-check=full --trace-children=yes --trace-children-skip='*gnuplot*' -q ./build/valgrind/run_tests
 
 # libFuzzer targets (tests/fuzz/) for the parsers of user text, built with
 # clang, ASan and UBSan in a build folder of their own; each runs for
