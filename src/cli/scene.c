@@ -395,10 +395,7 @@ static char *reader(char *str, int num, void *stream)
     st->line++;
     if (len + 1 >= (size_t)num) {
         fail(st, st->line, "the line is longer than %d characters", num - 3);
-        len = (size_t)num - 2;
-        memcpy(str, start, len);
-        str[len] = '\0';
-        st->pos += strcspn(start, "\n");
+        st->pos += len;
         if (st->text[st->pos]) st->pos++;
         str[0] = '\0';  /* parse nothing of it */
         return str;
@@ -779,6 +776,19 @@ static int plan_step(scene_plan *plan, size_t product, step_kind kind, char **ar
     return product_add_step(plan, product, plan->nsteps - 1);
 }
 
+/* Ends building one step: hands argv and output over to the plan, or frees
+ * them when building failed (ok 0 or no output path). */
+static int finish_step(scene_plan *plan, size_t product, step_kind kind, int ok,
+                       argv_builder *b, char *output, size_t data_product)
+{
+    if (!ok || !output) {
+        free(output);
+        argv_free(b->v);
+        return 0;
+    }
+    return plan_step(plan, product, kind, b->v, output, data_product);
+}
+
 static char *out_path(const char *dir, const char *name, const char *suffix)
 {
     size_t n = strlen(dir) + strlen(name) + strlen(suffix) + 2;
@@ -824,12 +834,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         PAIR("--tol", scene_value(s, p, "tol"));
         char *out = out_path(dir, p->name, ".tsv");
         PAIR("--out", out);
-        if (!ok || !out) {
-            free(out);
-            argv_free(b.v);
-            return 0;
-        }
-        return plan_step(plan, index, STEP_COMMAND, b.v, out, 0);
+        return finish_step(plan, index, STEP_COMMAND, ok, &b, out, 0);
     }
     case SCENE_PERIOD:
     case SCENE_DISPERSION: {
@@ -858,13 +863,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
             PAIR("--nu", nus[i]);
             PAIR("--tol", scene_value(s, p, "tol"));
             PAIR("--out", out);
-            if (!ok || !out) {
-                free(out);
-                argv_free(b.v);
-                ok = 0;
-                break;
-            }
-            ok = plan_step(plan, index, STEP_COMMAND, b.v, out, 0);
+            ok = finish_step(plan, index, STEP_COMMAND, ok, &b, out, 0);
         }
         scene_list_free(nus, count);
         return ok;
@@ -880,12 +879,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         PAIR("--tol", scene_value(s, p, "tol"));
         char *out = out_path(dir, p->name, ".tsv");
         PAIR("--out", out);
-        if (!ok || !out) {
-            free(out);
-            argv_free(b.v);
-            return 0;
-        }
-        return plan_step(plan, index, STEP_COMMAND, b.v, out, 0);
+        return finish_step(plan, index, STEP_COMMAND, ok, &b, out, 0);
     }
     case SCENE_BRANCH: {
         char **ns;
@@ -910,13 +904,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
             PAIR("--max-points", OWN(0, "max_points"));
             PAIR("--tol", scene_value(s, p, "tol"));
             PAIR("--out", out);
-            if (!ok || !out) {
-                free(out);
-                argv_free(b.v);
-                ok = 0;
-                break;
-            }
-            ok = plan_step(plan, index, STEP_COMMAND, b.v, out, 0);
+            ok = finish_step(plan, index, STEP_COMMAND, ok, &b, out, 0);
         }
         scene_list_free(ns, count);
         return ok;
@@ -931,12 +919,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         PAIR("--tol", scene_value(s, p, "tol"));
         char *out = out_path(dir, p->name, ".tsv");
         PAIR("--out", out);
-        if (!ok || !out) {
-            free(out);
-            argv_free(b.v);
-            return 0;
-        }
-        return plan_step(plan, index, STEP_COMMAND, b.v, out, 0);
+        return finish_step(plan, index, STEP_COMMAND, ok, &b, out, 0);
     }
     case SCENE_VALIDITY: {
         ARG("asymptotics");
@@ -948,12 +931,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         PAIR("--nu", v ? v : "-0.99:0.99:12");
         char *out = out_path(dir, p->name, ".tsv");
         PAIR("--out", out);
-        if (!ok || !out) {
-            free(out);
-            argv_free(b.v);
-            return 0;
-        }
-        return plan_step(plan, index, STEP_COMMAND, b.v, out, 0);
+        return finish_step(plan, index, STEP_COMMAND, ok, &b, out, 0);
     }
     case SCENE_FRICTION: {
         /* argv holds the settings, for the plan's listing and the runner */
@@ -966,12 +944,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         PAIR("--points", v ? v : "601");
         char *out = out_path(dir, p->name, ".tsv");
         PAIR("--out", out);
-        if (!ok || !out) {
-            free(out);
-            argv_free(b.v);
-            return 0;
-        }
-        return plan_step(plan, index, STEP_FORMULA, b.v, out, 0);
+        return finish_step(plan, index, STEP_FORMULA, ok, &b, out, 0);
     }
     case SCENE_SPACETIME: {
         ARG("simulate");
@@ -992,14 +965,10 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         char *st = out_path(dir, p->name, ".dat");
         char *out = out_path(dir, p->name, "_diag.tsv");
         PAIR("--spacetime", st);
+        ok = ok && out;
         PAIR("--out", out);
         free(out);
-        if (!ok || !st) {
-            free(st);
-            argv_free(b.v);
-            return 0;
-        }
-        return plan_step(plan, index, STEP_COMMAND, b.v, st, 0);
+        return finish_step(plan, index, STEP_COMMAND, ok, &b, st, 0);
     }
     case SCENE_CHECK: {
         ARG("check");
@@ -1013,12 +982,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         ARG("--no-progress");
         char *out = out_path(dir, p->name, ".tsv");
         PAIR("--out", out);
-        if (!ok || !out) {
-            free(out);
-            argv_free(b.v);
-            return 0;
-        }
-        return plan_step(plan, index, STEP_COMMAND, b.v, out, 0);
+        return finish_step(plan, index, STEP_COMMAND, ok, &b, out, 0);
     }
     case SCENE_FIGURE: {
         if (!o->figures) return 1;
@@ -1046,12 +1010,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
             else
                 free(path);
         }
-        if (!ok || !first) {
-            free(first);
-            argv_free(b.v);
-            return 0;
-        }
-        return plan_step(plan, index, STEP_FIGURE, b.v, first, di);
+        return finish_step(plan, index, STEP_FIGURE, ok, &b, first, di);
     }
     case SCENE_NKINDS:
         break;
