@@ -16,47 +16,7 @@
 #include "bkfront/cycle.h"
 #include "bkfront/model.h"
 #include "bkfront/speeds.h"
-
-/* A field this large has left the model's attractor for good (the cycle
- * stays within |psi| < 2.1); stopping beats integrating an overflow. */
-#define BLOWUP 1e6
-
-struct bkf_pde {
-    bkf_pde_params p;
-    bkf_pde_options o;
-    size_t N, dim;     /* dim = 2N + 2: psi, eta, Q, D */
-    double h;          /* grid spacing S/N */
-    double t;
-    double *y;         /* current state */
-    double *f;         /* y' at the current state (valid when have_f) */
-    int have_f;
-    double hstep;      /* step size proposed for the next step */
-    double hcap;       /* stability cap on the step (see bkf_pde_alloc) */
-
-    /* FFTW: aligned buffers, plans made once */
-    double *rbuf, *lap;
-    fftw_complex *cbuf;
-    fftw_plan fwd, bwd;
-    double *symbol;    /* -q_k^2 / N, k = 0 .. N/2 */
-    double *fsymbol;   /* filter rates sigma_k / N (NULL: no filter) */
-    fftw_complex *cbuf2;
-    /* moving frame (V = o.frame_speed != 0): V q_k / N, 0 at Nyquist */
-    double *dsymbol;
-    fftw_complex *cbuf3;
-    double *scr;       /* N scratch values for second_derivative */
-    size_t keep;       /* modes kept by the 2/3 rule (k < keep) */
-
-    /* integrator */
-    gsl_odeiv2_system sys;
-    gsl_odeiv2_step *step;
-    gsl_odeiv2_control *control;
-    double *ytry, *yerr, *f1, *g0, *g1, *sample, *psit;
-
-    /* reference values for the residuals */
-    double t_set, H_set, mean_eta_set;
-
-    bkf_pde_stats stats;
-};
+#include "pde_internal.h"
 
 bkf_pde_options bkf_pde_options_default(void)
 {
@@ -91,8 +51,12 @@ int bkf_pde_check(const bkf_pde_params *p, const bkf_pde_options *o, bkf_error *
         return bkf_error_set(err, BKF_EINPUT, "tol = %g is outside [%g, %g]", o->tol,
                              BKF_PDE_TOL_MIN, BKF_PDE_TOL_MAX);
     if (o->stepper != BKF_PDE_RK8PD && o->stepper != BKF_PDE_RKCK &&
-        o->stepper != BKF_PDE_RKF45)
-        return bkf_error_set(err, BKF_EINPUT, "stepper must be rk8pd, rkck or rkf45");
+        o->stepper != BKF_PDE_RKF45 && o->stepper != BKF_PDE_ETDRK4)
+        return bkf_error_set(err, BKF_EINPUT, "stepper must be rk8pd, rkck, rkf45 or etdrk4");
+    if (o->stepper == BKF_PDE_ETDRK4 && p->model != BKF_PDE_CONTINUUM)
+        return bkf_error_set(err, BKF_EINPUT, "the etdrk4 stepper applies to the continuum model only");
+    if (o->stepper == BKF_PDE_ETDRK4 && o->dealias)
+        return bkf_error_set(err, BKF_EINPUT, "the etdrk4 stepper is not combined with dealiasing");
     if (!isfinite(o->filter) || o->filter < 0 || o->filter > 1e3)
         return bkf_error_set(err, BKF_EINPUT, "filter = %g is outside [0, 1000]", o->filter);
     if (o->dealias && p->model != BKF_PDE_CONTINUUM)
@@ -377,6 +341,7 @@ void bkf_pde_free(bkf_pde *m)
     free(m->g1);
     free(m->sample);
     free(m->psit);
+    bkf_pde_etd_free(m->etd);
     free(m);
 }
 
@@ -456,6 +421,7 @@ bkf_pde *bkf_pde_alloc(const bkf_pde_params *params, const bkf_pde_options *opti
             m->dsymbol[k] = 2 * k == N ? 0.0 : o.frame_speed * q / (double)N;
         }
     }
+    if (o.stepper == BKF_PDE_ETDRK4 && !(m->etd = bkf_pde_etd_alloc(m))) goto nomem;
     m->step = gsl_odeiv2_step_alloc(step_type(o.stepper), m->dim);
     m->control = gsl_odeiv2_control_y_new(o.tol, o.tol);
     if (!m->step || !m->control) goto nomem;
@@ -479,6 +445,8 @@ bkf_pde *bkf_pde_alloc(const bkf_pde_params *params, const bkf_pde_options *opti
     /* A first step well inside the explicit stability limit; the control
      * finds the right size within a few steps. */
     m->hstep = 0.1 / (omega + params->gamma * 3.0);
+    /* The exponential integrator has no such limit (src/pde_etd.c). */
+    if (m->etd) m->hstep = 0.1;
 
     for (size_t i = 0; i < N; i++) {
         m->y[i] = params->nu;
@@ -568,6 +536,7 @@ static void mark_set(bkf_pde *m)
     m->H_set = bkf_pde_energy(m);
     m->mean_eta_set = mean_of(m->y + N, N);
     m->have_f = 0;
+    bkf_pde_etd_invalidate(m->etd);
 }
 
 double bkf_pde_energy_residual(bkf_pde *m)
@@ -597,7 +566,7 @@ double bkf_pde_sample_mean_residual(const bkf_pde *m, const bkf_pde_sample *s)
 }
 
 /* The observer's view of a full state vector. */
-static int emit(bkf_pde *m, bkf_pde_observer observer, void *data, double t, const double *y)
+int bkf_pde_emit(bkf_pde *m, bkf_pde_observer observer, void *data, double t, const double *y)
 {
     size_t N = m->N;
     bkf_pde_sample s = {t, y, y + N, y[2 * N], y[2 * N + 1]};
@@ -856,6 +825,8 @@ int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer obs
     if (!isfinite(sample_dt) || !(sample_dt > 0))
         return bkf_error_set(err, BKF_EINPUT, "sample_dt = %g must be finite and > 0",
                              sample_dt);
+    if (m->etd)
+        return bkf_pde_etd_run(m, t_end, sample_dt, observer, odata, progress, pdata, err);
     size_t N = m->N, dim = m->dim;
     m->stats.stopped = 0;
     /* Samples closer than this to t_end are t_end: rounding in t0 + k dt
@@ -871,7 +842,7 @@ int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer obs
     }
     if (observer) {
         k_next = 1;
-        if (emit(m, observer, odata, m->t, m->y)) {
+        if (bkf_pde_emit(m, observer, odata, m->t, m->y)) {
             m->stats.stopped = 1;
             return BKF_OK;
         }
@@ -943,7 +914,7 @@ int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer obs
                     end_emitted = 1;
                 }
                 k_next++;
-                if (emit(m, observer, odata, ts, state)) {
+                if (bkf_pde_emit(m, observer, odata, ts, state)) {
                     m->stats.stopped = 1;
                     break;
                 }
@@ -982,6 +953,6 @@ int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer obs
             return bkf_error_set(err, BKF_ENUMERIC, "more than %zu steps before t = %g",
                                  m->o.max_steps, t_end);
     }
-    if (observer && !end_emitted && emit(m, observer, odata, m->t, m->y)) m->stats.stopped = 1;
+    if (observer && !end_emitted && bkf_pde_emit(m, observer, odata, m->t, m->y)) m->stats.stopped = 1;
     return BKF_OK;
 }

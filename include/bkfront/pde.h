@@ -77,7 +77,9 @@ typedef enum { BKF_PDE_CONTINUUM = 0, BKF_PDE_CHAIN = 1 } bkf_pde_model;
 typedef enum {
     BKF_PDE_RK8PD = 0,  /* Dormand-Prince 8(7): the default, best at tight tol */
     BKF_PDE_RKCK = 1,   /* Cash-Karp 5(4) */
-    BKF_PDE_RKF45 = 2   /* Runge-Kutta-Fehlberg 4(5) */
+    BKF_PDE_RKF45 = 2,  /* Runge-Kutta-Fehlberg 4(5) */
+    BKF_PDE_ETDRK4 = 3  /* exponential Runge-Kutta (Cox-Matthews), continuum only;
+                           see "The exponential integrator" below */
 } bkf_pde_stepper;
 
 #define BKF_PDE_N_MIN 8

@@ -42,7 +42,7 @@
 
 static const char *const format_names[] = {"tsv", "json", NULL};
 static const char *const model_names[] = {"continuum", "chain", NULL};
-static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", NULL};
+static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", NULL};
 static const char *const spacetime_names[] = {"text", "binary", NULL};
 
 static const char *num(double x, char *buf, size_t size)
@@ -744,7 +744,7 @@ static int plan_simulate(int argc, char **argv, sim_plan *p, bkf_error *err)
         {"--init", &init, INIT_FORM, NULL},
         {"--seed", &mf.seed, "an integer >= 0", NULL},
         {"--model", &mf.model, "continuum or chain", NULL},
-        {"--stepper", &mf.stepper, "rk8pd, rkck or rkf45", NULL},
+        {"--stepper", &mf.stepper, "rk8pd, rkck, rkf45 or etdrk4", NULL},
         {"--dealias", NULL, NULL, &mf.dealias},
         {"--filter", &mf.filter, "a number in [0, 1000]", NULL},
         {"--level", &level, "a finite number", NULL},
@@ -1311,6 +1311,7 @@ static int plan_check(int argc, char **argv, check_plan *p, bkf_error *err)
         {"--tmax", &mf.tmax, "a number > 0", NULL},
         {"--tol", &mf.tol, "a number in [1e-13, 0.01]", NULL},
         {"--filter", &mf.filter, "a number in [0, 1000]", NULL},
+        {"--stepper", &mf.stepper, "rk8pd, rkck, rkf45 or etdrk4", NULL},
         {"--rel-tol", &reltol, "a number in (0, 1)", NULL},
         {"--perturb", &perturb, "a number in [0, 0.1]", NULL},
         {"--seed", &mf.seed, "an integer >= 0", NULL},

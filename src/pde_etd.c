@@ -1,0 +1,474 @@
+/* The exponential integrator of the continuum model (stepper etdrk4).
+ *
+ * Why: with an explicit Runge-Kutta method the step is capped by the
+ * fastest wave mode, omega_max = sqrt(1 + c^2 q_max^2) (+ |V| q_max in a
+ * moving frame), so a run costs ~N^2 log N and thin fronts (which need
+ * large N) are out of reach.  Here the linear wave part of every Fourier
+ * mode is solved exactly and only the friction and the filter are treated
+ * explicitly, so the step is set by the physics, not by the grid.
+ *
+ * Per mode q_k the linear part of
+ *     psi_t = gamma eta + [gamma (psi - psi^3/3) - F psi] + V psi_x
+ *     eta_t = -(1 + c^2 q^2) psi / gamma + nu / gamma + V eta_x
+ * (brackets: the explicit part) is diagonal in
+ *     a+- = (psi_k -+ i (gamma/w) eta_k) / 2,  w = sqrt(1 + c^2 q^2),
+ * with eigenvalues i (V q +- w) (V q = 0 at the Nyquist mode, as in the
+ * Runge-Kutta frame); back: psi_k = a+ + a-, eta_k = i (w/gamma)(a+ - a-).
+ * Every linear rate is imaginary, so the phi functions below never meet
+ * growth or damping and their arguments stay on the imaginary axis.
+ *
+ * The scheme is Cox and Matthews' ETDRK4 (J. Comput. Phys. 176, 430
+ * (2002)).  Its error estimate is f3 (N(c) - N(u_new)), f3 = h (4 phi3 -
+ * phi2) the weight of the last stage: without the linear part this is the
+ * classical RK4 with its FSAL-embedded third-order solution (the only
+ * third-order weights over the stages and N(u_new) differ from RK4's by a
+ * multiple of (0, 0, 0, 1, -1)).  N(u_new) is the next step's first stage,
+ * so the estimate costs an evaluation only when a step is rejected.  It is
+ * O(h^4) (control exponent 1/4): conservative for the fourth-order result.
+ * (The second-order estimate from the same four stages, O(h^3), held the
+ * steps of a steady seeded wave 4-8 times shorter at tol 1e-9.)
+ * Like every ETD Runge-Kutta scheme (and unlike the integrating-factor
+ * form) it keeps a steady state of the semi-discrete system exactly:
+ * L u + N(u) = 0 makes every stage equal u and the estimate 0.  In the
+ * frame of a travelling wave the steps therefore grow until the slow
+ * dynamics of the perturbation, or the explicit friction term
+ * (rate ~ gamma (psi^2 - 1) <= ~3 gamma), limits them.
+ *
+ * Step sizes live on a dyadic ladder base 2^-j (base: the sample interval,
+ * split into pieces of at most ETD_H_MAX), so steps land on the sample
+ * times exactly (no dense output is needed) and the coefficients, which
+ * cost N complex exponentials, are reused from a small cache.
+ *
+ * The quadratures Q and D of the Runge-Kutta path are not tracked (they
+ * would need the time derivatives at every step end, more than doubling
+ * the cost): samples and the state carry NaN there, so the energy and mean
+ * residuals are NaN for this stepper. */
+#include <complex.h>
+#include <gsl/gsl_math.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bkfront/model.h"
+#include "pde_internal.h"
+
+/* Coefficient sets kept (the ladder's current level, its neighbours and
+ * the last partial sample interval). */
+#define ETD_SETS 4
+/* Largest step: beyond it the explicit friction term (rate up to ~3 gamma)
+ * is what the error control would have to discover by rejections. */
+#define ETD_H_MAX 1.0
+/* Ticks per base interval: the finest level, h = base 2^-ETD_LEVELS. */
+#define ETD_LEVELS 40
+#define ETD_TAYLOR_TERMS 20
+
+typedef struct {
+    double h;               /* 0: unused */
+    unsigned long used;     /* for the least-recently-used replacement */
+    double complex *E, *E2, *Q, *f1, *f2, *f3;
+} etd_set;
+
+struct bkf_pde_etd {
+    size_t nc, n2;          /* nc = N/2 + 1 modes; index k: a+, nc + k: a- */
+    double complex *lam;    /* eigenvalue of each index */
+    double *ratio;          /* gamma / w_k */
+    double *sigma;          /* filter rate of mode k (0 without the filter) */
+    double complex *a, *sa, *s, *nu, *na, *nb, *nc_, *anew, *nnew;
+    double complex *pk;     /* psi_k of the state being evaluated */
+    double psi_max;         /* max |psi| of the state a (valid with have_nu) */
+    int valid, have_nu;
+    unsigned long clock;
+    etd_set set[ETD_SETS];
+    double inv_fact[ETD_TAYLOR_TERMS + 4];
+};
+
+static double complex *cbuf_of(bkf_pde *m) { return (double complex *)m->cbuf; }
+
+static void set_free(etd_set *s)
+{
+    free(s->E);
+    free(s->E2);
+    free(s->Q);
+    free(s->f1);
+    free(s->f2);
+    free(s->f3);
+    memset(s, 0, sizeof *s);
+}
+
+void bkf_pde_etd_free(bkf_pde_etd *etd)
+{
+    if (!etd) return;
+    for (int i = 0; i < ETD_SETS; i++) set_free(&etd->set[i]);
+    free(etd->lam);
+    free(etd->ratio);
+    free(etd->sigma);
+    free(etd->a);
+    free(etd->sa);
+    free(etd->s);
+    free(etd->nu);
+    free(etd->na);
+    free(etd->nb);
+    free(etd->nc_);
+    free(etd->anew);
+    free(etd->nnew);
+    free(etd->pk);
+    free(etd);
+}
+
+void bkf_pde_etd_invalidate(bkf_pde_etd *etd)
+{
+    if (etd) etd->valid = etd->have_nu = 0;
+}
+
+bkf_pde_etd *bkf_pde_etd_alloc(bkf_pde *m)
+{
+    bkf_pde_etd *etd = calloc(1, sizeof *etd);
+    if (!etd) return NULL;
+    size_t N = m->N, nc = N / 2 + 1, n2 = 2 * nc;
+    etd->nc = nc;
+    etd->n2 = n2;
+    etd->lam = malloc(n2 * sizeof *etd->lam);
+    etd->ratio = malloc(nc * sizeof *etd->ratio);
+    etd->sigma = malloc(nc * sizeof *etd->sigma);
+    double complex **arrays[] = {&etd->a,  &etd->sa,  &etd->s,    &etd->nu,  &etd->na,
+                                 &etd->nb, &etd->nc_, &etd->anew, &etd->nnew};
+    int bad = !etd->lam || !etd->ratio || !etd->sigma;
+    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++) {
+        *arrays[i] = calloc(n2, sizeof(double complex));
+        bad |= !*arrays[i];
+    }
+    etd->pk = calloc(nc, sizeof *etd->pk);
+    if (bad || !etd->pk) {
+        bkf_pde_etd_free(etd);
+        return NULL;
+    }
+    double g = m->p.gamma, c = m->p.c, V = m->o.frame_speed;
+    for (size_t k = 0; k < nc; k++) {
+        double q = 2.0 * M_PI * (double)k / m->p.S;
+        double w = sqrt(1.0 + c * c * q * q);
+        double adv = 2 * k == N ? 0.0 : V * q;
+        etd->lam[k] = I * (adv + w);
+        etd->lam[nc + k] = I * (adv - w);
+        etd->ratio[k] = g / w;
+        /* fsymbol holds sigma_k / N for the unnormalised transforms */
+        etd->sigma[k] = m->fsymbol ? m->fsymbol[k] * (double)N : 0.0;
+    }
+    double f = 1.0;
+    for (int k = 0; k < ETD_TAYLOR_TERMS + 4; k++) {
+        if (k > 0) f *= k;
+        etd->inv_fact[k] = 1.0 / f;
+    }
+    return etd;
+}
+
+/* e^z and phi_1..3(z) = sum_k z^k / (k + j)!.  Below |z| = 1 the closed
+ * forms cancel (phi3 loses ~|z|^-3 of its digits), the series does not. */
+static void phis(const bkf_pde_etd *etd, double complex z, double complex *e, double complex *p1,
+                 double complex *p2, double complex *p3)
+{
+    if (cabs(z) < 1.0) {
+        double complex zk = 1.0, s1 = 0, s2 = 0, s3 = 0;
+        for (int k = 0; k < ETD_TAYLOR_TERMS; k++) {
+            s1 += zk * etd->inv_fact[k + 1];
+            s2 += zk * etd->inv_fact[k + 2];
+            s3 += zk * etd->inv_fact[k + 3];
+            zk *= z;
+        }
+        *e = 1.0 + z * s1;
+        *p1 = s1;
+        *p2 = s2;
+        *p3 = s3;
+        return;
+    }
+    double complex E = cexp(z);
+    *e = E;
+    *p1 = (E - 1.0) / z;
+    *p2 = (E - 1.0 - z) / (z * z);
+    *p3 = (E - 1.0 - z - 0.5 * z * z) / (z * z * z);
+}
+
+/* The coefficient set of step h, from the cache or computed (NULL: out of
+ * memory). */
+static const etd_set *coefficients(bkf_pde_etd *etd, double h)
+{
+    etd_set *victim = &etd->set[0];
+    for (int i = 0; i < ETD_SETS; i++) {
+        etd_set *s = &etd->set[i];
+        if (s->h == h) {
+            s->used = ++etd->clock;
+            return s;
+        }
+        if (s->used < victim->used) victim = s;
+    }
+    etd_set *s = victim;
+    if (!s->E) {
+        size_t n = etd->n2;
+        double complex **arrays[] = {&s->E, &s->E2, &s->Q, &s->f1, &s->f2, &s->f3};
+        for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
+            if (!(*arrays[i] = malloc(n * sizeof(double complex)))) {
+                set_free(s);
+                return NULL;
+            }
+    }
+    for (size_t i = 0; i < etd->n2; i++) {
+        double complex z = etd->lam[i] * h, e, p1, p2, p3, eh, p1h, p2h, p3h;
+        phis(etd, z, &e, &p1, &p2, &p3);
+        phis(etd, 0.5 * z, &eh, &p1h, &p2h, &p3h);
+        s->E[i] = e;
+        s->E2[i] = eh;
+        s->Q[i] = 0.5 * h * p1h;
+        s->f1[i] = h * (p1 - 3.0 * p2 + 4.0 * p3);
+        s->f2[i] = h * (p2 - 2.0 * p3);
+        s->f3[i] = h * (4.0 * p3 - p2);
+    }
+    s->h = h;
+    s->used = ++etd->clock;
+    return s;
+}
+
+/* The explicit part N(a) in the a+- variables into out; *psi_max gets
+ * max |psi|.  Nonzero if the field is not finite or beyond BLOWUP. */
+static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, double *psi_max)
+{
+    bkf_pde_etd *etd = m->etd;
+    size_t N = m->N, nc = etd->nc;
+    double complex *cb = cbuf_of(m);
+    for (size_t k = 0; k < nc; k++) cb[k] = etd->pk[k] = a[k] + a[nc + k];
+    fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
+    double g = m->p.gamma, inv = 1.0 / (double)N, big = 0.0;
+    for (size_t i = 0; i < N; i++) {
+        double x = m->lap[i] * inv;
+        big = fmax(big, fabs(x));
+        m->rbuf[i] = g * (x - x * x * x * (1.0 / 3.0));
+    }
+    if (!(big <= BLOWUP)) return 1;
+    if (psi_max) *psi_max = big;
+    fftw_execute_dft_r2c(m->fwd, m->rbuf, m->cbuf);
+    /* nu/gamma in eta_t is the k = 0 coefficient nu N / gamma */
+    double ne0 = m->p.nu / g * (double)N;
+    for (size_t k = 0; k < nc; k++) {
+        double complex np = cb[k] - etd->sigma[k] * etd->pk[k];
+        double complex ne = k == 0 ? ne0 : 0.0;
+        double complex r = I * etd->ratio[k] * ne;
+        out[k] = 0.5 * (np - r);
+        out[nc + k] = 0.5 * (np + r);
+    }
+    return 0;
+}
+
+/* psi and eta of the a+- state a into y (N values each). */
+static void to_physical(bkf_pde *m, const double complex *a, double *y)
+{
+    bkf_pde_etd *etd = m->etd;
+    size_t N = m->N, nc = etd->nc;
+    double complex *cb = cbuf_of(m);
+    double inv = 1.0 / (double)N;
+    for (size_t k = 0; k < nc; k++) cb[k] = a[k] + a[nc + k];
+    fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
+    for (size_t i = 0; i < N; i++) y[i] = m->lap[i] * inv;
+    for (size_t k = 0; k < nc; k++) cb[k] = I / etd->ratio[k] * (a[k] - a[nc + k]);
+    fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
+    for (size_t i = 0; i < N; i++) y[N + i] = m->lap[i] * inv;
+    y[2 * N] = y[2 * N + 1] = NAN;
+}
+
+static void from_physical(bkf_pde *m)
+{
+    bkf_pde_etd *etd = m->etd;
+    size_t N = m->N, nc = etd->nc;
+    double complex *cb = cbuf_of(m);
+    memcpy(m->rbuf, m->y, N * sizeof *m->y);
+    fftw_execute_dft_r2c(m->fwd, m->rbuf, m->cbuf);
+    for (size_t k = 0; k < nc; k++) etd->pk[k] = cb[k];
+    memcpy(m->rbuf, m->y + N, N * sizeof *m->y);
+    fftw_execute_dft_r2c(m->fwd, m->rbuf, m->cbuf);
+    for (size_t k = 0; k < nc; k++) {
+        double complex r = I * etd->ratio[k] * cb[k];
+        etd->a[k] = 0.5 * (etd->pk[k] - r);
+        etd->a[nc + k] = 0.5 * (etd->pk[k] + r);
+    }
+    etd->valid = 1;
+    etd->have_nu = 0;
+}
+
+/* Largest |value| of the field whose a+- coefficients are e, as psi
+ * (which = 0) or eta (which = 1). */
+static double field_max(bkf_pde *m, const double complex *e, int which)
+{
+    bkf_pde_etd *etd = m->etd;
+    size_t N = m->N, nc = etd->nc;
+    double complex *cb = cbuf_of(m);
+    for (size_t k = 0; k < nc; k++)
+        cb[k] = which ? I / etd->ratio[k] * (e[k] - e[nc + k]) : e[k] + e[nc + k];
+    fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
+    double big = 0.0;
+    for (size_t i = 0; i < N; i++) big = fmax(big, fabs(m->lap[i]));
+    return big / (double)N;
+}
+
+enum { STEP_OK = 0, STEP_NONFINITE = 1, STEP_NOMEM = 2 };
+
+/* One ETDRK4 step of size h from etd->a into etd->anew (and N(anew) into
+ * etd->nnew, its largest |psi| into *psi_max_new); *err_ratio gets the
+ * estimated local error over the tolerance (accept when <= 1). */
+static int step(bkf_pde *m, double h, double *err_ratio, double *psi_max_new)
+{
+    bkf_pde_etd *etd = m->etd;
+    size_t n2 = etd->n2;
+    const etd_set *c = coefficients(etd, h);
+    if (!c) return STEP_NOMEM;
+    if (!etd->have_nu) {
+        if (nonlinear(m, etd->a, etd->nu, &etd->psi_max)) return STEP_NONFINITE;
+        etd->have_nu = 1;
+        m->stats.rhs_calls++;
+    }
+    double complex *restrict a = etd->a, *restrict sa = etd->sa, *restrict s = etd->s;
+    const double complex *restrict nu = etd->nu;
+    double complex *restrict na = etd->na, *restrict nb = etd->nb, *restrict ncv = etd->nc_;
+    for (size_t i = 0; i < n2; i++) sa[i] = c->E2[i] * a[i] + c->Q[i] * nu[i];
+    m->stats.rhs_calls += 3;
+    if (nonlinear(m, sa, na, NULL)) return STEP_NONFINITE;
+    for (size_t i = 0; i < n2; i++) s[i] = c->E2[i] * a[i] + c->Q[i] * na[i];
+    if (nonlinear(m, s, nb, NULL)) return STEP_NONFINITE;
+    for (size_t i = 0; i < n2; i++) s[i] = c->E2[i] * sa[i] + c->Q[i] * (2.0 * nb[i] - nu[i]);
+    if (nonlinear(m, s, ncv, NULL)) return STEP_NONFINITE;
+    double complex *restrict an = etd->anew;
+    for (size_t i = 0; i < n2; i++) {
+        an[i] = c->E[i] * a[i] + c->f1[i] * nu[i] + 2.0 * c->f2[i] * (na[i] + nb[i]) +
+                c->f3[i] * ncv[i];
+    }
+    m->stats.rhs_calls++;
+    if (nonlinear(m, an, etd->nnew, psi_max_new)) return STEP_NONFINITE;
+    for (size_t i = 0; i < n2; i++) s[i] = c->f3[i] * (ncv[i] - etd->nnew[i]);
+    /* The Runge-Kutta control's tol (1 + |y|), with the state's largest
+     * |psi| as the scale of both fields. */
+    double scale = m->o.tol * (1.0 + etd->psi_max);
+    double e = fmax(field_max(m, s, 0), field_max(m, s, 1));
+    *err_ratio = isfinite(e) ? e / scale : INFINITY;
+    return STEP_OK;
+}
+
+/* The integrator's state into m->y at time t (every return path). */
+static void sync(bkf_pde *m, double t)
+{
+    to_physical(m, m->etd->a, m->y);
+    m->t = t;
+}
+
+int bkf_pde_etd_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer observer,
+                    void *odata, bkf_pde_progress progress, void *pdata, bkf_error *err)
+{
+    bkf_pde_etd *etd = m->etd;
+    size_t N = m->N;
+    double t0 = m->t;
+    m->stats.stopped = 0;
+    if (!etd->valid) from_physical(m);
+    m->y[2 * N] = m->y[2 * N + 1] = NAN;
+    if (!etd->have_nu) {
+        if (nonlinear(m, etd->a, etd->nu, &etd->psi_max))
+            return bkf_error_set(err, BKF_ENUMERIC, "the initial state is not finite or too large");
+        etd->have_nu = 1;
+        m->stats.rhs_calls++;
+    }
+    if (observer && bkf_pde_emit(m, observer, odata, t0, m->y)) {
+        m->stats.stopped = 1;
+        return BKF_OK;
+    }
+    /* Samples closer than this to t_end are t_end (as in the Runge-Kutta
+     * loop). */
+    double span = t_end - t0;
+    double slack = 1e-9 * sample_dt + 4 * 2.2e-16 * fabs(t_end);
+    size_t full = observer ? (size_t)floor((span + slack) / sample_dt) : 0;
+    int tail = !observer || t0 + (double)full * sample_dt < t_end - slack;
+    size_t segments = full + (size_t)tail;
+    if (m->hstep <= 0 || !isfinite(m->hstep)) m->hstep = ETD_H_MAX;
+    const uint64_t ticks = (uint64_t)1 << ETD_LEVELS;
+    size_t steps_here = 0;
+    for (size_t seg = 0; seg < segments; seg++) {
+        double ta = seg == 0 ? t0 : t0 + (double)seg * sample_dt;
+        double tb = seg + 1 == segments ? t_end : t0 + (double)(seg + 1) * sample_dt;
+        double len = tb - ta;
+        double pieces = ceil(len / ETD_H_MAX - 1e-12);
+        if (pieces < 1) pieces = 1;
+        double base = len / pieces;
+        uint64_t total = (uint64_t)pieces * ticks, p = 0;
+        while (p < total) {
+            int j = 0;
+            if (m->hstep < base) j = (int)ceil(log2(base / m->hstep) - 1e-12);
+            while (j < ETD_LEVELS && p % (ticks >> j)) j++;
+            if (j > ETD_LEVELS || p % (ticks >> j)) {
+                sync(m, ta + len * ((double)p / (double)total));
+                return bkf_error_set(err, BKF_ENUMERIC,
+                                     "step size underflow at t = %.6g (tol %g cannot be met)",
+                                     m->t, m->o.tol);
+            }
+            double h = ldexp(base, -j), ratio = INFINITY, psi_max_new = NAN;
+            int s = step(m, h, &ratio, &psi_max_new);
+            if (s == STEP_NOMEM) {
+                sync(m, ta + len * ((double)p / (double)total));
+                return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            }
+            if (s == STEP_NONFINITE || !(ratio <= 1.0)) {
+                m->stats.rejected++;
+                double shrink = s == STEP_NONFINITE || !isfinite(ratio)
+                                    ? 0.25
+                                    : fmax(0.2, 0.9 * pow(ratio, -0.25));
+                m->hstep = fmin(m->hstep, h) * shrink;
+                if (j >= ETD_LEVELS) {
+                    sync(m, ta + len * ((double)p / (double)total));
+                    if (s == STEP_NONFINITE)
+                        return bkf_error_set(err, BKF_ENUMERIC,
+                                             "the field blew up at t = %.6g (|psi| > %g or not "
+                                             "finite)", m->t, BLOWUP);
+                    return bkf_error_set(err, BKF_ENUMERIC,
+                                         "step size underflow at t = %.6g (tol %g cannot be met)",
+                                         m->t, m->o.tol);
+                }
+                continue;
+            }
+            double complex *tmp = etd->a;
+            etd->a = etd->anew;
+            etd->anew = tmp;
+            tmp = etd->nu;
+            etd->nu = etd->nnew;
+            etd->nnew = tmp;
+            etd->psi_max = psi_max_new;
+            p += ticks >> j;
+            m->t = p == total ? tb : ta + len * ((double)p / (double)total);
+            m->stats.steps++;
+            steps_here++;
+            m->stats.h_last = h;
+            m->stats.h_min = fmin(m->stats.h_min, h);
+            m->stats.h_max = fmax(m->stats.h_max, h);
+            double grow = ratio > 0 ? fmin(4.0, fmax(0.2, 0.9 * pow(ratio, -0.25))) : 4.0;
+            m->hstep = fmin(h * grow, ETD_H_MAX);
+            if (p == total && observer) {
+                to_physical(m, etd->a, m->sample);
+                if (bkf_pde_emit(m, observer, odata, m->t, m->sample)) {
+                    m->stats.stopped = 1;
+                    sync(m, m->t);
+                    return BKF_OK;
+                }
+            }
+            if (progress && progress((m->t - t0) / span, pdata)) {
+                m->stats.stopped = 1;
+                sync(m, m->t);
+                return BKF_OK;
+            }
+            if (m->o.cancel && *m->o.cancel && m->t < t_end) {
+                m->stats.stopped = 1;
+                sync(m, m->t);
+                return bkf_error_set(err, BKF_ECANCELED, "canceled at t = %.9g of %.9g", m->t,
+                                     t_end);
+            }
+            if (m->o.max_steps && steps_here >= m->o.max_steps && m->t < t_end) {
+                sync(m, m->t);
+                return bkf_error_set(err, BKF_ENUMERIC, "more than %zu steps before t = %g",
+                                     m->o.max_steps, t_end);
+            }
+        }
+    }
+    sync(m, t_end);
+    return BKF_OK;
+}

@@ -1,0 +1,69 @@
+/* Internal to the simulator (src/pde.c, src/pde_etd.c): the object's
+ * layout and the pieces the exponential integrator shares with the
+ * Runge-Kutta loop.  Not installed, not part of the API. */
+#ifndef BKFRONT_PDE_INTERNAL_H
+#define BKFRONT_PDE_INTERNAL_H
+
+#include <fftw3.h>
+#include <gsl/gsl_odeiv2.h>
+
+#include "bkfront/pde.h"
+
+typedef struct bkf_pde_etd bkf_pde_etd;
+
+/* A field this large has left the model's attractor for good (the cycle
+ * stays within |psi| < 2.1); stopping beats integrating an overflow. */
+#define BLOWUP 1e6
+
+struct bkf_pde {
+    bkf_pde_params p;
+    bkf_pde_options o;
+    size_t N, dim;     /* dim = 2N + 2: psi, eta, Q, D */
+    double h;          /* grid spacing S/N */
+    double t;
+    double *y;         /* current state */
+    double *f;         /* y' at the current state (valid when have_f) */
+    int have_f;
+    double hstep;      /* step size proposed for the next step */
+    double hcap;       /* stability cap on the step (see bkf_pde_alloc) */
+
+    /* FFTW: aligned buffers, plans made once */
+    double *rbuf, *lap;
+    fftw_complex *cbuf;
+    fftw_plan fwd, bwd;
+    double *symbol;    /* -q_k^2 / N, k = 0 .. N/2 */
+    double *fsymbol;   /* filter rates sigma_k / N (NULL: no filter) */
+    fftw_complex *cbuf2;
+    /* moving frame (V = o.frame_speed != 0): V q_k / N, 0 at Nyquist */
+    double *dsymbol;
+    fftw_complex *cbuf3;
+    double *scr;       /* N scratch values for second_derivative */
+    size_t keep;       /* modes kept by the 2/3 rule (k < keep) */
+
+    /* integrator */
+    gsl_odeiv2_system sys;
+    gsl_odeiv2_step *step;
+    gsl_odeiv2_control *control;
+    double *ytry, *yerr, *f1, *g0, *g1, *sample, *psit;
+
+    /* reference values for the residuals */
+    double t_set, H_set, mean_eta_set;
+
+    bkf_pde_stats stats;
+
+    bkf_pde_etd *etd;  /* exponential integrator (stepper etdrk4), else NULL */
+};
+
+
+/* The observer's view of a full state vector (psi, eta, Q, D). */
+int bkf_pde_emit(bkf_pde *m, bkf_pde_observer observer, void *data, double t, const double *y);
+
+/* Exponential integrator (src/pde_etd.c). */
+bkf_pde_etd *bkf_pde_etd_alloc(bkf_pde *m);
+void bkf_pde_etd_free(bkf_pde_etd *etd);
+/* The state m->y changed outside the integrator (set_state, an init). */
+void bkf_pde_etd_invalidate(bkf_pde_etd *etd);
+int bkf_pde_etd_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer observer,
+                    void *odata, bkf_pde_progress progress, void *pdata, bkf_error *err);
+
+#endif
