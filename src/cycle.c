@@ -58,7 +58,8 @@ typedef struct {
     gsl_odeiv2_system system;
     double tol;
     size_t steps;
-    size_t capped;  /* steps shortened by the turn limit (shoot) */
+    double max_turn; /* the turn limit of this integrator's shots */
+    size_t capped;   /* steps shortened by the turn limit (shoot) */
 } integrator;
 
 typedef struct {
@@ -156,6 +157,7 @@ static int integrator_init(integrator *in, flow_params *flow, bkf_stepper_kind k
     in->driver = gsl_odeiv2_driver_alloc_scaled_new(&in->system, type, 1e-3, tol, tol, 1.0, 0.0, scale);
     in->tol = tol;
     in->steps = 0;
+    in->max_turn = MAX_TURN;
     if (!in->driver) return BKF_ENOMEM;
     in->step = in->driver->s;
     in->control = in->driver->c;
@@ -316,14 +318,14 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
          * is -1 - mu (f^2 - 1) u f'/(u^2 + f'^2), u = f - nu: about 1 on
          * small cycles, ~0 on the slow branches of relaxation cycles,
          * where steps stay long.  Where the limit, not the tolerance, sets
-         * the steps, two tolerances integrate alike and their difference
-         * says nothing: see capped_floor. */
+         * the steps, two tolerances would integrate alike and their
+         * difference say nothing: see tighten_turn. */
         {
             double u = s[IX] - p->nu, fp = flow_xdot(p, s), r2 = u * u + fp * fp;
             if (r2 > 0) {
                 double turn = fabs(-1.0 - p->mu * (s[IX] * s[IX] - 1.0) * u * fp / r2);
-                if (turn * h > MAX_TURN) {
-                    h = MAX_TURN / turn;
+                if (turn * h > main_in->max_turn) {
+                    h = main_in->max_turn / turn;
                     main_in->capped++;
                 }
             }
@@ -377,10 +379,17 @@ static double section_y_of_slope(const flow_params *p, double w)
 
 /* Slope f' at the upward crossing of f = nu: from the small-mu harmonic
  * cycle of radius 2 sqrt(1 - nu^2), or from the large-mu jump, which leaves
- * the left knee at Lienard height 2/3 plus the Airy overshoot. */
+ * the left knee at Lienard height 2/3 plus the Airy overshoot.  Between the
+ * Hopf point |nu| = 1 and half-way to the canard explosion (1 - |nu| ~
+ * 1/(8 mu^2)) the cycle is small and nearly harmonic at any mu: measured half-amplitude
+ * 0.0283 against 2 sqrt(1 - nu^2) = 0.0283 at mu 1 and 3, nu 0.9999; 0.116
+ * against 0.089 at mu 10, nu -0.999.  The jump guess there started Newton
+ * on a relaxation-sized orbit, 40 times too large, and cost 12-14 shots
+ * (now 2-5); closer to the explosion (8 mu^2 (1 - |nu|) ~ 0.7) it was the
+ * better guess of the two. */
 static double guess_slope(double mu, double nu)
 {
-    if (mu < 1.0) return 2.0 * sqrt(1.0 - nu * nu);
+    if (mu < 1.0 || 16.0 * mu * mu * (1.0 - fabs(nu)) < 1.0) return 2.0 * sqrt(1.0 - nu * nu);
     double jump_height = 2.0 / 3.0 + BKF_AIRY_A1 * cbrt((1.0 + nu) * (1.0 + nu)) * pow(mu, -4.0 / 3.0);
     double w = mu * (jump_height - lienard_F(nu));
     return w > 0 ? w : 2.0 * sqrt(1.0 - nu * nu);
@@ -390,13 +399,21 @@ typedef struct {
     double period, log_mult, y0, xmax, xmin, return_slope;
 } converged;
 
-/* When the looser solve's steps were shortened by the turn limit, both
- * solves can take the very same steps and |T_a - T_b| vanishes while T
- * still carries the (small) error of those steps: at mu = 1e-3, nu = 0,
- * tol 1e-3 the estimate was 1.8e-15 against a true 3.9e-11.  The looser
- * solve's own local tolerance times T then bounds the estimate from below
- * (its steps are shorter than that tolerance asks, so its error is
- * smaller). */
+/* The tighter solve of an error-estimate pair turns by at most half as much
+ * per step as the looser one.  Where the turn limit rather than the
+ * tolerance sets the steps (small cycles near the Hopf point, and about a
+ * quarter of bsimp's steps at mu >= 100), both solves would otherwise take
+ * the very same steps and |T_a - T_b| would miss their error: at mu = 1e-3,
+ * nu = 0, tol 1e-3 it was 1.8e-15 against a true 3.9e-11.  With different
+ * steps everywhere the difference measures the looser solve's error. */
+static void tighten_turn(integrator *tighter) { tighter->max_turn = 0.5 * MAX_TURN; }
+
+/* The classic pair (tight tolerances) keeps equal turn limits and instead
+ * floors the estimate at the looser solve's local tolerance times T when
+ * the limit shortened any of its steps (pessimistic, but the tightest
+ * accepted tolerances and the Floquet references depend on it; halving the
+ * turn there made bsimp refuse tol 1e-11 at mu 30, nu 0.9999, where its
+ * old answer was 1.3e-11 off with an estimate of 8e-12). */
 static double capped_floor(double period_err, const integrator *looser, double period)
 {
     return looser->capped ? fmax(period_err, looser->tol * period) : period_err;
@@ -583,23 +600,51 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
      * at tol_b (usually a single shot from the converged coarse point) is
      * all the extra work.  Its estimate |T_a - T_b| is of the coarse error,
      * a larger one than the classic pair gives; if it does not meet tol,
-     * the classic pair below runs.  Explicit stepper only: rk8pd's errors
-     * are far below its tolerance (measured 1e-3 of it), bsimp's are not,
-     * and there the classic pair was cheaper (make bench). */
-    if (kind == BKF_STEPPER_EXPLICIT && tol_loose <= 1.01 * FAST_SPAN * tol_int) {
-        double tol_b = fmin(tol_int, tol_loose / TOL_RATIO);
+     * the classic pair below runs.
+     *
+     * tol_b is only a factor TOL_RATIO below the coarse tolerance, not the
+     * tol/10 the classic pair would use: the achieved error is far below the
+     * local tolerance (1e-3 of it for rk8pd, ~1e-2 for bsimp, measured), so
+     * at tol 1e-6 the answer needs no 1e-7 shot; the estimate stays the
+     * coarse solve's, which bounds b's.  Not for rk8pd near its stability
+     * limit (mu > STIFF_MU/3): there its steps are set by stability, not by
+     * the tolerance, two tolerances a factor 10 apart take nearly the same
+     * steps and their difference missed the error (mu 30, nu 0: true/estimated
+     * 14 with a factor 10); there the pair is a factor 100 apart, which makes
+     * the tighter solve's steps tolerance-limited again. */
+    if (tol_loose <= 1.01 * FAST_SPAN * tol_int) {
+        int step_set_by_tol = kind == BKF_STEPPER_IMPLICIT || mu <= STIFF_MU / 3.0;
+        double tol_b = tol_loose / (step_set_by_tol ? TOL_RATIO : TOL_RATIO * TOL_RATIO);
         if (tol_b >= tol_floor) {
             size_t aux_steps = aux.steps;
             integrator_free(&aux);
             if (integrator_init(&fine, p, kind, 0, tol_b) != BKF_OK ||
                 integrator_init(&aux, p, kind, 1, tol_b) != BKF_OK)
                 goto fail_mem;
+            tighten_turn(&fine);
             aux.steps = aux_steps;
             rc = newton_at(c, &fine, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, y_scale, q_goal, 1,
                            &iterations, &b, err);
             if (rc != BKF_OK) goto done;
             double period_err = fabs(a.period - b.period) + 8.0 * DBL_EPSILON * b.period;
-            period_err = capped_floor(period_err, &coarse, b.period);
+            if (period_err > opt.tol * b.period) {
+                /* The coarse Newton stops at loose goals (t_goal 1e-3), so
+                 * |T_a - T_b| can be its iteration error rather than its
+                 * integration error (mu 10, nu 0.9999; mu 1e3, nu -0.999 at
+                 * tol 1e-6: 2-3e-6).  One coarse shot from b's converged
+                 * point leaves only the latter, for one shot instead of the
+                 * classic pair's two or more. */
+                converged a2;
+                double y_b = y0;
+                rc = newton_at(c, &coarse, &aux, &y_b, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale,
+                               y_scale, q_goal, 0, &iterations, &a2, err);
+                if (rc != BKF_OK) goto done;
+                double err2 = fabs(a2.period - b.period) + 8.0 * DBL_EPSILON * b.period;
+                if (err2 <= opt.tol * b.period) {
+                    a = a2;
+                    period_err = err2;
+                }
+            }
             if (period_err <= opt.tol * b.period) {
                 store_result(c, &a, &b, period_err, y0, kind, tol_b, &coarse, &fine, &finer, &aux,
                              iterations);

@@ -72,7 +72,7 @@
 
 bkf_speeds_options bkf_speeds_options_default(void)
 {
-    return (bkf_speeds_options){.tol = 1e-10, .n_from = 1, .n_to = 0};
+    return (bkf_speeds_options){.tol = 1e-10, .n_from = 1, .n_to = 0, .method = BKF_METHOD_AUTO};
 }
 
 int bkf_speeds_check(const bkf_speeds_params *p, const bkf_speeds_options *o, bkf_error *err)
@@ -105,6 +105,9 @@ int bkf_speeds_check(const bkf_speeds_params *p, const bkf_speeds_options *o, bk
         if (o->n_to && o->n_to < o->n_from)
             return bkf_error_set(err, BKF_EINPUT, "n_to = %zu is below n_from = %zu", o->n_to,
                                  o->n_from);
+        if (!bkf_cycle_method_name(o->method))
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "method must be auto, asymptotic, leading or shooting");
     }
     return BKF_OK;
 }
@@ -125,9 +128,13 @@ typedef struct {
     double k, lnk, knee, logc;
     double lnA;               /* ln(S/(c gamma)) */
     bkf_cycle *coarse, *precise;
+    bkf_cycle_method method;
+    const char *last_model;   /* the model of solve_T's last answer */
+    int formula_refused;      /* polish failed because the formula asked for
+                                 does not meet the root's tolerance */
     sample *x;
     size_t count, cap;
-    size_t coarse_solves, precise_solves;
+    size_t coarse_solves, precise_solves, formula_answers;
     double mu_max_sampled;
 } grid;
 
@@ -169,6 +176,7 @@ static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf
     const bkf_cycle_result *r = bkf_cycle_get(cycle);
     *T = r->period;
     *T_err = r->period_err;
+    g->last_model = "shooting";
     if (precise) g->precise_solves++;
     else g->coarse_solves++;
     if (mu > g->mu_max_sampled) g->mu_max_sampled = mu;
@@ -555,6 +563,7 @@ static int resolve_levels(search *sr, bkf_error *err)
 
 typedef struct {
     double s, D, T, T_err;
+    const char *model;
 } peval;
 
 typedef struct {
@@ -587,7 +596,7 @@ static double polish_f(double s, void *data)
         return NAN;
     }
     peval *e = &pc->ev[pc->nev++];
-    *e = (peval){s, log(T) - s - pc->ell, T, T_err};
+    *e = (peval){s, log(T) - s - pc->ell, T, T_err, pc->g->last_model};
     return e->D;
 }
 
@@ -685,7 +694,45 @@ static void predict(const grid *g, size_t i, double ell, double *root, double *s
 typedef struct {
     double n, s, T, T_err, D, slope;
     unsigned flags;
+    const char *model;
 } found_root;
+
+/* The root of level n of formula `f` near r0 (within a few cells either
+ * side, so that another root of the same n is not taken), by bisection on
+ * ln T_f(mu(s)) - s - ell; its bound must meet tol at the root itself. */
+static int formula_root(const grid *g, double n, double r0, double width, bkf_asym_formula f,
+                        double tol, found_root *out)
+{
+    double ell = level(g, n), nu = g->p.nu;
+#define DF(x) (log(bkf_asym_period(f, mu_of_s(g->p.gamma, (x)), nu)) - (x) - ell)
+    double lo = r0 - width, hi = r0 + width, dlo = DF(lo), dhi = DF(hi);
+    for (int k = 0; k < 4 && (dlo > 0) == (dhi > 0); k++) {
+        lo -= width;
+        hi += width;
+        dlo = DF(lo);
+        dhi = DF(hi);
+    }
+    if (!isfinite(dlo) || !isfinite(dhi) || (dlo > 0) == (dhi > 0)) return 0;
+    for (int it = 0; it < 200 && hi - lo > 4.0 * DBL_EPSILON * fmax(1.0, fabs(lo)); it++) {
+        double mid = 0.5 * (lo + hi), dm = DF(mid);
+        if ((dm > 0) == (dlo > 0)) {
+            lo = mid;
+            dlo = dm;
+        } else {
+            hi = mid;
+        }
+    }
+    double s = 0.5 * (lo + hi), mu = mu_of_s(g->p.gamma, s);
+    double bound = bkf_asym_error_bound(f, mu, nu);
+    if (!(bound <= tol)) return 0;
+    double h = 1e-6 * fmax(1.0, fabs(s));
+    double slope = (DF(s + h) - DF(s - h)) / (2.0 * h);
+#undef DF
+    double T = bkf_asym_period(f, mu, nu);
+    *out = (found_root){n, s, T, bound * T, log(T) - s - ell, slope, 0,
+                        f == BKF_ASYM_LEADING ? "leading" : "asymptotic"};
+    return 1;
+}
 
 /* The root of level n in cell i: a precise solve at the interpolated
  * prediction, a Newton step a little past it for a tight bracket, then
@@ -716,6 +763,32 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
     double f = fmin(fmax(0.5 * sens, 0.1), 10.0);
     pc.tol = fmin(fmax(g->tol * f, BKF_TOL_MIN), BKF_TOL_MAX);
     const double target = g->tol * fmin(1.0, f);
+    if (g->method != BKF_METHOD_SHOOTING) {
+        /* a formula where its verified bound meets what this root needs */
+        double Tf, bound = INFINITY;
+        int form = -1;
+        if (g->method == BKF_METHOD_LEADING) {
+            bound = bkf_asym_error_bound(BKF_ASYM_LEADING, mu0, g->p.nu);
+            if (bound <= pc.tol) form = BKF_ASYM_LEADING;
+        } else {
+            form = bkf_asym_choose(mu0, g->p.nu, pc.tol, g->method == BKF_METHOD_AUTO, &Tf, &bound);
+            if (form < 0 && g->method == BKF_METHOD_ASYMPTOTIC)
+                bound = fmin(bkf_asym_error_bound(BKF_ASYM_LARGE, mu0, g->p.nu),
+                             bkf_asym_error_bound(BKF_ASYM_SMALL, mu0, g->p.nu));
+        }
+        g->formula_refused = 0;
+        if (form >= 0 && formula_root(g, n, r0, sb - sa, (bkf_asym_formula)form, pc.tol, out)) {
+            g->formula_answers++;
+            return BKF_OK;
+        }
+        g->formula_refused = 1;
+        if (g->method != BKF_METHOD_AUTO)
+            return bkf_error_set(err, BKF_ENUMERIC,
+                                 "%s formula for n = %.0f at mu = %g, nu = %g: error bound %.2g "
+                                 "exceeds the tolerance %g of T this root needs (outside its "
+                                 "validity; use --method shooting or auto)",
+                                 bkf_cycle_method_name(g->method), n, mu0, g->p.nu, bound, pc.tol);
+    }
     double D0 = polish_f(r0, &pc);
     if (pc.status) return pc.status;
     /* secant steps from the interpolated slope, kept in the cell; they
@@ -768,7 +841,7 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
         if (!far || fabs(pc.ev[j].s - best->s) > fabs(far->s - best->s)) far = &pc.ev[j];
     double slope = far->s != best->s ? (far->D - best->D) / (far->s - best->s) : slope0;
     if (!(slope < 0 || slope > 0) || (slope > 0) != (slope0 > 0)) slope = slope0;
-    *out = (found_root){n, best->s, best->T, best->T_err, best->D, slope, 0};
+    *out = (found_root){n, best->s, best->T, best->T_err, best->D, slope, 0, best->model};
     return BKF_OK;
 }
 
@@ -793,7 +866,7 @@ static void asymptotic_root(const grid *g, double n, found_root *out)
     double slope = (log(bkf_asym_period_large(mu_of_s(g->p.gamma, s + h), g->p.nu)) -
                     log(bkf_asym_period_large(mu_of_s(g->p.gamma, s - h), g->p.nu))) / (2 * h) - 1.0;
     *out = (found_root){n, s, T, rem + last->T_err * last->mu / mu, log(T) - s - ell, slope,
-                        BKF_SPEEDS_ASYMPTOTIC};
+                        BKF_SPEEDS_ASYMPTOTIC, "asymptotic"};
 }
 
 /* ----------------------------------------------------------------- rows */
@@ -810,6 +883,7 @@ static void fill_row(const bkf_speeds_params *p, double k, const found_root *f,
     row->v_asym = p->S / (n * k * p->gamma);
     row->flags = f->flags;
     row->slope = f->slope;
+    row->model = f->model;
     double uT = f->T_err / f->T;
     if (p->c > 0) {
         double ratio = hypot(1.0, p->gamma * exp(-f->s)); /* v/c = mu / sqrt(mu^2 - gamma^2) */
@@ -871,18 +945,22 @@ static int find_c0(const bkf_speeds_params *p, const bkf_speeds_options *o, bkf_
                    bkf_error *err)
 {
     bkf_cycle_options co = bkf_cycle_options_default();
-    co.tol = o->tol;
+    co.tol = o->tol; /* v = S/(n T): v needs T to tol */
     bkf_cycle_result r;
     bkf_error e = {{0}};
-    int rc = bkf_cycle_period(p->gamma, p->nu, &co, &r, &e);
+    bkf_cycle *cycle = bkf_cycle_alloc();
+    if (!cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    int rc = bkf_cycle_estimate(cycle, p->gamma, p->nu, &co, o->method, &r, &e);
+    bkf_cycle_free(cycle);
     if (rc) return bkf_error_set(err, rc, "period at mu = gamma = %g: %s", p->gamma, e.message);
-    t->precise_solves = 1;
+    if (strcmp(r.model, "shooting") == 0) t->precise_solves = 1;
+    else t->formula_answers = 1;
     t->mu_grid_max = p->gamma;
     t->n_max = -1;
     t->g_inf = NAN;
     size_t last = o->n_to ? o->n_to : o->n_from + BKF_SPEEDS_ROWS_C0 - 1, cap = 0;
     for (size_t n = o->n_from; n <= last; n++) {
-        found_root f = {(double)n, 0, r.period, r.period_err, 0, 0, 0};
+        found_root f = {(double)n, 0, r.period, r.period_err, 0, 0, 0, r.model};
         bkf_speeds_root row;
         fill_row(p, t->k, &f, &row);
         if ((rc = push_root(t, &cap, &row, err))) return rc;
@@ -910,6 +988,7 @@ int bkf_speeds_find(const bkf_speeds_params *p, const bkf_speeds_options *option
     g->p = *p;
     g->tol = o.tol;
     g->tol_coarse = fmax(o.tol, COARSE_TOL);
+    g->method = o.method;
     g->k = t->k;
     g->lnk = log(t->k);
     g->knee = bkf_asym_knee_coefficient(p->nu);
@@ -970,7 +1049,7 @@ int bkf_speeds_find(const bkf_speeds_params *p, const bkf_speeds_options *option
                 }
                 bkf_error pe = {{0}};
                 rc = polish(g, fs, n, i, &found[nfound], &pe);
-                if (rc == BKF_ENUMERIC) {
+                if (rc == BKF_ENUMERIC && !g->formula_refused) {
                     /* one root lost is reported, not the whole table */
                     note_unresolved(&sr, n, g->x[i].mu, "root not polished (T failed)");
                     rc = BKF_OK;
@@ -1052,6 +1131,7 @@ done:
     t->samples = g->count;
     t->coarse_solves = g->coarse_solves;
     t->precise_solves = g->precise_solves;
+    t->formula_answers = g->formula_answers;
     t->mu_grid_max = g->mu_max_sampled;
     free(found);
     free(g->x);
@@ -1224,6 +1304,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
             r->mu = INFINITY;
             r->T = INFINITY;
             r->T_err = NAN;
+            r->model = "leading"; /* mu = inf: T = k mu exactly in the limit */
             r->v_over_c = 1.0;
             r->wavelength = pt.params.S / b->n;
             r->period_fixed = k * pt.params.gamma;
@@ -1237,7 +1318,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
             return 1;
         }
     }
-    found_root f = {b->n, u[0], 0, 0, 0, 0, 0};
+    found_root f = {b->n, u[0], 0, 0, 0, 0, 0, "shooting"};
     if (b->have_last && b->last_u[0] == u[0] && b->last_u[1] == u[1]) {
         f.T = b->last_T;
         f.T_err = b->last_T_err;

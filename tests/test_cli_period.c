@@ -480,3 +480,27 @@ TEST(cli_bench_quick_work_precision)
     CHECK_MSG(b.code == 2 && strstr(b.err, "--product") && b.out[0] == 0, "exit %d: %s", b.code, b.err);
     run_free(&b);
 }
+
+/* bkfront bench --product box --quick: both methods' ratio summaries, and
+ * every point answered at tol 1e-6 within 10x of its own estimate against
+ * the other stepper's (or the published) value; the small-mu point near
+ * the Hopf point is answered by the formula under auto, with no work. */
+TEST(cli_bench_box_quick)
+{
+    run_result r = RUN("bench", "--product", "box", "--quick");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, "# box, --method shooting: time(tol 1e-12)/time(tol 1e-6) per point") != NULL);
+    CHECK(strstr(r.out, "# box, --method auto: time(tol 1e-12)/time(tol 1e-6) per point") != NULL);
+    CHECK(strstr(r.out, "box\tmu=0.01,nu=0.9999\tauto(asymptotic)\t9.9999999999999995e-07\tnan\t") != NULL);
+    int rows = 0;
+    for (int i = 0; i < 64; i++) {
+        double err, est, tol, work;
+        if (!tsv_field(r.out, i, "tol", &tol)) break;
+        rows++;
+        if (tol != 1e-6 || !tsv_field(r.out, i, "error", &err) || !isfinite(err)) continue;
+        CHECK(tsv_field(r.out, i, "estimate", &est) && tsv_field(r.out, i, "work", &work));
+        CHECK_MSG(err <= tol && err <= 10 * est + 1e-15, "row %d: error %g estimate %g", i, err, est);
+    }
+    CHECK_MSG(rows == 24, "%d rows", rows);
+    run_free(&r);
+}

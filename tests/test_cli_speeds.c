@@ -152,7 +152,7 @@ static int rows(const char *tsv)
 
 static const char *const speeds_header =
     "n\tv\tmu\tT\tT_err\tv_over_c\twavelength\tperiod_fixed\tv_asym\tdeviation\tv_err\t"
-    "residual\tslope\tflags\n";
+    "model\tresidual\tslope\tflags\n";
 
 TEST(cli_speeds_paper_table)
 {
@@ -382,4 +382,44 @@ TEST(cli_branch_rejects_bad_input)
     bad_input(RUN("branch", "--param", "S", "--from", "20", "--to", "30", "--n", "13", "--gamma",
                   "2", "--c", "0.3", "--nu", "-0.96"),
               "branch", "no front with n = 13", "no root at the start");
+}
+
+/* --method auto at loose tol and large mu: the roots come from a formula
+ * (no solve at the roots' tolerance) and agree with shooting's roots within
+ * the stated v_err; a formula asked for where its bound exceeds what the
+ * root needs exits 1; a bad value exits 2 naming the flag and the values. */
+TEST(cli_speeds_method)
+{
+    run_result a = RUN("speeds", "--gamma", "300", "--c", "0.3", "--nu", "0", "--S", "2000",
+                       "--tol", "1e-2", "--nmax", "3", "--method", "auto");
+    CHECK_MSG(a.code == 0, "exit %d: %s", a.code, a.err);
+    CHECK(strstr(a.out, "0 solves at the roots' tolerance, 3 values of T from a formula") != NULL);
+    run_result s = RUN("speeds", "--gamma", "300", "--c", "0.3", "--nu", "0", "--S", "2000",
+                       "--tol", "1e-8", "--nmax", "3", "--method", "shooting");
+    CHECK_MSG(s.code == 0, "exit %d: %s", s.code, s.err);
+    CHECK(rows(a.out) == 3 && rows(s.out) == 3);
+    for (int i = 0; i < 3; i++) {
+        double va, verr, vs;
+        char model[32], smodel[32];
+        CHECK(field(a.out, i, "v", &va, NULL, 0) && field(a.out, i, "v_err", &verr, NULL, 0));
+        CHECK(field(a.out, i, "model", NULL, model, sizeof model));
+        CHECK(strcmp(model, "leading") == 0 || strcmp(model, "asymptotic") == 0);
+        CHECK(field(s.out, i, "v", &vs, NULL, 0) && field(s.out, i, "model", NULL, smodel, sizeof smodel));
+        CHECK(strcmp(smodel, "shooting") == 0);
+        CHECK_MSG(fabs(va - vs) <= verr && verr <= 1e-2 * va, "n %d: |%g - %g| vs v_err %g", i + 1,
+                  va, vs, verr);
+    }
+    run_result r = RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20",
+                       "--tol", "1e-2", "--method", "asymptotic");
+    CHECK_MSG(r.code == 1 && r.out[0] == '\0' && strstr(r.err, "error bound") != NULL,
+              "exit %d: %s", r.code, r.err);
+    run_result b = RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20",
+                       "--method", "fast");
+    CHECK_MSG(b.code == 2 && b.out[0] == '\0' && strstr(b.err, "--method") != NULL &&
+                  strstr(b.err, "shooting") != NULL && strchr(b.err, '\n') == b.err + strlen(b.err) - 1,
+              "exit %d: %s", b.code, b.err);
+    run_free(&a);
+    run_free(&s);
+    run_free(&r);
+    run_free(&b);
 }

@@ -286,6 +286,9 @@ static double T_plain(double mu, double nu)
     return r.period;
 }
 
+/* rows of the speeds matrix whose T came from a formula (method auto) */
+static size_t speeds_formula_rows;
+
 static void check_speeds_case(tally *t, bkf_speeds_params p, double tol, size_t n_from, size_t n_to)
 {
     bkf_speeds_options o = bkf_speeds_options_default();
@@ -354,8 +357,11 @@ static void check_speeds_case(tally *t, bkf_speeds_params p, double tol, size_t 
         }
         double err = fabs(v - v_ref);
         double ratio = fmax(err - v_unc, 0.0) / r->v_err;
-        bkf_test_note("%s: OK, true %.2g est %.2g ratio %.2g (ref +- %.1g)%s", at, err / v,
-                      r->v_err / v, ratio, v_unc / v, r->flags ? " flagged" : "");
+        bkf_test_note("%s: OK, true %.2g est %.2g ratio %.2g (ref +- %.1g), T by %s%s", at, err / v,
+                      r->v_err / v, ratio, v_unc / v, r->model, r->flags ? " flagged" : "");
+        /* the default method is auto: a formula's root is checked against
+         * the same independent value as a shot one */
+        if (strcmp(r->model, "shooting") != 0) speeds_formula_rows++;
         CHECK_MSG(err <= tol * v + v_unc, "%s: v = %.17g, independent %.17g +- %.2g: error %.3g > tol",
                   at, v, v_ref, v_unc, err / v);
         CHECK_MSG(ratio <= 10.0, "%s: v_err optimistic by %.3g", at, ratio);
@@ -399,7 +405,11 @@ TEST(extremes_speeds_matrix)
     check_speeds_case(&t, (bkf_speeds_params){1, 0.5, 0, (1 + 1e-6) * bkf_asym_k(0) * 0.5}, 1e-8, 1, 1);
     /* near the Hopf point (canard region) */
     check_speeds_case(&t, (bkf_speeds_params){1, 0.3, 0.9999, 20}, 1e-6, 1, 3);
+    /* loose tol at large mu: the roots from k mu (method auto) */
+    check_speeds_case(&t, (bkf_speeds_params){300, 0.3, 0, 2000}, 1e-2, 1, 3);
     tally_report(&t);
+    bkf_test_note("speeds: %zu rows with T from a formula (default method auto)", speeds_formula_rows);
+    CHECK(speeds_formula_rows >= 3);
 }
 
 /* ------------------------------------------------------------- Floquet */

@@ -153,6 +153,64 @@ TEST(speeds_residuals_below_tolerance)
     }
 }
 
+/* --method: with auto at loose tol and large mu every root comes from a
+ * formula (no solve at the roots' tolerance) and agrees with the shooting
+ * roots within its stated v_err; at c = 0 and small gamma the small-mu
+ * formula gives v = S/(n T) within v_err of the shooting value; a formula
+ * asked for where its bound does not meet what the root needs fails. */
+TEST(speeds_method_formula_roots)
+{
+    bkf_speeds_params p = {300.0, 0.3, 0.0, 2000.0};
+    bkf_speeds_options o = bkf_speeds_options_default();
+    CHECK(o.method == BKF_METHOD_AUTO);
+    o.tol = 1e-2;
+    o.n_to = 5;
+    bkf_speeds_table a, s;
+    bkf_error e = {{0}};
+    CHECK_MSG(bkf_speeds_find(&p, &o, &a, &e) == BKF_OK, "%s", e.message);
+    o.method = BKF_METHOD_SHOOTING;
+    o.tol = 1e-10;
+    CHECK_MSG(bkf_speeds_find(&p, &o, &s, &e) == BKF_OK, "%s", e.message);
+    CHECK(a.count == 5 && s.count == 5 && a.precise_solves == 0 && a.formula_answers == 5);
+    CHECK(s.formula_answers == 0);
+    for (size_t i = 0; i < a.count && i < s.count; i++) {
+        CHECK(strcmp(a.roots[i].model, "shooting") != 0 && strcmp(s.roots[i].model, "shooting") == 0);
+        CHECK_MSG(fabs(a.roots[i].v - s.roots[i].v) <= a.roots[i].v_err && a.roots[i].v_err <= 1e-2 * a.roots[i].v,
+                  "n %zu: %.10g vs %.10g, v_err %g", a.roots[i].n, a.roots[i].v, s.roots[i].v,
+                  a.roots[i].v_err);
+    }
+    bkf_speeds_table_free(&a);
+    bkf_speeds_table_free(&s);
+
+    bkf_speeds_params q = {1e-3, 0.0, 0.5, 10.0};
+    o = bkf_speeds_options_default();
+    o.tol = 1e-8;
+    o.n_to = 2;
+    CHECK_MSG(bkf_speeds_find(&q, &o, &a, &e) == BKF_OK, "%s", e.message);
+    bkf_cycle_options co = bkf_cycle_options_default();
+    co.tol = 1e-12;
+    bkf_cycle_result r;
+    CHECK(bkf_cycle_period(q.gamma, q.nu, &co, &r, &e) == BKF_OK);
+    CHECK(a.count == 2 && a.formula_answers == 1 && a.precise_solves == 0);
+    for (size_t i = 0; i < a.count; i++) {
+        CHECK(strcmp(a.roots[i].model, "asymptotic") == 0);
+        double v = q.S / ((double)a.roots[i].n * r.period);
+        CHECK_MSG(fabs(a.roots[i].v - v) <= a.roots[i].v_err && a.roots[i].v_err <= 1e-8 * v,
+                  "c = 0, n %zu: %.15g vs %.15g, v_err %g", a.roots[i].n, a.roots[i].v, v,
+                  a.roots[i].v_err);
+    }
+    bkf_speeds_table_free(&a);
+
+    o = bkf_speeds_options_default();
+    o.tol = 1e-2;
+    o.method = BKF_METHOD_ASYMPTOTIC;
+    CHECK(bkf_speeds_find(&paper, &o, &a, &e) == BKF_ENUMERIC && strstr(e.message, "error bound"));
+    bkf_speeds_table_free(&a);
+    o.method = (bkf_cycle_method)7;
+    CHECK(bkf_speeds_find(&paper, &o, &a, &e) == BKF_EINPUT && strstr(e.message, "method"));
+    bkf_speeds_table_free(&a);
+}
+
 /* nu -> -nu leaves T (and so every speed) unchanged: f -> -f. */
 TEST(speeds_symmetric_in_nu)
 {

@@ -19,6 +19,7 @@
 #define BKFRONT_SPEEDS_H
 
 #include <stddef.h>
+#include "bkfront/cycle.h"
 #include "bkfront/status.h"
 
 typedef struct {
@@ -40,6 +41,15 @@ typedef struct {
     size_t n_from;   /* rows for n in [n_from, n_to]; n_from >= 1 (default 1) */
     size_t n_to;     /* 0: up to n_max, but no more than BKF_SPEEDS_MAX_ROWS
                         values of n (BKF_SPEEDS_ROWS_C0 when c = 0) */
+    bkf_cycle_method method; /* how T is obtained at the roots (bkf_cycle_estimate):
+                        auto (default) takes a formula wherever its error bound
+                        meets the tolerance the root needs, and also for grid
+                        samples where it meets the grid's; asymptotic and
+                        leading make every root's T the formula's, and fail
+                        (BKF_ENUMERIC) where its bound does not meet what the
+                        root needs; shooting never uses a formula below the
+                        grid's cap (mu = 1e5).  The bracketing grid is sampled
+                        by shooting unless auto finds a formula good enough. */
 } bkf_speeds_options;
 
 bkf_speeds_options bkf_speeds_options_default(void);
@@ -68,6 +78,8 @@ typedef struct {
     double slope;           /* d ln g / ds at the root (c > 0; 0 when c = 0):
                                negative where v_n decreases with n, zero at a fold */
     unsigned flags;
+    const char *model;      /* what gave T: "shooting", "asymptotic" (corrected
+                               large-mu or small-mu formula) or "leading" (k mu) */
 } bkf_speeds_root;
 
 #define BKF_SPEEDS_NOTE_LEN 512
@@ -91,7 +103,8 @@ typedef struct {
                                        flagged, or empty */
     /* work */
     size_t samples;          /* grid points of the bracketing */
-    size_t coarse_solves, precise_solves;
+    size_t coarse_solves, precise_solves; /* shooting solves */
+    size_t formula_answers;  /* values of T taken from a formula (no integration) */
     double mu_grid_max;      /* largest mu sampled */
 } bkf_speeds_table;
 

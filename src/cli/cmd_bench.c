@@ -26,13 +26,13 @@ static const bkf_io_column columns[] = {
 };
 #define NCOLUMNS (sizeof columns / sizeof columns[0])
 
-static const char *const product_names[] = {"period", "speeds", "pde", "all", NULL};
+static const char *const product_names[] = {"period", "speeds", "pde", "all", "box", NULL};
 static const char *const format_names[] = {"tsv", "json", NULL};
 
 static void bench_help(FILE *out)
 {
     fprintf(out,
-        "usage: bkfront bench [--product period|speeds|pde|all] [--quick]\n"
+        "usage: bkfront bench [--product period|speeds|pde|all|box] [--quick]\n"
         "                     [--format tsv|json] [--out FILE]\n"
         "\n"
         "Work-precision measurement: achieved error against CPU time for every\n"
@@ -49,6 +49,11 @@ static void bench_help(FILE *out)
         "  pde     a seeded n = 4 front (paper's parameters), N in {256, 512, 1024},\n"
         "          tol in {1e-5, 1e-7, 1e-9}, t in [0, 30]; error: |v_meas - v_pred|/v_pred,\n"
         "          v_pred from the speeds solver at tol 1e-12; time: the run only.\n"
+        "  box     the cost goal: T at tol 1e-6 against 1e-12 on mu in {1e-3, 1e-2,\n"
+        "          0.1, 1, 3, 10, 30, 100, 1e3, 1e4} x nu in {0, -0.9, 0.99, -0.999,\n"
+        "          0.9999}, --method shooting and auto (cold calls); comment lines give\n"
+        "          the ratio per point (min, median, max) and in aggregate; method\n"
+        "          column: method(model that answered). Not part of all.\n"
         "options:\n"
         "  --product P   which product; default all\n"
         "  --quick       fewer cases and tolerances (for tests)\n"
@@ -187,6 +192,128 @@ static int bench_period(bench_ctx *b, bkf_error *err)
     return s;
 }
 
+/* ---------------------------------------------------------------- box */
+
+/* CPU seconds per cold T(mu, nu) by bkf_cycle_estimate (fresh cycle object
+ * each call, as a one-off caller has), repeated to at least 20 ms; -1 if
+ * refused. */
+static double time_estimate(double mu, double nu, double tol, bkf_cycle_method m,
+                            bkf_cycle_result *r)
+{
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = tol;
+    bkf_error e;
+    int reps = 0;
+    double t0 = cpu_now(), t = 0;
+    do {
+        bkf_cycle *c = bkf_cycle_alloc();
+        int rc = c ? bkf_cycle_estimate(c, mu, nu, &o, m, r, &e) : BKF_ENOMEM;
+        bkf_cycle_free(c);
+        if (rc != BKF_OK) return -1;
+        reps++;
+        t = cpu_now() - t0;
+    } while (t < 0.02 && reps < 100000);
+    return t / reps;
+}
+
+static int compare_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The issue's cost goal on the whole box: T at tol 1e-6 against 1e-12, per
+ * point and in aggregate (sum of the times), with --method shooting and
+ * auto.  Everything is measured first: the summary goes in comment lines,
+ * which must precede the rows. */
+static int bench_box(bench_ctx *b, bkf_error *err)
+{
+    const double mus_full[] = {1e-3, 1e-2, 0.1, 1, 3, 10, 30, 100, 1e3, 1e4};
+    const double mus_quick[] = {1e-2, 1, 100};
+    const double nus_full[] = {0, -0.9, 0.99, -0.999, 0.9999};
+    const double nus_quick[] = {0, 0.9999};
+    const double *mus = b->quick ? mus_quick : mus_full, *nus = b->quick ? nus_quick : nus_full;
+    size_t nmu = b->quick ? 3 : 10, nnu = b->quick ? 2 : 5, npt = nmu * nnu;
+    const double tols[2] = {1e-6, 1e-12};
+    const bkf_cycle_method methods[2] = {BKF_METHOD_SHOOTING, BKF_METHOD_AUTO};
+    typedef struct {
+        double T, err, t;
+        size_t work;
+        char model[16];
+    } meas;
+    meas *m = calloc(npt * 4, sizeof *m);
+    double *ratios = calloc(npt, sizeof *ratios);
+    if (!m || !ratios) {
+        free(m);
+        free(ratios);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    for (size_t i = 0; i < npt; i++) {
+        double mu = mus[i / nnu], nu = nus[i % nnu];
+        for (int k = 0; k < 4; k++) {
+            bkf_cycle_result r;
+            meas *x = &m[4 * i + k];
+            x->t = time_estimate(mu, nu, tols[k % 2], methods[k / 2], &r);
+            if (x->t < 0) continue;
+            x->T = r.period;
+            x->err = r.period_err / r.period;
+            x->work = r.rhs_calls;
+            snprintf(x->model, sizeof x->model, "%s", r.model);
+        }
+    }
+    int s = BKF_OK;
+    for (int q = 0; q < 2 && !s; q++) {
+        size_t n = 0;
+        double sum6 = 0, sum12 = 0;
+        for (size_t i = 0; i < npt; i++) {
+            const meas *lo = &m[4 * i + 2 * q], *hi = &m[4 * i + 2 * q + 1];
+            if (lo->t < 0 || hi->t < 0) continue;
+            ratios[n++] = hi->t / lo->t;
+            sum6 += lo->t;
+            sum12 += hi->t;
+        }
+        qsort(ratios, n, sizeof *ratios, compare_double);
+        char line[320];
+        if (n)
+            snprintf(line, sizeof line,
+                     "box, --method %s: time(tol 1e-12)/time(tol 1e-6) per point min %.3g, "
+                     "median %.3g, max %.3g over %zu points (%zu refused at either tol, left "
+                     "out); aggregate (sum of times) %.3g",
+                     bkf_cycle_method_name(methods[q]), ratios[0], ratios[n / 2], ratios[n - 1], n,
+                     npt - n, sum12 / sum6);
+        else
+            snprintf(line, sizeof line, "box, --method %s: every point refused",
+                     bkf_cycle_method_name(methods[q]));
+        s = bkf_io_table_comment(b->table, line, err);
+    }
+    for (size_t i = 0; i < npt && !s; i++) {
+        double mu = mus[i / nnu], nu = nus[i % nnu];
+        char kase[64];
+        snprintf(kase, sizeof kase, "mu=%g,nu=%g", mu, nu);
+        /* reference: the other stepper than the auto choice at tol 1e-12
+         * (bsimp above mu = 300, as in the period product) */
+        double Tref = NAN;
+        if (period_reference(mu, nu, mu > 30 && mu <= 300 ? BKF_STEPPER_EXPLICIT
+                                                           : BKF_STEPPER_IMPLICIT, &Tref))
+            Tref = NAN;
+        for (int k = 0; k < 4 && !s; k++) {
+            const meas *x = &m[4 * i + k];
+            char method[40];
+            snprintf(method, sizeof method, "%s(%s)", bkf_cycle_method_name(methods[k / 2]),
+                     x->t < 0 ? "-" : x->model);
+            if (x->t < 0)
+                s = emit(b, "box", kase, method, tols[k % 2], NAN, NAN, NAN, NAN, NAN, "refused",
+                         err);
+            else
+                s = emit(b, "box", kase, method, tols[k % 2], NAN, fabs(x->T - Tref) / Tref,
+                         x->err, x->t, (double)x->work, "ok", err);
+        }
+    }
+    free(m);
+    free(ratios);
+    return s;
+}
+
 /* ------------------------------------------------------------- speeds */
 
 static int bench_speeds(bench_ctx *b, bkf_error *err)
@@ -303,7 +430,7 @@ static int bench_run(int argc, char **argv, bkf_error *err)
     const char *product = NULL, *format = NULL, *out_path = NULL;
     int quick = 0, help = 0;
     const cli_flag flags[] = {
-        {"--product", &product, "period, speeds, pde or all", NULL},
+        {"--product", &product, "period, speeds, pde, all or box", NULL},
         {"--quick", NULL, NULL, &quick},
         {"--format", &format, "tsv or json", NULL},
         {"--out", &out_path, "a file name", NULL},
@@ -336,6 +463,7 @@ static int bench_run(int argc, char **argv, bkf_error *err)
         if (!s && (which == 0 || which == 3)) s = bench_period(&b, err);
         if (!s && (which == 1 || which == 3)) s = bench_speeds(&b, err);
         if (!s && (which == 2 || which == 3)) s = bench_pde(&b, err);
+        if (!s && which == 4) s = bench_box(&b, err);
         if (!s) s = bkf_io_table_finish(b.table, err);
         bkf_io_table_free(b.table);
         int c = cli_buffer_close(&buf, s ? NULL : err);

@@ -22,8 +22,9 @@
     {"T", BKF_IO_NUMBER}, {"T_err", BKF_IO_NUMBER}, {"v_over_c", BKF_IO_NUMBER},       \
     {"wavelength", BKF_IO_NUMBER}, {"period_fixed", BKF_IO_NUMBER},                    \
     {"v_asym", BKF_IO_NUMBER}, {"deviation", BKF_IO_NUMBER}, {"v_err", BKF_IO_NUMBER}, \
-    {"residual", BKF_IO_NUMBER}, {"slope", BKF_IO_NUMBER}, {"flags", BKF_IO_TEXT}
-#define NROOT 14
+    {"model", BKF_IO_TEXT}, {"residual", BKF_IO_NUMBER}, {"slope", BKF_IO_NUMBER},         \
+    {"flags", BKF_IO_TEXT}
+#define NROOT 15
 
 static const bkf_io_column speeds_columns[] = {ROOT_COLUMNS};
 static const bkf_io_column branch_columns[] = {
@@ -49,6 +50,8 @@ static const char *const param_names[] = {"S", "nu", "gamma", "c", NULL};
     "                 k = 3 + (nu^2 - 1) ln[(4 - nu^2)/(1 - nu^2)]\n"                 \
     "  deviation      (v - v_asym) / v\n"                                            \
     "  v_err          estimated absolute error of v (from T_err and the residual)\n"  \
+    "  model          what gave T: shooting, asymptotic (corrected large-mu or\n"   \
+    "                 small-mu formula, T_err its verified bound) or leading (k mu)\n" \
     "  residual       n T v sqrt(1 - c^2/v^2) / S - 1 at the reported root\n"        \
     "  slope          d ln g / ds at the root, g = T / sqrt(mu^2 - gamma^2),\n"       \
     "                 s = ln sqrt(mu^2 - gamma^2): < 0 on the usual branch, > 0 on\n"  \
@@ -61,7 +64,8 @@ static void speeds_help(FILE *out)
 {
     fprintf(out,
         "usage: bkfront speeds --gamma G --c C --nu V --S L [--n N | --nmax N]\n"
-        "                      [--tol E] [--format tsv|json] [--out FILE]\n"
+        "                      [--tol E] [--method auto|asymptotic|leading|shooting]\n"
+        "                      [--format tsv|json] [--out FILE]\n"
         "\n"
         "Every supersonic speed v at which n fronts propagate around the periodic\n"
         "system: the roots of n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)),\n"
@@ -81,6 +85,12 @@ static void speeds_help(FILE *out)
         "                 no more than %d values of n\n"
         "  --tol E        relative accuracy asked of v, and bound on |residual|, in\n"
         "                 [%g, %g]; default 1e-10\n"
+        "  --method M     how T is obtained at the roots (column model): auto (default)\n"
+        "                 takes a formula wherever its verified error bound meets the\n"
+        "                 tolerance the root needs (about tol, 0.1..10 tol), else\n"
+        "                 shooting; asymptotic or leading: the formula at every root,\n"
+        "                 exit 1 where its bound exceeds that; shooting: never a formula\n"
+        "                 (except beyond the grid's cap, flag asymptotic)\n"
         "  --format tsv|json  output format; default tsv\n"
         "  --out FILE     write to FILE, replaced atomically only on success;\n"
         "                 default standard output\n"
@@ -240,9 +250,10 @@ static void root_values(const bkf_speeds_root *r, bkf_io_value *v)
     v[8].number = r->v_asym;
     v[9].number = r->deviation;
     v[10].number = r->v_err;
-    v[11].number = r->residual;
-    v[12].number = r->slope;
-    v[13].text = flag_text(r->flags);
+    v[11].text = r->model ? r->model : "shooting";
+    v[12].number = r->residual;
+    v[13].number = r->slope;
+    v[14].text = flag_text(r->flags);
 }
 
 static int comment_command(bkf_io_table *table, int argc, char **argv, bkf_error *err)
@@ -295,7 +306,7 @@ typedef struct {
 static int plan_speeds(int argc, char **argv, speeds_plan *plan, bkf_error *err)
 {
     common_flags f = {0};
-    const char *n_text = NULL, *nmax_text = NULL;
+    const char *n_text = NULL, *nmax_text = NULL, *method_text = NULL;
     int help = 0;
     const cli_flag flags[] = {
         {"--gamma", &f.gamma, "a number in [1e-06, 1e+06]", NULL},
@@ -305,6 +316,7 @@ static int plan_speeds(int argc, char **argv, speeds_plan *plan, bkf_error *err)
         {"--n", &n_text, "an integer >= 1", NULL},
         {"--nmax", &nmax_text, "an integer >= 1", NULL},
         {"--tol", &f.tol, "a number in [1e-14, 0.1]", NULL},
+        {"--method", &method_text, "auto, asymptotic, leading or shooting", NULL},
         {"--format", &f.format, "tsv or json", NULL},
         {"--out", &f.out, "a file name", NULL},
         {"--help", NULL, NULL, &help},
@@ -314,6 +326,15 @@ static int plan_speeds(int argc, char **argv, speeds_plan *plan, bkf_error *err)
     if ((s = parse_common(&f, -1, &plan->common, err))) return s;
     plan->options = bkf_speeds_options_default();
     plan->options.tol = plan->common.tol;
+    if (method_text) {
+        static const char *const method_names[] = {"auto", "asymptotic", "leading", "shooting",
+                                                   NULL};
+        static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYMPTOTIC,
+                                                        BKF_METHOD_LEADING, BKF_METHOD_SHOOTING};
+        int k;
+        if ((s = cli_parse_choice("--method", method_text, method_names, &k, err))) return s;
+        plan->options.method = method_kinds[k];
+    }
     if (n_text && nmax_text)
         return bkf_error_set(err, BKF_EINPUT,
                              "--n, --nmax: give one of them (--n N: that n only; --nmax N: "
@@ -378,8 +399,10 @@ static int fill_speeds(const void *vplan, int argc, char **argv, FILE *stream, b
     if (!s) {
         snprintf(line, sizeof line,
                  "work: %zu grid samples (%zu solves at the coarse tolerance), %zu solves at "
-                 "the roots' tolerance, largest mu %.6g",
-                 t.samples, t.coarse_solves, t.precise_solves, t.mu_grid_max);
+                 "the roots' tolerance, %zu values of T from a formula, largest mu %.6g; "
+                 "method %s",
+                 t.samples, t.coarse_solves, t.precise_solves, t.formula_answers, t.mu_grid_max,
+                 bkf_cycle_method_name(plan->options.method));
         s = bkf_io_table_comment(table, line, err);
     }
     if (!s && t.note[0]) {

@@ -72,7 +72,7 @@ static const key_spec keys[] = {
     {"search", V_SEARCH, K(SCENE_THRESHOLD), "A:B with -1 < A < B < 1"},
     {"along", V_ALONG, K(SCENE_THRESHOLD), "c or gamma"},
     {"param", V_PARAM, K(SCENE_BRANCH), "S, nu, gamma or c"},
-    {"method", V_METHOD, K(SCENE_PERIOD), "auto, asymptotic, leading or shooting"},
+    {"method", V_METHOD, K(SCENE_PERIOD) | K(SCENE_SPEEDS), "auto, asymptotic, leading or shooting"},
     {"from", V_NUMBER, K(SCENE_THRESHOLD) | K(SCENE_BRANCH) | K(SCENE_FRICTION),
      "a finite number"},
     {"to", V_NUMBER, K(SCENE_THRESHOLD) | K(SCENE_BRANCH) | K(SCENE_FRICTION),
@@ -832,6 +832,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         PAIR("--n", OWN(0, "n"));
         PAIR("--nmax", OWN(0, "nmax"));
         PAIR("--tol", scene_value(s, p, "tol"));
+        PAIR("--method", OWN(0, "method"));
         char *out = out_path(dir, p->name, ".tsv");
         PAIR("--out", out);
         return finish_step(plan, index, STEP_COMMAND, ok, &b, out, 0);
