@@ -1,0 +1,208 @@
+/* The exponential integrator (stepper etdrk4) against independent facts:
+ * the cycle engine's period, the explicit rk8pd stepper on the same
+ * problem, exact steady states (continuous slip; the travelling wave in
+ * its own frame, with the speeds solver's v), the sample times asked for,
+ * and the inputs it refuses. */
+#include "harness.h"
+
+#include <string.h>
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+#include "bkfront/cycle.h"
+#include "bkfront/measure.h"
+#include "bkfront/pde.h"
+
+static bkf_pde *make(double nu, size_t N, bkf_pde_stepper stepper, double tol, double frame)
+{
+    bkf_pde_params p = {2, 0.3, nu, 20, N, BKF_PDE_CONTINUUM};
+    bkf_pde_options o = bkf_pde_options_default();
+    o.tol = tol;
+    o.stepper = stepper;
+    o.frame_speed = frame;
+    bkf_error e;
+    bkf_pde *m = bkf_pde_alloc(&p, &o, &e);
+    CHECK_MSG(m, "alloc: %s", e.message);
+    return m;
+}
+
+static int measure_sample(const bkf_pde_sample *s, void *data)
+{
+    bkf_error e;
+    CHECK_MSG(bkf_measure_add(data, s->t, s->psi, s->eta, &e) == BKF_OK, "%s", e.message);
+    return 0;
+}
+
+static bkf_measure *make_measure(const bkf_pde *m, const double *reference)
+{
+    const bkf_pde_params *pp = bkf_pde_get_params(m);
+    bkf_measure_params mp = bkf_measure_params_default();
+    mp.N = pp->N;
+    mp.S = pp->S;
+    mp.gamma = pp->gamma;
+    mp.nu = pp->nu;
+    mp.reference = reference;
+    bkf_error e;
+    bkf_measure *ms = bkf_measure_alloc(&mp, &e);
+    CHECK_MSG(ms, "%s", e.message);
+    return ms;
+}
+
+/* The uniform oscillation is the van der Pol cycle at mu = gamma in t; here
+ * everything but the k = 0 oscillator is in the explicit part. */
+TEST(etd_uniform_oscillation_has_the_cycle_period)
+{
+    const double nu = -0.92;
+    bkf_cycle_result cr;
+    bkf_cycle_options co = bkf_cycle_options_default();
+    co.tol = 1e-12;
+    bkf_error e;
+    CHECK_STATUS(bkf_cycle_period(2, nu, &co, &cr, &e), BKF_OK);
+    bkf_pde *m = make(nu, 16, BKF_PDE_ETDRK4, 1e-10, 0);
+    CHECK_STATUS(bkf_pde_init_oscillation(m, 0, 0.0, &e), BKF_OK);
+    bkf_measure *ms = make_measure(m, NULL);
+    CHECK_STATUS(bkf_pde_run(m, 12 * cr.period, 0.05, measure_sample, ms, NULL, NULL, &e),
+                 BKF_OK);
+    bkf_measure_summary s;
+    CHECK_STATUS(bkf_measure_summarize(ms, &s, &e), BKF_OK);
+    CHECK(s.period_multiplicity == 1);
+    CHECK(s.regime == BKF_REGIME_GLOBAL_OSCILLATION);
+    double rel = (s.period - cr.period) / cr.period;
+    CHECK_MSG(fabs(rel) < 1e-7, "period %.15g vs %.15g", s.period, cr.period);
+    bkf_test_note("period %.15g (ETD) vs %.15g (cycle engine), rel %.2g", s.period, cr.period,
+                  rel);
+    bkf_measure_free(ms);
+    bkf_pde_free(m);
+}
+
+/* A perturbed two-front wave in the lab frame, integrated by both
+ * steppers: the fields agree to the looser tolerance's accuracy. */
+TEST(etd_agrees_with_rk8pd)
+{
+    enum { N = 256 };
+    bkf_pde *runs[2] = {make(-0.96, N, BKF_PDE_ETDRK4, 1e-9, 0),
+                        make(-0.96, N, BKF_PDE_RK8PD, 1e-12, 0)};
+    bkf_pde_front_spec fs = bkf_pde_front_spec_default();
+    fs.n = 2;
+    fs.noise = 1e-3;
+    bkf_error e;
+    for (int k = 0; k < 2; k++) {
+        CHECK_STATUS(bkf_pde_init_front(runs[k], &fs, NULL, NULL, &e), BKF_OK);
+        CHECK_STATUS(bkf_pde_run(runs[k], 20, 1.0, NULL, NULL, NULL, NULL, &e), BKF_OK);
+    }
+    double diff = 0;
+    const double *a = bkf_pde_psi(runs[0]), *b = bkf_pde_psi(runs[1]);
+    const double *ea = bkf_pde_eta(runs[0]), *eb = bkf_pde_eta(runs[1]);
+    for (size_t i = 0; i < N; i++) diff = fmax(diff, fmax(fabs(a[i] - b[i]), fabs(ea[i] - eb[i])));
+    CHECK_MSG(diff < 1e-6, "max |ETD - rk8pd| = %g at t = 20", diff);
+    CHECK(bkf_pde_time(runs[0]) == 20);
+    const bkf_pde_stats *se = bkf_pde_get_stats(runs[0]), *sr = bkf_pde_get_stats(runs[1]);
+    bkf_test_note("max |ETD (tol 1e-9) - rk8pd (tol 1e-12)| = %.2g at t = 20; steps %zu vs %zu",
+                  diff, se->steps, sr->steps);
+    /* the quadratures are not tracked by this stepper, and say so */
+    CHECK(isnan(bkf_pde_mean_integral(runs[0])) && isnan(bkf_pde_energy_residual(runs[0])));
+    bkf_pde_free(runs[0]);
+    bkf_pde_free(runs[1]);
+}
+
+/* Continuous slip (|nu| > 1) is a fixed point with psi = nu, eta =
+ * phi(nu): every ETD stage returns it, so long steps keep it to rounding
+ * (the constant forcing nu/gamma and the k = 0 oscillator must balance). */
+TEST(etd_keeps_continuous_slip_exactly)
+{
+    bkf_pde *m = make(-1.5, 64, BKF_PDE_ETDRK4, 1e-9, 0);
+    bkf_error e;
+    CHECK_STATUS(bkf_pde_run(m, 50, 5.0, NULL, NULL, NULL, NULL, &e), BKF_OK);
+    double dev = 0, eta0 = -1.5 * -1.5 * -1.5 / 3 + 1.5;
+    for (size_t i = 0; i < 64; i++)
+        dev = fmax(dev, fmax(fabs(bkf_pde_psi(m)[i] + 1.5), fabs(bkf_pde_eta(m)[i] - eta0)));
+    CHECK_MSG(dev < 1e-13, "continuous slip drifted by %g", dev);
+    CHECK_MSG(bkf_pde_get_stats(m)->h_max >= 0.99, "h_max %g", bkf_pde_get_stats(m)->h_max);
+    bkf_pde_free(m);
+}
+
+/* In the frame of the speeds solver's v the seeded wave stands still, and
+ * the steps are not capped by the grid: on N = 4096 the explicit stepper's
+ * stability cap is kappa / (omega_max + v q_max) ~ 0.01. */
+TEST(etd_moving_frame_front_stands_still_with_long_steps)
+{
+    enum { N = 4096 };
+    bkf_pde *probe = make(-0.96, 512, BKF_PDE_RK8PD, 1e-9, 0);
+    bkf_pde_front_spec fs = bkf_pde_front_spec_default();
+    fs.n = 4;
+    fs.noise = 1e-6;
+    bkf_pde_front_info fi;
+    bkf_error e;
+    CHECK_STATUS(bkf_pde_init_front(probe, &fs, &fi, NULL, &e), BKF_OK);
+    bkf_pde_free(probe);
+    bkf_pde *m = make(-0.96, N, BKF_PDE_ETDRK4, 1e-7, -fi.v);
+    static double clean[N];
+    CHECK_STATUS(bkf_pde_init_front(m, &fs, &fi, clean, &e), BKF_OK);
+    bkf_measure *ms = make_measure(m, clean);
+    CHECK_STATUS(bkf_pde_run(m, 40, 0.25, measure_sample, ms, NULL, NULL, &e), BKF_OK);
+    bkf_measure_summary s;
+    CHECK_STATUS(bkf_measure_summarize(ms, &s, &e), BKF_OK);
+    CHECK(s.fronts_start == 4 && s.fronts_end == 4 && s.count_constant);
+    double rel = -s.speed / fi.v;
+    CHECK_MSG(fabs(rel) < 1e-8, "speed in the frame %.3g (relative %.3g)", s.speed, rel);
+    CHECK(s.deviation_end < 1e-4);
+    const bkf_pde_stats *st = bkf_pde_get_stats(m);
+    double cap = 3.0 / (sqrt(1 + 0.09 * pow(M_PI * N / 20, 2)) + fi.v * M_PI * N / 20);
+    CHECK_MSG(st->h_max >= 0.25 && st->steps < 40 / (4 * cap), "h_max %g, %zu steps (cap %g)",
+              st->h_max, st->steps, cap);
+    bkf_test_note("n = 4 on N = %d in the frame of v_pred: drift %.2g relative, %zu steps "
+                  "(h_max %.3g; the explicit cap would be %.3g)",
+                  N, rel, st->steps, st->h_max, cap);
+    bkf_measure_free(ms);
+    bkf_pde_free(m);
+}
+
+typedef struct {
+    double t[64];
+    size_t n;
+} times;
+
+static int record_time(const bkf_pde_sample *s, void *data)
+{
+    times *tt = data;
+    if (tt->n < 64) tt->t[tt->n] = s->t;
+    tt->n++;
+    CHECK(isfinite(s->psi[0]) && isfinite(s->eta[0]));
+    return 0;
+}
+
+/* Samples at t0 + k dt and once at t_end, as with the Runge-Kutta loop,
+ * also when dt does not divide the span and when the run continues. */
+TEST(etd_samples_at_the_asked_times)
+{
+    bkf_pde *m = make(-0.96, 64, BKF_PDE_ETDRK4, 1e-8, 0);
+    bkf_error e;
+    CHECK_STATUS(bkf_pde_init_uniform(m, 1e-2, 3, &e), BKF_OK);
+    times tt = {{0}, 0};
+    CHECK_STATUS(bkf_pde_run(m, 2.5, 0.7, record_time, &tt, NULL, NULL, &e), BKF_OK);
+    double want[] = {0, 0.7, 1.4, 2.1, 2.5};
+    CHECK_MSG(tt.n == 5, "%zu samples", tt.n);
+    for (size_t k = 0; k < 5 && k < tt.n; k++) CHECK_CLOSE(tt.t[k], want[k], 0, 1e-14);
+    tt.n = 0;
+    CHECK_STATUS(bkf_pde_run(m, 4.5, 1.0, record_time, &tt, NULL, NULL, &e), BKF_OK);
+    CHECK_MSG(tt.n == 3 && tt.t[0] == 2.5 && tt.t[2] == 4.5, "%zu samples", tt.n);
+    CHECK(bkf_pde_time(m) == 4.5);
+    bkf_pde_free(m);
+}
+
+TEST(etd_refuses_what_it_does_not_cover)
+{
+    bkf_pde_params chain = {2, 0.3, -0.96, 20, 20, BKF_PDE_CHAIN};
+    bkf_pde_options o = bkf_pde_options_default();
+    o.stepper = BKF_PDE_ETDRK4;
+    bkf_error e;
+    CHECK(bkf_pde_check(&chain, &o, &e) == BKF_EINPUT && strstr(e.message, "continuum"));
+    bkf_pde_params cont = {2, 0.3, -0.96, 20, 64, BKF_PDE_CONTINUUM};
+    o.dealias = 1;
+    CHECK(bkf_pde_check(&cont, &o, &e) == BKF_EINPUT && strstr(e.message, "dealias"));
+    o.dealias = 0;
+    o.stepper = (bkf_pde_stepper)9;
+    CHECK(bkf_pde_check(&cont, &o, &e) == BKF_EINPUT && strstr(e.message, "etdrk4"));
+}
