@@ -27,7 +27,7 @@ const char *scene_kind_name(scene_kind kind)
 typedef enum {
     V_GAMMA, V_C, V_NU, V_NU_ANY, V_S, V_TOL, V_PDE_TOL, V_GRID_N, V_MODEL,
     V_COUNT, V_SEED, V_NUMBER, V_POSITIVE, V_NU_LIST, V_COUNT_LIST, V_RANGE_LOG,
-    V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_METHOD, V_FORMATS, V_TEXT, V_NAME, V_INIT
+    V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_METHOD, V_STEPPER, V_FRAME, V_FORMATS, V_TEXT, V_NAME, V_INIT
 } value_type;
 
 #define K(kind) (1u << (kind))
@@ -84,6 +84,8 @@ static const key_spec keys[] = {
     {"tmax", V_POSITIVE, K(SCENE_SPACETIME) | K(SCENE_CHECK), "a number > 0"},
     {"frames", V_COUNT, K(SCENE_SPACETIME), "an integer >= 1"},
     {"rel_tol", V_POSITIVE, K(SCENE_CHECK), "a number > 0"},
+    {"stepper", V_STEPPER, K(SCENE_SPACETIME) | K(SCENE_CHECK), "rk8pd, rkck, rkf45 or etdrk4"},
+    {"frame", V_FRAME, K(SCENE_CHECK), "moving or lab"},
     {"data", V_NAME, K(SCENE_FIGURE), "the name of a product of this scene"},
     {"script", V_TEXT, K(SCENE_FIGURE), "a gnuplot script path"},
     {"formats", V_FORMATS, K(SCENE_FIGURE), "png, pdf, svg or a list such as png,svg"},
@@ -193,6 +195,16 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
     }
     case V_METHOD: {
         static const char *const m[] = {"auto", "asymptotic", "leading", "shooting", NULL};
+        int i;
+        return cli_parse_choice(k, v, m, &i, err);
+    }
+    case V_STEPPER: {
+        static const char *const m[] = {"rk8pd", "rkck", "rkf45", "etdrk4", NULL};
+        int i;
+        return cli_parse_choice(k, v, m, &i, err);
+    }
+    case V_FRAME: {
+        static const char *const m[] = {"moving", "lab", NULL};
         int i;
         return cli_parse_choice(k, v, m, &i, err);
     }
@@ -962,6 +974,7 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         v = OWN(0, "frames");
         PAIR("--frames", v ? v : "500");
         PAIR("--tol", OWN(0, "tol"));
+        PAIR("--stepper", OWN(0, "stepper"));
         ARG("--no-progress");
         char *st = out_path(dir, p->name, ".dat");
         char *out = out_path(dir, p->name, "_diag.tsv");
@@ -980,6 +993,8 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         PAIR("--tol", OWN(0, "tol"));
         PAIR("--rel-tol", OWN(0, "rel_tol"));
         PAIR("--seed", OWN(0, "seed"));
+        PAIR("--stepper", OWN(0, "stepper"));
+        PAIR("--frame", OWN(0, "frame"));
         ARG("--no-progress");
         char *out = out_path(dir, p->name, ".tsv");
         PAIR("--out", out);
