@@ -9,6 +9,7 @@
 #include "bkfront/cycle.h"
 #include "bkfront/measure.h"
 #include "bkfront/pde.h"
+#include "pde_support.h"
 
 static bkf_pde *make(double gamma, double c, double nu, double S, size_t N, bkf_pde_model model,
                      double tol)
@@ -20,28 +21,6 @@ static bkf_pde *make(double gamma, double c, double nu, double S, size_t N, bkf_
     bkf_pde *m = bkf_pde_alloc(&p, &o, &e);
     CHECK_MSG(m, "alloc: %s", e.message);
     return m;
-}
-
-static int measure_sample(const bkf_pde_sample *s, void *data)
-{
-    bkf_error e;
-    CHECK_MSG(bkf_measure_add(data, s->t, s->psi, s->eta, &e) == BKF_OK, "%s", e.message);
-    return 0;
-}
-
-static bkf_measure *make_measure(const bkf_pde *m, const double *reference)
-{
-    const bkf_pde_params *pp = bkf_pde_get_params(m);
-    bkf_measure_params mp = bkf_measure_params_default();
-    mp.N = pp->N;
-    mp.S = pp->S;
-    mp.gamma = pp->gamma;
-    mp.nu = pp->nu;
-    mp.reference = reference;
-    bkf_error e;
-    bkf_measure *ms = bkf_measure_alloc(&mp, &e);
-    CHECK_MSG(ms, "%s", e.message);
-    return ms;
 }
 
 /* With psi_xx = 0 the model is the van der Pol oscillator at mu = gamma in

@@ -1,0 +1,34 @@
+/* Helpers shared by the simulator's tests: a measurement fed by a run's
+ * observer. */
+#ifndef BKF_TEST_PDE_SUPPORT_H
+#define BKF_TEST_PDE_SUPPORT_H
+
+#include "bkfront/measure.h"
+#include "bkfront/pde.h"
+#include "harness.h"
+
+/* Observer: every sample into the bkf_measure passed as data. */
+static inline int measure_sample(const bkf_pde_sample *s, void *data)
+{
+    bkf_error e;
+    CHECK_MSG(bkf_measure_add(data, s->t, s->psi, s->eta, &e) == BKF_OK, "%s", e.message);
+    return 0;
+}
+
+/* A measurement on the run's grid and model; reference may be NULL. */
+static inline bkf_measure *make_measure(const bkf_pde *m, const double *reference)
+{
+    const bkf_pde_params *pp = bkf_pde_get_params(m);
+    bkf_measure_params mp = bkf_measure_params_default();
+    mp.N = pp->N;
+    mp.S = pp->S;
+    mp.gamma = pp->gamma;
+    mp.nu = pp->nu;
+    mp.reference = reference;
+    bkf_error e;
+    bkf_measure *ms = bkf_measure_alloc(&mp, &e);
+    CHECK_MSG(ms, "%s", e.message);
+    return ms;
+}
+
+#endif
