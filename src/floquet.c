@@ -27,9 +27,6 @@
 #include <nlopt.h>
 #include <stdlib.h>
 #include <string.h>
-#ifdef FLOQUET_DEBUG
-#include <stdio.h>
-#endif
 
 /* State layout: M is stored by columns, column j = (d_psi, d_eta) from the
  * unit start vector e_j; P = dM/dK the same way. */
@@ -467,10 +464,6 @@ static double lambda_error(const bkf_floquet *f, double K, const mults *ma, cons
     }
     *m_floor_out = m_floor;
     *cyc_out = cyc;
-#ifdef FLOQUET_DEBUG
-    fprintf(stderr, "dbg K %g tl %.1g s %g: diff %.2g cyc %.2g floor %.2g cond %.2g (m1t %.3g normM %.3g bal %.3g T_err %.2g)\n", K, tl, s,
-            fabs(ma->lambda - mb->lambda), cyc, lambda_floor, cond_term, m1t, normM, normM_bal, f->T_err);
-#endif
     /* For real multipliers cond_term already carries the floor (2 m_floor
      * in the trace's error, divided by |m1| and more near a double root):
      * adding lambda_floor too counted it three times, and half the rows of
@@ -841,9 +834,6 @@ int bkf_floquet_eval(bkf_floquet *f, double q, bkf_floquet_point *pt, bkf_error 
             ok = 1;
             consider(&rb, &cand, cand_cyc);
         }
-#ifdef FLOQUET_DEBUG
-        if (!ok) fprintf(stderr, "dbg retry at tl %g failed: %s\n", tl, e2.message);
-#endif
         if (!ok) break; /* over budget at this tolerance: tighter is worse */
     }
     if (!f->ready) return bkf_error_set(err, BKF_ENUMERIC, "floquet: the cycle failed on a retry: %s", e2.message);
