@@ -354,7 +354,7 @@ static int integrate(bkf_floquet *f, double K, int dk, int which, raw *out, bkf_
         return bkf_error_set(err, BKF_ENUMERIC,
                              "monodromy at gamma = %g, nu = %g, K = %g: integration failed at t = %g "
                              "(%s)",
-                             f->gamma, f->nu, K, t, gsl_strerror(rc));
+                             f->gamma, f->nu, K, t, rc != GSL_SUCCESS ? gsl_strerror(rc) : "non-finite state");
     out->M[0] = s[IM];
     out->M[1] = s[IM + 2];
     out->M[2] = s[IM + 1];
