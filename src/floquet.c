@@ -51,7 +51,7 @@ enum { DIM_PLAIN = 7, DIM_DK = 11 };
 #define RETRY_TOL_MIN 1e-13
 #define CYCLE_TOL_MIN 1e-13
 #define RETRY_WORK 30.0
-#define RETRY_STEPS_MIN 200000.0
+#define RETRY_STEPS_MIN 50000.0
 
 /* ------------------------------------------------------------ the flow */
 
