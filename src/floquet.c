@@ -47,6 +47,11 @@ enum { DIM_PLAIN = 7, DIM_DK = 11 };
 #define PEAK_FLOOR (-1.0)
 /* Scans only locate peaks, refined afterwards, so they run loose. */
 #define SCAN_TOL 1e-7
+/* Retries of a wavenumber whose estimate misses tol (bkf_floquet_eval). */
+#define RETRY_TOL_MIN 1e-13
+#define CYCLE_TOL_MIN 1e-13
+#define RETRY_WORK 30.0
+#define RETRY_STEPS_MIN 50000.0
 
 /* ------------------------------------------------------------ the flow */
 
@@ -126,6 +131,12 @@ typedef struct {
     double tol;
 } engine;
 
+/* Slots of the trace integration: the scan, the two tolerances of the
+ * estimate, and the two of a retry at a tighter tolerance.  Separate slots
+ * for the retry keep the usual drivers (and their step-size guesses) when
+ * one wavenumber needs more. */
+enum { ENG_SCAN = 0, ENG_COARSE = 1, ENG_FINE = 2, ENG_RETRY_COARSE = 3, ENG_RETRY_FINE = 4, ENG_SLOTS = 5 };
+
 struct bkf_floquet {
     double gamma, c, nu;
     bkf_floquet_options opt;
@@ -134,11 +145,14 @@ struct bkf_floquet {
     double x0, y0, T, T_err, L;
     lin_params lp;
     bkf_stepper_kind kind;
-    engine eng[2][3];         /* [with dM/dK][scan, coarse, fine] */
+    engine eng[2][ENG_SLOTS]; /* [with dM/dK][slot] */
+    engine eng_log[2];        /* log-column integrations, [coarse, fine] */
     double tol_int;           /* coarse integration tolerance; fine = /TOL_RATIO */
+    double tol_floor;         /* tightest coarse tolerance worth a retry */
+    double tol_retry;         /* tolerance of the retry slots */
+    size_t retry_nmax;        /* step budget of one retry integration */
+    bkf_cycle_options cycle_opt; /* of the cycle solved last */
 };
-
-enum { ENG_SCAN = 0, ENG_COARSE = 1, ENG_FINE = 2 };
 
 bkf_floquet_options bkf_floquet_options_default(void)
 {
@@ -185,11 +199,16 @@ bkf_floquet *bkf_floquet_alloc(void)
 
 static void engines_free(bkf_floquet *f)
 {
-    for (int d = 0; d < 2; d++)
-        for (int k = 0; k < 3; k++) {
+    for (int d = 0; d < 2; d++) {
+        for (int k = 0; k < ENG_SLOTS; k++) {
             if (f->eng[d][k].driver) gsl_odeiv2_driver_free(f->eng[d][k].driver);
             f->eng[d][k].driver = NULL;
         }
+    }
+    for (int k = 0; k < 2; k++) {
+        if (f->eng_log[k].driver) gsl_odeiv2_driver_free(f->eng_log[k].driver);
+        f->eng_log[k].driver = NULL;
+    }
 }
 
 void bkf_floquet_free(bkf_floquet *f)
@@ -236,7 +255,9 @@ static int engine_get(bkf_floquet *f, int dk, int which, engine **out)
 {
     double tol = which == ENG_SCAN ? fmax(SCAN_TOL, f->tol_int)
                  : which == ENG_COARSE ? f->tol_int
-                                       : f->tol_int / TOL_RATIO;
+                 : which == ENG_FINE ? f->tol_int / TOL_RATIO
+                 : which == ENG_RETRY_COARSE ? f->tol_retry
+                                             : f->tol_retry / TOL_RATIO;
     engine *e = &f->eng[dk][which];
     if (!e->driver || e->tol != tol) {
         if (e->driver) gsl_odeiv2_driver_free(e->driver);
@@ -246,9 +267,9 @@ static int engine_get(bkf_floquet *f, int dk, int which, engine **out)
             f->kind == BKF_STEPPER_IMPLICIT ? gsl_odeiv2_step_bsimp : gsl_odeiv2_step_rk8pd;
         e->driver = gsl_odeiv2_driver_alloc_standard_new(&e->system, type, 1e-2, tol, tol, 1.0, 0.0);
         if (!e->driver) return BKF_ENOMEM;
-        gsl_odeiv2_driver_set_nmax(e->driver, MAX_STEPS);
         e->tol = tol;
     }
+    gsl_odeiv2_driver_set_nmax(e->driver, which >= ENG_RETRY_COARSE ? f->retry_nmax : MAX_STEPS);
     *out = e;
     return BKF_OK;
 }
@@ -284,6 +305,7 @@ int bkf_floquet_set(bkf_floquet *f, double gamma, double c, double nu,
         else break;
     }
     if (rc != BKF_OK) return rc;
+    f->cycle_opt = co;
     const bkf_cycle_result *r = bkf_cycle_get(f->cycle);
     f->gamma = gamma;
     f->c = c;
@@ -303,6 +325,7 @@ int bkf_floquet_set(bkf_floquet *f, double gamma, double c, double nu,
     if (kind != f->kind || tol_int != f->tol_int) engines_free(f);
     f->kind = kind;
     f->tol_int = tol_int;
+    f->tol_floor = floor_tol * TOL_RATIO;
     f->ready = 1;
     return BKF_OK;
 }
@@ -331,7 +354,7 @@ static int integrate(bkf_floquet *f, double K, int dk, int which, raw *out, bkf_
         return bkf_error_set(err, BKF_ENUMERIC,
                              "monodromy at gamma = %g, nu = %g, K = %g: integration failed at t = %g "
                              "(%s)",
-                             f->gamma, f->nu, K, t, gsl_strerror(rc));
+                             f->gamma, f->nu, K, t, rc != GSL_SUCCESS ? gsl_strerror(rc) : "non-finite state");
     out->M[0] = s[IM];
     out->M[1] = s[IM + 2];
     out->M[2] = s[IM + 1];
@@ -347,80 +370,84 @@ static int integrate(bkf_floquet *f, double K, int dk, int which, raw *out, bkf_
 typedef struct {
     double m1_re, m1_im, m2_re, m2_im, lambda;
     bkf_floquet_kind kind;
+    double m1_abs_scaled;   /* |m1| / e^s (see multipliers_scaled) */
 } mults;
 
-/* Eigenvalues of a real 2x2 from its trace and ln det.  The determinant is
- * Liouville's, exact where the matrix's own would cancel (det ~ 1e-50 from
- * entries of order 1), and the small multiplier is det/m1. */
-static mults multipliers(double tr, double L)
+/* Eigenvalues of a real 2x2 M = e^s Mt from the trace of Mt and ln det M.
+ * The determinant is Liouville's, exact where the matrix's own would cancel
+ * (det ~ 1e-50 from entries of order 1), and the small multiplier is
+ * det/m1.  lambda comes from logs, so it stays right when m1 itself
+ * underflows (the log-column integration reaches lambda ~ -2e4). */
+static mults multipliers_scaled(double trt, double L, double s)
 {
     mults m = {0};
-    double D = exp(L), half = 0.5 * tr, disc = half * half - D;
+    double Dt = exp(L - 2.0 * s), half = 0.5 * trt, disc = half * half - Dt;
     if (disc >= 0.0) {
         double r = sqrt(disc);
-        double m1 = half >= 0.0 ? half + r : half - r;
-        m.m1_re = m1;
-        m.m2_re = m1 != 0.0 ? D / m1 : 0.0;
-        m.lambda = m1 != 0.0 ? log(fabs(m1)) : 0.5 * L;
-        m.kind = m1 >= 0.0 ? BKF_FLOQUET_REAL_POSITIVE : BKF_FLOQUET_REAL_NEGATIVE;
+        double m1t = half >= 0.0 ? half + r : half - r;
+        double sign = m1t >= 0.0 ? 1.0 : -1.0;
+        double l1 = m1t != 0.0 ? s + log(fabs(m1t)) : 0.5 * L;
+        m.m1_re = sign * exp(l1);
+        m.m2_re = sign * exp(L - l1);
+        m.lambda = l1;
+        m.m1_abs_scaled = fabs(m1t);
+        m.kind = m1t >= 0.0 ? BKF_FLOQUET_REAL_POSITIVE : BKF_FLOQUET_REAL_NEGATIVE;
     } else {
-        double im = sqrt(-disc);
-        m.m1_re = m.m2_re = half;
-        m.m1_im = im;
-        m.m2_im = -im;
+        double im = sqrt(-disc), es = exp(s);
+        m.m1_re = m.m2_re = half * es;
+        m.m1_im = im * es;
+        m.m2_im = -im * es;
         m.lambda = 0.5 * L;
+        m.m1_abs_scaled = sqrt(Dt);
         m.kind = BKF_FLOQUET_COMPLEX;
     }
     return m;
 }
 
+static mults multipliers(double tr, double L) { return multipliers_scaled(tr, L, 0.0); }
+
 /* How far lambda may move with the cycle's own error: the end time moves
  * M by A(0) M dT; the start point's error, of the same order in the cycle's
  * accuracy, was measured to move it up to ~20 times more (gamma 2, nu
- * -0.94, cycle tol 1e-7), hence the factor. */
-static double cycle_term(const bkf_floquet *f, double K, const double *M, double m1_abs)
+ * -0.94, cycle tol 1e-7), hence the factor.  normM_rel is |M|/|m1|. */
+static double norm_A(const bkf_floquet *f, double K)
 {
     double g = f->gamma;
-    double normA = g * fabs(f->nu * f->nu - 1.0) + g + (1.0 + K) / g;
-    double normM = sqrt(M[0] * M[0] + M[1] * M[1] + M[2] * M[2] + M[3] * M[3]);
-    double cond = m1_abs > 0.0 ? fmax(1.0, normM / m1_abs) : 1.0;
-    return 30.0 * f->T_err * normA * cond;
+    return g * fabs(f->nu * f->nu - 1.0) + g + (1.0 + K) / g;
 }
 
-static int eval_k2(bkf_floquet *f, double K, bkf_floquet_point *pt, bkf_error *err)
+static double cycle_term(const bkf_floquet *f, double K, double normM_rel)
 {
-    raw a, b;
-    int rc = integrate(f, K, 0, ENG_COARSE, &a, err);
-    if (rc == BKF_OK) rc = integrate(f, K, 0, ENG_FINE, &b, err);
-    if (rc != BKF_OK) return rc;
-    mults ma = multipliers(a.tr, a.L), mb = multipliers(b.tr, b.L);
-    memset(pt, 0, sizeof *pt);
-    pt->k2 = K;
-    pt->q = f->c > 0.0 ? sqrt(fmax(K - 1.0, 0.0)) / f->c : 0.0;
-    pt->m1_re = mb.m1_re;
-    pt->m1_im = mb.m1_im;
-    pt->m2_re = mb.m2_re;
-    pt->m2_im = mb.m2_im;
-    pt->lambda = mb.lambda;
-    pt->kind = mb.kind;
-    pt->trace = b.tr;
-    pt->log_det = b.L;
-    pt->det_direct = b.det;
-    memcpy(pt->monodromy, b.M, sizeof b.M);
-    double m1_abs = hypot(mb.m1_re, mb.m1_im);
-    double cyc = cycle_term(f, K, b.M, m1_abs);
+    /* in the plain coordinates, where the factor 30 was measured: with the
+     * balanced norm (coupling sqrt(K) both ways) m1_err came out 4 times
+     * optimistic at gamma 2, nu -0.94, tol 1e-6.  Where this bound is far
+     * too large (gamma 1e-2: it grows as (1 + K)/gamma), the retries of
+     * bkf_floquet_eval measure the cycle's share instead. */
+    return 30.0 * f->T_err * norm_A(f, K) * fmax(1.0, normM_rel);
+}
+
+/* The error terms common to both integrations of M: a and b are the
+ * multipliers at the coarse and fine tolerance, tr_a, tr_b the traces of
+ * e^-s M, normM = |e^-s M| (as integrated), normM_bal its balanced norm,
+ * tl the coarse tolerance.  Returns lambda_err; *m_floor_out is the
+ * absolute floor on m1 / e^s. */
+static double lambda_error(const bkf_floquet *f, double K, const mults *ma, const mults *mb,
+                           double tr_a, double tr_b, double L, double s, double normM,
+                           double normM_bal, double tl, double *m_floor_out, double *cyc_out)
+{
+    double m1t = mb->m1_abs_scaled;
+    double cyc = cycle_term(f, K, m1t > 0.0 ? normM_bal / m1t : INFINITY);
     /* An absolute floor: m1 comes from the trace of M, whose entries carry
      * an error of about the integration tolerance times their size whatever
      * the two integrations' difference says.  Where |m1| << |M| (lambda < -8,
      * |m1| < 3e-4) the difference alone was up to 70 times optimistic at tol
      * 1e-6; the coarse tolerance (10 times the fine one) times |M| is the
      * floor on m1, and lambda = ln|m1| inherits it divided by |m1|. */
-    double normM = sqrt(b.M[0] * b.M[0] + b.M[1] * b.M[1] + b.M[2] * b.M[2] + b.M[3] * b.M[3]);
-    double m_floor = f->tol_int * fmax(1.0, normM);
+    double m_floor = tl * normM;
     /* not capped: once m_floor reaches |m1| the computed m1 may be noise
      * and lambda is bounded only from above (a cap at 1 was optimistic by
      * up to 2e3 at gamma 100, c q 100, where |m1| ~ exp(-1.4e4)) */
-    double lambda_floor = m1_abs > 0.0 ? m_floor / m1_abs : INFINITY;
+    double lambda_floor = m1t > 0.0 ? m_floor / m1t : INFINITY;
     /* Near a double multiplier (tr^2 = 4 exp(L): the Hopf point, or where
      * the pair turns complex) m1 = tr/2 + sqrt(tr^2/4 - exp(L)) turns an
      * error e of the discriminant into sqrt(e), and the two integrations can
@@ -428,33 +455,398 @@ static int eval_k2(bkf_floquet *f, double K, bkf_floquet_point *pt, bkf_error *e
      * 0.9999, q 0, tol 1e-4: error 3.7e-4 against an estimate of 5.5e-5).
      * Bound the square root's response to the trace's error directly. */
     double cond_term = 0.0;
-    if (mb.kind != BKF_FLOQUET_COMPLEX && m1_abs > 0.0) {
-        double half = 0.5 * b.tr, disc = fabs(half * half - exp(b.L));
-        double d_tr = fabs(a.tr - b.tr) + 2.0 * m_floor;
+    if (mb->kind != BKF_FLOQUET_COMPLEX && m1t > 0.0) {
+        double half = 0.5 * tr_b, disc = fabs(half * half - exp(L - 2.0 * s));
+        double d_tr = fabs(tr_a - tr_b) + 2.0 * m_floor;
         double e = fabs(half) * d_tr + 0.25 * d_tr * d_tr;
         double d_root = disc > 0.0 ? fmin(sqrt(e), e / (2.0 * sqrt(disc))) : sqrt(e);
-        cond_term = (0.5 * d_tr + d_root) / m1_abs;
+        cond_term = (0.5 * d_tr + d_root) / m1t;
     }
-    pt->lambda_err = fabs(ma.lambda - mb.lambda) + cyc + lambda_floor + cond_term +
-                     4.0 * DBL_EPSILON * fabs(mb.lambda);
-    pt->m1_err = hypot(ma.m1_re - mb.m1_re, ma.m1_im - mb.m1_im) + cyc * m1_abs + m_floor;
+    *m_floor_out = m_floor;
+    *cyc_out = cyc;
+    /* For real multipliers cond_term already carries the floor (2 m_floor
+     * in the trace's error, divided by |m1| and more near a double root):
+     * adding lambda_floor too counted it three times, and half the rows of
+     * the paper's dispersion at tol 1e-10 then went to a retry. */
+    return fabs(ma->lambda - mb->lambda) + cyc +
+           (mb->kind != BKF_FLOQUET_COMPLEX && m1t > 0.0 ? cond_term : lambda_floor) +
+           4.0 * DBL_EPSILON * fabs(mb->lambda);
+}
+
+static void fill_point(bkf_floquet_point *pt, double K, const bkf_floquet *f, const mults *mb)
+{
+    memset(pt, 0, sizeof *pt);
+    pt->k2 = K;
+    pt->q = f->c > 0.0 ? sqrt(fmax(K - 1.0, 0.0)) / f->c : 0.0;
+    pt->m1_re = mb->m1_re;
+    pt->m1_im = mb->m1_im;
+    pt->m2_re = mb->m2_re;
+    pt->m2_im = mb->m2_im;
+    pt->lambda = mb->lambda;
+    pt->kind = mb->kind;
+}
+
+/* M integrated as it stands (the usual route): slots coarse and fine of
+ * the usual or of the retry tolerance. */
+static int eval_trace(bkf_floquet *f, double K, int retry, bkf_floquet_point *pt, double *cyc,
+                      bkf_error *err)
+{
+    raw a, b;
+    int rc = integrate(f, K, 0, retry ? ENG_RETRY_COARSE : ENG_COARSE, &a, err);
+    if (rc == BKF_OK) rc = integrate(f, K, 0, retry ? ENG_RETRY_FINE : ENG_FINE, &b, err);
+    if (rc != BKF_OK) return rc;
+    double tl = retry ? f->tol_retry : f->tol_int;
+    mults ma = multipliers(a.tr, a.L), mb = multipliers(b.tr, b.L);
+    fill_point(pt, K, f, &mb);
+    pt->trace = b.tr;
+    pt->log_det = b.L;
+    pt->det_direct = b.det;
+    memcpy(pt->monodromy, b.M, sizeof b.M);
+    double normM = sqrt(b.M[0] * b.M[0] + b.M[1] * b.M[1] + b.M[2] * b.M[2] + b.M[3] * b.M[3]);
+    double m_floor;
+    /* the entries are integrated to tl absolute or relative, whichever is
+     * larger: the floor is tl max(1, |M|) */
+    pt->lambda_err = lambda_error(f, K, &ma, &mb, a.tr, b.tr, b.L, 0.0, fmax(1.0, normM), normM, tl,
+                                  &m_floor, cyc);
+    double m1_abs = hypot(mb.m1_re, mb.m1_im);
+    pt->m1_err = hypot(ma.m1_re - mb.m1_re, ma.m1_im - mb.m1_im) +
+                 cycle_term(f, K, m1_abs > 0.0 ? normM / m1_abs : INFINITY) *
+                     m1_abs +
+                 m_floor;
     pt->steps = a.steps + b.steps;
     return BKF_OK;
+}
+
+static int eval_k2(bkf_floquet *f, double K, bkf_floquet_point *pt, bkf_error *err)
+{
+    double cyc;
+    return eval_trace(f, K, 0, pt, &cyc, err);
+}
+
+/* ------------------------------------------------- log-column monodromy */
+
+/* The columns of M in polar form.  In the balanced coordinates
+ * (u, w) = (d_psi, d_eta gamma/sqrt(K)) the linearisation is
+ *     u' = -damp u + k w,  w' = -k u,   k = sqrt(K), damp = gamma (psi*^2 - 1),
+ * and a solution r (cos th, sin th), rho = ln r, obeys
+ *     th' = -k + damp sin th cos th,   rho' = -damp cos^2 th.
+ * Each column is then known to a relative accuracy set by the absolute
+ * errors of th and rho, however small it is: the integration of M itself
+ * controls absolute errors of entries that start at 1, so it loses every
+ * multiplier below tol |M| (|m1| ~ exp(-1.4e4) at gamma 100, c q 100). */
+enum { LX = 0, LY = 1, LT0 = 2, LR0 = 3, LT1 = 4, LR1 = 5, LL = 6, DIM_LOG = 7 };
+
+static int log_rhs(double t, const double s[], double ds[], void *params)
+{
+    (void)t;
+    lin_params *p = params;
+    double g = p->gamma, x = s[LX], damp = g * (x * x - 1.0), k = sqrt(p->K);
+    p->rhs_calls++;
+    ds[LX] = g * (s[LY] - lienard_F(x));
+    ds[LY] = (p->nu - x) / g;
+    for (int j = 0; j < 2; j++) {
+        double th = s[LT0 + 2 * j], c = cos(th), sn = sin(th);
+        ds[LT0 + 2 * j] = -k + damp * sn * c;
+        ds[LR0 + 2 * j] = -damp * c * c;
+    }
+    ds[LL] = -damp;
+    return GSL_SUCCESS;
+}
+
+static int log_jac(double t, const double s[], double *J, double dfdt[], void *params)
+{
+    (void)t;
+    lin_params *p = params;
+    double g = p->gamma, x = s[LX], damp = g * (x * x - 1.0), ddamp = 2.0 * g * x;
+    const size_t n = DIM_LOG;
+    memset(J, 0, sizeof(double) * n * n);
+    memset(dfdt, 0, sizeof(double) * n);
+    J[LX * n + LX] = -damp;
+    J[LX * n + LY] = g;
+    J[LY * n + LX] = -1.0 / g;
+    for (int j = 0; j < 2; j++) {
+        size_t it = LT0 + 2 * j, ir = it + 1;
+        double th = s[it], c = cos(th), sn = sin(th);
+        J[it * n + LX] = ddamp * sn * c;
+        J[it * n + it] = damp * (c * c - sn * sn);
+        J[ir * n + LX] = -ddamp * c * c;
+        J[ir * n + it] = 2.0 * damp * sn * c;
+    }
+    J[LL * n + LX] = -ddamp;
+    return GSL_SUCCESS;
+}
+
+/* The log system's stepper: the library's, except that bsimp is replaced
+ * by rk8pd once the perturbation oscillates at least as fast as the
+ * cycle's stiffest rate (sqrt(K) >= gamma): rk8pd's steps are then set by
+ * the oscillation anyway, and bsimp took ~10 times longer at gamma 100,
+ * c q 100. */
+static const gsl_odeiv2_step_type *log_stepper(const bkf_floquet *f, double K)
+{
+    if (f->kind != BKF_STEPPER_IMPLICIT) return gsl_odeiv2_step_rk8pd;
+    if (f->opt.stepper == BKF_STEPPER_AUTO && sqrt(K) >= f->gamma) return gsl_odeiv2_step_rk8pd;
+    return gsl_odeiv2_step_bsimp;
+}
+
+/* Step budget of a log integration: retry_nmax counts the library
+ * stepper's steps; an rk8pd step standing in for bsimp is ~10 times
+ * cheaper. */
+static size_t log_nmax(const bkf_floquet *f, double K)
+{
+    return f->kind == BKF_STEPPER_IMPLICIT && log_stepper(f, K) == gsl_odeiv2_step_rk8pd
+               ? 10 * f->retry_nmax
+               : f->retry_nmax;
+}
+
+typedef struct {
+    double s, trt, normt, L;  /* M = e^s Mt (balanced), trace and norm of Mt */
+    double M[4];              /* M in the plain coordinates, row-major (may underflow) */
+    size_t steps;
+} lograw;
+
+static int integrate_log(bkf_floquet *f, double K, int which, double tol, lograw *out,
+                         bkf_error *err)
+{
+    engine *e = &f->eng_log[which];
+    if (!e->driver || e->tol != tol || e->driver->s->type != log_stepper(f, K)) {
+        if (e->driver) gsl_odeiv2_driver_free(e->driver);
+        e->system = (gsl_odeiv2_system){log_rhs, log_jac, DIM_LOG, &f->lp};
+        const gsl_odeiv2_step_type *type = log_stepper(f, K);
+        /* absolute errors only: th and rho are logs, their absolute error is
+         * the relative error of the column, whatever its size */
+        e->driver = gsl_odeiv2_driver_alloc_standard_new(&e->system, type, 1e-2, tol, 0.0, 1.0, 0.0);
+        if (!e->driver) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        e->tol = tol;
+    }
+    gsl_odeiv2_driver_set_nmax(e->driver, log_nmax(f, K));
+    double s[DIM_LOG] = {f->x0, f->y0, 0.0, 0.0, 0.5 * 3.14159265358979323846, 0.0, 0.0};
+    double t = 0.0;
+    f->lp.K = K;
+    gsl_odeiv2_driver_reset(e->driver);
+    int rc = gsl_odeiv2_driver_apply(e->driver, &t, f->T, s);
+    if (rc != GSL_SUCCESS || !isfinite(s[LR0]) || !isfinite(s[LR1]) || !isfinite(s[LT0]) ||
+        !isfinite(s[LT1]))
+        return bkf_error_set(err, BKF_ENUMERIC,
+                             "monodromy (log columns) at gamma = %g, nu = %g, K = %g: integration "
+                             "failed at t = %g (%s)",
+                             f->gamma, f->nu, K, t, rc != GSL_SUCCESS ? gsl_strerror(rc) : "non-finite state");
+    double sc = fmax(s[LR0], s[LR1]);
+    double r0 = exp(s[LR0] - sc), r1 = exp(s[LR1] - sc);
+    double c0 = cos(s[LT0]), s0 = sin(s[LT0]), c1 = cos(s[LT1]), s1 = sin(s[LT1]);
+    out->s = sc;
+    out->trt = r0 * c0 + r1 * s1;
+    out->normt = sqrt(r0 * r0 + r1 * r1);
+    out->L = s[LL];
+    /* back to (d_psi, d_eta): M = S^-1 Mb S with S = diag(1, a) */
+    double a = f->gamma / sqrt(K), es = exp(sc);
+    out->M[0] = es * r0 * c0;
+    out->M[1] = es * r1 * c1 * a;
+    out->M[2] = es * r0 * s0 / a;
+    out->M[3] = es * r1 * s1;
+    out->steps = e->driver->n;
+    return BKF_OK;
+}
+
+static int eval_log(bkf_floquet *f, double K, double tl, bkf_floquet_point *pt, double *cyc,
+                    bkf_error *err)
+{
+    lograw a, b;
+    int rc = integrate_log(f, K, 0, tl, &a, err);
+    if (rc == BKF_OK) rc = integrate_log(f, K, 1, tl / TOL_RATIO, &b, err);
+    if (rc != BKF_OK) return rc;
+    mults ma = multipliers_scaled(a.trt, a.L, a.s), mb = multipliers_scaled(b.trt, b.L, b.s);
+    fill_point(pt, K, f, &mb);
+    /* the coarse trace on the fine one's scale, for the difference */
+    double tra = a.trt * exp(a.s - b.s);
+    double m_floor;
+    /* each column carries a relative error ~tl (absolute in th and rho) */
+    pt->lambda_err = lambda_error(f, K, &ma, &mb, tra, b.trt, b.L, b.s, b.normt, b.normt, tl, &m_floor, cyc);
+    double es = exp(b.s);
+    pt->trace = b.trt * es;
+    pt->log_det = b.L;
+    pt->det_direct = b.M[0] * b.M[3] - b.M[1] * b.M[2];
+    memcpy(pt->monodromy, b.M, sizeof b.M);
+    pt->m1_err = hypot(ma.m1_re - mb.m1_re, ma.m1_im - mb.m1_im) +
+                 (pt->lambda_err - fabs(ma.lambda - mb.lambda)) * hypot(mb.m1_re, mb.m1_im);
+    pt->steps = a.steps + b.steps;
+    return BKF_OK;
+}
+
+/* At K = 1 the linearisation is the cycle's own variational equation: the
+ * multipliers are 1 (the flow's direction) and exp(L), exactly.  Integrating
+ * M there cannot resolve m1 near the Hopf point, where 1 and exp(L),
+ * L ~ -1e-5, nearly coincide (errors up to 4e-4 at tol 1e-4), nor at gamma
+ * 100 (|M| ~ 1e7): the closed form is the answer.  M is still integrated
+ * for the reported matrix and the check det_direct. */
+static int eval_trivial(bkf_floquet *f, bkf_floquet_point *pt, bkf_error *err)
+{
+    double cyc;
+    int rc = eval_trace(f, 1.0, 0, pt, &cyc, err);
+    if (rc != BKF_OK) return rc;
+    const bkf_cycle_result *cy = bkf_cycle_get(f->cycle);
+    double L = f->L, L_err = cy ? cy->log_multiplier_err : 0.0;
+    pt->m1_re = 1.0;
+    pt->m1_im = pt->m2_im = 0.0;
+    pt->m2_re = exp(L);
+    pt->kind = BKF_FLOQUET_REAL_POSITIVE;
+    pt->log_det = L;
+    /* the cycle is stable (L < 0) unless L is within its error of 0; then
+     * the dominant multiplier is exp(L) and lambda at most L + L_err */
+    pt->lambda = fmax(0.0, L);
+    pt->lambda_err = fmax(0.0, L + L_err) + DBL_EPSILON;
+    pt->m1_err = pt->lambda_err;
+    return BKF_OK;
+}
+
+/* The cycle again at tolerance tol (warm).  On failure the previous solve
+ * is restored (it succeeded at its tolerance before). */
+static int resolve_cycle(bkf_floquet *f, double tol, bkf_error *err)
+{
+    bkf_cycle_options co = f->cycle_opt;
+    co.tol = tol;
+    co.warm_start = 1;
+    int rc = bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
+    if (rc != BKF_OK) co = f->cycle_opt;
+    if (rc != BKF_OK && bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err) != BKF_OK) {
+        f->ready = 0;
+        return rc;
+    }
+    const bkf_cycle_result *r = bkf_cycle_get(f->cycle);
+    f->cycle_opt = co;
+    f->y0 = r->section_slope / f->gamma + lienard_F(f->nu);
+    f->T = r->period;
+    f->T_err = r->period_err;
+    f->L = r->log_multiplier;
+    return rc;
+}
+
+/* The cycle's share of lambda's error, measured instead of bounded: lambda
+ * with the cycle 100 times looser moves by d, so with the cycle as it is,
+ * by ~d/100 if that error is linear in the cycle's tolerance; d/10 leaves
+ * a factor 10.  The bound cycle_term is far above this at tight tolerance
+ * (1.3e-10 against a measured 1e-13 at gamma 2, nu -0.9, c q 0.66), where
+ * the cycle cannot be solved tighter than CYCLE_TOL_MIN.  Returns NaN if
+ * it cannot tell. */
+static double cycle_measured(bkf_floquet *f, double K)
+{
+    bkf_floquet_point a, b;
+    double cyc, tight = f->cycle_opt.tol;
+    bkf_error e;
+    if (eval_trace(f, K, 1, &a, &cyc, &e) != BKF_OK) return NAN;
+    if (resolve_cycle(f, fmin(100.0 * tight, 1e-3), &e) != BKF_OK) return NAN;
+    int rc = eval_trace(f, K, 1, &b, &cyc, &e);
+    if (resolve_cycle(f, tight, &e) != BKF_OK || rc != BKF_OK) return NAN;
+    return 0.1 * fabs(a.lambda - b.lambda);
+}
+
+/* The best attempt so far at one wavenumber.  Once the cycle's share has
+ * been measured (cycle_measured), it replaces the bound in every later
+ * attempt made with the same cycle. */
+typedef struct {
+    bkf_floquet_point best;
+    double cyc;               /* the cycle's share of best.lambda_err */
+    int have;
+    double cyc_measured;      /* INFINITY until measured */
+    size_t steps;
+} retry_best;
+
+static void consider(retry_best *rb, bkf_floquet_point *cand, double cand_cyc)
+{
+    rb->steps += cand->steps;
+    if (rb->cyc_measured < cand_cyc) {
+        cand->lambda_err += rb->cyc_measured - cand_cyc;
+        cand_cyc = rb->cyc_measured;
+    }
+    if (!rb->have || cand->lambda_err < rb->best.lambda_err) {
+        rb->best = *cand;
+        rb->cyc = cand_cyc;
+        rb->have = 1;
+    }
 }
 
 int bkf_floquet_eval(bkf_floquet *f, double q, bkf_floquet_point *pt, bkf_error *err)
 {
     if (!f || !f->ready) return bkf_error_set(err, BKF_EINPUT, "floquet: eval before a successful set");
     if (!pt) return bkf_error_set(err, BKF_EINPUT, "floquet: point is NULL");
+    /* NaN unless a point is filled: tells a refusal on tol from a failure */
+    pt->lambda_err = NAN;
     int rc = bkf_model_check_nonnegative("q", q, err);
     if (rc != BKF_OK) return rc;
     double K = k2_of(f, q);
     if (!(K <= K_MAX))
         return bkf_error_set(err, BKF_EINPUT, "c q = %g is too large (at most %g)", f->c * q,
                              sqrt(K_MAX - 1.0));
-    rc = eval_k2(f, K, pt, err);
-    if (rc == BKF_OK) pt->q = q;
-    return rc;
+    if (K == 1.0) {
+        rc = eval_trivial(f, pt, err);
+        if (rc == BKF_OK) pt->q = q;
+        return rc;
+    }
+    double tol = f->opt.tol, cyc = 0.0, cand_cyc;
+    rc = eval_trace(f, K, 0, pt, &cyc, err);
+    if (rc == BKF_OK && pt->lambda_err <= tol) return BKF_OK;
+    /* The estimate misses tol.  Try, keeping the best estimate: the log
+     * columns at the same tolerance (multipliers under the noise floor of
+     * M); a tighter cycle where its error dominates; both integrations at
+     * tolerances 100 times tighter down to RETRY_TOL_MIN.  Each retry
+     * integration may take RETRY_WORK times the steps of the first (bsimp
+     * at c q 100 and tol 1e-13 took minutes), at least RETRY_STEPS_MIN. */
+    size_t steps = rc == BKF_OK ? pt->steps : 0;
+    f->retry_nmax = (size_t)fmax(RETRY_STEPS_MIN, RETRY_WORK * 0.5 * (double)steps);
+    retry_best rb = {*pt, cyc, rc == BKF_OK, INFINITY, steps};
+    bkf_floquet_point cand;
+    bkf_error e2;
+    double tl = f->tol_int, tl_min = fmax(f->tol_floor, RETRY_TOL_MIN);
+    if (!(rb.have && rb.best.lambda_err <= tol) && eval_log(f, K, tl, &cand, &cand_cyc, &e2) == BKF_OK)
+        consider(&rb, &cand, cand_cyc);
+    int measured = 0, cycle_stuck = 0;
+    while (!(rb.have && rb.best.lambda_err <= tol)) {
+        /* the cycle's share must matter both against tol and in the total */
+        int cycle_matters = rb.have && rb.cyc > 0.3 * tol && rb.cyc > 0.3 * rb.best.lambda_err;
+        if (cycle_matters && !cycle_stuck && f->cycle_opt.tol > CYCLE_TOL_MIN) {
+            if (resolve_cycle(f, fmax(0.01 * f->cycle_opt.tol, CYCLE_TOL_MIN), &e2) != BKF_OK) {
+                /* near the canard the cycle can refuse a tight tolerance */
+                if (!f->ready) break;
+                cycle_stuck = 1;
+                continue;
+            }
+        } else if (cycle_matters && !measured) {
+            measured = 1;
+            double cm = cycle_measured(f, K);
+            if (!f->ready) break;
+            if (cm < rb.cyc) {
+                rb.best.lambda_err += cm - rb.cyc;
+                rb.cyc = cm;
+                rb.cyc_measured = cm;
+            }
+            continue;
+        } else if (tl > tl_min) {
+            tl = fmax(0.01 * tl, tl_min);
+        } else {
+            break;
+        }
+        f->tol_retry = tl;
+        int ok = 0;
+        if (eval_trace(f, K, 1, &cand, &cand_cyc, &e2) == BKF_OK) {
+            ok = 1;
+            consider(&rb, &cand, cand_cyc);
+        }
+        if (!(rb.have && rb.best.lambda_err <= tol) && eval_log(f, K, tl, &cand, &cand_cyc, &e2) == BKF_OK) {
+            ok = 1;
+            consider(&rb, &cand, cand_cyc);
+        }
+        if (!ok) break; /* over budget at this tolerance: tighter is worse */
+    }
+    if (!f->ready) return bkf_error_set(err, BKF_ENUMERIC, "floquet: the cycle failed on a retry: %s", e2.message);
+    if (!rb.have) return rc;
+    *pt = rb.best;
+    pt->q = q;
+    pt->steps = rb.steps;
+    if (!(pt->lambda_err <= tol))
+        return bkf_error_set(err, BKF_ENUMERIC,
+                             "estimated error %.2g of lambda exceeds tol %.2g at q = %g "
+                             "(gamma = %g, c = %g, nu = %g, lambda = %.6g)",
+                             pt->lambda_err, tol, q, f->gamma, f->c, f->nu, pt->lambda);
+    return BKF_OK;
 }
 
 static int longwave_at(bkf_floquet *f, int which, double *a, bkf_error *err)

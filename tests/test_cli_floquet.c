@@ -233,10 +233,24 @@ TEST(cli_floquet_dispersion)
 
     r = FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.92", "--q", "0.1:6:60");
     CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    /* a row whose estimate stays above tol is flagged: kind refused, no
+     * digits, its estimate above tol, one warning line on stderr each */
+    int refused = 0;
     for (int i = 0; fq_field(r.out, i, "lambda", &lambda, NULL, 0); i++) {
-        CHECK_MSG(lambda < 0, "row %d: lambda %g at nu = -0.92", i, lambda);
+        CHECK(fq_field(r.out, i, "kind", NULL, kind, sizeof kind));
+        if (!strcmp(kind, "refused")) {
+            double le;
+            refused++;
+            CHECK(isnan(lambda) && fq_field(r.out, i, "lambda_err", &le, NULL, 0) && le > 1e-10);
+        } else {
+            CHECK_MSG(lambda < 0, "row %d: lambda %g at nu = -0.92", i, lambda);
+        }
         CHECK(fq_field(r.out, i, "allowed", &al, NULL, 0) && isnan(al));
     }
+    int warnings = 0;
+    for (const char *w = r.err; (w = strstr(w, "warning: row q = ")); w++) warnings++;
+    CHECK_MSG(warnings == refused && refused <= 3, "%d refused rows, %d warnings", refused, warnings);
+    bkf_test_note("nu -0.92, tol 1e-10: %d of 60 rows refused", refused);
     fq_free(&r);
 }
 

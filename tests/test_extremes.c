@@ -18,10 +18,11 @@
  *    the slope of the residual in v (a secant, also with independent T);
  *    c = 0: the closed form v = S/(n T(gamma)).
  *  - lambda: c q = 0 has the multiplier 1 exactly (lambda = 0); the other
- *    stepper at tol 1e-12; Liouville ln|m1 m2| against L of an independent
- *    bkf_cycle_period solve at tol 1e-12 (printed, not asserted).  lambda
- *    has no refusal rule: points that miss tol are counted and printed, and
- *    the estimate's honesty (ratio <= 10) is asserted (README "Extremes").
+ *    stepper at tol 1e-10; where that cannot decide or lambda < -5, a power
+ *    iteration written here (rk4imp, the plain linear system renormalised
+ *    every step) for real multipliers, L/2 of an independent cycle solve
+ *    for a complex pair; Liouville ln|m1 m2| against that L (printed, not
+ *    asserted).  Points nothing independent can check are counted.
  * One line per point is printed: status, true error, estimated error and
  * their ratio; the summary gives the worst ratio per product. */
 #include "harness.h"
@@ -421,6 +422,98 @@ static bkf_stepper_kind floquet_other_stepper(double gamma)
     return gamma > 30.0 ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_IMPLICIT;
 }
 
+/* lambda by power iteration, written here: the cycle and one perturbation
+ * (d_psi, d_eta) in the plain coordinates, GSL rk4imp (implicit Gauss; the
+ * library uses rk8pd, bsimp and, for multipliers under the noise floor of
+ * M, angle and log-norm equations), the vector renormalised after every
+ * step with its log-norm summed.  Each period restarts the cycle from the
+ * section point of an independent cycle solve and keeps the direction:
+ * with real multipliers the growth per period converges to ln|m1| by the
+ * factor |m2/m1| per period; with a complex pair it keeps oscillating.
+ * Returns the last growth; *spread is the change over the last period and
+ * *periods how many ran. */
+typedef struct {
+    double gamma, nu, K;
+} pert;
+
+static int pert_rhs(double t, const double s[], double f[], void *params)
+{
+    (void)t;
+    const pert *p = params;
+    double g = p->gamma, x = s[0], damp = g * (x * x - 1.0);
+    f[0] = g * (s[1] - (x * x * x / 3.0 - x));
+    f[1] = (p->nu - x) / g;
+    f[2] = g * s[3] - damp * s[2];
+    f[3] = -p->K * s[2] / g;
+    return GSL_SUCCESS;
+}
+
+static int pert_jac(double t, const double s[], double *J, double *dt, void *params)
+{
+    (void)t;
+    const pert *p = params;
+    double g = p->gamma, x = s[0], damp = g * (x * x - 1.0);
+    memset(J, 0, 16 * sizeof *J);
+    J[0] = -damp;
+    J[1] = g;
+    J[4] = -1.0 / g;
+    J[8] = -2.0 * g * x * s[2];
+    J[10] = -damp;
+    J[11] = g;
+    J[14] = -p->K / g;
+    memset(dt, 0, 4 * sizeof *dt);
+    return GSL_SUCCESS;
+}
+
+static double lambda_power(double gamma, double nu, double K, const bkf_cycle_result *cy, double tol,
+                           int max_periods, double *spread, int *periods)
+{
+    gsl_set_error_handler_off();
+    pert p = {gamma, nu, K};
+    gsl_odeiv2_system sys = {pert_rhs, pert_jac, 4, &p};
+    /* through a driver: GSL's implicit steppers take their settings from it */
+    gsl_odeiv2_driver *d = gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rk4imp, 1e-5, tol, tol);
+    CHECK(d);
+    gsl_odeiv2_step *st = d->s;
+    gsl_odeiv2_control *ctl = d->c;
+    gsl_odeiv2_evolve *ev = d->e;
+    double x0 = nu, y0 = cy->section_slope / gamma + (nu * nu * nu / 3.0 - nu), T = cy->period;
+    double u = 1.0, e = 1.0, growth = NAN, last = NAN;
+    *spread = INFINITY;
+    int n;
+    for (n = 0; n < max_periods; n++) {
+        double s[4] = {x0, y0, u, e}, t = 0.0, h = 1e-3 * fmin(gamma, 1.0 / gamma), sum = 0.0;
+        double r0 = hypot(s[2], s[3]);
+        s[2] /= r0;
+        s[3] /= r0;
+        gsl_odeiv2_evolve_reset(ev);
+        while (t < T) {
+            if (gsl_odeiv2_evolve_apply(ev, ctl, st, &sys, &t, T, &h, s) != GSL_SUCCESS) break;
+            double r = hypot(s[2], s[3]);
+            if (!(r > 0.0) || !isfinite(r)) break;
+            sum += log(r);
+            s[2] /= r;
+            s[3] /= r;
+        }
+        if (t < T) {
+            growth = NAN;
+            break;
+        }
+        last = growth;
+        growth = sum;
+        u = s[2];
+        e = s[3];
+        if (n > 0) *spread = fabs(growth - last);
+        if (n > 1 && *spread <= 1e-12 * fmax(1.0, fabs(growth))) {
+            n++;
+            break;
+        }
+    }
+    *periods = n;
+    gsl_odeiv2_driver_free(d);
+    return growth;
+}
+
 /* ln |m1 m2| from the reported multipliers (m2 can underflow when L is very
  * negative: then NaN) */
 static double log_product(const bkf_floquet_point *p)
@@ -438,7 +531,8 @@ TEST(extremes_floquet_matrix)
     const double tols[] = {1e-4, 1e-8};
     tally t = {"floquet", 0, 0, 0, 0, 0, ""};
     double worst_L = 0;
-    size_t missed = 0, missed_unflagged = 0, unverified = 0, ref_loose = 0;
+    size_t unverified = 0;
+    double t_power = 0.0;
     for (size_t i = 0; i < sizeof gammas / sizeof gammas[0]; i++)
         for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
             double gamma = gammas[i], nu = nus[j];
@@ -463,7 +557,7 @@ TEST(extremes_floquet_matrix)
             /* the reference lambda: the other stepper at tol 1e-12, c = 1 so
              * that q' = c q gives the same K = 1 + c^2 q^2 */
             bkf_floquet_options ro = bkf_floquet_options_default();
-            ro.tol = 1e-12;
+            ro.tol = 1e-10;
             ro.stepper = floquet_other_stepper(gamma);
             bkf_floquet *ref = bkf_floquet_alloc();
             CHECK(ref);
@@ -491,8 +585,8 @@ TEST(extremes_floquet_matrix)
                             tally_refused(&t, rc, e.message, at);
                             continue;
                         }
-                        double lref, unc;
-                        const char *by;
+                        double lref = NAN, unc = INFINITY;
+                        const char *by = "?";
                         if (cq == 0.0) {
                             /* the trivial multiplier 1 exactly (the cycle is
                              * stable: L < 0) */
@@ -500,14 +594,51 @@ TEST(extremes_floquet_matrix)
                             lref = 0.0;
                             unc = 0.0;
                             by = "exact";
-                        } else {
-                            CHECK_MSG(ref_ok, "%s: no reference", at);
+                        } else if (ref_ok) {
+                            /* the other stepper; where it refuses, its best
+                             * attempt and its estimate still serve if that
+                             * estimate is below tol */
                             bkf_floquet_point r;
-                            CHECK_MSG(bkf_floquet_eval(ref, cq, &r, &e) == BKF_OK, "%s: reference: %s",
-                                      at, e.message);
-                            lref = r.lambda;
-                            unc = r.lambda_err;
-                            by = "other stepper";
+                            int rrc = bkf_floquet_eval(ref, cq, &r, &e);
+                            if (rrc == BKF_OK || rrc == BKF_ENUMERIC) {
+                                lref = r.lambda;
+                                unc = r.lambda_err;
+                                by = "other stepper";
+                            }
+                        }
+                        /* The library's other stepper runs the same
+                         * algorithms (for lambda < -5 often the log columns,
+                         * not M), so there, at tol 1e-4, the test's own power
+                         * iteration decides (at 1e-8 it costs minutes), as it
+                         * does wherever the other stepper cannot. */
+                        if (!(unc <= tol) || !(fabs(p.lambda - lref) <= tol + unc) ||
+                            (cq > 0.0 && p.lambda < -5.0 && p.kind != BKF_FLOQUET_COMPLEX && tol >= 1e-4)) {
+                            /* The power iteration written here: with real
+                             * multipliers it must converge to lambda; with a
+                             * complex pair lambda is L/2 of the independent
+                             * cycle solve, and the iteration must not
+                             * settle elsewhere. */
+                            double spread;
+                            int periods;
+                            clock_t c2 = clock();
+                            double lp_ = lambda_power(gamma, nu, 1.0 + cq * cq, &cy, fmax(1e-11, 1e-3 * tol),
+                                                     p.kind == BKF_FLOQUET_COMPLEX ? 12 : 4, &spread, &periods);
+                            t_power += (double)(clock() - c2) / CLOCKS_PER_SEC;
+                            int settled = spread <= 1e-9 * fmax(1.0, fabs(lp_));
+                            if (p.kind == BKF_FLOQUET_COMPLEX && !settled && periods >= 12 && isfinite(lp_)) {
+                                lref = 0.5 * L_ref;
+                                unc = 0.5 * L_unc + 1e-12 * fabs(L_ref);
+                                by = "L/2 (power iteration does not settle)";
+                            } else if (settled) {
+                                lref = lp_;
+                                /* rk4imp at 1e-3 tol (>= 1e-11) over at most ~1e5 steps */
+                                unc = spread + fmax(1e-9, 100.0 * fmax(1e-11, 1e-3 * tol)) * fmax(1.0, fabs(lp_));
+                                by = "power iteration";
+                            } else {
+                                bkf_test_note("%s: power iteration did not settle in %d periods (spread %.2g, "
+                                              "lambda %.6g, other stepper %.6g +- %.2g)",
+                                              at, periods, spread, p.lambda, lref, unc);
+                            }
                         }
                         /* Liouville with the independent L */
                         double lp = log_product(&p);
@@ -515,38 +646,19 @@ TEST(extremes_floquet_matrix)
                         if (dL / fmax(1.0, fabs(L_ref)) > worst_L) worst_L = dL / fmax(1.0, fabs(L_ref));
                         double err = fabs(p.lambda - lref);
                         double ratio = fmax(err - unc, 0.0) / p.lambda_err;
-                        bkf_test_note("%s: OK, lambda %.6g true %.2g est %.2g ratio %.2g (ref %s +- %.1g); "
+                        bkf_test_note("%s: OK, lambda %.10g true %.2g est %.2g ratio %.2g (ref %s +- %.1g); "
                                       "ln|m1 m2| - L %.2g (L %.6g +- %.1g)",
                                       at, p.lambda, err, p.lambda_err, ratio, by, unc, dL, L_ref, L_unc);
-                        /* Where the reference's own estimate is above tol
-                         * (pessimistic at small gamma; at gamma >= 30 and
-                         * c q >= 10 |m1| is under the integration's noise
-                         * floor, lambda -100 .. -2e4), agreement within tol
-                         * of the two steppers is the check; a point that
-                         * disagrees by more is not verified, only counted. */
-                        if (!(unc <= tol)) ref_loose++;
-                        if (!(unc <= tol) && err > tol) {
+                        if (!(unc <= tol) && !(err <= tol)) {
                             unverified++;
-                            bkf_test_note("%s: UNVERIFIED: reference's estimate %.2g > tol (lambda %.6g "
-                                          "+- %.2g, other stepper %.6g)", at, unc, p.lambda, p.lambda_err, lref);
+                            bkf_test_note("%s: UNVERIFIED: reference %s %.10g +- %.2g, lambda %.10g +- %.2g",
+                                          at, by, lref, unc, p.lambda, p.lambda_err);
                             t.points++;
                             continue;
                         }
-                        int met = err <= tol + unc;
-                        {
-                            /* Floquet has no refusal rule: bkf_floquet_eval
-                             * returns OK whatever lambda_err, so a missed
-                             * tolerance is counted and printed (a failure of
-                             * the meets-tol-or-refuses contract, reported in
-                             * the README), and only the estimate's honesty
-                             * is asserted. */
-                            if (!met) {
-                                missed++;
-                                if (p.lambda_err <= tol) missed_unflagged++;
-                                bkf_test_note("%s: MISSED TOL (error %.2g, lambda_err %.2g %s tol)", at, err,
-                                              p.lambda_err, p.lambda_err > tol ? ">" : "<=");
-                            }
-                        }
+                        /* the contract: OK means within tol */
+                        CHECK_MSG(err <= tol + unc, "%s: MISSED TOL: error %.2g (lambda %.10g, ref %.10g +- %.2g by %s), "
+                                  "lambda_err %.2g", at, err, p.lambda, lref, unc, by, p.lambda_err);
                         CHECK_MSG(ratio <= 10.0, "%s: lambda_err optimistic by %.3g", at, ratio);
                         tally_ok(&t, ratio, fmax(err - unc, 0.0) / tol, at);
                     }
@@ -558,10 +670,10 @@ TEST(extremes_floquet_matrix)
                           (double)(clock() - c0) / CLOCKS_PER_SEC);
         }
     bkf_test_note("worst |ln|m1 m2| - L| / max(1, |L|): %.3g", worst_L);
-    bkf_test_note("floquet: %zu OK points missed tol (%zu of them with lambda_err <= tol); "
-                  "reference's estimate above tol at %zu points, %zu of them not verified (the steppers "
-                  "disagree by more than tol)", missed, missed_unflagged, ref_loose, unverified);
-    /* A miss the estimate does not show is a silent wrong digit: none. */
-    CHECK_MSG(missed_unflagged == 0, "%zu points missed tol with lambda_err <= tol", missed_unflagged);
+    bkf_test_note("floquet: %zu not verifiable (no independent value within tol); power iteration %.2f s",
+                  unverified, t_power);
+    /* few refusals and few points nothing independent can check (README) */
+    CHECK_MSG(t.refused <= 40, "%zu refusals", t.refused);
+    CHECK_MSG(unverified <= 10, "%zu unverifiable points", unverified);
     tally_report(&t);
 }

@@ -24,12 +24,36 @@ static bkf_floquet *setup(double gamma, double c, double nu, double tol)
     return f;
 }
 
+/* A point, or a refusal on tol: lambda_err above tol after the retries
+ * (at tol 1e-10, lambda below ~-6 where |m1| << |M|).  The best attempt a
+ * refusal leaves in the point still carries an honest estimate, which the
+ * checks below use; refusals are counted and printed. */
+static size_t refusals;
+
 static bkf_floquet_point eval(bkf_floquet *f, double q)
 {
     bkf_floquet_point p;
     bkf_error e;
     int rc = bkf_floquet_eval(f, q, &p, &e);
-    CHECK_MSG(rc == BKF_OK, "q %g: %s", q, e.message);
+    int refused = rc == BKF_ENUMERIC && isfinite(p.lambda_err) && strstr(e.message, "exceeds tol");
+    CHECK_MSG(rc == BKF_OK || refused, "q %g: %s", q, e.message);
+    if (refused) {
+        refusals++;
+        bkf_test_note("q %g refused: %s", q, e.message);
+    }
+    return p;
+}
+
+/* A reference at a tolerance near what doubles allow: bkf_floquet_eval may
+ * refuse it (BKF_ENUMERIC, its estimate up to ~2e-11 at lambda -18); the best
+ * attempt it leaves in the point, with that estimate, is still a reference
+ * for tolerances >= 1e-10, and the callers subtract its estimate. */
+static bkf_floquet_point eval_ref(bkf_floquet *f, double q)
+{
+    bkf_floquet_point p;
+    bkf_error e;
+    int rc = bkf_floquet_eval(f, q, &p, &e);
+    CHECK_MSG(rc == BKF_OK || (rc == BKF_ENUMERIC && p.lambda_err <= 1e-10 * fmax(1.0, fabs(p.lambda))), "q %g: %s", q, e.message);
     return p;
 }
 
@@ -121,7 +145,8 @@ TEST(floquet_c_enters_only_through_K)
     bkf_floquet_free(z);
 }
 
-/* The tolerance contract: against a reference at 1e-13, the error of
+/* The tolerance contract: against a reference at 1e-11 (its own estimate
+ * subtracted), the error of
  * lambda is within its estimate where it matters (lambda > -2: elsewhere
  * |m1| < 0.14 and the contract is on m1, checked too), and both
  * shrink with tol. */
@@ -130,19 +155,22 @@ TEST(floquet_error_estimates_hold)
     const double cases[][3] = {{2.0, 0.3, -0.94}, {2.0, 0.3, -0.5}, {0.5, 1.0, 0.2}, {10.0, 1.0, -0.95}};
     const double tols[] = {1e-6, 1e-8, 1e-10};
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-        bkf_floquet *ref = setup(cases[k][0], cases[k][1], cases[k][2], 1e-13);
+        bkf_floquet *ref = setup(cases[k][0], cases[k][1], cases[k][2], 1e-11);
+        /* once per q: a refused reference costs its retries */
+        bkf_floquet_point refs[41];
+        for (int i = 0; i <= 40; i++) refs[i] = eval_ref(ref, 0.2 * i);
         for (size_t t = 0; t < sizeof tols / sizeof tols[0]; t++) {
             bkf_floquet *f = setup(cases[k][0], cases[k][1], cases[k][2], tols[t]);
             double worst = 0, worst_m = 0;
             for (int i = 0; i <= 40; i++) {
                 double q = 0.2 * i;
-                bkf_floquet_point p = eval(f, q), r = eval(ref, q);
-                double dm = hypot(p.m1_re - r.m1_re, p.m1_im - r.m1_im);
+                bkf_floquet_point p = eval(f, q), r = refs[i];
+                double dm = fmax(hypot(p.m1_re - r.m1_re, p.m1_im - r.m1_im) - r.m1_err, 0.0);
                 CHECK_MSG(dm <= fmax(p.m1_err, 1e-13) && dm <= 10.0 * tols[t],
                           "case %zu tol %g q %g: |dm1| %.3g, estimate %.3g", k, tols[t], q, dm,
                           p.m1_err);
                 if (r.lambda > -2.0) {
-                    double d = fabs(p.lambda - r.lambda);
+                    double d = fmax(fabs(p.lambda - r.lambda) - r.lambda_err, 0.0);
                     CHECK_MSG(d <= fmax(p.lambda_err, 1e-13) && d <= 10.0 * tols[t],
                               "case %zu tol %g q %g: |dlambda| %.3g, estimate %.3g", k, tols[t],
                               q, d, p.lambda_err);
@@ -164,7 +192,8 @@ TEST(floquet_longwave_coefficient_matches_small_q)
 {
     const double nus[] = {-0.9, -0.5, 0.0, -0.95};
     for (size_t i = 0; i < sizeof nus / sizeof nus[0]; i++) {
-        bkf_floquet *f = setup(2.0, 0.5, nus[i], 1e-12);
+        /* 1e-11: lambda ~ 1e-6 here, estimated to ~3e-12 at best */
+        bkf_floquet *f = setup(2.0, 0.5, nus[i], 1e-11);
         double a, a_err;
         bkf_error e;
         CHECK_STATUS(bkf_floquet_longwave(f, &a, &a_err, &e), BKF_OK);
@@ -467,25 +496,30 @@ TEST(floquet_rejects_bad_input)
 }
 
 /* Honest estimates everywhere, including multipliers far inside the unit
- * circle (lambda < -8): the true error (against tol 1e-13) is never more
+ * circle (lambda < -8): the true error (against tol 1e-11, less that
+ * reference's estimate) is never more
  * than 10 times the estimate, for m1 and lambda. */
 TEST(floquet_estimates_never_optimistic_by_10)
 {
     const double cases[][3] = {{2.0, 0.3, -0.94}, {10.0, 1.0, -0.95}, {0.5, 1.0, 0.2}};
     const double tols[] = {1e-6, 1e-8, 1e-10};
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-        bkf_floquet *ref = setup(cases[k][0], cases[k][1], cases[k][2], 1e-13);
+        bkf_floquet *ref = setup(cases[k][0], cases[k][1], cases[k][2], 1e-11);
+        /* once per q: a refused reference costs its retries */
+        bkf_floquet_point refs[41];
+        for (int i = 0; i <= 40; i++) refs[i] = eval_ref(ref, 0.2 * i);
         for (size_t t = 0; t < sizeof tols / sizeof tols[0]; t++) {
             bkf_floquet *f = setup(cases[k][0], cases[k][1], cases[k][2], tols[t]);
             double worst = 0, worst_m = 0, at = 0;
             for (int i = 0; i <= 40; i++) {
                 double q = 0.2 * i;
-                bkf_floquet_point p = eval(f, q), r = eval(ref, q);
+                bkf_floquet_point p = eval(f, q), r = refs[i];
                 double dm = hypot(p.m1_re - r.m1_re, p.m1_im - r.m1_im);
                 double dl = fabs(p.lambda - r.lambda);
-                /* the reference's own error, ~1e-13 relative */
-                double rl = fmax(dl - 1e-12, 0.0) / p.lambda_err;
-                double rm = fmax(dm - 1e-13, 0.0) / p.m1_err;
+                /* the reference's own error: its estimate, at least ~1e-13
+                 * relative */
+                double rl = fmax(dl - fmax(1e-12, r.lambda_err), 0.0) / p.lambda_err;
+                double rm = fmax(dm - fmax(1e-13, r.m1_err), 0.0) / p.m1_err;
                 CHECK_MSG(rl <= 10 && rm <= 10, "case %zu tol %g q %g lambda %g: true/estimated %.3g (lambda), %.3g (m1)",
                           k, tols[t], q, r.lambda, rl, rm);
                 if (rl > worst) { worst = rl; at = r.lambda; }

@@ -29,7 +29,10 @@
  * Accuracy: `tol` is the absolute accuracy asked of lambda (the relative
  * accuracy of the dominant multiplier).  Each quantity reported with an
  * error estimate comes from two integrations at tolerances a factor 10
- * apart plus the cycle's own error; the reported value is the tighter one. */
+ * apart plus the cycle's own error; the reported value is the tighter one.
+ * bkf_floquet_eval refuses (BKF_ENUMERIC) a q whose estimate it cannot
+ * bring under tol; the threshold and diagram drivers report their own
+ * errors in nu instead. */
 #ifndef BKFRONT_FLOQUET_H
 #define BKFRONT_FLOQUET_H
 
@@ -91,7 +94,18 @@ int bkf_floquet_set(bkf_floquet *floquet, double gamma, double c, double nu,
 /* The cycle behind the last successful set (T, its error, L), or NULL. */
 const bkf_cycle_result *bkf_floquet_cycle(const bkf_floquet *floquet);
 
-/* Monodromy, multipliers and lambda at wavenumber q >= 0. */
+/* Monodromy, multipliers and lambda at wavenumber q >= 0, to the object's
+ * tol or refused.  At K = 1 (q = 0 or c = 0) the multipliers are 1 and
+ * exp(L) exactly.  Otherwise M is integrated as it stands; where lambda_err
+ * exceeds tol, the dominant multiplier is recomputed without forming the
+ * trace (power iteration on the angle and log-norm equations of the
+ * perturbation, for real well-separated multipliers) and from the columns
+ * of M in log-polar form (multipliers below tol |M|, down to |m1| ~
+ * exp(-2e4)), then with the cycle solved tighter (or its share of the
+ * error measured) and integrations down to 1e-13.  If no attempt meets tol:
+ * BKF_ENUMERIC ("estimated error E of lambda exceeds tol T at q = ..."),
+ * with *point holding the best attempt and its lambda_err (> tol).  On
+ * any other failure point->lambda_err is NaN. */
 int bkf_floquet_eval(bkf_floquet *floquet, double q, bkf_floquet_point *point,
                      bkf_error *err);
 

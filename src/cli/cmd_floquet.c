@@ -114,7 +114,10 @@ static void floquet_help(FILE *out)
         "  lambda, lambda_err  ln|m1| and its estimated absolute error\n"
         "  m1_re, m1_im, m2_re, m2_im  the multipliers, |m1| >= |m2|\n"
         "  m1_err            estimated absolute error of m1\n"
-        "  kind              of m1: real_positive, real_negative or complex\n"
+        "  kind              of m1: real_positive, real_negative or complex; refused\n"
+        "                    where lambda_err stays above --tol after the retries\n"
+        "                    (lambda and the multipliers are then nan, and a warning\n"
+        "                    goes to stderr)\n"
         "  allowed           1 if q = 2 pi j/S for an integer j, else 0; nan without --S\n"
         "  lambda_slip       growth of a perturbation of continuous slip psi = nu over\n"
         "                    the same time T: T max Re s, s^2 + gamma phi'(nu) s + K = 0\n"
@@ -487,7 +490,16 @@ static int run_dispersion(const floquet_plan *p, bkf_io_table *t, int argc, char
     for (size_t i = 0; i < p->nq && !s; i++) {
         bkf_floquet_point pt;
         s = bkf_floquet_eval(f, p->q[i], &pt, &e);
-        if (s) {
+        /* A q whose estimate stays above tol is a flagged row: no digits
+         * (NaN), the estimate that was reached, kind "refused", and a line
+         * on stderr; the other rows stand.  Any other failure ends the table. */
+        int refused = s == BKF_ENUMERIC && pt.lambda_err > p->options.tol;
+        if (refused) {
+            fprintf(stderr, CLI_PROGRAM " floquet: warning: row q = %s refused: %s\n",
+                    num(p->q[i], a, sizeof a), e.message);
+            s = BKF_OK;
+            pt.lambda = pt.m1_re = pt.m1_im = pt.m2_re = pt.m2_im = pt.m1_err = NAN;
+        } else if (s) {
             bkf_error_set(err, s, "at q = %s: %s", num(p->q[i], a, sizeof a), e.message);
             break;
         }
@@ -501,7 +513,7 @@ static int run_dispersion(const floquet_plan *p, bkf_io_table *t, int argc, char
             {.number = pt.m2_re},
             {.number = pt.m2_im},
             {.number = pt.m1_err},
-            {.text = bkf_floquet_kind_name(pt.kind)},
+            {.text = refused ? "refused" : bkf_floquet_kind_name(pt.kind)},
             {.number = p->have_S ? (double)p->allowed[i] : NAN},
             {.number = cy->period * bkf_floquet_slip_rate(p->gamma, p->c, p->nu, pt.q)},
             {.number = exp(pt.log_det)},
