@@ -78,17 +78,8 @@ struct bkf_cycle {
     size_t node_count, node_capacity;
     double profile_tol;
     bkf_stepper_kind profile_stepper;
-    struct profile_integrator_s *profile_in; /* NULL until the first profile call */
 };
 
-/* The profile's integrator, kept between calls: allocating a GSL driver
- * cost more than the short integration from the nearest node (a seeded
- * front of 65536 points spent 1.2 s on it). */
-struct profile_integrator_s {
-    integrator in;
-    double tol;
-    bkf_stepper_kind kind;
-};
 
 /* ---------------------------------------------------------------- flow */
 
@@ -372,8 +363,6 @@ bkf_cycle *bkf_cycle_alloc(void) { return calloc(1, sizeof(bkf_cycle)); }
 void bkf_cycle_free(bkf_cycle *cycle)
 {
     if (!cycle) return;
-    if (cycle->profile_in) integrator_free(&cycle->profile_in->in);
-    free(cycle->profile_in);
     free(cycle->nodes);
     free(cycle);
 }
@@ -551,6 +540,10 @@ static void store_result(bkf_cycle *c, const converged *a, const converged *b, d
     r->model = "shooting";
     c->have_solution = 1;
     c->profile_tol = profile_tol;
+    /* A profile point integrates from the nearest node, a short stretch:
+     * bsimp's Jacobian and LU per step made that 18 us a point at mu = 47
+     * (seeding a front on 65536 points: 1.2 s), rk8pd 4 us; only well
+     * inside the stiff range does bsimp pay. */
     c->profile_stepper = p->mu <= 100 ? BKF_STEPPER_EXPLICIT : kind;
 }
 
@@ -805,25 +798,14 @@ int bkf_cycle_profile(bkf_cycle *c, double z, double *f, double *fprime, bkf_err
         if (c->nodes[mid].t <= zr) lo = mid;
         else hi = mid;
     }
-    struct profile_integrator_s *pi = c->profile_in;
-    if (pi && (pi->tol != c->profile_tol || pi->kind != c->profile_stepper)) {
-        integrator_free(&pi->in);
-        free(pi);
-        pi = c->profile_in = NULL;
-    }
-    if (!pi) {
-        pi = calloc(1, sizeof *pi);
-        if (!pi || integrator_init(&pi->in, &c->flow, c->profile_stepper, 1, c->profile_tol) != BKF_OK) {
-            if (pi) integrator_free(&pi->in);
-            free(pi);
-            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        }
-        pi->tol = c->profile_tol;
-        pi->kind = c->profile_stepper;
-        c->profile_in = pi;
+    integrator in = {0};
+    if (integrator_init(&in, &c->flow, c->profile_stepper, 1, c->profile_tol) != BKF_OK) {
+        integrator_free(&in);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     double s[DIM] = {c->nodes[lo].s[0], c->nodes[lo].s[1], 0.0, 0.0, 0.0};
-    int rc = integrator_to(&pi->in, c->nodes[lo].t, s, zr);
+    int rc = integrator_to(&in, c->nodes[lo].t, s, zr);
+    integrator_free(&in);
     if (rc != BKF_OK)
         return bkf_error_set(err, BKF_ENUMERIC, "profile integration failed at z = %g", z);
     if (f) *f = s[IX];

@@ -85,17 +85,25 @@ static int lin_rhs(double t, const double s[], double ds[], void *params, size_t
     return GSL_SUCCESS;
 }
 
+/* Zeroes J (n x n) and dfdt, then fills the cycle's own block: the
+ * Lienard-plane flow at (x, y) = (s[ix], s[iy]) of every system here. */
+static void jacobian_of_cycle(double *J, double *dfdt, size_t n, size_t ix, size_t iy,
+                              double damp, double g)
+{
+    memset(J, 0, sizeof(double) * n * n);
+    memset(dfdt, 0, sizeof(double) * n);
+    J[ix * n + ix] = -damp;
+    J[ix * n + iy] = g;
+    J[iy * n + ix] = -1.0 / g;
+}
+
 static int lin_jac(double t, const double s[], double *J, double dfdt[], void *params, size_t dim)
 {
     (void)t;
     lin_params *p = params;
     double g = p->gamma, x = s[IX], damp = g * (x * x - 1.0), ddamp = 2.0 * g * x;
     size_t n = dim;
-    memset(J, 0, sizeof(double) * n * n);
-    memset(dfdt, 0, sizeof(double) * n);
-    J[IX * n + IX] = -damp;
-    J[IX * n + IY] = g;
-    J[IY * n + IX] = -1.0 / g;
+    jacobian_of_cycle(J, dfdt, n, IX, IY, damp, g);
     for (int j = 0; j < 2; j++) {
         size_t iu = IM + 2 * j, ie = iu + 1;
         J[iu * n + IX] = -ddamp * s[iu];
@@ -589,11 +597,7 @@ static int log_jac(double t, const double s[], double *J, double dfdt[], void *p
     lin_params *p = params;
     double g = p->gamma, x = s[LX], damp = g * (x * x - 1.0), ddamp = 2.0 * g * x;
     const size_t n = DIM_LOG;
-    memset(J, 0, sizeof(double) * n * n);
-    memset(dfdt, 0, sizeof(double) * n);
-    J[LX * n + LX] = -damp;
-    J[LX * n + LY] = g;
-    J[LY * n + LX] = -1.0 / g;
+    jacobian_of_cycle(J, dfdt, n, LX, LY, damp, g);
     for (int j = 0; j < 2; j++) {
         size_t it = LT0 + 2 * j, ir = it + 1;
         double th = s[it], c = cos(th), sn = sin(th);

@@ -421,10 +421,15 @@ bkf_pde *bkf_pde_alloc(const bkf_pde_params *params, const bkf_pde_options *opti
             m->dsymbol[k] = 2 * k == N ? 0.0 : o.frame_speed * q / (double)N;
         }
     }
-    if (o.stepper == BKF_PDE_ETDRK4 && !(m->etd = bkf_pde_etd_alloc(m))) goto nomem;
-    m->step = gsl_odeiv2_step_alloc(step_type(o.stepper), m->dim);
-    m->control = gsl_odeiv2_control_y_new(o.tol, o.tol);
-    if (!m->step || !m->control) goto nomem;
+    if (o.stepper == BKF_PDE_ETDRK4) {
+        /* its own state (src/pde_etd.c); no GSL stepper: rk8pd's 13 stages
+         * of 2N + 2 values would be 54 MB unused at N = 262144 */
+        if (!(m->etd = bkf_pde_etd_alloc(m))) goto nomem;
+    } else {
+        m->step = gsl_odeiv2_step_alloc(step_type(o.stepper), m->dim);
+        m->control = gsl_odeiv2_control_y_new(o.tol, o.tol);
+        if (!m->step || !m->control) goto nomem;
+    }
     m->sys = (gsl_odeiv2_system){rhs, NULL, m->dim, m};
 
     /* The highest mode oscillates at omega = sqrt(1 + c^2 q_max^2) with

@@ -311,18 +311,14 @@ enum { STEP_OK = 0, STEP_NONFINITE = 1, STEP_NOMEM = 2 };
 
 /* One ETDRK4 step of size h from etd->a into etd->anew (and N(anew) into
  * etd->nnew, its largest |psi| into *psi_max_new); *err_ratio gets the
- * estimated local error over the tolerance (accept when <= 1). */
+ * estimated local error over the tolerance (accept when <= 1).  N(a) is
+ * in etd->nu (bkf_pde_etd_run evaluates it first). */
 static int step(bkf_pde *m, double h, double *err_ratio, double *psi_max_new)
 {
     bkf_pde_etd *etd = m->etd;
     size_t n2 = etd->n2;
     const etd_set *c = coefficients(etd, h);
     if (!c) return STEP_NOMEM;
-    if (!etd->have_nu) {
-        if (nonlinear(m, etd->a, etd->nu, &etd->psi_max)) return STEP_NONFINITE;
-        etd->have_nu = 1;
-        m->stats.rhs_calls++;
-    }
     double complex *restrict a = etd->a, *restrict sa = etd->sa, *restrict s = etd->s;
     const double complex *restrict nu = etd->nu;
     double complex *restrict na = etd->na, *restrict nb = etd->nb, *restrict ncv = etd->nc_;
@@ -394,7 +390,6 @@ int bkf_pde_etd_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer
     size_t full = observer ? (size_t)floor((span + slack) / sample_dt) : 0;
     int tail = !observer || t0 + (double)full * sample_dt < t_end - slack;
     size_t segments = full + (size_t)tail;
-    if (m->hstep <= 0 || !isfinite(m->hstep)) m->hstep = ETD_H_MAX;
     size_t steps_here = 0;
     double h_prev = 0.0;
     const double h_floor = 1e-12 * fmax(1.0, fabs(t_end));

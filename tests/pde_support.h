@@ -1,11 +1,19 @@
-/* Helpers shared by the simulator's tests: a measurement fed by a run's
- * observer. */
+/* Helpers shared by the simulator's tests: allocation that fails the test
+ * with the library's message, and a measurement fed by a run's observer. */
 #ifndef BKF_TEST_PDE_SUPPORT_H
 #define BKF_TEST_PDE_SUPPORT_H
 
 #include "bkfront/measure.h"
 #include "bkfront/pde.h"
 #include "harness.h"
+
+static inline bkf_pde *alloc_pde(const bkf_pde_params *params, const bkf_pde_options *options)
+{
+    bkf_error e;
+    bkf_pde *m = bkf_pde_alloc(params, options, &e);
+    CHECK_MSG(m, "alloc: %s", e.message);
+    return m;
+}
 
 /* Observer: every sample into the bkf_measure passed as data. */
 static inline int measure_sample(const bkf_pde_sample *s, void *data)

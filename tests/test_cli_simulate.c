@@ -394,6 +394,7 @@ TEST(cli_check_rejects_bad_input)
     expect_bad_input(SIM("check", "--init", "uniform"), "check", "--init", "no --init here");
     expect_bad_input(SIM("check", "--frame", "rotating"), "check", "--frame", "frame rotating");
     expect_bad_input(SIM("check", "--resolution", "2"), "check", "--resolution", "resolution 2");
+    expect_bad_input(SIM("check", "--stepper", "rk4"), "check", "--stepper", "stepper rk4");
 }
 
 /* The paper's three regimes at gamma 2, c 0.3, S 20 (Figs. 2b, 3a, 3b). */

@@ -17,10 +17,7 @@ static bkf_pde *make(double gamma, double c, double nu, double S, size_t N, bkf_
     bkf_pde_params p = {gamma, c, nu, S, N, model};
     bkf_pde_options o = bkf_pde_options_default();
     o.tol = tol;
-    bkf_error e;
-    bkf_pde *m = bkf_pde_alloc(&p, &o, &e);
-    CHECK_MSG(m, "alloc: %s", e.message);
-    return m;
+    return alloc_pde(&p, &o);
 }
 
 /* With psi_xx = 0 the model is the van der Pol oscillator at mu = gamma in

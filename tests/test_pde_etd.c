@@ -23,10 +23,7 @@ static bkf_pde *make(double nu, size_t N, bkf_pde_stepper stepper, double tol, d
     o.tol = tol;
     o.stepper = stepper;
     o.frame_speed = frame;
-    bkf_error e;
-    bkf_pde *m = bkf_pde_alloc(&p, &o, &e);
-    CHECK_MSG(m, "alloc: %s", e.message);
-    return m;
+    return alloc_pde(&p, &o);
 }
 
 /* The uniform oscillation is the van der Pol cycle at mu = gamma in t; here

@@ -63,6 +63,17 @@
  * psi_t and eta_t (the advection's discrete work included), so H - D stays
  * conserved to the time integration's error.
  *
+ * The exponential integrator (stepper BKF_PDE_ETDRK4, continuum only, no
+ * dealiasing; src/pde_etd.c).  Cox-Matthews ETDRK4 with the linear wave
+ * part of every mode (and a moving frame's advection) solved exactly, the
+ * friction, the filter and nu/gamma explicit: no stability cap from N, and
+ * a steady state of the semi-discrete system (the seeded wave in the frame
+ * of its speed) is kept exactly.  Local error control with the same tol,
+ * relative to the state's largest |psi|.  Steps land on the sample times,
+ * so samples are step ends, not interpolated.  The quadratures Q and D are
+ * not integrated: samples, bkf_pde_dissipation, bkf_pde_mean_integral and
+ * the energy and mean residuals give NaN for it.
+ *
  * The library never prints and never exits; long runs report progress
  * through a callback. */
 #ifndef BKFRONT_PDE_H
@@ -79,7 +90,7 @@ typedef enum {
     BKF_PDE_RKCK = 1,   /* Cash-Karp 5(4) */
     BKF_PDE_RKF45 = 2,  /* Runge-Kutta-Fehlberg 4(5) */
     BKF_PDE_ETDRK4 = 3  /* exponential Runge-Kutta (Cox-Matthews), continuum only;
-                           see "The exponential integrator" below */
+                           see "The exponential integrator" above */
 } bkf_pde_stepper;
 
 #define BKF_PDE_N_MIN 8
