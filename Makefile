@@ -5,7 +5,7 @@
 # runs, after deps has installed what pkg-config needs.
 
 DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
-                libinih-dev gnuplot-nox
+                libinih-dev libsundials-dev gnuplot-nox
 # Only for `make valgrind` and `make fuzz` (libFuzzer ships with clang's
 # runtime), so that `make test` needs neither.
 VALGRIND_PACKAGES := valgrind
@@ -21,7 +21,10 @@ PKG_LIBS   = $(shell pkg-config --libs $(PKGS))
 # command line add to, never replace, the project's own.
 override CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -Iinclude $(PKG_CFLAGS) $(SANITIZE)
 override LDFLAGS += $(SANITIZE)
-LDLIBS   += $(PKG_LIBS) -lm
+# SUNDIALS (CVODE for the comoving simulation) ships no pkg-config file.
+SUNDIALS_LIBS := -lsundials_cvode -lsundials_sunlinsolband -lsundials_sunmatrixband \
+                 -lsundials_nvecserial
+LDLIBS   += $(PKG_LIBS) $(SUNDIALS_LIBS) -lm
 
 LIB_SRC   := $(wildcard src/*.c)
 CLI_SRC   := $(wildcard src/cli/*.c)
