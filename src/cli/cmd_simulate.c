@@ -18,6 +18,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bkfront/comoving.h"
 #include "bkfront/cycle.h"
 #include "bkfront/io.h"
 #include "bkfront/measure.h"
@@ -1193,9 +1194,22 @@ const cli_command cli_cmd_simulate = {
 
 /* =============================================================== check */
 
-/* Resolves every n at the paper's parameters but n = 12 (which needs
- * N = 2^18 and ~16 minutes; README "The check's budget"). */
+/* With --grid uniform: resolves every n at the paper's parameters but
+ * n = 12 (which needs N = 2^18 and ~16 minutes; README "The check's
+ * budget"). */
 #define DEF_N_MAX 65536
+/* --grid auto: the uniform spectral grid while it resolves the wave on at
+ * most this many points, the adapted comoving grid beyond (at the paper's
+ * parameters n <= 9 uniform, n = 10 .. 12 adapted; from N = 16384 on the
+ * adapted grid is the cheaper, and it does n = 12 in ~1.5 s). */
+#define AUTO_UNIFORM_MAX 8192
+/* Points per wavelength on the adapted grid and its tolerance: at 768 and
+ * 1e-8 the paper-parameter speeds agree to ~2e-9 (README "The adapted
+ * grid"); the tolerance well below the perturbation so that BDF's long
+ * steps do not damp a growing perturbation unseen. */
+#define DEF_POINTS 768
+#define CHECK_MAPPED_TOL 1e-8
+#define CHECK_MAPPED_SAMPLE_DT 0.5
 #define DEF_REL_TOL 1e-6
 #define DEF_PERTURB 1e-6
 /* The seeded wave counts as resolved on N points when its Fourier
@@ -1218,6 +1232,7 @@ static void check_help(FILE *out)
         "usage: bkfront check [--gamma G] [--c C] [--nu V] [--S S] [--n K] [--N N]\n"
         "                     [--N-max M] [--tmax T] [--tol E] [--rel-tol R] [--perturb A]\n"
         "                     [--seed K] [--stepper S] [--frame lab|moving]\n"
+        "                     [--grid auto|uniform|mapped] [--points M]\n"
         "                     [--resolution R] [--no-progress] [--format tsv|json] [--out FILE]\n"
         "\n"
         "The predicted front speeds against direct simulation.  For every root of the\n"
@@ -1229,6 +1244,13 @@ static void check_help(FILE *out)
         "options (defaults: the paper's gamma 2, c 0.3, nu -0.96, S 20):\n"
         "  --gamma G, --c C, --nu V, --S S   model parameters (|nu| < 1)\n"
         "  --n K             check n = K only; default every n with a root\n"
+        "  --grid G          auto (default): the uniform spectral grid when it resolves the\n"
+        "                    wave on N <= %d, else the adapted grid; uniform: always the\n"
+        "                    spectral grid (up to --N-max); mapped: always the adapted grid\n"
+        "                    (finite differences of order 8 on points placed by the wave's\n"
+        "                    own length scales, in the frame of v_pred, CVODE in time;\n"
+        "                    README \"The adapted grid\")\n"
+        "  --points M        adapted grid: points per wavelength; default %d\n"
         "  --N N             smallest grid; each root runs on the smallest N = N 2^k that\n"
         "                    resolves its wave (Fourier coefficients above N/3 below %.0e of\n"
         "                    the largest); default %d\n"
@@ -1239,7 +1261,7 @@ static void check_help(FILE *out)
         "                    exact, steps set by the physics), or rk8pd, rkck, rkf45\n"
         "                    (explicit, steps capped by the fastest wave mode ~ 1/N)\n"
         "  --tol E           local error tolerance; default %.0e with etdrk4, 1e-9 with\n"
-        "                    the Runge-Kutta steppers\n"
+        "                    the Runge-Kutta steppers, %.0e on the adapted grid\n"
         "  --filter F        spectral filter, as in bkfront simulate; default 4\n"
         "  --rel-tol R       agreement asked of a stable front, |v_meas - v_pred| / v_pred;\n"
         "                    default %.0e\n"
@@ -1253,19 +1275,22 @@ static void check_help(FILE *out)
         "\n"
         "columns:\n"
         "  n, root           number of fronts and the root (1: fastest) of bkf_speeds_find\n"
-        "  N                 grid used (0: unresolved within --N-max)\n"
-        "  tail              the seed's spectral tail on the last grid tried\n"
+        "  grid              uniform or mapped (the adapted grid)\n"
+        "  N                 points of the grid used (0: unresolved within --N-max)\n"
+        "  tail              the seed's spectral tail on the last uniform grid tried; on the\n"
+        "                    adapted grid max |relaxed wave - seed| (its truncation error)\n"
         "  v_pred, v_pred_err  predicted speed and its estimated error\n"
         "  v_meas, v_meas_err  measured speed (fronts move towards -x) and its uncertainty,\n"
         "                    fitted over [fit_from, fit_to]: the later half of the part of\n"
         "                    the run where the wave is coherent (front count kept and\n"
-        "                    deviation <= max(100 perturb, 1e-6); on grids with a tail\n"
-        "                    above %.0e also 10 times the deviation at t = min(10, tmax/4))\n"
+        "                    deviation <= max(100 perturb, 1e-6); on uniform grids with a\n"
+        "                    tail above %.0e and on the adapted grid also 10 times the\n"
+        "                    deviation at t = min(10, tmax/4))\n"
         "  rel_err           (v_meas - v_pred) / v_pred\n"
         "  fronts_start, fronts_end   front counts at t = 0 and t = tmax\n"
         "  deviation_start, deviation_mid, deviation_end\n"
         "                    max |psi - seeded wave shifted with the fronts| at t = 0,\n"
-        "                    tmax/2 and tmax\n"
+        "                    tmax/2 and tmax (adapted grid: the wave relaxed onto the grid)\n"
         "  growth            ln(deviation_end / deviation_mid) / (tmax/2): growth rate of\n"
         "                    the perturbation over the later half\n"
         "  stable            1 when the front count never changed and the perturbation did\n"
@@ -1275,13 +1300,14 @@ static void check_help(FILE *out)
         "                    unstable (not judged), unresolved (not run)\n"
         "\n"
         "exit status: 0 ok, 1 a stable front disagrees (or a numerical failure), 2 bad input\n",
-        RESOLUTION_TOL, DEF_N, DEF_N_MAX, CHECK_ETD_TOL, DEF_REL_TOL, DEF_PERTURB,
-        RESOLUTION_TOL, RESOLUTION_TOL);
+        AUTO_UNIFORM_MAX, DEF_POINTS, RESOLUTION_TOL, DEF_N, DEF_N_MAX, CHECK_ETD_TOL,
+        CHECK_MAPPED_TOL, DEF_REL_TOL, DEF_PERTURB, RESOLUTION_TOL, RESOLUTION_TOL);
 }
 
 static const bkf_io_column check_columns[] = {
     {"n", BKF_IO_NUMBER},
     {"root", BKF_IO_NUMBER},
+    {"grid", BKF_IO_TEXT},
     {"N", BKF_IO_NUMBER},
     {"tail", BKF_IO_NUMBER},
     {"v_pred", BKF_IO_NUMBER},
@@ -1309,6 +1335,9 @@ typedef struct {
     double rel_tol, perturb;
     double resolution; /* spectral tail accepted as resolved */
     int lab;           /* 1: simulate in the lab frame; 0: in the frame of v_pred */
+    int grid;          /* 0 auto, 1 uniform, 2 mapped */
+    size_t points;     /* adapted grid: points per wavelength */
+    double mapped_tol;
     int progress;
 } check_plan;
 
@@ -1316,7 +1345,7 @@ static int plan_check(int argc, char **argv, check_plan *p, bkf_error *err)
 {
     model_flags mf = {0};
     const char *n = NULL, *nmax = NULL, *reltol = NULL, *perturb = NULL, *frame = NULL,
-               *resol = NULL;
+               *resol = NULL, *grid = NULL, *points = NULL;
     int help = 0, noprog = 0;
     const cli_flag flags[] = {
         {"--gamma", &mf.gamma, "a number > 0", NULL},
@@ -1334,6 +1363,8 @@ static int plan_check(int argc, char **argv, check_plan *p, bkf_error *err)
         {"--perturb", &perturb, "a number in [0, 0.1]", NULL},
         {"--seed", &mf.seed, "an integer >= 0", NULL},
         {"--frame", &frame, "lab or moving", NULL},
+        {"--grid", &grid, "auto, uniform or mapped", NULL},
+        {"--points", &points, "an integer in [32, 1048576]", NULL},
         {"--resolution", &resol, "a number in [1e-16, 1]", NULL},
         {"--no-progress", NULL, NULL, &noprog},
         {"--format", &mf.format, "tsv or json", NULL},
@@ -1344,7 +1375,25 @@ static int plan_check(int argc, char **argv, check_plan *p, bkf_error *err)
     if (s) return s;
     if (!mf.stepper) mf.stepper = "etdrk4";
     if ((s = plan_model(&mf, &p->m, err))) return s;
+    p->mapped_tol = mf.tol ? p->m.options.tol : CHECK_MAPPED_TOL;
     if (!mf.tol && p->m.options.stepper == BKF_PDE_ETDRK4) p->m.options.tol = CHECK_ETD_TOL;
+    p->grid = 0;
+    if (grid) {
+        static const char *const grid_names[] = {"auto", "uniform", "mapped", NULL};
+        if ((s = cli_parse_choice("--grid", grid, grid_names, &p->grid, err))) return s;
+    }
+    if (p->grid == 2 && p->lab)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "--frame: lab is not available with --grid mapped (the adapted grid "
+                             "moves with v_pred)");
+    if (p->lab && p->grid == 0) p->grid = 1;
+    p->points = DEF_POINTS;
+    if (points) {
+        if ((s = cli_parse_count("--points", points, (size_t)1 << 20, &p->points, err))) return s;
+        if (p->points < 32)
+            return bkf_error_set(err, BKF_EINPUT, "--points: %s is outside [32, 1048576]",
+                                 points);
+    }
     p->lab = 0;
     if (frame) {
         static const char *const frame_names[] = {"moving", "lab", NULL};
@@ -1405,11 +1454,109 @@ static int check_observe(const bkf_pde_sample *smp, void *data)
 
 typedef struct {
     size_t n, root, N;
+    const char *grid;
     double tail;
     double v_pred, v_pred_err, v_meas, v_meas_err, rel_err, fit_from, fit_to;
     double fronts_start, fronts_end, dev_start, dev_mid, dev_end, growth, stable;
     const char *verdict;
 } check_row;
+
+/* One root on the adapted comoving grid (bkf_comoving): the same
+ * measurements and verdicts as on the uniform grid. */
+static int check_root_mapped(const check_plan *p, const bkf_speeds_root *sr, progress_bar *bar,
+                             check_row *row, bkf_error *err)
+{
+    row->grid = "mapped";
+    bkf_comoving_params cp = bkf_comoving_params_default();
+    cp.gamma = p->m.params.gamma;
+    cp.c = p->m.params.c;
+    cp.nu = p->m.params.nu;
+    cp.S = p->m.params.S;
+    cp.n = row->n;
+    cp.v = sr->v;
+    cp.points = p->points;
+    cp.tol = p->mapped_tol;
+    cp.noise = p->perturb;
+    cp.seed = p->m.seed;
+    cp.cancel = p->m.options.cancel;
+    double period_ref;
+    cp.level = front_level(&p->m.params, &period_ref);
+    bkf_error e;
+    bkf_comoving *cm = bkf_comoving_alloc(&cp, &e);
+    if (!cm) {
+        int st = strstr(e.message, "out of memory") ? BKF_ENOMEM : BKF_ENUMERIC;
+        return bkf_error_set(err, st, "n = %zu, root %zu, adapted grid: %s", row->n, row->root,
+                             e.message);
+    }
+    row->N = bkf_comoving_size(cm);
+    bkf_comoving_stats st;
+    bkf_comoving_get_stats(cm, &st);
+    row->tail = st.relax_change;
+    int s = bkf_comoving_run(cm, p->m.tmax, CHECK_MAPPED_SAMPLE_DT, progress_draw, bar, &e);
+    int broke = 0;
+    if (s == BKF_ENUMERIC && bkf_comoving_count(cm) >= 2) {
+        broke = 1; /* a blown-up front is a result (unstable) */
+        s = BKF_OK;
+    }
+    if (s) {
+        bkf_comoving_free(cm);
+        return bkf_error_set(err, s, "n = %zu, root %zu, adapted grid of %zu points: %s", row->n,
+                             row->root, row->N, e.message);
+    }
+    size_t R = bkf_comoving_count(cm);
+    const bkf_comoving_record *first = bkf_comoving_record_at(cm, 0),
+                              *last = bkf_comoving_record_at(cm, R - 1), *mid = last;
+    int constant = 1;
+    for (size_t r = 0; r < R; r++) {
+        const bkf_comoving_record *rc = bkf_comoving_record_at(cm, r);
+        if (rc->fronts != first->fronts) constant = 0;
+        if (rc->t >= 0.5 * last->t && mid == last) mid = rc;
+    }
+    row->fronts_start = (double)first->fronts;
+    row->fronts_end = (double)last->fronts;
+    row->dev_start = first->deviation;
+    row->dev_mid = mid->deviation;
+    row->dev_end = last->deviation;
+    row->growth = last->t > mid->t ? log(last->deviation / mid->deviation) / (last->t - mid->t)
+                                   : NAN;
+    int kept = !broke && constant && first->fronts == row->n && isfinite(row->dev_end) &&
+               row->dev_end <= 2 * row->dev_mid && row->dev_end <= 1e-2;
+    row->stable = kept;
+    /* coherent part, as on the uniform grid; the relaxed wave's own
+     * deviation plateau (set by the resolution) counts as coherent */
+    double coherent = fmax(100 * p->perturb, 1e-6);
+    double t_ref = fmin(10.0, 0.25 * p->m.tmax);
+    for (size_t r = 0; r < R; r++) {
+        const bkf_comoving_record *rc = bkf_comoving_record_at(cm, r);
+        if (rc->t < t_ref) continue;
+        if (rc->fronts == row->n && isfinite(rc->deviation))
+            coherent = fmax(coherent, 10 * rc->deviation);
+        break;
+    }
+    size_t end = 0;
+    for (size_t r = 0; r < R; r++) {
+        const bkf_comoving_record *rc = bkf_comoving_record_at(cm, r);
+        if (rc->fronts != row->n || !(rc->deviation <= coherent)) break;
+        end = r;
+    }
+    double t_end = bkf_comoving_record_at(cm, end)->t;
+    if (end >= 6) {
+        double drift, drift_err;
+        if (bkf_comoving_fit_drift(cm, 0.5 * t_end, t_end, &drift, &drift_err, &e) == BKF_OK) {
+            /* the frame moves with the fronts towards -x at v_pred */
+            row->v_meas = sr->v - drift;
+            row->v_meas_err = drift_err;
+            row->rel_err = -drift / sr->v;
+            row->fit_from = 0.5 * t_end;
+            row->fit_to = t_end;
+        }
+    }
+    bkf_comoving_free(cm);
+    if (!kept) row->verdict = "unstable";
+    else if (isfinite(row->rel_err) && fabs(row->rel_err) <= p->rel_tol) row->verdict = "agrees";
+    else row->verdict = "disagrees";
+    return BKF_OK;
+}
 
 /* One root: resolution, the perturbed run, its measurements. */
 static int check_root(const check_plan *p, size_t n, size_t root, const bkf_speeds_root *sr,
@@ -1440,10 +1587,19 @@ static int check_root(const check_plan *p, size_t n, size_t root, const bkf_spee
     bkf_measure *meas = NULL;
     bkf_pde_front_info fi;
     int s = BKF_OK;
+    row->grid = "uniform";
+    if (p->grid == 2) return check_root_mapped(p, sr, bar, row, err);
+    size_t N_cap = p->grid == 0 ? (p->N_max < AUTO_UNIFORM_MAX ? p->N_max : AUTO_UNIFORM_MAX)
+                                : p->N_max;
     for (size_t N = p->m.params.N;; N *= 2) {
-        if (N > p->N_max) {
+        if (N > N_cap) {
+            if (p->grid == 0) {
+                bkf_pde_free(pde);
+                free(clean);
+                return check_root_mapped(p, sr, bar, row, err);
+            }
             row->verdict = "unresolved";
-            return BKF_OK;
+            goto done;
         }
         pp.N = N;
         bkf_pde_free(pde);
@@ -1594,11 +1750,16 @@ static int check_compute(const check_plan *p, int argc, char **argv, progress_ba
         s = commentf(t, err, "frame: %s", p->lab ? "lab" : "moving with v_pred of each root");
     if (!s)
         s = commentf(t, err,
-                     "tmax %s, perturbation rms %s (seed %lu), agreement asked %s, grids %zu .. %zu "
-                     "(resolution %.0e), samples every %s",
+                     "tmax %s, perturbation rms %s (seed %lu), agreement asked %s, grid %s: "
+                     "uniform %zu .. %zu (resolution %.0e, samples every %s), adapted %zu points "
+                     "per wavelength (tol %.0e, samples every %g)",
                      num(p->m.tmax, a, sizeof a), num(p->perturb, b, sizeof b), p->m.seed,
-                     num(p->rel_tol, c, sizeof c), p->m.params.N, p->N_max, p->resolution,
-                     num(CHECK_SAMPLE_DT, d, sizeof d));
+                     num(p->rel_tol, c, sizeof c),
+                     p->grid == 0 ? "auto" : p->grid == 1 ? "uniform" : "mapped", p->m.params.N,
+                     p->grid == 0 && p->N_max > AUTO_UNIFORM_MAX ? (size_t)AUTO_UNIFORM_MAX
+                                                                  : p->N_max,
+                     p->resolution, num(CHECK_SAMPLE_DT, d, sizeof d), p->points, p->mapped_tol,
+                     CHECK_MAPPED_SAMPLE_DT);
     if (!s)
         s = commentf(t, err, "speeds: k(nu) %s, n_max %ld, %zu roots%s%s",
                      num(tab.k, f, sizeof f), tab.n_max, tab.count, tab.note[0] ? "; " : "",
@@ -1625,7 +1786,8 @@ static int check_compute(const check_plan *p, int argc, char **argv, progress_ba
     for (size_t i = 0; !s && i < tab.count; i++) {
         const check_row *r = &rows[i];
         bkf_io_value v[CHECK_NCOLUMNS] = {
-            {.number = (double)r->n},   {.number = (double)r->root}, {.number = (double)r->N},
+            {.number = (double)r->n},   {.number = (double)r->root}, {.text = r->grid},
+            {.number = (double)r->N},
             {.number = r->tail},        {.number = r->v_pred},      {.number = r->v_pred_err},   {.number = r->v_meas},
             {.number = r->v_meas_err},  {.number = r->rel_err},      {.number = r->fit_from},
             {.number = r->fit_to},      {.number = r->fronts_start}, {.number = r->fronts_end},
