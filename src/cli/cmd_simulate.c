@@ -1382,11 +1382,6 @@ static int plan_check(int argc, char **argv, check_plan *p, bkf_error *err)
         static const char *const grid_names[] = {"auto", "uniform", "mapped", NULL};
         if ((s = cli_parse_choice("--grid", grid, grid_names, &p->grid, err))) return s;
     }
-    if (p->grid == 2 && p->lab)
-        return bkf_error_set(err, BKF_EINPUT,
-                             "--frame: lab is not available with --grid mapped (the adapted grid "
-                             "moves with v_pred)");
-    if (p->lab && p->grid == 0) p->grid = 1;
     p->points = DEF_POINTS;
     if (points) {
         if ((s = cli_parse_count("--points", points, (size_t)1 << 20, &p->points, err))) return s;
@@ -1399,6 +1394,12 @@ static int plan_check(int argc, char **argv, check_plan *p, bkf_error *err)
         static const char *const frame_names[] = {"moving", "lab", NULL};
         if ((s = cli_parse_choice("--frame", frame, frame_names, &p->lab, err))) return s;
     }
+    if (p->grid == 2 && p->lab)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "--frame: lab is not available with --grid mapped (the adapted grid "
+                             "moves with v_pred)");
+    if (p->lab && p->grid == 0) p->grid = 1;
+
     p->resolution = RESOLUTION_TOL;
     if (resol) {
         if ((s = cli_parse_double("--resolution", resol, &p->resolution, err))) return s;

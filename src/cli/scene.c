@@ -27,7 +27,7 @@ const char *scene_kind_name(scene_kind kind)
 typedef enum {
     V_GAMMA, V_C, V_NU, V_NU_ANY, V_S, V_TOL, V_PDE_TOL, V_GRID_N, V_MODEL,
     V_COUNT, V_SEED, V_NUMBER, V_POSITIVE, V_NU_LIST, V_COUNT_LIST, V_RANGE_LOG,
-    V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_METHOD, V_STEPPER, V_FRAME, V_FORMATS, V_TEXT, V_NAME, V_INIT
+    V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_METHOD, V_STEPPER, V_FRAME, V_GRID, V_FORMATS, V_TEXT, V_NAME, V_INIT
 } value_type;
 
 #define K(kind) (1u << (kind))
@@ -78,7 +78,7 @@ static const key_spec keys[] = {
     {"to", V_NUMBER, K(SCENE_THRESHOLD) | K(SCENE_BRANCH) | K(SCENE_FRICTION),
      "a finite number"},
     {"max_points", V_COUNT, K(SCENE_BRANCH) | K(SCENE_THRESHOLD), "an integer >= 1"},
-    {"points", V_COUNT, K(SCENE_PROFILE) | K(SCENE_FRICTION), "an integer >= 1"},
+    {"points", V_COUNT, K(SCENE_PROFILE) | K(SCENE_FRICTION) | K(SCENE_CHECK), "an integer >= 1"},
     {"init", V_INIT, K(SCENE_SPACETIME), "uniform, front:n=K,..., oscillation:q=Q,... or file:PATH"},
     {"seed", V_SEED, K(SCENE_SPACETIME) | K(SCENE_CHECK), "an integer >= 0"},
     {"tmax", V_POSITIVE, K(SCENE_SPACETIME) | K(SCENE_CHECK), "a number > 0"},
@@ -86,6 +86,7 @@ static const key_spec keys[] = {
     {"rel_tol", V_POSITIVE, K(SCENE_CHECK), "a number > 0"},
     {"stepper", V_STEPPER, K(SCENE_SPACETIME) | K(SCENE_CHECK), "rk8pd, rkck, rkf45 or etdrk4"},
     {"frame", V_FRAME, K(SCENE_CHECK), "moving or lab"},
+    {"grid", V_GRID, K(SCENE_CHECK), "auto, uniform or mapped"},
     {"data", V_NAME, K(SCENE_FIGURE), "the name of a product of this scene"},
     {"script", V_TEXT, K(SCENE_FIGURE), "a gnuplot script path"},
     {"formats", V_FORMATS, K(SCENE_FIGURE), "png, pdf, svg or a list such as png,svg"},
@@ -205,6 +206,11 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
     }
     case V_FRAME: {
         static const char *const m[] = {"moving", "lab", NULL};
+        int i;
+        return cli_parse_choice(k, v, m, &i, err);
+    }
+    case V_GRID: {
+        static const char *const m[] = {"auto", "uniform", "mapped", NULL};
         int i;
         return cli_parse_choice(k, v, m, &i, err);
     }
@@ -995,6 +1001,8 @@ static int plan_product(scene_plan *plan, const scene *s, size_t index,
         PAIR("--seed", OWN(0, "seed"));
         PAIR("--stepper", OWN(0, "stepper"));
         PAIR("--frame", OWN(0, "frame"));
+        PAIR("--grid", OWN(0, "grid"));
+        PAIR("--points", OWN(0, "points"));
         ARG("--no-progress");
         char *out = out_path(dir, p->name, ".tsv");
         PAIR("--out", out);
