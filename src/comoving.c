@@ -665,13 +665,14 @@ void bkf_comoving_free(bkf_comoving *m)
     free(m);
 }
 
-size_t bkf_comoving_size(const bkf_comoving *m) { return m->M; }
-const double *bkf_comoving_grid(const bkf_comoving *m) { return m->xi; }
-double bkf_comoving_time(const bkf_comoving *m) { return m->t; }
-double bkf_comoving_mu(const bkf_comoving *m) { return m->mu; }
+size_t bkf_comoving_size(const bkf_comoving *m) { return m ? m->M : 0; }
+const double *bkf_comoving_grid(const bkf_comoving *m) { return m ? m->xi : NULL; }
+double bkf_comoving_time(const bkf_comoving *m) { return m ? m->t : NAN; }
+double bkf_comoving_mu(const bkf_comoving *m) { return m ? m->mu : NAN; }
 
 const double *bkf_comoving_psi(const bkf_comoving *m)
 {
+    if (!m) return NULL;
     const double *Y = N_VGetArrayPointer(m->y);
     for (size_t j = 0; j < m->M; j++) m->scratch[j] = Y[2 * m->slot[j]];
     return m->scratch;
@@ -679,6 +680,7 @@ const double *bkf_comoving_psi(const bkf_comoving *m)
 
 const double *bkf_comoving_eta(const bkf_comoving *m)
 {
+    if (!m) return NULL;
     const double *Y = N_VGetArrayPointer(m->y);
     for (size_t j = 0; j < m->M; j++) m->scratch[j] = Y[2 * m->slot[j] + 1];
     return m->scratch;
@@ -686,6 +688,7 @@ const double *bkf_comoving_eta(const bkf_comoving *m)
 
 double bkf_comoving_min_spacing(const bkf_comoving *m)
 {
+    if (!m) return NAN;
     double lo = INFINITY;
     for (size_t j = 0; j < m->M; j++) lo = fmin(lo, m->gp[j] * m->h);
     return lo;
@@ -693,6 +696,7 @@ double bkf_comoving_min_spacing(const bkf_comoving *m)
 
 double bkf_comoving_max_spacing(const bkf_comoving *m)
 {
+    if (!m) return NAN;
     double hi = 0.0;
     for (size_t j = 0; j < m->M; j++) hi = fmax(hi, m->gp[j] * m->h);
     return hi;
@@ -884,11 +888,11 @@ static int record(bkf_comoving *m, const double *u, bkf_error *err)
     return BKF_OK;
 }
 
-size_t bkf_comoving_count(const bkf_comoving *m) { return m->count; }
+size_t bkf_comoving_count(const bkf_comoving *m) { return m ? m->count : 0; }
 
 const bkf_comoving_record *bkf_comoving_record_at(const bkf_comoving *m, size_t i)
 {
-    return i < m->count ? &m->rec[i] : NULL;
+    return m && i < m->count ? &m->rec[i] : NULL;
 }
 
 /* Least-squares slope of the front's positions over records [a, b), and its
@@ -940,6 +944,8 @@ static double mean_slope(const bkf_comoving *m, size_t a, size_t b, double *se_r
 int bkf_comoving_fit_drift(const bkf_comoving *m, double t_from, double t_to, double *drift,
                            double *drift_err, bkf_error *err)
 {
+    if (!m || !drift || !drift_err)
+        return bkf_error_set(err, BKF_EINPUT, "simulation object or outputs are NULL");
     size_t a = m->count, b = 0;
     for (size_t r = 0; r < m->count; r++) {
         if (m->rec[r].t < t_from || m->rec[r].t > t_to) continue;
@@ -1007,6 +1013,9 @@ int bkf_comoving_run(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_pr
 
 void bkf_comoving_get_stats(const bkf_comoving *m, bkf_comoving_stats *st)
 {
+    if (!st) return;
+    memset(st, 0, sizeof *st);
+    if (!m) return;
     long a = 0, b = 0, c = 0, d = 0, e = 0;
     sunrealtype h = 0;
     CVodeGetNumSteps(m->cv, &a);

@@ -16,6 +16,7 @@
 
 #include "bkfront/asymfit.h"
 #include "bkfront/asymptotics.h"
+#include "bkfront/comoving.h"
 #include "bkfront/continuation.h"
 #include "bkfront/cycle.h"
 #include "bkfront/floquet.h"
@@ -451,6 +452,73 @@ TEST(api_fuzz_measure)
     CHECK(isfinite(sum.mean) && isfinite(sum.variance));
     bkf_measure_free(m);
     bkf_measure_free(NULL);
+}
+
+TEST(api_fuzz_comoving)
+{
+    for (size_t i = 0; i < NHOSTILE; i++) {
+        double x = hostile[i];
+        double *fields[] = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
+        bkf_comoving_params base = bkf_comoving_params_default();
+        base.gamma = 2;
+        base.c = 0.3;
+        base.nu = -0.96;
+        base.S = 20;
+        base.n = 7;
+        base.v = 0.35;
+        base.points = 64;
+        bkf_comoving_params p[8];
+        for (int k = 0; k < 8; k++) p[k] = base;
+        fields[0] = &p[0].gamma;
+        fields[1] = &p[1].c;
+        fields[2] = &p[2].nu;
+        fields[3] = &p[3].S;
+        fields[4] = &p[4].v;
+        fields[5] = &p[5].tol;
+        fields[6] = &p[6].noise;
+        fields[7] = &p[7].cycle_tol;
+        for (int k = 0; k < 8; k++) {
+            *fields[k] = x;
+            bkf_error e;
+            bkf_comoving *m = bkf_comoving_alloc(&p[k], &e);
+            /* a hostile value may be valid for a few fields (c = 0 with v
+             * above it, say); then the object must be usable */
+            if (m) CHECK(bkf_comoving_size(m) == 7 * 64);
+            bkf_comoving_free(m);
+        }
+    }
+    bkf_error e;
+    CHECK(bkf_comoving_alloc(NULL, &e) == NULL);
+    CHECK_EINPUT(bkf_comoving_run(NULL, 1.0, 0.1, NULL, NULL, err));
+    double d, de;
+    CHECK_EINPUT(bkf_comoving_fit_drift(NULL, 0, 1, &d, &de, err));
+    CHECK(bkf_comoving_size(NULL) == 0 && bkf_comoving_count(NULL) == 0 &&
+          bkf_comoving_record_at(NULL, 0) == NULL && bkf_comoving_grid(NULL) == NULL &&
+          bkf_comoving_psi(NULL) == NULL && bkf_comoving_eta(NULL) == NULL &&
+          isnan(bkf_comoving_time(NULL)) && isnan(bkf_comoving_mu(NULL)));
+    bkf_comoving_stats st;
+    bkf_comoving_get_stats(NULL, &st);
+    CHECK(st.steps == 0);
+    bkf_comoving_get_stats(NULL, NULL);
+    bkf_comoving_free(NULL);
+    /* a valid object refuses hostile run arguments */
+    bkf_comoving_params p = bkf_comoving_params_default();
+    p.gamma = 2;
+    p.c = 0.3;
+    p.nu = -0.96;
+    p.S = 20;
+    p.n = 7;
+    p.v = 0.347551274998819;
+    p.points = 64;
+    bkf_comoving *m = bkf_comoving_alloc(&p, &e);
+    CHECK_MSG(m != NULL, "%s", e.message);
+    for (size_t i = 0; m && i < NHOSTILE; i++) {
+        if (hostile[i] > 0 && isfinite(hostile[i])) continue;
+        CHECK_EINPUT(bkf_comoving_run(m, hostile[i], 0.1, NULL, NULL, err));
+        CHECK_EINPUT(bkf_comoving_run(m, 1.0, hostile[i], NULL, NULL, err));
+    }
+    CHECK_EINPUT(bkf_comoving_fit_drift(m, 0, 1, NULL, &de, err));
+    bkf_comoving_free(m);
 }
 
 TEST(api_fuzz_asymfit)
