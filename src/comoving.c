@@ -60,7 +60,7 @@ struct bkf_comoving {
     SUNLinearSolver LS;
     void *cv;
     double t;
-    size_t steps_before;      /* for max_steps per run call */
+    int blew_up, over_budget;
     char cv_message[200];
 
     /* measurements */
@@ -372,8 +372,10 @@ static int band_jacobian(bkf_comoving *m, N_Vector y, N_Vector fy, N_Vector ytmp
  * each step is a Newton solve, and long steps damp every mode, growing or
  * not, while the wave drifts by only (v_grid - v) times their sum).  The
  * relaxed wave is what the run perturbs and measures against. */
-static const double RELAX_STEPS[] = {1e-3, 1e-2, 1e-1, 1.0, 10.0};
-#define RELAX_NEWTON 4
+static const double RELAX_STEPS[] = {1e-3, 1e-2, 1e-1, 1.0, 3.0};
+#define RELAX_NEWTON 8
+/* Newton's last correction at each step must fall below this. */
+#define RELAX_CONVERGED 1e-5
 
 static int relax(bkf_comoving *m, bkf_error *err)
 {
@@ -388,7 +390,7 @@ static int relax(bkf_comoving *m, bkf_error *err)
     double *Fv = N_VGetArrayPointer(f), *B = N_VGetArrayPointer(t1);
     size_t n = 2 * m->M;
     for (size_t k = 0; k < sizeof RELAX_STEPS / sizeof RELAX_STEPS[0]; k++) {
-        double h = RELAX_STEPS[k];
+        double h = RELAX_STEPS[k], last = INFINITY;
         N_VScale(1.0, m->y, y0);
         if (band_jacobian(m, m->y, f, t1, t2)) {
             s = bkf_error_set(err, BKF_ENUMERIC, "relaxation: right-hand side failed");
@@ -414,7 +416,19 @@ static int relax(bkf_comoving *m, bkf_error *err)
                 s = bkf_error_set(err, BKF_ENUMERIC, "relaxation diverged at step %g", h);
                 goto done;
             }
-            if (dmax <= 1e-13) break;
+            /* converged, or stalled at the rounding floor of the residual
+             * (1e-8 .. 1e-6 here: 1/cell^2 ~ 1e10 times the rounding) */
+            int stalled = it >= 2 && dmax > 0.5 * last;
+            last = dmax;
+            if (dmax <= 1e-13 || stalled) break;
+        }
+        if (!(last <= RELAX_CONVERGED)) {
+            s = bkf_error_set(err, BKF_ENUMERIC,
+                              "relaxing the seed onto the grid: Newton's correction is still %.2g "
+                              "after %d iterations at step %g (the grid of %zu points per "
+                              "wavelength may not resolve the wave)",
+                              last, RELAX_NEWTON, h, m->m);
+            goto done;
         }
     }
     /* how far the grid's wave is from the continuum's */
@@ -982,6 +996,8 @@ int bkf_comoving_run(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_pr
     double t0 = m->t;
     long steps0;
     CVodeGetNumSteps(m->cv, &steps0);
+    m->over_budget = 0;
+    CVodeSetMaxNumSteps(m->cv, m->p.max_steps ? (long)m->p.max_steps + 1 : 1000000000L);
     for (size_t k = 1;; k++) {
         double tout = t0 + (double)k * sample_dt;
         if (tout > t_end * (1 - 1e-14)) tout = t_end;
@@ -990,21 +1006,25 @@ int bkf_comoving_run(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_pr
         sunrealtype tret;
         m->cv_message[0] = 0;
         int s = CVode(m->cv, tout, m->y, &tret, CV_NORMAL);
+        long steps;
+        CVodeGetNumSteps(m->cv, &steps);
+        if (m->p.max_steps && (s == CV_TOO_MUCH_WORK || (size_t)(steps - steps0) > m->p.max_steps)) {
+            m->over_budget = 1;
+            return bkf_error_set(err, BKF_ENUMERIC, "more than %zu steps by t = %g",
+                                 m->p.max_steps, (double)tret);
+        }
         if (s < 0)
             return bkf_error_set(err, BKF_ENUMERIC, "CVODE failed at t = %g: %s", (double)tret,
                                  m->cv_message[0] ? m->cv_message : "no message");
         m->t = tout;
         const double *u = bkf_comoving_psi(m);
         for (size_t j = 0; j < m->M; j++)
-            if (!(fabs(u[j]) <= BLOWUP))
+            if (!(fabs(u[j]) <= BLOWUP)) {
+                m->blew_up = 1;
                 return bkf_error_set(err, BKF_ENUMERIC, "the field blew up by t = %g", m->t);
+            }
         int st = record(m, u, err);
         if (st) return st;
-        long steps;
-        CVodeGetNumSteps(m->cv, &steps);
-        if (m->p.max_steps && (size_t)(steps - steps0) > m->p.max_steps)
-            return bkf_error_set(err, BKF_ENUMERIC, "more than %zu steps by t = %g",
-                                 m->p.max_steps, m->t);
         if (progress && progress((m->t - t0) / (t_end - t0), progress_data)) return BKF_OK;
         if (tout >= t_end) break;
     }
@@ -1031,6 +1051,8 @@ void bkf_comoving_get_stats(const bkf_comoving *m, bkf_comoving_stats *st)
     st->error_failures = (size_t)e;
     st->h_last = h;
     st->relax_newton = m->relax_newton;
+    st->blew_up = m->blew_up;
+    st->over_budget = m->over_budget;
     st->relax_change = m->relax_shift;
 }
 

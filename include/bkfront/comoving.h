@@ -41,10 +41,14 @@
  * Relaxation.  The continuum's wave is not the grid's: their difference
  * (the truncation error, largest in the jumps) would set off fast waves.
  * So before the noise is added, the seed is relaxed onto the grid's own
- * travelling wave by five backward Euler steps of lengths 1e-3 .. 10 (each
- * a Newton solve with the banded difference-quotient Jacobian: pseudo-
- * transient continuation, which damps every mode, growing or not, while
- * the wave drifts by only (v_grid - v) times 11).  The relaxed wave is what
+ * travelling wave by backward Euler steps of lengths 1e-3, 0.01, 0.1, 1, 3 (each
+ * a Newton solve with the banded difference-quotient Jacobian, up to 8
+ * iterations until the correction stalls at its rounding floor, 1e-8 ..
+ * 1e-6; above 1e-5 it is BKF_ENUMERIC: pseudo-
+ * transient continuation, which damps every mode faster than ~0.3 per
+ * unit time, growing or not, while the wave drifts by only (v_grid - v)
+ * 4.1; a last step of 10 was faster still, but its Newton iteration does
+ * not converge).  The relaxed wave is what
  * the run perturbs and the reference the deviation is measured from.
  *
  * Time: SUNDIALS CVODE (variable order BDF, 1..5, stability limit
@@ -151,7 +155,10 @@ typedef struct {
     double h_last;
     size_t relax_newton;  /* Newton iterations of the seed's relaxation */
     double relax_change;  /* max |psi_relaxed - psi_seed|: how far the grid's
-                             wave is from the continuum's */
+                             wave is from the continuum's (including its
+                             drift during the relaxation) */
+    int blew_up;          /* the last run stopped on a blown-up field */
+    int over_budget;      /* the last run stopped at max_steps */
 } bkf_comoving_stats;
 
 void bkf_comoving_get_stats(const bkf_comoving *m, bkf_comoving_stats *stats);
