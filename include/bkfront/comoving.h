@@ -44,7 +44,7 @@
  * travelling wave by backward Euler steps of lengths 1e-3, 0.01, 0.1, 1, 3 (each
  * a Newton solve with the banded difference-quotient Jacobian, up to 8
  * iterations until the correction stalls at its rounding floor, 1e-8 ..
- * 1e-6; above 1e-5 it is BKF_ENUMERIC: pseudo-
+ * 1e-6, 3e-5 in a hard case; above 1e-3 it is BKF_ENUMERIC: pseudo-
  * transient continuation, which damps every mode faster than ~0.3 per
  * unit time, growing or not, while the wave drifts by only (v_grid - v)
  * 4.1; a last step of 10 was faster still, but its Newton iteration does

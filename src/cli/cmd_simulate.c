@@ -1302,8 +1302,9 @@ static void check_help(FILE *out)
         "                    not grow over the later half (deviation_end <= 2 deviation_mid\n"
         "                    and <= 1e-2): count and shape kept over the run\n"
         "  verdict           agrees, disagrees (stable, rel_err beyond --rel-tol),\n"
-        "                    unstable (not judged), unresolved (not run, or the adapted\n"
-        "                    grid's run exceeded %d steps)\n"
+        "                    unstable (not judged), unresolved (not run; or the adapted\n"
+        "                    grid's run exceeded %d steps or could not be set up, with a\n"
+        "                    warning on stderr)\n"
         "\n"
         "exit status: 0 ok, 1 a stable front disagrees (or a numerical failure), 2 bad input\n",
         AUTO_UNIFORM_MAX, DEF_POINTS, RESOLUTION_TOL, DEF_N, DEF_N_MAX, CHECK_ETD_TOL,
@@ -1493,9 +1494,14 @@ static int check_root_mapped(const check_plan *p, const bkf_speeds_root *sr, pro
     bkf_error e;
     bkf_comoving *cm = bkf_comoving_alloc(&cp, &e);
     if (!cm) {
-        int st = strstr(e.message, "out of memory") ? BKF_ENOMEM : BKF_ENUMERIC;
-        return bkf_error_set(err, st, "n = %zu, root %zu, adapted grid: %s", row->n, row->root,
-                             e.message);
+        if (strstr(e.message, "out of memory"))
+            return bkf_error_set(err, BKF_ENOMEM, "n = %zu: out of memory", row->n);
+        /* this root cannot be set up on this grid (the other roots still
+         * can): a row, not the end of the table */
+        fprintf(stderr, CLI_PROGRAM " check: warning: n = %zu, root %zu reported unresolved: %s\n",
+                row->n, row->root, e.message);
+        row->verdict = "unresolved";
+        return BKF_OK;
     }
     row->N = bkf_comoving_size(cm);
     bkf_comoving_stats st;
