@@ -1,4 +1,6 @@
 # Predicted front speeds against direct simulation (data: bkfront check).
+# Stable fronts filled, unstable open; circles on the uniform spectral
+# grid, squares on the adapted comoving grid (column `grid`).
 load plotdir.'/common.gp'
 f = word(files, 1)
 set title (title ne '' ? title : \
@@ -8,9 +10,14 @@ set ylabel '|v_{meas} - v_{pred}| / v_{pred}'
 set logscale y
 set format y '10^{%T}'
 set offsets 0.5, 0.5, 0, 0
-set key top left
-plot f using 'n':(column('stable') == 1 ? abs(column('rel_err')) : NaN) with points pt 7 ps 1.4 \
-       lc rgb '#2ca02c' title 'stable front', \
+set key top right
+set yrange [*:1e-4]
+uni(g) = g eq 'uniform'
+plot 1e-6 with lines dt 2 lc rgb '#888888' title "the check's default agreement, 1e-6", \
+     f using 'n':(column('stable') == 1 && uni(strcol('grid')) ? abs(column('rel_err')) : NaN) \
+       with points pt 7 ps 1.4 lc rgb '#2ca02c' title 'stable, uniform spectral grid', \
+     f using 'n':(column('stable') == 1 && !uni(strcol('grid')) ? abs(column('rel_err')) : NaN) \
+       with points pt 5 ps 1.4 lc rgb '#1f77b4' title 'stable, adapted grid', \
      f using 'n':(column('stable') == 1 ? NaN : abs(column('rel_err'))) with points pt 6 ps 1.4 \
        lc rgb '#d62728' title 'unstable (count or shape changed)', \
      f using 'n':(column('stable') == 1 ? column('v_meas_err')/column('v_pred') : NaN) \
