@@ -43,10 +43,10 @@ struct bkf_comoving {
     double *xi, *gp, *gpp;    /* xi_j, g'(s_j), g''(s_j) */
     double *inv_gp;
     double *damping;          /* coefficient of the grid-scale damping at each point */
-    double *zref, *f0, *f1, *f2, *f3; /* the seed: z_j in a wavelength, f, f', f'' there */
+    double *zref, *f0, *f1;   /* the equidistributed z_j in a wavelength; the seed f, f' at
+                                 the smoothed points */
     size_t *slot;             /* unknown pair of point j (banded order) */
     double *ub, *eb;          /* points with R ghosts each side */
-    bkf_cycle *cycle;         /* for the seed beyond the Taylor range */
     double *scratch;          /* M values */
     double *ref;              /* the relaxed wave: psi at t = 0 before the noise */
     double *xun;              /* xi_j unwrapped over j = -R .. M + R */
@@ -250,18 +250,15 @@ done:
 }
 
 /* The seed at the map's points, from the cycle. */
-static int seed_profile(bkf_comoving *m, bkf_error *err)
+static int seed_profile(bkf_comoving *m, bkf_cycle *cycle, bkf_error *err)
 {
     for (size_t j = 0; j < m->m; j++) {
         double z = m->T / m->lambda * m->xi[j], f, fp;
         bkf_error e;
-        int s = bkf_cycle_profile(m->cycle, z, &f, &fp, &e);
+        int s = bkf_cycle_profile(cycle, z, &f, &fp, &e);
         if (s) return bkf_error_set(err, s, "seed profile: %s", e.message);
-        m->zref[j] = z;
         m->f0[j] = f;
         m->f1[j] = fp;
-        m->f2[j] = m->p.nu - f - m->mu * (f * f - 1.0) * fp;
-        m->f3[j] = -fp - m->mu * (2.0 * f * fp * fp + (f * f - 1.0) * m->f2[j]);
     }
     return BKF_OK;
 }
@@ -358,7 +355,8 @@ static int band_jacobian(bkf_comoving *m, N_Vector y, N_Vector fy, N_Vector ytmp
             Yt[j] = Y[j];
             double *col = SM_COLUMN_B(m->A, j);
             sunindextype lo = j - mu > 0 ? j - mu : 0, hi = j + ml < n - 1 ? j + ml : n - 1;
-            for (sunindextype i = lo; i <= hi; i++) SM_COLUMN_ELEMENT_B(col, i, j) = (Ft[i] - F[i]) / inc;
+            for (sunindextype i = lo; i <= hi; i++)
+                SM_COLUMN_ELEMENT_B(col, i, j) = (Ft[i] - F[i]) / inc;
         }
     }
     return 0;
@@ -400,7 +398,8 @@ static int relax(bkf_comoving *m, bkf_error *err)
         }
         SUNMatScaleAddI(-h, m->A);
         if (SUNLinSolSetup(m->LS, m->A)) {
-            s = bkf_error_set(err, BKF_ENUMERIC, "relaxation: singular Newton matrix at step %g", h);
+            s = bkf_error_set(err, BKF_ENUMERIC, "relaxation: singular Newton matrix at step %g",
+                              h);
             goto done;
         }
         for (int it = 0; it < RELAX_NEWTON; it++) {
@@ -435,7 +434,8 @@ static int relax(bkf_comoving *m, bkf_error *err)
     }
     /* how far the grid's wave is from the continuum's */
     double shift = 0.0;
-    for (size_t j = 0; j < m->M; j++) shift = fmax(shift, fabs(Y[2 * m->slot[j]] - m->f0[j % m->m]));
+    for (size_t j = 0; j < m->M; j++)
+        shift = fmax(shift, fabs(Y[2 * m->slot[j]] - m->f0[j % m->m]));
     m->relax_shift = shift;
 done:
     if (y0) N_VDestroy(y0);
@@ -542,8 +542,6 @@ bkf_comoving *bkf_comoving_alloc(const bkf_comoving_params *params, bkf_error *e
     m->zref = malloc(mm * sizeof *m->zref);
     m->f0 = malloc(mm * sizeof *m->f0);
     m->f1 = malloc(mm * sizeof *m->f1);
-    m->f2 = malloc(mm * sizeof *m->f2);
-    m->f3 = malloc(mm * sizeof *m->f3);
     m->slot = malloc(M * sizeof *m->slot);
     m->ub = malloc((M + 2 * R) * sizeof *m->ub);
     m->eb = malloc((M + 2 * R) * sizeof *m->eb);
@@ -554,26 +552,33 @@ bkf_comoving *bkf_comoving_alloc(const bkf_comoving_params *params, bkf_error *e
     m->gpg = malloc((M + 2 * R) * sizeof *m->gpg);
     m->cross = malloc(M * sizeof *m->cross);
     m->xc = malloc(M * sizeof *m->xc);
-    m->cycle = bkf_cycle_alloc();
-    if (!m->xi || !m->gp || !m->gpp || !m->inv_gp || !m->damping || !m->zref || !m->f0 || !m->f1 || !m->f2 || !m->f3 ||
-        !m->slot || !m->ub || !m->eb || !m->scratch || !m->ref || !m->xun || !m->refg || !m->gpg || !m->cross || !m->xc || !m->cycle) {
+    if (!m->xi || !m->gp || !m->gpp || !m->inv_gp || !m->damping || !m->zref || !m->f0 || !m->f1 ||
+        !m->slot || !m->ub || !m->eb || !m->scratch || !m->ref || !m->xun || !m->refg || !m->gpg ||
+        !m->cross || !m->xc) {
         bkf_error_set(err, BKF_ENOMEM, "out of memory");
         goto fail;
     }
 
+    /* the cycle is needed only to build the grid and the seed */
+    bkf_cycle *cycle = bkf_cycle_alloc();
+    if (!cycle) {
+        bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        goto fail;
+    }
     bkf_error e;
     bkf_cycle_options co = bkf_cycle_options_default();
     co.tol = m->p.cycle_tol;
-    int s = bkf_cycle_solve(m->cycle, m->mu, m->p.nu, &co, &e);
-    if (s) {
-        bkf_error_set(err, s, "cycle at mu = %g: %s", m->mu, e.message);
-        goto fail;
+    int s = bkf_cycle_solve(cycle, m->mu, m->p.nu, &co, &e);
+    if (s) bkf_error_set(err, s, "cycle at mu = %g: %s", m->mu, e.message);
+    if (!s) {
+        const bkf_cycle_result *cr = bkf_cycle_get(cycle);
+        m->T = cr->period;
+        s = build_map(m, cr->section_slope, cr->xmax, cr->xmin, err);
     }
-    const bkf_cycle_result *cr = bkf_cycle_get(m->cycle);
-    m->T = cr->period;
-    if ((s = build_map(m, cr->section_slope, cr->xmax, cr->xmin, err))) goto fail;
-    if ((s = smooth_map(m, err))) goto fail;
-    if ((s = seed_profile(m, err))) goto fail;
+    if (!s) s = smooth_map(m, err);
+    if (!s) s = seed_profile(m, cycle, err);
+    bkf_cycle_free(cycle);
+    if (s) goto fail;
 
     /* every wavelength alike */
     for (size_t i = 0; i < m->p.n; i++)
@@ -653,7 +658,6 @@ void bkf_comoving_free(bkf_comoving *m)
     if (m->A) SUNMatDestroy(m->A);
     if (m->y) N_VDestroy(m->y);
     if (m->ctx) SUNContext_Free(&m->ctx);
-    bkf_cycle_free(m->cycle);
     free(m->xi);
     free(m->gp);
     free(m->gpp);
@@ -662,8 +666,6 @@ void bkf_comoving_free(bkf_comoving *m)
     free(m->zref);
     free(m->f0);
     free(m->f1);
-    free(m->f2);
-    free(m->f3);
     free(m->slot);
     free(m->ub);
     free(m->eb);
@@ -882,7 +884,8 @@ static int record(bkf_comoving *m, const double *u, bkf_error *err)
         double best_cost = INFINITY;
         for (size_t o = 0; o < n; o++) {
             double cost = 0.0;
-            for (size_t i = 0; i < n; i++) cost += fabs(wrap(m->xc[(i + o) % n] - m->prev[i], m->p.S));
+            for (size_t i = 0; i < n; i++)
+                cost += fabs(wrap(m->xc[(i + o) % n] - m->prev[i], m->p.S));
             if (cost < best_cost) {
                 best_cost = cost;
                 best = o;
@@ -1010,7 +1013,8 @@ int bkf_comoving_run(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_pr
         int s = CVode(m->cv, tout, m->y, &tret, CV_NORMAL);
         long steps;
         CVodeGetNumSteps(m->cv, &steps);
-        if (m->p.max_steps && (s == CV_TOO_MUCH_WORK || (size_t)(steps - steps0) > m->p.max_steps)) {
+        if (m->p.max_steps &&
+            (s == CV_TOO_MUCH_WORK || (size_t)(steps - steps0) > m->p.max_steps)) {
             m->over_budget = 1;
             return bkf_error_set(err, BKF_ENUMERIC, "more than %zu steps by t = %g",
                                  m->p.max_steps, (double)tret);

@@ -454,40 +454,34 @@ TEST(api_fuzz_measure)
     bkf_measure_free(NULL);
 }
 
+static bkf_comoving_params fuzz_comoving_params(void)
+{
+    bkf_comoving_params p = bkf_comoving_params_default();
+    p.gamma = 2;
+    p.c = 0.3;
+    p.nu = -0.96;
+    p.S = 20;
+    p.n = 7;
+    p.v = 0.347551274998819; /* the paper's n = 7 */
+    p.points = 64;
+    return p;
+}
+
 TEST(api_fuzz_comoving)
 {
+    bkf_error e;
     for (size_t i = 0; i < NHOSTILE; i++) {
-        double x = hostile[i];
-        double *fields[] = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
-        bkf_comoving_params base = bkf_comoving_params_default();
-        base.gamma = 2;
-        base.c = 0.3;
-        base.nu = -0.96;
-        base.S = 20;
-        base.n = 7;
-        base.v = 0.35;
-        base.points = 64;
-        bkf_comoving_params p[8];
-        for (int k = 0; k < 8; k++) p[k] = base;
-        fields[0] = &p[0].gamma;
-        fields[1] = &p[1].c;
-        fields[2] = &p[2].nu;
-        fields[3] = &p[3].S;
-        fields[4] = &p[4].v;
-        fields[5] = &p[5].tol;
-        fields[6] = &p[6].noise;
-        fields[7] = &p[7].cycle_tol;
         for (int k = 0; k < 8; k++) {
-            *fields[k] = x;
-            bkf_error e;
-            bkf_comoving *m = bkf_comoving_alloc(&p[k], &e);
-            /* a hostile value may be valid for a few fields (c = 0 with v
-             * above it, say); then the object must be usable */
-            if (m) CHECK(bkf_comoving_size(m) == 7 * 64);
+            bkf_comoving_params p = fuzz_comoving_params();
+            double *field[8] = {&p.gamma, &p.c, &p.nu, &p.S, &p.v, &p.tol, &p.noise, &p.cycle_tol};
+            *field[k] = hostile[i];
+            bkf_comoving *m = bkf_comoving_alloc(&p, &e);
+            /* a few hostile values are valid for some fields (S = 1e300, v
+             * far above c); then the object must be whole */
+            if (m) CHECK(bkf_comoving_size(m) == 7 * 64 && bkf_comoving_count(m) == 1);
             bkf_comoving_free(m);
         }
     }
-    bkf_error e;
     CHECK(bkf_comoving_alloc(NULL, &e) == NULL);
     CHECK_EINPUT(bkf_comoving_run(NULL, 1.0, 0.1, NULL, NULL, err));
     double d, de;
@@ -502,14 +496,7 @@ TEST(api_fuzz_comoving)
     bkf_comoving_get_stats(NULL, NULL);
     bkf_comoving_free(NULL);
     /* a valid object refuses hostile run arguments */
-    bkf_comoving_params p = bkf_comoving_params_default();
-    p.gamma = 2;
-    p.c = 0.3;
-    p.nu = -0.96;
-    p.S = 20;
-    p.n = 7;
-    p.v = 0.347551274998819;
-    p.points = 64;
+    bkf_comoving_params p = fuzz_comoving_params();
     bkf_comoving *m = bkf_comoving_alloc(&p, &e);
     CHECK_MSG(m != NULL, "%s", e.message);
     for (size_t i = 0; m && i < NHOSTILE; i++) {

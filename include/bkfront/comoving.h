@@ -135,7 +135,8 @@ typedef struct {
     size_t fronts;        /* upward crossings of nu */
     double displacement;  /* mean displacement of the fronts since t = 0, in the
                              frame; NaN when the count differs from the first */
-    double deviation;     /* max |psi - seed shifted by displacement|; NaN as above */
+    double deviation;     /* max |psi - relaxed wave shifted by displacement|; NaN
+                             as above */
 } bkf_comoving_record;
 
 size_t bkf_comoving_count(const bkf_comoving *m);
