@@ -64,6 +64,9 @@ TEST(comoving_fronts_keep_the_predicted_speed)
     CHECK_STATUS(bkf_comoving_fit_drift(m, 20, 40, &drift, &drift_err, &e), BKF_OK);
     CHECK_MSG(fabs(drift) / v < 1e-7, "drift %g (v %g)", drift, v);
     CHECK(drift_err < 1e-7 * v);
+    /* the fit's uncertainty covers the distance to the independent v */
+    CHECK_MSG(fabs(drift) <= 3 * drift_err, "drift %g beyond 3 x its uncertainty %g", drift,
+              drift_err);
     bkf_comoving_stats st;
     bkf_comoving_get_stats(m, &st);
     bkf_test_note("n = 7, %zu samples: drift/v %.2g +- %.2g; %zu steps, last %.3g", R,
