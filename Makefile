@@ -26,9 +26,14 @@ SUNDIALS_LIBS := -lsundials_cvode -lsundials_sunlinsolband -lsundials_sunmatrixb
                  -lsundials_nvecserial
 LDLIBS   += $(PKG_LIBS) $(SUNDIALS_LIBS) -lm
 
-LIB_SRC   := $(wildcard src/*.c)
+# The library's layers, lowest first (CONTRIBUTING.md): a file may include
+# the headers of its own layer and of the layers before it, never after
+# (tests/core/test_layers.c enforces it).  cli sits on top, outside the library.
+LAYERS    := core wave stability simulation products scene
+LIB_SRC   := $(foreach l,$(LAYERS),$(wildcard src/$(l)/*.c))
 CLI_SRC   := $(wildcard src/cli/*.c)
-TEST_SRC  := $(wildcard tests/*.c)
+TEST_SRC  := $(wildcard tests/*.c tests/*/*.c)
+TEST_SRC  := $(filter-out tests/fuzz/% tests/bench/%,$(TEST_SRC))
 BENCH_SRC := $(wildcard tests/bench/*.c)
 
 LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
@@ -141,7 +146,7 @@ $(TESTS): $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(CLI)
 $(BENCH): $(BENCH_OBJ) $(LIB)
 	$(CC) $(LDFLAGS) -o $@ $(BENCH_OBJ) $(LIB) $(LDLIBS)
 
-$(BUILD)/tests/%.o: override CFLAGS += -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' -DBKF_SOURCE_DIR='"$(CURDIR)"'
+$(BUILD)/tests/%.o: override CFLAGS += -Itests -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' -DBKF_SOURCE_DIR='"$(CURDIR)"'
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)
