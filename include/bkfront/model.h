@@ -7,7 +7,26 @@
 #ifndef BKFRONT_MODEL_H
 #define BKFRONT_MODEL_H
 
+#include <stddef.h>
 #include "bkfront/status.h"
+
+/* Which medium: the continuum (spectral in x) or the Burridge-Knopoff chain
+ * of N blocks, Eq. (1) of the paper, spacing h = S/N. */
+typedef enum { BKF_MODEL_CONTINUUM = 0, BKF_MODEL_CHAIN = 1 } bkf_model_kind;
+
+/* The one parameter set every module takes (each checks the ranges its own
+ * problem needs: a limit cycle needs |nu| < 1, a simulation does not). */
+typedef struct {
+    double gamma;        /* friction strength, > 0 */
+    double c;            /* sound speed, >= 0 */
+    double nu;           /* pulling rate */
+    double S;            /* system size, > 0 */
+    bkf_model_kind kind; /* continuum or chain */
+    size_t N;            /* grid points or blocks; 0 where a module needs none */
+} bkf_model_params;
+
+/* The paper's parameters (gamma 2, c 0.3, nu -0.96, S 20, continuum, N 512). */
+bkf_model_params bkf_model_params_paper(void);
 
 /* Creep-slip friction phi(psi) = psi^3/3 - psi and its slope. */
 double bkf_model_friction(double psi);

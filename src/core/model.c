@@ -2,6 +2,12 @@
 
 #include <math.h>
 
+bkf_model_params bkf_model_params_paper(void)
+{
+    return (bkf_model_params){.gamma = 2.0, .c = 0.3, .nu = -0.96, .S = 20.0,
+                              .kind = BKF_MODEL_CONTINUUM, .N = 512};
+}
+
 double bkf_model_friction(double psi) { return psi * psi * psi / 3.0 - psi; }
 
 double bkf_model_friction_slope(double psi) { return psi * psi - 1.0; }
