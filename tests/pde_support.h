@@ -7,7 +7,7 @@
 #include "bkfront/pde.h"
 #include "harness.h"
 
-static inline bkf_pde *alloc_pde(const bkf_pde_params *params, const bkf_pde_options *options)
+static inline bkf_pde *alloc_pde(const bkf_model_params *params, const bkf_pde_options *options)
 {
     bkf_error e;
     bkf_pde *m = bkf_pde_alloc(params, options, &e);
@@ -26,7 +26,7 @@ static inline int measure_sample(const bkf_pde_sample *s, void *data)
 /* A measurement on the run's grid and model; reference may be NULL. */
 static inline bkf_measure *make_measure(const bkf_pde *m, const double *reference)
 {
-    const bkf_pde_params *pp = bkf_pde_get_params(m);
+    const bkf_model_params *pp = bkf_pde_get_params(m);
     bkf_measure_params mp = bkf_measure_params_default();
     mp.N = pp->N;
     mp.S = pp->S;

@@ -21,8 +21,8 @@ typedef struct {
     double c;            /* sound speed, >= 0 */
     double nu;           /* pulling rate */
     double S;            /* system size, > 0 */
-    bkf_model_kind kind; /* continuum or chain */
     size_t N;            /* grid points or blocks; 0 where a module needs none */
+    bkf_model_kind kind; /* continuum or chain */
 } bkf_model_params;
 
 /* The paper's parameters (gamma 2, c 0.3, nu -0.96, S 20, continuum, N 512). */

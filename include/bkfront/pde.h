@@ -4,10 +4,10 @@
  *
  * phi(psi) = psi^3/3 - psi, on N points x_i = i S/N, i = 0 .. N-1.
  *
- *  - BKF_PDE_CONTINUUM: L is the spectral second derivative (FFTW3 real
+ *  - BKF_MODEL_CONTINUUM: L is the spectral second derivative (FFTW3 real
  *    transforms); N even, >= 8 (any even size works, sizes with small prime
  *    factors are fastest; a power of two is not required).
- *  - BKF_PDE_CHAIN: the Burridge-Knopoff chain, Eq. (1) of the paper, in the
+ *  - BKF_MODEL_CHAIN: the Burridge-Knopoff chain, Eq. (1) of the paper, in the
  *    same variables: L psi_i = (psi_{i+1} - 2 psi_i + psi_{i-1}) / h^2 with
  *    h = S/N.  N = S (h = 1) is the physical chain of S blocks; larger N
  *    refines it towards the continuum (second order in h).
@@ -81,9 +81,9 @@
 
 #include <signal.h>
 #include <stddef.h>
+#include "bkfront/model.h"
 #include "bkfront/status.h"
 
-typedef enum { BKF_PDE_CONTINUUM = 0, BKF_PDE_CHAIN = 1 } bkf_pde_model;
 
 typedef enum {
     BKF_PDE_RK8PD = 0,  /* Dormand-Prince 8(7): the default, best at tight tol */
@@ -98,14 +98,9 @@ typedef enum {
 #define BKF_PDE_TOL_MIN 1e-13
 #define BKF_PDE_TOL_MAX 1e-2
 
-typedef struct {
-    double gamma;        /* > 0 */
-    double c;            /* >= 0 */
-    double nu;           /* finite; |nu| >= 1 is allowed (continuous slip) */
-    double S;            /* > 0 */
-    size_t N;            /* [BKF_PDE_N_MIN, BKF_PDE_N_MAX]; even for the continuum */
-    bkf_pde_model model;
-} bkf_pde_params;
+/* The model: bkf_model_params (model.h), with gamma > 0, c >= 0, nu finite
+ * (|nu| >= 1 is allowed: continuous slip), S > 0, N in [BKF_PDE_N_MIN,
+ * BKF_PDE_N_MAX] (even for the continuum). */
 
 typedef struct {
     double tol;              /* local error tolerance, abs and rel; default 1e-9 */
@@ -133,18 +128,18 @@ bkf_pde_options bkf_pde_options_default(void);
 
 /* Validation alone: BKF_EINPUT with a one-line message naming the parameter
  * and its range. */
-int bkf_pde_check(const bkf_pde_params *params, const bkf_pde_options *options,
+int bkf_pde_check(const bkf_model_params *params, const bkf_pde_options *options,
                   bkf_error *err);
 
 typedef struct bkf_pde bkf_pde;
 
 /* NULL with err filled on bad input (BKF_EINPUT) or out of memory.  The state
  * starts as uniform continuous slip psi = nu, eta = phi(nu), t = 0. */
-bkf_pde *bkf_pde_alloc(const bkf_pde_params *params, const bkf_pde_options *options,
+bkf_pde *bkf_pde_alloc(const bkf_model_params *params, const bkf_pde_options *options,
                        bkf_error *err);
 void bkf_pde_free(bkf_pde *pde);
 
-const bkf_pde_params *bkf_pde_get_params(const bkf_pde *pde);
+const bkf_model_params *bkf_pde_get_params(const bkf_pde *pde);
 size_t bkf_pde_size(const bkf_pde *pde);        /* N */
 double bkf_pde_spacing(const bkf_pde *pde);     /* h = S/N */
 double bkf_pde_time(const bkf_pde *pde);

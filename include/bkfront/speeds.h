@@ -20,14 +20,12 @@
 
 #include <stddef.h>
 #include "bkfront/cycle.h"
+#include "bkfront/model.h"
 #include "bkfront/status.h"
 
-typedef struct {
-    double gamma;  /* friction strength, in [1e-6, 1e6] (mu >= gamma must be solvable) */
-    double c;      /* sound speed, >= 0 */
-    double nu;     /* pulling rate, |nu| < 1 */
-    double S;      /* system size, > 0 */
-} bkf_speeds_params;
+/* The model: bkf_model_params (model.h); speeds reads gamma in [1e-6, 1e6]
+ * (mu >= gamma must be solvable), c >= 0, |nu| < 1, S > 0; kind and N are
+ * not used (the continuum). */
 
 /* Rows when n_to is 0 and c = 0 (every n has a root, there is no n_max). */
 #define BKF_SPEEDS_ROWS_C0 10
@@ -111,13 +109,13 @@ typedef struct {
 /* Validation alone: BKF_EINPUT with a one-line message naming the parameter
  * and its range, BKF_OK otherwise.  |nu| >= 1 is refused because there are no
  * fronts at all: uniform continuous slip is stable. */
-int bkf_speeds_check(const bkf_speeds_params *params, const bkf_speeds_options *options,
+int bkf_speeds_check(const bkf_model_params *params, const bkf_speeds_options *options,
                      bkf_error *err);
 
 /* Every root for n in the options' range.  *table is overwritten (free it
  * with bkf_speeds_table_free, also after a failure).  BKF_OK with count = 0
  * and a note when no n in the range has a root. */
-int bkf_speeds_find(const bkf_speeds_params *params, const bkf_speeds_options *options,
+int bkf_speeds_find(const bkf_model_params *params, const bkf_speeds_options *options,
                     bkf_speeds_table *table, bkf_error *err);
 void bkf_speeds_table_free(bkf_speeds_table *table);
 
@@ -138,7 +136,7 @@ typedef enum {
 } bkf_speeds_point_kind;
 
 typedef struct {
-    bkf_speeds_params params;   /* with the continued parameter at this point */
+    bkf_model_params params;   /* with the continued parameter at this point */
     bkf_speeds_root root;
     bkf_speeds_point_kind kind;
 } bkf_speeds_branch_point;
@@ -165,7 +163,7 @@ typedef struct {
  * Needs c > 0 all along (for c = 0, v = S/(n T(gamma)) in closed form);
  * along c the interval must stay in c > 0, along nu in (-1, 1), along S and
  * gamma in their ranges.  BKF_EINPUT when there is no such root at start. */
-int bkf_speeds_branch(const bkf_speeds_params *start, size_t n, size_t root_index,
+int bkf_speeds_branch(const bkf_model_params *start, size_t n, size_t root_index,
                       bkf_speeds_param along, double to, const bkf_speeds_options *options,
                       size_t max_points, bkf_speeds_visit visit, void *data,
                       bkf_speeds_branch_report *report, bkf_error *err);

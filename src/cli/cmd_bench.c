@@ -318,7 +318,7 @@ static int bench_box(bench_ctx *b, bkf_error *err)
 
 static int bench_speeds(bench_ctx *b, bkf_error *err)
 {
-    bkf_speeds_params p = {2.0, 0.3, -0.96, 20.0};
+    bkf_model_params p = {2.0, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_options o = bkf_speeds_options_default();
     bkf_speeds_table ref = {0};
     o.tol = 1e-13;
@@ -386,7 +386,7 @@ static int bench_pde(bench_ctx *b, bkf_error *err)
     int s = BKF_OK;
     for (size_t i = 0; i < nN && !s; i++)
         for (size_t q = 0; q < ntol && !s; q++) {
-            bkf_pde_params p = {2.0, 0.3, -0.96, 20.0, Ns[i], BKF_PDE_CONTINUUM};
+            bkf_model_params p = {2.0, 0.3, -0.96, 20.0, Ns[i], BKF_MODEL_CONTINUUM};
             bkf_pde_options o = bkf_pde_options_default();
             o.tol = tols[q];
             bkf_pde *m = bkf_pde_alloc(&p, &o, err);

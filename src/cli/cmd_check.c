@@ -424,7 +424,7 @@ static int check_root(const check_plan *p, size_t n, size_t root, const bkf_spee
     row->tail = NAN;
     row->fronts_start = row->fronts_end = NAN;
     row->dev_start = row->dev_mid = row->dev_end = row->growth = row->stable = NAN;
-    bkf_pde_params pp = p->m.params;
+    bkf_model_params pp = p->m.params;
     bkf_pde_options po = p->m.options;
     /* The seeded fronts move towards -x at v_pred: in that frame the wave is
      * a steady state and the steps grow to the stability cap. */
@@ -563,7 +563,7 @@ static int check_compute(const check_plan *p, int argc, char **argv, progress_ba
                          int *disagree, bkf_error *err)
 {
     char a[32], b[32], c[32], d[32], f[32];
-    bkf_speeds_params sp = {p->m.params.gamma, p->m.params.c, p->m.params.nu, p->m.params.S};
+    bkf_model_params sp = {p->m.params.gamma, p->m.params.c, p->m.params.nu, p->m.params.S, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_options so = bkf_speeds_options_default();
     so.tol = 1e-12;
     if (p->n) so.n_from = so.n_to = p->n;

@@ -56,7 +56,7 @@ static void profile_help(FILE *out)
 }
 
 typedef struct {
-    bkf_speeds_params params;
+    bkf_model_params params;
     size_t *n;
     size_t nn, root, points;
     double mu, tol;

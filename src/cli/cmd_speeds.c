@@ -159,7 +159,7 @@ typedef struct {
 } common_flags;
 
 typedef struct {
-    bkf_speeds_params params;
+    bkf_model_params params;
     double tol;
     bkf_io_format format;
     const char *out_path;
@@ -359,7 +359,7 @@ static int plan_speeds(int argc, char **argv, speeds_plan *plan, bkf_error *err)
 static int fill_speeds(const void *vplan, int argc, char **argv, FILE *stream, bkf_error *err)
 {
     const speeds_plan *plan = vplan;
-    const bkf_speeds_params *p = &plan->common.params;
+    const bkf_model_params *p = &plan->common.params;
     bkf_speeds_table t;
     int s = bkf_speeds_find(p, &plan->options, &t, err);
     if (s) {
@@ -561,7 +561,7 @@ static int fill_branch(const void *vplan, int argc, char **argv, FILE *stream, b
         if (!table) s = BKF_ENOMEM;
     }
     const char *pname = param_names[plan->along];
-    const bkf_speeds_params *p = &plan->common.params;
+    const bkf_model_params *p = &plan->common.params;
     char a[32], b[32], c[32], d[32], e[32], line[640];
     if (!s)
         s = bkf_io_table_comment(
@@ -591,7 +591,7 @@ static int fill_branch(const void *vplan, int argc, char **argv, FILE *stream, b
         const char *sep = " at ";
         for (size_t i = 0; i < sink.count && used > 0 && (size_t)used < sizeof line; i++)
             if (sink.points[i].kind == BKF_SPEEDS_FOLD) {
-                bkf_speeds_params q = sink.points[i].params;
+                bkf_model_params q = sink.points[i].params;
                 double x = plan->along == BKF_SPEEDS_ALONG_S ? q.S
                            : plan->along == BKF_SPEEDS_ALONG_NU ? q.nu
                            : plan->along == BKF_SPEEDS_ALONG_GAMMA ? q.gamma : q.c;

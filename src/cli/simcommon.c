@@ -101,7 +101,7 @@ int plan_model(const model_flags *f, model_plan *p, bkf_error *err)
 {
     int s;
     char a[32];
-    p->params = (bkf_pde_params){DEF_GAMMA, DEF_C, DEF_NU, DEF_S, DEF_N, BKF_PDE_CONTINUUM};
+    p->params = (bkf_model_params){DEF_GAMMA, DEF_C, DEF_NU, DEF_S, DEF_N, BKF_MODEL_CONTINUUM};
     p->options = bkf_pde_options_default();
     p->options.tol = DEF_TOL;
     if (f->gamma && (s = parse_positive("--gamma", f->gamma, &p->params.gamma, err))) return s;
@@ -115,7 +115,7 @@ int plan_model(const model_flags *f, model_plan *p, bkf_error *err)
     if (f->model) {
         int k;
         if ((s = cli_parse_choice("--model", f->model, model_names, &k, err))) return s;
-        p->params.model = k ? BKF_PDE_CHAIN : BKF_PDE_CONTINUUM;
+        p->params.kind = k ? BKF_MODEL_CHAIN : BKF_MODEL_CONTINUUM;
     }
     p->N_given = f->N != NULL;
     if (f->N) {
@@ -123,11 +123,11 @@ int plan_model(const model_flags *f, model_plan *p, bkf_error *err)
         if ((s = cli_parse_count("--N", f->N, BKF_PDE_N_MAX, &n, err))) return s;
         if (n < BKF_PDE_N_MIN)
             return bkf_error_set(err, BKF_EINPUT, "--N: %zu is below %d", n, BKF_PDE_N_MIN);
-        if (p->params.model == BKF_PDE_CONTINUUM && n % 2)
+        if (p->params.kind == BKF_MODEL_CONTINUUM && n % 2)
             return bkf_error_set(err, BKF_EINPUT,
                                  "--N: %zu must be even for the continuum model (spectral)", n);
         p->params.N = n;
-    } else if (p->params.model == BKF_PDE_CHAIN) {
+    } else if (p->params.kind == BKF_MODEL_CHAIN) {
         /* The physical chain: one block per unit length. */
         double S = p->params.S;
         if (S != floor(S) || S < BKF_PDE_N_MIN || S > BKF_PDE_N_MAX)
@@ -154,7 +154,7 @@ int plan_model(const model_flags *f, model_plan *p, bkf_error *err)
         if (!(p->options.filter >= 0 && p->options.filter <= 1000))
             return bkf_error_set(err, BKF_EINPUT, "--filter: %s is outside [0, 1000]", f->filter);
     }
-    if (f->dealias && p->params.model != BKF_PDE_CONTINUUM)
+    if (f->dealias && p->params.kind != BKF_MODEL_CONTINUUM)
         return bkf_error_set(err, BKF_EINPUT, "--dealias: only for --model continuum");
     p->tmax = DEF_TMAX;
     if (f->tmax) {
@@ -213,13 +213,13 @@ int comment_model(bkf_io_table *t, const model_plan *p, bkf_error *err)
     return commentf(t, err,
                     "model %s: gamma %s, c %s, nu %s, S %s, N %zu (h = %s); tol %s, stepper %s, "
                     "dealias %s, filter %s",
-                    model_names[p->params.model], num(p->params.gamma, a, sizeof a),
+                    model_names[p->params.kind], num(p->params.gamma, a, sizeof a),
                     num(p->params.c, b, sizeof b), num(p->params.nu, c, sizeof c),
                     num(p->params.S, d, sizeof d), p->params.N,
                     num(p->params.S / (double)p->params.N, e, sizeof e),
                     num(p->options.tol, f, sizeof f), stepper_names[p->options.stepper],
                     p->options.dealias ? "on (2/3 rule)" : "off",
-                    p->params.model == BKF_PDE_CHAIN || p->options.filter == 0
+                    p->params.kind == BKF_MODEL_CHAIN || p->options.filter == 0
                         ? "off"
                         : num(p->options.filter, g, sizeof g));
 }
@@ -230,7 +230,7 @@ int comment_model(bkf_io_table *t, const model_plan *p, bkf_error *err)
  * the period-doubled patterns, whose fronts sit well above nu.  Where there
  * is no cycle (|nu| >= 1) it is nu.  *period gets the cycle's period (0
  * without a cycle). */
-double front_level(const bkf_pde_params *pp, double *period)
+double front_level(const bkf_model_params *pp, double *period)
 {
     *period = 0;
     if (!(fabs(pp->nu) < 1) || pp->gamma < BKF_CYCLE_MU_MIN || pp->gamma > BKF_CYCLE_MU_MAX)

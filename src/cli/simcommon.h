@@ -46,7 +46,7 @@ typedef struct {
 } model_flags;
 
 typedef struct {
-    bkf_pde_params params;
+    bkf_model_params params;
     bkf_pde_options options;
     int N_given;
     unsigned long seed;
@@ -66,6 +66,6 @@ int plan_model(const model_flags *f, model_plan *p, bkf_error *err);
 int comment_command(bkf_io_table *t, int argc, char **argv, bkf_error *err);
 int commentf(bkf_io_table *t, bkf_error *err, const char *fmt, ...);
 int comment_model(bkf_io_table *t, const model_plan *p, bkf_error *err);
-double front_level(const bkf_pde_params *pp, double *period);
+double front_level(const bkf_model_params *pp, double *period);
 
 #endif

@@ -30,7 +30,7 @@ bkf_pde_front_spec bkf_pde_front_spec_default(void)
     return s;
 }
 
-int bkf_pde_check(const bkf_pde_params *p, const bkf_pde_options *o, bkf_error *err)
+int bkf_pde_check(const bkf_model_params *p, const bkf_pde_options *o, bkf_error *err)
 {
     if (!p) return bkf_error_set(err, BKF_EINPUT, "parameters are NULL");
     int s;
@@ -38,12 +38,12 @@ int bkf_pde_check(const bkf_pde_params *p, const bkf_pde_options *o, bkf_error *
     if ((s = bkf_model_check_nonnegative("c", p->c, err))) return s;
     if (!isfinite(p->nu)) return bkf_error_set(err, BKF_EINPUT, "nu must be a finite number");
     if ((s = bkf_model_check_positive("S", p->S, err))) return s;
-    if (p->model != BKF_PDE_CONTINUUM && p->model != BKF_PDE_CHAIN)
+    if (p->kind != BKF_MODEL_CONTINUUM && p->kind != BKF_MODEL_CHAIN)
         return bkf_error_set(err, BKF_EINPUT, "model must be continuum or chain");
     if (p->N < BKF_PDE_N_MIN || p->N > BKF_PDE_N_MAX)
         return bkf_error_set(err, BKF_EINPUT, "N = %zu is outside [%d, %d]", p->N,
                              BKF_PDE_N_MIN, BKF_PDE_N_MAX);
-    if (p->model == BKF_PDE_CONTINUUM && p->N % 2)
+    if (p->kind == BKF_MODEL_CONTINUUM && p->N % 2)
         return bkf_error_set(err, BKF_EINPUT,
                              "N = %zu must be even for the spectral continuum model", p->N);
     if (!o) return BKF_OK;
@@ -53,18 +53,18 @@ int bkf_pde_check(const bkf_pde_params *p, const bkf_pde_options *o, bkf_error *
     if (o->stepper != BKF_PDE_RK8PD && o->stepper != BKF_PDE_RKCK &&
         o->stepper != BKF_PDE_RKF45 && o->stepper != BKF_PDE_ETDRK4)
         return bkf_error_set(err, BKF_EINPUT, "stepper must be rk8pd, rkck, rkf45 or etdrk4");
-    if (o->stepper == BKF_PDE_ETDRK4 && p->model != BKF_PDE_CONTINUUM)
+    if (o->stepper == BKF_PDE_ETDRK4 && p->kind != BKF_MODEL_CONTINUUM)
         return bkf_error_set(err, BKF_EINPUT, "the etdrk4 stepper applies to the continuum model only");
     if (o->stepper == BKF_PDE_ETDRK4 && o->dealias)
         return bkf_error_set(err, BKF_EINPUT, "the etdrk4 stepper is not combined with dealiasing");
     if (!isfinite(o->filter) || o->filter < 0 || o->filter > 1e3)
         return bkf_error_set(err, BKF_EINPUT, "filter = %g is outside [0, 1000]", o->filter);
-    if (o->dealias && p->model != BKF_PDE_CONTINUUM)
+    if (o->dealias && p->kind != BKF_MODEL_CONTINUUM)
         return bkf_error_set(err, BKF_EINPUT, "dealiasing applies to the continuum model only");
     if (!isfinite(o->frame_speed) || fabs(o->frame_speed) > 1e3)
         return bkf_error_set(err, BKF_EINPUT, "frame speed = %g is outside [-1000, 1000]",
                              o->frame_speed);
-    if (o->frame_speed != 0 && p->model != BKF_PDE_CONTINUUM)
+    if (o->frame_speed != 0 && p->kind != BKF_MODEL_CONTINUUM)
         return bkf_error_set(err, BKF_EINPUT, "a moving frame applies to the continuum model only");
     if (o->frame_speed != 0 && o->dealias)
         return bkf_error_set(err, BKF_EINPUT, "a moving frame is not combined with dealiasing");
@@ -78,7 +78,7 @@ int bkf_pde_check(const bkf_pde_params *p, const bkf_pde_options *o, bkf_error *
 static void operators(bkf_pde *m, const double *in, double *out, double *filt)
 {
     size_t N = m->N;
-    if (m->p.model == BKF_PDE_CHAIN) {
+    if (m->p.kind == BKF_MODEL_CHAIN) {
         double w = 1.0 / (m->h * m->h);
         for (size_t i = 0; i < N; i++) {
             double l = in[i == 0 ? N - 1 : i - 1], r = in[i + 1 == N ? 0 : i + 1];
@@ -356,7 +356,7 @@ static const gsl_odeiv2_step_type *step_type(bkf_pde_stepper s)
 
 static void mark_set(bkf_pde *m);
 
-bkf_pde *bkf_pde_alloc(const bkf_pde_params *params, const bkf_pde_options *options,
+bkf_pde *bkf_pde_alloc(const bkf_model_params *params, const bkf_pde_options *options,
                        bkf_error *err)
 {
     bkf_pde_options o = options ? *options : bkf_pde_options_default();
@@ -401,7 +401,7 @@ bkf_pde *bkf_pde_alloc(const bkf_pde_params *params, const bkf_pde_options *opti
         double q = 2.0 * M_PI * (double)k / params->S;
         m->symbol[k] = -q * q / (double)N;
     }
-    if (params->model == BKF_PDE_CONTINUUM && o.filter > 0) {
+    if (params->kind == BKF_MODEL_CONTINUUM && o.filter > 0) {
         m->fsymbol = malloc(nc * sizeof(double));
         if (!m->fsymbol) goto nomem;
         /* top: the highest mode the state holds (the cutoff with the 2/3 rule) */
@@ -442,7 +442,7 @@ bkf_pde *bkf_pde_alloc(const bkf_pde_params *params, const bkf_pde_options *opti
      * method damps (rk8pd: |R(iy)| < 1 for 2 < y < 3.8) or nearly so (the
      * 5th-order pairs have |R(iy)| > 1 for every y; at y = 0.5 the spurious
      * growth is ~1e-5 omega per unit time). */
-    double qmax = params->model == BKF_PDE_CHAIN ? 2.0 / m->h : M_PI / m->h;
+    double qmax = params->kind == BKF_MODEL_CHAIN ? 2.0 / m->h : M_PI / m->h;
     /* In a moving frame the advection adds |V| q to the frequency. */
     double omega = sqrt(1.0 + params->c * params->c * qmax * qmax) + fabs(o.frame_speed) * qmax;
     double kappa = o.stepper == BKF_PDE_RK8PD ? 3.0 : 0.5;
@@ -469,7 +469,7 @@ nomem:
 
 /* Accessors and diagnostics of a NULL object (or field) give NULL, 0 or
  * NaN rather than crash. */
-const bkf_pde_params *bkf_pde_get_params(const bkf_pde *m) { return m ? &m->p : NULL; }
+const bkf_model_params *bkf_pde_get_params(const bkf_pde *m) { return m ? &m->p : NULL; }
 size_t bkf_pde_size(const bkf_pde *m) { return m ? m->N : 0; }
 double bkf_pde_spacing(const bkf_pde *m) { return m ? m->h : NAN; }
 double bkf_pde_time(const bkf_pde *m) { return m ? m->t : NAN; }
@@ -709,7 +709,7 @@ int bkf_pde_init_front(bkf_pde *m, const bkf_pde_front_spec *spec, bkf_pde_front
     if (bkf_model_check_nu_active(m->p.nu, &e) != BKF_OK)
         return bkf_error_set(err, BKF_EINPUT, "fronts need a limit cycle: %s", e.message);
 
-    bkf_speeds_params sp_p = {m->p.gamma, m->p.c, m->p.nu, m->p.S};
+    bkf_model_params sp_p = {m->p.gamma, m->p.c, m->p.nu, m->p.S, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_options so = bkf_speeds_options_default();
     so.tol = sp.tol;
     so.n_from = so.n_to = sp.n;

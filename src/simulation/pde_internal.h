@@ -16,7 +16,7 @@ typedef struct bkf_pde_etd bkf_pde_etd;
 #define BLOWUP 1e6
 
 struct bkf_pde {
-    bkf_pde_params p;
+    bkf_model_params p;
     bkf_pde_options o;
     size_t N, dim;     /* dim = 2N + 2: psi, eta, Q, D */
     double h;          /* grid spacing S/N */

@@ -75,7 +75,7 @@ bkf_speeds_options bkf_speeds_options_default(void)
     return (bkf_speeds_options){.tol = 1e-10, .n_from = 1, .n_to = 0, .method = BKF_METHOD_AUTO};
 }
 
-int bkf_speeds_check(const bkf_speeds_params *p, const bkf_speeds_options *o, bkf_error *err)
+int bkf_speeds_check(const bkf_model_params *p, const bkf_speeds_options *o, bkf_error *err)
 {
     if (!p) return bkf_error_set(err, BKF_EINPUT, "parameters are NULL");
     int rc = bkf_model_check_positive("gamma", p->gamma, err);
@@ -123,7 +123,7 @@ typedef struct {
 } sample;
 
 typedef struct {
-    bkf_speeds_params p;
+    bkf_model_params p;
     double tol, tol_coarse;
     double k, lnk, knee, logc;
     double lnA;               /* ln(S/(c gamma)) */
@@ -871,7 +871,7 @@ static void asymptotic_root(const grid *g, double n, found_root *out)
 
 /* ----------------------------------------------------------------- rows */
 
-static void fill_row(const bkf_speeds_params *p, double k, const found_root *f,
+static void fill_row(const bkf_model_params *p, double k, const found_root *f,
                      bkf_speeds_root *row)
 {
     double n = f->n;
@@ -941,7 +941,7 @@ void bkf_speeds_table_free(bkf_speeds_table *t)
     t->count = 0;
 }
 
-static int find_c0(const bkf_speeds_params *p, const bkf_speeds_options *o, bkf_speeds_table *t,
+static int find_c0(const bkf_model_params *p, const bkf_speeds_options *o, bkf_speeds_table *t,
                    bkf_error *err)
 {
     bkf_cycle_options co = bkf_cycle_options_default();
@@ -969,7 +969,7 @@ static int find_c0(const bkf_speeds_params *p, const bkf_speeds_options *o, bkf_
     return BKF_OK;
 }
 
-int bkf_speeds_find(const bkf_speeds_params *p, const bkf_speeds_options *options,
+int bkf_speeds_find(const bkf_model_params *p, const bkf_speeds_options *options,
                     bkf_speeds_table *t, bkf_error *err)
 {
     if (!t) return bkf_error_set(err, BKF_EINPUT, "table is NULL");
@@ -1149,7 +1149,7 @@ done:
 #define BRANCH_STEP_MAX 0.2
 
 typedef struct {
-    bkf_speeds_params p;          /* the start; the continued component varies */
+    bkf_model_params p;          /* the start; the continued component varies */
     bkf_speeds_param along;
     double n, tol, from, to;
     bkf_cycle *cycle;
@@ -1166,7 +1166,7 @@ typedef struct {
     bkf_speeds_branch_report rep;
 } branch_ctx;
 
-static double *param_slot(bkf_speeds_params *q, bkf_speeds_param along)
+static double *param_slot(bkf_model_params *q, bkf_speeds_param along)
 {
     switch (along) {
     case BKF_SPEEDS_ALONG_S: return &q->S;
@@ -1182,9 +1182,9 @@ static const char *param_name(bkf_speeds_param along)
     return names[along];
 }
 
-static bkf_speeds_params params_at(const branch_ctx *b, double p)
+static bkf_model_params params_at(const branch_ctx *b, double p)
 {
-    bkf_speeds_params q = b->p;
+    bkf_model_params q = b->p;
     *param_slot(&q, b->along) = p;
     return q;
 }
@@ -1208,7 +1208,7 @@ static int branch_T(branch_ctx *b, double mu, double nu, double *T, double *T_er
 static int branch_residual(const double *u, double *g, double *jac, void *data, bkf_error *err)
 {
     branch_ctx *b = data;
-    bkf_speeds_params q = params_at(b, u[1]);
+    bkf_model_params q = params_at(b, u[1]);
     if (!(q.c > 0) || !(q.S > 0) || !(fabs(q.nu) < 1) || !(q.gamma >= BKF_CYCLE_MU_MIN))
         return bkf_error_set(err, BKF_ENUMERIC, "left the valid range at %s = %g",
                              param_name(b->along), u[1]);
@@ -1250,7 +1250,7 @@ static int branch_residual(const double *u, double *g, double *jac, void *data, 
 }
 
 /* p where S = n k(nu) c gamma, the branch's sonic end; NaN if none. */
-static double sonic_value(const branch_ctx *b, const bkf_speeds_params *q)
+static double sonic_value(const branch_ctx *b, const bkf_model_params *q)
 {
     double k = bkf_asym_k(q->nu);
     switch (b->along) {
@@ -1375,7 +1375,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     return branch_visit(b, &pt);
 }
 
-int bkf_speeds_branch(const bkf_speeds_params *start, size_t n, size_t root_index,
+int bkf_speeds_branch(const bkf_model_params *start, size_t n, size_t root_index,
                       bkf_speeds_param along, double to, const bkf_speeds_options *options,
                       size_t max_points, bkf_speeds_visit visit, void *data,
                       bkf_speeds_branch_report *report, bkf_error *err)
@@ -1394,7 +1394,7 @@ int bkf_speeds_branch(const bkf_speeds_params *start, size_t n, size_t root_inde
         return bkf_error_set(err, BKF_EINPUT,
                              "c = 0: no continuation needed, v = S/(n T(gamma)) in closed form "
                              "(bkfront speeds); branches need c > 0");
-    bkf_speeds_params end = *start;
+    bkf_model_params end = *start;
     double from = *param_slot(&end, along);
     *param_slot(&end, along) = to;
     if (!isfinite(to))

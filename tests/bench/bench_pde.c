@@ -56,7 +56,7 @@ typedef struct {
 static int one_run(pd_ic ic, size_t n, double nu, size_t N, double tol, double tmax, int measure,
                    pd_run *out)
 {
-    bkf_pde_params p = {2.0, 0.3, nu, 20.0, N, BKF_PDE_CONTINUUM};
+    bkf_model_params p = {2.0, 0.3, nu, 20.0, N, BKF_MODEL_CONTINUUM};
     bkf_pde_options o = bkf_pde_options_default();
     o.tol = tol;
     bkf_error e;

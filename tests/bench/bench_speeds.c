@@ -31,7 +31,7 @@ static int by_value(const void *a, const void *b)
 }
 
 typedef struct {
-    bkf_speeds_params p;
+    bkf_model_params p;
     double n;
     int failed;
 } ref_cond;
@@ -53,7 +53,7 @@ static double ref_condition(double v, void *data)
 }
 
 /* The root in v near v0 (relative window 1e-6), or NaN. */
-static double ref_root(bkf_speeds_params p, double n, double v0)
+static double ref_root(bkf_model_params p, double n, double v0)
 {
     ref_cond c = {p, n, 0};
     gsl_function F = {ref_condition, &c};
@@ -75,7 +75,7 @@ static double ref_root(bkf_speeds_params p, double n, double v0)
 
 typedef struct {
     const char *name;
-    bkf_speeds_params p;
+    bkf_model_params p;
     double tol;
     int reference;   /* check every v against ref_root */
 } speeds_case;
@@ -152,7 +152,7 @@ void bench_speeds(void)
     printf("| tol | points | folds | sonic end | solves | time |\n|---:|---:|---:|:---|---:|---:|\n");
     const double tols[] = {1e-8, 1e-10};
     for (int i = 0; i < 2; i++) {
-        bkf_speeds_params p = {1.5, 0.3, -0.96, 30.0};
+        bkf_model_params p = {1.5, 0.3, -0.96, 30.0};
         bkf_speeds_options o = bkf_speeds_options_default();
         o.tol = tols[i];
         bkf_speeds_branch_report rep;

@@ -359,7 +359,7 @@ static int raise_flag(const bkf_pde_sample *s, void *data)
 
 TEST(pde_cancel_flag_stops_and_resumes_exactly)
 {
-    bkf_pde_params pp = {2.0, 0.3, -0.96, 20.0, 64, BKF_PDE_CONTINUUM};
+    bkf_model_params pp = {2.0, 0.3, -0.96, 20.0, 64, BKF_MODEL_CONTINUUM};
     bkf_pde_options o = bkf_pde_options_default();
     volatile sig_atomic_t flag = 0;
     o.cancel = &flag;

@@ -163,7 +163,7 @@ TEST(cli_speeds_paper_table)
     CHECK(strstr(r.out, "# command: bkfront speeds --gamma 2 --c 0.3 --nu -0.96 --S 20\n"));
     CHECK(rows(r.out) == 12);
     /* the same numbers as the library, bit for bit (%.17g) */
-    bkf_speeds_params p = {2, 0.3, -0.96, 20};
+    bkf_model_params p = {2, 0.3, -0.96, 20, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_table t;
     bkf_error e;
     CHECK(bkf_speeds_find(&p, NULL, &t, &e) == BKF_OK && t.count == 12);

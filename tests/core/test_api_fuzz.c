@@ -231,14 +231,14 @@ TEST(api_fuzz_floquet)
 
 TEST(api_fuzz_speeds)
 {
-    bkf_speeds_params good = {2.0, 0.3, -0.96, 20.0};
+    bkf_model_params good = {2.0, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_options o = bkf_speeds_options_default();
     bkf_speeds_table t;
     memset(&t, 0, sizeof t);
     for (size_t i = 0; i < NHOSTILE; i++) {
         double x = hostile[i];
         for (int k = 0; k < 4; k++) {
-            bkf_speeds_params p = good;
+            bkf_model_params p = good;
             double *field = k == 0 ? &p.gamma : k == 1 ? &p.c : k == 2 ? &p.nu : &p.S;
             *field = k == 1 && x > 0 && isfinite(x) ? -x : x; /* a huge c is valid */
             CHECK_EINPUT(bkf_speeds_check(&p, &o, err));
@@ -279,12 +279,12 @@ TEST(api_fuzz_speeds)
 
 TEST(api_fuzz_pde)
 {
-    const bkf_pde_params good = {2.0, 0.3, -0.96, 20.0, 16, BKF_PDE_CONTINUUM};
+    const bkf_model_params good = {2.0, 0.3, -0.96, 20.0, 16, BKF_MODEL_CONTINUUM};
     bkf_pde_options o = bkf_pde_options_default();
     for (size_t i = 0; i < NHOSTILE; i++) {
         double x = hostile[i];
         for (int k = 0; k < 4; k++) {
-            bkf_pde_params p = good;
+            bkf_model_params p = good;
             double *field = k == 0 ? &p.gamma : k == 1 ? &p.c : k == 2 ? &p.nu : &p.S;
             if (k == 2 && isfinite(x)) continue; /* any finite nu is valid */
             if (k == 1 && isfinite(x) && x > 0) continue; /* any c >= 0 */
@@ -300,7 +300,7 @@ TEST(api_fuzz_pde)
         bo.filter = x;
         CHECK_EINPUT(bkf_pde_check(&good, &bo, err));
     }
-    bkf_pde_params p = good;
+    bkf_model_params p = good;
     p.N = 0;
     CHECK_NULL_EINPUT(bkf_pde_alloc(&p, &o, err));
     p.N = 17; /* odd: not for the spectral continuum */
@@ -308,7 +308,7 @@ TEST(api_fuzz_pde)
     p.N = (size_t)-1;
     CHECK_NULL_EINPUT(bkf_pde_alloc(&p, &o, err));
     p = good;
-    p.model = (bkf_pde_model)5;
+    p.kind = (bkf_model_kind)5;
     CHECK_NULL_EINPUT(bkf_pde_alloc(&p, &o, err));
     bkf_pde_options bo = o;
     bo.stepper = (bkf_pde_stepper)-3;

@@ -13,7 +13,7 @@
 /* Paper parameters. */
 static double paper_speed(size_t n)
 {
-    bkf_speeds_params sp = {2, 0.3, -0.96, 20};
+    bkf_model_params sp = {2, 0.3, -0.96, 20, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_options so = bkf_speeds_options_default();
     so.tol = 1e-12;
     so.n_from = so.n_to = n;

@@ -11,10 +11,10 @@
 #include "bkfront/pde.h"
 #include "pde_support.h"
 
-static bkf_pde *make(double gamma, double c, double nu, double S, size_t N, bkf_pde_model model,
+static bkf_pde *make(double gamma, double c, double nu, double S, size_t N, bkf_model_kind model,
                      double tol)
 {
-    bkf_pde_params p = {gamma, c, nu, S, N, model};
+    bkf_model_params p = {gamma, c, nu, S, N, model};
     bkf_pde_options o = bkf_pde_options_default();
     o.tol = tol;
     return alloc_pde(&p, &o);
@@ -30,7 +30,7 @@ TEST(pde_uniform_oscillation_has_the_cycle_period)
     co.tol = 1e-12;
     bkf_error e;
     CHECK_STATUS(bkf_cycle_period(gamma, nu, &co, &cr, &e), BKF_OK);
-    bkf_pde *m = make(gamma, 0.3, nu, 20, 16, BKF_PDE_CONTINUUM, 1e-11);
+    bkf_pde *m = make(gamma, 0.3, nu, 20, 16, BKF_MODEL_CONTINUUM, 1e-11);
     CHECK_STATUS(bkf_pde_init_oscillation(m, 0, 0.0, &e), BKF_OK);
     bkf_measure *ms = make_measure(m, NULL);
     CHECK_STATUS(bkf_pde_run(m, 12 * cr.period, 0.05, measure_sample, ms, NULL, NULL, &e),
@@ -51,7 +51,7 @@ TEST(pde_uniform_oscillation_has_the_cycle_period)
 /* A seeded n-front wave moves at the predicted speed and keeps its count. */
 TEST(pde_seeded_front_keeps_its_speed)
 {
-    bkf_pde *m = make(2, 0.3, -0.96, 20, 512, BKF_PDE_CONTINUUM, 1e-9);
+    bkf_pde *m = make(2, 0.3, -0.96, 20, 512, BKF_MODEL_CONTINUUM, 1e-9);
     bkf_pde_front_spec fs = bkf_pde_front_spec_default();
     fs.n = 2;
     bkf_pde_front_info fi;
@@ -86,7 +86,7 @@ TEST(pde_front_direction_is_mirrored)
 {
     double v[2];
     for (int k = 0; k < 2; k++) {
-        bkf_pde *m = make(2, 0.3, -0.96, 20, 256, BKF_PDE_CONTINUUM, 1e-9);
+        bkf_pde *m = make(2, 0.3, -0.96, 20, 256, BKF_MODEL_CONTINUUM, 1e-9);
         bkf_pde_front_spec fs = bkf_pde_front_spec_default();
         fs.n = 1;
         fs.direction = k ? 1 : -1;
@@ -109,14 +109,14 @@ TEST(pde_chain_converges_to_the_continuum)
 {
     const double T = 8;
     bkf_error e;
-    bkf_pde *ref = make(2, 0.3, -0.5, 20, 128, BKF_PDE_CONTINUUM, 1e-12);
+    bkf_pde *ref = make(2, 0.3, -0.5, 20, 128, BKF_MODEL_CONTINUUM, 1e-12);
     CHECK_STATUS(bkf_pde_init_oscillation(ref, 1, 0.2, &e), BKF_OK);
     CHECK_STATUS(bkf_pde_run(ref, T, T, NULL, NULL, NULL, NULL, &e), BKF_OK);
     const double *pr = bkf_pde_psi(ref);
     double errs[4];
     size_t Ns[4] = {16, 32, 64, 128};
     for (int k = 0; k < 4; k++) {
-        bkf_pde *m = make(2, 0.3, -0.5, 20, Ns[k], BKF_PDE_CHAIN, 1e-12);
+        bkf_pde *m = make(2, 0.3, -0.5, 20, Ns[k], BKF_MODEL_CHAIN, 1e-12);
         CHECK_STATUS(bkf_pde_init_oscillation(m, 1, 0.2, &e), BKF_OK);
         CHECK_STATUS(bkf_pde_run(m, T, T, NULL, NULL, NULL, NULL, &e), BKF_OK);
         const double *p = bkf_pde_psi(m);
@@ -141,7 +141,7 @@ TEST(pde_energy_balance_and_linear_invariant)
 {
     for (int model = 0; model < 2; model++) {
         bkf_pde *m = make(2, 0.3, -0.96, 20, model ? 40 : 128,
-                          model ? BKF_PDE_CHAIN : BKF_PDE_CONTINUUM, 1e-11);
+                          model ? BKF_MODEL_CHAIN : BKF_MODEL_CONTINUUM, 1e-11);
         bkf_error e;
         CHECK_STATUS(bkf_pde_init_uniform(m, 0.3, 7, &e), BKF_OK);
         double H0 = bkf_pde_energy(m);
@@ -162,8 +162,8 @@ TEST(pde_energy_balance_and_linear_invariant)
 TEST(pde_sign_symmetry_is_exact)
 {
     bkf_error e;
-    bkf_pde *a = make(2, 0.3, -0.9, 20, 64, BKF_PDE_CONTINUUM, 1e-8);
-    bkf_pde *b = make(2, 0.3, 0.9, 20, 64, BKF_PDE_CONTINUUM, 1e-8);
+    bkf_pde *a = make(2, 0.3, -0.9, 20, 64, BKF_MODEL_CONTINUUM, 1e-8);
+    bkf_pde *b = make(2, 0.3, 0.9, 20, 64, BKF_MODEL_CONTINUUM, 1e-8);
     CHECK_STATUS(bkf_pde_init_uniform(a, 0.1, 3, &e), BKF_OK);
     double psi[64], eta[64];
     for (int i = 0; i < 64; i++) {
@@ -200,11 +200,11 @@ TEST(pde_dense_output_matches_a_run_to_the_sample)
 {
     bkf_error e;
     probe_at p = {7.3, {0}, 0};
-    bkf_pde *a = make(2, 0.3, -0.94, 20, 32, BKF_PDE_CONTINUUM, 1e-10);
+    bkf_pde *a = make(2, 0.3, -0.94, 20, 32, BKF_MODEL_CONTINUUM, 1e-10);
     CHECK_STATUS(bkf_pde_init_oscillation(a, 3, 0.3, &e), BKF_OK);
     CHECK_STATUS(bkf_pde_run(a, 10, 0.1, grab, &p, NULL, NULL, &e), BKF_OK);
     CHECK(p.hit);
-    bkf_pde *b = make(2, 0.3, -0.94, 20, 32, BKF_PDE_CONTINUUM, 1e-10);
+    bkf_pde *b = make(2, 0.3, -0.94, 20, 32, BKF_MODEL_CONTINUUM, 1e-10);
     CHECK_STATUS(bkf_pde_init_oscillation(b, 3, 0.3, &e), BKF_OK);
     CHECK_STATUS(bkf_pde_run(b, 7.3, 7.3, NULL, NULL, NULL, NULL, &e), BKF_OK);
     double worst = 0;
@@ -219,7 +219,7 @@ TEST(pde_dense_output_matches_a_run_to_the_sample)
 TEST(pde_continuous_slip_is_stable_beyond_the_threshold)
 {
     bkf_error e;
-    bkf_pde *m = make(2, 0.3, -1.2, 20, 64, BKF_PDE_CONTINUUM, 1e-9);
+    bkf_pde *m = make(2, 0.3, -1.2, 20, 64, BKF_MODEL_CONTINUUM, 1e-9);
     CHECK_STATUS(bkf_pde_init_uniform(m, 1e-2, 5, &e), BKF_OK);
     bkf_measure *ms = make_measure(m, NULL);
     CHECK_STATUS(bkf_pde_run(m, 60, 0.2, measure_sample, ms, NULL, NULL, &e), BKF_OK);
@@ -237,7 +237,7 @@ TEST(pde_filter_leaves_a_resolved_front_alone)
 {
     double psi[2][256];
     for (int k = 0; k < 2; k++) {
-        bkf_pde_params p = {2, 0.3, -0.96, 20, 256, BKF_PDE_CONTINUUM};
+        bkf_model_params p = {2, 0.3, -0.96, 20, 256, BKF_MODEL_CONTINUUM};
         bkf_pde_options o = bkf_pde_options_default();
         o.filter = k ? 0.0 : 4.0;
         bkf_error e;
@@ -259,21 +259,21 @@ TEST(pde_filter_leaves_a_resolved_front_alone)
 TEST(pde_rejects_bad_input)
 {
     bkf_error e;
-    bkf_pde_params good = {2, 0.3, -0.96, 20, 64, BKF_PDE_CONTINUUM};
+    bkf_model_params good = {2, 0.3, -0.96, 20, 64, BKF_MODEL_CONTINUUM};
     bkf_pde_options o = bkf_pde_options_default();
     struct {
-        bkf_pde_params p;
+        bkf_model_params p;
         const char *name;
     } bad[] = {
-        {{0, 0.3, -0.96, 20, 64, BKF_PDE_CONTINUUM}, "gamma"},
-        {{-1, 0.3, -0.96, 20, 64, BKF_PDE_CONTINUUM}, "gamma"},
-        {{2, -0.1, -0.96, 20, 64, BKF_PDE_CONTINUUM}, "c"},
-        {{2, 0.3, NAN, 20, 64, BKF_PDE_CONTINUUM}, "nu"},
-        {{2, 0.3, -0.96, 0, 64, BKF_PDE_CONTINUUM}, "S"},
-        {{2, 0.3, -0.96, INFINITY, 64, BKF_PDE_CONTINUUM}, "S"},
-        {{2, 0.3, -0.96, 20, 4, BKF_PDE_CONTINUUM}, "N"},
-        {{2, 0.3, -0.96, 20, 65, BKF_PDE_CONTINUUM}, "even"},
-        {{2, 0.3, -0.96, 20, 64, (bkf_pde_model)7}, "model"},
+        {{0, 0.3, -0.96, 20, 64, BKF_MODEL_CONTINUUM}, "gamma"},
+        {{-1, 0.3, -0.96, 20, 64, BKF_MODEL_CONTINUUM}, "gamma"},
+        {{2, -0.1, -0.96, 20, 64, BKF_MODEL_CONTINUUM}, "c"},
+        {{2, 0.3, NAN, 20, 64, BKF_MODEL_CONTINUUM}, "nu"},
+        {{2, 0.3, -0.96, 0, 64, BKF_MODEL_CONTINUUM}, "S"},
+        {{2, 0.3, -0.96, INFINITY, 64, BKF_MODEL_CONTINUUM}, "S"},
+        {{2, 0.3, -0.96, 20, 4, BKF_MODEL_CONTINUUM}, "N"},
+        {{2, 0.3, -0.96, 20, 65, BKF_MODEL_CONTINUUM}, "even"},
+        {{2, 0.3, -0.96, 20, 64, (bkf_model_kind)7}, "model"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         e.message[0] = '\0';
@@ -282,7 +282,7 @@ TEST(pde_rejects_bad_input)
                   bad[i].name);
     }
     /* odd N is fine for the chain; |nu| >= 1 is fine for a simulation */
-    bkf_pde_params chain = {2, 0.3, 1.5, 21, 21, BKF_PDE_CHAIN};
+    bkf_model_params chain = {2, 0.3, 1.5, 21, 21, BKF_MODEL_CHAIN};
     bkf_pde *m = bkf_pde_alloc(&chain, &o, &e);
     CHECK(m);
     CHECK_STATUS(bkf_pde_init_uniform(m, 1e-3, 1, &e), BKF_OK);
@@ -323,14 +323,14 @@ TEST(pde_rejects_bad_input)
  * (D now the general dH/dt of the frame's right-hand side) is conserved. */
 TEST(pde_moving_frame_holds_the_front_still)
 {
-    bkf_pde *lab = make(2, 0.3, -0.96, 20, 512, BKF_PDE_CONTINUUM, 1e-9);
+    bkf_pde *lab = make(2, 0.3, -0.96, 20, 512, BKF_MODEL_CONTINUUM, 1e-9);
     bkf_pde_front_spec fs = bkf_pde_front_spec_default();
     fs.n = 2;
     bkf_pde_front_info fi;
     bkf_error e;
     CHECK_STATUS(bkf_pde_init_front(lab, &fs, &fi, NULL, &e), BKF_OK);
     bkf_pde_free(lab);
-    bkf_pde_params p = {2, 0.3, -0.96, 20, 512, BKF_PDE_CONTINUUM};
+    bkf_model_params p = {2, 0.3, -0.96, 20, 512, BKF_MODEL_CONTINUUM};
     bkf_pde_options o = bkf_pde_options_default();
     o.frame_speed = -fi.v;
     bkf_pde *m = bkf_pde_alloc(&p, &o, &e);
@@ -354,9 +354,9 @@ TEST(pde_moving_frame_holds_the_front_still)
     bkf_pde_free(m);
 
     /* the frame is refused where it does not apply */
-    p.model = BKF_PDE_CHAIN;
+    p.kind = BKF_MODEL_CHAIN;
     CHECK(bkf_pde_check(&p, &o, &e) == BKF_EINPUT && strstr(e.message, "continuum"));
-    p.model = BKF_PDE_CONTINUUM;
+    p.kind = BKF_MODEL_CONTINUUM;
     o.frame_speed = NAN;
     CHECK(bkf_pde_check(&p, &o, &e) == BKF_EINPUT && strstr(e.message, "frame"));
 }

@@ -18,7 +18,7 @@
 
 static bkf_pde *make(double nu, size_t N, bkf_pde_stepper stepper, double tol, double frame)
 {
-    bkf_pde_params p = {2, 0.3, nu, 20, N, BKF_PDE_CONTINUUM};
+    bkf_model_params p = {2, 0.3, nu, 20, N, BKF_MODEL_CONTINUUM};
     bkf_pde_options o = bkf_pde_options_default();
     o.tol = tol;
     o.stepper = stepper;
@@ -170,12 +170,12 @@ TEST(etd_samples_at_the_asked_times)
 
 TEST(etd_refuses_what_it_does_not_cover)
 {
-    bkf_pde_params chain = {2, 0.3, -0.96, 20, 20, BKF_PDE_CHAIN};
+    bkf_model_params chain = {2, 0.3, -0.96, 20, 20, BKF_MODEL_CHAIN};
     bkf_pde_options o = bkf_pde_options_default();
     o.stepper = BKF_PDE_ETDRK4;
     bkf_error e;
     CHECK(bkf_pde_check(&chain, &o, &e) == BKF_EINPUT && strstr(e.message, "continuum"));
-    bkf_pde_params cont = {2, 0.3, -0.96, 20, 64, BKF_PDE_CONTINUUM};
+    bkf_model_params cont = {2, 0.3, -0.96, 20, 64, BKF_MODEL_CONTINUUM};
     o.dealias = 1;
     CHECK(bkf_pde_check(&cont, &o, &e) == BKF_EINPUT && strstr(e.message, "dealias"));
     o.dealias = 0;

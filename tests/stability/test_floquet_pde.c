@@ -45,7 +45,7 @@ static void check_growth(double nu, size_t j)
     CHECK(pt.m1_im == 0.0); /* a real multiplier: the amplitude ratio is clean */
     double T = bkf_floquet_cycle(fl)->period;
 
-    bkf_pde_params params = {gamma, c, nu, S, 64, BKF_PDE_CONTINUUM};
+    bkf_model_params params = {gamma, c, nu, S, 64, BKF_MODEL_CONTINUUM};
     bkf_pde_options options = bkf_pde_options_default();
     options.tol = 1e-11;
     bkf_pde *pde = bkf_pde_alloc(&params, &options, &e);

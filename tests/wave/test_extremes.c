@@ -259,13 +259,13 @@ TEST(extremes_period_matrix)
 /* ------------------------------------------------------------- speeds */
 
 /* n T(mu(v)) v sqrt(1 - c^2/v^2) / S - 1 with a given T(mu) */
-static double speed_residual(const bkf_speeds_params *p, double n, double v, double T)
+static double speed_residual(const bkf_model_params *p, double n, double v, double T)
 {
     double w = p->c > 0 ? sqrt(1.0 - (p->c / v) * (p->c / v)) : 1.0;
     return n * T * v * w / p->S - 1.0;
 }
 
-static double mu_of_v(const bkf_speeds_params *p, double v)
+static double mu_of_v(const bkf_model_params *p, double v)
 {
     return p->c > 0 ? p->gamma / sqrt(1.0 - (p->c / v) * (p->c / v)) : p->gamma;
 }
@@ -290,7 +290,7 @@ static double T_plain(double mu, double nu)
 /* rows of the speeds matrix whose T came from a formula (method auto) */
 static size_t speeds_formula_rows;
 
-static void check_speeds_case(tally *t, bkf_speeds_params p, double tol, size_t n_from, size_t n_to)
+static void check_speeds_case(tally *t, bkf_model_params p, double tol, size_t n_from, size_t n_to)
 {
     bkf_speeds_options o = bkf_speeds_options_default();
     o.tol = tol;
@@ -371,7 +371,7 @@ static void check_speeds_case(tally *t, bkf_speeds_params p, double tol, size_t 
     bkf_speeds_table_free(&tab);
 }
 
-static size_t n_below_bound(bkf_speeds_params p)
+static size_t n_below_bound(bkf_model_params p)
 {
     return (size_t)ceil(p.S / (bkf_asym_k(p.nu) * p.c * p.gamma)) - 1;
 }
@@ -380,34 +380,34 @@ TEST(extremes_speeds_matrix)
 {
     tally t = {"speeds", 0, 0, 0, 0, 0, ""};
     /* the paper, every n to n_max = 12 (mu 2 .. 47) */
-    check_speeds_case(&t, (bkf_speeds_params){2, 0.3, -0.96, 20}, 1e-8, 1, 0);
-    check_speeds_case(&t, (bkf_speeds_params){2, 0.3, -0.96, 20}, 1e-4, 10, 12);
+    check_speeds_case(&t, (bkf_model_params){2, 0.3, -0.96, 20, 0, BKF_MODEL_CONTINUUM}, 1e-8, 1, 0);
+    check_speeds_case(&t, (bkf_model_params){2, 0.3, -0.96, 20, 0, BKF_MODEL_CONTINUUM}, 1e-4, 10, 12);
     /* small gamma, small S: mu from 1e-2 up */
-    check_speeds_case(&t, (bkf_speeds_params){1e-2, 0.3, 0, 1e-2}, 1e-8, 1, 0);
+    check_speeds_case(&t, (bkf_model_params){1e-2, 0.3, 0, 1e-2, 0, BKF_MODEL_CONTINUUM}, 1e-8, 1, 0);
     /* large gamma, large S: the fastest and the two slowest (v -> c+) */
-    bkf_speeds_params big = {1e2, 0.3, 0, 1e4};
+    bkf_model_params big = {1e2, 0.3, 0, 1e4, 0, BKF_MODEL_CONTINUUM};
     size_t nb = n_below_bound(big);
     check_speeds_case(&t, big, 1e-8, 1, 1);
     check_speeds_case(&t, big, 1e-8, nb - 1, nb);
     /* c -> 0 with large gamma */
-    check_speeds_case(&t, (bkf_speeds_params){1e2, 1e-3, -0.9, 1}, 1e-8, 1, 0);
+    check_speeds_case(&t, (bkf_model_params){1e2, 1e-3, -0.9, 1, 0, BKF_MODEL_CONTINUUM}, 1e-8, 1, 0);
     /* c -> 0 against the closed form, and c = 0 itself at the box's corners */
-    check_speeds_case(&t, (bkf_speeds_params){1, 1e-6, 0, 10}, 1e-8, 1, 3);
-    check_speeds_case(&t, (bkf_speeds_params){1e-2, 0, 0.999, 1e4}, 1e-10, 1, 3);
-    check_speeds_case(&t, (bkf_speeds_params){1e2, 0, -0.9999, 1e-2}, 1e-6, 1, 2);
+    check_speeds_case(&t, (bkf_model_params){1, 1e-6, 0, 10, 0, BKF_MODEL_CONTINUUM}, 1e-8, 1, 3);
+    check_speeds_case(&t, (bkf_model_params){1e-2, 0, 0.999, 1e4, 0, BKF_MODEL_CONTINUUM}, 1e-10, 1, 3);
+    check_speeds_case(&t, (bkf_model_params){1e2, 0, -0.9999, 1e-2, 0, BKF_MODEL_CONTINUUM}, 1e-6, 1, 2);
     /* huge n_bound (5e5 fronts): the first two and the last two */
-    bkf_speeds_params many = {1e-2, 1, 0.5, 1e4};
+    bkf_model_params many = {1e-2, 1, 0.5, 1e4, 0, BKF_MODEL_CONTINUUM};
     nb = n_below_bound(many);
     check_speeds_case(&t, many, 1e-8, 1, 2);
     /* (its last rows sit at v/c - 1 ~ 4e-14, where v itself has 2 digits
      * left: not a useful test of anything) */
     (void)nb;
     /* the sonic limit: S just above k c gamma, root beyond mu = 1e5 */
-    check_speeds_case(&t, (bkf_speeds_params){1, 0.5, 0, (1 + 1e-6) * bkf_asym_k(0) * 0.5}, 1e-8, 1, 1);
+    check_speeds_case(&t, (bkf_model_params){1, 0.5, 0, (1 + 1e-6) * bkf_asym_k(0) * 0.5, 0, BKF_MODEL_CONTINUUM}, 1e-8, 1, 1);
     /* near the Hopf point (canard region) */
-    check_speeds_case(&t, (bkf_speeds_params){1, 0.3, 0.9999, 20}, 1e-6, 1, 3);
+    check_speeds_case(&t, (bkf_model_params){1, 0.3, 0.9999, 20, 0, BKF_MODEL_CONTINUUM}, 1e-6, 1, 3);
     /* loose tol at large mu: the roots from k mu (method auto) */
-    check_speeds_case(&t, (bkf_speeds_params){300, 0.3, 0, 2000}, 1e-2, 1, 3);
+    check_speeds_case(&t, (bkf_model_params){300, 0.3, 0, 2000, 0, BKF_MODEL_CONTINUUM}, 1e-2, 1, 3);
     tally_report(&t);
     bkf_test_note("speeds: %zu rows with T from a formula (default method auto)", speeds_formula_rows);
     CHECK(speeds_formula_rows >= 3);

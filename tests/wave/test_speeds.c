@@ -13,9 +13,9 @@
 #include "bkfront/cycle.h"
 #include "bkfront/speeds.h"
 
-static const bkf_speeds_params paper = {2.0, 0.3, -0.96, 20.0};
+static const bkf_model_params paper = {2.0, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM};
 
-static bkf_speeds_table find(bkf_speeds_params p, double tol, size_t n_from, size_t n_to)
+static bkf_speeds_table find(bkf_model_params p, double tol, size_t n_from, size_t n_to)
 {
     bkf_speeds_options o = bkf_speeds_options_default();
     o.tol = tol;
@@ -32,7 +32,7 @@ static bkf_speeds_table find(bkf_speeds_params p, double tol, size_t n_from, siz
 /* ------------------------------------------------ an independent root */
 
 typedef struct {
-    bkf_speeds_params p;
+    bkf_model_params p;
     double n;
 } cond;
 
@@ -53,7 +53,7 @@ static double condition_in_v(double v, void *data)
 }
 
 /* The root in v within a relative distance `width` of v0, by Brent. */
-static double reference_v(bkf_speeds_params p, double n, double v0, double width)
+static double reference_v(bkf_model_params p, double n, double v0, double width)
 {
     gsl_set_error_handler_off();
     cond c = {p, n};
@@ -75,7 +75,7 @@ static double reference_v(bkf_speeds_params p, double n, double v0, double width
 
 /* Every row: a root of the condition as written in v (its residual,
  * recomputed here from the row's T), supersonic, consistent columns. */
-static void check_rows(const bkf_speeds_params *p, const bkf_speeds_table *t, double tol)
+static void check_rows(const bkf_model_params *p, const bkf_speeds_table *t, double tol)
 {
     for (size_t i = 0; i < t->count; i++) {
         const bkf_speeds_root *r = &t->roots[i];
@@ -134,14 +134,14 @@ TEST(speeds_paper_table_every_v_to_1e9)
 TEST(speeds_residuals_below_tolerance)
 {
     const struct {
-        bkf_speeds_params p;
+        bkf_model_params p;
         double tol;
     } cases[] = {
-        {{1.0, 0.5, 0.0, 30.0}, 1e-10},
-        {{0.5, 1.0, 0.5, 10.0}, 1e-10},
-        {{2.0, 0.3, -0.96, 20.0}, 1e-6},
-        {{2.0, 0.3, 0.96, 20.0}, 1e-12},
-        {{1.5, 0.3, -0.96, 20.0}, 1e-10},
+        {{1.0, 0.5, 0.0, 30.0, 0, BKF_MODEL_CONTINUUM}, 1e-10},
+        {{0.5, 1.0, 0.5, 10.0, 0, BKF_MODEL_CONTINUUM}, 1e-10},
+        {{2.0, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM}, 1e-6},
+        {{2.0, 0.3, 0.96, 20.0, 0, BKF_MODEL_CONTINUUM}, 1e-12},
+        {{1.5, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM}, 1e-10},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         bkf_speeds_table t = find(cases[i].p, cases[i].tol, 1, 0);
@@ -160,7 +160,7 @@ TEST(speeds_residuals_below_tolerance)
  * asked for where its bound does not meet what the root needs fails. */
 TEST(speeds_method_formula_roots)
 {
-    bkf_speeds_params p = {300.0, 0.3, 0.0, 2000.0};
+    bkf_model_params p = {300.0, 0.3, 0.0, 2000.0, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_options o = bkf_speeds_options_default();
     CHECK(o.method == BKF_METHOD_AUTO);
     o.tol = 1e-2;
@@ -182,7 +182,7 @@ TEST(speeds_method_formula_roots)
     bkf_speeds_table_free(&a);
     bkf_speeds_table_free(&s);
 
-    bkf_speeds_params q = {1e-3, 0.0, 0.5, 10.0};
+    bkf_model_params q = {1e-3, 0.0, 0.5, 10.0, 0, BKF_MODEL_CONTINUUM};
     o = bkf_speeds_options_default();
     o.tol = 1e-8;
     o.n_to = 2;
@@ -214,7 +214,7 @@ TEST(speeds_method_formula_roots)
 /* nu -> -nu leaves T (and so every speed) unchanged: f -> -f. */
 TEST(speeds_symmetric_in_nu)
 {
-    bkf_speeds_params q = paper;
+    bkf_model_params q = paper;
     q.nu = -paper.nu;
     bkf_speeds_table a = find(paper, 1e-10, 1, 0), b = find(q, 1e-10, 1, 0);
     CHECK(a.count == b.count && a.n_max == b.n_max);
@@ -225,7 +225,7 @@ TEST(speeds_symmetric_in_nu)
 
 TEST(speeds_c0_closed_form)
 {
-    bkf_speeds_params p = {2.0, 0.0, -0.96, 20.0};
+    bkf_model_params p = {2.0, 0.0, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_table t = find(p, 1e-10, 1, 0);
     CHECK(t.n_max == -1 && t.count == BKF_SPEEDS_ROWS_C0 && isinf(t.n_bound));
     bkf_cycle_options o = bkf_cycle_options_default();
@@ -246,7 +246,7 @@ TEST(speeds_c0_closed_form)
 
     /* c -> 0+: the speeds go over continuously into the closed form (the
      * correction is O(c^2)) */
-    bkf_speeds_params q = p;
+    bkf_model_params q = p;
     q.c = 1e-4;
     bkf_speeds_table a = find(p, 1e-10, 1, 5), b = find(q, 1e-10, 1, 5);
     CHECK(a.count == 5 && b.count == 5);
@@ -268,7 +268,7 @@ TEST(speeds_large_gamma_limit)
     const double gammas[] = {100.0, 200.0, 400.0};
     double previous[12] = {0};
     for (int i = 0; i < 3; i++) {
-        bkf_speeds_params p = {gammas[i], 0.3, -0.96, 10.0 * gammas[i]};
+        bkf_model_params p = {gammas[i], 0.3, -0.96, 10.0 * gammas[i], 0, BKF_MODEL_CONTINUUM};
         bkf_speeds_table t = find(p, 1e-10, 1, 0);
         CHECK(t.n_max == 12 && t.count == 12);
         check_rows(&p, &t, 1e-10);
@@ -296,7 +296,7 @@ TEST(speeds_existence_bound)
     double k = bkf_asym_k(-0.96), kcg = k * 0.3 * 2.0;
     const double factors[] = {0.5, 0.999, 1.001, 2.5, 7.3, 12.0001};
     for (size_t i = 0; i < sizeof factors / sizeof factors[0]; i++) {
-        bkf_speeds_params p = {2.0, 0.3, -0.96, factors[i] * kcg};
+        bkf_model_params p = {2.0, 0.3, -0.96, factors[i] * kcg, 0, BKF_MODEL_CONTINUUM};
         bkf_speeds_table t = find(p, 1e-8, 1, 0);
         long want = (long)ceil(factors[i]) - 1;
         CHECK_MSG(t.n_max == want, "S = %g kcg: n_max %ld, want %ld", factors[i], t.n_max, want);
@@ -320,7 +320,7 @@ TEST(speeds_existence_bound)
  * (two each), while lower n have three. */
 TEST(speeds_dip_below_k_beyond_n_bound)
 {
-    bkf_speeds_params p = {1.0, 0.3, -0.99, 20.0};
+    bkf_model_params p = {1.0, 0.3, -0.99, 20.0, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_table t = find(p, 1e-10, 1, 0);
     CHECK(t.dips_below_k && t.g_inf < t.k);
     CHECK_MSG(t.n_max > (long)ceil(t.n_bound), "n_max %ld, n_bound %g", t.n_max, t.n_bound);
@@ -341,7 +341,7 @@ TEST(speeds_dip_below_k_beyond_n_bound)
  * local minimum and maximum. */
 TEST(speeds_three_roots_for_one_n)
 {
-    bkf_speeds_params p = {1.5, 0.3, -0.96, 20.0};
+    bkf_model_params p = {1.5, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_table t = find(p, 1e-10, 6, 6);
     CHECK_MSG(t.count == 3, "%zu roots for n = 6", t.count);
     check_rows(&p, &t, 1e-10);
@@ -358,7 +358,7 @@ TEST(speeds_three_roots_for_one_n)
  * changes against every level ln(S/(n c gamma)). */
 TEST(speeds_no_root_missed_against_dense_scan)
 {
-    bkf_speeds_params p = {1.5, 0.3, -0.96, 20.0};
+    bkf_model_params p = {1.5, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_table t = find(p, 1e-10, 1, 0);
     enum { M = 3000 };
     static double lng[M + 1];
@@ -392,15 +392,15 @@ TEST(speeds_rejects_bad_input)
     bkf_speeds_table t;
     bkf_error e;
     struct {
-        bkf_speeds_params p;
+        bkf_model_params p;
         const char *name;
     } bad[] = {
-        {{0.0, 0.3, -0.96, 20}, "gamma"},  {{-1.0, 0.3, -0.96, 20}, "gamma"},
-        {{2e6, 0.3, -0.96, 20}, "gamma"},  {{NAN, 0.3, -0.96, 20}, "gamma"},
-        {{2.0, -0.1, -0.96, 20}, "c"},     {{2.0, INFINITY, -0.96, 20}, "c"},
-        {{2.0, 0.3, 1.0, 20}, "no fronts"}, {{2.0, 0.3, -1.5, 20}, "no fronts"},
-        {{2.0, 0.3, NAN, 20}, "nu"},       {{2.0, 0.3, -0.96, 0}, "S"},
-        {{2.0, 1e-300, -0.96, 20}, "c = 0"},
+        {{0.0, 0.3, -0.96, 20, 0, BKF_MODEL_CONTINUUM}, "gamma"},  {{-1.0, 0.3, -0.96, 20, 0, BKF_MODEL_CONTINUUM}, "gamma"},
+        {{2e6, 0.3, -0.96, 20, 0, BKF_MODEL_CONTINUUM}, "gamma"},  {{NAN, 0.3, -0.96, 20, 0, BKF_MODEL_CONTINUUM}, "gamma"},
+        {{2.0, -0.1, -0.96, 20, 0, BKF_MODEL_CONTINUUM}, "c"},     {{2.0, INFINITY, -0.96, 20, 0, BKF_MODEL_CONTINUUM}, "c"},
+        {{2.0, 0.3, 1.0, 20, 0, BKF_MODEL_CONTINUUM}, "no fronts"}, {{2.0, 0.3, -1.5, 20, 0, BKF_MODEL_CONTINUUM}, "no fronts"},
+        {{2.0, 0.3, NAN, 20, 0, BKF_MODEL_CONTINUUM}, "nu"},       {{2.0, 0.3, -0.96, 0, 0, BKF_MODEL_CONTINUUM}, "S"},
+        {{2.0, 1e-300, -0.96, 20, 0, BKF_MODEL_CONTINUUM}, "c = 0"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         CHECK_STATUS(bkf_speeds_find(&bad[i].p, NULL, &t, &e), BKF_EINPUT);
@@ -434,7 +434,7 @@ static int collect(const bkf_speeds_branch_point *pt, void *data)
     return 0;
 }
 
-static size_t roots_at(bkf_speeds_params p, size_t n)
+static size_t roots_at(bkf_model_params p, size_t n)
 {
     bkf_speeds_table t = find(p, 1e-8, n, n);
     size_t count = t.count;
@@ -449,7 +449,7 @@ TEST(branch_passes_two_folds_to_the_sonic_limit)
 {
     static collected c;
     c.count = 0;
-    bkf_speeds_params p = {1.5, 0.3, -0.96, 30.0};
+    bkf_model_params p = {1.5, 0.3, -0.96, 30.0, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_options o = bkf_speeds_options_default();
     o.tol = 1e-8;
     bkf_speeds_branch_report rep;
@@ -480,9 +480,9 @@ TEST(branch_passes_two_folds_to_the_sonic_limit)
     }
     CHECK(nf == 2 && folds[0] < folds[1] && folds[1] < 30.0);
     /* the folds bound the window of three roots */
-    CHECK(roots_at((bkf_speeds_params){1.5, 0.3, -0.96, folds[0] - 0.02}, 6) == 1);
-    CHECK(roots_at((bkf_speeds_params){1.5, 0.3, -0.96, 0.5 * (folds[0] + folds[1])}, 6) == 3);
-    CHECK(roots_at((bkf_speeds_params){1.5, 0.3, -0.96, folds[1] + 0.02}, 6) == 1);
+    CHECK(roots_at((bkf_model_params){1.5, 0.3, -0.96, folds[0] - 0.02, 0, BKF_MODEL_CONTINUUM}, 6) == 1);
+    CHECK(roots_at((bkf_model_params){1.5, 0.3, -0.96, 0.5 * (folds[0] + folds[1]), 0, BKF_MODEL_CONTINUUM}, 6) == 3);
+    CHECK(roots_at((bkf_model_params){1.5, 0.3, -0.96, folds[1] + 0.02, 0, BKF_MODEL_CONTINUUM}, 6) == 1);
     bkf_test_note("folds at S = %.10g and %.10g, sonic at S = %.10g; %zu points, %zu solves",
                   folds[0], folds[1], rep.sonic_value, rep.points, rep.solves);
 }
@@ -503,7 +503,7 @@ TEST(branch_lands_on_its_end_and_agrees_with_speeds)
     bkf_speeds_table t0 = find(paper, 1e-10, 12, 12);
     CHECK_CLOSE(c.pts[0].root.v, t0.roots[0].v, 1e-9, 0);
     bkf_speeds_table_free(&t0);
-    bkf_speeds_params q = paper;
+    bkf_model_params q = paper;
     q.c = 0.1;
     bkf_speeds_table t1 = find(q, 1e-10, 12, 12);
     CHECK(t1.count == 1);
@@ -543,7 +543,7 @@ TEST(branch_rejects_bad_input)
 {
     static collected c;
     bkf_error e;
-    bkf_speeds_params p = paper;
+    bkf_model_params p = paper;
     CHECK_STATUS(bkf_speeds_branch(&p, 6, 1, BKF_SPEEDS_ALONG_S, 20.0, NULL, 0, collect, &c, NULL, &e),
                  BKF_EINPUT);
     CHECK(strstr(e.message, "equals"));
