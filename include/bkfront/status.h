@@ -12,8 +12,12 @@ typedef enum {
     BKF_ENUMERIC = 1, /* numerical failure: no convergence, tolerance not met */
     BKF_EINPUT = 2,   /* bad input: parameter outside its valid range */
     BKF_ENOMEM = 3,
-    BKF_ECANCELED = 4 /* stopped by the caller's cancellation flag; the work
-                         done so far is kept (the message says how far) */
+    BKF_ECANCELED = 4, /* stopped by the caller's cancellation flag; the work
+                          done so far is kept (the message says how far) */
+    BKF_ETOL = 5,      /* refused: the requested tolerance cannot be met here */
+    BKF_EBUDGET = 6,   /* a step or iteration budget ran out */
+    BKF_EBLOWUP = 7,   /* the state became non-finite or left its bounds */
+    BKF_EIO = 8        /* reading or writing a file or stream failed */
 } bkf_status;
 
 #define BKF_ERROR_LEN 320
