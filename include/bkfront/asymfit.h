@@ -2,7 +2,7 @@
  * period (module cycle): fits of the expansion coefficients, and where in mu
  * each formula holds to a given relative accuracy.
  *
- * Large mu.  The expansion derived in README.md is
+ * Large mu.  The expansion derived in docs/numerics.md is
  *     T = k(nu) mu + A* mu^p* + B* mu^(-1) ln mu + O(1/mu),
  *     A* = a1 C(nu),  p* = -1/3,  B* = L(nu) = -2/(3 (1 - nu^2)).
  * bkf_asymfit_large computes T at log-spaced mu, forms R = T - k mu and fits

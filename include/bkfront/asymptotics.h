@@ -1,6 +1,6 @@
 /* Asymptotic formulas for the period T(mu, nu) of
  *     f'' + mu (f^2 - 1) f' + f = nu.
- * Derivations are in README.md ("Asymptotics of the period"). */
+ * Derivations are in docs/numerics.md ("Asymptotics of the period"). */
 #ifndef BKFRONT_ASYMPTOTICS_H
 #define BKFRONT_ASYMPTOTICS_H
 

@@ -2,7 +2,7 @@
  *     f'' + mu (f^2 - 1) f' + f = nu,     mu > 0, |nu| < 1,
  * its period T(mu, nu), amplitude, nontrivial Floquet multiplier and profile.
  *
- * Method (DESIGN.md section 2): Newton shooting on the Poincare section f = nu,
+ * Method (docs/numerics.md, "The cycle engine"): Newton shooting on the Poincare section f = nu,
  * f' > 0, with the variational equations, in scaled Lienard coordinates
  *     x' = a (y - b F(x)),  y' = (nu - x)/a,   F(x) = x^3/3 - x,
  *     a = sqrt(1 + mu^2),   b = mu/a           (so a b = mu),

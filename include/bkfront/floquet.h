@@ -4,7 +4,7 @@
  *
  * With psi_xx = 0 the model is the Lienard system of the cycle module with
  * mu = gamma and time t = z.  A perturbation eps(t) exp(iqx) of the global
- * oscillation psi*(t) obeys (DESIGN.md section 1)
+ * oscillation psi*(t) obeys (docs/numerics.md, "Floquet stability")
  *     d_psi' = gamma (d_eta - (psi*(t)^2 - 1) d_psi)
  *     d_eta' = -(1 + c^2 q^2) d_psi / gamma
  * over one period T.  Its monodromy matrix M_q has two multipliers m1, m2

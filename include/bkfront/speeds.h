@@ -13,7 +13,7 @@
  *
  * With c = 0, mu = gamma and v = S / (n T(gamma)) for every n >= 1.
  *
- * How the roots are bracketed, and why none is missed, is in README.md
+ * How the roots are bracketed, and why none is missed, is in docs/numerics.md
  * ("Allowed front speeds").  The library never prints and never exits. */
 #ifndef BKFRONT_SPEEDS_H
 #define BKFRONT_SPEEDS_H

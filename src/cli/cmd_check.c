@@ -27,8 +27,8 @@
 /* =============================================================== check */
 
 /* With --grid uniform: resolves every n at the paper's parameters but
- * n = 12 (which needs N = 2^18 and ~16 minutes; README "The check's
- * budget"). */
+ * n = 12 (which needs N = 2^18 and ~16 minutes; docs/benchmarks.md "The
+ * check's budget"). */
 #define DEF_N_MAX 65536
 /* --grid auto: the uniform spectral grid while it resolves the wave on at
  * most this many points, the adapted comoving grid beyond (at the paper's
@@ -36,8 +36,8 @@
  * adapted grid is the cheaper, and it does n = 12 in ~1.5 s). */
 #define AUTO_UNIFORM_MAX 8192
 /* Points per wavelength on the adapted grid and its tolerance: at 768 and
- * 1e-8 the paper-parameter speeds agree to ~2e-9 (README "The adapted
- * grid"); the tolerance well below the perturbation so that BDF's long
+ * 1e-8 the paper-parameter speeds agree to ~2e-9 (docs/cli/check.md "The
+ * adapted grid, measured"); the tolerance well below the perturbation so that BDF's long
  * steps do not damp a growing perturbation unseen. */
 #define DEF_POINTS 768
 #define CHECK_MAPPED_TOL 1e-8
@@ -58,7 +58,7 @@
 /* The check's default tolerance with the exponential stepper: its
  * estimate is the third-order embedded solution's error, far above the
  * fourth-order step's, and at 1e-7 the paper-parameter speeds and verdicts
- * are those of tol 1e-9 (README "The check's budget") at a third of the
+ * are those of tol 1e-9 (docs/benchmarks.md "The check's budget") at a third of the
  * cost. */
 #define CHECK_ETD_TOL 1e-7
 

@@ -16,7 +16,7 @@
  *   check       predicted speeds against simulation  (bkfront check)
  *   figure      a gnuplot figure of one product      (gnuplot, plots/KIND.gp)
  *
- * The keys of each kind are in README.md ("Scenes").  Parsing (libinih)
+ * The keys of each kind are in docs/scenes.md.  Parsing (libinih)
  * checks every key's value with the same rules as the matching command-line
  * flag; errors are one line "FILE:LINE: message".
  *

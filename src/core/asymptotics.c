@@ -1,6 +1,6 @@
 /* Asymptotic expansions of the van der Pol period T(mu, nu).
  *
- * Large mu (relaxation oscillations), derived in README.md: the slow branches
+ * Large mu (relaxation oscillations), derived in docs/numerics.md: the slow branches
  * give k(nu) mu; each fold ("knee") at x = +-1 adds an Airy delay a1 theta
  * plus the shift of the landing point on the opposite branch, where
  * theta = mu^(-1/3) (1 -+ nu)^(-1/3); the next-order slow manifold diverges

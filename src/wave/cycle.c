@@ -32,7 +32,7 @@
 enum { DIM = 5, IX = 0, IY = 1, IVX = 2, IVY = 3, IL = 4 };
 
 /* Above this mu the explicit stepper's step is limited by stability, not
- * accuracy (the fast rate is ~mu); measured crossover, see README benchmark. */
+ * accuracy (the fast rate is ~mu); measured crossover, see docs/benchmarks.md. */
 #define STIFF_MU 30.0
 /* Ratio of the two integration tolerances whose answers give the error
  * estimate. */
@@ -573,7 +573,7 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
     double y_scale = fmax(fabs(y0), 1e-3);
 
     /* The global error of T is a modest multiple of the local tolerance; the
-     * safety factor was measured over the benchmark box (README). */
+     * safety factor was measured over the benchmark box (docs/benchmarks.md). */
     double tol_int = 0.1 * opt.tol;
     /* Looser local tolerances buy almost nothing with these steppers, and
      * near |nu| = 1 the cycle is small (radius 2 sqrt(1 - nu^2)): at

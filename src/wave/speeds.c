@@ -6,7 +6,7 @@
  * so one grid of T serves every n.  The grid's samples are solved at a
  * coarse tolerance (they only have to give signs), the roots at what v
  * needs.  T(mu) is not assumed monotone (it is not, inside canards).  What
- * the search rests on, argued in README.md ("why none is missed"):
+ * the search rests on, argued in docs/numerics.md ("why none is missed"):
  *   below the first sample, ln g decreases (eps = d ln T/ds -> 0 as
  *       mu -> gamma+, bounded there from the secant of T from T(gamma));
  *   A2  the slope eps on a cell lies within the secant slopes of the cell
