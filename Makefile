@@ -45,6 +45,9 @@ LIB   := $(BUILD)/libbkfront.a
 CLI   := $(BUILD)/bkfront
 TESTS := $(BUILD)/run_tests
 BENCH := $(BUILD)/run_bench
+# C programs of docs/examples/, each linked with the library alone (no CLI
+# code): the proof that a product is reachable from C.
+EXAMPLES := $(BUILD)/examples/check_paper
 
 .PHONY: all test run bench sanitize deps clean build-all check-built bench-built \
         sanitize-built valgrind fuzz fuzz-built
@@ -127,7 +130,8 @@ fuzz-built: $(FUZZ_NAMES:%=$(BUILD)/fuzz_%)
 	  echo "fuzz_$$t: $$(sed -n 's/^stat::number_of_executed_units: *//p' $$log) executions in $(FUZZ_SECONDS) s, $$(ls $(BUILD)/corpus/$$t | wc -l) corpus inputs, no findings"; \
 	done
 
-.SECONDARY: $(FUZZ_NAMES:%=$(BUILD)/tests/fuzz/fuzz_%.o)
+.SECONDARY: $(FUZZ_NAMES:%=$(BUILD)/tests/fuzz/fuzz_%.o) \
+            $(EXAMPLES:$(BUILD)/examples/%=$(BUILD)/docs/examples/%.o)
 $(BUILD)/fuzz_%: $(BUILD)/tests/fuzz/fuzz_%.o $(BUILD)/src/cli/args.o $(BUILD)/src/cli/simcommon.o $(LIB)
 	$(CC) $(LDFLAGS) -fsanitize=fuzzer -o $@ $^ $(LDLIBS)
 
@@ -140,13 +144,18 @@ $(CLI): $(CLI_OBJ) $(LIB)
 # The tests link the CLI's parsing code too (everything but its main).
 CLI_TESTABLE := $(filter-out $(BUILD)/src/cli/main.o,$(CLI_OBJ))
 
-$(TESTS): $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(CLI)
+$(TESTS): $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(CLI) $(EXAMPLES)
 	$(CC) $(LDFLAGS) -o $@ $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(LDLIBS)
+
+$(BUILD)/examples/%: $(BUILD)/docs/examples/%.o $(LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $< $(LIB) $(LDLIBS)
 
 $(BENCH): $(BENCH_OBJ) $(LIB)
 	$(CC) $(LDFLAGS) -o $@ $(BENCH_OBJ) $(LIB) $(LDLIBS)
 
-$(BUILD)/tests/%.o: override CFLAGS += -Itests -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' -DBKF_SOURCE_DIR='"$(CURDIR)"'
+$(BUILD)/tests/%.o: override CFLAGS += -Itests -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' \
+  -DBKF_EXAMPLES_DIR='"$(abspath $(BUILD)/examples)"' -DBKF_SOURCE_DIR='"$(CURDIR)"'
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)

@@ -1,6 +1,6 @@
 /* The model's parameters, their validation and the friction law.
  *
- * Dimensionless continuum Burridge-Knopoff model (README.md):
+ * Dimensionless continuum Burridge-Knopoff model (docs/numerics.md):
  *   psi_t = gamma (eta - phi(psi)),  eta_t = -(psi - nu - c^2 psi_xx)/gamma,
  * phi(psi) = psi^3/3 - psi.  The active range, where the uniform slip psi = nu
  * is unstable and a limit cycle exists, is |nu| < 1. */

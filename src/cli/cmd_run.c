@@ -27,7 +27,7 @@ static void run_help(FILE *out)
         "                   [--plots DIR] SCENE\n"
         "\n"
         "Compute what the scene file SCENE asks for (an INI file: [model],\n"
-        "[accuracy] and one section per product; see README.md, \"Scenes\") and\n"
+        "[accuracy] and one section per product; see docs/scenes.md) and\n"
         "write the data (TSV, gnuplot matrices) and figures into one folder.\n"
         "Only the computations the products need are run, each once.\n"
         "\n"
@@ -462,5 +462,5 @@ static int run_run(int argc, char **argv, bkf_error *err)
     return BKF_OK;
 }
 
-const cli_command cli_cmd_run = {"run", "compute a scene file's products and figures (README: Scenes)",
+const cli_command cli_cmd_run = {"run", "compute a scene file's products and figures (docs/scenes.md)",
                                  run_run, run_help};

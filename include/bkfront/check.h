@@ -1,0 +1,210 @@
+/* The check of the predicted front speeds against seeded simulations.
+ *
+ * For every root of the speed-selection condition (bkf_speeds_find; every n,
+ * or one n) the travelling wave of n fronts at the predicted speed is seeded
+ * with a small band-limited perturbation and simulated for tmax; the
+ * measured speed is compared with the prediction, and the run tells whether
+ * the front keeps its count and shape.
+ *
+ * Grids.  The uniform spectral grid (bkf_pde) runs on the smallest N = N 2^k
+ * that resolves the wave (Fourier coefficients above N/3 below `resolution`
+ * of the largest); the adapted grid (bkf_comoving) puts `points` points per
+ * wavelength where the wave's own length scales need them, in the frame of
+ * v_pred.  BKF_CHECK_GRID_AUTO takes the uniform grid while it resolves the
+ * wave on at most BKF_CHECK_AUTO_UNIFORM_MAX points, the adapted one beyond
+ * (at the paper's parameters n <= 9 uniform, n = 10 .. 12 adapted).
+ *
+ * Measurements, on both grids the same: the deviation is max |psi - seeded
+ * wave shifted with the fronts| (on the adapted grid, from the wave relaxed
+ * onto the grid); the speed is fitted over the later half of the coherent
+ * part of the run (front count kept and deviation <= max(100 perturb, 1e-6);
+ * on uniform grids with a tail above BKF_CHECK_RESOLUTION_DEFAULT and on the
+ * adapted grid also 10 times the deviation at t = min(10, tmax/4), where a
+ * wave the grid does not fully resolve has settled on a plateau of its own).
+ * The verdict is bkf_check_judge's.
+ *
+ * The library never prints and never exits: rows go to the caller's
+ * visitor, warnings to its warning callback. */
+#ifndef BKFRONT_CHECK_H
+#define BKFRONT_CHECK_H
+
+#include <signal.h>
+#include <stddef.h>
+
+#include "bkfront/model.h"
+#include "bkfront/pde.h"
+#include "bkfront/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum {
+    BKF_CHECK_GRID_AUTO = 0,    /* uniform up to BKF_CHECK_AUTO_UNIFORM_MAX, else mapped */
+    BKF_CHECK_GRID_UNIFORM = 1, /* always the spectral grid, up to N_max */
+    BKF_CHECK_GRID_MAPPED = 2   /* always the adapted grid (moving frame only) */
+} bkf_check_grid;
+
+typedef enum {
+    BKF_CHECK_FRAME_MOVING = 0, /* the frame of v_pred: the seeded wave is a steady state */
+    BKF_CHECK_FRAME_LAB = 1     /* the lab frame (uniform grid only; auto means uniform) */
+} bkf_check_frame;
+
+typedef enum {
+    BKF_CHECK_AGREES = 0,    /* stable, |rel_err| <= rel_tol */
+    BKF_CHECK_DISAGREES = 1, /* stable, rel_err beyond rel_tol (or not measured) */
+    BKF_CHECK_UNSTABLE = 2,  /* count or shape not kept: not judged */
+    BKF_CHECK_UNRESOLVED = 3 /* not run to the end (see bkf_check_row.reason) */
+} bkf_check_verdict;
+
+/* "agrees", "disagrees", "unstable", "unresolved"; "unknown" otherwise. */
+const char *bkf_check_verdict_name(bkf_check_verdict verdict);
+/* "auto", "uniform", "mapped"; "unknown" otherwise. */
+const char *bkf_check_grid_name(bkf_check_grid grid);
+
+/* The uniform grid's cap under BKF_CHECK_GRID_AUTO: from N = 16384 on the
+ * adapted grid is the cheaper. */
+#define BKF_CHECK_AUTO_UNIFORM_MAX 8192
+/* The adapted grid's step budget per root: the paper's n = 10..12 take
+ * 40-160 steps, an oscillating unstable wave (n = 3) ~2500; beyond it the
+ * root is unresolved (BKF_EBUDGET) instead of running for many minutes. */
+#define BKF_CHECK_MAPPED_MAX_STEPS 20000
+/* Sample spacings of the measurements: the exponential stepper lands on
+ * every sample, so on the uniform grid this is also its longest step. */
+#define BKF_CHECK_SAMPLE_DT 0.25
+#define BKF_CHECK_MAPPED_SAMPLE_DT 0.5
+/* Defaults (see bkf_check_options). */
+#define BKF_CHECK_N_DEFAULT 512
+#define BKF_CHECK_N_MAX_DEFAULT 65536
+#define BKF_CHECK_TMAX_DEFAULT 125.0
+#define BKF_CHECK_ETD_TOL_DEFAULT 1e-7
+#define BKF_CHECK_RK_TOL_DEFAULT 1e-9
+#define BKF_CHECK_MAPPED_TOL_DEFAULT 1e-8
+#define BKF_CHECK_REL_TOL_DEFAULT 1e-6
+#define BKF_CHECK_PERTURB_DEFAULT 1e-6
+#define BKF_CHECK_RESOLUTION_DEFAULT 1e-5
+#define BKF_CHECK_POINTS_DEFAULT 768
+/* Ranges (see bkf_check_options). */
+#define BKF_CHECK_FRONTS_MAX 100000
+#define BKF_CHECK_POINTS_MIN 32
+#define BKF_CHECK_POINTS_MAX 1048576
+#define BKF_CHECK_TMAX_MAX 1e6
+#define BKF_CHECK_PERTURB_MAX 0.1
+#define BKF_CHECK_RESOLUTION_MIN 1e-16
+#define BKF_CHECK_FILTER_MAX 1000.0
+
+typedef struct {
+    size_t n;             /* check this n only, [1, 100000]; 0 (default): every n with a root */
+    size_t N;             /* smallest uniform grid, even, [8, BKF_PDE_N_MAX]; default 512
+                             (the model's own N is not used: the check picks the grid) */
+    size_t N_max;         /* largest uniform grid, [N, BKF_PDE_N_MAX]; roots needing more are
+                             unresolved; default 65536, which with grid uniform resolves
+                             every n at the paper's parameters but n = 12 (2^18 points,
+                             ~16 minutes) */
+    double tmax;          /* length of each run, (0, 1e6]; default 125 */
+    bkf_pde_stepper stepper; /* uniform grid's stepper; default BKF_PDE_ETDRK4 */
+    double tol;           /* uniform grid's local error tolerance, [1e-13, 1e-2]; 0 (default):
+                             1e-7 with etdrk4 (its third-order error estimate is far above
+                             its fourth-order error: at 1e-7 the paper-parameter speeds and
+                             verdicts are those of 1e-9 at a third of the cost), 1e-9 with
+                             the Runge-Kutta steppers */
+    double filter;        /* spectral filter of bkf_pde, [0, 1000]; default 4 */
+    double rel_tol;       /* agreement asked of a stable front, |rel_err|, (0, 1); default 1e-6 */
+    double perturb;       /* rms of the noise added to the seeded wave, [0, 0.1]; default 1e-6 */
+    unsigned long seed;   /* seed of that noise; default 1 */
+    bkf_check_frame frame;   /* default BKF_CHECK_FRAME_MOVING */
+    bkf_check_grid grid;     /* default BKF_CHECK_GRID_AUTO */
+    size_t points;        /* adapted grid: points per wavelength, [32, 1048576]; default 768
+                             (with mapped_tol 1e-8 the paper-parameter speeds agree to ~2e-9) */
+    double mapped_tol;    /* adapted grid: CVODE's tolerance, [1e-13, 1e-2]; 0 (default): tol
+                             when tol is set, else 1e-8 (well below the perturbation, so that
+                             BDF's long steps do not damp a growing perturbation unseen) */
+    size_t mapped_max_steps; /* adapted grid: step budget per root; default 20000 */
+    double resolution;    /* spectral tail accepted as resolved, [1e-16, 1]; default 1e-5 */
+} bkf_check_options;
+
+/* Exactly the defaults of `bkfront check`. */
+bkf_check_options bkf_check_options_default(void);
+
+/* Validation alone: BKF_EINPUT with a one-line message naming the option
+ * (or model parameter) and its range.  The model needs gamma in the cycle
+ * solver's range, c >= 0, |nu| < 1 and S > 0; its N and kind are not used
+ * (the check runs the continuum). */
+int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *options,
+                       bkf_error *err);
+
+/* One root's result.  NaN where a quantity was not measured. */
+typedef struct {
+    size_t n, root;         /* fronts, and the root (1: fastest) of bkf_speeds_find */
+    bkf_check_grid grid;    /* UNIFORM or MAPPED: the grid used (or tried last) */
+    size_t N;               /* points of that grid; 0: unresolved within N_max */
+    double tail;            /* uniform: the seed's spectral tail on the last grid tried;
+                               mapped: max |relaxed wave - seed| */
+    double v_pred, v_pred_err;  /* predicted speed and its estimated error */
+    double v_meas, v_meas_err;  /* measured speed (towards -x) and its uncertainty */
+    double rel_err;         /* (v_meas - v_pred) / v_pred */
+    double fit_from, fit_to;    /* the fit's time window */
+    double fronts_start, fronts_end; /* front counts at t = 0 and t = tmax */
+    double deviation_start, deviation_mid, deviation_end; /* at 0, tmax/2, tmax */
+    double growth;          /* ln(deviation_end / deviation_mid) / (t_end - t_mid) */
+    double stable;          /* 1 count and shape kept, 0 not, NaN not run */
+    bkf_check_verdict verdict;
+    int reason;             /* a bkf_status: BKF_OK for a run to the end; unstable:
+                               BKF_EBLOWUP when the run blew up; unresolved: BKF_ETOL (not
+                               resolved within N_max), BKF_EBUDGET (the adapted grid's step
+                               budget ran out), or the status of the adapted grid's failed
+                               set-up (BKF_EINPUT, BKF_ENUMERIC; a warning says which) */
+} bkf_check_row;
+
+/* The verdict from the measured quantities, the one rule of both grids:
+ * stable when the run did not blow up, the count never changed and started
+ * at n, and the perturbation did not grow over the later half
+ * (deviation_end finite, <= 2 deviation_mid and <= 1e-2); then agrees when
+ * |rel_err| <= rel_tol (finite), else disagrees; else unstable.  *stable
+ * (may be NULL) gets 1 or 0. */
+bkf_check_verdict bkf_check_judge(size_t n, int blew_up, int count_constant, size_t fronts_start,
+                                  double deviation_mid, double deviation_end, double rel_err,
+                                  double rel_tol, int *stable);
+
+/* What the run is about to do, handed to the begin callback. */
+typedef struct {
+    size_t roots;           /* rows to come */
+    double k;               /* bkf_speeds_table.k */
+    long n_max;             /* bkf_speeds_table.n_max */
+    const char *speeds_note; /* bkf_speeds_table.note ("" when none); valid
+                                during the call only */
+    double tol, mapped_tol; /* the tolerances in effect (defaults resolved) */
+    size_t N_cap;           /* the largest uniform grid in effect (N_max, or the auto cap) */
+} bkf_check_info;
+
+typedef struct {
+    /* Called once before the first root (may be NULL).  Nonzero stops the
+     * check (BKF_OK, no rows). */
+    int (*begin)(const bkf_check_info *info, void *data);
+    /* Called once per root, in bkf_speeds_find order, as soon as it is
+     * done (may be NULL).  Nonzero stops the check (BKF_OK). */
+    int (*row)(const bkf_check_row *row, void *data);
+    /* Fraction of the whole check done, in [0, 1], every few steps. */
+    void (*progress)(double fraction, void *data);
+    /* One line without a newline, e.g. "n = 10, root 1 reported unresolved:
+     * ..." (a root whose adapted grid cannot be set up). */
+    void (*warning)(const char *message, void *data);
+    void *data;             /* handed to each callback */
+    /* When non-NULL and *cancel becomes nonzero (e.g. in a signal
+     * handler), the check stops within a step: BKF_ECANCELED, the rows done
+     * so far delivered. */
+    const volatile sig_atomic_t *cancel;
+} bkf_check_hooks;
+
+/* Runs the check.  hooks may be NULL.  BKF_EINPUT as bkf_check_validate;
+ * BKF_ECANCELED; BKF_ENOMEM; BKF_ENUMERIC (or the simulation's own status)
+ * when a root's run fails otherwise than by the outcomes above (the
+ * message names n, root and grid). */
+int bkf_check_run(const bkf_model_params *model, const bkf_check_options *options,
+                  const bkf_check_hooks *hooks, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,546 @@
+/* The check of the predicted front speeds against seeded simulations: one
+ * root at a time on the uniform spectral grid (bkf_pde + bkf_measure) or the
+ * adapted comoving grid (bkf_comoving), both judged by bkf_check_judge. */
+#include "bkfront/check.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bkfront/comoving.h"
+#include "bkfront/cycle.h"
+#include "bkfront/measure.h"
+#include "bkfront/speeds.h"
+
+const char *bkf_check_verdict_name(bkf_check_verdict verdict)
+{
+    switch (verdict) {
+    case BKF_CHECK_AGREES: return "agrees";
+    case BKF_CHECK_DISAGREES: return "disagrees";
+    case BKF_CHECK_UNSTABLE: return "unstable";
+    case BKF_CHECK_UNRESOLVED: return "unresolved";
+    }
+    return "unknown";
+}
+
+const char *bkf_check_grid_name(bkf_check_grid grid)
+{
+    switch (grid) {
+    case BKF_CHECK_GRID_AUTO: return "auto";
+    case BKF_CHECK_GRID_UNIFORM: return "uniform";
+    case BKF_CHECK_GRID_MAPPED: return "mapped";
+    }
+    return "unknown";
+}
+
+bkf_check_options bkf_check_options_default(void)
+{
+    bkf_pde_options po = bkf_pde_options_default();
+    return (bkf_check_options){
+        .n = 0,
+        .N = BKF_CHECK_N_DEFAULT,
+        .N_max = BKF_CHECK_N_MAX_DEFAULT,
+        .tmax = BKF_CHECK_TMAX_DEFAULT,
+        .stepper = BKF_PDE_ETDRK4,
+        .tol = 0,
+        .filter = po.filter,
+        .rel_tol = BKF_CHECK_REL_TOL_DEFAULT,
+        .perturb = BKF_CHECK_PERTURB_DEFAULT,
+        .seed = 1,
+        .frame = BKF_CHECK_FRAME_MOVING,
+        .grid = BKF_CHECK_GRID_AUTO,
+        .points = BKF_CHECK_POINTS_DEFAULT,
+        .mapped_tol = 0,
+        .mapped_max_steps = BKF_CHECK_MAPPED_MAX_STEPS,
+        .resolution = BKF_CHECK_RESOLUTION_DEFAULT,
+    };
+}
+
+/* The tolerances in effect (0 stands for the defaults). */
+static double uniform_tol(const bkf_check_options *o)
+{
+    if (o->tol) return o->tol;
+    return o->stepper == BKF_PDE_ETDRK4 ? BKF_CHECK_ETD_TOL_DEFAULT : BKF_CHECK_RK_TOL_DEFAULT;
+}
+
+static double mapped_tol(const bkf_check_options *o)
+{
+    if (o->mapped_tol) return o->mapped_tol;
+    return o->tol ? o->tol : BKF_CHECK_MAPPED_TOL_DEFAULT;
+}
+
+static int tol_ok(double tol) { return tol == 0 || (tol >= BKF_PDE_TOL_MIN && tol <= BKF_PDE_TOL_MAX); }
+
+int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *o, bkf_error *err)
+{
+    if (!model || !o) return bkf_error_set(err, BKF_EINPUT, "model and options must not be NULL");
+    bkf_error e;
+    if (!(model->gamma >= BKF_CYCLE_MU_MIN && model->gamma <= BKF_CYCLE_MU_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "gamma: %g is outside [%g, %g]", model->gamma,
+                             BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
+    if (!(model->c >= 0 && isfinite(model->c)))
+        return bkf_error_set(err, BKF_EINPUT, "c: %g must be a finite number >= 0", model->c);
+    if (bkf_model_check_nu_active(model->nu, &e))
+        return bkf_error_set(err, BKF_EINPUT, "%s; there are no fronts", e.message);
+    if (bkf_model_check_positive("S", model->S, err)) return BKF_EINPUT;
+    if (o->n > BKF_CHECK_FRONTS_MAX)
+        return bkf_error_set(err, BKF_EINPUT, "n: %zu is outside [1, %d] (0: every n)", o->n,
+                             BKF_CHECK_FRONTS_MAX);
+    if (o->N < BKF_PDE_N_MIN || o->N > BKF_PDE_N_MAX || o->N % 2)
+        return bkf_error_set(err, BKF_EINPUT, "N: %zu is not an even integer in [%d, %d]", o->N,
+                             BKF_PDE_N_MIN, BKF_PDE_N_MAX);
+    if (o->N_max < o->N || o->N_max > BKF_PDE_N_MAX)
+        return bkf_error_set(err, BKF_EINPUT, "N_max: %zu is outside [N = %zu, %d]", o->N_max,
+                             o->N, BKF_PDE_N_MAX);
+    if (!(o->tmax > 0 && o->tmax <= BKF_CHECK_TMAX_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "tmax: %g is outside (0, %g]", o->tmax,
+                             BKF_CHECK_TMAX_MAX);
+    if ((unsigned)o->stepper > BKF_PDE_ETDRK4)
+        return bkf_error_set(err, BKF_EINPUT, "stepper: %d is not a bkf_pde_stepper",
+                             (int)o->stepper);
+    if (!tol_ok(o->tol))
+        return bkf_error_set(err, BKF_EINPUT, "tol: %g is outside [%g, %g] (0: the default)",
+                             o->tol, BKF_PDE_TOL_MIN, BKF_PDE_TOL_MAX);
+    if (!(o->filter >= 0 && o->filter <= BKF_CHECK_FILTER_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "filter: %g is outside [0, %g]", o->filter,
+                             BKF_CHECK_FILTER_MAX);
+    if (!(o->rel_tol > 0 && o->rel_tol < 1))
+        return bkf_error_set(err, BKF_EINPUT, "rel_tol: %g is outside (0, 1)", o->rel_tol);
+    if (!(o->perturb >= 0 && o->perturb <= BKF_CHECK_PERTURB_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "perturb: %g is outside [0, %g]", o->perturb,
+                             BKF_CHECK_PERTURB_MAX);
+    if ((unsigned)o->frame > BKF_CHECK_FRAME_LAB)
+        return bkf_error_set(err, BKF_EINPUT, "frame: %d is not a bkf_check_frame", (int)o->frame);
+    if ((unsigned)o->grid > BKF_CHECK_GRID_MAPPED)
+        return bkf_error_set(err, BKF_EINPUT, "grid: %d is not a bkf_check_grid", (int)o->grid);
+    if (o->grid == BKF_CHECK_GRID_MAPPED && o->frame == BKF_CHECK_FRAME_LAB)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "frame: lab is not available with grid mapped (the adapted grid "
+                             "moves with v_pred)");
+    if (o->points < BKF_CHECK_POINTS_MIN || o->points > BKF_CHECK_POINTS_MAX)
+        return bkf_error_set(err, BKF_EINPUT, "points: %zu is outside [%d, %d]", o->points,
+                             BKF_CHECK_POINTS_MIN, BKF_CHECK_POINTS_MAX);
+    if (!tol_ok(o->mapped_tol))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "mapped_tol: %g is outside [%g, %g] (0: the default)", o->mapped_tol,
+                             BKF_PDE_TOL_MIN, BKF_PDE_TOL_MAX);
+    if (!(o->resolution >= BKF_CHECK_RESOLUTION_MIN && o->resolution <= 1))
+        return bkf_error_set(err, BKF_EINPUT, "resolution: %g is outside [%g, 1]", o->resolution,
+                             BKF_CHECK_RESOLUTION_MIN);
+    return BKF_OK;
+}
+
+bkf_check_verdict bkf_check_judge(size_t n, int blew_up, int count_constant, size_t fronts_start,
+                                  double deviation_mid, double deviation_end, double rel_err,
+                                  double rel_tol, int *stable)
+{
+    int kept = !blew_up && count_constant && fronts_start == n && isfinite(deviation_end) &&
+               deviation_end <= 2 * deviation_mid && deviation_end <= 1e-2;
+    if (stable) *stable = kept;
+    if (!kept) return BKF_CHECK_UNSTABLE;
+    return isfinite(rel_err) && fabs(rel_err) <= rel_tol ? BKF_CHECK_AGREES : BKF_CHECK_DISAGREES;
+}
+
+/* The level whose crossings are fronts: the middle of the global
+ * oscillation's range, (xmin + xmax)/2 of the cycle at mu = gamma, where
+ * every relaxation jump is steepest.  // merged later: the library's one
+ * front level (the same rule as the CLI's front_level) replaces this. */
+static double check_front_level(const bkf_model_params *pp)
+{
+    if (!(fabs(pp->nu) < 1) || pp->gamma < BKF_CYCLE_MU_MIN || pp->gamma > BKF_CYCLE_MU_MAX)
+        return pp->nu;
+    bkf_cycle_result cr;
+    bkf_cycle_options co = bkf_cycle_options_default();
+    bkf_error e;
+    if (bkf_cycle_period(pp->gamma, pp->nu, &co, &cr, &e) != BKF_OK) return pp->nu;
+    return 0.5 * (cr.xmin + cr.xmax);
+}
+
+/* The travelling wave seeded on the uniform grid.  // merged later: the
+ * products' front seeding (same signature) replaces bkf_pde_init_front. */
+static int check_seed_front(bkf_pde *pde, const bkf_pde_front_spec *spec,
+                            bkf_pde_front_info *info, double *clean_psi, bkf_error *err)
+{
+    return bkf_pde_init_front(pde, spec, info, clean_psi, err);
+}
+
+/* The whole run's state shared by the roots. */
+typedef struct {
+    const bkf_model_params *model;
+    const bkf_check_options *o;
+    const bkf_check_hooks *hooks;
+    double tol, mapped_tol, level;
+    size_t root_index, roots; /* progress: this root's share of the whole */
+} check_ctx;
+
+static int check_progress(double fraction, void *data)
+{
+    const check_ctx *c = data;
+    if (c->hooks && c->hooks->progress)
+        c->hooks->progress(((double)c->root_index + fraction) / (double)c->roots, c->hooks->data);
+    return 0;
+}
+
+static const volatile sig_atomic_t *check_cancel(const check_ctx *c)
+{
+    return c->hooks ? c->hooks->cancel : NULL;
+}
+
+static void check_warn(const check_ctx *c, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+static void check_warn(const check_ctx *c, const char *fmt, ...)
+{
+    if (!c->hooks || !c->hooks->warning) return;
+    char line[BKF_ERROR_LEN + 128];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    c->hooks->warning(line, c->hooks->data);
+}
+
+/* The end of the coherent part of a run: the last record, from the start
+ * on, whose count is n and whose deviation is below the bound (see
+ * check.h); with `settle` the bound rises to 10 times the deviation at
+ * t_ref = min(10, tmax/4), by when a wave the grid does not fully resolve
+ * has settled into the grid's own travelling wave (a plateau set by the
+ * resolution, not a growing perturbation).  `at(i, data, &t, &fronts,
+ * &deviation)` reads record i of R. */
+typedef void (*record_reader)(size_t i, const void *data, double *t, size_t *fronts,
+                              double *deviation);
+
+static size_t coherent_end(record_reader at, const void *data, size_t R, size_t n, int settle,
+                           double perturb, double tmax)
+{
+    double bound = fmax(100 * perturb, 1e-6);
+    double t_ref = fmin(10.0, 0.25 * tmax), t, dev;
+    size_t fronts, end = 0;
+    for (size_t r = 0; settle && r < R; r++) {
+        at(r, data, &t, &fronts, &dev);
+        if (t < t_ref) continue;
+        if (fronts == n && isfinite(dev)) bound = fmax(bound, 10 * dev);
+        break;
+    }
+    for (size_t r = 0; r < R; r++) {
+        at(r, data, &t, &fronts, &dev);
+        if (fronts != n || !(dev <= bound)) break;
+        end = r;
+    }
+    return end;
+}
+
+/* A speed fit needs this many coherent records past the first. */
+#define FIT_MIN_RECORDS 6
+
+static void measure_reader(size_t i, const void *data, double *t, size_t *fronts, double *dev)
+{
+    const bkf_measure_record *rc = bkf_measure_record_at(data, i);
+    *t = rc->t;
+    *fronts = rc->fronts;
+    *dev = rc->deviation;
+}
+
+static void comoving_reader(size_t i, const void *data, double *t, size_t *fronts, double *dev)
+{
+    const bkf_comoving_record *rc = bkf_comoving_record_at(data, i);
+    *t = rc->t;
+    *fronts = rc->fronts;
+    *dev = rc->deviation;
+}
+
+/* One root on the adapted comoving grid. */
+static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row,
+                             bkf_error *err)
+{
+    const bkf_check_options *o = c->o;
+    row->grid = BKF_CHECK_GRID_MAPPED;
+    bkf_comoving_params cp = bkf_comoving_params_default();
+    cp.gamma = c->model->gamma;
+    cp.c = c->model->c;
+    cp.nu = c->model->nu;
+    cp.S = c->model->S;
+    cp.n = row->n;
+    cp.v = sr->v;
+    cp.points = o->points;
+    cp.tol = c->mapped_tol;
+    cp.noise = o->perturb;
+    cp.seed = o->seed;
+    cp.cancel = check_cancel(c);
+    cp.max_steps = o->mapped_max_steps;
+    cp.level = c->level;
+    bkf_error e;
+    bkf_comoving *cm = bkf_comoving_alloc(&cp, &e);
+    if (!cm) {
+        /* bkf_comoving_alloc reports no status, only its message: out of
+         * memory ends the check, any other failure is this root's alone. */
+        if (strstr(e.message, "out of memory"))
+            return bkf_error_set(err, BKF_ENOMEM, "n = %zu: out of memory", row->n);
+        check_warn(c, "n = %zu, root %zu reported unresolved: %s", row->n, row->root, e.message);
+        row->verdict = BKF_CHECK_UNRESOLVED;
+        row->reason = BKF_ENUMERIC;
+        return BKF_OK;
+    }
+    row->N = bkf_comoving_size(cm);
+    bkf_comoving_stats st;
+    bkf_comoving_get_stats(cm, &st);
+    row->tail = st.relax_change;
+    int s = bkf_comoving_run(cm, o->tmax, BKF_CHECK_MAPPED_SAMPLE_DT, check_progress, (void *)c, &e);
+    bkf_comoving_get_stats(cm, &st);
+    size_t R = bkf_comoving_count(cm);
+    int blew_up = (s == BKF_EBLOWUP || (s == BKF_ENUMERIC && st.blew_up)) && R >= 2;
+    if (blew_up) s = BKF_OK; /* a blown-up front is a result (unstable) */
+    if (s == BKF_EBUDGET || (s == BKF_ENUMERIC && st.over_budget)) {
+        /* not a verdict: the run was too costly to finish */
+        bkf_comoving_free(cm);
+        row->verdict = BKF_CHECK_UNRESOLVED;
+        row->reason = BKF_EBUDGET;
+        return BKF_OK;
+    }
+    if (s) {
+        bkf_comoving_free(cm);
+        return bkf_error_set(err, s, "n = %zu, root %zu, adapted grid of %zu points: %s", row->n,
+                             row->root, row->N, e.message);
+    }
+    const bkf_comoving_record *first = bkf_comoving_record_at(cm, 0),
+                              *last = bkf_comoving_record_at(cm, R - 1), *mid = last;
+    int constant = 1;
+    for (size_t r = 0; r < R; r++) {
+        const bkf_comoving_record *rc = bkf_comoving_record_at(cm, r);
+        if (rc->fronts != first->fronts) constant = 0;
+        if (rc->t >= 0.5 * last->t && mid == last) mid = rc;
+    }
+    row->fronts_start = (double)first->fronts;
+    row->fronts_end = (double)last->fronts;
+    row->deviation_start = first->deviation;
+    row->deviation_mid = mid->deviation;
+    row->deviation_end = last->deviation;
+    row->growth = last->t > mid->t ? log(last->deviation / mid->deviation) / (last->t - mid->t)
+                                   : NAN;
+    /* the relaxed wave's own deviation plateau counts as coherent */
+    size_t end = coherent_end(comoving_reader, cm, R, row->n, 1, o->perturb, o->tmax);
+    double t_end = bkf_comoving_record_at(cm, end)->t;
+    if (end >= FIT_MIN_RECORDS) {
+        double drift, drift_err;
+        if (bkf_comoving_fit_drift(cm, 0.5 * t_end, t_end, &drift, &drift_err, &e) == BKF_OK) {
+            /* the frame moves with the fronts towards -x at v_pred */
+            row->v_meas = sr->v - drift;
+            row->v_meas_err = drift_err;
+            row->rel_err = -drift / sr->v;
+            row->fit_from = 0.5 * t_end;
+            row->fit_to = t_end;
+        }
+    }
+    int stable;
+    row->verdict = bkf_check_judge(row->n, blew_up, constant, first->fronts, row->deviation_mid,
+                                   row->deviation_end, row->rel_err, o->rel_tol, &stable);
+    row->stable = stable;
+    if (blew_up) row->reason = BKF_EBLOWUP;
+    bkf_comoving_free(cm);
+    return BKF_OK;
+}
+
+typedef struct {
+    bkf_measure *meas;
+    int status;
+    bkf_error err;
+} check_obs;
+
+static int check_observe(const bkf_pde_sample *smp, void *data)
+{
+    check_obs *ob = data;
+    bkf_error e;
+    if (bkf_measure_add(ob->meas, smp->t, smp->psi, smp->eta, &e)) {
+        ob->status = bkf_error_set(&ob->err, BKF_ENUMERIC, "measurement at t = %g: %s", smp->t,
+                                   e.message);
+        return 1;
+    }
+    return 0;
+}
+
+/* One root: the grid that resolves it, the perturbed run, its
+ * measurements. */
+static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row,
+                      bkf_error *err)
+{
+    const bkf_check_options *o = c->o;
+    size_t n = row->n, root = row->root;
+    if (o->grid == BKF_CHECK_GRID_MAPPED) return check_root_mapped(c, sr, row, err);
+    bkf_model_params pp = *c->model;
+    pp.kind = BKF_MODEL_CONTINUUM;
+    bkf_pde_options po = bkf_pde_options_default();
+    po.tol = c->tol;
+    po.stepper = o->stepper;
+    po.filter = o->filter;
+    po.cancel = check_cancel(c);
+    /* The seeded fronts move towards -x at v_pred: in that frame the wave is
+     * a steady state and the steps grow to the stability cap. */
+    po.frame_speed = o->frame == BKF_CHECK_FRAME_LAB ? 0.0 : -sr->v;
+    bkf_pde_front_spec fs = bkf_pde_front_spec_default();
+    fs.n = n;
+    fs.root = root;
+    fs.noise = o->perturb;
+    fs.seed = o->seed;
+    bkf_error e;
+    bkf_pde *pde = NULL;
+    double *clean = NULL;
+    bkf_measure *meas = NULL;
+    bkf_pde_front_info fi;
+    int s = BKF_OK;
+    row->grid = BKF_CHECK_GRID_UNIFORM;
+    size_t N_cap = o->N_max;
+    if (o->grid == BKF_CHECK_GRID_AUTO && N_cap > BKF_CHECK_AUTO_UNIFORM_MAX)
+        N_cap = BKF_CHECK_AUTO_UNIFORM_MAX;
+    for (size_t N = o->N;; N *= 2) {
+        if (N > N_cap) {
+            bkf_pde_free(pde);
+            free(clean);
+            if (o->grid == BKF_CHECK_GRID_AUTO) return check_root_mapped(c, sr, row, err);
+            row->verdict = BKF_CHECK_UNRESOLVED;
+            row->reason = BKF_ETOL;
+            return BKF_OK;
+        }
+        pp.N = N;
+        bkf_pde_free(pde);
+        free(clean);
+        pde = bkf_pde_alloc(&pp, &po, err);
+        clean = malloc(N * sizeof *clean);
+        if (!pde || !clean) {
+            s = pde ? bkf_error_set(err, BKF_ENOMEM, "out of memory") : BKF_ENOMEM;
+            goto done;
+        }
+        if ((s = check_seed_front(pde, &fs, &fi, clean, &e))) {
+            bkf_error_set(err, s, "n = %zu, root %zu: %s", n, root, e.message);
+            goto done;
+        }
+        row->tail = bkf_pde_spectral_tail(pde, clean);
+        if (row->tail <= o->resolution) break;
+    }
+    row->N = pp.N;
+    bkf_measure_params mp = bkf_measure_params_default();
+    mp.N = pp.N;
+    mp.S = pp.S;
+    mp.gamma = pp.gamma;
+    mp.nu = pp.nu;
+    mp.reference = clean;
+    mp.level = c->level;
+    if (!(meas = bkf_measure_alloc(&mp, err))) {
+        s = BKF_ENOMEM;
+        goto done;
+    }
+    check_obs ob = {meas, 0, {{0}}};
+    s = bkf_pde_run(pde, o->tmax, BKF_CHECK_SAMPLE_DT, check_observe, &ob, check_progress,
+                    (void *)c, &e);
+    if (ob.status) {
+        s = ob.status;
+        *err = ob.err;
+        goto done;
+    }
+    /* A blown-up front is a result (unstable), not a failure of the check.
+     * bkf_pde reports a blow-up, like a step size underflow in the blow-up's
+     * run-up, as BKF_ENUMERIC (no stats field tells them apart): both count,
+     * once the run has recorded a start to compare with. */
+    int blew_up = (s == BKF_EBLOWUP || s == BKF_ENUMERIC) && bkf_measure_count(meas) >= 2;
+    if (blew_up) s = BKF_OK;
+    if (s) {
+        bkf_error_set(err, s, "n = %zu, root %zu, N = %zu: %s", n, root, pp.N, e.message);
+        goto done;
+    }
+    bkf_measure_summary ms;
+    if ((s = bkf_measure_summarize(meas, &ms, &e))) {
+        bkf_error_set(err, BKF_ENUMERIC, "n = %zu: %s", n, e.message);
+        goto done;
+    }
+    row->fronts_start = (double)ms.fronts_start;
+    row->fronts_end = (double)ms.fronts_end;
+    row->deviation_start = ms.deviation_start;
+    row->deviation_mid = ms.deviation_mid;
+    row->deviation_end = ms.deviation_end;
+    row->growth = ms.deviation_growth;
+    /* A fully resolved seed has no plateau to settle on: the bound stays. */
+    size_t R = bkf_measure_count(meas);
+    size_t last = coherent_end(measure_reader, meas, R, n, row->tail > BKF_CHECK_RESOLUTION_DEFAULT,
+                               o->perturb, o->tmax);
+    double t_end = bkf_measure_record_at(meas, last)->t;
+    if (last >= FIT_MIN_RECORDS) {
+        double t_from = 0.5 * t_end;
+        double v, ve;
+        if (bkf_measure_fit_speed(meas, t_from, t_end, &v, &ve, NULL, &e) == BKF_OK) {
+            /* v is relative to the frame; towards -x in the lab: -(v + V) */
+            row->v_meas = -(v + po.frame_speed);
+            row->v_meas_err = ve;
+            row->rel_err = -(v + po.frame_speed + sr->v) / sr->v;
+            row->fit_from = t_from;
+            row->fit_to = t_end;
+        }
+    }
+    int stable;
+    row->verdict = bkf_check_judge(n, blew_up, ms.count_constant, ms.fronts_start,
+                                   ms.deviation_mid, ms.deviation_end, row->rel_err, o->rel_tol,
+                                   &stable);
+    row->stable = stable;
+    if (blew_up) row->reason = BKF_EBLOWUP;
+done:
+    bkf_measure_free(meas);
+    bkf_pde_free(pde);
+    free(clean);
+    return s;
+}
+
+static void row_init(bkf_check_row *row, size_t n, size_t root, const bkf_speeds_root *sr)
+{
+    memset(row, 0, sizeof *row);
+    row->n = n;
+    row->root = root;
+    row->v_pred = sr->v;
+    row->v_pred_err = sr->v_err;
+    row->v_meas = row->v_meas_err = row->rel_err = row->fit_from = row->fit_to = NAN;
+    row->tail = NAN;
+    row->fronts_start = row->fronts_end = NAN;
+    row->deviation_start = row->deviation_mid = row->deviation_end = NAN;
+    row->growth = row->stable = NAN;
+    row->verdict = BKF_CHECK_UNRESOLVED;
+    row->reason = BKF_OK;
+}
+
+int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
+                  const bkf_check_hooks *hooks, bkf_error *err)
+{
+    int s = bkf_check_validate(model, o, err);
+    if (s) return s;
+    bkf_model_params sp = {model->gamma, model->c, model->nu, model->S, 0, BKF_MODEL_CONTINUUM};
+    bkf_speeds_options so = bkf_speeds_options_default();
+    so.tol = 1e-12;
+    if (o->n) so.n_from = so.n_to = o->n;
+    bkf_speeds_table tab;
+    memset(&tab, 0, sizeof tab);
+    bkf_error e;
+    if ((s = bkf_speeds_find(&sp, &so, &tab, &e))) {
+        bkf_speeds_table_free(&tab);
+        return bkf_error_set(err, s, "speeds: %s", e.message);
+    }
+    check_ctx c = {model, o, hooks, uniform_tol(o), mapped_tol(o), 0, 0, tab.count};
+    c.level = check_front_level(model);
+    bkf_check_info info = {tab.count, tab.k, tab.n_max, tab.note, c.tol, c.mapped_tol,
+                           o->grid == BKF_CHECK_GRID_AUTO && o->N_max > BKF_CHECK_AUTO_UNIFORM_MAX
+                               ? (size_t)BKF_CHECK_AUTO_UNIFORM_MAX
+                               : o->N_max};
+    int stop = hooks && hooks->begin ? hooks->begin(&info, hooks->data) : 0;
+    const volatile sig_atomic_t *cancel = check_cancel(&c);
+    for (size_t i = 0; !s && !stop && i < tab.count; i++) {
+        if (cancel && *cancel) {
+            s = bkf_error_set(err, BKF_ECANCELED, "canceled after %zu of %zu roots", i, tab.count);
+            break;
+        }
+        size_t root = 1;
+        for (size_t k = i; k > 0 && tab.roots[k - 1].n == tab.roots[i].n; k--) root++;
+        bkf_check_row row;
+        row_init(&row, tab.roots[i].n, root, &tab.roots[i]);
+        c.root_index = i;
+        s = check_root(&c, &tab.roots[i], &row, err);
+        if (!s && hooks && hooks->row) stop = hooks->row(&row, hooks->data);
+    }
+    bkf_speeds_table_free(&tab);
+    return s;
+}
