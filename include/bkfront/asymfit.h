@@ -22,16 +22,22 @@
  * upper half of the points alone: how far the answer moves with the range
  * the truncation acts on.
  *
- * All functions validate their inputs (BKF_EINPUT), return BKF_ENUMERIC with
- * the (mu, nu) that failed when a cycle cannot be solved, and never print. */
+ * All functions validate their inputs (BKF_EINPUT), return the cycle's status
+ * (a numerical one, bkf_status_is_numerical) with the (mu, nu) that failed
+ * when a cycle cannot be solved, and never print. */
 #ifndef BKFRONT_ASYMFIT_H
 #define BKFRONT_ASYMFIT_H
 
 #include <stddef.h>
 #include "bkfront/status.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Cycle tolerance asked first, and the one retried when the solver refuses
- * the first (BKF_ENUMERIC: its two-tolerance error estimate was not met). */
+ * the first (its two-tolerance error estimate was not met: BKF_ETOL, or any
+ * other numerical failure). */
 #define BKF_ASYMFIT_TOL 1e-12
 #define BKF_ASYMFIT_TOL_FALLBACK 1e-11
 
@@ -166,5 +172,9 @@ typedef struct {
  * [BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX], |nu| < 1, nmu * nnu <= 1e6. */
 int bkf_asymfit_grid(const double *mu, size_t nmu, const double *nu, size_t nnu,
                      bkf_asymfit_grid_point *out, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

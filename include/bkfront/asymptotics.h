@@ -4,6 +4,10 @@
 #ifndef BKFRONT_ASYMPTOTICS_H
 #define BKFRONT_ASYMPTOTICS_H
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Every function is NaN outside the domain |nu| < 1, mu > 0 (finite). */
 
 /* First zero of Ai(-x). */
@@ -58,5 +62,9 @@ double bkf_asym_error_bound(bkf_asym_formula formula, double mu, double nu);
  * receive its period and bound (may be NULL). */
 int bkf_asym_choose(double mu, double nu, double tol, int allow_leading, double *T,
                     double *rel_bound);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

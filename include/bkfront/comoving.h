@@ -78,6 +78,10 @@
 #include "bkfront/pde.h"
 #include "bkfront/status.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     double gamma;         /* > 0 */
     double c;             /* >= 0 */
@@ -163,5 +167,9 @@ typedef struct {
 } bkf_comoving_stats;
 
 void bkf_comoving_get_stats(const bkf_comoving *m, bkf_comoving_stats *stats);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -14,6 +14,10 @@
 #include <stddef.h>
 #include "bkfront/status.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Residual G(u) (n values) and, if jac != NULL, its n x (n+1) Jacobian in
  * row-major order.  Return BKF_OK, or an error status to make the driver
  * shrink the step (BKF_ENUMERIC) or stop (any other; the run then returns
@@ -77,5 +81,9 @@ int bkf_cont_run(bkf_cont_residual residual, bkf_cont_accept accept, void *data,
                  const double *u0, int dir_index, int direction,
                  const bkf_cont_options *options, bkf_cont_report *report,
                  bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -18,6 +18,10 @@
 #include <stddef.h>
 #include "bkfront/status.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #define BKF_CYCLE_MU_MIN 1e-6
 #define BKF_CYCLE_MU_MAX 1e6
 
@@ -66,8 +70,11 @@ bkf_cycle *bkf_cycle_alloc(void);
 void bkf_cycle_free(bkf_cycle *cycle);
 
 /* Solve for the cycle at (mu, nu).  Inputs are validated (mu in
- * [BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX], |nu| < 1, tol in range).  On
- * BKF_ENUMERIC the previous solution in the object is kept. */
+ * [BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX], |nu| < 1, tol in range).  BKF_ETOL
+ * when the estimated error of T stays above tol, BKF_EBUDGET when a period
+ * needs more integration steps than the engine allows, BKF_ENUMERIC for
+ * other failures (shooting did not converge); on any failure the previous
+ * solution in the object is kept. */
 int bkf_cycle_solve(bkf_cycle *cycle, double mu, double nu,
                     const bkf_cycle_options *options, bkf_error *err);
 
@@ -97,7 +104,7 @@ const char *bkf_cycle_method_name(bkf_cycle_method method);
 
 /* T(mu, nu) to options->tol by `method` into *out.  A formula is used only
  * where its error bound (bkf_asym_error_bound) meets tol; a formula asked
- * for explicitly where it does not is a BKF_ENUMERIC failure, never a silent
+ * for explicitly where it does not is refused (BKF_ETOL), never a silent
  * answer.  Shooting (and auto when no formula qualifies) is bkf_cycle_solve
  * on `cycle`, which must then be non-NULL; formulas leave `cycle` alone and
  * integrate nothing (all work counters 0). */
@@ -116,5 +123,9 @@ typedef int (*bkf_cycle_visit)(const bkf_cycle_result *point, void *data);
 int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed,
                      const bkf_cycle_options *options, size_t max_points,
                      bkf_cycle_visit visit, void *data, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -30,7 +30,7 @@
  * accuracy of the dominant multiplier).  Each quantity reported with an
  * error estimate comes from two integrations at tolerances a factor 10
  * apart plus the cycle's own error; the reported value is the tighter one.
- * bkf_floquet_eval refuses (BKF_ENUMERIC) a q whose estimate it cannot
+ * bkf_floquet_eval refuses (BKF_ETOL) a q whose estimate it cannot
  * bring under tol; the threshold and diagram drivers report their own
  * errors in nu instead. */
 #ifndef BKFRONT_FLOQUET_H
@@ -39,6 +39,10 @@
 #include <stddef.h>
 #include "bkfront/cycle.h"
 #include "bkfront/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 typedef struct {
     double tol;               /* absolute accuracy of lambda, [1e-14, 1e-1]; default 1e-10 */
@@ -103,7 +107,7 @@ const bkf_cycle_result *bkf_floquet_cycle(const bkf_floquet *floquet);
  * of M in log-polar form (multipliers below tol |M|, down to |m1| ~
  * exp(-2e4)), then with the cycle solved tighter (or its share of the
  * error measured) and integrations down to 1e-13.  If no attempt meets tol:
- * BKF_ENUMERIC ("estimated error E of lambda exceeds tol T at q = ..."),
+ * BKF_ETOL ("estimated error E of lambda exceeds tol T at q = ..."),
  * with *point holding the best attempt and its lambda_err (> tol).  On
  * any other failure point->lambda_err is NaN. */
 int bkf_floquet_eval(bkf_floquet *floquet, double q, bkf_floquet_point *point,
@@ -202,5 +206,9 @@ typedef int (*bkf_floquet_interval_visit)(const bkf_floquet_interval *interval, 
 int bkf_floquet_diagram(double gamma, double c, double nu_lo, double nu_hi,
                         const bkf_floquet_options *options,
                         bkf_floquet_interval_visit visit, void *data, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -27,6 +27,10 @@
 #include <stdio.h>
 #include "bkfront/status.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef enum { BKF_IO_NUMBER = 0, BKF_IO_TEXT = 1 } bkf_io_kind;
 
 typedef struct {
@@ -96,5 +100,9 @@ int bkf_io_atomic_commit(bkf_io_atomic *file, bkf_error *err);
 
 /* Closes and removes the temporary file and frees `file` (NULL is a no-op). */
 void bkf_io_atomic_abort(bkf_io_atomic *file);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

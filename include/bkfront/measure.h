@@ -61,6 +61,10 @@
 #include <stddef.h>
 #include "bkfront/status.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     size_t N;             /* grid points, >= 8 */
     double S;             /* domain size, > 0 */
@@ -166,5 +170,9 @@ int bkf_measure_fit_speed(const bkf_measure *m, double t_from, double t_to, doub
                           double *speed_err, size_t *tracks, bkf_error *err);
 
 int bkf_measure_summarize(const bkf_measure *m, bkf_measure_summary *summary, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

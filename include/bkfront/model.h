@@ -10,6 +10,10 @@
 #include <stddef.h>
 #include "bkfront/status.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Which medium: the continuum (spectral in x) or the Burridge-Knopoff chain
  * of N blocks, Eq. (1) of the paper, spacing h = S/N. */
 typedef enum { BKF_MODEL_CONTINUUM = 0, BKF_MODEL_CHAIN = 1 } bkf_model_kind;
@@ -45,5 +49,9 @@ int bkf_model_check_tol(double tol, bkf_error *err);        /* [1e-14, 1e-1] */
 
 #define BKF_TOL_MIN 1e-14
 #define BKF_TOL_MAX 1e-1
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -84,6 +84,10 @@
 #include "bkfront/model.h"
 #include "bkfront/status.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 
 typedef enum {
     BKF_PDE_RK8PD = 0,  /* Dormand-Prince 8(7): the default, best at tight tol */
@@ -264,5 +268,9 @@ double bkf_pde_sample_mean_residual(const bkf_pde *pde, const bkf_pde_sample *sa
  * both measured from the last set_state/init call. */
 double bkf_pde_energy_residual(bkf_pde *pde);
 double bkf_pde_mean_residual(const bkf_pde *pde);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

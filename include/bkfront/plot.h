@@ -20,6 +20,10 @@
 #include "bkfront/io.h"
 #include "bkfront/status.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef enum { BKF_PLOT_PNG = 0, BKF_PLOT_PDF = 1, BKF_PLOT_SVG = 2 } bkf_plot_format;
 #define BKF_PLOT_NFORMATS 3
 
@@ -81,5 +85,9 @@ bkf_io_table *bkf_plot_data_table(bkf_plot_data *data);
 int bkf_plot_data_commit(bkf_plot_data *data, bkf_error *err);
 /* Remove the temporary file and free (NULL is a no-op). */
 void bkf_plot_data_abort(bkf_plot_data *data);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

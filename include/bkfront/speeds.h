@@ -23,6 +23,10 @@
 #include "bkfront/model.h"
 #include "bkfront/status.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* The model: bkf_model_params (model.h); speeds reads gamma in [1e-6, 1e6]
  * (mu >= gamma must be solvable), c >= 0, |nu| < 1, S > 0; kind and N are
  * not used (the continuum). */
@@ -44,7 +48,7 @@ typedef struct {
                         meets the tolerance the root needs, and also for grid
                         samples where it meets the grid's; asymptotic and
                         leading make every root's T the formula's, and fail
-                        (BKF_ENUMERIC) where its bound does not meet what the
+                        (BKF_ETOL) where its bound does not meet what the
                         root needs; shooting never uses a formula below the
                         grid's cap (mu = 1e5).  The bracketing grid is sampled
                         by shooting unless auto finds a formula good enough. */
@@ -114,7 +118,10 @@ int bkf_speeds_check(const bkf_model_params *params, const bkf_speeds_options *o
 
 /* Every root for n in the options' range.  *table is overwritten (free it
  * with bkf_speeds_table_free, also after a failure).  BKF_OK with count = 0
- * and a note when no n in the range has a root. */
+ * and a note when no n in the range has a root.  BKF_EBUDGET when the
+ * bracketing grid or the polishing of a root needs more samples of T than
+ * the search allows, BKF_ETOL when a formula asked for does not meet the
+ * tolerance a root needs. */
 int bkf_speeds_find(const bkf_model_params *params, const bkf_speeds_options *options,
                     bkf_speeds_table *table, bkf_error *err);
 void bkf_speeds_table_free(bkf_speeds_table *table);
@@ -167,5 +174,9 @@ int bkf_speeds_branch(const bkf_model_params *start, size_t n, size_t root_index
                       bkf_speeds_param along, double to, const bkf_speeds_options *options,
                       size_t max_points, bkf_speeds_visit visit, void *data,
                       bkf_speeds_branch_report *report, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -411,6 +411,16 @@ void cli_cancel_end(void)
 
 int cli_cancel_signal(void) { return (int)cancel_flag; }
 
+int cli_exit_code(int status)
+{
+    switch (status) {
+    case BKF_OK: return 0;
+    case BKF_EINPUT: return 2;
+    case BKF_ECANCELED: return 128 + (cli_cancel_signal() ? cli_cancel_signal() : SIGINT);
+    default: return 1;
+    }
+}
+
 int cli_output_open(cli_output *out, const char *path, const char *flag, bkf_error *err)
 {
     out->file = NULL;
@@ -426,14 +436,14 @@ int cli_output_write(cli_output *out, const char *data, size_t size, bkf_error *
 {
     if (!out->file) {
         if ((size && fwrite(data, 1, size, stdout) != size) || fflush(stdout) != 0)
-            return bkf_error_set(err, BKF_ENUMERIC, "cannot write to standard output: %s",
+            return bkf_error_set(err, BKF_EIO, "cannot write to standard output: %s",
                                  strerror(errno));
         return BKF_OK;
     }
     FILE *f = bkf_io_atomic_stream(out->file);
     int status = BKF_OK;
     if (size && fwrite(data, 1, size, f) != size) {
-        status = bkf_error_set(err, BKF_ENUMERIC, "writing the output failed: %s",
+        status = bkf_error_set(err, BKF_EIO, "writing the output failed: %s",
                                strerror(errno));
         bkf_io_atomic_abort(out->file);
     } else

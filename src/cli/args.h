@@ -11,9 +11,11 @@
 #include <stdio.h>
 #include "bkfront/io.h"
 #include "bkfront/status.h"
+#include "bkfront/version.h"
 
 #define CLI_PROGRAM "bkfront"
-#define CLI_VERSION "0.1.0"
+/* The library's version: one number for the program and its provenance. */
+#define CLI_VERSION BKF_VERSION_STRING
 
 /* Largest number of points a range or a grid may have: a typo such as
  * 1:2:1e9 should be an error, not an hour of work and a huge table. */
@@ -104,6 +106,12 @@ void cli_output_abort(cli_output *out);
 const volatile sig_atomic_t *cli_cancel_begin(void);
 void cli_cancel_end(void);
 int cli_cancel_signal(void);
+
+/* The exit code for a status: 0 ok, 2 bad input, 128 + the signal for a run
+ * canceled by one (130 for SIGINT, as a shell reports Ctrl-C; 130 also when
+ * no signal is known), 1 for every other failure (numerical, a refused
+ * tolerance, a spent budget, a blow-up, memory, I/O). */
+int cli_exit_code(int status);
 
 /* An in-memory stream (open_memstream) to build the whole output in. */
 typedef struct {

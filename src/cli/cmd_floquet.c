@@ -493,7 +493,7 @@ static int run_dispersion(const floquet_plan *p, bkf_io_table *t, int argc, char
         /* A q whose estimate stays above tol is a flagged row: no digits
          * (NaN), the estimate that was reached, kind "refused", and a line
          * on stderr; the other rows stand.  Any other failure ends the table. */
-        int refused = s == BKF_ENUMERIC && pt.lambda_err > p->options.tol;
+        int refused = s == BKF_ETOL;
         if (refused) {
             fprintf(stderr, CLI_PROGRAM " floquet: warning: row q = %s refused: %s\n",
                     num(p->q[i], a, sizeof a), e.message);

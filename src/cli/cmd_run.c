@@ -47,6 +47,19 @@ static void run_help(FILE *out)
         "failed (the others are still produced), 2 bad scene or options.\n");
 }
 
+/* Which failure a scene reports when several steps fail: memory first, then
+ * a cancellation, then bad input, then the rest (all exit 1). */
+static int severity(int status)
+{
+    switch (status) {
+    case BKF_OK: return 0;
+    case BKF_ENOMEM: return 4;
+    case BKF_ECANCELED: return 3;
+    case BKF_EINPUT: return 2;
+    default: return 1;
+    }
+}
+
 static double now(void)
 {
     struct timespec ts;
@@ -363,7 +376,7 @@ static int run_run(int argc, char **argv, bkf_error *err)
         print_plan(sc, &plan, stdout);
         scene_plan_free(&plan);
         scene_free(sc);
-        return fflush(stdout) == 0 ? BKF_OK : bkf_error_set(err, BKF_ENUMERIC, "cannot write");
+        return fflush(stdout) == 0 ? BKF_OK : bkf_error_set(err, BKF_EIO, "cannot write");
     }
     if ((s = make_dirs(outdir, err))) {
         scene_plan_free(&plan);
@@ -417,7 +430,7 @@ static int run_run(int argc, char **argv, bkf_error *err)
             if (!first_failure[0])
                 snprintf(first_failure, sizeof first_failure, "%s:%d [%s %s]: %.200s", sc->path,
                          p->line, scene_kind_name(p->kind), p->name, e.message);
-            if (status == BKF_ENOMEM || (worst != BKF_ENOMEM && status > worst)) worst = status;
+            if (severity(status) > severity(worst)) worst = status;
         } else if (warning[0]) {
             printf("        gnuplot: %s\n", warning);
         }

@@ -6,6 +6,7 @@
 #include "args.h"
 #include "commands.h"
 
+#include <gsl/gsl_errno.h>
 #include <string.h>
 
 static void print_usage(FILE *out)
@@ -71,10 +72,14 @@ int main(int argc, char **argv)
         print_usage(stderr);
         return 2;
     }
+    /* The CLI reports every failure as a status and an error line, never by
+     * GSL's default abort: it keeps GSL's handler off for the whole run (a
+     * library call puts back whatever handler it found, this one). */
+    gsl_set_error_handler_off();
     const char *first = argv[1];
     if (strcmp(first, "--help") == 0 || strcmp(first, "-h") == 0) return print_help(NULL);
     if (strcmp(first, "--version") == 0) {
-        printf(CLI_PROGRAM " " CLI_VERSION "\n");
+        printf(CLI_PROGRAM " %s\n", bkf_version());
         return fflush(stdout) == 0 ? 0 : 1;
     }
     if (strcmp(first, "help") == 0) {
@@ -99,8 +104,5 @@ int main(int argc, char **argv)
         fprintf(stderr, CLI_PROGRAM " %s: %s\n", cmd->name,
                 err.message[0] ? err.message : "failed");
     }
-    /* A canceled run exits as the shell reports the signal: 130 for SIGINT,
-     * 143 for SIGTERM. */
-    if (status == BKF_ECANCELED && cli_cancel_signal()) return 128 + cli_cancel_signal();
-    return bkf_status_exit_code(status);
+    return cli_exit_code(status);
 }

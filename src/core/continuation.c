@@ -489,10 +489,10 @@ static int take_step(cont_ws *ws, const run_vectors *v, double h, int *landed,
     return BKF_OK;
 }
 
-int bkf_cont_run(bkf_cont_residual residual, bkf_cont_accept accept, void *data,
-                 const double *u0, int dir_index, int direction,
-                 const bkf_cont_options *options, bkf_cont_report *report,
-                 bkf_error *err)
+static int cont_run_body(bkf_cont_residual residual, bkf_cont_accept accept, void *data,
+                         const double *u0, int dir_index, int direction,
+                         const bkf_cont_options *options, bkf_cont_report *report,
+                         bkf_error *err)
 {
     bkf_cont_report rep = {0, 0, 0, 0, 0};
     if (report) *report = rep;
@@ -613,4 +613,15 @@ done:
     if (report) *report = rep;
     ws_free(&ws, &v);
     return st;
+}
+
+int bkf_cont_run(bkf_cont_residual residual, bkf_cont_accept accept, void *data,
+                 const double *u0, int dir_index, int direction,
+                 const bkf_cont_options *options, bkf_cont_report *report,
+                 bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = cont_run_body(residual, accept, data, u0, dir_index, direction, options, report, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
 }

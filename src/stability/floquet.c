@@ -304,8 +304,8 @@ static int engine_get(bkf_floquet *f, int dk, int which, engine **out)
     return BKF_OK;
 }
 
-int bkf_floquet_set(bkf_floquet *f, double gamma, double c, double nu,
-                    const bkf_floquet_options *options, bkf_error *err)
+static int floquet_set_body(bkf_floquet *f, double gamma, double c, double nu,
+                            const bkf_floquet_options *options, bkf_error *err)
 {
     if (!f) return bkf_error_set(err, BKF_EINPUT, "floquet object is NULL");
     bkf_floquet_options o = options ? *options : bkf_floquet_options_default();
@@ -313,7 +313,6 @@ int bkf_floquet_set(bkf_floquet *f, double gamma, double c, double nu,
     if (rc == BKF_OK) rc = check_gamma_c(gamma, c, err);
     if (rc == BKF_OK) rc = bkf_model_check_nu_active(nu, err);
     if (rc != BKF_OK) return rc;
-    gsl_set_error_handler_off();
     f->ready = 0;
     f->cycle_gen++;
     bkf_cycle_options co = bkf_cycle_options_default();
@@ -328,7 +327,7 @@ int bkf_floquet_set(bkf_floquet *f, double gamma, double c, double nu,
      * enters lambda_err through T_err. */
     for (int attempt = 0;; attempt++) {
         rc = bkf_cycle_solve(f->cycle, gamma, nu, &co, err);
-        if (rc != BKF_ENUMERIC || attempt == 3) break;
+        if (!bkf_status_is_numerical(rc) || attempt == 3) break;
         /* a warm start from across a canard explosion (large gamma, the
          * small and the relaxation cycle nu-close) can fail: start cold */
         if (co.warm_start) co.warm_start = 0;
@@ -359,6 +358,15 @@ int bkf_floquet_set(bkf_floquet *f, double gamma, double c, double nu,
     f->tol_floor = floor_tol * TOL_RATIO;
     f->ready = 1;
     return BKF_OK;
+}
+
+int bkf_floquet_set(bkf_floquet *f, double gamma, double c, double nu,
+                    const bkf_floquet_options *options, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = floquet_set_body(f, gamma, c, nu, options, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
 }
 
 /* ------------------------------------------------------------ monodromy */
@@ -822,7 +830,7 @@ static void consider(retry_best *rb, bkf_floquet_point *cand, double cand_cyc)
     }
 }
 
-int bkf_floquet_eval(bkf_floquet *f, double q, bkf_floquet_point *pt, bkf_error *err)
+static int floquet_eval_body(bkf_floquet *f, double q, bkf_floquet_point *pt, bkf_error *err)
 {
     if (!f || !f->ready) return bkf_error_set(err, BKF_EINPUT, "floquet: eval before a successful set");
     if (!pt) return bkf_error_set(err, BKF_EINPUT, "floquet: point is NULL");
@@ -906,11 +914,19 @@ int bkf_floquet_eval(bkf_floquet *f, double q, bkf_floquet_point *pt, bkf_error 
     pt->q = q;
     pt->steps = rb.steps;
     if (!(pt->lambda_err <= tol))
-        return bkf_error_set(err, BKF_ENUMERIC,
+        return bkf_error_set(err, BKF_ETOL,
                              "estimated error %.2g of lambda exceeds tol %.2g at q = %g "
                              "(gamma = %g, c = %g, nu = %g, lambda = %.6g)",
                              pt->lambda_err, tol, q, f->gamma, f->c, f->nu, pt->lambda);
     return BKF_OK;
+}
+
+int bkf_floquet_eval(bkf_floquet *f, double q, bkf_floquet_point *pt, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = floquet_eval_body(f, q, pt, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
 }
 
 static int longwave_at(bkf_floquet *f, int which, double *a, bkf_error *err)
@@ -930,7 +946,7 @@ static int longwave_at(bkf_floquet *f, int which, double *a, bkf_error *err)
     return BKF_OK;
 }
 
-int bkf_floquet_longwave(bkf_floquet *f, double *a, double *a_err, bkf_error *err)
+static int floquet_longwave_body(bkf_floquet *f, double *a, double *a_err, bkf_error *err)
 {
     if (!f || !f->ready)
         return bkf_error_set(err, BKF_EINPUT, "floquet: longwave before a successful set");
@@ -947,6 +963,14 @@ int bkf_floquet_longwave(bkf_floquet *f, double *a, double *a_err, bkf_error *er
                  4.0 * DBL_EPSILON * fabs(af);
     }
     return BKF_OK;
+}
+
+int bkf_floquet_longwave(bkf_floquet *f, double *a, double *a_err, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = floquet_longwave_body(f, a, a_err, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
 }
 
 double bkf_floquet_slip_rate(double gamma, double c, double nu, double q)
@@ -1118,7 +1142,7 @@ static int stability_scan(bkf_floquet *f, stability_full *sf, bkf_error *err)
     return BKF_OK;
 }
 
-int bkf_floquet_stability_at(bkf_floquet *f, bkf_floquet_stability *out, bkf_error *err)
+static int floquet_stability_at_body(bkf_floquet *f, bkf_floquet_stability *out, bkf_error *err)
 {
     if (!f || !f->ready)
         return bkf_error_set(err, BKF_EINPUT, "floquet: stability before a successful set");
@@ -1128,6 +1152,14 @@ int bkf_floquet_stability_at(bkf_floquet *f, bkf_floquet_stability *out, bkf_err
     int rc = stability_scan(f, sf, err);
     if (rc == BKF_OK) *out = sf->s;
     free(sf);
+    return rc;
+}
+
+int bkf_floquet_stability_at(bkf_floquet *f, bkf_floquet_stability *out, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = floquet_stability_at_body(f, out, err);
+    bkf_gsl_handler_pop(handler);
     return rc;
 }
 
@@ -1224,7 +1256,7 @@ static int indicator_root(indicator *ind, double lo, double f_lo, double hi, dou
         /* a cycle the engine cannot solve (the inside of a canard explosion
          * is exponentially thin in nu) need not stop the search: the bracket
          * still holds a root, try points nearer the bracket's middle */
-        for (int retry = 0; rc == BKF_ENUMERIC && retry < 4; retry++) {
+        for (int retry = 0; bkf_status_is_numerical(rc) && retry < 4; retry++) {
             trial = from + (0.5 + 0.1 * retry) * (c - from);
             rc = indicator_eval(ind, trial, &f_trial);
         }
@@ -1331,7 +1363,7 @@ static int boundary_between(bkf_floquet *f, double gamma, double c, double nu_s,
         if (rc == BKF_OK) {
             *th = cand;
             found = 1;
-        } else if (rc == BKF_ENUMERIC) {
+        } else if (bkf_status_is_numerical(rc)) {
             failed = 1;
             fail_dist = fabs(near - nu_s);
             fail_err = ind.err;
@@ -1366,7 +1398,7 @@ static int boundary_between(bkf_floquet *f, double gamma, double c, double nu_s,
         if (rc == BKF_OK) {
             if (!found || fabs(cand.nu - nu_s) < fabs(th->nu - nu_s)) *th = cand;
             found = 1;
-        } else if (rc == BKF_ENUMERIC) {
+        } else if (bkf_status_is_numerical(rc)) {
             failed = 1;
             fail_dist = fmin(fail_dist, fabs(near - nu_s));
             fail_err = ind.err;
@@ -1464,9 +1496,9 @@ static int keep_first(const bkf_floquet_threshold *th, double nu_prev, int stabl
     return 1;
 }
 
-int bkf_floquet_threshold_find(double gamma, double c, double nu_lo, double nu_hi,
-                               const bkf_floquet_options *options, bkf_floquet_threshold *out,
-                               bkf_error *err)
+static int floquet_threshold_find_body(double gamma, double c, double nu_lo, double nu_hi,
+                                       const bkf_floquet_options *options, bkf_floquet_threshold *out,
+                                       bkf_error *err)
 {
     if (!out) return bkf_error_set(err, BKF_EINPUT, "threshold result is NULL");
     bkf_floquet_options o = options ? *options : bkf_floquet_options_default();
@@ -1480,6 +1512,16 @@ int bkf_floquet_threshold_find(double gamma, double c, double nu_lo, double nu_h
                              "oscillations are %s throughout (scan step %g)",
                              nu_lo, nu_hi, gamma, first ? "stable" : "unstable", o.nu_step);
     return BKF_OK;
+}
+
+int bkf_floquet_threshold_find(double gamma, double c, double nu_lo, double nu_hi,
+                               const bkf_floquet_options *options, bkf_floquet_threshold *out,
+                               bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = floquet_threshold_find_body(gamma, c, nu_lo, nu_hi, options, out, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
 }
 
 /* --------------------------------------------------------------- diagram */
@@ -1521,9 +1563,9 @@ static int diagram_boundary(const bkf_floquet_threshold *th, double nu_prev, int
     return 0;
 }
 
-int bkf_floquet_diagram(double gamma, double c, double nu_lo, double nu_hi,
-                        const bkf_floquet_options *options, bkf_floquet_interval_visit visit,
-                        void *data, bkf_error *err)
+static int floquet_diagram_body(double gamma, double c, double nu_lo, double nu_hi,
+                                const bkf_floquet_options *options, bkf_floquet_interval_visit visit,
+                                void *data, bkf_error *err)
 {
     if (!visit) return bkf_error_set(err, BKF_EINPUT, "diagram visit callback is NULL");
     bkf_floquet_options o = options ? *options : bkf_floquet_options_default();
@@ -1546,6 +1588,16 @@ int bkf_floquet_diagram(double gamma, double c, double nu_lo, double nu_hi,
     d.current.nu_to = nu_hi;
     visit(&d.current, data);
     return BKF_OK;
+}
+
+int bkf_floquet_diagram(double gamma, double c, double nu_lo, double nu_hi,
+                        const bkf_floquet_options *options, bkf_floquet_interval_visit visit,
+                        void *data, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = floquet_diagram_body(gamma, c, nu_lo, nu_hi, options, visit, data, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
 }
 
 /* ------------------------------------------------------- threshold curve */
@@ -1583,7 +1635,8 @@ static int branch_eval(branch_ctx *b, double K, double nu, double s, double *g, 
     if (!(fabs(nu) < 1.0) || !(K >= 1.0) || !(K <= K_MAX))
         return bkf_error_set(err, BKF_ENUMERIC, "threshold curve left the valid range");
     int rc = bkf_floquet_set(b->f, gamma, c, nu, &b->opt, err);
-    if (rc != BKF_OK) return rc == BKF_EINPUT ? BKF_ENUMERIC : rc;
+    /* any failure but memory shrinks the continuation's step */
+    if (rc != BKF_OK) return rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
     if (b->longwave) return longwave_at(b->f, ENG_FINE, &g[0], err);
     raw r;
     rc = integrate(b->f, K, 1, ENG_FINE, &r, err);
@@ -1681,10 +1734,10 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     return 0;
 }
 
-int bkf_floquet_threshold_branch(bkf_floquet_param along, double from, double to, double gamma,
-                                 double c, double nu_lo, double nu_hi,
-                                 const bkf_floquet_options *options, size_t max_points,
-                                 bkf_floquet_threshold_visit visit, void *data, bkf_error *err)
+static int floquet_threshold_branch_body(bkf_floquet_param along, double from, double to, double gamma,
+                                         double c, double nu_lo, double nu_hi,
+                                         const bkf_floquet_options *options, size_t max_points,
+                                         bkf_floquet_threshold_visit visit, void *data, bkf_error *err)
 {
     if (!visit) return bkf_error_set(err, BKF_EINPUT, "threshold visit callback is NULL");
     if (along != BKF_FLOQUET_ALONG_C && along != BKF_FLOQUET_ALONG_GAMMA)
@@ -1748,5 +1801,16 @@ int bkf_floquet_threshold_branch(bkf_floquet_param along, double from, double to
     bkf_floquet_free(b.f);
     if (b.visit_status > 0) return b.visit_status;
     if (b.visit_status < 0) return BKF_OK;
+    return rc;
+}
+
+int bkf_floquet_threshold_branch(bkf_floquet_param along, double from, double to, double gamma,
+                                 double c, double nu_lo, double nu_hi,
+                                 const bkf_floquet_options *options, size_t max_points,
+                                 bkf_floquet_threshold_visit visit, void *data, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = floquet_threshold_branch_body(along, from, to, gamma, c, nu_lo, nu_hi, options, max_points, visit, data, err);
+    bkf_gsl_handler_pop(handler);
     return rc;
 }

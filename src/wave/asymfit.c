@@ -67,7 +67,7 @@ static int solve_period(solver *sv, double mu, double nu, double *T, double *T_e
     bkf_error e = {{0}};
     sv->solves++;
     int s = bkf_cycle_solve(sv->cycle, mu, nu, &opt, &e);
-    if (s == BKF_ENUMERIC) {
+    if (bkf_status_is_numerical(s)) {
         opt.tol = BKF_ASYMFIT_TOL_FALLBACK;
         sv->solves++;
         s = bkf_cycle_solve(sv->cycle, mu, nu, &opt, &e);
@@ -327,8 +327,8 @@ static double spread(double full, double err, double lower, double upper)
     return fmax(err, fmax(fabs(lower - full), fabs(upper - full)));
 }
 
-int bkf_asymfit_correction(const double *mu, const double *R, size_t n, double p_lo,
-                           double p_hi, bkf_asymfit_large_result *result, bkf_error *err)
+static int asymfit_correction_body(const double *mu, const double *R, size_t n, double p_lo,
+                                   double p_hi, bkf_asymfit_large_result *result, bkf_error *err)
 {
     if (!mu || !R || !result) return bkf_error_set(err, BKF_EINPUT, "NULL argument");
     if (n < 10 || n > BKF_ASYMFIT_MAX_POINTS)
@@ -346,7 +346,6 @@ int bkf_asymfit_correction(const double *mu, const double *R, size_t n, double p
             return bkf_error_set(err, BKF_EINPUT, "R[%zu] = %g: must be finite and nonzero",
                                  i, R[i]);
     }
-    gsl_set_error_handler_off();
 
     lsq q;
     int s = lsq_init(&q, n, err);
@@ -393,13 +392,22 @@ int bkf_asymfit_correction(const double *mu, const double *R, size_t n, double p
     return BKF_OK;
 }
 
+int bkf_asymfit_correction(const double *mu, const double *R, size_t n, double p_lo,
+                           double p_hi, bkf_asymfit_large_result *result, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = asymfit_correction_body(mu, R, n, p_lo, p_hi, result, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
+
 bkf_asymfit_large_options bkf_asymfit_large_options_default(void)
 {
     return (bkf_asymfit_large_options){1e2, 1e4, 12, -0.9, -0.05};
 }
 
-int bkf_asymfit_large(double nu, const bkf_asymfit_large_options *options,
-                      bkf_asymfit_large_result *result, bkf_error *err)
+static int asymfit_large_body(double nu, const bkf_asymfit_large_options *options,
+                              bkf_asymfit_large_result *result, bkf_error *err)
 {
     bkf_asymfit_large_options o = options ? *options : bkf_asymfit_large_options_default();
     if (!result) return bkf_error_set(err, BKF_EINPUT, "NULL result");
@@ -452,6 +460,15 @@ int bkf_asymfit_large(double nu, const bkf_asymfit_large_options *options,
     return s;
 }
 
+int bkf_asymfit_large(double nu, const bkf_asymfit_large_options *options,
+                      bkf_asymfit_large_result *result, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = asymfit_large_body(nu, options, result, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
+
 /* ---- the small-mu fit ---------------------------------------------------- */
 
 bkf_asymfit_small_options bkf_asymfit_small_options_default(void)
@@ -485,8 +502,8 @@ static int fit_small_rows(lsq *q, const double *mu, const double *y, size_t firs
     return GSL_SUCCESS;
 }
 
-int bkf_asymfit_small(double nu, const bkf_asymfit_small_options *options,
-                      bkf_asymfit_small_result *result, bkf_error *err)
+static int asymfit_small_body(double nu, const bkf_asymfit_small_options *options,
+                              bkf_asymfit_small_result *result, bkf_error *err)
 {
     bkf_asymfit_small_options o = options ? *options : bkf_asymfit_small_options_default();
     if (!result) return bkf_error_set(err, BKF_EINPUT, "NULL result");
@@ -501,7 +518,6 @@ int bkf_asymfit_small(double nu, const bkf_asymfit_small_options *options,
     if (o.npoints < 6 || o.npoints > BKF_ASYMFIT_MAX_POINTS)
         return bkf_error_set(err, BKF_EINPUT, "npoints = %zu: need 6 to %u", o.npoints,
                              BKF_ASYMFIT_MAX_POINTS);
-    gsl_set_error_handler_off();
 
     size_t n = o.npoints;
     double *mu = malloc(2 * n * sizeof *mu);
@@ -553,6 +569,15 @@ int bkf_asymfit_small(double nu, const bkf_asymfit_small_options *options,
     return s;
 }
 
+int bkf_asymfit_small(double nu, const bkf_asymfit_small_options *options,
+                      bkf_asymfit_small_result *result, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = asymfit_small_body(nu, options, result, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
+
 /* ---- formulas, grid, validity map ---------------------------------------- */
 
 const char *bkf_asymfit_formula_name(bkf_asymfit_formula formula)
@@ -598,8 +623,8 @@ static int check_mu_value(const char *name, double mu, bkf_error *err)
     return BKF_OK;
 }
 
-int bkf_asymfit_grid(const double *mu, size_t nmu, const double *nu, size_t nnu,
-                     bkf_asymfit_grid_point *out, bkf_error *err)
+static int asymfit_grid_body(const double *mu, size_t nmu, const double *nu, size_t nnu,
+                             bkf_asymfit_grid_point *out, bkf_error *err)
 {
     if (!mu || !nu || !out) return bkf_error_set(err, BKF_EINPUT, "NULL argument");
     if (nmu == 0 || nnu == 0 || nmu > 1000000u / nnu)
@@ -625,6 +650,15 @@ int bkf_asymfit_grid(const double *mu, size_t nmu, const double *nu, size_t nnu,
     return s;
 }
 
+int bkf_asymfit_grid(const double *mu, size_t nmu, const double *nu, size_t nnu,
+                     bkf_asymfit_grid_point *out, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = asymfit_grid_body(mu, nmu, nu, nnu, out, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
+
 bkf_asymfit_map_options bkf_asymfit_map_options_default(void)
 {
     return (bkf_asymfit_map_options){1e-3, 1e4, 8, 1.02};
@@ -647,9 +681,9 @@ static int refine(solver *sv, bkf_asymfit_formula f, double eps, double nu, doub
     return BKF_OK;
 }
 
-int bkf_asymfit_map(const double *nu, size_t nnu, const double *eps, size_t neps,
-                    const bkf_asymfit_map_options *options, bkf_asymfit_boundary *out,
-                    bkf_error *err)
+static int asymfit_map_body(const double *nu, size_t nnu, const double *eps, size_t neps,
+                            const bkf_asymfit_map_options *options, bkf_asymfit_boundary *out,
+                            bkf_error *err)
 {
     bkf_asymfit_map_options o = options ? *options : bkf_asymfit_map_options_default();
     if (!nu || !eps || !out) return bkf_error_set(err, BKF_EINPUT, "NULL argument");
@@ -727,4 +761,14 @@ int bkf_asymfit_map(const double *nu, size_t nnu, const double *eps, size_t neps
     solver_free(&sv);
     free(mu);
     return s;
+}
+
+int bkf_asymfit_map(const double *nu, size_t nnu, const double *eps, size_t neps,
+                    const bkf_asymfit_map_options *options, bkf_asymfit_boundary *out,
+                    bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = asymfit_map_body(nu, nnu, eps, neps, options, out, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
 }

@@ -287,7 +287,7 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
     gsl_odeiv2_step_reset(main_in->step);
     for (size_t n = 0;; n++) {
         if (n > MAX_STEPS_PER_PERIOD)
-            return bkf_error_set(err, BKF_ENUMERIC,
+            return bkf_error_set(err, BKF_EBUDGET,
                                  "cycle at mu = %g, nu = %g: no return to the section after %d steps",
                                  p->mu, p->nu, MAX_STEPS_PER_PERIOD);
         memcpy(s_prev, s, sizeof s);
@@ -547,13 +547,11 @@ static void store_result(bkf_cycle *c, const converged *a, const converged *b, d
     c->profile_stepper = p->mu <= 100 ? BKF_STEPPER_EXPLICIT : kind;
 }
 
-int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
-                    bkf_error *err)
+static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
+                            bkf_error *err)
 {
     if (!c) return bkf_error_set(err, BKF_EINPUT, "cycle object is NULL");
     bkf_cycle_options opt = options ? *options : bkf_cycle_options_default();
-    /* GSL's default handler aborts; every GSL status is checked here instead */
-    gsl_set_error_handler_off();
     int rc = check_inputs(mu, nu, &opt, err);
     if (rc != BKF_OK) return rc;
 
@@ -677,7 +675,7 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
         period_err = capped_floor(period_err, &fine, b.period);
         if (period_err <= opt.tol * b.period || attempt == 3 || tol_int / TOL_RATIO <= tol_floor) {
             if (period_err > opt.tol * b.period) {
-                rc = bkf_error_set(err, BKF_ENUMERIC,
+                rc = bkf_error_set(err, BKF_ETOL,
                                    "cycle at mu = %g, nu = %g: estimated relative error %.2g of T "
                                    "exceeds tol = %g",
                                    mu, nu, period_err / b.period, opt.tol);
@@ -703,6 +701,15 @@ done:
         /* keep the previous solution usable: restore its flow */
         if (c->have_solution) c->flow = previous;
     }
+    return rc;
+}
+
+int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
+                    bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = cycle_solve_body(c, mu, nu, options, err);
+    bkf_gsl_handler_pop(handler);
     return rc;
 }
 
@@ -769,7 +776,7 @@ int bkf_cycle_estimate(bkf_cycle *c, double mu, double nu, const bkf_cycle_optio
             return BKF_OK;
         }
         if (method != BKF_METHOD_AUTO)
-            return bkf_error_set(err, BKF_ENUMERIC,
+            return bkf_error_set(err, BKF_ETOL,
                                  "%s formula at mu = %g, nu = %g: error bound %.2g exceeds tol = %g "
                                  "(outside its validity; use shooting)",
                                  method == BKF_METHOD_LEADING ? "leading" : "asymptotic", mu, nu,
@@ -783,7 +790,7 @@ int bkf_cycle_estimate(bkf_cycle *c, double mu, double nu, const bkf_cycle_optio
 
 /* ------------------------------------------------------------- profile */
 
-int bkf_cycle_profile(bkf_cycle *c, double z, double *f, double *fprime, bkf_error *err)
+static int cycle_profile_body(bkf_cycle *c, double z, double *f, double *fprime, bkf_error *err)
 {
     if (!c || !c->have_solution)
         return bkf_error_set(err, BKF_EINPUT, "profile requested before a successful solve");
@@ -811,6 +818,14 @@ int bkf_cycle_profile(bkf_cycle *c, double z, double *f, double *fprime, bkf_err
     if (f) *f = s[IX];
     if (fprime) *fprime = flow_xdot(&c->flow, s);
     return BKF_OK;
+}
+
+int bkf_cycle_profile(bkf_cycle *c, double z, double *f, double *fprime, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = cycle_profile_body(c, z, f, fprime, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
 }
 
 /* -------------------------------------------------------------- branch */
@@ -910,9 +925,9 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     return 0;
 }
 
-int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed,
-                     const bkf_cycle_options *options, size_t max_points, bkf_cycle_visit visit,
-                     void *data, bkf_error *err)
+static int cycle_branch_body(bkf_cycle_param along, double from, double to, double fixed,
+                             const bkf_cycle_options *options, size_t max_points, bkf_cycle_visit visit,
+                             void *data, bkf_error *err)
 {
     if (!visit) return bkf_error_set(err, BKF_EINPUT, "visit callback is NULL");
     if (along != BKF_CYCLE_ALONG_MU && along != BKF_CYCLE_ALONG_NU)
@@ -957,5 +972,15 @@ int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed
     bkf_cycle_free(b.cycle);
     if (b.visit_status > 0) return b.visit_status;
     if (b.visit_status < 0) return BKF_OK;
+    return rc;
+}
+
+int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed,
+                     const bkf_cycle_options *options, size_t max_points, bkf_cycle_visit visit,
+                     void *data, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = cycle_branch_body(along, from, to, fixed, options, max_points, visit, data, err);
+    bkf_gsl_handler_pop(handler);
     return rc;
 }

@@ -164,7 +164,7 @@ static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf
     bkf_stepper_kind first = mu <= STEPPER_SWITCH_MU ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_IMPLICIT;
     bkf_error e = {{0}};
     int rc = BKF_ENUMERIC;
-    for (int attempt = 0; attempt < 3 && rc == BKF_ENUMERIC; attempt++) {
+    for (int attempt = 0; attempt < 3 && bkf_status_is_numerical(rc); attempt++) {
         o.stepper = attempt < 2 ? first
                     : first == BKF_STEPPER_EXPLICIT ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
         o.warm_start = attempt == 0;
@@ -203,7 +203,7 @@ static int make_sample(grid *g, double s, int precise, sample *out, bkf_error *e
 static int insert_sample(grid *g, const sample *smp, bkf_error *err)
 {
     if (g->count >= MAX_SAMPLES)
-        return bkf_error_set(err, BKF_ENUMERIC,
+        return bkf_error_set(err, BKF_EBUDGET,
                              "bracketing needed more than %d samples of T (near mu = %g)",
                              MAX_SAMPLES, smp->mu);
     if (g->count == g->cap) {
@@ -425,7 +425,7 @@ static int build_grid(search *sr, double n_target, bkf_error *err)
         for (int k = 0;; k++) {
             double at = fmin(s_next + 0.1 * GRID_STEP * k, s_cap);
             rc = add_sample(g, at, err);
-            if (rc != BKF_ENUMERIC || k == 5 || at == s_cap) break;
+            if (!bkf_status_is_numerical(rc) || k == 5 || at == s_cap) break;
         }
         if (rc) return rc;
     }
@@ -446,7 +446,7 @@ static int refine_cell(search *sr, size_t i, double n, int *inserted, bkf_error 
         *inserted = 1;
         return BKF_OK;
     }
-    if (rc != BKF_ENUMERIC) {
+    if (!bkf_status_is_numerical(rc)) {
         if (err) *err = e;
         return rc;
     }
@@ -461,7 +461,7 @@ static int try_upgrade(search *sr, size_t j, double n, bkf_error *err)
 {
     bkf_error e = {{0}};
     int rc = upgrade(&sr->g, j, &e);
-    if (rc == BKF_ENUMERIC) {
+    if (bkf_status_is_numerical(rc)) {
         sr->g.x[j].precise = 1;
         note_unresolved(sr, n, sr->g.x[j].mu, "T not computable to tol here");
         return BKF_OK;
@@ -584,7 +584,7 @@ static double polish_f(double s, void *data)
         if (pc->ev[i].s == s) return pc->ev[i].D;
     if (pc->status) return NAN;
     if (pc->nev == MAX_POLISH_EVALS) {
-        pc->status = bkf_error_set(pc->err, BKF_ENUMERIC,
+        pc->status = bkf_error_set(pc->err, BKF_EBUDGET,
                                    "root polishing needed more than %d solves near mu = %g",
                                    MAX_POLISH_EVALS, mu_of_s(pc->g->p.gamma, s));
         return NAN;
@@ -783,7 +783,7 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
         }
         g->formula_refused = 1;
         if (g->method != BKF_METHOD_AUTO)
-            return bkf_error_set(err, BKF_ENUMERIC,
+            return bkf_error_set(err, BKF_ETOL,
                                  "%s formula for n = %.0f at mu = %g, nu = %g: error bound %.2g "
                                  "exceeds the tolerance %g of T this root needs (outside its "
                                  "validity; use --method shooting or auto)",
@@ -969,15 +969,14 @@ static int find_c0(const bkf_model_params *p, const bkf_speeds_options *o, bkf_s
     return BKF_OK;
 }
 
-int bkf_speeds_find(const bkf_model_params *p, const bkf_speeds_options *options,
-                    bkf_speeds_table *t, bkf_error *err)
+static int speeds_find_body(const bkf_model_params *p, const bkf_speeds_options *options,
+                            bkf_speeds_table *t, bkf_error *err)
 {
     if (!t) return bkf_error_set(err, BKF_EINPUT, "table is NULL");
     memset(t, 0, sizeof *t);
     bkf_speeds_options o = options ? *options : bkf_speeds_options_default();
     int rc = bkf_speeds_check(p, &o, err);
     if (rc) return rc;
-    gsl_set_error_handler_off();
     t->k = bkf_asym_k(p->nu);
     t->n_bound = p->c > 0 ? p->S / (t->k * p->c * p->gamma) : INFINITY;
     if (p->c == 0) return find_c0(p, &o, t, err);
@@ -1049,7 +1048,7 @@ int bkf_speeds_find(const bkf_model_params *p, const bkf_speeds_options *options
                 }
                 bkf_error pe = {{0}};
                 rc = polish(g, fs, n, i, &found[nfound], &pe);
-                if (rc == BKF_ENUMERIC && !g->formula_refused) {
+                if (bkf_status_is_numerical(rc) && !g->formula_refused) {
                     /* one root lost is reported, not the whole table */
                     note_unresolved(&sr, n, g->x[i].mu, "root not polished (T failed)");
                     rc = BKF_OK;
@@ -1138,6 +1137,15 @@ done:
     bkf_cycle_free(g->coarse);
     bkf_cycle_free(g->precise);
     if (fs) gsl_root_fsolver_free(fs);
+    return rc;
+}
+
+int bkf_speeds_find(const bkf_model_params *p, const bkf_speeds_options *options,
+                    bkf_speeds_table *t, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = speeds_find_body(p, options, t, err);
+    bkf_gsl_handler_pop(handler);
     return rc;
 }
 
@@ -1375,10 +1383,10 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     return branch_visit(b, &pt);
 }
 
-int bkf_speeds_branch(const bkf_model_params *start, size_t n, size_t root_index,
-                      bkf_speeds_param along, double to, const bkf_speeds_options *options,
-                      size_t max_points, bkf_speeds_visit visit, void *data,
-                      bkf_speeds_branch_report *report, bkf_error *err)
+static int speeds_branch_body(const bkf_model_params *start, size_t n, size_t root_index,
+                              bkf_speeds_param along, double to, const bkf_speeds_options *options,
+                              size_t max_points, bkf_speeds_visit visit, void *data,
+                              bkf_speeds_branch_report *report, bkf_error *err)
 {
     if (report) memset(report, 0, sizeof *report);
     if (!visit) return bkf_error_set(err, BKF_EINPUT, "visit callback is NULL");
@@ -1446,7 +1454,6 @@ int bkf_speeds_branch(const bkf_model_params *start, size_t n, size_t root_index
     b.err = err;
     b.cycle = bkf_cycle_alloc();
     if (!b.cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    gsl_set_error_handler_off();
 
     double u0[2] = {0.5 * log((mu0 - start->gamma) * (mu0 + start->gamma)), from};
     /* scale p so that G changes by ~1 per unit: steps weigh s and p alike */
@@ -1480,4 +1487,15 @@ int bkf_speeds_branch(const bkf_model_params *start, size_t n, size_t root_index
     if (b.stop_status < 0) return BKF_OK;
     if (rc) return bkf_error_set(err, rc, "continuation in %s: %s", param_name(along), ce.message);
     return BKF_OK;
+}
+
+int bkf_speeds_branch(const bkf_model_params *start, size_t n, size_t root_index,
+                      bkf_speeds_param along, double to, const bkf_speeds_options *options,
+                      size_t max_points, bkf_speeds_visit visit, void *data,
+                      bkf_speeds_branch_report *report, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = speeds_branch_body(start, n, root_index, along, to, options, max_points, visit, data, report, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
 }

@@ -45,7 +45,7 @@ static inline char *fuzz_string(const uint8_t *data, size_t size)
 static inline void fuzz_check_status(int status, const bkf_error *err)
 {
     FUZZ_CHECK(status == BKF_OK || status == BKF_EINPUT || status == BKF_ENOMEM ||
-               status == BKF_ENUMERIC);
+               bkf_status_is_numerical(status));
     if (status == BKF_OK) return;
     FUZZ_CHECK(err->message[0] != '\0');
     for (const unsigned char *p = (const unsigned char *)err->message; *p; p++)

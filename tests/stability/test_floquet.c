@@ -35,7 +35,7 @@ static bkf_floquet_point eval(bkf_floquet *f, double q)
     bkf_floquet_point p;
     bkf_error e;
     int rc = bkf_floquet_eval(f, q, &p, &e);
-    int refused = rc == BKF_ENUMERIC && isfinite(p.lambda_err) && strstr(e.message, "exceeds tol");
+    int refused = rc == BKF_ETOL && isfinite(p.lambda_err) && strstr(e.message, "exceeds tol");
     CHECK_MSG(rc == BKF_OK || refused, "q %g: %s", q, e.message);
     if (refused) {
         refusals++;
@@ -45,7 +45,7 @@ static bkf_floquet_point eval(bkf_floquet *f, double q)
 }
 
 /* A reference at a tolerance near what doubles allow: bkf_floquet_eval may
- * refuse it (BKF_ENUMERIC, its estimate up to ~2e-11 at lambda -18); the best
+ * refuse it (BKF_ETOL, its estimate up to ~2e-11 at lambda -18); the best
  * attempt it leaves in the point, with that estimate, is still a reference
  * for tolerances >= 1e-10, and the callers subtract its estimate. */
 static bkf_floquet_point eval_ref(bkf_floquet *f, double q)
@@ -53,7 +53,7 @@ static bkf_floquet_point eval_ref(bkf_floquet *f, double q)
     bkf_floquet_point p;
     bkf_error e;
     int rc = bkf_floquet_eval(f, q, &p, &e);
-    CHECK_MSG(rc == BKF_OK || (rc == BKF_ENUMERIC && p.lambda_err <= 1e-10 * fmax(1.0, fabs(p.lambda))), "q %g: %s", q, e.message);
+    CHECK_MSG(rc == BKF_OK || (rc == BKF_ETOL && p.lambda_err <= 1e-10 * fmax(1.0, fabs(p.lambda))), "q %g: %s", q, e.message);
     return p;
 }
 

@@ -1,0 +1,22 @@
+/* Every public header of libbkfront, for programs that use the library (in C
+ * or C++).  Library code includes the headers it needs, never this one: the
+ * layers (CONTRIBUTING.md) would not hold. */
+#ifndef BKFRONT_BKFRONT_H
+#define BKFRONT_BKFRONT_H
+
+#include "bkfront/status.h"
+#include "bkfront/version.h"
+#include "bkfront/model.h"
+#include "bkfront/io.h"
+#include "bkfront/asymptotics.h"
+#include "bkfront/continuation.h"
+#include "bkfront/cycle.h"
+#include "bkfront/speeds.h"
+#include "bkfront/asymfit.h"
+#include "bkfront/floquet.h"
+#include "bkfront/pde.h"
+#include "bkfront/comoving.h"
+#include "bkfront/measure.h"
+#include "bkfront/plot.h"
+
+#endif

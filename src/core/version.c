@@ -1,0 +1,3 @@
+#include "bkfront/version.h"
+
+const char *bkf_version(void) { return BKF_VERSION_STRING; }
