@@ -17,6 +17,8 @@
 #include "bkfront/pde.h"
 #include "bkfront/comoving.h"
 #include "bkfront/measure.h"
+#include "bkfront/bench.h"
+#include "bkfront/check.h"
 #include "bkfront/plot.h"
 
 #endif
