@@ -19,6 +19,9 @@
 #include "bkfront/measure.h"
 #include "bkfront/bench.h"
 #include "bkfront/check.h"
+#include "bkfront/options.h"
+#include "bkfront/period.h"
+#include "bkfront/profile.h"
 #include "bkfront/plot.h"
 
 #endif
