@@ -18,6 +18,7 @@
 #include "bkfront/comoving.h"
 #include "bkfront/measure.h"
 #include "bkfront/bench.h"
+#include "bkfront/catalog.h"
 #include "bkfront/check.h"
 #include "bkfront/options.h"
 #include "bkfront/period.h"

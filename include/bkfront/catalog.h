@@ -1,0 +1,66 @@
+/* The catalogue of products: every product bkfront computes, by name, with
+ * its table of option keys and the calls that fill, check and write it.
+ *
+ * It is how scenes (and the command line) reach a product without knowing
+ * it: make a spec (bkf_catalog_spec_new: the product's defaults), apply
+ * key = value texts through the product's own option table
+ * (bkf_catalog_apply: the validation every flag and scene key shares),
+ * check the whole spec, write the table.  A product's numerics live in its
+ * own module (period.h, profile.h, check.h, ...); an entry only adapts
+ * them to one shape.  The library never prints and never exits. */
+#ifndef BKFRONT_CATALOG_H
+#define BKFRONT_CATALOG_H
+
+#include <signal.h>
+#include <stddef.h>
+#include <stdio.h>
+#include "bkfront/io.h"
+#include "bkfront/options.h"
+#include "bkfront/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* What a long product may report and obey; every field may be NULL. */
+typedef struct {
+    int (*progress)(double fraction, void *data); /* fraction in [0, 1] */
+    void (*warn)(const char *message, void *data); /* one line, kept going */
+    void *data;
+    const volatile sig_atomic_t *cancel;          /* raised: BKF_ECANCELED */
+} bkf_catalog_hooks;
+
+typedef struct {
+    const char *name;     /* "period": the subcommand and the key of a scene step */
+    const char *summary;  /* one line */
+    const char *usage;    /* the usage lines and description, before the options */
+    const char *columns;  /* the columns and exit status, after the options */
+    size_t spec_size;
+    const bkf_option *(*options)(size_t *count);
+    void (*init)(void *spec);                              /* the defaults */
+    int (*check)(const void *spec, const char *prefix, bkf_error *err);
+    int (*write)(const void *spec, FILE *out, bkf_io_format format,
+                 const bkf_provenance *provenance, const bkf_catalog_hooks *hooks,
+                 bkf_error *err);
+    void (*release)(void *spec);                           /* frees lists; not the spec */
+} bkf_catalog_entry;
+
+size_t bkf_catalog_count(void);
+const bkf_catalog_entry *bkf_catalog_at(size_t i);
+/* NULL when there is no such product. */
+const bkf_catalog_entry *bkf_catalog_find(const char *name);
+
+/* A spec with the product's defaults (NULL with err: out of memory). */
+void *bkf_catalog_spec_new(const bkf_catalog_entry *entry, bkf_error *err);
+void bkf_catalog_spec_free(const bkf_catalog_entry *entry, void *spec);
+
+/* key = text through the product's table; a switch takes NULL (or, from a
+ * scene, "yes"/"no").  An unknown key is BKF_EINPUT naming the product. */
+int bkf_catalog_apply(const bkf_catalog_entry *entry, void *spec, const char *key,
+                      const char *text, const char *prefix, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
