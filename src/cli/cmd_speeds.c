@@ -12,26 +12,11 @@
 #include <string.h>
 
 #include "bkfront/cycle.h"
+#include "bkfront/fronts.h"
 #include "bkfront/io.h"
 #include "bkfront/model.h"
+#include "bkfront/product.h"
 #include "bkfront/speeds.h"
-
-/* The columns of one root, shared by both tables. */
-#define ROOT_COLUMNS                                                                   \
-    {"n", BKF_IO_NUMBER}, {"v", BKF_IO_NUMBER}, {"mu", BKF_IO_NUMBER},                 \
-    {"T", BKF_IO_NUMBER}, {"T_err", BKF_IO_NUMBER}, {"v_over_c", BKF_IO_NUMBER},       \
-    {"wavelength", BKF_IO_NUMBER}, {"period_fixed", BKF_IO_NUMBER},                    \
-    {"v_asym", BKF_IO_NUMBER}, {"deviation", BKF_IO_NUMBER}, {"v_err", BKF_IO_NUMBER}, \
-    {"model", BKF_IO_TEXT}, {"residual", BKF_IO_NUMBER}, {"slope", BKF_IO_NUMBER},         \
-    {"flags", BKF_IO_TEXT}
-#define NROOT 15
-
-static const bkf_io_column speeds_columns[] = {ROOT_COLUMNS};
-static const bkf_io_column branch_columns[] = {
-    {"point", BKF_IO_TEXT}, {"S", BKF_IO_NUMBER},  {"gamma", BKF_IO_NUMBER},
-    {"c", BKF_IO_NUMBER},   {"nu", BKF_IO_NUMBER}, ROOT_COLUMNS};
-#define NSPEEDS (sizeof speeds_columns / sizeof speeds_columns[0])
-#define NBRANCH (sizeof branch_columns / sizeof branch_columns[0])
 
 static const char *const format_names[] = {"tsv", "json", NULL};
 
@@ -144,14 +129,6 @@ static void branch_help(FILE *out)
         BKF_TOL_MIN, BKF_TOL_MAX);
 }
 
-/* Shortest of %.15g / %.17g that reads back exactly. */
-static const char *num(double x, char *buf, size_t size)
-{
-    snprintf(buf, size, "%.15g", x);
-    if (strtod(buf, NULL) != x) snprintf(buf, size, "%.17g", x);
-    return buf;
-}
-
 /* ------------------------------------------------------- shared parsing */
 
 typedef struct {
@@ -228,63 +205,32 @@ static int parse_common(const common_flags *f, int skip, common_plan *plan, bkf_
     return BKF_OK;
 }
 
-static const char *flag_text(unsigned flags)
-{
-    if ((flags & BKF_SPEEDS_NEAR_TANGENT) && (flags & BKF_SPEEDS_ASYMPTOTIC))
-        return "near-tangent,asymptotic";
-    if (flags & BKF_SPEEDS_NEAR_TANGENT) return "near-tangent";
-    if (flags & BKF_SPEEDS_ASYMPTOTIC) return "asymptotic";
-    return "";
-}
+/* The product's table, built in memory and written all or nothing, with
+ * the program in its title and the command line after its comments. */
+typedef int (*write_fn)(const void *spec, const bkf_product_output *out, bkf_error *err);
 
-static void root_values(const bkf_speeds_root *r, bkf_io_value *v)
-{
-    v[0].number = (double)r->n;
-    v[1].number = r->v;
-    v[2].number = r->mu;
-    v[3].number = r->T;
-    v[4].number = r->T_err;
-    v[5].number = r->v_over_c;
-    v[6].number = r->wavelength;
-    v[7].number = r->period_fixed;
-    v[8].number = r->v_asym;
-    v[9].number = r->deviation;
-    v[10].number = r->v_err;
-    v[11].text = r->model ? r->model : "shooting";
-    v[12].number = r->residual;
-    v[13].number = r->slope;
-    v[14].text = flag_text(r->flags);
-}
-
-static int comment_command(bkf_io_table *table, int argc, char **argv, bkf_error *err)
+static int write_product(const common_plan *plan, write_fn write, const void *spec, int argc,
+                         char **argv, bkf_error *err)
 {
     char *cmd = cli_command_line(argc, argv);
-    if (!cmd) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    size_t n = strlen(cmd) + 32;
-    char *text = malloc(n);
-    if (!text) {
+    size_t n = cmd ? strlen(cmd) + 32 : 0;
+    char *command = cmd ? malloc(n) : NULL;
+    if (!command) {
         free(cmd);
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
-    snprintf(text, n, "command: " CLI_PROGRAM " %s", cmd);
-    int s = bkf_io_table_comment(table, text, err);
-    free(text);
+    snprintf(command, n, "command: " CLI_PROGRAM " %s", cmd);
     free(cmd);
-    return s;
-}
-
-/* Build into a memory buffer with `fill`, then write it all or nothing. */
-typedef int (*fill_fn)(const void *plan, int argc, char **argv, FILE *stream, bkf_error *err);
-
-static int run_all_or_nothing(const char *out_path, fill_fn fill, const void *plan, int argc,
-                              char **argv, bkf_error *err)
-{
     cli_output out = {0};
     cli_buffer buf = {0};
-    int s = cli_output_open(&out, out_path, "--out", err);
+    int s = cli_output_open(&out, plan->out_path, "--out", err);
     if (!s) s = cli_buffer_open(&buf, err);
     if (!s) {
-        s = fill(plan, argc, argv, buf.stream, err);
+        bkf_product_output po = bkf_product_output_default(buf.stream);
+        po.format = plan->format;
+        po.program = CLI_PROGRAM " " CLI_VERSION;
+        po.command = command;
+        s = write(spec, &po, err);
         int c = cli_buffer_close(&buf, s ? NULL : err);
         if (!s) s = c;
     }
@@ -293,7 +239,18 @@ static int run_all_or_nothing(const char *out_path, fill_fn fill, const void *pl
     else
         cli_output_abort(&out);
     cli_buffer_free(&buf);
+    free(command);
     return s;
+}
+
+static int write_speeds(const void *spec, const bkf_product_output *out, bkf_error *err)
+{
+    return bkf_fronts_write(spec, out, NULL, err);
+}
+
+static int write_branch(const void *spec, const bkf_product_output *out, bkf_error *err)
+{
+    return bkf_fronts_branch_write(spec, out, err);
 }
 
 /* --------------------------------------------------------------- speeds */
@@ -356,79 +313,16 @@ static int plan_speeds(int argc, char **argv, speeds_plan *plan, bkf_error *err)
     return BKF_OK;
 }
 
-static int fill_speeds(const void *vplan, int argc, char **argv, FILE *stream, bkf_error *err)
-{
-    const speeds_plan *plan = vplan;
-    const bkf_model_params *p = &plan->common.params;
-    bkf_speeds_table t;
-    int s = bkf_speeds_find(p, &plan->options, &t, err);
-    if (s) {
-        bkf_speeds_table_free(&t);
-        return s;
-    }
-    bkf_io_table *table = bkf_io_table_alloc(stream, plan->common.format, speeds_columns, NSPEEDS, err);
-    if (!table) {
-        bkf_speeds_table_free(&t);
-        return BKF_ENOMEM;
-    }
-    char a[32], b[32], c[32], d[32], e[32], line[640];
-    s = bkf_io_table_comment(
-        table,
-        CLI_PROGRAM " " CLI_VERSION " speeds: roots v > c of n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)), "
-        "mu(v) = gamma / sqrt(1 - c^2/v^2)",
-        err);
-    if (!s) {
-        snprintf(line, sizeof line, "gamma %s, c %s, nu %s, S %s; tol %s (relative, on v)",
-                 num(p->gamma, a, sizeof a), num(p->c, b, sizeof b), num(p->nu, c, sizeof c),
-                 num(p->S, d, sizeof d), num(plan->options.tol, e, sizeof e));
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) {
-        if (p->c > 0)
-            snprintf(line, sizeof line,
-                     "n_max %ld; n_bound = S/(k c gamma) = %.17g with k(nu) = %.17g; "
-                     "inf of T/sqrt(mu^2 - gamma^2) over mu > gamma: %.17g (%s)",
-                     t.n_max, t.n_bound, t.k, t.g_inf,
-                     t.dips_below_k ? "dips below k: some n >= n_bound have roots"
-                                    : "= k, approached as mu -> inf");
-        else
-            snprintf(line, sizeof line,
-                     "n_max: none (c = 0, every n has a front); k(nu) = %.17g", t.k);
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) {
-        snprintf(line, sizeof line,
-                 "work: %zu grid samples (%zu solves at the coarse tolerance), %zu solves at "
-                 "the roots' tolerance, %zu values of T from a formula, largest mu %.6g; "
-                 "method %s",
-                 t.samples, t.coarse_solves, t.precise_solves, t.formula_answers, t.mu_grid_max,
-                 bkf_cycle_method_name(plan->options.method));
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s && t.note[0]) {
-        snprintf(line, sizeof line, "note: %s", t.note);
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) s = comment_command(table, argc, argv, err);
-    for (size_t i = 0; !s && i < t.count; i++) {
-        bkf_io_value v[NSPEEDS];
-        memset(v, 0, sizeof v);
-        root_values(&t.roots[i], v);
-        s = bkf_io_table_row(table, v, err);
-    }
-    if (!s) s = bkf_io_table_finish(table, err);
-    bkf_io_table_free(table);
-    bkf_speeds_table_free(&t);
-    return s;
-}
-
 static int speeds_run(int argc, char **argv, bkf_error *err)
 {
     speeds_plan plan;
     memset(&plan, 0, sizeof plan);
     int s = plan_speeds(argc, argv, &plan, err);
     if (s) return s;
-    return run_all_or_nothing(plan.common.out_path, fill_speeds, &plan, argc, argv, err);
+    bkf_fronts_spec spec = bkf_fronts_spec_default();
+    spec.params = plan.common.params;
+    spec.options = plan.options;
+    return write_product(&plan.common, write_speeds, &spec, argc, argv, err);
 }
 
 const cli_command cli_cmd_speeds = {
@@ -522,123 +416,22 @@ static int plan_branch(int argc, char **argv, branch_plan *plan, bkf_error *err)
     return BKF_OK;
 }
 
-typedef struct {
-    bkf_speeds_branch_point *points;
-    size_t count, cap;
-    int status;
-} branch_sink;
-
-static int collect_point(const bkf_speeds_branch_point *pt, void *data)
-{
-    branch_sink *sink = data;
-    if (sink->count == sink->cap) {
-        size_t cap = sink->cap ? 2 * sink->cap : 64;
-        bkf_speeds_branch_point *x = realloc(sink->points, cap * sizeof *x);
-        if (!x) {
-            sink->status = BKF_ENOMEM;
-            return 1;
-        }
-        sink->points = x;
-        sink->cap = cap;
-    }
-    sink->points[sink->count++] = *pt;
-    return 0;
-}
-
-static int fill_branch(const void *vplan, int argc, char **argv, FILE *stream, bkf_error *err)
-{
-    const branch_plan *plan = vplan;
-    bkf_speeds_options o = bkf_speeds_options_default();
-    o.tol = plan->common.tol;
-    branch_sink sink = {0};
-    bkf_speeds_branch_report rep;
-    int s = bkf_speeds_branch(&plan->common.params, plan->n, plan->root, plan->along, plan->to, &o,
-                              plan->max_points, collect_point, &sink, &rep, err);
-    if (!s && sink.status) s = bkf_error_set(err, sink.status, "out of memory");
-    bkf_io_table *table = NULL;
-    if (!s) {
-        table = bkf_io_table_alloc(stream, plan->common.format, branch_columns, NBRANCH, err);
-        if (!table) s = BKF_ENOMEM;
-    }
-    const char *pname = param_names[plan->along];
-    const bkf_model_params *p = &plan->common.params;
-    char a[32], b[32], c[32], d[32], e[32], line[640];
-    if (!s)
-        s = bkf_io_table_comment(
-            table,
-            CLI_PROGRAM " " CLI_VERSION " branch: one root v_n of n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)) "
-            "followed along one parameter by pseudo-arclength continuation",
-            err);
-    if (!s) {
-        snprintf(line, sizeof line, "%s from %s to %s; n %zu, root %zu at the start; tol %s",
-                 pname, num(plan->from, a, sizeof a), num(plan->to, b, sizeof b), plan->n,
-                 plan->root, num(plan->common.tol, c, sizeof c));
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) {
-        snprintf(line, sizeof line, "fixed: %s%s%s%s%s%s%s%s", plan->along == BKF_SPEEDS_ALONG_GAMMA ? "" : "gamma ",
-                 plan->along == BKF_SPEEDS_ALONG_GAMMA ? "" : num(p->gamma, a, sizeof a),
-                 plan->along == BKF_SPEEDS_ALONG_C ? "" : " c ",
-                 plan->along == BKF_SPEEDS_ALONG_C ? "" : num(p->c, b, sizeof b),
-                 plan->along == BKF_SPEEDS_ALONG_NU ? "" : " nu ",
-                 plan->along == BKF_SPEEDS_ALONG_NU ? "" : num(p->nu, c, sizeof c),
-                 plan->along == BKF_SPEEDS_ALONG_S ? "" : " S ",
-                 plan->along == BKF_SPEEDS_ALONG_S ? "" : num(p->S, d, sizeof d));
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) {
-        int used = snprintf(line, sizeof line, "%zu points, %zu fold(s)", rep.points, rep.folds);
-        const char *sep = " at ";
-        for (size_t i = 0; i < sink.count && used > 0 && (size_t)used < sizeof line; i++)
-            if (sink.points[i].kind == BKF_SPEEDS_FOLD) {
-                bkf_model_params q = sink.points[i].params;
-                double x = plan->along == BKF_SPEEDS_ALONG_S ? q.S
-                           : plan->along == BKF_SPEEDS_ALONG_NU ? q.nu
-                           : plan->along == BKF_SPEEDS_ALONG_GAMMA ? q.gamma : q.c;
-                used += snprintf(line + used, sizeof line - (size_t)used, "%s%s = %s (v = %s)",
-                                 sep, pname, num(x, a, sizeof a),
-                                 num(sink.points[i].root.v, e, sizeof e));
-                sep = ", ";
-            }
-        if (used > 0 && (size_t)used < sizeof line) {
-            if (rep.sonic)
-                snprintf(line + used, sizeof line - (size_t)used,
-                         "; ends at the sonic limit v -> c+ at %s = %s (S = n k(nu) c gamma)",
-                         pname, num(rep.sonic_value, a, sizeof a));
-            else if (rep.reached_end)
-                snprintf(line + used, sizeof line - (size_t)used, "; ends on the range's boundary");
-            else
-                snprintf(line + used, sizeof line - (size_t)used, "; stopped after --max-points");
-        }
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) s = comment_command(table, argc, argv, err);
-    static const char *const kinds[] = {"point", "fold", "sonic"};
-    for (size_t i = 0; !s && i < sink.count; i++) {
-        const bkf_speeds_branch_point *pt = &sink.points[i];
-        bkf_io_value v[NBRANCH];
-        memset(v, 0, sizeof v);
-        v[0].text = kinds[pt->kind];
-        v[1].number = pt->params.S;
-        v[2].number = pt->params.gamma;
-        v[3].number = pt->params.c;
-        v[4].number = pt->params.nu;
-        root_values(&pt->root, v + 5);
-        s = bkf_io_table_row(table, v, err);
-    }
-    if (!s) s = bkf_io_table_finish(table, err);
-    bkf_io_table_free(table);
-    free(sink.points);
-    return s;
-}
-
 static int branch_run(int argc, char **argv, bkf_error *err)
 {
     branch_plan plan;
     memset(&plan, 0, sizeof plan);
     int s = plan_branch(argc, argv, &plan, err);
     if (s) return s;
-    return run_all_or_nothing(plan.common.out_path, fill_branch, &plan, argc, argv, err);
+    bkf_fronts_branch_spec spec = bkf_fronts_branch_spec_default();
+    spec.params = plan.common.params;
+    spec.along = plan.along;
+    spec.from = plan.from;
+    spec.to = plan.to;
+    spec.n = plan.n;
+    spec.root = plan.root;
+    spec.max_points = plan.max_points;
+    spec.tol = plan.common.tol;
+    return write_product(&plan.common, write_branch, &spec, argc, argv, err);
 }
 
 const cli_command cli_cmd_branch = {
