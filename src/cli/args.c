@@ -9,207 +9,39 @@
 #include <string.h>
 #include <unistd.h>
 
-#define NUMBER_FORM "a finite decimal number such as 2, -0.5 or 1e-3"
-
-/* User text inside a one-line message: control characters would break the
- * line and a pasted megabyte would drown it. */
 static const char *shown(const char *text, char *buf, size_t size)
 {
-    size_t n = 0, limit = size - 4;
-    const unsigned char *s = (const unsigned char *)text;
-    for (; *s && n < limit; s++) buf[n++] = (*s < 0x20 || *s == 0x7f) ? '?' : (char)*s;
-    if (*s) {
-        memcpy(buf + n, "...", 3);
-        n += 3;
-    }
-    buf[n] = '\0';
-    return buf;
+    return bkf_option_shown(text, buf, size);
 }
 
 const char *cli_shown(const char *text, char *buf, size_t size)
 {
-    return shown(text ? text : "", buf, size);
-}
-
-static int is_nonfinite_word(const char *s)
-{
-    if (*s == '+' || *s == '-') s++;
-    static const char *const words[] = {"nan", "inf", "infinity"};
-    for (size_t i = 0; i < sizeof words / sizeof words[0]; i++) {
-        size_t n = strlen(words[i]);
-        size_t j = 0;
-        for (; j < n && s[j]; j++)
-            if ((s[j] | 0x20) != words[i][j]) break;
-        if (j == n && (s[j] == '\0' || s[j] == '(')) return 1;
-    }
-    return 0;
-}
-
-typedef enum { NUM_OK, NUM_MALFORMED, NUM_NONFINITE, NUM_OVERFLOW } number_verdict;
-
-static number_verdict read_double(const char *text, double *value)
-{
-    if (is_nonfinite_word(text)) return NUM_NONFINITE;
-    /* Only the characters of a decimal number: this is what shuts out
-     * strtod's hex floats, nan(...), infinities and leading white space. */
-    if (!*text || strspn(text, "0123456789+-.eE") != strlen(text)) return NUM_MALFORMED;
-    char *end;
-    errno = 0;
-    double x = strtod(text, &end);
-    if (end == text || *end != '\0') return NUM_MALFORMED;
-    /* ERANGE on underflow still gives a usable (tiny or zero) value. */
-    if (!isfinite(x)) return NUM_OVERFLOW;
-    *value = x;
-    return NUM_OK;
-}
-
-/* "--mu: 'abc' is not a number (...)", or with a context such as
- * "in range '1:abc:3'" after the quoted part. */
-static int number_error(bkf_error *err, const char *flag, const char *part,
-                        const char *context, number_verdict verdict)
-{
-    char a[72], b[72];
-    const char *what = verdict == NUM_NONFINITE ? "is not a finite number"
-                       : verdict == NUM_OVERFLOW ? "is too large for a double"
-                                                 : "is not a number";
-    if (context)
-        return bkf_error_set(err, BKF_EINPUT, "%s: '%s' in '%s' %s (expected %s)", flag,
-                             shown(part, a, sizeof a), shown(context, b, sizeof b), what,
-                             NUMBER_FORM);
-    return bkf_error_set(err, BKF_EINPUT, "%s: '%s' %s (expected %s)", flag,
-                         shown(part, a, sizeof a), what, NUMBER_FORM);
+    return bkf_option_shown(text, buf, size);
 }
 
 int cli_parse_double(const char *flag, const char *text, double *value, bkf_error *err)
 {
-    double x = 0;
-    number_verdict v = read_double(text ? text : "", &x);
-    if (v != NUM_OK) return number_error(err, flag, text ? text : "", NULL, v);
-    *value = x;
-    return BKF_OK;
-}
-
-static int read_count(const char *text, size_t max, size_t *value)
-{
-    if (!*text || strspn(text, "0123456789") != strlen(text)) return 0;
-    size_t n = 0;
-    for (const char *p = text; *p; p++) {
-        size_t d = (size_t)(*p - '0');
-        if (d > max || n > (max - d) / 10) return 0;  /* n * 10 + d > max */
-        n = n * 10 + d;
-    }
-    if (n < 1) return 0;
-    *value = n;
-    return 1;
+    return bkf_option_parse_double(text, "", flag, value, err);
 }
 
 int cli_parse_count(const char *flag, const char *text, size_t max, size_t *value,
                     bkf_error *err)
 {
-    char a[72];
-    if (!read_count(text ? text : "", max, value))
-        return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not an integer in [1, %zu]", flag,
-                             shown(text ? text : "", a, sizeof a), max);
-    return BKF_OK;
+    return bkf_option_parse_count(text, 1, max, "", flag, value, err);
 }
 
 int cli_parse_choice(const char *flag, const char *text, const char *const *choices,
                      int *index, bkf_error *err)
 {
-    char list[256] = "", a[72];
-    for (int i = 0; choices[i]; i++) {
-        if (text && strcmp(text, choices[i]) == 0) {
-            *index = i;
-            return BKF_OK;
-        }
-        size_t used = strlen(list);
-        snprintf(list + used, sizeof list - used, "%s%s", i ? ", " : "", choices[i]);
-    }
-    return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not one of %s", flag,
-                         shown(text ? text : "", a, sizeof a), list);
+    return bkf_option_parse_choice(text, choices, "", flag, index, err);
 }
 
-void cli_range_free(cli_range *range)
-{
-    if (!range) return;
-    free(range->values);
-    range->values = NULL;
-    range->count = 0;
-}
+void cli_range_free(cli_range *range) { bkf_list_free(range); }
 
 int cli_parse_range(const char *flag, const char *text, int geometric, cli_range *range,
                     bkf_error *err)
 {
-    char a[72], b[72];
-    const char *form = geometric ? "a number > 0 or a geometric range A:B:N with A, B > 0"
-                                 : "a number or a range A:B:N";
-    *range = (cli_range){0};
-    if (!text) text = "";
-    const char *c1 = strchr(text, ':');
-    const char *c2 = c1 ? strchr(c1 + 1, ':') : NULL;
-    if ((c1 && !c2) || (c2 && strchr(c2 + 1, ':')))
-        return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not %s", flag,
-                             shown(text, a, sizeof a), form);
-
-    double from = 0, to = 0;
-    size_t count = 1;
-    if (!c1) {
-        number_verdict v = read_double(text, &from);
-        if (v != NUM_OK) return number_error(err, flag, text, NULL, v);
-        to = from;
-    } else {
-        size_t la = (size_t)(c1 - text), lb = (size_t)(c2 - c1 - 1);
-        char *pa = malloc(la + 1), *pb = malloc(lb + 1);
-        if (!pa || !pb) {
-            free(pa);
-            free(pb);
-            return bkf_error_set(err, BKF_ENOMEM, "%s: out of memory", flag);
-        }
-        memcpy(pa, text, la);
-        pa[la] = '\0';
-        memcpy(pb, c1 + 1, lb);
-        pb[lb] = '\0';
-        number_verdict va = read_double(pa, &from), vb = read_double(pb, &to);
-        int status = BKF_OK;
-        if (va != NUM_OK)
-            status = number_error(err, flag, pa, text, va);
-        else if (vb != NUM_OK)
-            status = number_error(err, flag, pb, text, vb);
-        free(pa);
-        free(pb);
-        if (status) return status;
-        if (!read_count(c2 + 1, CLI_MAX_POINTS, &count))
-            return bkf_error_set(err, BKF_EINPUT,
-                                 "%s: N = '%s' in '%s' is not an integer in [1, %u]", flag,
-                                 shown(c2 + 1, a, sizeof a), shown(text, b, sizeof b),
-                                 CLI_MAX_POINTS);
-        if (count == 1 && from != to)
-            return bkf_error_set(err, BKF_EINPUT,
-                                 "%s: '%s' has N = 1 point, so A and B must be equal "
-                                 "(or give the single value A)", flag, shown(text, a, sizeof a));
-        range->is_range = 1;
-    }
-    if (geometric && !(from > 0 && to > 0))
-        return bkf_error_set(err, BKF_EINPUT,
-                             "%s: '%s' is not %s (--log makes the points geometric)", flag,
-                             shown(text, a, sizeof a), form);
-
-    double *values = malloc(count * sizeof *values);
-    if (!values) return bkf_error_set(err, BKF_ENOMEM, "%s: out of memory", flag);
-    double la = geometric ? log(from) : 0, lb = geometric ? log(to) : 0;
-    for (size_t i = 0; i < count; i++) {
-        double t = count > 1 ? (double)i / (double)(count - 1) : 0.0;
-        /* Weighted sum rather than from + i h: no overflow for ends of
-         * opposite sign near DBL_MAX, and t = 0 and 1 give the ends. */
-        values[i] = geometric ? exp(la * (1 - t) + lb * t) : from * (1 - t) + to * t;
-    }
-    values[0] = from;
-    values[count - 1] = to;
-    range->values = values;
-    range->count = count;
-    range->from = from;
-    range->to = to;
-    return BKF_OK;
+    return bkf_list_parse(text, geometric, 0, CLI_MAX_POINTS, "", flag, range, err);
 }
 
 int cli_parse_flags(const cli_flag *flags, size_t nflags, int argc, char **argv,
@@ -260,6 +92,79 @@ int cli_parse_flags(const cli_flag *flags, size_t nflags, int argc, char **argv,
                                  f->form ? f->form : "a value");
     }
     return BKF_OK;
+}
+
+#define CLI_MAX_OPTIONS 64
+
+int cli_parse_options(const cli_options *groups, size_t ngroups, int argc, char **argv,
+                      int *help, bkf_error *err)
+{
+    char names[CLI_MAX_OPTIONS][48], forms[CLI_MAX_OPTIONS][160];
+    const char *values[CLI_MAX_OPTIONS] = {0};
+    int seen[CLI_MAX_OPTIONS] = {0}, wants_help = 0;
+    cli_flag flags[CLI_MAX_OPTIONS + 1];
+    const bkf_option *opts[CLI_MAX_OPTIONS];
+    void *specs[CLI_MAX_OPTIONS];
+    size_t n = 0;
+    for (size_t g = 0; g < ngroups; g++)
+        for (size_t i = 0; i < groups[g].n; i++) {
+            const bkf_option *o = &groups[g].table[i];
+            if (o->flags & BKF_OPT_SCENE_ONLY) continue;
+            if (n == CLI_MAX_OPTIONS)
+                return bkf_error_set(err, BKF_EINPUT, "too many options in the tables");
+            snprintf(names[n], sizeof names[n], "--%s", o->name);
+            if (o->type == BKF_OPT_CUSTOM || !o->form)
+                bkf_option_describe(o, forms[n], sizeof forms[n]);
+            else
+                snprintf(forms[n], sizeof forms[n], "%s", o->form);
+            flags[n] = (cli_flag){names[n], o->type == BKF_OPT_SWITCH ? NULL : &values[n],
+                                  forms[n], &seen[n]};
+            opts[n] = o;
+            specs[n] = groups[g].spec;
+            n++;
+        }
+    flags[n] = (cli_flag){"--help", NULL, NULL, &wants_help};
+    int s = cli_parse_flags(flags, n + 1, argc, argv, err);
+    if (help) *help = wants_help;
+    if (s) return s;
+    for (size_t k = 0; k < n; k++)
+        if (!seen[k] && (opts[k]->flags & BKF_OPT_REQUIRED)) {
+            char form[160];
+            return bkf_error_set(err, BKF_EINPUT, "%s is required (%s)", names[k],
+                                 bkf_option_describe(opts[k], form, sizeof form));
+        }
+    for (size_t k = 0; k < n; k++)
+        if (seen[k] && (s = bkf_option_apply(opts[k], specs[k], values[k], "--", err))) return s;
+    return BKF_OK;
+}
+
+void cli_options_help(FILE *out, const cli_options *groups, size_t ngroups)
+{
+    for (size_t g = 0; g < ngroups; g++)
+        for (size_t i = 0; i < groups[g].n; i++) {
+            const bkf_option *o = &groups[g].table[i];
+            if (o->flags & BKF_OPT_SCENE_ONLY) continue;
+            char head[96];
+            int len = snprintf(head, sizeof head, "  --%s%s%s", o->name, o->form ? " " : "",
+                               o->form ? o->form : "");
+            const char *h = o->help ? o->help : "";
+            /* The first help line beside the flag when it fits, else below. */
+            if (len < 20)
+                fprintf(out, "%-20s", head);
+            else
+                fprintf(out, "%s\n%20s", head, "");
+            for (;;) {
+                size_t line = strcspn(h, "\n");
+                fprintf(out, "%.*s", (int)line, h);
+                h += line;
+                if (!*h) break;
+                h++;
+                fprintf(out, "\n%20s", "");
+            }
+            if (o->shown_default) fprintf(out, "; default %s", o->shown_default);
+            fputc('\n', out);
+        }
+    fprintf(out, "%-20s%s\n", "  --help", "this text");
 }
 
 int cli_wants_help(int argc, char **argv)

@@ -10,6 +10,7 @@
 #include <stddef.h>
 #include <stdio.h>
 #include "bkfront/io.h"
+#include "bkfront/options.h"
 #include "bkfront/status.h"
 
 #define CLI_PROGRAM "bkfront"
@@ -17,7 +18,7 @@
 
 /* Largest number of points a range or a grid may have: a typo such as
  * 1:2:1e9 should be an error, not an hour of work and a huge table. */
-#define CLI_MAX_POINTS 1000000u
+#define CLI_MAX_POINTS BKF_LIST_MAX
 
 /* A subcommand.  run() gets argv[0] = the subcommand's name and returns a
  * bkf_status, with err filled on failure; main prints "bkfront NAME: message"
@@ -33,28 +34,19 @@ typedef struct {
  * longer than about size - 4 bytes is cut with "...".  Returns buf. */
 const char *cli_shown(const char *text, char *buf, size_t size);
 
-/* A finite decimal number, the whole string: no leading or trailing space,
- * no hex floats, no nan/inf, no overflow. */
+/* The parsers of bkfront/options.h with the whole flag ("--mu") as name. */
 int cli_parse_double(const char *flag, const char *text, double *value, bkf_error *err);
 
-/* A decimal integer in [1, max], digits only. */
 int cli_parse_count(const char *flag, const char *text, size_t max, size_t *value,
                     bkf_error *err);
 
-/* One of `choices` (NULL-terminated); *index is its position. */
 int cli_parse_choice(const char *flag, const char *text, const char *const *choices,
                      int *index, bkf_error *err);
 
-/* "A" (one point) or "A:B:N" (N points from A to B, both included, N in
- * [1, CLI_MAX_POINTS]; N = 1 needs A == B).  Points are evenly spaced, or
- * geometric when `geometric` is set, which needs A, B > 0.  A > B runs
- * downward.  The ends are exactly A and B. */
-typedef struct {
-    double *values;   /* count points, owned */
-    size_t count;
-    double from, to;  /* A and B; both A for a single value */
-    int is_range;     /* written as A:B:N */
-} cli_range;
+/* A list in the grammar of bkf_list_parse: "A", "V1,V2,..." or "A:B:N" (N
+ * points from A to B, both exact, N in [1, CLI_MAX_POINTS]; N = 1 needs
+ * A == B), geometric when `geometric` is set (every value > 0). */
+typedef bkf_list cli_range;
 
 int cli_parse_range(const char *flag, const char *text, int geometric, cli_range *range,
                     bkf_error *err);
@@ -73,6 +65,25 @@ typedef struct {
 
 int cli_parse_flags(const cli_flag *flags, size_t nflags, int argc, char **argv,
                     bkf_error *err);
+
+/* Flags from option tables (bkfront/options.h): each entry not marked
+ * BKF_OPT_SCENE_ONLY is the flag --NAME; --help is always accepted (and sets
+ * *help if given).  Flags are read as by cli_parse_flags, then a missing
+ * BKF_OPT_REQUIRED entry is "--NAME is required (FORM)", then every given
+ * value is applied in table order (groups in order), so a switch such as
+ * --log that shapes a later list comes first in its table. */
+typedef struct {
+    const bkf_option *table;
+    size_t n;
+    void *spec;
+} cli_options;
+
+int cli_parse_options(const cli_options *groups, size_t ngroups, int argc, char **argv,
+                      int *help, bkf_error *err);
+
+/* The options block of a usage text, from the same tables: "  --NAME FORM"
+ * then the help lines and the default. */
+void cli_options_help(FILE *out, const cli_options *groups, size_t ngroups);
 
 /* Whether argv (after argv[0]) asks for help: "--help" or "-h". */
 int cli_wants_help(int argc, char **argv);

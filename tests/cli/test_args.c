@@ -2,6 +2,7 @@
  *
  * args.c belongs to the CLI, not to libbkfront; the test binary links the
  * CLI's objects (all but main) beside the library. */
+#define _POSIX_C_SOURCE 200809L
 #include "args.h"
 
 #include "harness.h"
@@ -236,4 +237,69 @@ TEST(args_help_and_command_line)
     CHECK_MSG(strcmp(line, "bkfront period --mu 1:2:3 --out 'my file'\\''s.tsv' ''") == 0,
               "%s", line);
     free(line);
+}
+
+typedef struct {
+    int log;
+    bkf_list mu;
+    double tol;
+    const char *out;
+} opt_spec;
+
+static const bkf_option opt_table[] = {
+    {.name = "log", .type = BKF_OPT_SWITCH, .offset = offsetof(opt_spec, log),
+     .help = "geometric --mu"},
+    {.name = "mu", .type = BKF_OPT_DOUBLE_LIST, .offset = offsetof(opt_spec, mu),
+     .flags = BKF_OPT_REQUIRED | BKF_OPT_MIN | BKF_OPT_MAX | BKF_OPT_LOG_SWITCH, .min = 1e-6,
+     .max = 1e6, .log_offset = offsetof(opt_spec, log), .form = "LIST",
+     .help = "mu values\nsecond line"},
+    {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = offsetof(opt_spec, tol),
+     .flags = BKF_OPT_MIN | BKF_OPT_MAX, .min = 1e-14, .max = 0.1, .form = "E",
+     .shown_default = "1e-10", .help = "accuracy"},
+    {.name = "scene-key", .type = BKF_OPT_TEXT, .offset = offsetof(opt_spec, out),
+     .flags = BKF_OPT_SCENE_ONLY},
+};
+
+TEST(args_options_from_a_table)
+{
+    opt_spec sp = {.tol = 1e-10};
+    cli_options g = {opt_table, sizeof opt_table / sizeof opt_table[0], &sp};
+    bkf_error e = {{0}};
+    int help = 0;
+    /* --log after --mu on the line still makes the list geometric: values
+     * are applied in table order. */
+    char *ok[] = {"period", "--mu", "1:100:3", "--log", NULL};
+    CHECK_STATUS(cli_parse_options(&g, 1, 4, ok, &help, &e), BKF_OK);
+    CHECK(sp.log && sp.mu.count == 3 && sp.mu.values[2] == 100 && !help);
+    CHECK_CLOSE(sp.mu.values[1], 10, 1e-15, 0);
+    CHECK(sp.tol == 1e-10);
+    bkf_option_free_lists(opt_table, g.n, &sp);
+
+    opt_spec sq = {0};
+    g.spec = &sq;
+    char *missing[] = {"period", "--tol", "1e-8", NULL};
+    CHECK_STATUS(cli_parse_options(&g, 1, 3, missing, &help, &e), BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "--mu is required (V, V1,V2,... or A:B:N, each in [1e-06, 1e+06])"), "%s", e.message);
+    char *bad[] = {"period", "--mu", "1", "--tol", "1", NULL};
+    CHECK_STATUS(cli_parse_options(&g, 1, 5, bad, &help, &e), BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "--tol: 1 is not in [1e-14, 0.1]"), "%s", e.message);
+    bkf_option_free_lists(opt_table, g.n, &sq);
+    char *scene_only[] = {"period", "--scene-key", "x", NULL};
+    CHECK_STATUS(cli_parse_options(&g, 1, 3, scene_only, &help, &e), BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "unknown option '--scene-key'"), "%s", e.message);
+    char *h[] = {"period", "--help", NULL};
+    CHECK_STATUS(cli_parse_options(&g, 1, 2, h, &help, &e), BKF_EINPUT);
+    CHECK_MSG(help == 1, "%s", e.message);
+
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    cli_options_help(f, &g, 1);
+    fclose(f);
+    CHECK_MSG(strstr(text, "  --log             geometric --mu\n"), "%s", text);
+    CHECK_MSG(strstr(text, "  --mu LIST         mu values\n                    second line\n"),
+              "%s", text);
+    CHECK_MSG(strstr(text, "  --tol E           accuracy; default 1e-10\n"), "%s", text);
+    CHECK_MSG(!strstr(text, "scene-key") && strstr(text, "  --help"), "%s", text);
+    free(text);
 }
