@@ -8,6 +8,7 @@
  * and the table is built in memory and written only when everything
  * succeeded. */
 #include "args.h"
+#include "product_out.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -16,31 +17,7 @@
 #include "bkfront/floquet.h"
 #include "bkfront/io.h"
 #include "bkfront/model.h"
-
-static const bkf_io_column dispersion_columns[] = {
-    {"q", BKF_IO_NUMBER},          {"K", BKF_IO_NUMBER},
-    {"lambda", BKF_IO_NUMBER},     {"lambda_err", BKF_IO_NUMBER},
-    {"m1_re", BKF_IO_NUMBER},      {"m1_im", BKF_IO_NUMBER},
-    {"m2_re", BKF_IO_NUMBER},      {"m2_im", BKF_IO_NUMBER},
-    {"m1_err", BKF_IO_NUMBER},     {"kind", BKF_IO_TEXT},
-    {"allowed", BKF_IO_NUMBER},    {"lambda_slip", BKF_IO_NUMBER},
-    {"det", BKF_IO_NUMBER},        {"det_direct", BKF_IO_NUMBER},
-};
-
-static const bkf_io_column threshold_columns[] = {
-    {"gamma", BKF_IO_NUMBER},   {"c", BKF_IO_NUMBER},         {"nu_pd", BKF_IO_NUMBER},
-    {"nu_pd_err", BKF_IO_NUMBER}, {"kind", BKF_IO_TEXT},      {"q_c", BKF_IO_NUMBER},
-    {"K_c", BKF_IO_NUMBER},     {"m_c_re", BKF_IO_NUMBER},    {"m_c_im", BKF_IO_NUMBER},
-    {"lambda_c", BKF_IO_NUMBER}, {"stable_above", BKF_IO_NUMBER}, {"longwave", BKF_IO_NUMBER},
-    {"discontinuous", BKF_IO_NUMBER},
-};
-
-static const bkf_io_column diagram_columns[] = {
-    {"nu_from", BKF_IO_NUMBER},  {"nu_to", BKF_IO_NUMBER},   {"stability", BKF_IO_TEXT},
-    {"from_kind", BKF_IO_TEXT},  {"to_kind", BKF_IO_TEXT},   {"from_err", BKF_IO_NUMBER},
-    {"to_err", BKF_IO_NUMBER},   {"from_q", BKF_IO_NUMBER},  {"to_q", BKF_IO_NUMBER},
-    {"from_m", BKF_IO_NUMBER},   {"to_m", BKF_IO_NUMBER},
-};
+#include "bkfront/oscillation.h"
 
 #define COUNT(a) (sizeof(a) / sizeof((a)[0]))
 
@@ -50,11 +27,8 @@ static const bkf_stepper_kind stepper_kinds[] = {BKF_STEPPER_AUTO, BKF_STEPPER_E
 static const char *const format_names[] = {"tsv", "json", NULL};
 static const char *const along_names[] = {"c", "gamma", NULL};
 
-/* strict C11 has no M_PI */
-#define TWO_PI 6.28318530717958647692528676655900577
-
-#define DEFAULT_SEARCH_LO (-0.999)
-#define DEFAULT_SEARCH_HI 0.999
+#define DEFAULT_SEARCH_LO BKF_OSCILLATION_SEARCH_LO
+#define DEFAULT_SEARCH_HI BKF_OSCILLATION_SEARCH_HI
 
 static void floquet_help(FILE *out)
 {
@@ -157,9 +131,7 @@ typedef struct {
     int mode;
     double gamma, c, nu, S;
     int have_gamma, have_c, have_S;
-    double *q;                /* dispersion rows */
-    unsigned char *allowed;
-    size_t nq;
+    cli_range q;              /* dispersion grid */
     int along;                /* BKF_FLOQUET_ALONG_C / _GAMMA */
     double from, to;
     double search_lo, search_hi;
@@ -170,10 +142,7 @@ typedef struct {
 
 static void plan_free(floquet_plan *p)
 {
-    free(p->q);
-    free(p->allowed);
-    p->q = NULL;
-    p->allowed = NULL;
+    cli_range_free(&p->q);
 }
 
 static int parse_gamma(const char *flag, const char *text, double *gamma, bkf_error *err)
@@ -221,59 +190,6 @@ static int parse_search(const char *text, double *lo, double *hi, bkf_error *err
     if (s) return s;
     if (!(*lo > -1.0 && *hi < 1.0 && *lo < *hi))
         return bkf_error_set(err, BKF_EINPUT, "--search: '%s' is not %s", cli_shown(text, a, sizeof a), form);
-    return BKF_OK;
-}
-
-/* The q rows: the grid, plus with --S every allowed mode 2 pi j/S inside
- * it, merged in the grid's direction; grid points within rounding of an
- * allowed mode are marked rather than duplicated. */
-static int build_q_rows(floquet_plan *p, const cli_range *q, bkf_error *err)
-{
-    double lo = fmin(q->from, q->to), hi = fmax(q->from, q->to);
-    size_t jlo = 0, jhi = 0, nmodes = 0;
-    double step = 0;
-    if (p->have_S) {
-        step = TWO_PI / p->S;
-        double a = ceil(lo / step - 1e-12), b = floor(hi / step + 1e-12);
-        if (b >= a) {
-            if (b - a + 1 > (double)CLI_MAX_POINTS)
-                return bkf_error_set(err, BKF_EINPUT,
-                                     "--S: %.0f allowed modes in the --q range, more than %u",
-                                     b - a + 1, CLI_MAX_POINTS);
-            jlo = (size_t)a;
-            jhi = (size_t)b;
-            nmodes = jhi - jlo + 1;
-        }
-    }
-    size_t cap = q->count + nmodes;
-    if (cap > CLI_MAX_POINTS)
-        return bkf_error_set(err, BKF_EINPUT, "--q, --S: %zu rows, more than %u", cap, CLI_MAX_POINTS);
-    p->q = malloc(cap * sizeof *p->q);
-    p->allowed = malloc(cap * sizeof *p->allowed);
-    if (!p->q || !p->allowed) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    int up = q->to >= q->from;
-    size_t i = 0, k = 0, n = 0;
-    /* modes in the grid's direction */
-    while (i < q->count || k < nmodes) {
-        double mode = nmodes && k < nmodes ? step * (double)(up ? jlo + k : jhi - k) : NAN;
-        double g = i < q->count ? q->values[i] : NAN;
-        double scale = fmax(fabs(mode), step);
-        if (k < nmodes && i < q->count && fabs(g - mode) <= 1e-12 * scale) {
-            p->q[n] = g;
-            p->allowed[n++] = 1;
-            i++;
-            k++;
-        } else if (k < nmodes && (i == q->count || (up ? mode < g : mode > g))) {
-            p->q[n] = mode;
-            p->allowed[n++] = 1;
-            k++;
-        } else {
-            p->q[n] = g;
-            p->allowed[n++] = 0;
-            i++;
-        }
-    }
-    p->nq = n;
     return BKF_OK;
 }
 
@@ -383,18 +299,15 @@ static int plan_floquet(int argc, char **argv, floquet_plan *plan, bkf_error *er
                                      num(plan->S, a, sizeof a));
             plan->have_S = 1;
         }
-        cli_range q;
-        if ((s = cli_parse_range("--q", f.q, 0, &q, err))) return s;
-        for (size_t i = 0; i < q.count && !s; i++) {
-            if (!(q.values[i] >= 0))
+        if ((s = cli_parse_range("--q", f.q, 0, &plan->q, err))) return s;
+        for (size_t i = 0; i < plan->q.count && !s; i++) {
+            if (!(plan->q.values[i] >= 0))
                 s = bkf_error_set(err, BKF_EINPUT, "--q: q = %s must be >= 0",
-                                  num(q.values[i], a, sizeof a));
-            else if (plan->c * q.values[i] > 1e4)
+                                  num(plan->q.values[i], a, sizeof a));
+            else if (plan->c * plan->q.values[i] > 1e4)
                 s = bkf_error_set(err, BKF_EINPUT, "--q: c q = %s is above 1e4",
-                                  num(plan->c * q.values[i], a, sizeof a));
+                                  num(plan->c * plan->q.values[i], a, sizeof a));
         }
-        if (!s) s = build_q_rows(plan, &q, err);
-        cli_range_free(&q);
         if (s) return s;
     }
 
@@ -433,274 +346,37 @@ static int plan_floquet(int argc, char **argv, floquet_plan *plan, bkf_error *er
     return BKF_OK;
 }
 
-static int comment_command(bkf_io_table *table, int argc, char **argv, bkf_error *err)
+static int write_oscillation(const void *spec, const bkf_product_output *out, bkf_error *err)
 {
-    char *cmd = cli_command_line(argc, argv);
-    if (!cmd) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    size_t n = strlen(cmd) + 32;
-    char *text = malloc(n);
-    if (!text) {
-        free(cmd);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
-    snprintf(text, n, "command: " CLI_PROGRAM " %s", cmd);
-    int s = bkf_io_table_comment(table, text, err);
-    free(text);
-    free(cmd);
-    return s;
-}
-
-/* ------------------------------------------------------------ dispersion */
-
-static int run_dispersion(const floquet_plan *p, bkf_io_table *t, int argc, char **argv,
-                          bkf_error *err)
-{
-    char a[32], b[32], c[32], d[32], line[512];
-    bkf_floquet *f = bkf_floquet_alloc();
-    if (!f) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    bkf_error e;
-    int s = bkf_floquet_set(f, p->gamma, p->c, p->nu, &p->options, &e);
-    if (s) {
-        bkf_error_set(err, s, "global oscillation at gamma = %s, nu = %s: %s",
-                      num(p->gamma, a, sizeof a), num(p->nu, b, sizeof b), e.message);
-        bkf_floquet_free(f);
-        return s;
-    }
-    const bkf_cycle_result *cy = bkf_floquet_cycle(f);
-    s = bkf_io_table_comment(
-        t,
-        CLI_PROGRAM " " CLI_VERSION " floquet: dispersion relation of the global oscillation\n"
-        "lambda = ln|m1| per period T; lambda_slip = T x growth rate of continuous slip; "
-        "det = exp(integral of the trace) (Liouville), det_direct = det of the integrated matrix",
-        err);
-    if (!s) {
-        snprintf(line, sizeof line, "gamma %s, c %s, nu %s, tol %s", num(p->gamma, a, sizeof a),
-                 num(p->c, b, sizeof b), num(p->nu, c, sizeof c), num(p->options.tol, d, sizeof d));
-        s = bkf_io_table_comment(t, line, err);
-    }
-    if (!s) {
-        snprintf(line, sizeof line,
-                 "cycle: T = %.17g (err %.3g), ln(m1 m2) = %.17g; stepper %s; %zu rows%s%s",
-                 cy->period, cy->period_err, cy->log_multiplier, cy->stepper, p->nq,
-                 p->have_S ? ", allowed modes q = 2 pi j/S with S = " : "",
-                 p->have_S ? num(p->S, b, sizeof b) : "");
-        s = bkf_io_table_comment(t, line, err);
-    }
-    if (!s) s = comment_command(t, argc, argv, err);
-    for (size_t i = 0; i < p->nq && !s; i++) {
-        bkf_floquet_point pt;
-        s = bkf_floquet_eval(f, p->q[i], &pt, &e);
-        /* A q whose estimate stays above tol is a flagged row: no digits
-         * (NaN), the estimate that was reached, kind "refused", and a line
-         * on stderr; the other rows stand.  Any other failure ends the table. */
-        int refused = s == BKF_ENUMERIC && pt.lambda_err > p->options.tol;
-        if (refused) {
-            fprintf(stderr, CLI_PROGRAM " floquet: warning: row q = %s refused: %s\n",
-                    num(p->q[i], a, sizeof a), e.message);
-            s = BKF_OK;
-            pt.lambda = pt.m1_re = pt.m1_im = pt.m2_re = pt.m2_im = pt.m1_err = NAN;
-        } else if (s) {
-            bkf_error_set(err, s, "at q = %s: %s", num(p->q[i], a, sizeof a), e.message);
-            break;
-        }
-        bkf_io_value v[COUNT(dispersion_columns)] = {
-            {.number = pt.q},
-            {.number = pt.k2},
-            {.number = pt.lambda},
-            {.number = pt.lambda_err},
-            {.number = pt.m1_re},
-            {.number = pt.m1_im},
-            {.number = pt.m2_re},
-            {.number = pt.m2_im},
-            {.number = pt.m1_err},
-            {.text = refused ? "refused" : bkf_floquet_kind_name(pt.kind)},
-            {.number = p->have_S ? (double)p->allowed[i] : NAN},
-            {.number = cy->period * bkf_floquet_slip_rate(p->gamma, p->c, p->nu, pt.q)},
-            {.number = exp(pt.log_det)},
-            {.number = pt.det_direct},
-        };
-        s = bkf_io_table_row(t, v, err);
-    }
-    bkf_floquet_free(f);
-    return s;
-}
-
-/* ------------------------------------------------------------- threshold */
-
-typedef struct {
-    bkf_io_table *table;
-    int status;
-    bkf_error err;
-} sink;
-
-static int threshold_row(const bkf_floquet_threshold *th, void *data)
-{
-    sink *k = data;
-    bkf_io_value v[COUNT(threshold_columns)] = {
-        {.number = th->gamma},
-        {.number = th->c},
-        {.number = th->nu},
-        {.number = th->nu_err},
-        {.text = bkf_floquet_boundary_name(th->kind)},
-        {.number = th->q},
-        {.number = th->k2},
-        {.number = th->m_re},
-        {.number = th->m_im},
-        {.number = th->lambda},
-        {.number = th->stable_above},
-        {.number = th->longwave},
-        {.number = th->discontinuous},
-    };
-    int s = bkf_io_table_row(k->table, v, &k->err);
-    if (s && !k->status) k->status = s;
-    return s != BKF_OK;
-}
-
-static int comment_scan(bkf_io_table *t, const floquet_plan *p, const char *what, bkf_error *err)
-{
-    char a[32], b[32], c[32], d[32], e[32], line[512];
-    int s = bkf_io_table_comment(t, what, err);
-    if (s) return s;
-    snprintf(line, sizeof line,
-             "scan: nu in [%s, %s] upward in steps %s, c q in (0, %s] on %zu points; tol %s",
-             num(p->search_lo, a, sizeof a), num(p->search_hi, b, sizeof b),
-             num(p->options.nu_step, c, sizeof c), num(p->options.p_max, d, sizeof d),
-             p->options.scan_points, num(p->options.tol, e, sizeof e));
-    s = bkf_io_table_comment(t, line, err);
-    if (!s)
-        s = bkf_io_table_comment(
-            t,
-            "kinds: period_doubling (finite-q peak of lambda through 0 with m1 = -1), long_wave "
-            "(a in lambda ~ a c^2 q^2 through 0), other (finite-q peak with m1 = +1, or a jump of "
-            "the cycle), scan_end",
-            err);
-    return s;
-}
-
-static int run_threshold(const floquet_plan *p, bkf_io_table *t, int argc, char **argv,
-                         bkf_error *err)
-{
-    char a[32], b[32];
-    int s = comment_scan(t, p,
-                         CLI_PROGRAM " " CLI_VERSION
-                         " floquet --threshold: lowest stability boundary of the global "
-                         "oscillation in the scanned nu range",
-                         err);
-    if (!s) s = comment_command(t, argc, argv, err);
-    if (s) return s;
-    sink k = {t, 0, {{0}}};
-    bkf_error e = {{0}};
-    if (p->mode == MODE_THRESHOLD) {
-        bkf_floquet_threshold th;
-        s = bkf_floquet_threshold_find(p->gamma, p->c, p->search_lo, p->search_hi, &p->options,
-                                       &th, &e);
-        if (s)
-            return bkf_error_set(err, s, "threshold at gamma = %s, c = %s: %s",
-                                 num(p->gamma, a, sizeof a), num(p->c, b, sizeof b), e.message);
-        threshold_row(&th, &k);
-    } else {
-        s = bkf_floquet_threshold_branch((bkf_floquet_param)p->along, p->from, p->to, p->gamma,
-                                         p->c, p->search_lo, p->search_hi, &p->options, 0,
-                                         threshold_row, &k, &e);
-        if (!k.status && s)
-            return bkf_error_set(err, s, "threshold curve along %s from %s to %s: %s",
-                                 p->along == BKF_FLOQUET_ALONG_C ? "c" : "gamma",
-                                 num(p->from, a, sizeof a), num(p->to, b, sizeof b), e.message);
-    }
-    if (k.status) {
-        *err = k.err;
-        return k.status;
-    }
-    return BKF_OK;
-}
-
-/* --------------------------------------------------------------- diagram */
-
-static int diagram_row(const bkf_floquet_interval *iv, void *data)
-{
-    sink *k = data;
-    bkf_io_value v[COUNT(diagram_columns)] = {
-        {.number = iv->nu_from},
-        {.number = iv->nu_to},
-        {.text = iv->stable ? "stable" : "unstable"},
-        {.text = bkf_floquet_boundary_name(iv->from.kind)},
-        {.text = bkf_floquet_boundary_name(iv->to.kind)},
-        {.number = iv->from.nu_err},
-        {.number = iv->to.nu_err},
-        {.number = iv->from.q},
-        {.number = iv->to.q},
-        {.number = iv->from.m_re},
-        {.number = iv->to.m_re},
-    };
-    int s = bkf_io_table_row(k->table, v, &k->err);
-    if (s && !k->status) k->status = s;
-    return s != BKF_OK;
-}
-
-static int run_diagram(const floquet_plan *p, bkf_io_table *t, int argc, char **argv,
-                       bkf_error *err)
-{
-    char a[32], b[32];
-    int s = comment_scan(t, p,
-                         CLI_PROGRAM " " CLI_VERSION
-                         " floquet --diagram: stability intervals of the global oscillation "
-                         "over nu (windows narrower than the nu step may be missed)",
-                         err);
-    if (!s) s = comment_command(t, argc, argv, err);
-    if (s) return s;
-    sink k = {t, 0, {{0}}};
-    bkf_error e = {{0}};
-    s = bkf_floquet_diagram(p->gamma, p->c, p->search_lo, p->search_hi, &p->options, diagram_row,
-                            &k, &e);
-    if (k.status) {
-        *err = k.err;
-        return k.status;
-    }
-    if (s)
-        return bkf_error_set(err, s, "diagram at gamma = %s, c = %s: %s", num(p->gamma, a, sizeof a),
-                             num(p->c, b, sizeof b), e.message);
-    return BKF_OK;
-}
-
-/* ------------------------------------------------------------------ run */
-
-static int compute(const floquet_plan *p, int argc, char **argv, FILE *stream, bkf_error *err)
-{
-    const bkf_io_column *cols = p->mode == MODE_DISPERSION ? dispersion_columns
-                                : p->mode == MODE_DIAGRAM  ? diagram_columns
-                                                           : threshold_columns;
-    size_t ncols = p->mode == MODE_DISPERSION ? COUNT(dispersion_columns)
-                   : p->mode == MODE_DIAGRAM  ? COUNT(diagram_columns)
-                                              : COUNT(threshold_columns);
-    bkf_io_table *t = bkf_io_table_alloc(stream, p->format, cols, ncols, err);
-    if (!t) return BKF_ENOMEM;
-    int s = p->mode == MODE_DISPERSION ? run_dispersion(p, t, argc, argv, err)
-            : p->mode == MODE_DIAGRAM  ? run_diagram(p, t, argc, argv, err)
-                                       : run_threshold(p, t, argc, argv, err);
-    if (!s) s = bkf_io_table_finish(t, err);
-    bkf_io_table_free(t);
-    return s;
+    return bkf_oscillation_write(spec, out, err);
 }
 
 static int floquet_run(int argc, char **argv, bkf_error *err)
 {
     floquet_plan plan;
     memset(&plan, 0, sizeof plan);
-    cli_output out = {0};
-    cli_buffer buf = {0};
     int s = plan_floquet(argc, argv, &plan, err);
-    if (!s) s = cli_output_open(&out, plan.out_path, "--out", err);
-    if (!s) s = cli_buffer_open(&buf, err);
     if (!s) {
-        s = compute(&plan, argc, argv, buf.stream, err);
-        int c = cli_buffer_close(&buf, s ? NULL : err);
-        if (!s) s = c;
+        static const bkf_oscillation_mode modes[] = {
+            BKF_OSCILLATION_DISPERSION, BKF_OSCILLATION_THRESHOLD, BKF_OSCILLATION_CURVE,
+            BKF_OSCILLATION_DIAGRAM};
+        bkf_oscillation_spec spec = bkf_oscillation_spec_default();
+        spec.mode = modes[plan.mode];
+        spec.gamma = plan.gamma;
+        spec.c = plan.c;
+        spec.nu = plan.nu;
+        spec.q = plan.q.values;
+        spec.nq = plan.q.count;
+        spec.S = plan.have_S ? plan.S : 0;
+        spec.along = (bkf_floquet_param)plan.along;
+        spec.from = plan.from;
+        spec.to = plan.to;
+        spec.search_lo = plan.search_lo;
+        spec.search_hi = plan.search_hi;
+        spec.options = plan.options;
+        s = cli_write_product(plan.out_path, plan.format, write_oscillation, &spec, argc, argv,
+                              err);
     }
-    if (!s)
-        s = cli_output_write(&out, buf.data, buf.size, err);
-    else
-        cli_output_abort(&out);
-    cli_buffer_free(&buf);
     plan_free(&plan);
     return s;
 }

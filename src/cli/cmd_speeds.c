@@ -6,6 +6,7 @@
  * the table is built in memory and written only when the whole computation
  * succeeded, so a failed run leaves stdout (or the --out file) untouched. */
 #include "args.h"
+#include "product_out.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -205,44 +206,6 @@ static int parse_common(const common_flags *f, int skip, common_plan *plan, bkf_
     return BKF_OK;
 }
 
-/* The product's table, built in memory and written all or nothing, with
- * the program in its title and the command line after its comments. */
-typedef int (*write_fn)(const void *spec, const bkf_product_output *out, bkf_error *err);
-
-static int write_product(const common_plan *plan, write_fn write, const void *spec, int argc,
-                         char **argv, bkf_error *err)
-{
-    char *cmd = cli_command_line(argc, argv);
-    size_t n = cmd ? strlen(cmd) + 32 : 0;
-    char *command = cmd ? malloc(n) : NULL;
-    if (!command) {
-        free(cmd);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
-    snprintf(command, n, "command: " CLI_PROGRAM " %s", cmd);
-    free(cmd);
-    cli_output out = {0};
-    cli_buffer buf = {0};
-    int s = cli_output_open(&out, plan->out_path, "--out", err);
-    if (!s) s = cli_buffer_open(&buf, err);
-    if (!s) {
-        bkf_product_output po = bkf_product_output_default(buf.stream);
-        po.format = plan->format;
-        po.program = CLI_PROGRAM " " CLI_VERSION;
-        po.command = command;
-        s = write(spec, &po, err);
-        int c = cli_buffer_close(&buf, s ? NULL : err);
-        if (!s) s = c;
-    }
-    if (!s)
-        s = cli_output_write(&out, buf.data, buf.size, err);
-    else
-        cli_output_abort(&out);
-    cli_buffer_free(&buf);
-    free(command);
-    return s;
-}
-
 static int write_speeds(const void *spec, const bkf_product_output *out, bkf_error *err)
 {
     return bkf_fronts_write(spec, out, NULL, err);
@@ -322,7 +285,8 @@ static int speeds_run(int argc, char **argv, bkf_error *err)
     bkf_fronts_spec spec = bkf_fronts_spec_default();
     spec.params = plan.common.params;
     spec.options = plan.options;
-    return write_product(&plan.common, write_speeds, &spec, argc, argv, err);
+    return cli_write_product(plan.common.out_path, plan.common.format, write_speeds, &spec, argc,
+                             argv, err);
 }
 
 const cli_command cli_cmd_speeds = {
@@ -431,7 +395,8 @@ static int branch_run(int argc, char **argv, bkf_error *err)
     spec.root = plan.root;
     spec.max_points = plan.max_points;
     spec.tol = plan.common.tol;
-    return write_product(&plan.common, write_branch, &spec, argc, argv, err);
+    return cli_write_product(plan.common.out_path, plan.common.format, write_branch, &spec, argc,
+                             argv, err);
 }
 
 const cli_command cli_cmd_branch = {
