@@ -83,6 +83,15 @@ typedef struct bkf_option {
 int bkf_option_apply(const bkf_option *opt, void *spec, const char *text, const char *prefix,
                      bkf_error *err);
 
+/* Where a product's table came from, for its comment lines: `program`
+ * opens the first comment ("bkfront 0.1.0" gives "bkfront 0.1.0 period: ...";
+ * NULL gives "libbkfront"), `command` (NULL: none) is written as the last
+ * comment, "command: COMMAND". */
+typedef struct {
+    const char *program;
+    const char *command;
+} bkf_provenance;
+
 /* The entry called `name` in a table of n, or NULL. */
 const bkf_option *bkf_option_find(const bkf_option *table, size_t n, const char *name);
 

@@ -6,6 +6,7 @@
 #include <math.h>
 #include <signal.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -319,8 +320,18 @@ int cli_cancel_signal(void) { return (int)cancel_flag; }
 int cli_output_open(cli_output *out, const char *path, const char *flag, bkf_error *err)
 {
     out->file = NULL;
+    out->device = NULL;
     if (!path) return BKF_OK;
     bkf_error e;
+    struct stat st;
+    char shown_path[72];
+    if (stat(path, &st) == 0 && S_ISCHR(st.st_mode)) {
+        out->device = fopen(path, "w");
+        if (!out->device)
+            return bkf_error_set(err, BKF_EINPUT, "%s: cannot open '%s': %s", flag,
+                                 cli_shown(path, shown_path, sizeof shown_path), strerror(errno));
+        return BKF_OK;
+    }
     out->file = bkf_io_atomic_open(path, &e);
     if (!out->file) return bkf_error_set(err, BKF_EINPUT, "%s: %s", flag, e.message);
     out->slot = arm_cleanup(bkf_io_atomic_temp_path(out->file));
@@ -329,6 +340,14 @@ int cli_output_open(cli_output *out, const char *path, const char *flag, bkf_err
 
 int cli_output_write(cli_output *out, const char *data, size_t size, bkf_error *err)
 {
+    if (out->device) {
+        int bad = (size && fwrite(data, 1, size, out->device) != size);
+        bad |= fclose(out->device) != 0;
+        out->device = NULL;
+        if (bad) return bkf_error_set(err, BKF_EIO, "writing the output failed: %s",
+                                      strerror(errno));
+        return BKF_OK;
+    }
     if (!out->file) {
         if ((size && fwrite(data, 1, size, stdout) != size) || fflush(stdout) != 0)
             return bkf_error_set(err, BKF_ENUMERIC, "cannot write to standard output: %s",
@@ -350,6 +369,10 @@ int cli_output_write(cli_output *out, const char *data, size_t size, bkf_error *
 
 void cli_output_abort(cli_output *out)
 {
+    if (out && out->device) {
+        fclose(out->device);
+        out->device = NULL;
+    }
     if (!out || !out->file) return;
     bkf_io_atomic_abort(out->file);
     out->file = NULL;
@@ -383,4 +406,50 @@ void cli_buffer_free(cli_buffer *buf)
     free(buf->data);
     buf->data = NULL;
     buf->size = 0;
+}
+
+static const char *const format_names[] = {"tsv", "json", NULL};
+
+const bkf_option cli_output_options[] = {
+    {.name = "format", .type = BKF_OPT_CHOICE, .offset = offsetof(cli_output_spec, format),
+     .flags = BKF_OPT_CLI_ONLY, .choices = format_names, .form = "tsv|json",
+     .shown_default = "tsv", .help = "output format"},
+    {.name = "out", .type = BKF_OPT_TEXT, .offset = offsetof(cli_output_spec, out),
+     .flags = BKF_OPT_CLI_ONLY, .form = "FILE",
+     .help = "write to FILE, replaced atomically only on success;\n"
+             "default standard output"},
+};
+const size_t cli_output_noptions = sizeof cli_output_options / sizeof cli_output_options[0];
+
+int cli_write_table(const cli_output_spec *output, int argc, char **argv,
+                    cli_table_writer write, const void *spec, bkf_error *err)
+{
+    cli_output out = {0};
+    cli_buffer buf = {0};
+    char *cmd = NULL, *command = NULL;
+    int s = cli_output_open(&out, output->out, "--out", err);
+    if (!s) {
+        cmd = cli_command_line(argc, argv);
+        size_t n = cmd ? strlen(cmd) + sizeof CLI_PROGRAM + 1 : 0;
+        command = cmd ? malloc(n) : NULL;
+        if (command)
+            snprintf(command, n, CLI_PROGRAM " %s", cmd);
+        else
+            s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    if (!s) s = cli_buffer_open(&buf, err);
+    if (!s) {
+        bkf_provenance prov = {CLI_PROGRAM " " CLI_VERSION, command};
+        s = write(spec, buf.stream, output->format == 1 ? BKF_IO_JSON : BKF_IO_TSV, &prov, err);
+        int c = cli_buffer_close(&buf, s ? NULL : err);
+        if (!s) s = c;
+    }
+    if (!s)
+        s = cli_output_write(&out, buf.data, buf.size, err);
+    else
+        cli_output_abort(&out);
+    cli_buffer_free(&buf);
+    free(cmd);
+    free(command);
+    return s;
 }

@@ -99,13 +99,34 @@ char *cli_command_line(int argc, char **argv);
  * at once; SIGKILL cannot be caught, see bkf_io_atomic_open for what
  * happens to its temporary). */
 typedef struct {
-    bkf_io_atomic *file;  /* NULL: standard output */
+    bkf_io_atomic *file;  /* NULL: standard output (or `device`) */
     int slot;             /* the signal cleanup's slot for its temporary */
+    FILE *device;         /* a character device such as /dev/null, written directly:
+                             it cannot be replaced, and has nothing to truncate */
 } cli_output;
 
 int cli_output_open(cli_output *out, const char *path, const char *flag, bkf_error *err);
 int cli_output_write(cli_output *out, const char *data, size_t size, bkf_error *err);
 void cli_output_abort(cli_output *out);
+
+/* What every table-writing command takes besides its product's keys. */
+typedef struct {
+    int format;           /* index in tsv, json */
+    const char *out;      /* NULL: standard output */
+} cli_output_spec;
+
+extern const bkf_option cli_output_options[];
+extern const size_t cli_output_noptions;
+
+/* A product's table writer: the whole table to `out`. */
+typedef int (*cli_table_writer)(const void *spec, FILE *out, bkf_io_format format,
+                                const bkf_provenance *provenance, bkf_error *err);
+
+/* All or nothing: opens --out (before any work), builds the table in memory
+ * with the provenance "bkfront VERSION" and "command: bkfront ARGS", and
+ * writes it only when `write` succeeded. */
+int cli_write_table(const cli_output_spec *output, int argc, char **argv,
+                    cli_table_writer write, const void *spec, bkf_error *err);
 
 /* Cancellation by SIGINT or SIGTERM: between cli_cancel_begin and
  * cli_cancel_end the first such signal sets the returned flag (give it to a

@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include "bkfront/period.h"
 
 #ifndef BKF_CLI_PATH
 #error "BKF_CLI_PATH (the built bkfront binary) is defined by the Makefile for tests"
@@ -502,5 +503,56 @@ TEST(cli_bench_box_quick)
         CHECK_MSG(err <= tol && err <= 10 * est + 1e-15, "row %d: error %g estimate %g", i, err, est);
     }
     CHECK_MSG(rows == 24, "%d rows", rows);
+    run_free(&r);
+}
+
+/* Issue 14: a comma list is accepted by period as by the other commands, and
+ * its rows are those of the single points. */
+TEST(cli_period_mu_list_matches_single_points)
+{
+    run_result l = RUN("period", "--mu", "0.5,5", "--nu", "0");
+    run_result a = RUN("period", "--mu", "0.5", "--nu", "0");
+    run_result b = RUN("period", "--mu", "5", "--nu", "0");
+    CHECK_MSG(l.code == 0 && a.code == 0 && b.code == 0, "%s", l.err);
+    double x, y;
+    CHECK(tsv_field(l.out, 0, "T", &x) && tsv_field(a.out, 0, "T", &y) && x == y);
+    CHECK(tsv_field(l.out, 1, "T", &x) && tsv_field(b.out, 0, "T", &y) && x == y);
+    CHECK(tsv_field(l.out, 1, "mu", &x) && x == 5);
+    run_free(&l);
+    run_free(&a);
+    run_free(&b);
+}
+
+/* A character device is written directly (it cannot be replaced). */
+TEST(cli_period_out_dev_null)
+{
+    run_result r = RUN("period", "--mu", "1", "--nu", "0", "--out", "/dev/null");
+    CHECK_MSG(r.code == 0 && r.out[0] == '\0' && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    run_free(&r);
+}
+
+/* The library's product writes the table the CLI writes, given the same
+ * provenance. */
+TEST(cli_period_library_matches_cli)
+{
+    run_result r = RUN("period", "--mu", "1:3:3", "--nu", "-0.5", "--tol", "1e-9");
+    CHECK(r.code == 0);
+    bkf_period_spec spec = bkf_period_spec_default();
+    bkf_error e = {{0}};
+    const bkf_option *mu = bkf_option_find(bkf_period_options, bkf_period_noptions, "mu");
+    const bkf_option *nu = bkf_option_find(bkf_period_options, bkf_period_noptions, "nu");
+    const bkf_option *tol = bkf_option_find(bkf_period_options, bkf_period_noptions, "tol");
+    CHECK_STATUS(bkf_option_apply(mu, &spec, "1:3:3", "", &e), BKF_OK);
+    CHECK_STATUS(bkf_option_apply(nu, &spec, "-0.5", "", &e), BKF_OK);
+    CHECK_STATUS(bkf_option_apply(tol, &spec, "1e-9", "", &e), BKF_OK);
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    bkf_provenance prov = {"bkfront 0.1.0", "bkfront period --mu 1:3:3 --nu -0.5 --tol 1e-9"};
+    CHECK_STATUS(bkf_period_write(&spec, f, BKF_IO_TSV, &prov, &e), BKF_OK);
+    fclose(f);
+    CHECK_MSG(strcmp(text, r.out) == 0, "library:\n%s\nCLI:\n%s", text, r.out);
+    free(text);
+    bkf_period_spec_free(&spec);
     run_free(&r);
 }
