@@ -27,8 +27,9 @@ int bkf_product_table_open(FILE *out, bkf_io_format format, const bkf_io_column 
     /* the products' columns are valid: what is left is memory */
     bkf_io_table *t = bkf_io_table_alloc(out, format, columns, ncolumns, err);
     if (!t) return BKF_ENOMEM;
-    int s = comment_joined(t, prov && prov->program ? prov->program : "libbkfront", " ", title,
-                           err);
+    /* no provenance: the title alone */
+    int s = prov ? comment_joined(t, prov->program ? prov->program : "libbkfront", " ", title, err)
+                 : bkf_io_table_comment(t, title, err);
     if (s) {
         bkf_io_table_free(t);
         return s;

@@ -10,8 +10,8 @@
 #include "bkfront/options.h"
 #include "bkfront/status.h"
 
-/* *table with "PROGRAM TITLE" written (PROGRAM "libbkfront" without one);
- * NULL on failure. */
+/* *table with "PROGRAM TITLE" written (PROGRAM "libbkfront" without one;
+ * TITLE alone without a provenance); NULL on failure. */
 int bkf_product_table_open(FILE *out, bkf_io_format format, const bkf_io_column *columns,
                            size_t ncolumns, const char *title, const bkf_provenance *prov,
                            bkf_io_table **table, bkf_error *err);
