@@ -52,7 +52,7 @@ static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYM
 #define TOL_OPTION(SPEC, what)                                                                \
     {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, tol), .flags = BOUNDED,  \
      .min = BKF_TOL_MIN, .max = BKF_TOL_MAX, .form = "E", .shown_default = "1e-10",           \
-     .help = what ", in [1e-14, 0.1]"}
+     .help = what ",\nin [1e-14, 0.1]"}
 
 /* ---------------------------------------------------------------- speeds */
 

@@ -112,7 +112,7 @@ const bkf_option bkf_oscillation_options[] = {
      .form = "B", .help = "end of the curve, B != A"},
     {.name = "search", .type = BKF_OPT_CUSTOM, .set = set_search, .form = "A:B",
      .shown_default = "-0.999:0.999",
-     .help = "nu range scanned by --threshold and --diagram, -1 < A < B < 1"},
+     .help = "nu range scanned by --threshold and --diagram,\n-1 < A < B < 1"},
     {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_oscillation_spec, tol),
      .flags = BOUNDED, .min = BKF_TOL_MIN, .max = BKF_TOL_MAX, .form = "E",
      .shown_default = "1e-10",
