@@ -154,15 +154,22 @@ void cli_options_help(FILE *out, const cli_options *groups, size_t ngroups)
                 fprintf(out, "%-20s", head);
             else
                 fprintf(out, "%s\n%20s", head, "");
+            size_t line = 0;
             for (;;) {
-                size_t line = strcspn(h, "\n");
+                line = strcspn(h, "\n");
                 fprintf(out, "%.*s", (int)line, h);
                 h += line;
                 if (!*h) break;
                 h++;
                 fprintf(out, "\n%20s", "");
             }
-            if (o->shown_default) fprintf(out, "; default %s", o->shown_default);
+            /* The default on the last help line if it fits in 79 columns. */
+            if (o->shown_default) {
+                if (20 + line + 10 + strlen(o->shown_default) <= 79)
+                    fprintf(out, "; default %s", o->shown_default);
+                else
+                    fprintf(out, "\n%20sdefault %s", "", o->shown_default);
+            }
             fputc('\n', out);
         }
     fprintf(out, "%-20s%s\n", "  --help", "this text");

@@ -127,56 +127,16 @@ static void asymptotics_help(FILE *out)
         BKF_CYCLE_MU_MAX, BKF_CYCLE_MU_MIN);
 }
 
-/* Shortest of %.15g / %.17g that reads back exactly (as in cmd_period.c). */
 static const char *num(double x, char *buf, size_t size)
 {
-    snprintf(buf, size, "%.15g", x);
-    if (strtod(buf, NULL) != x) snprintf(buf, size, "%.17g", x);
-    return buf;
+    return bkf_format_number(x, buf, size);
 }
 
-/* "V", "A:B:N" (linear) or "V1,V2,..." into a cli_range (owned values). */
+/* The one list grammar (bkfront/options.h); a function of its own for the
+ * fuzz target tests/fuzz/fuzz_lists.c. */
 static int parse_list(const char *flag, const char *text, cli_range *list, bkf_error *err)
 {
-    *list = (cli_range){0};
-    if (!strchr(text, ',')) return cli_parse_range(flag, text, 0, list, err);
-    size_t n = 1;
-    for (const char *p = text; *p; p++) n += *p == ',';
-    if (n > CLI_MAX_POINTS)
-        return bkf_error_set(err, BKF_EINPUT, "%s: more than %u values", flag, CLI_MAX_POINTS);
-    size_t len = strlen(text);
-    char *copy = malloc(len + 1);
-    double *values = malloc(n * sizeof *values);
-    if (!copy || !values) {
-        free(copy);
-        free(values);
-        return bkf_error_set(err, BKF_ENOMEM, "%s: out of memory", flag);
-    }
-    memcpy(copy, text, len + 1);
-    /* strtok would merge ",," into one separator and hide an empty item. */
-    char *item = copy;
-    int s = BKF_OK;
-    for (size_t i = 0; i < n && !s; i++) {
-        char *comma = strchr(item, ',');
-        if (comma) *comma = '\0';
-        if (!*item)
-            s = bkf_error_set(err, BKF_EINPUT, "%s: empty item in the list (expected %s)", flag,
-                              LIST_FORM);
-        else
-            s = cli_parse_double(flag, item, &values[i], err);
-        item = comma ? comma + 1 : item + strlen(item);
-    }
-    free(copy);
-    if (s) {
-        free(values);
-        return s;
-    }
-    list->values = values;
-    list->count = n;
-    list->from = values[0];
-    list->to = values[n - 1];
-    list->is_range = 1;
-    return BKF_OK;
+    return cli_parse_range(flag, text, 0, list, err);
 }
 
 /* A list copied from constants, so that every plan owns its values. */

@@ -496,9 +496,11 @@ TEST(profile_spans_one_wavelength)
         }
         line = next;
     }
-    CHECK(rows == 202);
-    CHECK_CLOSE(last_x[0], 20.0 / 4, 1e-9, 0);
-    CHECK_CLOSE(last_x[1], 20.0 / 10, 1e-9, 0);
+    /* --points 100: 100 rows per profile (issue 14: was 101, z = T
+     * repeating z = 0), the last at z = 99 T / 100. */
+    CHECK(rows == 200);
+    CHECK_CLOSE(last_x[0] * 100 / 99, 20.0 / 4, 1e-9, 0);
+    CHECK_CLOSE(last_x[1] * 100 / 99, 20.0 / 10, 1e-9, 0);
     free(r);
     r = run_cli((char *[]){"profile", "--nu", "0", "--mu", "1", "--n", "3", NULL});
     CHECK(r->code == 2 && strstr(r->err, "--mu"));
