@@ -23,6 +23,9 @@
 #include "bkfront/options.h"
 #include "bkfront/period.h"
 #include "bkfront/profile.h"
+#include "bkfront/friction.h"
+#include "bkfront/fronts.h"
+#include "bkfront/oscillation.h"
 #include "bkfront/plot.h"
 
 #endif

@@ -64,6 +64,14 @@ void bkf_io_table_free(bkf_io_table *table);
  * once a row has been written. */
 int bkf_io_table_comment(bkf_io_table *table, const char *text, bkf_error *err);
 
+/* A key result as a named value (a number, or text with kind BKF_IO_TEXT):
+ * in JSON a member of the object "results", written between "comments" and
+ * "columns" (only when a table has results); TSV has no place for it, so a
+ * caller keeps it in a comment as well.  Before the first row; BKF_EINPUT for
+ * an empty or repeated name. */
+int bkf_io_table_result(bkf_io_table *table, const char *name, bkf_io_kind kind,
+                        bkf_io_value value, bkf_error *err);
+
 /* One row: ncolumns values in column order. */
 int bkf_io_table_row(bkf_io_table *table, const bkf_io_value *values, bkf_error *err);
 

@@ -16,6 +16,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "bkfront/friction.h"
 #include "bkfront/io.h"
 #include "bkfront/model.h"
 #include "bkfront/plot.h"
@@ -118,40 +119,20 @@ static const char *arg_after(char **argv, const char *flag)
 
 static int run_friction(const scene_step *step, bkf_error *err)
 {
-    double from = -1, to = 4;
-    size_t points = 601;
-    int s = cli_parse_double("from", arg_after(step->argv, "--from"), &from, err);
-    if (!s) s = cli_parse_double("to", arg_after(step->argv, "--to"), &to, err);
-    if (!s) s = cli_parse_count("points", arg_after(step->argv, "--points"), 1000000, &points, err);
+    bkf_friction_spec spec = bkf_friction_spec_default();
+    int s = cli_parse_double("from", arg_after(step->argv, "--from"), &spec.from, err);
+    if (!s) s = cli_parse_double("to", arg_after(step->argv, "--to"), &spec.to, err);
+    if (!s)
+        s = cli_parse_count("points", arg_after(step->argv, "--points"), BKF_FRICTION_POINTS_MAX,
+                            &spec.points, err);
+    if (!s && !(spec.to > spec.from))
+        s = bkf_error_set(err, BKF_EINPUT, "friction: needs from < to");
     if (s) return s;
-    if (!(to > from)) return bkf_error_set(err, BKF_EINPUT, "friction: needs from < to");
-    static const bkf_io_column cols[] = {{"v", BKF_IO_NUMBER},
-                                         {"psi", BKF_IO_NUMBER},
-                                         {"creep_slip", BKF_IO_NUMBER},
-                                         {"carlson_langer", BKF_IO_NUMBER}};
     cli_output out = {0};
     cli_buffer buf = {0};
     s = cli_output_open(&out, step->output, "--out", err);
     if (!s) s = cli_buffer_open(&buf, err);
-    bkf_io_table *t = s ? NULL : bkf_io_table_alloc(buf.stream, BKF_IO_TSV, cols, 4, err);
-    if (!s && !t) s = BKF_ENOMEM;
-    if (!s)
-        s = bkf_io_table_comment(t,
-                                 "friction laws against block velocity v: creep_slip = "
-                                 "(3/2) phi(psi), phi = psi^3/3 - psi, psi = v - 1 (slip "
-                                 "threshold psi = -1 at v = 0, scaled to static friction 1); "
-                                 "carlson_langer = sgn(v)/(1 + |v|)", err);
-    for (size_t i = 0; !s && i < points; i++) {
-        double v = points > 1 ? from + (to - from) * (double)i / (double)(points - 1) : from;
-        /* the jump of the Carlson-Langer law at v = 0 is drawn as a gap */
-        bkf_io_value row[4] = {{v, NULL},
-                               {v - 1, NULL},
-                               {1.5 * bkf_model_friction(v - 1), NULL},
-                               {v == 0 ? NAN : bkf_model_friction_carlson_langer(v), NULL}};
-        s = bkf_io_table_row(t, row, err);
-    }
-    if (!s) s = bkf_io_table_finish(t, err);
-    bkf_io_table_free(t);
+    if (!s) s = bkf_friction_table(&spec, buf.stream, BKF_IO_TSV, NULL, err);
     if (buf.stream) {
         int c = cli_buffer_close(&buf, s ? NULL : err);
         if (!s) s = c;

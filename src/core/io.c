@@ -29,6 +29,11 @@ struct bkf_io_table {
     int finished;
     int write_failed;
     int write_errno;
+    /* key results for JSON's "results" object, kept until the header */
+    size_t nresults;
+    char **result_names;
+    char **result_texts;     /* NULL for a number */
+    double *result_numbers;
 };
 
 int bkf_io_format_parse(const char *name, bkf_io_format *format, bkf_error *err)
@@ -239,6 +244,13 @@ bkf_io_table *bkf_io_table_alloc(FILE *out, bkf_io_format format,
 void bkf_io_table_free(bkf_io_table *table)
 {
     if (!table) return;
+    for (size_t i = 0; i < table->nresults; i++) {
+        free(table->result_names[i]);
+        free(table->result_texts[i]);
+    }
+    free(table->result_names);
+    free(table->result_texts);
+    free(table->result_numbers);
     free(table->columns);
     free(table->names);
     free(table);
@@ -290,6 +302,60 @@ int bkf_io_table_comment(bkf_io_table *t, const char *text, bkf_error *err)
     return write_status(t, err);
 }
 
+static char *copy_text(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *c = malloc(n);
+    if (c) memcpy(c, s, n);
+    return c;
+}
+
+int bkf_io_table_result(bkf_io_table *t, const char *name, bkf_io_kind kind,
+                        bkf_io_value value, bkf_error *err)
+{
+    int s = check_usable(t, err);
+    if (s) return s;
+    if (t->header_done)
+        return bkf_error_set(err, BKF_EINPUT, "results must come before the first row");
+    if (!name || !*name) return bkf_error_set(err, BKF_EINPUT, "a result needs a name");
+    for (size_t i = 0; i < t->nresults; i++)
+        if (strcmp(t->result_names[i], name) == 0)
+            return bkf_error_set(err, BKF_EINPUT, "result '%s' is given twice", name);
+    size_t n = t->nresults + 1;
+    char **names = realloc(t->result_names, n * sizeof *names);
+    if (names) t->result_names = names;
+    char **texts = names ? realloc(t->result_texts, n * sizeof *texts) : NULL;
+    if (texts) t->result_texts = texts;
+    double *numbers = texts ? realloc(t->result_numbers, n * sizeof *numbers) : NULL;
+    if (numbers) t->result_numbers = numbers;
+    char *name_copy = numbers ? copy_text(name) : NULL;
+    char *text_copy = kind == BKF_IO_TEXT && value.text && name_copy ? copy_text(value.text) : NULL;
+    if (!name_copy || (kind == BKF_IO_TEXT && value.text && !text_copy)) {
+        free(name_copy);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory storing a result");
+    }
+    t->result_names[t->nresults] = name_copy;
+    t->result_texts[t->nresults] = text_copy;
+    t->result_numbers[t->nresults] = kind == BKF_IO_NUMBER ? value.number : NAN;
+    t->nresults = n;
+    return BKF_OK;
+}
+
+static void write_results(bkf_io_table *t)
+{
+    puts_(t, "  \"results\": {");
+    for (size_t i = 0; i < t->nresults; i++) {
+        if (i) puts_(t, ", ");
+        put_json_string(t, t->result_names[i]);
+        puts_(t, ": ");
+        if (t->result_texts[i])
+            put_json_string(t, t->result_texts[i]);
+        else
+            put_number(t, t->result_numbers[i]);
+    }
+    puts_(t, "},\n");
+}
+
 static void write_header(bkf_io_table *t)
 {
     if (t->format == BKF_IO_TSV) {
@@ -299,8 +365,9 @@ static void write_header(bkf_io_table *t)
         }
         puts_(t, "\n");
     } else {
-        puts_(t, t->comments == 0 ? "{\n  \"comments\": [],\n  \"columns\": ["
-                                  : "\n  ],\n  \"columns\": [");
+        puts_(t, t->comments == 0 ? "{\n  \"comments\": [],\n" : "\n  ],\n");
+        if (t->nresults) write_results(t);
+        puts_(t, "  \"columns\": [");
         for (size_t i = 0; i < t->ncolumns; i++) {
             if (i) puts_(t, ", ");
             put_json_string(t, t->columns[i].name);
