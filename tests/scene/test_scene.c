@@ -14,6 +14,7 @@
 
 #include "bkfront/plot.h"
 #include "scene.h"
+#include "cli_support.h"
 
 #ifndef BKF_SOURCE_DIR
 #define BKF_SOURCE_DIR "."
@@ -240,49 +241,21 @@ TEST(plan_refuses_an_output_folder_figures_cannot_list)
 
 #ifdef BKF_CLI_PATH
 
-typedef struct {
-    char out[65536], err[8192];
-    int code;
-} run_result;
+typedef bkf_cli_result run_result;
 
-static void read_all(int fd, char *buf, size_t size)
-{
-    lseek(fd, 0, SEEK_SET);
-    size_t n = 0;
-    ssize_t k;
-    while (n + 1 < size && (k = read(fd, buf + n, size - 1 - n)) > 0) n += (size_t)k;
-    buf[n] = '\0';
-    close(fd);
-}
-
+/* The result on the heap (run_free frees it). */
 static run_result *run_cli(char *const *args)
 {
-    run_result *r = calloc(1, sizeof *r);
+    run_result *r = malloc(sizeof *r);
     CHECK(r);
-    char *argv[32];
-    int argc = 0;
-    argv[argc++] = BKF_CLI_PATH;
-    for (; *args && argc < 31; args++) argv[argc++] = *args;
-    argv[argc] = NULL;
-    FILE *o = tmpfile(), *e = tmpfile();
-    CHECK(o && e);
-    fflush(stdout);
-    pid_t pid = fork();
-    CHECK(pid >= 0);
-    if (pid == 0) {
-        dup2(fileno(o), 1);
-        dup2(fileno(e), 2);
-        execv(BKF_CLI_PATH, argv);
-        _exit(127);
-    }
-    int status = 0;
-    CHECK(waitpid(pid, &status, 0) == pid);
-    r->code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    read_all(dup(fileno(o)), r->out, sizeof r->out);
-    read_all(dup(fileno(e)), r->err, sizeof r->err);
-    fclose(o);
-    fclose(e);
+    *r = bkf_cli_run((const char *const *)args, NULL);
     return r;
+}
+
+static void run_free(run_result *r)
+{
+    bkf_cli_result_free(r);
+    free(r);
 }
 
 static char *temp_dir(void)
@@ -391,7 +364,7 @@ TEST(run_scene_writes_data_and_figures_in_every_format)
     CHECK(file_size(sub, "fric.png") > 5000 && file_size(sub, "tablefig.png") > 5000);
     CHECK(file_size(sub, "fric.png.part") < 0);    /* nothing half-written left */
     check_friction_table(dir);
-    free(r);
+    run_free(r);
     remove_tree(dir);
     free(path);
     free(dir);
@@ -411,7 +384,7 @@ TEST(run_plan_computes_nothing)
     CHECK(!strstr(r->out, "\tspeeds\t"));
     struct stat st;
     CHECK(stat(outdir, &st) != 0);   /* not even the folder */
-    free(r);
+    run_free(r);
     remove_tree(dir);
     free(path);
     free(dir);
@@ -432,17 +405,17 @@ TEST(run_refuses_a_bad_scene_with_its_line)
     CHECK(strchr(r->err, '\n') == r->err + strlen(r->err) - 1);
     struct stat st;
     CHECK(stat(outdir, &st) != 0);
-    free(r);
+    run_free(r);
 
     r = run_cli((char *[]){"run", "--frobnicate", path, NULL});
     CHECK(r->code == 2 && strstr(r->err, "--frobnicate"));
-    free(r);
+    run_free(r);
     r = run_cli((char *[]){"run", NULL});
     CHECK(r->code == 2 && strstr(r->err, "SCENE"));
-    free(r);
+    run_free(r);
     r = run_cli((char *[]){"run", "--formats", "gif", path, NULL});
     CHECK(r->code == 2 && strstr(r->err, "--formats"));
-    free(r);
+    run_free(r);
     remove_tree(dir);
     free(path);
     free(dir);
@@ -463,7 +436,7 @@ TEST(run_keeps_going_past_a_failed_product)
     CHECK(strstr(r->err, "[profile p]") && strstr(r->err, "n = 40"));
     CHECK(file_size(outdir, "f.png") > 0);
     CHECK(file_size(outdir, "p.tsv") < 0 && file_size(outdir, "p.png") < 0);
-    free(r);
+    run_free(r);
     remove_tree(dir);
     free(path);
     free(dir);
@@ -499,13 +472,13 @@ TEST(profile_spans_one_wavelength)
     CHECK(rows == 202);
     CHECK_CLOSE(last_x[0], 20.0 / 4, 1e-9, 0);
     CHECK_CLOSE(last_x[1], 20.0 / 10, 1e-9, 0);
-    free(r);
+    run_free(r);
     r = run_cli((char *[]){"profile", "--nu", "0", "--mu", "1", "--n", "3", NULL});
     CHECK(r->code == 2 && strstr(r->err, "--mu"));
-    free(r);
+    run_free(r);
     r = run_cli((char *[]){"profile", "--nu", "1.5", "--mu", "1", NULL});
     CHECK(r->code == 2 && strstr(r->err, "--nu"));
-    free(r);
+    run_free(r);
 }
 
 #endif
