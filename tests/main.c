@@ -223,8 +223,9 @@ int main(int argc, char **argv)
         job_count++;
     }
     qsort(order, job_count, sizeof order[0], compare_expected);
-    signal(SIGINT, on_interrupt);
-    signal(SIGTERM, on_interrupt);
+    /* an ignored signal stays ignored (nohup, a background job) */
+    if (signal(SIGINT, on_interrupt) == SIG_IGN) signal(SIGINT, SIG_IGN);
+    if (signal(SIGTERM, on_interrupt) == SIG_IGN) signal(SIGTERM, SIG_IGN);
 
     int passed = 0, failed = 0;
     size_t started = 0, running = 0, reported = 0;
@@ -254,6 +255,8 @@ int main(int argc, char **argv)
         /* print as soon as everything before it in the sorted order is done */
         while (reported < job_count && jobs[reported].done) report(&jobs[reported++], &passed, &failed);
     }
+    free(order);
+    free(jobs);
     printf("%d passed, %d failed\n", passed, failed);
     return failed ? 1 : 0;
 }
