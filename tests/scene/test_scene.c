@@ -14,6 +14,7 @@
 
 #include "bkfront/plot.h"
 #include "scene.h"
+#include "cli_support.h"
 
 #ifndef BKF_SOURCE_DIR
 #define BKF_SOURCE_DIR "."
@@ -240,48 +241,19 @@ TEST(plan_refuses_an_output_folder_figures_cannot_list)
 
 #ifdef BKF_CLI_PATH
 
-typedef struct {
-    char out[65536], err[8192];
-    int code;
-} run_result;
+typedef bkf_cli_result run_result;
 
-static void read_all(int fd, char *buf, size_t size)
-{
-    lseek(fd, 0, SEEK_SET);
-    size_t n = 0;
-    ssize_t k;
-    while (n + 1 < size && (k = read(fd, buf + n, size - 1 - n)) > 0) n += (size_t)k;
-    buf[n] = '\0';
-    close(fd);
-}
-
+/* The result in one block, so that free(r) releases it all. */
 static run_result *run_cli(char *const *args)
 {
-    run_result *r = calloc(1, sizeof *r);
+    bkf_cli_result c = bkf_cli_run((const char *const *)args, NULL);
+    size_t n_out = strlen(c.out) + 1, n_err = strlen(c.err) + 1;
+    run_result *r = malloc(sizeof *r + n_out + n_err);
     CHECK(r);
-    char *argv[32];
-    int argc = 0;
-    argv[argc++] = BKF_CLI_PATH;
-    for (; *args && argc < 31; args++) argv[argc++] = *args;
-    argv[argc] = NULL;
-    FILE *o = tmpfile(), *e = tmpfile();
-    CHECK(o && e);
-    fflush(stdout);
-    pid_t pid = fork();
-    CHECK(pid >= 0);
-    if (pid == 0) {
-        dup2(fileno(o), 1);
-        dup2(fileno(e), 2);
-        execv(BKF_CLI_PATH, argv);
-        _exit(127);
-    }
-    int status = 0;
-    CHECK(waitpid(pid, &status, 0) == pid);
-    r->code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    read_all(dup(fileno(o)), r->out, sizeof r->out);
-    read_all(dup(fileno(e)), r->err, sizeof r->err);
-    fclose(o);
-    fclose(e);
+    *r = c;
+    r->out = memcpy((char *)(r + 1), c.out, n_out);
+    r->err = memcpy(r->out + n_out, c.err, n_err);
+    bkf_cli_result_free(&c);
     return r;
 }
 

@@ -13,6 +13,7 @@
 #include "bkfront/asymfit.h"
 #include "bkfront/asymptotics.h"
 #include "bkfront/cycle.h"
+#include "cli_support.h"
 
 /* ---- large mu ------------------------------------------------------------ */
 
@@ -273,53 +274,19 @@ TEST(asymfit_bad_arguments)
 /* In test_io.c. */
 int bkf_test_json_valid(const char *text);
 
-typedef struct {
-    char *out, *err;
-    int code;
-} cli_run;
+typedef bkf_cli_result cli_run;
 
-static char *slurp(FILE *f)
-{
-    size_t cap = 4096, n = 0;
-    char *buf = malloc(cap);
-    CHECK(buf);
-    rewind(f);
-    for (size_t k; (k = fread(buf + n, 1, cap - n - 1, f)) > 0;) {
-        n += k;
-        if (n + 1 >= cap) {
-            buf = realloc(buf, cap *= 2);
-            CHECK(buf);
-        }
-    }
-    buf[n] = '\0';
-    fclose(f);
-    return buf;
-}
-
-/* bkfront asymptotics ARGS..., output through unlinked temporary files. */
+/* bkfront asymptotics ARGS... */
 static cli_run run_cli(char *const *args)
 {
-    char *argv[32];
-    int argc = 0;
-    argv[argc++] = BKF_CLI_PATH;
-    argv[argc++] = "asymptotics";
-    for (; *args && argc < 31; args++) argv[argc++] = *args;
-    argv[argc] = NULL;
-    FILE *out = tmpfile(), *err = tmpfile();
-    CHECK(out && err);
-    fflush(stdout);
-    pid_t pid = fork();
-    CHECK(pid >= 0);
-    if (pid == 0) {
-        dup2(fileno(out), 1);
-        dup2(fileno(err), 2);
-        execv(BKF_CLI_PATH, argv);
-        _exit(127);
+    const char *argv[32] = {"asymptotics"};
+    size_t argc = 1;
+    for (; *args; args++) {
+        CHECK(argc < 31);
+        argv[argc++] = *args;
     }
-    int status = 0;
-    CHECK(waitpid(pid, &status, 0) == pid);
-    cli_run r = {slurp(out), slurp(err), WIFEXITED(status) ? WEXITSTATUS(status) : -1};
-    return r;
+    argv[argc] = NULL;
+    return bkf_cli_run(argv, NULL);
 }
 
 static void check_refused(char *const *args)
