@@ -26,6 +26,8 @@
 #include "bkfront/friction.h"
 #include "bkfront/fronts.h"
 #include "bkfront/oscillation.h"
+#include "bkfront/init.h"
+#include "bkfront/seed.h"
 #include "bkfront/plot.h"
 
 #endif

@@ -378,7 +378,7 @@ static int run_run(int argc, char **argv, bkf_error *err)
     for (size_t i = 0; i < plan.nsteps; i++) {
         scene_step *st = &plan.steps[i];
         const scene_product *p = &sc->products[st->users[0]];
-        bkf_error e = {{0}};
+        bkf_error e = {0};
         char warning[BKF_ERROR_LEN] = "";
         double t0 = now();
         int status = BKF_OK;

@@ -678,3 +678,152 @@ void bkf_io_atomic_abort(bkf_io_atomic *a)
     unlink(a->temp);
     atomic_free(a);
 }
+
+/* ------------------------------------------------------------ state reader */
+
+const char *bkf_io_shown(const char *text, char *buf, size_t size)
+{
+    size_t n = 0, limit = size - 4;
+    const unsigned char *s = (const unsigned char *)(text ? text : "");
+    for (; *s && n < limit; s++) buf[n++] = (*s < 0x20 || *s == 0x7f) ? '?' : (char)*s;
+    if (*s) {
+        memcpy(buf + n, "...", 3);
+        n += 3;
+    }
+    buf[n] = '\0';
+    return buf;
+}
+
+void bkf_io_state_free(bkf_io_state *state)
+{
+    if (!state) return;
+    free(state->psi);
+    free(state->eta);
+    memset(state, 0, sizeof *state);
+}
+
+/* The columns of a data line, split in place; -1 when a cell is not a finite
+ * number (*bad points at it). */
+static int state_cells(char *line, int ipsi, int ieta, int it, double *vp, double *ve, double *vt,
+                       int *fields, char **bad)
+{
+    char *save = NULL;
+    int col = 0;
+    for (char *tok = strtok_r(line, "\t", &save); tok; tok = strtok_r(NULL, "\t", &save), col++) {
+        if (col != ipsi && col != ieta && col != it) continue;
+        char *end;
+        errno = 0;
+        double v = strtod(tok, &end);
+        if (*end || end == tok || !isfinite(v) || errno) {
+            *bad = tok;
+            return -1;
+        }
+        if (col == ipsi) *vp = v;
+        else if (col == ieta) *ve = v;
+        else *vt = v;
+    }
+    *fields = col;
+    return 0;
+}
+
+int bkf_io_read_state(FILE *in, size_t max_rows, bkf_io_state *state, bkf_error *err)
+{
+    if (!state) return bkf_error_set(err, BKF_EINPUT, "state is NULL");
+    memset(state, 0, sizeof *state);
+    if (!in) return bkf_error_set(err, BKF_EINPUT, "stream is NULL");
+    char *line = NULL, a[72];
+    size_t cap = 0;
+    ssize_t len;
+    int ipsi = -1, ieta = -1, it = -1, ncol = 0, header = 0, status = BKF_OK;
+    size_t lineno = 0, rows = 0, rcap = 0;
+    double *psi = NULL, *eta = NULL, *tt = NULL;
+    while ((len = getline(&line, &cap, in)) >= 0) {
+        lineno++;
+        while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) line[--len] = '\0';
+        if (line[0] == '#' || len == 0) continue;
+        if (!header) {
+            header = 1;
+            char *save = NULL;
+            int col = 0;
+            for (char *tok = strtok_r(line, "\t", &save); tok; tok = strtok_r(NULL, "\t", &save), col++) {
+                if (strcmp(tok, "psi") == 0) ipsi = col;
+                else if (strcmp(tok, "eta") == 0) ieta = col;
+                else if (strcmp(tok, "t") == 0) it = col;
+            }
+            ncol = col;
+            if (ipsi < 0 || ieta < 0) {
+                status = bkf_error_set(err, BKF_EINPUT,
+                                       "the header (line %zu) must name the columns psi and eta",
+                                       lineno);
+                break;
+            }
+            continue;
+        }
+        if (rows == max_rows) {
+            status = bkf_error_set(err, BKF_EINPUT, "line %zu: more than %zu rows", lineno,
+                                   max_rows);
+            break;
+        }
+        if (rows == rcap) {
+            rcap = rcap ? 2 * rcap : 1024;
+            if (rcap > max_rows) rcap = max_rows;
+            double *p = realloc(psi, rcap * sizeof *p), *e = p ? realloc(eta, rcap * sizeof *e) : NULL,
+                   *t = e ? realloc(tt, rcap * sizeof *t) : NULL;
+            if (p) psi = p;
+            if (e) eta = e;
+            if (t) tt = t;
+            if (!p || !e || !t) {
+                status = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+                break;
+            }
+        }
+        double vp = NAN, ve = NAN, vt = 0;
+        int fields = 0;
+        char *bad = NULL;
+        if (state_cells(line, ipsi, ieta, it, &vp, &ve, &vt, &fields, &bad)) {
+            status = bkf_error_set(err, BKF_EINPUT, "line %zu: '%s' is not a finite number",
+                                   lineno, bkf_io_shown(bad, a, sizeof a));
+            break;
+        }
+        if (fields != ncol) {
+            status = bkf_error_set(err, BKF_EINPUT, "line %zu has %d fields, not %d", lineno,
+                                   fields, ncol);
+            break;
+        }
+        psi[rows] = vp;
+        eta[rows] = ve;
+        tt[rows] = vt;
+        rows++;
+    }
+    free(line);
+    if (!status && ferror(in)) status = bkf_error_set(err, BKF_EIO, "read error");
+    if (!status && !header) status = bkf_error_set(err, BKF_EINPUT, "no header line");
+    size_t first = 0;
+    if (!status && it >= 0 && rows) {
+        double tl = tt[rows - 1];
+        first = rows;
+        while (first > 0 && tt[first - 1] == tl) first--;
+        state->t = tl;
+        state->has_t = 1;
+    }
+    if (!status && rows > first) {
+        state->rows = rows - first;
+        state->psi = malloc(state->rows * sizeof *state->psi);
+        state->eta = malloc(state->rows * sizeof *state->eta);
+        if (!state->psi || !state->eta) {
+            bkf_io_state_free(state);
+            status = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        } else {
+            memcpy(state->psi, psi + first, state->rows * sizeof *psi);
+            memcpy(state->eta, eta + first, state->rows * sizeof *eta);
+        }
+    }
+    if (status) {
+        state->t = 0;
+        state->has_t = 0;
+    }
+    free(psi);
+    free(eta);
+    free(tt);
+    return status;
+}

@@ -622,8 +622,8 @@ static int write_scan(const bkf_oscillation_spec *p, const bkf_provenance *prov,
     int s = comment_scan(t, p, &o, prov, err);
     if (s) return s;
     char a[32], b[32];
-    sink k = {t, 0, {{0}}};
-    bkf_error e = {{0}};
+    sink k = {t, 0, {{0}, 0}};
+    bkf_error e = {0};
     if (mode == BKF_OSCILLATION_THRESHOLD) {
         bkf_floquet_threshold th;
         s = bkf_floquet_threshold_find(gamma, c, p->search_lo, p->search_hi, &o, &th, &e);

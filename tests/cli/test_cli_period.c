@@ -466,7 +466,7 @@ TEST(cli_period_library_matches_cli)
     run_result r = RUN("period", "--mu", "1:3:3", "--nu", "-0.5", "--tol", "1e-9");
     CHECK(r.code == 0);
     bkf_period_spec spec = bkf_period_spec_default();
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     const bkf_option *mu = bkf_option_find(bkf_period_options, bkf_period_noptions, "mu");
     const bkf_option *nu = bkf_option_find(bkf_period_options, bkf_period_noptions, "nu");
     const bkf_option *tol = bkf_option_find(bkf_period_options, bkf_period_noptions, "tol");

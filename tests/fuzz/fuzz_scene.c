@@ -11,7 +11,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     char *text = fuzz_string(data, size);
     scene *sc = NULL;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int s = scene_parse_string(text, "fuzz.scene", &sc, &e);
     fuzz_check_status(s, &e);
     if (s == BKF_OK) {

@@ -29,7 +29,7 @@ static inline char *library_output(product_writer write, const void *spec, bkf_i
     size_t size = 0;
     FILE *f = open_memstream(&data, &size);
     CHECK(f);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int s = write(spec, f, format, NULL, &e);
     CHECK(fclose(f) == 0);
     CHECK_MSG(s == BKF_OK, "library: %s", e.message);

@@ -23,7 +23,7 @@
 static scene *parse_ok(const char *text)
 {
     scene *s = NULL;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int status = scene_parse_string(text, "t.scene", &s, &e);
     CHECK_MSG(status == BKF_OK, "parse failed: %s", e.message);
     return s;
@@ -34,7 +34,7 @@ static scene *parse_ok(const char *text)
 static void parse_bad(const char *text, int line, const char *part)
 {
     scene *s = (scene *)1;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(scene_parse_string(text, "t.scene", &s, &e), BKF_EINPUT);
     CHECK(s == NULL);
     char prefix[32];
@@ -50,7 +50,7 @@ static void parse_bad(const char *text, int line, const char *part)
 TEST(scene_parses_the_paper_scene)
 {
     scene *s = NULL;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
     size_t figures = 0, kinds[SCENE_NKINDS] = {0};
     for (size_t i = 0; i < s->nproducts; i++) {
@@ -128,7 +128,7 @@ TEST(scene_errors_name_the_file_and_line)
 TEST(scene_file_errors)
 {
     scene *s = NULL;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(scene_parse_file("/nonexistent/x.scene", &s, &e), BKF_EINPUT);
     CHECK(strstr(e.message, "cannot open"));
 }
@@ -148,7 +148,7 @@ static plan_count count_plan(const char *text, int figures)
 {
     scene *s = parse_ok(text);
     scene_plan plan;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     scene_plan_options o = {.outdir = "out", .formats = 1, .figures = figures};
     CHECK_STATUS(scene_make_plan(s, &o, &plan, &e), BKF_OK);
     plan_count c = {.steps = plan.nsteps, .deduplicated = plan.deduplicated};
@@ -209,7 +209,7 @@ TEST(plan_runs_only_what_the_products_need)
 
     /* the paper scene: every figure, one computation per curve */
     scene *s = NULL;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
     scene_plan plan;
     scene_plan_options o = {.outdir = "out", .formats = 1, .figures = 1};
@@ -230,7 +230,7 @@ TEST(plan_refuses_an_output_folder_figures_cannot_list)
 {
     scene *s = parse_ok(MODEL "[speeds]\n");
     scene_plan plan;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     scene_plan_options o = {.outdir = "my out", .figures = 1};
     CHECK_STATUS(scene_make_plan(s, &o, &plan, &e), BKF_EINPUT);
     CHECK(strstr(e.message, "space"));
@@ -497,7 +497,7 @@ TEST(plot_failure_reports_gnuplot_and_leaves_no_image)
     CHECK(f);
     fputs("set terminal pngcairo\nset output out\nplot sin(x) with linez\n", f);
     fclose(f);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_plot_job *job = bkf_plot_job_alloc(script, &e);
     CHECK(job);
     CHECK_STATUS(bkf_plot_add_output(job, BKF_PLOT_PNG, out, &e), BKF_OK);
@@ -533,7 +533,7 @@ TEST(shipped_scenes_parse_and_plan)
         char path[1200];
         snprintf(path, sizeof path, "%s/fronts/%.500s", BKF_SOURCE_DIR, ent->d_name);
         scene *s = NULL;
-        bkf_error e = {{0}};
+        bkf_error e = {0};
         CHECK_MSG(scene_parse_file(path, &s, &e) == BKF_OK, "%s", e.message);
         scene_plan plan;
         scene_plan_options o = {.outdir = "out", .formats = 1, .figures = 1};

@@ -31,10 +31,8 @@ static double paper_speed(size_t n)
 static bkf_comoving_params paper_params(size_t n, double v, size_t points, double noise)
 {
     bkf_comoving_params p = bkf_comoving_params_default();
-    p.gamma = 2;
-    p.c = 0.3;
-    p.nu = -0.96;
-    p.S = 20;
+    p.model = (bkf_model_params){2, 0.3, -0.96, 20, 0, BKF_MODEL_CONTINUUM};
+    p.level = -0.96; /* fronts: crossings of nu */
     p.n = n;
     p.v = v;
     p.points = points;
@@ -166,7 +164,7 @@ TEST(comoving_refuses_bad_input)
     p = paper_params(0, v, 256, 0);
     refused(p, "n", ">= 1");
     p = paper_params(7, v, 256, 0);
-    p.nu = 1;
+    p.model.nu = 1;
     refused(p, "nu", "(-1, 1)");
     p = paper_params(7, v, 256, 0);
     p.tol = 1;
@@ -174,10 +172,10 @@ TEST(comoving_refuses_bad_input)
     snprintf(tol_range, sizeof tol_range, "[%g, %g]", BKF_PDE_TOL_MIN, BKF_PDE_TOL_MAX);
     refused(p, "tol", tol_range);
     p = paper_params(7, v, 256, 0);
-    p.gamma = 0;
+    p.model.gamma = 0;
     refused(p, "gamma", "> 0");
     p = paper_params(7, v, 256, 0);
-    p.S = -1;
+    p.model.S = -1;
     refused(p, "S", "> 0");
     p = paper_params(7, v, 256, 0);
     p.level = INFINITY;

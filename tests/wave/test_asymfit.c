@@ -23,7 +23,7 @@
 static void check_large_fit(double nu)
 {
     bkf_asymfit_large_result r;
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     CHECK_STATUS(bkf_asymfit_large(nu, NULL, &r, &err), BKF_OK);
     bkf_test_note("nu = %g: p = %.5f +- %.1e (-1/3); A = %.5f +- %.1e (a1 C = %.5f, %+.3f%%); "
                   "B = %.4f +- %.2f (L = %.4f, %+.1f%%); p fixed: A %+.4f%%, B %+.1f%%",
@@ -63,7 +63,7 @@ TEST(asymfit_correction_exact_model)
         R[i] = A * pow(mu[i], p) + B * log(mu[i]) / mu[i] + D / mu[i];
     }
     bkf_asymfit_large_result r;
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     CHECK_STATUS(bkf_asymfit_correction(mu, R, 16, -0.9, -0.05, &r, &err), BKF_OK);
     CHECK_CLOSE(r.p, p, 0.0, 1e-8);
     CHECK_CLOSE(r.A, A, 1e-7, 0.0);
@@ -80,7 +80,7 @@ TEST(asymfit_correction_exact_model)
 static void check_small_fit(double nu)
 {
     bkf_asymfit_small_result r;
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     CHECK_STATUS(bkf_asymfit_small(nu, NULL, &r, &err), BKF_OK);
     bkf_test_note("nu = %g: s = %.12g +- %.1e, s2 = %.12g (rel %.1e); s4 = %.6g +- %.1e", nu,
                   r.s, r.s_err, r.s_derived, r.s / r.s_derived - 1, r.s4, r.s4_err);
@@ -121,7 +121,7 @@ TEST(asymfit_map_nu_0)
 {
     double nu = 0.0, eps[3] = {1e-2, 1e-4, 1e-6};
     bkf_asymfit_boundary b[BKF_ASYMFIT_NFORMULAS * 3];
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     CHECK_STATUS(bkf_asymfit_map(&nu, 1, eps, 3, NULL, b, &err), BKF_OK);
     for (int f = 0; f < BKF_ASYMFIT_NFORMULAS; f++)
         bkf_test_note("%-9s mu boundary: eps 1e-2 %-9.4g eps 1e-4 %-9.4g eps 1e-6 %-9.4g",
@@ -167,7 +167,7 @@ TEST(asymfit_grid_matches_cycle)
 {
     double mu[2] = {0.05, 300.0}, nu[2] = {-0.3, 0.8};
     bkf_asymfit_grid_point g[4];
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     CHECK_STATUS(bkf_asymfit_grid(mu, 2, nu, 2, g, &err), BKF_OK);
     for (size_t j = 0; j < 2; j++)
         for (size_t i = 0; i < 2; i++) {
@@ -190,7 +190,7 @@ TEST(asymfit_grid_matches_cycle)
 
 #define CHECK_EINPUT(expr)                                                 \
     do {                                                                   \
-        bkf_error e_ = {{0}};                                              \
+        bkf_error e_ = {0};                                              \
         bkf_error *err = &e_;                                              \
         CHECK_STATUS((expr), BKF_EINPUT);                                  \
         CHECK_MSG(e_.message[0] != '\0', "%s: empty message", #expr);      \

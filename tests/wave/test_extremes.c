@@ -222,7 +222,7 @@ TEST(extremes_period_matrix)
                     o.warm_start = 0;
                     if (forced) o.stepper = BKF_STEPPER_IMPLICIT;
                     bkf_cycle_result r;
-                    bkf_error e = {{0}};
+                    bkf_error e = {0};
                     char where[160];
                     fmt_where(where, sizeof where, "T mu %g nu %g tol %g %s", mu, nu, tols[k],
                               forced ? "bsimp" : "auto");
@@ -302,7 +302,7 @@ static void check_speeds_case(tally *t, bkf_model_params p, double tol, size_t n
     o.n_from = n_from;
     o.n_to = n_to;
     bkf_speeds_table tab;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     char where[160];
     fmt_where(where, sizeof where, "speeds gamma %g c %g nu %g S %g tol %g n %zu..%zu", p.gamma, p.c,
               p.nu, p.S, tol, n_from, n_to);
@@ -555,7 +555,7 @@ static void floquet_matrix(const double *gammas, size_t n_gammas, const double *
             co.warm_start = 0;
             co.stepper = floquet_other_stepper(gamma);
             bkf_cycle_result cy;
-            bkf_error e = {{0}};
+            bkf_error e = {0};
             int cy_rc = bkf_cycle_period(gamma, nu, &co, &cy, &e);
             /* near the Hopf point at gamma >= 30 the cycle refuses 1e-12 */
             for (int a = 0; cy_rc != BKF_OK && a < 4; a++) {
