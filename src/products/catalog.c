@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bkfront/approx.h"
 #include "bkfront/period.h"
 #include "bkfront/profile.h"
 
@@ -50,6 +51,27 @@ static int profile_write(const void *spec, FILE *out, bkf_io_format format,
 }
 static void profile_release(void *spec) { bkf_profile_spec_free(spec); }
 
+/* -------------------------------------------------------- asymptotics */
+
+static const bkf_option *approx_options(size_t *count)
+{
+    *count = bkf_approx_noptions;
+    return bkf_approx_options;
+}
+static void approx_init(void *spec) { *(bkf_approx_spec *)spec = bkf_approx_spec_default(); }
+static int approx_check(const void *spec, const char *prefix, bkf_error *err)
+{
+    return bkf_approx_check(spec, prefix, err);
+}
+static int approx_write(const void *spec, FILE *out, bkf_io_format format,
+                        const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
+                        bkf_error *err)
+{
+    (void)hooks;
+    return bkf_approx_write(spec, out, format, prov, err);
+}
+static void approx_release(void *spec) { bkf_approx_spec_free(spec); }
+
 /* ---------------------------------------------------------- the table */
 
 static const bkf_catalog_entry entries[] = {
@@ -59,6 +81,10 @@ static const bkf_catalog_entry entries[] = {
     {"profile", "front profiles f(z), f'(z) and their place x along the system",
      NULL, NULL, sizeof(bkf_profile_spec), profile_options, profile_init, profile_check,
      profile_write, profile_release},
+    {"asymptotics",
+     "asymptotic formulas for T against the numerical period: fits, validity map, errors",
+     NULL, NULL, sizeof(bkf_approx_spec), approx_options, approx_init, approx_check,
+     approx_write, approx_release},
 };
 #define NENTRIES (sizeof entries / sizeof entries[0])
 
