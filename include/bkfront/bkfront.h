@@ -21,6 +21,7 @@
 #include "bkfront/catalog.h"
 #include "bkfront/check.h"
 #include "bkfront/options.h"
+#include "bkfront/approx.h"
 #include "bkfront/period.h"
 #include "bkfront/profile.h"
 #include "bkfront/friction.h"

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bkfront/approx.h"
 #include "bkfront/friction.h"
 #include "bkfront/fronts.h"
 #include "bkfront/oscillation.h"
@@ -42,11 +43,14 @@ static void release_nothing(void *spec) { (void)spec; }
 static void period_free(void *spec) { bkf_period_spec_free(spec); }
 static void profile_free(void *spec) { bkf_profile_spec_free(spec); }
 static void oscillation_free(void *spec) { bkf_oscillation_spec_free(spec); }
+static void approx_free(void *spec) { bkf_approx_spec_free(spec); }
 
 ADAPTERS(period, bkf_period_spec, bkf_period, period_free)
 WRITER(period, bkf_period_spec, bkf_period_write)
 ADAPTERS(profile, bkf_profile_spec, bkf_profile, profile_free)
 WRITER(profile, bkf_profile_spec, bkf_profile_write)
+ADAPTERS(asymptotics, bkf_approx_spec, bkf_approx, approx_free)
+WRITER(asymptotics, bkf_approx_spec, bkf_approx_write)
 ADAPTERS(speeds, bkf_fronts_spec, bkf_fronts, release_nothing)
 WRITER(speeds, bkf_fronts_spec, bkf_fronts_write)
 ADAPTERS(branch, bkf_fronts_branch_spec, bkf_fronts_branch, release_nothing)
@@ -80,6 +84,8 @@ static const bkf_catalog_entry entries[] = {
     ENTRY(speeds, bkf_fronts_spec, "allowed front speeds: every root of the speed condition"),
     ENTRY(branch, bkf_fronts_branch_spec,
           "speed branches v_n(p) along one parameter, through folds to the sonic limit"),
+    ENTRY(asymptotics, bkf_approx_spec,
+          "asymptotic formulas for T against the numerical period: fits, validity map, errors"),
     ENTRY(profile, bkf_profile_spec,
           "front profiles f(z), f'(z) and their place x along the system"),
     ENTRY(floquet, bkf_oscillation_spec,
