@@ -1,5 +1,7 @@
 #include "bkfront/options.h"
 
+#include "bkfront/io.h"
+
 #include <errno.h>
 #include <float.h>
 #include <math.h>
@@ -12,15 +14,7 @@
 
 const char *bkf_option_shown(const char *text, char *buf, size_t size)
 {
-    size_t n = 0, limit = size - 4;
-    const unsigned char *s = (const unsigned char *)(text ? text : "");
-    for (; *s && n < limit; s++) buf[n++] = (*s < 0x20 || *s == 0x7f) ? '?' : (char)*s;
-    if (*s) {
-        memcpy(buf + n, "...", 3);
-        n += 3;
-    }
-    buf[n] = '\0';
-    return buf;
+    return bkf_io_shown(text, buf, size);
 }
 
 const char *bkf_format_number(double x, char *buf, size_t size)
