@@ -9,6 +9,7 @@
 
 #include <stddef.h>
 #include "bkfront/io.h"
+#include "bkfront/options.h"
 #include "bkfront/status.h"
 
 #ifdef __cplusplus
@@ -34,6 +35,25 @@ const bkf_io_column *bkf_bench_columns(size_t *count);
  * rows (box also comment lines, before its rows) into `table`, which must
  * have bkf_bench_columns's columns. */
 int bkf_bench_run(bkf_bench_product which, int quick, bkf_io_table *table, bkf_error *err);
+
+/* As a product with keys (`bkfront bench`, the catalogue): which
+ * measurement and how thorough. */
+typedef struct {
+    int product; /* bkf_bench_product; default BKF_BENCH_ALL */
+    int quick;   /* switch */
+} bkf_bench_spec;
+
+bkf_bench_spec bkf_bench_spec_default(void);
+
+/* The keys: product, quick. */
+extern const bkf_option bkf_bench_options[];
+extern const size_t bkf_bench_noptions;
+
+int bkf_bench_check(const bkf_bench_spec *spec, const char *prefix, bkf_error *err);
+
+/* The whole table: title, the caller's command, rows. */
+int bkf_bench_write(const bkf_bench_spec *spec, FILE *out, bkf_io_format format,
+                    const bkf_provenance *provenance, bkf_error *err);
 
 #ifdef __cplusplus
 }

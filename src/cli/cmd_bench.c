@@ -1,15 +1,24 @@
 /* bkfront bench: the library's work-precision measurements (bench.h) as a
  * table. */
-#define _POSIX_C_SOURCE 200809L
 #include "args.h"
 
 #include "bkfront/bench.h"
-#include "bkfront/io.h"
 
-static const char *const format_names[] = {"tsv", "json", NULL};
+typedef struct {
+    bkf_bench_spec spec;
+    cli_output_spec output;
+} bench_args;
+
+static void groups_of(bench_args *a, cli_options g[2])
+{
+    g[0] = (cli_options){bkf_bench_options, bkf_bench_noptions, a ? &a->spec : NULL};
+    g[1] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
+}
 
 static void bench_help(FILE *out)
 {
+    cli_options g[2];
+    groups_of(NULL, g);
     fprintf(out,
         "usage: bkfront bench [--product period|speeds|pde|all|box] [--quick]\n"
         "                     [--format tsv|json] [--out FILE]\n"
@@ -33,10 +42,9 @@ static void bench_help(FILE *out)
         "          0.9999}, --method shooting and auto (cold calls); comment lines give\n"
         "          the ratio per point (min, median, max) and in aggregate; method\n"
         "          column: method(model that answered). Not part of all.\n"
-        "options:\n"
-        "  --product P   which product; default all\n"
-        "  --quick       fewer cases and tolerances (for tests)\n"
-        "  --format tsv|json, --out FILE   as for period\n"
+        "options:\n");
+    cli_options_help(out, g, 2);
+    fprintf(out,
         "columns: product, case, method, tol, N (pde; NaN otherwise), error (relative,\n"
         "  achieved), estimate (the method's own relative error estimate or bound),\n"
         "  cpu_seconds (process CPU time per call, averaged over repeats), work\n"
@@ -45,55 +53,20 @@ static void bench_help(FILE *out)
         "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
 }
 
-/* ------------------------------------------------------------ command */
+static int write_bench(const void *spec, FILE *out, bkf_io_format format,
+                       const bkf_provenance *prov, bkf_error *err)
+{
+    return bkf_bench_write(spec, out, format, prov, err);
+}
 
 static int bench_run(int argc, char **argv, bkf_error *err)
 {
-    const char *product = NULL, *format = NULL, *out_path = NULL;
-    int quick = 0, help = 0;
-    const cli_flag flags[] = {
-        {"--product", &product, "period, speeds, pde, all or box", NULL},
-        {"--quick", NULL, NULL, &quick},
-        {"--format", &format, "tsv or json", NULL},
-        {"--out", &out_path, "a file name", NULL},
-        {"--help", NULL, NULL, &help},
-    };
-    int s = cli_parse_flags(flags, sizeof flags / sizeof flags[0], argc, argv, err);
-    if (s) return s;
-    int which = 3, fmt = 0;
-    if (product && (s = cli_parse_choice("--product", product, bkf_bench_product_names(), &which, err)))
-        return s;
-    if (format && (s = cli_parse_choice("--format", format, format_names, &fmt, err))) return s;
-    if (out_path && !*out_path)
-        return bkf_error_set(err, BKF_EINPUT, "--out: the file name is empty");
-
-    cli_output out = {0};
-    cli_buffer buf = {0};
-    s = cli_output_open(&out, out_path, "--out", err);
-    if (!s) s = cli_buffer_open(&buf, err);
-    if (!s) {
-        size_t ncolumns;
-        const bkf_io_column *columns = bkf_bench_columns(&ncolumns);
-        bkf_io_table *table = bkf_io_table_alloc(buf.stream, fmt ? BKF_IO_JSON : BKF_IO_TSV,
-                                                 columns, ncolumns, err);
-        if (!table) s = BKF_ENOMEM;
-        if (!s)
-            s = bkf_io_table_comment(
-                table,
-                CLI_PROGRAM " " CLI_VERSION " bench: work-precision (achieved relative error "
-                "against CPU seconds per call, one core)",
-                err);
-        if (!s) s = bkf_bench_run((bkf_bench_product)which, quick, table, err);
-        if (!s) s = bkf_io_table_finish(table, err);
-        bkf_io_table_free(table);
-        int c = cli_buffer_close(&buf, s ? NULL : err);
-        if (!s) s = c;
-    }
-    if (!s)
-        s = cli_output_write(&out, buf.data, buf.size, err);
-    else
-        cli_output_abort(&out);
-    cli_buffer_free(&buf);
+    bench_args a = {bkf_bench_spec_default(), {0}};
+    cli_options g[2];
+    groups_of(&a, g);
+    int s = cli_parse_options(g, 2, argc, argv, NULL, err);
+    if (!s) s = bkf_bench_check(&a.spec, "--", err);
+    if (!s) s = cli_write_table(&a.output, argc, argv, write_bench, &a.spec, err);
     return s;
 }
 

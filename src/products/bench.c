@@ -4,6 +4,7 @@
 #include "bkfront/bench.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -14,6 +15,7 @@
 #include "bkfront/pde.h"
 #include "bkfront/seed.h"
 #include "bkfront/speeds.h"
+#include "product_internal.h"
 
 static const bkf_io_column columns[] = {
     {"product", BKF_IO_TEXT},  {"case", BKF_IO_TEXT},     {"method", BKF_IO_TEXT},
@@ -403,5 +405,45 @@ int bkf_bench_run(bkf_bench_product which, int quick, bkf_io_table *table, bkf_e
     if (!s && (which == BKF_BENCH_SPEEDS || which == BKF_BENCH_ALL)) s = bench_speeds(&b, err);
     if (!s && (which == BKF_BENCH_PDE || which == BKF_BENCH_ALL)) s = bench_pde(&b, err);
     if (!s && which == BKF_BENCH_BOX) s = bench_box(&b, err);
+    return s;
+}
+
+const bkf_option bkf_bench_options[] = {
+    {.name = "product", .type = BKF_OPT_CHOICE, .offset = offsetof(bkf_bench_spec, product),
+     .choices = product_names, .form = "P", .shown_default = "all",
+     .help = "which measurement: period, speeds, pde, all (those three) or box"},
+    {.name = "quick", .type = BKF_OPT_SWITCH, .offset = offsetof(bkf_bench_spec, quick),
+     .help = "fewer cases and tolerances (for tests)"},
+};
+const size_t bkf_bench_noptions = sizeof bkf_bench_options / sizeof bkf_bench_options[0];
+
+bkf_bench_spec bkf_bench_spec_default(void)
+{
+    return (bkf_bench_spec){BKF_BENCH_ALL, 0};
+}
+
+int bkf_bench_check(const bkf_bench_spec *spec, const char *prefix, bkf_error *err)
+{
+    if (!spec || (unsigned)spec->product > BKF_BENCH_BOX)
+        return bkf_error_set(err, BKF_EINPUT, "%sproduct: not one of period, speeds, pde, all, "
+                             "box", prefix ? prefix : "");
+    return BKF_OK;
+}
+
+int bkf_bench_write(const bkf_bench_spec *spec, FILE *out, bkf_io_format format,
+                    const bkf_provenance *provenance, bkf_error *err)
+{
+    int s = bkf_bench_check(spec, "", err);
+    if (s) return s;
+    bkf_io_table *t;
+    s = bkf_product_table_open(out, format, columns, NCOLUMNS,
+                               "bench: work-precision (achieved relative error against CPU "
+                               "seconds per call, one core)",
+                               provenance, &t, err);
+    if (s) return s;
+    s = bkf_product_table_command(t, provenance, err);
+    if (!s) s = bkf_bench_run((bkf_bench_product)spec->product, spec->quick, t, err);
+    if (!s) s = bkf_io_table_finish(t, err);
+    bkf_io_table_free(t);
     return s;
 }

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "bkfront/approx.h"
+#include "bkfront/bench.h"
 #include "bkfront/friction.h"
 #include "bkfront/fronts.h"
 #include "bkfront/oscillation.h"
@@ -57,6 +58,8 @@ ADAPTERS(branch, bkf_fronts_branch_spec, bkf_fronts_branch, release_nothing)
 WRITER(branch, bkf_fronts_branch_spec, bkf_fronts_branch_write)
 ADAPTERS(friction, bkf_friction_spec, bkf_friction, release_nothing)
 WRITER(friction, bkf_friction_spec, bkf_friction_table)
+ADAPTERS(bench, bkf_bench_spec, bkf_bench, release_nothing)
+WRITER(bench, bkf_bench_spec, bkf_bench_write)
 ADAPTERS(floquet, bkf_oscillation_spec, bkf_oscillation, oscillation_free)
 
 /* Refused dispersion rows go to the hooks' warning. */
@@ -91,6 +94,8 @@ static const bkf_catalog_entry entries[] = {
     ENTRY(floquet, bkf_oscillation_spec,
           "Floquet stability of the global oscillation: dispersion, threshold, diagram"),
     ENTRY(friction, bkf_friction_spec, "the friction laws, sampled"),
+    ENTRY(bench, bkf_bench_spec,
+          "work-precision: achieved error against CPU time for every method and tolerance"),
 };
 #define NENTRIES (sizeof entries / sizeof entries[0])
 
