@@ -24,5 +24,6 @@
 #include "bkfront/period.h"
 #include "bkfront/profile.h"
 #include "bkfront/plot.h"
+#include "bkfront/scene.h"
 
 #endif
