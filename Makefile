@@ -32,6 +32,8 @@ LDLIBS   += $(PKG_LIBS) $(SUNDIALS_LIBS) -lm
 LAYERS    := core wave stability simulation products scene
 LIB_SRC   := $(foreach l,$(LAYERS),$(wildcard src/$(l)/*.c))
 CLI_SRC   := $(wildcard src/cli/*.c)
+# tests/*.c are the runner (main.c) and the helpers every folder shares
+# (cli_support.c); the tests themselves sit in tests/LAYER/.
 TEST_SRC  := $(wildcard tests/*.c tests/*/*.c)
 TEST_SRC  := $(filter-out tests/fuzz/% tests/bench/%,$(TEST_SRC))
 BENCH_SRC := $(wildcard tests/bench/*.c)
@@ -78,6 +80,8 @@ deps:
 test: deps
 	@$(MAKE) --no-print-directory check-built
 
+# BKF_TEST_JOBS tests at once (default: the online CPUs), BKF_TEST_TIME_LIMIT
+# seconds each (default 240).
 check-built: $(CLI) $(TESTS)
 	./$(TESTS)
 
@@ -132,7 +136,7 @@ fuzz-built: $(FUZZ_NAMES:%=$(BUILD)/fuzz_%)
 
 .SECONDARY: $(FUZZ_NAMES:%=$(BUILD)/tests/fuzz/fuzz_%.o) \
             $(EXAMPLES:$(BUILD)/examples/%=$(BUILD)/docs/examples/%.o)
-$(BUILD)/fuzz_%: $(BUILD)/tests/fuzz/fuzz_%.o $(BUILD)/src/cli/args.o $(BUILD)/src/cli/simcommon.o $(LIB)
+$(BUILD)/fuzz_%: $(BUILD)/tests/fuzz/fuzz_%.o $(BUILD)/src/cli/args.o $(BUILD)/src/cli/output.o $(BUILD)/src/cli/simcommon.o $(LIB)
 	$(CC) $(LDFLAGS) -fsanitize=fuzzer -o $@ $^ $(LDLIBS)
 
 $(LIB): $(LIB_OBJ)

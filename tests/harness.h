@@ -1,6 +1,9 @@
 /* A small test harness: TEST(name) registers a test at load time; the runner
  * (tests/main.c) forks one process per test so a crash or a hang fails that
- * test alone, and ends with the line "N passed, N failed". */
+ * test alone, runs BKF_TEST_JOBS of them at once (default: the online CPUs),
+ * prints each test's output whole in the sorted order, and ends with the line
+ * "N passed, N failed".  Tests therefore share no files: each makes its own
+ * temporary folder.  Running the built CLI: cli_support.h. */
 #ifndef BKF_TEST_HARNESS_H
 #define BKF_TEST_HARNESS_H
 

@@ -28,10 +28,8 @@ static inline bkf_measure *make_measure(const bkf_pde *m, const double *referenc
 {
     const bkf_model_params *pp = bkf_pde_get_params(m);
     bkf_measure_params mp = bkf_measure_params_default();
-    mp.N = pp->N;
-    mp.S = pp->S;
-    mp.gamma = pp->gamma;
-    mp.nu = pp->nu;
+    mp.model = *pp;
+    mp.level = pp->nu; /* the tests' fronts: crossings of nu */
     mp.reference = reference;
     bkf_error e;
     bkf_measure *ms = bkf_measure_alloc(&mp, &e);

@@ -23,6 +23,11 @@
 #include "bkfront/options.h"
 #include "bkfront/period.h"
 #include "bkfront/profile.h"
+#include "bkfront/friction.h"
+#include "bkfront/fronts.h"
+#include "bkfront/oscillation.h"
+#include "bkfront/init.h"
+#include "bkfront/seed.h"
 #include "bkfront/plot.h"
 #include "bkfront/scene.h"
 

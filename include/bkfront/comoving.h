@@ -75,6 +75,8 @@
 #include <signal.h>
 #include <stddef.h>
 
+#include "bkfront/measure.h"
+#include "bkfront/model.h"
 #include "bkfront/pde.h"
 #include "bkfront/status.h"
 
@@ -83,10 +85,9 @@ extern "C" {
 #endif
 
 typedef struct {
-    double gamma;         /* > 0 */
-    double c;             /* >= 0 */
-    double nu;            /* |nu| < 1 */
-    double S;             /* > 0 */
+    /* model: gamma > 0, c >= 0, |nu| < 1, S > 0; N and kind are not used
+     * (the grid is n points per wavelength, the continuum) */
+    bkf_model_params model;
     size_t n;             /* fronts in the domain, >= 1 */
     double v;             /* the wave's speed, > c: fronts move towards -x at v,
                              the frame with them; the wave is the cycle at
@@ -99,12 +100,13 @@ typedef struct {
     unsigned long seed;   /* default 1 */
     double cycle_tol;     /* accuracy of the cycle; default 1e-12 */
     double level;         /* fronts are upward crossings of this level; NaN
-                             (the default): nu */
+                             (the default): bkf_measure_front_level(&model) */
     size_t max_steps;     /* per run call; 0: no limit (the default) */
     const volatile sig_atomic_t *cancel; /* as in bkf_pde_options */
 } bkf_comoving_params;
 
-/* Defaults for the optional fields; gamma, c, nu, S, n and v must be set. */
+/* Defaults for the optional fields; model.gamma, .c, .nu, .S, n and v must
+ * be set. */
 bkf_comoving_params bkf_comoving_params_default(void);
 
 typedef struct bkf_comoving bkf_comoving;
@@ -128,15 +130,15 @@ double bkf_comoving_max_spacing(const bkf_comoving *m);
 /* Integrates to t_end (> current time), recording a measurement at every
  * t0 + k sample_dt <= t_end and at t_end (interpolated by CVODE), and
  * calling `progress` (may be NULL) after each.  BKF_ENUMERIC when CVODE
- * fails (the message is CVODE's), the field blows up (non-finite or |psi| >
- * 1e6: the records up to there are kept) or max_steps is exceeded;
- * BKF_ECANCELED when *cancel was raised. */
+ * fails (the message is CVODE's), BKF_EBLOWUP when the field blows up
+ * (non-finite or |psi| > 1e6: the records up to there are kept), BKF_EBUDGET
+ * when max_steps is exceeded; BKF_ECANCELED when *cancel was raised. */
 int bkf_comoving_run(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_progress progress,
                      void *progress_data, bkf_error *err);
 
 typedef struct {
     double t;
-    size_t fronts;        /* upward crossings of nu */
+    size_t fronts;        /* upward crossings of the level */
     double displacement;  /* mean displacement of the fronts since t = 0, in the
                              frame; NaN when the count differs from the first */
     double deviation;     /* max |psi - relaxed wave shifted by displacement|; NaN

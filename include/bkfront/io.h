@@ -19,7 +19,10 @@
  *
  * The atomic writer gives a stream on a temporary file beside the target;
  * commit makes it the target in one rename, abort removes it, so a failed or
- * interrupted run never leaves a truncated target behind. */
+ * interrupted run never leaves a truncated target behind.
+ *
+ * The state reader takes back what bkfront simulate writes as snapshots: a
+ * TSV whose header names the columns psi and eta. */
 #ifndef BKFRONT_IO_H
 #define BKFRONT_IO_H
 
@@ -64,6 +67,14 @@ void bkf_io_table_free(bkf_io_table *table);
  * once a row has been written. */
 int bkf_io_table_comment(bkf_io_table *table, const char *text, bkf_error *err);
 
+/* A key result as a named value (a number, or text with kind BKF_IO_TEXT):
+ * in JSON a member of the object "results", written between "comments" and
+ * "columns" (only when a table has results); TSV has no place for it, so a
+ * caller keeps it in a comment as well.  Before the first row; BKF_EINPUT for
+ * an empty or repeated name. */
+int bkf_io_table_result(bkf_io_table *table, const char *name, bkf_io_kind kind,
+                        bkf_io_value value, bkf_error *err);
+
 /* One row: ncolumns values in column order. */
 int bkf_io_table_row(bkf_io_table *table, const bkf_io_value *values, bkf_error *err);
 
@@ -101,6 +112,32 @@ int bkf_io_atomic_commit(bkf_io_atomic *file, bkf_error *err);
 /* Closes and removes the temporary file and frees `file` (NULL is a no-op). */
 void bkf_io_atomic_abort(bkf_io_atomic *file);
 
+/* A field psi(x_i), eta(x_i) read back from a table. */
+typedef struct {
+    size_t rows;        /* values in psi and eta */
+    double *psi, *eta;  /* owned; bkf_io_state_free releases them */
+    int has_t;          /* the table had a t column */
+    double t;           /* its last value (0 without a t column) */
+} bkf_io_state;
+
+/* Reads a TSV from `in`: '#' lines and empty lines are skipped, the first
+ * other line is the header, which must name the columns psi and eta (other
+ * columns are ignored; with a column t, only the rows of the last t are
+ * kept: the last snapshot of a file of several).  Every kept cell must be a
+ * finite number and every line have the header's number of fields.  At most
+ * max_rows data lines are read, so that a huge or endless stream cannot
+ * take all memory.  On failure *state is left empty (NULL arrays, 0 rows):
+ * BKF_EINPUT for content that is not such a table (the message names the
+ * line), BKF_EIO when reading the stream fails, BKF_ENOMEM. */
+int bkf_io_read_state(FILE *in, size_t max_rows, bkf_io_state *state, bkf_error *err);
+
+/* Releases the arrays and empties *state (NULL is a no-op). */
+void bkf_io_state_free(bkf_io_state *state);
+
+/* `text` made fit for a one-line message into buf (size >= 8): control
+ * characters become '?', and beyond size - 4 characters it is cut and ends
+ * in "...".  Returns buf. */
+const char *bkf_io_shown(const char *text, char *buf, size_t size);
 #ifdef __cplusplus
 }
 #endif

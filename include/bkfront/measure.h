@@ -3,8 +3,8 @@
  * uncertainty, the temporal period at a point, spatial mean and variance,
  * the deviation from a reference travelling wave, and a regime label.
  *
- * Fronts.  A front is where psi crosses `level` (default nu, which every
- * limit cycle crosses once upward and once downward per period) with
+ * Fronts.  A front is where psi crosses `level` (default
+ * bkf_measure_front_level: the middle of the global oscillation's range) with
  * psi_t = gamma (eta - phi(psi)) > 0 there: the place where the medium is
  * switching to fast slip.  Crossings are found with hysteresis: the field
  * must pass from below level - hysteresis to above level + hysteresis (or
@@ -59,18 +59,29 @@
 #define BKFRONT_MEASURE_H
 
 #include <stddef.h>
+#include "bkfront/model.h"
 #include "bkfront/status.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+/* The default level of fronts, here and in bkf_comoving: the middle of the
+ * global oscillation's range, (xmin + xmax)/2 of the limit cycle at
+ * mu = gamma (bkf_cycle_period).  Every relaxation jump crosses it mid-way,
+ * where fronts are steepest, also in the period-doubled patterns, whose
+ * fronts sit well above nu.  Where there is no cycle (|nu| >= 1, gamma
+ * outside the cycle engine's range, or the cycle not found) it is nu.
+ * *period (may be NULL) gets the cycle's period, 0 without a cycle.  Uses
+ * gamma and nu of `model`. */
+double bkf_measure_front_level(const bkf_model_params *model, double *period);
+
 
 typedef struct {
-    size_t N;             /* grid points, >= 8 */
-    double S;             /* domain size, > 0 */
-    double gamma;         /* > 0, for psi_t = gamma (eta - phi(psi)) */
-    double nu;            /* finite */
-    double level;         /* crossing level; NaN (the default): nu */
+    /* model: N grid points >= 8, S > 0, gamma > 0 (psi_t = gamma (eta -
+     * phi(psi))), nu finite; c and kind are not used */
+    bkf_model_params model;
+    double level;         /* crossing level; NaN (the default):
+                             bkf_measure_front_level(&model) */
     double hysteresis;    /* >= 0; default 0.1 */
     size_t probe;         /* grid index of the point for the period; default 0 */
     double window;        /* (0, 1]: last fraction of the run used for fits; default 0.5 */
@@ -83,7 +94,7 @@ typedef struct {
                                 copied: the deviation is measured from it */
 } bkf_measure_params;
 
-/* Defaults for the optional fields; N, S, gamma and nu must be set. */
+/* Defaults for the optional fields; model.N, .S, .gamma and .nu must be set. */
 bkf_measure_params bkf_measure_params_default(void);
 
 typedef struct {

@@ -170,6 +170,9 @@ int bkf_pde_init_uniform(bkf_pde *pde, double amp, unsigned long seed, bkf_error
  * psi, with q_j = 2 pi j/S, 0 <= j < N/2. */
 int bkf_pde_init_oscillation(bkf_pde *pde, size_t j, double amp, bkf_error *err);
 
+/* What n fronts of a travelling wave are: the request that
+ * bkf_seed_front (products/seed.h) turns into a bkf_pde_wave by solving the
+ * speed condition. */
 typedef struct {
     size_t n;            /* fronts in the domain */
     size_t root;         /* 1: the fastest root for this n, in bkf_speeds_find order */
@@ -181,9 +184,22 @@ typedef struct {
 
 bkf_pde_front_spec bkf_pde_front_spec_default(void); /* n 1, root 1, -x, no noise */
 
+/* The wave to seed: n fronts at speed v, the cycle at mu (both from the
+ * speeds solver; mu = gamma v / sqrt(v^2 - c^2) there). */
+typedef struct {
+    size_t n;            /* fronts in the domain, >= 1 */
+    double v;            /* speed, > c */
+    double mu;           /* the cycle's mu, in [BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX] */
+    int direction;       /* -1 or +1, as in bkf_pde_front_spec */
+    double noise;        /* as in bkf_pde_front_spec */
+    unsigned long seed;
+    double tol;          /* accuracy of the cycle, [1e-14, 1e-4] */
+} bkf_pde_wave;
+
 typedef struct {
     double v;            /* predicted speed (> c), from bkf_speeds_find */
-    double v_err;        /* its estimated absolute error */
+    double v_err;        /* its estimated absolute error (bkf_seed_front; NaN
+                            from bkf_pde_init_front alone) */
     double mu;           /* gamma / sqrt(1 - c^2/v^2) */
     double T;            /* period of the cycle in z */
     double stretch;      /* sqrt(1 - c^2/v^2) */
@@ -191,18 +207,19 @@ typedef struct {
     double wavelength;   /* S / n */
     double residual;     /* n T v stretch / S - 1: how far the seed is from
                             periodic in x */
-    size_t roots_for_n;  /* roots the speeds solver found for this n */
+    size_t roots_for_n;  /* roots the speeds solver found for this n
+                            (bkf_seed_front; 0 from bkf_pde_init_front) */
 } bkf_pde_front_info;
 
 /* The travelling wave psi(x, 0) = f(z), z = (x/v)/stretch for direction -1
  * (z = -(x/v)/stretch for +1), f the limit cycle of
- * f'' + mu (f^2 - 1) f' + f = nu at the predicted speed of n fronts, and
- * eta = psi_t/gamma + phi(psi) with psi_t = f'(z)/stretch.  In the model,
- * psi(x, t) = f((x/v + t)/stretch) moves towards -x at speed v.  Needs
- * |nu| < 1, c >= 0 and a root for (n, root) (BKF_EINPUT otherwise, naming
- * how many n have fronts).  `info` may be NULL; `clean_psi`, if non-NULL,
- * receives the N values of psi before the noise. */
-int bkf_pde_init_front(bkf_pde *pde, const bkf_pde_front_spec *spec, bkf_pde_front_info *info,
+ * f'' + mu (f^2 - 1) f' + f = nu, and eta = psi_t/gamma + phi(psi) with
+ * psi_t = f'(z)/stretch.  In the model, psi(x, t) = f((x/v + t)/stretch)
+ * moves towards -x at speed v.  Needs |nu| < 1 and v > c (BKF_EINPUT
+ * otherwise); the wave is not checked to be periodic in x (info->residual
+ * says how far).  `info` may be NULL; `clean_psi`, if non-NULL, receives the
+ * N values of psi before the noise. */
+int bkf_pde_init_front(bkf_pde *pde, const bkf_pde_wave *wave, bkf_pde_front_info *info,
                        double *clean_psi, bkf_error *err);
 
 /* --------------------------------------------------------------------- run */
@@ -233,9 +250,10 @@ typedef struct {
  * `observer` (may be NULL) at t0 + k sample_dt for k = 0, 1, ... while
  * <= t_end, and at t_end (once, also when it falls on the grid).
  * sample_dt > 0.  Stats accumulate over calls (reset with _stats_reset).
- * BKF_ENUMERIC if the step size underflows, the field blows up (non-finite
- * or |psi| > 1e6) or max_steps is exceeded; BKF_ECANCELED when
- * options.cancel was raised (see above). */
+ * BKF_EBLOWUP if the field blows up (non-finite or |psi| > 1e6, also a step
+ * that keeps leaving the finite range), BKF_EBUDGET if max_steps is
+ * exceeded, BKF_ENUMERIC if the step size underflows (tol cannot be met);
+ * BKF_ECANCELED when options.cancel was raised (see above). */
 int bkf_pde_run(bkf_pde *pde, double t_end, double sample_dt, bkf_pde_observer observer,
                 void *observer_data, bkf_pde_progress progress, void *progress_data,
                 bkf_error *err);

@@ -53,6 +53,8 @@ typedef enum {
 
 typedef struct {
     char message[BKF_ERROR_LEN];
+    int status;  /* the code the message goes with, so that a call that
+                    returns a pointer (NULL on failure) still tells why */
 } bkf_error;
 
 /* printf-style: fills err (if non-NULL) and returns status, so a caller can

@@ -1,66 +1,33 @@
-/* bkfront floquet: stability of the global oscillations.  Three modes:
+/* bkfront floquet: stability of the global oscillations, the product of
+ * bkfront/oscillation.h from flags.  Three modes:
  *   dispersion  lambda_q and the multipliers on a q grid (--nu, --q)
  *   threshold   the lowest stability boundary in nu, or its curve against
  *               c or gamma (--threshold [--along c|gamma --from A --to B])
  *   diagram     every stable and unstable interval of nu (--diagram)
  *
- * As in `bkfront period`: every input is checked before the first solve,
- * and the table is built in memory and written only when everything
- * succeeded. */
+ * Every input is checked before the first solve, and the table is built in
+ * memory and written only when everything succeeded. */
 #include "args.h"
 
-#include <math.h>
-#include <stdlib.h>
-#include <string.h>
+#include "bkfront/oscillation.h"
 
-#include "bkfront/floquet.h"
-#include "bkfront/io.h"
-#include "bkfront/model.h"
+typedef struct {
+    bkf_oscillation_spec spec;
+    cli_output_spec output;
+} floquet_args;
 
-static const bkf_io_column dispersion_columns[] = {
-    {"q", BKF_IO_NUMBER},          {"K", BKF_IO_NUMBER},
-    {"lambda", BKF_IO_NUMBER},     {"lambda_err", BKF_IO_NUMBER},
-    {"m1_re", BKF_IO_NUMBER},      {"m1_im", BKF_IO_NUMBER},
-    {"m2_re", BKF_IO_NUMBER},      {"m2_im", BKF_IO_NUMBER},
-    {"m1_err", BKF_IO_NUMBER},     {"kind", BKF_IO_TEXT},
-    {"allowed", BKF_IO_NUMBER},    {"lambda_slip", BKF_IO_NUMBER},
-    {"det", BKF_IO_NUMBER},        {"det_direct", BKF_IO_NUMBER},
-};
-
-static const bkf_io_column threshold_columns[] = {
-    {"gamma", BKF_IO_NUMBER},   {"c", BKF_IO_NUMBER},         {"nu_pd", BKF_IO_NUMBER},
-    {"nu_pd_err", BKF_IO_NUMBER}, {"kind", BKF_IO_TEXT},      {"q_c", BKF_IO_NUMBER},
-    {"K_c", BKF_IO_NUMBER},     {"m_c_re", BKF_IO_NUMBER},    {"m_c_im", BKF_IO_NUMBER},
-    {"lambda_c", BKF_IO_NUMBER}, {"stable_above", BKF_IO_NUMBER}, {"longwave", BKF_IO_NUMBER},
-    {"discontinuous", BKF_IO_NUMBER},
-};
-
-static const bkf_io_column diagram_columns[] = {
-    {"nu_from", BKF_IO_NUMBER},  {"nu_to", BKF_IO_NUMBER},   {"stability", BKF_IO_TEXT},
-    {"from_kind", BKF_IO_TEXT},  {"to_kind", BKF_IO_TEXT},   {"from_err", BKF_IO_NUMBER},
-    {"to_err", BKF_IO_NUMBER},   {"from_q", BKF_IO_NUMBER},  {"to_q", BKF_IO_NUMBER},
-    {"from_m", BKF_IO_NUMBER},   {"to_m", BKF_IO_NUMBER},
-};
-
-#define COUNT(a) (sizeof(a) / sizeof((a)[0]))
-
-static const char *const stepper_names[] = {"auto", "explicit", "implicit", NULL};
-static const bkf_stepper_kind stepper_kinds[] = {BKF_STEPPER_AUTO, BKF_STEPPER_EXPLICIT,
-                                                 BKF_STEPPER_IMPLICIT};
-static const char *const format_names[] = {"tsv", "json", NULL};
-static const char *const along_names[] = {"c", "gamma", NULL};
-
-/* strict C11 has no M_PI */
-#define TWO_PI 6.28318530717958647692528676655900577
-
-#define DEFAULT_SEARCH_LO (-0.999)
-#define DEFAULT_SEARCH_HI 0.999
+static void groups_of(floquet_args *a, cli_options g[2])
+{
+    g[0] = (cli_options){bkf_oscillation_options, bkf_oscillation_noptions, a ? &a->spec : NULL};
+    g[1] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
+}
 
 static void floquet_help(FILE *out)
 {
-    bkf_floquet_options d = bkf_floquet_options_default();
+    cli_options g[2];
+    groups_of(NULL, g);
     fprintf(out,
-        "usage: bkfront floquet --gamma G --c C --nu V --q Q|A:B:N [--S S]\n"
+        "usage: bkfront floquet --gamma G --c C --nu V --q LIST [--S S]\n"
         "       bkfront floquet --threshold --gamma G --c C [--search A:B]\n"
         "       bkfront floquet --threshold --along c|gamma --from A --to B\n"
         "                       (--gamma G | --c C) [--search A:B]\n"
@@ -73,41 +40,12 @@ static void floquet_help(FILE *out)
         "    d_psi' = gamma (d_eta - (psi*^2 - 1) d_psi),  d_eta' = -(1 + c^2 q^2) d_psi/gamma\n"
         "over one period T.  lambda = ln|m1|, m1 the dominant multiplier of the\n"
         "monodromy matrix, is the growth per period; lambda > 0 is unstable.\n"
+        "The default mode is the dispersion relation, one row per q; --threshold\n"
+        "and --diagram scan nu instead.\n"
         "\n"
-        "modes:\n"
-        "  (default)         dispersion relation: one row per q\n"
-        "  --threshold       the lowest stability boundary in the --search range of nu\n"
-        "                    (the scan runs upward from A), located by root finding on\n"
-        "                    the height of the peak of lambda (NLopt) or on the\n"
-        "                    long-wave coefficient; with --along, its curve against c or\n"
-        "                    gamma by pseudo-arclength continuation from --from to --to\n"
-        "  --diagram         every interval of the --search range where the oscillation\n"
-        "                    is stable or unstable, each boundary located and labelled\n"
-        "\n"
-        "options:\n"
-        "  --gamma G         friction strength, in [%g, %g]\n"
-        "  --c C             sound speed, >= 0 (> 0 for --threshold and --diagram: with\n"
-        "                    c = 0 every q is the neutral q = 0 mode)\n"
-        "  --nu V            pulling rate, in (-1, 1); dispersion mode only\n"
-        "  --q Q|A:B:N       wavenumbers, >= 0, c q <= 1e4; dispersion mode only\n"
-        "  --S S             system size, > 0: the modes q = 2 pi j/S in the --q range\n"
-        "                    are added to the rows and marked allowed = 1\n"
-        "  --along c|gamma   with --threshold: the parameter of the curve; the option of\n"
-        "                    that name is then not given (it runs from --from to --to)\n"
-        "  --from A, --to B  ends of the curve, A != B (c > 0; gamma in range)\n"
-        "  --search A:B      nu range scanned by --threshold and --diagram, -1 < A < B < 1;\n"
-        "                    default %g:%g\n"
-        "  --tol E           absolute accuracy asked of lambda (of the multiplier m1)\n"
-        "                    and of the boundaries in nu, in [%g, %g]; default %g\n"
-        "  --cq-max P        peaks of lambda are sought for c q in (0, P]; default %g\n"
-        "  --nu-step H       step of the scan in nu, in (0, 1]; default %g.  Stable or\n"
-        "                    unstable windows narrower than H may be missed\n"
-        "  --stepper auto|explicit|implicit\n"
-        "                    integrator: rk8pd (explicit), bsimp (implicit), or by\n"
-        "                    stiffness (implicit above gamma = 30); default auto\n"
-        "  --format tsv|json output format; default tsv\n"
-        "  --out FILE        write to FILE, replaced atomically only on success\n"
-        "  --help            this text\n"
+        "options:\n");
+    cli_options_help(out, g, 2);
+    fprintf(out,
         "\n"
         "dispersion columns:\n"
         "  q, K              wavenumber and K = 1 + c^2 q^2 (q enters only through K)\n"
@@ -138,570 +76,31 @@ static void floquet_help(FILE *out)
         "  or scan_end), from_err, to_err, from_q, to_q, from_m, to_m\n"
         "\n"
         "Output is all or nothing: on any failure nothing is written.\n"
-        "exit status: 0 ok, 1 numerical failure, 2 bad input\n",
-        BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX, DEFAULT_SEARCH_LO, DEFAULT_SEARCH_HI, BKF_TOL_MIN,
-        BKF_TOL_MAX, d.tol, d.p_max, d.nu_step);
+        "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
 }
 
-/* Shortest of %.15g / %.17g that reads back exactly. */
-static const char *num(double x, char *buf, size_t size)
+static void warn_stderr(const char *message, void *data)
 {
-    snprintf(buf, size, "%.15g", x);
-    if (strtod(buf, NULL) != x) snprintf(buf, size, "%.17g", x);
-    return buf;
+    (void)data;
+    fprintf(stderr, CLI_PROGRAM " floquet: warning: %s\n", message);
 }
 
-enum { MODE_DISPERSION = 0, MODE_THRESHOLD = 1, MODE_CURVE = 2, MODE_DIAGRAM = 3 };
-
-typedef struct {
-    int mode;
-    double gamma, c, nu, S;
-    int have_gamma, have_c, have_S;
-    double *q;                /* dispersion rows */
-    unsigned char *allowed;
-    size_t nq;
-    int along;                /* BKF_FLOQUET_ALONG_C / _GAMMA */
-    double from, to;
-    double search_lo, search_hi;
-    bkf_floquet_options options;
-    bkf_io_format format;
-    const char *out_path;
-} floquet_plan;
-
-static void plan_free(floquet_plan *p)
+static int write_floquet(const void *spec, FILE *out, bkf_io_format format,
+                         const bkf_provenance *prov, bkf_error *err)
 {
-    free(p->q);
-    free(p->allowed);
-    p->q = NULL;
-    p->allowed = NULL;
-}
-
-static int parse_gamma(const char *flag, const char *text, double *gamma, bkf_error *err)
-{
-    char a[32];
-    int s = cli_parse_double(flag, text, gamma, err);
-    if (s) return s;
-    if (!(*gamma >= BKF_CYCLE_MU_MIN && *gamma <= BKF_CYCLE_MU_MAX))
-        return bkf_error_set(err, BKF_EINPUT, "%s: gamma = %s is outside [%g, %g]", flag,
-                             num(*gamma, a, sizeof a), BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
-    return BKF_OK;
-}
-
-static int parse_c(const char *flag, const char *text, int positive, double *c, bkf_error *err)
-{
-    char a[32];
-    int s = cli_parse_double(flag, text, c, err);
-    if (s) return s;
-    if (positive && !(*c > 0))
-        return bkf_error_set(err, BKF_EINPUT,
-                             "%s: c = %s must be > 0 for thresholds (with c = 0 every wavenumber "
-                             "is the neutral q = 0 mode)",
-                             flag, num(*c, a, sizeof a));
-    if (!(*c >= 0))
-        return bkf_error_set(err, BKF_EINPUT, "%s: c = %s must be >= 0", flag, num(*c, a, sizeof a));
-    return BKF_OK;
-}
-
-/* "A:B" with -1 < A < B < 1. */
-static int parse_search(const char *text, double *lo, double *hi, bkf_error *err)
-{
-    const char *form = "A:B with -1 < A < B < 1";
-    char a[72];
-    const char *colon = text ? strchr(text, ':') : NULL;
-    if (!colon || strchr(colon + 1, ':'))
-        return bkf_error_set(err, BKF_EINPUT, "--search: '%s' is not %s", cli_shown(text, a, sizeof a), form);
-    char left[64];
-    size_t n = (size_t)(colon - text);
-    if (n >= sizeof left)
-        return bkf_error_set(err, BKF_EINPUT, "--search: '%s' is not %s", cli_shown(text, a, sizeof a), form);
-    memcpy(left, text, n);
-    left[n] = '\0';
-    int s = cli_parse_double("--search", left, lo, err);
-    if (!s) s = cli_parse_double("--search", colon + 1, hi, err);
-    if (s) return s;
-    if (!(*lo > -1.0 && *hi < 1.0 && *lo < *hi))
-        return bkf_error_set(err, BKF_EINPUT, "--search: '%s' is not %s", cli_shown(text, a, sizeof a), form);
-    return BKF_OK;
-}
-
-/* The q rows: the grid, plus with --S every allowed mode 2 pi j/S inside
- * it, merged in the grid's direction; grid points within rounding of an
- * allowed mode are marked rather than duplicated. */
-static int build_q_rows(floquet_plan *p, const cli_range *q, bkf_error *err)
-{
-    double lo = fmin(q->from, q->to), hi = fmax(q->from, q->to);
-    size_t jlo = 0, jhi = 0, nmodes = 0;
-    double step = 0;
-    if (p->have_S) {
-        step = TWO_PI / p->S;
-        double a = ceil(lo / step - 1e-12), b = floor(hi / step + 1e-12);
-        if (b >= a) {
-            if (b - a + 1 > (double)CLI_MAX_POINTS)
-                return bkf_error_set(err, BKF_EINPUT,
-                                     "--S: %.0f allowed modes in the --q range, more than %u",
-                                     b - a + 1, CLI_MAX_POINTS);
-            jlo = (size_t)a;
-            jhi = (size_t)b;
-            nmodes = jhi - jlo + 1;
-        }
-    }
-    size_t cap = q->count + nmodes;
-    if (cap > CLI_MAX_POINTS)
-        return bkf_error_set(err, BKF_EINPUT, "--q, --S: %zu rows, more than %u", cap, CLI_MAX_POINTS);
-    p->q = malloc(cap * sizeof *p->q);
-    p->allowed = malloc(cap * sizeof *p->allowed);
-    if (!p->q || !p->allowed) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    int up = q->to >= q->from;
-    size_t i = 0, k = 0, n = 0;
-    /* modes in the grid's direction */
-    while (i < q->count || k < nmodes) {
-        double mode = nmodes && k < nmodes ? step * (double)(up ? jlo + k : jhi - k) : NAN;
-        double g = i < q->count ? q->values[i] : NAN;
-        double scale = fmax(fabs(mode), step);
-        if (k < nmodes && i < q->count && fabs(g - mode) <= 1e-12 * scale) {
-            p->q[n] = g;
-            p->allowed[n++] = 1;
-            i++;
-            k++;
-        } else if (k < nmodes && (i == q->count || (up ? mode < g : mode > g))) {
-            p->q[n] = mode;
-            p->allowed[n++] = 1;
-            k++;
-        } else {
-            p->q[n] = g;
-            p->allowed[n++] = 0;
-            i++;
-        }
-    }
-    p->nq = n;
-    return BKF_OK;
-}
-
-/* Everything the user typed, checked, before any computing. */
-static int plan_floquet(int argc, char **argv, floquet_plan *plan, bkf_error *err)
-{
-    struct {
-        const char *gamma, *c, *nu, *q, *S, *along, *from, *to, *search, *tol, *cq_max,
-            *nu_step, *stepper, *format, *out;
-        int threshold, diagram, help;
-    } f = {0};
-    const cli_flag flags[] = {
-        {"--gamma", &f.gamma, "a number in [1e-06, 1e+06]", NULL},
-        {"--c", &f.c, "a number >= 0", NULL},
-        {"--nu", &f.nu, "a number in (-1, 1)", NULL},
-        {"--q", &f.q, "Q or A:B:N, each >= 0", NULL},
-        {"--S", &f.S, "a number > 0", NULL},
-        {"--threshold", NULL, NULL, &f.threshold},
-        {"--diagram", NULL, NULL, &f.diagram},
-        {"--along", &f.along, "c or gamma", NULL},
-        {"--from", &f.from, "a number", NULL},
-        {"--to", &f.to, "a number", NULL},
-        {"--search", &f.search, "A:B with -1 < A < B < 1", NULL},
-        {"--tol", &f.tol, "a number in [1e-14, 0.1]", NULL},
-        {"--cq-max", &f.cq_max, "a number in (0, 1e4]", NULL},
-        {"--nu-step", &f.nu_step, "a number in (0, 1]", NULL},
-        {"--stepper", &f.stepper, "auto, explicit or implicit", NULL},
-        {"--format", &f.format, "tsv or json", NULL},
-        {"--out", &f.out, "a file name", NULL},
-        {"--help", NULL, NULL, &f.help},
-    };
-    int s = cli_parse_flags(flags, COUNT(flags), argc, argv, err);
-    if (s) return s;
-    char a[32];
-
-    if (f.threshold && f.diagram)
-        return bkf_error_set(err, BKF_EINPUT, "--threshold and --diagram are separate modes: give one");
-    plan->mode = f.diagram ? MODE_DIAGRAM : f.threshold ? (f.along ? MODE_CURVE : MODE_THRESHOLD)
-                                                        : MODE_DISPERSION;
-    int scanning = plan->mode != MODE_DISPERSION;
-    if (!f.threshold && (f.along || f.from || f.to)) {
-        const char *which = f.along ? "--along" : f.from ? "--from" : "--to";
-        return bkf_error_set(err, BKF_EINPUT, "%s: only with --threshold (the threshold curve)", which);
-    }
-    if (plan->mode == MODE_CURVE) {
-        int k;
-        if ((s = cli_parse_choice("--along", f.along, along_names, &k, err))) return s;
-        plan->along = k == 0 ? BKF_FLOQUET_ALONG_C : BKF_FLOQUET_ALONG_GAMMA;
-        if (!f.from || !f.to)
-            return bkf_error_set(err, BKF_EINPUT, "%s is required with --along (%s)",
-                                 f.from ? "--to" : "--from", "the curve's ends");
-        if (k == 0 && f.c)
-            return bkf_error_set(err, BKF_EINPUT,
-                                 "--c: not given with --along c (c runs from --from to --to)");
-        if (k == 1 && f.gamma)
-            return bkf_error_set(err, BKF_EINPUT,
-                                 "--gamma: not given with --along gamma (gamma runs from --from to --to)");
-        if (k == 0) {
-            if ((s = parse_c("--from", f.from, 1, &plan->from, err))) return s;
-            if ((s = parse_c("--to", f.to, 1, &plan->to, err))) return s;
-        } else {
-            if ((s = parse_gamma("--from", f.from, &plan->from, err))) return s;
-            if ((s = parse_gamma("--to", f.to, &plan->to, err))) return s;
-        }
-        if (plan->from == plan->to)
-            return bkf_error_set(err, BKF_EINPUT, "--from, --to: the curve needs two different ends");
-    } else if (f.from || f.to)
-        return bkf_error_set(err, BKF_EINPUT, "%s: only with --along", f.from ? "--from" : "--to");
-
-    int need_gamma = !(plan->mode == MODE_CURVE && plan->along == BKF_FLOQUET_ALONG_GAMMA);
-    int need_c = !(plan->mode == MODE_CURVE && plan->along == BKF_FLOQUET_ALONG_C);
-    if (need_gamma && !f.gamma)
-        return bkf_error_set(err, BKF_EINPUT, "--gamma is required (a number in [%g, %g])",
-                             BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
-    if (need_c && !f.c) return bkf_error_set(err, BKF_EINPUT, "--c is required (a number >= 0)");
-    if (f.gamma && (s = parse_gamma("--gamma", f.gamma, &plan->gamma, err))) return s;
-    if (f.c && (s = parse_c("--c", f.c, scanning, &plan->c, err))) return s;
-    plan->have_gamma = f.gamma != NULL;
-    plan->have_c = f.c != NULL;
-
-    if (scanning) {
-        if (f.nu)
-            return bkf_error_set(err, BKF_EINPUT,
-                                 "--nu: not used by --%s, which scans nu (see --search)",
-                                 f.diagram ? "diagram" : "threshold");
-        if (f.q) return bkf_error_set(err, BKF_EINPUT, "--q: only in the dispersion mode");
-        if (f.S) return bkf_error_set(err, BKF_EINPUT, "--S: only in the dispersion mode");
-        plan->search_lo = DEFAULT_SEARCH_LO;
-        plan->search_hi = DEFAULT_SEARCH_HI;
-        if (f.search && (s = parse_search(f.search, &plan->search_lo, &plan->search_hi, err)))
-            return s;
-    } else {
-        if (f.search) return bkf_error_set(err, BKF_EINPUT, "--search: only with --threshold or --diagram");
-        if (f.cq_max || f.nu_step)
-            return bkf_error_set(err, BKF_EINPUT, "%s: only with --threshold or --diagram",
-                                 f.cq_max ? "--cq-max" : "--nu-step");
-        if (!f.nu) return bkf_error_set(err, BKF_EINPUT, "--nu is required (a number in (-1, 1))");
-        if (!f.q) return bkf_error_set(err, BKF_EINPUT, "--q is required (Q or A:B:N, each >= 0)");
-        if ((s = cli_parse_double("--nu", f.nu, &plan->nu, err))) return s;
-        bkf_error e;
-        if (bkf_model_check_nu_active(plan->nu, &e) != BKF_OK)
-            return bkf_error_set(err, BKF_EINPUT, "--nu: %s", e.message);
-        if (f.S) {
-            if ((s = cli_parse_double("--S", f.S, &plan->S, err))) return s;
-            if (!(plan->S > 0))
-                return bkf_error_set(err, BKF_EINPUT, "--S: S = %s must be > 0",
-                                     num(plan->S, a, sizeof a));
-            plan->have_S = 1;
-        }
-        cli_range q;
-        if ((s = cli_parse_range("--q", f.q, 0, &q, err))) return s;
-        for (size_t i = 0; i < q.count && !s; i++) {
-            if (!(q.values[i] >= 0))
-                s = bkf_error_set(err, BKF_EINPUT, "--q: q = %s must be >= 0",
-                                  num(q.values[i], a, sizeof a));
-            else if (plan->c * q.values[i] > 1e4)
-                s = bkf_error_set(err, BKF_EINPUT, "--q: c q = %s is above 1e4",
-                                  num(plan->c * q.values[i], a, sizeof a));
-        }
-        if (!s) s = build_q_rows(plan, &q, err);
-        cli_range_free(&q);
-        if (s) return s;
-    }
-
-    plan->options = bkf_floquet_options_default();
-    if (f.tol) {
-        if ((s = cli_parse_double("--tol", f.tol, &plan->options.tol, err))) return s;
-        bkf_error e;
-        if (bkf_model_check_tol(plan->options.tol, &e) != BKF_OK)
-            return bkf_error_set(err, BKF_EINPUT, "--tol: %s", e.message);
-    }
-    if (f.cq_max) {
-        if ((s = cli_parse_double("--cq-max", f.cq_max, &plan->options.p_max, err))) return s;
-        if (!(plan->options.p_max > 0 && plan->options.p_max <= 1e4))
-            return bkf_error_set(err, BKF_EINPUT, "--cq-max: %s is outside (0, 1e4]",
-                                 num(plan->options.p_max, a, sizeof a));
-    }
-    if (f.nu_step) {
-        if ((s = cli_parse_double("--nu-step", f.nu_step, &plan->options.nu_step, err))) return s;
-        if (!(plan->options.nu_step > 0 && plan->options.nu_step <= 1))
-            return bkf_error_set(err, BKF_EINPUT, "--nu-step: %s is outside (0, 1]",
-                                 num(plan->options.nu_step, a, sizeof a));
-    }
-    if (f.stepper) {
-        int k;
-        if ((s = cli_parse_choice("--stepper", f.stepper, stepper_names, &k, err))) return s;
-        plan->options.stepper = stepper_kinds[k];
-    }
-    plan->format = BKF_IO_TSV;
-    if (f.format) {
-        int k;
-        if ((s = cli_parse_choice("--format", f.format, format_names, &k, err))) return s;
-        plan->format = k == 1 ? BKF_IO_JSON : BKF_IO_TSV;
-    }
-    if (f.out && !*f.out) return bkf_error_set(err, BKF_EINPUT, "--out: the file name is empty");
-    plan->out_path = f.out;
-    return BKF_OK;
-}
-
-static int comment_command(bkf_io_table *table, int argc, char **argv, bkf_error *err)
-{
-    char *cmd = cli_command_line(argc, argv);
-    if (!cmd) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    size_t n = strlen(cmd) + 32;
-    char *text = malloc(n);
-    if (!text) {
-        free(cmd);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
-    snprintf(text, n, "command: " CLI_PROGRAM " %s", cmd);
-    int s = bkf_io_table_comment(table, text, err);
-    free(text);
-    free(cmd);
-    return s;
-}
-
-/* ------------------------------------------------------------ dispersion */
-
-static int run_dispersion(const floquet_plan *p, bkf_io_table *t, int argc, char **argv,
-                          bkf_error *err)
-{
-    char a[32], b[32], c[32], d[32], line[512];
-    bkf_floquet *f = bkf_floquet_alloc();
-    if (!f) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    bkf_error e;
-    int s = bkf_floquet_set(f, p->gamma, p->c, p->nu, &p->options, &e);
-    if (s) {
-        bkf_error_set(err, s, "global oscillation at gamma = %s, nu = %s: %s",
-                      num(p->gamma, a, sizeof a), num(p->nu, b, sizeof b), e.message);
-        bkf_floquet_free(f);
-        return s;
-    }
-    const bkf_cycle_result *cy = bkf_floquet_cycle(f);
-    s = bkf_io_table_comment(
-        t,
-        CLI_PROGRAM " " CLI_VERSION " floquet: dispersion relation of the global oscillation\n"
-        "lambda = ln|m1| per period T; lambda_slip = T x growth rate of continuous slip; "
-        "det = exp(integral of the trace) (Liouville), det_direct = det of the integrated matrix",
-        err);
-    if (!s) {
-        snprintf(line, sizeof line, "gamma %s, c %s, nu %s, tol %s", num(p->gamma, a, sizeof a),
-                 num(p->c, b, sizeof b), num(p->nu, c, sizeof c), num(p->options.tol, d, sizeof d));
-        s = bkf_io_table_comment(t, line, err);
-    }
-    if (!s) {
-        snprintf(line, sizeof line,
-                 "cycle: T = %.17g (err %.3g), ln(m1 m2) = %.17g; stepper %s; %zu rows%s%s",
-                 cy->period, cy->period_err, cy->log_multiplier, cy->stepper, p->nq,
-                 p->have_S ? ", allowed modes q = 2 pi j/S with S = " : "",
-                 p->have_S ? num(p->S, b, sizeof b) : "");
-        s = bkf_io_table_comment(t, line, err);
-    }
-    if (!s) s = comment_command(t, argc, argv, err);
-    for (size_t i = 0; i < p->nq && !s; i++) {
-        bkf_floquet_point pt;
-        s = bkf_floquet_eval(f, p->q[i], &pt, &e);
-        /* A q whose estimate stays above tol is a flagged row: no digits
-         * (NaN), the estimate that was reached, kind "refused", and a line
-         * on stderr; the other rows stand.  Any other failure ends the table. */
-        int refused = s == BKF_ETOL;
-        if (refused) {
-            fprintf(stderr, CLI_PROGRAM " floquet: warning: row q = %s refused: %s\n",
-                    num(p->q[i], a, sizeof a), e.message);
-            s = BKF_OK;
-            pt.lambda = pt.m1_re = pt.m1_im = pt.m2_re = pt.m2_im = pt.m1_err = NAN;
-        } else if (s) {
-            bkf_error_set(err, s, "at q = %s: %s", num(p->q[i], a, sizeof a), e.message);
-            break;
-        }
-        bkf_io_value v[COUNT(dispersion_columns)] = {
-            {.number = pt.q},
-            {.number = pt.k2},
-            {.number = pt.lambda},
-            {.number = pt.lambda_err},
-            {.number = pt.m1_re},
-            {.number = pt.m1_im},
-            {.number = pt.m2_re},
-            {.number = pt.m2_im},
-            {.number = pt.m1_err},
-            {.text = refused ? "refused" : bkf_floquet_kind_name(pt.kind)},
-            {.number = p->have_S ? (double)p->allowed[i] : NAN},
-            {.number = cy->period * bkf_floquet_slip_rate(p->gamma, p->c, p->nu, pt.q)},
-            {.number = exp(pt.log_det)},
-            {.number = pt.det_direct},
-        };
-        s = bkf_io_table_row(t, v, err);
-    }
-    bkf_floquet_free(f);
-    return s;
-}
-
-/* ------------------------------------------------------------- threshold */
-
-typedef struct {
-    bkf_io_table *table;
-    int status;
-    bkf_error err;
-} sink;
-
-static int threshold_row(const bkf_floquet_threshold *th, void *data)
-{
-    sink *k = data;
-    bkf_io_value v[COUNT(threshold_columns)] = {
-        {.number = th->gamma},
-        {.number = th->c},
-        {.number = th->nu},
-        {.number = th->nu_err},
-        {.text = bkf_floquet_boundary_name(th->kind)},
-        {.number = th->q},
-        {.number = th->k2},
-        {.number = th->m_re},
-        {.number = th->m_im},
-        {.number = th->lambda},
-        {.number = th->stable_above},
-        {.number = th->longwave},
-        {.number = th->discontinuous},
-    };
-    int s = bkf_io_table_row(k->table, v, &k->err);
-    if (s && !k->status) k->status = s;
-    return s != BKF_OK;
-}
-
-static int comment_scan(bkf_io_table *t, const floquet_plan *p, const char *what, bkf_error *err)
-{
-    char a[32], b[32], c[32], d[32], e[32], line[512];
-    int s = bkf_io_table_comment(t, what, err);
-    if (s) return s;
-    snprintf(line, sizeof line,
-             "scan: nu in [%s, %s] upward in steps %s, c q in (0, %s] on %zu points; tol %s",
-             num(p->search_lo, a, sizeof a), num(p->search_hi, b, sizeof b),
-             num(p->options.nu_step, c, sizeof c), num(p->options.p_max, d, sizeof d),
-             p->options.scan_points, num(p->options.tol, e, sizeof e));
-    s = bkf_io_table_comment(t, line, err);
-    if (!s)
-        s = bkf_io_table_comment(
-            t,
-            "kinds: period_doubling (finite-q peak of lambda through 0 with m1 = -1), long_wave "
-            "(a in lambda ~ a c^2 q^2 through 0), other (finite-q peak with m1 = +1, or a jump of "
-            "the cycle), scan_end",
-            err);
-    return s;
-}
-
-static int run_threshold(const floquet_plan *p, bkf_io_table *t, int argc, char **argv,
-                         bkf_error *err)
-{
-    char a[32], b[32];
-    int s = comment_scan(t, p,
-                         CLI_PROGRAM " " CLI_VERSION
-                         " floquet --threshold: lowest stability boundary of the global "
-                         "oscillation in the scanned nu range",
-                         err);
-    if (!s) s = comment_command(t, argc, argv, err);
-    if (s) return s;
-    sink k = {t, 0, {{0}}};
-    bkf_error e = {{0}};
-    if (p->mode == MODE_THRESHOLD) {
-        bkf_floquet_threshold th;
-        s = bkf_floquet_threshold_find(p->gamma, p->c, p->search_lo, p->search_hi, &p->options,
-                                       &th, &e);
-        if (s)
-            return bkf_error_set(err, s, "threshold at gamma = %s, c = %s: %s",
-                                 num(p->gamma, a, sizeof a), num(p->c, b, sizeof b), e.message);
-        threshold_row(&th, &k);
-    } else {
-        s = bkf_floquet_threshold_branch((bkf_floquet_param)p->along, p->from, p->to, p->gamma,
-                                         p->c, p->search_lo, p->search_hi, &p->options, 0,
-                                         threshold_row, &k, &e);
-        if (!k.status && s)
-            return bkf_error_set(err, s, "threshold curve along %s from %s to %s: %s",
-                                 p->along == BKF_FLOQUET_ALONG_C ? "c" : "gamma",
-                                 num(p->from, a, sizeof a), num(p->to, b, sizeof b), e.message);
-    }
-    if (k.status) {
-        *err = k.err;
-        return k.status;
-    }
-    return BKF_OK;
-}
-
-/* --------------------------------------------------------------- diagram */
-
-static int diagram_row(const bkf_floquet_interval *iv, void *data)
-{
-    sink *k = data;
-    bkf_io_value v[COUNT(diagram_columns)] = {
-        {.number = iv->nu_from},
-        {.number = iv->nu_to},
-        {.text = iv->stable ? "stable" : "unstable"},
-        {.text = bkf_floquet_boundary_name(iv->from.kind)},
-        {.text = bkf_floquet_boundary_name(iv->to.kind)},
-        {.number = iv->from.nu_err},
-        {.number = iv->to.nu_err},
-        {.number = iv->from.q},
-        {.number = iv->to.q},
-        {.number = iv->from.m_re},
-        {.number = iv->to.m_re},
-    };
-    int s = bkf_io_table_row(k->table, v, &k->err);
-    if (s && !k->status) k->status = s;
-    return s != BKF_OK;
-}
-
-static int run_diagram(const floquet_plan *p, bkf_io_table *t, int argc, char **argv,
-                       bkf_error *err)
-{
-    char a[32], b[32];
-    int s = comment_scan(t, p,
-                         CLI_PROGRAM " " CLI_VERSION
-                         " floquet --diagram: stability intervals of the global oscillation "
-                         "over nu (windows narrower than the nu step may be missed)",
-                         err);
-    if (!s) s = comment_command(t, argc, argv, err);
-    if (s) return s;
-    sink k = {t, 0, {{0}}};
-    bkf_error e = {{0}};
-    s = bkf_floquet_diagram(p->gamma, p->c, p->search_lo, p->search_hi, &p->options, diagram_row,
-                            &k, &e);
-    if (k.status) {
-        *err = k.err;
-        return k.status;
-    }
-    if (s)
-        return bkf_error_set(err, s, "diagram at gamma = %s, c = %s: %s", num(p->gamma, a, sizeof a),
-                             num(p->c, b, sizeof b), e.message);
-    return BKF_OK;
-}
-
-/* ------------------------------------------------------------------ run */
-
-static int compute(const floquet_plan *p, int argc, char **argv, FILE *stream, bkf_error *err)
-{
-    const bkf_io_column *cols = p->mode == MODE_DISPERSION ? dispersion_columns
-                                : p->mode == MODE_DIAGRAM  ? diagram_columns
-                                                           : threshold_columns;
-    size_t ncols = p->mode == MODE_DISPERSION ? COUNT(dispersion_columns)
-                   : p->mode == MODE_DIAGRAM  ? COUNT(diagram_columns)
-                                              : COUNT(threshold_columns);
-    bkf_io_table *t = bkf_io_table_alloc(stream, p->format, cols, ncols, err);
-    if (!t) return BKF_ENOMEM;
-    int s = p->mode == MODE_DISPERSION ? run_dispersion(p, t, argc, argv, err)
-            : p->mode == MODE_DIAGRAM  ? run_diagram(p, t, argc, argv, err)
-                                       : run_threshold(p, t, argc, argv, err);
-    if (!s) s = bkf_io_table_finish(t, err);
-    bkf_io_table_free(t);
-    return s;
+    return bkf_oscillation_write(spec, out, format, prov, err);
 }
 
 static int floquet_run(int argc, char **argv, bkf_error *err)
 {
-    floquet_plan plan;
-    memset(&plan, 0, sizeof plan);
-    cli_output out = {0};
-    cli_buffer buf = {0};
-    int s = plan_floquet(argc, argv, &plan, err);
-    if (!s) s = cli_output_open(&out, plan.out_path, "--out", err);
-    if (!s) s = cli_buffer_open(&buf, err);
-    if (!s) {
-        s = compute(&plan, argc, argv, buf.stream, err);
-        int c = cli_buffer_close(&buf, s ? NULL : err);
-        if (!s) s = c;
-    }
-    if (!s)
-        s = cli_output_write(&out, buf.data, buf.size, err);
-    else
-        cli_output_abort(&out);
-    cli_buffer_free(&buf);
-    plan_free(&plan);
+    floquet_args a = {bkf_oscillation_spec_default(), {0}};
+    a.spec.warn = warn_stderr;
+    cli_options g[2];
+    groups_of(&a, g);
+    int s = cli_parse_options(g, 2, argc, argv, NULL, err);
+    if (!s) s = bkf_oscillation_check(&a.spec, "--", err);
+    if (!s) s = cli_write_table(&a.output, argc, argv, write_floquet, &a.spec, err);
+    bkf_oscillation_spec_free(&a.spec);
     return s;
 }
 

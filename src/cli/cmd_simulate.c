@@ -17,336 +17,16 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "bkfront/comoving.h"
-#include "bkfront/cycle.h"
+#include "bkfront/init.h"
 #include "bkfront/io.h"
 #include "bkfront/measure.h"
 #include "bkfront/model.h"
 #include "bkfront/pde.h"
-#include "bkfront/speeds.h"
-
-/* --------------------------------------------------------- initial state */
-
-typedef enum { INIT_UNIFORM, INIT_OSCILLATION, INIT_FRONT, INIT_FILE } init_kind;
-
-typedef struct {
-    init_kind kind;
-    double amp;                 /* uniform, oscillation */
-    int q_given;
-    double q;                   /* oscillation: requested wavenumber */
-    size_t j;                   /* oscillation: mode */
-    bkf_pde_front_spec front;
-    const char *path;           /* file */
-    double *psi, *eta;          /* file contents */
-    size_t rows;
-    double t0;
-} init_plan;
-
-static void init_free(init_plan *p)
-{
-    free(p->psi);
-    free(p->eta);
-    p->psi = p->eta = NULL;
-}
+#include "bkfront/seed.h"
 
 #define INIT_FORM                                                                          \
     "uniform[:amp=A], oscillation[:q=Q|j=J][,amp=A], front:n=K[,root=R][,dir=left|right]" \
     "[,noise=E], or file:PATH"
-
-/* key=value,key=value after the colon; each key handled by `take`. */
-static int parse_pairs(const char *text, const char *kind,
-                       int (*take)(const char *key, const char *value, void *data, bkf_error *err),
-                       void *data, bkf_error *err)
-{
-    char buf[256], shown[72];
-    if (strlen(text) >= sizeof buf)
-        return bkf_error_set(err, BKF_EINPUT, "--init: the %s options are too long", kind);
-    strcpy(buf, text);
-    char *save = NULL;
-    for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-        char *eq = strchr(tok, '=');
-        if (!eq || eq == tok || !eq[1])
-            return bkf_error_set(err, BKF_EINPUT, "--init %s: '%s' is not key=value (%s)", kind,
-                                 cli_shown(tok, shown, sizeof shown), INIT_FORM);
-        *eq = '\0';
-        int s = take(tok, eq + 1, data, err);
-        if (s) return s;
-    }
-    return BKF_OK;
-}
-
-static int init_amp(const char *kind, const char *key, const char *value, double *amp,
-                    bkf_error *err)
-{
-    char flag[64];
-    snprintf(flag, sizeof flag, "--init %s %s", kind, key);
-    int s = cli_parse_double(flag, value, amp, err);
-    if (s) return s;
-    if (!(*amp >= 0 && *amp <= 10))
-        return bkf_error_set(err, BKF_EINPUT, "%s: %s is outside [0, 10]", flag, value);
-    return BKF_OK;
-}
-
-static int take_uniform(const char *key, const char *value, void *data, bkf_error *err)
-{
-    init_plan *p = data;
-    if (strcmp(key, "amp") == 0) return init_amp("uniform", key, value, &p->amp, err);
-    char a[72];
-    return bkf_error_set(err, BKF_EINPUT, "--init uniform: unknown key '%s' (amp)",
-                         cli_shown(key, a, sizeof a));
-}
-
-static int take_oscillation(const char *key, const char *value, void *data, bkf_error *err)
-{
-    init_plan *p = data;
-    if (strcmp(key, "amp") == 0) return init_amp("oscillation", key, value, &p->amp, err);
-    if (strcmp(key, "q") == 0) {
-        int s = cli_parse_double("--init oscillation q", value, &p->q, err);
-        if (s) return s;
-        if (!(p->q >= 0))
-            return bkf_error_set(err, BKF_EINPUT, "--init oscillation q: %s must be >= 0", value);
-        p->q_given = 1;
-        return BKF_OK;
-    }
-    if (strcmp(key, "j") == 0) {
-        if (strcmp(value, "0") == 0) {
-            p->j = 0;
-            p->q_given = 0;
-            return BKF_OK;
-        }
-        return cli_parse_count("--init oscillation j", value, BKF_PDE_N_MAX, &p->j, err);
-    }
-    char a[72];
-    return bkf_error_set(err, BKF_EINPUT, "--init oscillation: unknown key '%s' (q, j, amp)",
-                         cli_shown(key, a, sizeof a));
-}
-
-static int take_front(const char *key, const char *value, void *data, bkf_error *err)
-{
-    init_plan *p = data;
-    char a[72];
-    if (strcmp(key, "n") == 0) return cli_parse_count("--init front n", value, 100000, &p->front.n, err);
-    if (strcmp(key, "root") == 0)
-        return cli_parse_count("--init front root", value, 100, &p->front.root, err);
-    if (strcmp(key, "noise") == 0) return init_amp("front", key, value, &p->front.noise, err);
-    if (strcmp(key, "dir") == 0) {
-        if (strcmp(value, "left") == 0) p->front.direction = -1;
-        else if (strcmp(value, "right") == 0) p->front.direction = 1;
-        else
-            return bkf_error_set(err, BKF_EINPUT, "--init front dir: '%s' is not left or right",
-                                 cli_shown(value, a, sizeof a));
-        return BKF_OK;
-    }
-    return bkf_error_set(err, BKF_EINPUT, "--init front: unknown key '%s' (n, root, dir, noise)",
-                         cli_shown(key, a, sizeof a));
-}
-
-/* A TSV whose header names psi and eta (snapshots of bkfront simulate are
- * such files); with a t column, the rows of the last t are taken. */
-static int read_state_stream(init_plan *p, FILE *f, bkf_error *err)
-{
-    char path[72], a[72];
-    cli_shown(p->path, path, sizeof path);
-    char *line = NULL;
-    size_t cap = 0;
-    ssize_t len;
-    int ipsi = -1, ieta = -1, it = -1, ncol = 0, header = 0, status = BKF_OK;
-    size_t lineno = 0, rows = 0, rcap = 0;
-    double *psi = NULL, *eta = NULL, *tt = NULL;
-    while ((len = getline(&line, &cap, f)) >= 0) {
-        lineno++;
-        while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) line[--len] = '\0';
-        if (line[0] == '#' || len == 0) continue;
-        if (!header) {
-            header = 1;
-            char *save = NULL;
-            int col = 0;
-            for (char *tok = strtok_r(line, "\t", &save); tok; tok = strtok_r(NULL, "\t", &save), col++) {
-                if (strcmp(tok, "psi") == 0) ipsi = col;
-                else if (strcmp(tok, "eta") == 0) ieta = col;
-                else if (strcmp(tok, "t") == 0) it = col;
-            }
-            ncol = col;
-            if (ipsi < 0 || ieta < 0) {
-                status = bkf_error_set(err, BKF_EINPUT,
-                                       "--init file:%s: the header (line %zu) must name the "
-                                       "columns psi and eta", path, lineno);
-                break;
-            }
-            continue;
-        }
-        if (rows == rcap) {
-            rcap = rcap ? 2 * rcap : 1024;
-            double *a = realloc(psi, rcap * sizeof *a), *b = a ? realloc(eta, rcap * sizeof *b) : NULL,
-                   *c = b ? realloc(tt, rcap * sizeof *c) : NULL;
-            if (a) psi = a;
-            if (b) eta = b;
-            if (c) tt = c;
-            if (!a || !b || !c) {
-                status = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-                break;
-            }
-        }
-        char *save = NULL;
-        int col = 0;
-        double vp = NAN, ve = NAN, vt = 0;
-        for (char *tok = strtok_r(line, "\t", &save); tok; tok = strtok_r(NULL, "\t", &save), col++) {
-            if (col != ipsi && col != ieta && col != it) continue;
-            char *end;
-            errno = 0;
-            double v = strtod(tok, &end);
-            if (*end || end == tok || !isfinite(v) || errno) {
-                status = bkf_error_set(err, BKF_EINPUT,
-                                       "--init file:%s: line %zu: '%s' is not a finite number",
-                                       path, lineno, cli_shown(tok, a, sizeof a));
-                break;
-            }
-            if (col == ipsi) vp = v;
-            else if (col == ieta) ve = v;
-            else vt = v;
-        }
-        if (status) break;
-        if (col != ncol) {
-            status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: line %zu has %d fields, not %d",
-                                   path, lineno, col, ncol);
-            break;
-        }
-        psi[rows] = vp;
-        eta[rows] = ve;
-        tt[rows] = vt;
-        rows++;
-    }
-    free(line);
-    if (!status && ferror(f))
-        status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: read error", path);
-    if (!status && !header)
-        status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: no header line", path);
-    size_t first = 0;
-    if (!status && it >= 0 && rows) {
-        double tl = tt[rows - 1];
-        first = rows;
-        while (first > 0 && tt[first - 1] == tl) first--;
-        p->t0 = tl;
-    }
-    if (!status && rows - first < BKF_PDE_N_MIN)
-        status = bkf_error_set(err, BKF_EINPUT, "--init file:%s: %zu rows, need at least %d",
-                               path, rows - first, BKF_PDE_N_MIN);
-    if (!status) {
-        p->rows = rows - first;
-        p->psi = malloc(p->rows * sizeof *p->psi);
-        p->eta = malloc(p->rows * sizeof *p->eta);
-        if (!p->psi || !p->eta) status = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        else {
-            memcpy(p->psi, psi + first, p->rows * sizeof *psi);
-            memcpy(p->eta, eta + first, p->rows * sizeof *eta);
-        }
-    }
-    free(psi);
-    free(eta);
-    free(tt);
-    return status;
-}
-
-static int read_state_file(init_plan *p, bkf_error *err)
-{
-    FILE *f = fopen(p->path, "r");
-    if (!f)
-    {
-        char a[72];
-        return bkf_error_set(err, BKF_EINPUT, "--init file:%s: %s",
-                             cli_shown(p->path, a, sizeof a), strerror(errno));
-    }
-    int s = read_state_stream(p, f, err);
-    fclose(f);
-    return s;
-}
-
-static int parse_init(const char *text, init_plan *p, bkf_error *err)
-{
-    memset(p, 0, sizeof *p);
-    p->front = bkf_pde_front_spec_default();
-    const char *colon = strchr(text, ':');
-    size_t klen = colon ? (size_t)(colon - text) : strlen(text);
-    const char *rest = colon ? colon + 1 : "";
-    if (klen == 7 && strncmp(text, "uniform", 7) == 0) {
-        p->kind = INIT_UNIFORM;
-        p->amp = 1e-3;
-        return parse_pairs(rest, "uniform", take_uniform, p, err);
-    }
-    if (klen == 11 && strncmp(text, "oscillation", 11) == 0) {
-        p->kind = INIT_OSCILLATION;
-        p->amp = 0;
-        return parse_pairs(rest, "oscillation", take_oscillation, p, err);
-    }
-    if (klen == 5 && strncmp(text, "front", 5) == 0) {
-        p->kind = INIT_FRONT;
-        int have_n = strstr(rest, "n=") == rest || strstr(rest, ",n=");
-        int s = parse_pairs(rest, "front", take_front, p, err);
-        if (s) return s;
-        if (!have_n)
-            return bkf_error_set(err, BKF_EINPUT, "--init front: n=K is required (%s)", INIT_FORM);
-        return BKF_OK;
-    }
-    if (klen == 4 && strncmp(text, "file", 4) == 0) {
-        p->kind = INIT_FILE;
-        if (!*rest) return bkf_error_set(err, BKF_EINPUT, "--init file: give a path, file:PATH");
-        p->path = rest;
-        return read_state_file(p, err);
-    }
-    char a[72];
-    return bkf_error_set(err, BKF_EINPUT, "--init: '%s' is not one of %s",
-                         cli_shown(text, a, sizeof a), INIT_FORM);
-}
-
-/* Cross-checks that need the model parameters. */
-static int check_init(init_plan *ip, model_plan *mp, bkf_error *err)
-{
-    char a[32], b[32], path[72];
-    bkf_error e;
-    if (ip->kind == INIT_FILE) {
-        cli_shown(ip->path, path, sizeof path);
-        if (mp->N_given && mp->params.N != ip->rows)
-            return bkf_error_set(err, BKF_EINPUT, "--N: %zu differs from the %zu rows of --init "
-                                                  "file:%s", mp->params.N, ip->rows, path);
-        mp->params.N = ip->rows;
-        if (bkf_pde_check(&mp->params, &mp->options, &e))
-            return bkf_error_set(err, BKF_EINPUT, "--init file:%s: %s", path, e.message);
-    }
-    if (ip->kind == INIT_OSCILLATION || ip->kind == INIT_FRONT) {
-        if (bkf_model_check_nu_active(mp->params.nu, &e))
-            return bkf_error_set(err, BKF_EINPUT, "--init %s needs a limit cycle: --nu: %s",
-                                 ip->kind == INIT_FRONT ? "front" : "oscillation", e.message);
-        if (mp->params.gamma < BKF_CYCLE_MU_MIN || mp->params.gamma > BKF_CYCLE_MU_MAX)
-            return bkf_error_set(err, BKF_EINPUT, "--gamma: %s is outside [%g, %g] (the cycle "
-                                                  "engine's range of mu)",
-                                 num(mp->params.gamma, a, sizeof a), BKF_CYCLE_MU_MIN,
-                                 BKF_CYCLE_MU_MAX);
-    }
-    if (ip->kind == INIT_OSCILLATION) {
-        if (ip->q_given) ip->j = (size_t)floor(ip->q * mp->params.S / (2 * PI) + 0.5);
-        if (ip->j >= mp->params.N / 2)
-            return bkf_error_set(err, BKF_EINPUT,
-                                 "--init oscillation: mode j = %zu (q = %s) is not below N/2 = %zu",
-                                 ip->j, num(2 * PI * (double)ip->j / mp->params.S, b, sizeof b),
-                                 mp->params.N / 2);
-    }
-    return BKF_OK;
-}
-
-static int apply_init(bkf_pde *pde, const init_plan *ip, const model_plan *mp,
-                      bkf_pde_front_info *info, double *clean, bkf_error *err)
-{
-    switch (ip->kind) {
-    case INIT_UNIFORM: return bkf_pde_init_uniform(pde, ip->amp, mp->seed, err);
-    case INIT_OSCILLATION: return bkf_pde_init_oscillation(pde, ip->j, ip->amp, err);
-    case INIT_FRONT: {
-        bkf_pde_front_spec fs = ip->front;
-        fs.seed = mp->seed;
-        return bkf_pde_init_front(pde, &fs, info, clean, err);
-    }
-    default: return bkf_pde_set_state(pde, ip->psi, ip->eta, 0.0, err);
-    }
-}
 
 /* ============================================================ simulate */
 
@@ -455,7 +135,7 @@ static const bkf_io_column sim_columns[] = {
 
 typedef struct {
     model_plan m;
-    init_plan init;
+    bkf_init_spec init;
     const char *init_text;
     size_t frames, snapshots;
     const char *spacetime_path, *snapshots_path;
@@ -498,8 +178,11 @@ static int plan_simulate(int argc, char **argv, sim_plan *p, bkf_error *err)
     if (s) return s;
     if ((s = plan_model(&mf, &p->m, err))) return s;
     p->init_text = init ? init : "uniform";
-    if ((s = parse_init(p->init_text, &p->init, err))) return s;
-    if ((s = check_init(&p->init, &p->m, err))) return s;
+    if ((s = bkf_init_parse(p->init_text, &p->init, err))) return s;
+    p->init.seed = p->m.seed;
+    /* a state file that cannot be read is the user's input, as a bad path */
+    if ((s = bkf_init_load(&p->init, err))) return s == BKF_EIO ? BKF_EINPUT : s;
+    if ((s = bkf_init_check(&p->init, &p->m.params, p->m.N_given, &p->m.options, err))) return s;
     p->frames = DEF_FRAMES;
     if (frames && (s = cli_parse_count("--frames", frames, 1000000, &p->frames, err))) return s;
     p->snapshots = 2;
@@ -674,7 +357,7 @@ static int write_summary(bkf_io_table *t, const sim_plan *p, const sim_run *r,
     if (!s) s = comment_model(t, &p->m, err);
     if (!s) s = commentf(t, err, "init %s, seed %lu; tmax %s, %zu frames", p->init_text, p->m.seed,
                          num(p->m.tmax, a, sizeof a), p->frames);
-    if (!s && p->init.kind == INIT_FRONT)
+    if (!s && p->init.kind == BKF_INIT_FRONT)
         s = commentf(t, err,
                      "front: n %zu, root %zu of %zu, v_pred %s (err %.2g), mu %s, T %s, period at "
                      "a point %s, direction %s",
@@ -682,7 +365,7 @@ static int write_summary(bkf_io_table *t, const sim_plan *p, const sim_run *r,
                      fi->v_err, num(fi->mu, b, sizeof b), num(fi->T, c, sizeof c),
                      num(fi->period_fixed, d, sizeof d),
                      p->init.front.direction < 0 ? "-x (left)" : "+x (right)");
-    if (!s && p->init.kind == INIT_OSCILLATION)
+    if (!s && p->init.kind == BKF_INIT_OSCILLATION)
         s = commentf(t, err, "oscillation: mode j %zu, q %s, amp %s", p->init.j,
                      num(2 * PI * (double)p->init.j / p->m.params.S, a, sizeof a),
                      num(p->init.amp, b, sizeof b));
@@ -706,7 +389,7 @@ static int write_summary(bkf_io_table *t, const sim_plan *p, const sim_run *r,
                      "towards +x; negative: towards -x)",
                      num(ms->speed, a, sizeof a), ms->speed_err, num(ms->fit_start, b, sizeof b),
                      ms->tracks, ms->moving_minus, ms->moving_plus);
-    if (!s && p->init.kind == INIT_FRONT && isfinite(ms->speed))
+    if (!s && p->init.kind == BKF_INIT_FRONT && isfinite(ms->speed))
         s = commentf(t, err, "speed vs prediction: |v| %s, v_pred %s, relative difference %.3g",
                      num(fabs(ms->speed), a, sizeof a), num(fi->v, b, sizeof b),
                      (fabs(ms->speed) - fi->v) / fi->v);
@@ -720,7 +403,7 @@ static int write_summary(bkf_io_table *t, const sim_plan *p, const sim_run *r,
                      num(ms->mean, a, sizeof a), num(ms->variance, b, sizeof b),
                      num(ms->std_max, c, sizeof c), num(ms->psi_min, d, sizeof d),
                      num(ms->psi_max, e, sizeof e));
-    if (!s && p->init.kind == INIT_FRONT)
+    if (!s && p->init.kind == BKF_INIT_FRONT)
         s = commentf(t, err, "deviation from the seeded wave: start %.3g, window start %.3g, end "
                              "%.3g, growth rate %.3g",
                      ms->deviation_start, ms->deviation_mid, ms->deviation_end,
@@ -758,37 +441,31 @@ static int simulate_compute(sim_plan *p, int argc, char **argv, progress_bar *ba
     }
     if (p->snapshots_path)
         for (size_t k = 0; k < p->snapshots; k++)
-            r.snap_frame[k] = p->snapshots == 1
-                                  ? p->frames
-                                  : (size_t)floor((double)k * (double)p->frames /
-                                                      (double)(p->snapshots - 1) + 0.5);
-    if ((s = apply_init(r.pde, &p->init, &p->m, &fi, clean, &e))) {
+            r.snap_frame[k] = bkf_init_snapshot_frame(k, p->snapshots, p->frames);
+    if ((s = bkf_seed_init(r.pde, &p->init, &fi, clean, &e))) {
         bkf_error_set(err, s, "--init %s: %s", p->init_text, e.message);
         goto done;
     }
     double period_ref;
-    double level = front_level(&p->m.params, &period_ref);
+    double level = bkf_measure_front_level(&p->m.params, &period_ref);
     if (!isnan(p->level)) level = p->level;
     p->level = level;
     bkf_measure_params mp = bkf_measure_params_default();
+    mp.model = p->m.params;
     mp.level = level;
-    mp.N = N;
-    mp.S = p->m.params.S;
-    mp.gamma = p->m.params.gamma;
-    mp.nu = p->m.params.nu;
     mp.period_ref = period_ref;
-    mp.reference = p->init.kind == INIT_FRONT ? clean : NULL;
+    mp.reference = p->init.kind == BKF_INIT_FRONT ? clean : NULL;
     r.meas = bkf_measure_alloc(&mp, err);
     if (!r.meas) {
         s = BKF_ENOMEM;
         goto done;
     }
-    double frame_dt = p->m.tmax / (double)p->frames;
-    r.per_frame = (size_t)ceil(frame_dt / SAMPLE_DT_MAX - 1e-9);
-    if (r.per_frame < 1) r.per_frame = 1;
-    double sample_dt = frame_dt / (double)r.per_frame;
+    bkf_init_sampling smp;
+    if ((s = bkf_init_sampling_plan(p->m.tmax, p->frames, BKF_INIT_SAMPLE_DT_MAX, &smp, err)))
+        goto done;
+    r.per_frame = smp.per_frame;
     double t0 = bkf_pde_time(r.pde);
-    s = bkf_pde_run(r.pde, t0 + p->m.tmax, sample_dt, sim_observe, &r, progress_draw, bar, &e);
+    s = bkf_pde_run(r.pde, t0 + p->m.tmax, smp.sample_dt, sim_observe, &r, progress_draw, bar, &e);
     progress_end(bar);
     if (r.status) {
         s = r.status;
@@ -913,7 +590,7 @@ static int simulate_run(int argc, char **argv, bkf_error *err)
     cli_buffer_free(&buf);
     cli_buffer_free(&st);
     cli_buffer_free(&sn);
-    init_free(&plan.init);
+    bkf_init_free(&plan.init);
     return s;
 }
 

@@ -1,42 +1,14 @@
 /* bkfront speeds: every supersonic front speed allowed by
  *     n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)),  mu(v) = gamma / sqrt(1 - c^2/v^2);
- * bkfront branch: one of them followed along S, nu, gamma or c.
+ * bkfront branch: one of them followed along S, nu, gamma or c.  The
+ * products of bkfront/fronts.h from flags.
  *
- * As in `bkfront period`: every input is checked before the first solve and
- * the table is built in memory and written only when the whole computation
- * succeeded, so a failed run leaves stdout (or the --out file) untouched. */
+ * Every input is checked before the first solve, and the table is built in
+ * memory and written only when the whole computation succeeded, so a failed
+ * run leaves stdout (or the --out file) untouched. */
 #include "args.h"
 
-#include <math.h>
-#include <stdlib.h>
-#include <string.h>
-
-#include "bkfront/cycle.h"
-#include "bkfront/io.h"
-#include "bkfront/model.h"
-#include "bkfront/speeds.h"
-
-/* The columns of one root, shared by both tables. */
-#define ROOT_COLUMNS                                                                   \
-    {"n", BKF_IO_NUMBER}, {"v", BKF_IO_NUMBER}, {"mu", BKF_IO_NUMBER},                 \
-    {"T", BKF_IO_NUMBER}, {"T_err", BKF_IO_NUMBER}, {"v_over_c", BKF_IO_NUMBER},       \
-    {"wavelength", BKF_IO_NUMBER}, {"period_fixed", BKF_IO_NUMBER},                    \
-    {"v_asym", BKF_IO_NUMBER}, {"deviation", BKF_IO_NUMBER}, {"v_err", BKF_IO_NUMBER}, \
-    {"model", BKF_IO_TEXT}, {"residual", BKF_IO_NUMBER}, {"slope", BKF_IO_NUMBER},         \
-    {"flags", BKF_IO_TEXT}
-#define NROOT 15
-
-static const bkf_io_column speeds_columns[] = {ROOT_COLUMNS};
-static const bkf_io_column branch_columns[] = {
-    {"point", BKF_IO_TEXT}, {"S", BKF_IO_NUMBER},  {"gamma", BKF_IO_NUMBER},
-    {"c", BKF_IO_NUMBER},   {"nu", BKF_IO_NUMBER}, ROOT_COLUMNS};
-#define NSPEEDS (sizeof speeds_columns / sizeof speeds_columns[0])
-#define NBRANCH (sizeof branch_columns / sizeof branch_columns[0])
-
-static const char *const format_names[] = {"tsv", "json", NULL};
-
-#define MAX_NMAX 100000u
-static const char *const param_names[] = {"S", "nu", "gamma", "c", NULL};
+#include "bkfront/fronts.h"
 
 #define COLUMNS_HELP                                                                   \
     "  n              number of fronts around the system\n"                          \
@@ -60,8 +32,33 @@ static const char *const param_names[] = {"S", "nu", "gamma", "c", NULL};
     "                 near, v_err is large), asymptotic (mu > 1e6: T from the\n"       \
     "                 large-mu expansion)\n"
 
+typedef struct {
+    bkf_fronts_spec spec;
+    cli_output_spec output;
+} speeds_args;
+
+typedef struct {
+    bkf_fronts_branch_spec spec;
+    cli_output_spec output;
+} branch_args;
+
+static void speeds_groups(speeds_args *a, cli_options g[2])
+{
+    g[0] = (cli_options){bkf_fronts_options, bkf_fronts_noptions, a ? &a->spec : NULL};
+    g[1] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
+}
+
+static void branch_groups(branch_args *a, cli_options g[2])
+{
+    g[0] = (cli_options){bkf_fronts_branch_options, bkf_fronts_branch_noptions,
+                         a ? &a->spec : NULL};
+    g[1] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
+}
+
 static void speeds_help(FILE *out)
 {
+    cli_options g[2];
+    speeds_groups(NULL, g);
     fprintf(out,
         "usage: bkfront speeds --gamma G --c C --nu V --S L [--n N | --nmax N]\n"
         "                      [--tol E] [--method auto|asymptotic|leading|shooting]\n"
@@ -70,44 +67,29 @@ static void speeds_help(FILE *out)
         "Every supersonic speed v at which n fronts propagate around the periodic\n"
         "system: the roots of n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)),\n"
         "mu(v) = gamma / sqrt(1 - c^2/v^2), for each n >= 1, all of them (one n can\n"
-        "have several). The range of n is found: n_max is reported in a comment,\n"
-        "with n_bound = S / (k(nu) c gamma); every n < n_bound has a root, and\n"
-        "larger n have one only where T(mu)/sqrt(mu^2 - gamma^2) dips below k.\n"
+        "have several). The range of n is found: n_max is reported in a comment\n"
+        "(with --format json also in \"results\"), with n_bound = S / (k(nu) c gamma);\n"
+        "every n < n_bound has a root, and larger n have one only where\n"
+        "T(mu)/sqrt(mu^2 - gamma^2) dips below k. With c = 0, mu = gamma and\n"
+        "v = S/(n T(gamma)) for every n (rows n <= %d by default).\n"
         "\n"
-        "options:\n"
-        "  --gamma G      required; friction strength, in [%g, %g]\n"
-        "  --c C          required; sound speed, >= 0. c = 0: mu = gamma and\n"
-        "                 v = S/(n T(gamma)) for every n (rows n <= %d by default)\n"
-        "  --nu V         required; pulling rate in (-1, 1); |nu| >= 1 has no fronts\n"
-        "  --S L          required; system size, > 0\n"
-        "  --n N          only the roots for this n\n"
-        "  --nmax N       only n <= N (N <= %u); default every n up to n_max, but\n"
-        "                 no more than %d values of n\n"
-        "  --tol E        relative accuracy asked of v, and bound on |residual|, in\n"
-        "                 [%g, %g]; default 1e-10\n"
-        "  --method M     how T is obtained at the roots (column model): auto (default)\n"
-        "                 takes a formula wherever its verified error bound meets the\n"
-        "                 tolerance the root needs (about tol, 0.1..10 tol), else\n"
-        "                 shooting; asymptotic or leading: the formula at every root,\n"
-        "                 exit 1 where its bound exceeds that; shooting: never a formula\n"
-        "                 (except beyond the grid's cap, flag asymptotic)\n"
-        "  --format tsv|json  output format; default tsv\n"
-        "  --out FILE     write to FILE, replaced atomically only on success;\n"
-        "                 default standard output\n"
-        "  --help         this text\n"
+        "options:\n",
+        BKF_SPEEDS_ROWS_C0);
+    cli_options_help(out, g, 2);
+    fprintf(out,
         "\n"
         "columns:\n" COLUMNS_HELP
         "\n"
         "No front at all (S too small) is an empty table with the reason in a\n"
         "comment, exit status 0. Output is all or nothing: on any failure nothing is\n"
         "written.\n"
-        "exit status: 0 ok, 1 numerical failure, 2 bad input\n",
-        BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX, BKF_SPEEDS_ROWS_C0, MAX_NMAX, BKF_SPEEDS_MAX_ROWS,
-        BKF_TOL_MIN, BKF_TOL_MAX);
+        "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
 }
 
 static void branch_help(FILE *out)
 {
+    cli_options g[2];
+    branch_groups(NULL, g);
     fprintf(out,
         "usage: bkfront branch --param S|nu|gamma|c --from A --to B [--n N] [--root I]\n"
         "                      --gamma G --c C --nu V --S L  (all but the --param one)\n"
@@ -118,317 +100,53 @@ static void branch_help(FILE *out)
         "where two roots of one n meet and p turns back (rows of type fold), and\n"
         "ends where p leaves [A, B] or at the sonic limit v -> c+ (mu -> inf),\n"
         "reached at S = n k(nu) c gamma (a row of type sonic, with mu = T = inf).\n"
+        "The parameters other than --param are required; c > 0 (for c = 0,\n"
+        "v = S/(n T(gamma)) needs no continuation).\n"
         "\n"
-        "options:\n"
-        "  --param S|nu|gamma|c  required; the continued parameter\n"
-        "  --from A, --to B      required; its start and end values (A != B)\n"
-        "  --n N          number of fronts; default 1\n"
-        "  --root I       which root of this n at p = A to follow, 1 being the\n"
-        "                 fastest (as listed by bkfront speeds); default 1\n"
-        "  --gamma G, --c C, --nu V, --S L\n"
-        "                 the other parameters, ranges as in bkfront speeds; c > 0\n"
-        "                 (for c = 0, v = S/(n T(gamma)) needs no continuation)\n"
-        "  --tol E        relative accuracy asked of T and v, in [%g, %g];\n"
-        "                 default 1e-10\n"
-        "  --max-points N at most N regular points; default no limit\n"
-        "  --format tsv|json  output format; default tsv\n"
-        "  --out FILE     write to FILE, replaced atomically only on success\n"
-        "  --help         this text\n"
+        "options:\n");
+    cli_options_help(out, g, 2);
+    fprintf(out,
         "\n"
         "columns:\n"
         "  point          point, fold or sonic\n"
         "  S, gamma, c, nu  the parameters at this point\n" COLUMNS_HELP
         "\n"
         "Output is all or nothing: on any failure nothing is written.\n"
-        "exit status: 0 ok, 1 numerical failure, 2 bad input\n",
-        BKF_TOL_MIN, BKF_TOL_MAX);
+        "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
 }
 
-/* Shortest of %.15g / %.17g that reads back exactly. */
-static const char *num(double x, char *buf, size_t size)
+static int write_speeds(const void *spec, FILE *out, bkf_io_format format,
+                        const bkf_provenance *prov, bkf_error *err)
 {
-    snprintf(buf, size, "%.15g", x);
-    if (strtod(buf, NULL) != x) snprintf(buf, size, "%.17g", x);
-    return buf;
+    return bkf_fronts_write(spec, out, format, prov, err);
 }
 
-/* ------------------------------------------------------- shared parsing */
-
-typedef struct {
-    const char *gamma, *c, *nu, *S, *tol, *format, *out;
-} common_flags;
-
-typedef struct {
-    bkf_model_params params;
-    double tol;
-    bkf_io_format format;
-    const char *out_path;
-} common_plan;
-
-/* One model parameter: given, a number, in its range; skip = the continued one. */
-static int parse_param(const char *flag, const char *text, int skip, double *value,
-                       bkf_error *err)
+static int write_branch(const void *spec, FILE *out, bkf_io_format format,
+                        const bkf_provenance *prov, bkf_error *err)
 {
-    if (skip) {
-        if (text)
-            return bkf_error_set(err, BKF_EINPUT,
-                                 "%s: this is the continued parameter (--param %s); give its "
-                                 "range with --from and --to instead",
-                                 flag, flag + 2);
-        return BKF_OK;
-    }
-    if (!text) return bkf_error_set(err, BKF_EINPUT, "%s is required", flag);
-    int s = cli_parse_double(flag, text, value, err);
-    if (s) return s;
-    bkf_error e;
-    const char *name = flag + 2;
-    if (strcmp(name, "gamma") == 0) {
-        if (bkf_model_check_positive("gamma", *value, &e) ||
-            *value < BKF_CYCLE_MU_MIN || *value > BKF_CYCLE_MU_MAX)
-            return bkf_error_set(err, BKF_EINPUT,
-                                 "--gamma: gamma = %g is outside [%g, %g] (mu >= gamma must be "
-                                 "solvable)", *value, BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
-    } else if (strcmp(name, "c") == 0) {
-        if (bkf_model_check_nonnegative("c", *value, &e))
-            return bkf_error_set(err, BKF_EINPUT, "--c: %s", e.message);
-    } else if (strcmp(name, "S") == 0) {
-        if (bkf_model_check_positive("S", *value, &e))
-            return bkf_error_set(err, BKF_EINPUT, "--S: %s", e.message);
-    } else if (fabs(*value) >= 1.0) {
-        return bkf_error_set(err, BKF_EINPUT,
-                             "--nu: nu = %g is outside (-1, 1): no fronts, uniform continuous "
-                             "slip psi = nu is stable (no limit cycle)", *value);
-    }
-    return BKF_OK;
-}
-
-static int parse_common(const common_flags *f, int skip, common_plan *plan, bkf_error *err)
-{
-    int s;
-    if ((s = parse_param("--gamma", f->gamma, skip == BKF_SPEEDS_ALONG_GAMMA, &plan->params.gamma, err)))
-        return s;
-    if ((s = parse_param("--c", f->c, skip == BKF_SPEEDS_ALONG_C, &plan->params.c, err))) return s;
-    if ((s = parse_param("--nu", f->nu, skip == BKF_SPEEDS_ALONG_NU, &plan->params.nu, err))) return s;
-    if ((s = parse_param("--S", f->S, skip == BKF_SPEEDS_ALONG_S, &plan->params.S, err))) return s;
-    plan->tol = 1e-10;
-    if (f->tol) {
-        if ((s = cli_parse_double("--tol", f->tol, &plan->tol, err))) return s;
-        bkf_error e;
-        if (bkf_model_check_tol(plan->tol, &e) != BKF_OK)
-            return bkf_error_set(err, BKF_EINPUT, "--tol: %s", e.message);
-    }
-    plan->format = BKF_IO_TSV;
-    if (f->format) {
-        int k;
-        if ((s = cli_parse_choice("--format", f->format, format_names, &k, err))) return s;
-        plan->format = k == 1 ? BKF_IO_JSON : BKF_IO_TSV;
-    }
-    if (f->out && !*f->out) return bkf_error_set(err, BKF_EINPUT, "--out: the file name is empty");
-    plan->out_path = f->out;
-    return BKF_OK;
-}
-
-static const char *flag_text(unsigned flags)
-{
-    if ((flags & BKF_SPEEDS_NEAR_TANGENT) && (flags & BKF_SPEEDS_ASYMPTOTIC))
-        return "near-tangent,asymptotic";
-    if (flags & BKF_SPEEDS_NEAR_TANGENT) return "near-tangent";
-    if (flags & BKF_SPEEDS_ASYMPTOTIC) return "asymptotic";
-    return "";
-}
-
-static void root_values(const bkf_speeds_root *r, bkf_io_value *v)
-{
-    v[0].number = (double)r->n;
-    v[1].number = r->v;
-    v[2].number = r->mu;
-    v[3].number = r->T;
-    v[4].number = r->T_err;
-    v[5].number = r->v_over_c;
-    v[6].number = r->wavelength;
-    v[7].number = r->period_fixed;
-    v[8].number = r->v_asym;
-    v[9].number = r->deviation;
-    v[10].number = r->v_err;
-    v[11].text = r->model ? r->model : "shooting";
-    v[12].number = r->residual;
-    v[13].number = r->slope;
-    v[14].text = flag_text(r->flags);
-}
-
-static int comment_command(bkf_io_table *table, int argc, char **argv, bkf_error *err)
-{
-    char *cmd = cli_command_line(argc, argv);
-    if (!cmd) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    size_t n = strlen(cmd) + 32;
-    char *text = malloc(n);
-    if (!text) {
-        free(cmd);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
-    snprintf(text, n, "command: " CLI_PROGRAM " %s", cmd);
-    int s = bkf_io_table_comment(table, text, err);
-    free(text);
-    free(cmd);
-    return s;
-}
-
-/* Build into a memory buffer with `fill`, then write it all or nothing. */
-typedef int (*fill_fn)(const void *plan, int argc, char **argv, FILE *stream, bkf_error *err);
-
-static int run_all_or_nothing(const char *out_path, fill_fn fill, const void *plan, int argc,
-                              char **argv, bkf_error *err)
-{
-    cli_output out = {0};
-    cli_buffer buf = {0};
-    int s = cli_output_open(&out, out_path, "--out", err);
-    if (!s) s = cli_buffer_open(&buf, err);
-    if (!s) {
-        s = fill(plan, argc, argv, buf.stream, err);
-        int c = cli_buffer_close(&buf, s ? NULL : err);
-        if (!s) s = c;
-    }
-    if (!s)
-        s = cli_output_write(&out, buf.data, buf.size, err);
-    else
-        cli_output_abort(&out);
-    cli_buffer_free(&buf);
-    return s;
-}
-
-/* --------------------------------------------------------------- speeds */
-
-typedef struct {
-    common_plan common;
-    bkf_speeds_options options;
-} speeds_plan;
-
-static int plan_speeds(int argc, char **argv, speeds_plan *plan, bkf_error *err)
-{
-    common_flags f = {0};
-    const char *n_text = NULL, *nmax_text = NULL, *method_text = NULL;
-    int help = 0;
-    const cli_flag flags[] = {
-        {"--gamma", &f.gamma, "a number in [1e-06, 1e+06]", NULL},
-        {"--c", &f.c, "a number >= 0", NULL},
-        {"--nu", &f.nu, "a number in (-1, 1)", NULL},
-        {"--S", &f.S, "a number > 0", NULL},
-        {"--n", &n_text, "an integer >= 1", NULL},
-        {"--nmax", &nmax_text, "an integer >= 1", NULL},
-        {"--tol", &f.tol, "a number in [1e-14, 0.1]", NULL},
-        {"--method", &method_text, "auto, asymptotic, leading or shooting", NULL},
-        {"--format", &f.format, "tsv or json", NULL},
-        {"--out", &f.out, "a file name", NULL},
-        {"--help", NULL, NULL, &help},
-    };
-    int s = cli_parse_flags(flags, sizeof flags / sizeof flags[0], argc, argv, err);
-    if (s) return s;
-    if ((s = parse_common(&f, -1, &plan->common, err))) return s;
-    plan->options = bkf_speeds_options_default();
-    plan->options.tol = plan->common.tol;
-    if (method_text) {
-        static const char *const method_names[] = {"auto", "asymptotic", "leading", "shooting",
-                                                   NULL};
-        static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYMPTOTIC,
-                                                        BKF_METHOD_LEADING, BKF_METHOD_SHOOTING};
-        int k;
-        if ((s = cli_parse_choice("--method", method_text, method_names, &k, err))) return s;
-        plan->options.method = method_kinds[k];
-    }
-    if (n_text && nmax_text)
-        return bkf_error_set(err, BKF_EINPUT,
-                             "--n, --nmax: give one of them (--n N: that n only; --nmax N: "
-                             "n <= N)");
-    size_t k;
-    if (n_text) {
-        if ((s = cli_parse_count("--n", n_text, 1000000000u, &k, err))) return s;
-        plan->options.n_from = plan->options.n_to = k;
-    }
-    if (nmax_text) {
-        /* each row costs a few solves: a typo must not mean hours */
-        if ((s = cli_parse_count("--nmax", nmax_text, MAX_NMAX, &k, err))) return s;
-        plan->options.n_to = k;
-    }
-    /* the library's own checks: S/(c gamma) below 1e15 */
-    bkf_error e;
-    if (bkf_speeds_check(&plan->common.params, &plan->options, &e) != BKF_OK)
-        return bkf_error_set(err, BKF_EINPUT, "--S, --c, --gamma: %s", e.message);
-    return BKF_OK;
-}
-
-static int fill_speeds(const void *vplan, int argc, char **argv, FILE *stream, bkf_error *err)
-{
-    const speeds_plan *plan = vplan;
-    const bkf_model_params *p = &plan->common.params;
-    bkf_speeds_table t;
-    int s = bkf_speeds_find(p, &plan->options, &t, err);
-    if (s) {
-        bkf_speeds_table_free(&t);
-        return s;
-    }
-    bkf_io_table *table = bkf_io_table_alloc(stream, plan->common.format, speeds_columns, NSPEEDS, err);
-    if (!table) {
-        bkf_speeds_table_free(&t);
-        return BKF_ENOMEM;
-    }
-    char a[32], b[32], c[32], d[32], e[32], line[640];
-    s = bkf_io_table_comment(
-        table,
-        CLI_PROGRAM " " CLI_VERSION " speeds: roots v > c of n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)), "
-        "mu(v) = gamma / sqrt(1 - c^2/v^2)",
-        err);
-    if (!s) {
-        snprintf(line, sizeof line, "gamma %s, c %s, nu %s, S %s; tol %s (relative, on v)",
-                 num(p->gamma, a, sizeof a), num(p->c, b, sizeof b), num(p->nu, c, sizeof c),
-                 num(p->S, d, sizeof d), num(plan->options.tol, e, sizeof e));
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) {
-        if (p->c > 0)
-            snprintf(line, sizeof line,
-                     "n_max %ld; n_bound = S/(k c gamma) = %.17g with k(nu) = %.17g; "
-                     "inf of T/sqrt(mu^2 - gamma^2) over mu > gamma: %.17g (%s)",
-                     t.n_max, t.n_bound, t.k, t.g_inf,
-                     t.dips_below_k ? "dips below k: some n >= n_bound have roots"
-                                    : "= k, approached as mu -> inf");
-        else
-            snprintf(line, sizeof line,
-                     "n_max: none (c = 0, every n has a front); k(nu) = %.17g", t.k);
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) {
-        snprintf(line, sizeof line,
-                 "work: %zu grid samples (%zu solves at the coarse tolerance), %zu solves at "
-                 "the roots' tolerance, %zu values of T from a formula, largest mu %.6g; "
-                 "method %s",
-                 t.samples, t.coarse_solves, t.precise_solves, t.formula_answers, t.mu_grid_max,
-                 bkf_cycle_method_name(plan->options.method));
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s && t.note[0]) {
-        snprintf(line, sizeof line, "note: %s", t.note);
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) s = comment_command(table, argc, argv, err);
-    for (size_t i = 0; !s && i < t.count; i++) {
-        bkf_io_value v[NSPEEDS];
-        memset(v, 0, sizeof v);
-        root_values(&t.roots[i], v);
-        s = bkf_io_table_row(table, v, err);
-    }
-    if (!s) s = bkf_io_table_finish(table, err);
-    bkf_io_table_free(table);
-    bkf_speeds_table_free(&t);
-    return s;
+    return bkf_fronts_branch_write(spec, out, format, prov, err);
 }
 
 static int speeds_run(int argc, char **argv, bkf_error *err)
 {
-    speeds_plan plan;
-    memset(&plan, 0, sizeof plan);
-    int s = plan_speeds(argc, argv, &plan, err);
-    if (s) return s;
-    return run_all_or_nothing(plan.common.out_path, fill_speeds, &plan, argc, argv, err);
+    speeds_args a = {bkf_fronts_spec_default(), {0}};
+    cli_options g[2];
+    speeds_groups(&a, g);
+    int s = cli_parse_options(g, 2, argc, argv, NULL, err);
+    if (!s) s = bkf_fronts_check(&a.spec, "--", err);
+    if (!s) s = cli_write_table(&a.output, argc, argv, write_speeds, &a.spec, err);
+    return s;
+}
+
+static int branch_run(int argc, char **argv, bkf_error *err)
+{
+    branch_args a = {bkf_fronts_branch_spec_default(), {0}};
+    cli_options g[2];
+    branch_groups(&a, g);
+    int s = cli_parse_options(g, 2, argc, argv, NULL, err);
+    if (!s) s = bkf_fronts_branch_check(&a.spec, "--", err);
+    if (!s) s = cli_write_table(&a.output, argc, argv, write_branch, &a.spec, err);
+    return s;
 }
 
 const cli_command cli_cmd_speeds = {
@@ -437,209 +155,6 @@ const cli_command cli_cmd_speeds = {
     speeds_run,
     speeds_help,
 };
-
-/* --------------------------------------------------------------- branch */
-
-typedef struct {
-    common_plan common;
-    bkf_speeds_param along;
-    double from, to;
-    size_t n, root, max_points;
-} branch_plan;
-
-static int plan_branch(int argc, char **argv, branch_plan *plan, bkf_error *err)
-{
-    common_flags f = {0};
-    const char *param = NULL, *from = NULL, *to = NULL, *n_text = NULL, *root_text = NULL,
-               *max_text = NULL;
-    int help = 0;
-    const cli_flag flags[] = {
-        {"--param", &param, "S, nu, gamma or c", NULL},
-        {"--from", &from, "a number", NULL},
-        {"--to", &to, "a number", NULL},
-        {"--n", &n_text, "an integer >= 1", NULL},
-        {"--root", &root_text, "an integer >= 1", NULL},
-        {"--gamma", &f.gamma, "a number in [1e-06, 1e+06]", NULL},
-        {"--c", &f.c, "a number > 0", NULL},
-        {"--nu", &f.nu, "a number in (-1, 1)", NULL},
-        {"--S", &f.S, "a number > 0", NULL},
-        {"--tol", &f.tol, "a number in [1e-14, 0.1]", NULL},
-        {"--max-points", &max_text, "an integer >= 1", NULL},
-        {"--format", &f.format, "tsv or json", NULL},
-        {"--out", &f.out, "a file name", NULL},
-        {"--help", NULL, NULL, &help},
-    };
-    int s = cli_parse_flags(flags, sizeof flags / sizeof flags[0], argc, argv, err);
-    if (s) return s;
-    if (!param) return bkf_error_set(err, BKF_EINPUT, "--param is required (S, nu, gamma or c)");
-    int k;
-    if ((s = cli_parse_choice("--param", param, param_names, &k, err))) return s;
-    plan->along = (bkf_speeds_param)k;
-    if (!from) return bkf_error_set(err, BKF_EINPUT, "--from is required (the start value of %s)", param);
-    if (!to) return bkf_error_set(err, BKF_EINPUT, "--to is required (the end value of %s)", param);
-    if ((s = cli_parse_double("--from", from, &plan->from, err))) return s;
-    if ((s = cli_parse_double("--to", to, &plan->to, err))) return s;
-    if ((s = parse_common(&f, k, &plan->common, err))) return s;
-    /* the ends as values of the continued parameter, checked like the others */
-    char flag[16];
-    snprintf(flag, sizeof flag, "--%s", param_names[k]);
-    const char *ends[2] = {from, to};
-    const char *end_flags[2] = {"--from", "--to"};
-    for (int i = 0; i < 2; i++) {
-        double x;
-        bkf_error e;
-        if (parse_param(flag, ends[i], 0, &x, &e))
-            return bkf_error_set(err, BKF_EINPUT, "%s: %s", end_flags[i],
-                                 strchr(e.message, ' ') ? strchr(e.message, ' ') + 1 : e.message);
-    }
-    if (plan->from == plan->to)
-        return bkf_error_set(err, BKF_EINPUT, "--from, --to: the ends are equal (need A != B)");
-    if (plan->along != BKF_SPEEDS_ALONG_C && !(plan->common.params.c > 0))
-        return bkf_error_set(err, BKF_EINPUT,
-                             "--c: c = 0 needs no continuation, v = S/(n T(gamma)) in closed "
-                             "form (bkfront speeds); branches need c > 0");
-    if (plan->along == BKF_SPEEDS_ALONG_C && !(plan->from > 0 && plan->to > 0))
-        return bkf_error_set(err, BKF_EINPUT,
-                             "--from, --to: c must stay > 0 along the branch (c = 0 is the "
-                             "closed form v = S/(n T(gamma)))");
-    *((plan->along == BKF_SPEEDS_ALONG_S)       ? &plan->common.params.S
-      : (plan->along == BKF_SPEEDS_ALONG_NU)    ? &plan->common.params.nu
-      : (plan->along == BKF_SPEEDS_ALONG_GAMMA) ? &plan->common.params.gamma
-                                                : &plan->common.params.c) = plan->from;
-    plan->n = 1;
-    plan->root = 1;
-    if (n_text && (s = cli_parse_count("--n", n_text, 1000000000u, &plan->n, err))) return s;
-    if (root_text && (s = cli_parse_count("--root", root_text, 1000000u, &plan->root, err)))
-        return s;
-    plan->max_points = 0;
-    if (max_text && (s = cli_parse_count("--max-points", max_text, CLI_MAX_POINTS, &plan->max_points, err)))
-        return s;
-    bkf_speeds_options o = bkf_speeds_options_default();
-    o.tol = plan->common.tol;
-    bkf_error e;
-    if (bkf_speeds_check(&plan->common.params, &o, &e) != BKF_OK)
-        return bkf_error_set(err, BKF_EINPUT, "--S, --c, --gamma: %s", e.message);
-    return BKF_OK;
-}
-
-typedef struct {
-    bkf_speeds_branch_point *points;
-    size_t count, cap;
-    int status;
-} branch_sink;
-
-static int collect_point(const bkf_speeds_branch_point *pt, void *data)
-{
-    branch_sink *sink = data;
-    if (sink->count == sink->cap) {
-        size_t cap = sink->cap ? 2 * sink->cap : 64;
-        bkf_speeds_branch_point *x = realloc(sink->points, cap * sizeof *x);
-        if (!x) {
-            sink->status = BKF_ENOMEM;
-            return 1;
-        }
-        sink->points = x;
-        sink->cap = cap;
-    }
-    sink->points[sink->count++] = *pt;
-    return 0;
-}
-
-static int fill_branch(const void *vplan, int argc, char **argv, FILE *stream, bkf_error *err)
-{
-    const branch_plan *plan = vplan;
-    bkf_speeds_options o = bkf_speeds_options_default();
-    o.tol = plan->common.tol;
-    branch_sink sink = {0};
-    bkf_speeds_branch_report rep;
-    int s = bkf_speeds_branch(&plan->common.params, plan->n, plan->root, plan->along, plan->to, &o,
-                              plan->max_points, collect_point, &sink, &rep, err);
-    if (!s && sink.status) s = bkf_error_set(err, sink.status, "out of memory");
-    bkf_io_table *table = NULL;
-    if (!s) {
-        table = bkf_io_table_alloc(stream, plan->common.format, branch_columns, NBRANCH, err);
-        if (!table) s = BKF_ENOMEM;
-    }
-    const char *pname = param_names[plan->along];
-    const bkf_model_params *p = &plan->common.params;
-    char a[32], b[32], c[32], d[32], e[32], line[640];
-    if (!s)
-        s = bkf_io_table_comment(
-            table,
-            CLI_PROGRAM " " CLI_VERSION " branch: one root v_n of n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)) "
-            "followed along one parameter by pseudo-arclength continuation",
-            err);
-    if (!s) {
-        snprintf(line, sizeof line, "%s from %s to %s; n %zu, root %zu at the start; tol %s",
-                 pname, num(plan->from, a, sizeof a), num(plan->to, b, sizeof b), plan->n,
-                 plan->root, num(plan->common.tol, c, sizeof c));
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) {
-        snprintf(line, sizeof line, "fixed: %s%s%s%s%s%s%s%s", plan->along == BKF_SPEEDS_ALONG_GAMMA ? "" : "gamma ",
-                 plan->along == BKF_SPEEDS_ALONG_GAMMA ? "" : num(p->gamma, a, sizeof a),
-                 plan->along == BKF_SPEEDS_ALONG_C ? "" : " c ",
-                 plan->along == BKF_SPEEDS_ALONG_C ? "" : num(p->c, b, sizeof b),
-                 plan->along == BKF_SPEEDS_ALONG_NU ? "" : " nu ",
-                 plan->along == BKF_SPEEDS_ALONG_NU ? "" : num(p->nu, c, sizeof c),
-                 plan->along == BKF_SPEEDS_ALONG_S ? "" : " S ",
-                 plan->along == BKF_SPEEDS_ALONG_S ? "" : num(p->S, d, sizeof d));
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) {
-        int used = snprintf(line, sizeof line, "%zu points, %zu fold(s)", rep.points, rep.folds);
-        const char *sep = " at ";
-        for (size_t i = 0; i < sink.count && used > 0 && (size_t)used < sizeof line; i++)
-            if (sink.points[i].kind == BKF_SPEEDS_FOLD) {
-                bkf_model_params q = sink.points[i].params;
-                double x = plan->along == BKF_SPEEDS_ALONG_S ? q.S
-                           : plan->along == BKF_SPEEDS_ALONG_NU ? q.nu
-                           : plan->along == BKF_SPEEDS_ALONG_GAMMA ? q.gamma : q.c;
-                used += snprintf(line + used, sizeof line - (size_t)used, "%s%s = %s (v = %s)",
-                                 sep, pname, num(x, a, sizeof a),
-                                 num(sink.points[i].root.v, e, sizeof e));
-                sep = ", ";
-            }
-        if (used > 0 && (size_t)used < sizeof line) {
-            if (rep.sonic)
-                snprintf(line + used, sizeof line - (size_t)used,
-                         "; ends at the sonic limit v -> c+ at %s = %s (S = n k(nu) c gamma)",
-                         pname, num(rep.sonic_value, a, sizeof a));
-            else if (rep.reached_end)
-                snprintf(line + used, sizeof line - (size_t)used, "; ends on the range's boundary");
-            else
-                snprintf(line + used, sizeof line - (size_t)used, "; stopped after --max-points");
-        }
-        s = bkf_io_table_comment(table, line, err);
-    }
-    if (!s) s = comment_command(table, argc, argv, err);
-    static const char *const kinds[] = {"point", "fold", "sonic"};
-    for (size_t i = 0; !s && i < sink.count; i++) {
-        const bkf_speeds_branch_point *pt = &sink.points[i];
-        bkf_io_value v[NBRANCH];
-        memset(v, 0, sizeof v);
-        v[0].text = kinds[pt->kind];
-        v[1].number = pt->params.S;
-        v[2].number = pt->params.gamma;
-        v[3].number = pt->params.c;
-        v[4].number = pt->params.nu;
-        root_values(&pt->root, v + 5);
-        s = bkf_io_table_row(table, v, err);
-    }
-    if (!s) s = bkf_io_table_finish(table, err);
-    bkf_io_table_free(table);
-    free(sink.points);
-    return s;
-}
-
-static int branch_run(int argc, char **argv, bkf_error *err)
-{
-    branch_plan plan;
-    memset(&plan, 0, sizeof plan);
-    int s = plan_branch(argc, argv, &plan, err);
-    if (s) return s;
-    return run_all_or_nothing(plan.common.out_path, fill_branch, &plan, argc, argv, err);
-}
 
 const cli_command cli_cmd_branch = {
     "branch",

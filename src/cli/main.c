@@ -98,7 +98,7 @@ int main(int argc, char **argv)
     char **sub_argv = argv + 1;
     if (cli_wants_help(sub_argc, sub_argv)) return print_help(cmd);
 
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     int status = cmd->run(sub_argc, sub_argv, &err);
     if (status != BKF_OK) {
         fprintf(stderr, CLI_PROGRAM " %s: %s\n", cmd->name,

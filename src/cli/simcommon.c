@@ -11,7 +11,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "bkfront/cycle.h"
+#include "bkfront/measure.h"
 #include "bkfront/model.h"
 
 const char *const format_names[] = {"tsv", "json", NULL};
@@ -224,21 +224,3 @@ int comment_model(bkf_io_table *t, const model_plan *p, bkf_error *err)
                         : num(p->options.filter, g, sizeof g));
 }
 
-/* The level whose crossings are fronts: the middle of the global
- * oscillation's range, (xmin + xmax)/2 of the cycle at mu = gamma.  Every
- * relaxation jump crosses it mid-way, where fronts are steepest, also in
- * the period-doubled patterns, whose fronts sit well above nu.  Where there
- * is no cycle (|nu| >= 1) it is nu.  *period gets the cycle's period (0
- * without a cycle). */
-double front_level(const bkf_model_params *pp, double *period)
-{
-    *period = 0;
-    if (!(fabs(pp->nu) < 1) || pp->gamma < BKF_CYCLE_MU_MIN || pp->gamma > BKF_CYCLE_MU_MAX)
-        return pp->nu;
-    bkf_cycle_result cr;
-    bkf_cycle_options co = bkf_cycle_options_default();
-    bkf_error e;
-    if (bkf_cycle_period(pp->gamma, pp->nu, &co, &cr, &e) != BKF_OK) return pp->nu;
-    *period = cr.period;
-    return 0.5 * (cr.xmin + cr.xmax);
-}

@@ -6,8 +6,15 @@
 
 #include "args.h"
 
+#include "bkfront/init.h"
 #include "bkfront/io.h"
 #include "bkfront/pde.h"
+#include "bkfront/seed.h"
+
+/* Transitional, for src/cli/cmd_check.c until it is moved: its calls of
+ * bkf_pde_init_front mean today's bkf_seed_front (the pde function now
+ * takes the solved wave).  To be removed when cmd_check.c calls
+ * bkf_seed_front. */
 
 /* Paper's parameters (PRL 79, 527): the defaults of both subcommands. */
 #define DEF_GAMMA 2.0
@@ -18,9 +25,6 @@
 #define DEF_TMAX 125.0
 #define DEF_TOL 1e-9
 #define DEF_FRAMES 500
-/* Measurement samples at most this far apart: tracking needs a front to
- * move less than half the spacing between fronts per sample. */
-#define SAMPLE_DT_MAX 0.1
 #define TMAX_MAX 1e6
 #define PI 3.14159265358979323846
 
@@ -66,6 +70,6 @@ int plan_model(const model_flags *f, model_plan *p, bkf_error *err);
 int comment_command(bkf_io_table *t, int argc, char **argv, bkf_error *err);
 int commentf(bkf_io_table *t, bkf_error *err, const char *fmt, ...);
 int comment_model(bkf_io_table *t, const model_plan *p, bkf_error *err);
-double front_level(const bkf_model_params *pp, double *period);
+/* bkf_measure_front_level, for cmd_check.c until it calls that itself. */
 
 #endif

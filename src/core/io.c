@@ -29,6 +29,11 @@ struct bkf_io_table {
     int finished;
     int write_failed;
     int write_errno;
+    /* key results for JSON's "results" object, kept until the header */
+    size_t nresults;
+    char **result_names;
+    char **result_texts;     /* NULL for a number */
+    double *result_numbers;
 };
 
 int bkf_io_format_parse(const char *name, bkf_io_format *format, bkf_error *err)
@@ -239,6 +244,13 @@ bkf_io_table *bkf_io_table_alloc(FILE *out, bkf_io_format format,
 void bkf_io_table_free(bkf_io_table *table)
 {
     if (!table) return;
+    for (size_t i = 0; i < table->nresults; i++) {
+        free(table->result_names[i]);
+        free(table->result_texts[i]);
+    }
+    free(table->result_names);
+    free(table->result_texts);
+    free(table->result_numbers);
     free(table->columns);
     free(table->names);
     free(table);
@@ -290,6 +302,60 @@ int bkf_io_table_comment(bkf_io_table *t, const char *text, bkf_error *err)
     return write_status(t, err);
 }
 
+static char *copy_text(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *c = malloc(n);
+    if (c) memcpy(c, s, n);
+    return c;
+}
+
+int bkf_io_table_result(bkf_io_table *t, const char *name, bkf_io_kind kind,
+                        bkf_io_value value, bkf_error *err)
+{
+    int s = check_usable(t, err);
+    if (s) return s;
+    if (t->header_done)
+        return bkf_error_set(err, BKF_EINPUT, "results must come before the first row");
+    if (!name || !*name) return bkf_error_set(err, BKF_EINPUT, "a result needs a name");
+    for (size_t i = 0; i < t->nresults; i++)
+        if (strcmp(t->result_names[i], name) == 0)
+            return bkf_error_set(err, BKF_EINPUT, "result '%s' is given twice", name);
+    size_t n = t->nresults + 1;
+    char **names = realloc(t->result_names, n * sizeof *names);
+    if (names) t->result_names = names;
+    char **texts = names ? realloc(t->result_texts, n * sizeof *texts) : NULL;
+    if (texts) t->result_texts = texts;
+    double *numbers = texts ? realloc(t->result_numbers, n * sizeof *numbers) : NULL;
+    if (numbers) t->result_numbers = numbers;
+    char *name_copy = numbers ? copy_text(name) : NULL;
+    char *text_copy = kind == BKF_IO_TEXT && value.text && name_copy ? copy_text(value.text) : NULL;
+    if (!name_copy || (kind == BKF_IO_TEXT && value.text && !text_copy)) {
+        free(name_copy);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory storing a result");
+    }
+    t->result_names[t->nresults] = name_copy;
+    t->result_texts[t->nresults] = text_copy;
+    t->result_numbers[t->nresults] = kind == BKF_IO_NUMBER ? value.number : NAN;
+    t->nresults = n;
+    return BKF_OK;
+}
+
+static void write_results(bkf_io_table *t)
+{
+    puts_(t, "  \"results\": {");
+    for (size_t i = 0; i < t->nresults; i++) {
+        if (i) puts_(t, ", ");
+        put_json_string(t, t->result_names[i]);
+        puts_(t, ": ");
+        if (t->result_texts[i])
+            put_json_string(t, t->result_texts[i]);
+        else
+            put_number(t, t->result_numbers[i]);
+    }
+    puts_(t, "},\n");
+}
+
 static void write_header(bkf_io_table *t)
 {
     if (t->format == BKF_IO_TSV) {
@@ -299,8 +365,9 @@ static void write_header(bkf_io_table *t)
         }
         puts_(t, "\n");
     } else {
-        puts_(t, t->comments == 0 ? "{\n  \"comments\": [],\n  \"columns\": ["
-                                  : "\n  ],\n  \"columns\": [");
+        puts_(t, t->comments == 0 ? "{\n  \"comments\": [],\n" : "\n  ],\n");
+        if (t->nresults) write_results(t);
+        puts_(t, "  \"columns\": [");
         for (size_t i = 0; i < t->ncolumns; i++) {
             if (i) puts_(t, ", ");
             put_json_string(t, t->columns[i].name);
@@ -610,4 +677,153 @@ void bkf_io_atomic_abort(bkf_io_atomic *a)
     if (a->stream) fclose(a->stream);
     unlink(a->temp);
     atomic_free(a);
+}
+
+/* ------------------------------------------------------------ state reader */
+
+const char *bkf_io_shown(const char *text, char *buf, size_t size)
+{
+    size_t n = 0, limit = size - 4;
+    const unsigned char *s = (const unsigned char *)(text ? text : "");
+    for (; *s && n < limit; s++) buf[n++] = (*s < 0x20 || *s == 0x7f) ? '?' : (char)*s;
+    if (*s) {
+        memcpy(buf + n, "...", 3);
+        n += 3;
+    }
+    buf[n] = '\0';
+    return buf;
+}
+
+void bkf_io_state_free(bkf_io_state *state)
+{
+    if (!state) return;
+    free(state->psi);
+    free(state->eta);
+    memset(state, 0, sizeof *state);
+}
+
+/* The columns of a data line, split in place; -1 when a cell is not a finite
+ * number (*bad points at it). */
+static int state_cells(char *line, int ipsi, int ieta, int it, double *vp, double *ve, double *vt,
+                       int *fields, char **bad)
+{
+    char *save = NULL;
+    int col = 0;
+    for (char *tok = strtok_r(line, "\t", &save); tok; tok = strtok_r(NULL, "\t", &save), col++) {
+        if (col != ipsi && col != ieta && col != it) continue;
+        char *end;
+        errno = 0;
+        double v = strtod(tok, &end);
+        if (*end || end == tok || !isfinite(v) || errno) {
+            *bad = tok;
+            return -1;
+        }
+        if (col == ipsi) *vp = v;
+        else if (col == ieta) *ve = v;
+        else *vt = v;
+    }
+    *fields = col;
+    return 0;
+}
+
+int bkf_io_read_state(FILE *in, size_t max_rows, bkf_io_state *state, bkf_error *err)
+{
+    if (!state) return bkf_error_set(err, BKF_EINPUT, "state is NULL");
+    memset(state, 0, sizeof *state);
+    if (!in) return bkf_error_set(err, BKF_EINPUT, "stream is NULL");
+    char *line = NULL, a[72];
+    size_t cap = 0;
+    ssize_t len;
+    int ipsi = -1, ieta = -1, it = -1, ncol = 0, header = 0, status = BKF_OK;
+    size_t lineno = 0, rows = 0, rcap = 0;
+    double *psi = NULL, *eta = NULL, *tt = NULL;
+    while ((len = getline(&line, &cap, in)) >= 0) {
+        lineno++;
+        while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) line[--len] = '\0';
+        if (line[0] == '#' || len == 0) continue;
+        if (!header) {
+            header = 1;
+            char *save = NULL;
+            int col = 0;
+            for (char *tok = strtok_r(line, "\t", &save); tok; tok = strtok_r(NULL, "\t", &save), col++) {
+                if (strcmp(tok, "psi") == 0) ipsi = col;
+                else if (strcmp(tok, "eta") == 0) ieta = col;
+                else if (strcmp(tok, "t") == 0) it = col;
+            }
+            ncol = col;
+            if (ipsi < 0 || ieta < 0) {
+                status = bkf_error_set(err, BKF_EINPUT,
+                                       "the header (line %zu) must name the columns psi and eta",
+                                       lineno);
+                break;
+            }
+            continue;
+        }
+        if (rows == max_rows) {
+            status = bkf_error_set(err, BKF_EINPUT, "line %zu: more than %zu rows", lineno,
+                                   max_rows);
+            break;
+        }
+        if (rows == rcap) {
+            rcap = rcap ? 2 * rcap : 1024;
+            if (rcap > max_rows) rcap = max_rows;
+            double *p = realloc(psi, rcap * sizeof *p), *e = p ? realloc(eta, rcap * sizeof *e) : NULL,
+                   *t = e ? realloc(tt, rcap * sizeof *t) : NULL;
+            if (p) psi = p;
+            if (e) eta = e;
+            if (t) tt = t;
+            if (!p || !e || !t) {
+                status = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+                break;
+            }
+        }
+        double vp = NAN, ve = NAN, vt = 0;
+        int fields = 0;
+        char *bad = NULL;
+        if (state_cells(line, ipsi, ieta, it, &vp, &ve, &vt, &fields, &bad)) {
+            status = bkf_error_set(err, BKF_EINPUT, "line %zu: '%s' is not a finite number",
+                                   lineno, bkf_io_shown(bad, a, sizeof a));
+            break;
+        }
+        if (fields != ncol) {
+            status = bkf_error_set(err, BKF_EINPUT, "line %zu has %d fields, not %d", lineno,
+                                   fields, ncol);
+            break;
+        }
+        psi[rows] = vp;
+        eta[rows] = ve;
+        tt[rows] = vt;
+        rows++;
+    }
+    free(line);
+    if (!status && ferror(in)) status = bkf_error_set(err, BKF_EIO, "read error");
+    if (!status && !header) status = bkf_error_set(err, BKF_EINPUT, "no header line");
+    size_t first = 0;
+    if (!status && it >= 0 && rows) {
+        double tl = tt[rows - 1];
+        first = rows;
+        while (first > 0 && tt[first - 1] == tl) first--;
+        state->t = tl;
+        state->has_t = 1;
+    }
+    if (!status && rows > first) {
+        state->rows = rows - first;
+        state->psi = malloc(state->rows * sizeof *state->psi);
+        state->eta = malloc(state->rows * sizeof *state->eta);
+        if (!state->psi || !state->eta) {
+            bkf_io_state_free(state);
+            status = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        } else {
+            memcpy(state->psi, psi + first, state->rows * sizeof *psi);
+            memcpy(state->eta, eta + first, state->rows * sizeof *eta);
+        }
+    }
+    if (status) {
+        state->t = 0;
+        state->has_t = 0;
+    }
+    free(psi);
+    free(eta);
+    free(tt);
+    return status;
 }

@@ -532,7 +532,7 @@ int bkf_option_apply(const bkf_option *opt, void *spec, const char *text, const 
         return BKF_OK;
     }
     case BKF_OPT_CUSTOM: {
-        bkf_error e = {{0}};
+        bkf_error e = {0};
         if (!opt->set) return bkf_error_set(err, BKF_EINPUT, "%s%s: no setter", prefix, opt->name);
         s = opt->set(spec, text, &e);
         if (s) return bkf_error_set(err, s, "%s%s: %s", prefix, opt->name, e.message);

@@ -11,6 +11,7 @@ int bkf_error_set(bkf_error *err, int status, const char *fmt, ...)
         va_start(ap, fmt);
         vsnprintf(err->message, sizeof err->message, fmt, ap);
         va_end(ap);
+        err->status = status;
     }
     return status;
 }

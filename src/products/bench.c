@@ -12,6 +12,7 @@
 #include "bkfront/cycle.h"
 #include "bkfront/measure.h"
 #include "bkfront/pde.h"
+#include "bkfront/seed.h"
 #include "bkfront/speeds.h"
 
 static const bkf_io_column columns[] = {
@@ -363,12 +364,10 @@ static int bench_pde(bench_ctx *b, bkf_error *err)
             bkf_pde_front_spec fs = bkf_pde_front_spec_default();
             fs.n = 4;
             bkf_pde_front_info fi;
-            s = bkf_pde_init_front(m, &fs, &fi, NULL, err);
+            s = bkf_seed_front(m, &fs, &fi, NULL, err);
             bkf_measure_params mp = bkf_measure_params_default();
-            mp.N = Ns[i];
-            mp.S = 20;
-            mp.gamma = 2;
-            mp.nu = -0.96;
+            mp.model = p;
+            mp.level = p.nu; /* the bench's fronts: crossings of nu, as ever */
             bkf_measure *ms = s ? NULL : bkf_measure_alloc(&mp, err);
             if (!s && !ms) s = BKF_ENOMEM;
             double t0 = cpu_now();

@@ -5,60 +5,86 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bkfront/friction.h"
+#include "bkfront/fronts.h"
+#include "bkfront/oscillation.h"
 #include "bkfront/period.h"
 #include "bkfront/profile.h"
 
-/* ------------------------------------------------------------- period */
+/* The adapters of a product whose module has the usual shape: a spec
+ * type T with T PREFIX_spec_default(void), tables PREFIX_options and
+ * PREFIX_noptions and int PREFIX_check(const T *, prefix, err); RELEASE
+ * frees what the spec owns.  WRITER adapts a write WRITE(const T *, FILE *,
+ * format, provenance, err). */
+#define ADAPTERS(name, T, PREFIX, RELEASE)                                        \
+    static const bkf_option *name##_options(size_t *count)                              \
+    {                                                                                    \
+        *count = PREFIX##_noptions;                                                      \
+        return PREFIX##_options;                                                         \
+    }                                                                                    \
+    static void name##_init(void *spec) { *(T *)spec = PREFIX##_spec_default(); }       \
+    static int name##_check(const void *spec, const char *prefix, bkf_error *err)        \
+    {                                                                                    \
+        return PREFIX##_check(spec, prefix, err);                                        \
+    }                                                                                    \
+    static void name##_release(void *spec) { RELEASE(spec); }
 
-static const bkf_option *period_options(size_t *count)
-{
-    *count = bkf_period_noptions;
-    return bkf_period_options;
-}
-static void period_init(void *spec) { *(bkf_period_spec *)spec = bkf_period_spec_default(); }
-static int period_check(const void *spec, const char *prefix, bkf_error *err)
-{
-    return bkf_period_check(spec, prefix, err);
-}
-static int period_write(const void *spec, FILE *out, bkf_io_format format,
-                        const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
-                        bkf_error *err)
-{
-    (void)hooks;
-    return bkf_period_write(spec, out, format, prov, err);
-}
-static void period_release(void *spec) { bkf_period_spec_free(spec); }
+#define WRITER(name, T, WRITE)                                                           \
+    static int name##_write(const void *spec, FILE *out, bkf_io_format format,          \
+                            const bkf_provenance *prov, const bkf_catalog_hooks *hooks,  \
+                            bkf_error *err)                                              \
+    {                                                                                    \
+        (void)hooks;                                                                     \
+        return WRITE((const T *)spec, out, format, prov, err);                           \
+    }
 
-/* ------------------------------------------------------------ profile */
+static void release_nothing(void *spec) { (void)spec; }
+static void period_free(void *spec) { bkf_period_spec_free(spec); }
+static void profile_free(void *spec) { bkf_profile_spec_free(spec); }
+static void oscillation_free(void *spec) { bkf_oscillation_spec_free(spec); }
 
-static const bkf_option *profile_options(size_t *count)
-{
-    *count = bkf_profile_noptions;
-    return bkf_profile_options;
-}
-static void profile_init(void *spec) { *(bkf_profile_spec *)spec = bkf_profile_spec_default(); }
-static int profile_check(const void *spec, const char *prefix, bkf_error *err)
-{
-    return bkf_profile_check(spec, prefix, err);
-}
-static int profile_write(const void *spec, FILE *out, bkf_io_format format,
+ADAPTERS(period, bkf_period_spec, bkf_period, period_free)
+WRITER(period, bkf_period_spec, bkf_period_write)
+ADAPTERS(profile, bkf_profile_spec, bkf_profile, profile_free)
+WRITER(profile, bkf_profile_spec, bkf_profile_write)
+ADAPTERS(speeds, bkf_fronts_spec, bkf_fronts, release_nothing)
+WRITER(speeds, bkf_fronts_spec, bkf_fronts_write)
+ADAPTERS(branch, bkf_fronts_branch_spec, bkf_fronts_branch, release_nothing)
+WRITER(branch, bkf_fronts_branch_spec, bkf_fronts_branch_write)
+ADAPTERS(friction, bkf_friction_spec, bkf_friction, release_nothing)
+WRITER(friction, bkf_friction_spec, bkf_friction_table)
+ADAPTERS(floquet, bkf_oscillation_spec, bkf_oscillation, oscillation_free)
+
+/* Refused dispersion rows go to the hooks' warning. */
+static int floquet_write(const void *spec, FILE *out, bkf_io_format format,
                          const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
                          bkf_error *err)
 {
-    (void)hooks;
-    return bkf_profile_write(spec, out, format, prov, err);
+    bkf_oscillation_spec s = *(const bkf_oscillation_spec *)spec;
+    if (hooks && hooks->warn) {
+        s.warn = hooks->warn;
+        s.warn_data = hooks->data;
+    }
+    return bkf_oscillation_write(&s, out, format, prov, err);
 }
-static void profile_release(void *spec) { bkf_profile_spec_free(spec); }
 
 /* ---------------------------------------------------------- the table */
 
+#define ENTRY(name, T, summary) \
+    {#name, summary, NULL, NULL, sizeof(T), name##_options, name##_init, name##_check, \
+     name##_write, name##_release}
+
 static const bkf_catalog_entry entries[] = {
-    {"period", "period T(mu, nu) of the reduced front equation, at points, on grids or branches",
-     NULL, NULL, sizeof(bkf_period_spec), period_options, period_init, period_check,
-     period_write, period_release},
-    {"profile", "front profiles f(z), f'(z) and their place x along the system",
-     NULL, NULL, sizeof(bkf_profile_spec), profile_options, profile_init, profile_check,
-     profile_write, profile_release},
+    ENTRY(period, bkf_period_spec,
+          "period T(mu, nu) of the reduced front equation, at points, on grids or branches"),
+    ENTRY(speeds, bkf_fronts_spec, "allowed front speeds: every root of the speed condition"),
+    ENTRY(branch, bkf_fronts_branch_spec,
+          "speed branches v_n(p) along one parameter, through folds to the sonic limit"),
+    ENTRY(profile, bkf_profile_spec,
+          "front profiles f(z), f'(z) and their place x along the system"),
+    ENTRY(floquet, bkf_oscillation_spec,
+          "Floquet stability of the global oscillation: dispersion, threshold, diagram"),
+    ENTRY(friction, bkf_friction_spec, "the friction laws, sampled"),
 };
 #define NENTRIES (sizeof entries / sizeof entries[0])
 

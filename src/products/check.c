@@ -12,6 +12,7 @@
 #include "bkfront/comoving.h"
 #include "bkfront/cycle.h"
 #include "bkfront/measure.h"
+#include "bkfront/seed.h"
 #include "bkfront/speeds.h"
 
 const char *bkf_check_verdict_name(bkf_check_verdict verdict)
@@ -143,29 +144,6 @@ bkf_check_verdict bkf_check_judge(size_t n, int blew_up, int count_constant, siz
     return isfinite(rel_err) && fabs(rel_err) <= rel_tol ? BKF_CHECK_AGREES : BKF_CHECK_DISAGREES;
 }
 
-/* The level whose crossings are fronts: the middle of the global
- * oscillation's range, (xmin + xmax)/2 of the cycle at mu = gamma, where
- * every relaxation jump is steepest.  // merged later: the library's one
- * front level (the same rule as the CLI's front_level) replaces this. */
-static double check_front_level(const bkf_model_params *pp)
-{
-    if (!(fabs(pp->nu) < 1) || pp->gamma < BKF_CYCLE_MU_MIN || pp->gamma > BKF_CYCLE_MU_MAX)
-        return pp->nu;
-    bkf_cycle_result cr;
-    bkf_cycle_options co = bkf_cycle_options_default();
-    bkf_error e;
-    if (bkf_cycle_period(pp->gamma, pp->nu, &co, &cr, &e) != BKF_OK) return pp->nu;
-    return 0.5 * (cr.xmin + cr.xmax);
-}
-
-/* The travelling wave seeded on the uniform grid.  // merged later: the
- * products' front seeding (same signature) replaces bkf_pde_init_front. */
-static int check_seed_front(bkf_pde *pde, const bkf_pde_front_spec *spec,
-                            bkf_pde_front_info *info, double *clean_psi, bkf_error *err)
-{
-    return bkf_pde_init_front(pde, spec, info, clean_psi, err);
-}
-
 /* The whole run's state shared by the roots. */
 typedef struct {
     const bkf_model_params *model;
@@ -257,10 +235,7 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     const bkf_check_options *o = c->o;
     row->grid = BKF_CHECK_GRID_MAPPED;
     bkf_comoving_params cp = bkf_comoving_params_default();
-    cp.gamma = c->model->gamma;
-    cp.c = c->model->c;
-    cp.nu = c->model->nu;
-    cp.S = c->model->S;
+    cp.model = *c->model;
     cp.n = row->n;
     cp.v = sr->v;
     cp.points = o->points;
@@ -273,13 +248,13 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     bkf_error e;
     bkf_comoving *cm = bkf_comoving_alloc(&cp, &e);
     if (!cm) {
-        /* bkf_comoving_alloc reports no status, only its message: out of
-         * memory ends the check, any other failure is this root's alone. */
-        if (strstr(e.message, "out of memory"))
+        /* Out of memory ends the check, any other failure is this root's
+         * alone. */
+        if (e.status == BKF_ENOMEM)
             return bkf_error_set(err, BKF_ENOMEM, "n = %zu: out of memory", row->n);
         check_warn(c, "n = %zu, root %zu reported unresolved: %s", row->n, row->root, e.message);
         row->verdict = BKF_CHECK_UNRESOLVED;
-        row->reason = BKF_ENUMERIC;
+        row->reason = e.status;
         return BKF_OK;
     }
     row->N = bkf_comoving_size(cm);
@@ -289,9 +264,9 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     int s = bkf_comoving_run(cm, o->tmax, BKF_CHECK_MAPPED_SAMPLE_DT, check_progress, (void *)c, &e);
     bkf_comoving_get_stats(cm, &st);
     size_t R = bkf_comoving_count(cm);
-    int blew_up = (s == BKF_EBLOWUP || (s == BKF_ENUMERIC && st.blew_up)) && R >= 2;
+    int blew_up = s == BKF_EBLOWUP && R >= 2;
     if (blew_up) s = BKF_OK; /* a blown-up front is a result (unstable) */
-    if (s == BKF_EBUDGET || (s == BKF_ENUMERIC && st.over_budget)) {
+    if (s == BKF_EBUDGET) {
         /* not a verdict: the run was too costly to finish */
         bkf_comoving_free(cm);
         row->verdict = BKF_CHECK_UNRESOLVED;
@@ -410,7 +385,7 @@ static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_r
             s = pde ? bkf_error_set(err, BKF_ENOMEM, "out of memory") : BKF_ENOMEM;
             goto done;
         }
-        if ((s = check_seed_front(pde, &fs, &fi, clean, &e))) {
+        if ((s = bkf_seed_front(pde, &fs, &fi, clean, &e))) {
             bkf_error_set(err, s, "n = %zu, root %zu: %s", n, root, e.message);
             goto done;
         }
@@ -419,17 +394,14 @@ static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_r
     }
     row->N = pp.N;
     bkf_measure_params mp = bkf_measure_params_default();
-    mp.N = pp.N;
-    mp.S = pp.S;
-    mp.gamma = pp.gamma;
-    mp.nu = pp.nu;
+    mp.model = pp;
     mp.reference = clean;
     mp.level = c->level;
     if (!(meas = bkf_measure_alloc(&mp, err))) {
         s = BKF_ENOMEM;
         goto done;
     }
-    check_obs ob = {meas, 0, {{0}}};
+    check_obs ob = {meas, 0, {{0}, 0}};
     s = bkf_pde_run(pde, o->tmax, BKF_CHECK_SAMPLE_DT, check_observe, &ob, check_progress,
                     (void *)c, &e);
     if (ob.status) {
@@ -521,7 +493,7 @@ int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
         return bkf_error_set(err, s, "speeds: %s", e.message);
     }
     check_ctx c = {model, o, hooks, uniform_tol(o), mapped_tol(o), 0, 0, tab.count};
-    c.level = check_front_level(model);
+    c.level = bkf_measure_front_level(model, NULL);
     bkf_check_info info = {tab.count, tab.k, tab.n_max, tab.note, c.tol, c.mapped_tol,
                            o->grid == BKF_CHECK_GRID_AUTO && o->N_max > BKF_CHECK_AUTO_UNIFORM_MAX
                                ? (size_t)BKF_CHECK_AUTO_UNIFORM_MAX

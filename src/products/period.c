@@ -255,7 +255,7 @@ int bkf_period_write(const bkf_period_spec *spec, FILE *out, bkf_io_format forma
         int mu_along = spec->along == 0;
         const bkf_list *on = mu_along ? &spec->mu : &spec->nu;
         double fixed = mu_along ? spec->nu.values[0] : spec->mu.values[0];
-        bkf_error e = {{0}};
+        bkf_error e = {0};
         /* N only shaped the range's syntax: the continuation's own step
          * control decides the points, hence max_points 0. */
         s = bkf_cycle_branch(mu_along ? BKF_CYCLE_ALONG_MU : BKF_CYCLE_ALONG_NU, on->from,

@@ -1462,47 +1462,6 @@ static int write_catalogued(const bkf_scene_step *step, void *spec, FILE *out,
     return step->entry->write(spec, out, BKF_IO_TSV, prov, &o->hooks, err);
 }
 
-/* TRANSITIONAL (issue 14): the friction laws while the catalogue has no
- * friction product; goes when it does. */
-static int write_friction(const bkf_scene_step *step, void *spec, FILE *out,
-                          const bkf_provenance *prov, const bkf_scene_run_options *o,
-                          bkf_error *err)
-{
-    (void)spec, (void)prov, (void)o;
-    double from = -1, to = 4;
-    size_t points = 601;
-    int s = bkf_option_parse_double(arg_value(step, "from"), "", "from", &from, err);
-    if (!s) s = bkf_option_parse_double(arg_value(step, "to"), "", "to", &to, err);
-    if (!s)
-        s = bkf_option_parse_count(arg_value(step, "points"), 1, 1000000, "", "points", &points,
-                                   err);
-    if (s) return s;
-    if (!(to > from)) return bkf_error_set(err, BKF_EINPUT, "friction: needs from < to");
-    static const bkf_io_column cols[] = {{"v", BKF_IO_NUMBER},
-                                         {"psi", BKF_IO_NUMBER},
-                                         {"creep_slip", BKF_IO_NUMBER},
-                                         {"carlson_langer", BKF_IO_NUMBER}};
-    bkf_io_table *t = bkf_io_table_alloc(out, BKF_IO_TSV, cols, 4, err);
-    if (!t) return BKF_ENOMEM;
-    s = bkf_io_table_comment(t,
-                             "friction laws against block velocity v: creep_slip = "
-                             "(3/2) phi(psi), phi = psi^3/3 - psi, psi = v - 1 (slip "
-                             "threshold psi = -1 at v = 0, scaled to static friction 1); "
-                             "carlson_langer = sgn(v)/(1 + |v|)", err);
-    for (size_t i = 0; !s && i < points; i++) {
-        double v = points > 1 ? from + (to - from) * (double)i / (double)(points - 1) : from;
-        /* the jump of the Carlson-Langer law at v = 0 is drawn as a gap */
-        bkf_io_value row[4] = {{v, NULL},
-                               {v - 1, NULL},
-                               {1.5 * bkf_model_friction(v - 1), NULL},
-                               {v == 0 ? NAN : bkf_model_friction_carlson_langer(v), NULL}};
-        s = bkf_io_table_row(t, row, err);
-    }
-    if (!s) s = bkf_io_table_finish(t, err);
-    bkf_io_table_free(t);
-    return s;
-}
-
 static int append(char *buf, size_t size, const char *sep, const char *text)
 {
     size_t used = strlen(buf);
@@ -1615,8 +1574,6 @@ int bkf_scene_run_step(const bkf_scene *s, const bkf_scene_plan *plan, size_t i,
         bkf_catalog_spec_free(step->entry, spec);
         return st;
     }
-    if (strcmp(step->product, "friction") == 0)
-        return write_output(step, NULL, write_friction, o, err);
     /* TRANSITIONAL (issue 14): a product not yet in the catalogue runs as
      * the caller's command line. */
     if (!o->run_argv)

@@ -21,6 +21,7 @@
 #include <sunmatrix/sunmatrix_band.h>
 
 #include "bkfront/cycle.h"
+#include "bkfront/measure.h"
 #include "bkfront/model.h"
 
 /* Stencil radius of the order-8 central differences. */
@@ -77,7 +78,7 @@ bkf_comoving_params bkf_comoving_params_default(void)
 {
     bkf_comoving_params p;
     memset(&p, 0, sizeof p);
-    p.gamma = p.c = p.nu = p.S = p.v = p.level = NAN;
+    p.model.gamma = p.model.c = p.model.nu = p.model.S = p.v = p.level = NAN;
     p.points = 768;
     p.tol = 1e-8;
     p.seed = 1;
@@ -143,7 +144,7 @@ static int integrate_period(map_ctx *c, double T, double slope, double *integral
 
 static int build_map(bkf_comoving *m, double slope, double xmax, double xmin, bkf_error *err)
 {
-    map_ctx c = {m->mu, m->p.nu, xmax - xmin, 0.0, 0.0};
+    map_ctx c = {m->mu, m->p.model.nu, xmax - xmin, 0.0, 0.0};
     double R0, I;
     int s = integrate_period(&c, m->T, slope, &R0, err);
     if (s) return s;
@@ -157,7 +158,7 @@ static int build_map(bkf_comoving *m, double slope, double xmax, double xmin, bk
     gsl_odeiv2_driver *d =
         gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rk8pd, 1e-3, MAP_TOL, MAP_TOL);
     if (!d) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    double sigma = 0.0, y[3] = {0.0, m->p.nu, slope};
+    double sigma = 0.0, y[3] = {0.0, m->p.model.nu, slope};
     size_t mm = m->m;
     for (size_t j = 0; j <= mm; j++) {
         double target = (double)j / (double)mm;
@@ -310,7 +311,7 @@ static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *data)
     fill_ghosts(u, M);
     fill_ghosts(e, M);
     double ih = 1.0 / m->h, ih2 = ih * ih;
-    double g = m->p.gamma, v = m->p.v, c2 = m->p.c * m->p.c, nu = m->p.nu;
+    double g = m->p.model.gamma, v = m->p.v, c2 = m->p.model.c * m->p.model.c, nu = m->p.model.nu;
     for (size_t j = 0; j < M; j++) {
         double ig = m->inv_gp[j];
         double us = d1(u, j) * ih, uss = d2(u, j) * ih2, es = d1(e, j) * ih;
@@ -451,20 +452,20 @@ static int check_params(const bkf_comoving_params *p, bkf_error *err)
 {
     if (!p) return bkf_error_set(err, BKF_EINPUT, "parameters are NULL");
     int s;
-    if ((s = bkf_model_check_positive("gamma", p->gamma, err))) return s;
-    if ((s = bkf_model_check_nonnegative("c", p->c, err))) return s;
-    if ((s = bkf_model_check_positive("S", p->S, err))) return s;
-    if ((s = bkf_model_check_nu_active(p->nu, err))) return s;
+    if ((s = bkf_model_check_positive("gamma", p->model.gamma, err))) return s;
+    if ((s = bkf_model_check_nonnegative("c", p->model.c, err))) return s;
+    if ((s = bkf_model_check_positive("S", p->model.S, err))) return s;
+    if ((s = bkf_model_check_nu_active(p->model.nu, err))) return s;
     if (p->n < 1) return bkf_error_set(err, BKF_EINPUT, "n = %zu: must be >= 1", p->n);
-    if (!(isfinite(p->v) && p->v > p->c))
-        return bkf_error_set(err, BKF_EINPUT, "v = %g must be finite and > c = %g", p->v, p->c);
+    if (!(isfinite(p->v) && p->v > p->model.c))
+        return bkf_error_set(err, BKF_EINPUT, "v = %g must be finite and > c = %g", p->v, p->model.c);
     if (p->points < 32 || p->points > ((size_t)1 << 20))
         return bkf_error_set(err, BKF_EINPUT, "points = %zu is outside [32, 1048576]", p->points);
     if (!(p->tol >= BKF_PDE_TOL_MIN && p->tol <= BKF_PDE_TOL_MAX))
         return bkf_error_set(err, BKF_EINPUT, "tol = %g is outside [%g, %g]", p->tol,
                              BKF_PDE_TOL_MIN, BKF_PDE_TOL_MAX);
     if (!isnan(p->level) && !isfinite(p->level))
-        return bkf_error_set(err, BKF_EINPUT, "level = %g must be finite (or NaN: nu)", p->level);
+        return bkf_error_set(err, BKF_EINPUT, "level = %g must be finite (or NaN: the default)", p->level);
     if (!(p->noise >= 0 && p->noise <= 10))
         return bkf_error_set(err, BKF_EINPUT, "noise = %g is outside [0, 10]", p->noise);
     if (!(p->cycle_tol >= 1e-14 && p->cycle_tol <= 1e-4))
@@ -478,7 +479,7 @@ static int check_params(const bkf_comoving_params *p, bkf_error *err)
  * function of x; summed directly at the adapted points. */
 static int add_noise(bkf_comoving *m, double *u, bkf_error *err)
 {
-    size_t J = (size_t)floor(m->p.S / 2.0);
+    size_t J = (size_t)floor(m->p.model.S / 2.0);
     if (J < 1) J = 1;
     double *a = malloc(2 * J * sizeof *a);
     gsl_rng *r = gsl_rng_alloc(gsl_rng_mt19937);
@@ -500,7 +501,7 @@ static int add_noise(bkf_comoving *m, double *u, bkf_error *err)
         /* x at t = 0 is xi */
         double sum = 0.0;
         for (size_t j = 0; j < J; j++) {
-            double q = 2.0 * M_PI * (double)(j + 1) / m->p.S;
+            double q = 2.0 * M_PI * (double)(j + 1) / m->p.model.S;
             sum += a[2 * j] * cos(q * m->xi[i]) - a[2 * j + 1] * sin(q * m->xi[i]);
         }
         u[i] += scale * sum;
@@ -520,10 +521,10 @@ bkf_comoving *bkf_comoving_alloc(const bkf_comoving_params *params, bkf_error *e
         return NULL;
     }
     m->p = *params;
-    m->level = isnan(params->level) ? params->nu : params->level;
-    double v = m->p.v, c = m->p.c;
+    m->level = isnan(params->level) ? bkf_measure_front_level(&params->model, NULL) : params->level;
+    double v = m->p.v, c = m->p.model.c;
     m->stretch = sqrt((v - c) * (v + c)) / v;
-    m->mu = m->p.gamma / m->stretch;
+    m->mu = m->p.model.gamma / m->stretch;
     if (!(m->mu <= BKF_CYCLE_MU_MAX)) {
         bkf_error_set(err, BKF_EINPUT, "v = %.17g is too close to c: mu = %g is above %g", v,
                       m->mu, BKF_CYCLE_MU_MAX);
@@ -531,8 +532,8 @@ bkf_comoving *bkf_comoving_alloc(const bkf_comoving_params *params, bkf_error *e
     }
     m->m = m->p.points;
     m->M = m->p.n * m->m;
-    m->h = m->p.S / (double)m->M;
-    m->lambda = m->p.S / (double)m->p.n;
+    m->h = m->p.model.S / (double)m->M;
+    m->lambda = m->p.model.S / (double)m->p.n;
     size_t M = m->M, mm = m->m;
     m->xi = malloc(M * sizeof *m->xi);
     m->gp = malloc(M * sizeof *m->gp);
@@ -568,7 +569,7 @@ bkf_comoving *bkf_comoving_alloc(const bkf_comoving_params *params, bkf_error *e
     bkf_error e;
     bkf_cycle_options co = bkf_cycle_options_default();
     co.tol = m->p.cycle_tol;
-    int s = bkf_cycle_solve(cycle, m->mu, m->p.nu, &co, &e);
+    int s = bkf_cycle_solve(cycle, m->mu, m->p.model.nu, &co, &e);
     if (s) bkf_error_set(err, s, "cycle at mu = %g: %s", m->mu, e.message);
     if (!s) {
         const bkf_cycle_result *cr = bkf_cycle_get(cycle);
@@ -590,11 +591,11 @@ bkf_comoving *bkf_comoving_alloc(const bkf_comoving_params *params, bkf_error *e
         }
     for (size_t j = 0; j < M + 2 * R; j++) {
         long i = (long)j - R, q = i < 0 ? -1 : (i >= (long)M ? 1 : 0);
-        m->xun[j] = m->xi[i - q * (long)M] + (double)q * m->p.S;
+        m->xun[j] = m->xi[i - q * (long)M] + (double)q * m->p.model.S;
     }
     for (size_t j = 0; j < M; j++) {
         m->inv_gp[j] = 1.0 / m->gp[j];
-        m->damping[j] = DAMPING * (m->p.v + m->p.c) / (m->gp[j] * m->h) / 256.0;
+        m->damping[j] = DAMPING * (m->p.v + m->p.model.c) / (m->gp[j] * m->h) / 256.0;
     }
     /* banded order: 0, M-1, 1, M-2, ... */
     for (size_t j = 0; j < M; j++) m->slot[j] = j < (M + 1) / 2 ? 2 * j : 2 * (M - 1 - j) + 1;
@@ -612,7 +613,7 @@ bkf_comoving *bkf_comoving_alloc(const bkf_comoving_params *params, bkf_error *e
     for (size_t k = 0; k < M; k++) {
         size_t j = k % mm;
         Y[2 * m->slot[k]] = m->f0[j];
-        Y[2 * m->slot[k] + 1] = m->f1[j] / m->stretch / m->p.gamma + bkf_model_friction(m->f0[j]);
+        Y[2 * m->slot[k] + 1] = m->f1[j] / m->stretch / m->p.model.gamma + bkf_model_friction(m->f0[j]);
     }
     m->t = 0.0;
 
@@ -743,7 +744,7 @@ static double xi_at(const bkf_comoving *m, size_t j, double w)
     for (int k = -1; k <= 2; k++) {
         long i = (long)j + k, M = (long)m->M;
         long q = i < 0 ? -1 : (i >= M ? 1 : 0);
-        x[k + 1] = m->xi[i - q * M] + (double)q * m->p.S;
+        x[k + 1] = m->xi[i - q * M] + (double)q * m->p.model.S;
     }
     return cubic(x + 1, w);
 }
@@ -787,7 +788,7 @@ static size_t find_fronts(bkf_comoving *m, const double *u)
             else b = w;
         }
         double x = xi_at(m, j, 0.5 * (a + b));
-        m->xc[i] = x - m->p.S * floor(x / m->p.S);
+        m->xc[i] = x - m->p.model.S * floor(x / m->p.model.S);
     }
     /* ordered by x */
     for (size_t i = 1; i < n; i++)
@@ -838,8 +839,8 @@ static double reference_at(const bkf_comoving *m, size_t j, double d)
         long i = (long)floor(x), wraps = (long)floor((double)i / (double)M);
         ii = i - wraps * M;
         lagrange8_weights(x - (double)i, l);
-        double err = apply8(m->xun + R, ii, l) + (double)wraps * m->p.S - target;
-        if (fabs(err) <= 1e-15 * m->p.S) break;
+        double err = apply8(m->xun + R, ii, l) + (double)wraps * m->p.model.S - target;
+        if (fabs(err) <= 1e-15 * m->p.model.S) break;
         x -= err / (apply8(m->gpg + R, ii, l) * m->h);
     }
     return apply8(m->refg + R, ii, l);
@@ -885,7 +886,7 @@ static int record(bkf_comoving *m, const double *u, bkf_error *err)
         for (size_t o = 0; o < n; o++) {
             double cost = 0.0;
             for (size_t i = 0; i < n; i++)
-                cost += fabs(wrap(m->xc[(i + o) % n] - m->prev[i], m->p.S));
+                cost += fabs(wrap(m->xc[(i + o) % n] - m->prev[i], m->p.model.S));
             if (cost < best_cost) {
                 best_cost = cost;
                 best = o;
@@ -893,7 +894,7 @@ static int record(bkf_comoving *m, const double *u, bkf_error *err)
         }
         double mean = 0.0;
         for (size_t i = 0; i < n; i++) {
-            m->prev[i] += wrap(m->xc[(i + best) % n] - m->prev[i], m->p.S);
+            m->prev[i] += wrap(m->xc[(i + best) % n] - m->prev[i], m->p.model.S);
             m->pos[m->count * n + i] = m->prev[i];
             mean += m->prev[i] - m->start[i];
         }
@@ -1016,7 +1017,7 @@ int bkf_comoving_run(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_pr
         if (m->p.max_steps &&
             (s == CV_TOO_MUCH_WORK || (size_t)(steps - steps0) > m->p.max_steps)) {
             m->over_budget = 1;
-            return bkf_error_set(err, BKF_ENUMERIC, "more than %zu steps by t = %g",
+            return bkf_error_set(err, BKF_EBUDGET, "more than %zu steps by t = %g",
                                  m->p.max_steps, (double)tret);
         }
         if (s < 0)
@@ -1027,7 +1028,7 @@ int bkf_comoving_run(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_pr
         for (size_t j = 0; j < m->M; j++)
             if (!(fabs(u[j]) <= BLOWUP)) {
                 m->blew_up = 1;
-                return bkf_error_set(err, BKF_ENUMERIC, "the field blew up by t = %g", m->t);
+                return bkf_error_set(err, BKF_EBLOWUP, "the field blew up by t = %g", m->t);
             }
         int st = record(m, u, err);
         if (st) return st;

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "bkfront/model.h"
+#include "bkfront/cycle.h"
 
 typedef struct {
     double t, psi, psit;
@@ -48,6 +49,21 @@ const char *bkf_regime_name(bkf_regime r)
     case BKF_REGIME_FRONTS: return "propagating_fronts";
     default: return "irregular";
     }
+}
+
+double bkf_measure_front_level(const bkf_model_params *model, double *period)
+{
+    if (period) *period = 0;
+    if (!model) return NAN;
+    if (!(fabs(model->nu) < 1) || !(model->gamma >= BKF_CYCLE_MU_MIN) ||
+        !(model->gamma <= BKF_CYCLE_MU_MAX))
+        return model->nu;
+    bkf_cycle_result cr;
+    bkf_cycle_options co = bkf_cycle_options_default();
+    bkf_error e;
+    if (bkf_cycle_period(model->gamma, model->nu, &co, &cr, &e) != BKF_OK) return model->nu;
+    if (period) *period = cr.period;
+    return 0.5 * (cr.xmin + cr.xmax);
 }
 
 bkf_measure_params bkf_measure_params_default(void)
@@ -94,20 +110,20 @@ void bkf_measure_free(bkf_measure *m)
 static int check_params(const bkf_measure_params *p, bkf_error *err)
 {
     if (!p) return bkf_error_set(err, BKF_EINPUT, "parameters are NULL");
-    if (p->N < 8 || p->N > (1u << 24))
-        return bkf_error_set(err, BKF_EINPUT, "N = %zu is outside [8, %u]", p->N, 1u << 24);
+    if (p->model.N < 8 || p->model.N > (1u << 24))
+        return bkf_error_set(err, BKF_EINPUT, "N = %zu is outside [8, %u]", p->model.N, 1u << 24);
     int s;
-    if ((s = bkf_model_check_positive("S", p->S, err))) return s;
-    if ((s = bkf_model_check_positive("gamma", p->gamma, err))) return s;
-    if (!isfinite(p->nu)) return bkf_error_set(err, BKF_EINPUT, "nu must be finite");
+    if ((s = bkf_model_check_positive("S", p->model.S, err))) return s;
+    if ((s = bkf_model_check_positive("gamma", p->model.gamma, err))) return s;
+    if (!isfinite(p->model.nu)) return bkf_error_set(err, BKF_EINPUT, "nu must be finite");
     if (!isnan(p->level) && !isfinite(p->level))
-        return bkf_error_set(err, BKF_EINPUT, "level must be finite (or NaN for nu)");
+        return bkf_error_set(err, BKF_EINPUT, "level must be finite (or NaN for the default)");
     if (!(p->hysteresis >= 0) || !isfinite(p->hysteresis))
         return bkf_error_set(err, BKF_EINPUT, "hysteresis = %g must be finite and >= 0",
                              p->hysteresis);
-    if (p->probe >= p->N)
+    if (p->probe >= p->model.N)
         return bkf_error_set(err, BKF_EINPUT, "probe = %zu is outside [0, %zu]", p->probe,
-                             p->N - 1);
+                             p->model.N - 1);
     if (!(p->window > 0 && p->window <= 1))
         return bkf_error_set(err, BKF_EINPUT, "window = %g is outside (0, 1]", p->window);
     if (!(p->period_ref >= 0) || !isfinite(p->period_ref))
@@ -118,7 +134,7 @@ static int check_params(const bkf_measure_params *p, bkf_error *err)
         return bkf_error_set(err, BKF_EINPUT, "slip_eps, uniform_eps and periodic_tol must be "
                                               "finite and > 0");
     if (p->reference)
-        for (size_t i = 0; i < p->N; i++)
+        for (size_t i = 0; i < p->model.N; i++)
             if (!isfinite(p->reference[i]))
                 return bkf_error_set(err, BKF_EINPUT, "reference[%zu] is not finite", i);
     return BKF_OK;
@@ -134,9 +150,9 @@ bkf_measure *bkf_measure_alloc(const bkf_measure_params *params, bkf_error *err)
     }
     m->p = *params;
     m->p.reference = NULL;
-    size_t N = params->N;
-    m->h = params->S / (double)N;
-    m->level = isnan(params->level) ? params->nu : params->level;
+    size_t N = params->model.N;
+    m->h = params->model.S / (double)N;
+    m->level = isnan(params->level) ? bkf_measure_front_level(&params->model, NULL) : params->level;
     m->nc = N / 2 + 1;
     m->rbuf = fftw_malloc(N * sizeof(double));
     m->d1 = fftw_malloc(N * sizeof(double));
@@ -173,10 +189,10 @@ static double wrap(double d, double S) { return d - S * floor(d / S + 0.5); }
 /* psi_x and psi_xx into m->d1, m->d2 (spectral). */
 static void derivatives(bkf_measure *m, const double *psi)
 {
-    size_t N = m->p.N, nc = m->nc;
+    size_t N = m->p.model.N, nc = m->nc;
     memcpy(m->rbuf, psi, N * sizeof *psi);
     fftw_execute_dft_r2c(m->fwd, m->rbuf, m->c);
-    double k0 = 2.0 * M_PI / m->p.S, inv = 1.0 / (double)N;
+    double k0 = 2.0 * M_PI / m->p.model.S, inv = 1.0 / (double)N;
     for (size_t k = 0; k < nc; k++) {
         double q = k0 * (double)k;
         /* The Nyquist mode has no odd part on the grid: its derivative is 0. */
@@ -214,7 +230,7 @@ static void hermite5(const double a[3], const double b[3], double w, double *v, 
  * Newton from the linear guess, kept inside a shrinking bracket. */
 static double cell_root(const bkf_measure *m, const double *psi, size_t j, double *slope)
 {
-    size_t N = m->p.N, k = (j + 1) % N;
+    size_t N = m->p.model.N, k = (j + 1) % N;
     double h = m->h, L = m->level;
     double a[3] = {psi[j] - L, m->d1[j] * h, m->d2[j] * h * h};
     double b[3] = {psi[k] - L, m->d1[k] * h, m->d2[k] * h * h};
@@ -247,8 +263,8 @@ static double cell_root(const bkf_measure *m, const double *psi, size_t j, doubl
 static size_t find_fronts(bkf_measure *m, const double *psi, const double *eta, bkf_front *out,
                           size_t cap)
 {
-    size_t N = m->p.N;
-    double L = m->level, d = m->p.hysteresis, g = m->p.gamma;
+    size_t N = m->p.model.N;
+    double L = m->level, d = m->p.hysteresis, g = m->p.model.gamma;
     for (size_t i = 0; i < N; i++) m->psit[i] = g * (eta[i] - bkf_model_friction(psi[i]));
     size_t i0 = N;
     for (size_t i = 0; i < N; i++)
@@ -282,7 +298,7 @@ static size_t find_fronts(bkf_measure *m, const double *psi, const double *eta, 
             if (pt > 0) {
                 if (count < cap) {
                     double x = ((double)j + w) * m->h;
-                    if (x >= m->p.S) x -= m->p.S;
+                    if (x >= m->p.model.S) x -= m->p.model.S;
                     out[count].x = x;
                     out[count].velocity = slope != 0 ? -pt / slope : (double)NAN;
                     out[count].rising = prev_state < 0;
@@ -326,7 +342,7 @@ int bkf_measure_fronts(bkf_measure *m, const double *psi, const double *eta, bkf
                        size_t capacity, size_t *count, bkf_error *err)
 {
     if (!m) return bkf_error_set(err, BKF_EINPUT, "measure object is NULL");
-    int s = check_field(psi, eta, m->p.N, err);
+    int s = check_field(psi, eta, m->p.model.N, err);
     if (s) return s;
     derivatives(m, psi);
     size_t n = find_fronts(m, psi, eta, fronts, fronts ? capacity : 0);
@@ -341,8 +357,8 @@ int bkf_measure_fronts(bkf_measure *m, const double *psi, const double *eta, bkf
  * within S/2 of x; x itself when there is none within a quarter domain. */
 static double reference_crossing(const bkf_measure *m, double x, int rising)
 {
-    long N = (long)m->p.N;
-    double L = m->level, S = m->p.S;
+    long N = (long)m->p.model.N;
+    double L = m->level, S = m->p.model.S;
     long c = (long)floor(x / m->h);
     for (long off = 0; off <= N / 4; off++)
         for (int sg = -1; sg <= 1; sg += 2) {
@@ -360,8 +376,8 @@ static double reference_crossing(const bkf_measure *m, double x, int rising)
 /* max |psi(x) - ref(x - d)| */
 static double deviation(bkf_measure *m, const double *psi, double d)
 {
-    size_t N = m->p.N;
-    double k0 = 2.0 * M_PI / m->p.S, inv = 1.0 / (double)N;
+    size_t N = m->p.model.N;
+    double k0 = 2.0 * M_PI / m->p.model.S, inv = 1.0 / (double)N;
     for (size_t k = 0; k < m->nc; k++) {
         double ph = -k0 * (double)k * d;
         double cr = cos(ph), ci = sin(ph);
@@ -388,7 +404,7 @@ int bkf_measure_add(bkf_measure *m, double t, const double *psi, const double *e
     if (m->nrec && !(t > m->rec[m->nrec - 1].t))
         return bkf_error_set(err, BKF_EINPUT, "sample times must increase (t = %g after %g)", t,
                              m->rec[m->nrec - 1].t);
-    size_t N = m->p.N;
+    size_t N = m->p.model.N;
     int s = check_field(psi, eta, N, err);
     if (s) return s;
     size_t r = m->nrec;
@@ -427,7 +443,7 @@ int bkf_measure_add(bkf_measure *m, double t, const double *psi, const double *e
     }
 
     /* tracking */
-    double S = m->p.S;
+    double S = m->p.model.S;
     int continued = r > 0 && n > 0 && n == m->nprev;
     if (continued) {
         double dt = t - m->t_prev;
@@ -504,7 +520,7 @@ int bkf_measure_add(bkf_measure *m, double t, const double *psi, const double *e
     rc->max = mx;
     size_t pi = m->p.probe;
     rc->probe = psi[pi];
-    m->probe[r] = (probe_point){t, psi[pi], m->p.gamma * (eta[pi] - bkf_model_friction(psi[pi]))};
+    m->probe[r] = (probe_point){t, psi[pi], m->p.model.gamma * (eta[pi] - bkf_model_friction(psi[pi]))};
 
     bkf_front *sw = m->prev;
     m->prev = m->cur;
@@ -772,13 +788,13 @@ int bkf_measure_summarize(const bkf_measure *m, bkf_measure_summary *s, bkf_erro
         s->std_max = fmax(s->std_max, sqrt(rc->variance));
         s->psi_min = fmin(s->psi_min, rc->min);
         s->psi_max = fmax(s->psi_max, rc->max);
-        slip_max = fmax(slip_max, fmax(fabs(rc->max - m->p.nu), fabs(rc->min - m->p.nu)));
+        slip_max = fmax(slip_max, fmax(fabs(rc->max - m->p.model.nu), fabs(rc->min - m->p.model.nu)));
     }
     s->mean = msum / (double)cnt;
     s->variance = vsum / (double)cnt;
     const bkf_measure_record *rf = &m->rec[first], *rl = &m->rec[R - 1];
-    s->slip_deviation_start = fmax(fabs(rf->max - m->p.nu), fabs(rf->min - m->p.nu));
-    s->slip_deviation_end = fmax(fabs(rl->max - m->p.nu), fabs(rl->min - m->p.nu));
+    s->slip_deviation_start = fmax(fabs(rf->max - m->p.model.nu), fabs(rf->min - m->p.model.nu));
+    s->slip_deviation_end = fmax(fabs(rl->max - m->p.model.nu), fabs(rl->min - m->p.model.nu));
 
     s->deviation_start = m->rec[0].deviation;
     s->deviation_mid = rf->deviation;

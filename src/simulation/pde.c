@@ -15,7 +15,6 @@
 
 #include "bkfront/cycle.h"
 #include "bkfront/model.h"
-#include "bkfront/speeds.h"
 #include "pde_internal.h"
 
 bkf_pde_options bkf_pde_options_default(void)
@@ -692,14 +691,14 @@ int bkf_pde_init_oscillation(bkf_pde *m, size_t j, double amp, bkf_error *err)
     return BKF_OK;
 }
 
-int bkf_pde_init_front(bkf_pde *m, const bkf_pde_front_spec *spec, bkf_pde_front_info *info,
+int bkf_pde_init_front(bkf_pde *m, const bkf_pde_wave *wave, bkf_pde_front_info *info,
                        double *clean_psi, bkf_error *err)
 {
     if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
-    bkf_pde_front_spec sp = spec ? *spec : bkf_pde_front_spec_default();
+    if (!wave) return bkf_error_set(err, BKF_EINPUT, "wave is NULL");
+    bkf_pde_wave sp = *wave;
     int s;
     if (sp.n < 1) return bkf_error_set(err, BKF_EINPUT, "the number of fronts n must be >= 1");
-    if (sp.root < 1) return bkf_error_set(err, BKF_EINPUT, "root must be >= 1");
     if (sp.direction != -1 && sp.direction != 1)
         return bkf_error_set(err, BKF_EINPUT, "direction must be -1 or +1");
     if ((s = check_amp("noise", sp.noise, err))) return s;
@@ -708,51 +707,26 @@ int bkf_pde_init_front(bkf_pde *m, const bkf_pde_front_spec *spec, bkf_pde_front
     bkf_error e;
     if (bkf_model_check_nu_active(m->p.nu, &e) != BKF_OK)
         return bkf_error_set(err, BKF_EINPUT, "fronts need a limit cycle: %s", e.message);
-
-    bkf_model_params sp_p = {m->p.gamma, m->p.c, m->p.nu, m->p.S, 0, BKF_MODEL_CONTINUUM};
-    bkf_speeds_options so = bkf_speeds_options_default();
-    so.tol = sp.tol;
-    so.n_from = so.n_to = sp.n;
-    bkf_speeds_table tab;
-    memset(&tab, 0, sizeof tab);
-    s = bkf_speeds_find(&sp_p, &so, &tab, &e);
-    if (s) {
-        bkf_speeds_table_free(&tab);
-        return bkf_error_set(err, s, "speeds for n = %zu: %s", sp.n, e.message);
-    }
-    if (tab.count < sp.root) {
-        long n_max = tab.n_max;
-        size_t have = tab.count;
-        bkf_speeds_table_free(&tab);
-        if (have == 0)
-            return bkf_error_set(err, BKF_EINPUT,
-                                 "no front speed for n = %zu (fronts exist for n <= %ld here)",
-                                 sp.n, n_max);
-        return bkf_error_set(err, BKF_EINPUT, "n = %zu has %zu root(s), not root %zu", sp.n,
-                             have, sp.root);
-    }
-    bkf_speeds_root root = tab.roots[sp.root - 1];
-    size_t roots_for_n = tab.count;
-    bkf_speeds_table_free(&tab);
-    if (root.flags & BKF_SPEEDS_ASYMPTOTIC)
-        return bkf_error_set(err, BKF_EINPUT,
-                             "n = %zu: mu = %g is beyond the cycle engine's range; the front "
-                             "cannot be built", sp.n, root.mu);
+    if (!(isfinite(sp.v) && sp.v > m->p.c))
+        return bkf_error_set(err, BKF_EINPUT, "v = %g must be finite and > c = %g", sp.v, m->p.c);
+    if (!(sp.mu >= BKF_CYCLE_MU_MIN && sp.mu <= BKF_CYCLE_MU_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "mu = %g is outside [%g, %g] (the cycle engine's "
+                             "range)", sp.mu, BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
 
     bkf_cycle *cy = bkf_cycle_alloc();
     if (!cy) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     bkf_cycle_options co = bkf_cycle_options_default();
     co.tol = sp.tol;
-    s = bkf_cycle_solve(cy, root.mu, m->p.nu, &co, &e);
+    s = bkf_cycle_solve(cy, sp.mu, m->p.nu, &co, &e);
     if (s) {
         co.tol = fmax(sp.tol, 1e-10);
-        s = bkf_cycle_solve(cy, root.mu, m->p.nu, &co, &e);
+        s = bkf_cycle_solve(cy, sp.mu, m->p.nu, &co, &e);
     }
     if (s) {
         bkf_cycle_free(cy);
-        return bkf_error_set(err, s, "cycle at mu = %g: %s", root.mu, e.message);
+        return bkf_error_set(err, s, "cycle at mu = %g: %s", sp.mu, e.message);
     }
-    double v = root.v, c = m->p.c;
+    double v = sp.v, c = m->p.c;
     /* sqrt(1 - c^2/v^2) without the cancellation near the sonic limit */
     double stretch = sqrt((v - c) * (v + c)) / v;
     size_t N = m->N;
@@ -772,14 +746,14 @@ int bkf_pde_init_front(bkf_pde *m, const bkf_pde_front_spec *spec, bkf_pde_front
     const bkf_cycle_result *cr = bkf_cycle_get(cy);
     if (info) {
         info->v = v;
-        info->v_err = root.v_err;
-        info->mu = root.mu;
+        info->v_err = NAN;
+        info->mu = sp.mu;
         info->T = cr->period;
         info->stretch = stretch;
         info->period_fixed = cr->period * stretch;
         info->wavelength = m->p.S / (double)sp.n;
         info->residual = (double)sp.n * cr->period * v * stretch / m->p.S - 1.0;
-        info->roots_for_n = roots_for_n;
+        info->roots_for_n = 0;
     }
     bkf_cycle_free(cy);
     if (clean_psi) memcpy(clean_psi, m->y, N * sizeof *clean_psi);
@@ -842,7 +816,7 @@ int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer obs
 
     if (!m->have_f) {
         if (rhs(m->t, m->y, m->f, m) != GSL_SUCCESS)
-            return bkf_error_set(err, BKF_ENUMERIC, "the initial state is not finite or too large");
+            return bkf_error_set(err, BKF_EBLOWUP, "the initial state is not finite or too large");
         m->have_f = 1;
     }
     if (observer) {
@@ -870,7 +844,7 @@ int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer obs
             m->stats.rejected++;
             m->hstep = 0.25 * dt;
             if (m->hstep < h_floor)
-                return bkf_error_set(err, BKF_ENUMERIC,
+                return bkf_error_set(err, BKF_EBLOWUP,
                                      "the field blew up at t = %.6g (|psi| > %g or not finite)",
                                      m->t, BLOWUP);
             continue;
@@ -942,7 +916,7 @@ int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer obs
         m->hstep = last ? fmax(hnew, natural) : hnew;
         if (m->stats.stopped) return BKF_OK;
         if (blown_up(m->y, N))
-            return bkf_error_set(err, BKF_ENUMERIC,
+            return bkf_error_set(err, BKF_EBLOWUP,
                                  "the field blew up at t = %.6g (|psi| > %g or not finite)", m->t,
                                  BLOWUP);
         if (progress && progress((m->t - t0) / (t_end - t0), pdata)) {
@@ -955,7 +929,7 @@ int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer obs
                                  t_end);
         }
         if (m->o.max_steps && steps_here >= m->o.max_steps && m->t < t_end)
-            return bkf_error_set(err, BKF_ENUMERIC, "more than %zu steps before t = %g",
+            return bkf_error_set(err, BKF_EBUDGET, "more than %zu steps before t = %g",
                                  m->o.max_steps, t_end);
     }
     if (observer && !end_emitted && bkf_pde_emit(m, observer, odata, m->t, m->y)) m->stats.stopped = 1;

@@ -375,7 +375,7 @@ int bkf_pde_etd_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer
     m->y[2 * N] = m->y[2 * N + 1] = NAN;
     if (!etd->have_nu) {
         if (nonlinear(m, etd->a, etd->nu, &etd->psi_max))
-            return bkf_error_set(err, BKF_ENUMERIC, "the initial state is not finite or too large");
+            return bkf_error_set(err, BKF_EBLOWUP, "the initial state is not finite or too large");
         etd->have_nu = 1;
         m->stats.rhs_calls++;
     }
@@ -429,7 +429,7 @@ int bkf_pde_etd_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer
                     if (m->hstep < h_floor) {
                         sync(m, m->t);
                         if (s == STEP_NONFINITE)
-                            return bkf_error_set(err, BKF_ENUMERIC,
+                            return bkf_error_set(err, BKF_EBLOWUP,
                                                  "the field blew up at t = %.6g (|psi| > %g or not "
                                                  "finite)", m->t, BLOWUP);
                         return bkf_error_set(err, BKF_ENUMERIC,
@@ -476,7 +476,7 @@ int bkf_pde_etd_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer
                 }
                 if (m->o.max_steps && steps_here >= m->o.max_steps && m->t < t_end) {
                     sync(m, m->t);
-                    return bkf_error_set(err, BKF_ENUMERIC, "more than %zu steps before t = %g",
+                    return bkf_error_set(err, BKF_EBUDGET, "more than %zu steps before t = %g",
                                          m->o.max_steps, t_end);
                 }
             }

@@ -1350,7 +1350,7 @@ static int boundary_between(bkf_floquet *f, double gamma, double c, double nu_s,
 {
     int found = 0, failed = 0;
     double fail_dist = HUGE_VAL;
-    bkf_error fail_err = {{0}};
+    bkf_error fail_err = {0};
     double dp = f->opt.p_max / (double)f->opt.scan_points;
     indicator ind;
     bkf_floquet_threshold cand;

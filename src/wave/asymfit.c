@@ -64,7 +64,7 @@ static int solve_period(solver *sv, double mu, double nu, double *T, double *T_e
     bkf_cycle_options opt = bkf_cycle_options_default();
     opt.warm_start = 1;
     opt.tol = BKF_ASYMFIT_TOL;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     sv->solves++;
     int s = bkf_cycle_solve(sv->cycle, mu, nu, &opt, &e);
     if (bkf_status_is_numerical(s)) {
@@ -360,7 +360,7 @@ static int asymfit_correction_body(const double *mu, const double *R, size_t n, 
     corr_problem lower = {mu, R, half, &q, 0, 0};
     corr_problem upper = {mu + (n - half), R + (n - half), half, &q, 0, 0};
     corr_fit f, fl, fu, g, gl, gu;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
 
     s = fit_free_p(&all, p_lo, p_hi, &f, err);
     if (!s && (s = fit_free_p(&lower, p_lo, p_hi, &fl, &e)))
@@ -443,7 +443,7 @@ static int asymfit_large_body(double nu, const bkf_asymfit_large_options *option
         R[i] = T - k * mu[i];
     }
     if (!s) {
-        bkf_error e = {{0}};
+        bkf_error e = {0};
         s = bkf_asymfit_correction(mu, R, n, o.p_lo, o.p_hi, result, &e);
         if (s) bkf_error_set(err, s, "large-mu fit at nu = %g: %s", nu, e.message);
     }

@@ -162,7 +162,7 @@ static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf
     bkf_cycle_options o = bkf_cycle_options_default();
     o.tol = precise ? tol : g->tol_coarse;
     bkf_stepper_kind first = mu <= STEPPER_SWITCH_MU ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_IMPLICIT;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int rc = BKF_ENUMERIC;
     for (int attempt = 0; attempt < 3 && bkf_status_is_numerical(rc); attempt++) {
         o.stepper = attempt < 2 ? first
@@ -440,7 +440,7 @@ static int refine_cell(search *sr, size_t i, double n, int *inserted, bkf_error 
     grid *g = &sr->g;
     *inserted = 0;
     if (g->x[i].frozen) return BKF_OK;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int rc = add_sample(g, 0.5 * (g->x[i].s + g->x[i + 1].s), &e);
     if (rc == BKF_OK) {
         *inserted = 1;
@@ -459,7 +459,7 @@ static int refine_cell(search *sr, size_t i, double n, int *inserted, bkf_error 
  * the coarse value and report it. */
 static int try_upgrade(search *sr, size_t j, double n, bkf_error *err)
 {
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int rc = upgrade(&sr->g, j, &e);
     if (bkf_status_is_numerical(rc)) {
         sr->g.x[j].precise = 1;
@@ -947,7 +947,7 @@ static int find_c0(const bkf_model_params *p, const bkf_speeds_options *o, bkf_s
     bkf_cycle_options co = bkf_cycle_options_default();
     co.tol = o->tol; /* v = S/(n T): v needs T to tol */
     bkf_cycle_result r;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_cycle *cycle = bkf_cycle_alloc();
     if (!cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     int rc = bkf_cycle_estimate(cycle, p->gamma, p->nu, &co, o->method, &r, &e);
@@ -1046,7 +1046,7 @@ static int speeds_find_body(const bkf_model_params *p, const bkf_speeds_options 
                     found = x;
                     found_cap = nc;
                 }
-                bkf_error pe = {{0}};
+                bkf_error pe = {0};
                 rc = polish(g, fs, n, i, &found[nfound], &pe);
                 if (bkf_status_is_numerical(rc) && !g->formula_refused) {
                     /* one root lost is reported, not the whole table */
@@ -1202,7 +1202,7 @@ static int branch_T(branch_ctx *b, double mu, double nu, double *T, double *T_er
     bkf_cycle_options o = bkf_cycle_options_default();
     o.tol = b->tol;
     o.stepper = mu <= STEPPER_SWITCH_MU ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_IMPLICIT;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int rc = bkf_cycle_solve(b->cycle, mu, nu, &o, &e);
     if (rc) return bkf_error_set(err, rc, "period at mu = %.17g, nu = %.17g: %s", mu, nu, e.message);
     *T = bkf_cycle_get(b->cycle)->period;
@@ -1334,7 +1334,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
         f.slope = b->last_Gs;
     } else {
         double g[1], jac[2];
-        bkf_error e = {{0}};
+        bkf_error e = {0};
         int rc = branch_residual(u, g, jac, b, &e);
         if (rc) {
             b->stop_status = bkf_error_set(b->err, rc, "at %s = %g: %s", param_name(b->along), u[1],
@@ -1351,7 +1351,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     if (!is_fold && fabs(f.D) > b->tol && fabs(f.slope) > 1e-3) {
         double s1 = u[0] - f.D / f.slope, T1, T1_err;
         double mu1 = mu_of_s(pt.params.gamma, s1);
-        bkf_error e = {{0}};
+        bkf_error e = {0};
         if (mu1 <= BKF_CYCLE_MU_MAX && branch_T(b, mu1, pt.params.nu, &T1, &T1_err, &e) == BKF_OK) {
             double D1 = log(T1) - s1 - (log(pt.params.S) - log(b->n * pt.params.c * pt.params.gamma));
             if (fabs(D1) < fabs(f.D)) {
@@ -1458,7 +1458,7 @@ static int speeds_branch_body(const bkf_model_params *start, size_t n, size_t ro
     double u0[2] = {0.5 * log((mu0 - start->gamma) * (mu0 + start->gamma)), from};
     /* scale p so that G changes by ~1 per unit: steps weigh s and p alike */
     double g0[1], jac0[2];
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     rc = branch_residual(u0, g0, jac0, &b, &e);
     if (rc) {
         bkf_cycle_free(b.cycle);
@@ -1478,7 +1478,7 @@ static int speeds_branch_body(const bkf_model_params *start, size_t n, size_t ro
     co.stop_max = fmax(from, to);
     if (max_points) co.max_points = max_points;
     bkf_cont_report cr;
-    bkf_error ce = {{0}};
+    bkf_error ce = {0};
     rc = bkf_cont_run(branch_residual, branch_accept, &b, u0, 1, to > from ? 1 : -1, &co, &cr, &ce);
     bkf_cycle_free(b.cycle);
     b.rep.reached_end = cr.reached_bound;

@@ -5,6 +5,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "bkfront/measure.h"
 #include "bkfront/pde.h"
+#include "bkfront/seed.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -68,7 +69,7 @@ static int one_run(pd_ic ic, size_t n, double nu, size_t N, double tol, double t
     if (ic == IC_FRONT) {
         bkf_pde_front_spec fs = bkf_pde_front_spec_default();
         fs.n = n;
-        s = bkf_pde_init_front(m, &fs, &fi, NULL, &e);
+        s = bkf_seed_front(m, &fs, &fi, NULL, &e);
     } else if (ic == IC_UNIFORM)
         s = bkf_pde_init_uniform(m, 1e-3, 1, &e);
     else
@@ -76,10 +77,8 @@ static int one_run(pd_ic ic, size_t n, double nu, size_t N, double tol, double t
     bkf_measure *ms = NULL;
     if (!s && measure) {
         bkf_measure_params mp = bkf_measure_params_default();
-        mp.N = N;
-        mp.S = 20;
-        mp.gamma = 2;
-        mp.nu = nu;
+        mp.model = (bkf_model_params){2, 0.3, nu, 20, N, BKF_MODEL_CONTINUUM};
+        mp.level = nu;
         ms = bkf_measure_alloc(&mp, &e);
         if (!ms) s = -1;
     }

@@ -11,14 +11,14 @@
 
 static int parses(const char *text, double *x)
 {
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     return cli_parse_double("--mu", text, x, &e) == BKF_OK;
 }
 
 static void check_rejected(const char *text)
 {
     double x = 12345;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int s = cli_parse_double("--mu", text, &x, &e);
     CHECK_MSG(s == BKF_EINPUT, "'%s' was accepted as %.17g", text, x);
     CHECK_MSG(x == 12345, "'%s' wrote the output on failure", text);
@@ -56,7 +56,7 @@ TEST(args_double_rejects_everything_else)
 TEST(args_double_messages)
 {
     double x;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     cli_parse_double("--mu", "abc", &x, &e);
     CHECK_MSG(strncmp(e.message, "--mu: 'abc' is not a number", 27) == 0, "%s", e.message);
     cli_parse_double("--nu", "nan", &x, &e);
@@ -71,7 +71,7 @@ TEST(args_double_messages)
 TEST(args_count)
 {
     size_t n = 0;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(cli_parse_count("--n", "1", 10, &n, &e), BKF_OK);
     CHECK(n == 1);
     CHECK_STATUS(cli_parse_count("--n", "10", 10, &n, &e), BKF_OK);
@@ -91,7 +91,7 @@ TEST(args_choice)
 {
     static const char *const choices[] = {"tsv", "json", NULL};
     int k = -1;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(cli_parse_choice("--format", "json", choices, &k, &e), BKF_OK);
     CHECK(k == 1);
     CHECK_STATUS(cli_parse_choice("--format", "JSON", choices, &k, &e), BKF_EINPUT);
@@ -101,7 +101,7 @@ TEST(args_choice)
 TEST(args_range_single_and_linear)
 {
     cli_range r;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(cli_parse_range("--nu", "-0.5", 0, &r, &e), BKF_OK);
     CHECK(r.count == 1 && r.values[0] == -0.5 && !r.is_range);
     CHECK(r.from == -0.5 && r.to == -0.5);
@@ -133,7 +133,7 @@ TEST(args_range_single_and_linear)
 TEST(args_range_geometric)
 {
     cli_range r;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(cli_parse_range("--mu", "1e-1:1e4:6", 1, &r, &e), BKF_OK);
     CHECK(r.count == 6 && r.values[0] == 0.1 && r.values[5] == 1e4);
     for (size_t i = 1; i < 5; i++) CHECK_CLOSE(r.values[i], pow(10.0, (double)i - 1), 1e-14, 0);
@@ -161,7 +161,7 @@ TEST(args_range_geometric)
 TEST(args_range_rejects_malformed)
 {
     cli_range r;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     const char *bad[] = {"", ":", "1:2", "1:2:", "1::3", ":2:3", "1:2:3:4", "1:2:0",
                          "1:2:-1", "1:2:2.5", "1:2:1e1", "1:2:1", "a:2:3", "1:b:3",
                          "1:2:c", "nan:1:3", "1:inf:3", "1:2:1000001", "1:2: 3",
@@ -188,7 +188,7 @@ TEST(args_flags)
         {"--nu", &nu, "V", NULL},
         {"--log", NULL, NULL, &log},
     };
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     char *ok[] = {"period", "--mu", "1", "--nu=-0.5", "--log", NULL};
     CHECK_STATUS(cli_parse_flags(flags, 3, 5, ok, &e), BKF_OK);
     CHECK(mu && strcmp(mu, "1") == 0 && nu && strcmp(nu, "-0.5") == 0 && log && seen_mu);
@@ -264,7 +264,7 @@ TEST(args_options_from_a_table)
 {
     opt_spec sp = {.tol = 1e-10};
     cli_options g = {opt_table, sizeof opt_table / sizeof opt_table[0], &sp};
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int help = 0;
     /* --log after --mu on the line still makes the list geometric: values
      * are applied in table order. */

@@ -2,6 +2,7 @@
  * stdout, stderr and exit status, in its three modes. */
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
+#include "cli_support.h"
 
 #include <fcntl.h>
 #include <string.h>
@@ -9,78 +10,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#ifndef BKF_CLI_PATH
-#error "BKF_CLI_PATH (the built bkfront binary) is defined by the Makefile for tests"
-#endif
-
 /* In test_io.c. */
 int bkf_test_json_valid(const char *text);
 
-typedef struct {
-    char *out, *err;
-    int code;
-} fq_run;
-
-static char *fq_read_all(int fd)
-{
-    size_t cap = 4096, n = 0;
-    char *buf = malloc(cap);
-    CHECK(buf);
-    lseek(fd, 0, SEEK_SET);
-    for (;;) {
-        if (n + 1 >= cap) {
-            buf = realloc(buf, cap *= 2);
-            CHECK(buf);
-        }
-        ssize_t k = read(fd, buf + n, cap - n - 1);
-        if (k <= 0) break;
-        n += (size_t)k;
-    }
-    buf[n] = '\0';
-    return buf;
-}
-
-static int fq_temp_fd(void)
-{
-    char name[] = "/tmp/bkf_floquet_test_XXXXXX";
-    int fd = mkstemp(name);
-    CHECK(fd >= 0);
-    unlink(name);
-    return fd;
-}
-
-static fq_run fq_argv(const char *const *args)
-{
-    char *argv[64];
-    int argc = 0;
-    argv[argc++] = BKF_CLI_PATH;
-    for (; args[argc - 1] && argc < 63; argc++) argv[argc] = (char *)args[argc - 1];
-    argv[argc] = NULL;
-    int out = fq_temp_fd(), err = fq_temp_fd();
-    fflush(stdout);
-    pid_t pid = fork();
-    CHECK(pid >= 0);
-    if (pid == 0) {
-        dup2(out, 1);
-        dup2(err, 2);
-        execv(BKF_CLI_PATH, argv);
-        _exit(127);
-    }
-    int status = 0;
-    CHECK(waitpid(pid, &status, 0) == pid);
-    fq_run r = {fq_read_all(out), fq_read_all(err), WIFEXITED(status) ? WEXITSTATUS(status) : -1};
-    close(out);
-    close(err);
-    return r;
-}
-
-#define FQ(...) fq_argv((const char *const[]){"floquet", __VA_ARGS__, NULL})
-
-static void fq_free(fq_run *r)
-{
-    free(r->out);
-    free(r->err);
-}
+typedef bkf_cli_result fq_run;
+#define FQ(...) BKF_CLI("floquet", __VA_ARGS__)
+#define fq_free bkf_cli_result_free
 
 static int fq_lines(const char *s)
 {
@@ -315,19 +250,16 @@ TEST(cli_floquet_out_file_is_atomic)
     fq_run r = FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "0:3:4", "--out", path);
     CHECK_MSG(r.code == 0 && r.out[0] == '\0' && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
     fq_free(&r);
-    int fd = open(path, O_RDONLY);
-    CHECK(fd >= 0);
-    char *text = fq_read_all(fd);
-    close(fd);
+    char *text = bkf_cli_read_file(path);
+    CHECK(text);
     double q;
     CHECK(fq_field(text, 3, "q", &q, NULL, 0) && q == 3);
     /* a failed run leaves it as it was */
     r = FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "-1", "--out", path);
     CHECK(r.code == 2);
     fq_free(&r);
-    fd = open(path, O_RDONLY);
-    char *again = fq_read_all(fd);
-    close(fd);
+    char *again = bkf_cli_read_file(path);
+    CHECK(again);
     CHECK(strcmp(text, again) == 0);
     free(text);
     free(again);

@@ -2,6 +2,7 @@
  * stdout, stderr and exit status. */
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
+#include "cli_support.h"
 
 #include <fcntl.h>
 #include <stdarg.h>
@@ -11,82 +12,12 @@
 #include <unistd.h>
 #include "bkfront/period.h"
 
-#ifndef BKF_CLI_PATH
-#error "BKF_CLI_PATH (the built bkfront binary) is defined by the Makefile for tests"
-#endif
-
 /* In test_io.c. */
 int bkf_test_json_valid(const char *text);
 
-typedef struct {
-    char *out, *err;
-    int code;      /* exit status, or -1 if killed by a signal */
-} run_result;
-
-static char *read_all(int fd)
-{
-    size_t cap = 4096, n = 0;
-    char *buf = malloc(cap);
-    CHECK(buf);
-    lseek(fd, 0, SEEK_SET);
-    for (;;) {
-        if (n + 1 >= cap) {
-            buf = realloc(buf, cap *= 2);
-            CHECK(buf);
-        }
-        ssize_t k = read(fd, buf + n, cap - n - 1);
-        if (k <= 0) break;
-        n += (size_t)k;
-    }
-    buf[n] = '\0';
-    return buf;
-}
-
-static int temp_fd(void)
-{
-    char name[] = "/tmp/bkf_cli_test_XXXXXX";
-    int fd = mkstemp(name);
-    CHECK(fd >= 0);
-    unlink(name);
-    return fd;
-}
-
-/* Runs bkfront with the given arguments (NULL-terminated). Output goes to
- * unlinked temporary files rather than pipes: no deadlock however much the
- * child writes. */
-static run_result run_argv(const char *const *args)
-{
-    char *argv[64];
-    int argc = 0;
-    argv[argc++] = BKF_CLI_PATH;
-    /* execv's argv is char *const[] for history's sake; it does not write. */
-    for (; args[argc - 1] && argc < 63; argc++) argv[argc] = (char *)args[argc - 1];
-    argv[argc] = NULL;
-    int out = temp_fd(), err = temp_fd();
-    fflush(stdout);
-    pid_t pid = fork();
-    CHECK(pid >= 0);
-    if (pid == 0) {
-        dup2(out, 1);
-        dup2(err, 2);
-        execv(BKF_CLI_PATH, argv);
-        _exit(127);
-    }
-    int status = 0;
-    CHECK(waitpid(pid, &status, 0) == pid);
-    run_result r = {read_all(out), read_all(err), WIFEXITED(status) ? WEXITSTATUS(status) : -1};
-    close(out);
-    close(err);
-    return r;
-}
-
-#define RUN(...) run_argv((const char *const[]){__VA_ARGS__, NULL})
-
-static void run_free(run_result *r)
-{
-    free(r->out);
-    free(r->err);
-}
+typedef bkf_cli_result run_result;
+#define RUN(...) BKF_CLI(__VA_ARGS__)
+#define run_free bkf_cli_result_free
 
 static int count_lines(const char *s)
 {
@@ -233,7 +164,7 @@ TEST(cli_usage_help_and_version)
     run_free(&r);
 
     const char *none[] = {NULL};
-    r = run_argv(none);
+    r = bkf_cli_run(none, NULL);
     CHECK(r.code == 2 && r.out[0] == '\0' && strstr(r.err, "usage"));
     run_free(&r);
 }
@@ -299,10 +230,8 @@ TEST(cli_period_out_file_is_atomic)
     CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
     CHECK_MSG(r.out[0] == '\0' && r.err[0] == '\0', "stdout: %s stderr: %s", r.out, r.err);
     run_free(&r);
-    int fd = open(path, O_RDONLY);
-    CHECK(fd >= 0);
-    char *text = read_all(fd);
-    close(fd);
+    char *text = bkf_cli_read_file(path);
+    CHECK(text);
     CHECK(strstr(text, expected_columns));
     double T;
     CHECK(tsv_field(text, 0, "T", &T));
@@ -312,9 +241,8 @@ TEST(cli_period_out_file_is_atomic)
     r = RUN("period", "--out", path, "--mu", "1", "--nu", "2");
     CHECK(r.code == 2 && r.out[0] == '\0');
     run_free(&r);
-    fd = open(path, O_RDONLY);
-    char *again = read_all(fd);
-    close(fd);
+    char *again = bkf_cli_read_file(path);
+    CHECK(again);
     CHECK(strcmp(text, again) == 0);
     free(again);
     free(text);
@@ -538,7 +466,7 @@ TEST(cli_period_library_matches_cli)
     run_result r = RUN("period", "--mu", "1:3:3", "--nu", "-0.5", "--tol", "1e-9");
     CHECK(r.code == 0);
     bkf_period_spec spec = bkf_period_spec_default();
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     const bkf_option *mu = bkf_option_find(bkf_period_options, bkf_period_noptions, "mu");
     const bkf_option *nu = bkf_option_find(bkf_period_options, bkf_period_noptions, "nu");
     const bkf_option *tol = bkf_option_find(bkf_period_options, bkf_period_noptions, "tol");

@@ -10,6 +10,7 @@
  * and then resumed ends where an uninterrupted run ends. */
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
+#include "cli_support.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -23,29 +24,7 @@
 
 #include "bkfront/pde.h"
 
-#ifndef BKF_CLI_PATH
-#error "BKF_CLI_PATH (the built bkfront binary) is defined by the Makefile for tests"
-#endif
-
-static char *slurp(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    size_t cap = 1 << 16, n = 0;
-    char *buf = malloc(cap);
-    CHECK(buf);
-    size_t k;
-    while ((k = fread(buf + n, 1, cap - n - 1, f)) > 0) {
-        n += k;
-        if (n + 1 == cap) {
-            buf = realloc(buf, cap *= 2);
-            CHECK(buf);
-        }
-    }
-    buf[n] = '\0';
-    fclose(f);
-    return buf;
-}
+#define slurp bkf_cli_read_file
 
 static void write_text(const char *path, const char *text)
 {
@@ -90,39 +69,12 @@ static void remove_dir(const char *dir)
     rmdir(dir);
 }
 
-/* The CLI in dir with stderr to dir/stderr.  The child gets the default
- * dispositions of an interactive shell: a test runner started in the
- * background may ignore SIGINT, and an ignored SIGINT is inherited (and
- * deliberately kept by bkfront, as nohup expects). */
+/* The CLI in dir with stderr to dir/stderr, stdout to /dev/null. */
 static pid_t spawn_cli(const char *dir, const char *const *args)
 {
-    char *argv[64];
-    int argc = 0;
-    argv[argc++] = BKF_CLI_PATH;
-    for (; args[argc - 1] && argc < 63; argc++) argv[argc] = (char *)args[argc - 1];
-    argv[argc] = NULL;
     char errpath[4096];
     snprintf(errpath, sizeof errpath, "%s/stderr", dir);
-    fflush(stdout);
-    pid_t pid = fork();
-    CHECK(pid >= 0);
-    if (pid == 0) {
-        int fd = open(errpath, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        int null = open("/dev/null", O_WRONLY);
-        if (fd < 0 || null < 0 || chdir(dir) != 0) _exit(126);
-        dup2(fd, 2);
-        dup2(null, 1);
-        signal(SIGINT, SIG_DFL);
-        signal(SIGTERM, SIG_DFL);
-        signal(SIGHUP, SIG_DFL);
-        sigset_t none;
-        sigemptyset(&none);
-        sigprocmask(SIG_SETMASK, &none, NULL);
-        alarm(0);
-        execv(BKF_CLI_PATH, argv);
-        _exit(127);
-    }
-    return pid;
+    return bkf_cli_spawn(args, &(bkf_cli_options){.dir = dir}, NULL, errpath);
 }
 
 static double now(void)

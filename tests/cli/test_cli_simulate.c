@@ -2,6 +2,7 @@
  * binary (BKF_CLI_PATH), its outputs, stderr and exit status. */
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
+#include "cli_support.h"
 
 #include <fcntl.h>
 #include <string.h>
@@ -9,87 +10,20 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#ifndef BKF_CLI_PATH
-#error "BKF_CLI_PATH (the built bkfront binary) is defined by the Makefile for tests"
-#endif
-
 /* In test_io.c. */
 int bkf_test_json_valid(const char *text);
 
-typedef struct {
-    char *out, *err;
-    int code;
-} sim_result;
-
-static char *slurp_fd(int fd)
-{
-    size_t cap = 4096, n = 0;
-    char *buf = malloc(cap);
-    CHECK(buf);
-    lseek(fd, 0, SEEK_SET);
-    for (;;) {
-        if (n + 1 >= cap) {
-            buf = realloc(buf, cap *= 2);
-            CHECK(buf);
-        }
-        ssize_t k = read(fd, buf + n, cap - n - 1);
-        if (k <= 0) break;
-        n += (size_t)k;
-    }
-    buf[n] = '\0';
-    return buf;
-}
+typedef bkf_cli_result sim_result;
 
 static char *slurp(const char *path)
 {
-    int fd = open(path, O_RDONLY);
-    CHECK_MSG(fd >= 0, "cannot open %s", path);
-    char *s = slurp_fd(fd);
-    close(fd);
+    char *s = bkf_cli_read_file(path);
+    CHECK_MSG(s, "cannot open %s", path);
     return s;
 }
 
-static int scratch_fd(void)
-{
-    char name[] = "/tmp/bkf_sim_test_XXXXXX";
-    int fd = mkstemp(name);
-    CHECK(fd >= 0);
-    unlink(name);
-    return fd;
-}
-
-static sim_result run_cli(const char *const *args)
-{
-    char *argv[64];
-    int argc = 0;
-    argv[argc++] = BKF_CLI_PATH;
-    for (; args[argc - 1] && argc < 63; argc++) argv[argc] = (char *)args[argc - 1];
-    argv[argc] = NULL;
-    int out = scratch_fd(), err = scratch_fd();
-    fflush(stdout);
-    pid_t pid = fork();
-    CHECK(pid >= 0);
-    if (pid == 0) {
-        dup2(out, 1);
-        dup2(err, 2);
-        execv(BKF_CLI_PATH, argv);
-        _exit(127);
-    }
-    int status = 0;
-    CHECK(waitpid(pid, &status, 0) == pid);
-    sim_result r = {slurp_fd(out), slurp_fd(err), WIFEXITED(status) ? WEXITSTATUS(status) : -1};
-    close(out);
-    close(err);
-    return r;
-}
-
-#define SIM(...) run_cli((const char *const[]){__VA_ARGS__, NULL})
-
-static void sim_free(sim_result *r)
-{
-    free(r->out);
-    free(r->err);
-}
+#define SIM(...) BKF_CLI(__VA_ARGS__)
+#define sim_free bkf_cli_result_free
 
 static int lines_in(const char *s)
 {

@@ -2,6 +2,7 @@
  * binary (BKF_CLI_PATH), its stdout, stderr and exit status. */
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
+#include "cli_support.h"
 
 #include <fcntl.h>
 #include <string.h>
@@ -12,78 +13,12 @@
 #include "bkfront/asymptotics.h"
 #include "bkfront/speeds.h"
 
-#ifndef BKF_CLI_PATH
-#error "BKF_CLI_PATH (the built bkfront binary) is defined by the Makefile for tests"
-#endif
-
 /* In test_io.c. */
 int bkf_test_json_valid(const char *text);
 
-typedef struct {
-    char *out, *err;
-    int code;
-} run_result;
-
-static char *slurp(int fd)
-{
-    size_t cap = 4096, n = 0;
-    char *buf = malloc(cap);
-    CHECK(buf);
-    lseek(fd, 0, SEEK_SET);
-    for (;;) {
-        if (n + 1 >= cap) {
-            buf = realloc(buf, cap *= 2);
-            CHECK(buf);
-        }
-        ssize_t k = read(fd, buf + n, cap - n - 1);
-        if (k <= 0) break;
-        n += (size_t)k;
-    }
-    buf[n] = '\0';
-    return buf;
-}
-
-static int scratch_fd(void)
-{
-    char name[] = "/tmp/bkf_cli_speeds_XXXXXX";
-    int fd = mkstemp(name);
-    CHECK(fd >= 0);
-    unlink(name);
-    return fd;
-}
-
-static run_result run_args(const char *const *args)
-{
-    char *argv[64];
-    int argc = 0;
-    argv[argc++] = BKF_CLI_PATH;
-    for (; args[argc - 1] && argc < 63; argc++) argv[argc] = (char *)args[argc - 1];
-    argv[argc] = NULL;
-    int out = scratch_fd(), err = scratch_fd();
-    fflush(stdout);
-    pid_t pid = fork();
-    CHECK(pid >= 0);
-    if (pid == 0) {
-        dup2(out, 1);
-        dup2(err, 2);
-        execv(BKF_CLI_PATH, argv);
-        _exit(127);
-    }
-    int status = 0;
-    CHECK(waitpid(pid, &status, 0) == pid);
-    run_result r = {slurp(out), slurp(err), WIFEXITED(status) ? WEXITSTATUS(status) : -1};
-    close(out);
-    close(err);
-    return r;
-}
-
-#define RUN(...) run_args((const char *const[]){__VA_ARGS__, NULL})
-
-static void run_free(run_result *r)
-{
-    free(r->out);
-    free(r->err);
-}
+typedef bkf_cli_result run_result;
+#define RUN(...) BKF_CLI(__VA_ARGS__)
+#define run_free bkf_cli_result_free
 
 static int lines(const char *s)
 {
@@ -284,17 +219,14 @@ TEST(cli_speeds_out_file_is_atomic)
                        path, "--tol", "1e-8");
     CHECK_MSG(r.code == 0 && r.out[0] == '\0' && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
     run_free(&r);
-    int fd = open(path, O_RDONLY);
-    CHECK(fd >= 0);
-    char *text = slurp(fd);
-    close(fd);
+    char *text = bkf_cli_read_file(path);
+    CHECK(text);
     CHECK(rows(text) == 12);
     r = RUN("speeds", "--out", path, "--gamma", "2", "--c", "0.3", "--nu", "-1", "--S", "20");
     CHECK(r.code == 2 && r.out[0] == '\0');
     run_free(&r);
-    fd = open(path, O_RDONLY);
-    char *again = slurp(fd);
-    close(fd);
+    char *again = bkf_cli_read_file(path);
+    CHECK(again);
     CHECK(strcmp(text, again) == 0);
     free(text);
     free(again);

@@ -24,6 +24,7 @@
 #include "bkfront/measure.h"
 #include "bkfront/model.h"
 #include "bkfront/pde.h"
+#include "bkfront/seed.h"
 #include "bkfront/speeds.h"
 
 /* Not a valid value for any parameter below. */
@@ -336,10 +337,21 @@ TEST(api_fuzz_pde)
         }
         bkf_pde_front_spec fs = bkf_pde_front_spec_default();
         fs.noise = x;
-        CHECK_EINPUT(bkf_pde_init_front(m, &fs, NULL, NULL, err));
+        CHECK_EINPUT(bkf_seed_front(m, &fs, NULL, NULL, err));
         fs = bkf_pde_front_spec_default();
         fs.tol = x;
-        CHECK_EINPUT(bkf_pde_init_front(m, &fs, NULL, NULL, err));
+        CHECK_EINPUT(bkf_seed_front(m, &fs, NULL, NULL, err));
+        /* the paper's n = 7 wave, one field hostile */
+        for (int k = 0; k < 4; k++) {
+            bkf_pde_wave w = {7, 0.347551274998819, 3.0, -1, 0.0, 1, 1e-12};
+            double *field[4] = {&w.v, &w.mu, &w.noise, &w.tol};
+            *field[k] = x;
+            if (k == 0 && x > 0.3 && isfinite(x)) continue; /* any v > c is a wave */
+            if (k == 1 && x >= BKF_CYCLE_MU_MIN && x <= BKF_CYCLE_MU_MAX) continue;
+            if (k == 2 && x >= 0 && x <= 10) continue;
+            if (k == 3 && x >= 1e-14 && x <= 1e-4) continue;
+            CHECK_EINPUT(bkf_pde_init_front(m, &w, NULL, NULL, err));
+        }
     }
     CHECK_EINPUT(bkf_pde_init_uniform(m, -1.0, 1, err));
     CHECK_EINPUT(bkf_pde_init_uniform(NULL, 1e-3, 1, err));
@@ -349,16 +361,23 @@ TEST(api_fuzz_pde)
     CHECK_EINPUT(bkf_pde_set_state(m, psi, NULL, 0.0, err));
     CHECK_EINPUT(bkf_pde_set_state(NULL, psi, eta, 0.0, err));
     CHECK_EINPUT(bkf_pde_init_front(NULL, NULL, NULL, NULL, err));
+    CHECK_EINPUT(bkf_pde_init_front(m, NULL, NULL, NULL, err));
+    CHECK_EINPUT(bkf_seed_front(NULL, NULL, NULL, NULL, err));
     CHECK_EINPUT(bkf_pde_init_oscillation(NULL, 1, 1e-3, err));
     bkf_pde_front_spec fs = bkf_pde_front_spec_default();
     fs.n = 0;
-    CHECK_EINPUT(bkf_pde_init_front(m, &fs, NULL, NULL, err));
+    CHECK_EINPUT(bkf_seed_front(m, &fs, NULL, NULL, err));
     fs = bkf_pde_front_spec_default();
     fs.root = 0;
-    CHECK_EINPUT(bkf_pde_init_front(m, &fs, NULL, NULL, err));
+    CHECK_EINPUT(bkf_seed_front(m, &fs, NULL, NULL, err));
     fs = bkf_pde_front_spec_default();
     fs.direction = 0;
-    CHECK_EINPUT(bkf_pde_init_front(m, &fs, NULL, NULL, err));
+    CHECK_EINPUT(bkf_seed_front(m, &fs, NULL, NULL, err));
+    bkf_pde_wave w = {0, 0.35, 3.0, -1, 0.0, 1, 1e-12}; /* n = 0 */
+    CHECK_EINPUT(bkf_pde_init_front(m, &w, NULL, NULL, err));
+    w.n = 7;
+    w.direction = 0;
+    CHECK_EINPUT(bkf_pde_init_front(m, &w, NULL, NULL, err));
     CHECK_EINPUT(bkf_pde_run(NULL, 1.0, 0.1, NULL, NULL, NULL, NULL, err));
     CHECK_EINPUT(bkf_pde_run(m, 0.0, 0.1, NULL, NULL, NULL, NULL, err)); /* not after t */
     /* the refusals left the object usable */
@@ -383,18 +402,15 @@ TEST(api_fuzz_pde)
 TEST(api_fuzz_measure)
 {
     bkf_measure_params good = bkf_measure_params_default();
-    good.N = 16;
-    good.S = 20;
-    good.gamma = 2;
-    good.nu = -0.96;
+    good.model = (bkf_model_params){2, 0.3, -0.96, 20, 16, BKF_MODEL_CONTINUUM};
     for (size_t i = 0; i < NHOSTILE; i++) {
         double x = hostile[i];
         for (int k = 0; k < 8; k++) {
             bkf_measure_params p = good;
-            double *field[] = {&p.S,      &p.gamma,        &p.nu,       &p.level,
+            double *field[] = {&p.model.S, &p.model.gamma, &p.model.nu, &p.level,
                                &p.window, &p.hysteresis, &p.period_ref, &p.slip_eps};
             if ((k == 2 || k == 3) && isfinite(x)) continue;
-            if (k == 3 && isnan(x)) continue; /* NaN level: the default, nu */
+            if (k == 3 && isnan(x)) continue; /* NaN level: the default */
             if ((k == 0 || k == 1 || k == 5 || k == 6 || k == 7) && isfinite(x) && x > 0) continue;
             *field[k] = x;
             CHECK_MSG(bkf_measure_alloc(&p, NULL) == NULL, "field %d = %g accepted", k, x);
@@ -402,7 +418,7 @@ TEST(api_fuzz_measure)
         }
     }
     bkf_measure_params p = good;
-    p.N = 0;
+    p.model.N = 0;
     CHECK_NULL_EINPUT(bkf_measure_alloc(&p, err));
     p = good;
     p.probe = 16;
@@ -457,10 +473,7 @@ TEST(api_fuzz_measure)
 static bkf_comoving_params fuzz_comoving_params(void)
 {
     bkf_comoving_params p = bkf_comoving_params_default();
-    p.gamma = 2;
-    p.c = 0.3;
-    p.nu = -0.96;
-    p.S = 20;
+    p.model = (bkf_model_params){2, 0.3, -0.96, 20, 0, BKF_MODEL_CONTINUUM};
     p.n = 7;
     p.v = 0.347551274998819; /* the paper's n = 7 */
     p.points = 64;
@@ -473,7 +486,8 @@ TEST(api_fuzz_comoving)
     for (size_t i = 0; i < NHOSTILE; i++) {
         for (int k = 0; k < 8; k++) {
             bkf_comoving_params p = fuzz_comoving_params();
-            double *field[8] = {&p.gamma, &p.c, &p.nu, &p.S, &p.v, &p.tol, &p.noise, &p.cycle_tol};
+            double *field[8] = {&p.model.gamma, &p.model.c, &p.model.nu, &p.model.S,
+                                &p.v,           &p.tol,     &p.noise,    &p.cycle_tol};
             *field[k] = hostile[i];
             bkf_comoving *m = bkf_comoving_alloc(&p, &e);
             /* a few hostile values are valid for some fields (S = 1e300, v

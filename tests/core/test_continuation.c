@@ -129,7 +129,7 @@ TEST(cont_circle_passes_fold_at_top)
     r->stop_after_folds = 1;
     bkf_cont_options o = bkf_cont_options_default(1);
     bkf_cont_report rep;
-    bkf_error err = {""};
+    bkf_error err = {0};
     double u0[2] = {-1.0, 0.0};
     CHECK_STATUS(bkf_cont_run(circle, record_point, r, u0, 1, +1, &o, &rep, &err), BKF_OK);
     CHECK(rep.folds == 1);
@@ -214,7 +214,7 @@ TEST(cont_scurve_two_folds_then_bound)
     o.stop_min = -1.0;
     o.stop_max = 1.0;
     bkf_cont_report rep;
-    bkf_error err = {""};
+    bkf_error err = {0};
     double u0[2] = {-1.3, -1.0}; /* root near -1.3247, corrected at lambda = -1 */
     CHECK_STATUS(bkf_cont_run(scurve, record_point, r, u0, 1, +1, &o, &rep, &err), BKF_OK);
     CHECK(rep.folds == 2);
@@ -275,7 +275,7 @@ static void run_cosine_system(int fd)
     o.stop_min = -10.0;
     o.stop_max = 3.0;
     bkf_cont_report rep;
-    bkf_error err = {""};
+    bkf_error err = {0};
     double u0[3] = {1.1, 0.9, 0.0}; /* off the branch: the start is corrected */
     CHECK_STATUS(bkf_cont_run(cosine_system, record_point, r, u0, 2, +1, &o, &rep, &err),
                  BKF_OK);
@@ -308,7 +308,7 @@ TEST(cont_numeric_failure_says_where)
     record *r = new_record(2);
     bkf_cont_options o = bkf_cont_options_default(1);
     bkf_cont_report rep;
-    bkf_error err = {""};
+    bkf_error err = {0};
     double u0[2] = {0.0, 0.0};
     CHECK_STATUS(bkf_cont_run(line_undefined_beyond, record_point, r, u0, 1, +1, &o, &rep, &err),
                  BKF_ENUMERIC);
@@ -325,7 +325,7 @@ TEST(cont_fatal_residual_status_stops_run)
 {
     record *r = new_record(2);
     bkf_cont_options o = bkf_cont_options_default(1);
-    bkf_error err = {""};
+    bkf_error err = {0};
     double u0[2] = {0.0, 0.0};
     CHECK_STATUS(bkf_cont_run(line_fatal_beyond, record_point, r, u0, 1, +1, &o, NULL, &err),
                  BKF_EINPUT);

@@ -108,7 +108,7 @@ TEST(umbrella_header_compiles_alone_as_pedantic_c)
 {
     int rc = run_in_tmp(
         "printf '#include \"bkfront/bkfront.h\"\\n"
-        "int main(void) { bkf_error e = {{0}}; (void)e; return bkf_version()[0] == 0; }\\n'"
+        "int main(void) { bkf_error e = {0}; (void)e; return bkf_version()[0] == 0; }\\n'"
         " > \"$T/a.c\" && cc -std=c11 -Wall -Wextra -Werror -pedantic -I\"$S/include\""
         " -c \"$T/a.c\" -o \"$T/a.o\"");
     CHECK_MSG(rc == 0, "cc on a file including only bkfront/bkfront.h: exit %d", rc);

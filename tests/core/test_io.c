@@ -200,7 +200,7 @@ TEST(io_tsv_layout)
 {
     memout m;
     mem_open(&m);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_io_table *t = bkf_io_table_alloc(m.f, BKF_IO_TSV, cols, 3, &e);
     CHECK(t);
     CHECK_STATUS(bkf_io_table_comment(t, "first\nsecond", &e), BKF_OK);
@@ -234,7 +234,7 @@ TEST(io_tsv_numbers_read_back_bitwise)
     size_t n = sizeof xs / sizeof xs[0];
     memout m;
     mem_open(&m);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_io_column c[] = {{"x", BKF_IO_NUMBER}};
     bkf_io_table *t = bkf_io_table_alloc(m.f, BKF_IO_TSV, c, 1, &e);
     for (size_t i = 0; i < n; i++) {
@@ -261,7 +261,7 @@ TEST(io_json_layout)
 {
     memout m;
     mem_open(&m);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_io_table *t = bkf_io_table_alloc(m.f, BKF_IO_JSON, cols, 3, &e);
     CHECK(t);
     CHECK_STATUS(bkf_io_table_comment(t, "say \"hi\"\\", &e), BKF_OK);
@@ -298,7 +298,7 @@ TEST(io_json_empty_and_invalid_utf8)
 {
     memout m;
     mem_open(&m);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_io_table *t = bkf_io_table_alloc(m.f, BKF_IO_JSON, cols, 3, &e);
     CHECK_STATUS(bkf_io_table_finish(t, &e), BKF_OK);
     bkf_io_table_free(t);
@@ -335,7 +335,7 @@ TEST(io_json_numbers_read_back_bitwise)
     double xs[] = {0.1, 1.0 / 3.0, -2.5e-300, 5e-324, 1.7976931348623157e308, 6.663286859323130};
     memout m;
     mem_open(&m);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_io_column c[] = {{"x", BKF_IO_NUMBER}};
     bkf_io_table *t = bkf_io_table_alloc(m.f, BKF_IO_JSON, c, 1, &e);
     for (size_t i = 0; i < 6; i++) {
@@ -360,7 +360,7 @@ TEST(io_json_numbers_read_back_bitwise)
 
 TEST(io_bad_columns_and_formats)
 {
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_io_column dup[] = {{"a", BKF_IO_NUMBER}, {"a", BKF_IO_TEXT}};
     bkf_io_column hash[] = {{"#a", BKF_IO_NUMBER}};
     bkf_io_column tab[] = {{"a\tb", BKF_IO_NUMBER}};
@@ -385,7 +385,7 @@ TEST(io_write_error_is_reported)
     /* A stream that cannot be written: reading-only /dev/null. */
     FILE *f = fopen("/dev/null", "r");
     CHECK(f);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_io_table *t = bkf_io_table_alloc(f, BKF_IO_TSV, cols, 3, &e);
     bkf_io_value r[] = {{.number = 1}, {.number = 2}, {.text = "x"}};
     (void)bkf_io_table_row(t, r, &e); /* may be buffered; finish must see it */
@@ -409,7 +409,7 @@ TEST(io_atomic_commit_replaces)
     fclose(old);
     CHECK(chmod(path, 0640) == 0);
 
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_io_atomic *a = bkf_io_atomic_open(path, &e);
     CHECK_MSG(a, "%s", e.message);
     const char *temp = bkf_io_atomic_temp_path(a);
@@ -445,7 +445,7 @@ TEST(io_atomic_abort_leaves_nothing)
     make_dir(dir);
     char path[256];
     snprintf(path, sizeof path, "%s/out.tsv", dir);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_io_atomic *a = bkf_io_atomic_open(path, &e);
     CHECK(a);
     fputs("partial", bkf_io_atomic_stream(a));
@@ -479,7 +479,7 @@ TEST(io_atomic_follows_symlink)
     fputs("old\n", f);
     fclose(f);
     CHECK(symlink("real.tsv", link) == 0);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_io_atomic *a = bkf_io_atomic_open(link, &e);
     CHECK(a);
     fputs("new\n", bkf_io_atomic_stream(a));
@@ -494,7 +494,7 @@ TEST(io_atomic_follows_symlink)
 
 TEST(io_atomic_rejects_bad_targets)
 {
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK(!bkf_io_atomic_open("/nonexistent_bkf_dir/x.tsv", &e));
     CHECK_MSG(strstr(e.message, "/nonexistent_bkf_dir/x.tsv"), "%s", e.message);
     CHECK(!bkf_io_atomic_open("/tmp", &e));

@@ -75,7 +75,7 @@ static void refused(const char *name, const char *text, const char *want)
     s.format = 7;
     s.seed = 7;
     memcpy(&before, &s, sizeof s);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int st = apply(&s, name, text, &e);
     CHECK_MSG(st == BKF_EINPUT, "--%s '%s' accepted", name, text);
     char head[64];
@@ -91,7 +91,7 @@ static void refused(const char *name, const char *text, const char *want)
 TEST(options_scalars_good)
 {
     spec_t s = {0};
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(apply(&s, "log", NULL, &e), BKF_OK);
     CHECK(s.log == 1);
     CHECK_STATUS(apply(&s, "tol", "1e-14", &e), BKF_OK);
@@ -141,7 +141,7 @@ TEST(options_scalars_bad_name_key_and_range)
 TEST(options_prefix_for_scenes)
 {
     spec_t s = {0};
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     const bkf_option *o = bkf_option_find(table, NTABLE, "tol");
     CHECK_STATUS(bkf_option_apply(o, &s, "2", "paper.scene:12: ", &e), BKF_EINPUT);
     CHECK_MSG(strncmp(e.message, "paper.scene:12: tol: 2 is not in", 32) == 0, "%s", e.message);
@@ -153,7 +153,7 @@ TEST(options_prefix_for_scenes)
 TEST(options_lists_every_form)
 {
     spec_t s = {0};
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(apply(&s, "mu", "2", &e), BKF_OK);
     CHECK(s.mu.count == 1 && s.mu.values[0] == 2 && !s.mu.is_range);
     CHECK_STATUS(apply(&s, "mu", "0.5,5", &e), BKF_OK);
@@ -179,7 +179,7 @@ TEST(options_lists_every_form)
 TEST(options_integer_lists)
 {
     spec_t s = {0};
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     /* The case `profile --n 1:10:10` used to refuse: the weighted sum gave
      * 3.9999999999999996 for the fourth point. */
     CHECK_STATUS(apply(&s, "n", "1:10:10", &e), BKF_OK);
@@ -232,7 +232,7 @@ TEST(options_list_cap_on_comma_lists)
     }
     text[2 * n - 1] = '\0';
     bkf_list l;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(bkf_list_parse(text, 0, 0, 0, "", "x", &l, &e), BKF_EINPUT);
     CHECK_MSG(strstr(e.message, "x: more than 1000000 values"), "%s", e.message);
     CHECK(l.values == NULL && l.count == 0);

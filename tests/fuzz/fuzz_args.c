@@ -13,7 +13,7 @@
 
 static void fuzz_double(const char *text)
 {
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     double x = 12345;
     int s = cli_parse_double("--x", text, &x, &e);
     fuzz_check_status(s, &e);
@@ -26,7 +26,7 @@ static void fuzz_double(const char *text)
 
 static void fuzz_count(const char *text, size_t max)
 {
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     size_t n = 0;
     int s = cli_parse_count("--n", text, max, &n, &e);
     fuzz_check_status(s, &e);
@@ -43,7 +43,7 @@ static void fuzz_count(const char *text, size_t max)
 
 static void fuzz_range(const char *text, int geometric)
 {
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     cli_range r;
     int s = cli_parse_range("--mu", text, geometric, &r, &e);
     fuzz_check_status(s, &e);
@@ -63,7 +63,7 @@ static void fuzz_range(const char *text, int geometric)
 static void fuzz_choice(const char *text)
 {
     static const char *const choices[] = {"tsv", "json", "text", NULL};
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int k = -1;
     int s = cli_parse_choice("--format", text, choices, &k, &e);
     fuzz_check_status(s, &e);
@@ -91,7 +91,7 @@ static void fuzz_flags(char *text)
         {"--nu", &nu, "V", NULL},
         {"--log", NULL, NULL, &log_},
     };
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int s = cli_parse_flags(flags, 3, argc, argv, &e);
     fuzz_check_status(s, &e);
     if (s == BKF_OK) {

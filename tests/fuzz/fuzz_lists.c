@@ -11,7 +11,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 1) return 0;
     char *text = fuzz_string(data + 1, size - 1);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     if (data[0] & 1) {
         cli_range list;
         int s = parse_list("--nu", text, &list, &e);

@@ -12,7 +12,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     char *text = fuzz_string(data, size);
     bkf_scene *sc = NULL;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int s = bkf_scene_parse_string(text, "fuzz.scene", &sc, &e);
     fuzz_check_status(s, &e);
     if (s == BKF_OK) {

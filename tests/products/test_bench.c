@@ -8,7 +8,7 @@
 
 TEST(bench_refuses_bad_input)
 {
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK(bkf_bench_run((bkf_bench_product)7, 1, NULL, &e) == BKF_EINPUT);
     CHECK(strstr(e.message, "period, speeds, pde, all, box") != NULL);
     CHECK(bkf_bench_run(BKF_BENCH_PERIOD, 1, NULL, &e) == BKF_EINPUT);

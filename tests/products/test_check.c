@@ -76,7 +76,7 @@ static void expect_refused(const bkf_model_params *m, const bkf_check_options *o
 {
     counter c = {0};
     bkf_check_hooks h = {.begin = count_begin, .row = count_row, .data = &c};
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     int s = bkf_check_run(m, o, &h, &err);
     CHECK_MSG(s == BKF_EINPUT, "%s: status %d (%s)", name, s, err.message);
     CHECK_MSG(strstr(err.message, name) && strstr(err.message, range),

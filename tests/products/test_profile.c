@@ -10,7 +10,7 @@
 
 static void set(bkf_profile_spec *s, const char *key, const char *value)
 {
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     const bkf_option *o = bkf_option_find(bkf_profile_options, bkf_profile_noptions, key);
     CHECK_MSG(o && bkf_option_apply(o, s, value, "", &e) == BKF_OK, "%s %s: %s", key, value,
               e.message);
@@ -46,7 +46,7 @@ TEST(profile_rows_and_wavelength)
     char *text = NULL;
     size_t size = 0;
     FILE *f = open_memstream(&text, &size);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(bkf_profile_write(&s, f, BKF_IO_TSV, NULL, &e), BKF_OK);
     fclose(f);
     double r[32][9];
@@ -68,7 +68,7 @@ TEST(profile_rows_and_wavelength)
 TEST(profile_refuses_mixed_inputs)
 {
     bkf_profile_spec s = bkf_profile_spec_default();
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(bkf_profile_check(&s, "--", &e), BKF_EINPUT);
     CHECK_MSG(strstr(e.message, "--nu is required"), "%s", e.message);
     set(&s, "nu", "0");

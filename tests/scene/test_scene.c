@@ -14,6 +14,7 @@
 
 #include "bkfront/plot.h"
 #include "bkfront/scene.h"
+#include "cli_support.h"
 
 #ifndef BKF_SOURCE_DIR
 #define BKF_SOURCE_DIR "."
@@ -22,7 +23,7 @@
 static bkf_scene *parse_ok(const char *text)
 {
     bkf_scene *s = NULL;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int status = bkf_scene_parse_string(text, "t.scene", &s, &e);
     CHECK_MSG(status == BKF_OK, "parse failed: %s", e.message);
     return s;
@@ -33,7 +34,7 @@ static bkf_scene *parse_ok(const char *text)
 static void parse_bad(const char *text, int line, const char *part)
 {
     bkf_scene *s = (bkf_scene *)1;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(bkf_scene_parse_string(text, "t.scene", &s, &e), BKF_EINPUT);
     CHECK(s == NULL);
     char prefix[32];
@@ -49,7 +50,7 @@ static void parse_bad(const char *text, int line, const char *part)
 TEST(scene_parses_the_paper_scene)
 {
     bkf_scene *s = NULL;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(bkf_scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
     size_t figures = 0, kinds[BKF_SCENE_NKINDS] = {0};
     for (size_t i = 0; i < s->nproducts; i++) {
@@ -127,7 +128,7 @@ TEST(scene_errors_name_the_file_and_line)
 TEST(scene_file_errors)
 {
     bkf_scene *s = NULL;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(bkf_scene_parse_file("/nonexistent/x.scene", &s, &e), BKF_EINPUT);
     CHECK(strstr(e.message, "cannot open"));
 }
@@ -147,7 +148,7 @@ static plan_count count_plan(const char *text, int figures)
 {
     bkf_scene *s = parse_ok(text);
     bkf_scene_plan plan;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_scene_plan_options o = {.outdir = "out", .formats = 1, .figures = figures};
     CHECK_STATUS(bkf_scene_make_plan(s, &o, &plan, &e), BKF_OK);
     plan_count c = {.steps = plan.nsteps, .deduplicated = plan.deduplicated};
@@ -208,7 +209,7 @@ TEST(plan_runs_only_what_the_products_need)
 
     /* the paper scene: every figure, one computation per curve */
     bkf_scene *s = NULL;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_STATUS(bkf_scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
     bkf_scene_plan plan;
     bkf_scene_plan_options o = {.outdir = "out", .formats = 1, .figures = 1};
@@ -229,7 +230,7 @@ TEST(plan_refuses_an_output_folder_figures_cannot_list)
 {
     bkf_scene *s = parse_ok(MODEL "[speeds]\n");
     bkf_scene_plan plan;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_scene_plan_options o = {.outdir = "my out", .figures = 1};
     CHECK_STATUS(bkf_scene_make_plan(s, &o, &plan, &e), BKF_EINPUT);
     CHECK(strstr(e.message, "space"));
@@ -240,48 +241,19 @@ TEST(plan_refuses_an_output_folder_figures_cannot_list)
 
 #ifdef BKF_CLI_PATH
 
-typedef struct {
-    char out[65536], err[8192];
-    int code;
-} run_result;
+typedef bkf_cli_result run_result;
 
-static void read_all(int fd, char *buf, size_t size)
-{
-    lseek(fd, 0, SEEK_SET);
-    size_t n = 0;
-    ssize_t k;
-    while (n + 1 < size && (k = read(fd, buf + n, size - 1 - n)) > 0) n += (size_t)k;
-    buf[n] = '\0';
-    close(fd);
-}
-
+/* The result in one block, so that free(r) releases it all. */
 static run_result *run_cli(char *const *args)
 {
-    run_result *r = calloc(1, sizeof *r);
+    bkf_cli_result c = bkf_cli_run((const char *const *)args, NULL);
+    size_t n_out = strlen(c.out) + 1, n_err = strlen(c.err) + 1;
+    run_result *r = malloc(sizeof *r + n_out + n_err);
     CHECK(r);
-    char *argv[32];
-    int argc = 0;
-    argv[argc++] = BKF_CLI_PATH;
-    for (; *args && argc < 31; args++) argv[argc++] = *args;
-    argv[argc] = NULL;
-    FILE *o = tmpfile(), *e = tmpfile();
-    CHECK(o && e);
-    fflush(stdout);
-    pid_t pid = fork();
-    CHECK(pid >= 0);
-    if (pid == 0) {
-        dup2(fileno(o), 1);
-        dup2(fileno(e), 2);
-        execv(BKF_CLI_PATH, argv);
-        _exit(127);
-    }
-    int status = 0;
-    CHECK(waitpid(pid, &status, 0) == pid);
-    r->code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    read_all(dup(fileno(o)), r->out, sizeof r->out);
-    read_all(dup(fileno(e)), r->err, sizeof r->err);
-    fclose(o);
-    fclose(e);
+    *r = c;
+    r->out = memcpy((char *)(r + 1), c.out, n_out);
+    r->err = memcpy(r->out + n_out, c.err, n_err);
+    bkf_cli_result_free(&c);
     return r;
 }
 
@@ -525,7 +497,7 @@ TEST(plot_failure_reports_gnuplot_and_leaves_no_image)
     CHECK(f);
     fputs("set terminal pngcairo\nset output out\nplot sin(x) with linez\n", f);
     fclose(f);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_plot_job *job = bkf_plot_job_alloc(script, &e);
     CHECK(job);
     CHECK_STATUS(bkf_plot_add_output(job, BKF_PLOT_PNG, out, &e), BKF_OK);
@@ -561,7 +533,7 @@ TEST(shipped_scenes_parse_and_plan)
         char path[1200];
         snprintf(path, sizeof path, "%s/fronts/%.500s", BKF_SOURCE_DIR, ent->d_name);
         bkf_scene *s = NULL;
-        bkf_error e = {{0}};
+        bkf_error e = {0};
         CHECK_MSG(bkf_scene_parse_file(path, &s, &e) == BKF_OK, "%s", e.message);
         bkf_scene_plan plan;
         bkf_scene_plan_options o = {.outdir = "out", .formats = 1, .figures = 1};

@@ -5,9 +5,11 @@
  * verdict on an unstable wave, and the inputs it refuses. */
 #include "harness.h"
 
+#include <ctype.h>
 #include <string.h>
 
 #include "bkfront/comoving.h"
+#include "bkfront/pde.h"
 #include "bkfront/speeds.h"
 
 /* Paper parameters. */
@@ -29,10 +31,8 @@ static double paper_speed(size_t n)
 static bkf_comoving_params paper_params(size_t n, double v, size_t points, double noise)
 {
     bkf_comoving_params p = bkf_comoving_params_default();
-    p.gamma = 2;
-    p.c = 0.3;
-    p.nu = -0.96;
-    p.S = 20;
+    p.model = (bkf_model_params){2, 0.3, -0.96, 20, 0, BKF_MODEL_CONTINUUM};
+    p.level = -0.96; /* fronts: crossings of nu */
     p.n = n;
     p.v = v;
     p.points = points;
@@ -127,13 +127,27 @@ TEST(comoving_unstable_wave_grows)
     bkf_comoving_free(m);
 }
 
-static void refused(bkf_comoving_params p, const char *name)
+/* name occurs in text as a word of its own (not "n" inside "points") */
+static int names_word(const char *text, const char *name)
+{
+    size_t len = strlen(name);
+    for (const char *p = strstr(text, name); p; p = strstr(p + 1, name)) {
+        int before = p > text && (isalnum((unsigned char)p[-1]) || p[-1] == '_');
+        int after = isalnum((unsigned char)p[len]) || p[len] == '_';
+        if (!before && !after) return 1;
+    }
+    return 0;
+}
+
+/* Refused as bad input, the message naming the parameter and its range. */
+static void refused(bkf_comoving_params p, const char *name, const char *range)
 {
     bkf_error e;
     memset(&e, 0, sizeof e);
     bkf_comoving *m = bkf_comoving_alloc(&p, &e);
     CHECK_MSG(m == NULL, "%s accepted", name);
-    CHECK_MSG(strstr(e.message, name) != NULL, "message '%s' does not name %s", e.message, name);
+    CHECK_MSG(names_word(e.message, name), "message '%s' does not name %s", e.message, name);
+    CHECK_MSG(strstr(e.message, range), "message '%s' does not give the range %s", e.message, range);
     bkf_comoving_free(m);
 }
 
@@ -142,29 +156,31 @@ TEST(comoving_refuses_bad_input)
     double v = 0.35;
     bkf_comoving_params p = paper_params(7, v, 256, 0);
     p.v = 0.3;
-    refused(p, "v");
+    refused(p, "v", "> c");
     p.v = NAN;
-    refused(p, "v");
+    refused(p, "v", "> c");
     p = paper_params(7, v, 16, 0);
-    refused(p, "points");
+    refused(p, "points", "[32, 1048576]");
     p = paper_params(0, v, 256, 0);
-    refused(p, "n");
+    refused(p, "n", ">= 1");
     p = paper_params(7, v, 256, 0);
-    p.nu = 1;
-    refused(p, "nu");
+    p.model.nu = 1;
+    refused(p, "nu", "(-1, 1)");
     p = paper_params(7, v, 256, 0);
     p.tol = 1;
-    refused(p, "tol");
+    char tol_range[64];
+    snprintf(tol_range, sizeof tol_range, "[%g, %g]", BKF_PDE_TOL_MIN, BKF_PDE_TOL_MAX);
+    refused(p, "tol", tol_range);
     p = paper_params(7, v, 256, 0);
-    p.gamma = 0;
-    refused(p, "gamma");
+    p.model.gamma = 0;
+    refused(p, "gamma", "> 0");
     p = paper_params(7, v, 256, 0);
-    p.S = -1;
-    refused(p, "S");
+    p.model.S = -1;
+    refused(p, "S", "> 0");
     p = paper_params(7, v, 256, 0);
     p.level = INFINITY;
-    refused(p, "level");
+    refused(p, "level", "finite");
     p = paper_params(7, v, 256, 0);
     p.noise = -1;
-    refused(p, "noise");
+    refused(p, "noise", "[0, 10]");
 }

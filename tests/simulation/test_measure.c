@@ -15,14 +15,13 @@ static double eta_for(double psi, double psit, double gamma)
     return psit / gamma + bkf_model_friction(psi);
 }
 
+/* level NaN: nu, the level these synthetic fields are built around (the
+ * library's default is the global oscillation's middle). */
 static bkf_measure *make(size_t N, double S, double nu, double level)
 {
     bkf_measure_params p = bkf_measure_params_default();
-    p.N = N;
-    p.S = S;
-    p.gamma = 2;
-    p.nu = nu;
-    p.level = level;
+    p.model = (bkf_model_params){2, 0, nu, S, N, BKF_MODEL_CONTINUUM};
+    p.level = isnan(level) ? nu : level;
     bkf_error e;
     bkf_measure *m = bkf_measure_alloc(&p, &e);
     CHECK_MSG(m, "%s", e.message);
@@ -109,10 +108,8 @@ TEST(measure_speed_and_period_of_a_translating_wave)
     double psi[N], eta[N];
     const double S = 20, v = -0.83, nu = -0.5;
     bkf_measure_params p = bkf_measure_params_default();
-    p.N = N;
-    p.S = S;
-    p.gamma = 2;
-    p.nu = nu;
+    p.model = (bkf_model_params){2, 0, nu, S, N, BKF_MODEL_CONTINUUM};
+    p.level = nu;
     bkf_error e;
     bkf_measure *m = bkf_measure_alloc(&p, &e);
     CHECK(m);
@@ -175,10 +172,8 @@ TEST(measure_deviation_from_a_shifted_reference)
     const double S = 20, v = -0.5, nu = -0.5;
     travelling(ref, eta, N, S, 1, 2.0, v, 0, nu);
     bkf_measure_params p = bkf_measure_params_default();
-    p.N = N;
-    p.S = S;
-    p.gamma = 2;
-    p.nu = nu;
+    p.model = (bkf_model_params){2, 0, nu, S, N, BKF_MODEL_CONTINUUM};
+    p.level = nu;
     p.reference = ref;
     bkf_error e;
     bkf_measure *m = bkf_measure_alloc(&p, &e);
@@ -234,15 +229,12 @@ TEST(measure_rejects_bad_input)
 {
     bkf_error e;
     bkf_measure_params p = bkf_measure_params_default();
-    p.N = 4;
-    p.S = 20;
-    p.gamma = 2;
-    p.nu = 0;
+    p.model = (bkf_model_params){2, 0, 0, 20, 4, BKF_MODEL_CONTINUUM};
     CHECK(bkf_measure_alloc(&p, &e) == NULL && strstr(e.message, "N"));
-    p.N = 16;
-    p.S = -1;
+    p.model.N = 16;
+    p.model.S = -1;
     CHECK(bkf_measure_alloc(&p, &e) == NULL && strstr(e.message, "S"));
-    p.S = 20;
+    p.model.S = 20;
     p.window = 0;
     CHECK(bkf_measure_alloc(&p, &e) == NULL && strstr(e.message, "window"));
     p.window = 0.5;
@@ -259,4 +251,35 @@ TEST(measure_rejects_bad_input)
     bkf_measure_summary s;
     CHECK_STATUS(bkf_measure_summarize(m, &s, &e), BKF_EINPUT); /* one sample only */
     bkf_measure_free(m);
+}
+
+/* The default level (NaN) is bkf_measure_front_level: a wave that swings
+ * about that level, entirely above nu, has its 6 crossings (3 periods, psi_t
+ * > 0 everywhere) with the default and none at level nu. */
+TEST(measure_default_level_is_the_front_level)
+{
+    enum { N = 64 };
+    const double nu = -0.9, S = 20;
+    bkf_model_params model = {2, 0, nu, S, N, BKF_MODEL_CONTINUUM};
+    double period;
+    double level = bkf_measure_front_level(&model, &period);
+    CHECK(level > nu + 0.3 && period > 0);
+    double psi[N], eta[N];
+    for (int i = 0; i < N; i++) {
+        double x = S * i / N;
+        psi[i] = level + 0.25 * sin(TWO_PI * 3 * x / S);
+        eta[i] = eta_for(psi[i], 1, 2);
+    }
+    size_t count = 99, count_nu = 99;
+    bkf_error e;
+    bkf_measure *m = make(N, S, nu, NAN); /* level nu */
+    CHECK_STATUS(bkf_measure_fronts(m, psi, eta, NULL, 0, &count_nu, &e), BKF_OK);
+    bkf_measure_free(m);
+    bkf_measure_params p = bkf_measure_params_default();
+    p.model = model;
+    m = bkf_measure_alloc(&p, &e);
+    CHECK_MSG(m, "%s", e.message);
+    CHECK_STATUS(bkf_measure_fronts(m, psi, eta, NULL, 0, &count, &e), BKF_OK);
+    bkf_measure_free(m);
+    CHECK_MSG(count == 6 && count_nu == 0, "default %zu fronts, at nu %zu", count, count_nu);
 }

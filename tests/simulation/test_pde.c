@@ -9,6 +9,7 @@
 #include "bkfront/cycle.h"
 #include "bkfront/measure.h"
 #include "bkfront/pde.h"
+#include "bkfront/seed.h"
 #include "pde_support.h"
 
 static bkf_pde *make(double gamma, double c, double nu, double S, size_t N, bkf_model_kind model,
@@ -57,7 +58,7 @@ TEST(pde_seeded_front_keeps_its_speed)
     bkf_pde_front_info fi;
     double clean[512];
     bkf_error e;
-    CHECK_STATUS(bkf_pde_init_front(m, &fs, &fi, clean, &e), BKF_OK);
+    CHECK_STATUS(bkf_seed_front(m, &fs, &fi, clean, &e), BKF_OK);
     CHECK_MSG(fabs(fi.residual) < 1e-10, "seed not periodic: residual %g", fi.residual);
     CHECK_CLOSE(fi.period_fixed, fi.T * fi.stretch, 1e-15, 0);
     bkf_measure *ms = make_measure(m, clean);
@@ -91,7 +92,7 @@ TEST(pde_front_direction_is_mirrored)
         fs.n = 1;
         fs.direction = k ? 1 : -1;
         bkf_error e;
-        CHECK_STATUS(bkf_pde_init_front(m, &fs, NULL, NULL, &e), BKF_OK);
+        CHECK_STATUS(bkf_seed_front(m, &fs, NULL, NULL, &e), BKF_OK);
         bkf_measure *ms = make_measure(m, NULL);
         CHECK_STATUS(bkf_pde_run(m, 20, 0.1, measure_sample, ms, NULL, NULL, &e), BKF_OK);
         bkf_measure_summary s;
@@ -244,7 +245,7 @@ TEST(pde_filter_leaves_a_resolved_front_alone)
         bkf_pde *m = bkf_pde_alloc(&p, &o, &e);
         CHECK(m);
         bkf_pde_front_spec fs = bkf_pde_front_spec_default();
-        CHECK_STATUS(bkf_pde_init_front(m, &fs, NULL, NULL, &e), BKF_OK);
+        CHECK_STATUS(bkf_seed_front(m, &fs, NULL, NULL, &e), BKF_OK);
         CHECK(bkf_pde_spectral_tail(m, bkf_pde_psi(m)) < 1e-11);
         CHECK_STATUS(bkf_pde_run(m, 20, 20, NULL, NULL, NULL, NULL, &e), BKF_OK);
         memcpy(psi[k], bkf_pde_psi(m), sizeof psi[k]);
@@ -288,7 +289,7 @@ TEST(pde_rejects_bad_input)
     CHECK_STATUS(bkf_pde_init_uniform(m, 1e-3, 1, &e), BKF_OK);
     /* but fronts and the oscillation need a cycle */
     bkf_pde_front_spec fs = bkf_pde_front_spec_default();
-    CHECK_STATUS(bkf_pde_init_front(m, &fs, NULL, NULL, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_seed_front(m, &fs, NULL, NULL, &e), BKF_EINPUT);
     CHECK(strstr(e.message, "nu"));
     CHECK_STATUS(bkf_pde_init_oscillation(m, 1, 0.1, &e), BKF_EINPUT);
     CHECK_STATUS(bkf_pde_run(m, 0, 0.1, NULL, NULL, NULL, NULL, &e), BKF_EINPUT);
@@ -305,11 +306,11 @@ TEST(pde_rejects_bad_input)
     m = bkf_pde_alloc(&good, &o, &e);
     CHECK(m);
     fs.n = 1000; /* far beyond n_max */
-    CHECK_STATUS(bkf_pde_init_front(m, &fs, NULL, NULL, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_seed_front(m, &fs, NULL, NULL, &e), BKF_EINPUT);
     CHECK_MSG(strstr(e.message, "n = 1000"), "%s", e.message);
     fs = bkf_pde_front_spec_default();
     fs.root = 2; /* n = 1 has one root here */
-    CHECK_STATUS(bkf_pde_init_front(m, &fs, NULL, NULL, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_seed_front(m, &fs, NULL, NULL, &e), BKF_EINPUT);
     CHECK_STATUS(bkf_pde_init_oscillation(m, 32, 0.1, &e), BKF_EINPUT);
     double bad_state[64];
     for (int i = 0; i < 64; i++) bad_state[i] = i == 5 ? NAN : 0;
@@ -328,7 +329,7 @@ TEST(pde_moving_frame_holds_the_front_still)
     fs.n = 2;
     bkf_pde_front_info fi;
     bkf_error e;
-    CHECK_STATUS(bkf_pde_init_front(lab, &fs, &fi, NULL, &e), BKF_OK);
+    CHECK_STATUS(bkf_seed_front(lab, &fs, &fi, NULL, &e), BKF_OK);
     bkf_pde_free(lab);
     bkf_model_params p = {2, 0.3, -0.96, 20, 512, BKF_MODEL_CONTINUUM};
     bkf_pde_options o = bkf_pde_options_default();
@@ -336,7 +337,7 @@ TEST(pde_moving_frame_holds_the_front_still)
     bkf_pde *m = bkf_pde_alloc(&p, &o, &e);
     CHECK_MSG(m, "alloc: %s", e.message);
     double clean[512];
-    CHECK_STATUS(bkf_pde_init_front(m, &fs, &fi, clean, &e), BKF_OK);
+    CHECK_STATUS(bkf_seed_front(m, &fs, &fi, clean, &e), BKF_OK);
     bkf_measure *ms = make_measure(m, clean);
     CHECK_STATUS(bkf_pde_run(m, 40, 0.1, measure_sample, ms, NULL, NULL, &e), BKF_OK);
     bkf_measure_summary s;

@@ -14,6 +14,7 @@
 #include "bkfront/cycle.h"
 #include "bkfront/measure.h"
 #include "bkfront/pde.h"
+#include "bkfront/seed.h"
 #include "pde_support.h"
 
 static bkf_pde *make(double nu, size_t N, bkf_pde_stepper stepper, double tol, double frame)
@@ -65,7 +66,7 @@ TEST(etd_agrees_with_rk8pd)
     fs.noise = 1e-3;
     bkf_error e;
     for (int k = 0; k < 2; k++) {
-        CHECK_STATUS(bkf_pde_init_front(runs[k], &fs, NULL, NULL, &e), BKF_OK);
+        CHECK_STATUS(bkf_seed_front(runs[k], &fs, NULL, NULL, &e), BKF_OK);
         CHECK_STATUS(bkf_pde_run(runs[k], 20, 1.0, NULL, NULL, NULL, NULL, &e), BKF_OK);
     }
     double diff = 0;
@@ -111,11 +112,11 @@ TEST(etd_moving_frame_front_stands_still_with_long_steps)
     fs.noise = 1e-6;
     bkf_pde_front_info fi;
     bkf_error e;
-    CHECK_STATUS(bkf_pde_init_front(probe, &fs, &fi, NULL, &e), BKF_OK);
+    CHECK_STATUS(bkf_seed_front(probe, &fs, &fi, NULL, &e), BKF_OK);
     bkf_pde_free(probe);
     bkf_pde *m = make(-0.96, N, BKF_PDE_ETDRK4, 1e-7, -fi.v);
     static double clean[N];
-    CHECK_STATUS(bkf_pde_init_front(m, &fs, &fi, clean, &e), BKF_OK);
+    CHECK_STATUS(bkf_seed_front(m, &fs, &fi, clean, &e), BKF_OK);
     bkf_measure *ms = make_measure(m, clean);
     CHECK_STATUS(bkf_pde_run(m, 40, 0.25, measure_sample, ms, NULL, NULL, &e), BKF_OK);
     bkf_measure_summary s;

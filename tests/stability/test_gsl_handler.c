@@ -61,7 +61,7 @@ static int accept_point(const double *u, const double *t, int is_fold, void *dat
 TEST(gsl_handler_of_the_host_survives_library_calls)
 {
     gsl_set_error_handler(host_handler);
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     bkf_cycle_result r;
 
     CHECK_STATUS(bkf_cycle_period(1.0, 0.0, NULL, &r, &e), BKF_OK);

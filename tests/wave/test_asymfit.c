@@ -13,6 +13,7 @@
 #include "bkfront/asymfit.h"
 #include "bkfront/asymptotics.h"
 #include "bkfront/cycle.h"
+#include "cli_support.h"
 
 /* ---- large mu ------------------------------------------------------------ */
 
@@ -22,7 +23,7 @@
 static void check_large_fit(double nu)
 {
     bkf_asymfit_large_result r;
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     CHECK_STATUS(bkf_asymfit_large(nu, NULL, &r, &err), BKF_OK);
     bkf_test_note("nu = %g: p = %.5f +- %.1e (-1/3); A = %.5f +- %.1e (a1 C = %.5f, %+.3f%%); "
                   "B = %.4f +- %.2f (L = %.4f, %+.1f%%); p fixed: A %+.4f%%, B %+.1f%%",
@@ -62,7 +63,7 @@ TEST(asymfit_correction_exact_model)
         R[i] = A * pow(mu[i], p) + B * log(mu[i]) / mu[i] + D / mu[i];
     }
     bkf_asymfit_large_result r;
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     CHECK_STATUS(bkf_asymfit_correction(mu, R, 16, -0.9, -0.05, &r, &err), BKF_OK);
     CHECK_CLOSE(r.p, p, 0.0, 1e-8);
     CHECK_CLOSE(r.A, A, 1e-7, 0.0);
@@ -79,7 +80,7 @@ TEST(asymfit_correction_exact_model)
 static void check_small_fit(double nu)
 {
     bkf_asymfit_small_result r;
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     CHECK_STATUS(bkf_asymfit_small(nu, NULL, &r, &err), BKF_OK);
     bkf_test_note("nu = %g: s = %.12g +- %.1e, s2 = %.12g (rel %.1e); s4 = %.6g +- %.1e", nu,
                   r.s, r.s_err, r.s_derived, r.s / r.s_derived - 1, r.s4, r.s4_err);
@@ -120,7 +121,7 @@ TEST(asymfit_map_nu_0)
 {
     double nu = 0.0, eps[3] = {1e-2, 1e-4, 1e-6};
     bkf_asymfit_boundary b[BKF_ASYMFIT_NFORMULAS * 3];
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     CHECK_STATUS(bkf_asymfit_map(&nu, 1, eps, 3, NULL, b, &err), BKF_OK);
     for (int f = 0; f < BKF_ASYMFIT_NFORMULAS; f++)
         bkf_test_note("%-9s mu boundary: eps 1e-2 %-9.4g eps 1e-4 %-9.4g eps 1e-6 %-9.4g",
@@ -166,7 +167,7 @@ TEST(asymfit_grid_matches_cycle)
 {
     double mu[2] = {0.05, 300.0}, nu[2] = {-0.3, 0.8};
     bkf_asymfit_grid_point g[4];
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     CHECK_STATUS(bkf_asymfit_grid(mu, 2, nu, 2, g, &err), BKF_OK);
     for (size_t j = 0; j < 2; j++)
         for (size_t i = 0; i < 2; i++) {
@@ -189,7 +190,7 @@ TEST(asymfit_grid_matches_cycle)
 
 #define CHECK_EINPUT(expr)                                                 \
     do {                                                                   \
-        bkf_error e_ = {{0}};                                              \
+        bkf_error e_ = {0};                                              \
         bkf_error *err = &e_;                                              \
         CHECK_STATUS((expr), BKF_EINPUT);                                  \
         CHECK_MSG(e_.message[0] != '\0', "%s: empty message", #expr);      \
@@ -273,53 +274,19 @@ TEST(asymfit_bad_arguments)
 /* In test_io.c. */
 int bkf_test_json_valid(const char *text);
 
-typedef struct {
-    char *out, *err;
-    int code;
-} cli_run;
+typedef bkf_cli_result cli_run;
 
-static char *slurp(FILE *f)
-{
-    size_t cap = 4096, n = 0;
-    char *buf = malloc(cap);
-    CHECK(buf);
-    rewind(f);
-    for (size_t k; (k = fread(buf + n, 1, cap - n - 1, f)) > 0;) {
-        n += k;
-        if (n + 1 >= cap) {
-            buf = realloc(buf, cap *= 2);
-            CHECK(buf);
-        }
-    }
-    buf[n] = '\0';
-    fclose(f);
-    return buf;
-}
-
-/* bkfront asymptotics ARGS..., output through unlinked temporary files. */
+/* bkfront asymptotics ARGS... */
 static cli_run run_cli(char *const *args)
 {
-    char *argv[32];
-    int argc = 0;
-    argv[argc++] = BKF_CLI_PATH;
-    argv[argc++] = "asymptotics";
-    for (; *args && argc < 31; args++) argv[argc++] = *args;
-    argv[argc] = NULL;
-    FILE *out = tmpfile(), *err = tmpfile();
-    CHECK(out && err);
-    fflush(stdout);
-    pid_t pid = fork();
-    CHECK(pid >= 0);
-    if (pid == 0) {
-        dup2(fileno(out), 1);
-        dup2(fileno(err), 2);
-        execv(BKF_CLI_PATH, argv);
-        _exit(127);
+    const char *argv[32] = {"asymptotics"};
+    size_t argc = 1;
+    for (; *args; args++) {
+        CHECK(argc < 31);
+        argv[argc++] = *args;
     }
-    int status = 0;
-    CHECK(waitpid(pid, &status, 0) == pid);
-    cli_run r = {slurp(out), slurp(err), WIFEXITED(status) ? WEXITSTATUS(status) : -1};
-    return r;
+    argv[argc] = NULL;
+    return bkf_cli_run(argv, NULL);
 }
 
 static void check_refused(char *const *args)

@@ -21,8 +21,8 @@
  *    stepper at tol 1e-10; where that cannot decide or lambda < -5, a power
  *    iteration written here (rk4imp, the plain linear system renormalised
  *    every step) for real multipliers, L/2 of an independent cycle solve
- *    for a complex pair; Liouville ln|m1 m2| against that L (printed, not
- *    asserted).  Points nothing independent can check are counted.
+ *    for a complex pair; Liouville ln|m1 m2| against that L, within tol
+ *    max(1, |L|).  Points nothing independent can check are counted.
  * One line per point is printed: status, true error, estimated error and
  * their ratio; the summary gives the worst ratio per product. */
 #include "harness.h"
@@ -222,7 +222,7 @@ TEST(extremes_period_matrix)
                     o.warm_start = 0;
                     if (forced) o.stepper = BKF_STEPPER_IMPLICIT;
                     bkf_cycle_result r;
-                    bkf_error e = {{0}};
+                    bkf_error e = {0};
                     char where[160];
                     fmt_where(where, sizeof where, "T mu %g nu %g tol %g %s", mu, nu, tols[k],
                               forced ? "bsimp" : "auto");
@@ -255,6 +255,10 @@ TEST(extremes_period_matrix)
         }
     tally_report(&t);
     CHECK(t.ok >= t.points * 3 / 4);
+    /* Today one refusal, mu 1e4 nu 0.9999 at tol 1e-11 (its estimate 1.8e-11
+     * just above tol); two more leave room for the other mu 1e4 point and
+     * mu 1e3 at that tol, the same edge. */
+    CHECK_MSG(t.refused <= 3, "%zu refusals", t.refused);
 }
 
 /* ------------------------------------------------------------- speeds */
@@ -298,7 +302,7 @@ static void check_speeds_case(tally *t, bkf_model_params p, double tol, size_t n
     o.n_from = n_from;
     o.n_to = n_to;
     bkf_speeds_table tab;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     char where[160];
     fmt_where(where, sizeof where, "speeds gamma %g c %g nu %g S %g tol %g n %zu..%zu", p.gamma, p.c,
               p.nu, p.S, tol, n_from, n_to);
@@ -412,6 +416,10 @@ TEST(extremes_speeds_matrix)
     tally_report(&t);
     bkf_test_note("speeds: %zu rows with T from a formula (default method auto)", speeds_formula_rows);
     CHECK(speeds_formula_rows >= 3);
+    /* Today no case refuses.  Two may: the sonic limit (root beyond mu =
+     * 1e5) and the canard near the Hopf point are where a refusal is an
+     * honest answer; any other refusal loses a case's rows. */
+    CHECK_MSG(t.refused <= 2, "%zu refused cases", t.refused);
 }
 
 /* ------------------------------------------------------------- Floquet */
@@ -523,10 +531,12 @@ static double log_product(const bkf_floquet_point *p)
     return a > 0 && b > 0 ? log(a) + log(b) : NAN;
 }
 
-TEST(extremes_floquet_matrix)
+/* The Floquet matrix over gammas x nus (one part of the box: the parts run
+ * in parallel), with at most max_refused refusals and max_unverified points
+ * nothing independent can check. */
+static void floquet_matrix(const double *gammas, size_t n_gammas, const double *nus, size_t n_nus,
+                           size_t max_refused, size_t max_unverified)
 {
-    const double gammas[] = {1e-2, 0.3, 2, 30, 1e2};
-    const double nus[] = {0, -0.9, -0.99, 0.9999};
     const double cs[] = {0, 0.3, 10};
     const double qs[] = {0, 1, 10};
     const double tols[] = {1e-4, 1e-8};
@@ -534,8 +544,8 @@ TEST(extremes_floquet_matrix)
     double worst_L = 0;
     size_t unverified = 0;
     double t_power = 0.0;
-    for (size_t i = 0; i < sizeof gammas / sizeof gammas[0]; i++)
-        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+    for (size_t i = 0; i < n_gammas; i++)
+        for (size_t j = 0; j < n_nus; j++) {
             double gamma = gammas[i], nu = nus[j];
             clock_t c0 = clock();
             /* L by an independent solve of the cycle (mu = gamma), the other
@@ -545,7 +555,7 @@ TEST(extremes_floquet_matrix)
             co.warm_start = 0;
             co.stepper = floquet_other_stepper(gamma);
             bkf_cycle_result cy;
-            bkf_error e = {{0}};
+            bkf_error e = {0};
             int cy_rc = bkf_cycle_period(gamma, nu, &co, &cy, &e);
             /* near the Hopf point at gamma >= 30 the cycle refuses 1e-12 */
             for (int a = 0; cy_rc != BKF_OK && a < 4; a++) {
@@ -641,10 +651,17 @@ TEST(extremes_floquet_matrix)
                                               at, periods, spread, p.lambda, lref, unc);
                             }
                         }
-                        /* Liouville with the independent L */
+                        /* Liouville with the independent L: ln|m1 m2| is the
+                         * integral of the trace over the period, the same
+                         * for every q, an integral of size |L| met to the
+                         * relative tolerance tol */
                         double lp = log_product(&p);
                         double dL = fabs((isfinite(lp) ? lp : p.log_det) - L_ref);
-                        if (dL / fmax(1.0, fabs(L_ref)) > worst_L) worst_L = dL / fmax(1.0, fabs(L_ref));
+                        double L_scale = tol * fmax(1.0, fabs(L_ref));
+                        CHECK_MSG(dL <= L_scale + L_unc,
+                                  "%s: LIOUVILLE: ln|m1 m2| - L = %.3g above tol max(1, |L|) "
+                                  "(L %.10g +- %.1g)", at, dL, L_ref, L_unc);
+                        worst_L = fmax(worst_L, dL / L_scale);
                         double err = fabs(p.lambda - lref);
                         double ratio = fmax(err - unc, 0.0) / p.lambda_err;
                         bkf_test_note("%s: OK, lambda %.10g true %.2g est %.2g ratio %.2g (ref %s +- %.1g); "
@@ -670,11 +687,36 @@ TEST(extremes_floquet_matrix)
             bkf_test_note("floquet gamma %g nu %g: references %.2f s, all %.2f s", gamma, nu, t_ref,
                           (double)(clock() - c0) / CLOCKS_PER_SEC);
         }
-    bkf_test_note("worst |ln|m1 m2| - L| / max(1, |L|): %.3g", worst_L);
+    bkf_test_note("worst |ln|m1 m2| - L| / (tol max(1, |L|)): %.3g (at most 1)", worst_L);
     bkf_test_note("floquet: %zu not verifiable (no independent value within tol); power iteration %.2f s",
                   unverified, t_power);
     /* few refusals and few points nothing independent can check (README) */
-    CHECK_MSG(t.refused <= 40, "%zu refusals", t.refused);
-    CHECK_MSG(unverified <= 10, "%zu unverifiable points", unverified);
+    CHECK_MSG(t.refused <= max_refused, "%zu refusals", t.refused);
+    CHECK_MSG(unverified <= max_unverified, "%zu unverifiable points", unverified);
     tally_report(&t);
+}
+
+/* The box gamma {1e-2, 0.3, 2, 30, 1e2} x nu {0, -0.9, -0.99, 0.9999} in
+ * three parts of similar cost (gamma 1e2 costs twice gamma 30, and nu 0.9999
+ * the most there); the caps add up to the whole box's, 40 refusals and 10
+ * points nothing independent can check (today 3 + 4 + 4 and 0 + 3 + 1). */
+TEST(extremes_floquet_matrix_gamma_to_30)
+{
+    const double gammas[] = {1e-2, 0.3, 2, 30};
+    const double nus[] = {0, -0.9, -0.99, 0.9999};
+    floquet_matrix(gammas, 4, nus, 4, 13, 3);
+}
+
+TEST(extremes_floquet_matrix_gamma_100)
+{
+    const double gammas[] = {1e2};
+    const double nus[] = {0, -0.9, -0.99};
+    floquet_matrix(gammas, 1, nus, 3, 14, 4);
+}
+
+TEST(extremes_floquet_matrix_gamma_100_near_hopf)
+{
+    const double gammas[] = {1e2};
+    const double nus[] = {0.9999};
+    floquet_matrix(gammas, 1, nus, 1, 13, 3);
 }

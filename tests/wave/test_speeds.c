@@ -22,7 +22,7 @@ static bkf_speeds_table find(bkf_model_params p, double tol, size_t n_from, size
     o.n_from = n_from;
     o.n_to = n_to;
     bkf_speeds_table t;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int rc = bkf_speeds_find(&p, &o, &t, &e);
     CHECK_MSG(rc == BKF_OK, "find(gamma %g, c %g, nu %g, S %g): %s", p.gamma, p.c, p.nu, p.S,
               e.message);
@@ -166,7 +166,7 @@ TEST(speeds_method_formula_roots)
     o.tol = 1e-2;
     o.n_to = 5;
     bkf_speeds_table a, s;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     CHECK_MSG(bkf_speeds_find(&p, &o, &a, &e) == BKF_OK, "%s", e.message);
     o.method = BKF_METHOD_SHOOTING;
     o.tol = 1e-10;
@@ -453,7 +453,7 @@ TEST(branch_passes_two_folds_to_the_sonic_limit)
     bkf_speeds_options o = bkf_speeds_options_default();
     o.tol = 1e-8;
     bkf_speeds_branch_report rep;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int rc = bkf_speeds_branch(&p, 6, 1, BKF_SPEEDS_ALONG_S, 5.0, &o, 0, collect, &c, &rep, &e);
     CHECK_MSG(rc == BKF_OK, "%s", e.message);
     CHECK_MSG(rep.folds == 2 && rep.sonic, "folds %zu sonic %d", rep.folds, rep.sonic);
@@ -495,7 +495,7 @@ TEST(branch_lands_on_its_end_and_agrees_with_speeds)
     c.count = 0;
     bkf_speeds_options o = bkf_speeds_options_default();
     bkf_speeds_branch_report rep;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     int rc = bkf_speeds_branch(&paper, 12, 1, BKF_SPEEDS_ALONG_C, 0.1, &o, 0, collect, &c, &rep, &e);
     CHECK_MSG(rc == BKF_OK, "%s", e.message);
     CHECK(rep.reached_end && !rep.sonic && rep.folds == 0);
@@ -518,7 +518,7 @@ TEST(branch_in_nu_and_gamma)
     bkf_speeds_options o = bkf_speeds_options_default();
     o.tol = 1e-9;
     bkf_speeds_branch_report rep;
-    bkf_error e = {{0}};
+    bkf_error e = {0};
     const struct {
         bkf_speeds_param along;
         double to;

@@ -1,0 +1,104 @@
+/* The products of the speed-selection condition (module speeds) as tables:
+ * every allowed front speed (`bkfront speeds`) and one speed followed along
+ * a parameter (`bkfront branch`).  The numbers are bkf_speeds_find's and
+ * bkf_speeds_branch's; this module checks the spec, runs them and tabulates.
+ *
+ * bkf_fronts_options and bkf_fronts_branch_options are the tables of their
+ * keys (flags and scene keys, options.h): fill a spec from its _default,
+ * apply values through the table, check, write. */
+#ifndef BKFRONT_FRONTS_H
+#define BKFRONT_FRONTS_H
+
+#include <stddef.h>
+#include <stdio.h>
+#include "bkfront/io.h"
+#include "bkfront/model.h"
+#include "bkfront/options.h"
+#include "bkfront/speeds.h"
+#include "bkfront/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* --nmax at most: each n costs a few solves, a typo must not mean hours. */
+#define BKF_FRONTS_NMAX_MAX 100000u
+
+/* ---------------------------------------------------------------- speeds */
+
+typedef struct {
+    double gamma, c, nu, S; /* required (NaN by default); ranges as bkf_speeds_check */
+    size_t n;               /* only this n; 0 (default): every n */
+    size_t nmax;            /* only n <= nmax; 0 (default): up to n_max, at most
+                               BKF_SPEEDS_MAX_ROWS values of n */
+    double tol;             /* relative on v; default 1e-10 */
+    int method;             /* index in auto, asymptotic, leading, shooting */
+} bkf_fronts_spec;
+
+bkf_fronts_spec bkf_fronts_spec_default(void);
+
+/* The keys: gamma, c, nu, S, n, nmax, tol, method. */
+extern const bkf_option bkf_fronts_options[];
+extern const size_t bkf_fronts_noptions;
+
+/* What the table cannot judge key by key (n and nmax together, S/(c gamma)
+ * below 1e15); messages name the keys with `prefix` ("--" or ""). */
+int bkf_fronts_check(const bkf_fronts_spec *spec, const char *prefix, bkf_error *err);
+
+/* The spec as the speeds module's parameters and options. */
+void bkf_fronts_setup(const bkf_fronts_spec *spec, bkf_model_params *params,
+                      bkf_speeds_options *options);
+
+/* The columns of one root: n, v, mu, T, T_err, v_over_c, wavelength,
+ * period_fixed, v_asym, deviation, v_err, model, residual, slope, flags. */
+#define BKF_FRONTS_ROOT_COLUMNS 15
+const bkf_io_column *bkf_fronts_columns(size_t *count);
+/* The BKF_FRONTS_ROOT_COLUMNS cells of one root (text cells are static). */
+void bkf_fronts_root_values(const bkf_speeds_root *root, bkf_io_value *values);
+
+/* Every root (bkf_speeds_find) as a table to `out`.  Comments: the
+ * parameters, the range of n (n_max, n_bound = S/(k c gamma), k(nu), the
+ * infimum of T/sqrt(mu^2 - gamma^2)), the work, the note; in JSON the same
+ * key results are the fields of "results": n_max and n_bound (null when
+ * c = 0: every n has a root), k, g_inf, dips_below_k.  On failure the stream
+ * holds a partial table and the caller discards it. */
+int bkf_fronts_write(const bkf_fronts_spec *spec, FILE *out, bkf_io_format format,
+                     const bkf_provenance *provenance, bkf_error *err);
+
+/* ---------------------------------------------------------------- branch */
+
+typedef struct {
+    int along;              /* index in S, nu, gamma, c (bkf_speeds_param); required */
+    double from, to;        /* the continued parameter's ends, from != to; required */
+    double gamma, c, nu, S; /* every one but the continued one: required (NaN) */
+    size_t n;               /* number of fronts; default 1 */
+    size_t root;            /* which root of n at `from`, 1 the fastest; default 1 */
+    size_t max_points;      /* regular points at most; 0 (default): no limit */
+    double tol;             /* relative accuracy of T and v; default 1e-10 */
+} bkf_fronts_branch_spec;
+
+bkf_fronts_branch_spec bkf_fronts_branch_spec_default(void);
+
+/* The keys: param, from, to, n, root, gamma, c, nu, S, tol, max-points. */
+extern const bkf_option bkf_fronts_branch_options[];
+extern const size_t bkf_fronts_branch_noptions;
+
+/* The ranges bkf_speeds_branch needs: the continued parameter given only as
+ * from and to, each end in its range, c > 0 along the branch. */
+int bkf_fronts_branch_check(const bkf_fronts_branch_spec *spec, const char *prefix,
+                            bkf_error *err);
+
+/* The columns: point, S, gamma, c, nu, then the root's. */
+const bkf_io_column *bkf_fronts_branch_columns(size_t *count);
+
+/* The branch (bkf_speeds_branch) as a table: one row per point, fold and
+ * sonic end; comments list the folds and how the branch ended (a C program
+ * that wants the points as structs calls bkf_speeds_branch). */
+int bkf_fronts_branch_write(const bkf_fronts_branch_spec *spec, FILE *out, bkf_io_format format,
+                            const bkf_provenance *provenance, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

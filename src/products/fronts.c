@@ -1,0 +1,527 @@
+#include "bkfront/fronts.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bkfront/cycle.h"
+
+#include "product_internal.h"
+
+#define ROOT_COLUMNS                                                                   \
+    {"n", BKF_IO_NUMBER}, {"v", BKF_IO_NUMBER}, {"mu", BKF_IO_NUMBER},                 \
+    {"T", BKF_IO_NUMBER}, {"T_err", BKF_IO_NUMBER}, {"v_over_c", BKF_IO_NUMBER},       \
+    {"wavelength", BKF_IO_NUMBER}, {"period_fixed", BKF_IO_NUMBER},                    \
+    {"v_asym", BKF_IO_NUMBER}, {"deviation", BKF_IO_NUMBER}, {"v_err", BKF_IO_NUMBER}, \
+    {"model", BKF_IO_TEXT}, {"residual", BKF_IO_NUMBER}, {"slope", BKF_IO_NUMBER},     \
+    {"flags", BKF_IO_TEXT}
+
+static const bkf_io_column speeds_columns[] = {ROOT_COLUMNS};
+static const bkf_io_column branch_columns[] = {
+    {"point", BKF_IO_TEXT}, {"S", BKF_IO_NUMBER},  {"gamma", BKF_IO_NUMBER},
+    {"c", BKF_IO_NUMBER},   {"nu", BKF_IO_NUMBER}, ROOT_COLUMNS};
+#define NSPEEDS (sizeof speeds_columns / sizeof speeds_columns[0])
+#define NBRANCH (sizeof branch_columns / sizeof branch_columns[0])
+#define NPARAM (NBRANCH - NSPEEDS)
+
+_Static_assert(NSPEEDS == BKF_FRONTS_ROOT_COLUMNS, "the root's columns");
+
+static const char *const param_names[] = {"S", "nu", "gamma", "c", NULL};
+static const char *const method_names[] = {"auto", "asymptotic", "leading", "shooting", NULL};
+static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYMPTOTIC,
+                                                BKF_METHOD_LEADING, BKF_METHOD_SHOOTING};
+
+#define BOUNDED (BKF_OPT_MIN | BKF_OPT_MAX)
+
+/* The model's keys, shared by both products' tables (REQUIRED: speeds needs
+ * every one; branch all but the continued one, which its check sees).  nu's
+ * range is the checks' (check_nu), whose message says why. */
+#define MODEL_OPTIONS(SPEC, required)                                                         \
+    {.name = "gamma", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, gamma),                \
+     .flags = (required) | BOUNDED, .min = BKF_CYCLE_MU_MIN, .max = BKF_CYCLE_MU_MAX,         \
+     .form = "G", .help = "friction strength, in [1e-06, 1e+06] (mu >= gamma must be\n"       \
+                          "solvable)"},                                                       \
+    {.name = "c", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, c),                        \
+     .flags = (required) | BKF_OPT_MIN, .min = 0, .form = "C", .help = "sound speed, >= 0"},  \
+    {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, nu), .flags = (required), \
+     .form = "V", .help = "pulling rate in (-1, 1); |nu| >= 1 has no fronts"},                \
+    {.name = "S", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, S),                        \
+     .flags = (required) | BKF_OPT_MIN | BKF_OPT_MIN_OPEN, .min = 0, .form = "L",             \
+     .help = "system size, > 0"}
+
+#define TOL_OPTION(SPEC, what)                                                                \
+    {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, tol), .flags = BOUNDED,  \
+     .min = BKF_TOL_MIN, .max = BKF_TOL_MAX, .form = "E", .shown_default = "1e-10",           \
+     .help = what ",\nin [1e-14, 0.1]"}
+
+/* ---------------------------------------------------------------- speeds */
+
+const bkf_option bkf_fronts_options[] = {
+    MODEL_OPTIONS(bkf_fronts_spec, BKF_OPT_REQUIRED),
+    {.name = "n", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_fronts_spec, n), .flags = BOUNDED,
+     .min = 1, .max = 1e9, .form = "N", .help = "only the roots for this n"},
+    {.name = "nmax", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_fronts_spec, nmax),
+     .flags = BOUNDED, .min = 1, .max = BKF_FRONTS_NMAX_MAX, .form = "N",
+     .help = "only n <= N; default every n up to n_max, but no more\n"
+             "than 1000 values of n (rows n <= 10 when c = 0)"},
+    TOL_OPTION(bkf_fronts_spec, "relative accuracy asked of v, and bound on |residual|"),
+    {.name = "method", .type = BKF_OPT_CHOICE, .offset = offsetof(bkf_fronts_spec, method),
+     .choices = method_names, .form = "auto|asymptotic|leading|shooting", .shown_default = "auto",
+     .help = "how T is obtained at the roots (column model): auto\n"
+             "takes a formula wherever its verified error bound meets the\n"
+             "tolerance the root needs (about tol, 0.1..10 tol), else\n"
+             "shooting; asymptotic or leading: the formula at every root,\n"
+             "exit 1 where its bound exceeds that; shooting: never a formula\n"
+             "(except beyond the grid's cap, flag asymptotic)"},
+};
+const size_t bkf_fronts_noptions = sizeof bkf_fronts_options / sizeof bkf_fronts_options[0];
+
+bkf_fronts_spec bkf_fronts_spec_default(void)
+{
+    bkf_fronts_spec s;
+    memset(&s, 0, sizeof s);
+    s.gamma = s.c = s.nu = s.S = NAN;
+    s.tol = bkf_speeds_options_default().tol;
+    s.method = 0;
+    return s;
+}
+
+/* |nu| >= 1: no limit cycle, hence no fronts. */
+static int check_nu(const char *p, double nu, bkf_error *err)
+{
+    char a[32];
+    if (!(fabs(nu) < 1.0))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%snu: nu = %s is outside (-1, 1): no fronts, uniform continuous "
+                             "slip psi = nu is stable (no limit cycle)",
+                             p, bkf_format_number(nu, a, sizeof a));
+    return BKF_OK;
+}
+
+static bkf_model_params model_of(double gamma, double c, double nu, double S)
+{
+    bkf_model_params p;
+    memset(&p, 0, sizeof p);
+    p.gamma = gamma;
+    p.c = c;
+    p.nu = nu;
+    p.S = S;
+    p.kind = BKF_MODEL_CONTINUUM;
+    return p;
+}
+
+void bkf_fronts_setup(const bkf_fronts_spec *spec, bkf_model_params *params,
+                      bkf_speeds_options *options)
+{
+    *params = model_of(spec->gamma, spec->c, spec->nu, spec->S);
+    *options = bkf_speeds_options_default();
+    options->tol = spec->tol;
+    options->method = (unsigned)spec->method < 4 ? method_kinds[spec->method] : BKF_METHOD_AUTO;
+    if (spec->n) options->n_from = options->n_to = spec->n;
+    if (spec->nmax) options->n_to = spec->nmax;
+}
+
+int bkf_fronts_check(const bkf_fronts_spec *spec, const char *prefix, bkf_error *err)
+{
+    if (!spec) return bkf_error_set(err, BKF_EINPUT, "speeds: spec is NULL");
+    const char *p = prefix ? prefix : "";
+    if (spec->n && spec->nmax)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%sn, %snmax: give one of them (%sn N: that n only; %snmax N: "
+                             "n <= N)", p, p, p, p);
+    if ((unsigned)spec->method >= 4)
+        return bkf_error_set(err, BKF_EINPUT, "%smethod: not auto, asymptotic, leading or shooting", p);
+    int s = check_nu(p, spec->nu, err);
+    if (s) return s;
+    bkf_model_params params;
+    bkf_speeds_options options;
+    bkf_fronts_setup(spec, &params, &options);
+    bkf_error e;
+    if (bkf_speeds_check(&params, &options, &e) != BKF_OK)
+        return bkf_error_set(err, BKF_EINPUT, "%sS, %sc, %sgamma: %s", p, p, p, e.message);
+    return BKF_OK;
+}
+
+const bkf_io_column *bkf_fronts_columns(size_t *count)
+{
+    if (count) *count = NSPEEDS;
+    return speeds_columns;
+}
+
+static const char *flag_text(unsigned flags)
+{
+    if ((flags & BKF_SPEEDS_NEAR_TANGENT) && (flags & BKF_SPEEDS_ASYMPTOTIC))
+        return "near-tangent,asymptotic";
+    if (flags & BKF_SPEEDS_NEAR_TANGENT) return "near-tangent";
+    if (flags & BKF_SPEEDS_ASYMPTOTIC) return "asymptotic";
+    return "";
+}
+
+void bkf_fronts_root_values(const bkf_speeds_root *r, bkf_io_value *v)
+{
+    memset(v, 0, NSPEEDS * sizeof *v);
+    v[0].number = (double)r->n;
+    v[1].number = r->v;
+    v[2].number = r->mu;
+    v[3].number = r->T;
+    v[4].number = r->T_err;
+    v[5].number = r->v_over_c;
+    v[6].number = r->wavelength;
+    v[7].number = r->period_fixed;
+    v[8].number = r->v_asym;
+    v[9].number = r->deviation;
+    v[10].number = r->v_err;
+    v[11].text = r->model ? r->model : "shooting";
+    v[12].number = r->residual;
+    v[13].number = r->slope;
+    v[14].text = flag_text(r->flags);
+}
+
+static int number_result(bkf_io_table *t, const char *name, double x, bkf_error *err)
+{
+    bkf_io_value v = {x, NULL};
+    return bkf_io_table_result(t, name, BKF_IO_NUMBER, v, err);
+}
+
+/* The key results: a comment for TSV and the fields of JSON's "results". */
+static int range_of_n(bkf_io_table *table, double c, const bkf_speeds_table *t, bkf_error *err)
+{
+    char line[640];
+    int c_positive = c > 0;
+    if (c_positive)
+        snprintf(line, sizeof line,
+                 "n_max %ld; n_bound = S/(k c gamma) = %.17g with k(nu) = %.17g; "
+                 "inf of T/sqrt(mu^2 - gamma^2) over mu > gamma: %.17g (%s)",
+                 t->n_max, t->n_bound, t->k, t->g_inf,
+                 t->dips_below_k ? "dips below k: some n >= n_bound have roots"
+                                 : "= k, approached as mu -> inf");
+    else
+        snprintf(line, sizeof line, "n_max: none (c = 0, every n has a front); k(nu) = %.17g",
+                 t->k);
+    int s = bkf_io_table_comment(table, line, err);
+    /* c = 0: no largest n and no bound, null in JSON */
+    if (!s) s = number_result(table, "n_max", c_positive ? (double)t->n_max : NAN, err);
+    if (!s) s = number_result(table, "n_bound", c_positive ? t->n_bound : NAN, err);
+    if (!s) s = number_result(table, "k", t->k, err);
+    if (!s) s = number_result(table, "g_inf", c_positive ? t->g_inf : NAN, err);
+    if (!s) s = number_result(table, "dips_below_k", c_positive ? (double)t->dips_below_k : NAN, err);
+    return s;
+}
+
+static int write_speeds(const bkf_model_params *p, const bkf_speeds_options *o,
+                        const bkf_speeds_table *t, FILE *out, bkf_io_format format,
+                        const bkf_provenance *prov, bkf_error *err)
+{
+    bkf_io_table *table;
+    int s = bkf_product_table_open(
+        out, format, speeds_columns, NSPEEDS,
+        "speeds: roots v > c of n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)), "
+        "mu(v) = gamma / sqrt(1 - c^2/v^2)",
+        prov, &table, err);
+    if (s) return s;
+    char a[32], b[32], c[32], d[32], e[32], line[640];
+    snprintf(line, sizeof line, "gamma %s, c %s, nu %s, S %s; tol %s (relative, on v)",
+             bkf_format_number(p->gamma, a, sizeof a), bkf_format_number(p->c, b, sizeof b),
+             bkf_format_number(p->nu, c, sizeof c), bkf_format_number(p->S, d, sizeof d),
+             bkf_format_number(o->tol, e, sizeof e));
+    s = bkf_io_table_comment(table, line, err);
+    if (!s) s = range_of_n(table, p->c, t, err);
+    if (!s) {
+        snprintf(line, sizeof line,
+                 "work: %zu grid samples (%zu solves at the coarse tolerance), %zu solves at "
+                 "the roots' tolerance, %zu values of T from a formula, largest mu %.6g; "
+                 "method %s",
+                 t->samples, t->coarse_solves, t->precise_solves, t->formula_answers,
+                 t->mu_grid_max, bkf_cycle_method_name(o->method));
+        s = bkf_io_table_comment(table, line, err);
+    }
+    if (!s && t->note[0]) {
+        snprintf(line, sizeof line, "note: %s", t->note);
+        s = bkf_io_table_comment(table, line, err);
+    }
+    if (!s) s = bkf_product_table_command(table, prov, err);
+    for (size_t i = 0; !s && i < t->count; i++) {
+        bkf_io_value v[NSPEEDS];
+        bkf_fronts_root_values(&t->roots[i], v);
+        s = bkf_io_table_row(table, v, err);
+    }
+    if (!s) s = bkf_io_table_finish(table, err);
+    bkf_io_table_free(table);
+    return s;
+}
+
+int bkf_fronts_write(const bkf_fronts_spec *spec, FILE *out, bkf_io_format format,
+                     const bkf_provenance *prov, bkf_error *err)
+{
+    int s = bkf_fronts_check(spec, "", err);
+    if (s) return s;
+    bkf_model_params params;
+    bkf_speeds_options options;
+    bkf_fronts_setup(spec, &params, &options);
+    bkf_speeds_table t;
+    s = bkf_speeds_find(&params, &options, &t, err);
+    if (!s) s = write_speeds(&params, &options, &t, out, format, prov, err);
+    bkf_speeds_table_free(&t);
+    return s;
+}
+
+/* ---------------------------------------------------------------- branch */
+
+const bkf_option bkf_fronts_branch_options[] = {
+    {.name = "param", .type = BKF_OPT_CHOICE, .offset = offsetof(bkf_fronts_branch_spec, along),
+     .flags = BKF_OPT_REQUIRED, .choices = param_names, .form = "S|nu|gamma|c",
+     .help = "required; the continued parameter"},
+    {.name = "from", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_fronts_branch_spec, from),
+     .flags = BKF_OPT_REQUIRED, .form = "A", .help = "required; its start value"},
+    {.name = "to", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_fronts_branch_spec, to),
+     .flags = BKF_OPT_REQUIRED, .form = "B", .help = "required; its end value (A != B)"},
+    {.name = "n", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_fronts_branch_spec, n),
+     .flags = BOUNDED, .min = 1, .max = 1e9, .form = "N", .shown_default = "1",
+     .help = "number of fronts"},
+    {.name = "root", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_fronts_branch_spec, root),
+     .flags = BOUNDED, .min = 1, .max = 1e6, .form = "I", .shown_default = "1",
+     .help = "which root of this n at p = A to follow, 1 being the\n"
+             "fastest (as listed by bkfront speeds)"},
+    MODEL_OPTIONS(bkf_fronts_branch_spec, 0),
+    TOL_OPTION(bkf_fronts_branch_spec, "relative accuracy asked of T and v"),
+    {.name = "max-points", .type = BKF_OPT_COUNT,
+     .offset = offsetof(bkf_fronts_branch_spec, max_points), .flags = BOUNDED, .min = 1,
+     .max = BKF_LIST_MAX, .form = "N", .help = "at most N regular points; default no limit"},
+};
+const size_t bkf_fronts_branch_noptions =
+    sizeof bkf_fronts_branch_options / sizeof bkf_fronts_branch_options[0];
+
+bkf_fronts_branch_spec bkf_fronts_branch_spec_default(void)
+{
+    bkf_fronts_branch_spec s;
+    memset(&s, 0, sizeof s);
+    s.along = -1;
+    s.from = s.to = NAN;
+    s.gamma = s.c = s.nu = s.S = NAN;
+    s.n = 1;
+    s.root = 1;
+    s.max_points = 0;
+    s.tol = bkf_speeds_options_default().tol;
+    return s;
+}
+
+const bkf_io_column *bkf_fronts_branch_columns(size_t *count)
+{
+    if (count) *count = NBRANCH;
+    return branch_columns;
+}
+
+static double *param_field(bkf_model_params *p, bkf_speeds_param along)
+{
+    return along == BKF_SPEEDS_ALONG_S       ? &p->S
+           : along == BKF_SPEEDS_ALONG_NU    ? &p->nu
+           : along == BKF_SPEEDS_ALONG_GAMMA ? &p->gamma
+                                             : &p->c;
+}
+
+static double param_value(bkf_model_params p, bkf_speeds_param along)
+{
+    return *param_field(&p, along);
+}
+
+/* The fixed parameters with the continued one at x. */
+static bkf_model_params branch_params(const bkf_fronts_branch_spec *spec, double x)
+{
+    bkf_model_params p = model_of(spec->gamma, spec->c, spec->nu, spec->S);
+    *param_field(&p, (bkf_speeds_param)spec->along) = x;
+    return p;
+}
+
+/* One end of the continued parameter in its range, as speeds checks it. */
+static int check_end(const bkf_fronts_branch_spec *spec, const char *p, const char *end, double x,
+                     bkf_error *err)
+{
+    const char *name = param_names[spec->along];
+    char a[32];
+    if (!isfinite(x))
+        return bkf_error_set(err, BKF_EINPUT, "%s%s: %s is required", p, end, name);
+    int bad = 0;
+    if (spec->along == BKF_SPEEDS_ALONG_GAMMA)
+        bad = !(x >= BKF_CYCLE_MU_MIN && x <= BKF_CYCLE_MU_MAX);
+    else if (spec->along == BKF_SPEEDS_ALONG_C)
+        bad = !(x >= 0);
+    else if (spec->along == BKF_SPEEDS_ALONG_S)
+        bad = !(x > 0);
+    else
+        bad = !(fabs(x) < 1);
+    if (bad) {
+        const char *range = spec->along == BKF_SPEEDS_ALONG_GAMMA ? "[1e-06, 1e+06]"
+                            : spec->along == BKF_SPEEDS_ALONG_C   ? ">= 0"
+                            : spec->along == BKF_SPEEDS_ALONG_S   ? "> 0"
+                                                                  : "in (-1, 1)";
+        return bkf_error_set(err, BKF_EINPUT, "%s%s: %s = %s is outside its range (%s)", p, end,
+                             name, bkf_format_number(x, a, sizeof a), range);
+    }
+    return BKF_OK;
+}
+
+int bkf_fronts_branch_check(const bkf_fronts_branch_spec *spec, const char *prefix,
+                            bkf_error *err)
+{
+    if (!spec) return bkf_error_set(err, BKF_EINPUT, "branch: spec is NULL");
+    const char *p = prefix ? prefix : "";
+    if (spec->along < 0 || spec->along > BKF_SPEEDS_ALONG_C)
+        return bkf_error_set(err, BKF_EINPUT, "%sparam is required (S, nu, gamma or c)", p);
+    const char *name = param_names[spec->along];
+    const double values[4] = {spec->S, spec->nu, spec->gamma, spec->c};
+    for (int k = 0; k < 4; k++) {
+        if (k == spec->along && !isnan(values[k]))
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "%s%s: this is the continued parameter (%sparam %s); give its "
+                                 "range with %sfrom and %sto instead",
+                                 p, name, p, name, p, p);
+        if (k != spec->along && isnan(values[k]))
+            return bkf_error_set(err, BKF_EINPUT, "%s%s is required", p, param_names[k]);
+    }
+    int s;
+    if (spec->along != BKF_SPEEDS_ALONG_NU && (s = check_nu(p, spec->nu, err))) return s;
+    if ((s = check_end(spec, p, "from", spec->from, err))) return s;
+    if ((s = check_end(spec, p, "to", spec->to, err))) return s;
+    if (spec->from == spec->to)
+        return bkf_error_set(err, BKF_EINPUT, "%sfrom, %sto: the ends are equal (need A != B)", p,
+                             p);
+    if (spec->along != BKF_SPEEDS_ALONG_C && !(spec->c > 0))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%sc: c = 0 needs no continuation, v = S/(n T(gamma)) in closed "
+                             "form (bkfront speeds); branches need c > 0", p);
+    if (spec->along == BKF_SPEEDS_ALONG_C && !(spec->from > 0 && spec->to > 0))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%sfrom, %sto: c must stay > 0 along the branch (c = 0 is the "
+                             "closed form v = S/(n T(gamma)))", p, p);
+    if (spec->n < 1 || spec->root < 1)
+        return bkf_error_set(err, BKF_EINPUT, "%sn, %sroot: must be >= 1", p, p);
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.tol = spec->tol;
+    bkf_model_params start = branch_params(spec, spec->from);
+    bkf_error e;
+    if (bkf_speeds_check(&start, &o, &e) != BKF_OK)
+        return bkf_error_set(err, BKF_EINPUT, "%sS, %sc, %sgamma: %s", p, p, p, e.message);
+    return BKF_OK;
+}
+
+typedef struct {
+    bkf_speeds_branch_point *points;
+    size_t count, cap;
+    int status;
+} branch_sink;
+
+static int collect_point(const bkf_speeds_branch_point *pt, void *data)
+{
+    branch_sink *sink = data;
+    if (sink->count == sink->cap) {
+        size_t cap = sink->cap ? 2 * sink->cap : 64;
+        bkf_speeds_branch_point *x = realloc(sink->points, cap * sizeof *x);
+        if (!x) {
+            sink->status = BKF_ENOMEM;
+            return 1;
+        }
+        sink->points = x;
+        sink->cap = cap;
+    }
+    sink->points[sink->count++] = *pt;
+    return 0;
+}
+
+/* "N points, F fold(s) at p = .. (v = ..), ...; ends ..." */
+static void summary_line(bkf_speeds_param along, const branch_sink *sink,
+                         const bkf_speeds_branch_report *rep, char *line, size_t size)
+{
+    const char *pname = param_names[along];
+    char a[32], e[32];
+    int used = snprintf(line, size, "%zu points, %zu fold(s)", rep->points, rep->folds);
+    const char *sep = " at ";
+    for (size_t i = 0; i < sink->count && used > 0 && (size_t)used < size; i++)
+        if (sink->points[i].kind == BKF_SPEEDS_FOLD) {
+            used += snprintf(line + used, size - (size_t)used, "%s%s = %s (v = %s)", sep, pname,
+                             bkf_format_number(param_value(sink->points[i].params, along), a,
+                                               sizeof a),
+                             bkf_format_number(sink->points[i].root.v, e, sizeof e));
+            sep = ", ";
+        }
+    if (used > 0 && (size_t)used < size) {
+        if (rep->sonic)
+            snprintf(line + used, size - (size_t)used,
+                     "; ends at the sonic limit v -> c+ at %s = %s (S = n k(nu) c gamma)", pname,
+                     bkf_format_number(rep->sonic_value, a, sizeof a));
+        else if (rep->reached_end)
+            snprintf(line + used, size - (size_t)used, "; ends on the range's boundary");
+        else
+            snprintf(line + used, size - (size_t)used, "; stopped after --max-points");
+    }
+}
+
+static int write_branch(const bkf_fronts_branch_spec *spec, const branch_sink *sink,
+                        const bkf_speeds_branch_report *rep, FILE *out, bkf_io_format format,
+                        const bkf_provenance *prov, bkf_error *err)
+{
+    bkf_io_table *table;
+    int s = bkf_product_table_open(
+        out, format, branch_columns, NBRANCH,
+        "branch: one root v_n of n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)) "
+        "followed along one parameter by pseudo-arclength continuation",
+        prov, &table, err);
+    if (s) return s;
+    bkf_speeds_param along = (bkf_speeds_param)spec->along;
+    char a[32], b[32], c[32], d[32], line[640];
+    snprintf(line, sizeof line, "%s from %s to %s; n %zu, root %zu at the start; tol %s",
+             param_names[along], bkf_format_number(spec->from, a, sizeof a),
+             bkf_format_number(spec->to, b, sizeof b), spec->n, spec->root,
+             bkf_format_number(spec->tol, c, sizeof c));
+    s = bkf_io_table_comment(table, line, err);
+    if (!s) {
+        snprintf(line, sizeof line, "fixed: %s%s%s%s%s%s%s%s",
+                 along == BKF_SPEEDS_ALONG_GAMMA ? "" : "gamma ",
+                 along == BKF_SPEEDS_ALONG_GAMMA ? "" : bkf_format_number(spec->gamma, a, sizeof a),
+                 along == BKF_SPEEDS_ALONG_C ? "" : " c ",
+                 along == BKF_SPEEDS_ALONG_C ? "" : bkf_format_number(spec->c, b, sizeof b),
+                 along == BKF_SPEEDS_ALONG_NU ? "" : " nu ",
+                 along == BKF_SPEEDS_ALONG_NU ? "" : bkf_format_number(spec->nu, c, sizeof c),
+                 along == BKF_SPEEDS_ALONG_S ? "" : " S ",
+                 along == BKF_SPEEDS_ALONG_S ? "" : bkf_format_number(spec->S, d, sizeof d));
+        s = bkf_io_table_comment(table, line, err);
+    }
+    if (!s) {
+        summary_line(along, sink, rep, line, sizeof line);
+        s = bkf_io_table_comment(table, line, err);
+    }
+    if (!s) s = bkf_product_table_command(table, prov, err);
+    static const char *const kinds[] = {"point", "fold", "sonic"};
+    for (size_t i = 0; !s && i < sink->count; i++) {
+        const bkf_speeds_branch_point *pt = &sink->points[i];
+        bkf_io_value v[NBRANCH];
+        memset(v, 0, sizeof v);
+        v[0].text = kinds[pt->kind];
+        v[1].number = pt->params.S;
+        v[2].number = pt->params.gamma;
+        v[3].number = pt->params.c;
+        v[4].number = pt->params.nu;
+        bkf_fronts_root_values(&pt->root, v + NPARAM);
+        s = bkf_io_table_row(table, v, err);
+    }
+    if (!s) s = bkf_io_table_finish(table, err);
+    bkf_io_table_free(table);
+    return s;
+}
+
+int bkf_fronts_branch_write(const bkf_fronts_branch_spec *spec, FILE *out, bkf_io_format format,
+                            const bkf_provenance *prov, bkf_error *err)
+{
+    int s = bkf_fronts_branch_check(spec, "", err);
+    if (s) return s;
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.tol = spec->tol;
+    bkf_model_params start = branch_params(spec, spec->from);
+    branch_sink sink = {0};
+    bkf_speeds_branch_report rep;
+    s = bkf_speeds_branch(&start, spec->n, spec->root, (bkf_speeds_param)spec->along, spec->to,
+                          &o, spec->max_points, collect_point, &sink, &rep, err);
+    if (!s && sink.status) s = bkf_error_set(err, sink.status, "out of memory");
+    if (!s) s = write_branch(spec, &sink, &rep, out, format, prov, err);
+    free(sink.points);
+    return s;
+}

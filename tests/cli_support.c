@@ -1,0 +1,154 @@
+/* The shared runner of the built CLI (cli_support.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "cli_support.h"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "harness.h"
+
+#ifndef BKF_CLI_PATH
+#error "BKF_CLI_PATH (the built bkfront binary) is defined by the Makefile for tests"
+#endif
+
+#define MAX_ARGS 64
+
+static int temp_fd(void)
+{
+    char name[] = "/tmp/bkf_cli_run_XXXXXX";
+    int fd = mkstemp(name);
+    CHECK_MSG(fd >= 0, "mkstemp failed");
+    unlink(name);
+    return fd;
+}
+
+static char *read_all(int fd)
+{
+    size_t cap = 4096, n = 0;
+    char *buf = malloc(cap);
+    CHECK(buf);
+    CHECK(lseek(fd, 0, SEEK_SET) == 0);
+    for (;;) {
+        if (n + 1 >= cap) {
+            buf = realloc(buf, cap *= 2);
+            CHECK(buf);
+        }
+        ssize_t k = read(fd, buf + n, cap - n - 1);
+        if (k <= 0) break;
+        n += (size_t)k;
+    }
+    buf[n] = '\0';
+    return buf;
+}
+
+/* In the child: only calls that are safe after fork, then exec; 126 when the
+ * set-up fails, 127 when exec does. */
+static pid_t spawn_fds(const char *const *args, const bkf_cli_options *o, int in, int out, int err)
+{
+    char *argv[MAX_ARGS + 2];
+    size_t argc = 0;
+    argv[argc++] = BKF_CLI_PATH;
+    /* execv's argv is char *const[] for history's sake; it does not write */
+    for (; args[argc - 1]; argc++) {
+        CHECK_MSG(argc <= MAX_ARGS, "more than %d arguments", MAX_ARGS);
+        argv[argc] = (char *)args[argc - 1];
+    }
+    argv[argc] = NULL;
+    fflush(stdout);
+    fflush(stderr);
+    pid_t pid = fork();
+    CHECK(pid >= 0);
+    if (pid > 0) return pid;
+
+    if (dup2(in, 0) < 0 || dup2(out, 1) < 0 || dup2(err, 2) < 0) _exit(126);
+    if (o && o->dir && chdir(o->dir) != 0) _exit(126);
+    if (o && o->env)
+        for (const char *const *e = o->env; *e; e++) {
+            const char *eq = strchr(*e, '=');
+            if (!eq) _exit(126);
+            char name[256];
+            size_t len = (size_t)(eq - *e);
+            if (len == 0 || len >= sizeof name) _exit(126);
+            memcpy(name, *e, len);
+            name[len] = '\0';
+            if (setenv(name, eq + 1, 1) != 0) _exit(126);
+        }
+    const int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE, SIGALRM};
+    for (size_t i = 0; i < sizeof sigs / sizeof sigs[0]; i++) signal(sigs[i], SIG_DFL);
+    sigset_t none;
+    sigemptyset(&none);
+    sigprocmask(SIG_SETMASK, &none, NULL);
+    /* an alarm set here survives exec: the run's own timeout */
+    alarm(o ? o->timeout_s : 0);
+    execv(BKF_CLI_PATH, argv);
+    _exit(127);
+}
+
+static int stdin_fd(const bkf_cli_options *o)
+{
+    if (!o || !o->in) {
+        int fd = open("/dev/null", O_RDONLY);
+        CHECK(fd >= 0);
+        return fd;
+    }
+    int fd = temp_fd();
+    size_t len = strlen(o->in), done = 0;
+    while (done < len) {
+        ssize_t k = write(fd, o->in + done, len - done);
+        CHECK(k > 0);
+        done += (size_t)k;
+    }
+    CHECK(lseek(fd, 0, SEEK_SET) == 0);
+    return fd;
+}
+
+bkf_cli_result bkf_cli_run(const char *const *args, const bkf_cli_options *o)
+{
+    int in = stdin_fd(o), out = temp_fd(), err = temp_fd();
+    pid_t pid = spawn_fds(args, o, in, out, err);
+    int status = 0;
+    CHECK(waitpid(pid, &status, 0) == pid);
+    bkf_cli_result r = {read_all(out), read_all(err), WIFEXITED(status) ? WEXITSTATUS(status) : -1,
+                        WIFSIGNALED(status) ? WTERMSIG(status) : 0};
+    close(in);
+    close(out);
+    close(err);
+    return r;
+}
+
+void bkf_cli_result_free(bkf_cli_result *r)
+{
+    free(r->out);
+    free(r->err);
+    r->out = r->err = NULL;
+}
+
+char *bkf_cli_read_file(const char *path)
+{
+    int fd = open(path, O_RDONLY);
+    if (fd < 0) return NULL;
+    char *text = read_all(fd);
+    close(fd);
+    return text;
+}
+
+static int open_out(const char *path)
+{
+    int fd = path ? open(path, O_WRONLY | O_CREAT | O_TRUNC, 0644) : open("/dev/null", O_WRONLY);
+    CHECK_MSG(fd >= 0, "cannot open %s", path ? path : "/dev/null");
+    return fd;
+}
+
+pid_t bkf_cli_spawn(const char *const *args, const bkf_cli_options *o, const char *out_path,
+                    const char *err_path)
+{
+    int in = stdin_fd(o), out = open_out(out_path), err = open_out(err_path);
+    pid_t pid = spawn_fds(args, o, in, out, err);
+    close(in);
+    close(out);
+    close(err);
+    return pid;
+}

@@ -1,0 +1,175 @@
+/* The fronts products (speeds, branch) through the library: the same rows as
+ * the executable, and the key results in JSON's "results" against the closed
+ * forms of DESIGN.md: k(nu) = 3 + (nu^2 - 1) ln[(4 - nu^2)/(1 - nu^2)] and
+ * the sonic limit of the speed condition, n = S/(k c gamma). */
+#include "products_support.h"
+
+#include <math.h>
+
+#include "bkfront/fronts.h"
+
+/* In test_io.c. */
+int bkf_test_json_valid(const char *text);
+
+static int write_speeds(const void *spec, FILE *out, bkf_io_format format,
+                        const bkf_provenance *prov, bkf_error *err)
+{
+    return bkf_fronts_write(spec, out, format, prov, err);
+}
+
+static int write_branch(const void *spec, FILE *out, bkf_io_format format,
+                        const bkf_provenance *prov, bkf_error *err)
+{
+    return bkf_fronts_branch_write(spec, out, format, prov, err);
+}
+
+static bkf_fronts_spec speeds_spec(double gamma, double c, double nu, double S)
+{
+    bkf_fronts_spec s = bkf_fronts_spec_default();
+    s.gamma = gamma;
+    s.c = c;
+    s.nu = nu;
+    s.S = S;
+    return s;
+}
+
+static double k_closed_form(double nu)
+{
+    return 3 + (nu * nu - 1) * log((4 - nu * nu) / (1 - nu * nu));
+}
+
+/* The value of "NAME": in the JSON object "results"; *is_null for null. */
+static double result_field(const char *json, const char *name, int *is_null)
+{
+    const char *results = strstr(json, "\"results\": {");
+    CHECK_MSG(results, "no results in: %.300s", json);
+    const char *end = strchr(results, '}');
+    char key[64];
+    snprintf(key, sizeof key, "\"%s\": ", name);
+    const char *at = strstr(results, key);
+    CHECK_MSG(at && at < end, "no %s in the results", name);
+    at += strlen(key);
+    *is_null = strncmp(at, "null", 4) == 0;
+    return *is_null ? NAN : strtod(at, NULL);
+}
+
+/* The largest n among the TSV rows (first column). */
+static long largest_n(const char *tsv)
+{
+    char *body = table_body(tsv);
+    long n = 0;
+    const char *line = strchr(body, '\n'); /* past the header */
+    for (; line && line[1]; line = strchr(line + 1, '\n')) {
+        long k = strtol(line + 1, NULL, 10);
+        if (k > n) n = k;
+    }
+    free(body);
+    return n;
+}
+
+TEST(products_speeds_library_rows_are_the_cli_rows)
+{
+    bkf_fronts_spec s = speeds_spec(2, 0.3, -0.96, 20);
+    size_t rows = check_same_rows(write_speeds, &s, "speeds --gamma 2 --c 0.3 --nu -0.96 --S 20");
+    CHECK_MSG(rows == 12, "%zu rows at the paper's parameters, want n = 1..12", rows);
+    s = speeds_spec(1, 0.5, 0.5, 30);
+    s.tol = 1e-8;
+    check_same_rows(write_speeds, &s, "speeds --gamma 1 --c 0.5 --nu 0.5 --S 30 --tol 1e-8");
+    s = speeds_spec(2, 0, -0.5, 20);
+    s.nmax = 4;
+    CHECK(check_same_rows(write_speeds, &s, "speeds --gamma 2 --c 0 --nu -0.5 --S 20 --nmax 4") == 4);
+}
+
+TEST(products_branch_library_rows_are_the_cli_rows)
+{
+    bkf_fronts_branch_spec b = bkf_fronts_branch_spec_default();
+    b.along = BKF_SPEEDS_ALONG_S;
+    b.from = 20;
+    b.to = 40;
+    b.gamma = 2;
+    b.c = 0.3;
+    b.nu = -0.96;
+    size_t rows = check_same_rows(
+        write_branch, &b, "branch --param S --from 20 --to 40 --gamma 2 --c 0.3 --nu -0.96 --n 1");
+    CHECK(rows >= 2);
+}
+
+/* n_max and n_bound are JSON fields, equal to the closed forms. */
+TEST(products_speeds_json_results_match_the_closed_forms)
+{
+    const double cases[][4] = {{2, 0.3, -0.96, 20}, {1, 0.5, 0.5, 30}, {2, 0.3, 0.2, 7}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        const double *p = cases[i];
+        bkf_fronts_spec s = speeds_spec(p[0], p[1], p[2], p[3]);
+        char *json = library_output(write_speeds, &s, BKF_IO_JSON);
+        CHECK(bkf_test_json_valid(json));
+        int null_max, null_bound, null_k, null_dips;
+        double n_max = result_field(json, "n_max", &null_max);
+        double n_bound = result_field(json, "n_bound", &null_bound);
+        double k = result_field(json, "k", &null_k);
+        double dips = result_field(json, "dips_below_k", &null_dips);
+        CHECK(!null_max && !null_bound && !null_k && !null_dips);
+        double k_want = k_closed_form(p[2]);
+        CHECK_CLOSE(k, k_want, 1e-13, 0);
+        double bound_want = p[3] / (k_want * p[1] * p[0]);
+        CHECK_CLOSE(n_bound, bound_want, 1e-13, 0);
+        /* every n below the sonic limit S/(n k c gamma) > 1 has a root; beyond
+         * it only where g dips below k */
+        double below = ceil(bound_want) - 1;
+        if (dips == 0)
+            CHECK_MSG(n_max == below, "n_max %g, want %g (n_bound %g)", n_max, below, bound_want);
+        else
+            CHECK_MSG(n_max >= below, "n_max %g below %g", n_max, below);
+        /* and it is the table's own largest n */
+        char *tsv = library_output(write_speeds, &s, BKF_IO_TSV);
+        CHECK_MSG(largest_n(tsv) == (long)n_max, "largest n %ld, n_max %g", largest_n(tsv), n_max);
+        bkf_test_note("gamma %g c %g nu %g S %g: n_max %g, n_bound %.6f (closed form %.6f), "
+                      "dips below k %g", p[0], p[1], p[2], p[3], n_max, n_bound, bound_want, dips);
+        free(tsv);
+        free(json);
+    }
+    /* c = 0: every n has a front, no n_max and no bound */
+    bkf_fronts_spec s = speeds_spec(2, 0, -0.5, 20);
+    char *json = library_output(write_speeds, &s, BKF_IO_JSON);
+    int is_null;
+    result_field(json, "n_max", &is_null);
+    CHECK(is_null);
+    result_field(json, "n_bound", &is_null);
+    CHECK(is_null);
+    free(json);
+    /* the executable writes the same results */
+    char *cli = cli_output("speeds --gamma 2 --c 0.3 --nu -0.96 --S 20 --format json");
+    CHECK(bkf_test_json_valid(cli));
+    int n1, n2;
+    CHECK(result_field(cli, "n_max", &n1) == 12 && !n1);
+    CHECK_CLOSE(result_field(cli, "n_bound", &n2), 20 / (k_closed_form(-0.96) * 0.3 * 2), 1e-13, 0);
+    free(cli);
+}
+
+TEST(products_fronts_check_names_the_keys)
+{
+    bkf_error e;
+    bkf_fronts_spec s = speeds_spec(2, 0.3, 1.5, 20);
+    CHECK_STATUS(bkf_fronts_check(&s, "", &e), BKF_EINPUT);
+    CHECK_MSG(strncmp(e.message, "nu: ", 4) == 0 && strstr(e.message, "no fronts"), "%s", e.message);
+    s = speeds_spec(2, 0.3, -0.96, 20);
+    s.n = 2;
+    s.nmax = 3;
+    CHECK_STATUS(bkf_fronts_check(&s, "--", &e), BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "--nmax"), "%s", e.message);
+    bkf_fronts_branch_spec b = bkf_fronts_branch_spec_default();
+    b.along = BKF_SPEEDS_ALONG_S;
+    b.from = 20;
+    b.to = 30;
+    b.gamma = 2;
+    b.c = 0.3;
+    b.nu = -0.96;
+    CHECK_STATUS(bkf_fronts_branch_check(&b, "", &e), BKF_OK);
+    b.S = 20;
+    CHECK_STATUS(bkf_fronts_branch_check(&b, "", &e), BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "continued parameter"), "%s", e.message);
+    b.S = NAN;
+    b.c = 0;
+    CHECK_STATUS(bkf_fronts_branch_check(&b, "", &e), BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "closed form"), "%s", e.message);
+}
