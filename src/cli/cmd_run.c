@@ -277,7 +277,7 @@ static int run_run(int argc, char **argv, bkf_error *err)
     for (size_t i = 0; i < plan.nsteps; i++) {
         bkf_scene_step *st = &plan.steps[i];
         const bkf_scene_product *p = &sc->products[st->users[0]];
-        bkf_error e = {{0}};
+        bkf_error e = {0};
         char warning[BKF_ERROR_LEN] = "";
         double t0 = now();
         int status = bkf_scene_run_step(sc, &plan, i, step_status, &ro, warning,
