@@ -30,5 +30,6 @@
 #include "bkfront/init.h"
 #include "bkfront/seed.h"
 #include "bkfront/plot.h"
+#include "bkfront/scene.h"
 
 #endif

@@ -130,6 +130,12 @@ typedef int (*cli_table_writer)(const void *spec, FILE *out, bkf_io_format forma
 int cli_write_table(const cli_output_spec *output, int argc, char **argv,
                     cli_table_writer write, const void *spec, bkf_error *err);
 
+/* A temporary file that SIGINT/SIGTERM (and the other fatal signals the
+ * CLI handles) remove until unguarded, for a file written by the library
+ * (bkf_io_atomic): returns its slot, -1 when it cannot be guarded. */
+int cli_guard_temp(const char *temp);
+void cli_unguard_temp(int slot);
+
 /* Cancellation by SIGINT or SIGTERM: between cli_cancel_begin and
  * cli_cancel_end the first such signal sets the returned flag (give it to a
  * library call that checks one, e.g. bkf_pde_options.cancel) instead of

@@ -1,25 +1,21 @@
-/* bkfront run SCENE: the products of a scene, computed lazily, with figures.
+/* bkfront run SCENE: the products of a scene (bkfront/scene.h), computed
+ * lazily, with figures.
  *
- * Each computation of the plan (scene.h) is a subcommand run in-process with
- * the product's settings and --out into the output folder; figures are
- * gnuplot runs (plot.h) on those files.  A failing product does not stop
- * the others; figures of failed data are skipped and said so. */
+ * The library parses the scene, makes the plan and carries out each step;
+ * this file turns flags into those calls and prints the progress lines,
+ * the speeds tables and the files written.  A failing product does not
+ * stop the others; figures of failed data are skipped and said so. */
 #define _POSIX_C_SOURCE 200809L
 #include "args.h"
 #include "commands.h"
-#include "scene.h"
 
 #include <errno.h>
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
 
-#include "bkfront/friction.h"
-#include "bkfront/io.h"
-#include "bkfront/model.h"
-#include "bkfront/plot.h"
+#include "bkfront/scene.h"
 
 static void run_help(FILE *out)
 {
@@ -108,136 +104,33 @@ static int is_dir(const char *path)
     return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
-static const char *arg_after(char **argv, const char *flag)
+/* TRANSITIONAL (issue 14): a scene step whose product is not yet in the
+ * catalogue runs as its subcommand, in-process. */
+static int run_subcommand(int argc, char **argv, const char *out_path, void *data,
+                          bkf_error *err)
 {
-    for (int i = 0; argv && argv[i]; i++)
-        if (strcmp(argv[i], flag) == 0 && argv[i + 1]) return argv[i + 1];
-    return NULL;
+    (void)out_path, (void)data;
+    const cli_command *cmd = cli_find_command(argv[0]);
+    return cmd ? cmd->run(argc, argv, err)
+               : bkf_error_set(err, BKF_EINPUT, "no subcommand %s", argv[0]);
 }
-
-/* ------------------------------------------------------------- friction */
-
-static int run_friction(const scene_step *step, bkf_error *err)
-{
-    bkf_friction_spec spec = bkf_friction_spec_default();
-    int s = cli_parse_double("from", arg_after(step->argv, "--from"), &spec.from, err);
-    if (!s) s = cli_parse_double("to", arg_after(step->argv, "--to"), &spec.to, err);
-    if (!s)
-        s = cli_parse_count("points", arg_after(step->argv, "--points"), BKF_FRICTION_POINTS_MAX,
-                            &spec.points, err);
-    if (!s && !(spec.to > spec.from))
-        s = bkf_error_set(err, BKF_EINPUT, "friction: needs from < to");
-    if (s) return s;
-    cli_output out = {0};
-    cli_buffer buf = {0};
-    s = cli_output_open(&out, step->output, "--out", err);
-    if (!s) s = cli_buffer_open(&buf, err);
-    if (!s) s = bkf_friction_table(&spec, buf.stream, BKF_IO_TSV, NULL, err);
-    if (buf.stream) {
-        int c = cli_buffer_close(&buf, s ? NULL : err);
-        if (!s) s = c;
-    }
-    if (!s)
-        s = cli_output_write(&out, buf.data, buf.size, err);
-    else
-        cli_output_abort(&out);
-    cli_buffer_free(&buf);
-    return s;
-}
-
-/* --------------------------------------------------------------- figure */
 
 typedef struct {
-    const scene *sc;
-    const scene_plan *plan;
-    const char *plots_dir;
-    char scene_dir[2048];
+    int slot;  /* the signal cleanup's slot of the file being written */
 } run_context;
 
-static int append(char *buf, size_t size, const char *sep, const char *text)
+static void guard_temp(const char *path, int armed, void *data)
 {
-    size_t used = strlen(buf);
-    int n = snprintf(buf + used, size - used, "%s%s", used ? sep : "", text);
-    return n >= 0 && (size_t)n < size - used;
-}
-
-static int run_figure(const run_context *rc, const scene_step *step, char *warning,
-                      size_t wsize, bkf_error *err)
-{
-    const scene_product *fig = &rc->sc->products[step->users[0]];
-    const scene_product *data = &rc->sc->products[step->data_product];
-    const scene_product_plan *dp = &rc->plan->products[step->data_product];
-    char script[4096];
-    const char *own = scene_value(rc->sc, fig, "script");
-    if (own && own[0] == '/')
-        snprintf(script, sizeof script, "%s", own);
-    else if (own)
-        snprintf(script, sizeof script, "%.2000s/%.2000s", rc->scene_dir, own);
+    run_context *rc = data;
+    if (armed)
+        rc->slot = cli_guard_temp(path);
     else
-        snprintf(script, sizeof script, "%.2000s/%.64s.gp", rc->plots_dir, scene_kind_name(data->kind));
-
-    char files[8192] = "", labels[4096] = "";
-    for (size_t i = 0; i < dp->nsteps; i++) {
-        const scene_step *ds = &rc->plan->steps[dp->steps[i]];
-        if (!append(files, sizeof files, " ", ds->output))
-            return bkf_error_set(err, BKF_EINPUT, "figure %s: too many data files", fig->name);
-        const char *value = "";
-        if (data->kind == SCENE_PERIOD || data->kind == SCENE_DISPERSION)
-            value = arg_after(ds->argv, "--nu");
-        else if (data->kind == SCENE_BRANCH)
-            value = arg_after(ds->argv, "--n");
-        if (data->kind == SCENE_PROFILE) {
-            char **items;
-            size_t count;
-            if (!scene_list_values(arg_after(ds->argv, "--n"), &items, &count))
-                return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-            for (size_t k = 0; k < count; k++) append(labels, sizeof labels, " ", items[k]);
-            scene_list_free(items, count);
-        } else if (value && *value)
-            append(labels, sizeof labels, " ", value);
-    }
-    bkf_plot_job *job = bkf_plot_job_alloc(script, err);
-    if (!job) return BKF_EINPUT;
-    int s = bkf_plot_set_string(job, "files", files, err);
-    /* per file: its nu (period, dispersion) or n (branch) */
-    if (!s) s = bkf_plot_set_string(job, "values", labels, err);
-    if (!s) s = bkf_plot_set_string(job, "plotdir", rc->plots_dir, err);
-    if (!s) s = bkf_plot_set_string(job, "kind", scene_kind_name(data->kind), err);
-    const char *title = scene_value(rc->sc, fig, "title");
-    if (!s) s = bkf_plot_set_string(job, "title", title ? title : "", err);
-    static const char *const numbers[] = {"gamma", "c", "nu", "S", "tmax"};
-    for (size_t i = 0; !s && i < sizeof numbers / sizeof numbers[0]; i++) {
-        const char *v = scene_value(rc->sc, data, numbers[i]);
-        double x = NAN;
-        if (v && !strchr(v, ',') && !strchr(v, ':')) cli_parse_double(numbers[i], v, &x, NULL);
-        s = bkf_plot_set_number(job, numbers[i], x, err);
-    }
-    const char *param = scene_value(rc->sc, data, data->kind == SCENE_BRANCH ? "param" : "along");
-    if (!s) s = bkf_plot_set_string(job, "param", param ? param : "", err);
-    size_t w = 900, h = 600;
-    const char *wt = scene_value(rc->sc, fig, "width"), *ht = scene_value(rc->sc, fig, "height");
-    if (wt) cli_parse_count("width", wt, 1000000, &w, NULL);
-    if (ht) cli_parse_count("height", ht, 1000000, &h, NULL);
-    if (!s) s = bkf_plot_set_number(job, "width", (double)w, err);
-    if (!s) s = bkf_plot_set_number(job, "height", (double)h, err);
-    for (int i = 1; !s && i < step->argc; i += 2) {
-        const char *path = step->argv[i + 1];
-        const char *dot = strrchr(path, '.');
-        bkf_plot_format f = strcmp(dot, ".png") == 0   ? BKF_PLOT_PNG
-                            : strcmp(dot, ".pdf") == 0 ? BKF_PLOT_PDF
-                                                       : BKF_PLOT_SVG;
-        s = bkf_plot_add_output(job, f, path, err);
-    }
-    bkf_plot_report report;
-    if (!s) s = bkf_plot_run(job, NULL, &report, err);
-    if (!s) snprintf(warning, wsize, "%s", report.warning);
-    bkf_plot_job_free(job);
-    return s;
+        cli_unguard_temp(rc->slot);
 }
 
 /* ------------------------------------------------------------------ run */
 
-static void print_plan(const scene *sc, const scene_plan *plan, FILE *out)
+static void print_plan(const bkf_scene *sc, const bkf_scene_plan *plan, FILE *out)
 {
     fprintf(out, "# plan for %s: %zu computations for %zu products, output in %s\n", sc->path,
             plan->nsteps, sc->nproducts, plan->outdir);
@@ -245,21 +138,22 @@ static void print_plan(const scene *sc, const scene_plan *plan, FILE *out)
         fprintf(out, "# %zu computation%s shared between products (run once)\n",
                 plan->deduplicated, plan->deduplicated == 1 ? "" : "s");
     for (size_t i = 0; i < plan->nsteps; i++) {
-        const scene_step *st = &plan->steps[i];
-        fprintf(out, "%zu\t%s\tfor", i + 1, scene_step_label(st));
+        const bkf_scene_step *st = &plan->steps[i];
+        fprintf(out, "%zu\t%s\tfor", i + 1, st->product);
         for (size_t u = 0; u < st->nusers; u++) {
-            const scene_product *p = &sc->products[st->users[u]];
-            fprintf(out, "%s[%s %s] (line %d)", u ? ", " : " ", scene_kind_name(p->kind),
+            const bkf_scene_product *p = &sc->products[st->users[u]];
+            fprintf(out, "%s[%s %s] (line %d)", u ? ", " : " ", bkf_scene_kind_name(p->kind),
                     p->name, p->line);
         }
-        if (st->kind == STEP_FIGURE) {
-            const scene_product *d = &sc->products[st->data_product];
-            fprintf(out, "\tgnuplot on the data of [%s %s] -> %s\n", scene_kind_name(d->kind),
+        if (st->kind == BKF_SCENE_STEP_FIGURE) {
+            const bkf_scene_product *d = &sc->products[st->data_product];
+            fprintf(out, "\tgnuplot on the data of [%s %s] -> %s\n", bkf_scene_kind_name(d->kind),
                     d->name, st->output);
-        } else if (st->kind == STEP_FORMULA) {
+        } else if (!st->entry && !cli_find_command(st->product)) {
+            /* transitional: a product computed in the scene layer alone */
             fprintf(out, "\tclosed forms -> %s\n", st->output);
         } else {
-            char *cmd = scene_step_command(st);
+            char *cmd = bkf_scene_step_command(st);
             fprintf(out, "\t" CLI_PROGRAM " %s\n", cmd ? cmd : "?");
             free(cmd);
         }
@@ -324,12 +218,11 @@ static int run_run(int argc, char **argv, bkf_error *err)
     if (formats_text && (s = parse_formats(formats_text, &formats, err))) return s;
     if (out && !*out) return bkf_error_set(err, BKF_EINPUT, "--out: the folder name is empty");
 
-    scene *sc = NULL;
-    if ((s = scene_parse_file(scene_path, &sc, err))) return s;
+    bkf_scene *sc = NULL;
+    if ((s = bkf_scene_parse_file(scene_path, &sc, err))) return s;
 
-    run_context rc = {.sc = sc};
-    dir_of(scene_path, rc.scene_dir, sizeof rc.scene_dir);
-    char outdir[4096], plots_dir[4096];
+    char scene_dir[2048], outdir[4096], plots_dir[4096];
+    dir_of(scene_path, scene_dir, sizeof scene_dir);
     if (out)
         snprintf(outdir, sizeof outdir, "%s", out);
     else {
@@ -341,34 +234,40 @@ static int run_run(int argc, char **argv, bkf_error *err)
     if (plots)
         snprintf(plots_dir, sizeof plots_dir, "%s", plots);
     else {
-        snprintf(plots_dir, sizeof plots_dir, "%.2000s/../plots", rc.scene_dir);
+        snprintf(plots_dir, sizeof plots_dir, "%.2000s/../plots", scene_dir);
         if (!is_dir(plots_dir)) snprintf(plots_dir, sizeof plots_dir, "plots");
     }
-    rc.plots_dir = plots_dir;
+    run_context rc = {.slot = -1};
+    bkf_scene_run_options ro = {.program = CLI_PROGRAM " " CLI_VERSION,
+                                .command_prefix = CLI_PROGRAM,
+                                .plots_dir = plots_dir,
+                                .scene_dir = scene_dir,
+                                .temp_file = guard_temp,
+                                .run_argv = run_subcommand,
+                                .data = &rc};
 
-    scene_plan plan;
-    scene_plan_options po = {.outdir = outdir, .formats = formats, .figures = !no_figures};
-    if ((s = scene_make_plan(sc, &po, &plan, err))) {
-        scene_free(sc);
+    bkf_scene_plan plan;
+    bkf_scene_plan_options po = {.outdir = outdir, .formats = formats, .figures = !no_figures};
+    if ((s = bkf_scene_make_plan(sc, &po, &plan, err))) {
+        bkf_scene_free(sc);
         return s;
     }
-    rc.plan = &plan;
     if (plan_only) {
         print_plan(sc, &plan, stdout);
-        scene_plan_free(&plan);
-        scene_free(sc);
+        bkf_scene_plan_free(&plan);
+        bkf_scene_free(sc);
         return fflush(stdout) == 0 ? BKF_OK : bkf_error_set(err, BKF_EIO, "cannot write");
     }
     if ((s = make_dirs(outdir, err))) {
-        scene_plan_free(&plan);
-        scene_free(sc);
+        bkf_scene_plan_free(&plan);
+        bkf_scene_free(sc);
         return s;
     }
 
     int *step_status = calloc(plan.nsteps ? plan.nsteps : 1, sizeof *step_status);
     if (!step_status) {
-        scene_plan_free(&plan);
-        scene_free(sc);
+        bkf_scene_plan_free(&plan);
+        bkf_scene_free(sc);
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     int worst = BKF_OK;
@@ -376,41 +275,24 @@ static int run_run(int argc, char **argv, bkf_error *err)
     char first_failure[BKF_ERROR_LEN] = "";
     double t_all = now();
     for (size_t i = 0; i < plan.nsteps; i++) {
-        scene_step *st = &plan.steps[i];
-        const scene_product *p = &sc->products[st->users[0]];
+        bkf_scene_step *st = &plan.steps[i];
+        const bkf_scene_product *p = &sc->products[st->users[0]];
         bkf_error e = {0};
         char warning[BKF_ERROR_LEN] = "";
         double t0 = now();
-        int status = BKF_OK;
-        const char *skip = NULL;
-        if (st->kind == STEP_FIGURE) {
-            const scene_product_plan *dp = &plan.products[st->data_product];
-            for (size_t k = 0; k < dp->nsteps; k++)
-                if (step_status[dp->steps[k]]) skip = "its data failed";
-        }
-        if (skip) {
-            status = BKF_ENUMERIC;
-            snprintf(e.message, sizeof e.message, "skipped: %s", skip);
-        } else if (st->kind == STEP_COMMAND) {
-            const cli_command *cmd = cli_find_command(st->argv[0]);
-            status = cmd ? cmd->run(st->argc, st->argv, &e)
-                         : bkf_error_set(&e, BKF_EINPUT, "no subcommand %s", st->argv[0]);
-        } else if (st->kind == STEP_FORMULA) {
-            status = run_friction(st, &e);
-        } else {
-            status = run_figure(&rc, st, warning, sizeof warning, &e);
-        }
+        int status = bkf_scene_run_step(sc, &plan, i, step_status, &ro, warning,
+                                        sizeof warning, &e);
         step_status[i] = status;
         double dt = now() - t0;
         printf("[%zu/%zu] %-11s %-18s %s %6.2f s  %s\n", i + 1, plan.nsteps,
-               scene_step_label(st), p->name, status ? "FAILED" : "done  ", dt, st->output);
+               st->product, p->name, status ? "FAILED" : "done  ", dt, st->output);
         if (status) {
-            printf("        %s:%d [%s %s]: %s\n", sc->path, p->line, scene_kind_name(p->kind),
+            printf("        %s:%d [%s %s]: %s\n", sc->path, p->line, bkf_scene_kind_name(p->kind),
                    p->name, e.message);
             failed++;
             if (!first_failure[0])
                 snprintf(first_failure, sizeof first_failure, "%s:%d [%s %s]: %.200s", sc->path,
-                         p->line, scene_kind_name(p->kind), p->name, e.message);
+                         p->line, bkf_scene_kind_name(p->kind), p->name, e.message);
             if (severity(status) > severity(worst)) worst = status;
         } else if (warning[0]) {
             printf("        gnuplot: %s\n", warning);
@@ -421,10 +303,10 @@ static int run_run(int argc, char **argv, bkf_error *err)
 
     /* The tables users most want to read, then where everything is. */
     for (size_t i = 0; i < sc->nproducts; i++) {
-        if (sc->products[i].kind != SCENE_SPEEDS) continue;
-        const scene_product_plan *pp = &plan.products[i];
+        if (sc->products[i].kind != BKF_SCENE_SPEEDS) continue;
+        const bkf_scene_product_plan *pp = &plan.products[i];
         for (size_t k = 0; k < pp->nsteps; k++) {
-            const scene_step *st = &plan.steps[pp->steps[k]];
+            const bkf_scene_step *st = &plan.steps[pp->steps[k]];
             if (step_status[pp->steps[k]]) continue;
             FILE *f = fopen(st->output, "r");
             if (!f) continue;
@@ -436,20 +318,20 @@ static int run_run(int argc, char **argv, bkf_error *err)
     }
     size_t nfig = 0;
     for (size_t i = 0; i < plan.nsteps; i++)
-        if (plan.steps[i].kind == STEP_FIGURE && !step_status[i]) nfig++;
+        if (plan.steps[i].kind == BKF_SCENE_STEP_FIGURE && !step_status[i]) nfig++;
     printf("\n%zu computation%s in %.2f s; %zu figure%s", plan.nsteps,
            plan.nsteps == 1 ? "" : "s", total, nfig, nfig == 1 ? "" : "s");
     if (nfig) printf(" in %s:", outdir);
     printf("\n");
     for (size_t i = 0; i < plan.nsteps; i++) {
-        const scene_step *st = &plan.steps[i];
-        if (st->kind != STEP_FIGURE || step_status[i]) continue;
-        for (int k = 1; k + 1 < st->argc + 1 && st->argv[k]; k += 2) printf("  %s\n", st->argv[k + 1]);
+        const bkf_scene_step *st = &plan.steps[i];
+        if (st->kind != BKF_SCENE_STEP_FIGURE || step_status[i]) continue;
+        for (size_t k = 0; k < st->nargs; k++) printf("  %s\n", st->args[k].value);
     }
     fflush(stdout);
     free(step_status);
-    scene_plan_free(&plan);
-    scene_free(sc);
+    bkf_scene_plan_free(&plan);
+    bkf_scene_free(sc);
     if (failed)
         return bkf_error_set(err, worst ? worst : BKF_ENUMERIC, "%zu of the computations failed; first: %s",
                              failed, first_failure);

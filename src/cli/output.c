@@ -90,6 +90,10 @@ static void disarm_cleanup(int slot)
     update_handlers();
 }
 
+int cli_guard_temp(const char *temp) { return arm_cleanup(temp); }
+
+void cli_unguard_temp(int slot) { disarm_cleanup(slot); }
+
 const volatile sig_atomic_t *cli_cancel_begin(void)
 {
     cancel_flag = 0;

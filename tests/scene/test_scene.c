@@ -13,18 +13,18 @@
 #include <unistd.h>
 
 #include "bkfront/plot.h"
-#include "scene.h"
+#include "bkfront/scene.h"
 #include "cli_support.h"
 
 #ifndef BKF_SOURCE_DIR
 #define BKF_SOURCE_DIR "."
 #endif
 
-static scene *parse_ok(const char *text)
+static bkf_scene *parse_ok(const char *text)
 {
-    scene *s = NULL;
+    bkf_scene *s = NULL;
     bkf_error e = {0};
-    int status = scene_parse_string(text, "t.scene", &s, &e);
+    int status = bkf_scene_parse_string(text, "t.scene", &s, &e);
     CHECK_MSG(status == BKF_OK, "parse failed: %s", e.message);
     return s;
 }
@@ -33,9 +33,9 @@ static scene *parse_ok(const char *text)
  * `part`. */
 static void parse_bad(const char *text, int line, const char *part)
 {
-    scene *s = (scene *)1;
+    bkf_scene *s = (bkf_scene *)1;
     bkf_error e = {0};
-    CHECK_STATUS(scene_parse_string(text, "t.scene", &s, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_scene_parse_string(text, "t.scene", &s, &e), BKF_EINPUT);
     CHECK(s == NULL);
     char prefix[32];
     snprintf(prefix, sizeof prefix, "t.scene:%d: ", line);
@@ -49,45 +49,45 @@ static void parse_bad(const char *text, int line, const char *part)
 
 TEST(scene_parses_the_paper_scene)
 {
-    scene *s = NULL;
+    bkf_scene *s = NULL;
     bkf_error e = {0};
-    CHECK_STATUS(scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
-    size_t figures = 0, kinds[SCENE_NKINDS] = {0};
+    CHECK_STATUS(bkf_scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
+    size_t figures = 0, kinds[BKF_SCENE_NKINDS] = {0};
     for (size_t i = 0; i < s->nproducts; i++) {
         kinds[s->products[i].kind]++;
-        figures += s->products[i].kind == SCENE_FIGURE;
+        figures += s->products[i].kind == BKF_SCENE_FIGURE;
     }
     /* every paper figure and every figure the issue lists beyond it */
-    CHECK(kinds[SCENE_FRICTION] == 1 && kinds[SCENE_SPACETIME] == 3);
-    CHECK(kinds[SCENE_DISPERSION] == 1 && kinds[SCENE_SPEEDS] == 1);
-    CHECK(kinds[SCENE_PERIOD] == 1 && kinds[SCENE_VALIDITY] == 1);
-    CHECK(kinds[SCENE_PROFILE] == 1 && kinds[SCENE_BRANCH] == 1);
+    CHECK(kinds[BKF_SCENE_FRICTION] == 1 && kinds[BKF_SCENE_SPACETIME] == 3);
+    CHECK(kinds[BKF_SCENE_DISPERSION] == 1 && kinds[BKF_SCENE_SPEEDS] == 1);
+    CHECK(kinds[BKF_SCENE_PERIOD] == 1 && kinds[BKF_SCENE_VALIDITY] == 1);
+    CHECK(kinds[BKF_SCENE_PROFILE] == 1 && kinds[BKF_SCENE_BRANCH] == 1);
     CHECK(figures == s->nproducts - figures);
-    const scene_product *fig3a = scene_find(s, "fig3a", 0);
-    CHECK(fig3a && fig3a->kind == SCENE_SPACETIME);
-    CHECK(strcmp(scene_value(s, fig3a, "nu"), "-0.92") == 0);   /* its own */
-    CHECK(strcmp(scene_value(s, fig3a, "gamma"), "2") == 0);    /* from [model] */
-    CHECK(strcmp(scene_value(s, fig3a, "N"), "512") == 0);      /* from [accuracy] */
+    const bkf_scene_product *fig3a = bkf_scene_find(s, "fig3a", 0);
+    CHECK(fig3a && fig3a->kind == BKF_SCENE_SPACETIME);
+    CHECK(strcmp(bkf_scene_value(s, fig3a, "nu"), "-0.92") == 0);   /* its own */
+    CHECK(strcmp(bkf_scene_value(s, fig3a, "gamma"), "2") == 0);    /* from [model] */
+    CHECK(strcmp(bkf_scene_value(s, fig3a, "N"), "512") == 0);      /* from [accuracy] */
     /* a Runge-Kutta tolerance is not the accuracy asked of a result */
-    CHECK(scene_value(s, fig3a, "tol") == NULL);
-    const scene_product *table = scene_find(s, "table", 0);
-    CHECK(strcmp(scene_value(s, table, "tol"), "1e-10") == 0);
-    CHECK(scene_find(s, "fig3a", 1) && scene_find(s, "fig3a", 1)->kind == SCENE_FIGURE);
-    scene_free(s);
+    CHECK(bkf_scene_value(s, fig3a, "tol") == NULL);
+    const bkf_scene_product *table = bkf_scene_find(s, "table", 0);
+    CHECK(strcmp(bkf_scene_value(s, table, "tol"), "1e-10") == 0);
+    CHECK(bkf_scene_find(s, "fig3a", 1) && bkf_scene_find(s, "fig3a", 1)->kind == BKF_SCENE_FIGURE);
+    bkf_scene_free(s);
 }
 
 TEST(scene_keys_inherit_and_sections_keep_their_lines)
 {
-    scene *s = parse_ok("# comment\n" MODEL "\n[accuracy]\ntol = 1e-8 ; inline\n"
+    bkf_scene *s = parse_ok("# comment\n" MODEL "\n[accuracy]\ntol = 1e-8 ; inline\n"
                         "[speeds]\n\n[speeds second]\nn = 3\nS = 30\n");
     CHECK(s->nproducts == 2);
     CHECK(strcmp(s->products[0].name, "speeds") == 0 && s->products[0].line == 10);
     CHECK(strcmp(s->products[1].name, "second") == 0 && s->products[1].line == 12);
-    CHECK(strcmp(scene_value(s, &s->products[0], "tol"), "1e-8") == 0);
-    CHECK(strcmp(scene_value(s, &s->products[1], "S"), "30") == 0);
-    CHECK(strcmp(scene_value(s, &s->products[0], "S"), "20") == 0);
+    CHECK(strcmp(bkf_scene_value(s, &s->products[0], "tol"), "1e-8") == 0);
+    CHECK(strcmp(bkf_scene_value(s, &s->products[1], "S"), "30") == 0);
+    CHECK(strcmp(bkf_scene_value(s, &s->products[0], "S"), "20") == 0);
     CHECK(s->products[1].nentries == 2 && s->products[1].entries[0].line == 13);
-    scene_free(s);
+    bkf_scene_free(s);
 }
 
 TEST(scene_errors_name_the_file_and_line)
@@ -127,9 +127,9 @@ TEST(scene_errors_name_the_file_and_line)
 
 TEST(scene_file_errors)
 {
-    scene *s = NULL;
+    bkf_scene *s = NULL;
     bkf_error e = {0};
-    CHECK_STATUS(scene_parse_file("/nonexistent/x.scene", &s, &e), BKF_EINPUT);
+    CHECK_STATUS(bkf_scene_parse_file("/nonexistent/x.scene", &s, &e), BKF_EINPUT);
     CHECK(strstr(e.message, "cannot open"));
 }
 
@@ -146,26 +146,26 @@ static const char *const labels[] = {"speeds", "period", "floquet", "branch", "p
 
 static plan_count count_plan(const char *text, int figures)
 {
-    scene *s = parse_ok(text);
-    scene_plan plan;
+    bkf_scene *s = parse_ok(text);
+    bkf_scene_plan plan;
     bkf_error e = {0};
-    scene_plan_options o = {.outdir = "out", .formats = 1, .figures = figures};
-    CHECK_STATUS(scene_make_plan(s, &o, &plan, &e), BKF_OK);
+    bkf_scene_plan_options o = {.outdir = "out", .formats = 1, .figures = figures};
+    CHECK_STATUS(bkf_scene_make_plan(s, &o, &plan, &e), BKF_OK);
     plan_count c = {.steps = plan.nsteps, .deduplicated = plan.deduplicated};
     for (size_t i = 0; i < plan.nsteps; i++) {
-        const char *l = scene_step_label(&plan.steps[i]);
+        const char *l = plan.steps[i].product;
         int found = 0;
         for (int k = 0; labels[k]; k++)
             if (strcmp(l, labels[k]) == 0) c.by_label[k]++, found = 1;
         CHECK_MSG(found, "unknown step %s", l);
-        c.figures += plan.steps[i].kind == STEP_FIGURE;
+        c.figures += plan.steps[i].kind == BKF_SCENE_STEP_FIGURE;
         /* every step serves some product, and every product has a step */
         CHECK(plan.steps[i].nusers >= 1);
     }
     for (size_t i = 0; i < s->nproducts; i++)
-        if (figures || s->products[i].kind != SCENE_FIGURE) CHECK(plan.products[i].nsteps >= 1);
-    scene_plan_free(&plan);
-    scene_free(s);
+        if (figures || s->products[i].kind != BKF_SCENE_FIGURE) CHECK(plan.products[i].nsteps >= 1);
+    bkf_scene_plan_free(&plan);
+    bkf_scene_free(s);
     return c;
 }
 
@@ -208,33 +208,33 @@ TEST(plan_runs_only_what_the_products_need)
     CHECK(count_of(&c, "branch") == 3);
 
     /* the paper scene: every figure, one computation per curve */
-    scene *s = NULL;
+    bkf_scene *s = NULL;
     bkf_error e = {0};
-    CHECK_STATUS(scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
-    scene_plan plan;
-    scene_plan_options o = {.outdir = "out", .formats = 1, .figures = 1};
-    CHECK_STATUS(scene_make_plan(s, &o, &plan, &e), BKF_OK);
+    CHECK_STATUS(bkf_scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
+    bkf_scene_plan plan;
+    bkf_scene_plan_options o = {.outdir = "out", .formats = 1, .figures = 1};
+    CHECK_STATUS(bkf_scene_make_plan(s, &o, &plan, &e), BKF_OK);
     size_t sims = 0, figs = 0;
     for (size_t i = 0; i < plan.nsteps; i++) {
-        sims += strcmp(scene_step_label(&plan.steps[i]), "simulate") == 0;
-        figs += plan.steps[i].kind == STEP_FIGURE;
+        sims += strcmp(plan.steps[i].product, "simulate") == 0;
+        figs += plan.steps[i].kind == BKF_SCENE_STEP_FIGURE;
     }
     CHECK(sims == 3 && figs == 11);
     bkf_test_note("paper scene: %zu computations (%zu simulations, %zu figures)", plan.nsteps,
                   sims, figs);
-    scene_plan_free(&plan);
-    scene_free(s);
+    bkf_scene_plan_free(&plan);
+    bkf_scene_free(s);
 }
 
 TEST(plan_refuses_an_output_folder_figures_cannot_list)
 {
-    scene *s = parse_ok(MODEL "[speeds]\n");
-    scene_plan plan;
+    bkf_scene *s = parse_ok(MODEL "[speeds]\n");
+    bkf_scene_plan plan;
     bkf_error e = {0};
-    scene_plan_options o = {.outdir = "my out", .figures = 1};
-    CHECK_STATUS(scene_make_plan(s, &o, &plan, &e), BKF_EINPUT);
+    bkf_scene_plan_options o = {.outdir = "my out", .figures = 1};
+    CHECK_STATUS(bkf_scene_make_plan(s, &o, &plan, &e), BKF_EINPUT);
     CHECK(strstr(e.message, "space"));
-    scene_free(s);
+    bkf_scene_free(s);
 }
 
 /* ------------------------------------------------------------------- run */
@@ -532,15 +532,15 @@ TEST(shipped_scenes_parse_and_plan)
         if (n < 7 || strcmp(ent->d_name + n - 6, ".scene") != 0) continue;
         char path[1200];
         snprintf(path, sizeof path, "%s/fronts/%.500s", BKF_SOURCE_DIR, ent->d_name);
-        scene *s = NULL;
+        bkf_scene *s = NULL;
         bkf_error e = {0};
-        CHECK_MSG(scene_parse_file(path, &s, &e) == BKF_OK, "%s", e.message);
-        scene_plan plan;
-        scene_plan_options o = {.outdir = "out", .formats = 1, .figures = 1};
-        CHECK_STATUS(scene_make_plan(s, &o, &plan, &e), BKF_OK);
+        CHECK_MSG(bkf_scene_parse_file(path, &s, &e) == BKF_OK, "%s", e.message);
+        bkf_scene_plan plan;
+        bkf_scene_plan_options o = {.outdir = "out", .formats = 1, .figures = 1};
+        CHECK_STATUS(bkf_scene_make_plan(s, &o, &plan, &e), BKF_OK);
         CHECK(plan.nsteps >= 1);
-        scene_plan_free(&plan);
-        scene_free(s);
+        bkf_scene_plan_free(&plan);
+        bkf_scene_free(s);
         scenes++;
     }
     closedir(d);

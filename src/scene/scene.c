@@ -1,0 +1,1587 @@
+/* Scene files (scene.h): parsing with libinih, checking, the plan, and
+ * its steps carried out through the catalogue. */
+#define _POSIX_C_SOURCE 200809L
+#include "bkfront/scene.h"
+
+#include <ctype.h>
+#include <ini.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bkfront/cycle.h"
+#include "bkfront/io.h"
+#include "bkfront/model.h"
+#include "bkfront/options.h"
+#include "bkfront/pde.h"
+#include "bkfront/plot.h"
+
+/* At most this many values in a list key (as on the command line). */
+#define SCENE_MAX_POINTS BKF_LIST_MAX
+
+static const char *const kind_names[BKF_SCENE_NKINDS] = {
+    "speeds", "period", "dispersion", "threshold", "branch", "profile",
+    "validity", "friction", "spacetime", "check", "figure"};
+
+const char *bkf_scene_kind_name(bkf_scene_kind kind)
+{
+    return (unsigned)kind < BKF_SCENE_NKINDS ? kind_names[kind] : NULL;
+}
+
+/* ------------------------------------------------------------ key table */
+
+typedef enum {
+    V_GAMMA, V_C, V_NU, V_NU_ANY, V_S, V_TOL, V_PDE_TOL, V_GRID_N, V_MODEL,
+    V_COUNT, V_SEED, V_NUMBER, V_POSITIVE, V_NU_LIST, V_COUNT_LIST, V_RANGE_LOG,
+    V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_METHOD, V_STEPPER, V_FRAME, V_GRID, V_FORMATS, V_TEXT, V_NAME, V_INIT
+} value_type;
+
+#define K(kind) (1u << (kind))
+#define K_CYCLE (K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE) | K(BKF_SCENE_CHECK))
+#define K_DATA (K_CYCLE | K(BKF_SCENE_PERIOD) | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD) | \
+                K(BKF_SCENE_VALIDITY) | K(BKF_SCENE_SPACETIME))
+#define K_MODEL (1u << 30)     /* [model] */
+#define K_ACCURACY (1u << 29)  /* [accuracy] */
+
+typedef struct {
+    const char *key;
+    value_type type;
+    unsigned where;
+    const char *form;   /* for messages: the valid values */
+} key_spec;
+
+/* A key may appear in several rows with different types by kind. */
+static const key_spec keys[] = {
+    {"gamma", V_GAMMA, K_MODEL | K_CYCLE | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD) |
+                           K(BKF_SCENE_SPACETIME), "a number in [1e-6, 1e6]"},
+    {"c", V_C, K_MODEL | K_CYCLE | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD) |
+                   K(BKF_SCENE_SPACETIME), "a number >= 0"},
+    {"nu", V_NU, K_MODEL | K_CYCLE, "a number in (-1, 1)"},
+    {"nu", V_NU_ANY, K(BKF_SCENE_SPACETIME), "a finite number"},
+    {"nu", V_NU_LIST, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_VALIDITY),
+     "V, V1,V2,... or A:B:N, each in (-1, 1)"},
+    {"S", V_S, K_MODEL | K_CYCLE | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_SPACETIME), "a number > 0"},
+    {"model", V_MODEL, K_MODEL | K(BKF_SCENE_SPACETIME), "continuum or chain"},
+    {"tol", V_TOL, K_ACCURACY | K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE) |
+                       K(BKF_SCENE_PERIOD) | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD),
+     "a number in [1e-14, 0.1]"},
+    {"tol", V_PDE_TOL, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "a number in [1e-13, 0.01]"},
+    {"N", V_GRID_N, K_ACCURACY | K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK),
+     "an integer in [8, 1048576]"},
+    {"n", V_COUNT, K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_CHECK), "an integer >= 1"},
+    {"n", V_COUNT_LIST, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE), "K, K1,K2,... or A:B:N, each >= 1"},
+    {"nmax", V_COUNT, K(BKF_SCENE_SPEEDS), "an integer >= 1"},
+    {"root", V_COUNT, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE), "an integer >= 1"},
+    {"mu", V_RANGE_LOG, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_VALIDITY),
+     "M or a geometric range A:B:N, in [1e-6, 1e6]"},
+    {"q", V_RANGE_LIN, K(BKF_SCENE_DISPERSION), "Q or a range A:B:N, >= 0"},
+    {"search", V_SEARCH, K(BKF_SCENE_THRESHOLD), "A:B with -1 < A < B < 1"},
+    {"along", V_ALONG, K(BKF_SCENE_THRESHOLD), "c or gamma"},
+    {"param", V_PARAM, K(BKF_SCENE_BRANCH), "S, nu, gamma or c"},
+    {"method", V_METHOD, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_SPEEDS), "auto, asymptotic, leading or shooting"},
+    {"from", V_NUMBER, K(BKF_SCENE_THRESHOLD) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_FRICTION),
+     "a finite number"},
+    {"to", V_NUMBER, K(BKF_SCENE_THRESHOLD) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_FRICTION),
+     "a finite number"},
+    {"max_points", V_COUNT, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_THRESHOLD), "an integer >= 1"},
+    {"points", V_COUNT, K(BKF_SCENE_PROFILE) | K(BKF_SCENE_FRICTION) | K(BKF_SCENE_CHECK),
+     "an integer >= 1"},
+    {"init", V_INIT, K(BKF_SCENE_SPACETIME), "uniform, front:n=K,..., oscillation:q=Q,... or file:PATH"},
+    {"seed", V_SEED, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "an integer >= 0"},
+    {"tmax", V_POSITIVE, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "a number > 0"},
+    {"frames", V_COUNT, K(BKF_SCENE_SPACETIME), "an integer >= 1"},
+    {"rel_tol", V_POSITIVE, K(BKF_SCENE_CHECK), "a number > 0"},
+    {"stepper", V_STEPPER, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "rk8pd, rkck, rkf45 or etdrk4"},
+    {"frame", V_FRAME, K(BKF_SCENE_CHECK), "moving or lab"},
+    {"grid", V_GRID, K(BKF_SCENE_CHECK), "auto, uniform or mapped"},
+    {"data", V_NAME, K(BKF_SCENE_FIGURE), "the name of a product of this scene"},
+    {"script", V_TEXT, K(BKF_SCENE_FIGURE), "a gnuplot script path"},
+    {"formats", V_FORMATS, K(BKF_SCENE_FIGURE), "png, pdf, svg or a list such as png,svg"},
+    {"title", V_TEXT, K(BKF_SCENE_FIGURE), "text"},
+    {"width", V_COUNT, K(BKF_SCENE_FIGURE), "an integer >= 1 (pixels)"},
+    {"height", V_COUNT, K(BKF_SCENE_FIGURE), "an integer >= 1 (pixels)"},
+};
+#define NKEYS (sizeof keys / sizeof keys[0])
+
+/* ------------------------------------------------------------- checking */
+
+static int check_list(const char *key, const char *text, int counts, bkf_error *err)
+{
+    /* "A:B:N" is a range, anything else a comma list of single values. */
+    if (strchr(text, ':')) {
+        bkf_list r;
+        int s = bkf_list_parse(text, 0, 0, SCENE_MAX_POINTS, "", key, &r, err);
+        if (s) return s;
+        int bad = 0;
+        for (size_t i = 0; i < r.count; i++)
+            if (counts ? (r.values[i] < 1 || r.values[i] != floor(r.values[i]))
+                       : !(fabs(r.values[i]) < 1))
+                bad = 1;
+        bkf_list_free(&r);
+        if (bad)
+            return bkf_error_set(err, BKF_EINPUT, "%s: '%s' has values outside %s", key, text,
+                                 counts ? "the integers >= 1" : "(-1, 1)");
+        return BKF_OK;
+    }
+    char buf[BKF_SCENE_VALUE_LEN];
+    snprintf(buf, sizeof buf, "%s", text);
+    char *save = NULL;
+    int any = 0;
+    for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+        any = 1;
+        if (counts) {
+            size_t n;
+            int s = bkf_option_parse_count(tok, 1, 100000, "", key, &n, err);
+            if (s) return s;
+        } else {
+            double v;
+            int s = bkf_option_parse_double(tok, "", key, &v, err);
+            if (s) return s;
+            if (!(fabs(v) < 1))
+                return bkf_error_set(err, BKF_EINPUT, "%s: %s is outside (-1, 1)", key, tok);
+        }
+    }
+    if (!any || text[strlen(text) - 1] == ',' || text[0] == ',')
+        return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not a list", key, text);
+    return BKF_OK;
+}
+
+static int check_value(const key_spec *spec, const char *v, bkf_error *err)
+{
+    const char *k = spec->key;
+    double x;
+    size_t n;
+    int s;
+    switch (spec->type) {
+    case V_GAMMA:
+        if ((s = bkf_option_parse_double(v, "", k, &x, err))) return s;
+        if (!(x >= BKF_CYCLE_MU_MIN && x <= BKF_CYCLE_MU_MAX))
+            return bkf_error_set(err, BKF_EINPUT, "gamma: %s is outside [1e-6, 1e6]", v);
+        return BKF_OK;
+    case V_C:
+        if ((s = bkf_option_parse_double(v, "", k, &x, err))) return s;
+        if (x < 0) return bkf_error_set(err, BKF_EINPUT, "c: %s must be >= 0", v);
+        return BKF_OK;
+    case V_NU:
+        if ((s = bkf_option_parse_double(v, "", k, &x, err))) return s;
+        if (!(fabs(x) < 1))
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "nu: %s is outside (-1, 1), where there are no fronts or "
+                                 "oscillations", v);
+        return BKF_OK;
+    case V_NUMBER:
+    case V_NU_ANY:
+        return bkf_option_parse_double(v, "", k, &x, err);
+    case V_S:
+    case V_POSITIVE:
+        if ((s = bkf_option_parse_double(v, "", k, &x, err))) return s;
+        if (!(x > 0)) return bkf_error_set(err, BKF_EINPUT, "%s: %s must be > 0", k, v);
+        return BKF_OK;
+    case V_TOL:
+    case V_PDE_TOL: {
+        double lo = spec->type == V_TOL ? 1e-14 : BKF_PDE_TOL_MIN;
+        double hi = spec->type == V_TOL ? 0.1 : BKF_PDE_TOL_MAX;
+        if ((s = bkf_option_parse_double(v, "", k, &x, err))) return s;
+        if (!(x >= lo && x <= hi))
+            return bkf_error_set(err, BKF_EINPUT, "tol: %s is outside [%g, %g]", v, lo, hi);
+        return BKF_OK;
+    }
+    case V_GRID_N:
+        if ((s = bkf_option_parse_count(v, 1, BKF_PDE_N_MAX, "", k, &n, err))) return s;
+        if (n < BKF_PDE_N_MIN)
+            return bkf_error_set(err, BKF_EINPUT, "N: %s is below %d", v, BKF_PDE_N_MIN);
+        return BKF_OK;
+    case V_MODEL: {
+        static const char *const m[] = {"continuum", "chain", NULL};
+        int i;
+        return bkf_option_parse_choice(v, m, "", k, &i, err);
+    }
+    case V_ALONG: {
+        static const char *const m[] = {"c", "gamma", NULL};
+        int i;
+        return bkf_option_parse_choice(v, m, "", k, &i, err);
+    }
+    case V_METHOD: {
+        static const char *const m[] = {"auto", "asymptotic", "leading", "shooting", NULL};
+        int i;
+        return bkf_option_parse_choice(v, m, "", k, &i, err);
+    }
+    case V_STEPPER: {
+        static const char *const m[] = {"rk8pd", "rkck", "rkf45", "etdrk4", NULL};
+        int i;
+        return bkf_option_parse_choice(v, m, "", k, &i, err);
+    }
+    case V_FRAME: {
+        static const char *const m[] = {"moving", "lab", NULL};
+        int i;
+        return bkf_option_parse_choice(v, m, "", k, &i, err);
+    }
+    case V_GRID: {
+        static const char *const m[] = {"auto", "uniform", "mapped", NULL};
+        int i;
+        return bkf_option_parse_choice(v, m, "", k, &i, err);
+    }
+    case V_PARAM: {
+        static const char *const m[] = {"S", "nu", "gamma", "c", NULL};
+        int i;
+        return bkf_option_parse_choice(v, m, "", k, &i, err);
+    }
+    case V_COUNT:
+        return bkf_option_parse_count(v, 1, 1000000, "", k, &n, err);
+    case V_SEED:
+        if (!*v || strspn(v, "0123456789") != strlen(v) || strlen(v) > 18)
+            return bkf_error_set(err, BKF_EINPUT, "seed: '%s' is not an integer in [0, 1e18)",
+                                 v);
+        return BKF_OK;
+    case V_NU_LIST:
+        return check_list(k, v, 0, err);
+    case V_COUNT_LIST:
+        return check_list(k, v, 1, err);
+    case V_RANGE_LOG:
+    case V_RANGE_LIN: {
+        bkf_list r;
+        int geometric = spec->type == V_RANGE_LOG;
+        if ((s = bkf_list_parse(v, geometric, 0, SCENE_MAX_POINTS, "", k, &r, err))) return s;
+        int bad = 0;
+        for (size_t i = 0; i < r.count; i++)
+            bad |= geometric ? !(r.values[i] >= BKF_CYCLE_MU_MIN && r.values[i] <= BKF_CYCLE_MU_MAX)
+                             : !(r.values[i] >= 0);
+        size_t count = r.count;
+        bkf_list_free(&r);
+        if (bad)
+            return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not %s", k, v, spec->form);
+        if (count > 100000)
+            return bkf_error_set(err, BKF_EINPUT, "%s: '%s' has more than 100000 points", k, v);
+        return BKF_OK;
+    }
+    case V_SEARCH: {
+        const char *colon = strchr(v, ':');
+        double a, b;
+        char left[BKF_SCENE_VALUE_LEN];
+        if (!colon || strchr(colon + 1, ':'))
+            return bkf_error_set(err, BKF_EINPUT, "search: '%s' is not A:B", v);
+        snprintf(left, sizeof left, "%.*s", (int)(colon - v), v);
+        if ((s = bkf_option_parse_double(left, "", k, &a, err)) || (s = bkf_option_parse_double(colon + 1, "", k, &b, err)))
+            return s;
+        if (!(-1 < a && a < b && b < 1))
+            return bkf_error_set(err, BKF_EINPUT, "search: '%s' needs -1 < A < B < 1", v);
+        return BKF_OK;
+    }
+    case V_FORMATS: {
+        char buf[BKF_SCENE_VALUE_LEN];
+        snprintf(buf, sizeof buf, "%s", v);
+        char *save = NULL;
+        int any = 0;
+        for (char *t = strtok_r(buf, ", ", &save); t; t = strtok_r(NULL, ", ", &save)) {
+            static const char *const f[] = {"png", "pdf", "svg", NULL};
+            int i;
+            if ((s = bkf_option_parse_choice(t, f, "", k, &i, err))) return s;
+            any = 1;
+        }
+        if (!any) return bkf_error_set(err, BKF_EINPUT, "formats: give png, pdf or svg");
+        return BKF_OK;
+    }
+    case V_INIT:
+        if (!(strcmp(v, "uniform") == 0 || strncmp(v, "uniform:", 8) == 0 ||
+              strncmp(v, "front:", 6) == 0 || strncmp(v, "oscillation:", 12) == 0 ||
+              strncmp(v, "file:", 5) == 0))
+            return bkf_error_set(err, BKF_EINPUT, "init: '%s' is not %s", v, spec->form);
+        return BKF_OK;
+    case V_NAME:
+    case V_TEXT:
+        if (!*v) return bkf_error_set(err, BKF_EINPUT, "%s: the value is empty", k);
+        for (const unsigned char *p = (const unsigned char *)v; *p; p++)
+            if (*p < 0x20 || *p == 0x7f)
+                return bkf_error_set(err, BKF_EINPUT, "%s: the value holds a control character", k);
+        return BKF_OK;
+    }
+    return BKF_OK;
+}
+
+/* -------------------------------------------------------- the catalogue */
+
+/* What each kind computes: the catalogue's product; the switches the kind
+ * always passes, before (first) or after (last) the scene's keys; the key
+ * whose list gives one step per value.  A kind whose product is not yet in
+ * the catalogue is handed to the caller's run_argv (transitional). */
+typedef struct {
+    const char *product, *first, *last, *split;
+} kind_map_row;
+
+static const kind_map_row kind_map[BKF_SCENE_NKINDS] = {
+    [BKF_SCENE_SPEEDS] = {"speeds", NULL, NULL, NULL},
+    [BKF_SCENE_PERIOD] = {"period", NULL, NULL, "nu"},
+    [BKF_SCENE_DISPERSION] = {"floquet", NULL, NULL, "nu"},
+    [BKF_SCENE_THRESHOLD] = {"floquet", "threshold", NULL, NULL},
+    [BKF_SCENE_BRANCH] = {"branch", NULL, NULL, "n"},
+    [BKF_SCENE_PROFILE] = {"profile", NULL, NULL, NULL},
+    [BKF_SCENE_VALIDITY] = {"asymptotics", "grid", NULL, NULL},
+    [BKF_SCENE_FRICTION] = {"friction", NULL, NULL, NULL},
+    [BKF_SCENE_SPACETIME] = {"simulate", NULL, "no-progress", NULL},
+    [BKF_SCENE_CHECK] = {"check", NULL, "no-progress", NULL},
+    [BKF_SCENE_FIGURE] = {NULL, NULL, NULL, NULL},
+};
+
+static const bkf_catalog_entry *catalog_entry(bkf_scene_kind kind)
+{
+    return kind_map[kind].product ? bkf_catalog_find(kind_map[kind].product) : NULL;
+}
+
+/* A scene key as the option's name: max_points is --max-points. */
+static const char *option_name(const char *key, char *buf, size_t size)
+{
+    snprintf(buf, size, "%s", key);
+    for (char *c = buf; *c; c++)
+        if (*c == '_') *c = '-';
+    return buf;
+}
+
+static const bkf_option *catalog_option(const bkf_catalog_entry *entry, const char *name)
+{
+    size_t n;
+    const bkf_option *table = entry->options(&n);
+    const bkf_option *opt = bkf_option_find(table, n, name);
+    return opt && !(opt->flags & BKF_OPT_CLI_ONLY) ? opt : NULL;
+}
+
+/* The step's settings into `spec`: switches first (a geometric list reads
+ * the log switch), outputs never, a fixed switch the product does not know
+ * not at all (--no-progress is the command line's).  *bad: the arg at
+ * fault. */
+static int apply_args(const bkf_catalog_entry *entry, const bkf_scene_arg *args, size_t n,
+                      void *spec, size_t *bad, bkf_error *err)
+{
+    for (int pass = 0; pass < 2; pass++)
+        for (size_t i = 0; i < n; i++) {
+            const bkf_scene_arg *a = &args[i];
+            if (a->output || (a->value == NULL) != (pass == 0)) continue;
+            if (a->fixed && !catalog_option(entry, a->key)) continue;
+            int s = bkf_catalog_apply(entry, spec, a->key, a->value, "", err);
+            if (s) {
+                if (bad) *bad = i;
+                return s;
+            }
+        }
+    return BKF_OK;
+}
+
+/* One key of a catalogued kind, through the product's table (each value of
+ * the kind's split list on its own, as the plan passes them).  *known 0:
+ * the product has no such key. */
+static int catalog_check_key(const bkf_catalog_entry *entry, const kind_map_row *map,
+                             const char *key, const char *value, int *known, bkf_error *err)
+{
+    char name[64];
+    option_name(key, name, sizeof name);
+    const bkf_option *opt = catalog_option(entry, name);
+    *known = opt != NULL;
+    if (!opt) return BKF_OK;
+    void *spec = bkf_catalog_spec_new(entry, err);
+    if (!spec) return BKF_ENOMEM;
+    int s = BKF_OK;
+    if (map->split && strcmp(key, map->split) == 0) {
+        bkf_list list;
+        s = bkf_list_parse(value, 0, 0, SCENE_MAX_POINTS, "", key, &list, err);
+        for (size_t i = 0; !s && i < list.count; i++) {
+            char item[64];
+            snprintf(item, sizeof item, "%.15g", list.values[i]);
+            s = bkf_catalog_apply(entry, spec, name, item, "", err);
+        }
+        bkf_list_free(&list);
+    } else {
+        s = bkf_catalog_apply(entry, spec, name, value, "", err);
+    }
+    bkf_catalog_spec_free(entry, spec);
+    return s;
+}
+
+/* Whether `name` is one of the comma-separated names in `list`. */
+static int listed(const char *list, const char *name)
+{
+    size_t n = strlen(name);
+    for (const char *p = list; (p = strstr(p, name)); p += n)
+        if ((p == list || p[-1] == ' ') && (p[n] == ',' || p[n] == '\0')) return 1;
+    return 0;
+}
+
+/* ------------------------------------------------------------- parsing */
+
+typedef struct {
+    bkf_scene *s;
+    const char *name;
+    const char *text;       /* string being read */
+    size_t pos;
+    int line;               /* of the line last handed to inih */
+    int status;
+    bkf_error *err;
+    char section[BKF_SCENE_VALUE_LEN]; /* inih's current section, as recorded */
+    int section_kind;       /* -1 model, -2 accuracy, >= 0: product index */
+    int seen_model, seen_accuracy;
+} parse_state;
+
+static int fail(parse_state *st, int line, const char *fmt, ...)
+{
+    if (st->status) return 0;
+    char msg[BKF_ERROR_LEN];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    /* the message quotes the user's text: keep it one printable line */
+    for (char *c = msg; *c; c++)
+        if ((unsigned char)*c < 0x20 || *c == 0x7f) *c = '?';
+    st->status = bkf_error_set(st->err, BKF_EINPUT, "%s:%d: %s", st->name, line, msg);
+    return 0;
+}
+
+static int valid_name(const char *name)
+{
+    if (!*name || strlen(name) >= BKF_SCENE_NAME_LEN) return 0;
+    for (const char *p = name; *p; p++)
+        if (!((*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9') ||
+              *p == '_' || *p == '-'))
+            return 0;
+    return 1;
+}
+
+/* A section header line, seen by the reader before inih parses it: sections
+ * with no keys must exist too, and inih does not report them. */
+static void header_line(parse_state *st, const char *line)
+{
+    if (st->status) return;
+    /* inih skips what isspace() calls space: so must we, to see the same
+     * section headers */
+    const char *p = line;
+    while (isspace((unsigned char)*p)) p++;
+    if (*p != '[') return;
+    const char *end = strchr(p, ']');
+    if (!end) return;  /* inih reports it */
+    char inner[BKF_SCENE_VALUE_LEN];
+    snprintf(inner, sizeof inner, "%.*s", (int)(end - p - 1), p + 1);
+    /* inih strips the section name's ends too */
+    char *a = inner;
+    while (isspace((unsigned char)*a)) a++;
+    size_t n = strlen(a);
+    while (n && isspace((unsigned char)a[n - 1])) a[--n] = '\0';
+    snprintf(st->section, sizeof st->section, "%s", a);
+
+    if (strcmp(a, "model") == 0 || strcmp(a, "accuracy") == 0) {
+        int *seen = a[0] == 'm' ? &st->seen_model : &st->seen_accuracy;
+        if (*seen) {
+            fail(st, st->line, "[%s] is given twice", a);
+            return;
+        }
+        *seen = 1;
+        st->section_kind = a[0] == 'm' ? -1 : -2;
+        return;
+    }
+    char kind[BKF_SCENE_VALUE_LEN], name[BKF_SCENE_VALUE_LEN] = "", extra[BKF_SCENE_VALUE_LEN] = "";
+    int fields = sscanf(a, "%255s %255s %255s", kind, name, extra);
+    int k = -1;
+    for (int i = 0; fields >= 1 && i < BKF_SCENE_NKINDS; i++)
+        if (strcmp(kind, kind_names[i]) == 0) k = i;
+    if (k < 0) {
+        fail(st, st->line,
+             "unknown section [%s] (model, accuracy, speeds, period, dispersion, threshold, "
+             "branch, profile, validity, friction, spacetime, check, figure)", a);
+        return;
+    }
+    if (fields == 3) {
+        fail(st, st->line, "[%s]: a section is [KIND] or [KIND NAME]", a);
+        return;
+    }
+    if (fields == 1) snprintf(name, sizeof name, "%s", kind);
+    if (!valid_name(name)) {
+        fail(st, st->line, "[%s]: the name '%s' must be letters, digits, _ or - (at most %d)", a,
+             name, BKF_SCENE_NAME_LEN - 1);
+        return;
+    }
+    bkf_scene *s = st->s;
+    for (size_t i = 0; i < s->nproducts; i++) {
+        int fig_a = s->products[i].kind == BKF_SCENE_FIGURE, fig_b = k == BKF_SCENE_FIGURE;
+        if (fig_a == fig_b && strcmp(s->products[i].name, name) == 0) {
+            fail(st, st->line, "[%s]: the name '%s' is already used on line %d", a, name,
+                 s->products[i].line);
+            return;
+        }
+    }
+    bkf_scene_product *grown = realloc(s->products, (s->nproducts + 1) * sizeof *grown);
+    if (!grown) {
+        st->status = bkf_error_set(st->err, BKF_ENOMEM, "out of memory");
+        return;
+    }
+    s->products = grown;
+    bkf_scene_product *prod = &s->products[s->nproducts];
+    *prod = (bkf_scene_product){.kind = (bkf_scene_kind)k, .line = st->line};
+    snprintf(prod->name, sizeof prod->name, "%.*s", BKF_SCENE_NAME_LEN - 1, name);
+    st->section_kind = (int)s->nproducts++;
+}
+
+static char *reader(char *str, int num, void *stream)
+{
+    parse_state *st = stream;
+    if (!st->text[st->pos]) return NULL;
+    const char *start = st->text + st->pos;
+    size_t len = strcspn(start, "\n");
+    st->line++;
+    if (len + 1 >= (size_t)num) {
+        fail(st, st->line, "the line is longer than %d characters", num - 3);
+        st->pos += len;
+        if (st->text[st->pos]) st->pos++;
+        str[0] = '\0';  /* parse nothing of it */
+        return str;
+    }
+    memcpy(str, start, len);
+    str[len] = '\0';
+    st->pos += len;
+    if (st->text[st->pos]) st->pos++;
+    header_line(st, str);
+    return str;
+}
+
+static bkf_scene_entry *push_entry(bkf_scene_entry **list, size_t *n)
+{
+    bkf_scene_entry *grown = realloc(*list, (*n + 1) * sizeof *grown);
+    if (!grown) return NULL;
+    *list = grown;
+    return &grown[(*n)++];
+}
+
+static int handler(void *user, const char *section, const char *name, const char *value)
+{
+    parse_state *st = user;
+    if (st->status) return 1;
+    if (!*section) return fail(st, st->line, "'%s' comes before any [section]", name);
+    /* a header inih accepted but the line reader did not recognise */
+    if (st->section_kind < -2 || st->section_kind >= (int)st->s->nproducts ||
+        strcmp(section, st->section) != 0)
+        return fail(st, st->line, "the section header before '%s' is not understood", name);
+    unsigned where;
+    bkf_scene_entry **list;
+    size_t *count;
+    if (st->section_kind == -1 || st->section_kind == -2) {
+        where = st->section_kind == -1 ? K_MODEL : K_ACCURACY;
+        list = &st->s->model;
+        count = &st->s->nmodel;
+    } else {
+        bkf_scene_product *p = &st->s->products[st->section_kind];
+        where = K(p->kind);
+        list = &p->entries;
+        count = &p->nentries;
+    }
+    const key_spec *spec = NULL;
+    char known[512] = "";
+    for (size_t i = 0; i < NKEYS; i++) {
+        if (!(keys[i].where & where)) continue;
+        if (strcmp(keys[i].key, name) == 0) spec = &keys[i];
+        int listed = 0;
+        for (size_t j = 0; j < i; j++)
+            if ((keys[j].where & where) && strcmp(keys[j].key, keys[i].key) == 0) listed = 1;
+        if (!listed) {
+            size_t used = strlen(known);
+            snprintf(known + used, sizeof known - used, "%s%s", used ? ", " : "", keys[i].key);
+        }
+    }
+    /* A catalogued product's keys are its option table's: checked by the
+     * code that checks the command-line flag. */
+    const bkf_catalog_entry *product = NULL;
+    if (st->section_kind >= 0) {
+        bkf_scene_kind kind = st->s->products[st->section_kind].kind;
+        product = catalog_entry(kind);
+        size_t n;
+        const bkf_option *table = product ? product->options(&n) : NULL;
+        for (size_t i = 0; product && i < n; i++) {
+            char shown[64];
+            if (table[i].flags & BKF_OPT_CLI_ONLY) continue;
+            if (listed(known, option_name(table[i].name, shown, sizeof shown))) continue;
+            size_t used = strlen(known);
+            snprintf(known + used, sizeof known - used, "%s%s", used ? ", " : "", table[i].name);
+        }
+    }
+    int by_catalog = 0;
+    if (product) {
+        char opt[64];
+        by_catalog = catalog_option(product, option_name(name, opt, sizeof opt)) != NULL;
+    }
+    if (!spec && !by_catalog)
+        return fail(st, st->line, "[%s]: unknown key '%s' (%s)", st->section, name, known);
+    for (size_t i = 0; i < *count; i++)
+        if (strcmp((*list)[i].key, name) == 0)
+            return fail(st, st->line, "[%s]: '%s' is already set on line %d", st->section, name,
+                        (*list)[i].line);
+    if (strlen(value) >= BKF_SCENE_VALUE_LEN)
+        return fail(st, st->line, "%s: the value is longer than %d characters", name,
+                    BKF_SCENE_VALUE_LEN - 1);
+    bkf_error e;
+    if (by_catalog) {
+        int known_key;
+        int s = catalog_check_key(product, &kind_map[st->s->products[st->section_kind].kind], name,
+                                  value, &known_key, &e);
+        if (s == BKF_ENOMEM) {
+            st->status = bkf_error_set(st->err, s, "out of memory");
+            return 0;
+        }
+        if (s) return fail(st, st->line, "%s", e.message);
+    } else if (check_value(spec, value, &e)) {
+        return fail(st, st->line, "%s (%s)", e.message, spec->form);
+    }
+    bkf_scene_entry *entry = push_entry(list, count);
+    if (!entry) {
+        st->status = bkf_error_set(st->err, BKF_ENOMEM, "out of memory");
+        return 0;
+    }
+    snprintf(entry->key, sizeof entry->key, "%s", name);
+    snprintf(entry->value, sizeof entry->value, "%s", value);
+    entry->line = st->line;
+    return 1;
+}
+
+static const char *entry_value(const bkf_scene_entry *list, size_t n, const char *key)
+{
+    for (size_t i = 0; i < n; i++)
+        if (strcmp(list[i].key, key) == 0) return list[i].value;
+    return NULL;
+}
+
+const char *bkf_scene_value(const bkf_scene *s, const bkf_scene_product *p, const char *key)
+{
+    const char *v = p ? entry_value(p->entries, p->nentries, key) : NULL;
+    if (v) return v;
+    /* A simulation's tol is a Runge-Kutta tolerance, not the accuracy asked
+     * of a result: it is not inherited. */
+    if (p && strcmp(key, "tol") == 0 &&
+        (p->kind == BKF_SCENE_SPACETIME || p->kind == BKF_SCENE_CHECK || p->kind == BKF_SCENE_VALIDITY))
+        return NULL;
+    return entry_value(s->model, s->nmodel, key);
+}
+
+const bkf_scene_product *bkf_scene_find(const bkf_scene *s, const char *name, int figures)
+{
+    for (size_t i = 0; i < s->nproducts; i++)
+        if ((s->products[i].kind == BKF_SCENE_FIGURE) == (figures != 0) &&
+            strcmp(s->products[i].name, name) == 0)
+            return &s->products[i];
+    return NULL;
+}
+
+static int entry_line(const bkf_scene_product *p, const char *key)
+{
+    for (size_t i = 0; i < p->nentries; i++)
+        if (strcmp(p->entries[i].key, key) == 0) return p->entries[i].line;
+    return p->line;
+}
+
+/* The line that gives `key` (an option name) to product p: its own entry,
+ * else [model]/[accuracy], else the section's header. */
+static int key_line(const bkf_scene *s, const bkf_scene_product *p, const char *key)
+{
+    char name[64];
+    for (size_t i = 0; i < p->nentries; i++)
+        if (strcmp(option_name(p->entries[i].key, name, sizeof name), key) == 0)
+            return p->entries[i].line;
+    for (size_t i = 0; i < s->nmodel; i++)
+        if (strcmp(s->model[i].key, key) == 0) return s->model[i].line;
+    return p->line;
+}
+
+static int validate_plan(parse_state *st);
+
+/* What needs the whole scene: required keys, references, the model's
+ * parameters where a product needs them. */
+static int check_scene(parse_state *st)
+{
+    bkf_scene *s = st->s;
+    if (!st->seen_model) return fail(st, 1, "the scene has no [model] section");
+    if (s->nproducts == 0) return fail(st, st->line, "the scene asks for no product");
+    static const char *const model_keys[] = {"gamma", "c", "nu", "S"};
+    for (size_t i = 0; i < s->nproducts; i++) {
+        const bkf_scene_product *p = &s->products[i];
+        if (p->kind == BKF_SCENE_FIGURE) {
+            const char *data = entry_value(p->entries, p->nentries, "data");
+            if (!data) return fail(st, p->line, "[figure %s]: give data = NAME of the product shown", p->name);
+            if (!bkf_scene_find(s, data, 0))
+                return fail(st, entry_line(p, "data"), "data: no product named '%s' in this scene",
+                            data);
+            continue;
+        }
+        if (p->kind == BKF_SCENE_FRICTION) continue;
+        for (size_t k = 0; k < 4; k++) {
+            const char *key = model_keys[k];
+            if (p->kind == BKF_SCENE_THRESHOLD && (strcmp(key, "nu") == 0 || strcmp(key, "S") == 0))
+                continue;
+            if ((p->kind == BKF_SCENE_PERIOD || p->kind == BKF_SCENE_VALIDITY) && strcmp(key, "nu") != 0)
+                continue;
+            if (p->kind == BKF_SCENE_DISPERSION && strcmp(key, "S") == 0) continue;
+            if (p->kind == BKF_SCENE_BRANCH || p->kind == BKF_SCENE_THRESHOLD) {
+                const char *along = entry_value(p->entries, p->nentries,
+                                                p->kind == BKF_SCENE_BRANCH ? "param" : "along");
+                if (along && strcmp(along, key) == 0) continue;
+            }
+            if (!bkf_scene_value(s, p, key))
+                return fail(st, p->line, "[%s %s]: %s is not set here nor in [model]",
+                            kind_names[p->kind], p->name, key);
+        }
+        if (p->kind == BKF_SCENE_BRANCH) {
+            if (!entry_value(p->entries, p->nentries, "param"))
+                return fail(st, p->line, "[branch %s]: give param = S, nu, gamma or c", p->name);
+            if (!entry_value(p->entries, p->nentries, "to"))
+                return fail(st, p->line, "[branch %s]: give to = the end value of the parameter",
+                            p->name);
+        }
+        if (p->kind == BKF_SCENE_THRESHOLD) {
+            int along = entry_value(p->entries, p->nentries, "along") != NULL;
+            int from = entry_value(p->entries, p->nentries, "from") != NULL;
+            int to = entry_value(p->entries, p->nentries, "to") != NULL;
+            if (along != from || along != to)
+                return fail(st, p->line, "[threshold %s]: along, from and to go together", p->name);
+        }
+        if (p->kind == BKF_SCENE_SPEEDS && entry_value(p->entries, p->nentries, "n") &&
+            entry_value(p->entries, p->nentries, "nmax"))
+            return fail(st, entry_line(p, "nmax"), "[speeds %s]: give n or nmax, not both", p->name);
+    }
+    return 1;
+}
+
+int bkf_scene_parse_string(const char *text, const char *name, bkf_scene **out, bkf_error *err)
+{
+    *out = NULL;
+    if (!text) return bkf_error_set(err, BKF_EINPUT, "scene: no text");
+    bkf_scene *s = calloc(1, sizeof *s);
+    if (!s || !(s->path = strdup(name ? name : "scene"))) {
+        free(s);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    parse_state st = {.s = s, .name = s->path, .text = text, .err = err, .section_kind = -3};
+    /* Strict: no Python-style continuation lines, comments with ; or #. */
+    ini_allow_multiline = 0;
+    ini_allow_inline_comments = 1;
+    ini_inline_comment_prefixes = (char *)";#";
+    int r = ini_parse_stream(reader, &st, handler, &st);
+    if (!st.status && r > 0) fail(&st, r, "not a section header, key = value or comment");
+    if (!st.status && r < 0) st.status = bkf_error_set(err, BKF_ENOMEM, "scene: out of memory");
+    if (!st.status && check_scene(&st)) validate_plan(&st);
+    if (st.status) {
+        bkf_scene_free(s);
+        return st.status;
+    }
+    *out = s;
+    return BKF_OK;
+}
+
+int bkf_scene_parse_file(const char *path, bkf_scene **out, bkf_error *err)
+{
+    *out = NULL;
+    FILE *f = fopen(path, "rb");
+    if (!f) return bkf_error_set(err, BKF_EINPUT, "scene %s: cannot open it", path);
+    size_t cap = 4096, n = 0;
+    char *buf = malloc(cap);
+    int status = buf ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    while (!status) {
+        if (n + 1 >= cap) {
+            if (cap > (1u << 24)) {
+                status = bkf_error_set(err, BKF_EINPUT, "scene %s: larger than 16 MiB", path);
+                break;
+            }
+            char *g = realloc(buf, cap *= 2);
+            if (!g) {
+                status = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+                break;
+            }
+            buf = g;
+        }
+        size_t k = fread(buf + n, 1, cap - 1 - n, f);
+        n += k;
+        if (k == 0) break;
+    }
+    if (!status && ferror(f)) status = bkf_error_set(err, BKF_EINPUT, "scene %s: read error", path);
+    fclose(f);
+    if (!status && memchr(buf, '\0', n))
+        status = bkf_error_set(err, BKF_EINPUT, "scene %s: holds a NUL byte (not a text file)", path);
+    if (!status) {
+        buf[n] = '\0';
+        status = bkf_scene_parse_string(buf, path, out, err);
+    }
+    free(buf);
+    return status;
+}
+
+void bkf_scene_free(bkf_scene *s)
+{
+    if (!s) return;
+    for (size_t i = 0; i < s->nproducts; i++) free(s->products[i].entries);
+    free(s->products);
+    free(s->model);
+    free(s->path);
+    free(s);
+}
+
+/* ------------------------------------------------------------------ plan */
+
+typedef struct {
+    bkf_scene_arg *v;
+    size_t n, cap;
+} arg_list;
+
+static void args_free(bkf_scene_arg *v, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        free(v[i].key);
+        free(v[i].value);
+    }
+    free(v);
+}
+
+static int arg_push(arg_list *b, const char *key, const char *value, int output, int fixed)
+{
+    if (b->n == b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : 16;
+        bkf_scene_arg *g = realloc(b->v, cap * sizeof *g);
+        if (!g) return 0;
+        b->v = g;
+        b->cap = cap;
+    }
+    bkf_scene_arg *a = &b->v[b->n];
+    *a = (bkf_scene_arg){.key = strdup(key), .value = value ? strdup(value) : NULL,
+                         .output = output, .fixed = fixed};
+    if (!a->key || (value && !a->value)) {
+        free(a->key);
+        free(a->value);
+        return 0;
+    }
+    b->n++;
+    return 1;
+}
+
+static int arg_has(const arg_list *b, const char *key)
+{
+    for (size_t i = 0; i < b->n; i++)
+        if (strcmp(b->v[i].key, key) == 0) return 1;
+    return 0;
+}
+
+/* A list value ("a,b,c" or "A:B:N") as separate texts; 0 when out of
+ * memory (the value was checked when parsed). */
+static int list_values(const char *text, char ***items, size_t *count)
+{
+    *items = NULL;
+    *count = 0;
+    if (strchr(text, ':')) {
+        bkf_list r;
+        bkf_error e;
+        if (bkf_list_parse(text, 0, 0, SCENE_MAX_POINTS, "", "list", &r, &e)) return 0;
+        *items = calloc(r.count ? r.count : 1, sizeof **items);
+        for (size_t i = 0; *items && i < r.count; i++) {
+            char buf[64];
+            snprintf(buf, sizeof buf, "%.15g", r.values[i]);
+            (*items)[i] = strdup(buf);
+            if (!(*items)[i]) break;
+            (*count)++;
+        }
+        size_t want = r.count;
+        bkf_list_free(&r);
+        return *items && *count == want;
+    }
+    char buf[BKF_SCENE_VALUE_LEN];
+    snprintf(buf, sizeof buf, "%s", text);
+    char *save = NULL;
+    for (char *t = strtok_r(buf, ",", &save); t; t = strtok_r(NULL, ",", &save)) {
+        char **g = realloc(*items, (*count + 1) * sizeof *g);
+        if (!g) return 0;
+        *items = g;
+        if (!(g[*count] = strdup(t))) return 0;
+        (*count)++;
+    }
+    return 1;
+}
+
+static void list_values_free(char **items, size_t count)
+{
+    for (size_t i = 0; i < count; i++) free(items[i]);
+    free(items);
+}
+
+/* The same computation: the same product and settings, whatever the files. */
+static int same_computation(const bkf_scene_step *a, const arg_list *b, const char *product)
+{
+    if (strcmp(a->product, product) != 0) return 0;
+    size_t i = 0, j = 0;
+    for (;;) {
+        while (i < a->nargs && a->args[i].output) i++;
+        while (j < b->n && b->v[j].output) j++;
+        if (i == a->nargs || j == b->n) return i == a->nargs && j == b->n;
+        const bkf_scene_arg *x = &a->args[i], *y = &b->v[j];
+        if (strcmp(x->key, y->key) != 0 || !x->value != !y->value ||
+            (x->value && strcmp(x->value, y->value) != 0))
+            return 0;
+        i++, j++;
+    }
+}
+
+static int plan_add_user(bkf_scene_step *st, size_t product)
+{
+    for (size_t i = 0; i < st->nusers; i++)
+        if (st->users[i] == product) return 1;
+    size_t *g = realloc(st->users, (st->nusers + 1) * sizeof *g);
+    if (!g) return 0;
+    st->users = g;
+    g[st->nusers++] = product;
+    return 1;
+}
+
+static int product_add_step(bkf_scene_plan *plan, size_t product, size_t step)
+{
+    bkf_scene_product_plan *pp = &plan->products[product];
+    size_t *g = realloc(pp->steps, (pp->nsteps + 1) * sizeof *g);
+    if (!g) return 0;
+    pp->steps = g;
+    g[pp->nsteps++] = step;
+    return plan_add_user(&plan->steps[step], product);
+}
+
+/* Adds the step, or finds the same computation already planned.  Takes
+ * the args and output over (frees them on failure, or when building failed:
+ * ok 0 or no output path). */
+static int finish_step(bkf_scene_plan *plan, size_t product, bkf_scene_step_kind kind,
+                       const char *name, int ok, arg_list *b, char *output,
+                       size_t data_product)
+{
+    if (!ok || !output) goto fail;
+    if (kind == BKF_SCENE_STEP_PRODUCT)
+        for (size_t i = 0; i < plan->nsteps; i++)
+            if (plan->steps[i].kind == BKF_SCENE_STEP_PRODUCT &&
+                same_computation(&plan->steps[i], b, name)) {
+                args_free(b->v, b->n);
+                free(output);
+                plan->deduplicated++;
+                return product_add_step(plan, product, i);
+            }
+    bkf_scene_step *g = realloc(plan->steps, (plan->nsteps + 1) * sizeof *g);
+    if (!g) goto fail;
+    plan->steps = g;
+    g[plan->nsteps] = (bkf_scene_step){.kind = kind, .product = name,
+                                       .entry = bkf_catalog_find(name), .args = b->v,
+                                       .nargs = b->n, .output = output,
+                                       .data_product = data_product};
+    plan->nsteps++;
+    return product_add_step(plan, product, plan->nsteps - 1);
+fail:
+    free(output);
+    args_free(b->v, b->n);
+    return 0;
+}
+
+static char *out_path(const char *dir, const char *name, const char *suffix)
+{
+    size_t n = strlen(dir) + strlen(name) + strlen(suffix) + 2;
+    char *p = malloc(n);
+    if (p) snprintf(p, n, "%s/%s%s", dir, name, suffix);
+    return p;
+}
+
+/* The model keys every cycle-based product takes. */
+static int model_args(arg_list *b, const bkf_scene *s, const bkf_scene_product *p, int with_nu,
+                      int with_S)
+{
+    const char *skip = NULL;
+    if (p->kind == BKF_SCENE_BRANCH) skip = entry_value(p->entries, p->nentries, "param");
+    if (p->kind == BKF_SCENE_THRESHOLD) skip = entry_value(p->entries, p->nentries, "along");
+    static const char *const names[] = {"gamma", "c", "nu", "S"};
+    for (int i = 0; i < 4; i++) {
+        if ((i == 2 && !with_nu) || (i == 3 && !with_S)) continue;
+        if (skip && strcmp(skip, names[i]) == 0) continue;
+        const char *v = bkf_scene_value(s, p, names[i]);
+        if (v && !arg_push(b, names[i], v, 0, 0)) return 0;
+    }
+    return 1;
+}
+
+/* Keys of a catalogued product's own section that the kind's recipe below
+ * does not pass: every key of the product's table reaches it. */
+static int other_keys(arg_list *b, const bkf_scene_product *p)
+{
+    const bkf_catalog_entry *entry = catalog_entry(p->kind);
+    if (!entry) return 1;
+    size_t n;
+    const bkf_option *table = entry->options(&n);
+    for (size_t i = 0; i < p->nentries; i++) {
+        char key[sizeof p->entries[i].key];
+        option_name(p->entries[i].key, key, sizeof key);
+        const bkf_option *opt = bkf_option_find(table, n, key);
+        if (!opt || arg_has(b, key)) continue;
+        const char *v = p->entries[i].value;
+        if (opt->type == BKF_OPT_SWITCH) {
+            if (strcmp(v, "no") == 0) continue;
+            v = NULL;
+        }
+        if (!arg_push(b, key, v, 0, 0)) return 0;
+    }
+    return 1;
+}
+
+/* The keys a kind always passes (kind_map), where the recipe puts them. */
+static int fixed_keys(arg_list *b, const char *keys)
+{
+    char buf[64];
+    snprintf(buf, sizeof buf, "%s", keys ? keys : "");
+    char *save = NULL;
+    for (char *t = strtok_r(buf, " ", &save); t; t = strtok_r(NULL, " ", &save))
+        if (!arg_push(b, t, NULL, 0, 1)) return 0;
+    return 1;
+}
+
+static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
+                        const bkf_scene_plan_options *o)
+{
+    const bkf_scene_product *p = &s->products[index];
+    const kind_map_row *map = &kind_map[p->kind];
+    const char *name = map->product;
+    const char *dir = plan->outdir;
+    const char *v;
+    arg_list b = {0};
+    int ok = 1;
+#define KEY(x) (ok = ok && arg_push(&b, (x), NULL, 0, 0))
+#define PAIR(k, x) (ok = ok && (!(x) || arg_push(&b, (k), (x), 0, 0)))
+#define OUT(k, x) (ok = ok && (x) && arg_push(&b, (k), (x), 1, 0))
+#define OWN(x) entry_value(p->entries, p->nentries, (x))
+#define FIRST() (ok = ok && fixed_keys(&b, map->first))
+#define LAST() (ok = ok && other_keys(&b, p) && fixed_keys(&b, map->last))
+    switch (p->kind) {
+    case BKF_SCENE_SPEEDS: {
+        FIRST();
+        ok = ok && model_args(&b, s, p, 1, 1);
+        PAIR("n", OWN("n"));
+        PAIR("nmax", OWN("nmax"));
+        PAIR("tol", bkf_scene_value(s, p, "tol"));
+        PAIR("method", OWN("method"));
+        LAST();
+        char *out = out_path(dir, p->name, ".tsv");
+        OUT("out", out);
+        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+    }
+    case BKF_SCENE_PERIOD:
+    case BKF_SCENE_DISPERSION: {
+        char **nus;
+        size_t count;
+        if (!list_values(bkf_scene_value(s, p, "nu"), &nus, &count)) return 0;
+        for (size_t i = 0; ok && i < count; i++) {
+            b = (arg_list){0};
+            char suffix[32];
+            snprintf(suffix, sizeof suffix, count > 1 ? "_%zu.tsv" : ".tsv", i + 1);
+            char *out = out_path(dir, p->name, suffix);
+            FIRST();
+            if (p->kind == BKF_SCENE_PERIOD) {
+                const char *mu = OWN("mu");
+                PAIR("mu", mu ? mu : "0.1:1e4:41");
+                if (!mu || strchr(mu, ':')) KEY("log");
+                PAIR("method", OWN("method"));
+            } else {
+                PAIR("gamma", bkf_scene_value(s, p, "gamma"));
+                PAIR("c", bkf_scene_value(s, p, "c"));
+                const char *q = OWN("q");
+                PAIR("q", q ? q : "0:6:241");
+                PAIR("S", bkf_scene_value(s, p, "S"));
+            }
+            PAIR("nu", nus[i]);
+            PAIR("tol", bkf_scene_value(s, p, "tol"));
+            LAST();
+            OUT("out", out);
+            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+        }
+        list_values_free(nus, count);
+        return ok;
+    }
+    case BKF_SCENE_THRESHOLD: {
+        FIRST();
+        ok = ok && model_args(&b, s, p, 0, 0);
+        PAIR("along", OWN("along"));
+        PAIR("from", OWN("from"));
+        PAIR("to", OWN("to"));
+        PAIR("search", OWN("search"));
+        PAIR("tol", bkf_scene_value(s, p, "tol"));
+        LAST();
+        char *out = out_path(dir, p->name, ".tsv");
+        OUT("out", out);
+        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+    }
+    case BKF_SCENE_BRANCH: {
+        char **ns;
+        size_t count;
+        v = OWN("n");
+        if (!list_values(v ? v : "1", &ns, &count)) return 0;
+        const char *param = OWN("param");
+        const char *from = OWN("from");
+        if (!from) from = bkf_scene_value(s, p, param);
+        for (size_t i = 0; ok && i < count; i++) {
+            b = (arg_list){0};
+            char suffix[32];
+            snprintf(suffix, sizeof suffix, count > 1 ? "_%zu.tsv" : ".tsv", i + 1);
+            char *out = out_path(dir, p->name, suffix);
+            FIRST();
+            PAIR("param", param);
+            PAIR("from", from);
+            PAIR("to", OWN("to"));
+            ok = ok && model_args(&b, s, p, 1, 1);
+            PAIR("n", ns[i]);
+            PAIR("root", OWN("root"));
+            PAIR("max-points", OWN("max_points"));
+            PAIR("tol", bkf_scene_value(s, p, "tol"));
+            LAST();
+            OUT("out", out);
+            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+        }
+        list_values_free(ns, count);
+        return ok;
+    }
+    case BKF_SCENE_PROFILE: {
+        FIRST();
+        ok = ok && model_args(&b, s, p, 1, 1);
+        v = OWN("n");
+        PAIR("n", v ? v : "1");
+        PAIR("root", OWN("root"));
+        PAIR("points", OWN("points"));
+        PAIR("tol", bkf_scene_value(s, p, "tol"));
+        LAST();
+        char *out = out_path(dir, p->name, ".tsv");
+        OUT("out", out);
+        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+    }
+    case BKF_SCENE_VALIDITY: {
+        FIRST();
+        v = OWN("mu");
+        PAIR("mu", v ? v : "0.1:1e4:21");
+        KEY("log");
+        v = OWN("nu");
+        PAIR("nu", v ? v : "-0.99:0.99:12");
+        LAST();
+        char *out = out_path(dir, p->name, ".tsv");
+        OUT("out", out);
+        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+    }
+    case BKF_SCENE_FRICTION: {
+        FIRST();
+        v = OWN("from");
+        PAIR("from", v ? v : "-1");
+        v = OWN("to");
+        PAIR("to", v ? v : "4");
+        v = OWN("points");
+        PAIR("points", v ? v : "601");
+        LAST();
+        char *out = out_path(dir, p->name, ".tsv");
+        OUT("out", out);
+        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+    }
+    case BKF_SCENE_SPACETIME: {
+        FIRST();
+        ok = ok && model_args(&b, s, p, 1, 1);
+        PAIR("model", bkf_scene_value(s, p, "model"));
+        v = bkf_scene_value(s, p, "N");
+        PAIR("N", v ? v : "512");
+        v = OWN("tmax");
+        PAIR("tmax", v ? v : "50");
+        v = OWN("init");
+        PAIR("init", v ? v : "uniform");
+        v = OWN("seed");
+        PAIR("seed", v ? v : "1");
+        v = OWN("frames");
+        PAIR("frames", v ? v : "500");
+        PAIR("tol", OWN("tol"));
+        PAIR("stepper", OWN("stepper"));
+        LAST();
+        char *st = out_path(dir, p->name, ".dat");
+        char *out = out_path(dir, p->name, "_diag.tsv");
+        OUT("spacetime", st);
+        OUT("out", out);
+        free(out);
+        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, st, 0);
+    }
+    case BKF_SCENE_CHECK: {
+        FIRST();
+        ok = ok && model_args(&b, s, p, 1, 1);
+        PAIR("n", OWN("n"));
+        PAIR("N", bkf_scene_value(s, p, "N"));
+        PAIR("tmax", OWN("tmax"));
+        PAIR("tol", OWN("tol"));
+        PAIR("rel-tol", OWN("rel_tol"));
+        PAIR("seed", OWN("seed"));
+        PAIR("stepper", OWN("stepper"));
+        PAIR("frame", OWN("frame"));
+        PAIR("grid", OWN("grid"));
+        PAIR("points", OWN("points"));
+        LAST();
+        char *out = out_path(dir, p->name, ".tsv");
+        OUT("out", out);
+        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+    }
+    case BKF_SCENE_FIGURE: {
+        if (!o->figures) return 1;
+        const bkf_scene_product *data = bkf_scene_find(s, OWN("data"), 0);
+        size_t di = (size_t)(data - s->products);
+        unsigned formats = 0;
+        v = OWN("formats");
+        if (v) {
+            formats |= strstr(v, "png") ? 1u : 0u;
+            formats |= strstr(v, "pdf") ? 2u : 0u;
+            formats |= strstr(v, "svg") ? 4u : 0u;
+        } else
+            formats = o->formats ? o->formats : 1u;
+        char *first = NULL;
+        for (int f = 0; ok && f < 3; f++) {
+            if (!(formats & (1u << f))) continue;
+            char suffix[8];
+            snprintf(suffix, sizeof suffix, ".%s", bkf_plot_format_name((bkf_plot_format)f));
+            char *path = out_path(dir, p->name, suffix);
+            OUT("out", path);
+            if (!first)
+                first = path;
+            else
+                free(path);
+        }
+        return finish_step(plan, index, BKF_SCENE_STEP_FIGURE, "figure", ok, &b, first, di);
+    }
+    case BKF_SCENE_NKINDS:
+        break;
+    }
+#undef KEY
+#undef PAIR
+#undef OUT
+#undef OWN
+#undef FIRST
+#undef LAST
+    args_free(b.v, b.n);
+    return 1;
+}
+
+int bkf_scene_make_plan(const bkf_scene *s, const bkf_scene_plan_options *o,
+                        bkf_scene_plan *plan, bkf_error *err)
+{
+    *plan = (bkf_scene_plan){0};
+    if (!o || !o->outdir || !*o->outdir)
+        return bkf_error_set(err, BKF_EINPUT, "plan: no output folder");
+    if (strpbrk(o->outdir, " \t\n'\""))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "--out: '%s' holds a space or a quote, which the figure scripts "
+                             "cannot take in a file list", o->outdir);
+    plan->outdir = strdup(o->outdir);
+    plan->products = calloc(s->nproducts ? s->nproducts : 1, sizeof *plan->products);
+    plan->nproducts = s->nproducts;
+    int ok = plan->outdir && plan->products;
+    /* Data first, figures after everything they could show. */
+    for (int pass = 0; ok && pass < 2; pass++)
+        for (size_t i = 0; ok && i < s->nproducts; i++)
+            if ((s->products[i].kind == BKF_SCENE_FIGURE) == (pass == 1))
+                ok = plan_product(plan, s, i, o);
+    if (!ok) {
+        bkf_scene_plan_free(plan);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    return BKF_OK;
+}
+
+void bkf_scene_plan_free(bkf_scene_plan *plan)
+{
+    if (!plan) return;
+    for (size_t i = 0; i < plan->nsteps; i++) {
+        args_free(plan->steps[i].args, plan->steps[i].nargs);
+        free(plan->steps[i].output);
+        free(plan->steps[i].users);
+    }
+    free(plan->steps);
+    for (size_t i = 0; plan->products && i < plan->nproducts; i++) free(plan->products[i].steps);
+    free(plan->products);
+    free(plan->outdir);
+    *plan = (bkf_scene_plan){0};
+}
+
+char **bkf_scene_step_argv(const bkf_scene_step *step, int *argc)
+{
+    char **v = calloc(2 * step->nargs + 2, sizeof *v);
+    int n = 0;
+    if (!v || !(v[n++] = strdup(step->product))) goto fail;
+    for (size_t i = 0; i < step->nargs; i++) {
+        const bkf_scene_arg *a = &step->args[i];
+        size_t len = strlen(a->key) + 3;
+        if (!(v[n] = malloc(len))) goto fail;
+        snprintf(v[n++], len, "--%s", a->key);
+        if (a->value && !(v[n++] = strdup(a->value))) goto fail;
+    }
+    if (argc) *argc = n;
+    return v;
+fail:
+    bkf_scene_argv_free(v);
+    return NULL;
+}
+
+void bkf_scene_argv_free(char **argv)
+{
+    if (!argv) return;
+    for (char **p = argv; *p; p++) free(*p);
+    free(argv);
+}
+
+/* Text a POSIX shell reads as one word, unquoted. */
+static int shell_plain(const char *s)
+{
+    if (!*s) return 0;
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+              strchr("-_./:=+,@%", c)))
+            return 0;
+    }
+    return 1;
+}
+
+char *bkf_scene_step_command(const bkf_scene_step *step)
+{
+    if (step->kind == BKF_SCENE_STEP_FIGURE) return strdup("gnuplot");
+    int argc = 0;
+    char **argv = bkf_scene_step_argv(step, &argc);
+    if (!argv) return NULL;
+    size_t cap = 1;
+    for (int i = 0; i < argc; i++) cap += 4 * strlen(argv[i]) + 3;
+    char *line = malloc(cap), *p = line;
+    for (int i = 0; line && i < argc; i++) {
+        if (i) *p++ = ' ';
+        const char *t = argv[i];
+        if (shell_plain(t)) {
+            size_t n = strlen(t);
+            memcpy(p, t, n);
+            p += n;
+            continue;
+        }
+        *p++ = '\'';
+        for (; *t; t++) {
+            if (*t == '\'') {
+                memcpy(p, "'\\''", 4);
+                p += 4;
+            } else
+                *p++ = ((unsigned char)*t < 0x20 || *t == 0x7f) ? '?' : *t;
+        }
+        *p++ = '\'';
+    }
+    if (line) *p = '\0';
+    bkf_scene_argv_free(argv);
+    return line;
+}
+
+/* What the catalogue's checks judge on the whole spec (nu inside the active
+ * range, what goes together), at parse time: a scene that parses runs its
+ * products past their checks.  The message names its key first (options.h:
+ * "PREFIXNAME: ..."): the error is given at that key's line. */
+static int validate_plan(parse_state *st)
+{
+    bkf_scene_plan plan;
+    bkf_scene_plan_options o = {.outdir = ".", .figures = 0};
+    bkf_error e;
+    int made = bkf_scene_make_plan(st->s, &o, &plan, &e);
+    if (made) {
+        st->status = bkf_error_set(st->err, made, "%s", e.message);
+        return 0;
+    }
+    for (size_t i = 0; !st->status && i < plan.nsteps; i++) {
+        const bkf_scene_step *step = &plan.steps[i];
+        if (!step->entry) continue;
+        void *spec = bkf_catalog_spec_new(step->entry, &e);
+        if (!spec) {
+            st->status = bkf_error_set(st->err, BKF_ENOMEM, "out of memory");
+            break;
+        }
+        const bkf_scene_product *p = &st->s->products[step->users[0]];
+        size_t bad = step->nargs;
+        int s = apply_args(step->entry, step->args, step->nargs, spec, &bad, &e);
+        if (!s) s = step->entry->check(spec, "", &e);
+        bkf_catalog_spec_free(step->entry, spec);
+        if (s == BKF_ENOMEM) {
+            st->status = bkf_error_set(st->err, s, "out of memory");
+        } else if (s) {
+            char key[32];
+            if (bad < step->nargs)
+                snprintf(key, sizeof key, "%s", step->args[bad].key);
+            else
+                snprintf(key, sizeof key, "%.*s", (int)strcspn(e.message, ":, "), e.message);
+            fail(st, key_line(st->s, p, key), "[%s %s]: %s", kind_names[p->kind], p->name,
+                 e.message);
+        }
+    }
+    bkf_scene_plan_free(&plan);
+    return !st->status;
+}
+
+/* ------------------------------------------------------------------- run */
+
+static const char *arg_value(const bkf_scene_step *step, const char *key)
+{
+    for (size_t i = 0; i < step->nargs; i++)
+        if (strcmp(step->args[i].key, key) == 0) return step->args[i].value;
+    return NULL;
+}
+
+typedef int (*table_writer)(const bkf_scene_step *step, void *spec, FILE *out,
+                            const bkf_provenance *prov, const bkf_scene_run_options *o,
+                            bkf_error *err);
+
+/* The step's table written atomically onto its output: whole or not at all. */
+static int write_output(const bkf_scene_step *step, void *spec, table_writer write,
+                        const bkf_scene_run_options *o, bkf_error *err)
+{
+    char *cmd = bkf_scene_step_command(step);
+    size_t n = cmd ? strlen(cmd) + (o->command_prefix ? strlen(o->command_prefix) : 0) + 2 : 0;
+    char *command = cmd ? malloc(n) : NULL;
+    if (!command) {
+        free(cmd);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    snprintf(command, n, "%s%s%s", o->command_prefix ? o->command_prefix : "",
+             o->command_prefix ? " " : "", cmd);
+    free(cmd);
+    bkf_error e;
+    bkf_io_atomic *file = bkf_io_atomic_open(step->output, &e);
+    if (!file) {
+        free(command);
+        return bkf_error_set(err, BKF_EINPUT, "out: %s", e.message);
+    }
+    char temp[4096];
+    snprintf(temp, sizeof temp, "%s", bkf_io_atomic_temp_path(file));
+    if (o->temp_file) o->temp_file(temp, 1, o->data);
+    bkf_provenance prov = {o->program, command};
+    int s = write(step, spec, bkf_io_atomic_stream(file), &prov, o, err);
+    if (!s)
+        s = bkf_io_atomic_commit(file, err);
+    else
+        bkf_io_atomic_abort(file);
+    if (o->temp_file) o->temp_file(temp, 0, o->data);
+    free(command);
+    return s;
+}
+
+static int write_catalogued(const bkf_scene_step *step, void *spec, FILE *out,
+                            const bkf_provenance *prov, const bkf_scene_run_options *o,
+                            bkf_error *err)
+{
+    return step->entry->write(spec, out, BKF_IO_TSV, prov, &o->hooks, err);
+}
+
+static int append(char *buf, size_t size, const char *sep, const char *text)
+{
+    size_t used = strlen(buf);
+    int n = snprintf(buf + used, size - used, "%s%s", used ? sep : "", text);
+    return n >= 0 && (size_t)n < size - used;
+}
+
+static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
+                      const bkf_scene_step *step, const bkf_scene_run_options *o,
+                      char *warning, size_t wsize, bkf_error *err)
+{
+    const bkf_scene_product *fig = &sc->products[step->users[0]];
+    const bkf_scene_product *data = &sc->products[step->data_product];
+    const bkf_scene_product_plan *dp = &plan->products[step->data_product];
+    const char *scene_dir = o->scene_dir ? o->scene_dir : ".";
+    const char *plots_dir = o->plots_dir ? o->plots_dir : "plots";
+    char script[4096];
+    const char *own = bkf_scene_value(sc, fig, "script");
+    if (own && own[0] == '/')
+        snprintf(script, sizeof script, "%s", own);
+    else if (own)
+        snprintf(script, sizeof script, "%.2000s/%.2000s", scene_dir, own);
+    else
+        snprintf(script, sizeof script, "%.2000s/%.64s.gp", plots_dir, kind_names[data->kind]);
+
+    char files[8192] = "", labels[4096] = "";
+    for (size_t i = 0; i < dp->nsteps; i++) {
+        const bkf_scene_step *ds = &plan->steps[dp->steps[i]];
+        if (!append(files, sizeof files, " ", ds->output))
+            return bkf_error_set(err, BKF_EINPUT, "figure %s: too many data files", fig->name);
+        const char *value = "";
+        if (data->kind == BKF_SCENE_PERIOD || data->kind == BKF_SCENE_DISPERSION)
+            value = arg_value(ds, "nu");
+        else if (data->kind == BKF_SCENE_BRANCH)
+            value = arg_value(ds, "n");
+        if (data->kind == BKF_SCENE_PROFILE) {
+            char **items;
+            size_t count;
+            if (!list_values(arg_value(ds, "n"), &items, &count))
+                return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            for (size_t k = 0; k < count; k++) append(labels, sizeof labels, " ", items[k]);
+            list_values_free(items, count);
+        } else if (value && *value)
+            append(labels, sizeof labels, " ", value);
+    }
+    bkf_plot_job *job = bkf_plot_job_alloc(script, err);
+    if (!job) return BKF_EINPUT;
+    int s = bkf_plot_set_string(job, "files", files, err);
+    /* per file: its nu (period, dispersion) or n (branch) */
+    if (!s) s = bkf_plot_set_string(job, "values", labels, err);
+    if (!s) s = bkf_plot_set_string(job, "plotdir", plots_dir, err);
+    if (!s) s = bkf_plot_set_string(job, "kind", kind_names[data->kind], err);
+    const char *title = bkf_scene_value(sc, fig, "title");
+    if (!s) s = bkf_plot_set_string(job, "title", title ? title : "", err);
+    static const char *const numbers[] = {"gamma", "c", "nu", "S", "tmax"};
+    for (size_t i = 0; !s && i < sizeof numbers / sizeof numbers[0]; i++) {
+        const char *v = bkf_scene_value(sc, data, numbers[i]);
+        double x = NAN;
+        if (v && !strchr(v, ',') && !strchr(v, ':'))
+            bkf_option_parse_double(v, "", numbers[i], &x, NULL);
+        s = bkf_plot_set_number(job, numbers[i], x, err);
+    }
+    const char *param =
+        bkf_scene_value(sc, data, data->kind == BKF_SCENE_BRANCH ? "param" : "along");
+    if (!s) s = bkf_plot_set_string(job, "param", param ? param : "", err);
+    size_t w = 900, h = 600;
+    const char *wt = bkf_scene_value(sc, fig, "width"), *ht = bkf_scene_value(sc, fig, "height");
+    if (wt) bkf_option_parse_count(wt, 1, 1000000, "", "width", &w, NULL);
+    if (ht) bkf_option_parse_count(ht, 1, 1000000, "", "height", &h, NULL);
+    if (!s) s = bkf_plot_set_number(job, "width", (double)w, err);
+    if (!s) s = bkf_plot_set_number(job, "height", (double)h, err);
+    for (size_t i = 0; !s && i < step->nargs; i++) {
+        const char *path = step->args[i].value;
+        const char *dot = strrchr(path, '.');
+        bkf_plot_format f = strcmp(dot, ".png") == 0   ? BKF_PLOT_PNG
+                            : strcmp(dot, ".pdf") == 0 ? BKF_PLOT_PDF
+                                                       : BKF_PLOT_SVG;
+        s = bkf_plot_add_output(job, f, path, err);
+    }
+    bkf_plot_report report;
+    if (!s) s = bkf_plot_run(job, NULL, &report, err);
+    if (!s && warning) snprintf(warning, wsize, "%s", report.warning);
+    bkf_plot_job_free(job);
+    return s;
+}
+
+int bkf_scene_run_step(const bkf_scene *s, const bkf_scene_plan *plan, size_t i,
+                       const int *done, const bkf_scene_run_options *options, char *warning,
+                       size_t wsize, bkf_error *err)
+{
+    static const bkf_scene_run_options none = {0};
+    const bkf_scene_run_options *o = options ? options : &none;
+    if (warning && wsize) warning[0] = '\0';
+    if (!s || !plan || i >= plan->nsteps)
+        return bkf_error_set(err, BKF_EINPUT, "scene: no such step");
+    const bkf_scene_step *step = &plan->steps[i];
+    if (step->kind == BKF_SCENE_STEP_FIGURE) {
+        const bkf_scene_product_plan *dp = &plan->products[step->data_product];
+        for (size_t k = 0; done && k < dp->nsteps; k++)
+            if (dp->steps[k] < i && done[dp->steps[k]])
+                return bkf_error_set(err, BKF_ENUMERIC, "skipped: its data failed");
+        return run_figure(s, plan, step, o, warning, wsize, err);
+    }
+    if (step->entry) {
+        void *spec = bkf_catalog_spec_new(step->entry, err);
+        if (!spec) return BKF_ENOMEM;
+        int st = apply_args(step->entry, step->args, step->nargs, spec, NULL, err);
+        if (!st) st = step->entry->check(spec, "", err);
+        if (!st) st = write_output(step, spec, write_catalogued, o, err);
+        bkf_catalog_spec_free(step->entry, spec);
+        return st;
+    }
+    /* TRANSITIONAL (issue 14): a product not yet in the catalogue runs as
+     * the caller's command line. */
+    if (!o->run_argv)
+        return bkf_error_set(err, BKF_EINPUT, "no product %s in the catalogue", step->product);
+    int argc = 0;
+    char **argv = bkf_scene_step_argv(step, &argc);
+    if (!argv) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    int st = o->run_argv(argc, argv, step->output, o->data, err);
+    bkf_scene_argv_free(argv);
+    return st;
+}
