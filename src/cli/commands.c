@@ -14,6 +14,7 @@ extern const cli_command cli_cmd_simulate;
 extern const cli_command cli_cmd_check;
 extern const cli_command cli_cmd_run;
 extern const cli_command cli_cmd_bench;
+extern const cli_command cli_cmd_friction;
 
 static const cli_command *const commands[] = {
     &cli_cmd_period,
@@ -22,6 +23,7 @@ static const cli_command *const commands[] = {
     &cli_cmd_branch,
     &cli_cmd_profile,
     &cli_cmd_floquet,
+    &cli_cmd_friction,
     &cli_cmd_simulate,
     &cli_cmd_check,
     &cli_cmd_run,

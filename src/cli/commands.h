@@ -11,4 +11,9 @@ const cli_command *cli_command_at(size_t i);
 /* NULL when there is no such subcommand. */
 const cli_command *cli_find_command(const char *name);
 
+/* A catalogue product (catalog.h) run from flags: its option table and the
+ * output flags, its check, its table written all or nothing. */
+int cli_run_product(const char *name, int argc, char **argv, bkf_error *err);
+void cli_product_help(const char *name, FILE *out);
+
 #endif

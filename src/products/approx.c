@@ -44,7 +44,6 @@ static const char *const mode_names[] = {"fit", "map", "grid", NULL};
 
 const bkf_option bkf_approx_options[] = {
     {.name = "fit", .type = BKF_OPT_SWITCH, .offset = offsetof(bkf_approx_spec, fit),
-     .flags = BKF_OPT_CLI_ONLY,
      .help = "mode: fit R = T - k mu = A mu^p + B ln(mu)/mu + D/mu on\n"
              "log-spaced mu, with p free (NLopt) and with p held at\n"
              "-1/3, and T/(2 pi) - 1 = s mu^2 + s4 mu^4 at small mu;\n"
@@ -52,7 +51,6 @@ const bkf_option bkf_approx_options[] = {
              "A* = a1 C(nu), p* = -1/3, B* = L(nu) = -2/(3 (1 - nu^2)),\n"
              "s* = s2(nu). About 1 s per nu"},
     {.name = "map", .type = BKF_OPT_SWITCH, .offset = offsetof(bkf_approx_spec, map),
-     .flags = BKF_OPT_CLI_ONLY,
      .help = "mode: for each formula, threshold eps and nu, the\n"
              "boundary mu of the region where |T_formula - T|/T <= eps:\n"
              "for the large-mu formulas the smallest mu_min from which\n"
@@ -61,7 +59,6 @@ const bkf_option bkf_approx_options[] = {
              "at 8 points per decade, crossing bisected to 2%).\n"
              "About 2 s per nu"},
     {.name = "grid", .type = BKF_OPT_SWITCH, .offset = offsetof(bkf_approx_spec, grid),
-     .flags = BKF_OPT_CLI_ONLY,
      .help = "mode: T and the three relative errors on a (mu, nu) grid,\n"
              "mu fastest"},
     {.name = "nu", .type = BKF_OPT_DOUBLE_LIST, .offset = offsetof(bkf_approx_spec, nu),

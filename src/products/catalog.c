@@ -147,7 +147,10 @@ int bkf_catalog_apply(const bkf_catalog_entry *entry, void *spec, const char *ke
                              entry->name);
     if (opt->type == BKF_OPT_SWITCH && text) {
         /* A scene writes a switch as key = yes or no. */
-        if (strcmp(text, "no") == 0) return BKF_OK;
+        if (strcmp(text, "no") == 0) {
+            *(int *)((char *)spec + opt->offset) = 0;
+            return BKF_OK;
+        }
         if (strcmp(text, "yes") != 0)
             return bkf_error_set(err, BKF_EINPUT, "%s%s: '%s' is not yes or no",
                                  prefix ? prefix : "", opt->name,
