@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bkfront/check.h"
 #include "bkfront/period.h"
 #include "bkfront/profile.h"
 
@@ -50,6 +51,47 @@ static int profile_write(const void *spec, FILE *out, bkf_io_format format,
 }
 static void profile_release(void *spec) { bkf_profile_spec_free(spec); }
 
+/* -------------------------------------------------------------- check */
+
+static const bkf_option *check_options(size_t *count)
+{
+    *count = bkf_check_nkeys;
+    return bkf_check_keys;
+}
+static void check_init(void *spec) { *(bkf_check_spec *)spec = bkf_check_spec_default(); }
+static int check_check(const void *spec, const char *prefix, bkf_error *err)
+{
+    return bkf_check_spec_check(spec, prefix, err);
+}
+/* The catalogue's progress may answer; the check stops by cancel only. */
+static void check_progress(double fraction, void *data)
+{
+    const bkf_catalog_hooks *h = data;
+    h->progress(fraction, h->data);
+}
+static void check_warning(const char *message, void *data)
+{
+    const bkf_catalog_hooks *h = data;
+    h->warn(message, h->data);
+}
+/* A stable front that disagrees is BKF_ENUMERIC after the whole table. */
+static int check_write(const void *spec, FILE *out, bkf_io_format format,
+                       const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
+                       bkf_error *err)
+{
+    bkf_catalog_hooks copy = {0};
+    if (hooks) copy = *hooks;
+    bkf_check_hooks h = {.progress = copy.progress ? check_progress : NULL,
+                         .warning = copy.warn ? check_warning : NULL,
+                         .data = &copy,
+                         .cancel = copy.cancel};
+    return bkf_check_write(spec, out, format, prov, &h, NULL, err);
+}
+static void check_release(void *spec)
+{
+    bkf_option_free_lists(bkf_check_keys, bkf_check_nkeys, spec);
+}
+
 /* ---------------------------------------------------------- the table */
 
 static const bkf_catalog_entry entries[] = {
@@ -59,6 +101,9 @@ static const bkf_catalog_entry entries[] = {
     {"profile", "front profiles f(z), f'(z) and their place x along the system",
      NULL, NULL, sizeof(bkf_profile_spec), profile_options, profile_init, profile_check,
      profile_write, profile_release},
+    {"check", "predicted front speeds against seeded simulations: agreement and stability per n",
+     NULL, NULL, sizeof(bkf_check_spec), check_options, check_init, check_check, check_write,
+     check_release},
 };
 #define NENTRIES (sizeof entries / sizeof entries[0])
 
