@@ -219,7 +219,8 @@ bkf_check_spec bkf_check_spec_default(void);
 
 /* The keys, named as the flags: gamma, c, nu, S, n, N, N-max, tmax, tol,
  * filter, stepper, rel-tol, perturb, seed, frame, grid, points, resolution;
- * scene keys only: mapped-tol, mapped-max-steps. */
+ * scene keys only: mapped-tol, mapped-max-steps.  (Not bkf_check_options,
+ * the name of the run's options.) */
 extern const bkf_option bkf_check_keys[];
 extern const size_t bkf_check_nkeys;
 

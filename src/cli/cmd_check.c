@@ -131,7 +131,7 @@ static int check_run(int argc, char **argv, bkf_error *err)
     if (s) return s;
     progress_bar bar;
     size_t disagree = 0;
-    bkf_error verdict = {{0}};
+    bkf_error verdict = {0};
     progress_init(&bar, CLI_PROGRAM " check", !a.progress.no_progress);
     check_job job = {&a.spec, &bar, &disagree, &verdict};
     s = cli_write_table(&a.output, argc, argv, write_check, &job, err);

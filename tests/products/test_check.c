@@ -329,7 +329,7 @@ TEST(check_catalog_writes_the_cli_table)
 {
     const bkf_catalog_entry *entry = bkf_catalog_find("check");
     CHECK(entry && strcmp(entry->name, "check") == 0);
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     void *spec = bkf_catalog_spec_new(entry, &err);
     CHECK(spec);
     CHECK_STATUS(bkf_catalog_apply(entry, spec, "n", "5", "", &err), BKF_OK);
@@ -364,7 +364,7 @@ TEST(check_catalog_writes_the_cli_table)
 static void expect_key_refused(const bkf_catalog_entry *entry, void *spec, const char *key,
                                const char *text, const char *range)
 {
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     bkf_check_spec before = *(bkf_check_spec *)spec;
     int s = bkf_catalog_apply(entry, spec, key, text, "scene:3: ", &err);
     CHECK_MSG(s == BKF_EINPUT, "%s = %s: status %d", key, text, s);
@@ -379,7 +379,7 @@ TEST(check_catalog_refuses_bad_keys)
 {
     const bkf_catalog_entry *entry = bkf_catalog_find("check");
     CHECK(entry);
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     bkf_check_spec *spec = bkf_catalog_spec_new(entry, &err);
     CHECK(spec);
     expect_key_refused(entry, spec, "gamma", "0", "[1e-06, 1e+06]");
@@ -443,7 +443,7 @@ TEST(check_write_disagreement_keeps_the_table)
     size_t size = 0, disagree = 99;
     FILE *out = open_memstream(&buf, &size);
     CHECK(out);
-    bkf_error err = {{0}};
+    bkf_error err = {0};
     int s = bkf_check_write(&spec, out, BKF_IO_TSV, NULL, NULL, &disagree, &err);
     CHECK(fclose(out) == 0);
     CHECK_MSG(s == BKF_ENUMERIC && disagree == 1, "status %d, %zu disagree: %s", s, disagree,
