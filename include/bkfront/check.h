@@ -30,8 +30,11 @@
 
 #include <signal.h>
 #include <stddef.h>
+#include <stdio.h>
 
+#include "bkfront/io.h"
 #include "bkfront/model.h"
+#include "bkfront/options.h"
 #include "bkfront/pde.h"
 #include "bkfront/status.h"
 
@@ -202,6 +205,41 @@ typedef struct {
  * message names n, root and grid). */
 int bkf_check_run(const bkf_model_params *model, const bkf_check_options *options,
                   const bkf_check_hooks *hooks, bkf_error *err);
+
+/* The check as a product (`bkfront check`, a scene's check step): a spec
+ * filled from bkf_check_spec_default through the table bkf_check_keys,
+ * checked, and written as the table of rows with its comment lines. */
+typedef struct {
+    bkf_model_params model;    /* gamma, c, nu, S; N and kind are not used */
+    bkf_check_options options; /* frame lab with grid auto means grid uniform */
+} bkf_check_spec;
+
+/* The paper's model and bkf_check_options_default: `bkfront check`. */
+bkf_check_spec bkf_check_spec_default(void);
+
+/* The keys, named as the flags: gamma, c, nu, S, n, N, N-max, tmax, tol,
+ * filter, stepper, rel-tol, perturb, seed, frame, grid, points, resolution;
+ * scene keys only: mapped-tol, mapped-max-steps.  (Not bkf_check_options,
+ * the name of the run's options.) */
+extern const bkf_option bkf_check_keys[];
+extern const size_t bkf_check_nkeys;
+
+/* What the table cannot judge key by key (N even, N-max >= N, frame lab
+ * not with grid mapped), then bkf_check_validate; messages name the keys
+ * with `prefix` ("--" or ""). */
+int bkf_check_spec_check(const bkf_check_spec *spec, const char *prefix, bkf_error *err);
+
+/* Runs the check and writes the whole table (comments, header, rows) to
+ * `out`, once every root is done: on a failure of the run nothing is
+ * written.  hooks (may be NULL): progress, warning and cancel as for
+ * bkf_check_run; begin and row are called too, after the write's own.
+ * When a stable front disagrees (verdict disagrees) the table is written
+ * in full and the status is BKF_ENUMERIC, the message naming the n, and
+ * *disagree (may be NULL; otherwise set to 0) gets their count: a caller
+ * tells this outcome from a failed run by *disagree > 0. */
+int bkf_check_write(const bkf_check_spec *spec, FILE *out, bkf_io_format format,
+                    const bkf_provenance *provenance, const bkf_check_hooks *hooks,
+                    size_t *disagree, bkf_error *err);
 
 #ifdef __cplusplus
 }

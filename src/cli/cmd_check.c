@@ -1,24 +1,43 @@
-/* bkfront check: the predicted front speeds against seeded simulations
- * (the library's bkf_check_run; this file turns flags into its options and
- * its rows into the table).
+/* bkfront check: the speed check product (bkfront/check.h) from flags, with
+ * a progress bar and the warnings on stderr.
  *
- * As in the other subcommands every input is checked before computing, each
- * output is built in memory and written only on success (files replaced
- * atomically), and errors are one line. */
-#define _POSIX_C_SOURCE 200809L
+ * Every input is checked before computing, and the table is built in memory
+ * and written only when the run completed (the --out file replaced
+ * atomically).  A stable front that disagrees with its predicted speed still
+ * gets the whole table, and the exit status 1. */
 #include "simcommon.h"
 
-#include <stdlib.h>
-#include <string.h>
-
 #include "bkfront/check.h"
-#include "bkfront/cycle.h"
-#include "bkfront/io.h"
-#include "bkfront/model.h"
-#include "bkfront/speeds.h"
+
+/* The progress bar is the command line's alone: no scene key. */
+typedef struct {
+    int no_progress;
+} progress_spec;
+
+static const bkf_option progress_options[] = {
+    {.name = "no-progress", .type = BKF_OPT_SWITCH, .offset = offsetof(progress_spec, no_progress),
+     .flags = BKF_OPT_CLI_ONLY,
+     .help = "no progress bar (drawn on stderr only when it is a\n"
+             "terminal and the run takes over half a second)"},
+};
+
+typedef struct {
+    bkf_check_spec spec;
+    progress_spec progress;
+    cli_output_spec output;
+} check_args;
+
+static void groups_of(check_args *a, cli_options g[3])
+{
+    g[0] = (cli_options){bkf_check_keys, bkf_check_nkeys, a ? &a->spec : NULL};
+    g[1] = (cli_options){progress_options, 1, a ? &a->progress : NULL};
+    g[2] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
+}
 
 static void check_help(FILE *out)
 {
+    cli_options g[3];
+    groups_of(NULL, g);
     fprintf(out,
         "usage: bkfront check [--gamma G] [--c C] [--nu V] [--S S] [--n K] [--N N]\n"
         "                     [--N-max M] [--tmax T] [--tol E] [--rel-tol R] [--perturb A]\n"
@@ -32,37 +51,9 @@ static void check_help(FILE *out)
         "measured speed is compared with the prediction and the run tells whether the\n"
         "front keeps its count and shape.\n"
         "\n"
-        "options (defaults: the paper's gamma 2, c 0.3, nu -0.96, S 20):\n"
-        "  --gamma G, --c C, --nu V, --S S   model parameters (|nu| < 1)\n"
-        "  --n K             check n = K only; default every n with a root\n"
-        "  --grid G          auto (default): the uniform spectral grid when it resolves the\n"
-        "                    wave on N <= %d, else the adapted grid; uniform: always the\n"
-        "                    spectral grid (up to --N-max); mapped: always the adapted grid\n"
-        "                    (finite differences of order 8 on points placed by the wave's\n"
-        "                    own length scales, in the frame of v_pred, CVODE in time;\n"
-        "                    docs/cli/check.md)\n"
-        "  --points M        adapted grid: points per wavelength; default %d\n"
-        "  --N N             smallest grid; each root runs on the smallest N = N 2^k that\n"
-        "                    resolves its wave (Fourier coefficients above N/3 below %.0e of\n"
-        "                    the largest); default %d\n"
-        "  --N-max M         largest grid; roots needing more are reported unresolved and\n"
-        "                    not simulated; default %d\n"
-        "  --tmax T          length of each run; default 125\n"
-        "  --stepper S       etdrk4 (default: exponential, the wave part of every mode\n"
-        "                    exact, steps set by the physics), or rk8pd, rkck, rkf45\n"
-        "                    (explicit, steps capped by the fastest wave mode ~ 1/N)\n"
-        "  --tol E           local error tolerance; default %.0e with etdrk4, 1e-9 with\n"
-        "                    the Runge-Kutta steppers, %.0e on the adapted grid\n"
-        "  --filter F        spectral filter, as in bkfront simulate; default 4\n"
-        "  --rel-tol R       agreement asked of a stable front, |v_meas - v_pred| / v_pred;\n"
-        "                    default %.0e\n"
-        "  --perturb A       rms of the band-limited noise added to the seeded wave;\n"
-        "                    default %.0e\n"
-        "  --seed K          seed of that noise; default 1\n"
-        "  --resolution R    the spectral tail accepted as resolved; default %.0e\n"
-        "  --frame lab|moving  simulate in the frame moving with v_pred (default), where\n"
-        "                    the seeded wave is a steady state, or in the lab frame\n"
-        "  --no-progress, --format tsv|json, --out FILE   as in bkfront simulate\n"
+        "options (defaults: the paper's gamma 2, c 0.3, nu -0.96, S 20):\n");
+    cli_options_help(out, g, 3);
+    fprintf(out,
         "\n"
         "columns:\n"
         "  n, root           number of fronts and the root (1: fastest) of bkf_speeds_find\n"
@@ -94,295 +85,60 @@ static void check_help(FILE *out)
         "                    warning on stderr)\n"
         "\n"
         "exit status: 0 ok, 1 a stable front disagrees (or a numerical failure), 2 bad input\n",
-        BKF_CHECK_AUTO_UNIFORM_MAX, BKF_CHECK_POINTS_DEFAULT, BKF_CHECK_RESOLUTION_DEFAULT,
-        BKF_CHECK_N_DEFAULT, BKF_CHECK_N_MAX_DEFAULT, BKF_CHECK_ETD_TOL_DEFAULT,
-        BKF_CHECK_MAPPED_TOL_DEFAULT, BKF_CHECK_REL_TOL_DEFAULT, BKF_CHECK_PERTURB_DEFAULT,
-        BKF_CHECK_RESOLUTION_DEFAULT, BKF_CHECK_RESOLUTION_DEFAULT, BKF_CHECK_MAPPED_MAX_STEPS);
+        BKF_CHECK_RESOLUTION_DEFAULT, BKF_CHECK_MAPPED_MAX_STEPS);
 }
 
-static const bkf_io_column check_columns[] = {
-    {"n", BKF_IO_NUMBER},
-    {"root", BKF_IO_NUMBER},
-    {"grid", BKF_IO_TEXT},
-    {"N", BKF_IO_NUMBER},
-    {"tail", BKF_IO_NUMBER},
-    {"v_pred", BKF_IO_NUMBER},
-    {"v_pred_err", BKF_IO_NUMBER},
-    {"v_meas", BKF_IO_NUMBER},
-    {"v_meas_err", BKF_IO_NUMBER},
-    {"rel_err", BKF_IO_NUMBER},
-    {"fit_from", BKF_IO_NUMBER},
-    {"fit_to", BKF_IO_NUMBER},
-    {"fronts_start", BKF_IO_NUMBER},
-    {"fronts_end", BKF_IO_NUMBER},
-    {"deviation_start", BKF_IO_NUMBER},
-    {"deviation_mid", BKF_IO_NUMBER},
-    {"deviation_end", BKF_IO_NUMBER},
-    {"growth", BKF_IO_NUMBER},
-    {"stable", BKF_IO_NUMBER},
-    {"verdict", BKF_IO_TEXT},
-};
-#define CHECK_NCOLUMNS (sizeof check_columns / sizeof check_columns[0])
-
+/* What the table writer needs besides the spec; the pointers are written. */
 typedef struct {
-    model_plan m;
-    bkf_check_options opt;
-    int progress;
-} check_plan;
-
-static int plan_check(int argc, char **argv, check_plan *p, bkf_error *err)
-{
-    model_flags mf = {0};
-    const char *n = NULL, *nmax = NULL, *reltol = NULL, *perturb = NULL, *frame = NULL,
-               *resol = NULL, *grid = NULL, *points = NULL;
-    int help = 0, noprog = 0;
-    const cli_flag flags[] = {
-        {"--gamma", &mf.gamma, "a number > 0", NULL},
-        {"--c", &mf.c, "a number >= 0", NULL},
-        {"--nu", &mf.nu, "a number in (-1, 1)", NULL},
-        {"--S", &mf.S, "a number > 0", NULL},
-        {"--n", &n, "an integer >= 1", NULL},
-        {"--N", &mf.N, "an even integer >= 8", NULL},
-        {"--N-max", &nmax, "an even integer >= 8", NULL},
-        {"--tmax", &mf.tmax, "a number > 0", NULL},
-        {"--tol", &mf.tol, "a number in [1e-13, 0.01]", NULL},
-        {"--filter", &mf.filter, "a number in [0, 1000]", NULL},
-        {"--stepper", &mf.stepper, "rk8pd, rkck, rkf45 or etdrk4", NULL},
-        {"--rel-tol", &reltol, "a number in (0, 1)", NULL},
-        {"--perturb", &perturb, "a number in [0, 0.1]", NULL},
-        {"--seed", &mf.seed, "an integer >= 0", NULL},
-        {"--frame", &frame, "lab or moving", NULL},
-        {"--grid", &grid, "auto, uniform or mapped", NULL},
-        {"--points", &points, "an integer in [32, 1048576]", NULL},
-        {"--resolution", &resol, "a number in [1e-16, 1]", NULL},
-        {"--no-progress", NULL, NULL, &noprog},
-        {"--format", &mf.format, "tsv or json", NULL},
-        {"--out", &mf.out, "a file name", NULL},
-        {"--help", NULL, NULL, &help},
-    };
-    int s = cli_parse_flags(flags, sizeof flags / sizeof flags[0], argc, argv, err);
-    if (s) return s;
-    if (!mf.stepper) mf.stepper = "etdrk4";
-    if ((s = plan_model(&mf, &p->m, err))) return s;
-    bkf_check_options *o = &p->opt;
-    *o = bkf_check_options_default();
-    o->N = p->m.params.N;
-    o->tmax = p->m.tmax;
-    o->seed = p->m.seed;
-    o->stepper = p->m.options.stepper;
-    o->filter = p->m.options.filter;
-    o->tol = mf.tol ? p->m.options.tol : 0; /* 0: the check's own defaults */
-    int k = 0;
-    if (grid) {
-        static const char *const grid_names[] = {"auto", "uniform", "mapped", NULL};
-        if ((s = cli_parse_choice("--grid", grid, grid_names, &k, err))) return s;
-        o->grid = (bkf_check_grid)k;
-    }
-    if (points) {
-        if ((s = cli_parse_count("--points", points, BKF_CHECK_POINTS_MAX, &o->points, err)))
-            return s;
-        if (o->points < BKF_CHECK_POINTS_MIN)
-            return bkf_error_set(err, BKF_EINPUT, "--points: %s is outside [%d, %d]", points,
-                                 BKF_CHECK_POINTS_MIN, BKF_CHECK_POINTS_MAX);
-    }
-    if (frame) {
-        static const char *const frame_names[] = {"moving", "lab", NULL};
-        if ((s = cli_parse_choice("--frame", frame, frame_names, &k, err))) return s;
-        o->frame = (bkf_check_frame)k;
-    }
-    if (o->grid == BKF_CHECK_GRID_MAPPED && o->frame == BKF_CHECK_FRAME_LAB)
-        return bkf_error_set(err, BKF_EINPUT,
-                             "--frame: lab is not available with --grid mapped (the adapted grid "
-                             "moves with v_pred)");
-    if (o->frame == BKF_CHECK_FRAME_LAB && o->grid == BKF_CHECK_GRID_AUTO)
-        o->grid = BKF_CHECK_GRID_UNIFORM;
-    if (resol) {
-        if ((s = cli_parse_double("--resolution", resol, &o->resolution, err))) return s;
-        if (!(o->resolution >= BKF_CHECK_RESOLUTION_MIN && o->resolution <= 1))
-            return bkf_error_set(err, BKF_EINPUT, "--resolution: %s is outside [1e-16, 1]", resol);
-    }
-    bkf_error e;
-    if (bkf_model_check_nu_active(p->m.params.nu, &e))
-        return bkf_error_set(err, BKF_EINPUT, "--nu: %s; there are no fronts", e.message);
-    if (p->m.params.gamma < BKF_CYCLE_MU_MIN || p->m.params.gamma > BKF_CYCLE_MU_MAX)
-        return bkf_error_set(err, BKF_EINPUT, "--gamma: %g is outside [%g, %g]",
-                             p->m.params.gamma, BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
-    if (n && (s = cli_parse_count("--n", n, BKF_CHECK_FRONTS_MAX, &o->n, err))) return s;
-    if (nmax && (s = cli_parse_count("--N-max", nmax, BKF_PDE_N_MAX, &o->N_max, err))) return s;
-    if (o->N_max < o->N)
-        return bkf_error_set(err, BKF_EINPUT, "--N-max: %zu is below --N = %zu", o->N_max, o->N);
-    if (reltol) {
-        if ((s = cli_parse_double("--rel-tol", reltol, &o->rel_tol, err))) return s;
-        if (!(o->rel_tol > 0 && o->rel_tol < 1))
-            return bkf_error_set(err, BKF_EINPUT, "--rel-tol: %s is outside (0, 1)", reltol);
-    }
-    if (perturb) {
-        if ((s = cli_parse_double("--perturb", perturb, &o->perturb, err))) return s;
-        if (!(o->perturb >= 0 && o->perturb <= BKF_CHECK_PERTURB_MAX))
-            return bkf_error_set(err, BKF_EINPUT, "--perturb: %s is outside [0, 0.1]", perturb);
-    }
-    p->progress = !noprog;
-    return BKF_OK;
-}
-
-/* The rows as they come, written once the run is done (all or nothing). */
-typedef struct {
-    check_plan *plan;
+    const bkf_check_spec *spec;
     progress_bar *bar;
-    bkf_check_row *rows;
-    size_t count, cap;
-    bkf_check_info info;
-    char note[BKF_SPEEDS_NOTE_LEN];
-    int failed; /* out of memory in row_keep */
-} check_sink;
+    size_t *disagree;
+    bkf_error *verdict; /* the message when a stable front disagrees */
+} check_job;
 
-static int check_begin(const bkf_check_info *info, void *data)
-{
-    check_sink *k = data;
-    k->info = *info;
-    snprintf(k->note, sizeof k->note, "%s", info->speeds_note);
-    k->info.speeds_note = k->note;
-    /* the tolerance in effect, for the provenance comment */
-    k->plan->m.options.tol = info->tol;
-    return 0;
-}
+static void show_progress(double fraction, void *data) { progress_draw(fraction, data); }
 
-static int check_keep(const bkf_check_row *row, void *data)
-{
-    check_sink *k = data;
-    if (k->count == k->cap) {
-        size_t cap = k->cap ? 2 * k->cap : 16;
-        bkf_check_row *r = realloc(k->rows, cap * sizeof *r);
-        if (!r) return k->failed = 1;
-        k->rows = r;
-        k->cap = cap;
-    }
-    k->rows[k->count++] = *row;
-    return 0;
-}
-
-static void check_progress(double fraction, void *data)
-{
-    progress_draw(fraction, ((check_sink *)data)->bar);
-}
-
-static void check_warning(const char *message, void *data)
+static void show_warning(const char *message, void *data)
 {
     (void)data;
     fprintf(stderr, CLI_PROGRAM " check: warning: %s\n", message);
 }
 
-static int check_write(const check_sink *k, int argc, char **argv, FILE *out, int *disagree,
-                       bkf_error *err)
+/* A disagreement is a result: the table is kept (BKF_OK here) and the
+ * command fails afterwards with the verdict's message. */
+static int write_check(const void *data, FILE *out, bkf_io_format format,
+                       const bkf_provenance *prov, bkf_error *err)
 {
-    const check_plan *p = k->plan;
-    const bkf_check_options *o = &p->opt;
-    char a[32], b[32], c[32], d[32], f[32];
-    int s = BKF_OK;
-    bkf_io_table *t = bkf_io_table_alloc(out, p->m.format, check_columns, CHECK_NCOLUMNS, err);
-    if (!t) s = BKF_ENOMEM;
-    if (!s)
-        s = bkf_io_table_comment(t, CLI_PROGRAM " " CLI_VERSION " check: predicted front speeds "
-                                    "against seeded simulations", err);
-    if (!s) s = comment_model(t, &p->m, err);
-    if (!s)
-        s = commentf(t, err, "frame: %s",
-                     o->frame == BKF_CHECK_FRAME_LAB ? "lab" : "moving with v_pred of each root");
-    if (!s)
-        s = commentf(t, err,
-                     "tmax %s, perturbation rms %s (seed %lu), agreement asked %s, grid %s: "
-                     "uniform %zu .. %zu (resolution %.0e, samples every %s), adapted %zu points "
-                     "per wavelength (tol %.0e, samples every %g)",
-                     num(o->tmax, a, sizeof a), num(o->perturb, b, sizeof b), o->seed,
-                     num(o->rel_tol, c, sizeof c), bkf_check_grid_name(o->grid), o->N,
-                     k->info.N_cap, o->resolution, num(BKF_CHECK_SAMPLE_DT, d, sizeof d),
-                     o->points, k->info.mapped_tol, BKF_CHECK_MAPPED_SAMPLE_DT);
-    if (!s)
-        s = commentf(t, err, "speeds: k(nu) %s, n_max %ld, %zu roots%s%s",
-                     num(k->info.k, f, sizeof f), k->info.n_max, k->info.roots,
-                     k->note[0] ? "; " : "", k->note);
-    if (!s) s = comment_command(t, argc, argv, err);
-    size_t stable = 0, agree = 0, unres = 0;
-    *disagree = 0;
-    for (size_t i = 0; i < k->count; i++) {
-        stable += k->rows[i].stable == 1;
-        agree += k->rows[i].verdict == BKF_CHECK_AGREES;
-        unres += k->rows[i].verdict == BKF_CHECK_UNRESOLVED;
-        *disagree += k->rows[i].verdict == BKF_CHECK_DISAGREES;
+    const check_job *job = data;
+    bkf_check_hooks hooks = {.progress = show_progress, .warning = show_warning,
+                             .data = job->bar};
+    int s = bkf_check_write(job->spec, out, format, prov, &hooks, job->disagree, err);
+    progress_end(job->bar);
+    if (s == BKF_ENUMERIC && *job->disagree) {
+        *job->verdict = *err;
+        return BKF_OK;
     }
-    if (!s) {
-        char list[512] = "";
-        for (size_t i = 0; i < k->count; i++)
-            if (k->rows[i].stable == 1) {
-                size_t used = strlen(list);
-                snprintf(list + used, sizeof list - used, "%s%zu", used ? ", " : "",
-                         k->rows[i].n);
-            }
-        s = commentf(t, err, "summary: %zu stable (n = %s), %zu agree, %d disagree, %zu unresolved",
-                     stable, stable ? list : "none", agree, *disagree, unres);
-    }
-    for (size_t i = 0; !s && i < k->count; i++) {
-        const bkf_check_row *r = &k->rows[i];
-        bkf_io_value v[CHECK_NCOLUMNS] = {
-            {.number = (double)r->n},          {.number = (double)r->root},
-            {.text = bkf_check_grid_name(r->grid)},
-            {.number = (double)r->N},          {.number = r->tail},
-            {.number = r->v_pred},             {.number = r->v_pred_err},
-            {.number = r->v_meas},             {.number = r->v_meas_err},
-            {.number = r->rel_err},            {.number = r->fit_from},
-            {.number = r->fit_to},             {.number = r->fronts_start},
-            {.number = r->fronts_end},         {.number = r->deviation_start},
-            {.number = r->deviation_mid},      {.number = r->deviation_end},
-            {.number = r->growth},             {.number = r->stable},
-            {.text = bkf_check_verdict_name(r->verdict)},
-        };
-        s = bkf_io_table_row(t, v, err);
-    }
-    if (!s) s = bkf_io_table_finish(t, err);
-    bkf_io_table_free(t);
-    return s;
-}
-
-static int check_compute(check_plan *p, int argc, char **argv, progress_bar *bar, FILE *out,
-                         int *disagree, bkf_error *err)
-{
-    check_sink k = {.plan = p, .bar = bar};
-    bkf_check_hooks hooks = {.begin = check_begin, .row = check_keep,
-                             .progress = check_progress, .warning = check_warning, .data = &k};
-    int s = bkf_check_run(&p->m.params, &p->opt, &hooks, err);
-    progress_end(bar);
-    if (!s && k.failed) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    if (!s) s = check_write(&k, argc, argv, out, disagree, err);
-    free(k.rows);
     return s;
 }
 
 static int check_run(int argc, char **argv, bkf_error *err)
 {
-    check_plan plan;
-    memset(&plan, 0, sizeof plan);
-    cli_output out = {0};
-    cli_buffer buf = {0};
+    check_args a = {bkf_check_spec_default(), {0}, {0}};
+    cli_options g[3];
+    groups_of(&a, g);
+    int s = cli_parse_options(g, 3, argc, argv, NULL, err);
+    if (!s) s = bkf_check_spec_check(&a.spec, "--", err);
+    if (s) return s;
     progress_bar bar;
-    int disagree = 0;
-    int s = plan_check(argc, argv, &plan, err);
-    if (!s) s = cli_output_open(&out, plan.m.out_path, "--out", err);
-    if (!s) s = cli_buffer_open(&buf, err);
-    if (!s) {
-        progress_init(&bar, CLI_PROGRAM " check", plan.progress);
-        s = check_compute(&plan, argc, argv, &bar, buf.stream, &disagree, err);
-        int c = cli_buffer_close(&buf, s ? NULL : err);
-        if (!s) s = c;
+    size_t disagree = 0;
+    bkf_error verdict = {0};
+    progress_init(&bar, CLI_PROGRAM " check", !a.progress.no_progress);
+    check_job job = {&a.spec, &bar, &disagree, &verdict};
+    s = cli_write_table(&a.output, argc, argv, write_check, &job, err);
+    if (!s && disagree) {
+        *err = verdict;
+        return BKF_ENUMERIC;
     }
-    if (!s)
-        s = cli_output_write(&out, buf.data, buf.size, err);
-    else
-        cli_output_abort(&out);
-    cli_buffer_free(&buf);
-    if (!s && disagree)
-        return bkf_error_set(err, BKF_ENUMERIC,
-                             "%d stable front(s) disagree with the predicted speed beyond "
-                             "--rel-tol %g (see the table)", disagree, plan.opt.rel_tol);
     return s;
 }
 

@@ -7,6 +7,7 @@
 
 #include "bkfront/approx.h"
 #include "bkfront/bench.h"
+#include "bkfront/check.h"
 #include "bkfront/friction.h"
 #include "bkfront/fronts.h"
 #include "bkfront/oscillation.h"
@@ -75,6 +76,47 @@ static int floquet_write(const void *spec, FILE *out, bkf_io_format format,
     return bkf_oscillation_write(&s, out, format, prov, err);
 }
 
+/* -------------------------------------------------------------- check */
+
+static const bkf_option *check_options(size_t *count)
+{
+    *count = bkf_check_nkeys;
+    return bkf_check_keys;
+}
+static void check_init(void *spec) { *(bkf_check_spec *)spec = bkf_check_spec_default(); }
+static int check_check(const void *spec, const char *prefix, bkf_error *err)
+{
+    return bkf_check_spec_check(spec, prefix, err);
+}
+/* The catalogue's progress may answer; the check stops by cancel only. */
+static void check_progress(double fraction, void *data)
+{
+    const bkf_catalog_hooks *h = data;
+    h->progress(fraction, h->data);
+}
+static void check_warning(const char *message, void *data)
+{
+    const bkf_catalog_hooks *h = data;
+    h->warn(message, h->data);
+}
+/* A stable front that disagrees is BKF_ENUMERIC after the whole table. */
+static int check_write(const void *spec, FILE *out, bkf_io_format format,
+                       const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
+                       bkf_error *err)
+{
+    bkf_catalog_hooks copy = {0};
+    if (hooks) copy = *hooks;
+    bkf_check_hooks h = {.progress = copy.progress ? check_progress : NULL,
+                         .warning = copy.warn ? check_warning : NULL,
+                         .data = &copy,
+                         .cancel = copy.cancel};
+    return bkf_check_write(spec, out, format, prov, &h, NULL, err);
+}
+static void check_release(void *spec)
+{
+    bkf_option_free_lists(bkf_check_keys, bkf_check_nkeys, spec);
+}
+
 /* ---------------------------------------------------------- the table */
 
 #define ENTRY(name, T, summary) \
@@ -93,6 +135,7 @@ static const bkf_catalog_entry entries[] = {
           "front profiles f(z), f'(z) and their place x along the system"),
     ENTRY(floquet, bkf_oscillation_spec,
           "Floquet stability of the global oscillation: dispersion, threshold, diagram"),
+    ENTRY(check, bkf_check_spec, "the predicted front speeds against direct simulation"),
     ENTRY(friction, bkf_friction_spec, "the friction laws, sampled"),
     ENTRY(bench, bkf_bench_spec,
           "work-precision: achieved error against CPU time for every method and tolerance"),

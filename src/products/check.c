@@ -3,6 +3,7 @@
  * adapted comoving grid (bkf_comoving), both judged by bkf_check_judge. */
 #include "bkfront/check.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -514,5 +515,360 @@ int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
         if (!s && hooks && hooks->row) stop = hooks->row(&row, hooks->data);
     }
     bkf_speeds_table_free(&tab);
+    return s;
+}
+
+/* ------------------------------------------------------------ the product */
+
+/* The choices are read and written as int: the enums must be int-sized. */
+_Static_assert(sizeof(bkf_pde_stepper) == sizeof(int), "bkf_pde_stepper is not int-sized");
+_Static_assert(sizeof(bkf_check_frame) == sizeof(int), "bkf_check_frame is not int-sized");
+_Static_assert(sizeof(bkf_check_grid) == sizeof(int), "bkf_check_grid is not int-sized");
+
+/* Indexed by bkf_pde_stepper, bkf_check_frame and bkf_check_grid. */
+static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", NULL};
+static const char *const frame_names[] = {"moving", "lab", NULL};
+static const char *const grid_names[] = {"auto", "uniform", "mapped", NULL};
+
+/* The seed is an unsigned long: up to 19 digits always fit. */
+static int set_seed(void *spec, const char *text, bkf_error *err)
+{
+    char shown[72];
+    if (!*text || strspn(text, "0123456789") != strlen(text) || strlen(text) > 19)
+        return bkf_error_set(err, BKF_EINPUT, "'%s' is not an integer in [0, 1e19)",
+                             bkf_option_shown(text, shown, sizeof shown));
+    unsigned long long v = strtoull(text, NULL, 10);
+    if (v > ULONG_MAX)
+        return bkf_error_set(err, BKF_EINPUT, "'%s' is out of range", text);
+    ((bkf_check_spec *)spec)->options.seed = (unsigned long)v;
+    return BKF_OK;
+}
+
+#define MODEL(f) (offsetof(bkf_check_spec, model) + offsetof(bkf_model_params, f))
+#define OPT(f) (offsetof(bkf_check_spec, options) + offsetof(bkf_check_options, f))
+#define BOUNDED (BKF_OPT_MIN | BKF_OPT_MAX)
+
+const bkf_option bkf_check_keys[] = {
+    {.name = "gamma", .type = BKF_OPT_DOUBLE, .offset = MODEL(gamma), .flags = BOUNDED,
+     .min = BKF_CYCLE_MU_MIN, .max = BKF_CYCLE_MU_MAX, .form = "G", .shown_default = "2",
+     .help = "friction strength, in [1e-06, 1e+06]"},
+    {.name = "c", .type = BKF_OPT_DOUBLE, .offset = MODEL(c), .flags = BKF_OPT_MIN, .min = 0,
+     .form = "C", .shown_default = "0.3", .help = "sound speed, >= 0"},
+    {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = MODEL(nu),
+     .flags = BOUNDED | BKF_OPT_MIN_OPEN | BKF_OPT_MAX_OPEN, .min = -1, .max = 1, .form = "V",
+     .shown_default = "-0.96", .help = "pulling rate, in (-1, 1): no fronts beyond"},
+    {.name = "S", .type = BKF_OPT_DOUBLE, .offset = MODEL(S),
+     .flags = BKF_OPT_MIN | BKF_OPT_MIN_OPEN, .min = 0, .form = "S", .shown_default = "20",
+     .help = "system size, > 0"},
+    {.name = "n", .type = BKF_OPT_COUNT, .offset = OPT(n), .flags = BOUNDED, .min = 1,
+     .max = BKF_CHECK_FRONTS_MAX, .form = "K",
+     .help = "check n = K only; default every n with a root"},
+    {.name = "N", .type = BKF_OPT_COUNT, .offset = OPT(N), .flags = BOUNDED,
+     .min = BKF_PDE_N_MIN, .max = BKF_PDE_N_MAX, .form = "N", .shown_default = "512",
+     .help = "smallest grid, even; each root runs on the smallest\n"
+             "N = N 2^k that resolves its wave (Fourier coefficients\n"
+             "above N/3 below --resolution of the largest)"},
+    {.name = "N-max", .type = BKF_OPT_COUNT, .offset = OPT(N_max), .flags = BOUNDED,
+     .min = BKF_PDE_N_MIN, .max = BKF_PDE_N_MAX, .form = "M", .shown_default = "65536",
+     .help = "largest grid, >= --N; roots needing more are reported\n"
+             "unresolved and not simulated"},
+    {.name = "tmax", .type = BKF_OPT_DOUBLE, .offset = OPT(tmax),
+     .flags = BOUNDED | BKF_OPT_MIN_OPEN, .min = 0, .max = BKF_CHECK_TMAX_MAX, .form = "T",
+     .shown_default = "125", .help = "length of each run, in (0, 1e+06]"},
+    {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = OPT(tol), .flags = BOUNDED,
+     .min = BKF_PDE_TOL_MIN, .max = BKF_PDE_TOL_MAX, .form = "E",
+     .help = "local error tolerance, in [1e-13, 0.01]; default 1e-07\n"
+             "with etdrk4, 1e-9 with the Runge-Kutta steppers, 1e-08\n"
+             "on the adapted grid"},
+    {.name = "filter", .type = BKF_OPT_DOUBLE, .offset = OPT(filter), .flags = BOUNDED,
+     .min = 0, .max = BKF_CHECK_FILTER_MAX, .form = "F", .shown_default = "4",
+     .help = "spectral filter, as in bkfront simulate,\nin [0, 1000]"},
+    {.name = "stepper", .type = BKF_OPT_CHOICE, .offset = OPT(stepper), .choices = stepper_names,
+     .form = "S", .shown_default = "etdrk4",
+     .help = "etdrk4 (exponential, the wave part of every mode exact,\n"
+             "steps set by the physics), or rk8pd, rkck, rkf45 (explicit,\n"
+             "steps capped by the fastest mode ~ 1/N)"},
+    {.name = "rel-tol", .type = BKF_OPT_DOUBLE, .offset = OPT(rel_tol),
+     .flags = BOUNDED | BKF_OPT_MIN_OPEN | BKF_OPT_MAX_OPEN, .min = 0, .max = 1, .form = "R",
+     .shown_default = "1e-06",
+     .help = "agreement asked of a stable front,\n"
+             "|v_meas - v_pred| / v_pred, in (0, 1)"},
+    {.name = "perturb", .type = BKF_OPT_DOUBLE, .offset = OPT(perturb), .flags = BOUNDED,
+     .min = 0, .max = BKF_CHECK_PERTURB_MAX, .form = "A", .shown_default = "1e-06",
+     .help = "rms of the band-limited noise added to the seeded wave,\n"
+             "in [0, 0.1]"},
+    {.name = "seed", .type = BKF_OPT_CUSTOM, .set = set_seed, .form = "K",
+     .shown_default = "1", .help = "seed of that noise, an integer in [0, 1e19)"},
+    {.name = "frame", .type = BKF_OPT_CHOICE, .offset = OPT(frame), .choices = frame_names,
+     .form = "lab|moving", .shown_default = "moving",
+     .help = "simulate in the frame moving with v_pred, where the seeded\n"
+             "wave is a steady state, or in the lab frame (uniform\n"
+             "grid only)"},
+    {.name = "grid", .type = BKF_OPT_CHOICE, .offset = OPT(grid), .choices = grid_names,
+     .form = "G", .shown_default = "auto",
+     .help = "auto: the uniform spectral grid when it resolves the wave\n"
+             "on N <= 8192, else the adapted grid; uniform: always the\n"
+             "spectral grid (up to --N-max); mapped: always the adapted\n"
+             "grid (finite differences of order 8 on points placed by\n"
+             "the wave's own length scales, in the frame of v_pred,\n"
+             "CVODE in time; docs/cli/check.md)"},
+    {.name = "points", .type = BKF_OPT_COUNT, .offset = OPT(points), .flags = BOUNDED,
+     .min = BKF_CHECK_POINTS_MIN, .max = BKF_CHECK_POINTS_MAX, .form = "M",
+     .shown_default = "768", .help = "adapted grid: points per wavelength,\nin [32, 1048576]"},
+    {.name = "resolution", .type = BKF_OPT_DOUBLE, .offset = OPT(resolution), .flags = BOUNDED,
+     .min = BKF_CHECK_RESOLUTION_MIN, .max = 1, .form = "R", .shown_default = "1e-05",
+     .help = "the spectral tail accepted as resolved,\nin [1e-16, 1]"},
+    {.name = "mapped-tol", .type = BKF_OPT_DOUBLE, .offset = OPT(mapped_tol),
+     .flags = BOUNDED | BKF_OPT_SCENE_ONLY, .min = BKF_PDE_TOL_MIN, .max = BKF_PDE_TOL_MAX,
+     .form = "E", .help = "adapted grid: CVODE's tolerance; default tol if given, else 1e-08"},
+    {.name = "mapped-max-steps", .type = BKF_OPT_COUNT, .offset = OPT(mapped_max_steps),
+     .flags = BKF_OPT_SCENE_ONLY, .form = "I", .shown_default = "20000",
+     .help = "adapted grid: step budget per root (beyond: unresolved)"},
+};
+const size_t bkf_check_nkeys = sizeof bkf_check_keys / sizeof bkf_check_keys[0];
+
+#undef MODEL
+#undef OPT
+#undef BOUNDED
+
+bkf_check_spec bkf_check_spec_default(void)
+{
+    bkf_check_spec s;
+    memset(&s, 0, sizeof s);
+    s.model = bkf_model_params_paper();
+    s.options = bkf_check_options_default();
+    return s;
+}
+
+int bkf_check_spec_check(const bkf_check_spec *spec, const char *prefix, bkf_error *err)
+{
+    const char *p = prefix ? prefix : "";
+    if (!spec) return bkf_error_set(err, BKF_EINPUT, "no spec given");
+    const bkf_check_options *o = &spec->options;
+    if (o->N % 2)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%sN: %zu must be even for the continuum model (spectral)", p, o->N);
+    if (o->N_max < o->N)
+        return bkf_error_set(err, BKF_EINPUT, "%sN-max: %zu is below %sN = %zu", p, o->N_max, p,
+                             o->N);
+    if (o->grid == BKF_CHECK_GRID_MAPPED && o->frame == BKF_CHECK_FRAME_LAB)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%sframe: lab is not available with %sgrid mapped (the adapted grid "
+                             "moves with v_pred)",
+                             p, p);
+    bkf_error e;
+    if (bkf_check_validate(&spec->model, o, &e))
+        return bkf_error_set(err, BKF_EINPUT, "%s%s", p, e.message);
+    return BKF_OK;
+}
+
+/* Numbers in comments as the CLI has always written them: %.15g when it
+ * reads back exactly, else %.17g (not bkf_format_number's shortest form). */
+static const char *num(double x, char *buf, size_t size)
+{
+    snprintf(buf, size, "%.15g", x);
+    if (strtod(buf, NULL) != x) snprintf(buf, size, "%.17g", x);
+    return buf;
+}
+
+static const bkf_io_column columns[] = {
+    {"n", BKF_IO_NUMBER},
+    {"root", BKF_IO_NUMBER},
+    {"grid", BKF_IO_TEXT},
+    {"N", BKF_IO_NUMBER},
+    {"tail", BKF_IO_NUMBER},
+    {"v_pred", BKF_IO_NUMBER},
+    {"v_pred_err", BKF_IO_NUMBER},
+    {"v_meas", BKF_IO_NUMBER},
+    {"v_meas_err", BKF_IO_NUMBER},
+    {"rel_err", BKF_IO_NUMBER},
+    {"fit_from", BKF_IO_NUMBER},
+    {"fit_to", BKF_IO_NUMBER},
+    {"fronts_start", BKF_IO_NUMBER},
+    {"fronts_end", BKF_IO_NUMBER},
+    {"deviation_start", BKF_IO_NUMBER},
+    {"deviation_mid", BKF_IO_NUMBER},
+    {"deviation_end", BKF_IO_NUMBER},
+    {"growth", BKF_IO_NUMBER},
+    {"stable", BKF_IO_NUMBER},
+    {"verdict", BKF_IO_TEXT},
+};
+#define NCOLUMNS (sizeof columns / sizeof columns[0])
+
+/* The rows as they come, written once the run is done: the summary comment
+ * needs them all. */
+typedef struct {
+    const bkf_check_hooks *hooks; /* the caller's, or NULL */
+    bkf_check_row *rows;
+    size_t count, cap;
+    bkf_check_info info;
+    char note[BKF_SPEEDS_NOTE_LEN];
+    int failed; /* out of memory keeping a row */
+} check_sink;
+
+static int sink_begin(const bkf_check_info *info, void *data)
+{
+    check_sink *k = data;
+    k->info = *info;
+    snprintf(k->note, sizeof k->note, "%s", info->speeds_note);
+    k->info.speeds_note = k->note;
+    return k->hooks && k->hooks->begin ? k->hooks->begin(info, k->hooks->data) : 0;
+}
+
+static int sink_row(const bkf_check_row *row, void *data)
+{
+    check_sink *k = data;
+    if (k->count == k->cap) {
+        size_t cap = k->cap ? 2 * k->cap : 16;
+        bkf_check_row *r = realloc(k->rows, cap * sizeof *r);
+        if (!r) return k->failed = 1;
+        k->rows = r;
+        k->cap = cap;
+    }
+    k->rows[k->count++] = *row;
+    return k->hooks && k->hooks->row ? k->hooks->row(row, k->hooks->data) : 0;
+}
+
+static void sink_progress(double fraction, void *data)
+{
+    const check_sink *k = data;
+    k->hooks->progress(fraction, k->hooks->data);
+}
+
+static void sink_warning(const char *message, void *data)
+{
+    const check_sink *k = data;
+    k->hooks->warning(message, k->hooks->data);
+}
+
+static int comment(bkf_io_table *t, bkf_error *err, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static int comment(bkf_io_table *t, bkf_error *err, const char *fmt, ...)
+{
+    char line[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    return bkf_io_table_comment(t, line, err);
+}
+
+/* "n1, n2, ..." of the rows that pass `keep`, into list. */
+static void list_n(const check_sink *k, int (*keep)(const bkf_check_row *), char *list,
+                   size_t size)
+{
+    list[0] = '\0';
+    for (size_t i = 0; i < k->count; i++)
+        if (keep(&k->rows[i])) {
+            size_t used = strlen(list);
+            snprintf(list + used, size - used, "%s%zu", used ? ", " : "", k->rows[i].n);
+        }
+}
+
+static int row_stable(const bkf_check_row *r) { return r->stable == 1; }
+static int row_disagrees(const bkf_check_row *r) { return r->verdict == BKF_CHECK_DISAGREES; }
+
+static int write_table(const check_sink *k, const bkf_check_spec *spec,
+                       const bkf_check_options *o, FILE *out, bkf_io_format format,
+                       const bkf_provenance *prov, bkf_error *err)
+{
+    const bkf_model_params *m = &spec->model;
+    char a[32], b[32], c[32], d[32], e[32], f[32], g[32];
+    bkf_io_table *t = bkf_io_table_alloc(out, format, columns, NCOLUMNS, err);
+    if (!t) return BKF_ENOMEM;
+    int s = comment(t, err, "%s check: predicted front speeds against seeded simulations",
+                    prov && prov->program ? prov->program : "libbkfront");
+    if (!s)
+        s = comment(t, err,
+                    "model continuum: gamma %s, c %s, nu %s, S %s, N %zu (h = %s); tol %s, "
+                    "stepper %s, dealias off, filter %s",
+                    num(m->gamma, a, sizeof a), num(m->c, b, sizeof b), num(m->nu, c, sizeof c),
+                    num(m->S, d, sizeof d), o->N, num(m->S / (double)o->N, e, sizeof e),
+                    num(k->info.tol, f, sizeof f), stepper_names[o->stepper],
+                    o->filter == 0 ? "off" : num(o->filter, g, sizeof g));
+    if (!s)
+        s = comment(t, err, "frame: %s",
+                    o->frame == BKF_CHECK_FRAME_LAB ? "lab" : "moving with v_pred of each root");
+    if (!s)
+        s = comment(t, err,
+                    "tmax %s, perturbation rms %s (seed %lu), agreement asked %s, grid %s: "
+                    "uniform %zu .. %zu (resolution %.0e, samples every %s), adapted %zu points "
+                    "per wavelength (tol %.0e, samples every %g)",
+                    num(o->tmax, a, sizeof a), num(o->perturb, b, sizeof b), o->seed,
+                    num(o->rel_tol, c, sizeof c), bkf_check_grid_name(o->grid), o->N,
+                    k->info.N_cap, o->resolution, num(BKF_CHECK_SAMPLE_DT, d, sizeof d),
+                    o->points, k->info.mapped_tol, BKF_CHECK_MAPPED_SAMPLE_DT);
+    if (!s)
+        s = comment(t, err, "speeds: k(nu) %s, n_max %ld, %zu roots%s%s",
+                    num(k->info.k, a, sizeof a), k->info.n_max, k->info.roots,
+                    k->note[0] ? "; " : "", k->note);
+    if (!s && prov && prov->command) s = comment(t, err, "command: %s", prov->command);
+    size_t stable = 0, agree = 0, unresolved = 0, disagree = 0;
+    for (size_t i = 0; i < k->count; i++) {
+        stable += k->rows[i].stable == 1;
+        agree += k->rows[i].verdict == BKF_CHECK_AGREES;
+        unresolved += k->rows[i].verdict == BKF_CHECK_UNRESOLVED;
+        disagree += k->rows[i].verdict == BKF_CHECK_DISAGREES;
+    }
+    if (!s) {
+        char list[512];
+        list_n(k, row_stable, list, sizeof list);
+        s = comment(t, err, "summary: %zu stable (n = %s), %zu agree, %zu disagree, %zu unresolved",
+                    stable, stable ? list : "none", agree, disagree, unresolved);
+    }
+    for (size_t i = 0; !s && i < k->count; i++) {
+        const bkf_check_row *r = &k->rows[i];
+        bkf_io_value v[NCOLUMNS] = {
+            {.number = (double)r->n},          {.number = (double)r->root},
+            {.text = bkf_check_grid_name(r->grid)},
+            {.number = (double)r->N},          {.number = r->tail},
+            {.number = r->v_pred},             {.number = r->v_pred_err},
+            {.number = r->v_meas},             {.number = r->v_meas_err},
+            {.number = r->rel_err},            {.number = r->fit_from},
+            {.number = r->fit_to},             {.number = r->fronts_start},
+            {.number = r->fronts_end},         {.number = r->deviation_start},
+            {.number = r->deviation_mid},      {.number = r->deviation_end},
+            {.number = r->growth},             {.number = r->stable},
+            {.text = bkf_check_verdict_name(r->verdict)},
+        };
+        s = bkf_io_table_row(t, v, err);
+    }
+    if (!s) s = bkf_io_table_finish(t, err);
+    bkf_io_table_free(t);
+    return s;
+}
+
+int bkf_check_write(const bkf_check_spec *spec, FILE *out, bkf_io_format format,
+                    const bkf_provenance *prov, const bkf_check_hooks *hooks, size_t *disagree,
+                    bkf_error *err)
+{
+    if (disagree) *disagree = 0;
+    int s = bkf_check_spec_check(spec, "", err);
+    if (s) return s;
+    bkf_check_options o = spec->options;
+    if (o.frame == BKF_CHECK_FRAME_LAB && o.grid == BKF_CHECK_GRID_AUTO)
+        o.grid = BKF_CHECK_GRID_UNIFORM;
+    check_sink k = {.hooks = hooks};
+    bkf_check_hooks own = {.begin = sink_begin, .row = sink_row, .data = &k};
+    if (hooks) {
+        own.progress = hooks->progress ? sink_progress : NULL;
+        own.warning = hooks->warning ? sink_warning : NULL;
+        own.cancel = hooks->cancel;
+    }
+    s = bkf_check_run(&spec->model, &o, &own, err);
+    if (!s && k.failed) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (!s) s = write_table(&k, spec, &o, out, format, prov, err);
+    size_t n = 0;
+    for (size_t i = 0; !s && i < k.count; i++) n += row_disagrees(&k.rows[i]);
+    if (n) {
+        char list[512], r[32];
+        list_n(&k, row_disagrees, list, sizeof list);
+        if (disagree) *disagree = n;
+        s = bkf_error_set(err, BKF_ENUMERIC,
+                          "%zu stable front(s) disagree with the predicted speed beyond rel-tol "
+                          "%s (n = %s; see the table)",
+                          n, num(o.rel_tol, r, sizeof r), list);
+    }
+    free(k.rows);
     return s;
 }

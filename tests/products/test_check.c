@@ -1,13 +1,16 @@
 /* The speed check through the library (bkf_check_*): its verdict rule on
  * synthetic measurements, its refusals, cancellation and early stops, and
  * the same verdicts as `bkfront check` from a C program that links the
- * library alone (docs/examples/check_paper.c). */
+ * library alone (docs/examples/check_paper.c); the product's keys and its
+ * catalogue entry against the command line. */
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
 
+#include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
 
+#include "bkfront/catalog.h"
 #include "bkfront/check.h"
 #include "bkfront/model.h"
 
@@ -259,4 +262,207 @@ TEST(check_example_and_cli_verdicts_agree)
      * n = 5 and 10 agree (n = 10 also on the uniform grid of 2^14 points) */
     CHECK(strcmp(lib[0].verdict, "unstable") == 0);
     CHECK(strcmp(lib[1].verdict, "agrees") == 0 && strcmp(lib[2].verdict, "agrees") == 0);
+}
+
+/* ------------------------------------------------ the product's keys */
+
+/* The lines of `text` that are not comments (TSV header and rows), each
+ * with its newline, into a malloc'd string; *lines gets their number. */
+static char *data_lines(const char *text, size_t *lines)
+{
+    size_t n = strlen(text), used = 0;
+    char *out = malloc(n + 1);
+    CHECK(out);
+    *lines = 0;
+    for (const char *p = text; *p;) {
+        size_t len = strcspn(p, "\n");
+        if (p[0] != '#') {
+            memcpy(out + used, p, len);
+            used += len;
+            out[used++] = '\n';
+            ++*lines;
+        }
+        p += len + (p[len] == '\n');
+    }
+    out[used] = '\0';
+    return out;
+}
+
+static char *run_cli(const char *args, int *exit_code)
+{
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "'%s' %s", BKF_CLI_PATH, args);
+    fflush(stdout);
+    FILE *f = popen(cmd, "r");
+    CHECK_MSG(f, "cannot run %s", cmd);
+    size_t cap = 1 << 16, n = 0, got;
+    char *text = malloc(cap);
+    CHECK(text);
+    while ((got = fread(text + n, 1, cap - 1 - n, f)) > 0) {
+        n += got;
+        if (n == cap - 1) {
+            text = realloc(text, cap *= 2);
+            CHECK(text);
+        }
+    }
+    text[n] = '\0';
+    int status = pclose(f);
+    *exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return text;
+}
+
+typedef struct {
+    size_t progress, warnings;
+} hook_counts;
+
+static int count_progress(double fraction, void *data)
+{
+    CHECK(fraction >= 0 && fraction <= 1);
+    ((hook_counts *)data)->progress++;
+    return 0;
+}
+
+/* A scene reaches the check through the catalogue: with the key n = 5 its
+ * table has the header and rows of `bkfront check --n 5` (the comments
+ * differ: provenance). */
+TEST(check_catalog_writes_the_cli_table)
+{
+    const bkf_catalog_entry *entry = bkf_catalog_find("check");
+    CHECK(entry && strcmp(entry->name, "check") == 0);
+    bkf_error err = {0};
+    void *spec = bkf_catalog_spec_new(entry, &err);
+    CHECK(spec);
+    CHECK_STATUS(bkf_catalog_apply(entry, spec, "n", "5", "", &err), BKF_OK);
+    CHECK_STATUS(entry->check(spec, "", &err), BKF_OK);
+    char *buf = NULL;
+    size_t size = 0;
+    FILE *out = open_memstream(&buf, &size);
+    CHECK(out);
+    hook_counts counts = {0};
+    bkf_catalog_hooks hooks = {.progress = count_progress, .data = &counts};
+    int s = entry->write(spec, out, BKF_IO_TSV, NULL, &hooks, &err);
+    CHECK(fclose(out) == 0);
+    CHECK_MSG(s == BKF_OK, "status %d: %s", s, err.message);
+    CHECK_MSG(counts.progress > 0, "no progress reported");
+    CHECK(strncmp(buf, "# libbkfront check: ", 20) == 0);
+
+    int code;
+    char *cli = run_cli("check --n 5 --no-progress", &code);
+    CHECK_MSG(code == 0, "bkfront check --n 5: exit %d", code);
+    size_t nl, nc;
+    char *lib_rows = data_lines(buf, &nl), *cli_rows = data_lines(cli, &nc);
+    CHECK_MSG(nl == 2 && nc == 2, "%zu lines from the catalogue, %zu from the CLI", nl, nc);
+    CHECK_MSG(strcmp(lib_rows, cli_rows) == 0, "catalogue:\n%s\nCLI:\n%s", lib_rows, cli_rows);
+    CHECK(strstr(lib_rows, "\tagrees\n"));
+    free(lib_rows);
+    free(cli_rows);
+    free(cli);
+    free(buf);
+    bkf_catalog_spec_free(entry, spec);
+}
+
+static void expect_key_refused(const bkf_catalog_entry *entry, void *spec, const char *key,
+                               const char *text, const char *range)
+{
+    bkf_error err = {0};
+    bkf_check_spec before = *(bkf_check_spec *)spec;
+    int s = bkf_catalog_apply(entry, spec, key, text, "scene:3: ", &err);
+    CHECK_MSG(s == BKF_EINPUT, "%s = %s: status %d", key, text, s);
+    char named[64];
+    snprintf(named, sizeof named, "scene:3: %s: ", key);
+    CHECK_MSG(strncmp(err.message, named, strlen(named)) == 0 && strstr(err.message, range),
+              "'%s' or '%s' not in: %s", named, range, err.message);
+    CHECK_MSG(memcmp(&before, spec, sizeof before) == 0, "%s = %s changed the spec", key, text);
+}
+
+TEST(check_catalog_refuses_bad_keys)
+{
+    const bkf_catalog_entry *entry = bkf_catalog_find("check");
+    CHECK(entry);
+    bkf_error err = {0};
+    bkf_check_spec *spec = bkf_catalog_spec_new(entry, &err);
+    CHECK(spec);
+    expect_key_refused(entry, spec, "gamma", "0", "[1e-06, 1e+06]");
+    expect_key_refused(entry, spec, "c", "-1", ">= 0");
+    expect_key_refused(entry, spec, "nu", "1", "(-1, 1)");
+    expect_key_refused(entry, spec, "S", "0", "> 0");
+    expect_key_refused(entry, spec, "n", "0", "[1, 100000]");
+    expect_key_refused(entry, spec, "N", "4", "[8, 1048576]");
+    expect_key_refused(entry, spec, "N-max", "2097152", "[8, 1048576]");
+    expect_key_refused(entry, spec, "tmax", "-5", "(0, 1e+06]");
+    expect_key_refused(entry, spec, "tol", "1", "[1e-13, 0.01]");
+    expect_key_refused(entry, spec, "filter", "2000", "[0, 1000]");
+    expect_key_refused(entry, spec, "stepper", "rk4", "rk8pd, rkck, rkf45, etdrk4");
+    expect_key_refused(entry, spec, "rel-tol", "0", "(0, 1)");
+    expect_key_refused(entry, spec, "perturb", "1", "[0, 0.1]");
+    expect_key_refused(entry, spec, "seed", "-3", "[0, 1e19)");
+    expect_key_refused(entry, spec, "frame", "rotating", "moving, lab");
+    expect_key_refused(entry, spec, "grid", "fine", "auto, uniform, mapped");
+    expect_key_refused(entry, spec, "points", "16", "[32, 1048576]");
+    expect_key_refused(entry, spec, "resolution", "2", "[1e-16, 1]");
+    expect_key_refused(entry, spec, "mapped-tol", "1", "[1e-13, 0.01]");
+    /* the progress bar is the command line's; --out and --format too */
+    expect_key_refused(entry, spec, "no-progress", "yes", "not a key of check");
+    expect_key_refused(entry, spec, "format", "json", "not a key of check");
+
+    /* good values land in the fields the library reads */
+    CHECK_STATUS(bkf_catalog_apply(entry, spec, "seed", "42", "", &err), BKF_OK);
+    CHECK_STATUS(bkf_catalog_apply(entry, spec, "grid", "mapped", "", &err), BKF_OK);
+    CHECK_STATUS(bkf_catalog_apply(entry, spec, "stepper", "rkck", "", &err), BKF_OK);
+    CHECK_STATUS(bkf_catalog_apply(entry, spec, "mapped-max-steps", "100", "", &err), BKF_OK);
+    CHECK(spec->options.seed == 42 && spec->options.grid == BKF_CHECK_GRID_MAPPED &&
+          spec->options.stepper == BKF_PDE_RKCK && spec->options.mapped_max_steps == 100);
+
+    /* what no key alone can judge, named with the prefix */
+    CHECK_STATUS(bkf_catalog_apply(entry, spec, "frame", "lab", "", &err), BKF_OK);
+    CHECK_STATUS(entry->check(spec, "", &err), BKF_EINPUT);
+    CHECK_MSG(strstr(err.message, "frame: lab") && strstr(err.message, "grid mapped"), "%s",
+              err.message);
+    *spec = bkf_check_spec_default();
+    CHECK_STATUS(bkf_catalog_apply(entry, spec, "N-max", "256", "", &err), BKF_OK);
+    CHECK_STATUS(entry->check(spec, "--", &err), BKF_EINPUT);
+    CHECK_MSG(strstr(err.message, "--N-max: 256 is below --N = 512"), "%s", err.message);
+    *spec = bkf_check_spec_default();
+    CHECK_STATUS(bkf_catalog_apply(entry, spec, "N", "514", "", &err), BKF_OK);
+    CHECK_STATUS(entry->check(spec, "", &err), BKF_OK);
+    CHECK_STATUS(bkf_catalog_apply(entry, spec, "N", "513", "", &err), BKF_OK);
+    CHECK_STATUS(entry->check(spec, "", &err), BKF_EINPUT);
+    CHECK_MSG(strstr(err.message, "N: 513 must be even"), "%s", err.message);
+    bkf_catalog_spec_free(entry, spec);
+}
+
+/* A stable front beyond rel-tol: the table is written in full, the status
+ * says so and names the n (the command line turns it into exit 1). */
+TEST(check_write_disagreement_keeps_the_table)
+{
+    bkf_check_spec spec = bkf_check_spec_default();
+    spec.options.n = 4;
+    spec.options.tmax = 60;
+    spec.options.rel_tol = 1e-15;
+    char *buf = NULL;
+    size_t size = 0, disagree = 99;
+    FILE *out = open_memstream(&buf, &size);
+    CHECK(out);
+    bkf_error err = {0};
+    int s = bkf_check_write(&spec, out, BKF_IO_TSV, NULL, NULL, &disagree, &err);
+    CHECK(fclose(out) == 0);
+    CHECK_MSG(s == BKF_ENUMERIC && disagree == 1, "status %d, %zu disagree: %s", s, disagree,
+              err.message);
+    CHECK_MSG(strstr(err.message, "n = 4") && strstr(err.message, "rel-tol 1e-15"), "%s",
+              err.message);
+    size_t lines;
+    char *rows = data_lines(buf, &lines);
+    CHECK(lines == 2 && strstr(rows, "\tdisagrees\n"));
+    CHECK(strstr(buf, "# summary: 1 stable (n = 4), 0 agree, 1 disagree, 0 unresolved\n"));
+    free(rows);
+    free(buf);
+    /* a failed check of the spec writes nothing and counts nothing */
+    spec.options.N_max = 256;
+    buf = NULL;
+    out = open_memstream(&buf, &size);
+    CHECK(out);
+    CHECK_STATUS(bkf_check_write(&spec, out, BKF_IO_TSV, NULL, NULL, &disagree, &err), BKF_EINPUT);
+    CHECK(fclose(out) == 0);
+    CHECK(size == 0 && disagree == 0);
+    free(buf);
 }
