@@ -112,6 +112,12 @@ int bkf_io_atomic_commit(bkf_io_atomic *file, bkf_error *err);
 /* Closes and removes the temporary file and frees `file` (NULL is a no-op). */
 void bkf_io_atomic_abort(bkf_io_atomic *file);
 
+/* The words as one line a POSIX shell reads back as those words: plain
+ * words as they are, others in single quotes, control characters shown as
+ * '?'.  For provenance comments and printed plans.  Caller frees; NULL when
+ * out of memory. */
+char *bkf_io_command_line(int argc, const char *const *argv);
+
 /* A field psi(x_i), eta(x_i) read back from a table. */
 typedef struct {
     size_t rows;        /* values in psi and eta */

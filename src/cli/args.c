@@ -182,50 +182,17 @@ int cli_wants_help(int argc, char **argv)
     return 0;
 }
 
-/* Safe unquoted in sh: letters, digits and a few punctuation marks. */
-static int shell_plain(const char *s)
-{
-    if (!*s) return 0;
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-              strchr("-_./:=+,@%", c)))
-            return 0;
-    }
-    return 1;
-}
-
 char *cli_command_line(int argc, char **argv)
 {
-    size_t cap = 1;
-    for (int i = 0; i < argc; i++) cap += 4 * strlen(argv[i]) + 3;
-    char *line = malloc(cap), *p = line;
-    if (!line) return NULL;
-    for (int i = 0; i < argc; i++) {
-        if (i) *p++ = ' ';
-        const char *s = argv[i];
-        if (i == 0) {
-            /* The program's name, not wherever it happened to be run from. */
-            const char *slash = strrchr(s, '/');
-            if (slash) s = slash + 1;
-        }
-        if (shell_plain(s)) {
-            size_t n = strlen(s);
-            memcpy(p, s, n);
-            p += n;
-            continue;
-        }
-        *p++ = '\'';
-        for (; *s; s++) {
-            if (*s == '\'') {
-                memcpy(p, "'\\''", 4);
-                p += 4;
-            } else
-                *p++ = ((unsigned char)*s < 0x20 || *s == 0x7f) ? '?' : *s;
-        }
-        *p++ = '\'';
-    }
-    *p = '\0';
+    if (argc <= 0) return bkf_io_command_line(0, NULL);
+    const char **words = malloc((size_t)argc * sizeof *words);
+    if (!words) return NULL;
+    for (int i = 0; i < argc; i++) words[i] = argv[i];
+    /* The program's name, not wherever it happened to be run from. */
+    const char *slash = strrchr(argv[0], '/');
+    if (slash) words[0] = slash + 1;
+    char *line = bkf_io_command_line(argc, words);
+    free(words);
     return line;
 }
 

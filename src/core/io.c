@@ -679,6 +679,50 @@ void bkf_io_atomic_abort(bkf_io_atomic *a)
     atomic_free(a);
 }
 
+/* ------------------------------------------------------------ command line */
+
+/* Safe unquoted in sh: letters, digits and a few punctuation marks. */
+static int shell_plain(const char *s)
+{
+    if (!*s) return 0;
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+              strchr("-_./:=+,@%", c)))
+            return 0;
+    }
+    return 1;
+}
+
+char *bkf_io_command_line(int argc, const char *const *argv)
+{
+    size_t cap = 1;
+    for (int i = 0; i < argc; i++) cap += 4 * strlen(argv[i]) + 3;
+    char *line = malloc(cap), *p = line;
+    if (!line) return NULL;
+    for (int i = 0; i < argc; i++) {
+        if (i) *p++ = ' ';
+        const char *t = argv[i];
+        if (shell_plain(t)) {
+            size_t n = strlen(t);
+            memcpy(p, t, n);
+            p += n;
+            continue;
+        }
+        *p++ = '\'';
+        for (; *t; t++) {
+            if (*t == '\'') {
+                memcpy(p, "'\\''", 4);
+                p += 4;
+            } else
+                *p++ = ((unsigned char)*t < 0x20 || *t == 0x7f) ? '?' : *t;
+        }
+        *p++ = '\'';
+    }
+    *p = '\0';
+    return line;
+}
+
 /* ------------------------------------------------------------ state reader */
 
 const char *bkf_io_shown(const char *text, char *buf, size_t size)

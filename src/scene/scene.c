@@ -1319,48 +1319,13 @@ void bkf_scene_argv_free(char **argv)
     free(argv);
 }
 
-/* Text a POSIX shell reads as one word, unquoted. */
-static int shell_plain(const char *s)
-{
-    if (!*s) return 0;
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-              strchr("-_./:=+,@%", c)))
-            return 0;
-    }
-    return 1;
-}
-
 char *bkf_scene_step_command(const bkf_scene_step *step)
 {
     if (step->kind == BKF_SCENE_STEP_FIGURE) return strdup("gnuplot");
     int argc = 0;
     char **argv = bkf_scene_step_argv(step, &argc);
     if (!argv) return NULL;
-    size_t cap = 1;
-    for (int i = 0; i < argc; i++) cap += 4 * strlen(argv[i]) + 3;
-    char *line = malloc(cap), *p = line;
-    for (int i = 0; line && i < argc; i++) {
-        if (i) *p++ = ' ';
-        const char *t = argv[i];
-        if (shell_plain(t)) {
-            size_t n = strlen(t);
-            memcpy(p, t, n);
-            p += n;
-            continue;
-        }
-        *p++ = '\'';
-        for (; *t; t++) {
-            if (*t == '\'') {
-                memcpy(p, "'\\''", 4);
-                p += 4;
-            } else
-                *p++ = ((unsigned char)*t < 0x20 || *t == 0x7f) ? '?' : *t;
-        }
-        *p++ = '\'';
-    }
-    if (line) *p = '\0';
+    char *line = bkf_io_command_line(argc, (const char *const *)argv);
     bkf_scene_argv_free(argv);
     return line;
 }
