@@ -136,7 +136,7 @@ fuzz-built: $(FUZZ_NAMES:%=$(BUILD)/fuzz_%)
 
 .SECONDARY: $(FUZZ_NAMES:%=$(BUILD)/tests/fuzz/fuzz_%.o) \
             $(EXAMPLES:$(BUILD)/examples/%=$(BUILD)/docs/examples/%.o)
-$(BUILD)/fuzz_%: $(BUILD)/tests/fuzz/fuzz_%.o $(BUILD)/src/cli/args.o $(BUILD)/src/cli/output.o $(BUILD)/src/cli/simcommon.o $(LIB)
+$(BUILD)/fuzz_%: $(BUILD)/tests/fuzz/fuzz_%.o $(BUILD)/src/cli/args.o $(BUILD)/src/cli/output.o $(LIB)
 	$(CC) $(LDFLAGS) -fsanitize=fuzzer -o $@ $^ $(LDLIBS)
 
 $(LIB): $(LIB_OBJ)

@@ -29,6 +29,7 @@
 #include "bkfront/oscillation.h"
 #include "bkfront/init.h"
 #include "bkfront/seed.h"
+#include "bkfront/simulate.h"
 #include "bkfront/plot.h"
 #include "bkfront/scene.h"
 

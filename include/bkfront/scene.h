@@ -174,13 +174,7 @@ typedef struct {
      * (armed 1), and when it is gone (armed 0), so that a signal handler
      * may remove it; NULL: nobody is told. */
     void (*temp_file)(const char *path, int armed, void *data);
-    /* TRANSITIONAL (issue 14): a step whose product is not yet in the
-     * catalogue is handed to the caller as argv (the command line
-     * bkf_scene_step_argv gives, outputs included).  Removed once every
-     * scene kind's product is catalogued.  NULL: such a step fails. */
-    int (*run_argv)(int argc, char **argv, const char *out_path, void *data,
-                    bkf_error *err);
-    void *data;               /* for temp_file and run_argv */
+    void *data;               /* for temp_file */
 } bkf_scene_run_options;
 
 /* Carries out step `i` of the plan (data steps write their files

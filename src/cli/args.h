@@ -129,6 +129,12 @@ typedef int (*cli_table_writer)(const void *spec, FILE *out, bkf_io_format forma
  * writes it only when `write` succeeded. */
 int cli_write_table(const cli_output_spec *output, int argc, char **argv,
                     cli_table_writer write, const void *spec, bkf_error *err);
+/* The same, but a write that returns BKF_ECANCELED after a complete table
+ * of what was done (marked so by the product) is written too, and the
+ * status kept: an interrupted simulation keeps its frames. */
+int cli_write_table_kept(const cli_output_spec *output, int argc, char **argv,
+                         cli_table_writer write, const void *spec, int keep_canceled,
+                         bkf_error *err);
 
 /* A temporary file that SIGINT/SIGTERM (and the other fatal signals the
  * CLI handles) remove until unguarded, for a file written by the library

@@ -5,32 +5,20 @@
  * and written only when the run completed (the --out file replaced
  * atomically).  A stable front that disagrees with its predicted speed still
  * gets the whole table, and the exit status 1. */
-#include "simcommon.h"
+#include "progress.h"
 
 #include "bkfront/check.h"
 
-/* The progress bar is the command line's alone: no scene key. */
-typedef struct {
-    int no_progress;
-} progress_spec;
-
-static const bkf_option progress_options[] = {
-    {.name = "no-progress", .type = BKF_OPT_SWITCH, .offset = offsetof(progress_spec, no_progress),
-     .flags = BKF_OPT_CLI_ONLY,
-     .help = "no progress bar (drawn on stderr only when it is a\n"
-             "terminal and the run takes over half a second)"},
-};
-
 typedef struct {
     bkf_check_spec spec;
-    progress_spec progress;
+    cli_progress_spec progress;
     cli_output_spec output;
 } check_args;
 
 static void groups_of(check_args *a, cli_options g[3])
 {
     g[0] = (cli_options){bkf_check_keys, bkf_check_nkeys, a ? &a->spec : NULL};
-    g[1] = (cli_options){progress_options, 1, a ? &a->progress : NULL};
+    g[1] = (cli_options){cli_progress_options, cli_progress_noptions, a ? &a->progress : NULL};
     g[2] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
 }
 

@@ -104,17 +104,6 @@ static int is_dir(const char *path)
     return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
-/* TRANSITIONAL (issue 14): a scene step whose product is not yet in the
- * catalogue runs as its subcommand, in-process. */
-static int run_subcommand(int argc, char **argv, const char *out_path, void *data,
-                          bkf_error *err)
-{
-    (void)out_path, (void)data;
-    const cli_command *cmd = cli_find_command(argv[0]);
-    return cmd ? cmd->run(argc, argv, err)
-               : bkf_error_set(err, BKF_EINPUT, "no subcommand %s", argv[0]);
-}
-
 typedef struct {
     int slot;  /* the signal cleanup's slot of the file being written */
 } run_context;
@@ -149,9 +138,6 @@ static void print_plan(const bkf_scene *sc, const bkf_scene_plan *plan, FILE *ou
             const bkf_scene_product *d = &sc->products[st->data_product];
             fprintf(out, "\tgnuplot on the data of [%s %s] -> %s\n", bkf_scene_kind_name(d->kind),
                     d->name, st->output);
-        } else if (!st->entry && !cli_find_command(st->product)) {
-            /* transitional: a product computed in the scene layer alone */
-            fprintf(out, "\tclosed forms -> %s\n", st->output);
         } else {
             char *cmd = bkf_scene_step_command(st);
             fprintf(out, "\t" CLI_PROGRAM " %s\n", cmd ? cmd : "?");
@@ -243,7 +229,6 @@ static int run_run(int argc, char **argv, bkf_error *err)
                                 .plots_dir = plots_dir,
                                 .scene_dir = scene_dir,
                                 .temp_file = guard_temp,
-                                .run_argv = run_subcommand,
                                 .data = &rc};
 
     bkf_scene_plan plan;

@@ -227,6 +227,13 @@ const size_t cli_output_noptions = sizeof cli_output_options / sizeof cli_output
 int cli_write_table(const cli_output_spec *output, int argc, char **argv,
                     cli_table_writer write, const void *spec, bkf_error *err)
 {
+    return cli_write_table_kept(output, argc, argv, write, spec, 0, err);
+}
+
+int cli_write_table_kept(const cli_output_spec *output, int argc, char **argv,
+                         cli_table_writer write, const void *spec, int keep_canceled,
+                         bkf_error *err)
+{
     cli_output out = {0};
     cli_buffer buf = {0};
     char *cmd = NULL, *command = NULL;
@@ -244,12 +251,16 @@ int cli_write_table(const cli_output_spec *output, int argc, char **argv,
     if (!s) {
         bkf_provenance prov = {CLI_PROGRAM " " CLI_VERSION, command};
         s = write(spec, buf.stream, output->format == 1 ? BKF_IO_JSON : BKF_IO_TSV, &prov, err);
-        int c = cli_buffer_close(&buf, s ? NULL : err);
-        if (!s) s = c;
+        int keep = !s || (keep_canceled && s == BKF_ECANCELED);
+        int c = cli_buffer_close(&buf, keep ? err : NULL);
+        if (keep && c) s = c;
     }
-    if (!s)
-        s = cli_output_write(&out, buf.data, buf.size, err);
-    else
+    if (!s || (keep_canceled && s == BKF_ECANCELED)) {
+        bkf_error canceled = *err;
+        int w = cli_output_write(&out, buf.data, buf.size, err);
+        if (w) s = w;
+        else if (s) *err = canceled;
+    } else
         cli_output_abort(&out);
     cli_buffer_free(&buf);
     free(cmd);

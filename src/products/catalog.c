@@ -13,6 +13,7 @@
 #include "bkfront/oscillation.h"
 #include "bkfront/period.h"
 #include "bkfront/profile.h"
+#include "bkfront/simulate.h"
 
 /* The adapters of a product whose module has the usual shape: a spec
  * type T with T PREFIX_spec_default(void), tables PREFIX_options and
@@ -76,6 +77,23 @@ static int floquet_write(const void *spec, FILE *out, bkf_io_format format,
     return bkf_oscillation_write(&s, out, format, prov, err);
 }
 
+ADAPTERS(simulate, bkf_simulate_spec, bkf_simulate, release_nothing)
+
+/* The hooks' progress and cancel flag drive the run; stopped, the complete
+ * frames are written and BKF_ECANCELED returned. */
+static int simulate_write(const void *spec, FILE *out, bkf_io_format format,
+                          const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
+                          bkf_error *err)
+{
+    bkf_simulate_spec s = *(const bkf_simulate_spec *)spec;
+    if (hooks) {
+        s.progress = hooks->progress;
+        s.cancel = hooks->cancel;
+        s.data = hooks->data;
+    }
+    return bkf_simulate_write(&s, out, format, prov, err);
+}
+
 /* -------------------------------------------------------------- check */
 
 static const bkf_option *check_options(size_t *count)
@@ -135,6 +153,8 @@ static const bkf_catalog_entry entries[] = {
           "front profiles f(z), f'(z) and their place x along the system"),
     ENTRY(floquet, bkf_oscillation_spec,
           "Floquet stability of the global oscillation: dispersion, threshold, diagram"),
+    ENTRY(simulate, bkf_simulate_spec,
+          "direct simulation (continuum or chain) with measurements, spacetime field, snapshots"),
     ENTRY(check, bkf_check_spec, "the predicted front speeds against direct simulation"),
     ENTRY(friction, bkf_friction_spec, "the friction laws, sampled"),
     ENTRY(bench, bkf_bench_spec,

@@ -304,7 +304,7 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
 /* What each kind computes: the catalogue's product; the switches the kind
  * always passes, before (first) or after (last) the scene's keys; the key
  * whose list gives one step per value.  A kind whose product is not yet in
- * the catalogue is handed to the caller's run_argv (transitional). */
+ * the catalogue cannot be planned. */
 typedef struct {
     const char *product, *first, *last, *split;
 } kind_map_row;
@@ -349,13 +349,18 @@ static const bkf_option *catalog_option(const bkf_catalog_entry *entry, const ch
  * the log switch), outputs never, a fixed switch the product does not know
  * not at all (--no-progress is the command line's).  *bad: the arg at
  * fault. */
+/* The step's keys into `spec`.  Outputs other than the table's own ("out",
+ * which the scene writes) are the product's data files (simulate's
+ * spacetime): applied only for a run (`outputs`), not when a plan is
+ * checked at parse time, which must not touch the file system. */
 static int apply_args(const bkf_catalog_entry *entry, const bkf_scene_arg *args, size_t n,
-                      void *spec, size_t *bad, bkf_error *err)
+                      void *spec, int outputs, size_t *bad, bkf_error *err)
 {
     for (int pass = 0; pass < 2; pass++)
         for (size_t i = 0; i < n; i++) {
             const bkf_scene_arg *a = &args[i];
-            if (a->output || (a->value == NULL) != (pass == 0)) continue;
+            if (a->output && (!outputs || strcmp(a->key, "out") == 0)) continue;
+            if ((a->value == NULL) != (pass == 0)) continue;
             if (a->fixed && !catalog_option(entry, a->key)) continue;
             int s = bkf_catalog_apply(entry, spec, a->key, a->value, "", err);
             if (s) {
@@ -1354,7 +1359,7 @@ static int validate_plan(parse_state *st)
         }
         const bkf_scene_product *p = &st->s->products[step->users[0]];
         size_t bad = step->nargs;
-        int s = apply_args(step->entry, step->args, step->nargs, spec, &bad, &e);
+        int s = apply_args(step->entry, step->args, step->nargs, spec, 0, &bad, &e);
         if (!s) s = step->entry->check(spec, "", &e);
         bkf_catalog_spec_free(step->entry, spec);
         if (s == BKF_ENOMEM) {
@@ -1400,8 +1405,14 @@ static int write_output(const bkf_scene_step *step, void *spec, table_writer wri
     snprintf(command, n, "%s%s%s", o->command_prefix ? o->command_prefix : "",
              o->command_prefix ? " " : "", cmd);
     free(cmd);
+    /* The table goes to the "out" output; a step without one (a figure's
+     * data written by the product itself) to its first output. */
+    const char *path = step->output;
+    for (size_t i = 0; i < step->nargs; i++)
+        if (step->args[i].output && strcmp(step->args[i].key, "out") == 0)
+            path = step->args[i].value;
     bkf_error e;
-    bkf_io_atomic *file = bkf_io_atomic_open(step->output, &e);
+    bkf_io_atomic *file = bkf_io_atomic_open(path, &e);
     if (!file) {
         free(command);
         return bkf_error_set(err, BKF_EINPUT, "out: %s", e.message);
@@ -1533,20 +1544,11 @@ int bkf_scene_run_step(const bkf_scene *s, const bkf_scene_plan *plan, size_t i,
     if (step->entry) {
         void *spec = bkf_catalog_spec_new(step->entry, err);
         if (!spec) return BKF_ENOMEM;
-        int st = apply_args(step->entry, step->args, step->nargs, spec, NULL, err);
+        int st = apply_args(step->entry, step->args, step->nargs, spec, 1, NULL, err);
         if (!st) st = step->entry->check(spec, "", err);
         if (!st) st = write_output(step, spec, write_catalogued, o, err);
         bkf_catalog_spec_free(step->entry, spec);
         return st;
     }
-    /* TRANSITIONAL (issue 14): a product not yet in the catalogue runs as
-     * the caller's command line. */
-    if (!o->run_argv)
-        return bkf_error_set(err, BKF_EINPUT, "no product %s in the catalogue", step->product);
-    int argc = 0;
-    char **argv = bkf_scene_step_argv(step, &argc);
-    if (!argv) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    int st = o->run_argv(argc, argv, step->output, o->data, err);
-    bkf_scene_argv_free(argv);
-    return st;
+    return bkf_error_set(err, BKF_EINPUT, "no product %s in the catalogue", step->product);
 }

@@ -1,0 +1,91 @@
+/* The simulation product (`bkfront simulate`, a scene's spacetime): a
+ * direct simulation of the continuum or the chain from an initial state
+ * (init.h), measured as it runs (measure.h), written as a table of frames
+ * with the summary (regime, front speed, period) in comments and in JSON
+ * "results", and optionally the spacetime field psi(x, t) and snapshots of
+ * the state, each file replaced atomically.
+ *
+ * bkf_simulate_options is the table of its keys (flags and scene keys);
+ * fill a spec from bkf_simulate_spec_default, apply values through the
+ * table, check, write.  The library never prints and never exits. */
+#ifndef BKFRONT_SIMULATE_H
+#define BKFRONT_SIMULATE_H
+
+#include <signal.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include "bkfront/io.h"
+#include "bkfront/model.h"
+#include "bkfront/options.h"
+#include "bkfront/pde.h"
+#include "bkfront/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define BKF_SIMULATE_TMAX_MAX 1e6
+#define BKF_SIMULATE_FRAMES_MAX 1000000u
+#define BKF_SIMULATE_SNAPSHOTS_MAX 100000u
+/* frames x N values of the spacetime field are kept in memory */
+#define BKF_SIMULATE_FIELD_MAX 2e8
+
+typedef struct {
+    bkf_model_params model; /* N 0: 512, or S blocks for the chain */
+    int chain;              /* model key: index in continuum, chain */
+    double tol;             /* [1e-13, 1e-2]; default 1e-9 */
+    int stepper;            /* index in rk8pd, rkck, rkf45, etdrk4 */
+    int dealias;            /* switch, continuum only */
+    double filter;          /* [0, 1000]; default 4 */
+    double tmax;            /* (0, 1e6]; default 125 */
+    const char *init;       /* init.h grammar; NULL: uniform */
+    uint64_t seed;          /* noise; default 1 */
+    double level;           /* fronts are crossings of it; NaN: bkf_measure_front_level */
+    size_t frames;          /* rows over [0, tmax], plus t = 0; default 500 */
+    const char *spacetime;  /* file of psi(x, t) at the frames, or NULL */
+    int spacetime_format;   /* index in text, binary; -1: not given (text) */
+    const char *snapshots;  /* file of snapshots, or NULL */
+    size_t snapshot_count;  /* 0: not given (2) */
+    /* Not keys: what the caller supplies for a run it may stop. */
+    const volatile sig_atomic_t *cancel;     /* raised: the run stops, what is
+                                                complete is written, BKF_ECANCELED */
+    const char *(*cancel_reason)(void *data); /* "SIGINT", ...; NULL: "canceled" */
+    int (*progress)(double fraction, void *data);
+    /* Told each data file's temporary while it exists (armed 1) and when it
+     * is gone (armed 0), so that a signal handler may remove it. */
+    void (*temp_file)(const char *path, int armed, void *data);
+    void *data;
+} bkf_simulate_spec;
+
+bkf_simulate_spec bkf_simulate_spec_default(void);
+
+/* The keys: gamma, c, nu, S, N, model, tmax, tol, init, seed, stepper,
+ * dealias, filter, level, frames, spacetime, spacetime-format, snapshots,
+ * snapshot-count. */
+extern const bkf_option bkf_simulate_options[];
+extern const size_t bkf_simulate_noptions;
+
+/* What the table cannot judge key by key: the grid for the model, the
+ * initial state against the model (a state file is read), the files and
+ * their formats, the size of the spacetime field.  Messages name the keys
+ * with `prefix`. */
+int bkf_simulate_check(const bkf_simulate_spec *spec, const char *prefix, bkf_error *err);
+
+/* Runs and writes: the frames' table to `out` (comments: the model, the
+ * initial state, the command of `provenance`, the work, the regime, fronts,
+ * speed, period, window statistics; JSON "results": regime, fronts, speed,
+ * speed_err, period, period_err, v_pred), and the spacetime and snapshot
+ * files, opened (so a bad path fails) before the run and replaced only at
+ * its end.  Stopped through spec->cancel: everything complete is written,
+ * marked "interrupted (REASON) at t = ...", and BKF_ECANCELED returned; on
+ * any other failure no file is replaced and `out` holds a partial table
+ * the caller discards. */
+int bkf_simulate_write(const bkf_simulate_spec *spec, FILE *out, bkf_io_format format,
+                       const bkf_provenance *provenance, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
