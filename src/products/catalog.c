@@ -2,6 +2,7 @@
  * lists them. */
 #include "bkfront/catalog.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -14,6 +15,33 @@
 #include "bkfront/period.h"
 #include "bkfront/profile.h"
 #include "bkfront/simulate.h"
+
+/* The keys a product requires (BKF_OPT_REQUIRED) have been given: the
+ * command line's parser says so for flags; here for every other caller.
+ * A required number is NaN until given, a list empty, a text NULL. */
+static int required_given(const bkf_option *table, size_t n, const void *spec,
+                          const char *prefix, bkf_error *err)
+{
+    for (size_t i = 0; i < n; i++) {
+        const bkf_option *o = &table[i];
+        if (!(o->flags & BKF_OPT_REQUIRED)) continue;
+        const char *field = (const char *)spec + o->offset;
+        int missing = 0;
+        switch (o->type) {
+        case BKF_OPT_DOUBLE: missing = isnan(*(const double *)field); break;
+        case BKF_OPT_DOUBLE_LIST:
+        case BKF_OPT_COUNT_LIST: missing = ((const bkf_list *)field)->count == 0; break;
+        case BKF_OPT_TEXT: missing = *(const char *const *)field == NULL; break;
+        default: break;
+        }
+        if (missing) {
+            char form[128];
+            return bkf_error_set(err, BKF_EINPUT, "%s%s is required (%s)", prefix ? prefix : "",
+                                 o->name, bkf_option_describe(o, form, sizeof form));
+        }
+    }
+    return BKF_OK;
+}
 
 /* The adapters of a product whose module has the usual shape: a spec
  * type T with T PREFIX_spec_default(void), tables PREFIX_options and
@@ -29,7 +57,8 @@
     static void name##_init(void *spec) { *(T *)spec = PREFIX##_spec_default(); }       \
     static int name##_check(const void *spec, const char *prefix, bkf_error *err)        \
     {                                                                                    \
-        return PREFIX##_check(spec, prefix, err);                                        \
+        int s_ = required_given(PREFIX##_options, PREFIX##_noptions, spec, prefix, err);  \
+        return s_ ? s_ : PREFIX##_check(spec, prefix, err);                              \
     }                                                                                    \
     static void name##_release(void *spec) { RELEASE(spec); }
 
@@ -104,7 +133,8 @@ static const bkf_option *check_options(size_t *count)
 static void check_init(void *spec) { *(bkf_check_spec *)spec = bkf_check_spec_default(); }
 static int check_check(const void *spec, const char *prefix, bkf_error *err)
 {
-    return bkf_check_spec_check(spec, prefix, err);
+    int s = required_given(bkf_check_keys, bkf_check_nkeys, spec, prefix, err);
+    return s ? s : bkf_check_spec_check(spec, prefix, err);
 }
 /* The catalogue's progress may answer; the check stops by cancel only. */
 static void check_progress(double fraction, void *data)
