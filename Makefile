@@ -51,7 +51,7 @@ BENCH := $(BUILD)/run_bench
 # code): the proof that a product is reachable from C.
 EXAMPLES := $(BUILD)/examples/check_paper
 
-.PHONY: all test run bench sanitize deps clean build-all check-built bench-built \
+.PHONY: all test run bench sanitize deps clean build-all check-built bench-built fuzz-syntax \
         sanitize-built valgrind fuzz fuzz-built
 
 all: deps
@@ -82,8 +82,16 @@ test: deps
 
 # BKF_TEST_JOBS tests at once (default: the online CPUs), BKF_TEST_TIME_LIMIT
 # seconds each (default 240).
-check-built: $(CLI) $(TESTS)
+# The benchmarks and the fuzz targets are built (the fuzz targets only
+# compiled: linking them needs clang's libFuzzer, `make fuzz`) so that a
+# change that breaks them fails here, not months later.
+check-built: $(CLI) $(TESTS) $(BENCH) fuzz-syntax
 	./$(TESTS)
+
+fuzz-syntax:
+	@for t in $(FUZZ_NAMES); do \
+	  $(CC) $(CFLAGS) -Itests/fuzz -Isrc/cli -fsyntax-only tests/fuzz/fuzz_$$t.c || exit 1; \
+	done
 
 run: deps
 	@$(MAKE) --no-print-directory build-all

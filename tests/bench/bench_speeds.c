@@ -132,13 +132,13 @@ void bench_speeds(void)
 {
     gsl_set_error_handler_off();
     const speeds_case cases[] = {
-        {"paper: gamma 2, c 0.3, nu -0.96, S 20", {2.0, 0.3, -0.96, 20.0}, 1e-10, 1},
-        {"paper", {2.0, 0.3, -0.96, 20.0}, 1e-8, 1},
-        {"paper", {2.0, 0.3, -0.96, 20.0}, 1e-12, 1},
-        {"gamma 1, c 0.5, nu 0, S 30", {1.0, 0.5, 0.0, 30.0}, 1e-10, 1},
-        {"folds: gamma 1.5, c 0.3, nu -0.96, S 20", {1.5, 0.3, -0.96, 20.0}, 1e-10, 1},
-        {"canard: gamma 1, c 0.3, nu -0.99, S 20", {1.0, 0.3, -0.99, 20.0}, 1e-10, 0},
-        {"large gamma: gamma 100, c 0.3, nu -0.96, S 1000", {100.0, 0.3, -0.96, 1000.0}, 1e-10, 1},
+        {"paper: gamma 2, c 0.3, nu -0.96, S 20", {2.0, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM}, 1e-10, 1},
+        {"paper", {2.0, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM}, 1e-8, 1},
+        {"paper", {2.0, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM}, 1e-12, 1},
+        {"gamma 1, c 0.5, nu 0, S 30", {1.0, 0.5, 0.0, 30.0, 0, BKF_MODEL_CONTINUUM}, 1e-10, 1},
+        {"folds: gamma 1.5, c 0.3, nu -0.96, S 20", {1.5, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM}, 1e-10, 1},
+        {"canard: gamma 1, c 0.3, nu -0.99, S 20", {1.0, 0.3, -0.99, 20.0, 0, BKF_MODEL_CONTINUUM}, 1e-10, 0},
+        {"large gamma: gamma 100, c 0.3, nu -0.96, S 1000", {100.0, 0.3, -0.96, 1000.0, 0, BKF_MODEL_CONTINUUM}, 1e-10, 1},
     };
     printf("## speeds: the whole table of allowed speeds, median of 11 runs, one core\n\n");
     printf("| case | tol | roots | n_max | time | coarse solves | precise solves | "
@@ -152,7 +152,7 @@ void bench_speeds(void)
     printf("| tol | points | folds | sonic end | solves | time |\n|---:|---:|---:|:---|---:|---:|\n");
     const double tols[] = {1e-8, 1e-10};
     for (int i = 0; i < 2; i++) {
-        bkf_model_params p = {1.5, 0.3, -0.96, 30.0};
+        bkf_model_params p = {1.5, 0.3, -0.96, 30.0, 0, BKF_MODEL_CONTINUUM};
         bkf_speeds_options o = bkf_speeds_options_default();
         o.tol = tols[i];
         bkf_speeds_branch_report rep;
