@@ -64,13 +64,13 @@ const bkf_option bkf_simulate_options[] = {
     {.name = "N", .type = BKF_OPT_COUNT, .offset = MODEL(N), .flags = BOUNDED,
      .min = BKF_PDE_N_MIN, .max = BKF_PDE_N_MAX, .form = "N",
      .shown_default = "512, or S blocks for --model chain",
-     .help = "grid points; even for the continuum (a power of two is\nnot required)"},
+     .help = "grid points, in [8, 1048576]; even for the continuum (a\npower of two is not required)"},
     {.name = "tmax", .type = BKF_OPT_DOUBLE, .offset = SPEC(tmax),
      .flags = BOUNDED | BKF_OPT_MIN_OPEN, .min = 0, .max = BKF_SIMULATE_TMAX_MAX, .form = "T",
-     .shown_default = "125", .help = "final time"},
+     .shown_default = "125", .help = "final time, in (0, 1e6]"},
     {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = SPEC(tol), .flags = BOUNDED,
      .min = BKF_PDE_TOL_MIN, .max = BKF_PDE_TOL_MAX, .form = "E", .shown_default = "1e-9",
-     .help = "local error tolerance of the stepper (absolute and\nrelative)"},
+     .help = "local error tolerance of the stepper (absolute and\nrelative), in [1e-13, 0.01]"},
     {.name = "init", .type = BKF_OPT_CUSTOM, .set = set_init, .form = "SPEC",
      .shown_default = "uniform",
      .help = "initial state:\n"
@@ -103,14 +103,14 @@ const bkf_option bkf_simulate_options[] = {
      .max = 1000, .form = "F", .shown_default = "4",
      .help = "continuum only: rate F of the spectral filter at the\n"
              "highest mode, F (k/k_top)^16 (it stops a grid instability of\n"
-             "the modes near the Nyquist wavenumber; 0 turns it off)"},
+             "the modes near the Nyquist wavenumber; 0 turns it off),\nin [0, 1000]"},
     {.name = "level", .type = BKF_OPT_DOUBLE, .offset = SPEC(level), .form = "L",
      .shown_default = "the middle of the global oscillation's range (nu if |nu| >= 1)",
      .help = "fronts are crossings of psi = L with psi_t > 0"},
     {.name = "frames", .type = BKF_OPT_COUNT, .offset = SPEC(frames), .flags = BOUNDED, .min = 1,
      .max = BKF_SIMULATE_FRAMES_MAX, .form = "F", .shown_default = "500",
      .help = "rows of the diagnostics and the spacetime field, evenly\n"
-             "spaced over [0, tmax] (F + 1 rows with t = 0)"},
+             "spaced over [0, tmax] (F + 1 rows with t = 0), in [1, 1e6]"},
     {.name = "spacetime", .type = BKF_OPT_TEXT, .offset = SPEC(spacetime), .form = "FILE",
      .help = "psi(x, t) at the frames for gnuplot: text is the nonuniform\n"
              "matrix format (first row N x_0 .. x_{N-1}, then t psi ...;\n"
@@ -123,7 +123,7 @@ const bkf_option bkf_simulate_options[] = {
      .help = "TSV with columns t, x, psi, eta at K frames spread over\nthe run"},
     {.name = "snapshot-count", .type = BKF_OPT_COUNT, .offset = SPEC(snapshot_count),
      .flags = BOUNDED, .min = 1, .max = BKF_SIMULATE_SNAPSHOTS_MAX, .form = "K",
-     .shown_default = "2", .help = "snapshots (the last at tmax)"},
+     .shown_default = "2", .help = "snapshots (the last at tmax), in [1, 1e5]"},
 };
 const size_t bkf_simulate_noptions = sizeof bkf_simulate_options / sizeof bkf_simulate_options[0];
 
