@@ -50,7 +50,8 @@ static void fuzz_range(const char *text, int geometric)
     if (s == BKF_OK) {
         FUZZ_CHECK(r.values && r.count >= 1 && r.count <= CLI_MAX_POINTS);
         FUZZ_CHECK(r.values[0] == r.from && r.values[r.count - 1] == r.to);
-        FUZZ_CHECK(r.is_range == (strchr(text, ':') != NULL));
+        /* one grammar: A:B:N and comma lists are ranges (options.h) */
+        FUZZ_CHECK(r.is_range == (strchr(text, ':') != NULL || strchr(text, ',') != NULL));
         for (size_t i = 0; i < r.count; i++) {
             FUZZ_CHECK(isfinite(r.values[i]));
             if (geometric) FUZZ_CHECK(r.values[i] > 0);
