@@ -619,10 +619,11 @@ const bkf_option bkf_check_keys[] = {
      .min = BKF_CHECK_RESOLUTION_MIN, .max = 1, .form = "R", .shown_default = "1e-05",
      .help = "the spectral tail accepted as resolved,\nin [1e-16, 1]"},
     {.name = "mapped-tol", .type = BKF_OPT_DOUBLE, .offset = OPT(mapped_tol),
-     .flags = BOUNDED | BKF_OPT_SCENE_ONLY, .min = BKF_PDE_TOL_MIN, .max = BKF_PDE_TOL_MAX,
-     .form = "E", .help = "adapted grid: CVODE's tolerance; default tol if given, else 1e-08"},
+     .flags = BOUNDED, .min = BKF_PDE_TOL_MIN, .max = BKF_PDE_TOL_MAX,
+     .form = "E",
+     .help = "adapted grid: CVODE's tolerance, in [1e-13, 0.01];\ndefault tol if given, else 1e-08"},
     {.name = "mapped-max-steps", .type = BKF_OPT_COUNT, .offset = OPT(mapped_max_steps),
-     .flags = BKF_OPT_SCENE_ONLY, .form = "I", .shown_default = "20000",
+     .form = "I", .shown_default = "20000",
      .help = "adapted grid: step budget per root (beyond: unresolved)"},
 };
 const size_t bkf_check_nkeys = sizeof bkf_check_keys / sizeof bkf_check_keys[0];

@@ -512,7 +512,7 @@ static int add_noise(bkf_comoving *m, double *u, bkf_error *err)
 
 static int record(bkf_comoving *m, const double *u, bkf_error *err);
 
-bkf_comoving *bkf_comoving_alloc(const bkf_comoving_params *params, bkf_error *err)
+static bkf_comoving *comoving_alloc_body(const bkf_comoving_params *params, bkf_error *err)
 {
     if (check_params(params, err)) return NULL;
     bkf_comoving *m = calloc(1, sizeof *m);
@@ -649,6 +649,14 @@ bkf_comoving *bkf_comoving_alloc(const bkf_comoving_params *params, bkf_error *e
 fail:
     bkf_comoving_free(m);
     return NULL;
+}
+
+bkf_comoving *bkf_comoving_alloc(const bkf_comoving_params *params, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    bkf_comoving *made = comoving_alloc_body(params, err);
+    bkf_gsl_handler_pop(handler);
+    return made;
 }
 
 void bkf_comoving_free(bkf_comoving *m)
@@ -990,8 +998,8 @@ int bkf_comoving_fit_drift(const bkf_comoving *m, double t_from, double t_to, do
 
 /* ---------------------------------------------------------------- run */
 
-int bkf_comoving_run(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_progress progress,
-                     void *progress_data, bkf_error *err)
+static int comoving_run_body(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_progress progress,
+                             void *progress_data, bkf_error *err)
 {
     if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
     if (!(t_end > m->t) || !isfinite(t_end))
@@ -1036,6 +1044,15 @@ int bkf_comoving_run(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_pr
         if (tout >= t_end) break;
     }
     return BKF_OK;
+}
+
+int bkf_comoving_run(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_progress progress,
+                     void *progress_data, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = comoving_run_body(m, t_end, sample_dt, progress, progress_data, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
 }
 
 void bkf_comoving_get_stats(const bkf_comoving *m, bkf_comoving_stats *st)

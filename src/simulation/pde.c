@@ -355,12 +355,11 @@ static const gsl_odeiv2_step_type *step_type(bkf_pde_stepper s)
 
 static void mark_set(bkf_pde *m);
 
-bkf_pde *bkf_pde_alloc(const bkf_model_params *params, const bkf_pde_options *options,
+static bkf_pde *pde_alloc_body(const bkf_model_params *params, const bkf_pde_options *options,
                        bkf_error *err)
 {
     bkf_pde_options o = options ? *options : bkf_pde_options_default();
     if (bkf_pde_check(params, &o, err) != BKF_OK) return NULL;
-    gsl_set_error_handler_off();
     bkf_pde *m = calloc(1, sizeof *m);
     if (!m) {
         bkf_error_set(err, BKF_ENOMEM, "out of memory");
@@ -464,6 +463,15 @@ nomem:
     bkf_pde_free(m);
     bkf_error_set(err, BKF_ENOMEM, "out of memory");
     return NULL;
+}
+
+bkf_pde *bkf_pde_alloc(const bkf_model_params *params, const bkf_pde_options *options,
+                       bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    bkf_pde *made = pde_alloc_body(params, options, err);
+    bkf_gsl_handler_pop(handler);
+    return made;
 }
 
 /* Accessors and diagnostics of a NULL object (or field) give NULL, 0 or
@@ -635,7 +643,7 @@ static int check_amp(const char *name, double a, bkf_error *err)
     return BKF_OK;
 }
 
-int bkf_pde_init_uniform(bkf_pde *m, double amp, unsigned long seed, bkf_error *err)
+static int pde_init_uniform_body(bkf_pde *m, double amp, unsigned long seed, bkf_error *err)
 {
     if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
     int s = check_amp("amp", amp, err);
@@ -651,7 +659,15 @@ int bkf_pde_init_uniform(bkf_pde *m, double amp, unsigned long seed, bkf_error *
     return BKF_OK;
 }
 
-int bkf_pde_init_oscillation(bkf_pde *m, size_t j, double amp, bkf_error *err)
+int bkf_pde_init_uniform(bkf_pde *m, double amp, unsigned long seed, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = pde_init_uniform_body(m, amp, seed, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
+
+static int pde_init_oscillation_body(bkf_pde *m, size_t j, double amp, bkf_error *err)
 {
     if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
     int s;
@@ -691,8 +707,16 @@ int bkf_pde_init_oscillation(bkf_pde *m, size_t j, double amp, bkf_error *err)
     return BKF_OK;
 }
 
-int bkf_pde_init_front(bkf_pde *m, const bkf_pde_wave *wave, bkf_pde_front_info *info,
-                       double *clean_psi, bkf_error *err)
+int bkf_pde_init_oscillation(bkf_pde *m, size_t j, double amp, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = pde_init_oscillation_body(m, j, amp, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
+
+static int pde_init_front_body(bkf_pde *m, const bkf_pde_wave *wave, bkf_pde_front_info *info,
+                               double *clean_psi, bkf_error *err)
 {
     if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
     if (!wave) return bkf_error_set(err, BKF_EINPUT, "wave is NULL");
@@ -767,6 +791,15 @@ int bkf_pde_init_front(bkf_pde *m, const bkf_pde_wave *wave, bkf_pde_front_info 
     return BKF_OK;
 }
 
+int bkf_pde_init_front(bkf_pde *m, const bkf_pde_wave *wave, bkf_pde_front_info *info,
+                       double *clean_psi, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = pde_init_front_body(m, wave, info, clean_psi, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
+
 /* ---------------------------------------------------------------- run */
 
 /* State at w in [0, 1] of the step [t0, t0 + dt] into m->sample (psi, eta). */
@@ -793,8 +826,8 @@ static int blown_up(const double *y, size_t N)
     return 0;
 }
 
-int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer observer,
-                void *odata, bkf_pde_progress progress, void *pdata, bkf_error *err)
+static int pde_run_body(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer observer,
+                        void *odata, bkf_pde_progress progress, void *pdata, bkf_error *err)
 {
     if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
     double t0 = m->t;
@@ -934,4 +967,13 @@ int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer obs
     }
     if (observer && !end_emitted && bkf_pde_emit(m, observer, odata, m->t, m->y)) m->stats.stopped = 1;
     return BKF_OK;
+}
+
+int bkf_pde_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer observer,
+                void *odata, bkf_pde_progress progress, void *pdata, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = pde_run_body(m, t_end, sample_dt, observer, odata, progress, pdata, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
 }

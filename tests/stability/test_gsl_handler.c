@@ -11,6 +11,9 @@
 #include "bkfront/continuation.h"
 #include "bkfront/cycle.h"
 #include "bkfront/floquet.h"
+#include "bkfront/comoving.h"
+#include "bkfront/pde.h"
+#include "bkfront/seed.h"
 #include "bkfront/speeds.h"
 
 static int host_calls;
@@ -142,5 +145,40 @@ TEST(gsl_handler_push_pop_nest)
     CHECK(host_calls == 0);
     gsl_error("an error with the host's handler back", __FILE__, __LINE__, GSL_EINVAL);
     CHECK(host_calls == 1);
+    gsl_set_error_handler(NULL);
+}
+
+TEST(gsl_handler_of_the_host_survives_simulations)
+{
+    gsl_set_error_handler(host_handler);
+    bkf_error e;
+    bkf_model_params m = bkf_model_params_paper();
+    m.N = 64;
+    bkf_pde_options o = bkf_pde_options_default();
+    bkf_pde *pde = bkf_pde_alloc(&m, &o, &e);
+    CHECK(pde != NULL);
+    CHECK_HOST_HANDLER("bkf_pde_alloc");
+    CHECK_STATUS(bkf_pde_init_uniform(pde, 1e-3, 1, &e), BKF_OK);
+    CHECK_HOST_HANDLER("bkf_pde_init_uniform");
+    CHECK_STATUS(bkf_pde_run(pde, 1.0, 0.5, NULL, NULL, NULL, NULL, &e), BKF_OK);
+    CHECK_HOST_HANDLER("bkf_pde_run");
+    bkf_pde_front_spec fs = bkf_pde_front_spec_default();
+    fs.n = 4;
+    bkf_pde_front_info fi;
+    CHECK_STATUS(bkf_seed_front(pde, &fs, &fi, NULL, &e), BKF_OK);
+    CHECK_HOST_HANDLER("bkf_seed_front");
+    bkf_pde_free(pde);
+    bkf_comoving_params cp = bkf_comoving_params_default();
+    cp.model = bkf_model_params_paper();
+    cp.n = 4;
+    cp.v = fi.v;
+    cp.points = 64;
+    bkf_comoving *cm = bkf_comoving_alloc(&cp, &e);
+    CHECK_MSG(cm != NULL, "%s", e.message);
+    CHECK_HOST_HANDLER("bkf_comoving_alloc");
+    CHECK_STATUS(bkf_comoving_run(cm, 0.5, 0.25, NULL, NULL, &e), BKF_OK);
+    CHECK_HOST_HANDLER("bkf_comoving_run");
+    bkf_comoving_free(cm);
+    CHECK_MSG(host_calls == 0, "the host's handler was called %d times", host_calls);
     gsl_set_error_handler(NULL);
 }
