@@ -152,3 +152,22 @@ pid_t bkf_cli_spawn(const char *const *args, const bkf_cli_options *o, const cha
     close(err);
     return pid;
 }
+
+char *bkf_cli_stdout(const char *words, int *code)
+{
+    char *copy = strdup(words);
+    const char *args[64];
+    size_t n = 0;
+    for (char *w = strtok(copy, " "); w && n < 63; w = strtok(NULL, " ")) args[n++] = w;
+    args[n] = NULL;
+    bkf_cli_result r = bkf_cli_run(args, NULL);
+    free(copy);
+    if (code)
+        *code = r.code;
+    else
+        CHECK_MSG(r.code == 0, "bkfront %s: exit %d: %s", words, r.code, r.err);
+    char *out = r.out;
+    r.out = NULL;
+    bkf_cli_result_free(&r);
+    return out;
+}

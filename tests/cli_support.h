@@ -39,6 +39,11 @@ pid_t bkf_cli_spawn(const char *const *args, const bkf_cli_options *o, const cha
  * be opened (an output the run should not have left). */
 char *bkf_cli_read_file(const char *path);
 
+/* stdout of `bkfront WORDS` (words separated by single spaces, no quoting),
+ * malloc'd; *code gets the exit status (NULL: it must be 0, else the test
+ * fails). */
+char *bkf_cli_stdout(const char *words, int *code);
+
 #define BKF_CLI_ARGS(...) ((const char *const[]){__VA_ARGS__, NULL})
 /* bkfront ARGS... with the default options */
 #define BKF_CLI(...) bkf_cli_run(BKF_CLI_ARGS(__VA_ARGS__), NULL)

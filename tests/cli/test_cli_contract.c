@@ -3,6 +3,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
 
+#include "cli_support.h"
+
 #include <string.h>
 
 #include "args.h"
@@ -26,11 +28,8 @@ TEST(cli_exit_codes_by_status)
 
 TEST(cli_version_is_the_library_version)
 {
-    FILE *p = popen("'" BKF_CLI_PATH "' --version", "r");
-    CHECK(p);
-    char line[128] = "";
-    CHECK(fgets(line, sizeof line, p));
-    CHECK(pclose(p) == 0);
+    char *line = bkf_cli_stdout("--version", NULL);
     CHECK_MSG(strcmp(line, "bkfront " BKF_VERSION_STRING "\n") == 0, "'%s'", line);
+    free(line);
     CHECK(strcmp(BKF_VERSION_STRING, bkf_version()) == 0);
 }

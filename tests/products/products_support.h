@@ -12,6 +12,7 @@
 
 #include "bkfront/io.h"
 #include "bkfront/options.h"
+#include "cli_support.h"
 #include "harness.h"
 
 #ifndef BKF_CLI_PATH
@@ -36,32 +37,9 @@ static inline char *library_output(product_writer write, const void *spec, bkf_i
     return data;
 }
 
-/* stdout of `bkfront ARGS` (ARGS shell words, no quoting needed), which must
- * exit 0 (caller frees). */
-static inline char *cli_output(const char *args)
-{
-    size_t len = strlen(BKF_CLI_PATH) + strlen(args) + 32;
-    char *cmd = malloc(len);
-    CHECK(cmd);
-    snprintf(cmd, len, "'%s' %s 2>/dev/null", BKF_CLI_PATH, args);
-    FILE *p = popen(cmd, "r");
-    free(cmd);
-    CHECK(p);
-    size_t cap = 1 << 16, n = 0;
-    char *buf = malloc(cap);
-    CHECK(buf);
-    for (size_t got; (got = fread(buf + n, 1, cap - n - 1, p)) > 0;) {
-        n += got;
-        if (cap - n < 2) {
-            buf = realloc(buf, cap *= 2);
-            CHECK(buf);
-        }
-    }
-    buf[n] = '\0';
-    int status = pclose(p);
-    CHECK_MSG(status == 0, "bkfront %s: status %d", args, status);
-    return buf;
-}
+/* stdout of `bkfront ARGS` (ARGS words separated by spaces, no quoting),
+ * which must exit 0 (caller frees). */
+static inline char *cli_output(const char *args) { return bkf_cli_stdout(args, NULL); }
 
 /* The lines of a TSV table that are not comments, in a fresh string. */
 static inline char *table_body(const char *tsv)

@@ -10,6 +10,8 @@
 
 #include "harness.h"
 
+#include "cli_support.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -18,20 +20,6 @@
 #endif
 
 #define GRID_ARGS "--grid --mu 1:1000:4 --log --nu 0,0.5"
-
-static char *read_stream(FILE *f)
-{
-    size_t cap = 4096, n = 0;
-    char *buf = malloc(cap);
-    CHECK(buf);
-    for (size_t k; buf && (k = fread(buf + n, 1, cap - n - 1, f)) > 0;) {
-        n += k;
-        if (n + 1 == cap && !(buf = realloc(buf, cap *= 2))) break;
-    }
-    CHECK(buf);
-    if (buf) buf[n] = '\0';
-    return buf;
-}
 
 static void apply(const bkf_catalog_entry *c, void *spec, const char *key, const char *text)
 {
@@ -69,10 +57,7 @@ static char *grid_from_catalog(void)
 TEST(approx_grid_through_catalog_equals_cli)
 {
     char *lib = grid_from_catalog();
-    FILE *p = popen("'" BKF_CLI_PATH "' asymptotics " GRID_ARGS, "r");
-    CHECK(p);
-    char *cli = p ? read_stream(p) : NULL;
-    CHECK(p && pclose(p) == 0);
+    char *cli = bkf_cli_stdout("asymptotics " GRID_ARGS, NULL);
     CHECK(lib && cli);
     if (lib && cli) CHECK_MSG(strcmp(lib, cli) == 0, "library:\n%s\nCLI:\n%s", lib, cli);
     free(cli);

@@ -3,6 +3,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
 
+#include "cli_support.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -75,13 +77,9 @@ TEST(catalog_period_is_the_published_value_and_the_cli_table)
     CHECK(sscanf(line2 + 1, "%lf\t%lf\t%lf", &mu, &nu, &T) == 3);
     CHECK_CLOSE(T, 6.663286859323130, 1e-12, 0);
     /* The executable, through its flags, writes the same rows. */
-    FILE *p = popen(BKF_CLI_PATH " period --mu 1 --nu 0 --tol 1e-12", "r");
-    CHECK(p != NULL);
-    char buf[8192];
-    size_t got = fread(buf, 1, sizeof buf - 1, p);
-    buf[got] = '\0';
-    CHECK(pclose(p) == 0);
+    char *buf = bkf_cli_stdout("period --mu 1 --nu 0 --tol 1e-12", NULL);
     char *cli_rows = rows_of(buf);
+    free(buf);
     CHECK_MSG(strcmp(rows, cli_rows) == 0, "library:\n%s\ncli:\n%s", rows, cli_rows);
     free(cli_rows);
     free(rows);

@@ -6,6 +6,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
 
+#include "cli_support.h"
+
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
@@ -290,25 +292,7 @@ static char *data_lines(const char *text, size_t *lines)
 
 static char *run_cli(const char *args, int *exit_code)
 {
-    char cmd[512];
-    snprintf(cmd, sizeof cmd, "'%s' %s", BKF_CLI_PATH, args);
-    fflush(stdout);
-    FILE *f = popen(cmd, "r");
-    CHECK_MSG(f, "cannot run %s", cmd);
-    size_t cap = 1 << 16, n = 0, got;
-    char *text = malloc(cap);
-    CHECK(text);
-    while ((got = fread(text + n, 1, cap - 1 - n, f)) > 0) {
-        n += got;
-        if (n == cap - 1) {
-            text = realloc(text, cap *= 2);
-            CHECK(text);
-        }
-    }
-    text[n] = '\0';
-    int status = pclose(f);
-    *exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return text;
+    return bkf_cli_stdout(args, exit_code);
 }
 
 typedef struct {
