@@ -663,14 +663,6 @@ int bkf_check_spec_check(const bkf_check_spec *spec, const char *prefix, bkf_err
     return BKF_OK;
 }
 
-/* Numbers in comments as the CLI has always written them: %.15g when it
- * reads back exactly, else %.17g (not bkf_format_number's shortest form). */
-static const char *num(double x, char *buf, size_t size)
-{
-    snprintf(buf, size, "%.15g", x);
-    if (strtod(buf, NULL) != x) snprintf(buf, size, "%.17g", x);
-    return buf;
-}
 
 static const bkf_io_column columns[] = {
     {"n", BKF_IO_NUMBER},
@@ -783,10 +775,10 @@ static int write_table(const check_sink *k, const bkf_check_spec *spec,
         s = comment(t, err,
                     "model continuum: gamma %s, c %s, nu %s, S %s, N %zu (h = %s); tol %s, "
                     "stepper %s, dealias off, filter %s",
-                    num(m->gamma, a, sizeof a), num(m->c, b, sizeof b), num(m->nu, c, sizeof c),
-                    num(m->S, d, sizeof d), o->N, num(m->S / (double)o->N, e, sizeof e),
-                    num(k->info.tol, f, sizeof f), stepper_names[o->stepper],
-                    o->filter == 0 ? "off" : num(o->filter, g, sizeof g));
+                    bkf_format_number(m->gamma, a, sizeof a), bkf_format_number(m->c, b, sizeof b), bkf_format_number(m->nu, c, sizeof c),
+                    bkf_format_number(m->S, d, sizeof d), o->N, bkf_format_number(m->S / (double)o->N, e, sizeof e),
+                    bkf_format_number(k->info.tol, f, sizeof f), stepper_names[o->stepper],
+                    o->filter == 0 ? "off" : bkf_format_number(o->filter, g, sizeof g));
     if (!s)
         s = comment(t, err, "frame: %s",
                     o->frame == BKF_CHECK_FRAME_LAB ? "lab" : "moving with v_pred of each root");
@@ -795,13 +787,13 @@ static int write_table(const check_sink *k, const bkf_check_spec *spec,
                     "tmax %s, perturbation rms %s (seed %lu), agreement asked %s, grid %s: "
                     "uniform %zu .. %zu (resolution %.0e, samples every %s), adapted %zu points "
                     "per wavelength (tol %.0e, samples every %g)",
-                    num(o->tmax, a, sizeof a), num(o->perturb, b, sizeof b), o->seed,
-                    num(o->rel_tol, c, sizeof c), bkf_check_grid_name(o->grid), o->N,
-                    k->info.N_cap, o->resolution, num(BKF_CHECK_SAMPLE_DT, d, sizeof d),
+                    bkf_format_number(o->tmax, a, sizeof a), bkf_format_number(o->perturb, b, sizeof b), o->seed,
+                    bkf_format_number(o->rel_tol, c, sizeof c), bkf_check_grid_name(o->grid), o->N,
+                    k->info.N_cap, o->resolution, bkf_format_number(BKF_CHECK_SAMPLE_DT, d, sizeof d),
                     o->points, k->info.mapped_tol, BKF_CHECK_MAPPED_SAMPLE_DT);
     if (!s)
         s = comment(t, err, "speeds: k(nu) %s, n_max %ld, %zu roots%s%s",
-                    num(k->info.k, a, sizeof a), k->info.n_max, k->info.roots,
+                    bkf_format_number(k->info.k, a, sizeof a), k->info.n_max, k->info.roots,
                     k->note[0] ? "; " : "", k->note);
     if (!s && prov && prov->command) s = comment(t, err, "command: %s", prov->command);
     size_t stable = 0, agree = 0, unresolved = 0, disagree = 0;
@@ -868,7 +860,7 @@ int bkf_check_write(const bkf_check_spec *spec, FILE *out, bkf_io_format format,
         s = bkf_error_set(err, BKF_ENUMERIC,
                           "%zu stable front(s) disagree with the predicted speed beyond rel-tol "
                           "%s (n = %s; see the table)",
-                          n, num(o.rel_tol, r, sizeof r), list);
+                          n, bkf_format_number(o.rel_tol, r, sizeof r), list);
     }
     free(k.rows);
     return s;

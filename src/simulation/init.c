@@ -3,6 +3,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "bkfront/init.h"
 
+#include "bkfront/options.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -75,13 +77,6 @@ static int read_count(const char *key, const char *text, size_t max, size_t *val
     return BKF_OK;
 }
 
-/* The shortest of %.15g and %.17g that reads back as x. */
-static const char *shortest(double x, char *buf, size_t size)
-{
-    snprintf(buf, size, "%.15g", x);
-    if (strtod(buf, NULL) != x) snprintf(buf, size, "%.17g", x);
-    return buf;
-}
 
 /* key=value,key=value after the colon; each key handled by `take`. */
 static int parse_pairs(const char *text, const char *kind,
@@ -264,7 +259,7 @@ int bkf_init_check(bkf_init_spec *ip, bkf_model_params *model, int N_given,
         if (model->gamma < BKF_CYCLE_MU_MIN || model->gamma > BKF_CYCLE_MU_MAX)
             return bkf_error_set(err, BKF_EINPUT, "--gamma: %s is outside [%g, %g] (the cycle "
                                                   "engine's range of mu)",
-                                 shortest(model->gamma, a, sizeof a), BKF_CYCLE_MU_MIN,
+                                 bkf_format_number(model->gamma, a, sizeof a), BKF_CYCLE_MU_MIN,
                                  BKF_CYCLE_MU_MAX);
     }
     if (ip->kind == BKF_INIT_OSCILLATION) {
@@ -272,7 +267,7 @@ int bkf_init_check(bkf_init_spec *ip, bkf_model_params *model, int N_given,
         if (ip->j >= model->N / 2)
             return bkf_error_set(err, BKF_EINPUT,
                                  "--init oscillation: mode j = %zu (q = %s) is not below N/2 = %zu",
-                                 ip->j, shortest(TWO_PI * (double)ip->j / model->S, b, sizeof b),
+                                 ip->j, bkf_format_number(TWO_PI * (double)ip->j / model->S, b, sizeof b),
                                  model->N / 2);
     }
     return BKF_OK;
