@@ -67,6 +67,11 @@ void bkf_io_table_free(bkf_io_table *table);
  * once a row has been written. */
 int bkf_io_table_comment(bkf_io_table *table, const char *text, bkf_error *err);
 
+/* The same, printf-style; a comment longer than 1023 bytes is BKF_EINPUT
+ * (never cut silently). */
+int bkf_io_table_commentf(bkf_io_table *table, bkf_error *err, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
 /* A key result as a named value (a number, or text with kind BKF_IO_TEXT):
  * in JSON a member of the object "results", written between "comments" and
  * "columns" (only when a table has results); TSV has no place for it, so a

@@ -5,6 +5,7 @@
 
 #include <dirent.h>
 #include <errno.h>
+#include <stdarg.h>
 #include <fcntl.h>
 #include <signal.h>
 #include <limits.h>
@@ -263,6 +264,19 @@ static int check_usable(const bkf_io_table *t, bkf_error *err)
     if (!t) return bkf_error_set(err, BKF_EINPUT, "table is NULL");
     if (t->finished) return bkf_error_set(err, BKF_EINPUT, "table is already finished");
     return BKF_OK;
+}
+
+int bkf_io_table_commentf(bkf_io_table *t, bkf_error *err, const char *fmt, ...)
+{
+    char line[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    if (n < 0 || (size_t)n >= sizeof line)
+        return bkf_error_set(err, BKF_EINPUT, "a comment of %d bytes is longer than %zu", n,
+                             sizeof line - 1);
+    return bkf_io_table_comment(t, line, err);
 }
 
 int bkf_io_table_comment(bkf_io_table *t, const char *text, bkf_error *err)

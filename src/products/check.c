@@ -734,17 +734,6 @@ static void sink_warning(const char *message, void *data)
     k->hooks->warning(message, k->hooks->data);
 }
 
-static int comment(bkf_io_table *t, bkf_error *err, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static int comment(bkf_io_table *t, bkf_error *err, const char *fmt, ...)
-{
-    char line[1024];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(line, sizeof line, fmt, ap);
-    va_end(ap);
-    return bkf_io_table_comment(t, line, err);
-}
 
 /* "n1, n2, ..." of the rows that pass `keep`, into list. */
 static void list_n(const check_sink *k, int (*keep)(const bkf_check_row *), char *list,
@@ -769,10 +758,10 @@ static int write_table(const check_sink *k, const bkf_check_spec *spec,
     char a[32], b[32], c[32], d[32], e[32], f[32], g[32];
     bkf_io_table *t = bkf_io_table_alloc(out, format, columns, NCOLUMNS, err);
     if (!t) return BKF_ENOMEM;
-    int s = comment(t, err, "%s check: predicted front speeds against seeded simulations",
+    int s = bkf_io_table_commentf(t, err, "%s check: predicted front speeds against seeded simulations",
                     prov && prov->program ? prov->program : "libbkfront");
     if (!s)
-        s = comment(t, err,
+        s = bkf_io_table_commentf(t, err,
                     "model continuum: gamma %s, c %s, nu %s, S %s, N %zu (h = %s); tol %s, "
                     "stepper %s, dealias off, filter %s",
                     bkf_format_number(m->gamma, a, sizeof a), bkf_format_number(m->c, b, sizeof b), bkf_format_number(m->nu, c, sizeof c),
@@ -780,10 +769,10 @@ static int write_table(const check_sink *k, const bkf_check_spec *spec,
                     bkf_format_number(k->info.tol, f, sizeof f), stepper_names[o->stepper],
                     o->filter == 0 ? "off" : bkf_format_number(o->filter, g, sizeof g));
     if (!s)
-        s = comment(t, err, "frame: %s",
+        s = bkf_io_table_commentf(t, err, "frame: %s",
                     o->frame == BKF_CHECK_FRAME_LAB ? "lab" : "moving with v_pred of each root");
     if (!s)
-        s = comment(t, err,
+        s = bkf_io_table_commentf(t, err,
                     "tmax %s, perturbation rms %s (seed %lu), agreement asked %s, grid %s: "
                     "uniform %zu .. %zu (resolution %.0e, samples every %s), adapted %zu points "
                     "per wavelength (tol %.0e, samples every %g)",
@@ -792,10 +781,10 @@ static int write_table(const check_sink *k, const bkf_check_spec *spec,
                     k->info.N_cap, o->resolution, bkf_format_number(BKF_CHECK_SAMPLE_DT, d, sizeof d),
                     o->points, k->info.mapped_tol, BKF_CHECK_MAPPED_SAMPLE_DT);
     if (!s)
-        s = comment(t, err, "speeds: k(nu) %s, n_max %ld, %zu roots%s%s",
+        s = bkf_io_table_commentf(t, err, "speeds: k(nu) %s, n_max %ld, %zu roots%s%s",
                     bkf_format_number(k->info.k, a, sizeof a), k->info.n_max, k->info.roots,
                     k->note[0] ? "; " : "", k->note);
-    if (!s && prov && prov->command) s = comment(t, err, "command: %s", prov->command);
+    if (!s && prov && prov->command) s = bkf_io_table_commentf(t, err, "command: %s", prov->command);
     size_t stable = 0, agree = 0, unresolved = 0, disagree = 0;
     for (size_t i = 0; i < k->count; i++) {
         stable += k->rows[i].stable == 1;
@@ -806,7 +795,7 @@ static int write_table(const check_sink *k, const bkf_check_spec *spec,
     if (!s) {
         char list[512];
         list_n(k, row_stable, list, sizeof list);
-        s = comment(t, err, "summary: %zu stable (n = %s), %zu agree, %zu disagree, %zu unresolved",
+        s = bkf_io_table_commentf(t, err, "summary: %zu stable (n = %s), %zu agree, %zu disagree, %zu unresolved",
                     stable, stable ? list : "none", agree, disagree, unresolved);
     }
     for (size_t i = 0; !s && i < k->count; i++) {

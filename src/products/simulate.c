@@ -298,17 +298,6 @@ static int observe(const bkf_pde_sample *smp, void *data)
     return 0;
 }
 
-static int commentf(bkf_io_table *t, bkf_error *err, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static int commentf(bkf_io_table *t, bkf_error *err, const char *fmt, ...)
-{
-    char line[1024];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(line, sizeof line, fmt, ap);
-    va_end(ap);
-    return bkf_io_table_comment(t, line, err);
-}
 
 #define NUM(x, buf) bkf_format_number((x), buf, sizeof buf)
 
@@ -316,7 +305,7 @@ static int comment_model(bkf_io_table *t, const run *r, bkf_error *err)
 {
     char a[32], b[32], c[32], d[32], e[32], f[32], g[32];
     const bkf_model_params *m = &r->model;
-    return commentf(t, err,
+    return bkf_io_table_commentf(t, err,
                     "model %s: gamma %s, c %s, nu %s, S %s, N %zu (h = %s); tol %s, stepper %s, "
                     "dealias %s, filter %s",
                     model_names[m->kind], NUM(m->gamma, a), NUM(m->c, b), NUM(m->nu, c),
@@ -380,7 +369,7 @@ static int write_snapshots(const run *r, const char *note, FILE *out, bkf_error 
     double h = r->model.S / (double)N;
     bkf_io_table *t = bkf_io_table_alloc(out, BKF_IO_TSV, cols, 4, err);
     if (!t) return BKF_ENOMEM;
-    int s = commentf(t, err, "%s simulate: snapshots of the field; readable by --init "
+    int s = bkf_io_table_commentf(t, err, "%s simulate: snapshots of the field; readable by --init "
                              "file:PATH (the last t)", program(r));
     if (!s && note) s = bkf_io_table_comment(t, note, err);
     if (!s && note)
@@ -410,57 +399,57 @@ static int write_summary(bkf_io_table *t, const run *r, const bkf_measure_summar
     const bkf_init_spec *in = &r->init;
     int front = in->kind == BKF_INIT_FRONT;
     int s = comment_model(t, r, err);
-    if (!s) s = commentf(t, err, "init %s, seed %lu; tmax %s, %zu frames",
+    if (!s) s = bkf_io_table_commentf(t, err, "init %s, seed %lu; tmax %s, %zu frames",
                          sp->init ? sp->init : "uniform", (unsigned long)sp->seed, NUM(sp->tmax, a),
                          sp->frames);
     if (!s && front)
-        s = commentf(t, err,
+        s = bkf_io_table_commentf(t, err,
                      "front: n %zu, root %zu of %zu, v_pred %s (err %.2g), mu %s, T %s, period at "
                      "a point %s, direction %s",
                      in->front.n, in->front.root, fi->roots_for_n, NUM(fi->v, a), fi->v_err,
                      NUM(fi->mu, b), NUM(fi->T, c), NUM(fi->period_fixed, d),
                      in->front.direction < 0 ? "-x (left)" : "+x (right)");
     if (!s && in->kind == BKF_INIT_OSCILLATION)
-        s = commentf(t, err, "oscillation: mode j %zu, q %s, amp %s", in->j,
+        s = bkf_io_table_commentf(t, err, "oscillation: mode j %zu, q %s, amp %s", in->j,
                      NUM(2 * PI * (double)in->j / r->model.S, a), NUM(in->amp, b));
     if (!s) s = bkf_product_table_command(t, r->prov, err);
     const bkf_pde_stats *st = bkf_pde_get_stats(r->pde);
     if (!s)
-        s = commentf(t, err, "work: %zu steps, %zu rejected, %zu rhs calls, step %s .. %s",
+        s = bkf_io_table_commentf(t, err, "work: %zu steps, %zu rejected, %zu rhs calls, step %s .. %s",
                      st->steps, st->rejected, st->rhs_calls, NUM(st->h_min, a), NUM(st->h_max, b));
-    if (!s) s = commentf(t, err, "regime: %s (window t >= %s)", bkf_regime_name(ms->regime),
+    if (!s) s = bkf_io_table_commentf(t, err, "regime: %s (window t >= %s)", bkf_regime_name(ms->regime),
                          NUM(ms->window_start, a));
     if (!s)
-        s = commentf(t, err, "fronts are crossings of psi = %s with psi_t > 0 (hysteresis 0.1)",
+        s = bkf_io_table_commentf(t, err, "fronts are crossings of psi = %s with psi_t > 0 (hysteresis 0.1)",
                      NUM(r->level, a));
     if (!s)
-        s = commentf(t, err, "fronts: %zu at start, %zu at end, %zu .. %zu in the window",
+        s = bkf_io_table_commentf(t, err, "fronts: %zu at start, %zu at end, %zu .. %zu in the window",
                      ms->fronts_start, ms->fronts_end, ms->fronts_min, ms->fronts_max);
     if (!s && isfinite(ms->speed))
-        s = commentf(t, err,
+        s = bkf_io_table_commentf(t, err,
                      "speed: %s +- %.3g (fitted from t = %s; %zu tracks, %zu towards -x, %zu "
                      "towards +x; negative: towards -x)",
                      NUM(ms->speed, a), ms->speed_err, NUM(ms->fit_start, b), ms->tracks,
                      ms->moving_minus, ms->moving_plus);
     if (!s && front && isfinite(ms->speed))
-        s = commentf(t, err, "speed vs prediction: |v| %s, v_pred %s, relative difference %.3g",
+        s = bkf_io_table_commentf(t, err, "speed vs prediction: |v| %s, v_pred %s, relative difference %.3g",
                      NUM(fabs(ms->speed), a), NUM(fi->v, b), (fabs(ms->speed) - fi->v) / fi->v);
     if (!s && isfinite(ms->period))
-        s = commentf(t, err, "period at x = 0: %s +- %.3g (multiplicity %zu, %zu crossings in "
+        s = bkf_io_table_commentf(t, err, "period at x = 0: %s +- %.3g (multiplicity %zu, %zu crossings in "
                              "the window); global oscillation period %s",
                      NUM(ms->period, a), ms->period_err, ms->period_multiplicity, ms->crossings,
                      period_ref > 0 ? NUM(period_ref, b) : "n/a");
     else if (!s)
-        s = commentf(t, err, "period at x = 0: none (%zu crossings in the window, %s); global "
+        s = bkf_io_table_commentf(t, err, "period at x = 0: none (%zu crossings in the window, %s); global "
                              "oscillation period %s",
                      ms->crossings, ms->crossings < 3 ? "fewer than 3" : "not periodic",
                      period_ref > 0 ? NUM(period_ref, b) : "n/a");
     if (!s)
-        s = commentf(t, err, "window: mean %s, variance %s, largest spatial std %s, psi in [%s, %s]",
+        s = bkf_io_table_commentf(t, err, "window: mean %s, variance %s, largest spatial std %s, psi in [%s, %s]",
                      NUM(ms->mean, a), NUM(ms->variance, b), NUM(ms->std_max, c),
                      NUM(ms->psi_min, d), NUM(ms->psi_max, e));
     if (!s && front)
-        s = commentf(t, err, "deviation from the seeded wave: start %.3g, window start %.3g, end "
+        s = bkf_io_table_commentf(t, err, "deviation from the seeded wave: start %.3g, window start %.3g, end "
                              "%.3g, growth rate %.3g",
                      ms->deviation_start, ms->deviation_mid, ms->deviation_end,
                      ms->deviation_growth);
@@ -612,11 +601,11 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
     /* an interruption is the first thing a reader sees, before the title */
     if (canceled) s = bkf_io_table_comment(t, interrupted, err);
     if (!s)
-        s = commentf(t, err, "%s simulate: direct simulation of the elastic excitable medium",
+        s = bkf_io_table_commentf(t, err, "%s simulate: direct simulation of the elastic excitable medium",
                      program(r));
     if (!s && have_summary) s = write_summary(t, r, &ms, &fi, period_ref, err);
     if (!s && sp->spacetime)
-        s = commentf(t, err, "spacetime: %s (%s)", sp->spacetime,
+        s = bkf_io_table_commentf(t, err, "spacetime: %s (%s)", sp->spacetime,
                      sp->spacetime_format == 1 ? "binary matrix, float32" : "text nonuniform matrix");
     for (size_t f = 0; !s && f < r->frame_index; f++) {
         bkf_io_value v[NCOLUMNS];
