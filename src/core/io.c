@@ -512,14 +512,25 @@ static char *resolve_target(const char *path, bkf_error *err, int *status)
     return dup_string(path);
 }
 
-/* Temporaries are named DIR/.BASE.tmp.PID.TAG (TAG: up to 8 hex digits).
- * One whose process no longer exists on this machine was left by a run that
- * was killed (SIGKILL, power loss): remove it.  Best effort, silent. */
+/* Temporaries are named DIR/.BASE.tmp.PID.TAG (TAG: up to 8 hex digits),
+ * BASE cut to its first TEMP_BASE_MAX bytes so that the name stays within
+ * a file system's 255 (a target name of up to 255 bytes is valid; its
+ * temporary must be too).  One whose process no longer exists on this
+ * machine was left by a run that was killed (SIGKILL, power loss): remove
+ * it.  Best effort, silent. */
+#define TEMP_BASE_MAX 200
+
+static size_t temp_base_len(const char *base)
+{
+    size_t n = strlen(base);
+    return n < TEMP_BASE_MAX ? n : TEMP_BASE_MAX;
+}
+
 static void remove_stale_temps(const char *dir, const char *base)
 {
     DIR *d = opendir(dir);
     if (!d) return;
-    size_t blen = strlen(base), dlen = strlen(dir);
+    size_t blen = temp_base_len(base), dlen = strlen(dir);
     struct dirent *de;
     while ((de = readdir(d)) != NULL) {
         const char *n = de->d_name;
@@ -611,8 +622,8 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
     int fd = -1, open_errno = 0;
     for (int attempt = 0; attempt < 100 && fd < 0; attempt++) {
         unsigned long tag = (unsigned long)now.tv_nsec ^ ((unsigned long)counter++ * 2654435761u);
-        snprintf(a->temp, tlen + 64, "%.*s.%s.tmp.%ld.%lx", (int)dlen, a->target, base,
-                 (long)getpid(), tag & 0xffffffffUL);
+        snprintf(a->temp, tlen + 64, "%.*s.%.*s.tmp.%ld.%lx", (int)dlen, a->target,
+                 (int)temp_base_len(base), base, (long)getpid(), tag & 0xffffffffUL);
         fd = open(a->temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
         open_errno = errno;
         if (fd < 0 && open_errno != EEXIST) break;

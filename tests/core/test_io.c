@@ -517,3 +517,26 @@ TEST(io_json_checker_is_strict)
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
         CHECK_MSG(!bkf_test_json_valid(bad[i]), "accepted: %s", bad[i]);
 }
+
+TEST(io_atomic_writes_the_longest_file_names)
+{
+    /* A name of 255 bytes is valid (NAME_MAX on Linux file systems); its
+     * temporary must fit too (a 244-byte name used to fail). */
+    char dir[] = "/tmp/bkf_io_test_XXXXXX";
+    make_dir(dir);
+    for (size_t len = 200; len <= 255; len += 11) {
+        char name[256], path[512];
+        memset(name, 'a', len);
+        name[len] = '\0';
+        snprintf(path, sizeof path, "%s/%s", dir, name);
+        bkf_error e = {0};
+        bkf_io_atomic *a = bkf_io_atomic_open(path, &e);
+        CHECK_MSG(a, "%zu bytes: %s", len, e.message);
+        fputs("x\n", bkf_io_atomic_stream(a));
+        CHECK_STATUS(bkf_io_atomic_commit(a, &e), BKF_OK);
+        CHECK(strcmp(slurp(path), "x\n") == 0);
+        CHECK_MSG(dir_entries(dir) == 1, "leftover temporary beside a %zu-byte name", len);
+        unlink(path);
+    }
+    rmdir(dir);
+}
