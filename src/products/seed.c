@@ -53,7 +53,7 @@ int bkf_seed_front(bkf_pde *pde, const bkf_pde_front_spec *spec, bkf_pde_front_i
     bkf_speeds_table_free(&tab);
     if (root.flags & BKF_SPEEDS_ASYMPTOTIC)
         return bkf_error_set(err, BKF_EINPUT,
-                             "n = %zu: mu = %g is beyond the cycle engine's range; the front "
+                             "n = %zu: mu = %.15g is beyond the cycle engine's range; the front "
                              "cannot be built", sp.n, root.mu);
     bkf_pde_wave wave = {sp.n, root.v, root.mu, sp.direction, sp.noise, sp.seed, sp.tol};
     if ((s = bkf_pde_init_front(pde, &wave, info, clean_psi, err))) return s;

@@ -458,7 +458,7 @@ static int check_params(const bkf_comoving_params *p, bkf_error *err)
     if ((s = bkf_model_check_nu_active(p->model.nu, err))) return s;
     if (p->n < 1) return bkf_error_set(err, BKF_EINPUT, "n = %zu: must be >= 1", p->n);
     if (!(isfinite(p->v) && p->v > p->model.c))
-        return bkf_error_set(err, BKF_EINPUT, "v = %g must be finite and > c = %g", p->v, p->model.c);
+        return bkf_error_set(err, BKF_EINPUT, "v = %g must be finite and > c = %.15g", p->v, p->model.c);
     if (p->points < 32 || p->points > ((size_t)1 << 20))
         return bkf_error_set(err, BKF_EINPUT, "points = %zu is outside [32, 1048576]", p->points);
     if (!(p->tol >= BKF_PDE_TOL_MIN && p->tol <= BKF_PDE_TOL_MAX))
@@ -526,7 +526,7 @@ static bkf_comoving *comoving_alloc_body(const bkf_comoving_params *params, bkf_
     m->stretch = sqrt((v - c) * (v + c)) / v;
     m->mu = m->p.model.gamma / m->stretch;
     if (!(m->mu <= BKF_CYCLE_MU_MAX)) {
-        bkf_error_set(err, BKF_EINPUT, "v = %.17g is too close to c: mu = %g is above %g", v,
+        bkf_error_set(err, BKF_EINPUT, "v = %.17g is too close to c: mu = %.15g is above %g", v,
                       m->mu, BKF_CYCLE_MU_MAX);
         goto fail;
     }
@@ -570,7 +570,7 @@ static bkf_comoving *comoving_alloc_body(const bkf_comoving_params *params, bkf_
     bkf_cycle_options co = bkf_cycle_options_default();
     co.tol = m->p.cycle_tol;
     int s = bkf_cycle_solve(cycle, m->mu, m->p.model.nu, &co, &e);
-    if (s) bkf_error_set(err, s, "cycle at mu = %g: %s", m->mu, e.message);
+    if (s) bkf_error_set(err, s, "cycle at mu = %.15g: %s", m->mu, e.message);
     if (!s) {
         const bkf_cycle_result *cr = bkf_cycle_get(cycle);
         m->T = cr->period;

@@ -690,7 +690,7 @@ static int pde_init_oscillation_body(bkf_pde *m, size_t j, double amp, bkf_error
     }
     if (s) {
         bkf_cycle_free(cy);
-        return bkf_error_set(err, s, "limit cycle at mu = gamma = %g: %s", m->p.gamma,
+        return bkf_error_set(err, s, "limit cycle at mu = gamma = %.15g: %s", m->p.gamma,
                              e.message);
     }
     double slope = bkf_cycle_get(cy)->section_slope;
@@ -732,9 +732,9 @@ static int pde_init_front_body(bkf_pde *m, const bkf_pde_wave *wave, bkf_pde_fro
     if (bkf_model_check_nu_active(m->p.nu, &e) != BKF_OK)
         return bkf_error_set(err, BKF_EINPUT, "fronts need a limit cycle: %s", e.message);
     if (!(isfinite(sp.v) && sp.v > m->p.c))
-        return bkf_error_set(err, BKF_EINPUT, "v = %g must be finite and > c = %g", sp.v, m->p.c);
+        return bkf_error_set(err, BKF_EINPUT, "v = %g must be finite and > c = %.15g", sp.v, m->p.c);
     if (!(sp.mu >= BKF_CYCLE_MU_MIN && sp.mu <= BKF_CYCLE_MU_MAX))
-        return bkf_error_set(err, BKF_EINPUT, "mu = %g is outside [%g, %g] (the cycle engine's "
+        return bkf_error_set(err, BKF_EINPUT, "mu = %.15g is outside [%g, %g] (the cycle engine's "
                              "range)", sp.mu, BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
 
     bkf_cycle *cy = bkf_cycle_alloc();
@@ -748,7 +748,7 @@ static int pde_init_front_body(bkf_pde *m, const bkf_pde_wave *wave, bkf_pde_fro
     }
     if (s) {
         bkf_cycle_free(cy);
-        return bkf_error_set(err, s, "cycle at mu = %g: %s", sp.mu, e.message);
+        return bkf_error_set(err, s, "cycle at mu = %.15g: %s", sp.mu, e.message);
     }
     double v = sp.v, c = m->p.c;
     /* sqrt(1 - c^2/v^2) without the cancellation near the sonic limit */

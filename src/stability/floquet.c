@@ -276,7 +276,7 @@ static int check_options(const bkf_floquet_options *o, bkf_error *err)
 static int check_gamma_c(double gamma, double c, bkf_error *err)
 {
     if (!isfinite(gamma) || gamma < BKF_CYCLE_MU_MIN || gamma > BKF_CYCLE_MU_MAX)
-        return bkf_error_set(err, BKF_EINPUT, "gamma = %g is outside [%g, %g]", gamma,
+        return bkf_error_set(err, BKF_EINPUT, "gamma = %.15g is outside [%g, %g]", gamma,
                              BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
     return bkf_model_check_nonnegative("c", c, err);
 }
@@ -385,7 +385,7 @@ static int integrate(bkf_floquet *f, double K, int dk, int which, raw *out, bkf_
     int rc = gsl_odeiv2_driver_apply(e->driver, &t, f->T, s);
     if (rc != GSL_SUCCESS || !isfinite(s[IM]) || !isfinite(s[IM + 3]))
         return bkf_error_set(err, BKF_ENUMERIC,
-                             "monodromy at gamma = %g, nu = %g, K = %g: integration failed at t = %g "
+                             "monodromy at gamma = %.15g, nu = %.15g, K = %.15g: integration failed at t = %g "
                              "(%s)",
                              f->gamma, f->nu, K, t, rc != GSL_SUCCESS ? gsl_strerror(rc) : "non-finite state");
     out->M[0] = s[IM];
@@ -669,7 +669,7 @@ static int integrate_log(bkf_floquet *f, double K, int which, double tol, lograw
     if (rc != GSL_SUCCESS || !isfinite(s[LR0]) || !isfinite(s[LR1]) || !isfinite(s[LT0]) ||
         !isfinite(s[LT1]))
         return bkf_error_set(err, BKF_ENUMERIC,
-                             "monodromy (log columns) at gamma = %g, nu = %g, K = %g: integration "
+                             "monodromy (log columns) at gamma = %.15g, nu = %.15g, K = %.15g: integration "
                              "failed at t = %g (%s)",
                              f->gamma, f->nu, K, t, rc != GSL_SUCCESS ? gsl_strerror(rc) : "non-finite state");
     double sc = fmax(s[LR0], s[LR1]);
@@ -840,7 +840,7 @@ static int floquet_eval_body(bkf_floquet *f, double q, bkf_floquet_point *pt, bk
     if (rc != BKF_OK) return rc;
     double K = k2_of(f, q);
     if (!(K <= K_MAX))
-        return bkf_error_set(err, BKF_EINPUT, "c q = %g is too large (at most %g)", f->c * q,
+        return bkf_error_set(err, BKF_EINPUT, "c q = %.15g is too large (at most %g)", f->c * q,
                              sqrt(K_MAX - 1.0));
     if (K == 1.0) {
         rc = eval_trivial(f, pt, err);
@@ -915,8 +915,8 @@ static int floquet_eval_body(bkf_floquet *f, double q, bkf_floquet_point *pt, bk
     pt->steps = rb.steps;
     if (!(pt->lambda_err <= tol))
         return bkf_error_set(err, BKF_ETOL,
-                             "estimated error %.2g of lambda exceeds tol %.2g at q = %g "
-                             "(gamma = %g, c = %g, nu = %g, lambda = %.6g)",
+                             "estimated error %.2g of lambda exceeds tol %.2g at q = %.15g "
+                             "(gamma = %.15g, c = %.15g, nu = %.15g, lambda = %.6g)",
                              pt->lambda_err, tol, q, f->gamma, f->c, f->nu, pt->lambda);
     return BKF_OK;
 }
@@ -939,7 +939,7 @@ static int longwave_at(bkf_floquet *f, int which, double *a, bkf_error *err)
     double one_minus_D = -expm1(r.L);
     if (!(one_minus_D > 0.0))
         return bkf_error_set(err, BKF_ENUMERIC,
-                             "long-wave coefficient at gamma = %g, nu = %g: cycle multiplier %g "
+                             "long-wave coefficient at gamma = %.15g, nu = %.15g: cycle multiplier %g "
                              "is not below 1",
                              f->gamma, f->nu, exp(r.L));
     *a = r.dtr / one_minus_D;
@@ -1028,7 +1028,7 @@ static int maximise_trace(bkf_floquet *f, double sign, double lo, double hi, dou
     if (pc.status != BKF_OK) return pc.status;
     if (res < 0 && res != NLOPT_ROUNDOFF_LIMITED)
         return bkf_error_set(err, BKF_ENUMERIC,
-                             "peak of lambda at gamma = %g, nu = %g near K = %g: NLopt failed (%d)",
+                             "peak of lambda at gamma = %.15g, nu = %.15g near K = %.15g: NLopt failed (%d)",
                              f->gamma, f->nu, *K, (int)res);
     *K = x;
     *value = fx;
@@ -1415,7 +1415,7 @@ static int boundary_between(bkf_floquet *f, double gamma, double c, double nu_s,
     }
     if (!found)
         return bkf_error_set(err, BKF_ENUMERIC,
-                             "stability changes between nu = %.10g and %.10g (gamma = %g) but no "
+                             "stability changes between nu = %.10g and %.10g (gamma = %.15g) but no "
                              "indicator changes sign there",
                              nu_s, nu_u, gamma);
     th->stable_above = nu_s > nu_u;
@@ -1430,7 +1430,7 @@ static int check_scan_inputs(double gamma, double c, double nu_lo, double nu_hi,
     if (rc != BKF_OK) return rc;
     if (!(c > 0.0))
         return bkf_error_set(err, BKF_EINPUT,
-                             "c = %g: thresholds need c > 0 (with c = 0 every wavenumber is the "
+                             "c = %.15g: thresholds need c > 0 (with c = 0 every wavenumber is the "
                              "neutral q = 0 mode)",
                              c);
     if ((rc = bkf_model_check_nu_active(nu_lo, err)) || (rc = bkf_model_check_nu_active(nu_hi, err)))
@@ -1508,7 +1508,7 @@ static int floquet_threshold_find_body(double gamma, double c, double nu_lo, dou
     if (rc != BKF_OK) return rc;
     if (changes == 0)
         return bkf_error_set(err, BKF_ENUMERIC,
-                             "no change of stability for nu in [%g, %g] at gamma = %g: global "
+                             "no change of stability for nu in [%g, %g] at gamma = %.15g: global "
                              "oscillations are %s throughout (scan step %g)",
                              nu_lo, nu_hi, gamma, first ? "stable" : "unstable", o.nu_step);
     return BKF_OK;

@@ -75,7 +75,7 @@ static int solve_period(solver *sv, double mu, double nu, double *T, double *T_e
     if (s) {
         /* The cycle module names the point in most of its messages already. */
         if (strncmp(e.message, "cycle at ", 9) == 0) return bkf_error_set(err, s, "%s", e.message);
-        return bkf_error_set(err, s, "cycle at mu = %g, nu = %g: %s", mu, nu, e.message);
+        return bkf_error_set(err, s, "cycle at mu = %.15g, nu = %.15g: %s", mu, nu, e.message);
     }
     const bkf_cycle_result *r = bkf_cycle_get(sv->cycle);
     *T = r->period;
@@ -445,7 +445,7 @@ static int asymfit_large_body(double nu, const bkf_asymfit_large_options *option
     if (!s) {
         bkf_error e = {0};
         s = bkf_asymfit_correction(mu, R, n, o.p_lo, o.p_hi, result, &e);
-        if (s) bkf_error_set(err, s, "large-mu fit at nu = %g: %s", nu, e.message);
+        if (s) bkf_error_set(err, s, "large-mu fit at nu = %.15g: %s", nu, e.message);
     }
     if (!s) {
         result->nu = nu;
@@ -547,7 +547,7 @@ static int asymfit_small_body(double nu, const bkf_asymfit_small_options *option
         if (!g) g = fit_small_rows(&q, mu, y, 0, half, cl, cle, &unused);
         if (!g) g = fit_small_rows(&q, mu, y, n - half, half, cu, cue, &unused);
         if (g)
-            s = bkf_error_set(err, BKF_ENUMERIC, "small-mu least squares at nu = %g failed: %s",
+            s = bkf_error_set(err, BKF_ENUMERIC, "small-mu least squares at nu = %.15g failed: %s",
                               nu, gsl_strerror(g));
         else {
             memset(result, 0, sizeof *result);

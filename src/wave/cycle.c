@@ -288,7 +288,7 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
     for (size_t n = 0;; n++) {
         if (n > MAX_STEPS_PER_PERIOD)
             return bkf_error_set(err, BKF_EBUDGET,
-                                 "cycle at mu = %g, nu = %g: no return to the section after %d steps",
+                                 "cycle at mu = %.15g, nu = %.15g: no return to the section after %d steps",
                                  p->mu, p->nu, MAX_STEPS_PER_PERIOD);
         memcpy(s_prev, s, sizeof s);
         t_prev = t;
@@ -297,7 +297,7 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
         main_in->steps++;
         if (rc != GSL_SUCCESS || !isfinite(s[IX]) || !isfinite(s[IY]))
             return bkf_error_set(err, BKF_ENUMERIC,
-                                 "cycle at mu = %g, nu = %g: integration failed at z = %g (%s)",
+                                 "cycle at mu = %.15g, nu = %.15g: integration failed at z = %g (%s)",
                                  p->mu, p->nu, t, gsl_strerror(rc));
         if (keep) {
             double xd_prev = flow_xdot(p, s_prev), xd = flow_xdot(p, s);
@@ -305,7 +305,7 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
                 double te, se[DIM];
                 if (locate_event(aux, p, event_extremum, t_prev, s_prev, t, s, &te, se) != BKF_OK)
                     return bkf_error_set(err, BKF_ENUMERIC,
-                                         "cycle at mu = %g, nu = %g: extremum not located", p->mu,
+                                         "cycle at mu = %.15g, nu = %.15g: extremum not located", p->mu,
                                          p->nu);
                 if (se[IX] > xmax) xmax = se[IX];
                 if (se[IX] < xmin) xmin = se[IX];
@@ -339,7 +339,7 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
     double T, sr[DIM];
     if (locate_event(aux, p, event_section, t_prev, s_prev, t, s, &T, sr) != BKF_OK)
         return bkf_error_set(err, BKF_ENUMERIC,
-                             "cycle at mu = %g, nu = %g: return to the section not located", p->mu,
+                             "cycle at mu = %.15g, nu = %.15g: return to the section not located", p->mu,
                              p->nu);
     out->period = T;
     out->y_return = sr[IY];
@@ -492,14 +492,14 @@ static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, 
         *y0 = next;
     }
     return bkf_error_set(err, BKF_ENUMERIC,
-                         "cycle at mu = %g, nu = %g: shooting did not converge in %d Newton steps",
+                         "cycle at mu = %.15g, nu = %.15g: shooting did not converge in %d Newton steps",
                          p->mu, p->nu, MAX_NEWTON);
 }
 
 static int check_inputs(double mu, double nu, const bkf_cycle_options *o, bkf_error *err)
 {
     if (!isfinite(mu) || mu < BKF_CYCLE_MU_MIN || mu > BKF_CYCLE_MU_MAX)
-        return bkf_error_set(err, BKF_EINPUT, "mu = %g is outside [%g, %g]", mu, BKF_CYCLE_MU_MIN,
+        return bkf_error_set(err, BKF_EINPUT, "mu = %.15g is outside [%g, %g]", mu, BKF_CYCLE_MU_MIN,
                              BKF_CYCLE_MU_MAX);
     int rc = bkf_model_check_nu_active(nu, err);
     if (rc != BKF_OK) return rc;
@@ -676,7 +676,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
         if (period_err <= opt.tol * b.period || attempt == 3 || tol_int / TOL_RATIO <= tol_floor) {
             if (period_err > opt.tol * b.period) {
                 rc = bkf_error_set(err, BKF_ETOL,
-                                   "cycle at mu = %g, nu = %g: estimated relative error %.2g of T "
+                                   "cycle at mu = %.15g, nu = %.15g: estimated relative error %.2g of T "
                                    "exceeds tol = %g",
                                    mu, nu, period_err / b.period, opt.tol);
                 goto done;
@@ -777,7 +777,7 @@ int bkf_cycle_estimate(bkf_cycle *c, double mu, double nu, const bkf_cycle_optio
         }
         if (method != BKF_METHOD_AUTO)
             return bkf_error_set(err, BKF_ETOL,
-                                 "%s formula at mu = %g, nu = %g: error bound %.2g exceeds tol = %g "
+                                 "%s formula at mu = %.15g, nu = %.15g: error bound %.2g exceeds tol = %g "
                                  "(outside its validity; use shooting)",
                                  method == BKF_METHOD_LEADING ? "leading" : "asymptotic", mu, nu,
                                  bound, opt.tol);
@@ -858,7 +858,7 @@ static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, d
     double mu, nu;
     branch_params(b, q, &mu, &nu);
     if (check_inputs(mu, nu, NULL, err) != BKF_OK)
-        return bkf_error_set(err, BKF_ENUMERIC, "branch left the valid range at mu = %g, nu = %g", mu,
+        return bkf_error_set(err, BKF_ENUMERIC, "branch left the valid range at mu = %.15g, nu = %.15g", mu,
                              nu);
     flow_params p = {0};
     flow_set(&p, mu, nu);

@@ -82,13 +82,13 @@ int bkf_speeds_check(const bkf_model_params *p, const bkf_speeds_options *o, bkf
     if (rc) return rc;
     if (p->gamma < BKF_CYCLE_MU_MIN || p->gamma > BKF_CYCLE_MU_MAX)
         return bkf_error_set(err, BKF_EINPUT,
-                             "gamma = %g is outside [%g, %g] (mu >= gamma must be solvable)",
+                             "gamma = %.15g is outside [%g, %g] (mu >= gamma must be solvable)",
                              p->gamma, BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
     if ((rc = bkf_model_check_nonnegative("c", p->c, err))) return rc;
     if ((rc = bkf_model_check_positive("S", p->S, err))) return rc;
     if (!isfinite(p->nu) || fabs(p->nu) >= 1.0)
         return bkf_error_set(err, BKF_EINPUT,
-                             "nu = %g is outside (-1, 1): no fronts, uniform continuous slip "
+                             "nu = %.15g is outside (-1, 1): no fronts, uniform continuous slip "
                              "psi = nu is stable (no limit cycle)", p->nu);
     if (p->c > 0) {
         /* S/(c gamma) counts the fronts that fit (n_bound = S/(k c gamma));
@@ -204,7 +204,7 @@ static int insert_sample(grid *g, const sample *smp, bkf_error *err)
 {
     if (g->count >= MAX_SAMPLES)
         return bkf_error_set(err, BKF_EBUDGET,
-                             "bracketing needed more than %d samples of T (near mu = %g)",
+                             "bracketing needed more than %d samples of T (near mu = %.15g)",
                              MAX_SAMPLES, smp->mu);
     if (g->count == g->cap) {
         size_t cap = g->cap ? 2 * g->cap : 64;
@@ -585,7 +585,7 @@ static double polish_f(double s, void *data)
     if (pc->status) return NAN;
     if (pc->nev == MAX_POLISH_EVALS) {
         pc->status = bkf_error_set(pc->err, BKF_EBUDGET,
-                                   "root polishing needed more than %d solves near mu = %g",
+                                   "root polishing needed more than %d solves near mu = %.15g",
                                    MAX_POLISH_EVALS, mu_of_s(pc->g->p.gamma, s));
         return NAN;
     }
@@ -784,7 +784,7 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
         g->formula_refused = 1;
         if (g->method != BKF_METHOD_AUTO)
             return bkf_error_set(err, BKF_ETOL,
-                                 "%s formula for n = %.0f at mu = %g, nu = %g: error bound %.2g "
+                                 "%s formula for n = %.0f at mu = %.15g, nu = %.15g: error bound %.2g "
                                  "exceeds the tolerance %g of T this root needs (outside its "
                                  "validity; use --method shooting or auto)",
                                  bkf_cycle_method_name(g->method), n, mu0, g->p.nu, bound, pc.tol);
@@ -814,7 +814,7 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
             if (pc.status) return pc.status;
             if ((Da > 0) == (Db > 0))
                 return bkf_error_set(err, BKF_ENUMERIC,
-                                     "the root for n = %.0f near mu = %g left its cell at the "
+                                     "the root for n = %.0f near mu = %.15g left its cell at the "
                                      "root's tolerance (T too noisy there?)",
                                      n, mu_of_s(g->p.gamma, r0));
             bracket_of(&pc, &lo, &hi);
@@ -822,13 +822,13 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
         gsl_function F = {polish_f, &pc};
         if (gsl_root_fsolver_set(fs, &F, lo, hi) != GSL_SUCCESS)
             return pc.status ? pc.status
-                             : bkf_error_set(err, BKF_ENUMERIC, "Brent could not start near mu = %g",
+                             : bkf_error_set(err, BKF_ENUMERIC, "Brent could not start near mu = %.15g",
                                              mu_of_s(g->p.gamma, lo));
         for (int it = 0; it < 100 && fabs(best_eval(&pc)->D) > target; it++) {
             int st = gsl_root_fsolver_iterate(fs);
             if (pc.status) return pc.status;
             if (st != GSL_SUCCESS)
-                return bkf_error_set(err, BKF_ENUMERIC, "Brent failed near mu = %g: %s",
+                return bkf_error_set(err, BKF_ENUMERIC, "Brent failed near mu = %.15g: %s",
                                      mu_of_s(g->p.gamma, lo), gsl_strerror(st));
             double xl = gsl_root_fsolver_x_lower(fs), xu = gsl_root_fsolver_x_upper(fs);
             if (xu - xl <= 4.0 * DBL_EPSILON * fmax(fabs(xl), fabs(xu)) + DBL_MIN) break;
@@ -952,7 +952,7 @@ static int find_c0(const bkf_model_params *p, const bkf_speeds_options *o, bkf_s
     if (!cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     int rc = bkf_cycle_estimate(cycle, p->gamma, p->nu, &co, o->method, &r, &e);
     bkf_cycle_free(cycle);
-    if (rc) return bkf_error_set(err, rc, "period at mu = gamma = %g: %s", p->gamma, e.message);
+    if (rc) return bkf_error_set(err, rc, "period at mu = gamma = %.15g: %s", p->gamma, e.message);
     if (strcmp(r.model, "shooting") == 0) t->precise_solves = 1;
     else t->formula_answers = 1;
     t->mu_grid_max = p->gamma;
@@ -1222,7 +1222,7 @@ static int branch_residual(const double *u, double *g, double *jac, void *data, 
                              param_name(b->along), u[1]);
     double mu = mu_of_s(q.gamma, u[0]);
     if (!(mu <= BKF_CYCLE_MU_MAX))
-        return bkf_error_set(err, BKF_ENUMERIC, "mu = %g beyond %g", mu, BKF_CYCLE_MU_MAX);
+        return bkf_error_set(err, BKF_ENUMERIC, "mu = %.15g beyond %g", mu, BKF_CYCLE_MU_MAX);
     double T, T_err;
     int rc = branch_T(b, mu, q.nu, &T, &T_err, err);
     if (rc) return rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
@@ -1412,7 +1412,7 @@ static int speeds_branch_body(const bkf_model_params *start, size_t n, size_t ro
                              param_name(along), to);
     if (along == BKF_SPEEDS_ALONG_C && !(to > 0))
         return bkf_error_set(err, BKF_EINPUT,
-                             "c = %g: the branch must stay in c > 0 (c = 0 is the closed form "
+                             "c = %.15g: the branch must stay in c > 0 (c = 0 is the closed form "
                              "v = S/(n T(gamma)))", to);
     if ((rc = bkf_speeds_check(&end, NULL, err))) return rc;
 

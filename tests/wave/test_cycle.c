@@ -249,3 +249,17 @@ TEST(cycle_rejects_bad_input)
     CHECK_STATUS(bkf_cycle_profile(c, 0.0, NULL, NULL, &e), BKF_EINPUT);
     bkf_cycle_free(c);
 }
+
+TEST(cycle_messages_keep_the_digits_of_the_parameters)
+{
+    /* A refusal at nu = 0.99999999 names that nu, not "nu = 1" (%g's six
+     * digits made a value inside the active range read as its edge). */
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = 1e-14;
+    bkf_cycle_result r;
+    bkf_error e;
+    int s = bkf_cycle_period(64.6885094197501, 0.99999999, &o, &r, &e);
+    CHECK_MSG(s != BKF_OK, "tol 1e-14 at the canard should be refused");
+    CHECK_MSG(strstr(e.message, "nu = 0.99999999") != NULL, "%s", e.message);
+    CHECK(strstr(e.message, "nu = 1:") == NULL && strstr(e.message, "nu = 1 ") == NULL);
+}
