@@ -130,10 +130,11 @@ typedef enum {
     BKF_BOUNDARY_PERIOD_DOUBLING = 0, /* a finite-q peak of lambda crosses 0 with m1 = -1 */
     BKF_BOUNDARY_LONG_WAVE = 1,       /* the long-wave coefficient a changes sign (q -> 0) */
     BKF_BOUNDARY_OTHER = 2,           /* a finite-q peak crosses 0 with m1 = +1 */
-    BKF_BOUNDARY_SCAN_END = 3         /* end of the scanned range, not a boundary */
+    BKF_BOUNDARY_SCAN_END = 3,        /* end of the scanned range, not a boundary */
+    BKF_BOUNDARY_NONE = 4             /* no change of stability in the scanned range */
 } bkf_floquet_boundary;
 
-/* "period_doubling", "long_wave", "other", "scan_end". */
+/* "period_doubling", "long_wave", "other", "scan_end", "none". */
 const char *bkf_floquet_boundary_name(bkf_floquet_boundary kind);
 
 /* Stability of the global oscillation at the object's nu against every
@@ -173,7 +174,9 @@ typedef struct {
  * upward from nu_lo in steps options->nu_step, and the first change of
  * stability is located by Brent's method on the indicator that changes
  * sign (the maximum of lambda over a tracked peak, found by NLopt, or a),
- * to about options->tol in nu.  BKF_ENUMERIC if there is no change. */
+ * to about options->tol in nu.  No change of stability in the range is an
+ * answer, not a failure: BKF_OK with kind BKF_BOUNDARY_NONE, nu NaN and
+ * stable_above telling whether the oscillation is stable throughout. */
 int bkf_floquet_threshold_find(double gamma, double c, double nu_lo, double nu_hi,
                                const bkf_floquet_options *options,
                                bkf_floquet_threshold *out, bkf_error *err);

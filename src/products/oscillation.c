@@ -606,7 +606,7 @@ static int comment_scan(bkf_io_table *t, const bkf_oscillation_spec *p,
             t,
             "kinds: period_doubling (finite-q peak of lambda through 0 with m1 = -1), long_wave "
             "(a in lambda ~ a c^2 q^2 through 0), other (finite-q peak with m1 = +1, or a jump of "
-            "the cycle), scan_end",
+            "the cycle), scan_end, none (no change of stability in the range)",
             err);
     if (!s) s = bkf_product_table_command(t, prov, err);
     return s;
@@ -631,6 +631,18 @@ static int write_scan(const bkf_oscillation_spec *p, const bkf_provenance *prov,
             return bkf_error_set(err, s, "threshold at gamma = %s, c = %s: %s",
                                  bkf_format_number(p->gamma, a, sizeof a),
                                  bkf_format_number(p->c, b, sizeof b), e.message);
+        if (th.kind == BKF_BOUNDARY_NONE) {
+            char lo[32], hi[32], st[32];
+            s = bkf_io_table_commentf(
+                t, err,
+                "no threshold: no change of stability for nu in [%s, %s] at gamma = %s, c = %s; "
+                "global oscillations are %s throughout (scan step %s)",
+                bkf_format_number(p->search_lo, lo, sizeof lo),
+                bkf_format_number(p->search_hi, hi, sizeof hi),
+                bkf_format_number(p->gamma, a, sizeof a), bkf_format_number(p->c, b, sizeof b),
+                th.stable_above ? "stable" : "unstable", bkf_format_number(o.nu_step, st, sizeof st));
+            if (s) return s;
+        }
         threshold_row(&th, &k);
     } else if (mode == BKF_OSCILLATION_CURVE) {
         s = bkf_floquet_threshold_branch((bkf_floquet_param)p->along, p->from, p->to, gamma, c,

@@ -211,6 +211,7 @@ const char *bkf_floquet_boundary_name(bkf_floquet_boundary kind)
     case BKF_BOUNDARY_LONG_WAVE: return "long_wave";
     case BKF_BOUNDARY_OTHER: return "other";
     case BKF_BOUNDARY_SCAN_END: return "scan_end";
+    case BKF_BOUNDARY_NONE: return "none";
     }
     return "?";
 }
@@ -1506,11 +1507,13 @@ static int floquet_threshold_find_body(double gamma, double c, double nu_lo, dou
     size_t changes = 0;
     int rc = scan_nu(gamma, c, nu_lo, nu_hi, &o, keep_first, out, &first, &last, &changes, err);
     if (rc != BKF_OK) return rc;
-    if (changes == 0)
-        return bkf_error_set(err, BKF_ENUMERIC,
-                             "no change of stability for nu in [%g, %g] at gamma = %.15g: global "
-                             "oscillations are %s throughout (scan step %g)",
-                             nu_lo, nu_hi, gamma, first ? "stable" : "unstable", o.nu_step);
+    if (changes == 0) {
+        /* stable or unstable throughout the scan: an answer */
+        *out = (bkf_floquet_threshold){.gamma = gamma, .c = c, .nu = NAN, .nu_err = NAN,
+                                       .kind = BKF_BOUNDARY_NONE, .q = NAN, .k2 = NAN,
+                                       .m_re = NAN, .m_im = NAN, .lambda = NAN,
+                                       .stable_above = first, .longwave = NAN};
+    }
     return BKF_OK;
 }
 
@@ -1755,6 +1758,13 @@ static int floquet_threshold_branch_body(bkf_floquet_param along, double from, d
     bkf_floquet_threshold start;
     rc = bkf_floquet_threshold_find(g_from, c_from, nu_lo, nu_hi, &o, &start, err);
     if (rc != BKF_OK) return rc;
+    if (start.kind == BKF_BOUNDARY_NONE)
+        return bkf_error_set(err, BKF_ENUMERIC,
+                             "no boundary to follow: no change of stability for nu in [%.15g, "
+                             "%.15g] at gamma = %.15g, c = %.15g (global oscillations %s "
+                             "throughout, scan step %g)",
+                             nu_lo, nu_hi, g_from, c_from, start.stable_above ? "stable" : "unstable",
+                             o.nu_step);
 
     branch_ctx b;
     memset(&b, 0, sizeof b);

@@ -266,3 +266,16 @@ TEST(cli_floquet_out_file_is_atomic)
     unlink(path);
     CHECK(rmdir(dir) == 0); /* no temporary left behind */
 }
+
+TEST(cli_floquet_no_threshold_is_an_answer)
+{
+    /* At gamma 1.5 no nu is stable (none for gamma below about 1.76): the
+     * command answers so, a row of kind none and a comment saying why, and
+     * exits 0. */
+    bkf_cli_result r = BKF_CLI("floquet", "--threshold", "--gamma", "1.5", "--c", "0.3");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, "# no threshold: no change of stability") != NULL);
+    CHECK(strstr(r.out, "unstable throughout") != NULL);
+    CHECK(strstr(r.out, "\tnan\tnan\tnone\t") != NULL);
+    bkf_cli_result_free(&r);
+}

@@ -468,6 +468,12 @@ TEST(floquet_slip_rate_is_the_larger_root)
     }
 }
 
+static int ignore_point(const bkf_floquet_threshold *point, void *data)
+{
+    (void)point, (void)data;
+    return 0;
+}
+
 TEST(floquet_rejects_bad_input)
 {
     bkf_floquet *f = bkf_floquet_alloc();
@@ -493,8 +499,16 @@ TEST(floquet_rejects_bad_input)
     CHECK(strstr(e.message, "c > 0"));
     CHECK_STATUS(bkf_floquet_threshold_find(2.0, 0.3, 0.0, -0.5, NULL, &th, &e), BKF_EINPUT);
     CHECK_STATUS(bkf_floquet_threshold_find(2.0, 0.3, -1.0, 0.0, NULL, &th, &e), BKF_EINPUT);
-    /* no change of stability in the range: a numerical verdict, said so */
-    CHECK_STATUS(bkf_floquet_threshold_find(2.0, 0.3, -0.5, 0.5, NULL, &th, &e), BKF_ENUMERIC);
+    /* no change of stability in the range is an answer: kind none, no nu,
+     * unstable throughout (the long-wave instability for |nu| < 0.8268 at
+     * gamma 2) */
+    CHECK_STATUS(bkf_floquet_threshold_find(2.0, 0.3, -0.5, 0.5, NULL, &th, &e), BKF_OK);
+    CHECK(th.kind == BKF_BOUNDARY_NONE && isnan(th.nu) && th.stable_above == 0);
+    CHECK(strcmp(bkf_floquet_boundary_name(th.kind), "none") == 0);
+    /* ... and a curve has no boundary to follow from there */
+    CHECK_STATUS(bkf_floquet_threshold_branch(BKF_FLOQUET_ALONG_C, 0.3, 0.5, 2.0, 0.3, -0.5, 0.5,
+                                              NULL, 0, ignore_point, NULL, &e),
+                 BKF_ENUMERIC);
     CHECK(strstr(e.message, "unstable throughout"));
 }
 
