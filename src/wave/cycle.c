@@ -187,6 +187,9 @@ static int integrator_to(integrator *in, double t0, double *s, double t1)
         if (gsl_odeiv2_evolve_apply(in->evolve, in->control, in->step, &in->system, &t, t1, &h, s) !=
             GSL_SUCCESS)
             return BKF_ENUMERIC;
+        /* A non-finite state has a non-finite error estimate, which the
+         * step control does not reject: stop here, never hand it on. */
+        if (!isfinite(s[0]) || !isfinite(s[1])) return BKF_ENUMERIC;
         in->steps++;
     }
     return BKF_OK;
@@ -805,16 +808,26 @@ static int cycle_profile_body(bkf_cycle *c, double z, double *f, double *fprime,
         if (c->nodes[mid].t <= zr) lo = mid;
         else hi = mid;
     }
-    integrator in = {0};
-    if (integrator_init(&in, &c->flow, c->profile_stepper, 1, c->profile_tol) != BKF_OK) {
+    /* The explicit stepper is the fast choice up to mu = 100, but on some
+     * stretches of a stiff cycle (mu 50..100, |nu| near 0.5..0.9) it blows
+     * up; the implicit one, as the solve would use, then takes over. */
+    double s[DIM];
+    int rc = BKF_ENUMERIC;
+    for (int attempt = 0; attempt < 2 && rc != BKF_OK; attempt++) {
+        bkf_stepper_kind kind = attempt ? BKF_STEPPER_IMPLICIT : c->profile_stepper;
+        if (attempt && kind == c->profile_stepper) break;
+        integrator in = {0};
+        if (integrator_init(&in, &c->flow, kind, 1, c->profile_tol) != BKF_OK) {
+            integrator_free(&in);
+            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        }
+        double s0[DIM] = {c->nodes[lo].s[0], c->nodes[lo].s[1], 0.0, 0.0, 0.0};
+        memcpy(s, s0, sizeof s);
+        rc = integrator_to(&in, c->nodes[lo].t, s, zr);
         integrator_free(&in);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
-    double s[DIM] = {c->nodes[lo].s[0], c->nodes[lo].s[1], 0.0, 0.0, 0.0};
-    int rc = integrator_to(&in, c->nodes[lo].t, s, zr);
-    integrator_free(&in);
     if (rc != BKF_OK)
-        return bkf_error_set(err, BKF_ENUMERIC, "profile integration failed at z = %g", z);
+        return bkf_error_set(err, BKF_ENUMERIC, "profile integration failed at z = %.15g", z);
     if (f) *f = s[IX];
     if (fprime) *fprime = flow_xdot(&c->flow, s);
     return BKF_OK;

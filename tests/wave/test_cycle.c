@@ -263,3 +263,38 @@ TEST(cycle_messages_keep_the_digits_of_the_parameters)
     CHECK_MSG(strstr(e.message, "nu = 0.99999999") != NULL, "%s", e.message);
     CHECK(strstr(e.message, "nu = 1:") == NULL && strstr(e.message, "nu = 1 ") == NULL);
 }
+
+TEST(cycle_profile_finite_on_stiff_cycles)
+{
+    /* mu 50..100, |nu| 0.5..0.9: the explicit profile stepper blew up on
+     * stretches of these cycles and NaN went out as f and f'.  Every point
+     * is now finite, the profile's range is the solve's [xmin, xmax], and
+     * f' agrees with a difference quotient of f. */
+    const double mus[] = {50, 75, 100}, nus[] = {-0.9, -0.5, 0.5};
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            bkf_cycle *c = bkf_cycle_alloc();
+            bkf_cycle_options o = bkf_cycle_options_default();
+            o.tol = 1e-8;
+            bkf_error e;
+            CHECK_STATUS(bkf_cycle_solve(c, mus[i], nus[j], &o, &e), BKF_OK);
+            const bkf_cycle_result *r = bkf_cycle_get(c);
+            double lo = INFINITY, hi = -INFINITY;
+            for (int k = 0; k < 2000; k++) {
+                double z = r->period * k / 2000.0, f, fp, f2;
+                CHECK_STATUS(bkf_cycle_profile(c, z, &f, &fp, &e), BKF_OK);
+                CHECK_MSG(isfinite(f) && isfinite(fp), "mu %g nu %g z %g: f %g f' %g", mus[i],
+                          nus[j], z, f, fp);
+                lo = fmin(lo, f);
+                hi = fmax(hi, f);
+                if (k % 200 == 37) {
+                    double dz = 1e-6 * r->period;
+                    CHECK_STATUS(bkf_cycle_profile(c, z + dz, &f2, NULL, &e), BKF_OK);
+                    CHECK_CLOSE((f2 - f) / dz, fp, 1e-2, 1e-2 * (1 + fabs(fp)));
+                }
+            }
+            CHECK_CLOSE(hi, r->xmax, 0, 1e-2);
+            CHECK_CLOSE(lo, r->xmin, 0, 1e-2);
+            bkf_cycle_free(c);
+        }
+}
