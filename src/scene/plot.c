@@ -2,6 +2,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "bkfront/plot.h"
 
+#include "bkfront/io.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -302,19 +304,23 @@ int bkf_plot_run(const bkf_plot_job *job, const bkf_plot_options *options,
 
     char *argv[2 + 3 * BKF_PLOT_NFORMATS + 1];
     char *exprs[BKF_PLOT_NFORMATS] = {0};
-    char *parts[BKF_PLOT_NFORMATS] = {0};
+    /* Each image is drawn into a temporary of its own beside the target,
+     * made by io's atomic writer (a fresh name, O_EXCL: two runs into one
+     * folder cannot meet, and a link planted there is never followed), and
+     * renamed over the target only when gnuplot succeeded. */
+    bkf_io_atomic *parts[BKF_PLOT_NFORMATS] = {0};
     int argc = 0, s = BKF_OK, outputs = 0;
     argv[argc++] = (char *)program;
     for (int f = 0; f < BKF_PLOT_NFORMATS && !s; f++) {
         if (!job->outputs[f]) continue;
         outputs++;
-        size_t n = strlen(job->outputs[f]) + 8;
-        parts[f] = malloc(n);
-        char *q = NULL;
-        if (parts[f]) {
-            snprintf(parts[f], n, "%s.part", job->outputs[f]);
-            q = quoted(parts[f]);
+        bkf_error e;
+        parts[f] = bkf_io_atomic_open(job->outputs[f], &e);
+        if (!parts[f]) {
+            s = bkf_error_set(err, e.status ? e.status : BKF_EINPUT, "%s", e.message);
+            break;
         }
+        char *q = quoted(bkf_io_atomic_temp_path(parts[f]));
         size_t m = (job->vars ? job->vars_len : 0) + (q ? strlen(q) : 0) + 64;
         exprs[f] = q ? malloc(m) : NULL;
         if (!exprs[f]) {
@@ -353,23 +359,23 @@ int bkf_plot_run(const bkf_plot_job *job, const bkf_plot_options *options,
         } else {
             pick_line(errbuf, 1, r.warning, sizeof r.warning);
             for (int f = 0; f < BKF_PLOT_NFORMATS && !s; f++) {
-                if (!job->outputs[f]) continue;
+                if (!parts[f]) continue;
                 struct stat st;
-                if (stat(parts[f], &st) != 0 || st.st_size == 0)
+                if (stat(bkf_io_atomic_temp_path(parts[f]), &st) != 0 || st.st_size == 0)
                     s = bkf_error_set(err, BKF_ENUMERIC,
                                       "gnuplot exited 0 but wrote no %s (does %s set output?)",
                                       job->outputs[f], job->script);
-                else if (rename(parts[f], job->outputs[f]) != 0)
-                    s = bkf_error_set(err, BKF_ENUMERIC, "cannot rename %s to %s: %s",
-                                      parts[f], job->outputs[f], strerror(errno));
+            }
+            for (int f = 0; f < BKF_PLOT_NFORMATS && !s; f++) {
+                if (!parts[f]) continue;
+                s = bkf_io_atomic_commit(parts[f], err);
+                parts[f] = NULL;
             }
         }
-        for (int f = 0; f < BKF_PLOT_NFORMATS; f++)
-            if (parts[f]) unlink(parts[f]);
     }
     for (int f = 0; f < BKF_PLOT_NFORMATS; f++) {
+        bkf_io_atomic_abort(parts[f]);
         free(exprs[f]);
-        free(parts[f]);
     }
     if (report) *report = r;
     return s;

@@ -546,3 +546,54 @@ TEST(shipped_scenes_parse_and_plan)
     closedir(d);
     CHECK(scenes >= 7);
 }
+
+/* A figure's temporary is fresh and exclusive: a link planted at the old
+ * fixed name OUT.part is not followed, and runs drawing the same image at
+ * once do not break each other. */
+TEST(plot_temporaries_are_exclusive)
+{
+    char dir[] = "/tmp/bkfront-plot-XXXXXX";
+    CHECK(mkdtemp(dir));
+    char script[256], out[256], part[300], victim[256];
+    snprintf(script, sizeof script, "%s/ok.gp", dir);
+    snprintf(out, sizeof out, "%s/f.png", dir);
+    snprintf(part, sizeof part, "%s.part", out);
+    snprintf(victim, sizeof victim, "%s/victim", dir);
+    FILE *f = fopen(script, "w");
+    CHECK(f);
+    fputs("set terminal pngcairo size 200,150\nset output out\nplot sin(x)\n", f);
+    fclose(f);
+    f = fopen(victim, "w");
+    CHECK(f);
+    fputs("precious\n", f);
+    fclose(f);
+    CHECK(symlink(victim, part) == 0);
+    bkf_error e = {0};
+    bkf_plot_job *job = bkf_plot_job_alloc(script, &e);
+    CHECK(job);
+    CHECK_STATUS(bkf_plot_add_output(job, BKF_PLOT_PNG, out, &e), BKF_OK);
+    CHECK_STATUS(bkf_plot_run(job, NULL, NULL, &e), BKF_OK);
+    char *v = bkf_cli_read_file(victim);
+    CHECK(v && strcmp(v, "precious\n") == 0);
+    free(v);
+    struct stat st;
+    CHECK(stat(out, &st) == 0 && st.st_size > 0);
+    unlink(part);
+    /* four at once into one folder: every one succeeds */
+    pid_t kids[4];
+    for (int i = 0; i < 4; i++) {
+        kids[i] = fork();
+        if (kids[i] == 0) _exit(bkf_plot_run(job, NULL, NULL, &e) == BKF_OK ? 0 : 1);
+    }
+    for (int i = 0; i < 4; i++) {
+        int status = 0;
+        waitpid(kids[i], &status, 0);
+        CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 0, "run %d failed", i);
+    }
+    CHECK(stat(out, &st) == 0 && st.st_size > 0);
+    bkf_plot_job_free(job);
+    unlink(out);
+    unlink(victim);
+    unlink(script);
+    CHECK(rmdir(dir) == 0);
+}
