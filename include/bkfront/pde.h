@@ -99,11 +99,14 @@ typedef enum {
 
 #define BKF_PDE_N_MIN 8
 #define BKF_PDE_N_MAX 1048576
+/* The continuous-slip state psi = nu, eta = phi(nu) lies well within the
+ * field's blow-up bound 1e6 (phi(100) = 3.3e5) for |nu| <= BKF_PDE_NU_MAX. */
+#define BKF_PDE_NU_MAX 100.0
 #define BKF_PDE_TOL_MIN 1e-13
 #define BKF_PDE_TOL_MAX 1e-2
 
 /* The model: bkf_model_params (model.h), with gamma > 0, c >= 0, nu finite
- * (|nu| >= 1 is allowed: continuous slip), S > 0, N in [BKF_PDE_N_MIN,
+ * (|nu| >= 1 is allowed: continuous slip; |nu| <= BKF_PDE_NU_MAX), S > 0, N in [BKF_PDE_N_MIN,
  * BKF_PDE_N_MAX] (even for the continuum). */
 
 typedef struct {

@@ -54,9 +54,9 @@ const bkf_option bkf_simulate_options[] = {
      .help = "friction strength, > 0"},
     {.name = "c", .type = BKF_OPT_DOUBLE, .offset = MODEL(c), .flags = BKF_OPT_MIN, .min = 0,
      .form = "C", .shown_default = "0.3", .help = "sound speed, >= 0"},
-    {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = MODEL(nu), .form = "V",
-     .shown_default = "-0.96",
-     .help = "pulling rate, any finite value (|nu| >= 1: continuous slip\n"
+    {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = MODEL(nu), .flags = BOUNDED,
+     .min = -BKF_PDE_NU_MAX, .max = BKF_PDE_NU_MAX, .form = "V", .shown_default = "-0.96",
+     .help = "pulling rate, in [-100, 100] (|nu| >= 1: continuous slip\n"
              "is stable; oscillation and front need |nu| < 1)"},
     {.name = "S", .type = BKF_OPT_DOUBLE, .offset = MODEL(S),
      .flags = BKF_OPT_MIN | BKF_OPT_MIN_OPEN, .min = 0, .form = "S", .shown_default = "20",

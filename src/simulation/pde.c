@@ -35,7 +35,11 @@ int bkf_pde_check(const bkf_model_params *p, const bkf_pde_options *o, bkf_error
     int s;
     if ((s = bkf_model_check_positive("gamma", p->gamma, err))) return s;
     if ((s = bkf_model_check_nonnegative("c", p->c, err))) return s;
-    if (!isfinite(p->nu)) return bkf_error_set(err, BKF_EINPUT, "nu must be a finite number");
+    if (!(fabs(p->nu) <= BKF_PDE_NU_MAX))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "nu = %.15g is outside [-%g, %g]: beyond, the uniform slip state "
+                             "psi = nu, eta = phi(nu) is not within the field's bound 1e6",
+                             p->nu, BKF_PDE_NU_MAX, BKF_PDE_NU_MAX);
     if ((s = bkf_model_check_positive("S", p->S, err))) return s;
     if (p->kind != BKF_MODEL_CONTINUUM && p->kind != BKF_MODEL_CHAIN)
         return bkf_error_set(err, BKF_EINPUT, "model must be continuum or chain");

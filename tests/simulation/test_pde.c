@@ -3,6 +3,7 @@
  * second-order approach to the continuum, the energy balance and the exact
  * linear invariant, the model's symmetries, and bad input. */
 #include "harness.h"
+#include "cli_support.h"
 
 #include <string.h>
 
@@ -360,4 +361,25 @@ TEST(pde_moving_frame_holds_the_front_still)
     p.kind = BKF_MODEL_CONTINUUM;
     o.frame_speed = NAN;
     CHECK(bkf_pde_check(&p, &o, &e) == BKF_EINPUT && strstr(e.message, "frame"));
+}
+
+TEST(pde_refuses_a_pulling_rate_beyond_the_field_bound)
+{
+    /* nu 1e300 used to pass the check and fail the run with "the initial
+     * state is not finite or too large": the cause is the parameter. */
+    bkf_model_params p = bkf_model_params_paper();
+    bkf_pde_options o = bkf_pde_options_default();
+    bkf_error e;
+    const double bad[] = {1e300, -1e300, 101, NAN, INFINITY};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        p.nu = bad[i];
+        CHECK_STATUS(bkf_pde_check(&p, &o, &e), BKF_EINPUT);
+        CHECK_MSG(strncmp(e.message, "nu = ", 5) == 0 && strstr(e.message, "[-100, 100]"), "%s",
+                  e.message);
+    }
+    p.nu = -100;
+    CHECK_STATUS(bkf_pde_check(&p, &o, &e), BKF_OK);
+    bkf_cli_result r = BKF_CLI("simulate", "--nu", "1e300", "--tmax", "1");
+    CHECK_MSG(r.code == 2 && r.out[0] == '\0' && strstr(r.err, "--nu"), "%d %s", r.code, r.err);
+    bkf_cli_result_free(&r);
 }
