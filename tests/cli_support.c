@@ -3,6 +3,8 @@
 #include "cli_support.h"
 
 #include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <signal.h>
 #include <string.h>
 #include <sys/wait.h>
@@ -170,4 +172,66 @@ char *bkf_cli_stdout(const char *words, int *code)
     r.out = NULL;
     bkf_cli_result_free(&r);
     return out;
+}
+
+size_t bkf_count_lines(const char *s)
+{
+    size_t n = 0;
+    for (; *s; s++) n += *s == '\n';
+    return n;
+}
+
+void bkf_cli_expect_bad_input(bkf_cli_result r, const char *cmd, const char *names,
+                              const char *what)
+{
+    char prefix[64];
+    snprintf(prefix, sizeof prefix, "bkfront %s: ", cmd);
+    CHECK_MSG(r.code == 2, "%s: exit %d, stderr: %s", what, r.code, r.err);
+    CHECK_MSG(r.out[0] == '\0', "%s: stdout not empty: %s", what, r.out);
+    CHECK_MSG(bkf_count_lines(r.err) == 1, "%s: stderr is not one line: %s", what, r.err);
+    CHECK_MSG(strncmp(r.err, prefix, strlen(prefix)) == 0, "%s: %s", what, r.err);
+    CHECK_MSG(strstr(r.err, names), "%s: '%s' not named in: %s", what, names, r.err);
+    bkf_cli_result_free(&r);
+}
+
+int bkf_tsv_cell(const char *tsv, int row, const char *column, double *value, char *text,
+                 size_t size)
+{
+    const char *p = tsv;
+    while (*p == '#') {
+        p = strchr(p, '\n');
+        if (!p) return 0;
+        p++;
+    }
+    int col = 0, found = -1;
+    size_t clen = strlen(column);
+    for (const char *q = p; *q && *q != '\n'; col++) {
+        size_t len = strcspn(q, "\t\n");
+        if (len == clen && strncmp(q, column, len) == 0) found = col;
+        q += len;
+        if (*q == '\t') q++;
+    }
+    if (found < 0) return 0;
+    for (int r = 0; r <= row; r++) {
+        p = strchr(p, '\n');
+        if (!p || !p[1]) return 0;
+        p++;
+    }
+    for (int c = 0; c < found; c++) {
+        p = strchr(p, '\t');
+        if (!p) return 0;
+        p++;
+    }
+    size_t len = strcspn(p, "\t\n");
+    if (text) {
+        if (len >= size) return 0;
+        memcpy(text, p, len);
+        text[len] = '\0';
+    }
+    if (value) {
+        char *end;
+        *value = strtod(p, &end);
+        if (end != p + len) return 0;
+    }
+    return 1;
 }

@@ -7,6 +7,7 @@
 #ifndef BKF_TEST_CLI_SUPPORT_H
 #define BKF_TEST_CLI_SUPPORT_H
 
+#include <stddef.h>
 #include <sys/types.h>
 
 typedef struct {
@@ -38,6 +39,22 @@ pid_t bkf_cli_spawn(const char *const *args, const bkf_cli_options *o, const cha
 /* The whole file at path, NUL-terminated and malloc'd; NULL when it cannot
  * be opened (an output the run should not have left). */
 char *bkf_cli_read_file(const char *path);
+
+/* The number of newlines in s. */
+size_t bkf_count_lines(const char *s);
+
+/* Bad input as every command must answer it: exit 2, nothing on stdout,
+ * one line on stderr that starts "bkfront CMD: " and contains `names`.
+ * Frees r. */
+void bkf_cli_expect_bad_input(bkf_cli_result r, const char *cmd, const char *names,
+                              const char *what);
+
+/* Cell `column` of data row `row` (0-based) of a TSV table ('#' lines,
+ * then the header): the number into *value and/or the text into text
+ * (size bytes).  0 when there is no such cell, or *value is asked and the
+ * cell is not a number. */
+int bkf_tsv_cell(const char *tsv, int row, const char *column, double *value, char *text,
+                 size_t size);
 
 /* stdout of `bkfront WORDS` (words separated by single spaces, no quoting),
  * malloc'd; *code gets the exit status (NULL: it must be 0, else the test

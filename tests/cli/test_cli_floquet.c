@@ -16,62 +16,8 @@ int bkf_test_json_valid(const char *text);
 typedef bkf_cli_result fq_run;
 #define FQ(...) BKF_CLI("floquet", __VA_ARGS__)
 #define fq_free bkf_cli_result_free
-
-static int fq_lines(const char *s)
-{
-    int n = 0;
-    for (; *s; s++) n += *s == '\n';
-    return n;
-}
-
-static void fq_bad(fq_run r, const char *names, const char *what)
-{
-    CHECK_MSG(r.code == 2, "%s: exit %d, stderr: %s", what, r.code, r.err);
-    CHECK_MSG(r.out[0] == '\0', "%s: stdout not empty: %s", what, r.out);
-    CHECK_MSG(fq_lines(r.err) == 1, "%s: stderr is not one line: %s", what, r.err);
-    CHECK_MSG(strncmp(r.err, "bkfront floquet: ", 17) == 0, "%s: %s", what, r.err);
-    CHECK_MSG(strstr(r.err, names), "%s: '%s' not named in: %s", what, names, r.err);
-    fq_free(&r);
-}
-
-/* Field `column` of data row `row` (0-based) of a TSV table; text fields
- * are copied into `text` when given. */
-static int fq_field(const char *tsv, int row, const char *column, double *value, char *text,
-                    size_t text_size)
-{
-    const char *p = tsv;
-    while (*p == '#') p = strchr(p, '\n') + 1;
-    const char *header = p;
-    int col = 0, found = -1;
-    size_t clen = strlen(column);
-    for (const char *q = header; *q && *q != '\n'; col++) {
-        size_t len = strcspn(q, "\t\n");
-        if (len == clen && strncmp(q, column, len) == 0) found = col;
-        q += len;
-        if (*q == '\t') q++;
-    }
-    if (found < 0) return 0;
-    p = strchr(header, '\n');
-    for (int r = 0; r < row; r++) {
-        if (!p || !p[1]) return 0;
-        p = strchr(p + 1, '\n');
-    }
-    if (!p || !p[1]) return 0;
-    p++;
-    for (int c = 0; c < found; c++) p = strchr(p, '\t') + 1;
-    size_t len = strcspn(p, "\t\n");
-    if (text) {
-        size_t n = len < text_size - 1 ? len : text_size - 1;
-        memcpy(text, p, n);
-        text[n] = '\0';
-    }
-    if (value) {
-        char *end;
-        *value = strtod(p, &end);
-        if (end != p + len) return text != NULL;
-    }
-    return 1;
-}
+#define fq_bad(r, names, what) bkf_cli_expect_bad_input((r), "floquet", (names), (what))
+#define fq_field bkf_tsv_cell
 
 TEST(cli_floquet_help)
 {

@@ -18,52 +18,9 @@ int bkf_test_json_valid(const char *text);
 typedef bkf_cli_result run_result;
 #define RUN(...) BKF_CLI(__VA_ARGS__)
 #define run_free bkf_cli_result_free
-
-static int count_lines(const char *s)
-{
-    int n = 0;
-    for (; *s; s++) n += *s == '\n';
-    return n;
-}
-
-/* Bad input: exit 2, nothing on stdout, one line on stderr that starts
- * "bkfront period: " and contains `names`. */
-static void check_bad_input(run_result r, const char *names, const char *what)
-{
-    CHECK_MSG(r.code == 2, "%s: exit %d, stderr: %s", what, r.code, r.err);
-    CHECK_MSG(r.out[0] == '\0', "%s: stdout not empty: %s", what, r.out);
-    CHECK_MSG(count_lines(r.err) == 1, "%s: stderr is not one line: %s", what, r.err);
-    CHECK_MSG(strncmp(r.err, "bkfront period: ", 16) == 0, "%s: %s", what, r.err);
-    CHECK_MSG(strstr(r.err, names), "%s: '%s' not named in: %s", what, names, r.err);
-    run_free(&r);
-}
-
-/* Splits the TSV on stdout: the header's fields and the first row's. */
-static int tsv_field(const char *tsv, int row, const char *column, double *value)
-{
-    const char *p = tsv;
-    while (*p == '#') p = strchr(p, '\n') + 1;
-    const char *header = p;
-    int col = 0, found = -1;
-    size_t clen = strlen(column);
-    for (const char *q = header; *q && *q != '\n'; col++) {
-        size_t len = strcspn(q, "\t\n");
-        if (len == clen && strncmp(q, column, len) == 0) found = col;
-        q += len;
-        if (*q == '\t') q++;
-    }
-    if (found < 0) return 0;
-    p = strchr(header, '\n');
-    for (int r = 0; r <= row; r++) {
-        if (!p || !p[1]) return 0;
-        if (r < row) p = strchr(p + 1, '\n');
-    }
-    p++;
-    for (int c = 0; c < found; c++) p = strchr(p, '\t') + 1;
-    char *end;
-    *value = strtod(p, &end);
-    return *end == '\t' || *end == '\n';
-}
+#define check_bad_input(r, names, what) bkf_cli_expect_bad_input((r), "period", (names), (what))
+#define tsv_field(tsv, row, column, value) bkf_tsv_cell((tsv), (row), (column), (value), NULL, 0)
+#define tsv_text(tsv, row, column, buf, size) bkf_tsv_cell((tsv), (row), (column), NULL, (buf), (size))
 
 static const char *const expected_columns =
     "mu\tnu\tT\tT_err\tT_asym\tT_asym2\txmax\txmin\tmultiplier\tlog_multiplier\tsteps\t"
@@ -150,17 +107,17 @@ TEST(cli_usage_help_and_version)
     run_free(&r);
 
     r = RUN("--version");
-    CHECK(r.code == 0 && strncmp(r.out, "bkfront ", 8) == 0 && count_lines(r.out) == 1);
+    CHECK(r.code == 0 && strncmp(r.out, "bkfront ", 8) == 0 && bkf_count_lines(r.out) == 1);
     run_free(&r);
 
     r = RUN("frobnicate");
-    CHECK_MSG(r.code == 2 && r.out[0] == '\0' && count_lines(r.err) == 1 &&
+    CHECK_MSG(r.code == 2 && r.out[0] == '\0' && bkf_count_lines(r.err) == 1 &&
                   strstr(r.err, "frobnicate"),
               "exit %d: %s", r.code, r.err);
     run_free(&r);
 
     r = RUN("help", "frobnicate");
-    CHECK(r.code == 2 && r.out[0] == '\0' && count_lines(r.err) == 1);
+    CHECK(r.code == 2 && r.out[0] == '\0' && bkf_count_lines(r.err) == 1);
     run_free(&r);
 
     const char *none[] = {NULL};
@@ -312,33 +269,6 @@ TEST(cli_period_continue_nu)
     check_branch("nu", "-0.5:0.5:3", "1", -0.5, 0.5);
 }
 
-/* Text field of row `row` in `column`, into buf. */
-static int tsv_text(const char *tsv, int row, const char *column, char *buf, size_t size)
-{
-    const char *p = tsv;
-    while (*p == '#') p = strchr(p, '\n') + 1;
-    int col = 0, found = -1;
-    size_t clen = strlen(column);
-    for (const char *q = p; *q && *q != '\n'; col++) {
-        size_t len = strcspn(q, "\t\n");
-        if (len == clen && strncmp(q, column, len) == 0) found = col;
-        q += len;
-        if (*q == '\t') q++;
-    }
-    if (found < 0) return 0;
-    for (int r = 0; r <= row; r++) {
-        p = strchr(p, '\n');
-        if (!p || !p[1]) return 0;
-        p++;
-    }
-    for (int c = 0; c < found; c++) p = strchr(p, '\t') + 1;
-    size_t len = strcspn(p, "\t\n");
-    if (len >= size) return 0;
-    memcpy(buf, p, len);
-    buf[len] = '\0';
-    return 1;
-}
-
 /* --method auto at tol 1e-2 and mu >= 100 answers from a formula, whose
  * value is within its bound of the published / shooting value; a formula
  * forced where its bound fails is a numerical failure; a bad method is bad
@@ -374,7 +304,7 @@ TEST(cli_period_method_auto_and_forced)
     run_free(&r);
     r = RUN("period", "--mu", "1", "--nu", "0", "--method", "leading", "--tol", "1e-2");
     CHECK_MSG(r.code == 1 && r.out[0] == '\0', "exit %d", r.code);
-    CHECK_MSG(strstr(r.err, "bound") && count_lines(r.err) == 1, "%s", r.err);
+    CHECK_MSG(strstr(r.err, "bound") && bkf_count_lines(r.err) == 1, "%s", r.err);
     run_free(&r);
     r = RUN("period", "--mu", "1e4", "--nu", "0", "--method", "asymptotic", "--tol", "1e-12");
     CHECK_MSG(r.code == 1 && r.out[0] == '\0', "exit %d", r.code);

@@ -24,77 +24,9 @@ static char *slurp(const char *path)
 
 #define SIM(...) BKF_CLI(__VA_ARGS__)
 #define sim_free bkf_cli_result_free
-
-static int lines_in(const char *s)
-{
-    int n = 0;
-    for (; *s; s++) n += *s == '\n';
-    return n;
-}
-
-static void expect_bad_input(sim_result r, const char *cmd, const char *names, const char *what)
-{
-    char prefix[64];
-    snprintf(prefix, sizeof prefix, "bkfront %s: ", cmd);
-    CHECK_MSG(r.code == 2, "%s: exit %d, stderr: %s", what, r.code, r.err);
-    CHECK_MSG(r.out[0] == '\0', "%s: stdout not empty", what);
-    CHECK_MSG(lines_in(r.err) == 1, "%s: stderr is not one line: %s", what, r.err);
-    CHECK_MSG(strncmp(r.err, prefix, strlen(prefix)) == 0, "%s: %s", what, r.err);
-    CHECK_MSG(strstr(r.err, names), "%s: '%s' not named in: %s", what, names, r.err);
-    sim_free(&r);
-}
-
-/* The value of `column` in data row `row` (0-based) of a TSV. */
-static int field(const char *tsv, int row, const char *column, double *value)
-{
-    const char *p = tsv;
-    while (*p == '#') p = strchr(p, '\n') + 1;
-    const char *header = p;
-    int col = 0, found = -1;
-    size_t clen = strlen(column);
-    for (const char *q = header; *q && *q != '\n'; col++) {
-        size_t len = strcspn(q, "\t\n");
-        if (len == clen && strncmp(q, column, len) == 0) found = col;
-        q += len;
-        if (*q == '\t') q++;
-    }
-    if (found < 0) return 0;
-    p = strchr(header, '\n');
-    for (int r = 0; r < row && p; r++) p = strchr(p + 1, '\n');
-    if (!p || !p[1]) return 0;
-    p++;
-    for (int c = 0; c < found; c++) p = strchr(p, '\t') + 1;
-    char *end;
-    *value = strtod(p, &end);
-    return *end == '\t' || *end == '\n';
-}
-
-/* The text in column `column` of data row `row`, copied into buf. */
-static int text_field(const char *tsv, int row, const char *column, char *buf, size_t size)
-{
-    const char *p = tsv;
-    while (*p == '#') p = strchr(p, '\n') + 1;
-    const char *header = p;
-    int col = 0, found = -1;
-    size_t clen = strlen(column);
-    for (const char *q = header; *q && *q != '\n'; col++) {
-        size_t len = strcspn(q, "\t\n");
-        if (len == clen && strncmp(q, column, len) == 0) found = col;
-        q += len;
-        if (*q == '\t') q++;
-    }
-    if (found < 0) return 0;
-    p = strchr(header, '\n');
-    for (int r = 0; r < row && p; r++) p = strchr(p + 1, '\n');
-    if (!p || !p[1]) return 0;
-    p++;
-    for (int c = 0; c < found; c++) p = strchr(p, '\t') + 1;
-    size_t len = strcspn(p, "\t\n");
-    if (len >= size) len = size - 1;
-    memcpy(buf, p, len);
-    buf[len] = '\0';
-    return 1;
-}
+#define expect_bad_input bkf_cli_expect_bad_input
+#define field(tsv, row, column, value) bkf_tsv_cell((tsv), (row), (column), (value), NULL, 0)
+#define text_field(tsv, row, column, buf, size) bkf_tsv_cell((tsv), (row), (column), NULL, (buf), (size))
 
 TEST(cli_simulate_front_outputs_and_restart)
 {
@@ -273,7 +205,7 @@ TEST(cli_check_stable_front_agrees)
     r = SIM("check", "--n", "4", "--tmax", "60", "--rel-tol", "1e-15", "--no-progress");
     CHECK_MSG(r.code == 1, "exit %d: %s", r.code, r.err);
     CHECK(strstr(r.out, "disagrees"));
-    CHECK(lines_in(r.err) == 1 && strstr(r.err, "disagree"));
+    CHECK(bkf_count_lines(r.err) == 1 && strstr(r.err, "disagree"));
     sim_free(&r);
 }
 
