@@ -5,12 +5,12 @@
 # runs, after deps has installed what pkg-config needs.
 
 DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
-                libinih-dev libsundials-dev gnuplot-nox
+                libinih-dev libsundials-dev liblapacke-dev gnuplot-nox
 # Only for `make valgrind` and `make fuzz` (libFuzzer ships with clang's
 # runtime), so that `make test` needs neither.
 VALGRIND_PACKAGES := valgrind
 FUZZ_PACKAGES     := clang libclang-rt-dev
-PKGS         := gsl nlopt fftw3 inih
+PKGS         := gsl nlopt fftw3 inih lapacke
 
 CC       ?= cc
 OPT      ?= -O2
