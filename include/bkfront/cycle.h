@@ -86,6 +86,17 @@ const bkf_cycle_result *bkf_cycle_get(const bkf_cycle *cycle);
 int bkf_cycle_profile(bkf_cycle *cycle, double z, double *f, double *fprime,
                       bkf_error *err);
 
+/* The profile at many points z[0] <= z[1] <= ... within [0, T], in one
+ * pass: f and f' (either may be NULL), to the same accuracy as
+ * bkf_cycle_profile, at the cost of about one period's integration. */
+int bkf_cycle_profile_sample(bkf_cycle *cycle, const double *z, size_t count, double *f,
+                             double *fprime, bkf_error *err);
+
+/* The steps of the last solve's final integration, z from 0 to T: a mesh
+ * adapted to the cycle (short on the fast jumps).  Writes at most capacity
+ * values and returns how many there are (0 before a solve). */
+size_t bkf_cycle_mesh(const bkf_cycle *cycle, double *z, size_t capacity);
+
 /* One-shot convenience: solve into *result without keeping an object. */
 int bkf_cycle_period(double mu, double nu, const bkf_cycle_options *options,
                      bkf_cycle_result *result, bkf_error *err);

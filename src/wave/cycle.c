@@ -833,6 +833,65 @@ static int cycle_profile_body(bkf_cycle *c, double z, double *f, double *fprime,
     return BKF_OK;
 }
 
+/* One integrator for all the points, each continued from the previous one
+ * unless a stored node lies between them (a restart there keeps the error
+ * that of one short stretch, as for a single point). */
+static int cycle_sample_body(bkf_cycle *c, const double *z, size_t count, double *f, double *fprime,
+                             bkf_error *err)
+{
+    if (!c || !c->have_solution)
+        return bkf_error_set(err, BKF_EINPUT, "profile requested before a successful solve");
+    double T = c->result.period;
+    for (size_t i = 0; i < count; i++)
+        if (!(z[i] >= 0.0 && z[i] <= T) || (i && z[i] < z[i - 1]))
+            return bkf_error_set(err, BKF_EINPUT, "sample points must increase within [0, T = %.15g]", T);
+    int rc = BKF_OK;
+    for (int attempt = 0; attempt < 2; attempt++) {
+        bkf_stepper_kind kind = attempt ? BKF_STEPPER_IMPLICIT : c->profile_stepper;
+        if (attempt && kind == c->profile_stepper) break;
+        integrator in = {0};
+        if (integrator_init(&in, &c->flow, kind, 1, c->profile_tol) != BKF_OK) {
+            integrator_free(&in);
+            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        }
+        double s[DIM] = {0}, t = -1.0;
+        size_t lo = 0;
+        rc = BKF_OK;
+        for (size_t i = 0; i < count && rc == BKF_OK; i++) {
+            while (lo + 1 < c->node_count && c->nodes[lo + 1].t <= z[i]) lo++;
+            if (t < c->nodes[lo].t) {
+                t = c->nodes[lo].t;
+                double s0[DIM] = {c->nodes[lo].s[0], c->nodes[lo].s[1], 0.0, 0.0, 0.0};
+                memcpy(s, s0, sizeof s);
+            }
+            rc = integrator_to(&in, t, s, z[i]);
+            t = z[i];
+            if (f) f[i] = s[IX];
+            if (fprime) fprime[i] = flow_xdot(&c->flow, s);
+        }
+        integrator_free(&in);
+        if (rc == BKF_OK) break;
+    }
+    if (rc != BKF_OK) return bkf_error_set(err, BKF_ENUMERIC, "profile integration failed");
+    return BKF_OK;
+}
+
+int bkf_cycle_profile_sample(bkf_cycle *c, const double *z, size_t count, double *f, double *fprime,
+                             bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = cycle_sample_body(c, z, count, f, fprime, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
+
+size_t bkf_cycle_mesh(const bkf_cycle *c, double *z, size_t capacity)
+{
+    if (!c || !c->have_solution) return 0;
+    for (size_t i = 0; i < c->node_count && i < capacity; i++) z[i] = c->nodes[i].t;
+    return c->node_count;
+}
+
 int bkf_cycle_profile(bkf_cycle *c, double z, double *f, double *fprime, bkf_error *err)
 {
     bkf_gsl_handler *handler = bkf_gsl_handler_push();

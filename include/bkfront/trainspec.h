@@ -1,0 +1,116 @@
+/* The spectrum of a train of n fronts on the ring of size S (and on the
+ * infinite line): which of the allowed speeds survive.
+ *
+ * In the frame xi = x + v t the train is steady and L-periodic, L = S/n.  In
+ * the cycle's variable z = xi / (v s), s = sqrt(1 - c^2/v^2) = gamma/mu, a
+ * perturbation p = exp(-sigma z / s) u of psi obeys the van der Pol
+ * variational equation with one extra term (docs/numerics.md, "Spectra of
+ * front trains"):
+ *     u'' + mu (f^2 - 1) u' + (1 + 2 mu f f') u = beta sigma (sigma + gamma (f^2 - 1)) u,
+ *     beta = c^2/(v^2 - c^2) = (mu/gamma)^2 - 1.
+ * sigma is an eigenvalue with Bloch angle theta (kappa = theta / L) when the
+ * monodromy M(sigma) of this 2x2 system over one period T, times
+ * exp(-sigma T/s), has the multiplier exp(i theta); on the ring theta =
+ * 2 pi j / n, j = 0..n-1.  det M = exp(integral of -mu (f^2 - 1)), the
+ * cycle's own multiplier, for every sigma (Liouville): a gauge of the
+ * integration.  sigma = 0 at theta = 0 (translation) is the other.
+ *
+ * Method: M(sigma) by a fourth-order Magnus integrator with exact 2x2
+ * exponentials on the cycle's adapted mesh (steps subdivided), so stiffness
+ * (large mu) and fast oscillation (large |sigma|) cost no extra steps.  The
+ * rightmost spectrum at each height Im sigma = y is the root in a of
+ * |multiplier(a + i y)| = 1 for each of the two multipliers; these curves are
+ * traced over y in [0, B], where B is extended until the curves have fallen
+ * below the window's left edge a_lo = r_inf / 2 (r_inf = s ln m / (2 T), the
+ * line they approach as |y| -> inf); the eigenvalues are the points on the
+ * curves whose multiplier has phase 2 pi j / n, located on the unwrapped
+ * phase and polished by Newton.  Conjugate symmetry gives y < 0.  Each
+ * reported sigma is computed on two meshes (k and 2k substeps per cycle
+ * step); the difference is its error estimate, and the mesh is refined
+ * until that meets tol or the result is refused. */
+#ifndef BKFRONT_TRAINSPEC_H
+#define BKFRONT_TRAINSPEC_H
+
+#include <stddef.h>
+#include "bkfront/model.h"
+#include "bkfront/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    double tol;        /* absolute accuracy asked of each sigma, [1e-10, 1e-2]; default 1e-6 */
+    size_t per_kappa;  /* leading eigenvalues reported per Bloch number, [1, 50]; default 3 */
+} bkf_trainspec_options;
+
+bkf_trainspec_options bkf_trainspec_options_default(void);
+
+typedef enum {
+    BKF_TRAINSPEC_STABLE = 0,     /* every sigma but the translation has Re sigma < 0 */
+    BKF_TRAINSPEC_UNSTABLE = 1,   /* some Re sigma > 0 beyond its error */
+    BKF_TRAINSPEC_UNRESOLVED = 2  /* the largest Re sigma is within its error of 0 */
+} bkf_trainspec_verdict;
+
+/* "yes", "no", "unresolved" (the answer to "stable?"). */
+const char *bkf_trainspec_verdict_name(bkf_trainspec_verdict verdict);
+
+typedef struct {
+    double re, im;     /* sigma, per unit time t */
+    double err;        /* estimated absolute error of sigma */
+    size_t j;          /* Bloch index: kappa = 2 pi j / S */
+    double kappa;
+    int translation;   /* the translation mode (j = 0, sigma = 0) */
+} bkf_trainspec_eigenvalue;
+
+/* The train: n fronts at speed v (v > c > 0), from a root of the speed
+ * condition (bkf_speeds_find) or given directly; mu = gamma / sqrt(1 - c^2/v^2). */
+typedef struct {
+    size_t n;
+    double v;
+} bkf_trainspec_train;
+
+typedef struct {
+    bkf_model_params params;
+    size_t n;
+    double v, mu, T, L;
+    bkf_trainspec_eigenvalue *eigenvalues; /* by j, then by decreasing Re sigma */
+    size_t count;
+    /* the rightmost eigenvalue other than the translation */
+    double sigma_max, sigma_max_im, sigma_max_err, kappa_max;
+    int complex_pair;                /* Im sigma_max != 0 beyond its error */
+    bkf_trainspec_verdict verdict;
+    double translation_residual;     /* |sigma| of the translation mode as computed */
+    double liouville_residual;       /* |ln det M - ln m| (the cycle's multiplier) */
+    double a_lo, y_max;              /* window searched: Re sigma > a_lo, |Im sigma| <= y_max */
+    double r_inf;                    /* the line the spectrum approaches as |Im sigma| -> inf */
+    size_t mesh_steps;               /* Magnus steps per period (finer mesh) */
+    size_t evaluations;              /* monodromies computed */
+    size_t curve_points;             /* heights y sampled */
+} bkf_trainspec_result;
+
+/* Validation alone: BKF_EINPUT with a one-line message naming the parameter. */
+int bkf_trainspec_check(const bkf_model_params *params, const bkf_trainspec_train *train,
+                        const bkf_trainspec_options *options, bkf_error *err);
+
+/* The ring spectrum of the train.  *result is overwritten; free it with
+ * bkf_trainspec_result_free (also after a failure).  BKF_ETOL when an
+ * eigenvalue's estimate stays above tol at the finest mesh allowed,
+ * BKF_EBUDGET when the window's height or the mesh outgrows the budget. */
+int bkf_trainspec_ring(const bkf_model_params *params, const bkf_trainspec_train *train,
+                       const bkf_trainspec_options *options, bkf_trainspec_result *result,
+                       bkf_error *err);
+void bkf_trainspec_result_free(bkf_trainspec_result *result);
+
+/* The continuous spectrum on the infinite line: for each of `count` Bloch
+ * numbers kappa_i = (2 pi / L) i / count, the rightmost sigma (re, im, err
+ * in out[i], j = i).  The translation's branch passes through 0 at kappa 0. */
+int bkf_trainspec_line(const bkf_model_params *params, const bkf_trainspec_train *train,
+                       const bkf_trainspec_options *options, size_t count,
+                       bkf_trainspec_eigenvalue *out, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,760 @@
+/* Spectra of front trains by the monodromy of the shifted variational
+ * equation (see trainspec.h and docs/numerics.md, "Spectra of front trains"). */
+#include "bkfront/trainspec.h"
+
+#include "bkfront/cycle.h"
+
+#include <gsl/gsl_math.h>
+
+#include <complex.h>
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define TOL_MIN 1e-10
+#define TOL_MAX 1e-2
+#define PER_KAPPA_MAX 50
+/* Magnus substeps per cycle step: start, and the most the refinement may reach. */
+#define SUBSTEPS_START 2
+#define MESH_MAX_STEPS 400000
+/* Heights sampled per family on the first pass, and the finest interval as
+ * a fraction of the window. */
+#define CURVE_START 96
+#define CURVE_MIN_FRACTION (1.0 / 65536.0)
+#define Y_MAX_LIMIT 1e4
+#define NEWTON_MAX 30
+#define MESH_REFINEMENTS 4
+
+enum { FAMILIES = 2 };
+
+/* Coefficients at the two Gauss points of every Magnus step:
+ * u'' = a u' + (b0 + beta sigma (sigma + gamma phi)) u. */
+typedef struct {
+    size_t steps;
+    double *h, *a, *b0, *phi; /* h per step; a, b0, phi: 2 per step */
+    double trace_sum;         /* sum of the steps' traces: ln det M */
+} mesh;
+
+typedef struct {
+    double gamma, c, nu, mu, v, s, beta, T, log_m, S, L;
+    size_t n;
+    double tol;
+    bkf_cycle *cycle;
+    double *nodes; /* cycle mesh 0..T */
+    size_t node_count;
+    size_t substeps;
+    mesh coarse, fine;
+    size_t evaluations;
+} ctx;
+
+/* ------------------------------------------------------------- meshes */
+
+static void mesh_free(mesh *m)
+{
+    free(m->h);
+    free(m->a);
+    free(m->b0);
+    free(m->phi);
+    memset(m, 0, sizeof *m);
+}
+
+static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
+{
+    mesh_free(m);
+    size_t steps = (x->node_count - 1) * substeps;
+    if (steps > MESH_MAX_STEPS)
+        return bkf_error_set(err, BKF_EBUDGET,
+                             "the spectrum needs more than %d Magnus steps per period (mu = %.15g)",
+                             MESH_MAX_STEPS, x->mu);
+    m->steps = steps;
+    m->h = malloc(steps * sizeof *m->h);
+    m->a = malloc(2 * steps * sizeof *m->a);
+    m->b0 = malloc(2 * steps * sizeof *m->b0);
+    m->phi = malloc(2 * steps * sizeof *m->phi);
+    double *z = malloc(2 * steps * sizeof *z), *f = malloc(2 * steps * sizeof *f),
+           *fp = malloc(2 * steps * sizeof *fp);
+    int rc = BKF_OK;
+    if (!m->h || !m->a || !m->b0 || !m->phi || !z || !f || !fp) {
+        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        goto done;
+    }
+    const double g = 0.5 / sqrt(3.0);
+    size_t k = 0;
+    for (size_t i = 0; i + 1 < x->node_count; i++) {
+        double h = (x->nodes[i + 1] - x->nodes[i]) / (double)substeps;
+        for (size_t q = 0; q < substeps; q++, k++) {
+            double mid = x->nodes[i] + (q + 0.5) * h;
+            m->h[k] = h;
+            z[2 * k] = fmax(mid - g * h, 0.0);
+            z[2 * k + 1] = fmin(mid + g * h, x->T);
+        }
+    }
+    rc = bkf_cycle_profile_sample(x->cycle, z, 2 * steps, f, fp, err);
+    if (rc != BKF_OK) goto done;
+    m->trace_sum = 0.0;
+    for (size_t i = 0; i < 2 * steps; i++) {
+        m->phi[i] = f[i] * f[i] - 1.0;
+        m->a[i] = -x->mu * m->phi[i];
+        m->b0[i] = -(1.0 + 2.0 * x->mu * f[i] * fp[i]);
+    }
+    for (size_t i = 0; i < steps; i++) m->trace_sum += 0.5 * m->h[i] * (m->a[2 * i] + m->a[2 * i + 1]);
+done:
+    free(z);
+    free(f);
+    free(fp);
+    if (rc != BKF_OK) mesh_free(m);
+    return rc;
+}
+
+/* ---------------------------------------------------------- monodromy */
+
+/* ln of the two multipliers of psi's perturbation over one period at sigma:
+ * w[0] the larger in modulus, w[1] the smaller.  The product is kept scaled
+ * (its log in `scale`) so that neither stiff decay nor growth over- or
+ * underflows; the smaller multiplier comes from det M = exp(trace_sum),
+ * free of cancellation. */
+static void monodromy(ctx *x, const mesh *m, double complex sigma, double complex w[2])
+{
+    x->evaluations++;
+    double complex p11 = 1, p12 = 0, p21 = 0, p22 = 1;
+    double scale = 0.0;
+    const double r3 = sqrt(3.0) / 12.0;
+    double complex extra = x->beta * sigma, gsig = x->gamma;
+    for (size_t i = 0; i < m->steps; i++) {
+        double h = m->h[i], a1 = m->a[2 * i], a2 = m->a[2 * i + 1];
+        double complex b1 = m->b0[2 * i] + extra * (sigma + gsig * m->phi[2 * i]);
+        double complex b2 = m->b0[2 * i + 1] + extra * (sigma + gsig * m->phi[2 * i + 1]);
+        double k = r3 * h * h;
+        double tr = 0.5 * h * (a1 + a2);
+        /* Omega = h/2 (A1 + A2) - sqrt(3) h^2/12 [A1, A2], A = [[0, 1], [b, a]] */
+        double complex n11 = -k * (b2 - b1) - 0.5 * tr;
+        double complex n12 = h - k * (a2 - a1);
+        double complex n21 = 0.5 * h * (b1 + b2) - k * (a1 * b2 - a2 * b1);
+        double complex d2 = n11 * n11 + n12 * n21, d = csqrt(d2);
+        double complex ch, sc;
+        double lg = 0.5 * tr;
+        if (cabs(d) < 0.5) {
+            ch = ccosh(d);
+            sc = d == 0 ? 1.0 : csinh(d) / d;
+        } else {
+            double complex e = cexp(-2.0 * d);
+            double complex ph = cexp(I * cimag(d));
+            ch = 0.5 * (1.0 + e) * ph;
+            sc = 0.5 * (1.0 - e) / d * ph;
+            lg += creal(d);
+        }
+        double complex e11 = ch + sc * n11, e22 = ch - sc * n11, e12 = sc * n12, e21 = sc * n21;
+        double complex q11 = e11 * p11 + e12 * p21, q12 = e11 * p12 + e12 * p22;
+        double complex q21 = e21 * p11 + e22 * p21, q22 = e21 * p12 + e22 * p22;
+        p11 = q11, p12 = q12, p21 = q21, p22 = q22;
+        scale += lg;
+        double big = fmax(fmax(cabs(p11), cabs(p12)), fmax(cabs(p21), cabs(p22)));
+        if (big > 0x1p200 || big < 0x1p-200) {
+            int e2;
+            frexp(big, &e2);
+            p11 = ldexp(creal(p11), -e2) + I * ldexp(cimag(p11), -e2);
+            p12 = ldexp(creal(p12), -e2) + I * ldexp(cimag(p12), -e2);
+            p21 = ldexp(creal(p21), -e2) + I * ldexp(cimag(p21), -e2);
+            p22 = ldexp(creal(p22), -e2) + I * ldexp(cimag(p22), -e2);
+            scale += e2 * M_LN2;
+        }
+    }
+    double complex half = 0.5 * (p11 + p22), det = p11 * p22 - p12 * p21;
+    double complex root = csqrt(half * half - det);
+    double complex big = cabs(half + root) >= cabs(half - root) ? half + root : half - root;
+    double complex shift = sigma * x->T / x->s;
+    double complex lb = scale + clog(big);
+    w[0] = lb - shift;
+    w[1] = m->trace_sum - lb - shift;
+}
+
+static double wrap(double phase)
+{
+    return phase - 2.0 * M_PI * floor(phase / (2.0 * M_PI) + 0.5);
+}
+
+/* w and dw/dsigma of one family at sigma (central differences; the phase
+ * differences wrapped, w being ln of a multiplier). */
+static void family_eval(ctx *x, const mesh *m, int fam, double complex sigma, double complex *w,
+                        double complex *dw)
+{
+    double complex w0[2], wp[2], wm[2];
+    monodromy(x, m, sigma, w0);
+    *w = w0[fam];
+    if (!dw) return;
+    double h = 1e-5 * fmax(1.0, cabs(sigma));
+    monodromy(x, m, sigma + h, wp);
+    monodromy(x, m, sigma - h, wm);
+    double complex diff = wp[fam] - wm[fam];
+    diff = creal(diff) + I * wrap(cimag(diff));
+    *dw = diff / (2.0 * h);
+}
+
+/* ------------------------------------------------------ curve tracing */
+
+typedef struct {
+    double y;
+    int found;         /* the family's multiplier reaches modulus 1 right of a_lo */
+    double a;          /* Re sigma there */
+    double slope;      /* da/dy along the curve */
+    double phase;      /* arg of the multiplier (principal), then unwrapped */
+    double rate;       /* d phase / dy along the curve */
+} curve_point;
+
+typedef struct {
+    double a_lo, a_hi;
+} window;
+
+/* The rightmost a in [a_lo, a_hi] where Re w_fam(a + i y) = 0, by bisection
+ * safeguarded secant (Re w decreases in a: the multipliers shrink to the
+ * right). */
+static int point_at(ctx *x, const mesh *m, int fam, window *win, double y, curve_point *pt)
+{
+    pt->y = y;
+    pt->found = 0;
+    double complex w[2];
+    for (int grow = 0;; grow++) {
+        monodromy(x, m, win->a_hi + I * y, w);
+        if (creal(w[0]) < 0.0) break;
+        if (grow > 40) return BKF_ENUMERIC;
+        win->a_hi *= 2.0;
+    }
+    double flo, fhi = creal(w[fam]);
+    monodromy(x, m, win->a_lo + I * y, w);
+    flo = creal(w[fam]);
+    if (flo < 0.0) return BKF_OK;
+    double lo = win->a_lo, hi = win->a_hi;
+    double tol_a = 1e-3 * x->tol;
+    for (int it = 0; it < 200 && hi - lo > tol_a; it++) {
+        double t = lo + (hi - lo) * flo / (flo - fhi);
+        double span = hi - lo;
+        if (!(t > lo + 0.01 * span && t < hi - 0.01 * span)) t = 0.5 * (lo + hi);
+        monodromy(x, m, t + I * y, w);
+        double ft = creal(w[fam]);
+        if (ft >= 0.0) lo = t, flo = ft;
+        else hi = t, fhi = ft;
+        if (fabs(ft) < 1e-3 * tol_a) {
+            lo = hi = t;
+            break;
+        }
+    }
+    double a = 0.5 * (lo + hi);
+    double complex wv, dw;
+    family_eval(x, m, fam, a + I * y, &wv, &dw);
+    pt->found = 1;
+    pt->a = a;
+    pt->phase = cimag(wv);
+    /* along Re w = 0: da/dy = Im w' / Re w', dphase/dy = |w'|^2 / Re w' */
+    double re = creal(dw), im = cimag(dw);
+    if (re == 0.0) return BKF_ENUMERIC;
+    pt->slope = im / re;
+    pt->rate = (re * re + im * im) / re;
+    return BKF_OK;
+}
+
+typedef struct {
+    curve_point *pts;
+    size_t count, cap;
+} curve;
+
+static int curve_push(curve *c, const curve_point *p)
+{
+    if (c->count == c->cap) {
+        size_t cap = c->cap ? 2 * c->cap : 256;
+        curve_point *g = realloc(c->pts, cap * sizeof *g);
+        if (!g) return BKF_ENOMEM;
+        c->pts = g;
+        c->cap = cap;
+    }
+    c->pts[c->count++] = *p;
+    return BKF_OK;
+}
+
+/* Does the interval between two samples need a sample in between: an edge
+ * of the curve, a phase step the rates do not account for, or a bend the
+ * linear interpolation of a misses. */
+static int needs_split(const ctx *x, const curve_point *p, const curve_point *q, double min_dy)
+{
+    double dy = q->y - p->y;
+    if (dy <= min_dy) return 0;
+    if (p->found != q->found) return 1;
+    if (!p->found) return 0;
+    double est = 0.5 * (p->rate + q->rate) * dy;
+    double darg = wrap(q->phase - p->phase);
+    double turns = nearbyint((est - darg) / (2.0 * M_PI));
+    if (fabs(est - (darg + 2.0 * M_PI * turns)) > 0.3) return 1;
+    if (fabs(q->slope - p->slope) * dy > fmax(0.05 * fabs(p->a) + 1e-3, 100.0 * x->tol)) return 1;
+    return 0;
+}
+
+/* Trace one family over [y0, y1] into c (appending, y increasing), refining
+ * where needs_split says so. */
+static int trace(ctx *x, int fam, window *win, double y0, double y1, double y_scale, curve *c)
+{
+    double min_dy = y_scale * CURVE_MIN_FRACTION;
+    size_t start = c->count;
+    for (int i = 0; i <= CURVE_START; i++) {
+        if (i == 0 && start > 0) continue; /* y0 is the previous pass's last point */
+        curve_point pt;
+        int rc = point_at(x, &x->coarse, fam, win, y0 + (y1 - y0) * i / CURVE_START, &pt);
+        if (rc != BKF_OK) return rc;
+        if (curve_push(c, &pt) != BKF_OK) return BKF_ENOMEM;
+    }
+    /* refine: insert midpoints until no interval asks for more */
+    for (size_t i = start ? start - 1 : 0; i + 1 < c->count;) {
+        if (!needs_split(x, &c->pts[i], &c->pts[i + 1], min_dy)) {
+            i++;
+            continue;
+        }
+        curve_point mid;
+        int rc = point_at(x, &x->coarse, fam, win, 0.5 * (c->pts[i].y + c->pts[i + 1].y), &mid);
+        if (rc != BKF_OK) return rc;
+        if (curve_push(c, &mid) != BKF_OK) return BKF_ENOMEM;
+        memmove(&c->pts[i + 2], &c->pts[i + 1], (c->count - i - 2) * sizeof *c->pts);
+        c->pts[i + 1] = mid;
+    }
+    return BKF_OK;
+}
+
+/* ------------------------------------------------------------ candidates */
+
+typedef struct {
+    double a, y;   /* interpolated sigma */
+    size_t cls;    /* phase class: the multiplier's phase is 2 pi cls / classes */
+    int fam;
+    int conj;      /* mirrored from y > 0 */
+} candidate;
+
+typedef struct {
+    candidate *items;
+    size_t count, cap;
+} candidates;
+
+static int cand_push(candidates *cs, candidate c)
+{
+    if (cs->count == cs->cap) {
+        size_t cap = cs->cap ? 2 * cs->cap : 1024;
+        candidate *g = realloc(cs->items, cap * sizeof *g);
+        if (!g) return BKF_ENOMEM;
+        cs->items = g;
+        cs->cap = cap;
+    }
+    cs->items[cs->count++] = c;
+    return BKF_OK;
+}
+
+/* Every point of the traced curve where the multiplier's phase is a multiple
+ * of 2 pi / classes, with its mirror image below the real axis. */
+static int collect(const curve *c, int fam, size_t classes, candidates *out)
+{
+    if (c->count == 0) return BKF_OK;
+    double step = 2.0 * M_PI / (double)classes;
+    /* unwrap the phase with the rates */
+    double psi = c->pts[0].phase;
+    for (size_t i = 0; i < c->count; i++) {
+        curve_point *p = &c->pts[i];
+        if (!p->found) continue;
+        if (i > 0 && c->pts[i - 1].found) {
+            const curve_point *q = &c->pts[i - 1];
+            double est = 0.5 * (p->rate + q->rate) * (p->y - q->y);
+            double darg = wrap(p->phase - q->phase);
+            psi += darg + 2.0 * M_PI * nearbyint((est - darg) / (2.0 * M_PI));
+        } else {
+            psi = p->phase;
+            /* a point alone on the real axis is a candidate itself */
+            double l = psi / step;
+            if (p->y == 0.0 && fabs(l - nearbyint(l)) < 1e-6) {
+                long cls = ((long)nearbyint(l) % (long)classes + (long)classes) % (long)classes;
+                if (cand_push(out, (candidate){p->a, 0.0, (size_t)cls, fam, 0}) != BKF_OK) return BKF_ENOMEM;
+            }
+        }
+        p->phase = psi; /* unwrapped from here on */
+        if (i == 0 || !c->pts[i - 1].found) continue;
+        const curve_point *q = &c->pts[i - 1];
+        double lo = fmin(q->phase, p->phase), hi = fmax(q->phase, p->phase);
+        for (double l = floor(lo / step) + 1.0; l * step <= hi; l += 1.0) {
+            if (l * step == lo) continue;
+            double t = (l * step - q->phase) / (p->phase - q->phase);
+            double dy = p->y - q->y;
+            /* Hermite interpolation of a with the slopes */
+            double h00 = 2 * t * t * t - 3 * t * t + 1, h10 = t * t * t - 2 * t * t + t;
+            double h01 = -2 * t * t * t + 3 * t * t, h11 = t * t * t - t * t;
+            double a = h00 * q->a + h10 * dy * q->slope + h01 * p->a + h11 * dy * p->slope;
+            double y = q->y + t * dy;
+            long cls = ((long)l % (long)classes + (long)classes) % (long)classes;
+            if (cand_push(out, (candidate){a, y, (size_t)cls, fam, 0}) != BKF_OK) return BKF_ENOMEM;
+            if (y > 0.0) {
+                size_t mirror = (size_t)((classes - (size_t)cls) % classes);
+                if (cand_push(out, (candidate){a, -y, mirror, fam, 1}) != BKF_OK) return BKF_ENOMEM;
+            }
+        }
+    }
+    return BKF_OK;
+}
+
+/* ------------------------------------------------------------- polishing */
+
+/* Newton on w(sigma) = i theta (mod 2 pi i), over whichever family fits
+ * best, on mesh m. */
+static int polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step)
+{
+    double complex s = *sigma;
+    *last_step = INFINITY;
+    for (int it = 0; it < NEWTON_MAX; it++) {
+        double complex w0[2];
+        monodromy(x, m, s, w0);
+        int fam = 0;
+        double complex r[2];
+        for (int f = 0; f < FAMILIES; f++) r[f] = creal(w0[f]) + I * wrap(cimag(w0[f]) - theta);
+        if (cabs(r[1]) < cabs(r[0])) fam = 1;
+        double complex w, dw;
+        family_eval(x, m, fam, s, &w, &dw);
+        if (dw == 0) return BKF_ENUMERIC;
+        double complex step = r[fam] / dw;
+        if (cabs(step) > 0.5) step *= 0.5 / cabs(step);
+        s -= step;
+        *last_step = cabs(step);
+        if (!isfinite(creal(s)) || !isfinite(cimag(s))) return BKF_ENUMERIC;
+        if (*last_step < 1e-4 * x->tol) break;
+    }
+    *sigma = s;
+    return *last_step < 1e-2 * x->tol ? BKF_OK : BKF_ENUMERIC;
+}
+
+static int by_a_desc(const void *pa, const void *pb)
+{
+    const candidate *a = pa, *b = pb;
+    if (a->cls != b->cls) return a->cls < b->cls ? -1 : 1;
+    return (a->a < b->a) - (a->a > b->a);
+}
+
+static int eig_desc(const void *pa, const void *pb)
+{
+    const bkf_trainspec_eigenvalue *a = pa, *b = pb;
+    if (a->j != b->j) return a->j < b->j ? -1 : 1;
+    return (a->re < b->re) - (a->re > b->re);
+}
+
+/* ------------------------------------------------------------------ api */
+
+bkf_trainspec_options bkf_trainspec_options_default(void)
+{
+    return (bkf_trainspec_options){.tol = 1e-6, .per_kappa = 3};
+}
+
+const char *bkf_trainspec_verdict_name(bkf_trainspec_verdict v)
+{
+    switch (v) {
+    case BKF_TRAINSPEC_STABLE: return "yes";
+    case BKF_TRAINSPEC_UNSTABLE: return "no";
+    default: return "unresolved";
+    }
+}
+
+int bkf_trainspec_check(const bkf_model_params *p, const bkf_trainspec_train *t,
+                        const bkf_trainspec_options *o, bkf_error *err)
+{
+    if (!p || !t) return bkf_error_set(err, BKF_EINPUT, "parameters and train are required");
+    int rc;
+    if ((rc = bkf_model_check_positive("gamma", p->gamma, err)) != BKF_OK) return rc;
+    if ((rc = bkf_model_check_positive("S", p->S, err)) != BKF_OK) return rc;
+    if ((rc = bkf_model_check_nu_active(p->nu, err)) != BKF_OK) return rc;
+    if (!(p->c > 0.0) || !isfinite(p->c))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "c must be finite and > 0 for a spectrum (with c = 0 the fronts are phase waves "
+                             "of uncoupled oscillators: every mode is neutral)");
+    if (t->n < 1) return bkf_error_set(err, BKF_EINPUT, "n must be >= 1");
+    if (!(t->v > p->c) || !isfinite(t->v))
+        return bkf_error_set(err, BKF_EINPUT, "v must be finite and > c = %.15g (fronts are supersonic)", p->c);
+    if (o) {
+        if (!(o->tol >= TOL_MIN && o->tol <= TOL_MAX))
+            return bkf_error_set(err, BKF_EINPUT, "tol must be in [%g, %g]", TOL_MIN, TOL_MAX);
+        if (o->per_kappa < 1 || o->per_kappa > PER_KAPPA_MAX)
+            return bkf_error_set(err, BKF_EINPUT, "per_kappa must be in [1, %d]", PER_KAPPA_MAX);
+    }
+    return BKF_OK;
+}
+
+static void ctx_free(ctx *x)
+{
+    mesh_free(&x->coarse);
+    mesh_free(&x->fine);
+    bkf_cycle_free(x->cycle);
+    free(x->nodes);
+}
+
+static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, double tol,
+                    bkf_error *err)
+{
+    memset(x, 0, sizeof *x);
+    x->gamma = p->gamma;
+    x->c = p->c;
+    x->nu = p->nu;
+    x->S = p->S;
+    x->n = t->n;
+    x->v = t->v;
+    x->tol = tol;
+    x->s = sqrt((t->v - p->c) * (t->v + p->c)) / t->v;
+    x->mu = p->gamma / x->s;
+    x->beta = (p->c / t->v) * (p->c / t->v) / (x->s * x->s);
+    x->L = p->S / (double)t->n;
+    x->cycle = bkf_cycle_alloc();
+    if (!x->cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    bkf_cycle_options co = bkf_cycle_options_default();
+    co.tol = 1e-12;
+    int rc = bkf_cycle_solve(x->cycle, x->mu, x->nu, &co, err);
+    if (rc != BKF_OK) return rc;
+    const bkf_cycle_result *cr = bkf_cycle_get(x->cycle);
+    x->T = cr->period;
+    x->log_m = cr->log_multiplier;
+    size_t count = bkf_cycle_mesh(x->cycle, NULL, 0);
+    x->nodes = malloc((count + 1) * sizeof *x->nodes);
+    if (!x->nodes) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    bkf_cycle_mesh(x->cycle, x->nodes, count);
+    x->nodes[count] = x->T;
+    x->node_count = count + 1;
+    x->substeps = SUBSTEPS_START;
+    if ((rc = mesh_build(x, x->substeps, &x->coarse, err)) != BKF_OK) return rc;
+    return mesh_build(x, 2 * x->substeps, &x->fine, err);
+}
+
+/* Trace both families over [0, B], B grown until the curves stay left of
+ * a_lo in its upper quarter. */
+static int trace_all(ctx *x, window *win, curve fam_curves[FAMILIES], double *y_max, bkf_error *err)
+{
+    double B = fmax(8.0, 4.0 * x->gamma * x->v / x->c);
+    double y0 = 0.0;
+    for (;;) {
+        for (int f = 0; f < FAMILIES; f++) {
+            int rc = trace(x, f, win, y0, B, B, &fam_curves[f]);
+            if (rc == BKF_ENOMEM) return bkf_error_set(err, rc, "out of memory");
+            if (rc != BKF_OK)
+                return bkf_error_set(err, rc, "spectrum: the multiplier curve could not be traced (mu = %.15g)",
+                                     x->mu);
+        }
+        int above = 0;
+        for (int f = 0; f < FAMILIES; f++)
+            for (size_t i = 0; i < fam_curves[f].count; i++)
+                if (fam_curves[f].pts[i].found && fam_curves[f].pts[i].y > 0.75 * B) above = 1;
+        if (!above) break;
+        if (2.0 * B > Y_MAX_LIMIT)
+            return bkf_error_set(err, BKF_EBUDGET,
+                                 "spectrum: eigenvalues right of %.3g reach beyond |Im sigma| = %g", win->a_lo,
+                                 Y_MAX_LIMIT);
+        y0 = B;
+        B *= 2.0;
+    }
+    *y_max = B;
+    return BKF_OK;
+}
+
+/* Spectrum in `classes` phase classes: per class the `keep` rightmost
+ * eigenvalues, polished on the fine mesh with error estimates. */
+static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
+                    window *win, double *y_max, size_t *curve_points, bkf_error *err)
+{
+    curve curves[FAMILIES] = {{0}};
+    candidates cs = {0};
+    bkf_trainspec_eigenvalue *eig = NULL;
+    size_t n_eig = 0;
+    int rc = trace_all(x, win, curves, y_max, err);
+    for (int f = 0; f < FAMILIES && rc == BKF_OK; f++) {
+        *curve_points += curves[f].count;
+        if (collect(&curves[f], f, classes, &cs) != BKF_OK) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    if (rc == BKF_OK) {
+        qsort(cs.items, cs.count, sizeof *cs.items, by_a_desc);
+        eig = calloc(classes * (keep + 2) + 1, sizeof *eig);
+        if (!eig) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    /* polish the best few of each class; mirrored classes (j > classes/2)
+     * come out of their partners by conjugation */
+    for (size_t i = 0; i < cs.count && rc == BKF_OK;) {
+        size_t cls = cs.items[i].cls, taken = 0, start_n = n_eig;
+        for (; i < cs.count && cs.items[i].cls == cls; i++) {
+            if (taken >= keep + 2) continue;
+            candidate cd = cs.items[i];
+            double theta = 2.0 * M_PI * (double)cls / (double)classes;
+            double complex sc = cd.a + I * cd.y, sf;
+            double step_c, step_f;
+            if (polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
+            sf = sc;
+            if (polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
+            double e = cabs(sf - sc) + step_f;
+            int dup = 0;
+            for (size_t k = start_n; k < n_eig; k++)
+                if (cabs((eig[k].re + I * eig[k].im) - sf) < 10.0 * fmax(e, x->tol)) dup = 1;
+            if (dup) continue;
+            eig[n_eig++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), e, cls, 0.0, 0};
+            taken++;
+        }
+    }
+    if (rc == BKF_OK) {
+        qsort(eig, n_eig, sizeof *eig, eig_desc);
+        /* keep `keep` per class */
+        size_t w = 0;
+        for (size_t i = 0; i < n_eig; i++) {
+            size_t same = 0;
+            for (size_t k = 0; k < w; k++) same += eig[k].j == eig[i].j;
+            if (same < keep) eig[w++] = eig[i];
+        }
+        n_eig = w;
+    }
+    for (int f = 0; f < FAMILIES; f++) free(curves[f].pts);
+    free(cs.items);
+    if (rc != BKF_OK) {
+        free(eig);
+        return rc;
+    }
+    *out = eig;
+    *count = n_eig;
+    return BKF_OK;
+}
+
+static double max_err_of_leading(const bkf_trainspec_eigenvalue *e, size_t count)
+{
+    double worst = 0.0;
+    for (size_t i = 0; i < count; i++) worst = fmax(worst, e[i].err);
+    return worst;
+}
+
+/* Run `spectrum`, refining the mesh until every reported error meets tol. */
+static int spectrum_to_tol(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out,
+                           size_t *count, window *win, double *y_max, size_t *curve_points, bkf_error *err)
+{
+    for (int r = 0;; r++) {
+        int rc = spectrum(x, classes, keep, out, count, win, y_max, curve_points, err);
+        if (rc != BKF_OK) return rc;
+        double worst = max_err_of_leading(*out, *count);
+        if (worst <= x->tol) return BKF_OK;
+        if (r == MESH_REFINEMENTS)
+            return bkf_error_set(err, BKF_ETOL,
+                                 "spectrum: an eigenvalue's estimated error %.3g exceeds tol %.3g at %zu Magnus "
+                                 "steps per period",
+                                 worst, x->tol, x->fine.steps);
+        free(*out);
+        *out = NULL;
+        x->substeps *= 2;
+        if ((rc = mesh_build(x, x->substeps, &x->coarse, err)) != BKF_OK) return rc;
+        if ((rc = mesh_build(x, 2 * x->substeps, &x->fine, err)) != BKF_OK) return rc;
+    }
+}
+
+static window initial_window(const ctx *x, double *r_inf)
+{
+    *r_inf = x->s * x->log_m / (2.0 * x->T);
+    return (window){.a_lo = 0.5 * *r_inf, .a_hi = fmax(1.0, x->gamma)};
+}
+
+void bkf_trainspec_result_free(bkf_trainspec_result *r)
+{
+    if (!r) return;
+    free(r->eigenvalues);
+    r->eigenvalues = NULL;
+    r->count = 0;
+}
+
+int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
+                       const bkf_trainspec_options *options, bkf_trainspec_result *r, bkf_error *err)
+{
+    if (!r) return bkf_error_set(err, BKF_EINPUT, "result is NULL");
+    memset(r, 0, sizeof *r);
+    bkf_trainspec_options o = options ? *options : bkf_trainspec_options_default();
+    int rc = bkf_trainspec_check(p, t, &o, err);
+    if (rc != BKF_OK) return rc;
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    ctx x;
+    rc = ctx_init(&x, p, t, o.tol, err);
+    window win = initial_window(&x, &r->r_inf);
+    if (rc == BKF_OK)
+        rc = spectrum_to_tol(&x, t->n, o.per_kappa, &r->eigenvalues, &r->count, &win, &r->y_max,
+                             &r->curve_points, err);
+    if (rc == BKF_OK) {
+        r->params = *p;
+        r->n = t->n;
+        r->v = t->v;
+        r->mu = x.mu;
+        r->T = x.T;
+        r->L = x.L;
+        r->a_lo = win.a_lo;
+        r->mesh_steps = x.fine.steps;
+        /* translation: the eigenvalue of class 0 nearest 0 */
+        double complex w[2];
+        monodromy(&x, &x.fine, 0.0, w);
+        r->liouville_residual = fabs(x.fine.trace_sum - x.log_m);
+        size_t best = r->count;
+        for (size_t i = 0; i < r->count; i++)
+            if (r->eigenvalues[i].j == 0 &&
+                (best == r->count ||
+                 hypot(r->eigenvalues[i].re, r->eigenvalues[i].im) <
+                     hypot(r->eigenvalues[best].re, r->eigenvalues[best].im)))
+                best = i;
+        double residual = fmin(cabs(w[0]), cabs(w[1])) / (x.T / x.s);
+        if (best < r->count && hypot(r->eigenvalues[best].re, r->eigenvalues[best].im) < 10.0 * o.tol) {
+            r->eigenvalues[best].translation = 1;
+            residual = hypot(r->eigenvalues[best].re, r->eigenvalues[best].im);
+        }
+        r->translation_residual = residual;
+        r->sigma_max = -INFINITY;
+        for (size_t i = 0; i < r->count; i++) {
+            bkf_trainspec_eigenvalue *e = &r->eigenvalues[i];
+            e->kappa = 2.0 * M_PI * (double)e->j / p->S;
+            if (e->translation || e->re <= r->sigma_max) continue;
+            r->sigma_max = e->re;
+            r->sigma_max_im = e->im;
+            r->sigma_max_err = e->err;
+            r->kappa_max = e->kappa;
+        }
+        if (!isfinite(r->sigma_max)) {
+            /* nothing right of a_lo but the translation */
+            r->sigma_max = win.a_lo;
+            r->sigma_max_err = 0.0;
+            r->verdict = BKF_TRAINSPEC_STABLE;
+        } else {
+            r->complex_pair = fabs(r->sigma_max_im) > r->sigma_max_err;
+            r->verdict = r->sigma_max + r->sigma_max_err < 0.0   ? BKF_TRAINSPEC_STABLE
+                         : r->sigma_max - r->sigma_max_err > 0.0 ? BKF_TRAINSPEC_UNSTABLE
+                                                                 : BKF_TRAINSPEC_UNRESOLVED;
+        }
+        r->evaluations = x.evaluations;
+    }
+    ctx_free(&x);
+    bkf_gsl_handler_pop(handler);
+    if (rc != BKF_OK) bkf_trainspec_result_free(r);
+    return rc;
+}
+
+int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
+                       const bkf_trainspec_options *options, size_t count, bkf_trainspec_eigenvalue *out,
+                       bkf_error *err)
+{
+    bkf_trainspec_options o = options ? *options : bkf_trainspec_options_default();
+    int rc = bkf_trainspec_check(p, t, &o, err);
+    if (rc != BKF_OK) return rc;
+    if (count < 2 || count > 100000) return bkf_error_set(err, BKF_EINPUT, "count must be in [2, 100000]");
+    if (!out) return bkf_error_set(err, BKF_EINPUT, "out is NULL");
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    ctx x;
+    rc = ctx_init(&x, p, t, o.tol, err);
+    double r_inf, y_max;
+    size_t points = 0, n_eig = 0;
+    window win = initial_window(&x, &r_inf);
+    bkf_trainspec_eigenvalue *eig = NULL;
+    if (rc == BKF_OK) rc = spectrum_to_tol(&x, count, 1, &eig, &n_eig, &win, &y_max, &points, err);
+    if (rc == BKF_OK) {
+        double L = x.L;
+        for (size_t i = 0; i < count; i++)
+            out[i] = (bkf_trainspec_eigenvalue){NAN, NAN, NAN, i, 2.0 * M_PI * (double)i / ((double)count * L), 0};
+        for (size_t k = 0; k < n_eig; k++) {
+            size_t j = eig[k].j;
+            out[j].re = eig[k].re;
+            out[j].im = eig[k].im;
+            out[j].err = eig[k].err;
+        }
+    }
+    free(eig);
+    ctx_free(&x);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
