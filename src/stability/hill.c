@@ -110,7 +110,7 @@ static int spectrum_body(bkf_cycle *cycle, double gamma, double theta, size_t M,
         lapack_int info = LAPACKE_zgeev(LAPACK_COL_MAJOR, 'N', 'N', (lapack_int)n, A, (lapack_int)n, w,
                                         NULL, 1, NULL, 1);
         if (info != 0)
-            rc = bkf_error_set(err, info < 0 ? BKF_ENOMEM : BKF_ENUMERIC,
+            rc = bkf_error_set(err, info == LAPACK_WORK_MEMORY_ERROR ? BKF_ENOMEM : BKF_ENUMERIC,
                                "zgeev failed (info %d) on the Hill matrix of size %zu", (int)info, n);
     }
     for (size_t i = 0; rc == BKF_OK && i < n; i++) {
