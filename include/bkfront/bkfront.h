@@ -14,6 +14,7 @@
 #include "bkfront/speeds.h"
 #include "bkfront/asymfit.h"
 #include "bkfront/floquet.h"
+#include "bkfront/hill.h"
 #include "bkfront/trainspec.h"
 #include "bkfront/pde.h"
 #include "bkfront/comoving.h"

@@ -1,0 +1,178 @@
+/* Hill's method for the spectrum of a front train (hill.h).
+ *
+ * Unknowns: the Fourier coefficients p_m, q_m, m = -M..M, of the periodic
+ * parts, in that order (p first).  D acts on mode m as i k_m with
+ * k_m = (theta + 2 pi m)/T, and (f^2 - 1) p is the convolution
+ * sum_m g_{m'-m} p_m with the coefficients g of f^2 - 1, needed for
+ * |m' - m| <= 2M.  They come from a DFT of 4M + 2 uniform samples: every
+ * index in -2M..2M is then distinct modulo the sample count, and the
+ * aliased coefficients (|k| >= 2M + 2) are far below the truncation error,
+ * which is set by |k| ~ M. */
+#include "bkfront/hill.h"
+
+#include <complex.h>
+#include <lapacke.h>
+#include <math.h>
+#include <stdlib.h>
+
+/* M_PI is not C11 */
+#define TWO_PI 6.283185307179586476925286766559
+
+static int check_inputs(const bkf_cycle *cycle, double gamma, double theta, size_t modes,
+                        size_t modes_max, bkf_error *err)
+{
+    const bkf_cycle_result *r = cycle ? bkf_cycle_get(cycle) : NULL;
+    if (!r) return bkf_error_set(err, BKF_EINPUT, "cycle must hold a solution (bkf_cycle_solve first)");
+    if (!(gamma > 0 && gamma <= r->mu))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "gamma must be in (0, mu] with mu = %.17g the cycle's (mu = gamma/sqrt(1 - c^2/v^2))",
+                             r->mu);
+    if (!isfinite(theta)) return bkf_error_set(err, BKF_EINPUT, "theta must be finite");
+    if (modes < BKF_HILL_MODES_MIN || modes > modes_max)
+        return bkf_error_set(err, BKF_EINPUT, "modes must be in [%d, %zu]", BKF_HILL_MODES_MIN, modes_max);
+    return BKF_OK;
+}
+
+/* g[k] for k = 0..2M, the Fourier coefficients of f^2 - 1 over one period
+ * (g_{-k} = conj g_k: f is real). */
+static int profile_coefficients(bkf_cycle *cycle, size_t M, double complex *g, bkf_error *err)
+{
+    double T = bkf_cycle_get(cycle)->period;
+    size_t ns = 4 * M + 2, nk = 2 * M + 1;
+    double *h = malloc(sizeof(double) * ns);
+    double *cs = malloc(sizeof(double) * 2 * ns);
+    if (!h || !cs) {
+        free(h);
+        free(cs);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    int rc = BKF_OK;
+    for (size_t j = 0; j < ns && rc == BKF_OK; j++) {
+        double f;
+        rc = bkf_cycle_profile(cycle, T * (double)j / (double)ns, &f, NULL, err);
+        h[j] = f * f - 1.0;
+        /* twiddles by exact index, so that (k j mod ns) carries no rounding */
+        cs[2 * j] = cos(TWO_PI * (double)j / (double)ns);
+        cs[2 * j + 1] = sin(TWO_PI * (double)j / (double)ns);
+    }
+    for (size_t k = 0; k < nk && rc == BKF_OK; k++) {
+        double re = 0.0, im = 0.0;
+        for (size_t j = 0, idx = 0; j < ns; j++, idx = (idx + k) % ns) {
+            re += h[j] * cs[2 * idx];
+            im -= h[j] * cs[2 * idx + 1];
+        }
+        g[k] = CMPLX(re / (double)ns, im / (double)ns);
+    }
+    free(h);
+    free(cs);
+    return rc;
+}
+
+static int by_real_part(const void *a, const void *b)
+{
+    const bkf_hill_eigenvalue *x = a, *y = b;
+    if (x->re != y->re) return x->re < y->re ? 1 : -1;
+    if (x->im != y->im) return x->im < y->im ? -1 : 1;
+    return 0;
+}
+
+static int spectrum_body(bkf_cycle *cycle, double gamma, double theta, size_t M,
+                         bkf_hill_eigenvalue *out, bkf_error *err)
+{
+    const bkf_cycle_result *r = bkf_cycle_get(cycle);
+    double mu = r->mu, T = r->period;
+    double s = gamma / mu, beta = (mu - gamma) * (mu + gamma) / (gamma * gamma);
+    size_t nm = 2 * M + 1, n = 2 * nm;
+    double complex *g = malloc(sizeof(double complex) * (2 * M + 1));
+    double complex *A = calloc(n * n, sizeof(double complex));
+    double complex *w = malloc(sizeof(double complex) * n);
+    if (!g || !A || !w) {
+        free(g);
+        free(A);
+        free(w);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory (Hill matrix of size %zu)", n);
+    }
+    int rc = profile_coefficients(cycle, M, g, err);
+    if (rc == BKF_OK) {
+        /* column-major: A[row + col n] */
+        for (size_t c = 0; c < nm; c++) {
+            double k = (theta + TWO_PI * ((double)c - (double)M)) / T;
+            for (size_t row = 0; row < nm; row++) {
+                long d = (long)row - (long)c;
+                double complex gd = d >= 0 ? g[d] : conj(g[-d]);
+                A[row + c * n] = -gamma * gd;
+            }
+            A[c + c * n] += -I * k / s;
+            A[c + (c + nm) * n] = gamma;
+            A[(c + nm) + c * n] = -(1.0 + beta * k * k) / gamma;
+            A[(c + nm) + (c + nm) * n] = -I * k / s;
+        }
+        lapack_int info = LAPACKE_zgeev(LAPACK_COL_MAJOR, 'N', 'N', (lapack_int)n, A, (lapack_int)n, w,
+                                        NULL, 1, NULL, 1);
+        if (info != 0)
+            rc = bkf_error_set(err, info == LAPACK_WORK_MEMORY_ERROR ? BKF_ENOMEM : BKF_ENUMERIC,
+                               "zgeev failed (info %d) on the Hill matrix of size %zu", (int)info, n);
+    }
+    for (size_t i = 0; rc == BKF_OK && i < n; i++) {
+        out[i].re = creal(w[i]);
+        out[i].im = cimag(w[i]);
+        if (!isfinite(out[i].re) || !isfinite(out[i].im))
+            rc = bkf_error_set(err, BKF_ENUMERIC, "non-finite eigenvalue of the Hill matrix");
+    }
+    if (rc == BKF_OK) qsort(out, n, sizeof *out, by_real_part);
+    free(g);
+    free(A);
+    free(w);
+    return rc;
+}
+
+int bkf_hill_spectrum(bkf_cycle *cycle, double gamma, double theta, size_t modes,
+                      bkf_hill_eigenvalue *out, size_t *count, bkf_error *err)
+{
+    if (count) *count = 0;
+    int rc = check_inputs(cycle, gamma, theta, modes, BKF_HILL_MODES_MAX, err);
+    if (rc != BKF_OK) return rc;
+    if (!out || !count) return bkf_error_set(err, BKF_EINPUT, "out and count must not be NULL");
+    rc = spectrum_body(cycle, gamma, theta, modes, out, err);
+    if (rc == BKF_OK) *count = 2 * (2 * modes + 1);
+    return rc;
+}
+
+int bkf_hill_leading(bkf_cycle *cycle, double gamma, double theta, size_t modes, double tol,
+                     size_t k, bkf_hill_eigenvalue *out, double *out_err, size_t *found,
+                     size_t *unresolved, bkf_error *err)
+{
+    if (found) *found = 0;
+    if (unresolved) *unresolved = 0;
+    int rc = check_inputs(cycle, gamma, theta, modes, BKF_HILL_MODES_MAX / 2, err);
+    if (rc != BKF_OK) return rc;
+    if (!(tol > 0 && isfinite(tol))) return bkf_error_set(err, BKF_EINPUT, "tol must be positive and finite");
+    if (k < 1) return bkf_error_set(err, BKF_EINPUT, "k must be at least 1");
+    if (!out || !found) return bkf_error_set(err, BKF_EINPUT, "out and found must not be NULL");
+    size_t n1 = 2 * (2 * modes + 1), n2 = 2 * (4 * modes + 1);
+    bkf_hill_eigenvalue *coarse = malloc(sizeof *coarse * n1), *fine = malloc(sizeof *fine * n2);
+    if (!coarse || !fine) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (rc == BKF_OK) rc = spectrum_body(cycle, gamma, theta, modes, coarse, err);
+    if (rc == BKF_OK) rc = spectrum_body(cycle, gamma, theta, 2 * modes, fine, err);
+    size_t got = 0, skipped = 0, skipped_above = 0;
+    for (size_t i = 0; rc == BKF_OK && i < n2 && got < k; i++) {
+        double best = INFINITY;
+        for (size_t j = 0; j < n1; j++)
+            best = fmin(best, hypot(fine[i].re - coarse[j].re, fine[i].im - coarse[j].im));
+        if (!(best <= tol)) {
+            skipped++;
+            continue;
+        }
+        out[got] = fine[i];
+        if (out_err) out_err[got] = best;
+        got++;
+        skipped_above = skipped;
+    }
+    if (rc == BKF_OK) {
+        *found = got;
+        if (unresolved) *unresolved = got ? skipped_above : skipped;
+    }
+    free(coarse);
+    free(fine);
+    return rc;
+}
