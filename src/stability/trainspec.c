@@ -16,15 +16,16 @@
 #define TOL_MAX 1e-2
 #define PER_KAPPA_MAX 50
 /* Magnus substeps per cycle step: start, and the most the refinement may reach. */
-#define SUBSTEPS_START 2
+#define SUBSTEPS_START 1
 #define MESH_MAX_STEPS 400000
 /* Heights sampled per family on the first pass, and the finest interval as
  * a fraction of the window. */
-#define CURVE_START 96
+#define CURVE_START 48
 #define CURVE_MIN_FRACTION (1.0 / 65536.0)
 #define Y_MAX_LIMIT 1e4
 #define NEWTON_MAX 30
 #define MESH_REFINEMENTS 4
+#define RESOLVE_TURN 1.0
 
 enum { FAMILIES = 2 };
 
@@ -44,6 +45,7 @@ typedef struct {
     double *nodes; /* cycle mesh 0..T */
     size_t node_count;
     size_t substeps;
+    double h_max; /* longest Magnus step: resolves the fastest oscillation in the window */
     mesh coarse, fine;
     size_t evaluations;
 } ctx;
@@ -59,10 +61,19 @@ static void mesh_free(mesh *m)
     memset(m, 0, sizeof *m);
 }
 
+/* Magnus steps in the cycle step i. */
+static size_t pieces(const ctx *x, size_t i, size_t substeps)
+{
+    double len = x->nodes[i + 1] - x->nodes[i];
+    double need = isfinite(x->h_max) ? ceil(len / x->h_max) : 1.0;
+    return need > (double)substeps ? (size_t)fmin(need, 1e9) : substeps;
+}
+
 static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
 {
     mesh_free(m);
-    size_t steps = (x->node_count - 1) * substeps;
+    size_t steps = 0;
+    for (size_t i = 0; i + 1 < x->node_count; i++) steps += pieces(x, i, substeps);
     if (steps > MESH_MAX_STEPS)
         return bkf_error_set(err, BKF_EBUDGET,
                              "the spectrum needs more than %d Magnus steps per period (mu = %.15g)",
@@ -82,8 +93,9 @@ static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
     const double g = 0.5 / sqrt(3.0);
     size_t k = 0;
     for (size_t i = 0; i + 1 < x->node_count; i++) {
-        double h = (x->nodes[i + 1] - x->nodes[i]) / (double)substeps;
-        for (size_t q = 0; q < substeps; q++, k++) {
+        size_t count = pieces(x, i, substeps);
+        double h = (x->nodes[i + 1] - x->nodes[i]) / (double)count;
+        for (size_t q = 0; q < count; q++, k++) {
             double mid = x->nodes[i] + (q + 0.5) * h;
             m->h[k] = h;
             z[2 * k] = fmax(mid - g * h, 0.0);
@@ -206,13 +218,13 @@ typedef struct {
     double a_lo, a_hi;
 } window;
 
-/* The rightmost a in [a_lo, a_hi] where Re w_fam(a + i y) = 0, by bisection
- * safeguarded secant (Re w decreases in a: the multipliers shrink to the
- * right). */
-static int point_at(ctx *x, const mesh *m, int fam, window *win, double y, curve_point *pt)
+/* Both families' rightmost a in [a_lo, a_hi] where Re w(a + i y) = 0, by
+ * the Illinois variant of regula falsi, started from the predictions
+ * guess[f] when given (NAN otherwise).  Re w decreases in a: the
+ * multipliers shrink to the right. */
+static int height_at(ctx *x, const mesh *m, window *win, double y, const double guess[FAMILIES],
+                     curve_point pt[FAMILIES])
 {
-    pt->y = y;
-    pt->found = 0;
     double complex w[2];
     for (int grow = 0;; grow++) {
         monodromy(x, m, win->a_hi + I * y, w);
@@ -220,54 +232,91 @@ static int point_at(ctx *x, const mesh *m, int fam, window *win, double y, curve
         if (grow > 40) return BKF_ENUMERIC;
         win->a_hi *= 2.0;
     }
-    double flo, fhi = creal(w[fam]);
+    double f_hi[2] = {creal(w[0]), creal(w[1])};
     monodromy(x, m, win->a_lo + I * y, w);
-    flo = creal(w[fam]);
-    if (flo < 0.0) return BKF_OK;
-    double lo = win->a_lo, hi = win->a_hi;
     double tol_a = 1e-3 * x->tol;
-    for (int it = 0; it < 200 && hi - lo > tol_a; it++) {
-        double t = lo + (hi - lo) * flo / (flo - fhi);
-        double span = hi - lo;
-        if (!(t > lo + 0.01 * span && t < hi - 0.01 * span)) t = 0.5 * (lo + hi);
-        monodromy(x, m, t + I * y, w);
-        double ft = creal(w[fam]);
-        if (ft >= 0.0) lo = t, flo = ft;
-        else hi = t, fhi = ft;
-        if (fabs(ft) < 1e-3 * tol_a) {
-            lo = hi = t;
-            break;
+    for (int f = 0; f < FAMILIES; f++) {
+        curve_point *p = &pt[f];
+        p->y = y;
+        p->found = 0;
+        double lo = win->a_lo, hi = win->a_hi, flo = creal(w[f]), fhi = f_hi[f];
+        if (flo < 0.0) continue;
+        /* shrink the bracket around the prediction */
+        if (isfinite(guess[f]) && guess[f] > lo && guess[f] < hi) {
+            double g = guess[f], d = fmax(1e-3, 100.0 * tol_a);
+            for (int k = 0; k < 2; k++, d *= 8.0) {
+                double complex wg[2];
+                double t = fmin(fmax(g, lo + 0.5 * tol_a), hi - 0.5 * tol_a);
+                monodromy(x, m, t + I * y, wg);
+                double ft = creal(wg[f]);
+                if (ft >= 0.0) {
+                    lo = t, flo = ft;
+                    g = t + d;
+                } else {
+                    hi = t, fhi = ft;
+                    g = t - d;
+                }
+                if (!(g > lo && g < hi)) break;
+            }
         }
+        int side = 0;
+        for (int it = 0; it < 200 && hi - lo > tol_a; it++) {
+            double t = (lo * fhi - hi * flo) / (fhi - flo);
+            if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
+            double complex wt[2];
+            monodromy(x, m, t + I * y, wt);
+            double ft = creal(wt[f]);
+            if (fabs(ft) < 1e-3 * tol_a) {
+                lo = hi = t;
+                break;
+            }
+            if (ft >= 0.0) {
+                lo = t, flo = ft;
+                if (side == -1) fhi *= 0.5;
+                side = -1;
+            } else {
+                hi = t, fhi = ft;
+                if (side == 1) flo *= 0.5;
+                side = 1;
+            }
+        }
+        double a = 0.5 * (lo + hi);
+        double complex wv, dw;
+        family_eval(x, m, f, a + I * y, &wv, &dw);
+        p->found = 1;
+        p->a = a;
+        p->phase = cimag(wv);
+        /* along Re w = 0: da/dy = Im w' / Re w', dphase/dy = |w'|^2 / Re w' */
+        double re = creal(dw), im = cimag(dw);
+        if (re == 0.0) return BKF_ENUMERIC;
+        p->slope = im / re;
+        p->rate = (re * re + im * im) / re;
     }
-    double a = 0.5 * (lo + hi);
-    double complex wv, dw;
-    family_eval(x, m, fam, a + I * y, &wv, &dw);
-    pt->found = 1;
-    pt->a = a;
-    pt->phase = cimag(wv);
-    /* along Re w = 0: da/dy = Im w' / Re w', dphase/dy = |w'|^2 / Re w' */
-    double re = creal(dw), im = cimag(dw);
-    if (re == 0.0) return BKF_ENUMERIC;
-    pt->slope = im / re;
-    pt->rate = (re * re + im * im) / re;
     return BKF_OK;
 }
 
+/* One sampled height: both families. */
 typedef struct {
-    curve_point *pts;
+    curve_point fam[FAMILIES];
+} height;
+
+typedef struct {
+    height *h;
     size_t count, cap;
 } curve;
 
-static int curve_push(curve *c, const curve_point *p)
+static int curve_insert(curve *c, size_t at, const height *p)
 {
     if (c->count == c->cap) {
         size_t cap = c->cap ? 2 * c->cap : 256;
-        curve_point *g = realloc(c->pts, cap * sizeof *g);
+        height *g = realloc(c->h, cap * sizeof *g);
         if (!g) return BKF_ENOMEM;
-        c->pts = g;
+        c->h = g;
         c->cap = cap;
     }
-    c->pts[c->count++] = *p;
+    memmove(&c->h[at + 1], &c->h[at], (c->count - at) * sizeof *c->h);
+    c->h[at] = *p;
+    c->count++;
     return BKF_OK;
 }
 
@@ -288,31 +337,44 @@ static int needs_split(const ctx *x, const curve_point *p, const curve_point *q,
     return 0;
 }
 
-/* Trace one family over [y0, y1] into c (appending, y increasing), refining
- * where needs_split says so. */
-static int trace(ctx *x, int fam, window *win, double y0, double y1, double y_scale, curve *c)
+static void predict(const height *p, const height *q, double y, double guess[FAMILIES])
+{
+    for (int f = 0; f < FAMILIES; f++) {
+        guess[f] = NAN;
+        const curve_point *near = p && p->fam[f].found ? &p->fam[f] : q && q->fam[f].found ? &q->fam[f] : NULL;
+        if (near) guess[f] = near->a + near->slope * (y - near->y);
+    }
+}
+
+/* Trace both families over [y0, y1] into c (appending, y increasing),
+ * refining where needs_split says so. */
+static int trace(ctx *x, window *win, double y0, double y1, double y_scale, curve *c)
 {
     double min_dy = y_scale * CURVE_MIN_FRACTION;
     size_t start = c->count;
     for (int i = 0; i <= CURVE_START; i++) {
         if (i == 0 && start > 0) continue; /* y0 is the previous pass's last point */
-        curve_point pt;
-        int rc = point_at(x, &x->coarse, fam, win, y0 + (y1 - y0) * i / CURVE_START, &pt);
+        double y = y0 + (y1 - y0) * i / CURVE_START, guess[FAMILIES];
+        predict(c->count ? &c->h[c->count - 1] : NULL, NULL, y, guess);
+        height h;
+        int rc = height_at(x, &x->coarse, win, y, guess, h.fam);
         if (rc != BKF_OK) return rc;
-        if (curve_push(c, &pt) != BKF_OK) return BKF_ENOMEM;
+        if (curve_insert(c, c->count, &h) != BKF_OK) return BKF_ENOMEM;
     }
-    /* refine: insert midpoints until no interval asks for more */
     for (size_t i = start ? start - 1 : 0; i + 1 < c->count;) {
-        if (!needs_split(x, &c->pts[i], &c->pts[i + 1], min_dy)) {
+        int split = 0;
+        for (int f = 0; f < FAMILIES; f++)
+            split |= needs_split(x, &c->h[i].fam[f], &c->h[i + 1].fam[f], min_dy);
+        if (!split) {
             i++;
             continue;
         }
-        curve_point mid;
-        int rc = point_at(x, &x->coarse, fam, win, 0.5 * (c->pts[i].y + c->pts[i + 1].y), &mid);
+        double y = 0.5 * (c->h[i].fam[0].y + c->h[i + 1].fam[0].y), guess[FAMILIES];
+        predict(&c->h[i], &c->h[i + 1], y, guess);
+        height mid;
+        int rc = height_at(x, &x->coarse, win, y, guess, mid.fam);
         if (rc != BKF_OK) return rc;
-        if (curve_push(c, &mid) != BKF_OK) return BKF_ENOMEM;
-        memmove(&c->pts[i + 2], &c->pts[i + 1], (c->count - i - 2) * sizeof *c->pts);
-        c->pts[i + 1] = mid;
+        if (curve_insert(c, i + 1, &mid) != BKF_OK) return BKF_ENOMEM;
     }
     return BKF_OK;
 }
@@ -346,17 +408,17 @@ static int cand_push(candidates *cs, candidate c)
 
 /* Every point of the traced curve where the multiplier's phase is a multiple
  * of 2 pi / classes, with its mirror image below the real axis. */
-static int collect(const curve *c, int fam, size_t classes, candidates *out)
+static int collect(curve *c, int fam, size_t classes, candidates *out)
 {
     if (c->count == 0) return BKF_OK;
     double step = 2.0 * M_PI / (double)classes;
     /* unwrap the phase with the rates */
-    double psi = c->pts[0].phase;
+    double psi = 0.0;
     for (size_t i = 0; i < c->count; i++) {
-        curve_point *p = &c->pts[i];
+        curve_point *p = &c->h[i].fam[fam];
         if (!p->found) continue;
-        if (i > 0 && c->pts[i - 1].found) {
-            const curve_point *q = &c->pts[i - 1];
+        if (i > 0 && c->h[i - 1].fam[fam].found) {
+            const curve_point *q = &c->h[i - 1].fam[fam];
             double est = 0.5 * (p->rate + q->rate) * (p->y - q->y);
             double darg = wrap(p->phase - q->phase);
             psi += darg + 2.0 * M_PI * nearbyint((est - darg) / (2.0 * M_PI));
@@ -370,8 +432,8 @@ static int collect(const curve *c, int fam, size_t classes, candidates *out)
             }
         }
         p->phase = psi; /* unwrapped from here on */
-        if (i == 0 || !c->pts[i - 1].found) continue;
-        const curve_point *q = &c->pts[i - 1];
+        if (i == 0 || !c->h[i - 1].fam[fam].found) continue;
+        const curve_point *q = &c->h[i - 1].fam[fam];
         double lo = fmin(q->phase, p->phase), hi = fmax(q->phase, p->phase);
         for (double l = floor(lo / step) + 1.0; l * step <= hi; l += 1.0) {
             if (l * step == lo) continue;
@@ -515,28 +577,37 @@ static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train
     x->nodes[count] = x->T;
     x->node_count = count + 1;
     x->substeps = SUBSTEPS_START;
-    if ((rc = mesh_build(x, x->substeps, &x->coarse, err)) != BKF_OK) return rc;
-    return mesh_build(x, 2 * x->substeps, &x->fine, err);
+    x->h_max = INFINITY;
+    return BKF_OK;
 }
 
 /* Trace both families over [0, B], B grown until the curves stay left of
  * a_lo in its upper quarter. */
-static int trace_all(ctx *x, window *win, curve fam_curves[FAMILIES], double *y_max, bkf_error *err)
+/* The meshes for a window up to height B: a Magnus step turns the fastest
+ * solution, u ~ exp(+-sqrt(beta) sigma z), by at most RESOLVE_TURN. */
+static int meshes_for(ctx *x, double B, const window *win, bkf_error *err)
 {
-    double B = fmax(8.0, 4.0 * x->gamma * x->v / x->c);
+    x->h_max = RESOLVE_TURN / (sqrt(x->beta) * hypot(B, win->a_hi) + 1e-300);
+    int rc = mesh_build(x, x->substeps, &x->coarse, err);
+    return rc != BKF_OK ? rc : mesh_build(x, 2 * x->substeps, &x->fine, err);
+}
+
+static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *err)
+{
+    /* beyond |sigma| ~ gamma v / c the spectrum is in its asymptotic regime */
+    double B = fmax(2.0, x->gamma * x->v / x->c);
     double y0 = 0.0;
     for (;;) {
-        for (int f = 0; f < FAMILIES; f++) {
-            int rc = trace(x, f, win, y0, B, B, &fam_curves[f]);
-            if (rc == BKF_ENOMEM) return bkf_error_set(err, rc, "out of memory");
-            if (rc != BKF_OK)
-                return bkf_error_set(err, rc, "spectrum: the multiplier curve could not be traced (mu = %.15g)",
-                                     x->mu);
-        }
+        int mrc = meshes_for(x, B, win, err);
+        if (mrc != BKF_OK) return mrc;
+        int rc = trace(x, win, y0, B, B, c);
+        if (rc == BKF_ENOMEM) return bkf_error_set(err, rc, "out of memory");
+        if (rc != BKF_OK)
+            return bkf_error_set(err, rc, "spectrum: the multiplier curve could not be traced (mu = %.15g)", x->mu);
         int above = 0;
         for (int f = 0; f < FAMILIES; f++)
-            for (size_t i = 0; i < fam_curves[f].count; i++)
-                if (fam_curves[f].pts[i].found && fam_curves[f].pts[i].y > 0.75 * B) above = 1;
+            for (size_t i = 0; i < c->count; i++)
+                if (c->h[i].fam[f].found && c->h[i].fam[f].y > 0.75 * B) above = 1;
         if (!above) break;
         if (2.0 * B > Y_MAX_LIMIT)
             return bkf_error_set(err, BKF_EBUDGET,
@@ -554,18 +625,17 @@ static int trace_all(ctx *x, window *win, curve fam_curves[FAMILIES], double *y_
 static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
                     window *win, double *y_max, size_t *curve_points, bkf_error *err)
 {
-    curve curves[FAMILIES] = {{0}};
+    curve heights = {0};
     candidates cs = {0};
     bkf_trainspec_eigenvalue *eig = NULL;
     size_t n_eig = 0;
-    int rc = trace_all(x, win, curves, y_max, err);
-    for (int f = 0; f < FAMILIES && rc == BKF_OK; f++) {
-        *curve_points += curves[f].count;
-        if (collect(&curves[f], f, classes, &cs) != BKF_OK) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
+    int rc = trace_all(x, win, &heights, y_max, err);
+    if (rc == BKF_OK) *curve_points += heights.count;
+    for (int f = 0; f < FAMILIES && rc == BKF_OK; f++)
+        if (collect(&heights, f, classes, &cs) != BKF_OK) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     if (rc == BKF_OK) {
         qsort(cs.items, cs.count, sizeof *cs.items, by_a_desc);
-        eig = calloc(classes * (keep + 2) + 1, sizeof *eig);
+        eig = calloc(2 * (classes + 2) * (keep + 2), sizeof *eig);
         if (!eig) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     /* polish the best few of each class; mirrored classes (j > classes/2)
@@ -573,7 +643,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     for (size_t i = 0; i < cs.count && rc == BKF_OK;) {
         size_t cls = cs.items[i].cls, taken = 0, start_n = n_eig;
         for (; i < cs.count && cs.items[i].cls == cls; i++) {
-            if (taken >= keep + 2) continue;
+            if (taken >= keep + 2 || 2 * cls > classes) continue;
             candidate cd = cs.items[i];
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
             double complex sc = cd.a + I * cd.y, sf;
@@ -591,6 +661,12 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
         }
     }
     if (rc == BKF_OK) {
+        for (size_t k = 0, polished = n_eig; k < polished; k++)
+            if (eig[k].j > 0 && 2 * eig[k].j < classes) {
+                eig[n_eig] = eig[k];
+                eig[n_eig].j = classes - eig[k].j;
+                eig[n_eig++].im = -eig[k].im;
+            }
         qsort(eig, n_eig, sizeof *eig, eig_desc);
         /* keep `keep` per class */
         size_t w = 0;
@@ -601,7 +677,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
         }
         n_eig = w;
     }
-    for (int f = 0; f < FAMILIES; f++) free(curves[f].pts);
+    free(heights.h);
     free(cs.items);
     if (rc != BKF_OK) {
         free(eig);
@@ -636,8 +712,6 @@ static int spectrum_to_tol(ctx *x, size_t classes, size_t keep, bkf_trainspec_ei
         free(*out);
         *out = NULL;
         x->substeps *= 2;
-        if ((rc = mesh_build(x, x->substeps, &x->coarse, err)) != BKF_OK) return rc;
-        if ((rc = mesh_build(x, 2 * x->substeps, &x->fine, err)) != BKF_OK) return rc;
     }
 }
 
