@@ -40,7 +40,7 @@ extern "C" {
 #endif
 
 typedef struct {
-    double tol;        /* absolute accuracy asked of each sigma, [1e-10, 1e-2]; default 1e-6 */
+    double tol;        /* absolute accuracy asked of each sigma, [1e-8, 1e-2]; default 1e-6 */
     size_t per_kappa;  /* leading eigenvalues reported per Bloch number, [1, 50]; default 3 */
 } bkf_trainspec_options;
 

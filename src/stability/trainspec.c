@@ -12,12 +12,16 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define TOL_MIN 1e-10
+#define TOL_MIN 1e-8
+/* The profile comes from a cycle solved to 1e-12: its share of an
+ * eigenvalue's error, per unit |sigma| (at least 1), measured by the
+ * nu -> -nu symmetry (whose two cycles differ) at below 1e-9. */
+#define PROFILE_ERROR 2e-9
 #define TOL_MAX 1e-2
 #define PER_KAPPA_MAX 50
 /* Magnus substeps per cycle step: start, and the most the refinement may reach. */
 #define SUBSTEPS_START 1
-#define MESH_MAX_STEPS 400000
+#define MESH_MAX_STEPS 100000
 /* Heights sampled per family on the first pass, and the finest interval as
  * a fraction of the window. */
 #define CURVE_START 48
@@ -25,7 +29,13 @@
 #define Y_MAX_LIMIT 1e4
 #define NEWTON_MAX 30
 #define MESH_REFINEMENTS 4
-#define RESOLVE_TURN 1.0
+#define RESOLVE_TURN 0.5
+/* The window reaches this far left of the axis, per unit gamma (or to
+ * r_inf / 2 if that is nearer). */
+#define WINDOW_DEPTH 0.05
+/* The edges of a curve (where it leaves the window) are located to this
+ * fraction of the window's height; phase and bends to CURVE_MIN_FRACTION. */
+#define EDGE_FRACTION (1.0 / 1024.0)
 
 enum { FAMILIES = 2 };
 
@@ -45,7 +55,8 @@ typedef struct {
     double *nodes; /* cycle mesh 0..T */
     size_t node_count;
     size_t substeps;
-    double h_max; /* longest Magnus step: resolves the fastest oscillation in the window */
+    double sigma_reach; /* largest |sigma| the meshes must resolve */
+    double *node_rate;  /* per cycle node: the fastest local rate of u at sigma_reach */
     mesh coarse, fine;
     size_t evaluations;
 } ctx;
@@ -61,12 +72,38 @@ static void mesh_free(mesh *m)
     memset(m, 0, sizeof *m);
 }
 
-/* Magnus steps in the cycle step i. */
+/* Magnus steps in the cycle step i: each step spans at most RESOLVE_TURN
+ * e-foldings or radians of the fastest local solution, the roots of
+ * lambda^2 = a lambda + b.  A fourth-order Magnus step is exact for frozen
+ * coefficients but its commutator correction is only accurate while h |A|
+ * stays O(1): on the slow branches of a stiff cycle |a| = mu |f^2 - 1|. */
 static size_t pieces(const ctx *x, size_t i, size_t substeps)
 {
     double len = x->nodes[i + 1] - x->nodes[i];
-    double need = isfinite(x->h_max) ? ceil(len / x->h_max) : 1.0;
-    return need > (double)substeps ? (size_t)fmin(need, 1e9) : substeps;
+    double rate = fmax(x->node_rate[i], x->node_rate[i + 1]);
+    double need = fmax(1.0, ceil(len * rate / RESOLVE_TURN)) * (double)substeps;
+    return (size_t)fmin(need, 1e9);
+}
+
+/* The local rates at the nodes for |sigma| up to reach. */
+static int node_rates(ctx *x, double reach, bkf_error *err)
+{
+    if (x->node_rate && reach == x->sigma_reach) return BKF_OK;
+    size_t n = x->node_count;
+    double *f = malloc(n * sizeof *f), *fp = malloc(n * sizeof *fp);
+    double *rate = realloc(x->node_rate, n * sizeof *rate);
+    if (rate) x->node_rate = rate;
+    int rc = !f || !fp || !rate ? bkf_error_set(err, BKF_ENOMEM, "out of memory")
+                                : bkf_cycle_profile_sample(x->cycle, x->nodes, n, f, fp, err);
+    for (size_t i = 0; rc == BKF_OK && i < n; i++) {
+        double phi = f[i] * f[i] - 1.0, a = x->mu * fabs(phi);
+        double b = fabs(1.0 + 2.0 * x->mu * f[i] * fp[i]) + x->beta * reach * (reach + x->gamma * fabs(phi));
+        x->node_rate[i] = 0.5 * a + sqrt(0.25 * a * a + b);
+    }
+    x->sigma_reach = reach;
+    free(f);
+    free(fp);
+    return rc;
 }
 
 static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
@@ -327,7 +364,7 @@ static int needs_split(const ctx *x, const curve_point *p, const curve_point *q,
 {
     double dy = q->y - p->y;
     if (dy <= min_dy) return 0;
-    if (p->found != q->found) return 1;
+    if (p->found != q->found) return dy > min_dy * (EDGE_FRACTION / CURVE_MIN_FRACTION);
     if (!p->found) return 0;
     double est = 0.5 * (p->rate + q->rate) * dy;
     double darg = wrap(q->phase - p->phase);
@@ -544,6 +581,7 @@ static void ctx_free(ctx *x)
     mesh_free(&x->fine);
     bkf_cycle_free(x->cycle);
     free(x->nodes);
+    free(x->node_rate);
 }
 
 static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, double tol,
@@ -577,7 +615,6 @@ static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train
     x->nodes[count] = x->T;
     x->node_count = count + 1;
     x->substeps = SUBSTEPS_START;
-    x->h_max = INFINITY;
     return BKF_OK;
 }
 
@@ -587,8 +624,8 @@ static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train
  * solution, u ~ exp(+-sqrt(beta) sigma z), by at most RESOLVE_TURN. */
 static int meshes_for(ctx *x, double B, const window *win, bkf_error *err)
 {
-    x->h_max = RESOLVE_TURN / (sqrt(x->beta) * hypot(B, win->a_hi) + 1e-300);
-    int rc = mesh_build(x, x->substeps, &x->coarse, err);
+    int rc = node_rates(x, hypot(B, win->a_hi), err);
+    if (rc == BKF_OK) rc = mesh_build(x, x->substeps, &x->coarse, err);
     return rc != BKF_OK ? rc : mesh_build(x, 2 * x->substeps, &x->fine, err);
 }
 
@@ -651,13 +688,62 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
             if (polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
             sf = sc;
             if (polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
-            double e = cabs(sf - sc) + step_f;
+            double e = cabs(sf - sc) + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
             int dup = 0;
             for (size_t k = start_n; k < n_eig; k++)
                 if (cabs((eig[k].re + I * eig[k].im) - sf) < 10.0 * fmax(e, x->tol)) dup = 1;
             if (dup) continue;
             eig[n_eig++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), e, cls, 0.0, 0};
             taken++;
+        }
+    }
+    /* The translation mode, polished from 0: the gauge.  Where the traced
+     * curves missed it the meshes are too coarse. */
+    if (rc == BKF_OK) {
+        size_t k = 0;
+        while (k < n_eig && !(eig[k].j == 0 && hypot(eig[k].re, eig[k].im) < 10.0 * x->tol)) k++;
+        if (k == n_eig) {
+            double complex sc = 0.0, sf;
+            double step_c, step_f = INFINITY;
+            int ok = polish(x, &x->coarse, 0.0, &sc, &step_c) == BKF_OK;
+            sf = sc;
+            ok = ok && polish(x, &x->fine, 0.0, &sf, &step_f) == BKF_OK;
+            eig[n_eig++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf),
+                                                      ok ? cabs(sf - sc) + step_f + PROFILE_ERROR : INFINITY,
+                                                      0, 0.0, 0};
+        }
+        eig[k].translation = 1;
+    }
+    /* the mesh refined until every estimate meets tol and the translation
+     * mode sits at 0 within it: only the polishing is redone, from the
+     * values in hand */
+    for (int r = 0; rc == BKF_OK; r++) {
+        double worst = 0.0;
+        for (size_t k = 0; k < n_eig; k++) {
+            worst = fmax(worst, eig[k].err);
+            if (eig[k].translation) worst = fmax(worst, hypot(eig[k].re, eig[k].im));
+        }
+        if (worst <= x->tol) break;
+        if (r == MESH_REFINEMENTS) {
+            rc = bkf_error_set(err, BKF_ETOL,
+                               "spectrum: an eigenvalue's estimated error %.3g exceeds tol %.3g at %zu Magnus "
+                               "steps per period",
+                               worst, x->tol, x->fine.steps);
+            break;
+        }
+        x->substeps *= 2;
+        if ((rc = mesh_build(x, x->substeps, &x->coarse, err)) != BKF_OK) break;
+        if ((rc = mesh_build(x, 2 * x->substeps, &x->fine, err)) != BKF_OK) break;
+        for (size_t k = 0; k < n_eig; k++) {
+            double theta = 2.0 * M_PI * (double)eig[k].j / (double)classes;
+            double complex sc = eig[k].translation ? 0.0 : eig[k].re + I * eig[k].im, sf;
+            double step_c, step_f;
+            if (polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
+            sf = sc;
+            if (polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
+            eig[k].re = creal(sf);
+            eig[k].im = cimag(sf);
+            eig[k].err = cabs(sf - sc) + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
         }
     }
     if (rc == BKF_OK) {
@@ -673,7 +759,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
         for (size_t i = 0; i < n_eig; i++) {
             size_t same = 0;
             for (size_t k = 0; k < w; k++) same += eig[k].j == eig[i].j;
-            if (same < keep) eig[w++] = eig[i];
+            if (same < keep || eig[i].translation) eig[w++] = eig[i];
         }
         n_eig = w;
     }
@@ -688,37 +774,10 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     return BKF_OK;
 }
 
-static double max_err_of_leading(const bkf_trainspec_eigenvalue *e, size_t count)
-{
-    double worst = 0.0;
-    for (size_t i = 0; i < count; i++) worst = fmax(worst, e[i].err);
-    return worst;
-}
-
-/* Run `spectrum`, refining the mesh until every reported error meets tol. */
-static int spectrum_to_tol(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out,
-                           size_t *count, window *win, double *y_max, size_t *curve_points, bkf_error *err)
-{
-    for (int r = 0;; r++) {
-        int rc = spectrum(x, classes, keep, out, count, win, y_max, curve_points, err);
-        if (rc != BKF_OK) return rc;
-        double worst = max_err_of_leading(*out, *count);
-        if (worst <= x->tol) return BKF_OK;
-        if (r == MESH_REFINEMENTS)
-            return bkf_error_set(err, BKF_ETOL,
-                                 "spectrum: an eigenvalue's estimated error %.3g exceeds tol %.3g at %zu Magnus "
-                                 "steps per period",
-                                 worst, x->tol, x->fine.steps);
-        free(*out);
-        *out = NULL;
-        x->substeps *= 2;
-    }
-}
-
 static window initial_window(const ctx *x, double *r_inf)
 {
     *r_inf = x->s * x->log_m / (2.0 * x->T);
-    return (window){.a_lo = 0.5 * *r_inf, .a_hi = fmax(1.0, x->gamma)};
+    return (window){.a_lo = fmax(0.5 * *r_inf, -WINDOW_DEPTH * x->gamma), .a_hi = fmax(1.0, x->gamma)};
 }
 
 void bkf_trainspec_result_free(bkf_trainspec_result *r)
@@ -742,7 +801,7 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
     rc = ctx_init(&x, p, t, o.tol, err);
     window win = initial_window(&x, &r->r_inf);
     if (rc == BKF_OK)
-        rc = spectrum_to_tol(&x, t->n, o.per_kappa, &r->eigenvalues, &r->count, &win, &r->y_max,
+        rc = spectrum(&x, t->n, o.per_kappa, &r->eigenvalues, &r->count, &win, &r->y_max,
                              &r->curve_points, err);
     if (rc == BKF_OK) {
         r->params = *p;
@@ -753,23 +812,10 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
         r->L = x.L;
         r->a_lo = win.a_lo;
         r->mesh_steps = x.fine.steps;
-        /* translation: the eigenvalue of class 0 nearest 0 */
-        double complex w[2];
-        monodromy(&x, &x.fine, 0.0, w);
         r->liouville_residual = fabs(x.fine.trace_sum - x.log_m);
-        size_t best = r->count;
         for (size_t i = 0; i < r->count; i++)
-            if (r->eigenvalues[i].j == 0 &&
-                (best == r->count ||
-                 hypot(r->eigenvalues[i].re, r->eigenvalues[i].im) <
-                     hypot(r->eigenvalues[best].re, r->eigenvalues[best].im)))
-                best = i;
-        double residual = fmin(cabs(w[0]), cabs(w[1])) / (x.T / x.s);
-        if (best < r->count && hypot(r->eigenvalues[best].re, r->eigenvalues[best].im) < 10.0 * o.tol) {
-            r->eigenvalues[best].translation = 1;
-            residual = hypot(r->eigenvalues[best].re, r->eigenvalues[best].im);
-        }
-        r->translation_residual = residual;
+            if (r->eigenvalues[i].translation)
+                r->translation_residual = hypot(r->eigenvalues[i].re, r->eigenvalues[i].im);
         r->sigma_max = -INFINITY;
         for (size_t i = 0; i < r->count; i++) {
             bkf_trainspec_eigenvalue *e = &r->eigenvalues[i];
@@ -815,7 +861,7 @@ int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
     size_t points = 0, n_eig = 0;
     window win = initial_window(&x, &r_inf);
     bkf_trainspec_eigenvalue *eig = NULL;
-    if (rc == BKF_OK) rc = spectrum_to_tol(&x, count, 1, &eig, &n_eig, &win, &y_max, &points, err);
+    if (rc == BKF_OK) rc = spectrum(&x, count, 1, &eig, &n_eig, &win, &y_max, &points, err);
     if (rc == BKF_OK) {
         double L = x.L;
         for (size_t i = 0; i < count; i++)

@@ -298,3 +298,32 @@ TEST(cycle_profile_finite_on_stiff_cycles)
             bkf_cycle_free(c);
         }
 }
+
+/* The batch profile (one pass) against the single-point profile (each
+ * point integrated from its nearest node), and the mesh's ends. */
+TEST(cycle_profile_sample_matches_single_points)
+{
+    bkf_cycle *cy = bkf_cycle_alloc();
+    bkf_error e;
+    CHECK(bkf_cycle_solve(cy, 5.0, 0.3, NULL, &e) == BKF_OK);
+    double T = bkf_cycle_get(cy)->period;
+    double z[50], f[50], fp[50];
+    for (int i = 0; i < 50; i++) z[i] = T * i / 49.0;
+    CHECK(bkf_cycle_profile_sample(cy, z, 50, f, fp, &e) == BKF_OK);
+    for (int i = 0; i < 50; i++) {
+        double f1, fp1;
+        CHECK(bkf_cycle_profile(cy, z[i], &f1, &fp1, &e) == BKF_OK);
+        CHECK_CLOSE(f[i], f1, 0, 1e-8);
+        CHECK_CLOSE(fp[i], fp1, 0, 1e-7);
+    }
+    double zr[2] = {1.0, 0.5};
+    CHECK(bkf_cycle_profile_sample(cy, zr, 2, f, fp, &e) == BKF_EINPUT);
+    size_t count = bkf_cycle_mesh(cy, NULL, 0);
+    CHECK(count > 10);
+    double *mesh = malloc(count * sizeof *mesh);
+    CHECK(bkf_cycle_mesh(cy, mesh, count) == count);
+    CHECK(mesh[0] == 0.0 && mesh[count - 1] < T);
+    for (size_t i = 1; i < count; i++) CHECK(mesh[i] > mesh[i - 1]);
+    free(mesh);
+    bkf_cycle_free(cy);
+}

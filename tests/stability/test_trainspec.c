@@ -1,0 +1,192 @@
+/* Spectra of front trains (monodromy + Magnus) against an independent
+ * method (Hill's method, dense Fourier-Bloch with LAPACK), against what
+ * holds whatever the numerics (the translation eigenvalue 0, Liouville's
+ * formula for det M, the nu -> -nu symmetry of the model), and the
+ * tolerance contract: every reported error covers the distance to Hill. */
+#include "harness.h"
+
+#include "bkfront/hill.h"
+#include "bkfront/trainspec.h"
+
+#include <string.h>
+
+#define TWO_PI 6.283185307179586476925286766559
+
+/* The paper's table (gamma 2, c 0.3, nu -0.96, S 20): v of the roots n = 2,
+ * 4 and 7 (bkfront speeds, tol 1e-10). */
+static bkf_model_params paper(void) { return bkf_model_params_paper(); }
+static const double v_n2 = 0.89541512114820221, v_n4 = 0.48545916040167414, v_n7 = 0.34755127499881538;
+
+static bkf_trainspec_result ring(bkf_model_params p, size_t n, double v, double tol)
+{
+    bkf_trainspec_train t = {n, v};
+    bkf_trainspec_options o = bkf_trainspec_options_default();
+    o.tol = tol;
+    bkf_trainspec_result r;
+    bkf_error e;
+    int rc = bkf_trainspec_ring(&p, &t, &o, &r, &e);
+    CHECK_MSG(rc == BKF_OK, "n %zu: %s", n, e.message);
+    return r;
+}
+
+/* Hill's leading eigenvalues for Bloch angle theta of the train (n, v). */
+static size_t hill(bkf_model_params p, double v, double theta, size_t modes, bkf_hill_eigenvalue *out,
+                   double *err)
+{
+    double mu = p.gamma / sqrt(1.0 - (p.c / v) * (p.c / v));
+    bkf_cycle *cy = bkf_cycle_alloc();
+    bkf_cycle_options co = bkf_cycle_options_default();
+    co.tol = 1e-12;
+    bkf_error e;
+    CHECK_MSG(bkf_cycle_solve(cy, mu, p.nu, &co, &e) == BKF_OK, "%s", e.message);
+    size_t found = 0, unresolved = 0;
+    int rc = bkf_hill_leading(cy, p.gamma, theta, modes, 1e-7, 6, out, err, &found, &unresolved, &e);
+    CHECK_MSG(rc == BKF_OK, "hill: %s", e.message);
+    bkf_cycle_free(cy);
+    return found;
+}
+
+/* Every eigenvalue reported for Bloch index j is one of Hill's, within the
+ * sum of the two estimates; and Hill's rightmost is reported. */
+static void agree_with_hill(size_t n, double v, size_t j, size_t modes)
+{
+    bkf_model_params p = paper();
+    bkf_trainspec_result r = ring(p, n, v, 1e-6);
+    bkf_hill_eigenvalue h[6];
+    double herr[6];
+    size_t found = hill(p, v, TWO_PI * (double)j / (double)n, modes, h, herr);
+    CHECK(found >= 2);
+    size_t matched = 0;
+    for (size_t i = 0; i < r.count; i++) {
+        const bkf_trainspec_eigenvalue *e = &r.eigenvalues[i];
+        if (e->j != j || e->translation) continue;
+        CHECK(e->err <= 1e-6);
+        double best = INFINITY, best_err = 0;
+        for (size_t k = 0; k < found; k++) {
+            double d = hypot(h[k].re - e->re, h[k].im - e->im);
+            if (d < best) best = d, best_err = herr[k];
+        }
+        CHECK_MSG(best <= e->err + best_err, "n %zu j %zu: sigma %.10f%+.10fi is %.3g from Hill's (estimates %.3g + %.3g)",
+                  n, j, e->re, e->im, best, e->err, best_err);
+        matched++;
+    }
+    CHECK(matched >= 1);
+    /* the rightmost of Hill's is among ours */
+    double ours_max = -INFINITY;
+    for (size_t i = 0; i < r.count; i++)
+        if (r.eigenvalues[i].j == j && !r.eigenvalues[i].translation) ours_max = fmax(ours_max, r.eigenvalues[i].re);
+    double hill_max = -INFINITY;
+    for (size_t k = 0; k < found; k++)
+        if (!(j == 0 && hypot(h[k].re, h[k].im) < 1e-6)) hill_max = fmax(hill_max, h[k].re);
+    CHECK_MSG(fabs(ours_max - hill_max) <= 2e-6, "n %zu j %zu: rightmost %.10f vs Hill %.10f", n, j, ours_max,
+              hill_max);
+    bkf_trainspec_result_free(&r);
+}
+
+TEST(trainspec_agrees_with_hill_unstable_n2)
+{
+    agree_with_hill(2, v_n2, 0, 64);
+    agree_with_hill(2, v_n2, 1, 64);
+}
+
+TEST(trainspec_agrees_with_hill_stable_n4)
+{
+    agree_with_hill(4, v_n4, 1, 64);
+    agree_with_hill(4, v_n4, 2, 64);
+}
+
+/* n = 7 of the paper's table: a weak oscillatory instability at the
+ * longest Bloch wave (Re sigma ~ 2e-4, j = 1), which a simulation of
+ * t = 125 cannot see, found by both methods. */
+TEST(trainspec_weak_instability_n7_seen_by_both_methods)
+{
+    agree_with_hill(7, v_n7, 1, 80);
+    bkf_trainspec_result r = ring(paper(), 7, v_n7, 1e-6);
+    CHECK(r.verdict == BKF_TRAINSPEC_UNSTABLE);
+    CHECK(r.sigma_max > 1e-4 && r.sigma_max < 1e-3);
+    CHECK(r.complex_pair);
+    bkf_trainspec_result_free(&r);
+}
+
+/* The gauges: sigma = 0 at j = 0 (translation) within tol, and the
+ * quadrature of ln det M against the cycle's own Liouville integral (a
+ * different integration). */
+TEST(trainspec_translation_and_liouville_gauges)
+{
+    for (double tol = 1e-4; tol >= 1e-8; tol *= 0.01) {
+        bkf_trainspec_result r = ring(paper(), 4, v_n4, tol);
+        CHECK_MSG(r.translation_residual <= tol, "tol %g: translation at %.3g", tol, r.translation_residual);
+        CHECK(r.liouville_residual <= 1e-6);
+        size_t translations = 0;
+        for (size_t i = 0; i < r.count; i++) translations += r.eigenvalues[i].translation;
+        CHECK(translations == 1);
+        CHECK(r.verdict == BKF_TRAINSPEC_STABLE);
+        CHECK(r.sigma_max < 0 && r.sigma_max + r.sigma_max_err < 0);
+        bkf_trainspec_result_free(&r);
+    }
+}
+
+/* psi -> -psi maps the model at nu to the model at -nu (phi is odd): the
+ * spectra agree, though the cycles, meshes and sections differ. */
+TEST(trainspec_nu_symmetry)
+{
+    bkf_model_params p = paper(), q = paper();
+    q.nu = -p.nu;
+    bkf_trainspec_result a = ring(p, 3, 0.60924790417982377, 1e-7);
+    bkf_trainspec_result b = ring(q, 3, 0.60924790417982377, 1e-7);
+    CHECK(a.count == b.count);
+    for (size_t i = 0; i < a.count && i < b.count; i++) {
+        CHECK(a.eigenvalues[i].j == b.eigenvalues[i].j);
+        double tol = a.eigenvalues[i].err + b.eigenvalues[i].err + 1e-12;
+        CHECK_CLOSE(a.eigenvalues[i].re, b.eigenvalues[i].re, 0, tol);
+    }
+    CHECK_CLOSE(a.sigma_max, b.sigma_max, 0, a.sigma_max_err + b.sigma_max_err);
+    bkf_trainspec_result_free(&a);
+    bkf_trainspec_result_free(&b);
+}
+
+TEST(trainspec_refuses_bad_input)
+{
+    bkf_model_params p = paper();
+    bkf_trainspec_train t = {4, v_n4};
+    bkf_trainspec_options o = bkf_trainspec_options_default();
+    bkf_trainspec_result r;
+    bkf_error e;
+    bkf_model_params c0 = p;
+    c0.c = 0.0;
+    CHECK(bkf_trainspec_ring(&c0, &t, &o, &r, &e) == BKF_EINPUT && strstr(e.message, "c must"));
+    bkf_trainspec_train slow = {4, 0.2};
+    CHECK(bkf_trainspec_ring(&p, &slow, &o, &r, &e) == BKF_EINPUT && strstr(e.message, "v must"));
+    bkf_trainspec_train none = {0, v_n4};
+    CHECK(bkf_trainspec_ring(&p, &none, &o, &r, &e) == BKF_EINPUT && strstr(e.message, "n must"));
+    bkf_trainspec_options bad = o;
+    bad.tol = 1e-20;
+    CHECK(bkf_trainspec_ring(&p, &t, &bad, &r, &e) == BKF_EINPUT && strstr(e.message, "tol"));
+    bad = o;
+    bad.per_kappa = 0;
+    CHECK(bkf_trainspec_ring(&p, &t, &bad, &r, &e) == BKF_EINPUT && strstr(e.message, "per_kappa"));
+    bkf_model_params nu1 = p;
+    nu1.nu = 1.0;
+    CHECK(bkf_trainspec_ring(&nu1, &t, &o, &r, &e) == BKF_EINPUT && strstr(e.message, "nu"));
+}
+
+/* The line's continuous spectrum passes through every ring eigenvalue:
+ * with 8 Bloch samples per period, sample 2 is the ring's j = 1 of n = 4
+ * (theta = pi/2); sample 0 is the translation. */
+TEST(trainspec_line_contains_the_ring)
+{
+    bkf_model_params p = paper();
+    bkf_trainspec_train t = {4, v_n4};
+    bkf_trainspec_eigenvalue line[8];
+    bkf_error e;
+    int rc = bkf_trainspec_line(&p, &t, NULL, 8, line, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    CHECK(hypot(line[0].re, line[0].im) <= 1e-6);
+    bkf_trainspec_result r = ring(p, 4, v_n4, 1e-6);
+    double best = -INFINITY, err = 0;
+    for (size_t i = 0; i < r.count; i++)
+        if (r.eigenvalues[i].j == 1 && r.eigenvalues[i].re > best) best = r.eigenvalues[i].re, err = r.eigenvalues[i].err;
+    CHECK_CLOSE(line[2].re, best, 0, err + line[2].err);
+    CHECK_CLOSE(line[2].kappa, TWO_PI / p.S, 1e-12, 0);
+    bkf_trainspec_result_free(&r);
+}
