@@ -36,18 +36,11 @@ static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYM
 /* The model's keys, shared by both products' tables (REQUIRED: speeds needs
  * every one; branch all but the continued one, which its check sees).  nu's
  * range is the checks' (check_nu), whose message says why. */
-#define MODEL_OPTIONS(SPEC, required)                                                         \
-    {.name = "gamma", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, gamma),                \
-     .flags = (required) | BOUNDED, .min = BKF_CYCLE_MU_MIN, .max = BKF_CYCLE_MU_MAX,         \
-     .form = "G", .help = "friction strength, in [1e-06, 1e+06] (mu >= gamma must be\n"       \
-                          "solvable)"},                                                       \
-    {.name = "c", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, c),                        \
-     .flags = (required) | BKF_OPT_MIN, .min = 0, .form = "C", .help = "sound speed, >= 0"},  \
-    {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, nu), .flags = (required), \
-     .form = "V", .help = "pulling rate in (-1, 1); |nu| >= 1 has no fronts"},                \
-    {.name = "S", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, S),                        \
-     .flags = (required) | BKF_OPT_MIN | BKF_OPT_MIN_OPEN, .min = 0, .form = "L",             \
-     .help = "system size, > 0"}
+#define MODEL_OPTIONS(SPEC, required)                                                        \
+    BKF_PRODUCT_GAMMA_OPTION(SPEC, required),                                                \
+    {.name = "c", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, c),                       \
+     .flags = (required) | BKF_OPT_MIN, .min = 0, .form = "C", .help = "sound speed, >= 0"}, \
+    BKF_PRODUCT_NU_OPTION(SPEC, required), BKF_PRODUCT_S_OPTION(SPEC, required)
 
 #define TOL_OPTION(SPEC, what)                                                                \
     {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, tol), .flags = BOUNDED,  \
