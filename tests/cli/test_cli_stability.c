@@ -117,7 +117,7 @@ TEST(cli_speeds_stability_verdicts_are_the_stability_commands)
         CHECK(bkf_tsv_cell(s.out, row, "kind", NULL, kind, sizeof kind));
         CHECK(bkf_tsv_cell(s.out, row, "sigma_max", &sigma, NULL, 0) &&
               bkf_tsv_cell(s.out, row, "sigma_max_err", &sigma_err, NULL, 0));
-        char nn[8];
+        char nn[16];
         snprintf(nn, sizeof nn, "%d", row + 1);
         bkf_cli_result r = BKF_CLI("stability", PAPER, "--n", nn);
         CHECK_MSG(r.code == 0, "n %s: exit %d: %s", nn, r.code, r.err);
