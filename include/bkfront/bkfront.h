@@ -28,6 +28,7 @@
 #include "bkfront/profile.h"
 #include "bkfront/friction.h"
 #include "bkfront/fronts.h"
+#include "bkfront/stability.h"
 #include "bkfront/oscillation.h"
 #include "bkfront/init.h"
 #include "bkfront/seed.h"

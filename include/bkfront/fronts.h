@@ -33,11 +33,14 @@ typedef struct {
                                BKF_SPEEDS_MAX_ROWS values of n */
     double tol;             /* relative on v; default 1e-10 */
     int method;             /* index in auto, asymptotic, leading, shooting */
+    int stability;          /* add each root's spectral verdict (bkf_stability_root; c > 0) */
+    double stability_tol;   /* its absolute tolerance on sigma, [1e-10, 1e-2]; 0 (default):
+                               trainspec's default, 1e-6; only with stability */
 } bkf_fronts_spec;
 
 bkf_fronts_spec bkf_fronts_spec_default(void);
 
-/* The keys: gamma, c, nu, S, n, nmax, tol, method. */
+/* The keys: gamma, c, nu, S, n, nmax, tol, method, stability, stability-tol. */
 extern const bkf_option bkf_fronts_options[];
 extern const size_t bkf_fronts_noptions;
 
@@ -56,7 +59,11 @@ const bkf_io_column *bkf_fronts_columns(size_t *count);
 /* The BKF_FRONTS_ROOT_COLUMNS cells of one root (text cells are static). */
 void bkf_fronts_root_values(const bkf_speeds_root *root, bkf_io_value *values);
 
-/* Every root (bkf_speeds_find) as a table to `out`.  Comments: the
+/* Every root (bkf_speeds_find) as a table to `out`; with stability, five
+ * more columns from each root's ring spectrum: stable (yes, no, unresolved),
+ * sigma_max, sigma_max_err, kappa_max, kind (real, complex).  A root whose
+ * spectrum fails (BKF_ETOL, BKF_EBUDGET) is unresolved with NaN numbers and
+ * a comment saying why; the table is still written.  Comments: the
  * parameters, the range of n (n_max, n_bound = S/(k c gamma), k(nu), the
  * infimum of T/sqrt(mu^2 - gamma^2)), the work, the note; in JSON the same
  * key results are the fields of "results": n_max and n_bound (null when

@@ -62,6 +62,7 @@ static void speeds_help(FILE *out)
     fprintf(out,
         "usage: bkfront speeds --gamma G --c C --nu V --S L [--n N | --nmax N]\n"
         "                      [--tol E] [--method auto|asymptotic|leading|shooting]\n"
+        "                      [--stability [--stability-tol E]]\n"
         "                      [--format tsv|json] [--out FILE]\n"
         "\n"
         "Every supersonic speed v at which n fronts propagate around the periodic\n"
@@ -79,6 +80,13 @@ static void speeds_help(FILE *out)
     fprintf(out,
         "\n"
         "columns:\n" COLUMNS_HELP
+        "with --stability, each root's ring spectrum (as bkfront stability):\n"
+        "  stable         yes, no, or unresolved (sigma_max within its error of 0,\n"
+        "                 or the spectrum failed: a comment says why, numbers nan)\n"
+        "  sigma_max      the rightmost Re sigma but the translation's 0\n"
+        "  sigma_max_err  its estimated absolute error\n"
+        "  kappa_max      its Bloch number 2 pi j / S\n"
+        "  kind           real, or complex (a conjugate pair)\n"
         "\n"
         "No front at all (S too small) is an empty table with the reason in a\n"
         "comment, exit status 0. Output is all or nothing: on any failure nothing is\n"

@@ -9,6 +9,7 @@ extern const cli_command cli_cmd_asymptotics;
 extern const cli_command cli_cmd_floquet;
 extern const cli_command cli_cmd_speeds;
 extern const cli_command cli_cmd_branch;
+extern const cli_command cli_cmd_stability;
 extern const cli_command cli_cmd_profile;
 extern const cli_command cli_cmd_simulate;
 extern const cli_command cli_cmd_check;
@@ -21,6 +22,7 @@ static const cli_command *const commands[] = {
     &cli_cmd_asymptotics,
     &cli_cmd_speeds,
     &cli_cmd_branch,
+    &cli_cmd_stability,
     &cli_cmd_profile,
     &cli_cmd_floquet,
     &cli_cmd_friction,

@@ -15,6 +15,7 @@
 #include "bkfront/period.h"
 #include "bkfront/profile.h"
 #include "bkfront/simulate.h"
+#include "bkfront/stability.h"
 
 /* The keys a product requires (BKF_OPT_REQUIRED) have been given: the
  * command line's parser says so for flags; here for every other caller.
@@ -87,6 +88,8 @@ ADAPTERS(speeds, bkf_fronts_spec, bkf_fronts, release_nothing)
 WRITER(speeds, bkf_fronts_spec, bkf_fronts_write)
 ADAPTERS(branch, bkf_fronts_branch_spec, bkf_fronts_branch, release_nothing)
 WRITER(branch, bkf_fronts_branch_spec, bkf_fronts_branch_write)
+ADAPTERS(stability, bkf_stability_spec, bkf_stability, release_nothing)
+WRITER(stability, bkf_stability_spec, bkf_stability_write)
 ADAPTERS(friction, bkf_friction_spec, bkf_friction, release_nothing)
 WRITER(friction, bkf_friction_spec, bkf_friction_table)
 ADAPTERS(bench, bkf_bench_spec, bkf_bench, release_nothing)
@@ -177,6 +180,8 @@ static const bkf_catalog_entry entries[] = {
     ENTRY(speeds, bkf_fronts_spec, "allowed front speeds: every root of the speed condition"),
     ENTRY(branch, bkf_fronts_branch_spec,
           "speed branches v_n(p) along one parameter, through folds to the sonic limit"),
+    ENTRY(stability, bkf_stability_spec,
+          "spectral stability of a train of n fronts: its spectrum on the ring or the line"),
     ENTRY(asymptotics, bkf_approx_spec,
           "asymptotic formulas for T against the numerical period: fits, validity map, errors"),
     ENTRY(profile, bkf_profile_spec,

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "bkfront/cycle.h"
+#include "bkfront/stability.h"
 
 #include "product_internal.h"
 
@@ -17,12 +18,17 @@
     {"flags", BKF_IO_TEXT}
 
 static const bkf_io_column speeds_columns[] = {ROOT_COLUMNS};
+/* With stability: the root's, then its spectral verdict. */
+static const bkf_io_column stability_columns[] = {
+    ROOT_COLUMNS,           {"stable", BKF_IO_TEXT},    {"sigma_max", BKF_IO_NUMBER},
+    {"sigma_max_err", BKF_IO_NUMBER}, {"kappa_max", BKF_IO_NUMBER}, {"kind", BKF_IO_TEXT}};
 static const bkf_io_column branch_columns[] = {
     {"point", BKF_IO_TEXT}, {"S", BKF_IO_NUMBER},  {"gamma", BKF_IO_NUMBER},
     {"c", BKF_IO_NUMBER},   {"nu", BKF_IO_NUMBER}, ROOT_COLUMNS};
 #define NSPEEDS (sizeof speeds_columns / sizeof speeds_columns[0])
 #define NBRANCH (sizeof branch_columns / sizeof branch_columns[0])
 #define NPARAM (NBRANCH - NSPEEDS)
+#define NSTABILITY (sizeof stability_columns / sizeof stability_columns[0])
 
 _Static_assert(NSPEEDS == BKF_FRONTS_ROOT_COLUMNS, "the root's columns");
 
@@ -36,18 +42,11 @@ static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYM
 /* The model's keys, shared by both products' tables (REQUIRED: speeds needs
  * every one; branch all but the continued one, which its check sees).  nu's
  * range is the checks' (check_nu), whose message says why. */
-#define MODEL_OPTIONS(SPEC, required)                                                         \
-    {.name = "gamma", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, gamma),                \
-     .flags = (required) | BOUNDED, .min = BKF_CYCLE_MU_MIN, .max = BKF_CYCLE_MU_MAX,         \
-     .form = "G", .help = "friction strength, in [1e-06, 1e+06] (mu >= gamma must be\n"       \
-                          "solvable)"},                                                       \
-    {.name = "c", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, c),                        \
-     .flags = (required) | BKF_OPT_MIN, .min = 0, .form = "C", .help = "sound speed, >= 0"},  \
-    {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, nu), .flags = (required), \
-     .form = "V", .help = "pulling rate in (-1, 1); |nu| >= 1 has no fronts"},                \
-    {.name = "S", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, S),                        \
-     .flags = (required) | BKF_OPT_MIN | BKF_OPT_MIN_OPEN, .min = 0, .form = "L",             \
-     .help = "system size, > 0"}
+#define MODEL_OPTIONS(SPEC, required)                                                        \
+    BKF_PRODUCT_GAMMA_OPTION(SPEC, required),                                                \
+    {.name = "c", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, c),                       \
+     .flags = (required) | BKF_OPT_MIN, .min = 0, .form = "C", .help = "sound speed, >= 0"}, \
+    BKF_PRODUCT_NU_OPTION(SPEC, required), BKF_PRODUCT_S_OPTION(SPEC, required)
 
 #define TOL_OPTION(SPEC, what)                                                                \
     {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, tol), .flags = BOUNDED,  \
@@ -73,6 +72,15 @@ const bkf_option bkf_fronts_options[] = {
              "shooting; asymptotic or leading: the formula at every root,\n"
              "exit 1 where its bound exceeds that; shooting: never a formula\n"
              "(except beyond the grid's cap, flag asymptotic)"},
+    {.name = "stability", .type = BKF_OPT_SWITCH, .offset = offsetof(bkf_fronts_spec, stability),
+     .help = "add each root's spectral stability (its ring spectrum, as\n"
+             "bkfront stability): columns stable, sigma_max, sigma_max_err,\n"
+             "kappa_max, kind; needs c > 0"},
+    {.name = "stability-tol", .type = BKF_OPT_DOUBLE,
+     .offset = offsetof(bkf_fronts_spec, stability_tol), .flags = BOUNDED, .min = 1e-10,
+     .max = 1e-2, .form = "E", .shown_default = "1e-6",
+     .help = "with --stability: absolute accuracy asked of each sigma,\n"
+             "in [1e-10, 0.01]"},
 };
 const size_t bkf_fronts_noptions = sizeof bkf_fronts_options / sizeof bkf_fronts_options[0];
 
@@ -131,6 +139,14 @@ int bkf_fronts_check(const bkf_fronts_spec *spec, const char *prefix, bkf_error 
                              "n <= N)", p, p, p, p);
     if ((unsigned)spec->method >= 4)
         return bkf_error_set(err, BKF_EINPUT, "%smethod: not auto, asymptotic, leading or shooting", p);
+    if (spec->stability_tol != 0 && !spec->stability)
+        return bkf_error_set(err, BKF_EINPUT, "%sstability-tol: only with %sstability", p, p);
+    if (spec->stability_tol != 0 && !(spec->stability_tol >= 1e-10 && spec->stability_tol <= 1e-2))
+        return bkf_error_set(err, BKF_EINPUT, "%sstability-tol: not in [1e-10, 0.01]", p);
+    if (spec->stability && !(spec->c > 0))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%sstability: needs %sc > 0 (with c = 0 the fronts are phase waves "
+                             "of uncoupled oscillators: every mode is neutral)", p, p);
     int s = check_nu(p, spec->nu, err);
     if (s) return s;
     bkf_model_params params;
@@ -208,13 +224,77 @@ static int range_of_n(bkf_io_table *table, double c, const bkf_speeds_table *t, 
     return s;
 }
 
+/* Each root's ring spectrum, or why it has none. */
+typedef struct {
+    double tol;
+    bkf_trainspec_result *spectra; /* one per root */
+    bkf_error *why;                /* status BKF_OK where the spectrum was computed */
+} root_spectra;
+
+static void root_spectra_free(root_spectra *r, size_t count)
+{
+    for (size_t i = 0; r->spectra && i < count; i++) bkf_trainspec_result_free(&r->spectra[i]);
+    free(r->spectra);
+    free(r->why);
+}
+
+/* A root whose spectrum does not meet the tolerance within the budget is
+ * unresolved; any other failure is the table's. */
+static int find_spectra(const bkf_model_params *p, const bkf_speeds_table *t, double tol,
+                        root_spectra *r, bkf_error *err)
+{
+    bkf_trainspec_options defaults = bkf_trainspec_options_default();
+    r->tol = tol != 0 ? tol : defaults.tol;
+    r->spectra = calloc(t->count ? t->count : 1, sizeof *r->spectra);
+    r->why = calloc(t->count ? t->count : 1, sizeof *r->why);
+    if (!r->spectra || !r->why) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    for (size_t i = 0; i < t->count; i++) {
+        int s = bkf_stability_root(p, &t->roots[i], r->tol, defaults.per_kappa, &r->spectra[i],
+                                   &r->why[i]);
+        r->why[i].status = s;
+        if (s && s != BKF_ETOL && s != BKF_EBUDGET) return bkf_error_set(err, s, "%s", r->why[i].message);
+    }
+    return BKF_OK;
+}
+
+/* The comments on the spectra: the tolerance, and each unresolved root. */
+static int spectra_comments(bkf_io_table *table, const bkf_speeds_table *t, const root_spectra *r,
+                            bkf_error *err)
+{
+    char a[32];
+    int s = bkf_io_table_commentf(table, err,
+                                  "stability: each root's ring spectrum (bkfront stability), "
+                                  "tol %s (absolute, on sigma); sigma_max is the rightmost "
+                                  "Re sigma but the translation",
+                                  bkf_format_number(r->tol, a, sizeof a));
+    for (size_t i = 0, root = 1; !s && i < t->count; i++) {
+        root = i > 0 && t->roots[i - 1].n == t->roots[i].n ? root + 1 : 1;
+        if (r->why[i].status)
+            s = bkf_io_table_commentf(table, err, "stability of n %zu, root %zu unresolved: %s",
+                                      t->roots[i].n, root, r->why[i].message);
+    }
+    return s;
+}
+
+static void spectrum_values(const root_spectra *r, size_t i, bkf_io_value *v)
+{
+    const bkf_trainspec_result *x = &r->spectra[i];
+    int ok = r->why[i].status == BKF_OK;
+    v[0].text = ok ? bkf_trainspec_verdict_name(x->verdict) : "unresolved";
+    v[1].number = ok ? x->sigma_max : NAN;
+    v[2].number = ok ? x->sigma_max_err : NAN;
+    v[3].number = ok ? x->kappa_max : NAN;
+    v[4].text = ok ? bkf_stability_kind_name(x) : NULL;
+}
+
 static int write_speeds(const bkf_model_params *p, const bkf_speeds_options *o,
-                        const bkf_speeds_table *t, FILE *out, bkf_io_format format,
-                        const bkf_provenance *prov, bkf_error *err)
+                        const bkf_speeds_table *t, const root_spectra *spectra, FILE *out,
+                        bkf_io_format format, const bkf_provenance *prov, bkf_error *err)
 {
     bkf_io_table *table;
     int s = bkf_product_table_open(
-        out, format, speeds_columns, NSPEEDS,
+        out, format, spectra ? stability_columns : speeds_columns,
+        spectra ? NSTABILITY : NSPEEDS,
         "speeds: roots v > c of n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)), "
         "mu(v) = gamma / sqrt(1 - c^2/v^2)",
         prov, &table, err);
@@ -239,10 +319,12 @@ static int write_speeds(const bkf_model_params *p, const bkf_speeds_options *o,
         snprintf(line, sizeof line, "note: %s", t->note);
         s = bkf_io_table_comment(table, line, err);
     }
+    if (!s && spectra) s = spectra_comments(table, t, spectra, err);
     if (!s) s = bkf_product_table_command(table, prov, err);
     for (size_t i = 0; !s && i < t->count; i++) {
-        bkf_io_value v[NSPEEDS];
+        bkf_io_value v[NSTABILITY];
         bkf_fronts_root_values(&t->roots[i], v);
+        if (spectra) spectrum_values(spectra, i, v + NSPEEDS);
         s = bkf_io_table_row(table, v, err);
     }
     if (!s) s = bkf_io_table_finish(table, err);
@@ -260,7 +342,12 @@ int bkf_fronts_write(const bkf_fronts_spec *spec, FILE *out, bkf_io_format forma
     bkf_fronts_setup(spec, &params, &options);
     bkf_speeds_table t;
     s = bkf_speeds_find(&params, &options, &t, err);
-    if (!s) s = write_speeds(&params, &options, &t, out, format, prov, err);
+    root_spectra spectra = {0};
+    if (!s && spec->stability) s = find_spectra(&params, &t, spec->stability_tol, &spectra, err);
+    if (!s)
+        s = write_speeds(&params, &options, &t, spec->stability ? &spectra : NULL, out, format,
+                         prov, err);
+    root_spectra_free(&spectra, t.count);
     bkf_speeds_table_free(&t);
     return s;
 }

@@ -1,0 +1,76 @@
+/* The spectral stability of a train of n fronts as a table (`bkfront
+ * stability`): the root of the speed condition (bkf_speeds_find, n only),
+ * then its spectrum on the ring (bkf_trainspec_ring: one row per eigenvalue)
+ * or on the infinite line (bkf_trainspec_line: the rightmost sigma against
+ * the Bloch number).  The numbers are trainspec's; this module checks the
+ * spec, finds the root and tabulates.  `bkfront speeds --stability` takes
+ * its verdict columns from here too (bkf_stability_root).
+ *
+ * bkf_stability_options is the table of its keys (flags and scene keys,
+ * options.h): fill a spec from its _default, apply values through the
+ * table, check, write. */
+#ifndef BKFRONT_STABILITY_H
+#define BKFRONT_STABILITY_H
+
+#include <stddef.h>
+#include <stdio.h>
+#include "bkfront/io.h"
+#include "bkfront/model.h"
+#include "bkfront/options.h"
+#include "bkfront/speeds.h"
+#include "bkfront/status.h"
+#include "bkfront/trainspec.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* --kappa-count at most (one Bloch number costs about one ring spectrum's
+ * curve trace). */
+#define BKF_STABILITY_KAPPA_MAX 100000u
+
+typedef struct {
+    double gamma, c, nu, S; /* required (NaN by default); c > 0, else as bkf_speeds_check */
+    size_t n;               /* required (0 by default), >= 1 */
+    size_t root;            /* which root of n, 1 the fastest (bkf_speeds_find order); default 1 */
+    double tol;             /* absolute accuracy of each sigma, [1e-10, 1e-2]; default 1e-6 */
+    size_t per_kappa;       /* eigenvalues per Bloch number, [1, 50]; default 3 */
+    int line;               /* the infinite line's spectrum instead of the ring's */
+    size_t kappa_count;     /* Bloch numbers sampled with line, [1, 100000]; default 64 */
+} bkf_stability_spec;
+
+bkf_stability_spec bkf_stability_spec_default(void);
+
+/* The keys: gamma, c, nu, S, n, root, tol, per-kappa, line, kappa-count. */
+extern const bkf_option bkf_stability_options[];
+extern const size_t bkf_stability_noptions;
+
+/* What the table cannot judge key by key (c > 0, |nu| < 1, the speeds
+ * module's ranges); messages name the keys with `prefix` ("--" or "").
+ * Whether n has a root is known only once the roots are found:
+ * bkf_stability_write refuses it then (BKF_EINPUT naming n and n_max). */
+int bkf_stability_check(const bkf_stability_spec *spec, const char *prefix, bkf_error *err);
+
+/* The ring spectrum of one root of the speed condition (bkf_trainspec_ring
+ * on the train n = root->n, v = root->v): *result as there. */
+int bkf_stability_root(const bkf_model_params *params, const bkf_speeds_root *root, double tol,
+                       size_t per_kappa, bkf_trainspec_result *result, bkf_error *err);
+
+/* "real" or "complex": the kind of the rightmost eigenvalue. */
+const char *bkf_stability_kind_name(const bkf_trainspec_result *result);
+
+/* The table to `out`.  Ring: one row per eigenvalue (j, kappa, re, im, err,
+ * translation), comments with the verdict, sigma_max and its kappa and
+ * kind, the gauges (translation and Liouville residuals), the window, the
+ * work and the root (n, v, mu, T); in JSON the same are the fields of
+ * "results".  Line: rows kappa, re, im, err, and the largest re among them
+ * with its kappa as results.  On failure the stream holds a partial table
+ * and the caller discards it. */
+int bkf_stability_write(const bkf_stability_spec *spec, FILE *out, bkf_io_format format,
+                        const bkf_provenance *provenance, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
