@@ -41,7 +41,8 @@ extern "C" {
 
 typedef struct {
     double tol;        /* absolute accuracy asked of each sigma, [1e-8, 1e-2]; default 1e-6 */
-    size_t per_kappa;  /* leading eigenvalues reported per Bloch number, [1, 50]; default 3 */
+    size_t per_kappa;  /* leading eigenvalues reported per Bloch number, [1, 50]; default 3
+                          (one more where the cut would split a conjugate pair) */
 } bkf_trainspec_options;
 
 bkf_trainspec_options bkf_trainspec_options_default(void);

@@ -759,7 +759,11 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
         for (size_t i = 0; i < n_eig; i++) {
             size_t same = 0;
             for (size_t k = 0; k < w; k++) same += eig[k].j == eig[i].j;
-            if (same < keep || eig[i].translation) eig[w++] = eig[i];
+            /* a conjugate pair (j = 0 or n/2) is never split by the cut */
+            int partner = w > 0 && eig[w - 1].j == eig[i].j &&
+                          fabs(eig[w - 1].re - eig[i].re) <= eig[w - 1].err + eig[i].err &&
+                          fabs(eig[w - 1].im + eig[i].im) <= eig[w - 1].err + eig[i].err && eig[i].im != 0.0;
+            if (same < keep || eig[i].translation || partner) eig[w++] = eig[i];
         }
         n_eig = w;
     }
