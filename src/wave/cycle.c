@@ -793,46 +793,6 @@ int bkf_cycle_estimate(bkf_cycle *c, double mu, double nu, const bkf_cycle_optio
 
 /* ------------------------------------------------------------- profile */
 
-static int cycle_profile_body(bkf_cycle *c, double z, double *f, double *fprime, bkf_error *err)
-{
-    if (!c || !c->have_solution)
-        return bkf_error_set(err, BKF_EINPUT, "profile requested before a successful solve");
-    if (!isfinite(z)) return bkf_error_set(err, BKF_EINPUT, "z must be finite");
-    double T = c->result.period;
-    double zr = fmod(z, T);
-    if (zr < 0) zr += T;
-    /* last node at or before zr (nodes are in increasing time) */
-    size_t lo = 0, hi = c->node_count;
-    while (hi - lo > 1) {
-        size_t mid = (lo + hi) / 2;
-        if (c->nodes[mid].t <= zr) lo = mid;
-        else hi = mid;
-    }
-    /* The explicit stepper is the fast choice up to mu = 100, but on some
-     * stretches of a stiff cycle (mu 50..100, |nu| near 0.5..0.9) it blows
-     * up; the implicit one, as the solve would use, then takes over. */
-    double s[DIM];
-    int rc = BKF_ENUMERIC;
-    for (int attempt = 0; attempt < 2 && rc != BKF_OK; attempt++) {
-        bkf_stepper_kind kind = attempt ? BKF_STEPPER_IMPLICIT : c->profile_stepper;
-        if (attempt && kind == c->profile_stepper) break;
-        integrator in = {0};
-        if (integrator_init(&in, &c->flow, kind, 1, c->profile_tol) != BKF_OK) {
-            integrator_free(&in);
-            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        }
-        double s0[DIM] = {c->nodes[lo].s[0], c->nodes[lo].s[1], 0.0, 0.0, 0.0};
-        memcpy(s, s0, sizeof s);
-        rc = integrator_to(&in, c->nodes[lo].t, s, zr);
-        integrator_free(&in);
-    }
-    if (rc != BKF_OK)
-        return bkf_error_set(err, BKF_ENUMERIC, "profile integration failed at z = %.15g", z);
-    if (f) *f = s[IX];
-    if (fprime) *fprime = flow_xdot(&c->flow, s);
-    return BKF_OK;
-}
-
 /* One integrator for all the points, each continued from the previous one
  * unless a stored node lies between them (a restart there keeps the error
  * that of one short stretch, as for a single point). */
@@ -894,8 +854,15 @@ size_t bkf_cycle_mesh(const bkf_cycle *c, double *z, size_t capacity)
 
 int bkf_cycle_profile(bkf_cycle *c, double z, double *f, double *fprime, bkf_error *err)
 {
+    if (!c || !c->have_solution)
+        return bkf_error_set(err, BKF_EINPUT, "profile requested before a successful solve");
+    if (!isfinite(z)) return bkf_error_set(err, BKF_EINPUT, "z must be finite");
+    double T = c->result.period;
+    double zr = fmod(z, T);
+    if (zr < 0) zr += T;
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
-    int rc = cycle_profile_body(c, z, f, fprime, err);
+    int rc = cycle_sample_body(c, &zr, 1, f, fprime, err);
+    if (rc == BKF_ENUMERIC) rc = bkf_error_set(err, BKF_ENUMERIC, "profile integration failed at z = %.15g", z);
     bkf_gsl_handler_pop(handler);
     return rc;
 }
