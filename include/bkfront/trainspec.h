@@ -110,6 +110,33 @@ int bkf_trainspec_line(const bkf_model_params *params, const bkf_trainspec_train
                        const bkf_trainspec_options *options, size_t count,
                        bkf_trainspec_eigenvalue *out, bkf_error *err);
 
+/* One eigenvalue on a fixed mesh: Newton from sigma0 = (re0, im0) on the
+ * multiplier exp(2 pi i j / n) of Bloch class j (j < n), every step of the
+ * cycle's mesh cut into `substeps` Magnus steps ([1, 4096]; the ring
+ * spectrum's meshes take 1 and 2, doubled on refinement) on top of those
+ * the local rates need at |sigma| ~ |sigma0|.  Doubling substeps halves
+ * every step, so the error falls 16-fold (fourth order): for convergence
+ * studies and for following one eigenvalue.  No error estimate; BKF_ENUMERIC
+ * when Newton does not converge.  *mesh_steps (may be NULL) gets the Magnus
+ * steps per period. */
+int bkf_trainspec_eigenvalue_at(const bkf_model_params *params, const bkf_trainspec_train *train,
+                                size_t j, double re0, double im0, size_t substeps, double *re,
+                                double *im, size_t *mesh_steps, bkf_error *err);
+
+/* The eigenfunction of the eigenvalue near sigma = (*re, *im) of class j:
+ * sigma is first polished as by bkf_trainspec_eigenvalue_at at 8 substeps
+ * (the value used goes back into *re, *im), then the perturbations p of psi
+ * and q of eta are sampled at the N points x_i = i S / N (N >= 2) of the
+ * ring, at t = 0 in the frame of bkf_pde_init_front's wave (psi = f(x / (v s)),
+ * fronts moving towards -x), scaled to max |p| = 1.  The state
+ * (F + eps Re p, G + eps Re q) then evolves, to first order in eps, as
+ * (F + eps Re(p e^{sigma t}), ...) in the frame moving with the fronts:
+ * the seed for a simulation that checks sigma.  Arrays of N values each
+ * (p_im, q_re, q_im may be NULL). */
+int bkf_trainspec_mode(const bkf_model_params *params, const bkf_trainspec_train *train, size_t j,
+                       double *re, double *im, size_t N, double *p_re, double *p_im, double *q_re,
+                       double *q_im, bkf_error *err);
+
 #ifdef __cplusplus
 }
 #endif

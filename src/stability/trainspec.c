@@ -106,38 +106,29 @@ static int node_rates(ctx *x, double reach, bkf_error *err)
     return rc;
 }
 
-static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
+/* A mesh on the step boundaries bounds[0..steps] (ascending in [0, T]):
+ * the coefficients at each step's two Gauss points. */
+static int mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf_error *err)
 {
     mesh_free(m);
-    size_t steps = 0;
-    for (size_t i = 0; i + 1 < x->node_count; i++) steps += pieces(x, i, substeps);
-    if (steps > MESH_MAX_STEPS)
-        return bkf_error_set(err, BKF_EBUDGET,
-                             "the spectrum needs more than %d Magnus steps per period (mu = %.15g)",
-                             MESH_MAX_STEPS, x->mu);
     m->steps = steps;
-    m->h = malloc(steps * sizeof *m->h);
-    m->a = malloc(2 * steps * sizeof *m->a);
-    m->b0 = malloc(2 * steps * sizeof *m->b0);
-    m->phi = malloc(2 * steps * sizeof *m->phi);
-    double *z = malloc(2 * steps * sizeof *z), *f = malloc(2 * steps * sizeof *f),
-           *fp = malloc(2 * steps * sizeof *fp);
+    size_t cap = steps ? steps : 1;
+    m->h = malloc(cap * sizeof *m->h);
+    m->a = malloc(2 * cap * sizeof *m->a);
+    m->b0 = malloc(2 * cap * sizeof *m->b0);
+    m->phi = malloc(2 * cap * sizeof *m->phi);
+    double *z = malloc(2 * cap * sizeof *z), *f = malloc(2 * cap * sizeof *f), *fp = malloc(2 * cap * sizeof *fp);
     int rc = BKF_OK;
     if (!m->h || !m->a || !m->b0 || !m->phi || !z || !f || !fp) {
         rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
         goto done;
     }
     const double g = 0.5 / sqrt(3.0);
-    size_t k = 0;
-    for (size_t i = 0; i + 1 < x->node_count; i++) {
-        size_t count = pieces(x, i, substeps);
-        double h = (x->nodes[i + 1] - x->nodes[i]) / (double)count;
-        for (size_t q = 0; q < count; q++, k++) {
-            double mid = x->nodes[i] + (q + 0.5) * h;
-            m->h[k] = h;
-            z[2 * k] = fmax(mid - g * h, 0.0);
-            z[2 * k + 1] = fmin(mid + g * h, x->T);
-        }
+    for (size_t k = 0; k < steps; k++) {
+        double h = bounds[k + 1] - bounds[k], mid = bounds[k] + 0.5 * h;
+        m->h[k] = h;
+        z[2 * k] = fmax(mid - g * h, 0.0);
+        z[2 * k + 1] = fmin(mid + g * h, x->T);
     }
     rc = bkf_cycle_profile_sample(x->cycle, z, 2 * steps, f, fp, err);
     if (rc != BKF_OK) goto done;
@@ -156,7 +147,105 @@ done:
     return rc;
 }
 
+/* The step boundaries of a mesh with `substeps` times the pieces that
+ * resolve the local rates (see pieces): *bounds (steps + 1 values). */
+static int mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, bkf_error *err)
+{
+    size_t count = 0;
+    for (size_t i = 0; i + 1 < x->node_count; i++) count += pieces(x, i, substeps);
+    if (count > MESH_MAX_STEPS)
+        return bkf_error_set(err, BKF_EBUDGET,
+                             "the spectrum needs more than %d Magnus steps per period (mu = %.15g)",
+                             MESH_MAX_STEPS, x->mu);
+    double *b = malloc((count + 1) * sizeof *b);
+    if (!b) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    size_t k = 0;
+    for (size_t i = 0; i + 1 < x->node_count; i++) {
+        size_t parts = pieces(x, i, substeps);
+        double h = (x->nodes[i + 1] - x->nodes[i]) / (double)parts;
+        for (size_t q = 0; q < parts; q++) b[k++] = x->nodes[i] + (double)q * h;
+    }
+    b[k] = x->T;
+    *bounds = b;
+    *steps = count;
+    return BKF_OK;
+}
+
+static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
+{
+    double *bounds = NULL;
+    size_t steps = 0;
+    int rc = mesh_bounds(x, substeps, &bounds, &steps, err);
+    if (rc == BKF_OK) rc = mesh_fill(x, bounds, steps, m, err);
+    free(bounds);
+    return rc;
+}
+
 /* ---------------------------------------------------------- monodromy */
+
+/* exp(Omega) of Magnus step i at sigma as e[0..3] (row-major) times
+ * exp(return value): the growth of a stiff step kept out of e. */
+static double magnus_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4])
+{
+    const double r3 = sqrt(3.0) / 12.0;
+    double complex extra = x->beta * sigma;
+    double h = m->h[i], a1 = m->a[2 * i], a2 = m->a[2 * i + 1];
+    double complex b1 = m->b0[2 * i] + extra * (sigma + x->gamma * m->phi[2 * i]);
+    double complex b2 = m->b0[2 * i + 1] + extra * (sigma + x->gamma * m->phi[2 * i + 1]);
+    double k = r3 * h * h;
+    double tr = 0.5 * h * (a1 + a2);
+    /* Omega = h/2 (A1 + A2) - sqrt(3) h^2/12 [A1, A2], A = [[0, 1], [b, a]] */
+    double complex n11 = -k * (b2 - b1) - 0.5 * tr;
+    double complex n12 = h - k * (a2 - a1);
+    double complex n21 = 0.5 * h * (b1 + b2) - k * (a1 * b2 - a2 * b1);
+    double complex d2 = n11 * n11 + n12 * n21, d = csqrt(d2);
+    double complex ch, sc;
+    double lg = 0.5 * tr;
+    if (cabs(d) < 0.5) {
+        ch = ccosh(d);
+        sc = d == 0 ? 1.0 : csinh(d) / d;
+    } else {
+        double complex ex = cexp(-2.0 * d);
+        double complex ph = cexp(I * cimag(d));
+        ch = 0.5 * (1.0 + ex) * ph;
+        sc = 0.5 * (1.0 - ex) / d * ph;
+        lg += creal(d);
+    }
+    e[0] = ch + sc * n11;
+    e[1] = sc * n12;
+    e[2] = sc * n21;
+    e[3] = ch - sc * n11;
+    return lg;
+}
+
+/* Keeps the entries of v (count of them) near 1 in modulus, the factor
+ * moved into *scale (a log). */
+static void rescale(double complex *v, size_t count, double *scale)
+{
+    double big = 0.0;
+    for (size_t i = 0; i < count; i++) big = fmax(big, cabs(v[i]));
+    if (!(big > 0x1p200 || big < 0x1p-200) || big == 0.0) return;
+    int e2;
+    frexp(big, &e2);
+    for (size_t i = 0; i < count; i++) v[i] = ldexp(creal(v[i]), -e2) + I * ldexp(cimag(v[i]), -e2);
+    *scale += e2 * M_LN2;
+}
+
+/* The monodromy over mesh m at sigma: p[0..3] (row-major) times exp(*scale). */
+static void monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double complex p[4], double *scale)
+{
+    x->evaluations++;
+    p[0] = 1, p[1] = 0, p[2] = 0, p[3] = 1;
+    *scale = 0.0;
+    for (size_t i = 0; i < m->steps; i++) {
+        double complex e[4];
+        *scale += magnus_step(x, m, i, sigma, e);
+        double complex q0 = e[0] * p[0] + e[1] * p[2], q1 = e[0] * p[1] + e[1] * p[3];
+        double complex q2 = e[2] * p[0] + e[3] * p[2], q3 = e[2] * p[1] + e[3] * p[3];
+        p[0] = q0, p[1] = q1, p[2] = q2, p[3] = q3;
+        rescale(p, 4, scale);
+    }
+}
 
 /* ln of the two multipliers of psi's perturbation over one period at sigma:
  * w[0] the larger in modulus, w[1] the smaller.  The product is kept scaled
@@ -165,51 +254,10 @@ done:
  * free of cancellation. */
 static void monodromy(ctx *x, const mesh *m, double complex sigma, double complex w[2])
 {
-    x->evaluations++;
-    double complex p11 = 1, p12 = 0, p21 = 0, p22 = 1;
-    double scale = 0.0;
-    const double r3 = sqrt(3.0) / 12.0;
-    double complex extra = x->beta * sigma, gsig = x->gamma;
-    for (size_t i = 0; i < m->steps; i++) {
-        double h = m->h[i], a1 = m->a[2 * i], a2 = m->a[2 * i + 1];
-        double complex b1 = m->b0[2 * i] + extra * (sigma + gsig * m->phi[2 * i]);
-        double complex b2 = m->b0[2 * i + 1] + extra * (sigma + gsig * m->phi[2 * i + 1]);
-        double k = r3 * h * h;
-        double tr = 0.5 * h * (a1 + a2);
-        /* Omega = h/2 (A1 + A2) - sqrt(3) h^2/12 [A1, A2], A = [[0, 1], [b, a]] */
-        double complex n11 = -k * (b2 - b1) - 0.5 * tr;
-        double complex n12 = h - k * (a2 - a1);
-        double complex n21 = 0.5 * h * (b1 + b2) - k * (a1 * b2 - a2 * b1);
-        double complex d2 = n11 * n11 + n12 * n21, d = csqrt(d2);
-        double complex ch, sc;
-        double lg = 0.5 * tr;
-        if (cabs(d) < 0.5) {
-            ch = ccosh(d);
-            sc = d == 0 ? 1.0 : csinh(d) / d;
-        } else {
-            double complex e = cexp(-2.0 * d);
-            double complex ph = cexp(I * cimag(d));
-            ch = 0.5 * (1.0 + e) * ph;
-            sc = 0.5 * (1.0 - e) / d * ph;
-            lg += creal(d);
-        }
-        double complex e11 = ch + sc * n11, e22 = ch - sc * n11, e12 = sc * n12, e21 = sc * n21;
-        double complex q11 = e11 * p11 + e12 * p21, q12 = e11 * p12 + e12 * p22;
-        double complex q21 = e21 * p11 + e22 * p21, q22 = e21 * p12 + e22 * p22;
-        p11 = q11, p12 = q12, p21 = q21, p22 = q22;
-        scale += lg;
-        double big = fmax(fmax(cabs(p11), cabs(p12)), fmax(cabs(p21), cabs(p22)));
-        if (big > 0x1p200 || big < 0x1p-200) {
-            int e2;
-            frexp(big, &e2);
-            p11 = ldexp(creal(p11), -e2) + I * ldexp(cimag(p11), -e2);
-            p12 = ldexp(creal(p12), -e2) + I * ldexp(cimag(p12), -e2);
-            p21 = ldexp(creal(p21), -e2) + I * ldexp(cimag(p21), -e2);
-            p22 = ldexp(creal(p22), -e2) + I * ldexp(cimag(p22), -e2);
-            scale += e2 * M_LN2;
-        }
-    }
-    double complex half = 0.5 * (p11 + p22), det = p11 * p22 - p12 * p21;
+    double complex p[4];
+    double scale;
+    monodromy_matrix(x, m, sigma, p, &scale);
+    double complex half = 0.5 * (p[0] + p[3]), det = p[0] * p[3] - p[1] * p[2];
     double complex root = csqrt(half * half - det);
     double complex big = cabs(half + root) >= cabs(half - root) ? half + root : half - root;
     double complex shift = sigma * x->T / x->s;
@@ -878,6 +926,214 @@ int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
         }
     }
     free(eig);
+    ctx_free(&x);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
+
+/* ------------------------------------------------- single eigenvalues */
+
+#define SUBSTEPS_MAX 4096
+#define MODE_SUBSTEPS 8
+
+/* The context and its fine mesh (substeps) resolving |sigma| ~ |sigma0|,
+ * and sigma polished on it from sigma0 in class j. */
+static int one_eigenvalue(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, size_t j,
+                          double complex *sigma, size_t substeps, bkf_error *err)
+{
+    int rc = ctx_init(x, p, t, TOL_MIN, err);
+    if (rc == BKF_OK) rc = node_rates(x, 2.0 * cabs(*sigma) + 1.0, err);
+    if (rc == BKF_OK) rc = mesh_build(x, substeps, &x->fine, err);
+    if (rc != BKF_OK) return rc;
+    double step;
+    double complex s = *sigma;
+    if (polish(x, &x->fine, 2.0 * M_PI * (double)j / (double)t->n, &s, &step) != BKF_OK)
+        return bkf_error_set(err, BKF_ENUMERIC,
+                             "no eigenvalue of class j = %zu converged from sigma = %.6g%+.6gi (last Newton "
+                             "step %.3g)",
+                             j, creal(*sigma), cimag(*sigma), step);
+    *sigma = s;
+    return BKF_OK;
+}
+
+static int check_one(const bkf_model_params *p, const bkf_trainspec_train *t, size_t j, double re0, double im0,
+                     bkf_error *err)
+{
+    int rc = bkf_trainspec_check(p, t, NULL, err);
+    if (rc != BKF_OK) return rc;
+    if (j >= t->n) return bkf_error_set(err, BKF_EINPUT, "j must be in [0, n - 1] = [0, %zu]", t->n - 1);
+    if (!isfinite(re0) || !isfinite(im0)) return bkf_error_set(err, BKF_EINPUT, "sigma must be finite");
+    return BKF_OK;
+}
+
+int bkf_trainspec_eigenvalue_at(const bkf_model_params *p, const bkf_trainspec_train *t, size_t j, double re0,
+                                double im0, size_t substeps, double *re, double *im, size_t *mesh_steps,
+                                bkf_error *err)
+{
+    int rc = check_one(p, t, j, re0, im0, err);
+    if (rc != BKF_OK) return rc;
+    if (substeps < 1 || substeps > SUBSTEPS_MAX)
+        return bkf_error_set(err, BKF_EINPUT, "substeps must be in [1, %d]", SUBSTEPS_MAX);
+    if (!re || !im) return bkf_error_set(err, BKF_EINPUT, "re and im are required");
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    ctx x;
+    double complex s = re0 + I * im0;
+    rc = one_eigenvalue(&x, p, t, j, &s, substeps, err);
+    if (rc == BKF_OK) {
+        *re = creal(s);
+        *im = cimag(s);
+        if (mesh_steps) *mesh_steps = x.fine.steps;
+    }
+    ctx_free(&x);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
+
+typedef struct {
+    double r;  /* z within the period, [0, T] */
+    size_t at; /* index of the sample on the ring */
+} mode_sample;
+
+static int by_r(const void *pa, const void *pb)
+{
+    const mode_sample *a = pa, *b = pb;
+    return (a->r > b->r) - (a->r < b->r);
+}
+
+/* u, u' from the multiplier's eigenvector through the period, recorded at
+ * the samples (sorted by r): mesh steps and samples merged into one walk. */
+static int mode_walk(ctx *x, double complex sigma, const double complex y0[2], const mode_sample *smp, size_t N,
+                     double complex *u, double complex *du, double *scale_at, bkf_error *err)
+{
+    double *bounds = NULL, *merged = NULL;
+    size_t steps = 0;
+    size_t *slot = malloc(N * sizeof *slot);
+    mesh walk = {0};
+    int rc = slot ? mesh_bounds(x, MODE_SUBSTEPS, &bounds, &steps, err) : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (rc == BKF_OK && !(merged = malloc((steps + 1 + N) * sizeof *merged)))
+        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    size_t count = 0;
+    if (rc == BKF_OK) {
+        size_t a = 0, b = 0;
+        while (a <= steps || b < N) {
+            if (b < N && (a > steps || smp[b].r <= bounds[a])) {
+                slot[b++] = count;
+                merged[count++] = smp[b - 1].r;
+            } else {
+                merged[count++] = bounds[a++];
+            }
+        }
+        rc = mesh_fill(x, merged, count - 1, &walk, err);
+    }
+    if (rc == BKF_OK) {
+        double complex y[2] = {y0[0], y0[1]};
+        double scale = 0.0;
+        size_t next = 0;
+        for (size_t k = 0; k < count; k++) {
+            while (next < N && slot[next] == k) {
+                u[next] = y[0];
+                du[next] = y[1];
+                scale_at[next++] = scale;
+            }
+            if (k + 1 == count) break;
+            double complex e[4];
+            scale += magnus_step(x, &walk, k, sigma, e);
+            double complex y1 = e[0] * y[0] + e[1] * y[1], y2 = e[2] * y[0] + e[3] * y[1];
+            y[0] = y1, y[1] = y2;
+            rescale(y, 2, &scale);
+        }
+    }
+    mesh_free(&walk);
+    free(bounds);
+    free(merged);
+    free(slot);
+    return rc;
+}
+
+int bkf_trainspec_mode(const bkf_model_params *p, const bkf_trainspec_train *t, size_t j, double *re, double *im,
+                       size_t N, double *p_re, double *p_im, double *q_re, double *q_im, bkf_error *err)
+{
+    if (!re || !im) return bkf_error_set(err, BKF_EINPUT, "re and im are required");
+    int rc = check_one(p, t, j, *re, *im, err);
+    if (rc != BKF_OK) return rc;
+    if (N < 2 || N > 1u << 24) return bkf_error_set(err, BKF_EINPUT, "N must be in [2, %u]", 1u << 24);
+    if (!p_re) return bkf_error_set(err, BKF_EINPUT, "p_re is required");
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    ctx x;
+    double complex sigma = *re + I * *im;
+    mode_sample *smp = malloc(N * sizeof *smp);
+    double complex *u = malloc(N * sizeof *u), *du = malloc(N * sizeof *du);
+    double *scale_at = malloc(N * sizeof *scale_at), *r = malloc(N * sizeof *r), *f = malloc(N * sizeof *f),
+           *fp = malloc(N * sizeof *fp);
+    rc = one_eigenvalue(&x, p, t, j, &sigma, MODE_SUBSTEPS, err);
+    if (rc == BKF_OK && (!smp || !u || !du || !scale_at || !r || !f || !fp))
+        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    double theta = 2.0 * M_PI * (double)j / (double)t->n;
+    if (rc == BKF_OK) {
+        /* the eigenvector of the multiplier exp(sigma T / s + i theta) */
+        double complex m[4], want = sigma * x.T / x.s + I * theta;
+        double scale;
+        monodromy_matrix(&x, &x.fine, sigma, m, &scale);
+        double complex half = 0.5 * (m[0] + m[3]), root = csqrt(half * half - (m[0] * m[3] - m[1] * m[2]));
+        double complex lam[2] = {half + root, half - root};
+        double miss[2];
+        for (int k = 0; k < 2; k++) {
+            double complex w = clog(lam[k]) + scale - want;
+            miss[k] = hypot(creal(w), wrap(cimag(w)));
+        }
+        double complex l = miss[0] <= miss[1] ? lam[0] : lam[1];
+        double complex ya[2] = {m[1], l - m[0]}, yb[2] = {l - m[3], m[2]};
+        const double complex *y0 = cabs(ya[0]) + cabs(ya[1]) >= cabs(yb[0]) + cabs(yb[1]) ? ya : yb;
+        double period = x.T, S = x.S, vs = x.v * x.s;
+        for (size_t i = 0; i < N; i++) {
+            double z = (double)i * S / (double)N / vs;
+            double cyc = fmin(floor(z / period), (double)(t->n - 1));
+            smp[i] = (mode_sample){fmin(fmax(z - cyc * period, 0.0), period), i};
+        }
+        qsort(smp, N, sizeof *smp, by_r);
+        for (size_t i = 0; i < N; i++) r[i] = smp[i].r;
+        rc = mode_walk(&x, sigma, y0, smp, N, u, du, scale_at, err);
+        if (rc == BKF_OK) rc = bkf_cycle_profile_sample(x.cycle, r, N, f, fp, err);
+    }
+    if (rc == BKF_OK) {
+        /* p = exp(-sigma r / s) u times the Bloch factor of the period it
+         * lies in; magnitudes relative to the largest, then normalised */
+        double top = -INFINITY;
+        for (size_t i = 0; i < N; i++) {
+            double size = fmax(cabs(u[i]), cabs(du[i]));
+            if (size > 0) top = fmax(top, scale_at[i] - creal(sigma) * r[i] / x.s + log(size));
+        }
+        double pmax = 0.0;
+        double complex *pv = u, *qv = du; /* overwritten in place */
+        for (size_t i = 0; i < N; i++) {
+            size_t at = smp[i].at;
+            double z = (double)at * x.S / (double)N / (x.v * x.s);
+            double cyc = fmin(floor(z / x.T), (double)(t->n - 1));
+            double complex factor = cexp(scale_at[i] - top - sigma * r[i] / x.s + I * cyc * theta);
+            double complex pi = factor * u[i];
+            double complex dpi = factor * (du[i] - sigma * u[i] / x.s) / (x.v * x.s);
+            pv[i] = pi;
+            qv[i] = (sigma * pi + x.v * dpi) / x.gamma + bkf_model_friction_slope(f[i]) * pi;
+            pmax = fmax(pmax, cabs(pi));
+        }
+        if (!(pmax > 0) || !isfinite(pmax)) rc = bkf_error_set(err, BKF_ENUMERIC, "the eigenfunction vanished");
+        for (size_t i = 0; i < N && rc == BKF_OK; i++) {
+            size_t at = smp[i].at;
+            p_re[at] = creal(pv[i]) / pmax;
+            if (p_im) p_im[at] = cimag(pv[i]) / pmax;
+            if (q_re) q_re[at] = creal(qv[i]) / pmax;
+            if (q_im) q_im[at] = cimag(qv[i]) / pmax;
+        }
+        *re = creal(sigma);
+        *im = cimag(sigma);
+    }
+    free(smp);
+    free(u);
+    free(du);
+    free(scale_at);
+    free(r);
+    free(f);
+    free(fp);
     ctx_free(&x);
     bkf_gsl_handler_pop(handler);
     return rc;
