@@ -166,6 +166,9 @@ $(BUILD)/examples/%: $(BUILD)/docs/examples/%.o $(LIB)
 $(BENCH): $(BENCH_OBJ) $(LIB)
 	$(CC) $(LDFLAGS) -o $@ $(BENCH_OBJ) $(LIB) $(LDLIBS)
 
+# The monodromy's complex products need no C99 Annex G infinity recovery
+# (its matrices are rescaled and finite); without it they run ~2x faster.
+$(BUILD)/src/stability/trainspec.o: override CFLAGS += -fcx-limited-range
 $(BUILD)/tests/%.o: override CFLAGS += -Itests -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' \
   -DBKF_EXAMPLES_DIR='"$(abspath $(BUILD)/examples)"' -DBKF_SOURCE_DIR='"$(CURDIR)"'
 
