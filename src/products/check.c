@@ -1018,6 +1018,18 @@ static void sink_warning(const char *message, void *data)
 }
 
 
+/* printf onto the end of the string in buf (truncated to size). */
+static void append(char *buf, size_t size, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static void append(char *buf, size_t size, const char *fmt, ...)
+{
+    size_t used = strlen(buf);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf + used, size - used, fmt, ap);
+    va_end(ap);
+}
+
 /* "n1, n2, ..." of the rows that pass `keep`, into list. */
 static void list_n(const check_sink *k, int (*keep)(const bkf_check_row *), char *list,
                    size_t size)
@@ -1149,21 +1161,20 @@ int bkf_check_write(const bkf_check_spec *spec, FILE *out, bkf_io_format format,
         nc += row_conflicts(&k.rows[i]);
     }
     if (nd || nc) {
-        char ld[512], lc[512], r[32], md[BKF_ERROR_LEN / 2] = "", mc[BKF_ERROR_LEN / 2] = "";
+        char ld[512], lc[512], r[32], msg[BKF_ERROR_LEN] = "";
         list_n(&k, row_disagrees, ld, sizeof ld);
         list_n(&k, row_conflicts, lc, sizeof lc);
         if (disagree) *disagree = nd + nc;
         if (nd)
-            snprintf(md, sizeof md,
-                     "%zu stable front(s) disagree with the predicted speed beyond rel-tol %s "
-                     "(n = %s)",
-                     nd, bkf_format_number(o.rel_tol, r, sizeof r), ld);
+            append(msg, sizeof msg,
+                   "%zu stable front(s) disagree with the predicted speed beyond rel-tol %s "
+                   "(n = %s); ",
+                   nd, bkf_format_number(o.rel_tol, r, sizeof r), ld);
         if (nc)
-            snprintf(mc, sizeof mc,
-                     "%zu front(s) whose simulated growth contradicts the spectrum (n = %s)", nc,
-                     lc);
-        s = bkf_error_set(err, BKF_ENUMERIC, "%s%s%s; see the table", md, nd && nc ? "; " : "",
-                          mc);
+            append(msg, sizeof msg,
+                   "%zu front(s) whose simulated growth contradicts the spectrum (n = %s); ", nc,
+                   lc);
+        s = bkf_error_set(err, BKF_ENUMERIC, "%ssee the table", msg);
     }
     free(k.rows);
     return s;
