@@ -1,5 +1,6 @@
 # Predicted front speeds against direct simulation (data: bkfront check).
-# Stable fronts filled, unstable open; circles on the uniform spectral
+# Stable fronts (verdict agrees or disagrees: kept by the run, not unstable by
+# the spectrum) filled, unstable open; circles on the uniform spectral
 # grid, squares on the adapted comoving grid (column `grid`).
 load plotdir.'/common.gp'
 f = word(files, 1)
@@ -13,12 +14,13 @@ set offsets 0.5, 0.5, 0, 0
 set key top right
 set yrange [*:1e-4]
 uni(g) = g eq 'uniform'
+ok(v) = v eq 'agrees' || v eq 'disagrees'
 plot 1e-6 with lines dt 2 lc rgb '#888888' title "the check's default agreement, 1e-6", \
-     f using 'n':(column('stable') == 1 && uni(strcol('grid')) ? abs(column('rel_err')) : NaN) \
+     f using 'n':(ok(strcol('verdict')) && uni(strcol('grid')) ? abs(column('rel_err')) : NaN) \
        with points pt 7 ps 1.4 lc rgb '#2ca02c' title 'stable, uniform spectral grid', \
-     f using 'n':(column('stable') == 1 && !uni(strcol('grid')) ? abs(column('rel_err')) : NaN) \
+     f using 'n':(ok(strcol('verdict')) && !uni(strcol('grid')) ? abs(column('rel_err')) : NaN) \
        with points pt 5 ps 1.4 lc rgb '#1f77b4' title 'stable, adapted grid', \
-     f using 'n':(column('stable') == 1 ? NaN : abs(column('rel_err'))) with points pt 6 ps 1.4 \
-       lc rgb '#d62728' title 'unstable (count or shape changed)', \
-     f using 'n':(column('stable') == 1 ? column('v_meas_err')/column('v_pred') : NaN) \
+     f using 'n':(ok(strcol('verdict')) ? NaN : abs(column('rel_err'))) with points pt 6 ps 1.4 \
+       lc rgb '#d62728' title 'unstable (by the run or the spectrum)', \
+     f using 'n':(ok(strcol('verdict')) ? column('v_meas_err')/column('v_pred') : NaN) \
        with points pt 1 lc rgb '#555555' title 'fit uncertainty'

@@ -16,11 +16,15 @@
  *
  * Measurements, on both grids the same: the deviation is max |psi - seeded
  * wave shifted with the fronts| (on the adapted grid, from the wave relaxed
- * onto the grid); the speed is fitted over the later half of the coherent
+ * onto the grid); the growth rate of the perturbation is fitted to the whole
+ * linear part of the run (bkf_check_fit_growth; on the uniform grid also per
+ * Bloch class, see bkf_check_row.growth); the speed is fitted over the later half of the coherent
  * part of the run (front count kept and deviation <= max(100 perturb, 1e-6);
  * on uniform grids with a tail above BKF_CHECK_RESOLUTION_DEFAULT and on the
  * adapted grid also 10 times the deviation at t = min(10, tmax/4), where a
  * wave the grid does not fully resolve has settled on a plateau of its own).
+ * Beside the run, the spectrum of the same train (bkf_stability_root): a
+ * decided growth that contradicts it is a conflict (bkf_check_conflict).
  * The verdict is bkf_check_judge's.
  *
  * The library never prints and never exits: rows go to the caller's
@@ -37,6 +41,7 @@
 #include "bkfront/options.h"
 #include "bkfront/pde.h"
 #include "bkfront/status.h"
+#include "bkfront/trainspec.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -56,11 +61,15 @@ typedef enum {
 typedef enum {
     BKF_CHECK_AGREES = 0,    /* stable, |rel_err| <= rel_tol */
     BKF_CHECK_DISAGREES = 1, /* stable, rel_err beyond rel_tol (or not measured) */
-    BKF_CHECK_UNSTABLE = 2,  /* count or shape not kept: not judged */
-    BKF_CHECK_UNRESOLVED = 3 /* not run to the end (see bkf_check_row.reason) */
+    BKF_CHECK_UNSTABLE = 2,  /* count or shape not kept, or the spectrum unstable: the
+                                speed is not judged */
+    BKF_CHECK_UNRESOLVED = 3, /* not run to the end (see bkf_check_row.reason) */
+    BKF_CHECK_CONFLICTS = 4  /* the run's decided growth contradicts the spectrum
+                                (bkf_check_conflict): an error, whatever the speed */
 } bkf_check_verdict;
 
-/* "agrees", "disagrees", "unstable", "unresolved"; "unknown" otherwise. */
+/* "agrees", "disagrees", "unstable", "unresolved", "conflicts"; "unknown"
+ * otherwise. */
 const char *bkf_check_verdict_name(bkf_check_verdict verdict);
 /* "auto", "uniform", "mapped"; "unknown" otherwise. */
 const char *bkf_check_grid_name(bkf_check_grid grid);
@@ -136,6 +145,56 @@ bkf_check_options bkf_check_options_default(void);
 int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *options,
                        bkf_error *err);
 
+/* The growth rate of a perturbation from its amplitude a(t) sampled over a
+ * run.  The amplitude of a sum of modes exp(sigma t) oscillates (a complex
+ * pair beats, several modes interfere: factors of 20-30 are common), so two
+ * samples say little.  The fit:
+ *   - the samples with t in [t_from, t_to] (the caller's linear part of the
+ *     run, after the initial transient), L = their time span;
+ *   - their envelope: the largest a in each of BKF_CHECK_GROWTH_WINDOWS
+ *     equal windows of [t_from, t_to];
+ *   - rate: least-squares slope of ln(envelope) against the windows'
+ *     centres (a constant offset of the maximum within its window does not
+ *     change it); rate_err: its standard error from the residuals;
+ *   - limit = max(2.5 rate_err, ln 2 / L): 2.5 is the two-sided 95% point of
+ *     Student's t at 6 degrees of freedom (8 windows, 2 parameters), and a
+ *     rate below ln 2 / L changes the amplitude by less than a factor 2 over
+ *     the whole fit, which the residual wobble of an envelope can fake;
+ *   - verdict: grows when rate > limit, decays when rate < -limit, else
+ *     undecided (also when there are fewer than 2 samples per window, or an
+ *     amplitude is not finite and positive).
+ * A rate within limit of 0 is not a measurement of its sign. */
+#define BKF_CHECK_GROWTH_WINDOWS 8
+
+typedef enum {
+    BKF_CHECK_GROWTH_UNDECIDED = 0,
+    BKF_CHECK_GROWTH_GROWS = 1,
+    BKF_CHECK_GROWTH_DECAYS = 2
+} bkf_check_growth_verdict;
+
+/* "undecided", "grows", "decays"; "unknown" otherwise. */
+const char *bkf_check_growth_name(bkf_check_growth_verdict verdict);
+
+typedef struct {
+    double rate, rate_err;   /* per unit time; NaN when not fitted */
+    double limit;            /* the detection limit above; NaN when not fitted */
+    double from, to;         /* the samples' time span */
+    bkf_check_growth_verdict verdict;
+} bkf_check_growth;
+
+/* Fits `count` samples (t increasing) as above into *growth (always
+ * written; undecided with NaN rate when there is too little to fit). */
+void bkf_check_fit_growth(const double *t, const double *amplitude, size_t count, double t_from,
+                          double t_to, bkf_check_growth *growth);
+
+/* Whether a decided growth contradicts the spectrum: grows while the
+ * spectrum is stable (every sigma but the translation below 0 beyond its
+ * error), or decays while it is unstable with sigma_max above the fit's
+ * detection limit (a weaker instability is invisible to the run).
+ * Undecided never contradicts; nor does an unresolved spectrum. */
+int bkf_check_conflict(const bkf_check_growth *growth, bkf_trainspec_verdict spectral,
+                       double sigma_max);
+
 /* One root's result.  NaN where a quantity was not measured. */
 typedef struct {
     size_t n, root;         /* fronts, and the root (1: fastest) of bkf_speeds_find */
@@ -149,8 +208,25 @@ typedef struct {
     double fit_from, fit_to;    /* the fit's time window */
     double fronts_start, fronts_end; /* front counts at t = 0 and t = tmax */
     double deviation_start, deviation_mid, deviation_end; /* at 0, tmax/2, tmax */
-    double growth;          /* ln(deviation_end / deviation_mid) / (t_end - t_mid) */
-    double stable;          /* 1 count and shape kept, 0 not, NaN not run */
+    /* The perturbation's growth rate (bkf_check_fit_growth) over the linear
+     * part of the run: from t = min(10, tmax/4) while the count is n and the
+     * deviation is <= max(1e-3, 10 perturb).  Fitted to the deviation and,
+     * on the uniform grid, to each Bloch class j = 1 .. n/2 of psi: the
+     * Fourier coefficients at wavenumbers k = +-j mod n (k in 2 pi / S),
+     * where the wave has none, so that they hold the perturbation alone
+     * and in the linear regime its modes exp(sigma t) of Bloch number
+     * kappa = 2 pi j / S alone (the drift of the fronts turns their phase,
+     * not their modulus).  growth is the fit with the largest rate, its
+     * verdict grows when any fit grows, decays when every fit decays. */
+    bkf_check_growth growth;
+    /* The spectrum of the same train (bkf_stability_root, tol 1e-6, the
+     * rightmost sigma per Bloch number):
+     * UNRESOLVED also when it was refused (a warning says why). */
+    bkf_trainspec_verdict spectral;
+    double sigma_max, sigma_max_err; /* NaN when refused */
+    double stable;          /* 1 count and shape kept (the run did not blow up, the count
+                               never changed, deviation_end <= 1e-2, growth not grows),
+                               0 not, NaN not run */
     bkf_check_verdict verdict;
     int reason;             /* a bkf_status: BKF_OK for a run to the end; unstable:
                                BKF_EBLOWUP when the run blew up; unresolved: BKF_ETOL (not
@@ -159,14 +235,17 @@ typedef struct {
                                set-up (BKF_EINPUT, BKF_ENUMERIC; a warning says which) */
 } bkf_check_row;
 
-/* The verdict from the measured quantities, the one rule of both grids:
- * stable when the run did not blow up, the count never changed and started
- * at n, and the perturbation did not grow over the later half
- * (deviation_end finite, <= 2 deviation_mid and <= 1e-2); then agrees when
- * |rel_err| <= rel_tol (finite), else disagrees; else unstable.  *stable
- * (may be NULL) gets 1 or 0. */
+/* The verdict from the measured quantities and the spectrum, the one rule
+ * of both grids.  The run kept the front (*stable, may be NULL, gets 1)
+ * when it did not blow up, the count never changed and started at n,
+ * deviation_end is finite and <= 1e-2, and the growth was not decided
+ * "grows".  Then: conflicts when bkf_check_conflict; else unstable when the
+ * run did not keep the front or the spectrum is unstable (an instability
+ * too slow for the run: the spectrum resolves what the run cannot); else
+ * agrees when |rel_err| <= rel_tol (finite), else disagrees. */
 bkf_check_verdict bkf_check_judge(size_t n, int blew_up, int count_constant, size_t fronts_start,
-                                  double deviation_mid, double deviation_end, double rel_err,
+                                  double deviation_end, const bkf_check_growth *growth,
+                                  bkf_trainspec_verdict spectral, double sigma_max, double rel_err,
                                   double rel_tol, int *stable);
 
 /* What the run is about to do, handed to the begin callback. */
@@ -233,8 +312,9 @@ int bkf_check_spec_check(const bkf_check_spec *spec, const char *prefix, bkf_err
  * `out`, once every root is done: on a failure of the run nothing is
  * written.  hooks (may be NULL): progress, warning and cancel as for
  * bkf_check_run; begin and row are called too, after the write's own.
- * When a stable front disagrees (verdict disagrees) the table is written
- * in full and the status is BKF_ENUMERIC, the message naming the n, and
+ * When a stable front disagrees (verdict disagrees) or a run's growth
+ * contradicts the spectrum (verdict conflicts), the table is written in
+ * full and the status is BKF_ENUMERIC, the message naming the n, and
  * *disagree (may be NULL; otherwise set to 0) gets their count: a caller
  * tells this outcome from a failed run by *disagree > 0. */
 int bkf_check_write(const bkf_check_spec *spec, FILE *out, bkf_io_format format,

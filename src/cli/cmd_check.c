@@ -3,8 +3,9 @@
  *
  * Every input is checked before computing, and the table is built in memory
  * and written only when the run completed (the --out file replaced
- * atomically).  A stable front that disagrees with its predicted speed still
- * gets the whole table, and the exit status 1. */
+ * atomically).  A stable front that disagrees with its predicted speed, or a
+ * run whose growth contradicts the spectrum, still gets the whole table, and
+ * the exit status 1. */
 #include "progress.h"
 
 #include "bkfront/check.h"
@@ -36,8 +37,9 @@ static void check_help(FILE *out)
         "The predicted front speeds against direct simulation.  For every root of the\n"
         "speed-selection condition (every n, or only --n K) the travelling wave of n fronts\n"
         "at the predicted speed is seeded with a small perturbation and simulated; the\n"
-        "measured speed is compared with the prediction and the run tells whether the\n"
-        "front keeps its count and shape.\n"
+        "measured speed is compared with the prediction, the perturbation's growth rate is\n"
+        "fitted, and both are set beside the spectrum of the same train (bkfront\n"
+        "stability).\n"
         "\n"
         "options (defaults: the paper's gamma 2, c 0.3, nu -0.96, S 20):\n");
     cli_options_help(out, g, 3);
@@ -62,18 +64,31 @@ static void check_help(FILE *out)
         "  deviation_start, deviation_mid, deviation_end\n"
         "                    max |psi - seeded wave shifted with the fronts| at t = 0,\n"
         "                    tmax/2 and tmax (adapted grid: the wave relaxed onto the grid)\n"
-        "  growth            ln(deviation_end / deviation_mid) / (tmax/2): growth rate of\n"
-        "                    the perturbation over the later half\n"
-        "  stable            1 when the front count never changed and the perturbation did\n"
-        "                    not grow over the later half (deviation_end <= 2 deviation_mid\n"
-        "                    and <= 1e-2): count and shape kept over the run\n"
-        "  verdict           agrees, disagrees (stable, rel_err beyond --rel-tol),\n"
-        "                    unstable (not judged), unresolved (not run; or the adapted\n"
-        "                    grid's run exceeded %d steps or could not be set up, with a\n"
-        "                    warning on stderr)\n"
+        "  growth, growth_err  the perturbation's growth rate per unit time and its\n"
+        "                    uncertainty, fitted from t = min(10, tmax/4) while the count is n\n"
+        "                    and the deviation <= max(1e-3, 10 perturb): least squares of the\n"
+        "                    log of the envelope (the maximum in each of %d windows); the\n"
+        "                    uncertainty from the residuals and the two halves' slopes.  On\n"
+        "                    the uniform grid also per Bloch class j = 1 .. n/2 (the Fourier\n"
+        "                    coefficients at k = +-j mod n, where the wave has none): the\n"
+        "                    fastest fit\n"
+        "  growth_limit      max(2.5 growth_err, ln 2 / fit length): the detection limit\n"
+        "  growth_verdict    grows (growth > limit), decays (< -limit), else undecided\n"
+        "  spectral          stable by the spectrum: yes, no, unresolved (also when the\n"
+        "                    spectrum was refused, with a warning)\n"
+        "  sigma_max, sigma_max_err  the rightmost Re sigma but the translation, its error\n"
+        "  stable            1 when the run kept the front: the count never changed,\n"
+        "                    deviation_end <= 1e-2 and growth_verdict is not grows\n"
+        "  verdict           conflicts (the run grows while the spectrum is stable, or\n"
+        "                    decays while sigma_max is above growth_limit; a warning on\n"
+        "                    stderr), unstable (the run did not keep the front, or the\n"
+        "                    spectrum says no), agrees, disagrees (stable, rel_err beyond\n"
+        "                    --rel-tol), unresolved (not run; or the adapted grid's run\n"
+        "                    exceeded %d steps or could not be set up, with a warning)\n"
         "\n"
-        "exit status: 0 ok, 1 a stable front disagrees (or a numerical failure), 2 bad input\n",
-        BKF_CHECK_RESOLUTION_DEFAULT, BKF_CHECK_MAPPED_MAX_STEPS);
+        "exit status: 0 ok, 1 a stable front disagrees or a run conflicts with the\n"
+        "spectrum (the table is written; or a numerical failure), 2 bad input\n",
+        BKF_CHECK_RESOLUTION_DEFAULT, BKF_CHECK_GROWTH_WINDOWS, BKF_CHECK_MAPPED_MAX_STEPS);
 }
 
 /* What the table writer needs besides the spec; the pointers are written. */
@@ -81,7 +96,7 @@ typedef struct {
     const bkf_check_spec *spec;
     progress_bar *bar;
     size_t *disagree;
-    bkf_error *verdict; /* the message when a stable front disagrees */
+    bkf_error *verdict; /* the message when a front disagrees or conflicts */
 } check_job;
 
 static void show_progress(double fraction, void *data) { progress_draw(fraction, data); }
@@ -92,7 +107,7 @@ static void show_warning(const char *message, void *data)
     fprintf(stderr, CLI_PROGRAM " check: warning: %s\n", message);
 }
 
-/* A disagreement is a result: the table is kept (BKF_OK here) and the
+/* A disagreement or a conflict is a result: the table is kept (BKF_OK here) and the
  * command fails afterwards with the verdict's message. */
 static int write_check(const void *data, FILE *out, bkf_io_format format,
                        const bkf_provenance *prov, bkf_error *err)
@@ -132,7 +147,7 @@ static int check_run(int argc, char **argv, bkf_error *err)
 
 const cli_command cli_cmd_check = {
     "check",
-    "predicted front speeds against seeded simulations: agreement and stability per n",
+    "predicted front speeds against seeded simulations: agreement, growth and spectrum per n",
     check_run,
     check_help,
 };

@@ -3,6 +3,7 @@
  * adapted comoving grid (bkf_comoving), both judged by bkf_check_judge. */
 #include "bkfront/check.h"
 
+#include <fftw3.h>
 #include <limits.h>
 #include <math.h>
 #include <stdarg.h>
@@ -15,6 +16,7 @@
 #include "bkfront/measure.h"
 #include "bkfront/seed.h"
 #include "bkfront/speeds.h"
+#include "bkfront/stability.h"
 
 const char *bkf_check_verdict_name(bkf_check_verdict verdict)
 {
@@ -23,6 +25,17 @@ const char *bkf_check_verdict_name(bkf_check_verdict verdict)
     case BKF_CHECK_DISAGREES: return "disagrees";
     case BKF_CHECK_UNSTABLE: return "unstable";
     case BKF_CHECK_UNRESOLVED: return "unresolved";
+    case BKF_CHECK_CONFLICTS: return "conflicts";
+    }
+    return "unknown";
+}
+
+const char *bkf_check_growth_name(bkf_check_growth_verdict verdict)
+{
+    switch (verdict) {
+    case BKF_CHECK_GROWTH_UNDECIDED: return "undecided";
+    case BKF_CHECK_GROWTH_GROWS: return "grows";
+    case BKF_CHECK_GROWTH_DECAYS: return "decays";
     }
     return "unknown";
 }
@@ -135,14 +148,114 @@ int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *o
 }
 
 bkf_check_verdict bkf_check_judge(size_t n, int blew_up, int count_constant, size_t fronts_start,
-                                  double deviation_mid, double deviation_end, double rel_err,
+                                  double deviation_end, const bkf_check_growth *growth,
+                                  bkf_trainspec_verdict spectral, double sigma_max, double rel_err,
                                   double rel_tol, int *stable)
 {
     int kept = !blew_up && count_constant && fronts_start == n && isfinite(deviation_end) &&
-               deviation_end <= 2 * deviation_mid && deviation_end <= 1e-2;
+               deviation_end <= 1e-2 && growth->verdict != BKF_CHECK_GROWTH_GROWS;
     if (stable) *stable = kept;
-    if (!kept) return BKF_CHECK_UNSTABLE;
+    if (bkf_check_conflict(growth, spectral, sigma_max)) return BKF_CHECK_CONFLICTS;
+    if (!kept || spectral == BKF_TRAINSPEC_UNSTABLE) return BKF_CHECK_UNSTABLE;
     return isfinite(rel_err) && fabs(rel_err) <= rel_tol ? BKF_CHECK_AGREES : BKF_CHECK_DISAGREES;
+}
+
+/* Student's t at 6 degrees of freedom, two-sided 95% (2.447), rounded up. */
+#define GROWTH_T95 2.5
+
+/* Least-squares slope of ln y against t over m points, *se its standard
+ * error from the residuals. */
+static double ls_slope(const double *t, const double *y, size_t m, double *se)
+{
+    double mt = 0, my = 0;
+    for (size_t k = 0; k < m; k++) {
+        mt += t[k] / (double)m;
+        my += log(y[k]) / (double)m;
+    }
+    double stt = 0, sty = 0;
+    for (size_t k = 0; k < m; k++) {
+        stt += (t[k] - mt) * (t[k] - mt);
+        sty += (t[k] - mt) * (log(y[k]) - my);
+    }
+    double slope = sty / stt, rss = 0;
+    for (size_t k = 0; k < m; k++) {
+        double r = log(y[k]) - my - slope * (t[k] - mt);
+        rss += r * r;
+    }
+    *se = m > 2 ? sqrt(rss / (double)(m - 2) / stt) : NAN;
+    return slope;
+}
+
+void bkf_check_fit_growth(const double *t, const double *a, size_t count, double t_from,
+                          double t_to, bkf_check_growth *g)
+{
+    *g = (bkf_check_growth){NAN, NAN, NAN, t_from, t_to, BKF_CHECK_GROWTH_UNDECIDED};
+    enum { W = BKF_CHECK_GROWTH_WINDOWS };
+    double env[W], tc[W];
+    size_t in[W] = {0};
+    double first = NAN, last = NAN;
+    for (size_t i = 0; i < count; i++) {
+        if (!(t[i] >= t_from && t[i] <= t_to)) continue;
+        if (!(a[i] > 0 && isfinite(a[i]))) return;
+        if (isnan(first)) first = t[i];
+        last = t[i];
+    }
+    double L = last - first;
+    if (!(L > 0)) return;
+    double w = L / W;
+    for (size_t i = 0; i < count; i++) {
+        if (!(t[i] >= first && t[i] <= last)) continue;
+        size_t k = (size_t)((t[i] - first) / w);
+        if (k >= W) k = W - 1;
+        env[k] = in[k]++ ? fmax(env[k], a[i]) : a[i];
+    }
+    for (size_t k = 0; k < W; k++) {
+        if (in[k] < 2) return;
+        tc[k] = first + (k + 0.5) * w;
+    }
+    double se, rate = ls_slope(tc, env, W, &se);
+    /* an envelope not yet a single exponential (a slower mode still fading)
+     * bends: the two halves' slopes differ, as much uncertainty as noise */
+    double se_half, bend = ls_slope(tc, env, W / 2, &se_half) -
+                           ls_slope(tc + W / 2, env + W / 2, W / 2, &se_half);
+    g->rate = rate;
+    g->rate_err = sqrt(se * se + 0.25 * bend * bend);
+    g->limit = fmax(GROWTH_T95 * g->rate_err, log(2.0) / L);
+    g->from = first;
+    g->to = last;
+    g->verdict = rate > g->limit    ? BKF_CHECK_GROWTH_GROWS
+                 : rate < -g->limit ? BKF_CHECK_GROWTH_DECAYS
+                                    : BKF_CHECK_GROWTH_UNDECIDED;
+}
+
+int bkf_check_conflict(const bkf_check_growth *g, bkf_trainspec_verdict spectral, double sigma_max)
+{
+    if (g->verdict == BKF_CHECK_GROWTH_GROWS) return spectral == BKF_TRAINSPEC_STABLE;
+    if (g->verdict == BKF_CHECK_GROWTH_DECAYS)
+        return spectral == BKF_TRAINSPEC_UNSTABLE && sigma_max > g->limit;
+    return 0;
+}
+
+/* Several fits of one run into one: the largest rate, grows when any
+ * grows, decays when every one decays. */
+static void growth_merge(bkf_check_growth *into, const bkf_check_growth *g, int first)
+{
+    if (first) {
+        *into = *g;
+        return;
+    }
+    bkf_check_growth_verdict v =
+        into->verdict == BKF_CHECK_GROWTH_GROWS || g->verdict == BKF_CHECK_GROWTH_GROWS
+            ? BKF_CHECK_GROWTH_GROWS
+        : into->verdict == BKF_CHECK_GROWTH_DECAYS && g->verdict == BKF_CHECK_GROWTH_DECAYS
+            ? BKF_CHECK_GROWTH_DECAYS
+            : BKF_CHECK_GROWTH_UNDECIDED;
+    /* the reported fit: a growing one when the run grows, the fastest */
+    int g_grows = g->verdict == BKF_CHECK_GROWTH_GROWS,
+        into_grows = into->verdict == BKF_CHECK_GROWTH_GROWS;
+    if (g_grows > into_grows || (g_grows == into_grows && (isnan(into->rate) || g->rate > into->rate)))
+        *into = *g;
+    into->verdict = v;
 }
 
 /* The whole run's state shared by the roots. */
@@ -187,14 +300,15 @@ static void check_warn(const check_ctx *c, const char *fmt, ...)
  * has settled into the grid's own travelling wave (a plateau set by the
  * resolution, not a growing perturbation).  `at(i, data, &t, &fronts,
  * &deviation)` reads record i of R. */
+static double transient_end(double tmax) { return fmin(10.0, 0.25 * tmax); }
+
 typedef void (*record_reader)(size_t i, const void *data, double *t, size_t *fronts,
                               double *deviation);
 
 static size_t coherent_end(record_reader at, const void *data, size_t R, size_t n, int settle,
-                           double perturb, double tmax)
+                           double bound, double tmax)
 {
-    double bound = fmax(100 * perturb, 1e-6);
-    double t_ref = fmin(10.0, 0.25 * tmax), t, dev;
+    double t_ref = transient_end(tmax), t, dev;
     size_t fronts, end = 0;
     for (size_t r = 0; settle && r < R; r++) {
         at(r, data, &t, &fronts, &dev);
@@ -208,6 +322,34 @@ static size_t coherent_end(record_reader at, const void *data, size_t R, size_t 
         end = r;
     }
     return end;
+}
+
+/* The deviation up to which the speed is fitted, and up to which the
+ * perturbation is taken as linear (its growth fitted; at the default
+ * perturbation three decades of growth). */
+static double speed_bound(const bkf_check_options *o) { return fmax(100 * o->perturb, 1e-6); }
+static double linear_bound(const bkf_check_options *o) { return fmax(10 * o->perturb, 1e-3); }
+
+/* The growth of the deviation over the linear part of the run: from the
+ * end of the transient, t = min(10, tmax/4), to the end of the coherent
+ * part under linear_bound.  *t_to gets that end (for the Bloch classes). */
+static int fit_deviation(record_reader at, const void *data, size_t R, size_t n,
+                         const bkf_check_options *o, bkf_check_growth *g, double *t_to)
+{
+    double *t = malloc((R + 1) * sizeof *t), *d = malloc((R + 1) * sizeof *d);
+    if (!t || !d) {
+        free(t);
+        free(d);
+        return BKF_ENOMEM;
+    }
+    size_t fronts;
+    for (size_t r = 0; r < R; r++) at(r, data, &t[r], &fronts, &d[r]);
+    size_t end = R ? coherent_end(at, data, R, n, 0, linear_bound(o), o->tmax) : 0;
+    *t_to = R ? t[end] : 0;
+    bkf_check_fit_growth(t, d, R, transient_end(o->tmax), *t_to, g);
+    free(t);
+    free(d);
+    return BKF_OK;
 }
 
 /* A speed fit needs this many coherent records past the first. */
@@ -292,10 +434,13 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     row->deviation_start = first->deviation;
     row->deviation_mid = mid->deviation;
     row->deviation_end = last->deviation;
-    row->growth = last->t > mid->t ? log(last->deviation / mid->deviation) / (last->t - mid->t)
-                                   : NAN;
+    double t_lin;
+    if (fit_deviation(comoving_reader, cm, R, row->n, o, &row->growth, &t_lin)) {
+        bkf_comoving_free(cm);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
     /* the relaxed wave's own deviation plateau counts as coherent */
-    size_t end = coherent_end(comoving_reader, cm, R, row->n, 1, o->perturb, o->tmax);
+    size_t end = coherent_end(comoving_reader, cm, R, row->n, 1, speed_bound(o), o->tmax);
     double t_end = bkf_comoving_record_at(cm, end)->t;
     if (end >= FIT_MIN_RECORDS) {
         double drift, drift_err;
@@ -309,16 +454,96 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
         }
     }
     int stable;
-    row->verdict = bkf_check_judge(row->n, blew_up, constant, first->fronts, row->deviation_mid,
-                                   row->deviation_end, row->rel_err, o->rel_tol, &stable);
+    row->verdict = bkf_check_judge(row->n, blew_up, constant, first->fronts, row->deviation_end,
+                                   &row->growth, row->spectral, row->sigma_max, row->rel_err,
+                                   o->rel_tol, &stable);
     row->stable = stable;
     if (blew_up) row->reason = BKF_EBLOWUP;
     bkf_comoving_free(cm);
     return BKF_OK;
 }
 
+/* The Bloch classes of psi on the uniform grid: for j = 1 .. n/2 the rms
+ * of the Fourier coefficients at k = +-j mod n (0 < |k| < N/2), the
+ * perturbation's part of Bloch number 2 pi j / S (see check.h), one row
+ * of `classes` values per sample. */
+typedef struct {
+    size_t N, n, classes;
+    double *in;
+    fftw_complex *out;
+    fftw_plan plan;
+    double *t, *amp;
+    size_t count, cap;
+} bloch_classes;
+
+static int bloch_init(bloch_classes *b, size_t N, size_t n)
+{
+    memset(b, 0, sizeof *b);
+    b->N = N;
+    b->n = n;
+    b->classes = n / 2;
+    if (!b->classes) return BKF_OK;
+    b->in = fftw_malloc(N * sizeof *b->in);
+    b->out = fftw_malloc((N / 2 + 1) * sizeof *b->out);
+    if (!b->in || !b->out) return BKF_ENOMEM;
+    b->plan = fftw_plan_dft_r2c_1d((int)N, b->in, b->out, FFTW_ESTIMATE);
+    return b->plan ? BKF_OK : BKF_ENOMEM;
+}
+
+static void bloch_free(bloch_classes *b)
+{
+    if (b->plan) fftw_destroy_plan(b->plan);
+    fftw_free(b->in);
+    fftw_free(b->out);
+    free(b->t);
+    free(b->amp);
+}
+
+static int bloch_add(bloch_classes *b, double t, const double *psi)
+{
+    if (!b->classes) return BKF_OK;
+    if (b->count == b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : 512;
+        double *nt = realloc(b->t, cap * sizeof *nt);
+        if (!nt) return BKF_ENOMEM;
+        b->t = nt;
+        double *na = realloc(b->amp, cap * b->classes * sizeof *na);
+        if (!na) return BKF_ENOMEM;
+        b->amp = na;
+        b->cap = cap;
+    }
+    memcpy(b->in, psi, b->N * sizeof *psi);
+    fftw_execute(b->plan);
+    double *a = b->amp + b->count * b->classes;
+    for (size_t j = 0; j < b->classes; j++) a[j] = 0;
+    for (size_t k = 1; k < b->N / 2; k++) {
+        size_t r = k % b->n, j = r < b->n - r ? r : b->n - r;
+        if (j) a[j - 1] += b->out[k][0] * b->out[k][0] + b->out[k][1] * b->out[k][1];
+    }
+    for (size_t j = 0; j < b->classes; j++) a[j] = sqrt(2 * a[j]) / (double)b->N;
+    b->t[b->count++] = t;
+    return BKF_OK;
+}
+
+/* Each class's growth over [t_from, t_to], merged into *g. */
+static int bloch_fit(const bloch_classes *b, double t_from, double t_to, bkf_check_growth *g)
+{
+    if (!b->classes) return BKF_OK;
+    double *a = malloc(b->count * sizeof *a);
+    if (!a) return BKF_ENOMEM;
+    for (size_t j = 0; j < b->classes; j++) {
+        for (size_t r = 0; r < b->count; r++) a[r] = b->amp[r * b->classes + j];
+        bkf_check_growth gj;
+        bkf_check_fit_growth(b->t, a, b->count, t_from, t_to, &gj);
+        growth_merge(g, &gj, 0);
+    }
+    free(a);
+    return BKF_OK;
+}
+
 typedef struct {
     bkf_measure *meas;
+    bloch_classes *bloch;
     int status;
     bkf_error err;
 } check_obs;
@@ -330,6 +555,10 @@ static int check_observe(const bkf_pde_sample *smp, void *data)
     if (bkf_measure_add(ob->meas, smp->t, smp->psi, smp->eta, &e)) {
         ob->status = bkf_error_set(&ob->err, BKF_ENUMERIC, "measurement at t = %g: %s", smp->t,
                                    e.message);
+        return 1;
+    }
+    if (bloch_add(ob->bloch, smp->t, smp->psi)) {
+        ob->status = bkf_error_set(&ob->err, BKF_ENOMEM, "out of memory");
         return 1;
     }
     return 0;
@@ -362,6 +591,8 @@ static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_r
     bkf_pde *pde = NULL;
     double *clean = NULL;
     bkf_measure *meas = NULL;
+    bloch_classes bloch;
+    memset(&bloch, 0, sizeof bloch);
     bkf_pde_front_info fi;
     int s = BKF_OK;
     row->grid = BKF_CHECK_GRID_UNIFORM;
@@ -402,7 +633,11 @@ static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_r
         s = BKF_ENOMEM;
         goto done;
     }
-    check_obs ob = {meas, 0, {{0}, 0}};
+    if ((s = bloch_init(&bloch, pp.N, n))) {
+        bkf_error_set(err, s, "out of memory");
+        goto done;
+    }
+    check_obs ob = {meas, &bloch, 0, {{0}, 0}};
     s = bkf_pde_run(pde, o->tmax, BKF_CHECK_SAMPLE_DT, check_observe, &ob, check_progress,
                     (void *)c, &e);
     if (ob.status) {
@@ -430,11 +665,16 @@ static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_r
     row->deviation_start = ms.deviation_start;
     row->deviation_mid = ms.deviation_mid;
     row->deviation_end = ms.deviation_end;
-    row->growth = ms.deviation_growth;
-    /* A fully resolved seed has no plateau to settle on: the bound stays. */
+    double t_lin;
     size_t R = bkf_measure_count(meas);
+    if ((s = fit_deviation(measure_reader, meas, R, n, o, &row->growth, &t_lin)) ||
+        (s = bloch_fit(&bloch, transient_end(o->tmax), t_lin, &row->growth))) {
+        bkf_error_set(err, s, "out of memory");
+        goto done;
+    }
+    /* A fully resolved seed has no plateau to settle on: the bound stays. */
     size_t last = coherent_end(measure_reader, meas, R, n, row->tail > BKF_CHECK_RESOLUTION_DEFAULT,
-                               o->perturb, o->tmax);
+                               speed_bound(o), o->tmax);
     double t_end = bkf_measure_record_at(meas, last)->t;
     if (last >= FIT_MIN_RECORDS) {
         double t_from = 0.5 * t_end;
@@ -450,11 +690,12 @@ static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_r
     }
     int stable;
     row->verdict = bkf_check_judge(n, blew_up, ms.count_constant, ms.fronts_start,
-                                   ms.deviation_mid, ms.deviation_end, row->rel_err, o->rel_tol,
-                                   &stable);
+                                   ms.deviation_end, &row->growth, row->spectral, row->sigma_max,
+                                   row->rel_err, o->rel_tol, &stable);
     row->stable = stable;
     if (blew_up) row->reason = BKF_EBLOWUP;
 done:
+    bloch_free(&bloch);
     bkf_measure_free(meas);
     bkf_pde_free(pde);
     free(clean);
@@ -472,9 +713,32 @@ static void row_init(bkf_check_row *row, size_t n, size_t root, const bkf_speeds
     row->tail = NAN;
     row->fronts_start = row->fronts_end = NAN;
     row->deviation_start = row->deviation_mid = row->deviation_end = NAN;
-    row->growth = row->stable = NAN;
+    bkf_check_fit_growth(NULL, NULL, 0, 0, 0, &row->growth);
+    row->spectral = BKF_TRAINSPEC_UNRESOLVED;
+    row->sigma_max = row->sigma_max_err = NAN;
+    row->stable = NAN;
     row->verdict = BKF_CHECK_UNRESOLVED;
     row->reason = BKF_OK;
+}
+
+/* The spectrum of the root's train, at trainspec's default accuracy (1e-6
+ * on sigma, far below any rate a run resolves); a refusal leaves the row's
+ * spectrum unresolved, with a warning: the run still judges. */
+static void check_spectrum(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row)
+{
+    bkf_model_params p = *c->model;
+    p.kind = BKF_MODEL_CONTINUUM;
+    bkf_trainspec_result res;
+    bkf_error e;
+    int s = bkf_stability_root(&p, sr, bkf_trainspec_options_default().tol, 1, &res, &e);
+    if (s == BKF_OK) {
+        row->spectral = res.verdict;
+        row->sigma_max = res.sigma_max;
+        row->sigma_max_err = res.sigma_max_err;
+    } else {
+        check_warn(c, "n = %zu, root %zu: spectrum unresolved: %s", row->n, row->root, e.message);
+    }
+    bkf_trainspec_result_free(&res);
 }
 
 int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
@@ -511,7 +775,20 @@ int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
         bkf_check_row row;
         row_init(&row, tab.roots[i].n, root, &tab.roots[i]);
         c.root_index = i;
+        check_spectrum(&c, &tab.roots[i], &row);
         s = check_root(&c, &tab.roots[i], &row, err);
+        if (!s && row.verdict == BKF_CHECK_CONFLICTS) {
+            char a[32], b[32], d[32], f[32];
+            check_warn(&c,
+                       "n = %zu, root %zu: the simulation's perturbation %s at %s +- %s per unit "
+                       "time, the spectrum says %s (sigma_max %s +- %s)",
+                       row.n, row.root, bkf_check_growth_name(row.growth.verdict),
+                       bkf_format_number(row.growth.rate, a, sizeof a),
+                       bkf_format_number(row.growth.rate_err, b, sizeof b),
+                       row.spectral == BKF_TRAINSPEC_STABLE ? "stable" : "unstable",
+                       bkf_format_number(row.sigma_max, d, sizeof d),
+                       bkf_format_number(row.sigma_max_err, f, sizeof f));
+        }
         if (!s && hooks && hooks->row) stop = hooks->row(&row, hooks->data);
     }
     bkf_speeds_table_free(&tab);
@@ -683,6 +960,12 @@ static const bkf_io_column columns[] = {
     {"deviation_mid", BKF_IO_NUMBER},
     {"deviation_end", BKF_IO_NUMBER},
     {"growth", BKF_IO_NUMBER},
+    {"growth_err", BKF_IO_NUMBER},
+    {"growth_limit", BKF_IO_NUMBER},
+    {"growth_verdict", BKF_IO_TEXT},
+    {"spectral", BKF_IO_TEXT},
+    {"sigma_max", BKF_IO_NUMBER},
+    {"sigma_max_err", BKF_IO_NUMBER},
     {"stable", BKF_IO_NUMBER},
     {"verdict", BKF_IO_TEXT},
 };
@@ -735,6 +1018,18 @@ static void sink_warning(const char *message, void *data)
 }
 
 
+/* printf onto the end of the string in buf (truncated to size). */
+static void append(char *buf, size_t size, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static void append(char *buf, size_t size, const char *fmt, ...)
+{
+    size_t used = strlen(buf);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf + used, size - used, fmt, ap);
+    va_end(ap);
+}
+
 /* "n1, n2, ..." of the rows that pass `keep`, into list. */
 static void list_n(const check_sink *k, int (*keep)(const bkf_check_row *), char *list,
                    size_t size)
@@ -749,6 +1044,15 @@ static void list_n(const check_sink *k, int (*keep)(const bkf_check_row *), char
 
 static int row_stable(const bkf_check_row *r) { return r->stable == 1; }
 static int row_disagrees(const bkf_check_row *r) { return r->verdict == BKF_CHECK_DISAGREES; }
+static int row_conflicts(const bkf_check_row *r) { return r->verdict == BKF_CHECK_CONFLICTS; }
+static int row_spectral_stable(const bkf_check_row *r)
+{
+    return r->spectral == BKF_TRAINSPEC_STABLE;
+}
+static int row_spectral_unstable(const bkf_check_row *r)
+{
+    return r->spectral == BKF_TRAINSPEC_UNSTABLE;
+}
 
 static int write_table(const check_sink *k, const bkf_check_spec *spec,
                        const bkf_check_options *o, FILE *out, bkf_io_format format,
@@ -785,18 +1089,24 @@ static int write_table(const check_sink *k, const bkf_check_spec *spec,
                     bkf_format_number(k->info.k, a, sizeof a), k->info.n_max, k->info.roots,
                     k->note[0] ? "; " : "", k->note);
     if (!s && prov && prov->command) s = bkf_io_table_commentf(t, err, "command: %s", prov->command);
-    size_t stable = 0, agree = 0, unresolved = 0, disagree = 0;
+    size_t stable = 0, agree = 0, unresolved = 0, disagree = 0, conflict = 0;
     for (size_t i = 0; i < k->count; i++) {
         stable += k->rows[i].stable == 1;
         agree += k->rows[i].verdict == BKF_CHECK_AGREES;
         unresolved += k->rows[i].verdict == BKF_CHECK_UNRESOLVED;
         disagree += k->rows[i].verdict == BKF_CHECK_DISAGREES;
+        conflict += k->rows[i].verdict == BKF_CHECK_CONFLICTS;
     }
     if (!s) {
-        char list[512];
+        char list[512], yes[512], no[512];
         list_n(k, row_stable, list, sizeof list);
-        s = bkf_io_table_commentf(t, err, "summary: %zu stable (n = %s), %zu agree, %zu disagree, %zu unresolved",
-                    stable, stable ? list : "none", agree, disagree, unresolved);
+        list_n(k, row_spectral_stable, yes, sizeof yes);
+        list_n(k, row_spectral_unstable, no, sizeof no);
+        s = bkf_io_table_commentf(t, err,
+                    "summary: %zu kept by the run (n = %s), %zu agree, %zu disagree, %zu "
+                    "conflict, %zu unresolved; spectrum stable n = %s, unstable n = %s",
+                    stable, stable ? list : "none", agree, disagree, conflict, unresolved,
+                    yes[0] ? yes : "none", no[0] ? no : "none");
     }
     for (size_t i = 0; !s && i < k->count; i++) {
         const bkf_check_row *r = &k->rows[i];
@@ -810,7 +1120,12 @@ static int write_table(const check_sink *k, const bkf_check_spec *spec,
             {.number = r->fit_to},             {.number = r->fronts_start},
             {.number = r->fronts_end},         {.number = r->deviation_start},
             {.number = r->deviation_mid},      {.number = r->deviation_end},
-            {.number = r->growth},             {.number = r->stable},
+            {.number = r->growth.rate},        {.number = r->growth.rate_err},
+            {.number = r->growth.limit},
+            {.text = bkf_check_growth_name(r->growth.verdict)},
+            {.text = bkf_trainspec_verdict_name(r->spectral)},
+            {.number = r->sigma_max},          {.number = r->sigma_max_err},
+            {.number = r->stable},
             {.text = bkf_check_verdict_name(r->verdict)},
         };
         s = bkf_io_table_row(t, v, err);
@@ -840,16 +1155,26 @@ int bkf_check_write(const bkf_check_spec *spec, FILE *out, bkf_io_format format,
     s = bkf_check_run(&spec->model, &o, &own, err);
     if (!s && k.failed) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     if (!s) s = write_table(&k, spec, &o, out, format, prov, err);
-    size_t n = 0;
-    for (size_t i = 0; !s && i < k.count; i++) n += row_disagrees(&k.rows[i]);
-    if (n) {
-        char list[512], r[32];
-        list_n(&k, row_disagrees, list, sizeof list);
-        if (disagree) *disagree = n;
-        s = bkf_error_set(err, BKF_ENUMERIC,
-                          "%zu stable front(s) disagree with the predicted speed beyond rel-tol "
-                          "%s (n = %s; see the table)",
-                          n, bkf_format_number(o.rel_tol, r, sizeof r), list);
+    size_t nd = 0, nc = 0;
+    for (size_t i = 0; !s && i < k.count; i++) {
+        nd += row_disagrees(&k.rows[i]);
+        nc += row_conflicts(&k.rows[i]);
+    }
+    if (nd || nc) {
+        char ld[512], lc[512], r[32], msg[BKF_ERROR_LEN] = "";
+        list_n(&k, row_disagrees, ld, sizeof ld);
+        list_n(&k, row_conflicts, lc, sizeof lc);
+        if (disagree) *disagree = nd + nc;
+        if (nd)
+            append(msg, sizeof msg,
+                   "%zu stable front(s) disagree with the predicted speed beyond rel-tol %s "
+                   "(n = %s); ",
+                   nd, bkf_format_number(o.rel_tol, r, sizeof r), ld);
+        if (nc)
+            append(msg, sizeof msg,
+                   "%zu front(s) whose simulated growth contradicts the spectrum (n = %s); ", nc,
+                   lc);
+        s = bkf_error_set(err, BKF_ENUMERIC, "%ssee the table", msg);
     }
     free(k.rows);
     return s;

@@ -8,6 +8,7 @@
 
 #include "cli_support.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
@@ -25,26 +26,211 @@
 
 /* ------------------------------------------------------------- verdicts */
 
+static bkf_check_growth growth_of(bkf_check_growth_verdict v, double rate, double limit)
+{
+    return (bkf_check_growth){rate, limit / 2.5, limit, 10, 125, v};
+}
+
 TEST(check_judge_each_branch)
 {
     int st = -1;
-    /* stable: count kept from n on, deviation not growing */
-    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, 1.5e-5, 2e-7, 1e-6, &st) == BKF_CHECK_AGREES && st == 1);
-    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, 1.5e-5, -1e-6, 1e-6, &st) == BKF_CHECK_AGREES);
-    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, 1.5e-5, 3e-6, 1e-6, &st) == BKF_CHECK_DISAGREES &&
-          st == 1);
-    /* stable but nothing measured: not an agreement */
-    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, 1.5e-5, NAN, 1e-6, &st) == BKF_CHECK_DISAGREES);
+    const bkf_check_growth flat = growth_of(BKF_CHECK_GROWTH_UNDECIDED, 1e-3, 6e-3),
+                           grows = growth_of(BKF_CHECK_GROWTH_GROWS, 2e-2, 6e-3),
+                           decays = growth_of(BKF_CHECK_GROWTH_DECAYS, -2e-2, 6e-3);
+    const bkf_trainspec_verdict yes = BKF_TRAINSPEC_STABLE, no = BKF_TRAINSPEC_UNSTABLE,
+                                unres = BKF_TRAINSPEC_UNRESOLVED;
+    /* kept: count from n on, deviation small, growth not decided grows */
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, yes, -1e-3, 2e-7, 1e-6, &st) ==
+              BKF_CHECK_AGREES && st == 1);
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &decays, yes, -1e-3, -1e-6, 1e-6, &st) ==
+          BKF_CHECK_AGREES);
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, unres, NAN, 3e-6, 1e-6, &st) ==
+              BKF_CHECK_DISAGREES && st == 1);
+    /* kept but nothing measured: not an agreement */
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, yes, -1e-3, NAN, 1e-6, &st) ==
+          BKF_CHECK_DISAGREES);
     /* each way of not keeping count and shape */
-    CHECK(bkf_check_judge(4, 1, 1, 4, 1e-5, 1.5e-5, 0, 1e-6, &st) == BKF_CHECK_UNSTABLE && st == 0);
-    CHECK(bkf_check_judge(4, 0, 0, 4, 1e-5, 1.5e-5, 0, 1e-6, &st) == BKF_CHECK_UNSTABLE);
-    CHECK(bkf_check_judge(4, 0, 1, 3, 1e-5, 1.5e-5, 0, 1e-6, &st) == BKF_CHECK_UNSTABLE);
-    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, 2.1e-5, 0, 1e-6, &st) == BKF_CHECK_UNSTABLE);
-    CHECK(bkf_check_judge(4, 0, 1, 4, 9e-3, 1.1e-2, 0, 1e-6, &st) == BKF_CHECK_UNSTABLE);
-    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, NAN, 0, 1e-6, &st) == BKF_CHECK_UNSTABLE);
-    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, 1.5e-5, 0, 1e-6, NULL) == BKF_CHECK_AGREES);
+    CHECK(bkf_check_judge(4, 1, 1, 4, 1e-5, &flat, unres, NAN, 0, 1e-6, &st) ==
+              BKF_CHECK_UNSTABLE && st == 0);
+    CHECK(bkf_check_judge(4, 0, 0, 4, 1e-5, &flat, unres, NAN, 0, 1e-6, &st) == BKF_CHECK_UNSTABLE);
+    CHECK(bkf_check_judge(4, 0, 1, 3, 1e-5, &flat, unres, NAN, 0, 1e-6, &st) == BKF_CHECK_UNSTABLE);
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1.1e-2, &flat, unres, NAN, 0, 1e-6, &st) ==
+          BKF_CHECK_UNSTABLE);
+    CHECK(bkf_check_judge(4, 0, 1, 4, NAN, &flat, unres, NAN, 0, 1e-6, &st) == BKF_CHECK_UNSTABLE);
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &grows, no, 2e-2, 0, 1e-6, &st) ==
+              BKF_CHECK_UNSTABLE && st == 0);
+    /* kept by a run too short to see it, unstable by the spectrum */
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, no, 2e-3, 0, 1e-6, &st) ==
+              BKF_CHECK_UNSTABLE && st == 1);
+    /* a decay faster than the spectrum's weak instability is below the limit */
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &decays, no, 5e-3, 0, 1e-6, &st) ==
+          BKF_CHECK_UNSTABLE);
+    /* the two conflicts, whatever the run kept */
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &grows, yes, -1e-4, 0, 1e-6, &st) ==
+              BKF_CHECK_CONFLICTS && st == 0);
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &decays, no, 7e-3, 0, 1e-6, &st) ==
+              BKF_CHECK_CONFLICTS && st == 1);
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, yes, -1e-3, 0, 1e-6, NULL) == BKF_CHECK_AGREES);
+    /* undecided and an unresolved spectrum never conflict */
+    CHECK(!bkf_check_conflict(&flat, yes, -1) && !bkf_check_conflict(&flat, no, 1));
+    CHECK(!bkf_check_conflict(&grows, unres, NAN) && !bkf_check_conflict(&decays, unres, NAN));
     CHECK(strcmp(bkf_check_verdict_name(BKF_CHECK_UNRESOLVED), "unresolved") == 0);
+    CHECK(strcmp(bkf_check_verdict_name(BKF_CHECK_CONFLICTS), "conflicts") == 0);
+    CHECK(strcmp(bkf_check_growth_name(BKF_CHECK_GROWTH_UNDECIDED), "undecided") == 0);
     CHECK(strcmp(bkf_check_grid_name(BKF_CHECK_GRID_MAPPED), "mapped") == 0);
+}
+
+/* ------------------------------------------------------- the growth fit */
+
+#define SYN_MAX 4096
+
+/* a(t) = exp(rate t) (1.05 + cos(omega t)): a mode beating by a factor 40,
+ * sampled every 0.25 on [0, tmax]. */
+static size_t synthetic(double rate, double omega, double tmax, double *t, double *a)
+{
+    size_t m = 0;
+    for (double s = 0; s <= tmax + 1e-9 && m < SYN_MAX; s += 0.25, m++) {
+        t[m] = s;
+        a[m] = exp(rate * s) * (1.05 + cos(omega * s));
+    }
+    return m;
+}
+
+TEST(check_growth_fit_on_closed_forms)
+{
+    static double t[SYN_MAX], a[SYN_MAX];
+    bkf_check_growth g;
+    /* the envelope's rate, through a beat of factor 40 that two samples
+     * would read as anything from -0.03 to +0.03 */
+    size_t m = synthetic(0.011, 0.44, 125, t, a);
+    bkf_check_fit_growth(t, a, m, 10, 125, &g);
+    CHECK_MSG(fabs(g.rate - 0.011) <= 2.5 * g.rate_err + 1e-3 && fabs(g.rate - 0.011) < 2e-3,
+              "rate %g +- %g", g.rate, g.rate_err);
+    CHECK_MSG(g.verdict == BKF_CHECK_GROWTH_GROWS, "%s, limit %g", bkf_check_growth_name(g.verdict),
+              g.limit);
+    CHECK(fabs(g.from - 10) < 1e-12 && fabs(g.to - 125) < 1e-12);
+    CHECK(fabs(g.limit - fmax(2.5 * g.rate_err, log(2.0) / 115)) < 1e-15);
+    /* the same decaying */
+    m = synthetic(-0.02, 0.44, 125, t, a);
+    bkf_check_fit_growth(t, a, m, 10, 125, &g);
+    CHECK_MSG(g.verdict == BKF_CHECK_GROWTH_DECAYS && fabs(g.rate + 0.02) < 2e-3, "%s %g",
+              bkf_check_growth_name(g.verdict), g.rate);
+    /* below ln 2 / L: undecided at t = 125, grows at 500 */
+    m = synthetic(0.004, 0.44, 125, t, a);
+    bkf_check_fit_growth(t, a, m, 10, 125, &g);
+    CHECK_MSG(g.verdict == BKF_CHECK_GROWTH_UNDECIDED && g.limit >= log(2.0) / 115,
+              "%s %g limit %g", bkf_check_growth_name(g.verdict), g.rate, g.limit);
+    m = synthetic(0.004, 0.44, 500, t, a);
+    bkf_check_fit_growth(t, a, m, 10, 500, &g);
+    CHECK_MSG(g.verdict == BKF_CHECK_GROWTH_GROWS && fabs(g.rate - 0.004) < 5e-4, "%s %g",
+              bkf_check_growth_name(g.verdict), g.rate);
+    /* a decaying mode giving way to a growing one at t = 77 bends the
+     * envelope: the halves' slopes (-0.01, then up to 0.05) differ, the
+     * uncertainty says so, and no sign is claimed */
+    m = 0;
+    for (double s = 0; s <= 125; s += 0.25, m++) {
+        t[m] = s;
+        a[m] = 1e-2 * exp(0.05 * s) + exp(-0.01 * s);
+    }
+    bkf_check_fit_growth(t, a, m, 10, 125, &g);
+    CHECK_MSG(g.rate_err > 1e-2 && g.verdict == BKF_CHECK_GROWTH_UNDECIDED, "rate %g +- %g: %s",
+              g.rate, g.rate_err, bkf_check_growth_name(g.verdict));
+    /* nothing to fit: too few samples, or an amplitude that is not > 0 */
+    bkf_check_fit_growth(t, a, 10, 10, 125, &g);
+    CHECK(g.verdict == BKF_CHECK_GROWTH_UNDECIDED && isnan(g.rate));
+    a[100] = 0;
+    bkf_check_fit_growth(t, a, m, 10, 125, &g);
+    CHECK(g.verdict == BKF_CHECK_GROWTH_UNDECIDED && isnan(g.rate) && isnan(g.limit));
+}
+
+/* ------------------------------------------------ growth against spectrum */
+
+#define ROWS_MAX 16
+
+typedef struct {
+    bkf_check_row rows[ROWS_MAX];
+    size_t count;
+} row_list;
+
+static int keep_row(const bkf_check_row *row, void *data)
+{
+    row_list *l = data;
+    CHECK(l->count < ROWS_MAX);
+    l->rows[l->count++] = *row;
+    return 0;
+}
+
+static bkf_check_row run_one(double gamma, double c, double nu, double S, size_t n, double tmax)
+{
+    bkf_model_params m = {gamma, c, nu, S, 0, BKF_MODEL_CONTINUUM};
+    bkf_check_options o = bkf_check_options_default();
+    o.n = n;
+    o.tmax = tmax;
+    row_list l = {.count = 0};
+    bkf_check_hooks h = {.row = keep_row, .data = &l};
+    bkf_error err;
+    int s = bkf_check_run(&m, &o, &h, &err);
+    CHECK_MSG(s == BKF_OK, "status %d: %s", s, err.message);
+    CHECK(l.count == 1);
+    const bkf_check_row *r = &l.rows[0];
+    bkf_test_note("gamma %g, n = %zu, tmax %g: growth %.5f +- %.5f (limit %.5f) %s; spectrum %s, "
+                  "sigma_max %.5f; %s",
+                  gamma, n, tmax, r->growth.rate, r->growth.rate_err, r->growth.limit,
+                  bkf_check_growth_name(r->growth.verdict),
+                  bkf_trainspec_verdict_name(r->spectral), r->sigma_max,
+                  bkf_check_verdict_name(r->verdict));
+    return *r;
+}
+
+/* The issue's case of a growth at the old detection limit: gamma 1, c 0.5,
+ * nu -0.5, S 30, n = 10, sigma_max 0.01276 (Bloch j = 3; j = 4 has
+ * 0.01235).  The fit grows at tmax 125 and 250, and its rate approaches
+ * sigma_max from below: in every Bloch class a slower mode (at j = 3,
+ * Re sigma 0.0045) is still fading, which only lowers the envelope's slope
+ * (so at most sigma_max + 2.5 err), by less than 10% at t = 250. */
+TEST(check_growth_meets_the_spectrum_gamma1)
+{
+    bkf_check_row a = run_one(1, 0.5, -0.5, 30, 10, 125), b = run_one(1, 0.5, -0.5, 30, 10, 250);
+    CHECK(a.spectral == BKF_TRAINSPEC_UNSTABLE && fabs(a.sigma_max - 0.01276) < 1e-5);
+    CHECK(a.growth.verdict == BKF_CHECK_GROWTH_GROWS && b.growth.verdict == BKF_CHECK_GROWTH_GROWS);
+    CHECK(a.verdict == BKF_CHECK_UNSTABLE && b.verdict == BKF_CHECK_UNSTABLE);
+    CHECK_MSG(b.growth.rate <= b.sigma_max + 2.5 * b.growth.rate_err &&
+                  b.growth.rate > 0.9 * b.sigma_max,
+              "growth %g, sigma_max %g", b.growth.rate, b.sigma_max);
+}
+
+/* The issue's flipping case: gamma 5, c 0.2, nu -0.9, S 50, n = 4 is
+ * weakly unstable (sigma_max 4.6e-4, oscillatory at kappa 0), far below
+ * what a run of 400 detects: undecided at every length, never a decided
+ * sign, never a conflict; the spectrum makes the verdict unstable. */
+TEST(check_growth_weak_instability_is_undecided)
+{
+    const double tmax[] = {125, 400};
+    for (size_t i = 0; i < 2; i++) {
+        bkf_check_row r = run_one(5, 0.2, -0.9, 50, 4, tmax[i]);
+        CHECK(r.spectral == BKF_TRAINSPEC_UNSTABLE && r.sigma_max < 1e-3);
+        CHECK_MSG(r.growth.verdict == BKF_CHECK_GROWTH_UNDECIDED, "tmax %g: %s", tmax[i],
+                  bkf_check_growth_name(r.growth.verdict));
+        CHECK(fabs(r.growth.rate) < r.growth.limit && r.sigma_max < r.growth.limit);
+        CHECK(r.stable == 1 && r.verdict == BKF_CHECK_UNSTABLE);
+    }
+}
+
+/* A clearly unstable root at the paper's parameters: n = 2 (sigma_max
+ * 0.0697) grows, at a rate within 20% below sigma_max over its short
+ * linear stretch (t = 10 .. 70; slower modes fade too); n = 8 (sigma_max
+ * 0.0021, weak) is undecided at tmax 125, its verdict the spectrum's. */
+TEST(check_growth_paper_strong_and_weak)
+{
+    bkf_check_row r = run_one(2, 0.3, -0.96, 20, 2, 125);
+    CHECK(r.spectral == BKF_TRAINSPEC_UNSTABLE && r.growth.verdict == BKF_CHECK_GROWTH_GROWS);
+    CHECK_MSG(r.growth.rate <= r.sigma_max + 2.5 * r.growth.rate_err &&
+                  r.growth.rate > 0.8 * r.sigma_max,
+              "growth %g +- %g, sigma_max %g", r.growth.rate, r.growth.rate_err, r.sigma_max);
+    CHECK(r.verdict == BKF_CHECK_UNSTABLE && r.stable == 0);
+    r = run_one(2, 0.3, -0.96, 20, 8, 125);
+    CHECK(r.spectral == BKF_TRAINSPEC_UNSTABLE && r.sigma_max < r.growth.limit);
+    CHECK(r.growth.verdict == BKF_CHECK_GROWTH_UNDECIDED && r.verdict == BKF_CHECK_UNSTABLE);
 }
 
 /* ------------------------------------------------------------- refusals */
@@ -260,10 +446,11 @@ TEST(check_example_and_cli_verdicts_agree)
                   lib[i].n, lib[i].root, lib[i].verdict, cli[i].verdict);
         bkf_test_note("n = %zu, root %zu: %s", lib[i].n, lib[i].root, lib[i].verdict);
     }
-    /* and the README's table at the paper's parameters: n = 2 unstable,
-     * n = 5 and 10 agree (n = 10 also on the uniform grid of 2^14 points) */
+    /* and the spectrum at the paper's parameters: n = 2 unstable (also by
+     * the run), n = 5 stable and agrees, n = 10 weakly unstable (kept by
+     * the run, unstable by the spectrum) */
     CHECK(strcmp(lib[0].verdict, "unstable") == 0);
-    CHECK(strcmp(lib[1].verdict, "agrees") == 0 && strcmp(lib[2].verdict, "agrees") == 0);
+    CHECK(strcmp(lib[1].verdict, "agrees") == 0 && strcmp(lib[2].verdict, "unstable") == 0);
 }
 
 /* ------------------------------------------------ the product's keys */
@@ -437,7 +624,9 @@ TEST(check_write_disagreement_keeps_the_table)
     size_t lines;
     char *rows = data_lines(buf, &lines);
     CHECK(lines == 2 && strstr(rows, "\tdisagrees\n"));
-    CHECK(strstr(buf, "# summary: 1 stable (n = 4), 0 agree, 1 disagree, 0 unresolved\n"));
+    CHECK_MSG(strstr(buf, "# summary: 1 kept by the run (n = 4), 0 agree, 1 disagree, 0 conflict, "
+                          "0 unresolved; spectrum stable n = 4, unstable n = none\n"),
+              "%s", buf);
     free(rows);
     free(buf);
     /* a failed check of the spec writes nothing and counts nothing */
