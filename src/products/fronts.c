@@ -552,6 +552,7 @@ typedef struct {
     bkf_speeds_branch_point point;
     int stability_change;
     root_verdict verdict; /* with stability */
+    int skipped;          /* no spectrum tried: mu beyond one that outgrew the budget */
 } branch_row;
 
 typedef struct {
@@ -731,6 +732,10 @@ static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sin
                             branch_verdicts *bv, bkf_error *err)
 {
     bkf_speeds_param along = (bkf_speeds_param)spec->along;
+    /* The mesh a spectrum needs grows with mu (thinner fronts): past a mu
+     * whose spectrum outgrew the budget the next ones would too, each after
+     * seconds of trying, as the branch runs to the sonic limit. */
+    double refused_mu = INFINITY;
     for (size_t i = 0; i < sink->count; i++) {
         branch_row *r = &sink->rows[i];
         if (r->point.kind == BKF_SPEEDS_SONIC) {
@@ -738,9 +743,17 @@ static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sin
                           "the sonic limit v = c, no front train to linearise about");
             continue;
         }
+        if (r->point.root.mu >= refused_mu) {
+            r->skipped = 1;
+            bkf_error_set(&r->verdict.why, BKF_EBUDGET,
+                          "not tried: mu beyond %.6g, where the spectrum outgrew its budget "
+                          "(thinner fronts need a finer mesh)", refused_mu);
+            continue;
+        }
         bv->spectra++;
         int s = verdict_find(&r->point.params, &r->point.root, bv->tol, &r->verdict, err);
         if (s) return s;
+        if (r->verdict.why.status == BKF_EBUDGET) refused_mu = r->point.root.mu;
     }
     /* room for a change between every two points: moving rows cannot fail */
     size_t cap = 2 * sink->count + 1;
@@ -842,6 +855,16 @@ static int branch_verdict_comments(bkf_io_table *table, bkf_speeds_param along,
                 sp->complex_pair ? "a complex pair crosses (oscillatory)"
                                  : "a real eigenvalue crosses",
                 before, after);
+        } else if (r->skipped) {
+            /* one line for the run of points not tried */
+            size_t j = i;
+            while (j + 1 < sink->count && sink->rows[j + 1].skipped) j++;
+            s = bkf_io_table_commentf(
+                table, err, "stability at %zu point(s) from %s = %s to %s (mu %.6g to %.6g) "
+                "unresolved: %s", j - i + 1, pname, bkf_format_number(x, a, sizeof a),
+                bkf_format_number(row_param(&sink->rows[j], along), b, sizeof b),
+                r->point.root.mu, sink->rows[j].point.root.mu, r->verdict.why.message);
+            i = j;
         } else if (!verdict_resolved(&r->verdict)) {
             s = bkf_io_table_commentf(table, err, "stability at %s = %s unresolved: %s", pname,
                                       bkf_format_number(x, a, sizeof a), r->verdict.why.message);
