@@ -237,6 +237,10 @@ TEST(products_branch_stability_change_is_where_sigma_max_vanishes)
               rows);
     CHECK(bkf_tsv_cell(tsv, at, "S", &S, NULL, 0) && bkf_tsv_cell(tsv, at, "v", &v, NULL, 0));
     CHECK(bkf_tsv_cell(tsv, at, "kind", NULL, kind, sizeof kind));
+    double kappa;
+    CHECK(bkf_tsv_cell(tsv, at, "kappa_max", &kappa, NULL, 0));
+    CHECK_MSG(kappa == 0, "the crossing at kappa %g, not 0: the doubled ring below needs j = 0",
+              kappa);
     CHECK(bkf_tsv_cell(tsv, rows - 1, "stable", NULL, stable, sizeof stable));
     CHECK_MSG(strcmp(stable, "yes") == 0, "n = 3 at S = 15: %s", stable);
 
@@ -273,6 +277,22 @@ TEST(products_branch_stability_change_is_where_sigma_max_vanishes)
         bkf_trainspec_result_free(&r);
     }
     free(tsv);
+    /* Six fronts on 2 S have the profile of three on S, and the crossing is
+     * at kappa 0 (j = 0), a mode of both rings: n = 6 must change there too.
+     * Both are located to |sigma_max| <= tol, i.e. S to tol / |dsigma/dS|
+     * (about 1.4e-4 for n = 3, twice that on the doubled ring). */
+    bkf_fronts_branch_spec b6 = paper_branch(6, 2 * S - 0.5, 2 * S + 0.5);
+    b6.stability = 1;
+    char *six = library_output(write_branch, &b6, BKF_IO_TSV);
+    double S6 = NAN, v6 = NAN;
+    for (int i = 0; bkf_tsv_cell(six, i, "point", NULL, type, sizeof type); i++)
+        if (strcmp(type, "stability") == 0) {
+            CHECK(bkf_tsv_cell(six, i, "S", &S6, NULL, 0) && bkf_tsv_cell(six, i, "v", &v6, NULL, 0));
+        }
+    CHECK_MSG(fabs(S6 / 2 - S) < 3e-4 && fabs(v6 - v) < 1e-5,
+              "n = 6 changes at S = %.10g (v %.10g), twice n = 3's %.10g (v %.10g)", S6, v6, S, v);
+    bkf_test_note("n = 6 changes at S = %.10f = 2 x %.10f", S6, S6 / 2);
+    free(six);
     /* the library's rows are the executable's */
     check_same_rows(write_branch, &b,
                     "branch --param S --from 20 --to 15 --gamma 2 --c 0.3 --nu -0.96 --n 3 "
