@@ -82,11 +82,15 @@ typedef struct {
     size_t root;            /* which root of n at `from`, 1 the fastest; default 1 */
     size_t max_points;      /* regular points at most; 0 (default): no limit */
     double tol;             /* relative accuracy of T and v; default 1e-10 */
+    int stability;          /* each point's spectral verdict, and where it changes */
+    double stability_tol;   /* as bkf_fronts_spec's: [1e-10, 1e-2], 0: 1e-6; only with
+                               stability */
 } bkf_fronts_branch_spec;
 
 bkf_fronts_branch_spec bkf_fronts_branch_spec_default(void);
 
-/* The keys: param, from, to, n, root, gamma, c, nu, S, tol, max-points. */
+/* The keys: param, from, to, n, root, gamma, c, nu, S, tol, max-points,
+ * stability, stability-tol. */
 extern const bkf_option bkf_fronts_branch_options[];
 extern const size_t bkf_fronts_branch_noptions;
 
@@ -95,12 +99,21 @@ extern const size_t bkf_fronts_branch_noptions;
 int bkf_fronts_branch_check(const bkf_fronts_branch_spec *spec, const char *prefix,
                             bkf_error *err);
 
-/* The columns: point, S, gamma, c, nu, then the root's. */
+/* The columns: point, S, gamma, c, nu, then the root's (without stability). */
 const bkf_io_column *bkf_fronts_branch_columns(size_t *count);
 
 /* The branch (bkf_speeds_branch) as a table: one row per point, fold and
  * sonic end; comments list the folds and how the branch ended (a C program
- * that wants the points as structs calls bkf_speeds_branch). */
+ * that wants the points as structs calls bkf_speeds_branch).
+ *
+ * With stability, the five columns of bkf_fronts_write's stability for each
+ * point (a sonic end, and a point whose spectrum is refused, BKF_ETOL or
+ * BKF_EBUDGET, are unresolved with a comment saying why), and where
+ * sigma_max changes sign between two consecutive points a row of type
+ * stability: the parameter where sigma_max = 0 to stability_tol (Brent on
+ * the parameter; the root there is re-solved, the one nearest the chord's
+ * v), its Bloch number and kind (complex: an oscillatory crossing), also
+ * listed in a comment.  A crossing that cannot be located is a comment. */
 int bkf_fronts_branch_write(const bkf_fronts_branch_spec *spec, FILE *out, bkf_io_format format,
                             const bkf_provenance *provenance, bkf_error *err);
 

@@ -32,6 +32,14 @@
     "                 near, v_err is large), asymptotic (mu > 1e6: T from the\n"       \
     "                 large-mu expansion)\n"
 
+#define STABILITY_HELP                                                                 \
+    "  stable         yes, no, or unresolved (sigma_max within its error of 0,\n"   \
+    "                 or the spectrum failed: a comment says why, numbers nan)\n"   \
+    "  sigma_max      the rightmost Re sigma but the translation's 0\n"             \
+    "  sigma_max_err  its estimated absolute error\n"                               \
+    "  kappa_max      its Bloch number 2 pi j / S\n"                                \
+    "  kind           real, or complex (a conjugate pair)\n"
+
 typedef struct {
     bkf_fronts_spec spec;
     cli_output_spec output;
@@ -81,12 +89,7 @@ static void speeds_help(FILE *out)
         "\n"
         "columns:\n" COLUMNS_HELP
         "with --stability, each root's ring spectrum (as bkfront stability):\n"
-        "  stable         yes, no, or unresolved (sigma_max within its error of 0,\n"
-        "                 or the spectrum failed: a comment says why, numbers nan)\n"
-        "  sigma_max      the rightmost Re sigma but the translation's 0\n"
-        "  sigma_max_err  its estimated absolute error\n"
-        "  kappa_max      its Bloch number 2 pi j / S\n"
-        "  kind           real, or complex (a conjugate pair)\n"
+        STABILITY_HELP
         "\n"
         "No front at all (S too small) is an empty table with the reason in a\n"
         "comment, exit status 0. Output is all or nothing: on any failure nothing is\n"
@@ -101,7 +104,8 @@ static void branch_help(FILE *out)
     fprintf(out,
         "usage: bkfront branch --param S|nu|gamma|c --from A --to B [--n N] [--root I]\n"
         "                      --gamma G --c C --nu V --S L  (all but the --param one)\n"
-        "                      [--tol E] [--max-points N] [--format tsv|json] [--out FILE]\n"
+        "                      [--tol E] [--max-points N] [--stability [--stability-tol E]]\n"
+        "                      [--format tsv|json] [--out FILE]\n"
         "\n"
         "The branch v_n(p) of allowed front speeds along one parameter p, by\n"
         "pseudo-arclength continuation from p = A towards p = B. It passes folds,\n"
@@ -109,15 +113,20 @@ static void branch_help(FILE *out)
         "ends where p leaves [A, B] or at the sonic limit v -> c+ (mu -> inf),\n"
         "reached at S = n k(nu) c gamma (a row of type sonic, with mu = T = inf).\n"
         "The parameters other than --param are required; c > 0 (for c = 0,\n"
-        "v = S/(n T(gamma)) needs no continuation).\n"
+        "v = S/(n T(gamma)) needs no continuation). With --stability each point\n"
+        "gets its spectral verdict, and where sigma_max changes sign between two\n"
+        "points the parameter where it is 0 is located (a row of type stability).\n"
         "\n"
         "options:\n");
     cli_options_help(out, g, 2);
     fprintf(out,
         "\n"
         "columns:\n"
-        "  point          point, fold or sonic\n"
+        "  point          point, fold, sonic, or (with --stability) stability: where\n"
+        "                 sigma_max = 0 to --stability-tol between two points\n"
         "  S, gamma, c, nu  the parameters at this point\n" COLUMNS_HELP
+        "with --stability, each point's ring spectrum (as bkfront stability):\n"
+        STABILITY_HELP
         "\n"
         "Output is all or nothing: on any failure nothing is written.\n"
         "exit status: 0 ok, 1 numerical failure, 2 bad input\n");

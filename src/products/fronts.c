@@ -4,6 +4,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_roots.h>
+
 #include "bkfront/cycle.h"
 #include "bkfront/stability.h"
 
@@ -17,18 +20,24 @@
     {"model", BKF_IO_TEXT}, {"residual", BKF_IO_NUMBER}, {"slope", BKF_IO_NUMBER},     \
     {"flags", BKF_IO_TEXT}
 
+/* Each root's spectral verdict (speeds and branch with stability). */
+#define VERDICT_COLUMNS                                                       \
+    {"stable", BKF_IO_TEXT}, {"sigma_max", BKF_IO_NUMBER},                    \
+    {"sigma_max_err", BKF_IO_NUMBER}, {"kappa_max", BKF_IO_NUMBER}, {"kind", BKF_IO_TEXT}
+#define PARAM_COLUMNS                                                         \
+    {"point", BKF_IO_TEXT}, {"S", BKF_IO_NUMBER}, {"gamma", BKF_IO_NUMBER},   \
+    {"c", BKF_IO_NUMBER}, {"nu", BKF_IO_NUMBER}
+
 static const bkf_io_column speeds_columns[] = {ROOT_COLUMNS};
-/* With stability: the root's, then its spectral verdict. */
-static const bkf_io_column stability_columns[] = {
-    ROOT_COLUMNS,           {"stable", BKF_IO_TEXT},    {"sigma_max", BKF_IO_NUMBER},
-    {"sigma_max_err", BKF_IO_NUMBER}, {"kappa_max", BKF_IO_NUMBER}, {"kind", BKF_IO_TEXT}};
-static const bkf_io_column branch_columns[] = {
-    {"point", BKF_IO_TEXT}, {"S", BKF_IO_NUMBER},  {"gamma", BKF_IO_NUMBER},
-    {"c", BKF_IO_NUMBER},   {"nu", BKF_IO_NUMBER}, ROOT_COLUMNS};
+static const bkf_io_column stability_columns[] = {ROOT_COLUMNS, VERDICT_COLUMNS};
+static const bkf_io_column branch_columns[] = {PARAM_COLUMNS, ROOT_COLUMNS};
+static const bkf_io_column branch_stability_columns[] = {PARAM_COLUMNS, ROOT_COLUMNS,
+                                                         VERDICT_COLUMNS};
 #define NSPEEDS (sizeof speeds_columns / sizeof speeds_columns[0])
 #define NBRANCH (sizeof branch_columns / sizeof branch_columns[0])
 #define NPARAM (NBRANCH - NSPEEDS)
 #define NSTABILITY (sizeof stability_columns / sizeof stability_columns[0])
+#define NBRANCH_STABILITY (sizeof branch_stability_columns / sizeof branch_stability_columns[0])
 
 _Static_assert(NSPEEDS == BKF_FRONTS_ROOT_COLUMNS, "the root's columns");
 
@@ -53,6 +62,13 @@ static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYM
      .min = BKF_TOL_MIN, .max = BKF_TOL_MAX, .form = "E", .shown_default = "1e-10",           \
      .help = what ",\nin [1e-14, 0.1]"}
 
+/* --stability-tol, the same for both products (checked by check_stability). */
+#define STABILITY_TOL_OPTION(SPEC)                                                            \
+    {.name = "stability-tol", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, stability_tol), \
+     .flags = BOUNDED, .min = 1e-10, .max = 1e-2, .form = "E", .shown_default = "1e-6",       \
+     .help = "with --stability: absolute accuracy asked of each sigma,\n"                     \
+             "in [1e-10, 0.01]"}
+
 /* ---------------------------------------------------------------- speeds */
 
 const bkf_option bkf_fronts_options[] = {
@@ -76,11 +92,7 @@ const bkf_option bkf_fronts_options[] = {
      .help = "add each root's spectral stability (its ring spectrum, as\n"
              "bkfront stability): columns stable, sigma_max, sigma_max_err,\n"
              "kappa_max, kind; needs c > 0"},
-    {.name = "stability-tol", .type = BKF_OPT_DOUBLE,
-     .offset = offsetof(bkf_fronts_spec, stability_tol), .flags = BOUNDED, .min = 1e-10,
-     .max = 1e-2, .form = "E", .shown_default = "1e-6",
-     .help = "with --stability: absolute accuracy asked of each sigma,\n"
-             "in [1e-10, 0.01]"},
+    STABILITY_TOL_OPTION(bkf_fronts_spec),
 };
 const size_t bkf_fronts_noptions = sizeof bkf_fronts_options / sizeof bkf_fronts_options[0];
 
@@ -103,6 +115,20 @@ static int check_nu(const char *p, double nu, bkf_error *err)
                              "%snu: nu = %s is outside (-1, 1): no fronts, uniform continuous "
                              "slip psi = nu is stable (no limit cycle)",
                              p, bkf_format_number(nu, a, sizeof a));
+    return BKF_OK;
+}
+
+/* The stability keys (c: the model's, or 1 where the branch checks it). */
+static int check_stability(const char *p, int stability, double tol, double c, bkf_error *err)
+{
+    if (tol != 0 && !stability)
+        return bkf_error_set(err, BKF_EINPUT, "%sstability-tol: only with %sstability", p, p);
+    if (tol != 0 && !(tol >= 1e-10 && tol <= 1e-2))
+        return bkf_error_set(err, BKF_EINPUT, "%sstability-tol: not in [1e-10, 0.01]", p);
+    if (stability && !(c > 0))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%sstability: needs %sc > 0 (with c = 0 the fronts are phase waves "
+                             "of uncoupled oscillators: every mode is neutral)", p, p);
     return BKF_OK;
 }
 
@@ -139,15 +165,9 @@ int bkf_fronts_check(const bkf_fronts_spec *spec, const char *prefix, bkf_error 
                              "n <= N)", p, p, p, p);
     if ((unsigned)spec->method >= 4)
         return bkf_error_set(err, BKF_EINPUT, "%smethod: not auto, asymptotic, leading or shooting", p);
-    if (spec->stability_tol != 0 && !spec->stability)
-        return bkf_error_set(err, BKF_EINPUT, "%sstability-tol: only with %sstability", p, p);
-    if (spec->stability_tol != 0 && !(spec->stability_tol >= 1e-10 && spec->stability_tol <= 1e-2))
-        return bkf_error_set(err, BKF_EINPUT, "%sstability-tol: not in [1e-10, 0.01]", p);
-    if (spec->stability && !(spec->c > 0))
-        return bkf_error_set(err, BKF_EINPUT,
-                             "%sstability: needs %sc > 0 (with c = 0 the fronts are phase waves "
-                             "of uncoupled oscillators: every mode is neutral)", p, p);
-    int s = check_nu(p, spec->nu, err);
+    int s = check_stability(p, spec->stability, spec->stability_tol, spec->c, err);
+    if (s) return s;
+    s = check_nu(p, spec->nu, err);
     if (s) return s;
     bkf_model_params params;
     bkf_speeds_options options;
@@ -224,67 +244,93 @@ static int range_of_n(bkf_io_table *table, double c, const bkf_speeds_table *t, 
     return s;
 }
 
-/* Each root's ring spectrum, or why it has none. */
+/* A root's ring spectrum, or why it has none. */
+typedef struct {
+    bkf_trainspec_result spectrum;
+    bkf_error why; /* status BKF_OK where the spectrum was computed */
+} root_verdict;
+
+static double verdict_tol(double stability_tol)
+{
+    return stability_tol != 0 ? stability_tol : bkf_trainspec_options_default().tol;
+}
+
+/* A root whose spectrum does not meet the tolerance within the budget is
+ * unresolved (r->why says why); any other failure is the table's. */
+static int verdict_find(const bkf_model_params *p, const bkf_speeds_root *root, double tol,
+                        root_verdict *r, bkf_error *err)
+{
+    int s = bkf_stability_root(p, root, tol, bkf_trainspec_options_default().per_kappa,
+                               &r->spectrum, &r->why);
+    r->why.status = s;
+    if (s && s != BKF_ETOL && s != BKF_EBUDGET) return bkf_error_set(err, s, "%s", r->why.message);
+    return BKF_OK;
+}
+
+static int verdict_resolved(const root_verdict *r)
+{
+    return r->why.status == BKF_OK;
+}
+
+/* The stable, sigma_max, sigma_max_err, kappa_max and kind cells. */
+static void verdict_values(const root_verdict *r, bkf_io_value *v)
+{
+    const bkf_trainspec_result *x = &r->spectrum;
+    int ok = verdict_resolved(r);
+    v[0].text = ok ? bkf_trainspec_verdict_name(x->verdict) : "unresolved";
+    v[1].number = ok ? x->sigma_max : NAN;
+    v[2].number = ok ? x->sigma_max_err : NAN;
+    v[3].number = ok ? x->kappa_max : NAN;
+    v[4].text = ok ? bkf_stability_kind_name(x) : NULL;
+}
+
+static int verdict_comment(bkf_io_table *table, double tol, bkf_error *err)
+{
+    char a[32];
+    return bkf_io_table_commentf(table, err,
+                                 "stability: each root's ring spectrum (bkfront stability), "
+                                 "tol %s (absolute, on sigma); sigma_max is the rightmost "
+                                 "Re sigma but the translation",
+                                 bkf_format_number(tol, a, sizeof a));
+}
+
+/* Each root's verdict, for the speeds table. */
 typedef struct {
     double tol;
-    bkf_trainspec_result *spectra; /* one per root */
-    bkf_error *why;                /* status BKF_OK where the spectrum was computed */
+    root_verdict *verdicts; /* one per root */
 } root_spectra;
 
 static void root_spectra_free(root_spectra *r, size_t count)
 {
-    for (size_t i = 0; r->spectra && i < count; i++) bkf_trainspec_result_free(&r->spectra[i]);
-    free(r->spectra);
-    free(r->why);
+    for (size_t i = 0; r->verdicts && i < count; i++)
+        bkf_trainspec_result_free(&r->verdicts[i].spectrum);
+    free(r->verdicts);
 }
 
-/* A root whose spectrum does not meet the tolerance within the budget is
- * unresolved; any other failure is the table's. */
 static int find_spectra(const bkf_model_params *p, const bkf_speeds_table *t, double tol,
                         root_spectra *r, bkf_error *err)
 {
-    bkf_trainspec_options defaults = bkf_trainspec_options_default();
-    r->tol = tol != 0 ? tol : defaults.tol;
-    r->spectra = calloc(t->count ? t->count : 1, sizeof *r->spectra);
-    r->why = calloc(t->count ? t->count : 1, sizeof *r->why);
-    if (!r->spectra || !r->why) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    for (size_t i = 0; i < t->count; i++) {
-        int s = bkf_stability_root(p, &t->roots[i], r->tol, defaults.per_kappa, &r->spectra[i],
-                                   &r->why[i]);
-        r->why[i].status = s;
-        if (s && s != BKF_ETOL && s != BKF_EBUDGET) return bkf_error_set(err, s, "%s", r->why[i].message);
-    }
-    return BKF_OK;
+    r->tol = verdict_tol(tol);
+    r->verdicts = calloc(t->count ? t->count : 1, sizeof *r->verdicts);
+    if (!r->verdicts) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    int s = BKF_OK;
+    for (size_t i = 0; !s && i < t->count; i++)
+        s = verdict_find(p, &t->roots[i], r->tol, &r->verdicts[i], err);
+    return s;
 }
 
 /* The comments on the spectra: the tolerance, and each unresolved root. */
 static int spectra_comments(bkf_io_table *table, const bkf_speeds_table *t, const root_spectra *r,
                             bkf_error *err)
 {
-    char a[32];
-    int s = bkf_io_table_commentf(table, err,
-                                  "stability: each root's ring spectrum (bkfront stability), "
-                                  "tol %s (absolute, on sigma); sigma_max is the rightmost "
-                                  "Re sigma but the translation",
-                                  bkf_format_number(r->tol, a, sizeof a));
+    int s = verdict_comment(table, r->tol, err);
     for (size_t i = 0, root = 1; !s && i < t->count; i++) {
         root = i > 0 && t->roots[i - 1].n == t->roots[i].n ? root + 1 : 1;
-        if (r->why[i].status)
+        if (!verdict_resolved(&r->verdicts[i]))
             s = bkf_io_table_commentf(table, err, "stability of n %zu, root %zu unresolved: %s",
-                                      t->roots[i].n, root, r->why[i].message);
+                                      t->roots[i].n, root, r->verdicts[i].why.message);
     }
     return s;
-}
-
-static void spectrum_values(const root_spectra *r, size_t i, bkf_io_value *v)
-{
-    const bkf_trainspec_result *x = &r->spectra[i];
-    int ok = r->why[i].status == BKF_OK;
-    v[0].text = ok ? bkf_trainspec_verdict_name(x->verdict) : "unresolved";
-    v[1].number = ok ? x->sigma_max : NAN;
-    v[2].number = ok ? x->sigma_max_err : NAN;
-    v[3].number = ok ? x->kappa_max : NAN;
-    v[4].text = ok ? bkf_stability_kind_name(x) : NULL;
 }
 
 static int write_speeds(const bkf_model_params *p, const bkf_speeds_options *o,
@@ -324,7 +370,7 @@ static int write_speeds(const bkf_model_params *p, const bkf_speeds_options *o,
     for (size_t i = 0; !s && i < t->count; i++) {
         bkf_io_value v[NSTABILITY];
         bkf_fronts_root_values(&t->roots[i], v);
-        if (spectra) spectrum_values(spectra, i, v + NSPEEDS);
+        if (spectra) verdict_values(&spectra->verdicts[i], v + NSPEEDS);
         s = bkf_io_table_row(table, v, err);
     }
     if (!s) s = bkf_io_table_finish(table, err);
@@ -374,6 +420,13 @@ const bkf_option bkf_fronts_branch_options[] = {
     {.name = "max-points", .type = BKF_OPT_COUNT,
      .offset = offsetof(bkf_fronts_branch_spec, max_points), .flags = BOUNDED, .min = 1,
      .max = BKF_LIST_MAX, .form = "N", .help = "at most N regular points; default no limit"},
+    {.name = "stability", .type = BKF_OPT_SWITCH,
+     .offset = offsetof(bkf_fronts_branch_spec, stability),
+     .help = "add each point's spectral stability (its ring spectrum, as\n"
+             "bkfront stability): columns stable, sigma_max, sigma_max_err,\n"
+             "kappa_max, kind; where sigma_max changes sign, a row of type\n"
+             "stability at the parameter where it is 0"},
+    STABILITY_TOL_OPTION(bkf_fronts_branch_spec),
 };
 const size_t bkf_fronts_branch_noptions =
     sizeof bkf_fronts_branch_options / sizeof bkf_fronts_branch_options[0];
@@ -482,6 +535,8 @@ int bkf_fronts_branch_check(const bkf_fronts_branch_spec *spec, const char *pref
                              "closed form v = S/(n T(gamma)))", p, p);
     if (spec->n < 1 || spec->root < 1)
         return bkf_error_set(err, BKF_EINPUT, "%sn, %sroot: must be >= 1", p, p);
+    /* c > 0 all along is checked above */
+    if ((s = check_stability(p, spec->stability, spec->stability_tol, 1, err))) return s;
     bkf_speeds_options o = bkf_speeds_options_default();
     o.tol = spec->tol;
     bkf_model_params start = branch_params(spec, spec->from);
@@ -491,27 +546,251 @@ int bkf_fronts_branch_check(const bkf_fronts_branch_spec *spec, const char *pref
     return BKF_OK;
 }
 
+/* A row of the branch: a point of the continuation (point, fold, sonic) or,
+ * with stability, a located change of stability. */
 typedef struct {
-    bkf_speeds_branch_point *points;
+    bkf_speeds_branch_point point;
+    int stability_change;
+    root_verdict verdict; /* with stability */
+    int skipped;          /* no spectrum tried: mu beyond one that outgrew the budget */
+} branch_row;
+
+typedef struct {
+    branch_row *rows;
     size_t count, cap;
     int status;
 } branch_sink;
 
-static int collect_point(const bkf_speeds_branch_point *pt, void *data)
+static int sink_push(branch_sink *sink, const branch_row *row)
 {
-    branch_sink *sink = data;
     if (sink->count == sink->cap) {
         size_t cap = sink->cap ? 2 * sink->cap : 64;
-        bkf_speeds_branch_point *x = realloc(sink->points, cap * sizeof *x);
-        if (!x) {
-            sink->status = BKF_ENOMEM;
-            return 1;
-        }
-        sink->points = x;
+        branch_row *x = realloc(sink->rows, cap * sizeof *x);
+        if (!x) return sink->status = BKF_ENOMEM;
+        sink->rows = x;
         sink->cap = cap;
     }
-    sink->points[sink->count++] = *pt;
-    return 0;
+    sink->rows[sink->count++] = *row;
+    return BKF_OK;
+}
+
+static void sink_free(branch_sink *sink)
+{
+    for (size_t i = 0; i < sink->count; i++) bkf_trainspec_result_free(&sink->rows[i].verdict.spectrum);
+    free(sink->rows);
+    memset(sink, 0, sizeof *sink);
+}
+
+static int collect_point(const bkf_speeds_branch_point *pt, void *data)
+{
+    branch_row row;
+    memset(&row, 0, sizeof row);
+    row.point = *pt;
+    return sink_push(data, &row) != BKF_OK;
+}
+
+static double row_param(const branch_row *r, bkf_speeds_param along)
+{
+    return param_value(r->point.params, along);
+}
+
+/* The Bloch index j of kappa = 2 pi j / S. */
+static long bloch_index(const bkf_trainspec_result *x)
+{
+    return lround(x->kappa_max * x->params.S / (2 * M_PI));
+}
+
+/* ------------------------------------------------- changes of stability */
+
+/* Brent's iterations at most: each costs a ring spectrum. */
+#define CROSSING_MAX_ITER 40
+
+/* The search for sigma_max = 0 between two consecutive points of the branch.
+ * At a trial parameter the root is re-solved (bkf_speeds_find, this n only:
+ * a few milliseconds beside the spectrum's ~0.1 s, and it brackets every
+ * root of n, so none is missed) and the one nearest the chord between the
+ * two points' v is taken: between consecutive continuation steps the
+ * branch is that close to its chord, also on the middle branch between two
+ * folds.  Re-running the continuation from one point would land on the
+ * trial parameter too, but only after stepping in arclength from there. */
+typedef struct {
+    const bkf_fronts_branch_spec *spec;
+    double tol;
+    const branch_row *ends[2];
+    branch_row at;   /* the last trial, its verdict computed */
+    double x_at;     /* its parameter; NaN before the first */
+    int status;      /* why the search stopped, in why */
+    bkf_error why;
+    size_t spectra;
+} crossing_search;
+
+static double crossing_sigma(double x, void *data)
+{
+    crossing_search *c = data;
+    bkf_speeds_param along = (bkf_speeds_param)c->spec->along;
+    for (int k = 0; k < 2; k++)
+        if (x == row_param(c->ends[k], along)) return c->ends[k]->verdict.spectrum.sigma_max;
+    if (c->status) return NAN;
+    double x0 = row_param(c->ends[0], along), x1 = row_param(c->ends[1], along);
+    double v0 = c->ends[0]->point.root.v, v1 = c->ends[1]->point.root.v;
+    double chord = v0 + (v1 - v0) * (x - x0) / (x1 - x0);
+    bkf_model_params p = branch_params(c->spec, x);
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.tol = c->spec->tol;
+    o.n_from = o.n_to = c->spec->n;
+    bkf_speeds_table t;
+    int s = bkf_speeds_find(&p, &o, &t, &c->why);
+    if (!s && t.count == 0) s = bkf_error_set(&c->why, BKF_ENUMERIC, "no root of this n there");
+    if (!s) {
+        size_t best = 0;
+        for (size_t i = 1; i < t.count; i++)
+            if (fabs(t.roots[i].v - chord) < fabs(t.roots[best].v - chord)) best = i;
+        bkf_trainspec_result_free(&c->at.verdict.spectrum);
+        memset(&c->at, 0, sizeof c->at);
+        c->at.point.params = p;
+        c->at.point.root = t.roots[best];
+        c->at.point.kind = BKF_SPEEDS_POINT;
+        c->at.stability_change = 1;
+        s = bkf_stability_root(&p, &c->at.point.root, c->tol,
+                               bkf_trainspec_options_default().per_kappa, &c->at.verdict.spectrum,
+                               &c->why);
+        c->spectra++;
+    }
+    bkf_speeds_table_free(&t);
+    c->status = s;
+    c->at.verdict.why.status = s;
+    c->x_at = s ? NAN : x;
+    return s ? NAN : c->at.verdict.spectrum.sigma_max;
+}
+
+/* The change of stability between rows a and b (resolved, sigma_max of
+ * opposite signs) into *out, located when its |sigma_max| <= tol; else
+ * BKF_ENUMERIC (or the search's failure) with the reason in *why. */
+static int locate_crossing(const bkf_fronts_branch_spec *spec, double tol, const branch_row *a,
+                           const branch_row *b, branch_row *out, bkf_error *why, size_t *spectra)
+{
+    bkf_speeds_param along = (bkf_speeds_param)spec->along;
+    crossing_search c;
+    memset(&c, 0, sizeof c);
+    c.spec = spec;
+    c.tol = tol;
+    c.ends[0] = a;
+    c.ends[1] = b;
+    c.x_at = NAN;
+    double xa = row_param(a, along), xb = row_param(b, along);
+    gsl_function F = {crossing_sigma, &c};
+    gsl_root_fsolver *fs = gsl_root_fsolver_alloc(gsl_root_fsolver_brent);
+    if (!fs) return bkf_error_set(why, BKF_ENOMEM, "out of memory");
+    bkf_gsl_handler *h = bkf_gsl_handler_push();
+    int g = gsl_root_fsolver_set(fs, &F, fmin(xa, xb), fmax(xa, xb));
+    int located = 0;
+    for (int it = 0; g == GSL_SUCCESS && !located && it < CROSSING_MAX_ITER; it++) {
+        g = gsl_root_fsolver_iterate(fs);
+        double x = gsl_root_fsolver_root(fs);
+        if (g == GSL_SUCCESS && x == c.x_at && fabs(c.at.verdict.spectrum.sigma_max) <= tol)
+            located = 1;
+        else if (g == GSL_SUCCESS && gsl_root_test_interval(gsl_root_fsolver_x_lower(fs),
+                                                            gsl_root_fsolver_x_upper(fs), 0,
+                                                            1e-13) == GSL_SUCCESS)
+            break;
+    }
+    bkf_gsl_handler_pop(h);
+    gsl_root_fsolver_free(fs);
+    *spectra += c.spectra;
+    int s = BKF_OK;
+    char e[32];
+    if (c.status)
+        s = bkf_error_set(why, c.status, "%s", c.why.message);
+    else if (!located)
+        s = bkf_error_set(why, BKF_ENUMERIC,
+                          "sigma_max stays above the tolerance in magnitude (%s) as the "
+                          "interval shrinks: it jumps there",
+                          bkf_format_number(fabs(c.at.verdict.spectrum.sigma_max), e, sizeof e));
+    if (s) {
+        bkf_trainspec_result_free(&c.at.verdict.spectrum);
+        return s;
+    }
+    *out = c.at;
+    return BKF_OK;
+}
+
+/* A change of stability that could not be located, between two points. */
+typedef struct {
+    double from, to;
+    bkf_error why;
+} missed_change;
+
+typedef struct {
+    double tol;
+    missed_change *missed; /* at most one per pair of points */
+    size_t nmissed, located, spectra;
+} branch_verdicts;
+
+/* Each row's verdict, then the changes of stability between consecutive
+ * resolved points (sigma_max of opposite signs) as rows of their own. */
+static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sink,
+                            branch_verdicts *bv, bkf_error *err)
+{
+    bkf_speeds_param along = (bkf_speeds_param)spec->along;
+    /* The mesh a spectrum needs grows with mu (thinner fronts): past a mu
+     * whose spectrum outgrew the budget the next ones would too, each after
+     * seconds of trying, as the branch runs to the sonic limit. */
+    double refused_mu = INFINITY;
+    for (size_t i = 0; i < sink->count; i++) {
+        branch_row *r = &sink->rows[i];
+        if (r->point.kind == BKF_SPEEDS_SONIC) {
+            bkf_error_set(&r->verdict.why, BKF_EINPUT,
+                          "the sonic limit v = c, no front train to linearise about");
+            continue;
+        }
+        if (r->point.root.mu >= refused_mu) {
+            r->skipped = 1;
+            bkf_error_set(&r->verdict.why, BKF_EBUDGET,
+                          "not tried: mu beyond %.6g, where the spectrum outgrew its budget "
+                          "(thinner fronts need a finer mesh)", refused_mu);
+            continue;
+        }
+        bv->spectra++;
+        int s = verdict_find(&r->point.params, &r->point.root, bv->tol, &r->verdict, err);
+        if (s) return s;
+        if (r->verdict.why.status == BKF_EBUDGET) refused_mu = r->point.root.mu;
+    }
+    /* room for a change between every two points: moving rows cannot fail */
+    size_t cap = 2 * sink->count + 1;
+    branch_row *rows = malloc(cap * sizeof *rows);
+    bv->missed = malloc(cap * sizeof *bv->missed);
+    if (!rows || !bv->missed) {
+        free(rows);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    size_t count = 0;
+    int s = BKF_OK;
+    for (size_t i = 0; i < sink->count; i++) {
+        rows[count++] = sink->rows[i];
+        if (s || i + 1 == sink->count) continue;
+        const branch_row *a = &sink->rows[i], *b = &sink->rows[i + 1];
+        if (!verdict_resolved(&a->verdict) || !verdict_resolved(&b->verdict) ||
+            !(a->verdict.spectrum.sigma_max * b->verdict.spectrum.sigma_max < 0))
+            continue;
+        bkf_error why;
+        int f = locate_crossing(spec, bv->tol, a, b, &rows[count], &why, &bv->spectra);
+        if (f == BKF_ENOMEM) {
+            s = bkf_error_set(err, f, "out of memory");
+        } else if (f) {
+            missed_change *m = &bv->missed[bv->nmissed++];
+            m->from = row_param(a, along);
+            m->to = row_param(b, along);
+            m->why = why;
+        } else {
+            count++;
+            bv->located++;
+        }
+    }
+    free(sink->rows);
+    sink->rows = rows;
+    sink->count = count;
+    sink->cap = cap;
+    return s;
 }
 
 /* "N points, F fold(s) at p = .. (v = ..), ...; ends ..." */
@@ -523,11 +802,10 @@ static void summary_line(bkf_speeds_param along, const branch_sink *sink,
     int used = snprintf(line, size, "%zu points, %zu fold(s)", rep->points, rep->folds);
     const char *sep = " at ";
     for (size_t i = 0; i < sink->count && used > 0 && (size_t)used < size; i++)
-        if (sink->points[i].kind == BKF_SPEEDS_FOLD) {
+        if (sink->rows[i].point.kind == BKF_SPEEDS_FOLD) {
             used += snprintf(line + used, size - (size_t)used, "%s%s = %s (v = %s)", sep, pname,
-                             bkf_format_number(param_value(sink->points[i].params, along), a,
-                                               sizeof a),
-                             bkf_format_number(sink->points[i].root.v, e, sizeof e));
+                             bkf_format_number(row_param(&sink->rows[i], along), a, sizeof a),
+                             bkf_format_number(sink->rows[i].point.root.v, e, sizeof e));
             sep = ", ";
         }
     if (used > 0 && (size_t)used < size) {
@@ -542,13 +820,73 @@ static void summary_line(bkf_speeds_param along, const branch_sink *sink,
     }
 }
 
+/* The comments on the verdicts: the tolerance, each change of stability
+ * (as the folds' line), each point left unresolved and each change not
+ * located. */
+static int branch_verdict_comments(bkf_io_table *table, bkf_speeds_param along,
+                                   const branch_sink *sink, const branch_verdicts *bv,
+                                   bkf_error *err)
+{
+    const char *pname = param_names[along];
+    char a[32], b[32], c[32], d[32];
+    int s = verdict_comment(table, bv->tol, err);
+    if (!s)
+        s = bkf_io_table_commentf(table, err,
+                                  "stability along the branch: %zu change(s) located (rows of "
+                                  "type stability, sigma_max = 0 to the tolerance), %zu not; "
+                                  "%zu spectra",
+                                  bv->located, bv->nmissed, bv->spectra);
+    for (size_t i = 0; !s && i < sink->count; i++) {
+        const branch_row *r = &sink->rows[i];
+        double x = row_param(r, along);
+        if (r->stability_change) {
+            const bkf_trainspec_result *sp = &r->verdict.spectrum;
+            /* a change sits between two resolved points */
+            const char *before = bkf_trainspec_verdict_name(sink->rows[i - 1].verdict.spectrum.verdict);
+            const char *after = bkf_trainspec_verdict_name(sink->rows[i + 1].verdict.spectrum.verdict);
+            s = bkf_io_table_commentf(
+                table, err,
+                "stability changes at %s = %s (v = %s): sigma_max %s at kappa %s (j = %ld), %s; "
+                "stable: %s before, %s after along the branch",
+                pname, bkf_format_number(x, a, sizeof a),
+                bkf_format_number(r->point.root.v, b, sizeof b),
+                bkf_format_number(sp->sigma_max, c, sizeof c),
+                bkf_format_number(sp->kappa_max, d, sizeof d), bloch_index(sp),
+                sp->complex_pair ? "a complex pair crosses (oscillatory)"
+                                 : "a real eigenvalue crosses",
+                before, after);
+        } else if (r->skipped) {
+            /* one line for the run of points not tried */
+            size_t j = i;
+            while (j + 1 < sink->count && sink->rows[j + 1].skipped) j++;
+            s = bkf_io_table_commentf(
+                table, err, "stability at %zu point(s) from %s = %s to %s (mu %.6g to %.6g) "
+                "unresolved: %s", j - i + 1, pname, bkf_format_number(x, a, sizeof a),
+                bkf_format_number(row_param(&sink->rows[j], along), b, sizeof b),
+                r->point.root.mu, sink->rows[j].point.root.mu, r->verdict.why.message);
+            i = j;
+        } else if (!verdict_resolved(&r->verdict)) {
+            s = bkf_io_table_commentf(table, err, "stability at %s = %s unresolved: %s", pname,
+                                      bkf_format_number(x, a, sizeof a), r->verdict.why.message);
+        }
+    }
+    for (size_t i = 0; !s && i < bv->nmissed; i++)
+        s = bkf_io_table_commentf(table, err,
+                                  "stability changes between %s = %s and %s = %s, not located: %s",
+                                  pname, bkf_format_number(bv->missed[i].from, a, sizeof a),
+                                  pname, bkf_format_number(bv->missed[i].to, b, sizeof b),
+                                  bv->missed[i].why.message);
+    return s;
+}
+
 static int write_branch(const bkf_fronts_branch_spec *spec, const branch_sink *sink,
-                        const bkf_speeds_branch_report *rep, FILE *out, bkf_io_format format,
-                        const bkf_provenance *prov, bkf_error *err)
+                        const bkf_speeds_branch_report *rep, const branch_verdicts *bv, FILE *out,
+                        bkf_io_format format, const bkf_provenance *prov, bkf_error *err)
 {
     bkf_io_table *table;
     int s = bkf_product_table_open(
-        out, format, branch_columns, NBRANCH,
+        out, format, bv ? branch_stability_columns : branch_columns,
+        bv ? NBRANCH_STABILITY : NBRANCH,
         "branch: one root v_n of n T(mu(v)) = S / (v sqrt(1 - c^2/v^2)) "
         "followed along one parameter by pseudo-arclength continuation",
         prov, &table, err);
@@ -576,18 +914,20 @@ static int write_branch(const bkf_fronts_branch_spec *spec, const branch_sink *s
         summary_line(along, sink, rep, line, sizeof line);
         s = bkf_io_table_comment(table, line, err);
     }
+    if (!s && bv) s = branch_verdict_comments(table, along, sink, bv, err);
     if (!s) s = bkf_product_table_command(table, prov, err);
     static const char *const kinds[] = {"point", "fold", "sonic"};
     for (size_t i = 0; !s && i < sink->count; i++) {
-        const bkf_speeds_branch_point *pt = &sink->points[i];
-        bkf_io_value v[NBRANCH];
+        const bkf_speeds_branch_point *pt = &sink->rows[i].point;
+        bkf_io_value v[NBRANCH_STABILITY];
         memset(v, 0, sizeof v);
-        v[0].text = kinds[pt->kind];
+        v[0].text = sink->rows[i].stability_change ? "stability" : kinds[pt->kind];
         v[1].number = pt->params.S;
         v[2].number = pt->params.gamma;
         v[3].number = pt->params.c;
         v[4].number = pt->params.nu;
         bkf_fronts_root_values(&pt->root, v + NPARAM);
+        if (bv) verdict_values(&sink->rows[i].verdict, v + NBRANCH);
         s = bkf_io_table_row(table, v, err);
     }
     if (!s) s = bkf_io_table_finish(table, err);
@@ -608,7 +948,10 @@ int bkf_fronts_branch_write(const bkf_fronts_branch_spec *spec, FILE *out, bkf_i
     s = bkf_speeds_branch(&start, spec->n, spec->root, (bkf_speeds_param)spec->along, spec->to,
                           &o, spec->max_points, collect_point, &sink, &rep, err);
     if (!s && sink.status) s = bkf_error_set(err, sink.status, "out of memory");
-    if (!s) s = write_branch(spec, &sink, &rep, out, format, prov, err);
-    free(sink.points);
+    branch_verdicts bv = {verdict_tol(spec->stability_tol), NULL, 0, 0, 0};
+    if (!s && spec->stability) s = branch_stability(spec, &sink, &bv, err);
+    if (!s) s = write_branch(spec, &sink, &rep, spec->stability ? &bv : NULL, out, format, prov, err);
+    free(bv.missed);
+    sink_free(&sink);
     return s;
 }

@@ -5,6 +5,7 @@
 #include "cli_support.h"
 
 #include <fcntl.h>
+#include <math.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -298,4 +299,53 @@ TEST(cli_speeds_method)
     run_free(&s);
     run_free(&r);
     run_free(&b);
+}
+
+/* branch --stability as a user sees it: the five columns, the change of
+ * stability of n = 3 between S = 20 (unstable, issue 15: sigma_max +0.0244)
+ * and S = 15 (the profile of n = 4 at S = 20, stable) as a row of type
+ * stability with sigma_max 0 to the tolerance, a comment naming it, the
+ * same rows in JSON; bad stability flags exit 2 naming the flag and write
+ * nothing, not even an --out file. */
+TEST(cli_branch_stability)
+{
+#define BRANCH3 "branch", "--param", "S", "--from", "20", "--to", "15", "--n", "3", "--gamma", "2", \
+                "--c", "0.3", "--nu", "-0.96"
+    run_result r = RUN(BRANCH3, "--stability", "--stability-tol", "1e-7");
+    CHECK_MSG(r.code == 0 && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, "\tflags\tstable\tsigma_max\tsigma_max_err\tkappa_max\tkind\n"));
+    CHECK(strstr(r.out, "# stability changes at S = "));
+    char type[32], first[32], last[32];
+    int n = 0, at = -1;
+    for (; field(r.out, n, "point", NULL, type, sizeof type); n++)
+        if (strcmp(type, "stability") == 0) at = n;
+    CHECK(at > 0 && n > at + 1);
+    double sigma, err;
+    CHECK(field(r.out, at, "sigma_max", &sigma, NULL, 0) &&
+          field(r.out, at, "sigma_max_err", &err, NULL, 0));
+    CHECK_MSG(fabs(sigma) <= 1e-7 && err <= 1e-7, "sigma_max %g err %g", sigma, err);
+    CHECK(field(r.out, 0, "stable", NULL, first, sizeof first) && strcmp(first, "no") == 0);
+    CHECK(field(r.out, n - 1, "stable", NULL, last, sizeof last) && strcmp(last, "yes") == 0);
+    run_free(&r);
+    r = RUN(BRANCH3, "--stability", "--format", "json");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    CHECK(bkf_test_json_valid(r.out) && strstr(r.out, "\"point\": \"stability\"") &&
+          strstr(r.out, "\"stable\": \"yes\""));
+    run_free(&r);
+
+    bad_input(RUN(BRANCH3, "--stability", "--stability-tol", "1"), "branch", "--stability-tol",
+              "--stability-tol 1");
+    bad_input(RUN(BRANCH3, "--stability", "--stability-tol", "1e-11"), "branch",
+              "--stability-tol", "--stability-tol 1e-11");
+    bad_input(RUN(BRANCH3, "--stability-tol", "1e-5"), "branch", "--stability-tol",
+              "--stability-tol without --stability");
+    char dir[] = "/tmp/bkf_cli_branch_stab_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/branch.tsv", dir);
+    bad_input(RUN(BRANCH3, "--stability", "--stability-tol", "x", "--out", path), "branch",
+              "--stability-tol", "--stability-tol x");
+    CHECK_MSG(access(path, F_OK) != 0, "%s written on bad input", path);
+    CHECK(rmdir(dir) == 0);
+#undef BRANCH3
 }

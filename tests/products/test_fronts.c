@@ -7,6 +7,7 @@
 #include <math.h>
 
 #include "bkfront/fronts.h"
+#include "bkfront/stability.h"
 
 /* In test_io.c. */
 int bkf_test_json_valid(const char *text);
@@ -172,4 +173,166 @@ TEST(products_fronts_check_names_the_keys)
     b.c = 0;
     CHECK_STATUS(bkf_fronts_branch_check(&b, "", &e), BKF_EINPUT);
     CHECK_MSG(strstr(e.message, "closed form"), "%s", e.message);
+}
+
+/* The paper's parameters along S for one n. */
+static bkf_fronts_branch_spec paper_branch(size_t n, double from, double to)
+{
+    bkf_fronts_branch_spec b = bkf_fronts_branch_spec_default();
+    b.along = BKF_SPEEDS_ALONG_S;
+    b.from = from;
+    b.to = to;
+    b.gamma = 2;
+    b.c = 0.3;
+    b.nu = -0.96;
+    b.n = n;
+    return b;
+}
+
+/* The ring spectrum of n fronts at the paper's gamma, c, nu and size S, on
+ * the root of n nearest v, which must be within dv of it (a call of its
+ * own: speeds, then trainspec). */
+static bkf_trainspec_result spectrum_at(size_t n, double S, double v, double dv, double tol)
+{
+    bkf_model_params p = {2, 0.3, -0.96, S, 0, BKF_MODEL_CONTINUUM};
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.n_from = o.n_to = n;
+    bkf_speeds_table t;
+    bkf_error e;
+    CHECK_MSG(bkf_speeds_find(&p, &o, &t, &e) == BKF_OK && t.count >= 1, "speeds at S %g", S);
+    size_t best = 0;
+    for (size_t i = 1; i < t.count; i++)
+        if (fabs(t.roots[i].v - v) < fabs(t.roots[best].v - v)) best = i;
+    CHECK_MSG(fabs(t.roots[best].v - v) < dv, "S %.17g: root v %.17g, want %.17g", S,
+              t.roots[best].v, v);
+    bkf_trainspec_result r;
+    CHECK_STATUS(bkf_stability_root(&p, &t.roots[best], tol, 3, &r, &e), BKF_OK);
+    bkf_speeds_table_free(&t);
+    return r;
+}
+
+/* Three fronts at S = 20 are unstable (sigma_max +0.0244, issue 15) and
+ * three on S = 15 have the profile of four on S = 20, which are stable: the
+ * branch of n = 3 from S = 20 down to 15 changes stability once.  The row
+ * of type stability must be where sigma_max = 0, recomputed by a call of
+ * its own, and the verdicts on either side of it and at its neighbouring
+ * points those of single-point calls. */
+TEST(products_branch_stability_change_is_where_sigma_max_vanishes)
+{
+    const double tol = 1e-6;
+    bkf_fronts_branch_spec b = paper_branch(3, 20, 15);
+    b.stability = 1;
+    char *tsv = library_output(write_branch, &b, BKF_IO_TSV);
+    char type[32], stable[32], kind[32];
+    double S, v, sigma;
+    CHECK(bkf_tsv_cell(tsv, 0, "sigma_max", &sigma, NULL, 0));
+    CHECK_CLOSE(sigma, 0.0244, 0, 5e-5);
+    int at = -1, changes = 0, rows = 0;
+    for (int i = 0; bkf_tsv_cell(tsv, i, "point", NULL, type, sizeof type); i++, rows++)
+        if (strcmp(type, "stability") == 0) {
+            at = i;
+            changes++;
+        }
+    CHECK_MSG(changes == 1 && at > 0 && at + 1 < rows, "%d changes, at row %d of %d", changes, at,
+              rows);
+    CHECK(bkf_tsv_cell(tsv, at, "S", &S, NULL, 0) && bkf_tsv_cell(tsv, at, "v", &v, NULL, 0));
+    CHECK(bkf_tsv_cell(tsv, at, "kind", NULL, kind, sizeof kind));
+    double kappa;
+    CHECK(bkf_tsv_cell(tsv, at, "kappa_max", &kappa, NULL, 0));
+    CHECK_MSG(kappa == 0, "the crossing at kappa %g, not 0: the doubled ring below needs j = 0",
+              kappa);
+    CHECK(bkf_tsv_cell(tsv, rows - 1, "stable", NULL, stable, sizeof stable));
+    CHECK_MSG(strcmp(stable, "yes") == 0, "n = 3 at S = 15: %s", stable);
+
+    bkf_trainspec_result r = spectrum_at(3, S, v, 1e-7, tol);
+    CHECK_MSG(fabs(r.sigma_max) <= tol, "S %.17g: sigma_max %.3g", S, r.sigma_max);
+    CHECK(strcmp(kind, bkf_stability_kind_name(&r)) == 0);
+    bkf_test_note("n = 3 changes stability at S = %.10f (v = %.10f): sigma_max %.2g, kappa %.4g, "
+                  "%s", S, v, r.sigma_max, r.kappa_max, kind);
+    bkf_trainspec_result_free(&r);
+    /* either side: sigma_max moves by about 0.007 per unit of S there */
+    const double side[2] = {S + 0.01, S - 0.01};
+    const bkf_trainspec_verdict want[2] = {BKF_TRAINSPEC_UNSTABLE, BKF_TRAINSPEC_STABLE};
+    double slope_v = 0;
+    {
+        double S0, S1, v0, v1;
+        CHECK(bkf_tsv_cell(tsv, at - 1, "S", &S0, NULL, 0) && bkf_tsv_cell(tsv, at - 1, "v", &v0, NULL, 0));
+        CHECK(bkf_tsv_cell(tsv, at + 1, "S", &S1, NULL, 0) && bkf_tsv_cell(tsv, at + 1, "v", &v1, NULL, 0));
+        slope_v = (v1 - v0) / (S1 - S0);
+        /* the neighbouring points' verdicts are single-point calls' */
+        for (int k = 0; k < 2; k++) {
+            double Sk = k ? S1 : S0, vk = k ? v1 : v0;
+            CHECK(bkf_tsv_cell(tsv, at - 1 + 2 * k, "stable", NULL, stable, sizeof stable));
+            r = spectrum_at(3, Sk, vk, 1e-7, tol);
+            CHECK_MSG(strcmp(stable, bkf_trainspec_verdict_name(r.verdict)) == 0,
+                      "S %.17g: table %s, single point %s", Sk, stable,
+                      bkf_trainspec_verdict_name(r.verdict));
+            CHECK(strcmp(stable, want[k] == BKF_TRAINSPEC_STABLE ? "yes" : "no") == 0);
+            bkf_trainspec_result_free(&r);
+        }
+    }
+    for (int k = 0; k < 2; k++) {
+        r = spectrum_at(3, side[k], v + slope_v * (side[k] - S), 1e-4, tol);
+        CHECK_MSG(r.verdict == want[k], "S %.17g: sigma_max %.3g", side[k], r.sigma_max);
+        bkf_trainspec_result_free(&r);
+    }
+    free(tsv);
+    /* Six fronts on 2 S have the profile of three on S, and the crossing is
+     * at kappa 0 (j = 0), a mode of both rings: n = 6 must change there too.
+     * Both are located to |sigma_max| <= tol, i.e. S to tol / |dsigma/dS|
+     * (about 1.4e-4 for n = 3, twice that on the doubled ring). */
+    bkf_fronts_branch_spec b6 = paper_branch(6, 2 * S - 0.5, 2 * S + 0.5);
+    b6.stability = 1;
+    char *six = library_output(write_branch, &b6, BKF_IO_TSV);
+    double S6 = NAN, v6 = NAN;
+    for (int i = 0; bkf_tsv_cell(six, i, "point", NULL, type, sizeof type); i++)
+        if (strcmp(type, "stability") == 0) {
+            CHECK(bkf_tsv_cell(six, i, "S", &S6, NULL, 0) && bkf_tsv_cell(six, i, "v", &v6, NULL, 0));
+        }
+    CHECK_MSG(fabs(S6 / 2 - S) < 3e-4 && fabs(v6 - v) < 1e-5,
+              "n = 6 changes at S = %.10g (v %.10g), twice n = 3's %.10g (v %.10g)", S6, v6, S, v);
+    bkf_test_note("n = 6 changes at S = %.10f = 2 x %.10f", S6, S6 / 2);
+    free(six);
+    /* the library's rows are the executable's */
+    check_same_rows(write_branch, &b,
+                    "branch --param S --from 20 --to 15 --gamma 2 --c 0.3 --nu -0.96 --n 3 "
+                    "--stability");
+}
+
+/* Without the flag the branch has no stability columns; the sonic end of a
+ * stability branch is unresolved, not a failure. */
+TEST(products_branch_stability_columns_and_sonic_end)
+{
+    bkf_fronts_branch_spec b = paper_branch(3, 20, 19);
+    char *plain = library_output(write_branch, &b, BKF_IO_TSV);
+    CHECK(!strstr(plain, "sigma_max"));
+    free(plain);
+    b.stability = 1;
+    b.stability_tol = 1e-4;
+    b.max_points = 2;
+    char *tsv = library_output(write_branch, &b, BKF_IO_TSV);
+    CHECK(strstr(tsv, "\tstable\tsigma_max\tsigma_max_err\tkappa_max\tkind\n"));
+    CHECK(strstr(tsv, "tol 0.0001 (absolute, on sigma)"));
+    free(tsv);
+    /* starting a hair above S = k c gamma = 1.62735 (a longer way down costs
+     * seconds a point: the fronts thin out) */
+    b = paper_branch(1, 1.6276, 1.0);
+    b.stability = 1;
+    tsv = library_output(write_branch, &b, BKF_IO_TSV);
+    char type[32], stable[32];
+    int last = 0;
+    while (bkf_tsv_cell(tsv, last + 1, "point", NULL, type, sizeof type)) last++;
+    CHECK(bkf_tsv_cell(tsv, last, "point", NULL, type, sizeof type) && strcmp(type, "sonic") == 0);
+    CHECK(bkf_tsv_cell(tsv, last, "stable", NULL, stable, sizeof stable) &&
+          strcmp(stable, "unresolved") == 0);
+    CHECK(strstr(tsv, "the sonic limit v = c"));
+    free(tsv);
+    bkf_error e;
+    b.stability_tol = 1;
+    CHECK_STATUS(bkf_fronts_branch_check(&b, "--", &e), BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "--stability-tol"), "%s", e.message);
+    b.stability = 0;
+    b.stability_tol = 1e-5;
+    CHECK_STATUS(bkf_fronts_branch_check(&b, "", &e), BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "only with stability"), "%s", e.message);
 }
