@@ -18,8 +18,9 @@ set yrange [0:*]
 col(n) = n % 6 + 1
 is(k) = strcol('kind') eq k
 plot for [i = 1:ncurves] f using 'nu':((column('curve') == i && (is('period_doubling') || is('other'))) ? column('S') : NaN) \
-        with lines lw 1 lc rgb '#bbbbbb' notitle, \
-     f using 'nu':(is('long_wave') ? column('S') : NaN) with lines lw 2 dt 2 lc rgb '#000000' title 'oscillation: long wave', \
+        with linespoints lw 1 pt 7 ps 0.3 lc rgb '#999999' notitle, \
+     for [i = 1:ncurves] f using 'nu':((column('curve') == i && is('long_wave')) ? column('S') : NaN) \
+        with linespoints lw 2 dt 2 pt 7 ps 0.5 lc rgb '#000000' title (i == 1 ? 'oscillation: long wave' : ''), \
      for [n = 1:nmax] f using 'nu':((is('existence') && column('n') == n) ? column('S') : NaN) \
         with lines lw 1 lc col(n) title sprintf('n = %d exists above', n), \
      for [i = 1:ncurves] f using 'nu':((column('curve') == i && is('stability')) ? column('S') : NaN):(col(int(column('n')))) \

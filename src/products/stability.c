@@ -576,9 +576,18 @@ static int diagram_curves(const bkf_stability_spec *spec, const double *nus, siz
     /* long wave: unstable for S > 2 pi c / p_b (m = 1 is in the band first) */
     if (!s) {
         k->curves++;
-        for (size_t i = 0; i < nnu; i++)
+        int open = 0;
+        for (size_t i = 0; i < nnu; i++) {
+            int here = 0;
             for (size_t j = 0; j < b[i].count; j++)
-                if (b[i].lo[j] == 0) add_row(k, "long_wave", 0, 1, nus[i], two_pi_c / b[i].hi[j], 0, 0);
+                if (b[i].lo[j] == 0) {
+                    add_row(k, "long_wave", 0, 1, nus[i], two_pi_c / b[i].hi[j], 0, 0);
+                    here = 1;
+                }
+            /* a nu without the band ends the curve: the next piece is another */
+            if (open && !here) k->curves++;
+            open = here;
+        }
     }
     /* finite-q bands: tongue m between 2 pi m c / p_b (unstable above) and
      * 2 pi m c / p_a (stable above) */
