@@ -15,6 +15,8 @@
  *   friction    the friction laws, sampled           (friction)
  *   spacetime   a simulation, psi(x, t)              (simulate)
  *   check       predicted speeds against simulation  (check)
+ *   stability   spectra of front trains, per n; their
+ *               boundaries and the (nu, S) diagram   (stability)
  *   figure      a gnuplot figure of one product      (gnuplot, plots/KIND.gp)
  *
  * The keys of each kind are in docs/scenes.md.  A key of a kind whose
@@ -53,6 +55,7 @@ typedef enum {
     BKF_SCENE_FRICTION,
     BKF_SCENE_SPACETIME,
     BKF_SCENE_CHECK,
+    BKF_SCENE_STABILITY,
     BKF_SCENE_FIGURE,
     BKF_SCENE_NKINDS
 } bkf_scene_kind;

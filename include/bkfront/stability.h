@@ -37,11 +37,25 @@ typedef struct {
     size_t per_kappa;       /* eigenvalues per Bloch number, [1, 50]; default 3 */
     int line;               /* the infinite line's spectrum instead of the ring's */
     size_t kappa_count;     /* Bloch numbers sampled with line, [1, 100000]; default 64 */
+    /* Across parameters (stabmap.h): */
+    int boundary;           /* the stability boundary of train n: the first sign change
+                               of sigma_max in S in [S, S_to] at nu, followed in nu to `to` */
+    int diagram;            /* the (nu, S) diagram of n = 1..n over nu in [nu, to], S in
+                               [S, S_to]: existence, stability, the oscillation's tongues */
+    double to;              /* the nu end (required with boundary, diagram), |to| < 1 */
+    double S_to;            /* the S end (required with boundary, diagram), > S */
+    double nu_step;         /* step in nu, (0, 0.5]; default 0.01 */
+    double S_tol;           /* bracket width ending an S solve, [1e-8, 1]; default 1e-3 */
+    size_t S_samples;       /* S scan's steps for the first crossing, [2, 1000]; default 12 */
 } bkf_stability_spec;
+
+/* Diagram: n at most (every n costs one scan and its boundaries). */
+#define BKF_STABILITY_DIAGRAM_N_MAX 20u
 
 bkf_stability_spec bkf_stability_spec_default(void);
 
-/* The keys: gamma, c, nu, S, n, root, tol, per-kappa, line, kappa-count. */
+/* The keys: gamma, c, nu, S, n, root, tol, per-kappa, line, kappa-count,
+ * boundary, diagram, to, S-to, nu-step, S-tol, S-samples. */
 extern const bkf_option bkf_stability_options[];
 extern const size_t bkf_stability_noptions;
 
@@ -64,7 +78,11 @@ const char *bkf_stability_kind_name(const bkf_trainspec_result *result);
  * kind, the gauges (translation and Liouville residuals), the window, the
  * work and the root (n, v, mu, T); in JSON the same are the fields of
  * "results".  Line: rows kappa, re, im, err, and the largest re among them
- * with its kappa as results.  On failure the stream holds a partial table
+ * with its kappa as results.  Boundary: rows nu, S, S_err, sigma,
+ * sigma_err, slope, v, mu, stable_above, results end, points, evaluations.
+ * Diagram: rows curve, kind (existence, stability, long_wave,
+ * period_doubling, other), n, m, nu, S, S_err, above (docs/cli/stability.md).
+ * On failure the stream holds a partial table
  * and the caller discards it. */
 int bkf_stability_write(const bkf_stability_spec *spec, FILE *out, bkf_io_format format,
                         const bkf_provenance *provenance, bkf_error *err);

@@ -27,6 +27,8 @@ static void stability_help(FILE *out)
         "usage: bkfront stability --gamma G --c C --nu V --S L --n N [--root I]\n"
         "                         [--tol E] [--per-kappa K] [--line [--kappa-count M]]\n"
         "                         [--format tsv|json] [--out FILE]\n"
+        "       bkfront stability --boundary | --diagram --gamma G --c C --nu V --S L\n"
+        "                         --n N --to V2 --S-to L2 [--nu-step H] [--S-tol E]\n"
         "\n"
         "The spectral stability of the train of n fronts at root I of the speed\n"
         "condition (bkfront speeds --n N). In the frame xi = x + v t the train is\n"
@@ -38,6 +40,12 @@ static void stability_help(FILE *out)
         "train, always present. The train is stable when every other sigma has\n"
         "Re sigma < 0 beyond its error. With --line, the rightmost sigma on the\n"
         "infinite line for M Bloch numbers in [0, 2 pi/L).\n"
+        "\n"
+        "Across parameters: --boundary follows the S at which train N changes\n"
+        "stability (sigma_max = 0) in nu from V to V2; --diagram tabulates for\n"
+        "n = 1..N where each train exists and where it is stable in the (nu, S)\n"
+        "plane, nu from V to V2, S in [L, L2], with the global oscillation's\n"
+        "thresholds (docs/cli/stability.md).\n"
         "\n"
         "options:\n");
     cli_options_help(out, g, 2);

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "bkfront/fronts.h"
+#include "bkfront/stabmap.h"
 
 #include "product_internal.h"
 
@@ -13,8 +14,18 @@ static const bkf_io_column ring_columns[] = {
     {"im", BKF_IO_NUMBER},  {"err", BKF_IO_NUMBER},   {"translation", BKF_IO_NUMBER}};
 static const bkf_io_column line_columns[] = {
     {"kappa", BKF_IO_NUMBER}, {"re", BKF_IO_NUMBER}, {"im", BKF_IO_NUMBER}, {"err", BKF_IO_NUMBER}};
+static const bkf_io_column boundary_columns[] = {
+    {"nu", BKF_IO_NUMBER},        {"S", BKF_IO_NUMBER},     {"S_err", BKF_IO_NUMBER},
+    {"sigma", BKF_IO_NUMBER},     {"sigma_err", BKF_IO_NUMBER}, {"slope", BKF_IO_NUMBER},
+    {"v", BKF_IO_NUMBER},         {"mu", BKF_IO_NUMBER},    {"stable_above", BKF_IO_NUMBER}};
+static const bkf_io_column diagram_columns[] = {
+    {"curve", BKF_IO_NUMBER}, {"kind", BKF_IO_TEXT},  {"n", BKF_IO_NUMBER},
+    {"m", BKF_IO_NUMBER},     {"nu", BKF_IO_NUMBER},  {"S", BKF_IO_NUMBER},
+    {"S_err", BKF_IO_NUMBER}, {"above", BKF_IO_NUMBER}};
 #define NRING (sizeof ring_columns / sizeof ring_columns[0])
 #define NLINE (sizeof line_columns / sizeof line_columns[0])
+#define NBOUNDARY (sizeof boundary_columns / sizeof boundary_columns[0])
+#define NDIAGRAM (sizeof diagram_columns / sizeof diagram_columns[0])
 
 /* trainspec's ranges (trainspec.h), repeated in the table for the messages. */
 #define TOL_MIN 1e-10
@@ -53,6 +64,28 @@ const bkf_option bkf_stability_options[] = {
      .flags = BOUNDED, .min = 1, .max = BKF_STABILITY_KAPPA_MAX, .form = "M",
      .shown_default = "64", .help = "with --line: M Bloch numbers kappa = (2 pi/L) i/M,\n"
                                      "i = 0..M-1, in [1, 100000]"},
+    {.name = "boundary", .type = BKF_OPT_SWITCH, .offset = FIELD(boundary),
+     .help = "the stability boundary of train n: the first sign change\n"
+             "of sigma_max in S between --S and --S-to at --nu,\n"
+             "followed in nu to --to"},
+    {.name = "diagram", .type = BKF_OPT_SWITCH, .offset = FIELD(diagram),
+     .help = "the (nu, S) diagram of the trains 1..n over nu from --nu\n"
+             "to --to and S in [--S, --S-to]: where each exists and is\n"
+             "stable, and the global oscillation's thresholds"},
+    {.name = "to", .type = BKF_OPT_DOUBLE, .offset = FIELD(to), .form = "V2",
+     .help = "with --boundary, --diagram: the end in nu, in (-1, 1)"},
+    {.name = "S-to", .type = BKF_OPT_DOUBLE, .offset = FIELD(S_to), .form = "L2",
+     .help = "with --boundary, --diagram: the end in S, > --S"},
+    {.name = "nu-step", .type = BKF_OPT_DOUBLE, .offset = FIELD(nu_step),
+     .flags = BKF_OPT_MIN | BKF_OPT_MIN_OPEN | BKF_OPT_MAX, .min = 0, .max = 0.5, .form = "H",
+     .shown_default = "0.01", .help = "step in nu of the continuation, in (0, 0.5]"},
+    {.name = "S-tol", .type = BKF_OPT_DOUBLE, .offset = FIELD(S_tol), .flags = BOUNDED,
+     .min = 1e-8, .max = 1, .form = "E", .shown_default = "1e-3",
+     .help = "bracket width in S ending a crossing's solve, in [1e-8, 1]"},
+    {.name = "S-samples", .type = BKF_OPT_COUNT, .offset = FIELD(S_samples), .flags = BOUNDED,
+     .min = 2, .max = 1000, .form = "K", .shown_default = "12",
+     .help = "steps of the scan in S for the first crossings, in\n"
+             "[2, 1000]"},
 };
 const size_t bkf_stability_noptions = sizeof bkf_stability_options / sizeof bkf_stability_options[0];
 
@@ -68,6 +101,11 @@ bkf_stability_spec bkf_stability_spec_default(void)
     s.per_kappa = o.per_kappa;
     s.line = 0;
     s.kappa_count = 64;
+    s.to = s.S_to = NAN;
+    bkf_stabmap_options m = bkf_stabmap_options_default();
+    s.nu_step = m.nu_step;
+    s.S_tol = m.S_tol;
+    s.S_samples = 12;
     return s;
 }
 
@@ -82,6 +120,51 @@ static bkf_fronts_spec fronts_of(const bkf_stability_spec *spec)
     f.S = spec->S;
     f.n = spec->n;
     return f;
+}
+
+/* The keys of --boundary and --diagram, and which modes go together. */
+static int check_across(const bkf_stability_spec *spec, const char *p, bkf_error *err)
+{
+    char a[32], b[32];
+    int across = spec->boundary || spec->diagram;
+    if (spec->boundary && spec->diagram)
+        return bkf_error_set(err, BKF_EINPUT, "%sdiagram: give %sboundary or %sdiagram, not both",
+                             p, p, p);
+    if (across && spec->line)
+        return bkf_error_set(err, BKF_EINPUT, "%sline: %sline is the spectrum of one train; "
+                             "not with %s%s", p, p, p, spec->boundary ? "boundary" : "diagram");
+    if (!across) {
+        if (!isnan(spec->to) || !isnan(spec->S_to))
+            return bkf_error_set(err, BKF_EINPUT, "%s%s: only with %sboundary or %sdiagram", p,
+                                 isnan(spec->to) ? "S-to" : "to", p, p);
+        return BKF_OK;
+    }
+    if (!(fabs(spec->to) < 1))
+        return bkf_error_set(err, BKF_EINPUT, "%sto: to = %s is not in (-1, 1)%s", p,
+                             bkf_format_number(spec->to, a, sizeof a),
+                             isnan(spec->to) ? " (required with boundary, diagram)" : "");
+    if (spec->to == spec->nu)
+        return bkf_error_set(err, BKF_EINPUT, "%sto: to = nu = %s: nothing to follow", p,
+                             bkf_format_number(spec->to, a, sizeof a));
+    if (!(spec->S_to > spec->S) || !isfinite(spec->S_to))
+        return bkf_error_set(err, BKF_EINPUT, "%sS-to: S-to = %s is not > S = %s%s", p,
+                             bkf_format_number(spec->S_to, a, sizeof a),
+                             bkf_format_number(spec->S, b, sizeof b),
+                             isnan(spec->S_to) ? " (required with boundary, diagram)" : "");
+    if (!(spec->nu_step > 0 && spec->nu_step <= 0.5))
+        return bkf_error_set(err, BKF_EINPUT, "%snu-step: nu-step = %s is not in (0, 0.5]", p,
+                             bkf_format_number(spec->nu_step, a, sizeof a));
+    if (!(spec->S_tol >= 1e-8 && spec->S_tol <= 1))
+        return bkf_error_set(err, BKF_EINPUT, "%sS-tol: S-tol = %s is not in [1e-8, 1]", p,
+                             bkf_format_number(spec->S_tol, a, sizeof a));
+    if (spec->S_samples < 2 || spec->S_samples > 1000)
+        return bkf_error_set(err, BKF_EINPUT, "%sS-samples: S-samples = %zu is not in [2, 1000]",
+                             p, spec->S_samples);
+    if (spec->diagram && spec->n > BKF_STABILITY_DIAGRAM_N_MAX)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%sn: n = %zu: the diagram takes n = 1..N, N at most %u", p,
+                             spec->n, BKF_STABILITY_DIAGRAM_N_MAX);
+    return BKF_OK;
 }
 
 int bkf_stability_check(const bkf_stability_spec *spec, const char *prefix, bkf_error *err)
@@ -110,6 +193,8 @@ int bkf_stability_check(const bkf_stability_spec *spec, const char *prefix, bkf_
         return bkf_error_set(err, BKF_EINPUT,
                              "%skappa-count: kappa-count = %zu is not in [1, 100000]", p,
                              spec->kappa_count);
+    int s = check_across(spec, p, err);
+    if (s) return s;
     bkf_fronts_spec f = fronts_of(spec);
     return bkf_fronts_check(&f, prefix, err);
 }
@@ -284,11 +369,327 @@ static int write_line(const bkf_stability_spec *spec, const bkf_speeds_root *roo
     return s;
 }
 
+static bkf_stabmap_options stabmap_options_of(const bkf_stability_spec *spec)
+{
+    bkf_stabmap_options o = bkf_stabmap_options_default();
+    o.tol = spec->tol;
+    o.S_tol = spec->S_tol;
+    o.nu_step = spec->nu_step;
+    return o;
+}
+
+static bkf_model_params params_of(const bkf_stability_spec *spec)
+{
+    bkf_fronts_spec f = fronts_of(spec);
+    bkf_model_params params;
+    bkf_speeds_options o;
+    bkf_fronts_setup(&f, &params, &o);
+    return params;
+}
+
+/* The boundary's points, collected before the table is opened. */
+typedef struct {
+    bkf_stabmap_point *p;
+    size_t n, cap;
+} point_sink;
+
+static int collect(const bkf_stabmap_point *pt, void *data)
+{
+    point_sink *k = data;
+    if (k->n == k->cap) {
+        size_t cap = k->cap ? 2 * k->cap : 32;
+        bkf_stabmap_point *g = realloc(k->p, cap * sizeof *g);
+        if (!g) return 1;
+        k->p = g;
+        k->cap = cap;
+    }
+    k->p[k->n++] = *pt;
+    return 0;
+}
+
+static int write_boundary(const bkf_stability_spec *spec, FILE *out, bkf_io_format format,
+                          const bkf_provenance *prov, bkf_error *err)
+{
+    bkf_model_params params = params_of(spec);
+    bkf_stabmap_options o = stabmap_options_of(spec);
+    bkf_stabmap_point first;
+    int found;
+    int s = bkf_stabmap_locate(&params, spec->n, spec->S, spec->S_to, spec->S_samples, &o,
+                               &first, &found, err);
+    if (!s && !found) {
+        char a[32], b[32], c[32];
+        return bkf_error_set(err, BKF_EINPUT,
+                             "S-to: sigma_max of n = %zu does not change sign for S in [%s, %s] "
+                             "at nu %s (%zu steps)",
+                             spec->n, bkf_format_number(spec->S, a, sizeof a),
+                             bkf_format_number(spec->S_to, b, sizeof b),
+                             bkf_format_number(spec->nu, c, sizeof c), spec->S_samples);
+    }
+    if (s) return s;
+    point_sink sink = {0};
+    bkf_stabmap_report rep;
+    s = bkf_stabmap_follow(&params, spec->n, &first, spec->to, &o, collect, &sink, &rep, err);
+    if (!s && sink.n < rep.points)
+        s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    bkf_io_table *table = NULL;
+    if (!s)
+        s = bkf_product_table_open(
+            out, format, boundary_columns, NBOUNDARY,
+            "stability --boundary: the S at which the train of n fronts changes stability "
+            "(sigma_max = 0), followed in nu",
+            prov, &table, err);
+    char a[32], b[32], c[32], d[32];
+    if (!s)
+        s = bkf_io_table_commentf(
+            table, err,
+            "gamma %s, c %s, n %zu; nu from %s to %s in steps %.6g; tol %.3g (sigma), S-tol %.3g",
+            bkf_format_number(spec->gamma, a, sizeof a), bkf_format_number(spec->c, b, sizeof b),
+            spec->n, bkf_format_number(spec->nu, c, sizeof c),
+            bkf_format_number(spec->to, d, sizeof d), spec->nu_step, spec->tol, spec->S_tol);
+    if (!s)
+        s = bkf_io_table_commentf(table, err,
+                                  "end: %s after %zu points, %zu spectra; last nu tried %.6g%s%s",
+                                  bkf_stabmap_end_name(rep.end), rep.points, rep.evaluations,
+                                  rep.nu_end, rep.note[0] ? "; " : "", rep.note);
+    if (!s) s = text_result(table, "end", bkf_stabmap_end_name(rep.end), err);
+    if (!s) s = number_result(table, "points", (double)rep.points, err);
+    if (!s) s = number_result(table, "evaluations", (double)rep.evaluations, err);
+    if (!s) s = bkf_product_table_command(table, prov, err);
+    for (size_t i = 0; !s && i < sink.n; i++) {
+        const bkf_stabmap_point *q = &sink.p[i];
+        bkf_io_value v[NBOUNDARY] = {{q->nu, NULL},    {q->S, NULL},         {q->S_err, NULL},
+                                     {q->sigma, NULL}, {q->sigma_err, NULL}, {q->slope, NULL},
+                                     {q->v, NULL},     {q->mu, NULL},
+                                     {q->stable_above ? 1 : 0, NULL}};
+        s = bkf_io_table_row(table, v, err);
+    }
+    if (!s) s = bkf_io_table_finish(table, err);
+    bkf_io_table_free(table);
+    free(sink.p);
+    return s;
+}
+
+/* ------------------------------------------------------------ diagram */
+
+typedef struct {
+    size_t curve, n, m, seq;
+    const char *kind;
+    double nu, S, S_err;
+    int above;
+} diagram_row;
+
+typedef struct {
+    diagram_row *r;
+    size_t n, cap, curves;
+    int failed;
+} diagram_sink;
+
+static int add_row(diagram_sink *k, const char *kind, size_t n, size_t m, double nu, double S,
+                   double S_err, int above)
+{
+    if (k->n == k->cap) {
+        size_t cap = k->cap ? 2 * k->cap : 256;
+        diagram_row *g = realloc(k->r, cap * sizeof *g);
+        if (!g) return k->failed = 1;
+        k->r = g;
+        k->cap = cap;
+    }
+    k->r[k->n] = (diagram_row){k->curves, n, m, k->n, kind, nu, S, S_err, above};
+    k->n++;
+    return 0;
+}
+
+/* The oscillation's bands at one nu (a few suffice: period doubling and
+ * long wave are the ones seen). */
+#define DIAGRAM_BANDS 4
+typedef struct {
+    double lo[DIAGRAM_BANDS], hi[DIAGRAM_BANDS];
+    int kind[DIAGRAM_BANDS];
+    size_t count;
+} nu_bands;
+
+static int diagram_curves(const bkf_stability_spec *spec, const double *nus, size_t nnu,
+                          diagram_sink *k, size_t *spectra, bkf_error *err)
+{
+    bkf_model_params params = params_of(spec);
+    bkf_stabmap_options o = stabmap_options_of(spec);
+    double *g = calloc(nnu, sizeof *g);
+    nu_bands *b = calloc(nnu, sizeof *b);
+    int s = g && b ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    /* existence: S = n c gamma g_inf(nu), one speeds solve per nu for every n */
+    for (size_t i = 0; !s && i < nnu; i++) {
+        bkf_model_params p = params;
+        p.nu = nus[i];
+        int attained;
+        s = bkf_stabmap_existence(&p, 1, &g[i], &attained, err);
+    }
+    for (size_t n = 1; !s && n <= spec->n; n++) {
+        k->curves++;
+        for (size_t i = 0; i < nnu; i++)
+            if (add_row(k, "existence", n, 0, nus[i], (double)n * g[i], 0, 1)) break;
+    }
+    /* stability: every crossing in S at every nu (a boundary may appear
+     * anywhere along nu), joined into curves by nearness in S */
+    double gap = 1.5 * (spec->S_to - spec->S) / (double)spec->S_samples;
+    for (size_t n = 1; !s && n <= spec->n && !k->failed; n++) {
+        size_t first_curve = k->curves + 1;
+        double last_S[64];
+        int last_above[64];
+        size_t last_i[64], open = 0;
+        for (size_t i = 0; !s && i < nnu; i++) {
+            bkf_model_params p = params;
+            p.nu = nus[i];
+            double lo = fmax(spec->S, 1.05 * (double)n * g[i]);
+            if (!(lo < spec->S_to)) continue;
+            bkf_stabmap_point pts[16];
+            size_t count;
+            size_t samples = (size_t)ceil((double)spec->S_samples * (spec->S_to - lo) /
+                                          (spec->S_to - spec->S));
+            s = bkf_stabmap_scan(&p, n, lo, spec->S_to, samples < 2 ? 2 : samples, &o, pts, 16,
+                                 &count, err);
+            for (size_t j = 0; !s && j < count; j++) {
+                *spectra += pts[j].evaluations;
+                size_t c = open;
+                for (size_t q = 0; q < open; q++)
+                    if (last_i[q] + 1 == i && last_above[q] == pts[j].stable_above &&
+                        fabs(last_S[q] - pts[j].S) < gap)
+                        c = q;
+                if (c == open) {
+                    if (open == 64) continue;
+                    open++;
+                }
+                last_S[c] = pts[j].S;
+                last_above[c] = pts[j].stable_above;
+                last_i[c] = i;
+                k->curves = first_curve + c;
+                add_row(k, "stability", n, 0, pts[j].nu, pts[j].S, pts[j].S_err,
+                        pts[j].stable_above);
+            }
+        }
+        k->curves = first_curve + open - 1;
+    }
+    /* the oscillation: its unstable bands per nu, then one curve per edge */
+    for (size_t i = 0; !s && i < nnu; i++)
+        s = bkf_stabmap_bands(spec->gamma, spec->c, nus[i], 6, 120, 1e-7, b[i].lo, b[i].hi,
+                              b[i].kind, DIAGRAM_BANDS, &b[i].count, err);
+    double two_pi_c = 6.283185307179586477 * spec->c;
+    /* long wave: unstable for S > 2 pi c / p_b (m = 1 is in the band first) */
+    if (!s) {
+        k->curves++;
+        int open = 0;
+        for (size_t i = 0; i < nnu; i++) {
+            int here = 0;
+            for (size_t j = 0; j < b[i].count; j++)
+                if (b[i].lo[j] == 0) {
+                    add_row(k, "long_wave", 0, 1, nus[i], two_pi_c / b[i].hi[j], 0, 0);
+                    here = 1;
+                }
+            /* a nu without the band ends the curve: the next piece is another */
+            if (open && !here) k->curves++;
+            open = here;
+        }
+    }
+    /* finite-q bands: tongue m between 2 pi m c / p_b (unstable above) and
+     * 2 pi m c / p_a (stable above) */
+    for (size_t m = 1; !s && m < 100000; m++) {
+        int any = 0;
+        for (int edge = 0; edge < 2; edge++) {
+            k->curves++;
+            for (size_t i = 0; i < nnu; i++)
+                for (size_t j = 0; j < b[i].count; j++) {
+                    if (b[i].lo[j] == 0) continue;
+                    double S = two_pi_c * (double)m / (edge ? b[i].lo[j] : b[i].hi[j]);
+                    if (two_pi_c * (double)m / b[i].hi[j] > spec->S_to) continue;
+                    any = 1;
+                    add_row(k, b[i].kind[j] ? "period_doubling" : "other", 0, m, nus[i], S, 0,
+                            edge);
+                }
+        }
+        if (!any) {
+            k->curves -= 2;
+            break;
+        }
+    }
+    if (!s && k->failed) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    free(g);
+    free(b);
+    return s;
+}
+
+/* Rows by curve, each curve in the order it was found (along nu). */
+static int by_curve(const void *a, const void *b)
+{
+    const diagram_row *x = a, *y = b;
+    if (x->curve != y->curve) return x->curve < y->curve ? -1 : 1;
+    return x->seq < y->seq ? -1 : x->seq > y->seq;
+}
+
+static int write_diagram(const bkf_stability_spec *spec, FILE *out, bkf_io_format format,
+                         const bkf_provenance *prov, bkf_error *err)
+{
+    double dir = spec->to > spec->nu ? 1 : -1;
+    size_t nnu = (size_t)floor(fabs(spec->to - spec->nu) / spec->nu_step + 1e-9) + 1;
+    double *nus = malloc((nnu + 1) * sizeof *nus);
+    if (!nus) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    for (size_t i = 0; i < nnu; i++) nus[i] = spec->nu + dir * (double)i * spec->nu_step;
+    if (fabs(nus[nnu - 1] - spec->to) > 1e-9 * spec->nu_step) nus[nnu++] = spec->to;
+    diagram_sink k = {0};
+    size_t spectra = 0;
+    int s = diagram_curves(spec, nus, nnu, &k, &spectra, err);
+    free(nus);
+    if (!s) qsort(k.r, k.n, sizeof *k.r, by_curve);
+    bkf_io_table *table = NULL;
+    if (!s)
+        s = bkf_product_table_open(
+            out, format, diagram_columns, NDIAGRAM,
+            "stability --diagram: where each train of n fronts exists and is stable in the "
+            "(nu, S) plane, and where the global oscillation is unstable",
+            prov, &table, err);
+    char a[32], b[32], c[32], d[32], e[32], f[32];
+    if (!s)
+        s = bkf_io_table_commentf(
+            table, err, "gamma %s, c %s, n = 1..%zu; nu from %s to %s in steps %.6g; S in [%s, %s]; "
+            "tol %.3g (sigma), S-tol %.3g",
+            bkf_format_number(spec->gamma, a, sizeof a), bkf_format_number(spec->c, b, sizeof b),
+            spec->n, bkf_format_number(spec->nu, c, sizeof c),
+            bkf_format_number(spec->to, d, sizeof d), spec->nu_step,
+            bkf_format_number(spec->S, e, sizeof e), bkf_format_number(spec->S_to, f, sizeof f),
+            spec->tol, spec->S_tol);
+    if (!s)
+        s = bkf_io_table_commentf(
+            table, err,
+            "kinds: existence (S = n c gamma g_inf(nu): trains exist above), stability "
+            "(sigma_max = 0; above 1: stable above), long_wave and period_doubling (the "
+            "oscillation's mode q = 2 pi m / S at a band edge; above 1: stable above)");
+    if (!s)
+        s = bkf_io_table_commentf(table, err,
+                                  "work: %zu spectra (a scan in S of %zu steps per n and nu, "
+                                  "each crossing closed to S-tol)",
+                                  spectra, spec->S_samples);
+    if (!s) s = number_result(table, "curves", (double)k.curves, err);
+    if (!s) s = number_result(table, "spectra", (double)spectra, err);
+    if (!s) s = bkf_product_table_command(table, prov, err);
+    for (size_t i = 0; !s && i < k.n; i++) {
+        const diagram_row *r = &k.r[i];
+        bkf_io_value v[NDIAGRAM] = {{(double)r->curve, NULL}, {0, r->kind},
+                                    {(double)r->n, NULL},     {(double)r->m, NULL},
+                                    {r->nu, NULL},            {r->S, NULL},
+                                    {r->S_err, NULL},         {r->above, NULL}};
+        s = bkf_io_table_row(table, v, err);
+    }
+    if (!s) s = bkf_io_table_finish(table, err);
+    bkf_io_table_free(table);
+    free(k.r);
+    return s;
+}
+
 int bkf_stability_write(const bkf_stability_spec *spec, FILE *out, bkf_io_format format,
                         const bkf_provenance *prov, bkf_error *err)
 {
     int s = bkf_stability_check(spec, "", err);
     if (s) return s;
+    if (spec->boundary) return write_boundary(spec, out, format, prov, err);
+    if (spec->diagram) return write_diagram(spec, out, format, prov, err);
     bkf_model_params params;
     bkf_speeds_root root;
     s = find_root(spec, &params, &root, err);

@@ -22,7 +22,7 @@
 
 static const char *const kind_names[BKF_SCENE_NKINDS] = {
     "speeds", "period", "dispersion", "threshold", "branch", "profile",
-    "validity", "friction", "spacetime", "check", "figure"};
+    "validity", "friction", "spacetime", "check", "stability", "figure"};
 
 const char *bkf_scene_kind_name(bkf_scene_kind kind)
 {
@@ -38,7 +38,8 @@ typedef enum {
 } value_type;
 
 #define K(kind) (1u << (kind))
-#define K_CYCLE (K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE) | K(BKF_SCENE_CHECK))
+#define K_CYCLE (K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE) | K(BKF_SCENE_CHECK) | \
+                 K(BKF_SCENE_STABILITY))
 #define K_DATA (K_CYCLE | K(BKF_SCENE_PERIOD) | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD) | \
                 K(BKF_SCENE_VALIDITY) | K(BKF_SCENE_SPACETIME))
 #define K_MODEL (1u << 30)     /* [model] */
@@ -70,7 +71,8 @@ static const key_spec keys[] = {
     {"N", V_GRID_N, K_ACCURACY | K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK),
      "an integer in [8, 1048576]"},
     {"n", V_COUNT, K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_CHECK), "an integer >= 1"},
-    {"n", V_COUNT_LIST, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE), "K, K1,K2,... or A:B:N, each >= 1"},
+    {"n", V_COUNT_LIST, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE) | K(BKF_SCENE_STABILITY),
+     "K, K1,K2,... or A:B:N, each >= 1"},
     {"nmax", V_COUNT, K(BKF_SCENE_SPEEDS), "an integer >= 1"},
     {"root", V_COUNT, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE), "an integer >= 1"},
     {"mu", V_RANGE_LOG, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_VALIDITY),
@@ -320,6 +322,7 @@ static const kind_map_row kind_map[BKF_SCENE_NKINDS] = {
     [BKF_SCENE_FRICTION] = {"friction", NULL, NULL, NULL},
     [BKF_SCENE_SPACETIME] = {"simulate", NULL, "no-progress", NULL},
     [BKF_SCENE_CHECK] = {"check", NULL, "no-progress", NULL},
+    [BKF_SCENE_STABILITY] = {"stability", NULL, NULL, "n"},
     [BKF_SCENE_FIGURE] = {NULL, NULL, NULL, NULL},
 };
 
@@ -489,7 +492,7 @@ static void header_line(parse_state *st, const char *line)
     if (k < 0) {
         fail(st, st->line,
              "unknown section [%s] (model, accuracy, speeds, period, dispersion, threshold, "
-             "branch, profile, validity, friction, spacetime, check, figure)", a);
+             "branch, profile, validity, friction, spacetime, check, stability, figure)", a);
         return;
     }
     if (fields == 3) {
@@ -656,7 +659,8 @@ const char *bkf_scene_value(const bkf_scene *s, const bkf_scene_product *p, cons
     /* A simulation's tol is a Runge-Kutta tolerance, not the accuracy asked
      * of a result: it is not inherited. */
     if (p && strcmp(key, "tol") == 0 &&
-        (p->kind == BKF_SCENE_SPACETIME || p->kind == BKF_SCENE_CHECK || p->kind == BKF_SCENE_VALIDITY))
+        (p->kind == BKF_SCENE_SPACETIME || p->kind == BKF_SCENE_CHECK || p->kind == BKF_SCENE_VALIDITY ||
+         p->kind == BKF_SCENE_STABILITY))
         return NULL;
     return entry_value(s->model, s->nmodel, key);
 }
@@ -1218,6 +1222,28 @@ static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
         OUT("out", out);
         return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
     }
+    case BKF_SCENE_STABILITY: {
+        /* one step per n: a figure shows several trains side by side */
+        char **ns;
+        size_t count;
+        v = OWN("n");
+        if (!list_values(v ? v : "1", &ns, &count)) return 0;
+        for (size_t i = 0; ok && i < count; i++) {
+            b = (arg_list){0};
+            char suffix[32];
+            snprintf(suffix, sizeof suffix, count > 1 ? "_%zu.tsv" : ".tsv", i + 1);
+            char *out = out_path(dir, p->name, suffix);
+            FIRST();
+            ok = ok && model_args(&b, s, p, 1, 1);
+            PAIR("n", ns[i]);
+            PAIR("tol", OWN("tol"));
+            LAST();
+            OUT("out", out);
+            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+        }
+        list_values_free(ns, count);
+        return ok;
+    }
     case BKF_SCENE_FIGURE: {
         if (!o->figures) return 1;
         const bkf_scene_product *data = bkf_scene_find(s, OWN("data"), 0);
@@ -1445,6 +1471,17 @@ static int append(char *buf, size_t size, const char *sep, const char *text)
     return n >= 0 && (size_t)n < size - used;
 }
 
+/* The default script's name: the kind's, but a stability product's shows
+ * what its mode computed. */
+static const char *default_script(const bkf_scene *sc, const bkf_scene_product *data)
+{
+    if (data->kind != BKF_SCENE_STABILITY) return kind_names[data->kind];
+    const char *d = bkf_scene_value(sc, data, "diagram"), *l = bkf_scene_value(sc, data, "line");
+    if (d && strcmp(d, "yes") == 0) return "diagram";
+    if (l && strcmp(l, "yes") == 0) return "spectrum_line";
+    return "spectrum";
+}
+
 static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
                       const bkf_scene_step *step, const bkf_scene_run_options *o,
                       char *warning, size_t wsize, bkf_error *err)
@@ -1461,7 +1498,7 @@ static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
     else if (own)
         snprintf(script, sizeof script, "%.2000s/%.2000s", scene_dir, own);
     else
-        snprintf(script, sizeof script, "%.2000s/%.64s.gp", plots_dir, kind_names[data->kind]);
+        snprintf(script, sizeof script, "%.2000s/%.64s.gp", plots_dir, default_script(sc, data));
 
     char files[8192] = "", labels[4096] = "";
     for (size_t i = 0; i < dp->nsteps; i++) {
@@ -1471,7 +1508,7 @@ static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
         const char *value = "";
         if (data->kind == BKF_SCENE_PERIOD || data->kind == BKF_SCENE_DISPERSION)
             value = arg_value(ds, "nu");
-        else if (data->kind == BKF_SCENE_BRANCH)
+        else if (data->kind == BKF_SCENE_BRANCH || data->kind == BKF_SCENE_STABILITY)
             value = arg_value(ds, "n");
         if (data->kind == BKF_SCENE_PROFILE) {
             char **items;

@@ -175,6 +175,22 @@ TEST(cli_stability_rejects_bad_input)
               "--per-kappa", "--per-kappa 51");
     bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--line", "--kappa-count", "0"),
               "stability", "--kappa-count", "--kappa-count 0");
+    bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--boundary", "--S-to", "24"), "stability",
+              "--to", "--boundary without --to");
+    bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--boundary", "--to", "-0.9", "--S-to",
+                      "10"),
+              "stability", "--S-to", "--S-to below --S");
+    bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--boundary", "--diagram", "--to", "-0.9",
+                      "--S-to", "24"),
+              "stability", "--diagram", "--boundary with --diagram");
+    bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--to", "-0.9"), "stability", "--to",
+              "--to without --boundary");
+    bad_input(BKF_CLI("stability", PAPER, "--n", "21", "--diagram", "--to", "-0.9", "--S-to",
+                      "24"),
+              "stability", "--n", "--diagram --n 21");
+    bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--boundary", "--to", "-0.9", "--S-to",
+                      "24", "--nu-step", "0"),
+              "stability", "--nu-step", "--nu-step 0");
     bad_input(BKF_CLI("speeds", PAPER, "--stability-tol", "1e-5"), "speeds", "--stability-tol",
               "--stability-tol without --stability");
     bad_input(BKF_CLI("speeds", PAPER, "--stability", "--stability-tol", "1"), "speeds",

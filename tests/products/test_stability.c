@@ -9,8 +9,12 @@
 #include <math.h>
 
 #include "bkfront/catalog.h"
+#include "bkfront/floquet.h"
 #include "bkfront/hill.h"
+#include "bkfront/asymptotics.h"
 #include "bkfront/speeds.h"
+#include "bkfront/stabmap.h"
+#include "bkfront/trainspec.h"
 #include "bkfront/stability.h"
 
 /* In test_io.c. */
@@ -259,4 +263,138 @@ TEST(products_stability_refuses_bad_specs)
     CHECK(fclose(f) == 0 && size == 0);
     CHECK_MSG(strstr(e.message, "n = 13") && strstr(e.message, "n_max = 12"), "%s", e.message);
     free(data);
+}
+
+/* The stability boundary of n = 4 at the paper's nu, located in S by the
+ * scan, recomputed independently: sigma_max at that (nu, S) within a few
+ * errors of 0, of opposite signs just either side (the side given by
+ * stable_above), and each point the continuation reaches again. */
+static void check_crossing(const bkf_model_params *p, const bkf_stabmap_point *pt)
+{
+    bkf_model_params q = *p;
+    q.nu = pt->nu;
+    bkf_error e;
+    double sig, err, v, mu, h = fmax(10 * pt->S_err, 0.05);
+    q.S = pt->S;
+    CHECK_STATUS(bkf_stabmap_sigma(&q, 4, 0, 1e-6, &sig, &err, &v, &mu, &e), BKF_OK);
+    CHECK(fabs(sig) <= fabs(pt->slope) * pt->S_err + 3 * err);
+    q.S = pt->S + h;
+    CHECK_STATUS(bkf_stabmap_sigma(&q, 4, 0, 1e-6, &sig, &err, &v, &mu, &e), BKF_OK);
+    CHECK(pt->stable_above ? sig < -err : sig > err);
+    q.S = pt->S - h;
+    CHECK_STATUS(bkf_stabmap_sigma(&q, 4, 0, 1e-6, &sig, &err, &v, &mu, &e), BKF_OK);
+    CHECK(pt->stable_above ? sig > err : sig < -err);
+}
+
+static int keep_points(const bkf_stabmap_point *pt, void *data)
+{
+    bkf_stabmap_point *last = data;
+    *last = *pt;
+    return 0;
+}
+
+TEST(stabmap_boundary_point_recomputed)
+{
+    bkf_error e;
+    bkf_model_params p = bkf_model_params_paper();
+    bkf_stabmap_options o = bkf_stabmap_options_default();
+    bkf_stabmap_point pt;
+    int found;
+    /* n = 4 is stable at S = 20 and unstable at 24 (docs/cli/stability.md) */
+    CHECK_STATUS(bkf_stabmap_locate(&p, 4, 18, 26, 4, &o, &pt, &found, &e), BKF_OK);
+    CHECK(found);
+    CHECK(pt.S > 20 && pt.S < 24 && !pt.stable_above);
+    check_crossing(&p, &pt);
+    bkf_stabmap_point last;
+    bkf_stabmap_report rep;
+    CHECK_STATUS(bkf_stabmap_follow(&p, 4, &pt, -0.94, &o, keep_points, &last, &rep, &e), BKF_OK);
+    CHECK(rep.points >= 3);
+    CHECK(fabs(last.nu + 0.94) < 1e-12 || rep.end != BKF_STABMAP_END_REACHED);
+    check_crossing(&p, &last);
+}
+
+/* The existence boundary S = n c gamma g_inf(nu) against the speed solver:
+ * no root of n just below it, a root just above; at gamma 2 g does not dip
+ * below k, so it is n k(nu) c gamma in closed form. */
+TEST(stabmap_existence_against_speeds)
+{
+    bkf_error e;
+    bkf_model_params p = bkf_model_params_paper();
+    double S;
+    int attained;
+    CHECK_STATUS(bkf_stabmap_existence(&p, 3, &S, &attained, &e), BKF_OK);
+    CHECK(!attained);
+    CHECK(fabs(S - 3 * bkf_asym_k(p.nu) * p.c * p.gamma) < 1e-9 * S);
+    bkf_speeds_options so = bkf_speeds_options_default();
+    so.n_from = so.n_to = 3;
+    bkf_speeds_table t;
+    p.S = S * (1 - 1e-3);
+    CHECK_STATUS(bkf_speeds_find(&p, &so, &t, &e), BKF_OK);
+    CHECK(t.count == 0);
+    bkf_speeds_table_free(&t);
+    p.S = S * (1 + 1e-3);
+    CHECK_STATUS(bkf_speeds_find(&p, &so, &t, &e), BKF_OK);
+    CHECK(t.count >= 1);
+    bkf_speeds_table_free(&t);
+}
+
+/* The train of n fronts on S and the train of one front on S/n are the
+ * same wave: same speed, same spectrum on the infinite line. */
+TEST(stabmap_train_n_on_S_is_train_1_on_S_over_n)
+{
+    bkf_error e;
+    bkf_model_params p = bkf_model_params_paper(), q = p;
+    q.S = p.S / 4;
+    bkf_speeds_options so = bkf_speeds_options_default();
+    so.n_from = so.n_to = 4;
+    bkf_speeds_table t4, t1;
+    CHECK_STATUS(bkf_speeds_find(&p, &so, &t4, &e), BKF_OK);
+    so.n_from = so.n_to = 1;
+    CHECK_STATUS(bkf_speeds_find(&q, &so, &t1, &e), BKF_OK);
+    CHECK(t4.count >= 1 && t1.count >= 1);
+    CHECK(fabs(t4.roots[0].v - t1.roots[0].v) < 1e-8 * t1.roots[0].v);
+    bkf_trainspec_options o = bkf_trainspec_options_default();
+    bkf_trainspec_eigenvalue a[6], b[6];
+    bkf_trainspec_train ta = {4, t4.roots[0].v}, tb = {1, t1.roots[0].v};
+    CHECK_STATUS(bkf_trainspec_line(&p, &ta, &o, 6, a, &e), BKF_OK);
+    CHECK_STATUS(bkf_trainspec_line(&q, &tb, &o, 6, b, &e), BKF_OK);
+    for (int i = 0; i < 6; i++) {
+        CHECK(fabs(a[i].kappa - b[i].kappa) < 1e-12);
+        CHECK(fabs(a[i].re - b[i].re) <= a[i].err + b[i].err + 1e-9);
+    }
+    bkf_speeds_table_free(&t4);
+    bkf_speeds_table_free(&t1);
+}
+
+/* The oscillation's bands against module floquet's own drivers: at nu
+ * -0.94 a long-wave band (lambda ~ a c^2 q^2, a > 0: bkf_floquet_longwave)
+ * and a period-doubling band around c q_c = 0.3 x 2.89 (Fig. 4a); at -0.92
+ * none (stable: bkf_floquet_diagram's interval (-0.935, -0.827)). */
+TEST(stabmap_oscillation_bands)
+{
+    bkf_error e;
+    double lo[4], hi[4];
+    int kind[4];
+    size_t count;
+    CHECK_STATUS(bkf_stabmap_bands(2, 0.3, -0.94, 6, 120, 1e-7, lo, hi, kind, 4, &count, &e),
+                 BKF_OK);
+    CHECK_MSG(count == 2 && lo[0] == 0 && kind[0] == 0 && kind[1] == 1 &&
+                  lo[1] < 0.3 * 2.89 && hi[1] > 0.3 * 2.89,
+              "%zu bands, (%g, %g) kind %d", count, lo[0], hi[0], kind[0]);
+    bkf_floquet *f = bkf_floquet_alloc();
+    bkf_floquet_options fo = bkf_floquet_options_default();
+    fo.tol = 1e-8;
+    bkf_floquet_point pt;
+    CHECK_STATUS(bkf_floquet_set(f, 2, 0.3, -0.94, &fo, &e), BKF_OK);
+    for (size_t i = 0; i < count; i++)
+        for (int side = 0; side < 2; side++) {
+            double p = side ? hi[i] : lo[i];
+            if (p == 0) continue;
+            CHECK_STATUS(bkf_floquet_eval(f, p / 0.3, &pt, &e), BKF_OK);
+            CHECK(fabs(pt.lambda) < 1e-5);
+        }
+    bkf_floquet_free(f);
+    CHECK_STATUS(bkf_stabmap_bands(2, 0.3, -0.92, 6, 120, 1e-7, lo, hi, kind, 4, &count, &e),
+                 BKF_OK);
+    CHECK(count == 0);
 }

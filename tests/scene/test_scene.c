@@ -62,6 +62,7 @@ TEST(scene_parses_the_paper_scene)
     CHECK(kinds[BKF_SCENE_DISPERSION] == 1 && kinds[BKF_SCENE_SPEEDS] == 1);
     CHECK(kinds[BKF_SCENE_PERIOD] == 1 && kinds[BKF_SCENE_VALIDITY] == 1);
     CHECK(kinds[BKF_SCENE_PROFILE] == 1 && kinds[BKF_SCENE_BRANCH] == 1);
+    CHECK(kinds[BKF_SCENE_STABILITY] == 3);
     CHECK(figures == s->nproducts - figures);
     const bkf_scene_product *fig3a = bkf_scene_find(s, "fig3a", 0);
     CHECK(fig3a && fig3a->kind == BKF_SCENE_SPACETIME);
@@ -141,7 +142,8 @@ typedef struct {
 } plan_count;
 
 static const char *const labels[] = {"speeds", "period", "floquet", "branch", "profile",
-                                     "asymptotics", "friction", "simulate", "check", "figure",
+                                     "asymptotics", "friction", "simulate", "check", "stability",
+                                     "figure",
                                      NULL};
 
 static plan_count count_plan(const char *text, int figures)
@@ -207,6 +209,13 @@ TEST(plan_runs_only_what_the_products_need)
     c = count_plan(MODEL "[branch b]\nparam = S\nto = 30\nn = 4:6:3\n", 1);
     CHECK(count_of(&c, "branch") == 3);
 
+    /* stability: one spectrum per n, the same product as the command (the
+     * mode's keys passed on); a figure's default script follows the mode */
+    c = count_plan(MODEL "[stability sp]\nn = 2,4\n[figure sp]\ndata = sp\n", 1);
+    CHECK(count_of(&c, "stability") == 2 && c.figures == 1);
+    c = count_plan(MODEL "[stability d]\ndiagram = yes\nn = 3\nto = -0.9\nS-to = 30\n", 1);
+    CHECK(count_of(&c, "stability") == 1);
+
     /* the paper scene: every figure, one computation per curve */
     bkf_scene *s = NULL;
     bkf_error e = {0};
@@ -219,7 +228,7 @@ TEST(plan_runs_only_what_the_products_need)
         sims += strcmp(plan.steps[i].product, "simulate") == 0;
         figs += plan.steps[i].kind == BKF_SCENE_STEP_FIGURE;
     }
-    CHECK(sims == 3 && figs == 11);
+    CHECK(sims == 3 && figs == 14);
     bkf_test_note("paper scene: %zu computations (%zu simulations, %zu figures)", plan.nsteps,
                   sims, figs);
     bkf_scene_plan_free(&plan);
@@ -363,6 +372,37 @@ TEST(run_scene_writes_data_and_figures_in_every_format)
     CHECK(file_size(sub, "fric.png") > 5000 && file_size(sub, "tablefig.png") > 5000);
     CHECK(file_size(sub, "fric.png.part") < 0);    /* nothing half-written left */
     check_friction_table(dir);
+    free(r);
+    remove_tree(dir);
+    free(path);
+    free(dir);
+}
+
+/* A stability scene: the ring spectra of n = 2 and 4 side by side in the
+ * spectrum figure, their verdicts those of the paper's table (n = 2
+ * unstable, 4 stable: docs/cli/stability.md, from Hill's method in
+ * tests/products/test_stability.c), each file the command's table. */
+TEST(run_stability_scene_writes_spectra_and_figure)
+{
+    char *dir = temp_dir();
+    char *path = write_scene(dir, MODEL "[stability sp]\nn = 2,4\n[figure sp]\ndata = sp\n");
+    char outdir[512];
+    snprintf(outdir, sizeof outdir, "%s/out", dir);
+    run_result *r = run_cli((char *[]){"run", "--out", outdir, "--plots",
+                                       BKF_SOURCE_DIR "/plots", path, NULL});
+    CHECK_MSG(r->code == 0, "exit %d: %s\n%s", r->code, r->err, r->out);
+    CHECK(strstr(r->out, "3 computations"));
+    CHECK(starts_with_bytes(outdir, "sp.png", "\x89PNG", 4));
+    CHECK(file_size(outdir, "sp.png") > 5000);
+    char file[700];
+    snprintf(file, sizeof file, "%s/sp_1.tsv", outdir);
+    char *t2 = bkf_cli_read_file(file);
+    snprintf(file, sizeof file, "%s/sp_2.tsv", outdir);
+    char *t4 = bkf_cli_read_file(file);
+    CHECK(t2 && strstr(t2, "# root: n 2,") && strstr(t2, "# stable: no;"));
+    CHECK(t4 && strstr(t4, "# root: n 4,") && strstr(t4, "# stable: yes;"));
+    free(t2);
+    free(t4);
     free(r);
     remove_tree(dir);
     free(path);

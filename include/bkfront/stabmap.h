@@ -1,0 +1,125 @@
+/* Stability across parameters: where in the (nu, S) plane a train of n
+ * fronts exists and where it is stable, and where the global oscillation is
+ * (`bkfront stability --boundary`, `--diagram`).
+ *
+ * - The existence boundary of n at nu: the smallest S with a root of the
+ *   speed condition, S = n c gamma g_inf(nu) (speeds.h: g_inf is the infimum
+ *   of T / sqrt(mu^2 - gamma^2), k(nu) unless g dips below k; then the
+ *   sonic limit is approached but not reached and every S above has a root).
+ * - A stability boundary of n: a curve S(nu) on which sigma_max (the
+ *   rightmost Re sigma of the ring spectrum but the translation,
+ *   trainspec.h) of the root continued from the previous point changes
+ *   sign.  Natural-parameter continuation in nu: the predictor is the
+ *   secant through the last two points, the corrector brackets sigma_max = 0
+ *   in S around the prediction and closes the bracket by the Illinois
+ *   method.  The S error of a point is the larger of the final bracket's
+ *   half-width and sigma_max's error divided by |d sigma_max / dS|.
+ * - The global oscillation on the ring: the allowed wavenumbers are
+ *   q = 2 pi m / S, so an unstable band c q in (p_a, p_b) of its Floquet
+ *   dispersion at nu (floquet.h) makes the ring unstable for S in
+ *   [2 pi m c / p_b, 2 pi m c / p_a], m = 1, 2, ... (a period-doubling
+ *   tongue per m); a long-wave band (0, p_b) for S > 2 pi c / p_b.
+ *
+ * The library never prints and never exits. */
+#ifndef BKFRONT_STABMAP_H
+#define BKFRONT_STABMAP_H
+
+#include <stddef.h>
+#include "bkfront/model.h"
+#include "bkfront/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    double tol;      /* absolute accuracy of each sigma (trainspec), default 1e-6 */
+    double S_tol;    /* bracket width at which an S solve stops, default 1e-3 */
+    double nu_step;  /* continuation step in nu, default 0.01 */
+    size_t max_points; /* points of one boundary at most; default 1000 */
+} bkf_stabmap_options;
+
+bkf_stabmap_options bkf_stabmap_options_default(void);
+
+/* How a followed boundary ended. */
+typedef enum {
+    BKF_STABMAP_END_REACHED = 0, /* nu reached `to` */
+    BKF_STABMAP_END_FOLD = 1,    /* no sign change near the prediction: the
+                                    boundary turns back in nu (or a second
+                                    crossing met it) */
+    BKF_STABMAP_END_NO_ROOT = 2, /* the train has no root of the speed condition there */
+    BKF_STABMAP_END_REFUSED = 3, /* trainspec refused sigma (BKF_ETOL, BKF_EBUDGET) */
+    BKF_STABMAP_END_POINTS = 4   /* max_points reached */
+} bkf_stabmap_end;
+
+/* "reached", "fold", "no_root", "refused", "max_points". */
+const char *bkf_stabmap_end_name(bkf_stabmap_end end);
+
+typedef struct {
+    double nu, S, S_err;
+    double v, mu;            /* the root there */
+    double sigma, sigma_err; /* sigma_max at (nu, S) as computed: within a few
+                                sigma_err of 0 */
+    double slope;            /* d sigma_max / dS across the final bracket */
+    int stable_above;        /* stable just above S (sigma_max < 0 there) */
+    size_t evaluations;      /* spectra computed for this point */
+} bkf_stabmap_point;
+
+typedef int (*bkf_stabmap_visit)(const bkf_stabmap_point *point, void *data);
+
+typedef struct {
+    size_t points, evaluations;
+    bkf_stabmap_end end;
+    double nu_end;           /* the last nu tried */
+    char note[256];          /* why it ended, one line */
+} bkf_stabmap_report;
+
+/* sigma_max of train n at (params->nu, params->S): the root whose v is
+ * nearest v_near (v_near <= 0: the fastest root).  BKF_EINPUT when n has
+ * no root there. */
+int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near, double tol,
+                      double *sigma, double *sigma_err, double *v, double *mu, bkf_error *err);
+
+/* The first sign change of sigma_max of train n in S, from S_from towards
+ * S_to (scanned on `samples` even steps, then closed), at params->nu.
+ * BKF_OK with *found 0 when there is none. */
+int bkf_stabmap_locate(const bkf_model_params *params, size_t n, double S_from, double S_to,
+                       size_t samples, const bkf_stabmap_options *options,
+                       bkf_stabmap_point *point, int *found, bkf_error *err);
+
+/* Every sign change of sigma_max of train n in S in [S_from, S_to] at
+ * params->nu, the same scan closed at each (at most max, in order of S);
+ * samples where n has no root or sigma is refused are gaps. */
+int bkf_stabmap_scan(const bkf_model_params *params, size_t n, double S_from, double S_to,
+                     size_t samples, const bkf_stabmap_options *options, bkf_stabmap_point *points,
+                     size_t max, size_t *count, bkf_error *err);
+
+/* The boundary through `first` (a point of bkf_stabmap_locate, its params
+ * gamma and c), followed in nu to nu_to; visit gets every point, the first
+ * included (nonzero stops).  The end is an answer, not a failure: BKF_OK
+ * with report->end; other failures return their status. */
+int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
+                       const bkf_stabmap_point *first, double nu_to,
+                       const bkf_stabmap_options *options, bkf_stabmap_visit visit, void *data,
+                       bkf_stabmap_report *report, bkf_error *err);
+
+/* The existence boundary S = n c gamma g_inf(nu) at params->nu (c > 0);
+ * *attained 1 when g dips below k (a fold: the root at S exists), 0 when
+ * it is the sonic limit (roots for every S above, none at S). */
+int bkf_stabmap_existence(const bkf_model_params *params, size_t n, double *S,
+                          int *attained, bkf_error *err);
+
+/* The unstable bands of the global oscillation at (gamma, c, nu): c q in
+ * (lo[i], hi[i]), lo[i] = 0 for a long-wave band, kind[i] 1 when the
+ * band's multiplier is real negative (period doubling), 0 otherwise; at most
+ * max bands, c q sampled on (0, p_max] at `samples` points, edges to about
+ * tol in c q. */
+int bkf_stabmap_bands(double gamma, double c, double nu, double p_max, size_t samples,
+                      double tol, double *lo, double *hi, int *kind, size_t max,
+                      size_t *count, bkf_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,361 @@
+#include "bkfront/stabmap.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bkfront/floquet.h"
+#include "bkfront/speeds.h"
+#include "bkfront/stability.h"
+#include "bkfront/trainspec.h"
+
+bkf_stabmap_options bkf_stabmap_options_default(void)
+{
+    bkf_stabmap_options o = {1e-6, 1e-3, 0.01, 1000};
+    return o;
+}
+
+const char *bkf_stabmap_end_name(bkf_stabmap_end end)
+{
+    static const char *const names[] = {"reached", "fold", "no_root", "refused", "max_points"};
+    return (unsigned)end < sizeof names / sizeof names[0] ? names[end] : "?";
+}
+
+int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near, double tol,
+                      double *sigma, double *sigma_err, double *v, double *mu, bkf_error *err)
+{
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.n_from = o.n_to = n;
+    bkf_speeds_table t;
+    int s = bkf_speeds_find(params, &o, &t, err);
+    if (!s && t.count == 0)
+        s = bkf_error_set(err, BKF_EINPUT, "n: n = %zu has no root at nu %.6g, S %.6g", n,
+                          params->nu, params->S);
+    if (s) {
+        bkf_speeds_table_free(&t);
+        return s;
+    }
+    size_t best = 0;
+    for (size_t i = 1; v_near > 0 && i < t.count; i++)
+        if (fabs(t.roots[i].v - v_near) < fabs(t.roots[best].v - v_near)) best = i;
+    bkf_speeds_root root = t.roots[best];
+    bkf_speeds_table_free(&t);
+    bkf_trainspec_result r;
+    s = bkf_stability_root(params, &root, tol, 1, &r, err);
+    if (!s) {
+        *sigma = r.sigma_max;
+        *sigma_err = r.sigma_max_err;
+        *v = root.v;
+        *mu = root.mu;
+    }
+    bkf_trainspec_result_free(&r);
+    return s;
+}
+
+/* sigma_max along S at fixed nu, the root continued by v ~ S (v = S/(n T)
+ * at slowly varying T). */
+typedef struct {
+    bkf_model_params p;
+    size_t n;
+    double tol;
+    double v_ref, S_ref;   /* the root followed; v_ref 0: the fastest */
+    size_t evaluations;
+} sigma_fn;
+
+typedef struct {
+    double S, f, err, v, mu;
+} sample;
+
+static int eval_at(sigma_fn *fn, double S, sample *out, bkf_error *err)
+{
+    bkf_model_params p = fn->p;
+    p.S = S;
+    double v_near = fn->v_ref > 0 ? fn->v_ref * S / fn->S_ref : 0;
+    fn->evaluations++;
+    out->S = S;
+    return bkf_stabmap_sigma(&p, fn->n, v_near, fn->tol, &out->f, &out->err, &out->v, &out->mu,
+                             err);
+}
+
+static int sign_of(double f) { return f > 0 ? 1 : -1; }
+
+/* Closes the bracket [a, b] (f of opposite signs) by the Illinois method:
+ * regula falsi whose retained end's value is halved when it is kept twice,
+ * so the bracket shrinks on both sides. */
+static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_stabmap_point *pt,
+                         bkf_error *err)
+{
+    int kept = 0;
+    double fa = a.f, fb = b.f;
+    sample best = fabs(a.f) < fabs(b.f) ? a : b;
+    for (int it = 0; it < 60 && fabs(b.S - a.S) > S_tol; it++) {
+        /* sigma within its error of 0: the sign there means nothing */
+        if (fabs(best.f) <= best.err) break;
+        double S = (a.S * fb - b.S * fa) / (fb - fa);
+        double lo = fmin(a.S, b.S), hi = fmax(a.S, b.S), w = hi - lo;
+        if (!(S > lo + 0.02 * w && S < hi - 0.02 * w)) S = 0.5 * (lo + hi);
+        sample m;
+        int s = eval_at(fn, S, &m, err);
+        if (s) return s;
+        if (fabs(m.f) < fabs(best.f)) best = m;
+        if (sign_of(m.f) == sign_of(a.f)) {
+            a = m;
+            fa = m.f;
+            if (kept == -1) fb *= 0.5;
+            kept = -1;
+        } else {
+            b = m;
+            fb = m.f;
+            if (kept == 1) fa *= 0.5;
+            kept = 1;
+        }
+    }
+    double slope = (b.f - a.f) / (b.S - a.S);
+    double S = fabs(b.S - a.S) > S_tol ? best.S : (a.S * b.f - b.S * a.f) / (b.f - a.f);
+    *pt = (bkf_stabmap_point){0};
+    pt->nu = fn->p.nu;
+    pt->S = S;
+    /* stopped with sigma within its error of 0: on the secant the root is
+     * within (|sigma| + err) / |slope| of S, less than the bracket */
+    double half = 0.5 * fabs(b.S - a.S), lin = (fabs(best.f) + best.err) / fabs(slope);
+    pt->S_err = fabs(b.S - a.S) > S_tol ? fmin(half, lin) : fmax(half, best.err / fabs(slope));
+    pt->v = best.v;
+    pt->mu = best.mu;
+    pt->sigma = best.f;
+    pt->sigma_err = best.err;
+    pt->slope = slope;
+    pt->stable_above = slope < 0;
+    return BKF_OK;
+}
+
+static int end_of(int status)
+{
+    if (status == BKF_EINPUT) return BKF_STABMAP_END_NO_ROOT;
+    if (status == BKF_ETOL || status == BKF_EBUDGET) return BKF_STABMAP_END_REFUSED;
+    return -1;
+}
+
+int bkf_stabmap_scan(const bkf_model_params *params, size_t n, double S_from, double S_to,
+                     size_t samples, const bkf_stabmap_options *options, bkf_stabmap_point *points,
+                     size_t max, size_t *count, bkf_error *err)
+{
+    bkf_stabmap_options o = options ? *options : bkf_stabmap_options_default();
+    *count = 0;
+    if (samples < 1 || !(S_from > 0) || !(S_to > 0) || !isfinite(S_from) || !isfinite(S_to))
+        return bkf_error_set(err, BKF_EINPUT, "scan: S_from, S_to > 0 and samples >= 1");
+    sigma_fn fn = {*params, n, o.tol, 0, 1, 0};
+    sample prev = {0};
+    int have = 0;
+    for (size_t i = 0; i <= samples && *count < max; i++) {
+        sample cur;
+        double S = S_from + (S_to - S_from) * (double)i / (double)samples;
+        bkf_error e;
+        fn.v_ref = 0;
+        int s = eval_at(&fn, S, &cur, &e);
+        if (s && end_of(s) < 0) return bkf_error_set(err, s, "%s", e.message);
+        if (s) {  /* no root or refused here: a gap in the scan */
+            have = 0;
+            continue;
+        }
+        if (have && sign_of(cur.f) != sign_of(prev.f)) {
+            size_t before = fn.evaluations;
+            fn.v_ref = cur.v;
+            fn.S_ref = cur.S;
+            int st = close_bracket(&fn, prev, cur, o.S_tol, &points[*count], &e);
+            if (st && end_of(st) < 0) return bkf_error_set(err, st, "%s", e.message);
+            if (!st) {
+                /* the scan's two samples and the solve's */
+                points[*count].evaluations = fn.evaluations - before + 2;
+                (*count)++;
+            }
+        }
+        prev = cur;
+        have = 1;
+    }
+    return BKF_OK;
+}
+
+int bkf_stabmap_locate(const bkf_model_params *params, size_t n, double S_from, double S_to,
+                       size_t samples, const bkf_stabmap_options *options,
+                       bkf_stabmap_point *point, int *found, bkf_error *err)
+{
+    size_t count;
+    int s = bkf_stabmap_scan(params, n, S_from, S_to, samples, options, point, 1, &count, err);
+    *found = !s && count == 1;
+    return s;
+}
+
+int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
+                       const bkf_stabmap_point *first, double nu_to,
+                       const bkf_stabmap_options *options, bkf_stabmap_visit visit, void *data,
+                       bkf_stabmap_report *report, bkf_error *err)
+{
+    bkf_stabmap_options o = options ? *options : bkf_stabmap_options_default();
+    bkf_stabmap_report rep = {0};
+    rep.end = BKF_STABMAP_END_REACHED;
+    if (!(fabs(nu_to) < 1) || !(o.nu_step > 0))
+        return bkf_error_set(err, BKF_EINPUT, "follow: nu_to in (-1, 1) and nu_step > 0");
+    bkf_stabmap_point cur = *first, old = *first;
+    int two = 0;
+    double dir = nu_to >= first->nu ? 1 : -1;
+    rep.points = 1;
+    rep.evaluations = first->evaluations;
+    rep.nu_end = first->nu;
+    int stop = visit && visit(first, data);
+    double h = o.nu_step;
+    while (!stop && dir * (nu_to - cur.nu) > 1e-12) {
+        if (o.max_points && rep.points >= o.max_points) {
+            rep.end = BKF_STABMAP_END_POINTS;
+            break;
+        }
+        double nu = cur.nu + dir * h;
+        if (dir * (nu - nu_to) > 0) nu = nu_to;
+        rep.nu_end = nu;
+        double Sp = two ? cur.S + (cur.S - old.S) / (cur.nu - old.nu) * (nu - cur.nu) : cur.S;
+        sigma_fn fn = {*params, n, o.tol, cur.v, cur.S, 0};
+        fn.p.nu = nu;
+        sample a, b;
+        bkf_error e;
+        int s = eval_at(&fn, Sp, &a, &e);
+        /* Towards the boundary: the side a lies on, by the sign it has. */
+        int above = cur.stable_above ? a.f < 0 : a.f > 0;
+        double delta = fmax(fmax(2 * fabs(Sp - cur.S), 4 * cur.S_err), 0.01 * cur.S);
+        int bracketed = 0;
+        for (int k = 0; !s && k < 4 && !bracketed; k++, delta *= 2) {
+            s = eval_at(&fn, above ? Sp - delta : Sp + delta, &b, &e);
+            if (!s && sign_of(b.f) != sign_of(a.f)) bracketed = 1;
+        }
+        rep.evaluations += fn.evaluations;
+        if (s) {
+            int end = end_of(s);
+            if (end < 0) return bkf_error_set(err, s, "%s", e.message);
+            rep.end = (bkf_stabmap_end)end;
+            snprintf(rep.note, sizeof rep.note, "at nu %.6g: %.200s", nu, e.message);
+            break;
+        }
+        if (!bracketed) {
+            if (h > o.nu_step / 4) {  /* a smaller step before giving up */
+                h *= 0.5;
+                continue;
+            }
+            rep.end = BKF_STABMAP_END_FOLD;
+            snprintf(rep.note, sizeof rep.note,
+                     "at nu %.6g: no sign change of sigma_max in S within %.4g of %.6g", nu,
+                     delta / 2, Sp);
+            break;
+        }
+        bkf_stabmap_point next;
+        fn.evaluations = 0;
+        s = close_bracket(&fn, a, b, o.S_tol, &next, err);
+        rep.evaluations += fn.evaluations;
+        if (s) {
+            int end = end_of(s);
+            if (end < 0) return s;
+            rep.end = (bkf_stabmap_end)end;
+            snprintf(rep.note, sizeof rep.note, "at nu %.6g: %.200s", nu, err ? err->message : "");
+            break;
+        }
+        next.evaluations = fn.evaluations + (size_t)2;
+        old = cur;
+        cur = next;
+        two = 1;
+        rep.points++;
+        stop = visit && visit(&cur, data);
+    }
+    if (report) *report = rep;
+    return BKF_OK;
+}
+
+int bkf_stabmap_existence(const bkf_model_params *params, size_t n, double *S, int *attained,
+                          bkf_error *err)
+{
+    if (!(params->c > 0))
+        return bkf_error_set(err, BKF_EINPUT, "c: existence boundary needs c > 0");
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.n_from = o.n_to = n;
+    bkf_speeds_table t;
+    int s = bkf_speeds_find(params, &o, &t, err);
+    if (!s) {
+        *S = (double)n * params->c * params->gamma * t.g_inf;
+        *attained = t.dips_below_k;
+    }
+    bkf_speeds_table_free(&t);
+    return s;
+}
+
+/* lambda at c q = p, and whether its dominant multiplier is real negative. */
+static int lambda_at(bkf_floquet *f, double c, double p, double *lambda, int *negative,
+                     bkf_error *err)
+{
+    bkf_floquet_point pt;
+    int s = bkf_floquet_eval(f, p / c, &pt, err);
+    /* a sign is all the bands need: an estimate above tol still has it
+     * unless lambda is within its error of 0 */
+    if (s == BKF_ETOL && isfinite(pt.lambda_err)) s = BKF_OK;
+    if (!s) {
+        *lambda = pt.lambda;
+        *negative = pt.kind == BKF_FLOQUET_REAL_NEGATIVE;
+    }
+    return s;
+}
+
+int bkf_stabmap_bands(double gamma, double c, double nu, double p_max, size_t samples,
+                      double tol, double *lo, double *hi, int *kind, size_t max,
+                      size_t *count, bkf_error *err)
+{
+    *count = 0;
+    if (!(c > 0) || !(p_max > 0) || samples < 2)
+        return bkf_error_set(err, BKF_EINPUT, "bands: c > 0, p_max > 0, samples >= 2");
+    bkf_floquet *f = bkf_floquet_alloc();
+    if (!f) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    bkf_floquet_options fo = bkf_floquet_options_default();
+    fo.tol = 1e-8;
+    int s = bkf_floquet_set(f, gamma, c, nu, &fo, err);
+    double a = 0, a_err = 0;
+    if (!s) s = bkf_floquet_longwave(f, &a, &a_err, err);
+    /* at p -> 0+, lambda ~ a p^2: the sign of a */
+    int unstable = a > 0, neg = 0, band_neg = 0;
+    double p_prev = 0;
+    double start = 0;
+    for (size_t i = 1; !s && i <= samples; i++) {
+        double p = p_max * (double)i / (double)samples, l;
+        s = lambda_at(f, c, p, &l, &neg, err);
+        if (s) break;
+        if (unstable && l > 0 && neg) band_neg = 1;
+        if ((l > 0) != unstable) {
+            /* the edge between p_prev and p by bisection on the sign */
+            double x0 = p_prev, x1 = p;
+            while (!s && x1 - x0 > tol) {
+                double xm = 0.5 * (x0 + x1), lm = 0;
+                int nm = 0;
+                s = lambda_at(f, c, xm, &lm, &nm, err);
+                if (s) break;
+                if ((lm > 0) == unstable)
+                    x0 = xm;
+                else
+                    x1 = xm;
+                if (unstable && lm > 0 && nm) band_neg = 1;
+            }
+            double edge = 0.5 * (x0 + x1);
+            if (!unstable) {
+                start = edge;
+                band_neg = neg && l > 0;
+            } else if (*count < max) {
+                lo[*count] = start;
+                hi[*count] = edge;
+                kind[*count] = band_neg;
+                (*count)++;
+            }
+            unstable = !unstable;
+        }
+        p_prev = p;
+    }
+    if (!s && unstable && *count < max) { /* a band open at p_max */
+        lo[*count] = start;
+        hi[*count] = p_max;
+        kind[*count] = band_neg;
+        (*count)++;
+    }
+    bkf_floquet_free(f);
+    return s;
+}
