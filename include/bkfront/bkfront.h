@@ -29,6 +29,7 @@
 #include "bkfront/friction.h"
 #include "bkfront/fronts.h"
 #include "bkfront/stability.h"
+#include "bkfront/stabmap.h"
 #include "bkfront/oscillation.h"
 #include "bkfront/init.h"
 #include "bkfront/seed.h"
