@@ -8,7 +8,8 @@ load plotdir.'/common.gp'
 f = word(files, 1)
 set xlabel '{/Symbol n}'
 set ylabel 'S'
-set key outside right top
+set key outside below center horizontal maxrows 3 font ',9'
+set xtics 0.04
 set title (title ne '' ? title : sprintf('Where front trains exist and are stable:  {/Symbol g} = %g,  c = %g', gamma, c))
 stats f using 'curve' nooutput
 ncurves = int(STATS_max)
@@ -24,4 +25,7 @@ plot for [i = 1:ncurves] f using 'nu':((column('curve') == i && (is('period_doub
      for [n = 1:nmax] f using 'nu':((is('existence') && column('n') == n) ? column('S') : NaN) \
         with lines lw 1 lc col(n) title sprintf('n = %d exists above', n), \
      for [i = 1:ncurves] f using 'nu':((column('curve') == i && is('stability')) ? column('S') : NaN):(col(int(column('n')))) \
-        with linespoints lw 3 pt 7 ps 0.6 lc variable notitle
+        with linespoints lw 3 pt 7 ps 0.6 lc variable notitle, \
+     NaN with linespoints lw 3 pt 7 ps 0.6 lc rgb '#555555' title 'stability boundary (thick)', \
+     NaN with linespoints lw 1 pt 7 ps 0.3 lc rgb '#999999' title 'oscillation: period doubling'
+

@@ -31,6 +31,7 @@
 #ifndef BKFRONT_TRAINSPEC_H
 #define BKFRONT_TRAINSPEC_H
 
+#include <signal.h>
 #include <stddef.h>
 #include "bkfront/model.h"
 #include "bkfront/status.h"
@@ -43,6 +44,12 @@ typedef struct {
     double tol;        /* absolute accuracy asked of each sigma, [1e-8, 1e-2]; default 1e-6 */
     size_t per_kappa;  /* leading eigenvalues reported per Bloch number, [1, 50]; default 3
                           (one more where the cut would split a conjugate pair) */
+    double max_work;   /* Magnus steps in all, the work budget, [1e5, 1e12]; 0 (default):
+                          4e7, about a second (the paper's n = 11, mu 14, takes 1.4e7); a
+                          spectrum that needs more is refused (BKF_EBUDGET) */
+    const volatile sig_atomic_t *cancel; /* when non-NULL and *cancel becomes nonzero
+                          (e.g. in a signal handler), the spectrum stops within one
+                          monodromy: BKF_ECANCELED; default NULL */
 } bkf_trainspec_options;
 
 bkf_trainspec_options bkf_trainspec_options_default(void);
@@ -87,6 +94,7 @@ typedef struct {
     double r_inf;                    /* the line the spectrum approaches as |Im sigma| -> inf */
     size_t mesh_steps;               /* Magnus steps per period (finer mesh) */
     size_t evaluations;              /* monodromies computed */
+    double work;                     /* Magnus steps taken in all (see max_work) */
     size_t curve_points;             /* heights y sampled */
 } bkf_trainspec_result;
 

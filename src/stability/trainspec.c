@@ -36,6 +36,7 @@
 /* The edges of a curve (where it leaves the window) are located to this
  * fraction of the window's height; phase and bends to CURVE_MIN_FRACTION. */
 #define EDGE_FRACTION (1.0 / 1024.0)
+#define MAX_WORK_DEFAULT 4e7
 
 enum { FAMILIES = 2 };
 
@@ -59,6 +60,9 @@ typedef struct {
     double *node_rate;  /* per cycle node: the fastest local rate of u at sigma_reach */
     mesh coarse, fine;
     size_t evaluations;
+    double work, max_work;               /* Magnus steps taken, and allowed */
+    const volatile sig_atomic_t *cancel;
+    int stop;                            /* BKF_EBUDGET or BKF_ECANCELED once either is hit */
 } ctx;
 
 /* ------------------------------------------------------------- meshes */
@@ -248,6 +252,14 @@ static void monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double
     x->evaluations++;
     p[0] = 1, p[1] = 0, p[2] = 0, p[3] = 1;
     *scale = 0.0;
+    if (!x->stop && x->cancel && *x->cancel) x->stop = BKF_ECANCELED;
+    if (!x->stop && x->work + (double)m->steps > x->max_work) x->stop = BKF_EBUDGET;
+    if (x->stop) {
+        /* every caller's search then fails at once; the entry point reports why */
+        *scale = NAN;
+        return;
+    }
+    x->work += (double)m->steps;
     for (size_t i = 0; i < m->steps; i++) {
         double complex e[4];
         *scale += magnus_step(x, m, i, sigma, e);
@@ -600,7 +612,7 @@ static int eig_desc(const void *pa, const void *pb)
 
 bkf_trainspec_options bkf_trainspec_options_default(void)
 {
-    return (bkf_trainspec_options){.tol = 1e-6, .per_kappa = 3};
+    return (bkf_trainspec_options){.tol = 1e-6, .per_kappa = 3, .max_work = 0, .cancel = NULL};
 }
 
 const char *bkf_trainspec_verdict_name(bkf_trainspec_verdict v)
@@ -632,6 +644,8 @@ int bkf_trainspec_check(const bkf_model_params *p, const bkf_trainspec_train *t,
             return bkf_error_set(err, BKF_EINPUT, "tol must be in [%g, %g]", TOL_MIN, TOL_MAX);
         if (o->per_kappa < 1 || o->per_kappa > PER_KAPPA_MAX)
             return bkf_error_set(err, BKF_EINPUT, "per_kappa must be in [1, %d]", PER_KAPPA_MAX);
+        if (o->max_work != 0 && !(o->max_work >= 1e5 && o->max_work <= 1e12))
+            return bkf_error_set(err, BKF_EINPUT, "max_work must be 0 (default) or in [1e5, 1e12]");
     }
     return BKF_OK;
 }
@@ -646,9 +660,11 @@ static void ctx_free(ctx *x)
 }
 
 static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, double tol,
-                    bkf_error *err)
+                    const bkf_trainspec_options *o, bkf_error *err)
 {
     memset(x, 0, sizeof *x);
+    x->max_work = o && o->max_work > 0 ? o->max_work : MAX_WORK_DEFAULT;
+    x->cancel = o ? o->cancel : NULL;
     x->gamma = p->gamma;
     x->c = p->c;
     x->nu = p->nu;
@@ -839,6 +855,18 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     return BKF_OK;
 }
 
+/* The reason a search was cut short, over whatever failure it produced. */
+static int stopped(const ctx *x, int rc, bkf_error *err)
+{
+    if (x->stop == BKF_ECANCELED) return bkf_error_set(err, BKF_ECANCELED, "spectrum: canceled");
+    if (x->stop == BKF_EBUDGET)
+        return bkf_error_set(err, BKF_EBUDGET,
+                             "the spectrum needs more than %.3g Magnus steps in all (mu = %.15g; the budget is "
+                             "max_work)",
+                             x->max_work, x->mu);
+    return rc;
+}
+
 static window initial_window(const ctx *x, double *r_inf)
 {
     *r_inf = x->s * x->log_m / (2.0 * x->T);
@@ -863,11 +891,12 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
     if (rc != BKF_OK) return rc;
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     ctx x;
-    rc = ctx_init(&x, p, t, o.tol, err);
+    rc = ctx_init(&x, p, t, o.tol, &o, err);
     window win = initial_window(&x, &r->r_inf);
     if (rc == BKF_OK)
         rc = spectrum(&x, t->n, o.per_kappa, &r->eigenvalues, &r->count, &win, &r->y_max,
                              &r->curve_points, err);
+    rc = stopped(&x, rc, err);
     if (rc == BKF_OK) {
         r->params = *p;
         r->n = t->n;
@@ -903,6 +932,7 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
                                                                  : BKF_TRAINSPEC_UNRESOLVED;
         }
         r->evaluations = x.evaluations;
+        r->work = x.work;
     }
     ctx_free(&x);
     bkf_gsl_handler_pop(handler);
@@ -921,12 +951,13 @@ int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
     if (!out) return bkf_error_set(err, BKF_EINPUT, "out is NULL");
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     ctx x;
-    rc = ctx_init(&x, p, t, o.tol, err);
+    rc = ctx_init(&x, p, t, o.tol, &o, err);
     double r_inf, y_max;
     size_t points = 0, n_eig = 0;
     window win = initial_window(&x, &r_inf);
     bkf_trainspec_eigenvalue *eig = NULL;
     if (rc == BKF_OK) rc = spectrum(&x, count, 1, &eig, &n_eig, &win, &y_max, &points, err);
+    rc = stopped(&x, rc, err);
     if (rc == BKF_OK) {
         double L = x.L;
         for (size_t i = 0; i < count; i++)
@@ -954,13 +985,15 @@ int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
 static int one_eigenvalue(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, size_t j,
                           double complex *sigma, size_t substeps, bkf_error *err)
 {
-    int rc = ctx_init(x, p, t, TOL_MIN, err);
+    int rc = ctx_init(x, p, t, TOL_MIN, NULL, err);
     if (rc == BKF_OK) rc = node_rates(x, 2.0 * cabs(*sigma) + 1.0, err);
     if (rc == BKF_OK) rc = mesh_build(x, substeps, &x->fine, err);
     if (rc != BKF_OK) return rc;
     double step;
     double complex s = *sigma;
-    if (polish(x, &x->fine, 2.0 * M_PI * (double)j / (double)t->n, &s, &step) != BKF_OK)
+    int prc = polish(x, &x->fine, 2.0 * M_PI * (double)j / (double)t->n, &s, &step);
+    if (x->stop) return stopped(x, prc, err);
+    if (prc != BKF_OK)
         return bkf_error_set(err, BKF_ENUMERIC,
                              "no eigenvalue of class j = %zu converged from sigma = %.6g%+.6gi (last Newton "
                              "step %.3g)",

@@ -190,3 +190,32 @@ TEST(trainspec_line_contains_the_ring)
     CHECK_CLOSE(line[2].kappa, TWO_PI / p.S, 1e-12, 0);
     bkf_trainspec_result_free(&r);
 }
+
+/* The work budget and the cancel flag stop a spectrum within one monodromy
+ * and say which stopped it; a spectrum within its budget reports its work. */
+TEST(trainspec_budget_and_cancel)
+{
+    bkf_model_params p = paper();
+    bkf_trainspec_train t = {7, v_n7};
+    bkf_trainspec_options o = bkf_trainspec_options_default();
+    bkf_trainspec_result r;
+    bkf_error e;
+    o.max_work = 1e5;
+    CHECK(bkf_trainspec_ring(&p, &t, &o, &r, &e) == BKF_EBUDGET);
+    CHECK(strstr(e.message, "more than 1e+05 Magnus steps"));
+    CHECK(r.count == 0 && r.eigenvalues == NULL);
+    bkf_trainspec_eigenvalue line[4];
+    CHECK(bkf_trainspec_line(&p, &t, &o, 4, line, &e) == BKF_EBUDGET);
+    volatile sig_atomic_t flag = 1;
+    o = bkf_trainspec_options_default();
+    o.cancel = &flag;
+    CHECK(bkf_trainspec_ring(&p, &t, &o, &r, &e) == BKF_ECANCELED);
+    o.cancel = NULL;
+    o.max_work = 1e4;
+    CHECK(bkf_trainspec_ring(&p, &t, &o, &r, &e) == BKF_EINPUT);
+    CHECK(strstr(e.message, "max_work"));
+    o.max_work = 0;
+    CHECK_MSG(bkf_trainspec_ring(&p, &t, &o, &r, &e) == BKF_OK, "%s", e.message);
+    CHECK(r.work >= (double)r.mesh_steps * 0.5 * (double)r.evaluations / 2 && r.work <= 4e7);
+    bkf_trainspec_result_free(&r);
+}
