@@ -1036,8 +1036,9 @@ int bkf_trainspec_eigenvalue_at(const bkf_model_params *p, const bkf_trainspec_t
 }
 
 typedef struct {
-    double r;  /* z within the period, [0, T] */
-    size_t at; /* index of the sample on the ring */
+    double r;     /* z within the period, [0, T] */
+    double cycle; /* which period (0 .. n-1): its Bloch factor is exp(i cycle theta) */
+    size_t at;    /* index of the sample on the ring */
 } mode_sample;
 
 static int by_r(const void *pa, const void *pb)
@@ -1134,7 +1135,7 @@ int bkf_trainspec_mode(const bkf_model_params *p, const bkf_trainspec_train *t, 
         for (size_t i = 0; i < N; i++) {
             double z = (double)i * S / (double)N / vs;
             double cyc = fmin(floor(z / period), (double)(t->n - 1));
-            smp[i] = (mode_sample){fmin(fmax(z - cyc * period, 0.0), period), i};
+            smp[i] = (mode_sample){fmin(fmax(z - cyc * period, 0.0), period), cyc, i};
         }
         qsort(smp, N, sizeof *smp, by_r);
         for (size_t i = 0; i < N; i++) r[i] = smp[i].r;
@@ -1152,10 +1153,7 @@ int bkf_trainspec_mode(const bkf_model_params *p, const bkf_trainspec_train *t, 
         double pmax = 0.0;
         double complex *pv = u, *qv = du; /* overwritten in place */
         for (size_t i = 0; i < N; i++) {
-            size_t at = smp[i].at;
-            double z = (double)at * x.S / (double)N / (x.v * x.s);
-            double cyc = fmin(floor(z / x.T), (double)(t->n - 1));
-            double complex factor = cexp(scale_at[i] - top - sigma * r[i] / x.s + I * cyc * theta);
+            double complex factor = cexp(scale_at[i] - top - sigma * r[i] / x.s + I * smp[i].cycle * theta);
             double complex pi = factor * u[i];
             double complex dpi = factor * (du[i] - sigma * u[i] / x.s) / (x.v * x.s);
             pv[i] = pi;
