@@ -15,9 +15,10 @@
  * cycle's own multiplier, for every sigma (Liouville): a gauge of the
  * integration.  sigma = 0 at theta = 0 (translation) is the other.
  *
- * Method: M(sigma) by a fourth-order Magnus integrator with exact 2x2
- * exponentials on the cycle's adapted mesh (steps subdivided), so stiffness
- * (large mu) and fast oscillation (large |sigma|) cost no extra steps.  The
+ * Method: M(sigma) by three-stage Radau IIA steps (order 5, L-stable) on a
+ * mesh built from the cycle's adapted one: steps resolve the local rates,
+ * except on the stiff slow branches of thin trains (large mu), where the
+ * L-stable step damps the fast solution and resolves the slow one only.  The
  * rightmost spectrum at each height Im sigma = y is the root in a of
  * |multiplier(a + i y)| = 1 for each of the two multipliers; these curves are
  * traced over y in [0, B], where B is extended until the curves have fallen
@@ -44,8 +45,9 @@ typedef struct {
     double tol;        /* absolute accuracy asked of each sigma, [1e-8, 1e-2]; default 1e-6 */
     size_t per_kappa;  /* leading eigenvalues reported per Bloch number, [1, 50]; default 3
                           (one more where the cut would split a conjugate pair) */
-    double max_work;   /* Magnus steps in all, the work budget, [1e5, 1e12]; 0 (default):
-                          4e7, about a second (the paper's n = 11, mu 14, takes 1.4e7); a
+    double max_work;   /* Radau steps in all, the work budget, [1e5, 1e12]; 0 (default):
+                          2.5e7, about 2 s (the paper's n = 11, mu 14, takes 5e6, n = 12,
+                          mu 47, 2e7); a
                           spectrum that needs more is refused (BKF_EBUDGET) */
     const volatile sig_atomic_t *cancel; /* when non-NULL and *cancel becomes nonzero
                           (e.g. in a signal handler), the spectrum stops within one
@@ -92,9 +94,9 @@ typedef struct {
     double liouville_residual;       /* |ln det M - ln m| (the cycle's multiplier) */
     double a_lo, y_max;              /* window searched: Re sigma > a_lo, |Im sigma| <= y_max */
     double r_inf;                    /* the line the spectrum approaches as |Im sigma| -> inf */
-    size_t mesh_steps;               /* Magnus steps per period (finer mesh) */
+    size_t mesh_steps;               /* Radau steps per period (finer mesh) */
     size_t evaluations;              /* monodromies computed */
-    double work;                     /* Magnus steps taken in all (see max_work) */
+    double work;                     /* Radau steps taken in all (see max_work) */
     size_t curve_points;             /* heights y sampled */
 } bkf_trainspec_result;
 
@@ -119,13 +121,13 @@ int bkf_trainspec_line(const bkf_model_params *params, const bkf_trainspec_train
                        bkf_trainspec_eigenvalue *out, bkf_error *err);
 
 /* One eigenvalue on a fixed mesh: Newton from sigma0 = (re0, im0) on the
- * multiplier exp(2 pi i j / n) of Bloch class j (j < n), every step of the
- * cycle's mesh cut into `substeps` Magnus steps ([1, 4096]; the ring
- * spectrum's meshes take 1 and 2, doubled on refinement) on top of those
- * the local rates need at |sigma| ~ |sigma0|.  Doubling substeps halves
- * every step, so the error falls 16-fold (fourth order): for convergence
+ * multiplier exp(2 pi i j / n) of Bloch class j (j < n), on the mesh the
+ * local rates need at |sigma| ~ |sigma0| with `substeps` times its steps
+ * ([1, 4096]; the ring spectrum's meshes take 1 and 2, doubled on
+ * refinement).  Doubling substeps halves
+ * every step, so the error falls 32-fold (fifth order): for convergence
  * studies and for following one eigenvalue.  No error estimate; BKF_ENUMERIC
- * when Newton does not converge.  *mesh_steps (may be NULL) gets the Magnus
+ * when Newton does not converge.  *mesh_steps (may be NULL) gets the Radau
  * steps per period. */
 int bkf_trainspec_eigenvalue_at(const bkf_model_params *params, const bkf_trainspec_train *train,
                                 size_t j, double re0, double im0, size_t substeps, double *re,

@@ -19,9 +19,10 @@
 #define PROFILE_ERROR 2e-9
 #define TOL_MAX 1e-2
 #define PER_KAPPA_MAX 50
-/* Magnus substeps per cycle step: start, and the most the refinement may reach. */
+/* Mesh multiplier (substeps) of the first pass. */
 #define SUBSTEPS_START 1
 #define MESH_MAX_STEPS 100000
+#define MESH_MIN_STEPS 16
 /* Heights sampled per family on the first pass, and the finest interval as
  * a fraction of the window. */
 #define CURVE_START 48
@@ -36,17 +37,39 @@
 /* The edges of a curve (where it leaves the window) are located to this
  * fraction of the window's height; phase and bends to CURVE_MIN_FRACTION. */
 #define EDGE_FRACTION (1.0 / 1024.0)
-#define MAX_WORK_DEFAULT 4e7
+#define MAX_WORK_DEFAULT 2.5e7
+/* A long (stiff) step is used where the fast solution decays by at least
+ * this many e-foldings per step over the whole window's Re sigma. */
+#define STIFF_MIN 1.0
+/* Through the fronts the coefficients change faster than the local rates
+ * tell: a step spans at most this change of the profile f (measured: at
+ * mu 47 it cuts the error of a 1400-step mesh from 1.6e-4 to 2e-7). */
+#define PROFILE_TURN 0.03
+/* The cycle's own mesh (adapted to the cycle at tol 1e-12) knows where the
+ * coefficients change fast better than the rates do: each of its steps
+ * takes at least this share of a step. */
+#define NODE_SHARE 0.5
+/* The fine mesh halves every step of the coarse one and the Radau step is
+ * fifth order: the fine value's error is the difference / 31 once the
+ * meshes converge (measured ratios 29-37 at mu 14 and 47); dividing by 8
+ * keeps a margin of 4. */
+#define RICHARDSON 8.0
 
 enum { FAMILIES = 2 };
 
-/* Coefficients at the two Gauss points of every Magnus step:
+/* Coefficients at the three Radau IIA points of every step,
  * u'' = a u' + (b0 + beta sigma (sigma + gamma phi)) u. */
 typedef struct {
     size_t steps;
-    double *h, *a, *b0, *phi; /* h per step; a, b0, phi: 2 per step */
-    double trace_sum;         /* sum of the steps' traces: ln det M */
+    double *h, *a, *b0, *phi; /* h per step; a, b0, phi: STRIDE per step */
+    /* per step, the parts of the stage matrix G and of A bp that do not
+     * depend on sigma (see radau_step): G0, M = A diag(phi) A (9 each),
+     * A b0 and A phi (3 each) */
+    double *g0, *m, *ab0, *aphi;
+    double trace_sum;         /* the steps' quadratures of the trace: ln det M */
 } mesh;
+
+enum { STRIDE = 3 };
 
 typedef struct {
     double gamma, c, nu, mu, v, s, beta, T, log_m, S, L;
@@ -57,10 +80,12 @@ typedef struct {
     size_t node_count;
     size_t substeps;
     double sigma_reach; /* largest |sigma| the meshes must resolve */
-    double *node_rate;  /* per cycle node: the fastest local rate of u at sigma_reach */
+    double re_floor;    /* smallest Re sigma the meshes must serve (Radau steps
+                           need the fast solution to decay there) */
+    double *need;       /* per cycle step: the steps it needs at sigma_reach (see node_rates) */
     mesh coarse, fine;
     size_t evaluations;
-    double work, max_work;               /* Magnus steps taken, and allowed */
+    double work, max_work;               /* steps taken, and allowed */
     const volatile sig_atomic_t *cancel;
     int stop;                            /* BKF_EBUDGET or BKF_ECANCELED once either is hit */
 } ctx;
@@ -70,79 +95,140 @@ typedef struct {
 static void mesh_free(mesh *m)
 {
     free(m->h);
+    free(m->g0);
+    free(m->m);
+    free(m->ab0);
+    free(m->aphi);
     free(m->a);
     free(m->b0);
     free(m->phi);
     memset(m, 0, sizeof *m);
 }
 
-/* Magnus steps in the cycle step i: each step spans at most RESOLVE_TURN
- * e-foldings or radians of the fastest local solution, the roots of
- * lambda^2 = a lambda + b.  A fourth-order Magnus step is exact for frozen
- * coefficients but its commutator correction is only accurate while h |A|
- * stays O(1): on the slow branches of a stiff cycle |a| = mu |f^2 - 1|. */
-static size_t pieces(const ctx *x, size_t i, size_t substeps)
-{
-    double len = x->nodes[i + 1] - x->nodes[i];
-    double rate = fmax(x->node_rate[i], x->node_rate[i + 1]);
-    double need = fmax(1.0, ceil(len * rate / RESOLVE_TURN)) * (double)substeps;
-    return (size_t)fmin(need, 1e9);
-}
-
-/* The local rates at the nodes for |sigma| up to reach. */
+/* The steps each cycle step needs (a real number: the meshes spread them
+ * evenly, see mesh_bounds) for |sigma| up to reach.  Where the cycle step
+ * is not stiff a step spans at most RESOLVE_TURN e-foldings or radians of
+ * the fastest local solution, the roots of lambda^2 = a lambda + b; where
+ * it is stiff, RESOLVE_TURN of the slow solution only.  Either way at most
+ * PROFILE_TURN of the profile's change.
+ *
+ * Stiff cycle steps:  In p = exp(-sigma z / s) u (the perturbation of psi
+ * itself) the system is p'' = ap p' + bp p with ap = -mu phi - 2 sigma / s,
+ * bp = b0 - sigma (sigma + gamma phi): on a slow branch (phi > 0) one
+ * solution decays at Re ap <= -mu (phi + 2 re_floor / gamma) and the other,
+ * the one the spectrum is made of, varies at |bp / ap| only.  There the
+ * L-stable Radau step, which damps the fast solution as the flow does,
+ * needs to resolve the slow one alone: steps O(mu) times longer. */
 static int node_rates(ctx *x, double reach, bkf_error *err)
 {
-    if (x->node_rate && reach == x->sigma_reach) return BKF_OK;
+    if (x->need && reach == x->sigma_reach) return BKF_OK;
     size_t n = x->node_count;
-    double *f = malloc(n * sizeof *f), *fp = malloc(n * sizeof *fp);
-    double *rate = realloc(x->node_rate, n * sizeof *rate);
-    if (rate) x->node_rate = rate;
-    int rc = !f || !fp || !rate ? bkf_error_set(err, BKF_ENOMEM, "out of memory")
-                                : bkf_cycle_profile_sample(x->cycle, x->nodes, n, f, fp, err);
+    double *f = malloc(n * sizeof *f), *fp = malloc(n * sizeof *fp), *slow = malloc(n * sizeof *slow);
+    double *phi = malloc(n * sizeof *phi), *rate = malloc(n * sizeof *rate);
+    double *need = realloc(x->need, n * sizeof *need);
+    if (need) x->need = need;
+    int rc = !f || !fp || !slow || !phi || !rate || !need ? bkf_error_set(err, BKF_ENOMEM, "out of memory")
+                                                          : bkf_cycle_profile_sample(x->cycle, x->nodes, n, f, fp, err);
     for (size_t i = 0; rc == BKF_OK && i < n; i++) {
-        double phi = f[i] * f[i] - 1.0, a = x->mu * fabs(phi);
-        double b = fabs(1.0 + 2.0 * x->mu * f[i] * fp[i]) + x->beta * reach * (reach + x->gamma * fabs(phi));
-        x->node_rate[i] = 0.5 * a + sqrt(0.25 * a * a + b);
+        phi[i] = f[i] * f[i] - 1.0;
+        double a = x->mu * fabs(phi[i]), b_fixed = fabs(1.0 + 2.0 * x->mu * f[i] * fp[i]);
+        double b = b_fixed + x->beta * reach * (reach + x->gamma * fabs(phi[i]));
+        rate[i] = 0.5 * a + sqrt(0.25 * a * a + b);
+        slow[i] = b_fixed + reach * (reach + x->gamma * fabs(phi[i])); /* bounds |bp| */
+    }
+    for (size_t i = 0; rc == BKF_OK && i + 1 < n; i++) {
+        double len = x->nodes[i + 1] - x->nodes[i];
+        double plain = len * fmax(rate[i], rate[i + 1]) / RESOLVE_TURN;
+        double decay = x->mu * (fmin(phi[i], phi[i + 1]) + 2.0 * x->re_floor / x->gamma);
+        double stiff = decay > 0.0 ? len * fmax(slow[i], slow[i + 1]) / decay / RESOLVE_TURN : INFINITY;
+        /* stiff steps, of length len / stiff, must damp the fast solution */
+        int use_stiff = stiff < plain && decay * len >= STIFF_MIN * fmax(stiff, 1.0);
+        need[i] = fmax(fmax(use_stiff ? stiff : plain, fabs(f[i + 1] - f[i]) / PROFILE_TURN), NODE_SHARE);
     }
     x->sigma_reach = reach;
     free(f);
     free(fp);
+    free(slow);
+    free(phi);
+    free(rate);
     return rc;
 }
 
+/* The Radau IIA (three stages, order 5, L-stable) tableau. */
+#define SQ6 2.449489742783178098197284
+static const double RADAU_C[3] = {(4.0 - SQ6) / 10.0, (4.0 + SQ6) / 10.0, 1.0};
+#define RA11 ((88.0 - 7.0 * SQ6) / 360.0)
+#define RA12 ((296.0 - 169.0 * SQ6) / 1800.0)
+#define RA13 ((-2.0 + 3.0 * SQ6) / 225.0)
+#define RA21 ((296.0 + 169.0 * SQ6) / 1800.0)
+#define RA22 ((88.0 + 7.0 * SQ6) / 360.0)
+#define RA23 ((-2.0 - 3.0 * SQ6) / 225.0)
+#define RA31 ((16.0 - SQ6) / 36.0)
+#define RA32 ((16.0 + SQ6) / 36.0)
+#define RA33 (1.0 / 9.0)
+static const double RADAU_A[3][3] = {{RA11, RA12, RA13}, {RA21, RA22, RA23}, {RA31, RA32, RA33}};
+#define RA2(q1, q2, q3, j1, j2, j3) (q1 * j1 + q2 * j2 + q3 * j3)
+/* A^2 */
+static const double RADAU_A2[3][3] = {
+    {RA2(RA11, RA12, RA13, RA11, RA21, RA31), RA2(RA11, RA12, RA13, RA12, RA22, RA32), RA2(RA11, RA12, RA13, RA13, RA23, RA33)},
+    {RA2(RA21, RA22, RA23, RA11, RA21, RA31), RA2(RA21, RA22, RA23, RA12, RA22, RA32), RA2(RA21, RA22, RA23, RA13, RA23, RA33)},
+    {RA2(RA31, RA32, RA33, RA11, RA21, RA31), RA2(RA31, RA32, RA33, RA12, RA22, RA32), RA2(RA31, RA32, RA33, RA13, RA23, RA33)}};
+
 /* A mesh on the step boundaries bounds[0..steps] (ascending in [0, T]):
- * the coefficients at each step's two Gauss points. */
+ * the coefficients at each step's Radau points. */
 static int mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf_error *err)
 {
     mesh_free(m);
     m->steps = steps;
     size_t cap = steps ? steps : 1;
     m->h = malloc(cap * sizeof *m->h);
-    m->a = malloc(2 * cap * sizeof *m->a);
-    m->b0 = malloc(2 * cap * sizeof *m->b0);
-    m->phi = malloc(2 * cap * sizeof *m->phi);
-    double *z = malloc(2 * cap * sizeof *z), *f = malloc(2 * cap * sizeof *f), *fp = malloc(2 * cap * sizeof *fp);
+    m->a = malloc(STRIDE * cap * sizeof *m->a);
+    m->b0 = malloc(STRIDE * cap * sizeof *m->b0);
+    m->phi = malloc(STRIDE * cap * sizeof *m->phi);
+    m->g0 = malloc(9 * cap * sizeof *m->g0);
+    m->m = malloc(9 * cap * sizeof *m->m);
+    m->ab0 = malloc(3 * cap * sizeof *m->ab0);
+    m->aphi = malloc(3 * cap * sizeof *m->aphi);
+    double *z = malloc(STRIDE * cap * sizeof *z), *f = malloc(STRIDE * cap * sizeof *f);
+    double *fp = malloc(STRIDE * cap * sizeof *fp);
     int rc = BKF_OK;
-    if (!m->h || !m->a || !m->b0 || !m->phi || !z || !f || !fp) {
+    if (!m->h || !m->a || !m->b0 || !m->phi || !m->g0 || !m->m || !m->ab0 || !m->aphi || !z || !f || !fp) {
         rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
         goto done;
     }
-    const double g = 0.5 / sqrt(3.0);
     for (size_t k = 0; k < steps; k++) {
-        double h = bounds[k + 1] - bounds[k], mid = bounds[k] + 0.5 * h;
+        double h = bounds[k + 1] - bounds[k];
         m->h[k] = h;
-        z[2 * k] = fmax(mid - g * h, 0.0);
-        z[2 * k + 1] = fmin(mid + g * h, x->T);
+        for (int q = 0; q < 3; q++) z[STRIDE * k + q] = fmin(bounds[k] + RADAU_C[q] * h, x->T);
     }
-    rc = bkf_cycle_profile_sample(x->cycle, z, 2 * steps, f, fp, err);
+    rc = bkf_cycle_profile_sample(x->cycle, z, STRIDE * steps, f, fp, err);
     if (rc != BKF_OK) goto done;
     m->trace_sum = 0.0;
-    for (size_t i = 0; i < 2 * steps; i++) {
+    for (size_t i = 0; i < STRIDE * steps; i++) {
         m->phi[i] = f[i] * f[i] - 1.0;
         m->a[i] = -x->mu * m->phi[i];
         m->b0[i] = -(1.0 + 2.0 * x->mu * f[i] * fp[i]);
     }
-    for (size_t i = 0; i < steps; i++) m->trace_sum += 0.5 * m->h[i] * (m->a[2 * i] + m->a[2 * i + 1]);
+    for (size_t i = 0; i < steps; i++) {
+        const double *a = m->a + STRIDE * i, *b0 = m->b0 + STRIDE * i, *phi = m->phi + STRIDE * i;
+        double h = m->h[i];
+        /* Radau quadrature (order 5) of the trace -mu phi */
+        m->trace_sum += h * (RADAU_A[2][0] * a[0] + RADAU_A[2][1] * a[1] + RADAU_A[2][2] * a[2]);
+        for (int q = 0; q < 3; q++) {
+            m->ab0[3 * i + q] = m->aphi[3 * i + q] = 0.0;
+            for (int j = 0; j < 3; j++) {
+                m->ab0[3 * i + q] += RADAU_A[q][j] * b0[j];
+                m->aphi[3 * i + q] += RADAU_A[q][j] * phi[j];
+                double ab = 0.0, ap = 0.0;
+                for (int l = 0; l < 3; l++) {
+                    ab += RADAU_A[q][l] * b0[l] * RADAU_A[l][j];
+                    ap += RADAU_A[q][l] * phi[l] * RADAU_A[l][j];
+                }
+                m->g0[9 * i + 3 * q + j] = (q == j) - h * RADAU_A[q][j] * a[j] - h * h * ab;
+                m->m[9 * i + 3 * q + j] = ap;
+            }
+        }
+    }
 done:
     free(z);
     free(f);
@@ -151,27 +237,34 @@ done:
     return rc;
 }
 
-/* The step boundaries of a mesh with `substeps` times the pieces that
- * resolve the local rates (see pieces): *bounds (steps + 1 values). */
+/* The step boundaries of a mesh of `substeps` times the steps the cycle
+ * steps need (node_rates), spread evenly in the cumulative need, so that
+ * doubling substeps halves every step: *bounds (steps + 1 values). */
 static int mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, bkf_error *err)
 {
-    size_t count = 0;
-    for (size_t i = 0; i + 1 < x->node_count; i++) count += pieces(x, i, substeps);
+    double total = 0.0;
+    for (size_t i = 0; i + 1 < x->node_count; i++) total += x->need[i];
+    double count = fmax(ceil(total), MESH_MIN_STEPS) * (double)substeps;
     if (count > MESH_MAX_STEPS)
-        return bkf_error_set(err, BKF_EBUDGET,
-                             "the spectrum needs more than %d Magnus steps per period (mu = %.15g)",
+        return bkf_error_set(err, BKF_EBUDGET, "the spectrum needs more than %d steps per period (mu = %.15g)",
                              MESH_MAX_STEPS, x->mu);
-    double *b = malloc((count + 1) * sizeof *b);
+    size_t k_max = (size_t)count;
+    double *b = malloc((k_max + 1) * sizeof *b);
     if (!b) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    size_t k = 0;
-    for (size_t i = 0; i + 1 < x->node_count; i++) {
-        size_t parts = pieces(x, i, substeps);
-        double h = (x->nodes[i + 1] - x->nodes[i]) / (double)parts;
-        for (size_t q = 0; q < parts; q++) b[k++] = x->nodes[i] + (double)q * h;
+    /* boundary k sits where the cumulative need reaches k total / k_max,
+     * linear within each cycle step */
+    double below = 0.0, per_step = total / count;
+    size_t i = 0;
+    b[0] = 0.0;
+    for (size_t k = 1; k < k_max; k++) {
+        double target = (double)k * per_step;
+        while (i + 2 < x->node_count && below + x->need[i] < target) below += x->need[i++];
+        double frac = x->need[i] > 0.0 ? fmin(1.0, (target - below) / x->need[i]) : 1.0;
+        b[k] = x->nodes[i] + frac * (x->nodes[i + 1] - x->nodes[i]);
     }
-    b[k] = x->T;
+    b[k_max] = x->T;
     *bounds = b;
-    *steps = count;
+    *steps = k_max;
     return BKF_OK;
 }
 
@@ -187,45 +280,71 @@ static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
 
 /* ---------------------------------------------------------- monodromy */
 
-/* exp(Omega) of Magnus step i at sigma as e[0..3] (row-major) times
- * exp(return value): the growth of a stiff step kept out of e. */
-static double magnus_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4])
+/* The Radau IIA step i at sigma as e[0..3] (row-major) times exp(return
+ * value): the growth of the step kept out of e.  It is taken
+ * in p = exp(-sigma z / s) u, where the solution that survives varies
+ * slowly (see node_rates), and turned into u's basis:
+ *     (u, u') = exp(k z) K (p, p'),  K = [[1, 0], [k, 1]],  k = sigma / s.
+ * With V the stages of p', the stages of p are p0 + h A V, so the six
+ * stage equations reduce to three:
+ *     (I - h A diag(ap) - h^2 A diag(bp) A) V = p0' + h p0 A bp. */
+static double radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4])
 {
-    const double r3 = sqrt(3.0) / 12.0;
-    double complex extra = x->beta * sigma;
-    double h = m->h[i], a1 = m->a[2 * i], a2 = m->a[2 * i + 1];
-    double complex b1 = m->b0[2 * i] + extra * (sigma + x->gamma * m->phi[2 * i]);
-    double complex b2 = m->b0[2 * i + 1] + extra * (sigma + x->gamma * m->phi[2 * i + 1]);
-    double k = r3 * h * h;
-    double tr = 0.5 * h * (a1 + a2);
-    /* Omega = h/2 (A1 + A2) - sqrt(3) h^2/12 [A1, A2], A = [[0, 1], [b, a]] */
-    double complex n11 = -k * (b2 - b1) - 0.5 * tr;
-    double complex n12 = h - k * (a2 - a1);
-    double complex n21 = 0.5 * h * (b1 + b2) - k * (a1 * b2 - a2 * b1);
-    double complex d2 = n11 * n11 + n12 * n21;
-    double complex ch, sc;
-    double lg = 0.5 * tr;
-    if (creal(d2) * creal(d2) + cimag(d2) * cimag(d2) < 0.0625) { /* |d2| < 0.25 */
-        /* cosh d and sinh d / d are series in d^2: no square root, no
-         * complex transcendental (most steps land here); truncation below
-         * 0.25^8 / 16! ~ 1e-18 */
-        ch = 1 + d2 * (1.0 / 2 + d2 * (1.0 / 24 + d2 * (1.0 / 720 + d2 * (1.0 / 40320 + d2 * (1.0 / 3628800 +
-             d2 * (1.0 / 479001600 + d2 * (1.0 / 87178291200.0)))))));
-        sc = 1 + d2 * (1.0 / 6 + d2 * (1.0 / 120 + d2 * (1.0 / 5040 + d2 * (1.0 / 362880 + d2 * (1.0 / 39916800 +
-             d2 * (1.0 / 6227020800.0 + d2 * (1.0 / 1307674368000.0)))))));
-    } else {
-        double complex d = csqrt(d2);
-        double complex ex = cexp(-2.0 * d);
-        double complex ph = cexp(I * cimag(d));
-        ch = 0.5 * (1.0 + ex) * ph;
-        sc = 0.5 * (1.0 - ex) / d * ph;
-        lg += creal(d);
+    double h = m->h[i];
+    double complex k = sigma / x->s, G[3][3], r[3][2];
+    /* ap = a - 2 k, bp = b0 - sigma^2 - gamma sigma phi: G = G0 + 2 k h A
+     * + h^2 sigma^2 A^2 + h^2 gamma sigma M (mesh_fill made G0 and M) */
+    double complex c1 = 2.0 * k * h, c2 = h * h * sigma * sigma, c3 = h * h * x->gamma * sigma;
+    double complex s2 = sigma * sigma, gs = x->gamma * sigma;
+    const double *g0 = m->g0 + 9 * i, *mm = m->m + 9 * i;
+    for (int q = 0; q < 3; q++) {
+        for (int j = 0; j < 3; j++)
+            G[q][j] = g0[3 * q + j] + c1 * RADAU_A[q][j] + c2 * RADAU_A2[q][j] + c3 * mm[3 * q + j];
+        /* right-hand sides for (p0, p0') = (1, 0) and (0, 1); A 1 = c */
+        r[q][0] = h * (m->ab0[3 * i + q] - s2 * RADAU_C[q] - gs * m->aphi[3 * i + q]);
+        r[q][1] = 1.0;
     }
-    e[0] = ch + sc * n11;
-    e[1] = sc * n12;
-    e[2] = sc * n21;
-    e[3] = ch - sc * n11;
-    return lg;
+    /* Gaussian elimination with partial pivoting */
+    for (int c = 0; c < 3; c++) {
+        int piv = c;
+        for (int q = c + 1; q < 3; q++)
+            if (fabs(creal(G[q][c])) + fabs(cimag(G[q][c])) > fabs(creal(G[piv][c])) + fabs(cimag(G[piv][c])))
+                piv = q;
+        if (piv != c)
+            for (int j = 0; j < 3; j++) {
+                double complex t = G[c][j];
+                G[c][j] = G[piv][j], G[piv][j] = t;
+                if (j < 2) t = r[c][j], r[c][j] = r[piv][j], r[piv][j] = t;
+            }
+        for (int q = c + 1; q < 3; q++) {
+            double complex l = G[q][c] / G[c][c];
+            for (int j = c; j < 3; j++) G[q][j] -= l * G[c][j];
+            r[q][0] -= l * r[c][0], r[q][1] -= l * r[c][1];
+        }
+    }
+    double complex V[3][2];
+    for (int q = 2; q >= 0; q--)
+        for (int rhs = 0; rhs < 2; rhs++) {
+            double complex sum = r[q][rhs];
+            for (int j = q + 1; j < 3; j++) sum -= G[q][j] * V[j][rhs];
+            V[q][rhs] = sum / G[q][q];
+        }
+    /* p's step matrix: p1 = p0 + h sum A_3j V_j, p1' = V_3 */
+    double complex pe[4];
+    for (int rhs = 0; rhs < 2; rhs++) {
+        double complex sum = 0;
+        for (int j = 0; j < 3; j++) sum += RADAU_A[2][j] * V[j][rhs];
+        pe[rhs] = (rhs == 0) + h * sum;
+        pe[2 + rhs] = V[2][rhs];
+    }
+    /* u's step matrix exp(k h) K P K^-1, the modulus of exp(k h) returned */
+    double complex d0 = pe[0] - k * pe[1], d2 = pe[2] - k * pe[3];
+    double complex ph = cexp(I * cimag(k * h));
+    e[0] = ph * d0;
+    e[1] = ph * pe[1];
+    e[2] = ph * (k * d0 + d2);
+    e[3] = ph * (k * pe[1] + pe[3]);
+    return creal(k * h);
 }
 
 /* Keeps the entries of v (count of them) near 1 in modulus, the factor
@@ -262,7 +381,7 @@ static void monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double
     x->work += (double)m->steps;
     for (size_t i = 0; i < m->steps; i++) {
         double complex e[4];
-        *scale += magnus_step(x, m, i, sigma, e);
+        *scale += radau_step(x, m, i, sigma, e);
         double complex q0 = e[0] * p[0] + e[1] * p[2], q1 = e[0] * p[1] + e[1] * p[3];
         double complex q2 = e[2] * p[0] + e[3] * p[2], q3 = e[2] * p[1] + e[3] * p[3];
         p[0] = q0, p[1] = q1, p[2] = q2, p[3] = q3;
@@ -656,7 +775,7 @@ static void ctx_free(ctx *x)
     mesh_free(&x->fine);
     bkf_cycle_free(x->cycle);
     free(x->nodes);
-    free(x->node_rate);
+    free(x->need);
 }
 
 static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, double tol,
@@ -692,13 +811,13 @@ static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train
     x->nodes[count] = x->T;
     x->node_count = count + 1;
     x->substeps = SUBSTEPS_START;
+    x->re_floor = -2.0 * WINDOW_DEPTH * x->gamma;
     return BKF_OK;
 }
 
-/* Trace both families over [0, B], B grown until the curves stay left of
- * a_lo in its upper quarter. */
-/* The meshes for a window up to height B: a Magnus step turns the fastest
- * solution, u ~ exp(+-sqrt(beta) sigma z), by at most RESOLVE_TURN. */
+/* The meshes for a window up to height B: a step turns the fastest
+ * solution, u ~ exp(+-sqrt(beta) sigma z), by at most RESOLVE_TURN (see
+ * node_rates). */
 static int meshes_for(ctx *x, double B, const window *win, bkf_error *err)
 {
     int rc = node_rates(x, hypot(B, win->a_hi), err);
@@ -706,6 +825,8 @@ static int meshes_for(ctx *x, double B, const window *win, bkf_error *err)
     return rc != BKF_OK ? rc : mesh_build(x, 2 * x->substeps, &x->fine, err);
 }
 
+/* Trace both families over [0, B], B grown until the curves stay left of
+ * a_lo in its upper quarter. */
 static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *err)
 {
     /* beyond |sigma| ~ gamma v / c the spectrum is in its asymptotic regime */
@@ -765,7 +886,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
             if (polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
             sf = sc;
             if (polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
-            double e = cabs(sf - sc) + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
+            double e = cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
             int dup = 0;
             for (size_t k = start_n; k < n_eig; k++)
                 if (cabs((eig[k].re + I * eig[k].im) - sf) < 10.0 * fmax(e, x->tol)) dup = 1;
@@ -786,7 +907,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
             sf = sc;
             ok = ok && polish(x, &x->fine, 0.0, &sf, &step_f) == BKF_OK;
             eig[n_eig++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf),
-                                                      ok ? cabs(sf - sc) + step_f + PROFILE_ERROR : INFINITY,
+                                                      ok ? cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR : INFINITY,
                                                       0, 0.0, 0};
         }
         eig[k].translation = 1;
@@ -803,7 +924,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
         if (worst <= x->tol) break;
         if (r == MESH_REFINEMENTS) {
             rc = bkf_error_set(err, BKF_ETOL,
-                               "spectrum: an eigenvalue's estimated error %.3g exceeds tol %.3g at %zu Magnus "
+                               "spectrum: an eigenvalue's estimated error %.3g exceeds tol %.3g at %zu "
                                "steps per period",
                                worst, x->tol, x->fine.steps);
             break;
@@ -820,7 +941,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
             if (polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
             eig[k].re = creal(sf);
             eig[k].im = cimag(sf);
-            eig[k].err = cabs(sf - sc) + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
+            eig[k].err = cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
         }
     }
     if (rc == BKF_OK) {
@@ -861,7 +982,7 @@ static int stopped(const ctx *x, int rc, bkf_error *err)
     if (x->stop == BKF_ECANCELED) return bkf_error_set(err, BKF_ECANCELED, "spectrum: canceled");
     if (x->stop == BKF_EBUDGET)
         return bkf_error_set(err, BKF_EBUDGET,
-                             "the spectrum needs more than %.3g Magnus steps in all (mu = %.15g; the budget is "
+                             "the spectrum needs more than %.3g Radau steps in all (mu = %.15g; the budget is "
                              "max_work)",
                              x->max_work, x->mu);
     return rc;
@@ -986,6 +1107,7 @@ static int one_eigenvalue(ctx *x, const bkf_model_params *p, const bkf_trainspec
                           double complex *sigma, size_t substeps, bkf_error *err)
 {
     int rc = ctx_init(x, p, t, TOL_MIN, NULL, err);
+    x->re_floor = fmin(x->re_floor, creal(*sigma) - WINDOW_DEPTH * x->gamma);
     if (rc == BKF_OK) rc = node_rates(x, 2.0 * cabs(*sigma) + 1.0, err);
     if (rc == BKF_OK) rc = mesh_build(x, substeps, &x->fine, err);
     if (rc != BKF_OK) return rc;
@@ -1084,7 +1206,7 @@ static int mode_walk(ctx *x, double complex sigma, const double complex y0[2], c
             }
             if (k + 1 == count) break;
             double complex e[4];
-            scale += magnus_step(x, &walk, k, sigma, e);
+            scale += radau_step(x, &walk, k, sigma, e);
             double complex y1 = e[0] * y[0] + e[1] * y[1], y2 = e[2] * y[0] + e[3] * y[1];
             y[0] = y1, y[1] = y2;
             rescale(y, 2, &scale);

@@ -29,7 +29,7 @@ void bench_trainspec(void)
         bkf_speeds_table_free(&table);
         return;
     }
-    printf("| n | mu | stable | sigma_max | Magnus steps | monodromies | time |\n|---|---|---|---|---|---|---|\n");
+    printf("| n | mu | stable | sigma_max | steps per period | monodromies | time |\n|---|---|---|---|---|---|---|\n");
     double total = 0;
     for (size_t i = 0; i < table.count; i++) {
         bkf_trainspec_train t = {table.roots[i].n, table.roots[i].v};
