@@ -12,6 +12,7 @@
 #include "bkfront/continuation.h"
 #include "bkfront/cycle.h"
 #include "bkfront/speeds.h"
+#include "bkfront/chainwave.h"
 #include "bkfront/asymfit.h"
 #include "bkfront/floquet.h"
 #include "bkfront/hill.h"

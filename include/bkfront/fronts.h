@@ -36,11 +36,15 @@ typedef struct {
     int stability;          /* add each root's spectral verdict (bkf_stability_root; c > 0) */
     double stability_tol;   /* its absolute tolerance on sigma, [1e-10, 1e-2]; 0 (default):
                                trainspec's default, 1e-6; only with stability */
+    int model;              /* 0 (default): the continuum; 1: the chain of N blocks, its
+                               rotating waves (module chainwave) */
+    size_t N;               /* chain only: blocks, [2, 400]; 0 (default): S, which must
+                               then be a whole number */
 } bkf_fronts_spec;
 
 bkf_fronts_spec bkf_fronts_spec_default(void);
 
-/* The keys: gamma, c, nu, S, n, nmax, tol, method, stability, stability-tol. */
+/* The keys: gamma, c, nu, S, n, nmax, tol, method, stability, stability-tol, model, N. */
 extern const bkf_option bkf_fronts_options[];
 extern const size_t bkf_fronts_noptions;
 
@@ -71,6 +75,16 @@ void bkf_fronts_root_values(const bkf_speeds_root *root, bkf_io_value *values);
  * holds a partial table and the caller discards it. */
 int bkf_fronts_write(const bkf_fronts_spec *spec, FILE *out, bkf_io_format format,
                      const bkf_provenance *provenance, bkf_error *err);
+
+/* With model = chain (bkf_chainwave_find: every wave connected to the
+ * uncoupled chain, n <= N/2 unless n or nmax say otherwise; tol in
+ * [1e-11, 1e-3]; method and stability-tol do not apply) the columns are
+ * those of bkf_fronts_chain_columns: n, v, v_err, P, P_err, tau, h,
+ * wavelength, residual, psi_min, psi_max, and with stability: stable,
+ * sigma_max, sigma_max_err, mult_abs, mult_abs_err, mult_arg, trivial_err. */
+#define BKF_FRONTS_CHAIN_COLUMNS 11
+#define BKF_FRONTS_CHAIN_STABILITY_COLUMNS 18
+const bkf_io_column *bkf_fronts_chain_columns(int stability, size_t *count);
 
 /* ---------------------------------------------------------------- branch */
 

@@ -7,6 +7,7 @@
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_roots.h>
 
+#include "bkfront/chainwave.h"
 #include "bkfront/cycle.h"
 #include "bkfront/stability.h"
 
@@ -41,6 +42,19 @@ static const bkf_io_column branch_stability_columns[] = {PARAM_COLUMNS, ROOT_COL
 
 _Static_assert(NSPEEDS == BKF_FRONTS_ROOT_COLUMNS, "the root's columns");
 
+#define CHAIN_COLUMNS                                                                  \
+    {"n", BKF_IO_NUMBER}, {"v", BKF_IO_NUMBER}, {"v_err", BKF_IO_NUMBER},              \
+    {"P", BKF_IO_NUMBER}, {"P_err", BKF_IO_NUMBER}, {"tau", BKF_IO_NUMBER},           \
+    {"h", BKF_IO_NUMBER}, {"wavelength", BKF_IO_NUMBER}, {"residual", BKF_IO_NUMBER}, \
+    {"psi_min", BKF_IO_NUMBER}, {"psi_max", BKF_IO_NUMBER}
+static const bkf_io_column chain_columns[] = {
+    CHAIN_COLUMNS, {"stable", BKF_IO_TEXT}, {"sigma_max", BKF_IO_NUMBER},
+    {"sigma_max_err", BKF_IO_NUMBER}, {"mult_abs", BKF_IO_NUMBER},
+    {"mult_abs_err", BKF_IO_NUMBER}, {"mult_arg", BKF_IO_NUMBER}, {"trivial_err", BKF_IO_NUMBER}};
+_Static_assert(sizeof chain_columns / sizeof chain_columns[0] ==
+                   BKF_FRONTS_CHAIN_STABILITY_COLUMNS, "the chain's columns");
+
+static const char *const model_names[] = {"continuum", "chain", NULL};
 static const char *const param_names[] = {"S", "nu", "gamma", "c", NULL};
 static const char *const method_names[] = {"auto", "asymptotic", "leading", "shooting", NULL};
 static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYMPTOTIC,
@@ -93,6 +107,15 @@ const bkf_option bkf_fronts_options[] = {
              "bkfront stability): columns stable, sigma_max, sigma_max_err,\n"
              "kappa_max, kind; needs c > 0"},
     STABILITY_TOL_OPTION(bkf_fronts_spec),
+    {.name = "model", .type = BKF_OPT_CHOICE, .offset = offsetof(bkf_fronts_spec, model),
+     .choices = model_names, .form = "continuum|chain", .shown_default = "continuum",
+     .help = "chain: the rotating waves of the chain of --N blocks\n"
+             "(spacing h = S/N), with their Floquet multipliers under\n"
+             "--stability; --tol in [1e-11, 0.001]; other columns (see below)"},
+    {.name = "N", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_fronts_spec, N), .flags = BOUNDED,
+     .min = BKF_CHAINWAVE_N_MIN, .max = BKF_CHAINWAVE_N_MAX, .form = "N",
+     .help = "with --model chain: blocks, in [2, 400]; default S (a\n"
+             "whole number then)"},
 };
 const size_t bkf_fronts_noptions = sizeof bkf_fronts_options / sizeof bkf_fronts_options[0];
 
@@ -155,10 +178,55 @@ void bkf_fronts_setup(const bkf_fronts_spec *spec, bkf_model_params *params,
     if (spec->nmax) options->n_to = spec->nmax;
 }
 
+/* The chain's parameters and options from the spec (N defaulting to S). */
+static void chain_setup(const bkf_fronts_spec *spec, bkf_model_params *params,
+                        bkf_chainwave_options *options)
+{
+    *params = model_of(spec->gamma, spec->c, spec->nu, spec->S);
+    params->kind = BKF_MODEL_CHAIN;
+    params->N = spec->N ? spec->N : (size_t)llround(spec->S);
+    *options = bkf_chainwave_options_default();
+    options->tol = spec->tol;
+    options->stability = spec->stability;
+}
+
+static int chain_check(const bkf_fronts_spec *spec, const char *p, bkf_error *err)
+{
+    if (spec->method != 0)
+        return bkf_error_set(err, BKF_EINPUT, "%smethod: continuum only (the chain has no "
+                             "formula for its waves)", p);
+    if (spec->stability_tol != 0)
+        return bkf_error_set(err, BKF_EINPUT, "%sstability-tol: continuum only (the chain's "
+                             "multipliers are computed to %stol)", p, p);
+    if (!spec->N && !(spec->S >= BKF_CHAINWAVE_N_MIN && spec->S <= BKF_CHAINWAVE_N_MAX &&
+                      spec->S == floor(spec->S)))
+        return bkf_error_set(err, BKF_EINPUT, "%sN: required when S = %g is not a whole number "
+                             "in [%d, %d] (blocks, spacing h = S/N)", p, spec->S,
+                             BKF_CHAINWAVE_N_MIN, BKF_CHAINWAVE_N_MAX);
+    if (!(spec->tol >= BKF_CHAINWAVE_TOL_MIN && spec->tol <= BKF_CHAINWAVE_TOL_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "%stol: %g is outside [%g, %g] for the chain", p,
+                             spec->tol, BKF_CHAINWAVE_TOL_MIN, BKF_CHAINWAVE_TOL_MAX);
+    bkf_model_params params;
+    bkf_chainwave_options options;
+    chain_setup(spec, &params, &options);
+    size_t top = spec->n ? spec->n : spec->nmax ? spec->nmax : params.N / 2;
+    if (top > params.N)
+        return bkf_error_set(err, BKF_EINPUT, "%s%s: %zu is outside [1, N = %zu]", p,
+                             spec->n ? "n" : "nmax", top, params.N);
+    bkf_error e;
+    if (bkf_chainwave_check(&params, top ? top : 1, &options, &e) != BKF_OK)
+        return bkf_error_set(err, BKF_EINPUT, "%sgamma, %sc, %sS, %sN: %s", p, p, p, p, e.message);
+    return BKF_OK;
+}
+
 int bkf_fronts_check(const bkf_fronts_spec *spec, const char *prefix, bkf_error *err)
 {
     if (!spec) return bkf_error_set(err, BKF_EINPUT, "speeds: spec is NULL");
     const char *p = prefix ? prefix : "";
+    if ((unsigned)spec->model > 1)
+        return bkf_error_set(err, BKF_EINPUT, "%smodel: not continuum or chain", p);
+    if (spec->model == 0 && spec->N)
+        return bkf_error_set(err, BKF_EINPUT, "%sN: only with %smodel chain", p, p);
     if (spec->n && spec->nmax)
         return bkf_error_set(err, BKF_EINPUT,
                              "%sn, %snmax: give one of them (%sn N: that n only; %snmax N: "
@@ -169,6 +237,7 @@ int bkf_fronts_check(const bkf_fronts_spec *spec, const char *prefix, bkf_error 
     if (s) return s;
     s = check_nu(p, spec->nu, err);
     if (s) return s;
+    if (spec->model == 1) return chain_check(spec, p, err);
     bkf_model_params params;
     bkf_speeds_options options;
     bkf_fronts_setup(spec, &params, &options);
@@ -378,11 +447,72 @@ static int write_speeds(const bkf_model_params *p, const bkf_speeds_options *o,
     return s;
 }
 
+const bkf_io_column *bkf_fronts_chain_columns(int stability, size_t *count)
+{
+    if (count) *count = stability ? BKF_FRONTS_CHAIN_STABILITY_COLUMNS : BKF_FRONTS_CHAIN_COLUMNS;
+    return chain_columns;
+}
+
+static int write_chain(const bkf_fronts_spec *spec, FILE *out, bkf_io_format format,
+                       const bkf_provenance *prov, bkf_error *err)
+{
+    bkf_model_params p;
+    bkf_chainwave_options o;
+    chain_setup(spec, &p, &o);
+    size_t from = spec->n ? spec->n : 1, to = spec->n ? spec->n : spec->nmax ? spec->nmax : p.N / 2;
+    bkf_chainwave_table t;
+    int s = bkf_chainwave_find(&p, from, to, &o, &t, err);
+    bkf_io_table *table = NULL;
+    size_t ncol;
+    const bkf_io_column *cols = bkf_fronts_chain_columns(spec->stability, &ncol);
+    if (!s)
+        s = bkf_product_table_open(out, format, cols, ncol,
+                                   "speeds --model chain: rotating waves psi_i(t) = F(t + i tau) "
+                                   "of N blocks, N tau = n P, v = h / tau",
+                                   prov, &table, err);
+    char a[32], b[32], c[32], d[32], e[32];
+    if (!s)
+        s = bkf_io_table_commentf(table, err,
+                                  "gamma %s, c %s, nu %s, S %s; N %zu blocks, h = S/N = %.17g, "
+                                  "K = c^2/h^2 = %.17g; tol %s (relative, on v)",
+                                  bkf_format_number(p.gamma, a, sizeof a),
+                                  bkf_format_number(p.c, b, sizeof b),
+                                  bkf_format_number(p.nu, c, sizeof c),
+                                  bkf_format_number(p.S, d, sizeof d), p.N, p.S / (double)p.N,
+                                  p.c * p.c * (double)(p.N * p.N) / (p.S * p.S),
+                                  bkf_format_number(o.tol, e, sizeof e));
+    if (!s)
+        s = bkf_io_table_commentf(table, err,
+                                  "n %zu to %zu: every wave on a branch from the uncoupled chain "
+                                  "(K = 0), followed in K to %.3g K; %zu folds, %zu branches "
+                                  "ended before K", from, to, BKF_CHAINWAVE_K_REACH, t.folds,
+                                  t.ended);
+    if (!s && t.note[0]) s = bkf_io_table_commentf(table, err, "note: %s", t.note);
+    if (!s) s = bkf_product_table_command(table, prov, err);
+    for (size_t i = 0; !s && i < t.count; i++) {
+        const bkf_chainwave *w = &t.waves[i];
+        bkf_io_value v[BKF_FRONTS_CHAIN_STABILITY_COLUMNS];
+        memset(v, 0, sizeof v);
+        double num[] = {(double)w->n, w->v, w->v_err, w->P, w->P_err, w->tau, w->h,
+                        p.S / (double)w->n, w->residual, w->psi_min, w->psi_max, 0,
+                        w->sigma_max, w->sigma_max_err, w->mult_abs, w->mult_abs_err,
+                        atan2(w->mult_im, w->mult_re), w->trivial_err};
+        for (size_t k = 0; k < ncol; k++) v[k].number = num[k];
+        v[11].text = bkf_chainwave_verdict_name(w->verdict);
+        s = bkf_io_table_row(table, v, err);
+    }
+    if (!s) s = bkf_io_table_finish(table, err);
+    bkf_io_table_free(table);
+    bkf_chainwave_table_free(&t);
+    return s;
+}
+
 int bkf_fronts_write(const bkf_fronts_spec *spec, FILE *out, bkf_io_format format,
                      const bkf_provenance *prov, bkf_error *err)
 {
     int s = bkf_fronts_check(spec, "", err);
     if (s) return s;
+    if (spec->model == 1) return write_chain(spec, out, format, prov, err);
     bkf_model_params params;
     bkf_speeds_options options;
     bkf_fronts_setup(spec, &params, &options);
