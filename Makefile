@@ -5,7 +5,8 @@
 # runs, after deps has installed what pkg-config needs.
 
 DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
-                libinih-dev libsundials-dev liblapacke-dev gnuplot-nox
+                libinih-dev libsundials-dev liblapacke-dev gnuplot-nox \
+                python3-cffi python3-numpy python3-pytest
 # Only for `make valgrind` and `make fuzz` (libFuzzer ships with clang's
 # runtime), so that `make test` needs neither.
 VALGRIND_PACKAGES := valgrind
@@ -44,6 +45,13 @@ TEST_OBJ  := $(TEST_SRC:%.c=$(BUILD)/%.o)
 BENCH_OBJ := $(BENCH_SRC:%.c=$(BUILD)/%.o)
 
 LIB   := $(BUILD)/libbkfront.a
+# The shared library: libbkfront.so.MAJOR.MINOR.PATCH with the SONAME
+# libbkfront.so.MAJOR, exporting only the bkf_ names (src/libbkfront.map).
+version_part = $(shell sed -n 's/^\#define BKF_VERSION_$(1) \([0-9]*\).*/\1/p' include/bkfront/version.h)
+MAJOR   := $(call version_part,MAJOR)
+VERSION := $(MAJOR).$(call version_part,MINOR).$(call version_part,PATCH)
+SONAME  := libbkfront.so.$(MAJOR)
+SHLIB   := $(BUILD)/libbkfront.so.$(VERSION)
 CLI   := $(BUILD)/bkfront
 TESTS := $(BUILD)/run_tests
 BENCH := $(BUILD)/run_bench
@@ -52,12 +60,12 @@ BENCH := $(BUILD)/run_bench
 EXAMPLES := $(BUILD)/examples/check_paper
 
 .PHONY: all test run bench sanitize deps clean build-all check-built bench-built fuzz-syntax \
-        sanitize-built valgrind fuzz fuzz-built
+        sanitize-built valgrind fuzz fuzz-built install uninstall FORCE
 
 all: deps
 	@$(MAKE) --no-print-directory build-all
 
-build-all: $(LIB) $(CLI)
+build-all: $(LIB) $(SHLIB) $(CLI)
 
 # The missing ones among the Debian packages $(1): apt-get update first, then
 # install (root, or sudo if not root).
@@ -85,8 +93,16 @@ test: deps
 # The benchmarks and the fuzz targets are built (the fuzz targets only
 # compiled: linking them needs clang's libFuzzer, `make fuzz`) so that a
 # change that breaks them fails here, not months later.
-check-built: $(CLI) $(TESTS) $(BENCH) fuzz-syntax
-	./$(TESTS)
+# After the C suite, and only outside the sanitizers (Python cannot load an
+# instrumented library): tests/python/ with pytest, the Python package over
+# the shared library, compared with the CLI, and a staged `make install` that
+# an external program links through pkg-config.  tests/run_suites ends with
+# one line `N passed, N failed` summing both.
+PYTHON ?= /usr/bin/python3
+check-built: $(CLI) $(TESTS) $(BENCH) fuzz-syntax $(if $(SANITIZE),,$(SHLIB))
+	@BKFRONT_LIBRARY=$(abspath $(BUILD)/$(SONAME)) BKFRONT_CLI=$(abspath $(CLI)) \
+	  BKF_MAKE="$(MAKE)" BKF_BUILD=$(BUILD) PYTHONPATH=$(CURDIR)/python \
+	  tests/run_suites ./$(TESTS) $(if $(SANITIZE),,$(PYTHON) tests/python)
 
 fuzz-syntax:
 	@for t in $(FUZZ_NAMES); do \
@@ -95,7 +111,7 @@ fuzz-syntax:
 
 run: deps
 	@$(MAKE) --no-print-directory build-all
-	./$(CLI) run fronts/paper.scene
+	./$(CLI) run --out plots/out/paper fronts/paper.scene
 
 bench: deps
 	@$(MAKE) --no-print-directory bench-built
@@ -149,6 +165,94 @@ $(BUILD)/fuzz_%: $(BUILD)/tests/fuzz/fuzz_%.o $(BUILD)/src/cli/args.o $(BUILD)/s
 
 $(LIB): $(LIB_OBJ)
 	$(AR) rcs $@ $^
+
+# Position-independent, so that the same objects make the archive and the
+# shared library; calls inside the library stay direct (no interposition).
+# (The marker rebuilds objects compiled before this rule existed.)
+$(LIB_OBJ): override CFLAGS += -fPIC -fno-semantic-interposition
+$(LIB_OBJ): $(BUILD)/.pic
+$(BUILD)/.pic:
+	@mkdir -p $(BUILD) && touch $@
+
+$(SHLIB): $(LIB_OBJ) src/libbkfront.map
+	$(CC) $(LDFLAGS) -shared -Wl,-soname,$(SONAME) -Wl,--version-script=src/libbkfront.map \
+	  -Wl,--no-undefined -o $@ $(LIB_OBJ) $(LDLIBS)
+	ln -sf $(notdir $@) $(BUILD)/$(SONAME)
+	ln -sf $(SONAME) $(BUILD)/libbkfront.so
+
+# ---------------------------------------------------------------- install
+# make install [PREFIX=/usr/local] [DESTDIR=staging]: the CLI, both
+# libraries, the headers, bkfront.pc (whose libdir and includedir follow
+# ${prefix}, so that pkg-config --define-variable=prefix=... relocates a
+# staged tree), the gnuplot scripts and example scenes (share/bkfront), the
+# Python package and the manual.  uninstall removes exactly these (folders
+# shared with other software stay).  The installed
+# CLI is the build's, relinked with a cmd_run.o that knows PREFIX's scripts.
+PREFIX     ?= /usr/local
+BINDIR     ?= $(PREFIX)/bin
+LIBDIR     ?= $(PREFIX)/lib
+INCLUDEDIR ?= $(PREFIX)/include
+DATADIR    ?= $(PREFIX)/share/bkfront
+DOCDIR     ?= $(PREFIX)/share/doc/bkfront
+PKGCONFIGDIR ?= $(LIBDIR)/pkgconfig
+# Where Debian's python3 looks for packages installed under PREFIX.
+PYTHONDIR  ?= $(LIBDIR)/python$(shell $(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null || echo 3)/dist-packages
+INST := $(BUILD)/installed
+
+# Rewritten only when PREFIX or a folder changes, so that what bakes them in
+# is rebuilt exactly then.
+$(INST)/dirs: FORCE
+	@mkdir -p $(INST)
+	@printf '%s\n' '$(BINDIR)' '$(LIBDIR)' '$(INCLUDEDIR)' '$(DATADIR)' '$(PYTHONDIR)' \
+	  | cmp -s - $@ || printf '%s\n' '$(BINDIR)' '$(LIBDIR)' '$(INCLUDEDIR)' '$(DATADIR)' \
+	  '$(PYTHONDIR)' > $@
+
+# The build's CLI finds the scripts of this source tree; the installed one
+# those of DATADIR (run --help: --plots).
+$(BUILD)/src/cli/cmd_run.o: override CFLAGS += -DBKF_PLOTS_DIR='"$(CURDIR)/plots"'
+$(INST)/cmd_run.o: src/cli/cmd_run.c $(INST)/dirs
+	$(CC) $(CFLAGS) -DBKF_PLOTS_DIR='"$(DATADIR)/plots"' -MMD -MP -c -o $@ $<
+$(INST)/bkfront: $(filter-out $(BUILD)/src/cli/cmd_run.o,$(CLI_OBJ)) $(INST)/cmd_run.o $(LIB)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(INST)/bkfront.pc: src/bkfront.pc.in $(INST)/dirs include/bkfront/version.h
+	sed -e 's|@PREFIX@|$(PREFIX)|' -e 's|@LIBDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))|' \
+	  -e 's|@INCLUDEDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))|' \
+	  -e 's|@VERSION@|$(VERSION)|' -e 's|@REQUIRES@|$(PKGS)|' \
+	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) -lm|' $< > $@
+
+# The Python package finds the shared library by its path relative to the
+# package, so that a staged (DESTDIR) or moved tree still works.
+$(INST)/_paths.py: $(INST)/dirs
+	printf '# written by make install\nLIBRARY = %s\n' \
+	  "$$($(PYTHON) -c 'import os, sys; print(repr(os.path.relpath(sys.argv[1], sys.argv[2])))' \
+	     '$(LIBDIR)/$(SONAME)' '$(PYTHONDIR)/bkfront')" > $@
+
+install: $(LIB) $(SHLIB) $(INST)/bkfront $(INST)/bkfront.pc $(INST)/_paths.py
+	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR) $(DESTDIR)$(PKGCONFIGDIR) \
+	  $(DESTDIR)$(INCLUDEDIR)/bkfront $(DESTDIR)$(DATADIR)/plots $(DESTDIR)$(DATADIR)/scenes \
+	  $(DESTDIR)$(PYTHONDIR)/bkfront $(DESTDIR)$(DOCDIR)/cli $(DESTDIR)$(DOCDIR)/examples
+	install -m 755 $(INST)/bkfront $(DESTDIR)$(BINDIR)/bkfront
+	install -m 644 $(LIB) $(DESTDIR)$(LIBDIR)/libbkfront.a
+	install -m 755 $(SHLIB) $(DESTDIR)$(LIBDIR)/
+	ln -sf $(notdir $(SHLIB)) $(DESTDIR)$(LIBDIR)/$(SONAME)
+	ln -sf $(SONAME) $(DESTDIR)$(LIBDIR)/libbkfront.so
+	install -m 644 include/bkfront/*.h $(DESTDIR)$(INCLUDEDIR)/bkfront/
+	install -m 644 $(INST)/bkfront.pc $(DESTDIR)$(PKGCONFIGDIR)/bkfront.pc
+	install -m 644 plots/*.gp $(DESTDIR)$(DATADIR)/plots/
+	install -m 644 fronts/*.scene $(DESTDIR)$(DATADIR)/scenes/
+	install -m 644 python/bkfront/*.py $(INST)/_paths.py $(DESTDIR)$(PYTHONDIR)/bkfront/
+	install -m 644 README.md docs/*.md $(DESTDIR)$(DOCDIR)/
+	install -m 644 docs/cli/*.md $(DESTDIR)$(DOCDIR)/cli/
+	install -m 644 docs/examples/*.c $(DESTDIR)$(DOCDIR)/examples/
+	@if [ -z "$(DESTDIR)" ] && [ "$$(id -u)" -eq 0 ] && command -v ldconfig >/dev/null; then ldconfig; fi
+
+uninstall:
+	rm -f $(DESTDIR)$(BINDIR)/bkfront $(DESTDIR)$(LIBDIR)/libbkfront.a \
+	  $(DESTDIR)$(LIBDIR)/libbkfront.so $(DESTDIR)$(LIBDIR)/$(SONAME) \
+	  $(DESTDIR)$(LIBDIR)/$(notdir $(SHLIB)) $(DESTDIR)$(PKGCONFIGDIR)/bkfront.pc
+	rm -rf $(DESTDIR)$(INCLUDEDIR)/bkfront $(DESTDIR)$(DATADIR) $(DESTDIR)$(DOCDIR) \
+	  $(DESTDIR)$(PYTHONDIR)/bkfront
 
 $(CLI): $(CLI_OBJ) $(LIB)
 	$(CC) $(LDFLAGS) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)

@@ -17,11 +17,18 @@
 
 #include "bkfront/scene.h"
 
+/* The gnuplot scripts' folder when neither --plots nor BKFRONT_PLOTS names
+ * one: the source tree's for the build's CLI, PREFIX/share/bkfront/plots for
+ * the installed one (Makefile). */
+#ifndef BKF_PLOTS_DIR
+#define BKF_PLOTS_DIR "plots"
+#endif
+
 static void run_help(FILE *out)
 {
     fprintf(out,
         "usage: bkfront run [--plan] [--out DIR] [--formats LIST] [--no-figures]\n"
-        "                   [--plots DIR] SCENE\n"
+        "                   [--plots DIR] [--trust-scene] SCENE\n"
         "\n"
         "Compute what the scene file SCENE asks for (an INI file: [model],\n"
         "[accuracy] and one section per product; see docs/scenes.md) and\n"
@@ -31,17 +38,23 @@ static void run_help(FILE *out)
         "options:\n"
         "  --plan          print the plan (every computation, the products that need\n"
         "                  it and its command line) and compute nothing\n"
-        "  --out DIR       output folder, created if missing; default\n"
-        "                  plots/out/NAME for SCENE = .../NAME.scene\n"
+        "  --out DIR       output folder, created if missing; default NAME beside\n"
+        "                  the scene (DIR/NAME for SCENE = DIR/NAME.scene)\n"
         "  --formats LIST  image formats of figures that set none: png, pdf, svg or\n"
         "                  a list png,pdf; default png\n"
         "  --no-figures    data only (no gnuplot)\n"
-        "  --plots DIR     folder of the default gnuplot scripts (KIND.gp); default\n"
-        "                  the plots folder beside the scene's folder, else ./plots\n"
+        "  --plots DIR     folder of the gnuplot scripts (KIND.gp); default\n"
+        "                  $BKFRONT_PLOTS, else this bkfront's own (below)\n"
+        "  --trust-scene   let figures run the scene's own scripts (script = ...);\n"
+        "                  a gnuplot script can run any shell command, so without\n"
+        "                  this flag such a scene is refused\n"
         "\n"
         "Prints one line per computation, then the speeds tables and the files\n"
         "written. exit status: 0 every product done, 1 a computation or figure\n"
-        "failed (the others are still produced), 2 bad scene or options.\n");
+        "failed (the others are still produced), 2 bad scene or options.\n"
+        "\n"
+        "A scene is trusted input only with --trust-scene (docs/scenes.md#trust).\n"
+        "This bkfront's gnuplot scripts: " BKF_PLOTS_DIR "\n");
 }
 
 /* Which failure a scene reports when several steps fail: memory first, then
@@ -102,6 +115,23 @@ static int is_dir(const char *path)
 {
     struct stat st;
     return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+/* A figure's `script =` runs a file the scene names, and gnuplot's system()
+ * and shell escapes run anything: only with --trust-scene. */
+static int check_trust(const bkf_scene *sc, bkf_error *err)
+{
+    for (size_t i = 0; i < sc->nproducts; i++) {
+        const bkf_scene_product *p = &sc->products[i];
+        if (p->kind != BKF_SCENE_FIGURE) continue;
+        for (size_t k = 0; k < p->nentries; k++)
+            if (strcmp(p->entries[k].key, "script") == 0)
+                return bkf_error_set(err, BKF_EINPUT,
+                                     "%s:%d: script = %s: a scene's own gnuplot script can run "
+                                     "shell commands; give --trust-scene to run it",
+                                     sc->path, p->entries[k].line, p->entries[k].value);
+    }
+    return BKF_OK;
 }
 
 typedef struct {
@@ -188,10 +218,11 @@ static int run_run(int argc, char **argv, bkf_error *err)
         }
     }
     const char *out = NULL, *formats_text = NULL, *plots = NULL;
-    int plan_only = 0, no_figures = 0;
+    int plan_only = 0, no_figures = 0, trust = 0;
     const cli_flag flags[] = {
         {"--plan", NULL, NULL, &plan_only},
         {"--no-figures", NULL, NULL, &no_figures},
+        {"--trust-scene", NULL, NULL, &trust},
         {"--out", &out, "a folder", NULL},
         {"--formats", &formats_text, "png, pdf, svg or a list", NULL},
         {"--plots", &plots, "a folder", NULL},
@@ -207,6 +238,11 @@ static int run_run(int argc, char **argv, bkf_error *err)
     bkf_scene *sc = NULL;
     if ((s = bkf_scene_parse_file(scene_path, &sc, err))) return s;
 
+    if (!trust && !no_figures && (s = check_trust(sc, err))) {
+        bkf_scene_free(sc);
+        return s;
+    }
+
     char scene_dir[2048], outdir[4096], plots_dir[4096];
     dir_of(scene_path, scene_dir, sizeof scene_dir);
     if (out)
@@ -215,13 +251,19 @@ static int run_run(int argc, char **argv, bkf_error *err)
         const char *base = strrchr(scene_path, '/');
         base = base ? base + 1 : scene_path;
         size_t len = strcspn(base, ".");
-        snprintf(outdir, sizeof outdir, "plots/out/%.*s", (int)(len ? len : strlen(base)), base);
+        snprintf(outdir, sizeof outdir, "%s%s%.*s", base == scene_path ? "" : scene_dir,
+                 base == scene_path ? "" : "/", (int)(len ? len : strlen(base)), base);
     }
-    if (plots)
-        snprintf(plots_dir, sizeof plots_dir, "%s", plots);
-    else {
-        snprintf(plots_dir, sizeof plots_dir, "%.2000s/../plots", scene_dir);
-        if (!is_dir(plots_dir)) snprintf(plots_dir, sizeof plots_dir, "plots");
+    /* Never the scene's own folder: a scene from elsewhere does not choose
+     * the scripts by what lies beside it. */
+    const char *env_plots = getenv("BKFRONT_PLOTS");
+    snprintf(plots_dir, sizeof plots_dir, "%s",
+             plots ? plots : env_plots && *env_plots ? env_plots : BKF_PLOTS_DIR);
+    if (!no_figures && !plan_only && !is_dir(plots_dir)) {
+        bkf_scene_free(sc);
+        return bkf_error_set(err, BKF_EINPUT,
+                             "--plots: %s is not a folder of gnuplot scripts (give --plots DIR, "
+                             "set BKFRONT_PLOTS, or --no-figures)", plots_dir);
     }
     run_context rc = {.slot = -1};
     bkf_scene_run_options ro = {.program = CLI_PROGRAM " " CLI_VERSION,

@@ -1,0 +1,151 @@
+"""make install, as a user runs it: an external C program links the
+installed library through pkg-config, the installed CLI runs a scene from
+another folder with the installed scripts, the installed Python package
+imports; and a DESTDIR staging install lands under DESTDIR and uninstalls.
+
+The link test installs with PREFIX inside a temporary folder (no DESTDIR):
+a DESTDIR tree is made for packaging and its bkfront.pc rightly names the
+final PREFIX, while PKG_CONFIG_SYSROOT_DIR or --define-variable=prefix would
+also move the system libraries' paths (gsl, fftw3) into the staging folder."""
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+import bkfront
+from conftest import SOURCE, tsv
+
+PROGRAM = r"""
+#include <stdio.h>
+#include <string.h>
+#include "bkfront/bkfront.h"
+
+int main(void)
+{
+    bkf_error e;
+    bkf_cycle_result r;
+    if (bkf_cycle_period(1.0, 0.0, NULL, &r, &e) != BKF_OK) { fprintf(stderr, "%s\n", e.message); return 1; }
+    printf("%s %.15g %.3g\n", bkf_version(), r.period, r.period_err);
+    return 0;
+}
+"""
+
+
+def make(*args, **env):
+    build = os.environ.get("BKF_BUILD", "build")
+    cmd = os.environ.get("BKF_MAKE", "make").split() + ["-C", SOURCE, "--no-print-directory",
+                                                       "BUILD=" + build] + list(args)
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=600,
+                       env=dict(os.environ, **env))
+    assert r.returncode == 0, r.stdout + r.stderr
+    return r
+
+
+@pytest.fixture(scope="module")
+def prefix(tmp_path_factory):
+    p = str(tmp_path_factory.mktemp("prefix"))
+    make("install", "PREFIX=" + p)
+    return p
+
+
+def test_external_program_links_through_pkg_config(prefix, tmp_path):
+    env = dict(os.environ, PKG_CONFIG_PATH=os.path.join(prefix, "lib", "pkgconfig"))
+    flags = subprocess.run(["pkg-config", "--cflags", "--libs", "bkfront"], env=env,
+                           capture_output=True, text=True, check=True).stdout.split()
+    libdir = subprocess.run(["pkg-config", "--variable=libdir", "bkfront"], env=env,
+                            capture_output=True, text=True, check=True).stdout.strip()
+    assert libdir == os.path.join(prefix, "lib")
+    src = tmp_path / "prog.c"
+    src.write_text(PROGRAM)
+    exe = tmp_path / "prog"
+    subprocess.run(["cc", "-std=c11", "-Wall", "-Werror", str(src), "-o", str(exe)] + flags +
+                   ["-Wl,-rpath," + libdir], check=True)
+    # linked to the shared library by its SONAME, not the archive
+    needed = subprocess.run(["readelf", "-d", str(exe)], capture_output=True, text=True).stdout
+    assert "[libbkfront.so.0]" in needed
+    out = subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.split()
+    assert out[0] == bkfront.version()
+    assert abs(float(out[1]) - 6.6632868593231302) <= float(out[2])
+
+
+def test_only_bkf_names_are_exported(prefix):
+    lib = os.path.join(prefix, "lib", "libbkfront.so.0")
+    assert os.path.islink(lib) and os.readlink(lib).startswith("libbkfront.so.0.")
+    soname = subprocess.run(["readelf", "-d", lib], capture_output=True, text=True).stdout
+    assert "Library soname: [libbkfront.so.0]" in soname
+    nm = subprocess.run(["nm", "-D", "--defined-only", lib], capture_output=True, text=True,
+                        check=True).stdout.split("\n")
+    names = [l.split()[-1] for l in nm if l.strip()]
+    assert len(names) > 100
+    assert [n for n in names if not n.startswith("bkf_")] == []
+    assert os.path.exists(os.path.join(prefix, "lib", "libbkfront.a"))
+
+
+def test_installed_cli_runs_a_scene_from_anywhere(prefix, tmp_path):
+    cli = os.path.join(prefix, "bin", "bkfront")
+    scripts = os.path.join(prefix, "share", "bkfront", "plots")
+    help_text = subprocess.run([cli, "run", "--help"], capture_output=True, text=True).stdout
+    assert help_text.rstrip().endswith(scripts)
+    work = tmp_path / "work"
+    elsewhere = tmp_path / "elsewhere"
+    work.mkdir()
+    elsewhere.mkdir()
+    shutil.copy(os.path.join(prefix, "share", "bkfront", "scenes", "fig1b.scene"), work)
+    env = {k: v for k, v in os.environ.items() if k != "BKFRONT_PLOTS"}
+    r = subprocess.run([cli, "run", str(work / "fig1b.scene")], cwd=elsewhere, env=env,
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert sorted(os.listdir(work / "fig1b")) == ["fig1b.pdf", "fig1b.png", "fig1b.tsv"]
+    assert os.listdir(elsewhere) == []
+    # a failed figure fails the run: a script that gnuplot refuses
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / "friction.gp").write_text("this is not gnuplot\n")
+    r = subprocess.run([cli, "run", "--out", str(tmp_path / "o"), str(work / "fig1b.scene")],
+                       env=dict(env, BKFRONT_PLOTS=str(bad)), capture_output=True, text=True)
+    assert r.returncode == 1 and "FAILED" in r.stdout
+    # a scene's own script needs --trust-scene; nothing is computed without it
+    (work / "own.gp").write_text("load plotdir.'/friction.gp'\n")
+    (work / "own.scene").write_text(open(work / "fig1b.scene").read() + "script = own.gp\n")
+    r = subprocess.run([cli, "run", str(work / "own.scene")], env=env, capture_output=True,
+                       text=True)
+    assert r.returncode == 2 and "--trust-scene" in r.stderr and not (work / "own").exists()
+    r = subprocess.run([cli, "run", "--trust-scene", str(work / "own.scene")], env=env,
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert (work / "own" / "fig1b.png").stat().st_size > 0
+
+
+def test_installed_python_package(prefix, tmp_path):
+    site = [os.path.join(prefix, "lib", d, "dist-packages")
+            for d in os.listdir(os.path.join(prefix, "lib")) if d.startswith("python")]
+    assert len(site) == 1
+    env = {k: v for k, v in os.environ.items() if k not in ("BKFRONT_LIBRARY", "PYTHONPATH")}
+    env["PYTHONPATH"] = site[0]
+    code = "import bkfront; print(bkfront.__file__); print(bkfront.speeds(2, 0.3, -0.96, 20))"
+    r = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env,
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0].startswith(site[0])
+    cols, rows = tsv("\n".join(lines[1:]))
+    assert cols[:3] == ["n", "v", "mu"] and len(rows) == 12
+    assert round(float(rows[5]["v"]), 4) == 0.3750
+
+
+def test_destdir_staging_and_uninstall(tmp_path):
+    stage = str(tmp_path / "stage")
+    make("install", "DESTDIR=" + stage, "PREFIX=/opt/bkf")
+    root = os.path.join(stage, "opt", "bkf")
+    assert sorted(os.listdir(stage)) == ["opt"]
+    for f in ["bin/bkfront", "include/bkfront/bkfront.h", "lib/libbkfront.so",
+              "lib/pkgconfig/bkfront.pc", "share/bkfront/plots/speeds.gp",
+              "share/doc/bkfront/python.md"]:
+        assert os.path.exists(os.path.join(root, f)), f
+    pc = open(os.path.join(root, "lib/pkgconfig/bkfront.pc")).read()
+    assert "prefix=/opt/bkf\n" in pc and stage not in pc
+    make("uninstall", "DESTDIR=" + stage, "PREFIX=/opt/bkf")
+    left = [os.path.join(d, f) for d, _, fs in os.walk(stage) for f in fs]
+    assert left == []
