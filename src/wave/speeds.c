@@ -1048,8 +1048,9 @@ static int speeds_find_body(const bkf_model_params *p, const bkf_speeds_options 
                 }
                 bkf_error pe = {0};
                 rc = polish(g, fs, n, i, &found[nfound], &pe);
-                if (bkf_status_is_numerical(rc) && !g->formula_refused) {
-                    /* one root lost is reported, not the whole table */
+                if (bkf_status_is_numerical(rc) && !(g->formula_refused && g->method != BKF_METHOD_AUTO)) {
+                    /* one root lost is reported, not the whole table (a
+                     * formula the user asked for and refused is the answer) */
                     note_unresolved(&sr, n, g->x[i].mu, "root not polished (T failed)");
                     rc = BKF_OK;
                     continue;
