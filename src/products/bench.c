@@ -295,12 +295,18 @@ static int bench_speeds(bench_ctx *b, bkf_error *err)
     bkf_speeds_table ref = {0};
     o.tol = 1e-13;
     int s = bkf_speeds_find(&p, &o, &ref, err);
-    if (s) {
+    /* a reference with a root left unresolved (T refused at 1e-13) is no reference */
+    if (s || ref.unresolved) {
         bkf_speeds_table_free(&ref);
         o.tol = 1e-12;
         if ((s = bkf_speeds_find(&p, &o, &ref, err))) {
             bkf_speeds_table_free(&ref);
             return s;
+        }
+        if (ref.unresolved) {
+            bkf_speeds_table_free(&ref);
+            return bkf_error_set(err, BKF_ETOL, "bench: the reference speeds table at tol 1e-12 left %zu "
+                                 "place(s) unresolved", ref.unresolved);
         }
     }
     const double tols_full[] = {1e-4, 1e-6, 1e-8, 1e-10, 1e-12};
