@@ -1,0 +1,113 @@
+/* Outputs under scarce resources and bounded work for bounded input: a
+ * memory limit must never give a cut output with exit 0.
+ *
+ * The memory limits are set with RLIMIT_AS in a forked child; AddressSanitizer
+ * reserves terabytes of address space, so those tests only run without it. */
+#define _GNU_SOURCE
+#include "args.h"
+
+#include "harness.h"
+#include "cli_support.h"
+
+#include <signal.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#if defined(__SANITIZE_ADDRESS__)
+#define ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define ASAN 1
+#endif
+#endif
+#ifndef ASAN
+#define ASAN 0
+#endif
+
+/* The output buffer under a 64 MiB address-space limit: writes of 1 MiB
+ * until one fails, then every later write fails too and close reports it.
+ * The bytes kept are exactly those the successful writes reported (the
+ * glibc memstream it replaces said it had stored one byte more than it had,
+ * and its fflush and fclose succeeded). */
+TEST(cli_buffer_reports_failed_growth)
+{
+    if (ASAN) {
+        bkf_test_note("skipped under AddressSanitizer (RLIMIT_AS)");
+        return;
+    }
+    pid_t pid = fork();
+    CHECK(pid >= 0);
+    if (pid == 0) {
+        struct rlimit rl = {64 << 20, 64 << 20};
+        if (setrlimit(RLIMIT_AS, &rl)) _exit(10);
+        cli_buffer buf;
+        bkf_error e = {0};
+        if (cli_buffer_open(&buf, &e)) _exit(11);
+        static char chunk[1 << 20];
+        memset(chunk, 'x', sizeof chunk);
+        size_t stored = 0;
+        int failed = 0;
+        for (int i = 0; i < 200; i++) {
+            size_t w = fwrite(chunk, 1, sizeof chunk, buf.stream);
+            stored += w;
+            if (w != sizeof chunk) failed = 1;
+            else if (failed) _exit(12); /* a write after a failure must fail too */
+        }
+        if (!failed) _exit(13); /* 200 MiB cannot fit in 64 MiB */
+        int s = cli_buffer_close(&buf, &e);
+        if (s != BKF_ENOMEM) _exit(14);
+        if (buf.size > stored) _exit(15);
+        cli_buffer_free(&buf);
+        _exit(0);
+    }
+    int st;
+    CHECK(waitpid(pid, &st, 0) == pid);
+    CHECK_MSG(WIFEXITED(st) && WEXITSTATUS(st) == 0, "child status %d", st);
+}
+
+/* The same through the executable: a JSON table of 1e6 rows (about 400 MB,
+ * built in memory) under a 350 MB limit, where the run itself (about 240 MB)
+ * fits: a message and no output file, never a cut table with exit 0. */
+TEST(cli_simulate_output_under_memory_limit)
+{
+    if (ASAN) {
+        bkf_test_note("skipped under AddressSanitizer (RLIMIT_AS)");
+        return;
+    }
+    char dir[] = "/tmp/bkf_limit_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char out[300], err[300], diag[300];
+    snprintf(out, sizeof out, "%s/stdout", dir);
+    snprintf(err, sizeof err, "%s/stderr", dir);
+    snprintf(diag, sizeof diag, "%s/diag.tsv", dir);
+    pid_t pid = fork();
+    CHECK(pid >= 0);
+    if (pid == 0) {
+        struct rlimit rl = {350ul << 20, 350ul << 20};
+        if (setrlimit(RLIMIT_AS, &rl)) _exit(100);
+        pid_t c = bkf_cli_spawn(BKF_CLI_ARGS("simulate", "--N", "8", "--tmax", "1000", "--frames",
+                                             "1000000", "--no-progress", "--format", "json", "--out",
+                                             diag),
+                                NULL, out, err);
+        int cs;
+        if (c < 0 || waitpid(c, &cs, 0) != c) _exit(101);
+        _exit(WIFEXITED(cs) ? WEXITSTATUS(cs) : 102);
+    }
+    int st;
+    CHECK(waitpid(pid, &st, 0) == pid);
+    CHECK(WIFEXITED(st));
+    char *e = bkf_cli_read_file(err);
+    CHECK(e);
+    bkf_test_note("exit %d: %s", WEXITSTATUS(st), e);
+    CHECK_MSG(WEXITSTATUS(st) == 1, "exit %d, want 1 (out of memory)", WEXITSTATUS(st));
+    CHECK(strstr(e, "writing the table failed") && strstr(e, "memory"));
+    struct stat sb;
+    CHECK_MSG(stat(diag, &sb) != 0, "a partial output was written");
+    free(e);
+    unlink(out);
+    unlink(err);
+    rmdir(dir);
+}
