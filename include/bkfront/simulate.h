@@ -51,6 +51,9 @@ typedef struct {
     const volatile sig_atomic_t *cancel;     /* raised: the run stops, what is
                                                 complete is written, BKF_ECANCELED */
     const char *(*cancel_reason)(void *data); /* "SIGINT", ...; NULL: "canceled" */
+    int discard_canceled;   /* stopped through cancel, replace no data file (a
+                               scene: a partial product must not replace a
+                               complete one of an earlier run) */
     int (*progress)(double fraction, void *data);
     /* Told each data file's temporary while it exists (armed 1) and when it
      * is gone (armed 0), so that a signal handler may remove it. */
@@ -78,7 +81,9 @@ int bkf_simulate_check(const bkf_simulate_spec *spec, const char *prefix, bkf_er
  * speed_err, period, period_err, v_pred), and the spacetime and snapshot
  * files, opened (so a bad path fails) before the run and replaced only at
  * its end.  Stopped through spec->cancel: everything complete is written,
- * marked "interrupted (REASON) at t = ...", and BKF_ECANCELED returned; on
+ * marked "interrupted (REASON) at t = ...", and BKF_ECANCELED returned (with
+ * discard_canceled the data files are left as they were, and only `out`
+ * gets the marked table, for the caller to discard or keep); on
  * any other failure no file is replaced and `out` holds a partial table
  * the caller discards. */
 int bkf_simulate_write(const bkf_simulate_spec *spec, FILE *out, bkf_io_format format,

@@ -10,6 +10,7 @@
 #include "commands.h"
 
 #include <errno.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -40,8 +41,11 @@ static void run_help(FILE *out)
         "                  the plots folder beside the scene's folder, else ./plots\n"
         "\n"
         "Prints one line per computation, then the speeds tables and the files\n"
-        "written. exit status: 0 every product done, 1 a computation or figure\n"
-        "failed (the others are still produced), 2 bad scene or options.\n");
+        "written. Ctrl-C (SIGINT) or SIGTERM stops the whole run: the computation\n"
+        "under way stops without replacing its files, the finished ones keep\n"
+        "theirs, no later one starts (exit 130, 143 for SIGTERM); a second signal\n"
+        "ends it at once. exit status: 0 every product done, 1 a computation or\n"
+        "figure failed (the others are still produced), 2 bad scene or options.\n");
 }
 
 /* Which failure a scene reports when several steps fail: memory first, then
@@ -104,17 +108,32 @@ static int is_dir(const char *path)
     return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
+/* The temporaries being written (a step's table and the data files a
+ * product writes itself, e.g. simulate's spacetime and snapshots), each
+ * guarded by the signal cleanup until it is committed or removed. */
+#define RUN_TEMPS 4
 typedef struct {
-    int slot;  /* the signal cleanup's slot of the file being written */
+    char path[RUN_TEMPS][4096];
+    int slot[RUN_TEMPS];
+    int used[RUN_TEMPS];
 } run_context;
 
 static void guard_temp(const char *path, int armed, void *data)
 {
     run_context *rc = data;
-    if (armed)
-        rc->slot = cli_guard_temp(path);
-    else
-        cli_unguard_temp(rc->slot);
+    for (int i = 0; i < RUN_TEMPS; i++) {
+        if (armed && !rc->used[i]) {
+            snprintf(rc->path[i], sizeof rc->path[i], "%s", path);
+            rc->slot[i] = cli_guard_temp(path);
+            rc->used[i] = 1;
+            return;
+        }
+        if (!armed && rc->used[i] && strcmp(rc->path[i], path) == 0) {
+            cli_unguard_temp(rc->slot[i]);
+            rc->used[i] = 0;
+            return;
+        }
+    }
 }
 
 /* ------------------------------------------------------------------ run */
@@ -223,11 +242,13 @@ static int run_run(int argc, char **argv, bkf_error *err)
         snprintf(plots_dir, sizeof plots_dir, "%.2000s/../plots", scene_dir);
         if (!is_dir(plots_dir)) snprintf(plots_dir, sizeof plots_dir, "plots");
     }
-    run_context rc = {.slot = -1};
+    run_context rc;
+    memset(&rc, 0, sizeof rc);
     bkf_scene_run_options ro = {.program = CLI_PROGRAM " " CLI_VERSION,
                                 .command_prefix = CLI_PROGRAM,
                                 .plots_dir = plots_dir,
                                 .scene_dir = scene_dir,
+                                .hooks = {.temp_file = guard_temp, .data = &rc},
                                 .temp_file = guard_temp,
                                 .data = &rc};
 
@@ -256,10 +277,16 @@ static int run_run(int argc, char **argv, bkf_error *err)
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     int worst = BKF_OK;
-    size_t failed = 0;
+    size_t failed = 0, ran = 0;
     char first_failure[BKF_ERROR_LEN] = "";
     double t_all = now();
-    for (size_t i = 0; i < plan.nsteps; i++) {
+    /* The first SIGINT or SIGTERM stops the whole run: the step under way
+     * stops at its next check (its files are not replaced), the steps done
+     * keep their files, no later step starts.  A second one ends the
+     * process at once (temporaries removed). */
+    const volatile sig_atomic_t *cancel = cli_cancel_begin();
+    ro.hooks.cancel = cancel;
+    for (size_t i = 0; i < plan.nsteps && !*cancel; i++, ran++) {
         bkf_scene_step *st = &plan.steps[i];
         const bkf_scene_product *p = &sc->products[st->users[0]];
         bkf_error e = {0};
@@ -267,10 +294,19 @@ static int run_run(int argc, char **argv, bkf_error *err)
         double t0 = now();
         int status = bkf_scene_run_step(sc, &plan, i, step_status, &ro, warning,
                                         sizeof warning, &e);
+        /* A step that finished although the signal came is complete and
+         * kept; one that failed because of it was stopped, not wrong. */
+        if (status && *cancel) {
+            status = BKF_ECANCELED;
+            snprintf(e.message, sizeof e.message, "stopped by %s; its files were not replaced",
+                     cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT");
+        }
         step_status[i] = status;
         double dt = now() - t0;
         printf("[%zu/%zu] %-11s %-18s %s %6.2f s  %s\n", i + 1, plan.nsteps,
-               st->product, p->name, status ? "FAILED" : "done  ", dt, st->output);
+               st->product, p->name,
+               status == BKF_ECANCELED ? "stopped" : status ? "FAILED" : "done  ", dt,
+               st->output);
         if (status) {
             printf("        %s:%d [%s %s]: %s\n", sc->path, p->line, bkf_scene_kind_name(p->kind),
                    p->name, e.message);
@@ -285,6 +321,21 @@ static int run_run(int argc, char **argv, bkf_error *err)
         fflush(stdout);
     }
     double total = now() - t_all;
+    int canceled = *cancel != 0;
+    cli_cancel_end();
+    if (canceled) {
+        const char *sig = cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT";
+        size_t nsteps = plan.nsteps;
+        printf("\ninterrupted (%s) after %zu of %zu computations; the rest were not run\n", sig,
+               ran, nsteps);
+        fflush(stdout);
+        free(step_status);
+        bkf_scene_plan_free(&plan);
+        bkf_scene_free(sc);
+        return bkf_error_set(err, BKF_ECANCELED,
+                             "interrupted (%s): %zu of %zu computations run; complete files "
+                             "kept, none replaced by partial data", sig, ran, nsteps);
+    }
 
     /* The tables users most want to read, then where everything is. */
     for (size_t i = 0; i < sc->nproducts; i++) {

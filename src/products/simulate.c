@@ -645,7 +645,7 @@ int bkf_simulate_write(const bkf_simulate_spec *sp, FILE *out, bkf_io_format for
     }
     if (!s) s = run_simulation(&r, out, format, st_file, sn_file, err);
     /* an interrupted run keeps what was complete */
-    int keep = !s || s == BKF_ECANCELED;
+    int keep = !s || (s == BKF_ECANCELED && !sp->discard_canceled);
     s = close_file(sp, st_file, keep, "spacetime", s, err);
     s = close_file(sp, sn_file, keep, "snapshots", s, err);
     bkf_measure_free(r.meas);

@@ -348,3 +348,61 @@ TEST(pde_cancel_flag_stops_and_resumes_exactly)
     bkf_pde_free(a);
     bkf_pde_free(b);
 }
+
+/* One SIGINT stops a whole `bkfront run`: the step under way (a simulation
+ * far too long to finish) stops without replacing the complete files of an
+ * earlier run, the step done before it keeps its file, no later step (a
+ * table, a gnuplot figure) starts, no temporary stays, exit 130. */
+TEST(cli_run_sigint_stops_the_whole_scene)
+{
+    char dir[] = "/tmp/bkf_sig_run_XXXXXX";
+    make_dir(dir);
+    char path[4096];
+    snprintf(path, sizeof path, "%s/t.scene", dir);
+    write_text(path, "[model]\ngamma = 2\nc = 0.3\nnu = -0.96\nS = 20\n"
+                     "[friction f]\nfrom = -1\nto = 4\n[figure f]\ndata = f\n"
+                     "[spacetime b]\ntmax = 1e6\nN = 128\nframes = 1000\n"
+                     "[period p]\nmu = 1:10:5\n");
+    snprintf(path, sizeof path, "%s/o", dir);
+    CHECK(mkdir(path, 0777) == 0);
+    static const char earlier[] = "complete data of an earlier run\n";
+    snprintf(path, sizeof path, "%s/o/b.dat", dir);
+    write_text(path, earlier);
+    snprintf(path, sizeof path, "%s/o/b_diag.tsv", dir);
+    write_text(path, earlier);
+    char outpath[4096], errpath[4096], odir[4096];
+    snprintf(outpath, sizeof outpath, "%s/stdout", dir);
+    snprintf(errpath, sizeof errpath, "%s/stderr", dir);
+    snprintf(odir, sizeof odir, "%s/o", dir);
+    pid_t pid = bkf_cli_spawn(BKF_CLI_ARGS("run", "--out", "o", "t.scene"),
+                              &(bkf_cli_options){.dir = dir}, outpath, errpath);
+    CHECK(pid > 0);
+    wait_computing(pid, odir, "b.dat", 0.3);
+    CHECK(kill(pid, SIGINT) == 0);
+    int status = wait_status(pid);
+    CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 130, "status %d", status);
+    char *out = slurp(outpath), *err = slurp(errpath);
+    CHECK(out && err);
+    bkf_test_note("stdout: %s", out);
+    CHECK(strstr(out, "interrupted (SIGINT) after 2 of 4 computations"));
+    CHECK(strstr(err, "interrupted (SIGINT)") && bkf_count_lines(err) == 1);
+    const char *kept[] = {"b.dat", "b_diag.tsv"};
+    for (int i = 0; i < 2; i++) {
+        snprintf(path, sizeof path, "%s/o/%s", dir, kept[i]);
+        char *text = slurp(path);
+        CHECK_MSG(text && strcmp(text, earlier) == 0, "%s was replaced", kept[i]);
+        free(text);
+    }
+    struct stat sb;
+    snprintf(path, sizeof path, "%s/o/f.tsv", dir);
+    CHECK_MSG(stat(path, &sb) == 0 && sb.st_size > 0, "the complete step lost its file");
+    snprintf(path, sizeof path, "%s/o/p.tsv", dir);
+    CHECK_MSG(stat(path, &sb) != 0, "a step after the signal ran");
+    snprintf(path, sizeof path, "%s/o/f.png", dir);
+    CHECK_MSG(stat(path, &sb) != 0, "the figure after the signal was drawn");
+    CHECK_MSG(count_entries(odir, ".", NULL, 0) == 2, "a temporary stayed"); /* . and .. */
+    free(out);
+    free(err);
+    remove_dir(odir);
+    remove_dir(dir);
+}
