@@ -136,8 +136,10 @@ typedef struct {
  * columns are ignored; with a column t, only the rows of the last t are
  * kept: the last snapshot of a file of several).  Every kept cell must be a
  * finite number and every line have the header's number of fields.  At most
- * max_rows data lines are read, so that a huge or endless stream cannot
- * take all memory.  On failure *state is left empty (NULL arrays, 0 rows):
+ * max_rows data lines are read, each at most 4096 bytes, no NUL byte, and
+ * at most 128 max_rows + 1 MiB bytes in all, and only the rows of the
+ * current t are held, so that a huge or endless stream (/dev/zero) takes
+ * neither all memory nor unbounded time.  On failure *state is left empty (NULL arrays, 0 rows):
  * BKF_EINPUT for content that is not such a table (the message names the
  * line), BKF_EIO when reading the stream fails, BKF_ENOMEM. */
 int bkf_io_read_state(FILE *in, size_t max_rows, bkf_io_state *state, bkf_error *err);

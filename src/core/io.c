@@ -10,6 +10,7 @@
 #include <signal.h>
 #include <limits.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -795,18 +796,57 @@ static int state_cells(char *line, int ipsi, int ieta, int it, double *vp, doubl
     return 0;
 }
 
+/* Lines of a state file are short (a snapshot row is about 80 bytes); a
+ * longer one, a NUL byte or a file beyond its byte budget ends the read, so
+ * that /dev/zero or an endless stream cannot take all memory or time. */
+#define STATE_LINE_MAX 4096
+#define STATE_BYTES_PER_ROW 128
+
+/* The next line into buf (without its newline): 1, 0 at the end of the
+ * stream, -1 with err set. */
+static int state_line(FILE *in, char *buf, size_t *len, size_t lineno, size_t *bytes,
+                      size_t max_bytes, size_t max_rows, bkf_error *err)
+{
+    size_t n = 0;
+    int c;
+    while ((c = getc(in)) != EOF) {
+        if (++*bytes > max_bytes) {
+            bkf_error_set(err, BKF_EINPUT, "larger than %zu bytes (the limit for %zu rows)",
+                          max_bytes, max_rows);
+            return -1;
+        }
+        if (c == '\n') break;
+        if (c == '\0') {
+            bkf_error_set(err, BKF_EINPUT, "line %zu holds a NUL byte (not a text table)", lineno);
+            return -1;
+        }
+        if (n == STATE_LINE_MAX) {
+            bkf_error_set(err, BKF_EINPUT, "line %zu is longer than %d bytes", lineno,
+                          STATE_LINE_MAX);
+            return -1;
+        }
+        buf[n++] = (char)c;
+    }
+    buf[n] = '\0';
+    *len = n;
+    return c != EOF || n > 0;
+}
+
 int bkf_io_read_state(FILE *in, size_t max_rows, bkf_io_state *state, bkf_error *err)
 {
     if (!state) return bkf_error_set(err, BKF_EINPUT, "state is NULL");
     memset(state, 0, sizeof *state);
     if (!in) return bkf_error_set(err, BKF_EINPUT, "stream is NULL");
-    char *line = NULL, a[72];
-    size_t cap = 0;
-    ssize_t len;
-    int ipsi = -1, ieta = -1, it = -1, ncol = 0, header = 0, status = BKF_OK;
-    size_t lineno = 0, rows = 0, rcap = 0;
+    char *line = malloc(STATE_LINE_MAX + 1), a[72];
+    if (!line) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    size_t len, bytes = 0;
+    size_t max_bytes = max_rows > (SIZE_MAX - (1u << 20)) / STATE_BYTES_PER_ROW
+                           ? SIZE_MAX
+                           : max_rows * STATE_BYTES_PER_ROW + (1u << 20);
+    int ipsi = -1, ieta = -1, it = -1, ncol = 0, header = 0, status = BKF_OK, got;
+    size_t lineno = 0, rows = 0, rcap = 0, total_rows = 0;
     double *psi = NULL, *eta = NULL, *tt = NULL;
-    while ((len = getline(&line, &cap, in)) >= 0) {
+    while ((got = state_line(in, line, &len, lineno + 1, &bytes, max_bytes, max_rows, err)) > 0) {
         lineno++;
         while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) line[--len] = '\0';
         if (line[0] == '#' || len == 0) continue;
@@ -828,7 +868,7 @@ int bkf_io_read_state(FILE *in, size_t max_rows, bkf_io_state *state, bkf_error 
             }
             continue;
         }
-        if (rows == max_rows) {
+        if (total_rows == max_rows) {
             status = bkf_error_set(err, BKF_EINPUT, "line %zu: more than %zu rows", lineno,
                                    max_rows);
             break;
@@ -859,11 +899,16 @@ int bkf_io_read_state(FILE *in, size_t max_rows, bkf_io_state *state, bkf_error 
                                    fields, ncol);
             break;
         }
+        /* Only the last snapshot is kept: a new t starts the rows again,
+         * so memory holds one snapshot however many the file has. */
+        if (it >= 0 && rows && vt != tt[rows - 1]) rows = 0;
         psi[rows] = vp;
         eta[rows] = ve;
         tt[rows] = vt;
         rows++;
+        total_rows++;
     }
+    if (got < 0 && !status) status = BKF_EINPUT;
     free(line);
     if (!status && ferror(in)) status = bkf_error_set(err, BKF_EIO, "read error");
     if (!status && !header) status = bkf_error_set(err, BKF_EINPUT, "no header line");
