@@ -28,8 +28,11 @@ extern "C" {
 #define BKF_SIMULATE_TMAX_MAX 1e6
 #define BKF_SIMULATE_FRAMES_MAX 1000000u
 #define BKF_SIMULATE_SNAPSHOTS_MAX 100000u
-/* frames x N values of the spacetime field are kept in memory */
-#define BKF_SIMULATE_FIELD_MAX 2e8
+/* The spacetime file's size, counted in bytes: (frames + 1) rows of N
+ * values, 16 bytes a value at most in text (" %.9g"), 4 in binary, plus the
+ * row's t.  The field is held in memory as float32 until the end, so this
+ * also bounds that memory (4 bytes a value). */
+#define BKF_SIMULATE_SPACETIME_BYTES_MAX 1073741824.0
 
 typedef struct {
     bkf_model_params model; /* N 0: 512, or S blocks for the chain */

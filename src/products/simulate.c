@@ -219,10 +219,18 @@ int bkf_simulate_check(const bkf_simulate_spec *sp, const char *prefix, bkf_erro
         if (!f) return bkf_error_set(err, BKF_EINPUT, "%s%s: %s", prefix, keys[i], e.message);
         bkf_io_atomic_abort(f);
     }
-    if (sp->spacetime && (double)(sp->frames + 1) * (double)model.N > BKF_SIMULATE_FIELD_MAX)
-        return bkf_error_set(err, BKF_EINPUT,
-                             "%sframes: %zu frames of %zu points is more than 2e8 values", prefix,
-                             sp->frames + 1, model.N);
+    if (sp->spacetime) {
+        int binary = sp->spacetime_format == 1;
+        double bytes = (double)(sp->frames + 1) *
+                       ((double)model.N * (binary ? 4 : 16) + (binary ? 4 : 26));
+        if (bytes > BKF_SIMULATE_SPACETIME_BYTES_MAX)
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "%sframes: %zu frames of %zu points make a %s spacetime file of "
+                                 "up to %.3g bytes, more than its limit of 1 GiB (%s)",
+                                 prefix, sp->frames + 1, model.N, binary ? "binary" : "text",
+                                 bytes, binary ? "fewer frames or points"
+                                                : "binary takes 4 bytes a value, text 16");
+    }
     return BKF_OK;
 }
 
