@@ -102,10 +102,17 @@ typedef enum {
 /* The continuous-slip state psi = nu, eta = phi(nu) lies well within the
  * field's blow-up bound 1e6 (phi(100) = 3.3e5) for |nu| <= BKF_PDE_NU_MAX. */
 #define BKF_PDE_NU_MAX 100.0
+/* gamma in [1e-6, 1e6] (the cycle engine's range of mu); the fastest wave
+ * rate c k_max (k_max = pi N/S, 2 N/S for the chain) at most 1e12: beyond,
+ * no step is resolved and the right-hand side nears overflow. */
+#define BKF_PDE_GAMMA_MIN 1e-6
+#define BKF_PDE_GAMMA_MAX 1e6
+#define BKF_PDE_WAVE_MAX 1e12
 #define BKF_PDE_TOL_MIN 1e-13
 #define BKF_PDE_TOL_MAX 1e-2
 
-/* The model: bkf_model_params (model.h), with gamma > 0, c >= 0, nu finite
+/* The model: bkf_model_params (model.h), with gamma in [BKF_PDE_GAMMA_MIN,
+ * BKF_PDE_GAMMA_MAX], c >= 0 with c k_max <= BKF_PDE_WAVE_MAX, nu finite
  * (|nu| >= 1 is allowed: continuous slip; |nu| <= BKF_PDE_NU_MAX), S > 0, N in [BKF_PDE_N_MIN,
  * BKF_PDE_N_MAX] (even for the continuum). */
 

@@ -49,6 +49,19 @@ int bkf_pde_check(const bkf_model_params *p, const bkf_pde_options *o, bkf_error
     if (p->kind == BKF_MODEL_CONTINUUM && p->N % 2)
         return bkf_error_set(err, BKF_EINPUT,
                              "N = %zu must be even for the spectral continuum model", p->N);
+    /* Parameters whose right-hand side overflows on a field within its bound
+     * 1e6 are refused here, by name: the run would otherwise fail at its
+     * first evaluation and blame the initial state. */
+    if (!(p->gamma >= BKF_PDE_GAMMA_MIN && p->gamma <= BKF_PDE_GAMMA_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "gamma = %.15g is outside [%g, %g]", p->gamma,
+                             BKF_PDE_GAMMA_MIN, BKF_PDE_GAMMA_MAX);
+    double kmax = (p->kind == BKF_MODEL_CHAIN ? 2.0 : 3.14159265358979323846) *
+                  (double)p->N / p->S;
+    if (!(p->c * kmax <= BKF_PDE_WAVE_MAX))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "c = %.15g with S = %.15g and N = %zu: the fastest wave rate c "
+                             "k_max = %.3g is beyond %g (lower c or N, or raise S)",
+                             p->c, p->S, p->N, p->c * kmax, BKF_PDE_WAVE_MAX);
     if (!o) return BKF_OK;
     if (!isfinite(o->tol) || o->tol < BKF_PDE_TOL_MIN || o->tol > BKF_PDE_TOL_MAX)
         return bkf_error_set(err, BKF_EINPUT, "tol = %g is outside [%g, %g]", o->tol,

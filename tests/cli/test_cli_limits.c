@@ -139,3 +139,24 @@ TEST(cli_simulate_spacetime_cap_in_bytes)
     CHECK_STATUS(bkf_simulate_check(&sp, "--", &e), BKF_EINPUT);
     CHECK(strstr(e.message, "binary") && strstr(e.message, "1 GiB"));
 }
+
+/* Parameters that make the right-hand side overflow on a field within its
+ * bound are refused by name, not reported as a blown-up initial state (the
+ * initial state psi = nu + 1e-3 noise is harmless in each case). */
+TEST(cli_simulate_blames_the_parameter_not_the_state)
+{
+    static const struct {
+        const char *flag, *value, *named;
+    } cases[] = {
+        {"--gamma", "1e300", "gamma = 1e+300 is outside [1e-06, 1e+06]"},
+        {"--gamma", "1e-300", "gamma = 1e-300 is outside [1e-06, 1e+06]"},
+        {"--c", "1e200", "c = 1e+200"},
+        {"--S", "1e-300", "S = 1e-300"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        bkf_cli_result r = BKF_CLI("simulate", cases[i].flag, cases[i].value, "--tmax", "1");
+        CHECK_MSG(!strstr(r.err, "initial state"), "%s %s: %s", cases[i].flag, cases[i].value,
+                  r.err);
+        bkf_cli_expect_bad_input(r, "simulate", cases[i].named, cases[i].flag);
+    }
+}
