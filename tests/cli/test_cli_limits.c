@@ -10,6 +10,7 @@
 #include "cli_support.h"
 #include "bkfront/simulate.h"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <string.h>
 #include <sys/resource.h>
@@ -159,4 +160,62 @@ TEST(cli_simulate_blames_the_parameter_not_the_state)
                   r.err);
         bkf_cli_expect_bad_input(r, "simulate", cases[i].named, cases[i].flag);
     }
+}
+
+/* bkfront ARGS with stdout closed (full: /dev/full) and stderr to a file;
+ * returns the exit status, stderr into *err. */
+static int run_stdout(const char *const *args, int full, char **err)
+{
+    char errpath[] = "/tmp/bkf_stdout_err_XXXXXX";
+    int efd = mkstemp(errpath);
+    CHECK(efd >= 0);
+    pid_t pid = fork();
+    CHECK(pid >= 0);
+    if (pid == 0) {
+        dup2(efd, 2);
+        if (full) {
+            int f = open("/dev/full", O_WRONLY);
+            if (f < 0 || dup2(f, 1) < 0) _exit(100);
+        } else
+            close(1);
+        char *argv[16];
+        int n = 0;
+        argv[n++] = (char *)BKF_CLI_PATH;
+        for (; args[n - 1] && n < 15; n++) argv[n] = (char *)args[n - 1];
+        argv[n] = NULL;
+        execv(BKF_CLI_PATH, argv);
+        _exit(127);
+    }
+    int st;
+    CHECK(waitpid(pid, &st, 0) == pid);
+    close(efd);
+    *err = bkf_cli_read_file(errpath);
+    unlink(errpath);
+    CHECK(WIFEXITED(st));
+    return WEXITSTATUS(st);
+}
+
+/* Help and --version to a closed stdout: exit 0, nothing said (the caller
+ * discarded them); to a full one: exit 1 with the reason.  Data to a closed
+ * stdout: exit 1 with the reason (the output is the result). */
+TEST(cli_help_to_closed_or_full_stdout)
+{
+    const char *const *texts[] = {BKF_CLI_ARGS("--help"), BKF_CLI_ARGS("--version"),
+                                  BKF_CLI_ARGS("help", "simulate"),
+                                  BKF_CLI_ARGS("period", "--help")};
+    for (size_t i = 0; i < sizeof texts / sizeof texts[0]; i++) {
+        char *err;
+        int code = run_stdout(texts[i], 0, &err);
+        CHECK_MSG(code == 0 && err[0] == '\0', "%s, closed: exit %d, %s", texts[i][0], code, err);
+        free(err);
+        code = run_stdout(texts[i], 1, &err);
+        CHECK_MSG(code == 1 && strstr(err, "cannot write to standard output: No space left"),
+                  "%s, full: exit %d, %s", texts[i][0], code, err);
+        free(err);
+    }
+    char *err;
+    int code = run_stdout(BKF_CLI_ARGS("period", "--mu", "1", "--nu", "0"), 0, &err);
+    CHECK_MSG(code == 1 && strstr(err, "Bad file descriptor"), "data, closed: exit %d, %s", code,
+              err);
+    free(err);
 }
