@@ -96,9 +96,14 @@ typedef struct bkf_io_atomic bkf_io_atomic;
 /* Creates the temporary file (in the target's directory, following a
  * symbolic link to its target, with the mode of an existing target or else
  * 0666 less the umask), named DIR/.BASE.tmp.PID.TAG for the target DIR/BASE
- * (PID the writing process, TAG up to 8 hex digits).  A process killed
+ * (PID the writing process, TAG up to 8 hex digits), held under an
+ * exclusive flock() until it is renamed or removed.  A process killed
  * outright (SIGKILL) leaves its temporary; the next open for the same target
- * removes every such temporary whose PID no longer exists on this machine.  BKF_EINPUT when the target cannot be written there:
+ * removes every such temporary whose PID does not exist here and that no
+ * one holds locked (a live writer in another PID namespace keeps its lock,
+ * and its temporary).  A chain of symbolic links is followed to its end
+ * (the final file is replaced, never a link of the chain; a loop is
+ * BKF_EINPUT).  BKF_EINPUT when the target cannot be written there:
  * missing directory, no permission, the target is a directory or another
  * non-regular file such as a device. */
 bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err);

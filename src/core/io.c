@@ -1,6 +1,7 @@
 /* realpath() is X/Open; _XOPEN_SOURCE 700 also brings POSIX 2008 (fsync,
- * O_CLOEXEC). */
+ * O_CLOEXEC); flock() (sys/file.h) is BSD, under _DEFAULT_SOURCE. */
 #define _XOPEN_SOURCE 700
+#define _DEFAULT_SOURCE
 #include "bkfront/io.h"
 
 #include <dirent.h>
@@ -13,6 +14,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -482,43 +484,63 @@ static const char *shown(const char *text, char *buf, size_t size)
 }
 
 /* A symbolic link's target is replaced, not the link: rename() over the link
- * would silently turn it into a regular file. */
+ * would silently turn it into a regular file.  A chain of links is followed
+ * to its end, so that a dangling chain (out -> l2 -> missing) writes the
+ * missing file, not over the intermediate link l2; a loop is refused. */
+#define LINK_HOPS_MAX 40
+
 static char *resolve_target(const char *path, bkf_error *err, int *status)
 {
     struct stat st;
     char sp[200];
     *status = BKF_OK;
-    if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
-        char *real = realpath(path, NULL);
-        if (real) return real;
-        /* A dangling link: write where it points, relative to its directory. */
+    if (!(lstat(path, &st) == 0 && S_ISLNK(st.st_mode))) return dup_string(path);
+    char *real = realpath(path, NULL);
+    if (real) return real;
+    char *cur = dup_string(path);
+    for (int hop = 0; cur; hop++) {
+        if (!(lstat(cur, &st) == 0 && S_ISLNK(st.st_mode))) return cur;
+        if (hop == LINK_HOPS_MAX) {
+            *status = bkf_error_set(err, BKF_EINPUT,
+                                    "output '%s': more than %d symbolic links in a row (a loop?)",
+                                    shown(path, sp, sizeof sp), LINK_HOPS_MAX);
+            break;
+        }
         char buf[PATH_MAX];
-        ssize_t n = readlink(path, buf, sizeof buf - 1);
+        ssize_t n = readlink(cur, buf, sizeof buf - 1);
         if (n < 0 || (size_t)n >= sizeof buf - 1) {
             *status = bkf_error_set(err, BKF_EINPUT, "cannot resolve the symbolic link '%s'",
                                     shown(path, sp, sizeof sp));
-            return NULL;
+            break;
         }
         buf[n] = '\0';
-        const char *slash = strrchr(path, '/');
-        if (buf[0] == '/' || !slash) return dup_string(buf);
-        size_t dlen = (size_t)(slash - path) + 1;
-        char *joined = malloc(dlen + (size_t)n + 1);
-        if (joined) {
-            memcpy(joined, path, dlen);
-            memcpy(joined + dlen, buf, (size_t)n + 1);
+        /* relative to the directory of the link that holds it */
+        const char *slash = strrchr(cur, '/');
+        size_t dlen = buf[0] == '/' || !slash ? 0 : (size_t)(slash - cur) + 1;
+        char *next = malloc(dlen + (size_t)n + 1);
+        if (next) {
+            memcpy(next, cur, dlen);
+            memcpy(next + dlen, buf, (size_t)n + 1);
         }
-        return joined;
+        free(cur);
+        cur = next;
     }
-    return dup_string(path);
+    free(cur);
+    return NULL;
 }
 
 /* Temporaries are named DIR/.BASE.tmp.PID.TAG (TAG: up to 8 hex digits),
  * BASE cut to its first TEMP_BASE_MAX bytes so that the name stays within
  * a file system's 255 (a target name of up to 255 bytes is valid; its
- * temporary must be too).  One whose process no longer exists on this
- * machine was left by a run that was killed (SIGKILL, power loss): remove
- * it.  Best effort, silent. */
+ * temporary must be too).  A writer holds an exclusive flock() on its
+ * temporary from creation until after the rename; the kernel drops it when
+ * the writer dies, however it dies.  One whose PID does not exist here AND
+ * that nobody holds locked was left by a run that was killed (SIGKILL,
+ * power loss): remove it.  The PID alone proves nothing for a writer in
+ * another PID namespace (a container on the same host, sharing the
+ * folder): its PID is not ours to look up, but its lock is seen.  When the
+ * lock cannot be tested (a file system without flock) nothing is removed.
+ * Best effort, silent. */
 #define TEMP_BASE_MAX 200
 
 static size_t temp_base_len(const char *base)
@@ -554,7 +576,12 @@ static void remove_stale_temps(const char *dir, const char *base)
         size_t k = dlen;
         if (k && full[k - 1] != '/') full[k++] = '/';
         memcpy(full + k, n, nlen + 1);
-        (void)unlink(full);
+        int fd = open(full, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+        if (fd >= 0) {
+            /* removed while we hold the lock: its writer cannot be alive */
+            if (flock(fd, LOCK_EX | LOCK_NB) == 0) (void)unlink(full);
+            close(fd);
+        }
         free(full);
     }
     closedir(d);
@@ -635,6 +662,10 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
         atomic_free(a);
         return NULL;
     }
+    /* Held until the rename: the mark of a live writer (remove_stale_temps).
+     * Best effort: without flock the temporary is merely never removed by
+     * another run. */
+    (void)flock(fd, LOCK_EX | LOCK_NB);
     if (exists) (void)fchmod(fd, st.st_mode & 07777); /* best effort: keep the old mode */
     a->stream = fdopen(fd, "w");
     if (!a->stream) {
@@ -670,6 +701,9 @@ int bkf_io_atomic_commit(bkf_io_atomic *a, bkf_error *err)
         step = "fsync";
         e = errno;
     }
+    /* The lock lives as long as any descriptor of the file: a duplicate
+     * keeps it over the close and the rename. */
+    int lock_fd = dup(fileno(a->stream));
     if (fclose(a->stream) != 0 && !step) {
         step = "close";
         e = errno;
@@ -679,6 +713,7 @@ int bkf_io_atomic_commit(bkf_io_atomic *a, bkf_error *err)
         step = "rename";
         e = errno;
     }
+    if (lock_fd >= 0) close(lock_fd);
     if (step) {
         unlink(a->temp);
         status = bkf_error_set(err, BKF_ENUMERIC, "writing '%s' failed (%s): %s",
