@@ -58,6 +58,9 @@ typedef struct {
                                scene: a partial product must not replace a
                                complete one of an earlier run) */
     int (*progress)(double fraction, void *data);
+    /* One line the run wants a reader to see (a seed the grid does not
+     * resolve); it is also a comment of the table.  NULL: comment only. */
+    void (*warn)(const char *message, void *data);
     /* Told each data file's temporary while it exists (armed 1) and when it
      * is gone (armed 0), so that a signal handler may remove it. */
     void (*temp_file)(const char *path, int armed, void *data);

@@ -123,6 +123,7 @@ static int simulate_write(const void *spec, FILE *out, bkf_io_format format,
         s.progress = hooks->progress;
         s.cancel = hooks->cancel;
         s.temp_file = hooks->temp_file;
+        s.warn = hooks->warn;
         s.data = hooks->data;
     }
     s.discard_canceled = !hooks || !hooks->keep_canceled;
