@@ -138,6 +138,16 @@ static void guard_temp(const char *path, int armed, void *data)
 
 /* ------------------------------------------------------------------ run */
 
+/* The report on stdout (the plan, the progress lines, the speeds tables)
+ * is output too: a write that failed anywhere in it is an error (exit 1),
+ * though the files written stay. */
+static int report_status(bkf_error *err)
+{
+    if (fflush(stdout) == 0 && !ferror(stdout)) return BKF_OK;
+    return bkf_error_set(err, BKF_EIO, "cannot write the report to standard output: %s",
+                         strerror(errno));
+}
+
 static void print_plan(const bkf_scene *sc, const bkf_scene_plan *plan, FILE *out)
 {
     fprintf(out, "# plan for %s: %zu computations for %zu products, output in %s\n", sc->path,
@@ -262,7 +272,7 @@ static int run_run(int argc, char **argv, bkf_error *err)
         print_plan(sc, &plan, stdout);
         bkf_scene_plan_free(&plan);
         bkf_scene_free(sc);
-        return fflush(stdout) == 0 ? BKF_OK : bkf_error_set(err, BKF_EIO, "cannot write");
+        return report_status(err);
     }
     if ((s = make_dirs(outdir, err))) {
         bkf_scene_plan_free(&plan);
@@ -364,14 +374,14 @@ static int run_run(int argc, char **argv, bkf_error *err)
         if (st->kind != BKF_SCENE_STEP_FIGURE || step_status[i]) continue;
         for (size_t k = 0; k < st->nargs; k++) printf("  %s\n", st->args[k].value);
     }
-    fflush(stdout);
+    int reported = report_status(err);
     free(step_status);
     bkf_scene_plan_free(&plan);
     bkf_scene_free(sc);
     if (failed)
         return bkf_error_set(err, worst ? worst : BKF_ENUMERIC, "%zu of the computations failed; first: %s",
                              failed, first_failure);
-    return BKF_OK;
+    return reported;
 }
 
 const cli_command cli_cmd_run = {"run", "compute a scene file's products and figures (docs/scenes.md)",

@@ -219,3 +219,34 @@ TEST(cli_help_to_closed_or_full_stdout)
               err);
     free(err);
 }
+
+/* `bkfront run`'s report on stdout is output too: to a full stdout, exit 1
+ * with the reason (it used to exit 0 with the report lost); the files the
+ * run wrote stay. */
+TEST(cli_run_report_to_a_full_stdout_fails)
+{
+    char dir[] = "/tmp/bkf_run_full_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char scene[300], out[300], table[320];
+    snprintf(scene, sizeof scene, "%s/s.scene", dir);
+    snprintf(out, sizeof out, "%s/o", dir);
+    snprintf(table, sizeof table, "%s/o/p.tsv", dir);
+    FILE *f = fopen(scene, "w");
+    CHECK(f);
+    fputs("[model]\ngamma = 2\nnu = 0\n[period p]\nmu = 1\n", f);
+    CHECK(fclose(f) == 0);
+    char *err;
+    int code = run_stdout(BKF_CLI_ARGS("run", "--no-figures", "--out", out, scene), 1, &err);
+    CHECK_MSG(code == 1 && strstr(err, "cannot write the report to standard output"),
+              "exit %d: %s", code, err);
+    free(err);
+    struct stat sb;
+    CHECK(stat(table, &sb) == 0 && sb.st_size > 0);
+    code = run_stdout(BKF_CLI_ARGS("run", "--plan", "--out", out, scene), 1, &err);
+    CHECK_MSG(code == 1 && strstr(err, "cannot write the report"), "plan: exit %d: %s", code, err);
+    free(err);
+    unlink(table);
+    rmdir(out);
+    unlink(scene);
+    rmdir(dir);
+}
