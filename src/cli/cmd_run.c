@@ -335,16 +335,17 @@ static int run_run(int argc, char **argv, bkf_error *err)
     cli_cancel_end();
     if (canceled) {
         const char *sig = cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT";
-        size_t nsteps = plan.nsteps;
-        printf("\ninterrupted (%s) after %zu of %zu computations; the rest were not run\n", sig,
-               ran, nsteps);
+        size_t nsteps = plan.nsteps, done = 0;
+        for (size_t i = 0; i < ran; i++) done += step_status[i] == BKF_OK;
+        printf("\ninterrupted (%s): %zu of %zu computations done, the rest not run\n", sig, done,
+               nsteps);
         fflush(stdout);
         free(step_status);
         bkf_scene_plan_free(&plan);
         bkf_scene_free(sc);
         return bkf_error_set(err, BKF_ECANCELED,
-                             "interrupted (%s): %zu of %zu computations run; complete files "
-                             "kept, none replaced by partial data", sig, ran, nsteps);
+                             "interrupted (%s): %zu of %zu computations done; their files kept, "
+                             "none replaced by partial data", sig, done, nsteps);
     }
 
     /* The tables users most want to read, then where everything is. */
