@@ -28,6 +28,13 @@ typedef struct {
     void (*warn)(const char *message, void *data); /* one line, kept going */
     void *data;
     const volatile sig_atomic_t *cancel;          /* raised: BKF_ECANCELED */
+    /* Told each data file a product writes itself (beside its table) while
+     * its temporary exists (armed 1) and when it is gone (armed 0), so that
+     * a signal handler may remove it. */
+    void (*temp_file)(const char *path, int armed, void *data);
+    /* Stopped through cancel, a product replaces none of its own data
+     * files unless this is set (its table is the caller's to keep or not). */
+    int keep_canceled;
 } bkf_catalog_hooks;
 
 typedef struct {

@@ -96,9 +96,14 @@ typedef struct bkf_io_atomic bkf_io_atomic;
 /* Creates the temporary file (in the target's directory, following a
  * symbolic link to its target, with the mode of an existing target or else
  * 0666 less the umask), named DIR/.BASE.tmp.PID.TAG for the target DIR/BASE
- * (PID the writing process, TAG up to 8 hex digits).  A process killed
+ * (PID the writing process, TAG up to 8 hex digits), held under an
+ * exclusive flock() until it is renamed or removed.  A process killed
  * outright (SIGKILL) leaves its temporary; the next open for the same target
- * removes every such temporary whose PID no longer exists on this machine.  BKF_EINPUT when the target cannot be written there:
+ * removes every such temporary whose PID does not exist here and that no
+ * one holds locked (a live writer in another PID namespace keeps its lock,
+ * and its temporary).  A chain of symbolic links is followed to its end
+ * (the final file is replaced, never a link of the chain; a loop is
+ * BKF_EINPUT).  BKF_EINPUT when the target cannot be written there:
  * missing directory, no permission, the target is a directory or another
  * non-regular file such as a device. */
 bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err);
@@ -136,8 +141,10 @@ typedef struct {
  * columns are ignored; with a column t, only the rows of the last t are
  * kept: the last snapshot of a file of several).  Every kept cell must be a
  * finite number and every line have the header's number of fields.  At most
- * max_rows data lines are read, so that a huge or endless stream cannot
- * take all memory.  On failure *state is left empty (NULL arrays, 0 rows):
+ * max_rows data lines are read, each at most 4096 bytes, no NUL byte, and
+ * at most 128 max_rows + 1 MiB bytes in all, and only the rows of the
+ * current t are held, so that a huge or endless stream (/dev/zero) takes
+ * neither all memory nor unbounded time.  On failure *state is left empty (NULL arrays, 0 rows):
  * BKF_EINPUT for content that is not such a table (the message names the
  * line), BKF_EIO when reading the stream fails, BKF_ENOMEM. */
 int bkf_io_read_state(FILE *in, size_t max_rows, bkf_io_state *state, bkf_error *err);

@@ -83,6 +83,7 @@ typedef struct {
     size_t nmodel;
     bkf_scene_product *products;
     size_t nproducts;
+    void *names_;             /* private: the products by name, for bkf_scene_find */
 } bkf_scene;
 
 /* BKF_EINPUT with "NAME:LINE: message" for syntax errors, unknown sections
@@ -139,6 +140,7 @@ typedef struct {
     size_t nproducts;
     size_t deduplicated;      /* computations shared by two products */
     char *outdir;
+    void *planner_;           /* private to bkf_scene_make_plan (NULL after it) */
 } bkf_scene_plan;
 
 typedef struct {

@@ -28,8 +28,11 @@ extern "C" {
 #define BKF_SIMULATE_TMAX_MAX 1e6
 #define BKF_SIMULATE_FRAMES_MAX 1000000u
 #define BKF_SIMULATE_SNAPSHOTS_MAX 100000u
-/* frames x N values of the spacetime field are kept in memory */
-#define BKF_SIMULATE_FIELD_MAX 2e8
+/* The spacetime file's size, counted in bytes: (frames + 1) rows of N
+ * values, 16 bytes a value at most in text (" %.9g"), 4 in binary, plus the
+ * row's t.  The field is held in memory as float32 until the end, so this
+ * also bounds that memory (4 bytes a value). */
+#define BKF_SIMULATE_SPACETIME_BYTES_MAX 1073741824.0
 
 typedef struct {
     bkf_model_params model; /* N 0: 512, or S blocks for the chain */
@@ -51,7 +54,13 @@ typedef struct {
     const volatile sig_atomic_t *cancel;     /* raised: the run stops, what is
                                                 complete is written, BKF_ECANCELED */
     const char *(*cancel_reason)(void *data); /* "SIGINT", ...; NULL: "canceled" */
+    int discard_canceled;   /* stopped through cancel, replace no data file (a
+                               scene: a partial product must not replace a
+                               complete one of an earlier run) */
     int (*progress)(double fraction, void *data);
+    /* One line the run wants a reader to see (a seed the grid does not
+     * resolve); it is also a comment of the table.  NULL: comment only. */
+    void (*warn)(const char *message, void *data);
     /* Told each data file's temporary while it exists (armed 1) and when it
      * is gone (armed 0), so that a signal handler may remove it. */
     void (*temp_file)(const char *path, int armed, void *data);
@@ -78,7 +87,9 @@ int bkf_simulate_check(const bkf_simulate_spec *spec, const char *prefix, bkf_er
  * speed_err, period, period_err, v_pred), and the spacetime and snapshot
  * files, opened (so a bad path fails) before the run and replaced only at
  * its end.  Stopped through spec->cancel: everything complete is written,
- * marked "interrupted (REASON) at t = ...", and BKF_ECANCELED returned; on
+ * marked "interrupted (REASON) at t = ...", and BKF_ECANCELED returned (with
+ * discard_canceled the data files are left as they were, and only `out`
+ * gets the marked table, for the caller to discard or keep); on
  * any other failure no file is replaced and `out` holds a partial table
  * the caller discards. */
 int bkf_simulate_write(const bkf_simulate_spec *spec, FILE *out, bkf_io_format format,

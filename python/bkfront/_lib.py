@@ -65,6 +65,8 @@ typedef struct {
     void (*warn)(const char *message, void *data);
     void *data;
     const int *cancel;
+    void (*temp_file)(const char *path, int armed, void *data);
+    int keep_canceled;
 } bkf_catalog_hooks;
 typedef struct {
     const char *name;

@@ -157,15 +157,22 @@ int cli_cancel_signal(void);
  * tolerance, a spent budget, a blow-up, memory, I/O). */
 int cli_exit_code(int status);
 
-/* An in-memory stream (open_memstream) to build the whole output in. */
+/* An in-memory stream to build the whole output in.  Unlike glibc's
+ * open_memstream, whose failed growth sets no error flag (fflush and fclose
+ * then succeed on a silently cut buffer), a write that cannot grow it fails
+ * and marks the stream, so close reports it.  The stream keeps a pointer to
+ * *buf: buf must not move while the stream is open. */
 typedef struct {
     FILE *stream;
     char *data;
     size_t size;
+    size_t cap;
+    int failed; /* a write could not grow the buffer */
 } cli_buffer;
 
 int cli_buffer_open(cli_buffer *buf, bkf_error *err);
-/* Closes the stream; data and size are then final.  Nonzero on error. */
+/* Closes the stream; data and size are then final.  BKF_ENOMEM when any
+ * write could not be stored. */
 int cli_buffer_close(cli_buffer *buf, bkf_error *err);
 void cli_buffer_free(cli_buffer *buf);
 

@@ -10,6 +10,7 @@
 #include "commands.h"
 
 #include <errno.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -50,8 +51,11 @@ static void run_help(FILE *out)
         "                  this flag such a scene is refused\n"
         "\n"
         "Prints one line per computation, then the speeds tables and the files\n"
-        "written. exit status: 0 every product done, 1 a computation or figure\n"
-        "failed (the others are still produced), 2 bad scene or options.\n"
+        "written. Ctrl-C (SIGINT) or SIGTERM stops the whole run: the computation\n"
+        "under way stops without replacing its files, the finished ones keep\n"
+        "theirs, no later one starts (exit 130, 143 for SIGTERM); a second signal\n"
+        "ends it at once. exit status: 0 every product done, 1 a computation or\n"
+        "figure failed (the others are still produced), 2 bad scene or options.\n"
         "\n"
         "A scene is trusted input only with --trust-scene (docs/scenes.md#trust).\n"
         "This bkfront's gnuplot scripts: " BKF_PLOTS_DIR "\n");
@@ -134,20 +138,45 @@ static int check_trust(const bkf_scene *sc, bkf_error *err)
     return BKF_OK;
 }
 
+/* The temporaries being written (a step's table and the data files a
+ * product writes itself, e.g. simulate's spacetime and snapshots), each
+ * guarded by the signal cleanup until it is committed or removed. */
+#define RUN_TEMPS 4
 typedef struct {
-    int slot;  /* the signal cleanup's slot of the file being written */
+    char path[RUN_TEMPS][4096];
+    int slot[RUN_TEMPS];
+    int used[RUN_TEMPS];
 } run_context;
 
 static void guard_temp(const char *path, int armed, void *data)
 {
     run_context *rc = data;
-    if (armed)
-        rc->slot = cli_guard_temp(path);
-    else
-        cli_unguard_temp(rc->slot);
+    for (int i = 0; i < RUN_TEMPS; i++) {
+        if (armed && !rc->used[i]) {
+            snprintf(rc->path[i], sizeof rc->path[i], "%s", path);
+            rc->slot[i] = cli_guard_temp(path);
+            rc->used[i] = 1;
+            return;
+        }
+        if (!armed && rc->used[i] && strcmp(rc->path[i], path) == 0) {
+            cli_unguard_temp(rc->slot[i]);
+            rc->used[i] = 0;
+            return;
+        }
+    }
 }
 
 /* ------------------------------------------------------------------ run */
+
+/* The report on stdout (the plan, the progress lines, the speeds tables)
+ * is output too: a write that failed anywhere in it is an error (exit 1),
+ * though the files written stay. */
+static int report_status(bkf_error *err)
+{
+    if (fflush(stdout) == 0 && !ferror(stdout)) return BKF_OK;
+    return bkf_error_set(err, BKF_EIO, "cannot write the report to standard output: %s",
+                         strerror(errno));
+}
 
 static void print_plan(const bkf_scene *sc, const bkf_scene_plan *plan, FILE *out)
 {
@@ -265,11 +294,13 @@ static int run_run(int argc, char **argv, bkf_error *err)
                              "--plots: %s is not a folder of gnuplot scripts (give --plots DIR, "
                              "set BKFRONT_PLOTS, or --no-figures)", plots_dir);
     }
-    run_context rc = {.slot = -1};
+    run_context rc;
+    memset(&rc, 0, sizeof rc);
     bkf_scene_run_options ro = {.program = CLI_PROGRAM " " CLI_VERSION,
                                 .command_prefix = CLI_PROGRAM,
                                 .plots_dir = plots_dir,
                                 .scene_dir = scene_dir,
+                                .hooks = {.temp_file = guard_temp, .data = &rc},
                                 .temp_file = guard_temp,
                                 .data = &rc};
 
@@ -283,7 +314,7 @@ static int run_run(int argc, char **argv, bkf_error *err)
         print_plan(sc, &plan, stdout);
         bkf_scene_plan_free(&plan);
         bkf_scene_free(sc);
-        return fflush(stdout) == 0 ? BKF_OK : bkf_error_set(err, BKF_EIO, "cannot write");
+        return report_status(err);
     }
     if ((s = make_dirs(outdir, err))) {
         bkf_scene_plan_free(&plan);
@@ -298,10 +329,16 @@ static int run_run(int argc, char **argv, bkf_error *err)
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     int worst = BKF_OK;
-    size_t failed = 0;
+    size_t failed = 0, ran = 0;
     char first_failure[BKF_ERROR_LEN] = "";
     double t_all = now();
-    for (size_t i = 0; i < plan.nsteps; i++) {
+    /* The first SIGINT or SIGTERM stops the whole run: the step under way
+     * stops at its next check (its files are not replaced), the steps done
+     * keep their files, no later step starts.  A second one ends the
+     * process at once (temporaries removed). */
+    const volatile sig_atomic_t *cancel = cli_cancel_begin();
+    ro.hooks.cancel = cancel;
+    for (size_t i = 0; i < plan.nsteps && !*cancel; i++, ran++) {
         bkf_scene_step *st = &plan.steps[i];
         const bkf_scene_product *p = &sc->products[st->users[0]];
         bkf_error e = {0};
@@ -309,10 +346,19 @@ static int run_run(int argc, char **argv, bkf_error *err)
         double t0 = now();
         int status = bkf_scene_run_step(sc, &plan, i, step_status, &ro, warning,
                                         sizeof warning, &e);
+        /* A step that finished although the signal came is complete and
+         * kept; one that failed because of it was stopped, not wrong. */
+        if (status && *cancel) {
+            status = BKF_ECANCELED;
+            snprintf(e.message, sizeof e.message, "stopped by %s; its files were not replaced",
+                     cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT");
+        }
         step_status[i] = status;
         double dt = now() - t0;
         printf("[%zu/%zu] %-11s %-18s %s %6.2f s  %s\n", i + 1, plan.nsteps,
-               st->product, p->name, status ? "FAILED" : "done  ", dt, st->output);
+               st->product, p->name,
+               status == BKF_ECANCELED ? "stopped" : status ? "FAILED" : "done  ", dt,
+               st->output);
         if (status) {
             printf("        %s:%d [%s %s]: %s\n", sc->path, p->line, bkf_scene_kind_name(p->kind),
                    p->name, e.message);
@@ -327,6 +373,22 @@ static int run_run(int argc, char **argv, bkf_error *err)
         fflush(stdout);
     }
     double total = now() - t_all;
+    int canceled = *cancel != 0;
+    cli_cancel_end();
+    if (canceled) {
+        const char *sig = cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT";
+        size_t nsteps = plan.nsteps, done = 0;
+        for (size_t i = 0; i < ran; i++) done += step_status[i] == BKF_OK;
+        printf("\ninterrupted (%s): %zu of %zu computations done, the rest not run\n", sig, done,
+               nsteps);
+        fflush(stdout);
+        free(step_status);
+        bkf_scene_plan_free(&plan);
+        bkf_scene_free(sc);
+        return bkf_error_set(err, BKF_ECANCELED,
+                             "interrupted (%s): %zu of %zu computations done; their files kept, "
+                             "none replaced by partial data", sig, done, nsteps);
+    }
 
     /* The tables users most want to read, then where everything is. */
     for (size_t i = 0; i < sc->nproducts; i++) {
@@ -355,14 +417,14 @@ static int run_run(int argc, char **argv, bkf_error *err)
         if (st->kind != BKF_SCENE_STEP_FIGURE || step_status[i]) continue;
         for (size_t k = 0; k < st->nargs; k++) printf("  %s\n", st->args[k].value);
     }
-    fflush(stdout);
+    int reported = report_status(err);
     free(step_status);
     bkf_scene_plan_free(&plan);
     bkf_scene_free(sc);
     if (failed)
         return bkf_error_set(err, worst ? worst : BKF_ENUMERIC, "%zu of the computations failed; first: %s",
                              failed, first_failure);
-    return BKF_OK;
+    return reported;
 }
 
 const cli_command cli_cmd_run = {"run", "compute a scene file's products and figures (docs/scenes.md)",

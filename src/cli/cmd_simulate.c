@@ -97,6 +97,13 @@ static void guard_temp(const char *path, int armed, void *data)
     }
 }
 
+/* Said before the run starts, so before any progress bar. */
+static void warn(const char *message, void *data)
+{
+    (void)data;
+    fprintf(stderr, CLI_PROGRAM " simulate: %s\n", message);
+}
+
 static int draw(double fraction, void *data)
 {
     simulate_context *c = data;
@@ -120,6 +127,7 @@ static int simulate_run(int argc, char **argv, bkf_error *err)
     simulate_context ctx = {0};
     progress_init(&ctx.bar, CLI_PROGRAM " simulate", !a.progress.no_progress);
     a.spec.progress = draw;
+    a.spec.warn = warn;
     a.spec.temp_file = guard_temp;
     a.spec.cancel_reason = cancel_reason;
     a.spec.data = &ctx;

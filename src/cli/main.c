@@ -3,11 +3,15 @@
  *
  * A subcommand is a cli_command (args.h) defined in its own cmd_NAME.c; adding
  * one is an extern declaration and an entry in commands.c. */
+#define _POSIX_C_SOURCE 200809L
 #include "args.h"
 #include "commands.h"
 
+#include <errno.h>
+#include <fcntl.h>
 #include <gsl/gsl_errno.h>
 #include <string.h>
+#include <unistd.h>
 
 static void print_usage(FILE *out)
 {
@@ -55,15 +59,32 @@ static int unknown_command(const char *name)
     return 2;
 }
 
-/* Help goes to stdout and succeeds even if stdout is closed: nothing useful
- * can be said about that on the same broken channel. */
+/* Help and the version go to stdout.  A caller that closed stdout
+ * (`bkfront --help >&-`) has said it does not want them: that is success,
+ * with nothing written.  Any other failure to write them (a full disk, a
+ * broken pipe) is an error, said on stderr, exit 1: the text asked for did
+ * not arrive.  (A data command fails on a closed stdout too: its output is
+ * the result.) */
+static int stdout_closed(void)
+{
+    return fcntl(STDOUT_FILENO, F_GETFD) == -1 && errno == EBADF;
+}
+
+static int finish_text(void)
+{
+    if (fflush(stdout) == 0 && !ferror(stdout)) return 0;
+    fprintf(stderr, CLI_PROGRAM ": cannot write to standard output: %s\n", strerror(errno));
+    return 1;
+}
+
 static int print_help(const cli_command *cmd)
 {
+    if (stdout_closed()) return 0;
     if (cmd)
         cmd->help(stdout);
     else
         print_usage(stdout);
-    return fflush(stdout) == 0 ? 0 : 1;
+    return finish_text();
 }
 
 int main(int argc, char **argv)
@@ -79,8 +100,9 @@ int main(int argc, char **argv)
     const char *first = argv[1];
     if (strcmp(first, "--help") == 0 || strcmp(first, "-h") == 0) return print_help(NULL);
     if (strcmp(first, "--version") == 0) {
+        if (stdout_closed()) return 0;
         printf(CLI_PROGRAM " %s\n", bkf_version());
-        return fflush(stdout) == 0 ? 0 : 1;
+        return finish_text();
     }
     if (strcmp(first, "help") == 0) {
         if (argc == 2) return print_help(NULL);

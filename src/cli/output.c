@@ -1,11 +1,12 @@
 /* All-or-nothing output, cancellation by signals and exit codes (args.h).
- * open_memstream and sigaction are POSIX 2008. */
-#define _POSIX_C_SOURCE 200809L
+ * sigaction is POSIX 2008; fopencookie (the output buffer) is GNU. */
+#define _GNU_SOURCE
 #include "args.h"
 
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <sys/stat.h>
 #include <string.h>
@@ -182,11 +183,39 @@ void cli_output_abort(cli_output *out)
     disarm_cleanup(out->slot);
 }
 
+/* A write that cannot be stored whole stores nothing and returns 0, which
+ * stdio takes as an error (ferror, and fflush/fclose fail). */
+static ssize_t buffer_write(void *cookie, const char *data, size_t size)
+{
+    cli_buffer *buf = cookie;
+    if (buf->failed) return 0;
+    if (size > buf->cap - buf->size) {
+        size_t cap = buf->cap ? buf->cap : 4096;
+        while (cap - buf->size < size) {
+            if (cap > SIZE_MAX / 2) {
+                buf->failed = 1;
+                return 0;
+            }
+            cap *= 2;
+        }
+        char *d = realloc(buf->data, cap);
+        if (!d) {
+            buf->failed = 1;
+            return 0;
+        }
+        buf->data = d;
+        buf->cap = cap;
+    }
+    memcpy(buf->data + buf->size, data, size);
+    buf->size += size;
+    return (ssize_t)size;
+}
+
 int cli_buffer_open(cli_buffer *buf, bkf_error *err)
 {
-    buf->data = NULL;
-    buf->size = 0;
-    buf->stream = open_memstream(&buf->data, &buf->size);
+    memset(buf, 0, sizeof *buf);
+    cookie_io_functions_t io = {.write = buffer_write};
+    buf->stream = fopencookie(buf, "w", io);
     if (!buf->stream) return bkf_error_set(err, BKF_ENOMEM, "out of memory for the output");
     return BKF_OK;
 }
@@ -197,7 +226,8 @@ int cli_buffer_close(cli_buffer *buf, bkf_error *err)
     int bad = ferror(buf->stream);
     int closed = fclose(buf->stream);
     buf->stream = NULL;
-    if (bad || closed != 0) return bkf_error_set(err, BKF_ENOMEM, "out of memory for the output");
+    if (bad || closed != 0 || buf->failed)
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory for the output");
     return BKF_OK;
 }
 
@@ -209,6 +239,7 @@ void cli_buffer_free(cli_buffer *buf)
     free(buf->data);
     buf->data = NULL;
     buf->size = 0;
+    buf->cap = 0;
 }
 
 static const char *const format_names[] = {"tsv", "json", NULL};

@@ -1,6 +1,7 @@
 /* realpath() is X/Open; _XOPEN_SOURCE 700 also brings POSIX 2008 (fsync,
- * O_CLOEXEC). */
+ * O_CLOEXEC); flock() (sys/file.h) is BSD, under _DEFAULT_SOURCE. */
 #define _XOPEN_SOURCE 700
+#define _DEFAULT_SOURCE
 #include "bkfront/io.h"
 
 #include <dirent.h>
@@ -10,8 +11,10 @@
 #include <signal.h>
 #include <limits.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -481,43 +484,63 @@ static const char *shown(const char *text, char *buf, size_t size)
 }
 
 /* A symbolic link's target is replaced, not the link: rename() over the link
- * would silently turn it into a regular file. */
+ * would silently turn it into a regular file.  A chain of links is followed
+ * to its end, so that a dangling chain (out -> l2 -> missing) writes the
+ * missing file, not over the intermediate link l2; a loop is refused. */
+#define LINK_HOPS_MAX 40
+
 static char *resolve_target(const char *path, bkf_error *err, int *status)
 {
     struct stat st;
     char sp[200];
     *status = BKF_OK;
-    if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
-        char *real = realpath(path, NULL);
-        if (real) return real;
-        /* A dangling link: write where it points, relative to its directory. */
+    if (!(lstat(path, &st) == 0 && S_ISLNK(st.st_mode))) return dup_string(path);
+    char *real = realpath(path, NULL);
+    if (real) return real;
+    char *cur = dup_string(path);
+    for (int hop = 0; cur; hop++) {
+        if (!(lstat(cur, &st) == 0 && S_ISLNK(st.st_mode))) return cur;
+        if (hop == LINK_HOPS_MAX) {
+            *status = bkf_error_set(err, BKF_EINPUT,
+                                    "output '%s': more than %d symbolic links in a row (a loop?)",
+                                    shown(path, sp, sizeof sp), LINK_HOPS_MAX);
+            break;
+        }
         char buf[PATH_MAX];
-        ssize_t n = readlink(path, buf, sizeof buf - 1);
+        ssize_t n = readlink(cur, buf, sizeof buf - 1);
         if (n < 0 || (size_t)n >= sizeof buf - 1) {
             *status = bkf_error_set(err, BKF_EINPUT, "cannot resolve the symbolic link '%s'",
                                     shown(path, sp, sizeof sp));
-            return NULL;
+            break;
         }
         buf[n] = '\0';
-        const char *slash = strrchr(path, '/');
-        if (buf[0] == '/' || !slash) return dup_string(buf);
-        size_t dlen = (size_t)(slash - path) + 1;
-        char *joined = malloc(dlen + (size_t)n + 1);
-        if (joined) {
-            memcpy(joined, path, dlen);
-            memcpy(joined + dlen, buf, (size_t)n + 1);
+        /* relative to the directory of the link that holds it */
+        const char *slash = strrchr(cur, '/');
+        size_t dlen = buf[0] == '/' || !slash ? 0 : (size_t)(slash - cur) + 1;
+        char *next = malloc(dlen + (size_t)n + 1);
+        if (next) {
+            memcpy(next, cur, dlen);
+            memcpy(next + dlen, buf, (size_t)n + 1);
         }
-        return joined;
+        free(cur);
+        cur = next;
     }
-    return dup_string(path);
+    free(cur);
+    return NULL;
 }
 
 /* Temporaries are named DIR/.BASE.tmp.PID.TAG (TAG: up to 8 hex digits),
  * BASE cut to its first TEMP_BASE_MAX bytes so that the name stays within
  * a file system's 255 (a target name of up to 255 bytes is valid; its
- * temporary must be too).  One whose process no longer exists on this
- * machine was left by a run that was killed (SIGKILL, power loss): remove
- * it.  Best effort, silent. */
+ * temporary must be too).  A writer holds an exclusive flock() on its
+ * temporary from creation until after the rename; the kernel drops it when
+ * the writer dies, however it dies.  One whose PID does not exist here AND
+ * that nobody holds locked was left by a run that was killed (SIGKILL,
+ * power loss): remove it.  The PID alone proves nothing for a writer in
+ * another PID namespace (a container on the same host, sharing the
+ * folder): its PID is not ours to look up, but its lock is seen.  When the
+ * lock cannot be tested (a file system without flock) nothing is removed.
+ * Best effort, silent. */
 #define TEMP_BASE_MAX 200
 
 static size_t temp_base_len(const char *base)
@@ -553,7 +576,12 @@ static void remove_stale_temps(const char *dir, const char *base)
         size_t k = dlen;
         if (k && full[k - 1] != '/') full[k++] = '/';
         memcpy(full + k, n, nlen + 1);
-        (void)unlink(full);
+        int fd = open(full, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+        if (fd >= 0) {
+            /* removed while we hold the lock: its writer cannot be alive */
+            if (flock(fd, LOCK_EX | LOCK_NB) == 0) (void)unlink(full);
+            close(fd);
+        }
         free(full);
     }
     closedir(d);
@@ -634,6 +662,10 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
         atomic_free(a);
         return NULL;
     }
+    /* Held until the rename: the mark of a live writer (remove_stale_temps).
+     * Best effort: without flock the temporary is merely never removed by
+     * another run. */
+    (void)flock(fd, LOCK_EX | LOCK_NB);
     if (exists) (void)fchmod(fd, st.st_mode & 07777); /* best effort: keep the old mode */
     a->stream = fdopen(fd, "w");
     if (!a->stream) {
@@ -669,6 +701,9 @@ int bkf_io_atomic_commit(bkf_io_atomic *a, bkf_error *err)
         step = "fsync";
         e = errno;
     }
+    /* The lock lives as long as any descriptor of the file: a duplicate
+     * keeps it over the close and the rename. */
+    int lock_fd = dup(fileno(a->stream));
     if (fclose(a->stream) != 0 && !step) {
         step = "close";
         e = errno;
@@ -678,6 +713,7 @@ int bkf_io_atomic_commit(bkf_io_atomic *a, bkf_error *err)
         step = "rename";
         e = errno;
     }
+    if (lock_fd >= 0) close(lock_fd);
     if (step) {
         unlink(a->temp);
         status = bkf_error_set(err, BKF_ENUMERIC, "writing '%s' failed (%s): %s",
@@ -795,18 +831,57 @@ static int state_cells(char *line, int ipsi, int ieta, int it, double *vp, doubl
     return 0;
 }
 
+/* Lines of a state file are short (a snapshot row is about 80 bytes); a
+ * longer one, a NUL byte or a file beyond its byte budget ends the read, so
+ * that /dev/zero or an endless stream cannot take all memory or time. */
+#define STATE_LINE_MAX 4096
+#define STATE_BYTES_PER_ROW 128
+
+/* The next line into buf (without its newline): 1, 0 at the end of the
+ * stream, -1 with err set. */
+static int state_line(FILE *in, char *buf, size_t *len, size_t lineno, size_t *bytes,
+                      size_t max_bytes, size_t max_rows, bkf_error *err)
+{
+    size_t n = 0;
+    int c;
+    while ((c = getc(in)) != EOF) {
+        if (++*bytes > max_bytes) {
+            bkf_error_set(err, BKF_EINPUT, "larger than %zu bytes (the limit for %zu rows)",
+                          max_bytes, max_rows);
+            return -1;
+        }
+        if (c == '\n') break;
+        if (c == '\0') {
+            bkf_error_set(err, BKF_EINPUT, "line %zu holds a NUL byte (not a text table)", lineno);
+            return -1;
+        }
+        if (n == STATE_LINE_MAX) {
+            bkf_error_set(err, BKF_EINPUT, "line %zu is longer than %d bytes", lineno,
+                          STATE_LINE_MAX);
+            return -1;
+        }
+        buf[n++] = (char)c;
+    }
+    buf[n] = '\0';
+    *len = n;
+    return c != EOF || n > 0;
+}
+
 int bkf_io_read_state(FILE *in, size_t max_rows, bkf_io_state *state, bkf_error *err)
 {
     if (!state) return bkf_error_set(err, BKF_EINPUT, "state is NULL");
     memset(state, 0, sizeof *state);
     if (!in) return bkf_error_set(err, BKF_EINPUT, "stream is NULL");
-    char *line = NULL, a[72];
-    size_t cap = 0;
-    ssize_t len;
-    int ipsi = -1, ieta = -1, it = -1, ncol = 0, header = 0, status = BKF_OK;
-    size_t lineno = 0, rows = 0, rcap = 0;
+    char *line = malloc(STATE_LINE_MAX + 1), a[72];
+    if (!line) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    size_t len, bytes = 0;
+    size_t max_bytes = max_rows > (SIZE_MAX - (1u << 20)) / STATE_BYTES_PER_ROW
+                           ? SIZE_MAX
+                           : max_rows * STATE_BYTES_PER_ROW + (1u << 20);
+    int ipsi = -1, ieta = -1, it = -1, ncol = 0, header = 0, status = BKF_OK, got;
+    size_t lineno = 0, rows = 0, rcap = 0, total_rows = 0;
     double *psi = NULL, *eta = NULL, *tt = NULL;
-    while ((len = getline(&line, &cap, in)) >= 0) {
+    while ((got = state_line(in, line, &len, lineno + 1, &bytes, max_bytes, max_rows, err)) > 0) {
         lineno++;
         while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) line[--len] = '\0';
         if (line[0] == '#' || len == 0) continue;
@@ -828,7 +903,7 @@ int bkf_io_read_state(FILE *in, size_t max_rows, bkf_io_state *state, bkf_error 
             }
             continue;
         }
-        if (rows == max_rows) {
+        if (total_rows == max_rows) {
             status = bkf_error_set(err, BKF_EINPUT, "line %zu: more than %zu rows", lineno,
                                    max_rows);
             break;
@@ -859,11 +934,16 @@ int bkf_io_read_state(FILE *in, size_t max_rows, bkf_io_state *state, bkf_error 
                                    fields, ncol);
             break;
         }
+        /* Only the last snapshot is kept: a new t starts the rows again,
+         * so memory holds one snapshot however many the file has. */
+        if (it >= 0 && rows && vt != tt[rows - 1]) rows = 0;
         psi[rows] = vp;
         eta[rows] = ve;
         tt[rows] = vt;
         rows++;
+        total_rows++;
     }
+    if (got < 0 && !status) status = BKF_EINPUT;
     free(line);
     if (!status && ferror(in)) status = bkf_error_set(err, BKF_EIO, "read error");
     if (!status && !header) status = bkf_error_set(err, BKF_EINPUT, "no header line");

@@ -112,7 +112,8 @@ static int floquet_write(const void *spec, FILE *out, bkf_io_format format,
 ADAPTERS(simulate, bkf_simulate_spec, bkf_simulate, release_nothing)
 
 /* The hooks' progress and cancel flag drive the run; stopped, the complete
- * frames are written and BKF_ECANCELED returned. */
+ * frames go to the table, the data files only with keep_canceled, and
+ * BKF_ECANCELED is returned. */
 static int simulate_write(const void *spec, FILE *out, bkf_io_format format,
                           const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
                           bkf_error *err)
@@ -121,8 +122,11 @@ static int simulate_write(const void *spec, FILE *out, bkf_io_format format,
     if (hooks) {
         s.progress = hooks->progress;
         s.cancel = hooks->cancel;
+        s.temp_file = hooks->temp_file;
+        s.warn = hooks->warn;
         s.data = hooks->data;
     }
+    s.discard_canceled = !hooks || !hooks->keep_canceled;
     return bkf_simulate_write(&s, out, format, prov, err);
 }
 

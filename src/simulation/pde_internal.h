@@ -37,14 +37,14 @@ struct bkf_pde {
     /* moving frame (V = o.frame_speed != 0): V q_k / N, 0 at Nyquist */
     double *dsymbol;
     fftw_complex *cbuf3;
-    double *scr;       /* N scratch values for second_derivative */
+    double *scr;       /* N scratch values (the Laplacian in rhs) */
     size_t keep;       /* modes kept by the 2/3 rule (k < keep) */
 
     /* integrator */
     gsl_odeiv2_system sys;
     gsl_odeiv2_step *step;
     gsl_odeiv2_control *control;
-    double *ytry, *yerr, *f1, *g0, *g1, *sample, *psit;
+    double *ytry, *yerr, *f1, *sample, *psit; /* sample: etdrk4's states in x */
 
     /* reference values for the residuals */
     double t_set, H_set, mean_eta_set;

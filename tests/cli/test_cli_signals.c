@@ -334,8 +334,12 @@ TEST(pde_cancel_flag_stops_and_resumes_exactly)
     /* lowered again, the run resumes; it ends where an uninterrupted run ends */
     flag = 0;
     ob.raise_at = 1e300;
-    CHECK_STATUS(bkf_pde_run(a, 20.0, 0.5, NULL, NULL, NULL, NULL, &e), BKF_OK);
-    CHECK_STATUS(bkf_pde_run(b, 20.0, 0.5, NULL, NULL, NULL, NULL, &e), BKF_OK);
+    /* samples are step ends, so both runs sample on the same grid (the stop
+     * is at a sample, t = 5) to take the same steps */
+    CHECK(t_stop == 5.0);
+    CHECK_STATUS(bkf_pde_run(a, 20.0, 0.5, raise_flag, &ob, NULL, NULL, &e), BKF_OK);
+    cancel_obs never = {&flag, 1e300, -1};
+    CHECK_STATUS(bkf_pde_run(b, 20.0, 0.5, raise_flag, &never, NULL, NULL, &e), BKF_OK);
     CHECK(bkf_pde_time(a) == 20.0 && bkf_pde_time(b) == 20.0);
     const double *pa = bkf_pde_psi(a), *pb = bkf_pde_psi(b);
     double diff = 0;
@@ -347,4 +351,62 @@ TEST(pde_cancel_flag_stops_and_resumes_exactly)
     CHECK(diff == 0);
     bkf_pde_free(a);
     bkf_pde_free(b);
+}
+
+/* One SIGINT stops a whole `bkfront run`: the step under way (a simulation
+ * far too long to finish) stops without replacing the complete files of an
+ * earlier run, the step done before it keeps its file, no later step (a
+ * table, a gnuplot figure) starts, no temporary stays, exit 130. */
+TEST(cli_run_sigint_stops_the_whole_scene)
+{
+    char dir[] = "/tmp/bkf_sig_run_XXXXXX";
+    make_dir(dir);
+    char path[4096];
+    snprintf(path, sizeof path, "%s/t.scene", dir);
+    write_text(path, "[model]\ngamma = 2\nc = 0.3\nnu = -0.96\nS = 20\n"
+                     "[friction f]\nfrom = -1\nto = 4\n[figure f]\ndata = f\n"
+                     "[spacetime b]\ntmax = 1e6\nN = 128\nframes = 1000\n"
+                     "[period p]\nmu = 1:10:5\n");
+    snprintf(path, sizeof path, "%s/o", dir);
+    CHECK(mkdir(path, 0777) == 0);
+    static const char earlier[] = "complete data of an earlier run\n";
+    snprintf(path, sizeof path, "%s/o/b.dat", dir);
+    write_text(path, earlier);
+    snprintf(path, sizeof path, "%s/o/b_diag.tsv", dir);
+    write_text(path, earlier);
+    char outpath[4096], errpath[4096], odir[4096];
+    snprintf(outpath, sizeof outpath, "%s/stdout", dir);
+    snprintf(errpath, sizeof errpath, "%s/stderr", dir);
+    snprintf(odir, sizeof odir, "%s/o", dir);
+    pid_t pid = bkf_cli_spawn(BKF_CLI_ARGS("run", "--out", "o", "t.scene"),
+                              &(bkf_cli_options){.dir = dir}, outpath, errpath);
+    CHECK(pid > 0);
+    wait_computing(pid, odir, "b.dat", 0.3);
+    CHECK(kill(pid, SIGINT) == 0);
+    int status = wait_status(pid);
+    CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 130, "status %d", status);
+    char *out = slurp(outpath), *err = slurp(errpath);
+    CHECK(out && err);
+    bkf_test_note("stdout: %s", out);
+    CHECK(strstr(out, "interrupted (SIGINT): 1 of 4 computations done"));
+    CHECK(strstr(err, "interrupted (SIGINT)") && bkf_count_lines(err) == 1);
+    const char *kept[] = {"b.dat", "b_diag.tsv"};
+    for (int i = 0; i < 2; i++) {
+        snprintf(path, sizeof path, "%s/o/%s", dir, kept[i]);
+        char *text = slurp(path);
+        CHECK_MSG(text && strcmp(text, earlier) == 0, "%s was replaced", kept[i]);
+        free(text);
+    }
+    struct stat sb;
+    snprintf(path, sizeof path, "%s/o/f.tsv", dir);
+    CHECK_MSG(stat(path, &sb) == 0 && sb.st_size > 0, "the complete step lost its file");
+    snprintf(path, sizeof path, "%s/o/p.tsv", dir);
+    CHECK_MSG(stat(path, &sb) != 0, "a step after the signal ran");
+    snprintf(path, sizeof path, "%s/o/f.png", dir);
+    CHECK_MSG(stat(path, &sb) != 0, "the figure after the signal was drawn");
+    CHECK_MSG(count_entries(odir, ".", NULL, 0) == 2, "a temporary stayed"); /* . and .. */
+    free(out);
+    free(err);
+    remove_dir(odir);
+    remove_dir(dir);
 }

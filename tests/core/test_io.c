@@ -1,11 +1,15 @@
 /* Table writer (TSV, JSON) and atomic file replacement. */
+#define _DEFAULT_SOURCE /* flock */
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
 
 #include <errno.h>
 #include <stdint.h>
 #include <string.h>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "bkfront/io.h"
@@ -538,5 +542,92 @@ TEST(io_atomic_writes_the_longest_file_names)
         CHECK_MSG(dir_entries(dir) == 1, "leftover temporary beside a %zu-byte name", len);
         unlink(path);
     }
+    rmdir(dir);
+}
+
+/* A PID that does not exist here: a reaped child's. */
+static long dead_pid(void)
+{
+    pid_t pid = fork();
+    CHECK(pid >= 0);
+    if (pid == 0) _exit(0);
+    int st;
+    CHECK(waitpid(pid, &st, 0) == pid);
+    return (long)pid;
+}
+
+/* A writer in another PID namespace (a container sharing the folder) has a
+ * PID we cannot see: its temporary looks orphaned by PID but is locked, and
+ * must survive another run's clean-up; once the lock is gone (the writer
+ * died) the next open removes it. */
+TEST(io_stale_cleanup_spares_a_locked_temporary)
+{
+    char dir[] = "/tmp/bkf_io_test_XXXXXX";
+    make_dir(dir);
+    char path[256], temp[300];
+    snprintf(path, sizeof path, "%s/out.tsv", dir);
+    snprintf(temp, sizeof temp, "%s/.out.tsv.tmp.%ld.1234abcd", dir, dead_pid());
+    int fd = open(temp, O_WRONLY | O_CREAT | O_EXCL, 0644);
+    CHECK(fd >= 0);
+    CHECK(flock(fd, LOCK_EX | LOCK_NB) == 0); /* the live writer */
+    bkf_error e = {0};
+    bkf_io_atomic *a = bkf_io_atomic_open(path, &e);
+    CHECK_MSG(a, "%s", e.message);
+    bkf_io_atomic_abort(a);
+    CHECK_MSG(file_exists(temp), "a live writer's temporary was removed");
+    close(fd); /* the writer is gone */
+    a = bkf_io_atomic_open(path, &e);
+    CHECK(a);
+    bkf_io_atomic_abort(a);
+    CHECK_MSG(!file_exists(temp), "a dead writer's temporary stayed");
+    /* our own writer holds its lock until the rename */
+    a = bkf_io_atomic_open(path, &e);
+    CHECK(a);
+    int probe = open(bkf_io_atomic_temp_path(a), O_RDONLY);
+    CHECK(probe >= 0);
+    CHECK(flock(probe, LOCK_EX | LOCK_NB) != 0);
+    close(probe);
+    CHECK_STATUS(bkf_io_atomic_commit(a, &e), BKF_OK);
+    CHECK(dir_entries(dir) == 1);
+    unlink(path);
+    rmdir(dir);
+}
+
+/* A chain of links is followed to its end: out -> l2 -> data.tsv (missing)
+ * writes data.tsv and leaves both links links; a loop is refused. */
+TEST(io_atomic_follows_a_dangling_chain_and_refuses_a_loop)
+{
+    char dir[] = "/tmp/bkf_io_test_XXXXXX";
+    make_dir(dir);
+    char out[256], l2[256], data[256];
+    snprintf(out, sizeof out, "%s/out.tsv", dir);
+    snprintf(l2, sizeof l2, "%s/l2", dir);
+    snprintf(data, sizeof data, "%s/data.tsv", dir);
+    CHECK(symlink("l2", out) == 0);
+    CHECK(symlink("data.tsv", l2) == 0);
+    bkf_error e = {0};
+    bkf_io_atomic *a = bkf_io_atomic_open(out, &e);
+    CHECK_MSG(a, "%s", e.message);
+    fputs("x\n", bkf_io_atomic_stream(a));
+    CHECK_STATUS(bkf_io_atomic_commit(a, &e), BKF_OK);
+    struct stat st;
+    CHECK(lstat(out, &st) == 0 && S_ISLNK(st.st_mode));
+    CHECK_MSG(lstat(l2, &st) == 0 && S_ISLNK(st.st_mode), "the intermediate link was replaced");
+    CHECK(strcmp(slurp(data), "x\n") == 0);
+    unlink(out);
+    unlink(l2);
+    unlink(data);
+    /* out -> l2 -> out */
+    CHECK(symlink("l2", out) == 0);
+    CHECK(symlink("out.tsv", l2) == 0);
+    a = bkf_io_atomic_open(out, &e);
+    CHECK(!a);
+    CHECK_MSG(e.status == BKF_EINPUT && strstr(e.message, "symbolic links in a row"), "%s",
+              e.message);
+    CHECK(lstat(out, &st) == 0 && S_ISLNK(st.st_mode) && lstat(l2, &st) == 0 &&
+          S_ISLNK(st.st_mode));
+    CHECK(dir_entries(dir) == 2);
+    unlink(out);
+    unlink(l2);
     rmdir(dir);
 }

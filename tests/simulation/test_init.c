@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "bkfront/cycle.h"
 #include "bkfront/init.h"
@@ -351,4 +352,54 @@ TEST(init_run_status_codes)
     int s = bkf_pde_run(m, 10, 1, NULL, NULL, NULL, NULL, &e);
     CHECK_MSG(s == BKF_EBLOWUP, "status %d: %s", s, e.message);
     bkf_pde_free(m);
+}
+
+/* A state file is read within bounds: /dev/zero (NUL bytes) and an overlong
+ * line stop at once, an endless stream of comment lines stops at the byte
+ * budget of its rows (128 per row + 1 MiB), each with a message that says
+ * which limit; a file within them reads. */
+TEST(init_state_reader_is_bounded)
+{
+    bkf_io_state st;
+    bkf_error e = {0};
+    FILE *z = fopen("/dev/zero", "r");
+    CHECK(z);
+    CHECK_STATUS(bkf_io_read_state(z, 1000, &st, &e), BKF_EINPUT);
+    fclose(z);
+    CHECK_MSG(strstr(e.message, "NUL byte"), "%s", e.message);
+    CHECK(st.rows == 0 && !st.psi);
+
+    char *long_line = malloc(5000);
+    CHECK(long_line);
+    memset(long_line, '1', 4999);
+    long_line[4999] = '\0';
+    char *text = malloc(6000);
+    CHECK(text);
+    snprintf(text, 6000, "psi\teta\n%s\t1\n", long_line);
+    CHECK_STATUS(read_text(text, 1000, &st, &e), BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "line 2 is longer than 4096 bytes"), "%s", e.message);
+
+    /* 2 MiB of comments against a budget of 10 rows: 1 MiB + 1280 bytes */
+    FILE *f = tmpfile();
+    CHECK(f);
+    for (int i = 0; i < (1 << 20); i++) fputs("#\n", f);
+    fputs("psi\teta\n", f);
+    for (int i = 0; i < 8; i++) fputs("0\t0\n", f);
+    rewind(f);
+    CHECK_STATUS(bkf_io_read_state(f, 10, &st, &e), BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "larger than 1049856 bytes (the limit for 10 rows)"), "%s",
+              e.message);
+    /* the same rows after 512 KiB of comments are within the budget */
+    rewind(f);
+    CHECK(ftruncate(fileno(f), 0) == 0);
+    for (int i = 0; i < (1 << 18); i++) fputs("#\n", f);
+    fputs("psi\teta\n", f);
+    for (int i = 0; i < 8; i++) fprintf(f, "%d\t0\n", i);
+    rewind(f);
+    CHECK_STATUS(bkf_io_read_state(f, 10, &st, &e), BKF_OK);
+    CHECK(st.rows == 8 && st.psi[7] == 7);
+    bkf_io_state_free(&st);
+    fclose(f);
+    free(text);
+    free(long_line);
 }
