@@ -26,8 +26,9 @@
  * line they approach as |y| -> inf); the eigenvalues are the points on the
  * curves whose multiplier has phase 2 pi j / n, located on the unwrapped
  * phase and polished by Newton.  Conjugate symmetry gives y < 0.  Each
- * reported sigma is computed on two meshes (k and 2k substeps per cycle
- * step); the difference is its error estimate, and the mesh is refined
+ * reported sigma is computed on two meshes (the second halving every step
+ * of the first); the difference / 8 is its error estimate (the steps are
+ * fifth order: the ratio is 31 once converged), and the mesh is refined
  * until that meets tol or the result is refused. */
 #ifndef BKFRONT_TRAINSPEC_H
 #define BKFRONT_TRAINSPEC_H

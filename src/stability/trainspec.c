@@ -51,7 +51,8 @@
 #define NODE_SHARE 0.5
 /* The fine mesh halves every step of the coarse one and the Radau step is
  * fifth order: the fine value's error is the difference / 31 once the
- * meshes converge (measured ratios 29-37 at mu 14 and 47); dividing by 8
+ * meshes converge (measured ratios 27-32 at mu 4 to 47, 19 on the first,
+ * unconverged pair at mu 47); dividing by 8
  * keeps a margin of 4. */
 #define RICHARDSON 8.0
 
@@ -82,7 +83,7 @@ typedef struct {
     double sigma_reach; /* largest |sigma| the meshes must resolve */
     double re_floor;    /* smallest Re sigma the meshes must serve (Radau steps
                            need the fast solution to decay there) */
-    double *need;       /* per cycle step: the steps it needs at sigma_reach (see node_rates) */
+    double *need;       /* per cycle step: the steps it needs at sigma_reach (see mesh_needs) */
     mesh coarse, fine;
     size_t evaluations;
     double work, max_work;               /* steps taken, and allowed */
@@ -119,7 +120,7 @@ static void mesh_free(mesh *m)
  * the one the spectrum is made of, varies at |bp / ap| only.  There the
  * L-stable Radau step, which damps the fast solution as the flow does,
  * needs to resolve the slow one alone: steps O(mu) times longer. */
-static int node_rates(ctx *x, double reach, bkf_error *err)
+static int mesh_needs(ctx *x, double reach, bkf_error *err)
 {
     if (x->need && reach == x->sigma_reach) return BKF_OK;
     size_t n = x->node_count;
@@ -238,7 +239,7 @@ done:
 }
 
 /* The step boundaries of a mesh of `substeps` times the steps the cycle
- * steps need (node_rates), spread evenly in the cumulative need, so that
+ * steps need (mesh_needs), spread evenly in the cumulative need, so that
  * doubling substeps halves every step: *bounds (steps + 1 values). */
 static int mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, bkf_error *err)
 {
@@ -283,7 +284,7 @@ static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
 /* The Radau IIA step i at sigma as e[0..3] (row-major) times exp(return
  * value): the growth of the step kept out of e.  It is taken
  * in p = exp(-sigma z / s) u, where the solution that survives varies
- * slowly (see node_rates), and turned into u's basis:
+ * slowly (see mesh_needs), and turned into u's basis:
  *     (u, u') = exp(k z) K (p, p'),  K = [[1, 0], [k, 1]],  k = sigma / s.
  * With V the stages of p', the stages of p are p0 + h A V, so the six
  * stage equations reduce to three:
@@ -817,10 +818,10 @@ static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train
 
 /* The meshes for a window up to height B: a step turns the fastest
  * solution, u ~ exp(+-sqrt(beta) sigma z), by at most RESOLVE_TURN (see
- * node_rates). */
+ * mesh_needs). */
 static int meshes_for(ctx *x, double B, const window *win, bkf_error *err)
 {
-    int rc = node_rates(x, hypot(B, win->a_hi), err);
+    int rc = mesh_needs(x, hypot(B, win->a_hi), err);
     if (rc == BKF_OK) rc = mesh_build(x, x->substeps, &x->coarse, err);
     return rc != BKF_OK ? rc : mesh_build(x, 2 * x->substeps, &x->fine, err);
 }
@@ -1108,7 +1109,7 @@ static int one_eigenvalue(ctx *x, const bkf_model_params *p, const bkf_trainspec
 {
     int rc = ctx_init(x, p, t, TOL_MIN, NULL, err);
     x->re_floor = fmin(x->re_floor, creal(*sigma) - WINDOW_DEPTH * x->gamma);
-    if (rc == BKF_OK) rc = node_rates(x, 2.0 * cabs(*sigma) + 1.0, err);
+    if (rc == BKF_OK) rc = mesh_needs(x, 2.0 * cabs(*sigma) + 1.0, err);
     if (rc == BKF_OK) rc = mesh_build(x, substeps, &x->fine, err);
     if (rc != BKF_OK) return rc;
     double step;
