@@ -54,6 +54,19 @@
  *                        period_ref > 0), or p = 2 (when it is not given)
  *   irregular            anything else (including transients not yet settled)
  *
+ * Bounded memory.  Without t_end every sample's record is kept (about
+ * 100 bytes plus 8 per front), for bkf_measure_record_at and
+ * bkf_measure_fit_speed over any interval.  With t_end the summary's
+ * sums over the window are taken as the samples arrive (in the same order,
+ * so the summary is the same to the last bit when the last sample is at
+ * t_end), and only the last record is kept, plus, inside the window, the
+ * records of the current unbroken set of tracks (the speed fit needs their
+ * positions) and the probe's crossing times: records before them are not
+ * available (bkf_measure_record_at gives NULL, bkf_measure_fit_speed
+ * BKF_EINPUT).  A run that stops early (canceled) is summarized over
+ * [window start, last sample]; one that stops before the window begins
+ * has no summary (BKF_EINPUT).
+ *
  * The library never prints and never exits. */
 #ifndef BKFRONT_MEASURE_H
 #define BKFRONT_MEASURE_H
@@ -92,6 +105,11 @@ typedef struct {
     const double *reference; /* NULL, or N values of psi at the first sample
                                 without perturbation (a seeded travelling wave),
                                 copied: the deviation is measured from it */
+    double t_end;         /* the time of the run's last sample, or NaN (the
+                             default): unknown.  Given, the window is fixed
+                             from the start, [t_end - window (t_end - t_first),
+                             t_end], and memory does not grow with the run:
+                             see "Bounded memory" above */
 } bkf_measure_params;
 
 /* Defaults for the optional fields; model.N, .S, .gamma and .nu must be set. */

@@ -569,6 +569,9 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
     mp.level = r->level;
     mp.period_ref = period_ref;
     mp.reference = r->init.kind == BKF_INIT_FRONT ? clean : NULL;
+    /* the run ends at t0 + tmax: the measurements keep only the window */
+    double t0 = bkf_pde_time(r->pde);
+    mp.t_end = t0 + sp->tmax;
     r->meas = bkf_measure_alloc(&mp, err);
     if (!r->meas) {
         s = BKF_ENOMEM;
@@ -578,8 +581,7 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
     if ((s = bkf_init_sampling_plan(sp->tmax, sp->frames, BKF_INIT_SAMPLE_DT_MAX, &smp, err)))
         goto done;
     r->per_frame = smp.per_frame;
-    double t0 = bkf_pde_time(r->pde);
-    s = bkf_pde_run(r->pde, t0 + sp->tmax, smp.sample_dt, observe, r, sp->progress, sp->data, &e);
+    s = bkf_pde_run(r->pde, mp.t_end, smp.sample_dt, observe, r, sp->progress, sp->data, &e);
     if (r->status) {
         s = r->status;
         *err = r->err;

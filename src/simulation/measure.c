@@ -15,6 +15,23 @@ typedef struct {
     double t, psi, psit;
 } probe_point;
 
+/* An upward crossing of the level at the probe, and the record it ends in. */
+typedef struct {
+    double t;
+    size_t r;
+} crossing;
+
+/* What the summary needs of the window's records, accumulated in record
+ * order (the same sums whether streamed in bkf_measure_add or looped over
+ * kept records in bkf_measure_summarize). */
+typedef struct {
+    size_t cnt;
+    double msum, vsum, std_max, psi_min, psi_max, slip_max;
+    size_t fronts_min, fronts_max, any_minus, any_plus;
+    bkf_measure_record first;   /* the window's first record */
+    size_t first_index, first_seg;
+} window_acc;
+
 struct bkf_measure {
     bkf_measure_params p;
     double h, level;
@@ -24,14 +41,29 @@ struct bkf_measure {
     fftw_complex *c, *cw, *refhat;
     fftw_plan fwd, bwd;
     double *ref;
-    /* records */
+    /* records: those from index `base` on are kept, at [r - base]; with
+     * t_end unknown base stays 0 */
     bkf_measure_record *rec;
-    size_t nrec, caprec;
-    size_t *seg, *off, *nminus, *nplus; /* per record */
-    probe_point *probe;
-    /* unwrapped track positions, per record, in track order */
+    size_t nrec, caprec, base;
+    size_t *seg, *off, *nminus, *nplus; /* per kept record */
+    /* unwrapped track positions, per kept record, in track order; off[] is
+     * relative to X */
     double *X;
     size_t nX, capX;
+    /* streamed over every record */
+    bkf_measure_record rec0;    /* the first record */
+    int count_constant, dev_nan;
+    double dev_max;
+    size_t seg_start;           /* first record of the current set of tracks */
+    probe_point probe_prev;
+    int armed;
+    crossing *cross;
+    size_t ncross, capcross;
+    /* bounded (t_end known): the window [tw, t_end] and its sums */
+    int bounded;
+    double tw, t_dropped;
+    size_t keep_from;           /* records before it are no longer needed */
+    window_acc win;
     /* tracking */
     bkf_front *prev, *cur, *tmp;
     size_t nprev, cap_fronts;
@@ -76,6 +108,7 @@ bkf_measure_params bkf_measure_params_default(void)
     p.slip_eps = 1e-3;
     p.uniform_eps = 1e-2;
     p.periodic_tol = 5e-2;
+    p.t_end = NAN;
     return p;
 }
 
@@ -98,7 +131,7 @@ void bkf_measure_free(bkf_measure *m)
     free(m->off);
     free(m->nminus);
     free(m->nplus);
-    free(m->probe);
+    free(m->cross);
     free(m->X);
     free(m->prev);
     free(m->cur);
@@ -133,6 +166,8 @@ static int check_params(const bkf_measure_params *p, bkf_error *err)
         !isfinite(p->slip_eps + p->uniform_eps + p->periodic_tol))
         return bkf_error_set(err, BKF_EINPUT, "slip_eps, uniform_eps and periodic_tol must be "
                                               "finite and > 0");
+    if (!isnan(p->t_end) && !isfinite(p->t_end))
+        return bkf_error_set(err, BKF_EINPUT, "t_end must be finite (or NaN: unknown)");
     if (p->reference)
         for (size_t i = 0; i < p->model.N; i++)
             if (!isfinite(p->reference[i]))
@@ -154,6 +189,9 @@ bkf_measure *bkf_measure_alloc(const bkf_measure_params *params, bkf_error *err)
     m->h = params->model.S / (double)N;
     m->level = isnan(params->level) ? bkf_measure_front_level(&params->model, NULL) : params->level;
     m->nc = N / 2 + 1;
+    m->bounded = !isnan(params->t_end);
+    m->count_constant = 1;
+    m->t_dropped = -INFINITY;
     m->rbuf = fftw_malloc(N * sizeof(double));
     m->d1 = fftw_malloc(N * sizeof(double));
     m->d2 = fftw_malloc(N * sizeof(double));
@@ -396,28 +434,145 @@ static double deviation(bkf_measure *m, const double *psi, double d)
     return dev;
 }
 
+/* Upward crossing of level between probe samples a and b by cubic Hermite. */
+static double crossing_time(const probe_point *a, const probe_point *b, double L)
+{
+    double dt = b->t - a->t;
+    double p0 = a->psi - L, p1 = b->psi - L, m0 = a->psit * dt, m1 = b->psit * dt;
+    double lo = 0, hi = 1, w = p0 / (p0 - p1);
+    if (!(w > 0 && w < 1)) w = 0.5;
+    for (int it = 0; it < 60; it++) {
+        double w2 = w * w, w3 = w2 * w;
+        double v = (2 * w3 - 3 * w2 + 1) * p0 + (w3 - 2 * w2 + w) * m0 + (-2 * w3 + 3 * w2) * p1 +
+                   (w3 - w2) * m1;
+        double dv = (6 * w2 - 6 * w) * p0 + (3 * w2 - 4 * w + 1) * m0 + (-6 * w2 + 6 * w) * p1 +
+                    (3 * w2 - 2 * w) * m1;
+        if (v < 0) lo = w;
+        else hi = w;
+        double wn = dv != 0 ? w - v / dv : 0.5 * (lo + hi);
+        if (!(wn > lo && wn < hi)) wn = 0.5 * (lo + hi);
+        if (fabs(wn - w) < 1e-15 || hi - lo < 1e-15) {
+            w = wn;
+            break;
+        }
+        w = wn;
+    }
+    return a->t + w * dt;
+}
+
+static void window_add(window_acc *w, const bkf_measure_record *rc, size_t r, size_t seg,
+                       size_t minus, size_t plus, double nu)
+{
+    if (w->cnt == 0) {
+        memset(w, 0, sizeof *w);
+        w->first = *rc;
+        w->first_index = r;
+        w->first_seg = seg;
+        w->fronts_min = w->fronts_max = rc->fronts;
+        w->psi_min = INFINITY;
+        w->psi_max = -INFINITY;
+    }
+    if (rc->fronts < w->fronts_min) w->fronts_min = rc->fronts;
+    if (rc->fronts > w->fronts_max) w->fronts_max = rc->fronts;
+    w->any_minus += minus;
+    w->any_plus += plus;
+    w->msum += rc->mean;
+    w->vsum += rc->variance;
+    w->cnt++;
+    w->std_max = fmax(w->std_max, sqrt(rc->variance));
+    w->psi_min = fmin(w->psi_min, rc->min);
+    w->psi_max = fmax(w->psi_max, rc->max);
+    w->slip_max = fmax(w->slip_max, fmax(fabs(rc->max - nu), fabs(rc->min - nu)));
+}
+
+/* Drops the kept records before keep_from (bounded mode), moving the rest
+ * and their positions to the front. */
+static void compact(bkf_measure *m)
+{
+    size_t dead = m->keep_from - m->base, live = m->nrec - m->keep_from;
+    if (!dead) return;
+    m->t_dropped = m->rec[dead - 1].t;
+    size_t x0 = live ? m->off[dead] : m->nX;
+    memmove(m->rec, m->rec + dead, live * sizeof *m->rec);
+    memmove(m->seg, m->seg + dead, live * sizeof *m->seg);
+    memmove(m->nminus, m->nminus + dead, live * sizeof *m->nminus);
+    memmove(m->nplus, m->nplus + dead, live * sizeof *m->nplus);
+    for (size_t j = 0; j < live; j++) m->off[j] = m->off[dead + j] - x0;
+    memmove(m->X, m->X + x0, (m->nX - x0) * sizeof *m->X);
+    m->nX -= x0;
+    m->base = m->keep_from;
+}
+
+/* Room for one more record with n positions; bounded runs reuse the
+ * space of records no longer needed before growing (amortised: only when
+ * they are at least half of what is kept). */
+static int reserve(bkf_measure *m, size_t n)
+{
+    size_t kept = m->nrec - m->base;
+    if ((kept + 1 > m->caprec || m->nX + n > m->capX) && m->keep_from > m->base &&
+        2 * (m->keep_from - m->base) >= kept)
+        compact(m);
+    kept = m->nrec - m->base;
+    if (kept + 1 > m->caprec) {
+        size_t c = m->caprec ? 2 * m->caprec : 256;
+        void *q;
+#define REGROW(field)                                                          \
+        if (!(q = realloc(m->field, c * sizeof *m->field))) return BKF_ENOMEM; \
+        m->field = q;
+        REGROW(rec) REGROW(seg) REGROW(off) REGROW(nminus) REGROW(nplus)
+#undef REGROW
+        m->caprec = c;
+    }
+    if (m->nX + n > m->capX) {
+        size_t c = m->capX ? 2 * m->capX : 4096;
+        while (c < m->nX + n) c *= 2;
+        double *q = realloc(m->X, c * sizeof *q);
+        if (!q) return BKF_ENOMEM;
+        m->X = q;
+        m->capX = c;
+    }
+    return BKF_OK;
+}
+
+/* The probe's crossings, streamed with the hysteresis of period_at_probe:
+ * armed once psi went below level - hysteresis. */
+static int probe_add(bkf_measure *m, size_t r, const probe_point *b, int keep)
+{
+    double L = m->level, d = m->p.hysteresis;
+    if (b->psi < L - d) m->armed = 1;
+    if (r > 0) {
+        const probe_point *a = &m->probe_prev;
+        if (m->armed && a->psi < L && b->psi >= L) {
+            double tc = crossing_time(a, b, L);
+            if (keep) {
+                if (m->ncross == m->capcross) {
+                    size_t c = m->capcross ? 2 * m->capcross : 64;
+                    crossing *q = realloc(m->cross, c * sizeof *q);
+                    if (!q) return BKF_ENOMEM;
+                    m->cross = q;
+                    m->capcross = c;
+                }
+                m->cross[m->ncross++] = (crossing){tc, r};
+            }
+            m->armed = b->psi < L - d;
+        }
+    }
+    m->probe_prev = *b;
+    return BKF_OK;
+}
+
 int bkf_measure_add(bkf_measure *m, double t, const double *psi, const double *eta,
                     bkf_error *err)
 {
     if (!m) return bkf_error_set(err, BKF_EINPUT, "measure object is NULL");
     if (!isfinite(t)) return bkf_error_set(err, BKF_EINPUT, "t must be finite");
-    if (m->nrec && !(t > m->rec[m->nrec - 1].t))
+    if (m->nrec && !(t > m->t_prev))
         return bkf_error_set(err, BKF_EINPUT, "sample times must increase (t = %g after %g)", t,
-                             m->rec[m->nrec - 1].t);
+                             m->t_prev);
     size_t N = m->p.model.N;
     int s = check_field(psi, eta, N, err);
     if (s) return s;
     size_t r = m->nrec;
-    if (r + 1 > m->caprec) {
-        size_t c = m->caprec ? 2 * m->caprec : 256;
-        void *q;
-#define REGROW(field)                                                  \
-        if (!(q = realloc(m->field, c * sizeof *m->field))) goto nomem; \
-        m->field = q;
-        REGROW(rec) REGROW(seg) REGROW(off) REGROW(nminus) REGROW(nplus) REGROW(probe)
-#undef REGROW
-        m->caprec = c;
-    }
 
     derivatives(m, psi);
     size_t n = find_fronts(m, psi, eta, m->cur, m->cap_fronts);
@@ -433,14 +588,8 @@ int bkf_measure_add(bkf_measure *m, double t, const double *psi, const double *e
         m->cap_fronts = c;
         n = find_fronts(m, psi, eta, m->cur, m->cap_fronts);
     }
-    if (m->nX + n > m->capX) {
-        size_t c = m->capX ? 2 * m->capX : 4096;
-        while (c < m->nX + n) c *= 2;
-        double *q = realloc(m->X, c * sizeof *q);
-        if (!q) goto nomem;
-        m->X = q;
-        m->capX = c;
-    }
+    if (reserve(m, n)) goto nomem;
+    size_t j = r - m->base;
 
     /* tracking */
     double S = m->p.model.S;
@@ -463,7 +612,7 @@ int bkf_measure_add(bkf_measure *m, double t, const double *psi, const double *e
             }
         }
         for (size_t i = 0; i < n; i++) m->tmp[i] = m->cur[(i + best) % n];
-        const double *Xp = m->X + m->off[r - 1];
+        const double *Xp = m->X + m->off[j - 1];
         double *Xc = m->X + m->nX;
         for (size_t i = 0; i < n; i++) Xc[i] = Xp[i] + wrap(m->tmp[i].x - m->prev[i].x, S);
         memcpy(m->cur, m->tmp, n * sizeof *m->cur);
@@ -471,13 +620,14 @@ int bkf_measure_add(bkf_measure *m, double t, const double *psi, const double *e
         double *Xc = m->X + m->nX;
         for (size_t i = 0; i < n; i++) Xc[i] = m->cur[i].x;
         if (r > 0) m->segment++;
+        m->seg_start = r;
     }
-    m->seg[r] = m->segment;
-    m->off[r] = m->nX;
+    m->seg[j] = m->segment;
+    m->off[j] = m->nX;
     size_t nm = 0;
     for (size_t i = 0; i < n; i++) nm += m->cur[i].rising;
-    m->nminus[r] = nm;
-    m->nplus[r] = n - nm;
+    m->nminus[j] = nm;
+    m->nplus[j] = n - nm;
     if (r == 0) {
         free(m->X0);
         m->X0 = n ? malloc(n * sizeof *m->X0) : NULL;
@@ -492,7 +642,7 @@ int bkf_measure_add(bkf_measure *m, double t, const double *psi, const double *e
                 m->X0[i] = reference_crossing(m, m->X0[i], m->cur[i].rising);
         }
     }
-    bkf_measure_record *rc = &m->rec[r];
+    bkf_measure_record *rc = &m->rec[j];
     rc->t = t;
     rc->fronts = n;
     rc->displacement = NAN;
@@ -520,7 +670,27 @@ int bkf_measure_add(bkf_measure *m, double t, const double *psi, const double *e
     rc->max = mx;
     size_t pi = m->p.probe;
     rc->probe = psi[pi];
-    m->probe[r] = (probe_point){t, psi[pi], m->p.model.gamma * (eta[pi] - bkf_model_friction(psi[pi]))};
+
+    /* what the summary needs of every record, streamed */
+    if (r == 0) {
+        m->rec0 = *rc;
+        if (m->bounded) m->tw = m->p.t_end - m->p.window * (m->p.t_end - t);
+    }
+    if (rc->fronts != m->rec0.fronts) m->count_constant = 0;
+    if (isnan(rc->deviation)) m->dev_nan = 1;
+    else m->dev_max = fmax(m->dev_max, rc->deviation);
+    int in_window = !m->bounded || t >= m->tw;
+    probe_point pp = {t, psi[pi], m->p.model.gamma * (eta[pi] - bkf_model_friction(psi[pi]))};
+    if (probe_add(m, r, &pp, in_window)) goto nomem;
+    if (m->bounded) {
+        /* kept: the last record (tracking continues from it) and, in the
+         * window, the current set of tracks (the speed fit) */
+        if (in_window) {
+            window_add(&m->win, rc, r, m->segment, nm, n - nm, m->p.model.nu);
+            m->keep_from = m->seg_start > m->win.first_index ? m->seg_start : m->win.first_index;
+        } else
+            m->keep_from = r;
+    }
 
     bkf_front *sw = m->prev;
     m->prev = m->cur;
@@ -537,10 +707,15 @@ size_t bkf_measure_count(const bkf_measure *m) { return m ? m->nrec : 0; }
 
 const bkf_measure_record *bkf_measure_record_at(const bkf_measure *m, size_t i)
 {
-    return m && i < m->nrec ? &m->rec[i] : NULL;
+    return m && i < m->nrec && i >= m->base ? &m->rec[i - m->base] : NULL;
 }
 
 /* ------------------------------------------------------------- summary */
+
+/* Kept record r (absolute index >= base), its set of tracks, its positions. */
+static const bkf_measure_record *rec_of(const bkf_measure *m, size_t r) { return &m->rec[r - m->base]; }
+static size_t seg_of(const bkf_measure *m, size_t r) { return m->seg[r - m->base]; }
+static const double *x_of(const bkf_measure *m, size_t r) { return m->X + m->off[r - m->base]; }
 
 /* Least-squares slope of y against t, and its standard error. */
 static void fit_line(const double *t, const double *y, size_t n, double *slope, double *se)
@@ -570,7 +745,7 @@ static void fit_line(const double *t, const double *y, size_t n, double *slope, 
 static int track_speeds(const bkf_measure *m, size_t a, size_t b, double *mean, double *se_rms,
                         double *spread, size_t *minus, size_t *plus)
 {
-    size_t n = m->rec[a].fronts, len = b - a;
+    size_t n = rec_of(m, a)->fronts, len = b - a;
     if (n == 0 || len < 3) return -1;
     double *t = malloc(len * sizeof *t), *y = malloc(len * sizeof *y);
     if (!t || !y) {
@@ -578,13 +753,13 @@ static int track_speeds(const bkf_measure *m, size_t a, size_t b, double *mean, 
         free(y);
         return -2;
     }
-    for (size_t r = a; r < b; r++) t[r - a] = m->rec[r].t;
+    for (size_t r = a; r < b; r++) t[r - a] = rec_of(m, r)->t;
     /* sums of the slopes' deviations from the first one: the textbook
      * sum2 - n mean^2 cancels to sqrt(eps) |v| when the slopes agree */
     double sum = 0, sum2 = 0, se2 = 0, first = 0;
     size_t mi = 0, pl = 0;
     for (size_t i = 0; i < n; i++) {
-        for (size_t r = a; r < b; r++) y[r - a] = m->X[m->off[r] + i];
+        for (size_t r = a; r < b; r++) y[r - a] = x_of(m, r)[i];
         double sl, se;
         fit_line(t, y, len, &sl, &se);
         if (i == 0) first = sl;
@@ -605,53 +780,16 @@ static int track_speeds(const bkf_measure *m, size_t a, size_t b, double *mean, 
     return 0;
 }
 
-/* Upward crossing of level between probe samples a and b by cubic Hermite. */
-static double crossing_time(const probe_point *a, const probe_point *b, double L)
-{
-    double dt = b->t - a->t;
-    double p0 = a->psi - L, p1 = b->psi - L, m0 = a->psit * dt, m1 = b->psit * dt;
-    double lo = 0, hi = 1, w = p0 / (p0 - p1);
-    if (!(w > 0 && w < 1)) w = 0.5;
-    for (int it = 0; it < 60; it++) {
-        double w2 = w * w, w3 = w2 * w;
-        double v = (2 * w3 - 3 * w2 + 1) * p0 + (w3 - 2 * w2 + w) * m0 + (-2 * w3 + 3 * w2) * p1 +
-                   (w3 - w2) * m1;
-        double dv = (6 * w2 - 6 * w) * p0 + (3 * w2 - 4 * w + 1) * m0 + (-6 * w2 + 6 * w) * p1 +
-                    (3 * w2 - 2 * w) * m1;
-        if (v < 0) lo = w;
-        else hi = w;
-        double wn = dv != 0 ? w - v / dv : 0.5 * (lo + hi);
-        if (!(wn > lo && wn < hi)) wn = 0.5 * (lo + hi);
-        if (fabs(wn - w) < 1e-15 || hi - lo < 1e-15) {
-            w = wn;
-            break;
-        }
-        w = wn;
-    }
-    return a->t + w * dt;
-}
-
 static void period_at_probe(const bkf_measure *m, size_t first, bkf_measure_summary *s)
 {
     s->period = s->period_err = NAN;
     s->period_multiplicity = 0;
     s->crossings = 0;
-    double L = m->level, d = m->p.hysteresis;
-    size_t cap = m->nrec, nc = 0;
-    double *c = malloc((cap ? cap : 1) * sizeof *c);
+    size_t nc = 0;
+    double *c = malloc((m->ncross ? m->ncross : 1) * sizeof *c);
     if (!c) return;
-    int armed = 0;
-    for (size_t r = 0; r < m->nrec; r++) {
-        const probe_point *b = &m->probe[r];
-        if (b->psi < L - d) armed = 1;
-        if (r == 0) continue;
-        const probe_point *a = &m->probe[r - 1];
-        if (armed && a->psi < L && b->psi >= L) {
-            double tc = crossing_time(a, b, L);
-            if (r >= first) c[nc++] = tc;
-            armed = b->psi < L - d;
-        }
-    }
+    for (size_t k = 0; k < m->ncross; k++)
+        if (m->cross[k].r >= first) c[nc++] = m->cross[k].t;
     s->crossings = nc;
     if (nc < 3) {
         free(c);
@@ -692,7 +830,7 @@ static int fit_records(const bkf_measure *m, size_t a, size_t b, double *speed, 
 {
     *speed = *err = NAN;
     if (spread_out) *spread_out = NAN;
-    size_t n = m->rec[a].fronts, len = b - a;
+    size_t n = rec_of(m, a)->fronts, len = b - a;
     double v, se, spread;
     size_t mi = 0, pl = 0;
     if (n == 0 || track_speeds(m, a, b, &v, &se, &spread, &mi, &pl) != 0) return -1;
@@ -716,13 +854,17 @@ int bkf_measure_fit_speed(const bkf_measure *m, double t_from, double t_to, doub
     if (!isfinite(t_from) || !isfinite(t_to) || !(t_from < t_to))
         return bkf_error_set(err, BKF_EINPUT, "need finite t_from < t_to (have %g, %g)", t_from,
                              t_to);
-    size_t a = 0;
-    while (a < m->nrec && m->rec[a].t < t_from) a++;
+    if (t_from <= m->t_dropped)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "the records up to t = %g are not kept (t_end was given: only the "
+                             "summary window's last set of tracks is)", m->t_dropped);
+    size_t a = m->base;
+    while (a < m->nrec && rec_of(m, a)->t < t_from) a++;
     size_t b = a;
-    while (b < m->nrec && m->rec[b].t <= t_to) b++;
+    while (b < m->nrec && rec_of(m, b)->t <= t_to) b++;
     if (b - a < 3)
         return bkf_error_set(err, BKF_ENUMERIC, "fewer than 3 samples in [%g, %g]", t_from, t_to);
-    if (m->seg[a] != m->seg[b - 1])
+    if (seg_of(m, a) != seg_of(m, b - 1))
         return bkf_error_set(err, BKF_ENUMERIC,
                              "the front count changes in [%g, %g]: no single set of tracks",
                              t_from, t_to);
@@ -739,76 +881,62 @@ int bkf_measure_summarize(const bkf_measure *m, bkf_measure_summary *s, bkf_erro
                              m->nrec);
     memset(s, 0, sizeof *s);
     size_t R = m->nrec;
+    const bkf_measure_record *rl = rec_of(m, R - 1);
     s->samples = R;
-    s->t_start = m->rec[0].t;
-    s->t_end = m->rec[R - 1].t;
-    double tw = s->t_end - m->p.window * (s->t_end - s->t_start);
-    size_t first = 0;
-    while (first < R - 1 && m->rec[first].t < tw) first++;
-    s->window_start = m->rec[first].t;
-
-    s->fronts_start = m->rec[0].fronts;
-    s->fronts_end = m->rec[R - 1].fronts;
-    s->fronts_min = s->fronts_max = m->rec[first].fronts;
-    s->count_constant = 1;
-    size_t any_minus = 0, any_plus = 0;
-    for (size_t r = 0; r < R; r++) {
-        if (m->rec[r].fronts != s->fronts_start) s->count_constant = 0;
-        if (r >= first) {
-            if (m->rec[r].fronts < s->fronts_min) s->fronts_min = m->rec[r].fronts;
-            if (m->rec[r].fronts > s->fronts_max) s->fronts_max = m->rec[r].fronts;
-            any_minus += m->nminus[r];
-            any_plus += m->nplus[r];
-        }
+    s->t_start = m->rec0.t;
+    s->t_end = rl->t;
+    /* The window: streamed when t_end was given, else summed here over the
+     * records, in the same order. */
+    window_acc wa, *w = &wa;
+    if (m->bounded) {
+        if (m->win.cnt == 0)
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "the run stopped at t = %.9g, before its summary window (t >= "
+                                 "%.9g, from t_end = %.9g) began", rl->t, m->tw, m->p.t_end);
+        w = (window_acc *)&m->win;
+    } else {
+        double tw = s->t_end - m->p.window * (s->t_end - s->t_start);
+        size_t first = 0;
+        while (first < R - 1 && m->rec[first].t < tw) first++;
+        memset(&wa, 0, sizeof wa);
+        for (size_t r = first; r < R; r++)
+            window_add(&wa, &m->rec[r], r, m->seg[r], m->nminus[r], m->nplus[r], m->p.model.nu);
     }
-    s->tracked_throughout = m->seg[R - 1] == 0 && s->fronts_start > 0;
+    size_t first = w->first_index;
+    const bkf_measure_record *rf = &w->first;
+    s->window_start = rf->t;
+
+    s->fronts_start = m->rec0.fronts;
+    s->fronts_end = rl->fronts;
+    s->fronts_min = w->fronts_min;
+    s->fronts_max = w->fronts_max;
+    s->count_constant = m->count_constant;
+    s->tracked_throughout = m->segment == 0 && s->fronts_start > 0;
 
     /* speed: the last segment, from the window start on */
-    size_t a = R - 1;
-    while (a > 0 && m->seg[a - 1] == m->seg[R - 1]) a--;
+    size_t a = m->seg_start;
     if (a < first) a = first;
-    s->fit_start = m->rec[a].t;
+    s->fit_start = rec_of(m, a)->t;
     fit_records(m, a, R, &s->speed, &s->speed_err, &s->speed_spread, &s->tracks,
                 &s->moving_minus, &s->moving_plus);
 
     period_at_probe(m, first, s);
 
     /* window statistics */
-    double msum = 0, vsum = 0;
-    size_t cnt = 0;
-    s->std_max = 0;
-    s->psi_min = INFINITY;
-    s->psi_max = -INFINITY;
-    double slip_max = 0;
-    for (size_t r = first; r < R; r++) {
-        const bkf_measure_record *rc = &m->rec[r];
-        msum += rc->mean;
-        vsum += rc->variance;
-        cnt++;
-        s->std_max = fmax(s->std_max, sqrt(rc->variance));
-        s->psi_min = fmin(s->psi_min, rc->min);
-        s->psi_max = fmax(s->psi_max, rc->max);
-        slip_max = fmax(slip_max, fmax(fabs(rc->max - m->p.model.nu), fabs(rc->min - m->p.model.nu)));
-    }
-    s->mean = msum / (double)cnt;
-    s->variance = vsum / (double)cnt;
-    const bkf_measure_record *rf = &m->rec[first], *rl = &m->rec[R - 1];
+    s->std_max = w->std_max;
+    s->psi_min = w->psi_min;
+    s->psi_max = w->psi_max;
+    double slip_max = w->slip_max;
+    size_t any_minus = w->any_minus, any_plus = w->any_plus;
+    s->mean = w->msum / (double)w->cnt;
+    s->variance = w->vsum / (double)w->cnt;
     s->slip_deviation_start = fmax(fabs(rf->max - m->p.model.nu), fabs(rf->min - m->p.model.nu));
     s->slip_deviation_end = fmax(fabs(rl->max - m->p.model.nu), fabs(rl->min - m->p.model.nu));
 
-    s->deviation_start = m->rec[0].deviation;
+    s->deviation_start = m->rec0.deviation;
     s->deviation_mid = rf->deviation;
     s->deviation_end = rl->deviation;
-    s->deviation_max = NAN;
-    if (m->ref) {
-        double dm = 0;
-        int ok = 1;
-        for (size_t r = 0; r < R; r++) {
-            if (isnan(m->rec[r].deviation)) ok = 0;
-            else dm = fmax(dm, m->rec[r].deviation);
-        }
-        s->deviation_max = ok ? dm : (double)NAN;
-    }
+    s->deviation_max = m->ref && !m->dev_nan ? m->dev_max : (double)NAN;
     s->deviation_growth = NAN;
     if (isfinite(s->deviation_mid) && isfinite(s->deviation_end) && s->deviation_mid > 0 &&
         s->deviation_end > 0 && rl->t > rf->t)
@@ -816,7 +944,7 @@ int bkf_measure_summarize(const bkf_measure *m, bkf_measure_summary *s, bkf_erro
 
     /* regime */
     double range = s->psi_max - s->psi_min;
-    int one_segment = m->seg[first] == m->seg[R - 1];
+    int one_segment = w->first_seg == m->segment;
     if (slip_max <= m->p.slip_eps &&
         s->slip_deviation_end <= 1.01 * s->slip_deviation_start + 1e-12)
         s->regime = BKF_REGIME_CONTINUOUS_SLIP;

@@ -6,6 +6,7 @@
 
 #include "bkfront/measure.h"
 #include "bkfront/model.h"
+#include "bkfront/pde.h"
 
 #define TWO_PI 6.283185307179586
 
@@ -282,4 +283,131 @@ TEST(measure_default_level_is_the_front_level)
     CHECK_STATUS(bkf_measure_fronts(m, psi, eta, NULL, 0, &count, &e), BKF_OK);
     bkf_measure_free(m);
     CHECK_MSG(count == 6 && count_nu == 0, "default %zu fronts, at nu %zu", count, count_nu);
+}
+
+/* Bounded memory (params.t_end): the same samples into a measure that keeps
+ * every record and one told where the run ends give the same summary, to
+ * the last bit, and the window statistics recomputed here from the kept
+ * records agree; the bounded one no longer has the early records. */
+static void feed_both(bkf_measure *all, bkf_measure *bounded, double t, const double *psi,
+                      const double *eta)
+{
+    bkf_error e;
+    CHECK_STATUS(bkf_measure_add(all, t, psi, eta, &e), BKF_OK);
+    CHECK_STATUS(bkf_measure_add(bounded, t, psi, eta, &e), BKF_OK);
+}
+
+static void compare_summaries(const bkf_measure *all, const bkf_measure *bounded)
+{
+    bkf_measure_summary a, b;
+    bkf_error e;
+    CHECK_STATUS(bkf_measure_summarize(all, &a, &e), BKF_OK);
+    CHECK_STATUS(bkf_measure_summarize(bounded, &b, &e), BKF_OK);
+    CHECK_MSG(memcmp(&a, &b, sizeof a) == 0,
+              "summaries differ: speed %.17g / %.17g, period %.17g / %.17g, mean %.17g / %.17g",
+              a.speed, b.speed, a.period, b.period, a.mean, b.mean);
+    /* the window's time averages, from the records themselves */
+    double msum = 0, vsum = 0, lo = INFINITY, hi = -INFINITY;
+    size_t cnt = 0, nlo = (size_t)-1, nhi = 0;
+    for (size_t r = 0; r < bkf_measure_count(all); r++) {
+        const bkf_measure_record *rc = bkf_measure_record_at(all, r);
+        if (rc->t < a.window_start) continue;
+        msum += rc->mean;
+        vsum += rc->variance;
+        lo = fmin(lo, rc->min);
+        hi = fmax(hi, rc->max);
+        nlo = rc->fronts < nlo ? rc->fronts : nlo;
+        nhi = rc->fronts > nhi ? rc->fronts : nhi;
+        cnt++;
+    }
+    CHECK(cnt > 0 && cnt < bkf_measure_count(all));
+    CHECK_CLOSE(b.mean, msum / (double)cnt, 1e-14, 1e-15);
+    CHECK_CLOSE(b.variance, vsum / (double)cnt, 1e-14, 1e-15);
+    CHECK(b.psi_min == lo && b.psi_max == hi && b.fronts_min == nlo && b.fronts_max == nhi);
+    CHECK(bkf_measure_count(bounded) == bkf_measure_count(all));
+    CHECK(bkf_measure_record_at(bounded, 0) == NULL);
+    CHECK(bkf_measure_record_at(bounded, bkf_measure_count(bounded) - 1) != NULL);
+}
+
+TEST(measure_bounded_memory_gives_the_full_summary)
+{
+    enum { N = 64, K = 3000 };
+    const double S = 20, v = -0.83, nu = -0.5, dt = 0.1;
+    bkf_measure_params p = bkf_measure_params_default();
+    p.model = (bkf_model_params){2, 0, nu, S, N, BKF_MODEL_CONTINUUM};
+    p.level = nu;
+    p.probe = 5;
+    bkf_error e;
+    bkf_measure *all = bkf_measure_alloc(&p, &e);
+    p.t_end = dt * (K - 1);
+    bkf_measure *bnd = bkf_measure_alloc(&p, &e);
+    CHECK(all && bnd);
+    double psi[N], eta[N];
+    /* 2 fronts, then 3 from inside the window on (a new set of tracks the
+     * speed is fitted on), with a wobble so that the fit has residuals */
+    for (int k = 0; k < K; k++) {
+        double t = dt * k;
+        size_t n = k < 2000 ? 2 : 3;
+        travelling(psi, eta, N, S, n, 3.0 + 0.01 * sin(0.7 * t), v, t, nu);
+        feed_both(all, bnd, t, psi, eta);
+    }
+    bkf_measure_summary s;
+    CHECK_STATUS(bkf_measure_summarize(bnd, &s, &e), BKF_OK);
+    CHECK(s.fronts_min == 2 && s.fronts_max == 3 && s.tracks == 3 && s.fit_start > 199.9);
+    CHECK(s.crossings > 10 && isfinite(s.period));
+    CHECK_CLOSE(s.speed, v, 1e-3, 0);
+    compare_summaries(all, bnd);
+    /* records of earlier sets of tracks are gone: no fit over them */
+    double vf, ef;
+    CHECK_STATUS(bkf_measure_fit_speed(bnd, 10, 20, &vf, &ef, NULL, &e), BKF_EINPUT);
+    CHECK(strstr(e.message, "not kept"));
+    CHECK_STATUS(bkf_measure_fit_speed(bnd, 250, 290, &vf, &ef, NULL, &e), BKF_OK);
+    double va, ea;
+    CHECK_STATUS(bkf_measure_fit_speed(all, 250, 290, &va, &ea, NULL, &e), BKF_OK);
+    CHECK(va == vf && ea == ef);
+    bkf_measure_free(all);
+    bkf_measure_free(bnd);
+}
+
+/* The same on a simulated irregular run (the uniform state's breakup at
+ * N 16), and the two ways a run may stop early. */
+static int feed_four(const bkf_pde_sample *smp, void *data)
+{
+    bkf_measure **ms = data;
+    bkf_error e;
+    for (int i = 0; i < 4; i++)
+        CHECK_STATUS(bkf_measure_add(ms[i], smp->t, smp->psi, smp->eta, &e), BKF_OK);
+    return 0;
+}
+
+TEST(measure_bounded_memory_on_a_simulation)
+{
+    bkf_model_params mp = {2, 0.3, -0.94, 20, 16, BKF_MODEL_CONTINUUM};
+    bkf_error e;
+    bkf_pde *pde = bkf_pde_alloc(&mp, NULL, &e);
+    CHECK_MSG(pde, "%s", e.message);
+    CHECK_STATUS(bkf_pde_init_uniform(pde, 1e-3, 1, &e), BKF_OK);
+    bkf_measure_params p = bkf_measure_params_default();
+    p.model = mp;
+    bkf_measure *all = bkf_measure_alloc(&p, &e);
+    p.t_end = 400;
+    bkf_measure *bnd = bkf_measure_alloc(&p, &e);
+    p.t_end = 600; /* a run that stops at 400 stopped inside this window */
+    bkf_measure *late = bkf_measure_alloc(&p, &e);
+    p.t_end = 1e4; /* and before this one began */
+    bkf_measure *never = bkf_measure_alloc(&p, &e);
+    CHECK(all && bnd && late && never);
+    bkf_measure *ms[] = {all, bnd, late, never};
+    CHECK_STATUS(bkf_pde_run(pde, 400, 0.1, feed_four, ms, NULL, NULL, &e), BKF_OK);
+    compare_summaries(all, bnd);
+    bkf_measure_summary s;
+    CHECK_STATUS(bkf_measure_summarize(bnd, &s, &e), BKF_OK);
+    bkf_test_note("regime %s, fronts %zu .. %zu, %zu crossings", bkf_regime_name(s.regime),
+                  s.fronts_min, s.fronts_max, s.crossings);
+    CHECK_STATUS(bkf_measure_summarize(late, &s, &e), BKF_OK);
+    CHECK(s.window_start >= 300 - 1e-9 && s.window_start < 300.1); /* the planned window */
+    CHECK_STATUS(bkf_measure_summarize(never, &s, &e), BKF_EINPUT);
+    CHECK(strstr(e.message, "before its summary window"));
+    for (int i = 0; i < 4; i++) bkf_measure_free(ms[i]);
+    bkf_pde_free(pde);
 }
