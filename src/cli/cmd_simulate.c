@@ -28,7 +28,8 @@ static void simulate_help(FILE *out)
     fprintf(out,
         "usage: bkfront simulate [--gamma G] [--c C] [--nu V] [--S S] [--N N] [--tmax T]\n"
         "                        [--tol E] [--init SPEC] [--seed K] [--model continuum|chain]\n"
-        "                        [--stepper rk8pd|rkck|rkf45|etdrk4] [--dealias] [--frames F]\n"
+        "                        [--stepper rk8pd|rkck|rkf45|etdrk4|lawson8] [--dealias]\n"
+        "                        [--frames F]\n"
         "                        [--spacetime FILE] [--spacetime-format text|binary]\n"
         "                        [--snapshots FILE] [--snapshot-count K] [--no-progress]\n"
         "                        [--format tsv|json] [--out FILE]\n"

@@ -17,7 +17,7 @@
 #define DEF_N 512
 
 static const char *const model_names[] = {"continuum", "chain", NULL};
-static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", NULL};
+static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8", NULL};
 static const char *const spacetime_names[] = {"text", "binary", NULL};
 
 /* The initial state's grammar is checked as the key is given (init.h
@@ -97,7 +97,8 @@ const bkf_option bkf_simulate_options[] = {
      .help = "rk8pd, rkck, rkf45: GSL embedded Runge-Kutta pairs;\n"
              "etdrk4: exponential Runge-Kutta (continuum only; the wave\n"
              "part exact, no step cap from N; energy_residual and\n"
-             "mean_residual are nan with it)"},
+             "mean_residual are nan with it); lawson8: the same with\n"
+             "rk8pd's order 8 (integrating factor: long steps at tight tol)"},
     {.name = "dealias", .type = BKF_OPT_SWITCH, .offset = SPEC(dealias),
      .help = "continuum only: 2/3-rule projection of the right-hand side"},
     {.name = "filter", .type = BKF_OPT_DOUBLE, .offset = SPEC(filter), .flags = BOUNDED, .min = 0,

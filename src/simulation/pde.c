@@ -67,12 +67,18 @@ int bkf_pde_check(const bkf_model_params *p, const bkf_pde_options *o, bkf_error
         return bkf_error_set(err, BKF_EINPUT, "tol = %g is outside [%g, %g]", o->tol,
                              BKF_PDE_TOL_MIN, BKF_PDE_TOL_MAX);
     if (o->stepper != BKF_PDE_RK8PD && o->stepper != BKF_PDE_RKCK &&
-        o->stepper != BKF_PDE_RKF45 && o->stepper != BKF_PDE_ETDRK4)
-        return bkf_error_set(err, BKF_EINPUT, "stepper must be rk8pd, rkck, rkf45 or etdrk4");
-    if (o->stepper == BKF_PDE_ETDRK4 && p->kind != BKF_MODEL_CONTINUUM)
-        return bkf_error_set(err, BKF_EINPUT, "the etdrk4 stepper applies to the continuum model only");
-    if (o->stepper == BKF_PDE_ETDRK4 && o->dealias)
-        return bkf_error_set(err, BKF_EINPUT, "the etdrk4 stepper is not combined with dealiasing");
+        o->stepper != BKF_PDE_RKF45 && o->stepper != BKF_PDE_ETDRK4 &&
+        o->stepper != BKF_PDE_LAWSON8)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "stepper must be rk8pd, rkck, rkf45, etdrk4 or lawson8");
+    int exponential = o->stepper == BKF_PDE_ETDRK4 || o->stepper == BKF_PDE_LAWSON8;
+    const char *sname = o->stepper == BKF_PDE_ETDRK4 ? "etdrk4" : "lawson8";
+    if (exponential && p->kind != BKF_MODEL_CONTINUUM)
+        return bkf_error_set(err, BKF_EINPUT, "the %s stepper applies to the continuum model only",
+                             sname);
+    if (exponential && o->dealias)
+        return bkf_error_set(err, BKF_EINPUT, "the %s stepper is not combined with dealiasing",
+                             sname);
     if (!isfinite(o->filter) || o->filter < 0 || o->filter > 1e3)
         return bkf_error_set(err, BKF_EINPUT, "filter = %g is outside [0, 1000]", o->filter);
     if (o->dealias && p->kind != BKF_MODEL_CONTINUUM)
@@ -365,7 +371,7 @@ static bkf_pde *pde_alloc_body(const bkf_model_params *params, const bkf_pde_opt
             m->dsymbol[k] = 2 * k == N ? 0.0 : o.frame_speed * q / (double)N;
         }
     }
-    if (o.stepper == BKF_PDE_ETDRK4) {
+    if (o.stepper == BKF_PDE_ETDRK4 || o.stepper == BKF_PDE_LAWSON8) {
         /* its own state (src/pde_etd.c); no GSL stepper: rk8pd's 13 stages
          * of 2N + 2 values would be 54 MB unused at N = 262144 */
         if (!(m->etd = bkf_pde_etd_alloc(m))) goto nomem;
