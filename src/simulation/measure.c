@@ -498,8 +498,10 @@ static void compact(bkf_measure *m)
     memmove(m->nminus, m->nminus + dead, live * sizeof *m->nminus);
     memmove(m->nplus, m->nplus + dead, live * sizeof *m->nplus);
     for (size_t j = 0; j < live; j++) m->off[j] = m->off[dead + j] - x0;
-    memmove(m->X, m->X + x0, (m->nX - x0) * sizeof *m->X);
-    m->nX -= x0;
+    if (x0) { /* X is NULL while no front was ever seen */
+        memmove(m->X, m->X + x0, (m->nX - x0) * sizeof *m->X);
+        m->nX -= x0;
+    }
     m->base = m->keep_from;
 }
 
