@@ -6,6 +6,7 @@
 
 #include "bkfront/status.h"
 #include "bkfront/version.h"
+#include "bkfront/fft.h"
 #include "bkfront/model.h"
 #include "bkfront/io.h"
 #include "bkfront/asymptotics.h"
