@@ -20,8 +20,9 @@ PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS))
 PKG_LIBS   = $(shell pkg-config --libs $(PKGS))
 # SANITIZE carries instrumentation flags (make sanitize); CFLAGS from the
 # command line add to, never replace, the project's own.
-override CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -Iinclude $(PKG_CFLAGS) $(SANITIZE)
-override LDFLAGS += $(SANITIZE)
+# OpenMP: bkf_sweep_run runs a sweep's points in threads (libgomp, part of gcc).
+override CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -Iinclude $(PKG_CFLAGS) $(SANITIZE) -fopenmp
+override LDFLAGS += $(SANITIZE) -fopenmp
 # SUNDIALS (CVODE for the comoving simulation) ships no pkg-config file.
 SUNDIALS_LIBS := -lsundials_cvode -lsundials_sunlinsolband -lsundials_sunmatrixband \
                  -lsundials_nvecserial
@@ -219,7 +220,7 @@ $(INST)/bkfront.pc: src/bkfront.pc.in $(INST)/dirs include/bkfront/version.h
 	sed -e 's|@PREFIX@|$(PREFIX)|' -e 's|@LIBDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))|' \
 	  -e 's|@INCLUDEDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))|' \
 	  -e 's|@VERSION@|$(VERSION)|' -e 's|@REQUIRES@|$(PKGS)|' \
-	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) -lm|' $< > $@
+	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) -lgomp -lm|' $< > $@
 
 # The Python package finds the shared library by its path relative to the
 # package, so that a staged (DESTDIR) or moved tree still works.

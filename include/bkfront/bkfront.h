@@ -36,6 +36,7 @@
 #include "bkfront/init.h"
 #include "bkfront/seed.h"
 #include "bkfront/simulate.h"
+#include "bkfront/sweep.h"
 #include "bkfront/plot.h"
 #include "bkfront/scene.h"
 
