@@ -124,6 +124,7 @@ bench-built: $(BENCH) $(CLI)
 	./$(BENCH)
 	@mkdir -p plots/out
 	./$(CLI) bench --out plots/out/work_precision.tsv
+	tests/bench/bench_sweep.sh ./$(CLI)
 	for g in plots/work_precision_*.gp; do gnuplot $$g || exit 1; done
 
 # The MPI build: build/mpi/bkfront, compiled with mpicc, whose `sweep` runs
