@@ -4,9 +4,10 @@
 # and from the global oscillation (perturbed in its longest mode), two seeds
 # each, with the Floquet boundaries of the global oscillation drawn over it.
 # Usage: fronts/regimes.sh [OUTDIR] [BKFRONT]; FINE=1 for the fine grid.
-# Coarse: 9 x 4 points x 2 states x 2 seeds = 144 runs of t = 400 on N 256
-# (about 1.5 s each: 2 min on 2 free cores).  Fine (FINE=1): 19 x 13 x 2 x 4
-# = 1976 runs, about 50 min on 2 cores, or mpirun on a cluster.
+# Coarse: 9 x 4 points x 2 states x 2 seeds = 144 runs of t = 400 on N 256,
+# 41 CPU seconds (measured 2026-11-25; 87 s wall on a shared 2-core machine).
+# Fine (FINE=1): 19 x 13 x 2 x 4 = 1976 runs, about 14 times that (~9.5 CPU
+# minutes: 5 min on 2 free cores), or mpirun on a cluster.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 out=${1:-$here/regimes}
