@@ -10,6 +10,8 @@ DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
 # Only for `make valgrind` and `make fuzz` (libFuzzer ships with clang's
 # runtime), so that `make test` needs neither.
 VALGRIND_PACKAGES := valgrind
+# Only for `make mpi` (bkfront sweep under mpirun) and `make test-mpi`.
+MPI_PACKAGES      := libopenmpi-dev openmpi-bin
 FUZZ_PACKAGES     := clang libclang-rt-dev
 PKGS         := gsl nlopt fftw3 inih lapacke
 
@@ -20,8 +22,9 @@ PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS))
 PKG_LIBS   = $(shell pkg-config --libs $(PKGS))
 # SANITIZE carries instrumentation flags (make sanitize); CFLAGS from the
 # command line add to, never replace, the project's own.
-override CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -Iinclude $(PKG_CFLAGS) $(SANITIZE)
-override LDFLAGS += $(SANITIZE)
+# OpenMP: bkf_sweep_run runs a sweep's points in threads (libgomp, part of gcc).
+override CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -Iinclude $(PKG_CFLAGS) $(SANITIZE) -fopenmp
+override LDFLAGS += $(SANITIZE) -fopenmp
 # SUNDIALS (CVODE for the comoving simulation) ships no pkg-config file.
 SUNDIALS_LIBS := -lsundials_cvode -lsundials_sunlinsolband -lsundials_sunmatrixband \
                  -lsundials_nvecserial
@@ -59,6 +62,7 @@ BENCH := $(BUILD)/run_bench
 # code): the proof that a product is reachable from C.
 EXAMPLES := $(BUILD)/examples/check_paper
 
+.PHONY: mpi test-mpi
 .PHONY: all test run bench sanitize deps clean build-all check-built bench-built fuzz-syntax \
         sanitize-built valgrind fuzz fuzz-built install uninstall FORCE
 
@@ -120,7 +124,22 @@ bench-built: $(BENCH) $(CLI)
 	./$(BENCH)
 	@mkdir -p plots/out
 	./$(CLI) bench --out plots/out/work_precision.tsv
+	tests/bench/bench_sweep.sh ./$(CLI)
 	for g in plots/work_precision_*.gp; do gnuplot $$g || exit 1; done
+
+# The MPI build: build/mpi/bkfront, compiled with mpicc, whose `sweep` runs
+# a manager/worker farm under mpirun (src/cli/sweep_mpi.c); test-mpi
+# compares mpirun -np 2 and -np 3 with the serial table, on this machine
+# only (shared memory and loopback).
+mpi: deps
+	@$(call install_missing,$(MPI_PACKAGES))
+	@$(MAKE) --no-print-directory BUILD=build/mpi CC=mpicc MPI_CFLAGS=-DBKF_MPI build/mpi/bkfront
+
+test-mpi: mpi
+	@$(MAKE) --no-print-directory build-all $(TESTS)
+	./$(TESTS) sweep_mpi
+
+$(BUILD)/src/cli/sweep_mpi.o: override CFLAGS += $(MPI_CFLAGS)
 
 # The whole suite under AddressSanitizer and UndefinedBehaviorSanitizer, in a
 # build folder of its own.
@@ -219,7 +238,7 @@ $(INST)/bkfront.pc: src/bkfront.pc.in $(INST)/dirs include/bkfront/version.h
 	sed -e 's|@PREFIX@|$(PREFIX)|' -e 's|@LIBDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))|' \
 	  -e 's|@INCLUDEDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))|' \
 	  -e 's|@VERSION@|$(VERSION)|' -e 's|@REQUIRES@|$(PKGS)|' \
-	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) -lm|' $< > $@
+	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) -lgomp -lm|' $< > $@
 
 # The Python package finds the shared library by its path relative to the
 # package, so that a staged (DESTDIR) or moved tree still works.

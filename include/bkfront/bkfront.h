@@ -6,6 +6,7 @@
 
 #include "bkfront/status.h"
 #include "bkfront/version.h"
+#include "bkfront/fft.h"
 #include "bkfront/model.h"
 #include "bkfront/io.h"
 #include "bkfront/asymptotics.h"
@@ -35,6 +36,7 @@
 #include "bkfront/init.h"
 #include "bkfront/seed.h"
 #include "bkfront/simulate.h"
+#include "bkfront/sweep.h"
 #include "bkfront/plot.h"
 #include "bkfront/scene.h"
 

@@ -16,6 +16,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include "bkfront/io.h"
+#include "bkfront/measure.h"
 #include "bkfront/model.h"
 #include "bkfront/options.h"
 #include "bkfront/pde.h"
@@ -94,6 +95,23 @@ int bkf_simulate_check(const bkf_simulate_spec *spec, const char *prefix, bkf_er
  * the caller discards. */
 int bkf_simulate_write(const bkf_simulate_spec *spec, FILE *out, bkf_io_format format,
                        const bkf_provenance *provenance, bkf_error *err);
+
+/* What a run gives without its table (a sweep's point): the summary of
+ * the measurements, the global oscillation's period (0: no cycle), where
+ * the run ended and its work. */
+typedef struct {
+    bkf_measure_summary summary;
+    double period_ref;
+    double t_end;
+    size_t steps, rejected;
+    size_t N;           /* the grid's points (the default resolved) */
+} bkf_simulate_outcome;
+
+/* The run of bkf_simulate_write, the same numbers bit for bit, without a
+ * table: spec must name no data file (spacetime, snapshots).  Stopped
+ * through spec->cancel: BKF_ECANCELED and no outcome. */
+int bkf_simulate_outcome_of(const bkf_simulate_spec *spec, bkf_simulate_outcome *outcome,
+                            bkf_error *err);
 
 #ifdef __cplusplus
 }

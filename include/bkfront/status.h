@@ -12,8 +12,11 @@
  * caller's handler back before it returns (bkf_gsl_handler_push/pop below),
  * so the host program's choice of handler is left as it was.  While a library
  * call runs, including the callbacks it makes into the caller's code, the
- * handler is off.  GSL keeps one handler for the whole process: like GSL
- * itself, this is not safe when threads call the library concurrently. */
+ * handler is off.  GSL keeps one handler for the whole process, so the
+ * calls in flight in all threads share it: the first to enter turns it off,
+ * the last to leave puts back the one it found, and library calls in several
+ * threads at once are safe.  A host program that sets GSL's handler itself
+ * must not do so while a library call runs in another thread. */
 #ifndef BKFRONT_STATUS_H
 #define BKFRONT_STATUS_H
 
@@ -78,7 +81,9 @@ int bkf_status_is_numerical(int status);
 
 /* GSL's error handler, saved and restored around a library call (see the top
  * of this file).  push turns the handler off and returns the one that was
- * installed (NULL: GSL's default); pop installs it again.  Pairs nest.  The
+ * installed (NULL: GSL's default); the pop that ends the last pair in
+ * flight, in any thread, installs again the one found by the first (its
+ * argument is not used).  Pairs nest.  Thread-safe.  The
  * type is GSL's gsl_error_handler_t, spelled out so this header needs no GSL
  * header. */
 typedef void bkf_gsl_handler(const char *reason, const char *file, int line, int gsl_errno);

@@ -16,6 +16,7 @@ extern const cli_command cli_cmd_check;
 extern const cli_command cli_cmd_run;
 extern const cli_command cli_cmd_bench;
 extern const cli_command cli_cmd_friction;
+extern const cli_command cli_cmd_sweep;
 
 static const cli_command *const commands[] = {
     &cli_cmd_period,
@@ -28,6 +29,7 @@ static const cli_command *const commands[] = {
     &cli_cmd_friction,
     &cli_cmd_simulate,
     &cli_cmd_check,
+    &cli_cmd_sweep,
     &cli_cmd_run,
     &cli_cmd_bench,
 };

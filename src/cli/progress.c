@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "progress.h"
 
+#include <math.h>
 #include <stddef.h>
 #include <string.h>
 #include <time.h>
@@ -34,23 +35,49 @@ void progress_init(progress_bar *p, const char *label, int allowed)
     p->share = 1.0;
 }
 
-int progress_draw(double fraction, void *data)
+/* The bar at fraction f, then `tail` (may be empty). */
+static void draw(progress_bar *p, double f, double t, const char *tail)
 {
-    progress_bar *p = data;
-    if (!p->enabled) return 0;
-    double t = now_seconds();
-    if (t - p->start < 0.5 || t - p->last < 0.1) return 0;
-    p->last = t;
-    double f = p->base + p->share * fraction;
     if (f > 1) f = 1;
     int width = 30, done = (int)(f * width + 0.5);
     char bar[64];
     for (int i = 0; i < width; i++) bar[i] = i < done ? '#' : '.';
     bar[width] = '\0';
-    fprintf(stderr, "\r%s [%s] %3.0f%%  %.1fs", p->label, bar, 100 * f, t - p->start);
+    fprintf(stderr, "\r%s [%s] %3.0f%%  %.1fs%s\033[K", p->label, bar, 100 * f, t - p->start, tail);
     fflush(stderr);
     p->drawn = 1;
+}
+
+/* Whether to draw now: after half a second, at most ten times a second. */
+static int due(progress_bar *p, double t)
+{
+    if (!p->enabled || t - p->start < 0.5 || t - p->last < 0.1) return 0;
+    p->last = t;
+    return 1;
+}
+
+int progress_draw(double fraction, void *data)
+{
+    progress_bar *p = data;
+    double t = now_seconds();
+    if (due(p, t)) draw(p, p->base + p->share * fraction, t, "");
     return 0;
+}
+
+void progress_count(progress_bar *p, size_t done, size_t total)
+{
+    double t = now_seconds();
+    if (!total || (done < total && !due(p, t))) return;
+    if (!p->enabled) return;
+    p->last = t;
+    char tail[96];
+    /* the rate so far: points take similar times on average over a grid */
+    double eta = done ? (t - p->start) * (double)(total - done) / (double)done : NAN;
+    if (done)
+        snprintf(tail, sizeof tail, ", %zu/%zu points, ETA %.0fs", done, total, eta);
+    else
+        snprintf(tail, sizeof tail, ", %zu/%zu points", done, total);
+    draw(p, (double)done / (double)total, t, tail);
 }
 
 void progress_end(progress_bar *p)

@@ -25,6 +25,8 @@ extern const size_t cli_progress_noptions;
 void progress_init(progress_bar *p, const char *label, int allowed);
 /* A bkf_pde_progress: data is the bar; never asks to stop. */
 int progress_draw(double fraction, void *data);
+/* Points done of total, with the time left at the rate so far. */
+void progress_count(progress_bar *p, size_t done, size_t total);
 void progress_end(progress_bar *p);
 
 #endif

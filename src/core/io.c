@@ -644,7 +644,8 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
 
     /* O_EXCL with a fresh name rather than mkstemp(): mkstemp forces mode
      * 0600, and the umask cannot be read without changing it. */
-    static unsigned counter;
+    /* atomic: atomic files may be opened in several threads at once */
+    static _Atomic unsigned counter;
     struct timespec now;
     clock_gettime(CLOCK_REALTIME, &now);
     int fd = -1, open_errno = 0;

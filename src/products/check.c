@@ -17,6 +17,7 @@
 #include "bkfront/seed.h"
 #include "bkfront/speeds.h"
 #include "bkfront/stability.h"
+#include "bkfront/fft.h"
 
 const char *bkf_check_verdict_name(bkf_check_verdict verdict)
 {
@@ -486,13 +487,17 @@ static int bloch_init(bloch_classes *b, size_t N, size_t n)
     b->in = fftw_malloc(N * sizeof *b->in);
     b->out = fftw_malloc((N / 2 + 1) * sizeof *b->out);
     if (!b->in || !b->out) return BKF_ENOMEM;
+    bkf_fft_lock();
     b->plan = fftw_plan_dft_r2c_1d((int)N, b->in, b->out, FFTW_ESTIMATE);
+    bkf_fft_unlock();
     return b->plan ? BKF_OK : BKF_ENOMEM;
 }
 
 static void bloch_free(bloch_classes *b)
 {
+    bkf_fft_lock();
     if (b->plan) fftw_destroy_plan(b->plan);
+    bkf_fft_unlock();
     fftw_free(b->in);
     fftw_free(b->out);
     free(b->t);

@@ -267,6 +267,7 @@ typedef struct {
     size_t snap_next;
     int status;
     bkf_error err;
+    bkf_simulate_outcome *outcome; /* set: the run's summary, no table */
 } run;
 
 static int observe(const bkf_pde_sample *smp, void *data)
@@ -620,6 +621,17 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
         }
     } else
         have_summary = 1;
+    if (r->outcome) {
+        if (canceled) {
+            s = bkf_error_set(err, BKF_ECANCELED, "%s", interrupted);
+            goto done;
+        }
+        const bkf_pde_stats *st = bkf_pde_get_stats(r->pde);
+        *r->outcome = (bkf_simulate_outcome){ms, period_ref, bkf_pde_time(r->pde), st->steps,
+                                             st->rejected, N};
+        s = BKF_OK;
+        goto done;
+    }
     t = bkf_io_table_alloc(out, format, columns, NCOLUMNS, err);
     if (!t) {
         s = BKF_ENOMEM;
@@ -653,13 +665,16 @@ done:
     return s;
 }
 
-int bkf_simulate_write(const bkf_simulate_spec *sp, FILE *out, bkf_io_format format,
-                       const bkf_provenance *provenance, bkf_error *err)
+/* The table to `out`, or with `outcome` only the run's summary into it. */
+static int simulate(const bkf_simulate_spec *sp, FILE *out, bkf_io_format format,
+                    const bkf_provenance *provenance, bkf_simulate_outcome *outcome,
+                    bkf_error *err)
 {
     int s = bkf_simulate_check(sp, "", err);
     if (s) return s;
     run r;
     memset(&r, 0, sizeof r);
+    r.outcome = outcome;
     r.spec = sp;
     r.prov = provenance;
     r.snapshots = sp->snapshot_count ? sp->snapshot_count : 2;
@@ -684,4 +699,20 @@ int bkf_simulate_write(const bkf_simulate_spec *sp, FILE *out, bkf_io_format for
     free(r.snap_frame);
     bkf_init_free(&r.init);
     return s;
+}
+
+int bkf_simulate_write(const bkf_simulate_spec *sp, FILE *out, bkf_io_format format,
+                       const bkf_provenance *provenance, bkf_error *err)
+{
+    return simulate(sp, out, format, provenance, NULL, err);
+}
+
+int bkf_simulate_outcome_of(const bkf_simulate_spec *sp, bkf_simulate_outcome *outcome,
+                            bkf_error *err)
+{
+    if (!outcome) return bkf_error_set(err, BKF_EINPUT, "no outcome given");
+    if (sp && (sp->spacetime || sp->snapshots))
+        return bkf_error_set(err, BKF_EINPUT, "%s: no data files without a table",
+                             sp->spacetime ? "spacetime" : "snapshots");
+    return simulate(sp, NULL, BKF_IO_TSV, NULL, outcome, err);
 }

@@ -23,6 +23,7 @@
 #include "bkfront/cycle.h"
 #include "bkfront/measure.h"
 #include "bkfront/model.h"
+#include "bkfront/fft.h"
 
 /* Stencil radius of the order-8 central differences. */
 #define R 4
@@ -198,8 +199,10 @@ static int smooth_map(bkf_comoving *m, bkf_error *err)
     fftw_plan fwd = NULL, bwd = NULL;
     int s = BKF_OK;
     if (d && c && w) {
+        bkf_fft_lock();
         fwd = fftw_plan_dft_r2c_1d((int)mm, d, c, FFTW_ESTIMATE);
         bwd = fftw_plan_dft_c2r_1d((int)mm, w, d, FFTW_ESTIMATE);
+        bkf_fft_unlock();
     }
     if (!fwd || !bwd) {
         s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
@@ -242,8 +245,10 @@ static int smooth_map(bkf_comoving *m, bkf_error *err)
             goto done;
         }
 done:
+    bkf_fft_lock();
     if (fwd) fftw_destroy_plan(fwd);
     if (bwd) fftw_destroy_plan(bwd);
+    bkf_fft_unlock();
     fftw_free(d);
     fftw_free(c);
     fftw_free(w);

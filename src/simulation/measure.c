@@ -10,6 +10,7 @@
 
 #include "bkfront/model.h"
 #include "bkfront/cycle.h"
+#include "bkfront/fft.h"
 
 typedef struct {
     double t, psi, psit;
@@ -115,8 +116,10 @@ bkf_measure_params bkf_measure_params_default(void)
 void bkf_measure_free(bkf_measure *m)
 {
     if (!m) return;
+    bkf_fft_lock();
     if (m->fwd) fftw_destroy_plan(m->fwd);
     if (m->bwd) fftw_destroy_plan(m->bwd);
+    bkf_fft_unlock();
     fftw_free(m->rbuf);
     fftw_free(m->d1);
     fftw_free(m->d2);
@@ -202,8 +205,10 @@ bkf_measure *bkf_measure_alloc(const bkf_measure_params *params, bkf_error *err)
      * new-array execute calls need the plan's alignment */
     m->shifted = fftw_malloc(N * sizeof(double));
     if (!m->rbuf || !m->d1 || !m->d2 || !m->c || !m->cw || !m->psit || !m->shifted) goto nomem;
+    bkf_fft_lock();
     m->fwd = fftw_plan_dft_r2c_1d((int)N, m->rbuf, m->c, FFTW_ESTIMATE);
     m->bwd = fftw_plan_dft_c2r_1d((int)N, m->cw, m->d1, FFTW_ESTIMATE);
+    bkf_fft_unlock();
     if (!m->fwd || !m->bwd) goto nomem;
     if (params->reference) {
         m->ref = malloc(N * sizeof(double));

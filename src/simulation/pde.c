@@ -15,6 +15,7 @@
 
 #include "bkfront/cycle.h"
 #include "bkfront/model.h"
+#include "bkfront/fft.h"
 #include "pde_internal.h"
 
 bkf_pde_options bkf_pde_options_default(void)
@@ -274,8 +275,10 @@ static int rhs(double t, const double y[], double dydt[], void *params)
 void bkf_pde_free(bkf_pde *m)
 {
     if (!m) return;
+    bkf_fft_lock();
     if (m->fwd) fftw_destroy_plan(m->fwd);
     if (m->bwd) fftw_destroy_plan(m->bwd);
+    bkf_fft_unlock();
     fftw_free(m->rbuf);
     fftw_free(m->lap);
     fftw_free(m->cbuf);
@@ -344,8 +347,10 @@ static bkf_pde *pde_alloc_body(const bkf_model_params *params, const bkf_pde_opt
         goto nomem;
     /* ESTIMATE: planning by measurement costs more than a short run gains
      * and would make runs differ in the last bits from one call to another. */
+    bkf_fft_lock();
     m->fwd = fftw_plan_dft_r2c_1d((int)N, m->rbuf, m->cbuf, FFTW_ESTIMATE);
     m->bwd = fftw_plan_dft_c2r_1d((int)N, m->cbuf, m->lap, FFTW_ESTIMATE);
+    bkf_fft_unlock();
     if (!m->fwd || !m->bwd) goto nomem;
     for (size_t k = 0; k < nc; k++) {
         double q = 2.0 * M_PI * (double)k / params->S;

@@ -3,9 +3,12 @@
  * success, on failure and on refused input; during the call, callbacks
  * included, GSL's handler is off, so a GSL error inside the library reaches
  * neither the host's handler nor GSL's abort. */
+#define _POSIX_C_SOURCE 200809L
 #include "harness.h"
 
 #include <gsl/gsl_errno.h>
+#include <pthread.h>
+#include <sched.h>
 
 #include "bkfront/asymfit.h"
 #include "bkfront/continuation.h"
@@ -180,5 +183,41 @@ TEST(gsl_handler_of_the_host_survives_simulations)
     CHECK_HOST_HANDLER("bkf_comoving_run");
     bkf_comoving_free(cm);
     CHECK_MSG(host_calls == 0, "the host's handler was called %d times", host_calls);
+    gsl_set_error_handler(NULL);
+}
+
+/* Pairs in two threads at once: while either is inside, the handler is
+ * off (never the host's, never GSL's abort), and after both, the host's. */
+static _Atomic int handler_violations;
+static pthread_barrier_t handler_start;
+
+static void *push_pop_many(void *arg)
+{
+    (void)arg;
+    pthread_barrier_wait(&handler_start);
+    for (int i = 0; i < 20000 && handler_violations < 10; i++) {
+        bkf_gsl_handler *h = bkf_gsl_handler_push();
+        sched_yield(); /* let the other thread in, also on one core */
+        gsl_error_handler_t *now = gsl_set_error_handler_off();
+        gsl_set_error_handler(now);
+        if (now == host_handler || now == NULL) handler_violations++;
+        bkf_gsl_handler_pop(h);
+    }
+    return NULL;
+}
+
+TEST(gsl_handler_pairs_in_two_threads)
+{
+    gsl_set_error_handler(host_handler);
+    pthread_t a, b;
+    pthread_barrier_init(&handler_start, NULL, 2);
+    CHECK(pthread_create(&a, NULL, push_pop_many, NULL) == 0);
+    CHECK(pthread_create(&b, NULL, push_pop_many, NULL) == 0);
+    pthread_join(a, NULL);
+    pthread_join(b, NULL);
+    pthread_barrier_destroy(&handler_start);
+    CHECK_MSG(handler_violations == 0, "the handler was on inside a pair %d times",
+              (int)handler_violations);
+    CHECK_HOST_HANDLER("pairs in two threads");
     gsl_set_error_handler(NULL);
 }

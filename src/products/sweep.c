@@ -1,0 +1,772 @@
+/* Sweeps of the simulation product over a grid (sweep.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "bkfront/sweep.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <inttypes.h>
+#include <stdarg.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "bkfront/io.h"
+#include "bkfront/measure.h"
+#include "bkfront/version.h"
+
+/* Seeds pass through a list of doubles: exact up to 2^53. */
+#define SEED_MAX 9007199254740992.0
+
+#define SPEC(field) offsetof(bkf_sweep_spec, field)
+
+const bkf_option bkf_sweep_options[] = {
+    {.name = "x", .type = BKF_OPT_TEXT, .offset = SPEC(x), .form = "NAME=LIST",
+     .help = "first axis: NAME one of gamma, c, nu, S, N, tmax, seed;\n"
+             "LIST as V1,V2,... or A:B:N"},
+    {.name = "y", .type = BKF_OPT_TEXT, .offset = SPEC(y), .form = "NAME=LIST",
+     .help = "second axis, as --x"},
+    {.name = "zip", .type = BKF_OPT_SWITCH, .offset = SPEC(zip),
+     .help = "x and y are a list of pairs (equal lengths), not a grid"},
+    {.name = "seeds", .type = BKF_OPT_COUNT_LIST, .offset = SPEC(seeds), .min = 0,
+     .max = SEED_MAX, .flags = BKF_OPT_MIN | BKF_OPT_MAX, .max_count = 100000, .form = "LIST",
+     .shown_default = "--seed", .help = "seeds of every point, integers in [0, 2^53]"},
+    {.name = "inits", .type = BKF_OPT_TEXT, .offset = SPEC(inits), .form = "SPEC;SPEC;...",
+     .shown_default = "--init",
+     .help = "initial states of every point (as --init), separated by ';'"},
+    {.name = "threads", .type = BKF_OPT_COUNT, .offset = SPEC(threads),
+     .flags = BKF_OPT_MIN | BKF_OPT_MAX, .min = 1, .max = 4096, .form = "K",
+     .shown_default = "every core", .help = "OpenMP threads, one run each, in [1, 4096]"},
+    {.name = "task", .type = BKF_OPT_COUNT, .offset = SPEC(task), .flags = BKF_OPT_MIN | BKF_OPT_MAX,
+     .min = 0, .max = 1000000, .form = "I", .shown_default = "0",
+     .help = "with --of K: compute only the points i with i % K == I\n"
+             "(a job array's index), in [0, K - 1]"},
+    {.name = "of", .type = BKF_OPT_COUNT, .offset = SPEC(of), .flags = BKF_OPT_MIN | BKF_OPT_MAX,
+     .min = 1, .max = 1000000, .form = "K", .shown_default = "1",
+     .help = "number of tasks the points are split into, in [1, 1e6]"},
+};
+const size_t bkf_sweep_noptions = sizeof bkf_sweep_options / sizeof bkf_sweep_options[0];
+
+bkf_sweep_spec bkf_sweep_spec_default(void)
+{
+    bkf_sweep_spec s;
+    memset(&s, 0, sizeof s);
+    s.sim = bkf_simulate_spec_default();
+    return s;
+}
+
+void bkf_sweep_spec_free(bkf_sweep_spec *spec)
+{
+    if (spec) bkf_list_free(&spec->seeds);
+}
+
+/* ------------------------------------------------------------ the plan */
+
+static const char *const axis_names[] = {"gamma", "c", "nu", "S", "N", "tmax", "seed", NULL};
+
+typedef struct {
+    const bkf_option *opt; /* NULL: no axis */
+    bkf_list values;
+} axis;
+
+typedef struct {
+    axis x, y;
+    size_t nx, ny, nseeds, ninits;
+    char **inits;          /* ninits texts; NULL entries: the base's */
+    size_t count;
+} plan;
+
+static void plan_free(plan *p)
+{
+    bkf_list_free(&p->x.values);
+    bkf_list_free(&p->y.values);
+    for (size_t i = 0; p->inits && i < p->ninits; i++) free(p->inits[i]);
+    free(p->inits);
+    memset(p, 0, sizeof *p);
+}
+
+/* A number as the option tables read it: the shortest text that reads
+ * back bit for bit. */
+static int apply_number(const bkf_option *opt, bkf_simulate_spec *sim, double v, const char *prefix,
+                        bkf_error *err)
+{
+    char text[40];
+    if (opt->type == BKF_OPT_SEED || opt->type == BKF_OPT_COUNT)
+        snprintf(text, sizeof text, "%.0f", v);
+    else
+        bkf_format_number(v, text, sizeof text);
+    return bkf_option_apply(opt, sim, text, prefix, err);
+}
+
+static int parse_axis(const char *text, const char *key, const char *prefix,
+                      const bkf_simulate_spec *base, axis *a, bkf_error *err)
+{
+    char shown[80];
+    const char *eq = text ? strchr(text, '=') : NULL;
+    if (!eq)
+        return bkf_error_set(err, BKF_EINPUT, "%s%s: '%s' is not NAME=LIST", prefix, key,
+                             bkf_option_shown(text ? text : "", shown, sizeof shown));
+    size_t len = (size_t)(eq - text);
+    const char *name = NULL;
+    for (size_t i = 0; axis_names[i]; i++)
+        if (strlen(axis_names[i]) == len && strncmp(axis_names[i], text, len) == 0)
+            name = axis_names[i];
+    if (!name)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%s%s: '%.*s' is not a parameter of a sweep (gamma, c, nu, S, N, "
+                             "tmax, seed)",
+                             prefix, key, (int)(len < 40 ? len : 40), text);
+    a->opt = bkf_option_find(bkf_simulate_options, bkf_simulate_noptions, name);
+    int integer = a->opt->type == BKF_OPT_COUNT || a->opt->type == BKF_OPT_SEED;
+    char what[64];
+    snprintf(what, sizeof what, "%s (%s)", key, name);
+    int s = bkf_list_parse(eq + 1, 0, integer, BKF_SWEEP_POINTS_MAX, prefix, what, &a->values, err);
+    if (s) return s;
+    /* every value through the simulation's own table: its range, its words */
+    for (size_t i = 0; i < a->values.count; i++) {
+        double v = a->values.values[i];
+        if (a->opt->type == BKF_OPT_SEED && (v < 0 || v > SEED_MAX))
+            return bkf_error_set(err, BKF_EINPUT, "%s%s: seed %.17g is not in [0, 2^53]", prefix,
+                                 key, v);
+        bkf_simulate_spec probe = *base;
+        bkf_error e;
+        if (apply_number(a->opt, &probe, v, "", &e))
+            return bkf_error_set(err, BKF_EINPUT, "%s%s: %s", prefix, key, e.message);
+    }
+    return BKF_OK;
+}
+
+static int make_plan(const bkf_sweep_spec *sp, const char *prefix, plan *p, bkf_error *err)
+{
+    memset(p, 0, sizeof *p);
+    int s = BKF_OK;
+    if (sp->x) s = parse_axis(sp->x, "x", prefix, &sp->sim, &p->x, err);
+    if (!s && sp->y) {
+        if (!sp->x)
+            s = bkf_error_set(err, BKF_EINPUT, "%sy: give %sx first", prefix, prefix);
+        else
+            s = parse_axis(sp->y, "y", prefix, &sp->sim, &p->y, err);
+        if (!s && p->y.opt == p->x.opt)
+            s = bkf_error_set(err, BKF_EINPUT, "%sy: %s is already the x axis", prefix,
+                              p->x.opt->name);
+    }
+    if (!s && sp->zip && (!p->y.opt || p->x.values.count != p->y.values.count))
+        s = bkf_error_set(err, BKF_EINPUT,
+                          "%szip: needs %sx and %sy of equal lengths (%zu and %zu values)", prefix,
+                          prefix, prefix, p->x.values.count, p->y.values.count);
+    if (!s && sp->seeds.count && (p->x.opt && p->x.opt->type == BKF_OPT_SEED))
+        s = bkf_error_set(err, BKF_EINPUT, "%sseeds: the seed is already the x axis", prefix);
+    if (!s && sp->seeds.count && (p->y.opt && p->y.opt->type == BKF_OPT_SEED))
+        s = bkf_error_set(err, BKF_EINPUT, "%sseeds: the seed is already the y axis", prefix);
+    if (s) {
+        plan_free(p);
+        return s;
+    }
+    p->nx = p->x.opt ? p->x.values.count : 1;
+    p->ny = p->y.opt && !sp->zip ? p->y.values.count : 1;
+    p->nseeds = sp->seeds.count ? sp->seeds.count : 1;
+    /* the initial states: one text per state, split at ';' */
+    p->ninits = 1;
+    for (const char *c = sp->inits; c && *c; c++) p->ninits += *c == ';';
+    if (p->ninits > BKF_SWEEP_INITS_MAX) {
+        s = bkf_error_set(err, BKF_EINPUT, "%sinits: %zu states, more than %u", prefix, p->ninits,
+                          BKF_SWEEP_INITS_MAX);
+        plan_free(p);
+        return s;
+    }
+    p->inits = calloc(p->ninits, sizeof *p->inits);
+    if (!p->inits) {
+        plan_free(p);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    const char *start = sp->inits;
+    for (size_t k = 0; start && k < p->ninits; k++) {
+        const char *end = strchr(start, ';');
+        size_t n = end ? (size_t)(end - start) : strlen(start);
+        p->inits[k] = strndup(start, n);
+        if (!p->inits[k]) {
+            plan_free(p);
+            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        }
+        start = end ? end + 1 : NULL;
+    }
+    double count = (double)p->nx * (double)p->ny * (double)p->nseeds * (double)p->ninits;
+    if (count > BKF_SWEEP_POINTS_MAX) {
+        plan_free(p);
+        return bkf_error_set(err, BKF_EINPUT, "%sx: the grid has %.0f points, more than %u",
+                             prefix, count, BKF_SWEEP_POINTS_MAX);
+    }
+    p->count = (size_t)count;
+    return BKF_OK;
+}
+
+/* The simulation of point i.  Its texts (the initial state) belong to the
+ * plan. */
+static int point_spec(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_simulate_spec *sim,
+                      const char *prefix, bkf_error *err)
+{
+    size_t seed = i % p->nseeds, rest = i / p->nseeds;
+    size_t ix = rest % p->nx;
+    rest /= p->nx;
+    size_t iy = rest % p->ny, init = rest / p->ny;
+    if (sp->zip) iy = ix;
+    *sim = sp->sim;
+    sim->cancel = sp->cancel;
+    int s = BKF_OK;
+    if (p->inits[init]) {
+        const bkf_option *o = bkf_option_find(bkf_simulate_options, bkf_simulate_noptions, "init");
+        char key[16];
+        snprintf(key, sizeof key, "%sinits: ", prefix);
+        s = bkf_option_apply(o, sim, p->inits[init], "", err);
+        if (s) {
+            char m[BKF_ERROR_LEN];
+            snprintf(m, sizeof m, "%s", err ? err->message : "");
+            return bkf_error_set(err, s, "%s%s", key, m);
+        }
+    }
+    if (p->x.opt) s = apply_number(p->x.opt, sim, p->x.values.values[ix], prefix, err);
+    if (!s && p->y.opt) s = apply_number(p->y.opt, sim, p->y.values.values[iy], prefix, err);
+    if (!s && sp->seeds.count) sim->seed = (uint64_t)sp->seeds.values[seed];
+    return s;
+}
+
+int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err)
+{
+    if (!sp) return bkf_error_set(err, BKF_EINPUT, "no sweep spec given");
+    if (!prefix) prefix = "";
+    if (sp->sim.spacetime || sp->sim.snapshots)
+        return bkf_error_set(err, BKF_EINPUT, "%s%s: not in a sweep (no fields per point)", prefix,
+                             sp->sim.spacetime ? "spacetime" : "snapshots");
+    size_t of = sp->of ? sp->of : 1;
+    if (sp->task >= of)
+        return bkf_error_set(err, BKF_EINPUT, "%stask: %zu is not in [0, %zu] (%sof %zu)", prefix,
+                             sp->task, of - 1, prefix, of);
+    plan p;
+    int s = make_plan(sp, prefix, &p, err);
+    if (s) return s;
+    /* every point, before any run: a bad corner of the grid is bad input
+     * now, not a failed row an hour later */
+    for (size_t i = 0; !s && i < p.count; i++) {
+        bkf_simulate_spec sim;
+        s = point_spec(sp, &p, i, &sim, prefix, err);
+        if (!s) s = bkf_simulate_check(&sim, prefix, err);
+    }
+    plan_free(&p);
+    return s;
+}
+
+size_t bkf_sweep_count(const bkf_sweep_spec *sp)
+{
+    plan p;
+    if (!sp || make_plan(sp, "", &p, NULL)) return 0;
+    size_t n = p.count;
+    plan_free(&p);
+    return n;
+}
+
+/* ------------------------------------------------------------ the rows */
+
+static const char *const column_names[] = {
+    "point", "init", "seed", "gamma", "c", "nu", "S", "tmax", "N", "regime",
+    "fronts", "fronts_min", "fronts_max", "speed", "speed_err", "period", "period_err",
+    "period_multiplicity", "global_period", "mean", "variance", "std_max", "psi_min", "psi_max",
+    "t_end", "steps", "status"};
+#define NCOLS (sizeof column_names / sizeof column_names[0])
+/* Columns fixed by the point alone (point .. tmax): what --resume compares. */
+#define NKEYCOLS 8
+
+/* A growing text. */
+typedef struct {
+    char *s;
+    size_t len, cap;
+    int failed;
+} text;
+
+static void addf(text *t, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+static void addf(text *t, const char *fmt, ...)
+{
+    if (t->failed) return;
+    for (;;) {
+        va_list ap;
+        va_start(ap, fmt);
+        int n = vsnprintf(t->s ? t->s + t->len : NULL, t->s ? t->cap - t->len : 0, fmt, ap);
+        va_end(ap);
+        if (n < 0) {
+            t->failed = 1;
+            return;
+        }
+        if (t->s && t->len + (size_t)n < t->cap) {
+            t->len += (size_t)n;
+            return;
+        }
+        size_t cap = (t->cap ? t->cap : 256);
+        while (cap <= t->len + (size_t)n) cap *= 2;
+        char *g = realloc(t->s, cap);
+        if (!g) {
+            t->failed = 1;
+            return;
+        }
+        t->s = g;
+        t->cap = cap;
+    }
+}
+
+static void add_number(text *t, double x)
+{
+    if (isnan(x))
+        addf(t, "\tnan");
+    else
+        addf(t, "\t%.17g", x);
+}
+
+/* The columns fixed by the point (point .. tmax), without a newline. */
+static void add_key(text *t, size_t i, const bkf_simulate_spec *sim)
+{
+    addf(t, "%zu\t%s\t%" PRIu64, i, sim->init ? sim->init : "uniform", sim->seed);
+    add_number(t, sim->model.gamma);
+    add_number(t, sim->model.c);
+    add_number(t, sim->model.nu);
+    add_number(t, sim->model.S);
+    add_number(t, sim->tmax);
+}
+
+char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
+{
+    plan p;
+    if (make_plan(sp, "", &p, err)) return NULL;
+    const bkf_simulate_spec *b = &sp->sim;
+    static const char *const steppers[] = {"rk8pd", "rkck", "rkf45", "etdrk4"};
+    char g[32], c[32], nu[32], S[32], tm[32], tol[32], fi[32], lv[32];
+    text t = {0};
+    addf(&t, "# bkfront %s sweep: regime of a direct simulation at %zu points\n",
+         BKF_VERSION_STRING, p.count);
+    /* The definition: every key that changes a row, and nothing that does
+     * not (threads, task, the command line), so that --resume and --merge
+     * recognise the same sweep however it was run. */
+    addf(&t,
+         "# sweep: x %s; y %s; zip %d; seeds %zu; inits %s; base: gamma %s c %s nu %s S %s N %zu "
+         "model %s tmax %s tol %s init %s seed %" PRIu64 " stepper %s dealias %d filter %s level "
+         "%s frames %zu; version %s\n",
+         sp->x ? sp->x : "-", sp->y ? sp->y : "-", sp->zip, sp->seeds.count,
+         sp->inits ? sp->inits : "-", bkf_format_number(b->model.gamma, g, sizeof g),
+         bkf_format_number(b->model.c, c, sizeof c), bkf_format_number(b->model.nu, nu, sizeof nu),
+         bkf_format_number(b->model.S, S, sizeof S), b->model.N, b->chain ? "chain" : "continuum",
+         bkf_format_number(b->tmax, tm, sizeof tm), bkf_format_number(b->tol, tol, sizeof tol),
+         b->init ? b->init : "uniform", b->seed, steppers[b->stepper & 3], b->dealias,
+         bkf_format_number(b->filter, fi, sizeof fi), bkf_format_number(b->level, lv, sizeof lv),
+         b->frames, BKF_VERSION_STRING);
+    if (sp->seeds.count) {
+        addf(&t, "# seeds:");
+        for (size_t k = 0; k < sp->seeds.count; k++) addf(&t, " %.0f", sp->seeds.values[k]);
+        addf(&t, "\n");
+    }
+    addf(&t, "# points: %zu\n", p.count);
+    addf(&t, "# regime: continuous_slip, global_oscillation, period_doubled_pacemakers, "
+             "propagating_fronts, irregular (bkfront simulate's, over the last half of the run); "
+             "none when the run failed (status)\n");
+    for (size_t k = 0; k < NCOLS; k++) addf(&t, "%s%s", k ? "\t" : "", column_names[k]);
+    addf(&t, "\n");
+    plan_free(&p);
+    if (t.failed) {
+        free(t.s);
+        bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        return NULL;
+    }
+    return t.s;
+}
+
+static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error *err)
+{
+    bkf_simulate_spec sim;
+    if (point_spec(sp, p, i, &sim, "", err)) return NULL;
+    bkf_simulate_outcome o;
+    bkf_error e;
+    int s = bkf_simulate_outcome_of(&sim, &o, &e);
+    if (s && !bkf_status_is_numerical(s)) {
+        bkf_error_set(err, s, "point %zu: %s", i, e.message);
+        return NULL;
+    }
+    text t = {0};
+    add_key(&t, i, &sim);
+    if (s) {
+        addf(&t, "\t%zu\tnone", sim.model.N);
+        for (size_t k = NKEYCOLS + 2; k < NCOLS - 1; k++) addf(&t, "\tnan");
+    } else {
+        const bkf_measure_summary *m = &o.summary;
+        addf(&t, "\t%zu\t%s\t%zu\t%zu\t%zu", o.N, bkf_regime_name(m->regime), m->fronts_end,
+             m->fronts_min, m->fronts_max);
+        add_number(&t, m->speed);
+        add_number(&t, m->speed_err);
+        add_number(&t, m->period);
+        add_number(&t, m->period_err);
+        addf(&t, "\t%zu", m->period_multiplicity);
+        add_number(&t, o.period_ref > 0 ? o.period_ref : NAN);
+        add_number(&t, m->mean);
+        add_number(&t, m->variance);
+        add_number(&t, m->std_max);
+        add_number(&t, m->psi_min);
+        add_number(&t, m->psi_max);
+        add_number(&t, o.t_end);
+        addf(&t, "\t%zu", o.steps);
+    }
+    addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
+    if (t.failed) {
+        free(t.s);
+        bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        return NULL;
+    }
+    return t.s;
+}
+
+char *bkf_sweep_row(const bkf_sweep_spec *sp, size_t index, bkf_error *err)
+{
+    plan p;
+    if (make_plan(sp, "", &p, err)) return NULL;
+    char *r = NULL;
+    if (index >= p.count)
+        bkf_error_set(err, BKF_EINPUT, "point %zu: the sweep has %zu points", index, p.count);
+    else
+        r = row_of(sp, &p, index, err);
+    plan_free(&p);
+    return r;
+}
+
+int bkf_sweep_run(const bkf_sweep_spec *sp, const unsigned char *done, bkf_sweep_row_fn fn,
+                  void *data, bkf_error *err)
+{
+    plan p;
+    int s = make_plan(sp, "", &p, err);
+    if (s) return s;
+    size_t of = sp->of ? sp->of : 1, ntodo = 0, finished = 0;
+    size_t *todo = malloc((p.count ? p.count : 1) * sizeof *todo);
+    if (!todo) {
+        plan_free(&p);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    for (size_t i = 0; i < p.count; i++)
+        if (i % of == sp->task && !(done && done[i])) todo[ntodo++] = i;
+    int status = BKF_OK;
+    bkf_error first = {0};
+    /* Dynamic: run times vary by orders of magnitude near thresholds; a
+     * point is handed out when a thread is free, and its row depends on
+     * the point alone. */
+    int nthreads = 1;
+#ifdef _OPENMP
+    nthreads = sp->threads ? (int)sp->threads : omp_get_max_threads();
+#endif
+    (void)nthreads;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads)
+    for (size_t k = 0; k < ntodo; k++) {
+        int stop;
+#pragma omp atomic read
+        stop = status;
+        if (stop || (sp->cancel && *sp->cancel)) continue;
+        bkf_error e = {0};
+        char *row = row_of(sp, &p, todo[k], &e);
+#pragma omp critical(bkf_sweep_rows)
+        {
+            int r = row ? BKF_OK : e.status;
+            if (row && !status) r = fn(todo[k], row, data, &e);
+            if (r && !status) {
+                first = e;
+#pragma omp atomic write
+                status = r;
+            }
+            if (row && !r) {
+                finished++;
+                if (sp->progress) sp->progress(finished, ntodo, sp->data);
+            }
+        }
+        free(row);
+    }
+    if (!status && sp->cancel && *sp->cancel)
+        bkf_error_set(&first, status = BKF_ECANCELED, "canceled with %zu of %zu points done",
+                      finished, ntodo);
+    if (status) bkf_error_set(err, status, "%s", first.message);
+    free(todo);
+    plan_free(&p);
+    return status;
+}
+
+/* ------------------------------------------------------------ the table */
+
+struct bkf_sweep_table {
+    char *path;
+    int fd;
+    size_t count, rows;
+    unsigned char *done;
+};
+
+/* A table read back: its head (everything up to and including the column
+ * names) and its valid rows. */
+typedef struct {
+    char *data;
+    size_t size;
+    size_t head_len;
+    size_t points;       /* from "# points: P" */
+    size_t nrows;
+    struct row {
+        size_t index;
+        const char *line; /* inside data, with its '\n' */
+        size_t len;
+    } *rows;
+} table_text;
+
+static void table_text_free(table_text *t)
+{
+    free(t->data);
+    free(t->rows);
+    memset(t, 0, sizeof *t);
+}
+
+static int read_all(const char *path, char **data, size_t *size, bkf_error *err)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return bkf_error_set(err, errno == ENOENT ? BKF_EINPUT : BKF_EIO, "%s: %s", path,
+                                 strerror(errno));
+    size_t cap = 1 << 16, len = 0;
+    char *buf = malloc(cap);
+    for (size_t got; buf && (got = fread(buf + len, 1, cap - len - 1, f)) > 0;) {
+        len += got;
+        if (cap - len < 2) {
+            char *g = realloc(buf, cap *= 2);
+            if (!g) {
+                free(buf);
+                buf = NULL;
+            }
+            buf = g;
+        }
+    }
+    int bad = ferror(f);
+    fclose(f);
+    if (!buf) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (bad) {
+        free(buf);
+        return bkf_error_set(err, BKF_EIO, "%s: read error", path);
+    }
+    buf[len] = '\0';
+    *data = buf;
+    *size = len;
+    return BKF_OK;
+}
+
+/* Reads `path`: the head ends at the first line not starting with '#'
+ * (the column names); a row is kept when it is a whole line with NCOLS
+ * fields and a point index below the head's count, seen first, and (with
+ * `key`) its key columns are those of its point. */
+static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key_spec,
+                      const plan *key_plan, bkf_error *err)
+{
+    memset(t, 0, sizeof *t);
+    int s = read_all(path, &t->data, &t->size, err);
+    if (s) return s;
+    char *p = t->data, *end = t->data + t->size;
+    while (p < end && *p == '#') {
+        if (strncmp(p, "# points: ", 10) == 0) t->points = strtoul(p + 10, NULL, 10);
+        char *nl = memchr(p, '\n', (size_t)(end - p));
+        p = nl ? nl + 1 : end;
+    }
+    char *nl = p < end ? memchr(p, '\n', (size_t)(end - p)) : NULL;
+    if (!nl || !t->points) {
+        table_text_free(t);
+        return bkf_error_set(err, BKF_EINPUT, "%s: not a table of bkfront sweep", path);
+    }
+    t->head_len = (size_t)(nl + 1 - t->data);
+    unsigned char *seen = calloc(t->points, 1);
+    t->rows = malloc(t->points * sizeof *t->rows);
+    if (!seen || !t->rows) {
+        free(seen);
+        table_text_free(t);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    for (p = nl + 1; p < end;) {
+        nl = memchr(p, '\n', (size_t)(end - p));
+        if (!nl) break; /* a partial last line: a write that never finished */
+        size_t len = (size_t)(nl + 1 - p), tabs = 0;
+        for (char *q = p; q < nl; q++) tabs += *q == '\t';
+        char *after;
+        errno = 0;
+        unsigned long long idx = strtoull(p, &after, 10);
+        int ok = tabs == NCOLS - 1 && after != p && *after == '\t' && !errno &&
+                 idx < t->points && !seen[idx];
+        if (ok && key_spec) {
+            bkf_simulate_spec sim;
+            text k = {0};
+            ok = !point_spec(key_spec, key_plan, (size_t)idx, &sim, "", NULL);
+            if (ok) add_key(&k, (size_t)idx, &sim);
+            ok = ok && !k.failed && len > k.len && strncmp(p, k.s, k.len) == 0 && p[k.len] == '\t';
+            free(k.s);
+        }
+        if (ok) {
+            seen[idx] = 1;
+            t->rows[t->nrows++] = (struct row){(size_t)idx, p, len};
+        }
+        p = nl + 1;
+    }
+    free(seen);
+    return BKF_OK;
+}
+
+static int by_index(const void *a, const void *b)
+{
+    size_t x = ((const struct row *)a)->index, y = ((const struct row *)b)->index;
+    return (x > y) - (x < y);
+}
+
+/* head and rows (sorted or as they are) to `path`, atomically. */
+static int table_write(const char *path, const char *head, size_t head_len, struct row *rows,
+                       size_t nrows, int sort, bkf_error *err)
+{
+    if (sort) qsort(rows, nrows, sizeof *rows, by_index);
+    bkf_io_atomic *f = bkf_io_atomic_open(path, err);
+    if (!f) return err ? err->status : BKF_EIO;
+    FILE *out = bkf_io_atomic_stream(f);
+    fwrite(head, 1, head_len, out);
+    for (size_t i = 0; i < nrows; i++) fwrite(rows[i].line, 1, rows[i].len, out);
+    return bkf_io_atomic_commit(f, err);
+}
+
+int bkf_sweep_table_open(const char *path, const bkf_sweep_spec *sp, int resume,
+                         bkf_sweep_table **table, bkf_error *err)
+{
+    *table = NULL;
+    if (!path) return bkf_error_set(err, BKF_EINPUT, "no table path given");
+    char *head = bkf_sweep_header(sp, err);
+    if (!head) return err ? err->status : BKF_ENOMEM;
+    plan p;
+    int s = make_plan(sp, "", &p, err);
+    bkf_sweep_table *t = s ? NULL : calloc(1, sizeof *t);
+    if (!s && t) {
+        t->count = p.count;
+        t->fd = -1;
+        t->path = strdup(path);
+        t->done = calloc(p.count ? p.count : 1, 1);
+    }
+    if (!s && (!t || !t->path || !t->done)) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    table_text old = {0};
+    int have_old = 0;
+    if (!s && resume) {
+        bkf_error e;
+        int r = table_read(path, &old, sp, &p, &e);
+        if (!r) {
+            have_old = 1;
+            if (old.head_len != strlen(head) || memcmp(old.data, head, old.head_len) != 0)
+                s = bkf_error_set(err, BKF_EINPUT,
+                                  "--resume: %s is the table of another sweep (its definition "
+                                  "line differs)",
+                                  path);
+        } else if (access(path, F_OK) == 0) {
+            s = bkf_error_set(err, BKF_EINPUT, "--resume: %s", e.message);
+        }
+    }
+    if (!s) {
+        /* a new table, or the old one without what cannot be trusted */
+        s = table_write(path, head, strlen(head), old.rows, have_old ? old.nrows : 0, 0, err);
+        for (size_t i = 0; !s && have_old && i < old.nrows; i++) t->done[old.rows[i].index] = 1;
+        if (!s && have_old) t->rows = old.nrows;
+    }
+    if (!s) {
+        t->fd = open(path, O_WRONLY | O_APPEND | O_CLOEXEC);
+        if (t->fd < 0) s = bkf_error_set(err, BKF_EIO, "%s: %s", path, strerror(errno));
+    }
+    table_text_free(&old);
+    plan_free(&p);
+    free(head);
+    if (s) {
+        if (t) bkf_sweep_table_close(t, 0, NULL);
+        return s;
+    }
+    *table = t;
+    return BKF_OK;
+}
+
+const unsigned char *bkf_sweep_table_done(const bkf_sweep_table *t) { return t ? t->done : NULL; }
+
+size_t bkf_sweep_table_rows(const bkf_sweep_table *t) { return t ? t->rows : 0; }
+
+int bkf_sweep_table_append(bkf_sweep_table *t, size_t index, const char *row, bkf_error *err)
+{
+    if (!t || index >= t->count || !row)
+        return bkf_error_set(err, BKF_EINPUT, "sweep table: no such point %zu", index);
+    /* one write of the whole line (O_APPEND: never interleaved), then to
+     * the disk: a finished row survives a crash or kill -9 that follows */
+    size_t len = strlen(row), off = 0;
+    while (off < len) {
+        ssize_t n = write(t->fd, row + off, len - off);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) return bkf_error_set(err, BKF_EIO, "%s: %s", t->path, strerror(errno));
+        off += (size_t)n;
+    }
+    if (fsync(t->fd) != 0 && errno != EINVAL)
+        return bkf_error_set(err, BKF_EIO, "%s: %s", t->path, strerror(errno));
+    t->done[index] = 1;
+    t->rows++;
+    return BKF_OK;
+}
+
+int bkf_sweep_table_close(bkf_sweep_table *t, int sort, bkf_error *err)
+{
+    if (!t) return BKF_OK;
+    int s = BKF_OK;
+    if (t->fd >= 0 && close(t->fd) != 0)
+        s = bkf_error_set(err, BKF_EIO, "%s: %s", t->path, strerror(errno));
+    if (!s && sort) {
+        table_text tt;
+        s = table_read(t->path, &tt, NULL, NULL, err);
+        if (!s) s = table_write(t->path, tt.data, tt.head_len, tt.rows, tt.nrows, 1, err);
+        table_text_free(&tt);
+    }
+    free(t->path);
+    free(t->done);
+    free(t);
+    return s;
+}
+
+int bkf_sweep_merge(const char *const *inputs, size_t n, const char *out, size_t *missing,
+                    bkf_error *err)
+{
+    if (!n || !inputs || !out) return bkf_error_set(err, BKF_EINPUT, "merge: no tables given");
+    table_text *t = calloc(n, sizeof *t);
+    if (!t) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    int s = BKF_OK;
+    size_t total = 0;
+    for (size_t k = 0; !s && k < n; k++) {
+        s = table_read(inputs[k], &t[k], NULL, NULL, err);
+        if (!s && k && (t[k].head_len != t[0].head_len ||
+                        memcmp(t[k].data, t[0].data, t[0].head_len) != 0))
+            s = bkf_error_set(err, BKF_EINPUT,
+                              "merge: %s is the table of another sweep than %s (definitions "
+                              "differ)",
+                              inputs[k], inputs[0]);
+        if (!s) total += t[k].nrows;
+    }
+    struct row *all = s ? NULL : malloc((total ? total : 1) * sizeof *all);
+    if (!s && !all) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    size_t m = 0;
+    unsigned char *seen = s ? NULL : calloc(t[0].points, 1);
+    if (!s && !seen) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    /* a point computed twice (a task run again) is one row: rows are a
+     * function of the point, so either copy is the row */
+    for (size_t k = 0; !s && k < n; k++)
+        for (size_t i = 0; i < t[k].nrows; i++)
+            if (!seen[t[k].rows[i].index]) {
+                seen[t[k].rows[i].index] = 1;
+                all[m++] = t[k].rows[i];
+            }
+    if (!s) s = table_write(out, t[0].data, t[0].head_len, all, m, 1, err);
+    if (!s && missing) *missing = t[0].points - m;
+    free(seen);
+    free(all);
+    for (size_t k = 0; k < n; k++) table_text_free(&t[k]);
+    free(t);
+    return s;
+}
