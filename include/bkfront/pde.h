@@ -82,9 +82,11 @@
  * step, its embedded estimate against the same tol.  Eighth order: at tol
  * 1e-9 a moving front takes steps of 0.025 where etdrk4 takes 0.003 and
  * rk8pd is capped at 3/omega_max (0.008 at N 8192), the same number of
- * steps from N 512 to 8192.  Beyond (N 16384 at c 0.3, S 20) the
- * rounding-level forcing of the fastest modes, rotated by exp(-L tau),
- * starts to shorten the steps.  A steady state of the semi-discrete system
+ * steps from N 512 to 65536: the modes that turn by more than 3.5 pi a
+ * step feel only their own branch of the explicit term (its coupling
+ * of the two branches, oscillating at 2 w_k, resonated in rk8pd's stages
+ * and grew them from rounding; see src/simulation/pde_etd.c), at the
+ * price of two more transform pairs per evaluation.  A steady state of the semi-discrete system
  * is kept to tol only (the stages rotate N(u) away from -L u), so in a
  * travelling wave's frame etdrk4's steps are longer.
  *

@@ -113,7 +113,7 @@ int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *o
     if (!(o->tmax > 0 && o->tmax <= BKF_CHECK_TMAX_MAX))
         return bkf_error_set(err, BKF_EINPUT, "tmax: %g is outside (0, %g]", o->tmax,
                              BKF_CHECK_TMAX_MAX);
-    if ((unsigned)o->stepper > BKF_PDE_ETDRK4)
+    if ((unsigned)o->stepper > BKF_PDE_LAWSON8)
         return bkf_error_set(err, BKF_EINPUT, "stepper: %d is not a bkf_pde_stepper",
                              (int)o->stepper);
     if (!tol_ok(o->tol))
@@ -808,7 +808,8 @@ _Static_assert(sizeof(bkf_check_frame) == sizeof(int), "bkf_check_frame is not i
 _Static_assert(sizeof(bkf_check_grid) == sizeof(int), "bkf_check_grid is not int-sized");
 
 /* Indexed by bkf_pde_stepper, bkf_check_frame and bkf_check_grid. */
-static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", NULL};
+static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8",
+                                             NULL};
 static const char *const frame_names[] = {"moving", "lab", NULL};
 static const char *const grid_names[] = {"auto", "uniform", "mapped", NULL};
 
@@ -868,8 +869,9 @@ const bkf_option bkf_check_keys[] = {
     {.name = "stepper", .type = BKF_OPT_CHOICE, .offset = OPT(stepper), .choices = stepper_names,
      .form = "S", .shown_default = "etdrk4",
      .help = "etdrk4 (exponential, the wave part of every mode exact,\n"
-             "steps set by the physics), or rk8pd, rkck, rkf45 (explicit,\n"
-             "steps capped by the fastest mode ~ 1/N)"},
+             "steps set by the physics), lawson8 (the same with rk8pd's\n"
+             "order 8), or rk8pd, rkck, rkf45 (explicit, steps capped by\n"
+             "the fastest mode ~ 1/N)"},
     {.name = "rel-tol", .type = BKF_OPT_DOUBLE, .offset = OPT(rel_tol),
      .flags = BOUNDED | BKF_OPT_MIN_OPEN | BKF_OPT_MAX_OPEN, .min = 0, .max = 1, .form = "R",
      .shown_default = "1e-06",

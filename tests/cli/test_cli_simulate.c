@@ -229,6 +229,16 @@ TEST(cli_check_exponential_and_explicit_agree)
     CHECK(field(a.out, 0, "N", &Na) && field(b.out, 0, "N", &Nb) && Na == Nb);
     CHECK_MSG(fabs(va - vb) < 1e-8 * vb, "v_meas %.15g (etdrk4) vs %.15g (rk8pd)", va, vb);
     bkf_test_note("n = 7 on N = %.0f: v_meas etdrk4 - rk8pd = %.2g relative", Na, (va - vb) / vb);
+    /* lawson8 is offered too and reaches the run (lab frame, its tol 1e-9) */
+    sim_result c = SIM("check", "--n", "7", "--tmax", "60", "--stepper", "lawson8", "--frame",
+                       "lab", "--no-progress");
+    CHECK_MSG(c.code == 0, "exit %d: %s", c.code, c.err);
+    CHECK(strstr(c.out, "stepper lawson8") && strstr(c.out, "frame: lab"));
+    double vc, sc;
+    CHECK(field(c.out, 0, "v_meas", &vc) && field(c.out, 0, "stable", &sc) && sc == 1);
+    CHECK_MSG(fabs(vc - vb) < 1e-8 * vb, "v_meas %.15g (lawson8) vs %.15g (rk8pd)", vc, vb);
+    bkf_test_note("v_meas lawson8 - rk8pd = %.2g relative", (vc - vb) / vb);
+    sim_free(&c);
     sim_free(&a);
     sim_free(&b);
 }

@@ -430,6 +430,32 @@ TEST(run_plan_computes_nothing)
     free(dir);
 }
 
+/* The stepper a scene names reaches the command it plans, for both kinds
+ * that take one; a name outside the list is refused with the list. */
+TEST(run_plan_passes_the_stepper)
+{
+    char *dir = temp_dir();
+    char *path = write_scene(dir, MODEL "[spacetime s]\ninit = front:n=3\nstepper = lawson8\n"
+                                        "[check c]\nn = 3\nstepper = lawson8\n");
+    char outdir[512];
+    snprintf(outdir, sizeof outdir, "%s/out", dir);
+    run_result *r = run_cli((char *[]){"run", "--plan", "--out", outdir, path, NULL});
+    CHECK_MSG(r->code == 0, "exit %d: %s", r->code, r->err);
+    const char *sim = strstr(r->out, "simulate --gamma"), *chk = strstr(r->out, "check --gamma");
+    CHECK_MSG(sim && chk, "plan: %s", r->out);
+    if (sim && chk) {
+        const char *sim_end = strchr(sim, '\n'), *chk_end = strchr(chk, '\n');
+        const char *s1 = strstr(sim, "--stepper lawson8"), *s2 = strstr(chk, "--stepper lawson8");
+        CHECK_MSG(s1 && (!sim_end || s1 < sim_end), "plan: %s", r->out);
+        CHECK_MSG(s2 && (!chk_end || s2 < chk_end), "plan: %s", r->out);
+    }
+    free(r);
+    free(path);
+    parse_bad(MODEL "[spacetime s]\nstepper = lawson9\n", 7, "etdrk4, lawson8");
+    remove_tree(dir);
+    free(dir);
+}
+
 TEST(run_refuses_a_bad_scene_with_its_line)
 {
     char *dir = temp_dir();
