@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <pthread.h>
 #include <inttypes.h>
 #include <stdarg.h>
 #include <math.h>
@@ -50,6 +51,38 @@ const bkf_option bkf_sweep_options[] = {
      .help = "number of tasks the points are split into, in [1, 1e6]"},
 };
 const size_t bkf_sweep_noptions = sizeof bkf_sweep_options / sizeof bkf_sweep_options[0];
+
+/* The simulation's keys apply to a sweep spec as they are: sim is its
+ * first member. */
+_Static_assert(offsetof(bkf_sweep_spec, sim) == 0, "sim must be the sweep spec's first member");
+
+/* Room for the sweep's keys and the simulation's. */
+#define KEYS_MAX 64
+static bkf_option all_keys[KEYS_MAX];
+static size_t nall_keys;
+static pthread_once_t keys_once = PTHREAD_ONCE_INIT;
+
+static void build_keys(void)
+{
+    static const char *const refused[] = {"spacetime", "spacetime-format", "snapshots",
+                                          "snapshot-count"};
+    size_t n = 0;
+    for (size_t i = 0; i < bkf_sweep_noptions && n < KEYS_MAX; i++) all_keys[n++] = bkf_sweep_options[i];
+    for (size_t i = 0; i < bkf_simulate_noptions && n < KEYS_MAX; i++) {
+        int skip = 0;
+        for (size_t k = 0; k < sizeof refused / sizeof *refused; k++)
+            skip |= strcmp(bkf_simulate_options[i].name, refused[k]) == 0;
+        if (!skip) all_keys[n++] = bkf_simulate_options[i];
+    }
+    nall_keys = n;
+}
+
+const bkf_option *bkf_sweep_keys(size_t *count)
+{
+    pthread_once(&keys_once, build_keys);
+    if (count) *count = nall_keys;
+    return all_keys;
+}
 
 bkf_sweep_spec bkf_sweep_spec_default(void)
 {
@@ -495,6 +528,42 @@ int bkf_sweep_run(const bkf_sweep_spec *sp, const unsigned char *done, bkf_sweep
     free(todo);
     plan_free(&p);
     return status;
+}
+
+/* The rows of bkf_sweep_write, by point. */
+typedef struct {
+    char **rows;
+} collected;
+
+static int collect(size_t index, const char *row, void *data, bkf_error *err)
+{
+    collected *c = data;
+    if (!(c->rows[index] = strdup(row))) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    return BKF_OK;
+}
+
+int bkf_sweep_write(const bkf_sweep_spec *sp, FILE *out, bkf_error *err)
+{
+    if (!sp || !out) return bkf_error_set(err, BKF_EINPUT, "no sweep spec or stream given");
+    int s = bkf_sweep_check(sp, "", err);
+    if (s) return s;
+    char *head = bkf_sweep_header(sp, err);
+    if (!head) return err ? err->status : BKF_ENOMEM;
+    size_t count = bkf_sweep_count(sp);
+    collected c = {calloc(count ? count : 1, sizeof *c.rows)};
+    if (!c.rows) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (!s) s = bkf_sweep_run(sp, NULL, collect, &c, err);
+    if (!s) {
+        fputs(head, out);
+        size_t of = sp->of ? sp->of : 1;
+        for (size_t i = 0; i < count; i++)
+            if (i % of == sp->task && c.rows[i]) fputs(c.rows[i], out);
+        if (ferror(out)) s = bkf_error_set(err, BKF_EIO, "sweep: write error");
+    }
+    for (size_t i = 0; c.rows && i < count; i++) free(c.rows[i]);
+    free(c.rows);
+    free(head);
+    return s;
 }
 
 /* ------------------------------------------------------------ the table */
