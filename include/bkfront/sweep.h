@@ -50,6 +50,11 @@ typedef struct {
     const char *inits;  /* "SPEC;SPEC;...", NULL: sim.init */
     size_t threads;     /* 0: every core (OpenMP's default) */
     size_t task, of;    /* this task's points: i % of == task; of 0: all */
+    double tmax_budget; /* > 0: a run goes on past tmax until its regime
+                           settles, doubling its length until two successive
+                           windows classify alike or the next doubling would
+                           pass this; a column says which (settled, budget).
+                           0: every run stops at tmax */
     /* Not keys: what the caller supplies for a run it may stop or watch. */
     const volatile sig_atomic_t *cancel; /* raised: no new point starts, the
                                             ones in flight stop, BKF_ECANCELED */

@@ -49,6 +49,15 @@ const bkf_option bkf_sweep_options[] = {
     {.name = "of", .type = BKF_OPT_COUNT, .offset = SPEC(of), .flags = BKF_OPT_MIN | BKF_OPT_MAX,
      .min = 1, .max = 1000000, .form = "K", .shown_default = "1",
      .help = "number of tasks the points are split into, in [1, 1e6]"},
+    {.name = "tmax-budget", .type = BKF_OPT_DOUBLE, .offset = SPEC(tmax_budget),
+     .flags = BKF_OPT_MIN | BKF_OPT_MAX | BKF_OPT_MIN_OPEN, .min = 0, .max = BKF_SIMULATE_TMAX_MAX,
+     .form = "T", .shown_default = "none (every run stops at tmax)",
+     .help = "let a run go on until its regime settles: its length doubles\n"
+             "(tmax, 2 tmax, 4 tmax, ...; each a run from t = 0) until the\n"
+             "regimes of two successive windows [t/2, t] and [t, 2t] agree\n"
+             "(and their front counts, for fronts and pacemakers), or the\n"
+             "next doubling would pass T; column settled says which\n"
+             "(settled, budget); T >= tmax, in (0, 1e6]"},
 };
 const size_t bkf_sweep_noptions = sizeof bkf_sweep_options / sizeof bkf_sweep_options[0];
 
@@ -278,6 +287,8 @@ int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err
     if (sp->task >= of)
         return bkf_error_set(err, BKF_EINPUT, "%stask: %zu is not in [0, %zu] (%sof %zu)", prefix,
                              sp->task, of - 1, prefix, of);
+    if (!(sp->tmax_budget >= 0))
+        return bkf_error_set(err, BKF_EINPUT, "%stmax-budget: not a number > 0", prefix);
     plan p;
     int s = make_plan(sp, prefix, &p, err);
     if (s) return s;
@@ -287,6 +298,12 @@ int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err
         bkf_simulate_spec sim;
         s = point_spec(sp, &p, i, &sim, prefix, err);
         if (!s) s = bkf_simulate_check(&sim, prefix, err);
+        if (!s && sp->tmax_budget > 0 && sp->tmax_budget < sim.tmax) {
+            char b[32], m[32];
+            s = bkf_error_set(err, BKF_EINPUT, "%stmax-budget: %s is below tmax %s of point %zu",
+                              prefix, bkf_format_number(sp->tmax_budget, b, sizeof b),
+                              bkf_format_number(sim.tmax, m, sizeof m), i);
+        }
     }
     plan_free(&p);
     return s;
@@ -397,6 +414,10 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
          b->init ? b->init : "uniform", b->seed, steppers[b->stepper & 3], b->dealias,
          bkf_format_number(b->filter, fi, sizeof fi), bkf_format_number(b->level, lv, sizeof lv),
          b->frames, BKF_VERSION_STRING);
+    if (sp->tmax_budget > 0) {
+        char tb[32];
+        addf(&t, "# settle: tmax-budget %s\n", bkf_format_number(sp->tmax_budget, tb, sizeof tb));
+    }
     if (sp->seeds.count) {
         addf(&t, "# seeds:");
         for (size_t k = 0; k < sp->seeds.count; k++) addf(&t, " %.0f", sp->seeds.values[k]);
@@ -406,7 +427,10 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
     addf(&t, "# regime: continuous_slip, global_oscillation, period_doubled_pacemakers, "
              "propagating_fronts, irregular (bkfront simulate's, over the last half of the run); "
              "none when the run failed (status)\n");
-    for (size_t k = 0; k < NCOLS; k++) addf(&t, "%s%s", k ? "\t" : "", column_names[k]);
+    for (size_t k = 0; k < NCOLS; k++) {
+        if (k == NCOLS - 1 && sp->tmax_budget > 0) addf(&t, "\tsettled");
+        addf(&t, "%s%s", k ? "\t" : "", column_names[k]);
+    }
     addf(&t, "\n");
     plan_free(&p);
     if (t.failed) {
@@ -424,6 +448,26 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
     bkf_simulate_outcome o;
     bkf_error e;
     int s = bkf_simulate_outcome_of(&sim, &o, &e);
+    /* Long transients: the run is made twice as long (from t = 0: a row
+     * stays a function of its point) while the classification of the last
+     * window differs from the one before it. */
+    const char *settled = "budget";
+    for (double tmax = sim.tmax; !s && sp->tmax_budget > 0 && 2 * tmax <= sp->tmax_budget;) {
+        bkf_simulate_spec longer = sim;
+        longer.tmax = tmax *= 2;
+        bkf_simulate_outcome next;
+        s = bkf_simulate_outcome_of(&longer, &next, &e);
+        if (s) break;
+        const bkf_measure_summary *a = &o.summary, *b = &next.summary;
+        int counted = b->regime == BKF_REGIME_FRONTS ||
+                      b->regime == BKF_REGIME_PACEMAKERS;
+        int same = a->regime == b->regime && (!counted || a->fronts_end == b->fronts_end);
+        o = next;
+        if (same) {
+            settled = "settled";
+            break;
+        }
+    }
     if (s && !bkf_status_is_numerical(s)) {
         bkf_error_set(err, s, "point %zu: %s", i, e.message);
         return NULL;
@@ -433,6 +477,7 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
     if (s) {
         addf(&t, "\t%zu\tnone", sim.model.N);
         for (size_t k = NKEYCOLS + 2; k < NCOLS - 1; k++) addf(&t, "\tnan");
+        if (sp->tmax_budget > 0) addf(&t, "\tnone");
     } else {
         const bkf_measure_summary *m = &o.summary;
         addf(&t, "\t%zu\t%s\t%zu\t%zu\t%zu", o.N, bkf_regime_name(m->regime), m->fronts_end,
@@ -450,6 +495,7 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
         add_number(&t, m->psi_max);
         add_number(&t, o.t_end);
         addf(&t, "\t%zu", o.steps);
+        if (sp->tmax_budget > 0) addf(&t, "\t%s", settled);
     }
     addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
     if (t.failed) {
@@ -629,8 +675,8 @@ static int read_all(const char *path, char **data, size_t *size, bkf_error *err)
 }
 
 /* Reads `path`: the head ends at the first line not starting with '#'
- * (the column names); a row is kept when it is a whole line with NCOLS
- * fields and a point index below the head's count, seen first, and (with
+ * (the column names); a row is kept when it is a whole line with as many
+ * fields as there are names and a point index below the head's count, seen first, and (with
  * `key`) its key columns are those of its point. */
 static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key_spec,
                       const plan *key_plan, bkf_error *err)
@@ -650,6 +696,8 @@ static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key
         return bkf_error_set(err, BKF_EINPUT, "%s: not a table of bkfront sweep", path);
     }
     t->head_len = (size_t)(nl + 1 - t->data);
+    size_t names_tabs = 0;
+    for (char *q = p; q < nl; q++) names_tabs += *q == '\t';
     unsigned char *seen = calloc(t->points, 1);
     t->rows = malloc(t->points * sizeof *t->rows);
     if (!seen || !t->rows) {
@@ -665,7 +713,7 @@ static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key
         char *after;
         errno = 0;
         unsigned long long idx = strtoull(p, &after, 10);
-        int ok = tabs == NCOLS - 1 && after != p && *after == '\t' && !errno &&
+        int ok = tabs == names_tabs && after != p && *after == '\t' && !errno &&
                  idx < t->points && !seen[idx];
         if (ok && key_spec) {
             bkf_simulate_spec sim;
