@@ -1,14 +1,14 @@
-# A regime map (bkfront sweep over nu and gamma): left, the regime of every
-# run, one mark per initial state and seed around its grid point (states
-# side by side, seeds one above the other); right, the fronts at the end
-# of each run.  The global oscillation's Floquet boundaries (second file,
-# columns gamma, nu, kind: period_doubling or long_wave, e.g. from bkfront
-# floquet --diagram at each gamma, grouped by kind) are drawn over both
-# panels.
+# A regime map (a scene's [sweep], bkfront sweep over nu and gamma): left,
+# the regime of every run, one mark per initial state and seed around its
+# grid point (states side by side, seeds one above the other); right, the
+# fronts at the end of each run.  files: the sweep's table, then (with the
+# sweep's thresholds key) one table of bkfront floquet --diagram per gamma,
+# whose gamma is the same word of values ("map g1 g2 ..."): the global
+# oscillation's period-doubling (dashed) and long-wave (solid) boundaries,
+# drawn over both panels.
 minwidth = 1400
 load plotdir.'/common.gp'
 f = word(files, 1)
-th = (nfiles > 1 ? word(files, 2) : '')
 regime(s) = (s eq 'continuous_slip' ? 0 : s eq 'global_oscillation' ? 1 : \
              s eq 'period_doubled_pacemakers' ? 2 : s eq 'propagating_fronts' ? 3 : \
              s eq 'irregular' ? 4 : 5)
@@ -17,36 +17,46 @@ colour(r) = (r == 0 ? 0x7f7f7f : r == 1 ? 0x1f77b4 : r == 2 ? 0xff7f0e : r == 3 
 stats f using 'nu' nooutput name 'NU'
 stats f using 'gamma' nooutput name 'G'
 stats f using 'seed' nooutput name 'SEED'
+# the initial states, in the order of the table (at most 4 told apart)
 stats f using 'point' nooutput name 'P'
 # the grid's spacing: mark offsets stay inside one cell
-dnu = (NU_max - NU_min) / 12.0
-dg = (G_max - G_min) / 12.0
+dnu = (NU_max > NU_min ? (NU_max - NU_min) / 12.0 : 0.01)
+dg = (G_max > G_min ? (G_max - G_min) / 12.0 : 0.1)
 nseed = SEED_max - SEED_min + 1
 xoff(s) = (strstrt(s, 'oscillation') > 0 ? 0.5 : -0.5) * dnu
 yoff(k) = (nseed > 1 ? (k - SEED_min) / (nseed - 1.0) - 0.5 : 0) * dg
+# the boundaries of every gamma, one curve per kind
+$PD << EOD
+EOD
+$LW << EOD
+EOD
+if (nfiles > 1) {
+    set table $PD
+    plot for [i = 2:nfiles] word(files, i) using 'nu_from':(real(word(values, i))) \
+        with table if (strcol('from_kind') eq 'period_doubling')
+    set table $LW
+    plot for [i = 2:nfiles] word(files, i) using 'nu_from':(real(word(values, i))) \
+        with table if (strcol('from_kind') eq 'long_wave')
+    unset table
+}
 set xrange [NU_min - 1.5 * dnu : NU_max + 1.5 * dnu]
 set yrange [G_min - 1.5 * dg : G_max + 1.5 * dg]
 set xlabel '{/Symbol n}'
 set ylabel '{/Symbol g}'
 set key outside below center horizontal font ',9'
-boundary(k) = (strcol('kind') eq k ? column('nu') : NaN)
 set multiplot layout 1, 2 title (title ne '' ? title : 'Regimes from an arbitrary initial state (left of each point: noise; right: oscillation)')
 set title 'regime'
 plot f using ($6 + xoff(strcol(2))):($4 + yoff($3)):(colour(regime(strcol(10)))) \
         with points pt 5 ps 1.2 lc rgb variable notitle, \
      for [r = 0:5] NaN with points pt 5 ps 1.2 lc rgb colour(r) \
         title word('continuous\_slip global\_oscillation pacemakers propagating\_fronts irregular failed', r + 1), \
-     (th ne '' ? th : NaN) using (boundary('period_doubling')):'gamma' with lines lw 2 dt 2 lc rgb '#000000' \
-        title 'period doubling (Floquet)', \
-     (th ne '' ? th : NaN) using (boundary('long_wave')):'gamma' with lines lw 2 lc rgb '#000000' \
-        title 'long wave (Floquet)'
+     $PD using 1:2 with linespoints lw 2 dt 2 pt 7 ps 0.5 lc rgb '#000000' title 'period doubling (Floquet)', \
+     $LW using 1:2 with linespoints lw 2 pt 7 ps 0.5 lc rgb '#000000' title 'long wave (Floquet)'
 set title 'fronts at the end of the run'
 set cbrange [0:*]
 set cblabel 'fronts'
 set palette rgb 33,13,10
 plot f using ($6 + xoff(strcol(2))):($4 + yoff($3)):11 with points pt 5 ps 1.2 lc palette notitle, \
-     (th ne '' ? th : NaN) using (boundary('period_doubling')):'gamma' with lines lw 2 dt 2 lc rgb '#000000' \
-        title 'period doubling (Floquet)', \
-     (th ne '' ? th : NaN) using (boundary('long_wave')):'gamma' with lines lw 2 lc rgb '#000000' \
-        title 'long wave (Floquet)'
+     $PD using 1:2 with linespoints lw 2 dt 2 pt 7 ps 0.5 lc rgb '#000000' title 'period doubling (Floquet)', \
+     $LW using 1:2 with linespoints lw 2 pt 7 ps 0.5 lc rgb '#000000' title 'long wave (Floquet)'
 unset multiplot

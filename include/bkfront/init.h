@@ -5,8 +5,11 @@
  * Specifications:
  *   uniform[:amp=A]                    psi = nu + band-limited noise of rms A
  *                                      (default 1e-3): bkf_pde_init_uniform
- *   oscillation[:q=Q|j=J][,amp=A]      the global oscillation plus A cos(q x),
- *                                      q rounded to 2 pi j/S (default j 0, A 0)
+ *   oscillation[:q=Q|j=J][,amp=A][,noise=E]
+ *                                      the global oscillation plus A cos(q x),
+ *                                      q rounded to 2 pi j/S (default j 0, A 0),
+ *                                      plus band-limited noise of rms E (default
+ *                                      0; drawn from the seed as uniform's)
  *   front:n=K[,root=R][,dir=left|right][,noise=E]
  *                                      K fronts at the predicted speed (the
  *                                      front is built by bkf_seed_front,
@@ -48,6 +51,7 @@ typedef struct {
     int q_given;              /* oscillation: q was given; bkf_init_check sets j */
     double q;                 /* oscillation: requested wavenumber, >= 0 */
     size_t j;                 /* oscillation: mode */
+    double noise;             /* oscillation: rms of the noise added to psi; 0: none */
     bkf_pde_front_spec front; /* front: n, root, direction, noise (its seed
                                  field is ignored: `seed` below counts) */
     unsigned long seed;       /* noise of uniform and front; default 1 */

@@ -198,6 +198,12 @@ int bkf_pde_init_uniform(bkf_pde *pde, double amp, unsigned long seed, bkf_error
  * psi, with q_j = 2 pi j/S, 0 <= j < N/2. */
 int bkf_pde_init_oscillation(bkf_pde *pde, size_t j, double amp, bkf_error *err);
 
+/* Adds band-limited noise of rms `amp` in [0, 10] to psi (eta unchanged),
+ * drawn as bkf_pde_init_uniform's: the same seed gives the same function of
+ * x at every N.  The global oscillation plus noise is an arbitrary start
+ * near the oscillation, every mode perturbed at once. */
+int bkf_pde_add_noise(bkf_pde *pde, double amp, unsigned long seed, bkf_error *err);
+
 /* What n fronts of a travelling wave are: the request that
  * bkf_seed_front (products/seed.h) turns into a bkf_pde_wave by solving the
  * speed condition. */

@@ -18,6 +18,8 @@
  *   stability   spectra of front trains, per n; their
  *               boundaries and the (nu, S) diagram   (stability)
  *   figure      a gnuplot figure of one product      (gnuplot, plots/KIND.gp)
+ *   sweep       a regime map over a grid of points,  (sweep; floquet --diagram
+ *               with the Floquet boundaries           per gamma of thresholds)
  *
  * The keys of each kind are in docs/scenes.md.  A key of a kind whose
  * product is in the catalogue (catalog.h) is checked at parse time by that
@@ -57,6 +59,7 @@ typedef enum {
     BKF_SCENE_CHECK,
     BKF_SCENE_STABILITY,
     BKF_SCENE_FIGURE,
+    BKF_SCENE_SWEEP,      /* after figure: the kinds before keep their numbers */
     BKF_SCENE_NKINDS
 } bkf_scene_kind;
 

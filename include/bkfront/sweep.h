@@ -25,6 +25,7 @@
 
 #include <signal.h>
 #include <stddef.h>
+#include <stdio.h>
 #include "bkfront/options.h"
 #include "bkfront/simulate.h"
 #include "bkfront/status.h"
@@ -49,6 +50,11 @@ typedef struct {
     const char *inits;  /* "SPEC;SPEC;...", NULL: sim.init */
     size_t threads;     /* 0: every core (OpenMP's default) */
     size_t task, of;    /* this task's points: i % of == task; of 0: all */
+    double tmax_budget; /* > 0: a run goes on past tmax until its regime
+                           settles, doubling its length until two successive
+                           windows classify alike or the next doubling would
+                           pass this; a column says which (settled, budget).
+                           0: every run stops at tmax */
     /* Not keys: what the caller supplies for a run it may stop or watch. */
     const volatile sig_atomic_t *cancel; /* raised: no new point starts, the
                                             ones in flight stop, BKF_ECANCELED */
@@ -64,6 +70,12 @@ void bkf_sweep_spec_free(bkf_sweep_spec *spec);
  * simulation's keys are bkf_simulate_options, applied to spec.sim. */
 extern const bkf_option bkf_sweep_options[];
 extern const size_t bkf_sweep_noptions;
+
+/* Every key of a sweep in one table, offsets in bkf_sweep_spec: its own,
+ * then the simulation's but those of the data files a sweep refuses
+ * (spacetime, spacetime-format, snapshots, snapshot-count).  The flags of
+ * `bkfront sweep` and the keys of a scene's [sweep]. */
+const bkf_option *bkf_sweep_keys(size_t *count);
 
 /* The whole grid, before any run: every axis value through the simulation's
  * own option table, every point's spec through bkf_simulate_check, the
@@ -90,6 +102,12 @@ char *bkf_sweep_row(const bkf_sweep_spec *spec, size_t index, bkf_error *err);
 typedef int (*bkf_sweep_row_fn)(size_t index, const char *row, void *data, bkf_error *err);
 int bkf_sweep_run(const bkf_sweep_spec *spec, const unsigned char *done, bkf_sweep_row_fn row,
                   void *data, bkf_error *err);
+
+/* The whole table (bkf_sweep_header, then every row in point order) to
+ * `out`: what `bkfront sweep --out` leaves at its end, computed in memory
+ * (no --resume; a scene's [sweep]).  Stopped through spec->cancel:
+ * BKF_ECANCELED and a partial stream the caller discards. */
+int bkf_sweep_write(const bkf_sweep_spec *spec, FILE *out, bkf_error *err);
 
 /* The table file, appended to row by row. */
 typedef struct bkf_sweep_table bkf_sweep_table;

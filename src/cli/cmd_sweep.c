@@ -39,18 +39,23 @@ typedef struct {
     sweep_cli_spec cli;
 } sweep_args;
 
-static void groups_of(sweep_args *a, cli_options g[4])
+#define NGROUPS 3
+
+/* The sweep's keys (the simulation's among them, but not its data files),
+ * then the command line's own. */
+static void groups_of(sweep_args *a, cli_options g[NGROUPS])
 {
-    g[0] = (cli_options){bkf_sweep_options, bkf_sweep_noptions, a ? &a->spec : NULL};
-    g[1] = (cli_options){bkf_simulate_options, bkf_simulate_noptions, a ? &a->spec.sim : NULL};
-    g[2] = (cli_options){cli_progress_options, cli_progress_noptions, a ? &a->progress : NULL};
-    g[3] = (cli_options){sweep_cli_options, sizeof sweep_cli_options / sizeof *sweep_cli_options,
+    size_t n;
+    const bkf_option *keys = bkf_sweep_keys(&n);
+    g[0] = (cli_options){keys, n, a ? &a->spec : NULL};
+    g[1] = (cli_options){cli_progress_options, cli_progress_noptions, a ? &a->progress : NULL};
+    g[2] = (cli_options){sweep_cli_options, sizeof sweep_cli_options / sizeof *sweep_cli_options,
                          a ? &a->cli : NULL};
 }
 
 static void sweep_help(FILE *out)
 {
-    cli_options g[4];
+    cli_options g[NGROUPS];
     groups_of(NULL, g);
     fprintf(out,
         "usage: bkfront sweep --out FILE [--x NAME=LIST [--y NAME=LIST [--zip]]] [--seeds LIST]\n"
@@ -66,7 +71,7 @@ static void sweep_help(FILE *out)
         "point's parameters gives the same regime, speed and period.\n"
         "\n"
         "options:\n");
-    cli_options_help(out, g, 4);
+    cli_options_help(out, g, NGROUPS);
     fprintf(out,
         "\n"
         "columns (one row per point):\n"
@@ -84,7 +89,9 @@ static void sweep_help(FILE *out)
         "  global_period     the global oscillation's period (nan without a cycle)\n"
         "  mean, variance, std_max, psi_min, psi_max\n"
         "                    window statistics of psi, as bkfront simulate's summary\n"
-        "  t_end, steps      where the run ended, accepted steps\n"
+        "  t_end, steps      where the run ended, accepted steps (of its last run)\n"
+        "  settled           with --tmax-budget: settled (two successive windows agree)\n"
+        "                    or budget (it ran out first); none when the run failed\n"
         "  status            ok, or why the run failed (numerical, blow-up, budget, ...)\n"
         "\n"
         "Rows are appended to --out as points finish, each whole and flushed to disk: a killed\n"
@@ -141,9 +148,9 @@ static int sweep_run(int argc, char **argv, bkf_error *err)
 {
     sweep_args a = {bkf_sweep_spec_default(), {0}, {0}};
     int rank = sweep_mpi_start(&argc, &argv);
-    cli_options g[4];
+    cli_options g[NGROUPS];
     groups_of(&a, g);
-    int s = cli_parse_options(g, 4, argc, argv, NULL, err);
+    int s = cli_parse_options(g, NGROUPS, argc, argv, NULL, err);
     if (!s && a.cli.merge) {
         s = rank == 0 ? merge_tables(&a.cli, err) : BKF_OK;
         goto done;

@@ -16,6 +16,7 @@
 #include "bkfront/profile.h"
 #include "bkfront/simulate.h"
 #include "bkfront/stability.h"
+#include "bkfront/sweep.h"
 
 /* The keys a product requires (BKF_OPT_REQUIRED) have been given: the
  * command line's parser says so for flags; here for every other caller.
@@ -130,6 +131,39 @@ static int simulate_write(const void *spec, FILE *out, bkf_io_format format,
     return bkf_simulate_write(&s, out, format, prov, err);
 }
 
+/* -------------------------------------------------------------- sweep */
+
+static const bkf_option *sweep_options(size_t *count) { return bkf_sweep_keys(count); }
+static void sweep_init(void *spec) { *(bkf_sweep_spec *)spec = bkf_sweep_spec_default(); }
+static int sweep_check(const void *spec, const char *prefix, bkf_error *err)
+{
+    return bkf_sweep_check(spec, prefix, err);
+}
+static void sweep_progress(size_t done, size_t total, void *data)
+{
+    const bkf_catalog_hooks *h = data;
+    h->progress(total ? (double)done / (double)total : 1.0, h->data);
+}
+/* The whole table in point order: a scene's sweep is computed in one go. */
+static int sweep_write(const void *spec, FILE *out, bkf_io_format format,
+                       const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
+                       bkf_error *err)
+{
+    (void)prov; /* the table's head is the sweep's definition, as --resume compares it */
+    if (format != BKF_IO_TSV)
+        return bkf_error_set(err, BKF_EINPUT, "format: a sweep's table is TSV only");
+    bkf_sweep_spec s = *(const bkf_sweep_spec *)spec;
+    if (hooks) {
+        s.cancel = hooks->cancel;
+        if (hooks->progress) {
+            s.progress = sweep_progress;
+            s.data = (void *)hooks;
+        }
+    }
+    return bkf_sweep_write(&s, out, err);
+}
+static void sweep_release(void *spec) { bkf_sweep_spec_free(spec); }
+
 /* -------------------------------------------------------------- check */
 
 static const bkf_option *check_options(size_t *count)
@@ -195,6 +229,8 @@ static const bkf_catalog_entry entries[] = {
     ENTRY(simulate, bkf_simulate_spec,
           "direct simulation (continuum or chain) with measurements, spacetime field, snapshots"),
     ENTRY(check, bkf_check_spec, "the predicted front speeds against direct simulation"),
+    ENTRY(sweep, bkf_sweep_spec,
+          "regime maps: a product at every point of a grid of parameters, seeds and states"),
     ENTRY(friction, bkf_friction_spec, "the friction laws, sampled"),
     ENTRY(bench, bkf_bench_spec,
           "work-precision: achieved error against CPU time for every method and tolerance"),

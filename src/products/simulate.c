@@ -77,9 +77,10 @@ const bkf_option bkf_simulate_options[] = {
      .help = "initial state:\n"
              "uniform[:amp=A]  psi = nu + band-limited noise of rms A\n"
              "  (default 1e-3, modes 1..S/2), eta = phi(psi)\n"
-             "oscillation[:q=Q|j=J][,amp=A]  the global oscillation\n"
-             "  (cycle at mu = gamma) at psi = nu rising, plus A cos(q x);\n"
-             "  q is rounded to the nearest 2 pi j/S; default j = 0, A = 0\n"
+             "oscillation[:q=Q|j=J][,amp=A][,noise=E]  the global\n"
+             "  oscillation (cycle at mu = gamma) at psi = nu rising, plus\n"
+             "  A cos(q x) and noise of rms E (as uniform's); q is rounded\n"
+             "  to the nearest 2 pi j/S; default j = 0, A = 0, E = 0\n"
              "front:n=K[,root=R][,dir=left|right][,noise=E]  the\n"
              "  travelling wave of K fronts at the predicted speed (root R,\n"
              "  default 1, the fastest), moving left (-x, default) or\n"
@@ -421,8 +422,9 @@ static int write_summary(bkf_io_table *t, const run *r, const bkf_measure_summar
                      NUM(fi->mu, b), NUM(fi->T, c), NUM(fi->period_fixed, d),
                      in->front.direction < 0 ? "-x (left)" : "+x (right)");
     if (!s && in->kind == BKF_INIT_OSCILLATION)
-        s = bkf_io_table_commentf(t, err, "oscillation: mode j %zu, q %s, amp %s", in->j,
-                     NUM(2 * PI * (double)in->j / r->model.S, a), NUM(in->amp, b));
+        s = bkf_io_table_commentf(t, err, "oscillation: mode j %zu, q %s, amp %s%s%s", in->j,
+                     NUM(2 * PI * (double)in->j / r->model.S, a), NUM(in->amp, b),
+                     in->noise > 0 ? ", noise " : "", in->noise > 0 ? NUM(in->noise, c) : "");
     if (!s) s = bkf_product_table_command(t, r->prov, err);
     const bkf_pde_stats *st = bkf_pde_get_stats(r->pde);
     if (!s)

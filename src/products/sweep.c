@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <pthread.h>
 #include <inttypes.h>
 #include <stdarg.h>
 #include <math.h>
@@ -48,8 +49,49 @@ const bkf_option bkf_sweep_options[] = {
     {.name = "of", .type = BKF_OPT_COUNT, .offset = SPEC(of), .flags = BKF_OPT_MIN | BKF_OPT_MAX,
      .min = 1, .max = 1000000, .form = "K", .shown_default = "1",
      .help = "number of tasks the points are split into, in [1, 1e6]"},
+    {.name = "tmax-budget", .type = BKF_OPT_DOUBLE, .offset = SPEC(tmax_budget),
+     .flags = BKF_OPT_MIN | BKF_OPT_MAX | BKF_OPT_MIN_OPEN, .min = 0, .max = BKF_SIMULATE_TMAX_MAX,
+     .form = "T", .shown_default = "none (every run stops at tmax)",
+     .help = "let a run go on until its regime settles: its length doubles\n"
+             "(tmax, 2 tmax, 4 tmax, ...; each a run from t = 0) until the\n"
+             "regimes of two successive windows [t/2, t] and [t, 2t] agree\n"
+             "(and their front counts, for fronts and pacemakers), or the\n"
+             "next doubling would pass T; column settled says which\n"
+             "(settled, budget); T >= tmax, in (0, 1e6]"},
 };
 const size_t bkf_sweep_noptions = sizeof bkf_sweep_options / sizeof bkf_sweep_options[0];
+
+/* The simulation's keys apply to a sweep spec as they are: sim is its
+ * first member. */
+_Static_assert(offsetof(bkf_sweep_spec, sim) == 0, "sim must be the sweep spec's first member");
+
+/* Room for the sweep's keys and the simulation's. */
+#define KEYS_MAX 64
+static bkf_option all_keys[KEYS_MAX];
+static size_t nall_keys;
+static pthread_once_t keys_once = PTHREAD_ONCE_INIT;
+
+static void build_keys(void)
+{
+    static const char *const refused[] = {"spacetime", "spacetime-format", "snapshots",
+                                          "snapshot-count"};
+    size_t n = 0;
+    for (size_t i = 0; i < bkf_sweep_noptions && n < KEYS_MAX; i++) all_keys[n++] = bkf_sweep_options[i];
+    for (size_t i = 0; i < bkf_simulate_noptions && n < KEYS_MAX; i++) {
+        int skip = 0;
+        for (size_t k = 0; k < sizeof refused / sizeof *refused; k++)
+            skip |= strcmp(bkf_simulate_options[i].name, refused[k]) == 0;
+        if (!skip) all_keys[n++] = bkf_simulate_options[i];
+    }
+    nall_keys = n;
+}
+
+const bkf_option *bkf_sweep_keys(size_t *count)
+{
+    pthread_once(&keys_once, build_keys);
+    if (count) *count = nall_keys;
+    return all_keys;
+}
 
 bkf_sweep_spec bkf_sweep_spec_default(void)
 {
@@ -245,6 +287,8 @@ int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err
     if (sp->task >= of)
         return bkf_error_set(err, BKF_EINPUT, "%stask: %zu is not in [0, %zu] (%sof %zu)", prefix,
                              sp->task, of - 1, prefix, of);
+    if (!(sp->tmax_budget >= 0))
+        return bkf_error_set(err, BKF_EINPUT, "%stmax-budget: not a number > 0", prefix);
     plan p;
     int s = make_plan(sp, prefix, &p, err);
     if (s) return s;
@@ -254,6 +298,12 @@ int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err
         bkf_simulate_spec sim;
         s = point_spec(sp, &p, i, &sim, prefix, err);
         if (!s) s = bkf_simulate_check(&sim, prefix, err);
+        if (!s && sp->tmax_budget > 0 && sp->tmax_budget < sim.tmax) {
+            char b[32], m[32];
+            s = bkf_error_set(err, BKF_EINPUT, "%stmax-budget: %s is below tmax %s of point %zu",
+                              prefix, bkf_format_number(sp->tmax_budget, b, sizeof b),
+                              bkf_format_number(sim.tmax, m, sizeof m), i);
+        }
     }
     plan_free(&p);
     return s;
@@ -364,6 +414,10 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
          b->init ? b->init : "uniform", b->seed, steppers[b->stepper & 3], b->dealias,
          bkf_format_number(b->filter, fi, sizeof fi), bkf_format_number(b->level, lv, sizeof lv),
          b->frames, BKF_VERSION_STRING);
+    if (sp->tmax_budget > 0) {
+        char tb[32];
+        addf(&t, "# settle: tmax-budget %s\n", bkf_format_number(sp->tmax_budget, tb, sizeof tb));
+    }
     if (sp->seeds.count) {
         addf(&t, "# seeds:");
         for (size_t k = 0; k < sp->seeds.count; k++) addf(&t, " %.0f", sp->seeds.values[k]);
@@ -373,7 +427,10 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
     addf(&t, "# regime: continuous_slip, global_oscillation, period_doubled_pacemakers, "
              "propagating_fronts, irregular (bkfront simulate's, over the last half of the run); "
              "none when the run failed (status)\n");
-    for (size_t k = 0; k < NCOLS; k++) addf(&t, "%s%s", k ? "\t" : "", column_names[k]);
+    for (size_t k = 0; k < NCOLS; k++) {
+        if (k == NCOLS - 1 && sp->tmax_budget > 0) addf(&t, "\tsettled");
+        addf(&t, "%s%s", k ? "\t" : "", column_names[k]);
+    }
     addf(&t, "\n");
     plan_free(&p);
     if (t.failed) {
@@ -391,6 +448,26 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
     bkf_simulate_outcome o;
     bkf_error e;
     int s = bkf_simulate_outcome_of(&sim, &o, &e);
+    /* Long transients: the run is made twice as long (from t = 0: a row
+     * stays a function of its point) while the classification of the last
+     * window differs from the one before it. */
+    const char *settled = "budget";
+    for (double tmax = sim.tmax; !s && sp->tmax_budget > 0 && 2 * tmax <= sp->tmax_budget;) {
+        bkf_simulate_spec longer = sim;
+        longer.tmax = tmax *= 2;
+        bkf_simulate_outcome next;
+        s = bkf_simulate_outcome_of(&longer, &next, &e);
+        if (s) break;
+        const bkf_measure_summary *a = &o.summary, *b = &next.summary;
+        int counted = b->regime == BKF_REGIME_FRONTS ||
+                      b->regime == BKF_REGIME_PACEMAKERS;
+        int same = a->regime == b->regime && (!counted || a->fronts_end == b->fronts_end);
+        o = next;
+        if (same) {
+            settled = "settled";
+            break;
+        }
+    }
     if (s && !bkf_status_is_numerical(s)) {
         bkf_error_set(err, s, "point %zu: %s", i, e.message);
         return NULL;
@@ -400,6 +477,7 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
     if (s) {
         addf(&t, "\t%zu\tnone", sim.model.N);
         for (size_t k = NKEYCOLS + 2; k < NCOLS - 1; k++) addf(&t, "\tnan");
+        if (sp->tmax_budget > 0) addf(&t, "\tnone");
     } else {
         const bkf_measure_summary *m = &o.summary;
         addf(&t, "\t%zu\t%s\t%zu\t%zu\t%zu", o.N, bkf_regime_name(m->regime), m->fronts_end,
@@ -417,6 +495,7 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
         add_number(&t, m->psi_max);
         add_number(&t, o.t_end);
         addf(&t, "\t%zu", o.steps);
+        if (sp->tmax_budget > 0) addf(&t, "\t%s", settled);
     }
     addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
     if (t.failed) {
@@ -497,6 +576,42 @@ int bkf_sweep_run(const bkf_sweep_spec *sp, const unsigned char *done, bkf_sweep
     return status;
 }
 
+/* The rows of bkf_sweep_write, by point. */
+typedef struct {
+    char **rows;
+} collected;
+
+static int collect(size_t index, const char *row, void *data, bkf_error *err)
+{
+    collected *c = data;
+    if (!(c->rows[index] = strdup(row))) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    return BKF_OK;
+}
+
+int bkf_sweep_write(const bkf_sweep_spec *sp, FILE *out, bkf_error *err)
+{
+    if (!sp || !out) return bkf_error_set(err, BKF_EINPUT, "no sweep spec or stream given");
+    int s = bkf_sweep_check(sp, "", err);
+    if (s) return s;
+    char *head = bkf_sweep_header(sp, err);
+    if (!head) return err ? err->status : BKF_ENOMEM;
+    size_t count = bkf_sweep_count(sp);
+    collected c = {calloc(count ? count : 1, sizeof *c.rows)};
+    if (!c.rows) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (!s) s = bkf_sweep_run(sp, NULL, collect, &c, err);
+    if (!s) {
+        fputs(head, out);
+        size_t of = sp->of ? sp->of : 1;
+        for (size_t i = 0; i < count; i++)
+            if (i % of == sp->task && c.rows[i]) fputs(c.rows[i], out);
+        if (ferror(out)) s = bkf_error_set(err, BKF_EIO, "sweep: write error");
+    }
+    for (size_t i = 0; c.rows && i < count; i++) free(c.rows[i]);
+    free(c.rows);
+    free(head);
+    return s;
+}
+
 /* ------------------------------------------------------------ the table */
 
 struct bkf_sweep_table {
@@ -560,8 +675,8 @@ static int read_all(const char *path, char **data, size_t *size, bkf_error *err)
 }
 
 /* Reads `path`: the head ends at the first line not starting with '#'
- * (the column names); a row is kept when it is a whole line with NCOLS
- * fields and a point index below the head's count, seen first, and (with
+ * (the column names); a row is kept when it is a whole line with as many
+ * fields as there are names and a point index below the head's count, seen first, and (with
  * `key`) its key columns are those of its point. */
 static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key_spec,
                       const plan *key_plan, bkf_error *err)
@@ -581,6 +696,8 @@ static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key
         return bkf_error_set(err, BKF_EINPUT, "%s: not a table of bkfront sweep", path);
     }
     t->head_len = (size_t)(nl + 1 - t->data);
+    size_t names_tabs = 0;
+    for (char *q = p; q < nl; q++) names_tabs += *q == '\t';
     unsigned char *seen = calloc(t->points, 1);
     t->rows = malloc(t->points * sizeof *t->rows);
     if (!seen || !t->rows) {
@@ -596,7 +713,7 @@ static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key
         char *after;
         errno = 0;
         unsigned long long idx = strtoull(p, &after, 10);
-        int ok = tabs == NCOLS - 1 && after != p && *after == '\t' && !errno &&
+        int ok = tabs == names_tabs && after != p && *after == '\t' && !errno &&
                  idx < t->points && !seen[idx];
         if (ok && key_spec) {
             bkf_simulate_spec sim;

@@ -25,7 +25,7 @@
 
 static const char *const kind_names[BKF_SCENE_NKINDS] = {
     "speeds", "period", "dispersion", "threshold", "branch", "profile",
-    "validity", "friction", "spacetime", "check", "stability", "figure"};
+    "validity", "friction", "spacetime", "check", "stability", "figure", "sweep"};
 
 const char *bkf_scene_kind_name(bkf_scene_kind kind)
 {
@@ -115,7 +115,7 @@ static int lookup_add(lookup *l, size_t h, size_t index)
 typedef enum {
     V_GAMMA, V_C, V_NU, V_NU_ANY, V_S, V_TOL, V_PDE_TOL, V_GRID_N, V_MODEL,
     V_COUNT, V_SEED, V_NUMBER, V_POSITIVE, V_NU_LIST, V_COUNT_LIST, V_RANGE_LOG,
-    V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_METHOD, V_STEPPER, V_FRAME, V_GRID, V_FORMATS, V_TEXT, V_NAME, V_INIT
+    V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_METHOD, V_STEPPER, V_FRAME, V_GRID, V_FORMATS, V_TEXT, V_NAME, V_INIT, V_GAMMA_LIST
 } value_type;
 
 #define K(kind) (1u << (kind))
@@ -159,7 +159,9 @@ static const key_spec keys[] = {
     {"mu", V_RANGE_LOG, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_VALIDITY),
      "M or a geometric range A:B:N, in [1e-6, 1e6]"},
     {"q", V_RANGE_LIN, K(BKF_SCENE_DISPERSION), "Q or a range A:B:N, >= 0"},
-    {"search", V_SEARCH, K(BKF_SCENE_THRESHOLD), "A:B with -1 < A < B < 1"},
+    {"search", V_SEARCH, K(BKF_SCENE_THRESHOLD) | K(BKF_SCENE_SWEEP), "A:B with -1 < A < B < 1"},
+    {"thresholds", V_GAMMA_LIST, K(BKF_SCENE_SWEEP),
+     "G, G1,G2,... or A:B:N, each in [1e-6, 1e6]"},
     {"along", V_ALONG, K(BKF_SCENE_THRESHOLD), "c or gamma"},
     {"param", V_PARAM, K(BKF_SCENE_BRANCH), "S, nu, gamma or c"},
     {"method", V_METHOD, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_SPEEDS), "auto, asymptotic, leading or shooting"},
@@ -319,6 +321,16 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
         return BKF_OK;
     case V_NU_LIST:
         return check_list(k, v, 0, err);
+    case V_GAMMA_LIST: {
+        bkf_list r;
+        if ((s = bkf_list_parse(v, 0, 0, SCENE_MAX_POINTS, "", k, &r, err))) return s;
+        int bad = 0;
+        for (size_t i = 0; i < r.count; i++)
+            bad |= !(r.values[i] >= BKF_CYCLE_MU_MIN && r.values[i] <= BKF_CYCLE_MU_MAX);
+        bkf_list_free(&r);
+        if (bad) return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not %s", k, v, spec->form);
+        return BKF_OK;
+    }
     case V_COUNT_LIST:
         return check_list(k, v, 1, err);
     case V_RANGE_LOG:
@@ -405,6 +417,7 @@ static const kind_map_row kind_map[BKF_SCENE_NKINDS] = {
     [BKF_SCENE_CHECK] = {"check", NULL, "no-progress", NULL},
     [BKF_SCENE_STABILITY] = {"stability", NULL, NULL, "n"},
     [BKF_SCENE_FIGURE] = {NULL, NULL, NULL, NULL},
+    [BKF_SCENE_SWEEP] = {"sweep", NULL, "no-progress", NULL},
 };
 
 static const bkf_catalog_entry *catalog_entry(bkf_scene_kind kind)
@@ -586,7 +599,7 @@ static void header_line(parse_state *st, const char *line)
     if (k < 0) {
         fail(st, st->line,
              "unknown section [%s] (model, accuracy, speeds, period, dispersion, threshold, "
-             "branch, profile, validity, friction, spacetime, check, stability, figure)", a);
+             "branch, profile, validity, friction, spacetime, check, stability, figure, sweep)", a);
         return;
     }
     if (fields == 3) {
@@ -761,7 +774,7 @@ const char *bkf_scene_value(const bkf_scene *s, const bkf_scene_product *p, cons
      * of a result: it is not inherited. */
     if (p && strcmp(key, "tol") == 0 &&
         (p->kind == BKF_SCENE_SPACETIME || p->kind == BKF_SCENE_CHECK || p->kind == BKF_SCENE_VALIDITY ||
-         p->kind == BKF_SCENE_STABILITY))
+         p->kind == BKF_SCENE_STABILITY || p->kind == BKF_SCENE_SWEEP))
         return NULL;
     return entry_value(s->model, s->nmodel, key);
 }
@@ -1406,6 +1419,39 @@ static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
         list_values_free(ns, count);
         return ok;
     }
+    case BKF_SCENE_SWEEP: {
+        FIRST();
+        ok = ok && model_args(&b, s, p, 1, 1);
+        PAIR("model", bkf_scene_value(s, p, "model"));
+        PAIR("N", bkf_scene_value(s, p, "N"));
+        LAST();
+        char *out = out_path(dir, p->name, ".tsv");
+        OUT("out", out);
+        ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+        /* The global oscillation's stability boundaries at each gamma of
+         * `thresholds`, for the map's figure to draw over the regimes. */
+        char **gs = NULL;
+        size_t count = 0;
+        v = OWN("thresholds");
+        if (ok && v && !list_values(v, &gs, &count)) ok = 0;
+        for (size_t i = 0; ok && i < count; i++) {
+            b = (arg_list){0};
+            char suffix[48];
+            snprintf(suffix, sizeof suffix, "_floquet_%zu.tsv", i + 1);
+            char *fout = out_path(dir, p->name, suffix);
+            KEY("diagram");
+            PAIR("gamma", gs[i]);
+            PAIR("c", bkf_scene_value(s, p, "c"));
+            v = OWN("search");
+            PAIR("search", v ? v : "-0.999:0.999");
+            /* boundaries to 1e-6 in nu: far finer than any map's grid */
+            PAIR("tol", "1e-6");
+            OUT("out", fout);
+            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, "floquet", ok, &b, fout, 0);
+        }
+        list_values_free(gs, count);
+        return ok;
+    }
     case BKF_SCENE_FIGURE: {
         if (!o->figures) return 1;
         const bkf_scene_product *data = bkf_scene_find(s, OWN("data"), 0);
@@ -1641,6 +1687,7 @@ static int append(char *buf, size_t size, const char *sep, const char *text)
  * what its mode computed. */
 static const char *default_script(const bkf_scene *sc, const bkf_scene_product *data)
 {
+    if (data->kind == BKF_SCENE_SWEEP) return "sweep_map";
     if (data->kind != BKF_SCENE_STABILITY) return kind_names[data->kind];
     const char *d = bkf_scene_value(sc, data, "diagram"), *l = bkf_scene_value(sc, data, "line");
     if (d && strcmp(d, "yes") == 0) return "diagram";
@@ -1676,6 +1723,9 @@ static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
             value = arg_value(ds, "nu");
         else if (data->kind == BKF_SCENE_BRANCH || data->kind == BKF_SCENE_STABILITY)
             value = arg_value(ds, "n");
+        else if (data->kind == BKF_SCENE_SWEEP)
+            /* the map, then the Floquet diagram of each gamma */
+            value = strcmp(ds->product, "sweep") == 0 ? "map" : arg_value(ds, "gamma");
         if (data->kind == BKF_SCENE_PROFILE) {
             char **items;
             size_t count;

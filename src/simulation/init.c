@@ -16,7 +16,8 @@
 #define TWO_PI 6.28318530717958647692
 
 #define INIT_FORM                                                                          \
-    "uniform[:amp=A], oscillation[:q=Q|j=J][,amp=A], front:n=K[,root=R][,dir=left|right]" \
+    "uniform[:amp=A], oscillation[:q=Q|j=J][,amp=A][,noise=E], "                        \
+    "front:n=K[,root=R][,dir=left|right]"                                                  \
     "[,noise=E], or file:PATH"
 
 /* The numbers of a specification read as the CLI reads its flags' (a
@@ -125,6 +126,7 @@ static int take_oscillation(const char *key, const char *value, bkf_init_spec *p
                             bkf_error *err)
 {
     if (strcmp(key, "amp") == 0) return take_amp("oscillation", key, value, &p->amp, err);
+    if (strcmp(key, "noise") == 0) return take_amp("oscillation", key, value, &p->noise, err);
     if (strcmp(key, "q") == 0) {
         int s = read_number("--init oscillation q", value, &p->q, err);
         if (s) return s;
@@ -142,7 +144,7 @@ static int take_oscillation(const char *key, const char *value, bkf_init_spec *p
         return read_count("--init oscillation j", value, BKF_PDE_N_MAX, &p->j, err);
     }
     char a[72];
-    return bkf_error_set(err, BKF_EINPUT, "--init oscillation: unknown key '%s' (q, j, amp)",
+    return bkf_error_set(err, BKF_EINPUT, "--init oscillation: unknown key '%s' (q, j, amp, noise)",
                          bkf_io_shown(key, a, sizeof a));
 }
 
@@ -278,7 +280,11 @@ int bkf_init_apply(bkf_pde *pde, const bkf_init_spec *spec, bkf_error *err)
     if (!spec) return bkf_error_set(err, BKF_EINPUT, "spec is NULL");
     switch (spec->kind) {
     case BKF_INIT_UNIFORM: return bkf_pde_init_uniform(pde, spec->amp, spec->seed, err);
-    case BKF_INIT_OSCILLATION: return bkf_pde_init_oscillation(pde, spec->j, spec->amp, err);
+    case BKF_INIT_OSCILLATION: {
+        int s = bkf_pde_init_oscillation(pde, spec->j, spec->amp, err);
+        if (!s && spec->noise > 0) s = bkf_pde_add_noise(pde, spec->noise, spec->seed, err);
+        return s;
+    }
     case BKF_INIT_FILE:
         if (!spec->state.psi) return bkf_error_set(err, BKF_EINPUT, "the state file is not loaded");
         if (pde && bkf_pde_size(pde) != spec->state.rows)

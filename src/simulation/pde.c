@@ -672,6 +672,25 @@ int bkf_pde_init_oscillation(bkf_pde *m, size_t j, double amp, bkf_error *err)
     return rc;
 }
 
+static int pde_add_noise_body(bkf_pde *m, double amp, unsigned long seed, bkf_error *err)
+{
+    if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
+    int s = check_amp("noise", amp, err);
+    if (s) return s;
+    if ((s = noise(m, amp, seed, m->psit, err))) return s;
+    for (size_t i = 0; i < m->N; i++) m->y[i] += m->psit[i];
+    mark_set(m);
+    return BKF_OK;
+}
+
+int bkf_pde_add_noise(bkf_pde *m, double amp, unsigned long seed, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = pde_add_noise_body(m, amp, seed, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}
+
 static int pde_init_front_body(bkf_pde *m, const bkf_pde_wave *wave, bkf_pde_front_info *info,
                                double *clean_psi, bkf_error *err)
 {

@@ -259,3 +259,128 @@ TEST(cli_sweep_sigterm_keeps_finished_rows_and_resume_completes)
     free(cut);
     free(err);
 }
+
+/* A scene's [sweep] is the product bkfront sweep computes: the same table,
+ * byte for byte, as the command line's (threads 2 against the CLI's 1), and
+ * its Floquet boundaries are bkfront floquet --diagram's. */
+TEST(cli_sweep_scene_gives_the_cli_table)
+{
+    char dir[] = "/tmp/bkf_sweep_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char *serial = serial_table(dir);
+    CHECK(serial);
+    char *scene = path_in(dir, "map.scene");
+    FILE *f = fopen(scene, "w");
+    CHECK(f);
+    fputs("[model]\ngamma = 2\nc = 0.3\nnu = -0.96\nS = 20\n[accuracy]\nN = 256\n"
+          "[sweep map]\nx = nu=-0.96,-0.94\ninits = front:n=4;uniform:amp=0.01\nseeds = 1,2\n"
+          "tmax = 30\nthreads = 2\nthresholds = 2\nsearch = -0.999:-0.75\n",
+          f);
+    fclose(f);
+    char *out = path_in(dir, "scene");
+    bkf_cli_result r = bkf_cli_run(BKF_CLI_ARGS("run", "--no-figures", "--out", out, scene), NULL);
+    CHECK_MSG(r.code == 0, "bkfront run: exit %d, %s", r.code, r.err);
+    bkf_cli_result_free(&r);
+    char *table = path_in(out, "map.tsv");
+    char *got = bkf_cli_read_file(table);
+    CHECK_MSG(got && strcmp(got, serial) == 0, "the scene's table differs:\n%s\n---\n%s",
+              got ? got : "(none)", serial);
+    char *fl = path_in(out, "map_floquet_1.tsv");
+    char *diagram = bkf_cli_read_file(fl);
+    int code;
+    char *want = bkf_cli_stdout("floquet --diagram --gamma 2 --c 0.3 --search -0.999:-0.75 "
+                                "--tol 1e-6", &code);
+    CHECK(diagram && want && code == 0);
+    /* the rows (after the comments, which name the output) agree */
+    const char *a = diagram ? strstr(diagram, "\nnu_from") : NULL;
+    const char *b = want ? strstr(want, "\nnu_from") : NULL;
+    CHECK(a && b && strcmp(a, b) == 0);
+    free(want);
+    free(diagram);
+    free(fl);
+    free(got);
+    free(table);
+    free(out);
+    free(scene);
+    free(serial);
+}
+
+/* bkfront simulate's regime and front count at tmax T (json results). */
+static int simulate_regime(const char *init, double tmax, char *regime, size_t size, int *fronts)
+{
+    char cmd[256];
+    snprintf(cmd, sizeof cmd,
+             "simulate --nu -0.94 --init %s --tmax %g --N 128 --format json --no-progress", init,
+             tmax);
+    int code;
+    char *out = bkf_cli_stdout(cmd, &code);
+    const char *r = out ? strstr(out, "\"regime\": \"") : NULL;
+    const char *f = out ? strstr(out, "\"fronts_end\": ") : NULL;
+    int ok = code == 0 && r && f;
+    if (ok) {
+        r += strlen("\"regime\": \"");
+        snprintf(regime, size, "%.*s", (int)strcspn(r, "\""), r);
+        *fronts = atoi(f + strlen("\"fronts_end\": "));
+    }
+    free(out);
+    return ok;
+}
+
+/* --tmax-budget: each row is what bkfront simulate's runs of tmax, 2 tmax,
+ * ... give under the stated rule (stop at the first two lengths whose
+ * regimes, and front counts for fronts, agree, or at the budget), and the
+ * default table has no settled column. */
+TEST(cli_sweep_settle_mode_follows_simulate_runs_of_doubling_length)
+{
+    char dir[] = "/tmp/bkf_sweep_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char *out = path_in(dir, "settle.tsv");
+    const char *inits[] = {"uniform:amp=0.01", "front:n=4", "oscillation:noise=0.01"};
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", "--nu", "-0.94", "--inits",
+                              "uniform:amp=0.01;front:n=4;oscillation:noise=0.01", "--tmax", "20",
+                              "--tmax-budget", "80", "--N", "128", "--no-progress", "--out", out)));
+    char *table = bkf_cli_read_file(out);
+    CHECK(table);
+    for (int i = 0; table && i < 3; i++) {
+        char prev[64], cur[64], want_settled[16] = "budget";
+        int pf, cf;
+        double tmax = 20;
+        CHECK(simulate_regime(inits[i], tmax, prev, sizeof prev, &pf));
+        while (2 * tmax <= 80) {
+            tmax *= 2;
+            CHECK(simulate_regime(inits[i], tmax, cur, sizeof cur, &cf));
+            int counted = strcmp(cur, "propagating_fronts") == 0 ||
+                          strcmp(cur, "period_doubled_pacemakers") == 0;
+            int same = strcmp(prev, cur) == 0 && (!counted || pf == cf);
+            snprintf(prev, sizeof prev, "%s", cur);
+            pf = cf;
+            if (same) {
+                snprintf(want_settled, sizeof want_settled, "settled");
+                break;
+            }
+        }
+        char regime[64], settled[16];
+        double t_end, fronts;
+        CHECK(bkf_tsv_cell(table, i, "regime", NULL, regime, sizeof regime));
+        CHECK(bkf_tsv_cell(table, i, "settled", NULL, settled, sizeof settled));
+        CHECK(bkf_tsv_cell(table, i, "t_end", &t_end, NULL, 0));
+        CHECK(bkf_tsv_cell(table, i, "fronts", &fronts, NULL, 0));
+        CHECK_MSG(strcmp(regime, prev) == 0 && strcmp(settled, want_settled) == 0 &&
+                      t_end == tmax && fronts == pf,
+                  "point %d: %s %s t %g, simulate: %s %s t %g", i, regime, settled, t_end, prev,
+                  want_settled, tmax);
+    }
+    free(table);
+    /* without a budget, no settled column; a budget below tmax is bad input */
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", "--nu", "-0.94", "--tmax", "5", "--N", "64",
+                              "--no-progress", "--out", out)));
+    table = bkf_cli_read_file(out);
+    CHECK(table && !strstr(table, "settled") && !strstr(table, "tmax-budget"));
+    free(table);
+    char *never = path_in(dir, "never.tsv");
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--tmax", "50", "--tmax-budget", "40", "--out",
+                                     never),
+                             "sweep", "tmax-budget", "a budget below tmax");
+    free(never);
+    free(out);
+}

@@ -82,7 +82,7 @@ TEST(init_parse_bad_specs_name_the_key_and_range)
     bad_spec("uniform:seed=3", "unknown key 'seed'", "(amp)", NULL);
     bad_spec("oscillation:q=-1", "--init oscillation q", ">= 0", NULL);
     bad_spec("oscillation:j=x", "--init oscillation j", "[1, 1048576]", NULL);
-    bad_spec("oscillation:k=1", "unknown key 'k'", "(q, j, amp)", NULL);
+    bad_spec("oscillation:k=1", "unknown key 'k'", "(q, j, amp, noise)", NULL);
     bad_spec("front", "n=K is required", NULL);
     bad_spec("front:root=2", "n=K is required", NULL);
     bad_spec("front:n=0", "--init front n", "[1, 100000]", NULL);
@@ -402,4 +402,49 @@ TEST(init_state_reader_is_bounded)
     fclose(f);
     free(text);
     free(long_line);
+}
+
+/* oscillation,noise=E is the clean oscillation plus the very noise of
+ * uniform:amp=E with the same seed (its rms E, eta untouched), at any N;
+ * another seed draws other noise. */
+TEST(init_oscillation_plus_noise_is_the_oscillation_plus_uniform_noise)
+{
+    bkf_error e;
+    for (size_t N = 64; N <= 128; N *= 2) {
+        bkf_model_params model = {2, 0.3, -0.94, 20, N, BKF_MODEL_CONTINUUM};
+        bkf_pde_options o = bkf_pde_options_default();
+        bkf_pde *clean = bkf_pde_alloc(&model, &o, &e), *noisy = bkf_pde_alloc(&model, &o, &e),
+                *uni = bkf_pde_alloc(&model, &o, &e), *other = bkf_pde_alloc(&model, &o, &e);
+        CHECK(clean && noisy && uni && other);
+        const char *specs[] = {"oscillation:j=1,amp=0.01", "oscillation:j=1,amp=0.01,noise=0.05",
+                               "uniform:amp=0.05", "oscillation:j=1,amp=0.01,noise=0.05"};
+        bkf_pde *pdes[] = {clean, noisy, uni, other};
+        for (int k = 0; k < 4; k++) {
+            bkf_init_spec sp;
+            CHECK_STATUS(bkf_init_parse(specs[k], &sp, &e), BKF_OK);
+            sp.seed = k == 3 ? 8 : 7;
+            CHECK_STATUS(bkf_init_check(&sp, &model, 1, &o, &e), BKF_OK);
+            CHECK_STATUS(bkf_init_apply(pdes[k], &sp, &e), BKF_OK);
+            bkf_init_free(&sp);
+        }
+        double sq = 0, diff_other = 0;
+        for (size_t i = 0; i < N; i++) {
+            double added = bkf_pde_psi(noisy)[i] - bkf_pde_psi(clean)[i];
+            CHECK_CLOSE(added, bkf_pde_psi(uni)[i] - model.nu, 0, 1e-15);
+            CHECK(bkf_pde_eta(noisy)[i] == bkf_pde_eta(clean)[i]);
+            sq += added * added;
+            diff_other += fabs(bkf_pde_psi(other)[i] - bkf_pde_psi(noisy)[i]);
+        }
+        CHECK_CLOSE(sqrt(sq / (double)N), 0.05, 1e-12, 0);
+        CHECK(diff_other > 1e-3 * (double)N);
+        bkf_pde_free(clean);
+        bkf_pde_free(noisy);
+        bkf_pde_free(uni);
+        bkf_pde_free(other);
+    }
+    bkf_init_spec sp;
+    CHECK_STATUS(bkf_init_parse("oscillation:noise=11", &sp, &e), BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "--init oscillation noise") && strstr(e.message, "[0, 10]"), "%s",
+              e.message);
+    bkf_init_free(&sp);
 }
