@@ -8,8 +8,9 @@
  *     a = sqrt(1 + mu^2),   b = mu/a           (so a b = mu),
  * which are the phase plane (x, x') for small mu and the Lienard plane for
  * large mu, smoothly in between.  An explicit Runge-Kutta (rk8pd) stepper is
- * used for mu <= BKF_CYCLE_STIFF_MU, an implicit Bader-Deuflhard stepper with
- * the analytic Jacobian above.  The error estimate comes from two solves at
+ * used for mu <= 30, above it a semi-implicit Bader-Deuflhard extrapolation
+ * stepper whose linear algebra is closed-form 2x2 (bd2x2; GSL's bsimp, the
+ * same method with a general LU, stays selectable).  The error estimate comes from two solves at
  * integration tolerances a factor BKF_CYCLE_TOL_RATIO apart; the reported
  * values are those of the tighter solve. */
 #ifndef BKFRONT_CYCLE_H
