@@ -8,7 +8,7 @@
  *     a = sqrt(1 + mu^2),   b = mu/a           (so a b = mu),
  * which are the phase plane (x, x') for small mu and the Lienard plane for
  * large mu, smoothly in between.  An explicit Runge-Kutta (rk8pd) stepper is
- * used for mu <= 30, above it a semi-implicit Bader-Deuflhard extrapolation
+ * used for mu <= BKF_CYCLE_STIFF_MU, above it a semi-implicit Bader-Deuflhard extrapolation
  * stepper whose linear algebra is closed-form 2x2 (bd2x2; GSL's bsimp, the
  * same method with a general LU, stays selectable).  The error estimate comes from two solves at
  * integration tolerances a factor BKF_CYCLE_TOL_RATIO apart; the reported
@@ -25,6 +25,8 @@ extern "C" {
 
 #define BKF_CYCLE_MU_MIN 1e-6
 #define BKF_CYCLE_MU_MAX 1e6
+/* Above this mu the automatic stepper is the stiff one (bd2x2). */
+#define BKF_CYCLE_STIFF_MU 30.0
 
 typedef enum {
     BKF_STEPPER_AUTO = 0,     /* explicit below the stiffness threshold */

@@ -33,7 +33,7 @@ enum { DIM = 5, IX = 0, IY = 1, IVX = 2, IVY = 3, IL = 4 };
 
 /* Above this mu the explicit stepper's step is limited by stability, not
  * accuracy (the fast rate is ~mu); measured crossover, see docs/benchmarks.md. */
-#define STIFF_MU 30.0
+#define STIFF_MU BKF_CYCLE_STIFF_MU
 /* Ratio of the two integration tolerances whose answers give the error
  * estimate. */
 #define TOL_RATIO 10.0
