@@ -1013,6 +1013,16 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
 {
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     int rc = cycle_solve_body(c, mu, nu, options, err);
+    /* bd2x2's estimate floor is 16 times bsimp's (BD_ERROR_PER_TOL), so at
+     * the tightest tolerances it refuses where bsimp answers (mu 47.07,
+     * nu -0.96, tol 1e-12: estimate 7.2e-13): the automatic choice then
+     * falls back to bsimp, never answering less than before bd2x2. */
+    if (bkf_status_is_numerical(rc) && (!options || options->stepper == BKF_STEPPER_AUTO) &&
+        auto_stepper(mu) == BKF_STEPPER_EXTRAPOLATION) {
+        bkf_cycle_options o = options ? *options : bkf_cycle_options_default();
+        o.stepper = BKF_STEPPER_IMPLICIT;
+        rc = cycle_solve_body(c, mu, nu, &o, err);
+    }
     bkf_gsl_handler_pop(handler);
     return rc;
 }
