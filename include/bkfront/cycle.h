@@ -8,8 +8,9 @@
  *     a = sqrt(1 + mu^2),   b = mu/a           (so a b = mu),
  * which are the phase plane (x, x') for small mu and the Lienard plane for
  * large mu, smoothly in between.  An explicit Runge-Kutta (rk8pd) stepper is
- * used for mu <= BKF_CYCLE_STIFF_MU, an implicit Bader-Deuflhard stepper with
- * the analytic Jacobian above.  The error estimate comes from two solves at
+ * used for mu <= BKF_CYCLE_STIFF_MU, above it a semi-implicit Bader-Deuflhard extrapolation
+ * stepper whose linear algebra is closed-form 2x2 (bd2x2; GSL's bsimp, the
+ * same method with a general LU, stays selectable).  The error estimate comes from two solves at
  * integration tolerances a factor BKF_CYCLE_TOL_RATIO apart; the reported
  * values are those of the tighter solve. */
 #ifndef BKFRONT_CYCLE_H
@@ -24,12 +25,22 @@ extern "C" {
 
 #define BKF_CYCLE_MU_MIN 1e-6
 #define BKF_CYCLE_MU_MAX 1e6
+/* Above this mu the automatic stepper is the stiff one (bd2x2). */
+#define BKF_CYCLE_STIFF_MU 30.0
 
 typedef enum {
     BKF_STEPPER_AUTO = 0,     /* explicit below the stiffness threshold */
     BKF_STEPPER_EXPLICIT = 1, /* gsl rk8pd */
-    BKF_STEPPER_IMPLICIT = 2  /* gsl bsimp with analytic Jacobian */
+    BKF_STEPPER_IMPLICIT = 2, /* gsl bsimp with analytic Jacobian */
+    BKF_STEPPER_EXTRAPOLATION = 3 /* the same method (semi-implicit midpoint
+                                     extrapolation) with closed-form 2x2 solves
+                                     and only (x, y) under error control; the
+                                     default above the stiffness threshold */
 } bkf_stepper_kind;
+
+/* The stepper's name as in bkf_cycle_result.stepper: "rk8pd", "bsimp",
+ * "bd2x2" ("auto" for BKF_STEPPER_AUTO); NULL for an unknown kind. */
+const char *bkf_cycle_stepper_name(bkf_stepper_kind kind);
 
 typedef struct {
     double tol;               /* requested relative accuracy of T, [1e-14, 1e-1] */

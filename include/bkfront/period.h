@@ -25,7 +25,7 @@ typedef struct {
     double tol;         /* relative on T; default 1e-10 */
     int along;          /* -1: points (default); 0 continue in mu, 1 in nu, from A to B
                            of that list, the other a single value */
-    int stepper;        /* index in auto, explicit, implicit */
+    int stepper;        /* index in auto, explicit, implicit, extrapolation */
     int method;         /* index in auto, asymptotic, leading, shooting */
 } bkf_period_spec;
 

@@ -27,9 +27,9 @@ static const bkf_io_column columns[] = {
 };
 #define NCOLUMNS (sizeof columns / sizeof columns[0])
 
-static const char *const stepper_names[] = {"auto", "explicit", "implicit", NULL};
+static const char *const stepper_names[] = {"auto", "explicit", "implicit", "extrapolation", NULL};
 static const bkf_stepper_kind stepper_kinds[] = {BKF_STEPPER_AUTO, BKF_STEPPER_EXPLICIT,
-                                                 BKF_STEPPER_IMPLICIT};
+                                                 BKF_STEPPER_IMPLICIT, BKF_STEPPER_EXTRAPOLATION};
 static const char *const method_names[] = {"auto", "asymptotic", "leading", "shooting", NULL};
 static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYMPTOTIC,
                                                 BKF_METHOD_LEADING, BKF_METHOD_SHOOTING};
@@ -73,9 +73,12 @@ const bkf_option bkf_period_options[] = {
              "numerical failure (exit 1). --continue needs shooting or\n"
              "auto (then it shoots)"},
     {.name = "stepper", .type = BKF_OPT_CHOICE, .offset = offsetof(bkf_period_spec, stepper),
-     .choices = stepper_names, .form = "auto|explicit|implicit", .shown_default = "auto",
-     .help = "integrator: rk8pd (explicit), bsimp with the analytic\n"
-             "Jacobian (implicit), or chosen by stiffness"},
+     .choices = stepper_names, .form = "auto|explicit|implicit|extrapolation",
+     .shown_default = "auto",
+     .help = "integrator: rk8pd (explicit), GSL's bsimp with the analytic\n"
+             "Jacobian (implicit; the former stiff default), bd2x2:\n"
+             "the same extrapolation method with closed-form 2x2 solves\n"
+             "(extrapolation), or auto: rk8pd for mu <= 30, else bd2x2"},
 };
 const size_t bkf_period_noptions = sizeof bkf_period_options / sizeof bkf_period_options[0];
 
@@ -185,7 +188,7 @@ static int write_comments(bkf_io_table *table, const bkf_period_spec *spec,
             "T_asym2: large-mu expansion (mu >= 1) or small-mu expansion (mu < 1)\n"
             "xmax, xmin: extremes of f; multiplier: nontrivial Floquet multiplier, "
             "log_multiplier: its logarithm; steps, rhs_calls, newton_iterations: work of the "
-            "solve; stepper: GSL stepper used; model: what answered (shooting, asymptotic, "
+            "solve; stepper: integrator used; model: what answered (shooting, asymptotic, "
             "leading; for a formula T_err is its error bound)",
             err);
     if (s) return s;

@@ -33,12 +33,15 @@ enum { DIM = 5, IX = 0, IY = 1, IVX = 2, IVY = 3, IL = 4 };
 
 /* Above this mu the explicit stepper's step is limited by stability, not
  * accuracy (the fast rate is ~mu); measured crossover, see docs/benchmarks.md. */
-#define STIFF_MU 30.0
+#define STIFF_MU BKF_CYCLE_STIFF_MU
 /* Ratio of the two integration tolerances whose answers give the error
  * estimate. */
 #define TOL_RATIO 10.0
 #define MAX_STEPS_PER_PERIOD 200000
 #define MAX_NEWTON 60
+/* Inverted brackets (noise above the distance to the cycle) tolerated
+ * before Newton gives up at a tolerance. */
+#define MAX_INVERSIONS 3
 #define MAX_TURN 1.0         /* radians per step about the equilibrium */
 /* Largest ratio of the coarse tolerance to the integration tolerance for which
  * the coarse solve serves as the looser solve of the error estimate. */
@@ -56,15 +59,18 @@ typedef struct {
 
 /* An integrator: one GSL step/control/evolve set for one tolerance. */
 typedef struct {
-    gsl_odeiv2_driver *driver;
+    gsl_odeiv2_driver *driver; /* NULL for the closed-form extrapolation stepper */
     gsl_odeiv2_step *step;
     gsl_odeiv2_control *control;
     gsl_odeiv2_evolve *evolve;
     gsl_odeiv2_system system;
+    flow_params *flow;
+    int row_target; /* extrapolation: the row at which a step is expected to converge */
     double tol;
     size_t steps;
     double max_turn; /* the turn limit of this integrator's shots */
     size_t capped;   /* steps shortened by the turn limit (shoot) */
+    int noisy;       /* Newton gave up: the returns are below this tolerance's noise */
 } integrator;
 
 typedef struct {
@@ -145,6 +151,184 @@ static void flow_set(flow_params *p, double mu, double nu)
     p->b = mu / p->a;
 }
 
+/* ------------------------------------- closed-form extrapolation stepper */
+
+/* Bader-Deuflhard semi-implicit midpoint rule with polynomial extrapolation
+ * in h^2, the method of GSL's bsimp, written for this system: the Jacobian
+ * of (x, y, vx, vy, L) is block lower triangular, the (x, y) block A repeated
+ * for (vx, vy), so I - hJ is solved by two closed-form 2x2 solves and a
+ * substitution.  Measured with callgrind, GSL's general LU on the 5x5 matrix
+ * was about 82% of bsimp's instructions at mu 100 and 1e4.  L is not under
+ * error control (it rides on the steps of (x, y); its error is estimated
+ * from the two solves): its absolute control, L growing like mu T, halved
+ * the steps at large mu for nothing in T. */
+#define BD_ROWS 8
+#define BD_ROW_START 4
+/* The variational column is controlled this much more loosely than (x, y):
+ * it gives Newton's derivative and dT/dy0, whose error multiplies the last
+ * Newton step (~1e-7) in the first-order correction of T.  Left out of
+ * control, dT was 1% off and T 1.2e-10 (mu 100, nu 0, local tol 1e-11);
+ * controlled like (x, y) it doubled the steps. */
+#define BD_VARIATIONAL_SLACK 1e4
+/* The largest true error of T per unit local tolerance times T, measured
+ * against the Taylor reference, divided by 3 (the estimate may flatter by
+ * at most 3): 11 at mu 31, nu 0.99, local tol 1e-12 (relative to the
+ * cycle's size, as below), 5.3 at mu 30.5, nu 0.5, local tol 8.7e-7, where
+ * |T_a - T_b| was 20 times smaller.  The accepted value is the table's diagonal, but
+ * the step is controlled on the error of the row below it, and on the slow
+ * branches an error of tol in position is mu tol in time. */
+#define BD_ERROR_PER_TOL 4.0
+static const int bd_n[BD_ROWS] = {2, 6, 10, 14, 22, 34, 50, 70};
+
+typedef struct {
+    double det_inv, ha, h_a, cx, cl;
+} bd_matrix;
+
+/* I - h J(s0); 0 if it is (nearly) singular, which an unstable stretch of
+ * the cycle (|x| < 1) can make it at long steps: the step is then shortened. */
+static int bd_matrix_set(bd_matrix *m, const flow_params *p, const double *s0, double h)
+{
+    double x = s0[IX], hd = h * p->mu * (x * x - 1.0);
+    double det = 1.0 + hd + h * h;
+    if (!(fabs(det) > 1e-6 * (1.0 + fabs(hd) + h * h))) return 0;
+    m->det_inv = 1.0 / det;
+    m->ha = h * p->a;
+    m->h_a = h / p->a;
+    m->cx = 2.0 * h * p->mu * x * s0[IVX];
+    m->cl = 2.0 * h * p->mu * x;
+    return 1;
+}
+
+/* One semi-implicit midpoint pass over H in n substeps from s0 (f0 = f(s0)),
+ * the right-hand side and the block solve written out on scalars: with
+ * arrays of 5 and calls per substep it cost 245 instructions a substep
+ * (callgrind, mu 1e4), most of them loads, stores and two divisions. */
+static int bd_midpoint(flow_params *p, const double *s0, const double *f0, double H, int n, double *out)
+{
+    double hs = H / n;
+    bd_matrix m;
+    if (!bd_matrix_set(&m, p, s0, hs)) return 0;
+    const double a = p->a, ia = 1.0 / p->a, mu = p->mu, nu = p->nu;
+    const double di = m.det_inv, ha = m.ha, h_a = m.h_a, cx = m.cx, cl = m.cl;
+    /* z = (I - hs J)^-1 r: the (x, y) block, then the variational block with
+     * its coupling to z0, then L by substitution */
+#define BD_SOLVE(r0, r1, r2, r3, r4)                                                              \
+    do {                                                                                          \
+        z0 = ((r0) + ha * (r1)) * di;                                                             \
+        z1 = (r1) - h_a * z0;                                                                     \
+        z2 = ((r2) - cx * z0 + ha * (r3)) * di;                                                   \
+        z3 = (r3) - h_a * z2;                                                                     \
+        z4 = (r4) - cl * z0;                                                                      \
+    } while (0)
+    double z0, z1, z2, z3, z4;
+    BD_SOLVE(hs * f0[0], hs * f0[1], hs * f0[2], hs * f0[3], hs * f0[4]);
+    double d0 = z0, d1 = z1, d2 = z2, d3 = z3, d4 = z4;
+    double x = s0[0] + d0, y = s0[1] + d1, vx = s0[2] + d2, vy = s0[3] + d3, L = s0[4] + d4;
+    for (int k = 1; k <= n; k++) {
+        double damping = mu * (x * x - 1.0);
+        double g0 = a * y - mu * (x * x * x / 3.0 - x), g1 = (nu - x) * ia;
+        double g2 = -damping * vx + a * vy, g3 = -vx * ia, g4 = -damping;
+        BD_SOLVE(hs * g0 - d0, hs * g1 - d1, hs * g2 - d2, hs * g3 - d3, hs * g4 - d4);
+        if (k == n) break;
+        d0 += 2.0 * z0;
+        d1 += 2.0 * z1;
+        d2 += 2.0 * z2;
+        d3 += 2.0 * z3;
+        d4 += 2.0 * z4;
+        x += d0;
+        y += d1;
+        vx += d2;
+        vy += d3;
+        L += d4;
+    }
+#undef BD_SOLVE
+    out[0] = x + z0;
+    out[1] = y + z1;
+    out[2] = vx + z2;
+    out[3] = vy + z3;
+    out[4] = L + z4;
+    p->rhs_calls += (size_t)n;
+    return isfinite(out[IX]) && isfinite(out[IY]);
+}
+
+/* Work of rows 0..j in right-hand sides (a row of n substeps costs n). */
+static double bd_work(int j)
+{
+    double w = 1.0;
+    for (int i = 0; i <= j; i++) w += bd_n[i];
+    return w;
+}
+
+/* One accepted step from (*t, s) of at most min(*h, t1 - *t), with the
+ * step and order control of Hairer and Wanner's ODEX/SEULEX (the work per
+ * unit step decides between neighbouring rows); *h is the next step. */
+static int bd_apply(integrator *in, double *t, double t1, double *h, double *s)
+{
+    flow_params *p = in->flow;
+    double f0[DIM], table[BD_ROWS][DIM], row[DIM], hopt[BD_ROWS], work[BD_ROWS];
+    int k = in->row_target;
+    flow_rhs(0.0, s, f0, p);
+    for (int attempt = 0; attempt < 200; attempt++) {
+        p->jacobian_calls++; /* one Jacobian, at s, per attempt */
+        int last = *t + *h >= t1;
+        double H = last ? t1 - *t : *h;
+        int accepted = -1, jmax = k + 1 < BD_ROWS ? k + 1 : BD_ROWS - 1, j;
+        double reduce = 0.25;
+        for (j = 0; j <= jmax; j++) {
+            if (!bd_midpoint(p, s, f0, H, bd_n[j], row)) break;
+            /* Neville's scheme in (H/n)^2 toward 0, one row at a time */
+            for (int c = 1; c <= j; c++) {
+                double q = (double)bd_n[j] / bd_n[j - c];
+                q = 1.0 / (q * q - 1.0);
+                for (int i = 0; i < DIM; i++) {
+                    double prev = table[c - 1][i];
+                    table[c - 1][i] = row[i];
+                    row[i] += (row[i] - prev) * q;
+                }
+            }
+            memcpy(table[j], row, sizeof row);
+            /* rows below k - 2 can neither be accepted nor enter the
+             * choice of the next row */
+            if (j == 0 || j < k - 2) continue;
+            double e = 0.0;
+            for (int i = IX; i <= IVY; i++) {
+                double d = fabs(table[j][i] - table[j - 1][i]) / (in->tol * (1.0 + fabs(table[j][i])));
+                if (i >= IVX) d /= BD_VARIATIONAL_SLACK;
+                if (d > e) e = d;
+            }
+            if (!isfinite(e)) break;
+            double fac = e > 0.0 ? 0.94 * pow(0.65 / e, 1.0 / (2 * j + 1)) : 4.0;
+            hopt[j] = H * fmin(4.0, fmax(0.02, fac));
+            work[j] = bd_work(j) / hopt[j];
+            if (j >= k - 1 && e <= 1.0) {
+                accepted = j;
+                break;
+            }
+            reduce = hopt[j] / H;
+        }
+        if (accepted < 0) {
+            /* a failed pass (singular or non-finite) halves the step */
+            *h = H * (j <= jmax ? 0.5 : fmin(0.5, reduce));
+            if (!(fabs(*h) > 1e-14 * fmax(1.0, fabs(*t)))) return BKF_ENUMERIC;
+            continue;
+        }
+        memcpy(s, table[accepted], sizeof row);
+        *t = last ? t1 : *t + H;
+        int knew = accepted;
+        if (accepted >= 2 && work[accepted - 1] < 0.8 * work[accepted]) knew = accepted - 1;
+        double hn = hopt[knew];
+        if (knew == accepted && accepted + 1 < BD_ROWS - 1 &&
+            (accepted == 1 || work[accepted] < 0.9 * work[accepted - 1])) {
+            hn = hopt[accepted] * bd_work(accepted + 1) / bd_work(accepted);
+            knew = accepted + 1;
+        }
+        in->row_target = knew < 2 ? 2 : knew;
+        if (!last || hn < *h) *h = hn;
+        return BKF_OK;
+    }
+    return BKF_ENUMERIC;
+}
+
 /* ---------------------------------------------------------- integrator */
 
 /* The implicit stepper is Bader-Deuflhard (bsimp): one-step, so restarts
@@ -152,18 +336,37 @@ static void flow_set(flow_params *p, double mu, double nu)
  * measured far more accurate per tolerance than msbdf near the knees, where
  * the msbdf period wandered at 1e-7 relative whatever the tolerance
  * (mu = 1e4, nu = 0.999). */
+static bkf_stepper_kind auto_stepper(double mu)
+{
+    return mu > STIFF_MU ? BKF_STEPPER_EXTRAPOLATION : BKF_STEPPER_EXPLICIT;
+}
+
+const char *bkf_cycle_stepper_name(bkf_stepper_kind kind)
+{
+    switch (kind) {
+    case BKF_STEPPER_AUTO: return "auto";
+    case BKF_STEPPER_EXPLICIT: return "rk8pd";
+    case BKF_STEPPER_IMPLICIT: return "bsimp";
+    case BKF_STEPPER_EXTRAPOLATION: return "bd2x2";
+    }
+    return NULL;
+}
+
 static int integrator_init(integrator *in, flow_params *flow, bkf_stepper_kind kind, int restarts,
                            double tol)
 {
     static const double scale[DIM] = {1.0, 1.0, 1.0, 1.0, 1.0};
     (void)restarts;
+    memset(in, 0, sizeof *in);
+    in->flow = flow;
+    in->tol = tol;
+    in->max_turn = MAX_TURN;
+    in->row_target = BD_ROW_START;
+    if (kind == BKF_STEPPER_EXTRAPOLATION) return BKF_OK;
     const gsl_odeiv2_step_type *type =
         kind == BKF_STEPPER_IMPLICIT ? gsl_odeiv2_step_bsimp : gsl_odeiv2_step_rk8pd;
     in->system = (gsl_odeiv2_system){flow_rhs, flow_jacobian, DIM, flow};
     in->driver = gsl_odeiv2_driver_alloc_scaled_new(&in->system, type, 1e-3, tol, tol, 1.0, 0.0, scale);
-    in->tol = tol;
-    in->steps = 0;
-    in->max_turn = MAX_TURN;
     if (!in->driver) return BKF_ENOMEM;
     in->step = in->driver->s;
     in->control = in->driver->c;
@@ -177,21 +380,36 @@ static void integrator_free(integrator *in)
     memset(in, 0, sizeof *in);
 }
 
+static void integrator_reset(integrator *in)
+{
+    in->row_target = BD_ROW_START;
+    if (!in->driver) return;
+    gsl_odeiv2_evolve_reset(in->evolve);
+    gsl_odeiv2_step_reset(in->step);
+}
+
+/* One accepted step from *t toward t1 (never past it); *h: the next step. */
+static int integrator_apply(integrator *in, double *t, double t1, double *h, double *s)
+{
+    if (!in->driver) return bd_apply(in, t, t1, h, s);
+    return gsl_odeiv2_evolve_apply(in->evolve, in->control, in->step, &in->system, t, t1, h, s) ==
+                   GSL_SUCCESS
+               ? BKF_OK
+               : BKF_ENUMERIC;
+}
+
 /* Advance s from t0 to exactly t1 under error control. */
 static int integrator_to(integrator *in, double t0, double *s, double t1)
 {
     double t = t0, h = t1 - t0;
     if (h == 0.0) return BKF_OK;
-    gsl_odeiv2_evolve_reset(in->evolve);
-    gsl_odeiv2_step_reset(in->step);
+    integrator_reset(in);
     for (int guard = 0; t != t1; guard++) {
         if (guard > 100000) return BKF_ENUMERIC;
         /* bsimp can suggest a next step of the wrong sign after a rejected
          * step near t1; GSL treats that as a caller error */
         if ((t1 > t && !(h > 0.0)) || (t1 < t && !(h < 0.0))) h = t1 - t;
-        if (gsl_odeiv2_evolve_apply(in->evolve, in->control, in->step, &in->system, &t, t1, &h, s) !=
-            GSL_SUCCESS)
-            return BKF_ENUMERIC;
+        if (integrator_apply(in, &t, t1, &h, s) != BKF_OK) return BKF_ENUMERIC;
         /* A non-finite state has a non-finite error estimate, which the
          * step control does not reject: stop here, never hand it on. */
         if (!isfinite(s[0]) || !isfinite(s[1])) return BKF_ENUMERIC;
@@ -291,8 +509,7 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
         keep->node_count = 0;
         if (node_push(keep, t, s) != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
-    gsl_odeiv2_evolve_reset(main_in->evolve);
-    gsl_odeiv2_step_reset(main_in->step);
+    integrator_reset(main_in);
     for (size_t n = 0;; n++) {
         if (n > MAX_STEPS_PER_PERIOD)
             return bkf_error_set(err, BKF_EBUDGET,
@@ -300,13 +517,12 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
                                  p->mu, p->nu, MAX_STEPS_PER_PERIOD);
         memcpy(s_prev, s, sizeof s);
         t_prev = t;
-        int rc = gsl_odeiv2_evolve_apply(main_in->evolve, main_in->control, main_in->step,
-                                         &main_in->system, &t, GSL_POSINF, &h, s);
+        int rc = integrator_apply(main_in, &t, GSL_POSINF, &h, s);
         main_in->steps++;
-        if (rc != GSL_SUCCESS || !isfinite(s[IX]) || !isfinite(s[IY]))
+        if (rc != BKF_OK || !isfinite(s[IX]) || !isfinite(s[IY]))
             return bkf_error_set(err, BKF_ENUMERIC,
-                                 "cycle at mu = %.15g, nu = %.15g: integration failed at z = %g (%s)",
-                                 p->mu, p->nu, t, gsl_strerror(rc));
+                                 "cycle at mu = %.15g, nu = %.15g: integration failed at z = %g", p->mu,
+                                 p->nu, t);
         if (keep) {
             double xd_prev = flow_xdot(p, s_prev), xd = flow_xdot(p, s);
             if ((xd_prev > 0) != (xd > 0)) {
@@ -450,9 +666,10 @@ static double capped_floor(double period_err, const integrator *looser, double p
 static double period_error(const converged *a, const converged *b, const flow_params *p,
                            bkf_stepper_kind kind)
 {
-    int implicit = kind == BKF_STEPPER_IMPLICIT;
+    int implicit = kind != BKF_STEPPER_EXPLICIT;
     double size = fmin(1.0, 2.0 * sqrt(1.0 - p->nu * p->nu));
-    double tol_floor = (implicit ? 0.25 : 0.02) * b->tol * b->period / size;
+    double per_tol = kind == BKF_STEPPER_EXTRAPOLATION ? BD_ERROR_PER_TOL : implicit ? 0.25 : 0.02;
+    double tol_floor = per_tol * b->tol * b->period / size;
     double amplified = b->period + fmax(1.0, fabs(b->y0)) * fabs(b->dT) / (1.0 - fmin(b->return_slope, 0.999999));
     double round_floor = (implicit ? 30.0 : 8.0) * DBL_EPSILON * amplified;
     double diff = fabs(a->period - b->period) + 8.0 * DBL_EPSILON * b->period;
@@ -473,6 +690,8 @@ static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, 
     flow_params *p = &c->flow;
     double lo = p->b * lienard_F(p->nu), hi = GSL_POSINF;
     double previous_step = GSL_POSINF, stride = 0.0;
+    int inversions = 0;
+    in->noisy = 0;
     for (int iter = 0; iter < MAX_NEWTON; iter++) {
         shot sh = {0};
         int rc = shoot(in, aux, p, *y0, keep ? c : NULL, &sh, err);
@@ -487,6 +706,13 @@ static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, 
          * negative and put the Newton point a hair beyond P itself */
         double slack = 1e-3 * fabs(g) + 4.0 * DBL_EPSILON * fabs(*y0);
         int safeguarded = 0, inverted = lo >= hi;
+        if (inverted && ++inversions > MAX_INVERSIONS) {
+            in->noisy = 1;
+            return bkf_error_set(err, BKF_ENUMERIC,
+                                 "cycle at mu = %.15g, nu = %.15g: the returns at local tolerance %g are "
+                                 "below the integration noise (the bracket of the cycle inverted %d times)",
+                                 p->mu, p->nu, in->tol, inversions);
+        }
         if (inverted) {
             /* integration noise exceeds the distance to the cycle: the
              * bracket carries no information any more */
@@ -548,8 +774,8 @@ static int check_inputs(double mu, double nu, const bkf_cycle_options *o, bkf_er
     rc = bkf_model_check_tol(o->tol, err);
     if (rc != BKF_OK) return rc;
     if (o->stepper != BKF_STEPPER_AUTO && o->stepper != BKF_STEPPER_EXPLICIT &&
-        o->stepper != BKF_STEPPER_IMPLICIT)
-        return bkf_error_set(err, BKF_EINPUT, "stepper must be auto, explicit or implicit");
+        o->stepper != BKF_STEPPER_IMPLICIT && o->stepper != BKF_STEPPER_EXTRAPOLATION)
+        return bkf_error_set(err, BKF_EINPUT, "stepper must be auto, explicit, implicit or extrapolation");
     return BKF_OK;
 }
 
@@ -577,7 +803,7 @@ static void store_result(bkf_cycle *c, const converged *a, const converged *b, d
     r->rhs_calls = p->rhs_calls;
     r->jacobian_calls = p->jacobian_calls;
     r->newton_iterations = iterations;
-    r->stepper = kind == BKF_STEPPER_IMPLICIT ? "bsimp" : "rk8pd";
+    r->stepper = bkf_cycle_stepper_name(kind);
     r->model = "shooting";
     c->have_solution = 1;
     c->profile_tol = profile_tol;
@@ -602,7 +828,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
     flow_params *p = &c->flow;
     p->rhs_calls = p->jacobian_calls = 0;
     bkf_stepper_kind kind = opt.stepper;
-    if (kind == BKF_STEPPER_AUTO) kind = mu > STIFF_MU ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
+    if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu);
 
     double slope = c->warm_slope > 0 ? c->warm_slope
                    : opt.warm_start && c->have_solution ? warm_slope
@@ -621,7 +847,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
     tol_int = fmin(tol_int, 1e-5 * fmin(1.0, sqrt(1.0 - nu * nu)));
     /* Below these local tolerances the steppers only accumulate rounding
      * (measured: bsimp at 1e-15 takes ~1e5 steps a period at mu = 1e4). */
-    const double tol_floor = kind == BKF_STEPPER_IMPLICIT ? 1e-14 : 1e-16;
+    const double tol_floor = kind != BKF_STEPPER_EXPLICIT ? 1e-14 : 1e-16;
     if (tol_int / TOL_RATIO < tol_floor) tol_int = tol_floor * TOL_RATIO;
     double tol_loose = fmax(tol_int, 1e-5 * fmin(1.0, sqrt(1.0 - nu * nu)));
     integrator coarse = {0}, fine = {0}, finer = {0}, aux = {0};
@@ -636,7 +862,25 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
      * below q_goal needs no confirming shot: the first-order correction
      * leaves an error of that order */
     double q_goal = 1e-2 * opt.tol;
-    rc = newton_at(c, &coarse, &aux, &y0, 1e-3, 1e-4 * y_scale, y_scale, 0.0, 0, &iterations, &a, err);
+    /* In the canard region an error made on the repelling slow branch grows
+     * like exp(mu x the time spent there) before the orbit jumps: at mu 3.65,
+     * nu 0.99 the returns at the coarse tolerance 1.4e-6 were 3e-3 off, P
+     * looked decreasing and Newton cycled for 60 steps.  Such noise shows as
+     * brackets that invert; the coarse solve then tightens its tolerance. */
+    for (double y_start = y0;;) {
+        rc = newton_at(c, &coarse, &aux, &y0, 1e-3, 1e-4 * y_scale, y_scale, 0.0, 0, &iterations, &a, err);
+        if (rc == BKF_OK || !coarse.noisy || tol_loose <= tol_int) break;
+        tol_loose = fmax(tol_int, 1e-2 * tol_loose);
+        size_t coarse_steps = coarse.steps, aux_steps = aux.steps;
+        integrator_free(&coarse);
+        integrator_free(&aux);
+        if (integrator_init(&coarse, p, kind, 0, tol_loose) != BKF_OK ||
+            integrator_init(&aux, p, kind, 1, tol_loose) != BKF_OK)
+            goto fail_mem;
+        coarse.steps = coarse_steps;
+        aux.steps = aux_steps;
+        y0 = y_start;
+    }
     if (rc != BKF_OK) goto done;
     /* Fast path for loose tolerances: when the coarse solve is within a
      * factor FAST_SPAN of the integration tolerance asked, it serves as the
@@ -657,7 +901,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
      * 14 with a factor 10); there the pair is a factor 100 apart, which makes
      * the tighter solve's steps tolerance-limited again. */
     if (tol_loose <= 1.01 * FAST_SPAN * tol_int) {
-        int step_set_by_tol = kind == BKF_STEPPER_IMPLICIT || mu <= STIFF_MU / 3.0;
+        int step_set_by_tol = kind != BKF_STEPPER_EXPLICIT || mu <= STIFF_MU / 3.0;
         double tol_b = tol_loose / (step_set_by_tol ? TOL_RATIO : TOL_RATIO * TOL_RATIO);
         if (tol_b >= tol_floor) {
             size_t aux_steps = aux.steps;
@@ -769,6 +1013,16 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
 {
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     int rc = cycle_solve_body(c, mu, nu, options, err);
+    /* bd2x2's estimate floor is 16 times bsimp's (BD_ERROR_PER_TOL), so at
+     * the tightest tolerances it refuses where bsimp answers (mu 47.07,
+     * nu -0.96, tol 1e-12: estimate 7.2e-13): the automatic choice then
+     * falls back to bsimp, never answering less than before bd2x2. */
+    if (bkf_status_is_numerical(rc) && (!options || options->stepper == BKF_STEPPER_AUTO) &&
+        auto_stepper(mu) == BKF_STEPPER_EXTRAPOLATION) {
+        bkf_cycle_options o = options ? *options : bkf_cycle_options_default();
+        o.stepper = BKF_STEPPER_IMPLICIT;
+        rc = cycle_solve_body(c, mu, nu, &o, err);
+    }
     bkf_gsl_handler_pop(handler);
     return rc;
 }
@@ -959,7 +1213,7 @@ static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, d
     flow_params p = {0};
     flow_set(&p, mu, nu);
     bkf_stepper_kind kind = b->options.stepper;
-    if (kind == BKF_STEPPER_AUTO) kind = mu > STIFF_MU ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
+    if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu);
     integrator in = {0}, aux = {0};
     double tol = fmax(0.1 * b->options.tol, 1e-13);
     int rc = BKF_ENOMEM;

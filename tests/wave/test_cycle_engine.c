@@ -1,0 +1,108 @@
+/* Issue 20, items 1 and 2: the closed-form extrapolation stepper (bd2x2),
+ * the stiff default, against the independent long-double Taylor reference
+ * (taylor_reference.h), the former stiff default (bsimp) still selectable,
+ * and cold solves inside the canard explosion, where integration noise on
+ * the repelling slow branch used to make Newton cycle. */
+#include "harness.h"
+
+#include "bkfront/cycle.h"
+
+#include <string.h>
+
+#include "taylor_reference.h"
+
+static int solve_with(double mu, double nu, double tol, bkf_stepper_kind kind, bkf_cycle_result *r,
+                      bkf_error *e)
+{
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = tol;
+    o.stepper = kind;
+    o.warm_start = 0;
+    return bkf_cycle_period(mu, nu, &o, r, e);
+}
+
+TEST(cycle_engine_bd2x2_meets_tol_against_taylor)
+{
+    const double mus[] = {31, 100, 300}; /* the reference costs 2 s at 300, a minute at 1e3 */
+    const double nus[] = {0.0, -0.96, 0.99};
+    const double tols[] = {1e-3, 1e-6, 1e-10};
+    double worst = 0.0;
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++)
+        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+            double ref = NAN, unc = 0.0;
+            for (size_t k = 0; k < sizeof tols / sizeof tols[0]; k++) {
+                bkf_cycle_result r;
+                bkf_error e = {0};
+                int rc = solve_with(mus[i], nus[j], tols[k], BKF_STEPPER_AUTO, &r, &e);
+                CHECK_MSG(rc == BKF_OK, "mu %g nu %g tol %g: %s", mus[i], nus[j], tols[k], e.message);
+                if (rc != BKF_OK) continue;
+                CHECK_MSG(strcmp(r.stepper, "bd2x2") == 0, "mu %g: auto chose %s", mus[i], r.stepper);
+                if (!isfinite(ref)) ref = taylor_period(mus[i], nus[j], r.section_slope, &unc);
+                double err = fabs(r.period - ref), ratio = fmax(err - unc, 0.0) / r.period_err;
+                CHECK_MSG(unc <= 1e-3 * tols[k] * r.period, "mu %g nu %g: reference uncertain by %.2g",
+                          mus[i], nus[j], unc / r.period);
+                CHECK_MSG(err <= tols[k] * r.period + unc, "mu %g nu %g tol %g: error %.3g > tol", mus[i],
+                          nus[j], tols[k], err / r.period);
+                CHECK_MSG(ratio <= 3.0, "mu %g nu %g tol %g: estimate %.3g optimistic by %.3g", mus[i],
+                          nus[j], tols[k], r.period_err / r.period, ratio);
+                if (ratio > worst) worst = ratio;
+            }
+        }
+    bkf_test_note("largest true/estimated error ratio: %.3g", worst);
+}
+
+/* The former stiff default stays selectable and agrees within the two
+ * estimates; bd2x2 is selectable below the stiffness threshold too. */
+TEST(cycle_engine_steppers_selectable_and_agree)
+{
+    const double mus[] = {3, 100, 1e4};
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++) {
+        bkf_cycle_result a, b;
+        bkf_error e = {0};
+        CHECK_MSG(solve_with(mus[i], -0.5, 1e-9, BKF_STEPPER_IMPLICIT, &a, &e) == BKF_OK, "%s", e.message);
+        CHECK_MSG(solve_with(mus[i], -0.5, 1e-9, BKF_STEPPER_EXTRAPOLATION, &b, &e) == BKF_OK, "%s",
+                  e.message);
+        CHECK(strcmp(a.stepper, "bsimp") == 0 && strcmp(b.stepper, "bd2x2") == 0);
+        CHECK_MSG(fabs(a.period - b.period) <= a.period_err + b.period_err,
+                  "mu %g: bsimp %.17g bd2x2 %.17g beyond %.2g + %.2g", mus[i], a.period, b.period,
+                  a.period_err, b.period_err);
+    }
+    CHECK(strcmp(bkf_cycle_stepper_name(BKF_STEPPER_EXTRAPOLATION), "bd2x2") == 0);
+    CHECK(bkf_cycle_stepper_name((bkf_stepper_kind)7) == NULL);
+    bkf_cycle_result r;
+    bkf_error e = {0};
+    CHECK(solve_with(1.0, 0.0, 1e-8, (bkf_stepper_kind)7, &r, &e) == BKF_EINPUT);
+}
+
+/* Issue 20: a cold solve at mu 3.6505, nu 0.99 (inside the canard
+ * explosion, 1 - nu ~ 1/(8 mu^2)) did not converge in 60 Newton steps.
+ * Now it answers within tol of the Taylor reference at tol 1e-8, and at
+ * 1e-10, where forward shooting's rounding noise is about 7e-11 of T, it
+ * answers within tol or refuses with BKF_ETOL, never a non-convergence. */
+TEST(cycle_engine_cold_solve_in_the_canard)
+{
+    const double mus[] = {3.6505, 3.65046710920463};
+    const double nus[] = {0.99, -0.99};
+    for (size_t i = 0; i < 2; i++)
+        for (size_t j = 0; j < 2; j++) {
+            double unc = 0.0, ref = NAN;
+            const double tols[] = {1e-8, 1e-10};
+            for (size_t k = 0; k < 2; k++) {
+                bkf_cycle_result r;
+                bkf_error e = {0};
+                int rc = solve_with(mus[i], nus[j], tols[k], BKF_STEPPER_AUTO, &r, &e);
+                if (k == 1 && rc == BKF_ETOL) {
+                    bkf_test_note("mu %.15g nu %g tol 1e-10: refused (%s)", mus[i], nus[j], e.message);
+                    continue;
+                }
+                CHECK_MSG(rc == BKF_OK, "mu %.15g nu %g tol %g: %s", mus[i], nus[j], tols[k], e.message);
+                if (rc != BKF_OK) continue;
+                if (!isfinite(ref)) ref = taylor_period(mus[i], nus[j], r.section_slope, &unc);
+                double err = fabs(r.period - ref);
+                CHECK_MSG(err <= tols[k] * r.period + unc, "mu %.15g nu %g tol %g: error %.3g > tol",
+                          mus[i], nus[j], tols[k], err / r.period);
+                CHECK_MSG(fmax(err - unc, 0.0) <= 3.0 * r.period_err, "estimate %.3g, true %.3g",
+                          r.period_err / r.period, err / r.period);
+            }
+        }
+}
