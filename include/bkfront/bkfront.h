@@ -8,6 +8,7 @@
 #include "bkfront/version.h"
 #include "bkfront/model.h"
 #include "bkfront/io.h"
+#include "bkfront/h5.h"
 #include "bkfront/asymptotics.h"
 #include "bkfront/continuation.h"
 #include "bkfront/cycle.h"
