@@ -186,8 +186,13 @@ int bkf_h5_write(bkf_io_atomic *file, const bkf_h5_grid *g, bkf_error *err)
      * to a file itself.  A write that fails inside HDF5 leaves a file it can
      * neither close nor forget (1.10 then crashes at exit), and a file
      * reopened by name could be another one. */
-    double bytes = 65536.0 + 8.0 * (double)(g->rows.count + g->columns.count) +
-                   4.0 * (double)g->nfields * (double)g->rows.count * (double)g->columns.count;
+    /* The core driver grows its image by whole increments (and zeroes
+     * them): one increment a little above the raw data holds the whole
+     * file (chunk indices and headers add ~2%), so the peak is the image
+     * once, not twice. */
+    double bytes = 1048576.0 + 8.0 * (double)(g->rows.count + g->columns.count) +
+                   1.05 * 4.0 * (double)g->nfields * (double)g->rows.count *
+                       (double)g->columns.count;
     if (g->deflate) bytes /= 8; /* grown as needed */
     size_t increment = bytes > 268435456.0 ? 268435456u : (size_t)bytes;
     hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
