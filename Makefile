@@ -6,14 +6,14 @@
 
 DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
                 libinih-dev libsundials-dev liblapacke-dev gnuplot-nox \
-                python3-cffi python3-numpy python3-pytest
+                python3-cffi python3-numpy python3-pytest libhdf5-dev python3-h5py
 # Only for `make valgrind` and `make fuzz` (libFuzzer ships with clang's
 # runtime), so that `make test` needs neither.
 VALGRIND_PACKAGES := valgrind
 # Only for `make mpi` (bkfront sweep under mpirun) and `make test-mpi`.
 MPI_PACKAGES      := libopenmpi-dev openmpi-bin
 FUZZ_PACKAGES     := clang libclang-rt-dev
-PKGS         := gsl nlopt fftw3 inih lapacke
+PKGS         := gsl nlopt fftw3 inih lapacke hdf5-serial
 
 CC       ?= cc
 OPT      ?= -O2
@@ -28,7 +28,10 @@ override LDFLAGS += $(SANITIZE) -fopenmp
 # SUNDIALS (CVODE for the comoving simulation) ships no pkg-config file.
 SUNDIALS_LIBS := -lsundials_cvode -lsundials_sunlinsolband -lsundials_sunmatrixband \
                  -lsundials_nvecserial
-LDLIBS   += $(PKG_LIBS) $(SUNDIALS_LIBS) -lm
+# HDF5's dimension scales (H5DS) are in its high-level library, which
+# hdf5-serial.pc does not list; its -L is that of hdf5-serial.
+HDF5_HL_LIBS := -lhdf5_hl
+LDLIBS   += $(HDF5_HL_LIBS) $(PKG_LIBS) $(SUNDIALS_LIBS) -lm
 
 # The library's layers, lowest first (CONTRIBUTING.md): a file may include
 # the headers of its own layer and of the layers before it, never after
@@ -238,7 +241,7 @@ $(INST)/bkfront.pc: src/bkfront.pc.in $(INST)/dirs include/bkfront/version.h
 	sed -e 's|@PREFIX@|$(PREFIX)|' -e 's|@LIBDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))|' \
 	  -e 's|@INCLUDEDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))|' \
 	  -e 's|@VERSION@|$(VERSION)|' -e 's|@REQUIRES@|$(PKGS)|' \
-	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) -lgomp -lm|' $< > $@
+	  -e 's|@LIBS_PRIVATE@|$(HDF5_HL_LIBS) $(SUNDIALS_LIBS) -lgomp -lm|' $< > $@
 
 # The Python package finds the shared library by its path relative to the
 # package, so that a staged (DESTDIR) or moved tree still works.

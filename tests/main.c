@@ -80,6 +80,7 @@ static const struct {
     {"extremes_floquet_matrix_gamma_to_30", 36.4},
     {"extremes_floquet_matrix_gamma_100_near_hopf", 28.3},
     {"extremes_period_matrix", 10.0},
+    {"cli_check_adapted_grid_error_covers_the_grid_thin_fronts", 13.0},
     {"cli_check_adapted_grid", 6.1},
     {"extremes_speeds_matrix", 4.0},
     {"speeds_no_root_missed_against_dense_scan", 3.3},

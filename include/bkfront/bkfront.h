@@ -9,6 +9,7 @@
 #include "bkfront/fft.h"
 #include "bkfront/model.h"
 #include "bkfront/io.h"
+#include "bkfront/h5.h"
 #include "bkfront/asymptotics.h"
 #include "bkfront/continuation.h"
 #include "bkfront/cycle.h"

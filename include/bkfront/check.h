@@ -203,7 +203,9 @@ typedef struct {
     double tail;            /* uniform: the seed's spectral tail on the last grid tried;
                                mapped: max |relaxed wave - seed| */
     double v_pred, v_pred_err;  /* predicted speed and its estimated error */
-    double v_meas, v_meas_err;  /* measured speed (towards -x) and its uncertainty */
+    double v_meas, v_meas_err;  /* measured speed (towards -x) and its uncertainty
+                                   (adapted grid: the fit's plus the grid's, from
+                                   a second run on 2/3 of the points) */
     double rel_err;         /* (v_meas - v_pred) / v_pred */
     double fit_from, fit_to;    /* the fit's time window */
     double fronts_start, fronts_end; /* front counts at t = 0 and t = tmax */

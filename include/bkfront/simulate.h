@@ -34,6 +34,9 @@ extern "C" {
  * row's t.  The field is held in memory as float32 until the end, so this
  * also bounds that memory (4 bytes a value). */
 #define BKF_SIMULATE_SPACETIME_BYTES_MAX 1073741824.0
+/* The fields a spacetime file may hold (spacetime_fields). */
+#define BKF_SIMULATE_PSI 1u
+#define BKF_SIMULATE_ETA 2u
 
 typedef struct {
     bkf_model_params model; /* N 0: 512, or S blocks for the chain */
@@ -48,7 +51,11 @@ typedef struct {
     double level;           /* fronts are crossings of it; NaN: bkf_measure_front_level */
     size_t frames;          /* rows over [0, tmax], plus t = 0; default 500 */
     const char *spacetime;  /* file of psi(x, t) at the frames, or NULL */
-    int spacetime_format;   /* index in text, binary; -1: not given (text) */
+    int spacetime_format;   /* index in text, binary, hdf5; -1: not given (hdf5
+                               for a name ending .h5, .hdf5 or .he5, else text) */
+    unsigned spacetime_fields; /* BKF_SIMULATE_PSI | BKF_SIMULATE_ETA; 0: not
+                                  given (psi); eta only in hdf5 */
+    size_t spacetime_deflate; /* hdf5: gzip level 1..9; 0: not given (none) */
     const char *snapshots;  /* file of snapshots, or NULL */
     size_t snapshot_count;  /* 0: not given (2) */
     /* Not keys: what the caller supplies for a run it may stop. */
@@ -71,8 +78,8 @@ typedef struct {
 bkf_simulate_spec bkf_simulate_spec_default(void);
 
 /* The keys: gamma, c, nu, S, N, model, tmax, tol, init, seed, stepper,
- * dealias, filter, level, frames, spacetime, spacetime-format, snapshots,
- * snapshot-count. */
+ * dealias, filter, level, frames, spacetime, spacetime-format,
+ * spacetime-fields, spacetime-deflate, snapshots, snapshot-count. */
 extern const bkf_option bkf_simulate_options[];
 extern const size_t bkf_simulate_noptions;
 

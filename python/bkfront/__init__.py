@@ -348,10 +348,12 @@ def stability(**keys):
 def simulate(**keys):
     """A simulation (``bkfront simulate``, same defaults): its diagnostics
     table, with the spacetime field as attributes ``t`` (frames), ``x``
-    (grid) and ``psi`` (array of shape (len(t), len(x)))."""
+    (grid) and ``psi`` (array of shape (len(t), len(x))).  With
+    ``spacetime=FILE`` the field is written to FILE instead, as the CLI
+    writes it (``FILE.h5``: HDF5; ``spacetime_fields="psi,eta"``,
+    ``spacetime_deflate=L``), and the table has no arrays."""
     if "spacetime" in keys:
-        raise InputError("simulate: the spacetime field is returned (t, x, psi), not written",
-                         _lib.EINPUT)
+        return product("simulate", **keys)
     folder = tempfile.mkdtemp(prefix="bkfront-")
     try:
         path = os.path.join(folder, "spacetime.txt")

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "bkfront/check.h"
+#include "bkfront/h5.h"
 #include "bkfront/init.h"
 #include "bkfront/measure.h"
 #include "bkfront/seed.h"
@@ -18,7 +19,8 @@
 
 static const char *const model_names[] = {"continuum", "chain", NULL};
 static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8", NULL};
-static const char *const spacetime_names[] = {"text", "binary", NULL};
+static const char *const spacetime_names[] = {"text", "binary", "hdf5", NULL};
+enum { SPACETIME_TEXT, SPACETIME_BINARY, SPACETIME_HDF5 };
 
 /* The initial state's grammar is checked as the key is given (init.h
  * words its messages for the flag: "--init ..."; the key's name is put in
@@ -43,6 +45,38 @@ static int set_init(void *spec, const char *text, bkf_error *err)
     }
     ((bkf_simulate_spec *)spec)->init = text;
     return BKF_OK;
+}
+
+/* A comma list of psi and eta, each at most once. */
+static int set_fields(void *spec, const char *text, bkf_error *err)
+{
+    unsigned fields = 0;
+    const char *p = text;
+    for (;;) {
+        size_t n = strcspn(p, ",");
+        unsigned f = n == 3 && strncmp(p, "psi", 3) == 0   ? BKF_SIMULATE_PSI
+                     : n == 3 && strncmp(p, "eta", 3) == 0 ? BKF_SIMULATE_ETA
+                                                           : 0;
+        if (!f || (fields & f))
+            return bkf_error_set(err, BKF_EINPUT, "'%s' is not a list of psi and eta, each at "
+                                 "most once (psi, eta, psi,eta)", text);
+        fields |= f;
+        if (!p[n]) break;
+        p += n + 1;
+    }
+    ((bkf_simulate_spec *)spec)->spacetime_fields = fields;
+    return BKF_OK;
+}
+
+/* The spacetime file's format: given, or by the name's extension. */
+static int spacetime_kind(const bkf_simulate_spec *sp)
+{
+    if (sp->spacetime_format >= 0) return sp->spacetime_format;
+    const char *dot = sp->spacetime ? strrchr(sp->spacetime, '.') : NULL;
+    static const char *const ext[] = {".h5", ".hdf5", ".he5"};
+    for (size_t i = 0; dot && i < sizeof ext / sizeof ext[0]; i++)
+        if (strcmp(dot, ext[i]) == 0) return SPACETIME_HDF5;
+    return SPACETIME_TEXT;
 }
 
 #define SPEC(field) offsetof(bkf_simulate_spec, field)
@@ -118,10 +152,20 @@ const bkf_option bkf_simulate_options[] = {
      .help = "psi(x, t) at the frames for gnuplot: text is the nonuniform\n"
              "matrix format (first row N x_0 .. x_{N-1}, then t psi ...;\n"
              "plot 'FILE' nonuniform matrix with image), binary the same\n"
-             "numbers as float32 (plot 'FILE' binary matrix with image)"},
+             "numbers as float32 (plot 'FILE' binary matrix with image),\n"
+             "hdf5 datasets psi[t, x] (float32) with t and x as dimension\n"
+             "scales and the parameters as attributes (h5py, xarray)"},
     {.name = "spacetime-format", .type = BKF_OPT_CHOICE, .offset = SPEC(spacetime_format),
-     .choices = spacetime_names, .form = "text|binary", .shown_default = "text",
+     .choices = spacetime_names, .form = "text|binary|hdf5",
+     .shown_default = "hdf5 for FILE.h5, .hdf5, .he5, else text",
      .help = "the spacetime file's format"},
+    {.name = "spacetime-fields", .type = BKF_OPT_CUSTOM, .set = set_fields, .form = "LIST",
+     .shown_default = "psi",
+     .help = "the fields of the spacetime file: psi, eta or psi,eta\n(eta only in hdf5)"},
+    {.name = "spacetime-deflate", .type = BKF_OPT_COUNT, .offset = SPEC(spacetime_deflate),
+     .flags = BOUNDED, .min = 1, .max = BKF_H5_DEFLATE_MAX, .form = "L",
+     .shown_default = "none",
+     .help = "hdf5 only: gzip level of the fields' chunks, in [1, 9]"},
     {.name = "snapshots", .type = BKF_OPT_TEXT, .offset = SPEC(snapshots), .form = "FILE",
      .help = "TSV with columns t, x, psi, eta at K frames spread over\nthe run"},
     {.name = "snapshot-count", .type = BKF_OPT_COUNT, .offset = SPEC(snapshot_count),
@@ -207,9 +251,22 @@ int bkf_simulate_check(const bkf_simulate_spec *sp, const char *prefix, bkf_erro
     if (snapshots > sp->frames + 1)
         return bkf_error_set(err, BKF_EINPUT, "%ssnapshot-count: %zu is more than the %zu frames",
                              prefix, snapshots, sp->frames + 1);
-    if (sp->spacetime_format >= 0 && !sp->spacetime)
-        return bkf_error_set(err, BKF_EINPUT, "%sspacetime-format: give %sspacetime FILE too",
-                             prefix, prefix);
+    const char *needs_file = sp->spacetime_format >= 0 ? "spacetime-format"
+                             : sp->spacetime_fields     ? "spacetime-fields"
+                             : sp->spacetime_deflate    ? "spacetime-deflate"
+                                                        : NULL;
+    if (needs_file && !sp->spacetime)
+        return bkf_error_set(err, BKF_EINPUT, "%s%s: give %sspacetime FILE too", prefix,
+                             needs_file, prefix);
+    int kind = spacetime_kind(sp);
+    if (kind != SPACETIME_HDF5 && (sp->spacetime_fields & BKF_SIMULATE_ETA))
+        return bkf_error_set(err, BKF_EINPUT, "%sspacetime-fields: eta is written only in the "
+                             "hdf5 format (%sspacetime FILE.h5 or %sspacetime-format hdf5)",
+                             prefix, prefix, prefix);
+    if (kind != SPACETIME_HDF5 && sp->spacetime_deflate)
+        return bkf_error_set(err, BKF_EINPUT, "%sspacetime-deflate: only for the hdf5 format",
+                             prefix);
+
     if (sp->snapshot_count && !sp->snapshots)
         return bkf_error_set(err, BKF_EINPUT, "%ssnapshot-count: give %ssnapshots FILE too",
                              prefix, prefix);
@@ -223,16 +280,21 @@ int bkf_simulate_check(const bkf_simulate_spec *sp, const char *prefix, bkf_erro
         bkf_io_atomic_abort(f);
     }
     if (sp->spacetime) {
-        int binary = sp->spacetime_format == 1;
-        double bytes = (double)(sp->frames + 1) *
-                       ((double)model.N * (binary ? 4 : 16) + (binary ? 4 : 26));
+        /* hdf5: 4 bytes a value of each field, 8 for each t (and x) */
+        int text = kind == SPACETIME_TEXT;
+        double fields = sp->spacetime_fields == (BKF_SIMULATE_PSI | BKF_SIMULATE_ETA) ? 2 : 1;
+        double bytes = kind == SPACETIME_HDF5
+                           ? (double)(sp->frames + 1) * ((double)model.N * 4 * fields + 8) +
+                                 8.0 * (double)model.N
+                           : (double)(sp->frames + 1) *
+                                 ((double)model.N * (text ? 16 : 4) + (text ? 26 : 4));
         if (bytes > BKF_SIMULATE_SPACETIME_BYTES_MAX)
             return bkf_error_set(err, BKF_EINPUT,
                                  "%sframes: %zu frames of %zu points make a %s spacetime file of "
                                  "up to %.3g bytes, more than its limit of 1 GiB (%s)",
-                                 prefix, sp->frames + 1, model.N, binary ? "binary" : "text",
-                                 bytes, binary ? "fewer frames or points"
-                                                : "binary takes 4 bytes a value, text 16");
+                                 prefix, sp->frames + 1, model.N, spacetime_names[kind], bytes,
+                                 text ? "binary and hdf5 take 4 bytes a value, text 16"
+                                      : "fewer frames or points");
     }
     return BKF_OK;
 }
@@ -263,6 +325,7 @@ typedef struct {
     /* frame rows, kept until the end */
     double *diag;        /* per frame: NCOLUMNS values */
     float *field;        /* per frame: psi at N points (spacetime) */
+    float *field_eta;    /* per frame: eta at N points (spacetime-fields eta) */
     double *snap;        /* per snapshot: t, psi[N], eta[N] */
     size_t *snap_frame;  /* frame index of each snapshot */
     size_t snap_next;
@@ -300,6 +363,8 @@ static int observe(const bkf_pde_sample *smp, void *data)
     row[11] = bkf_pde_sample_mean_residual(r->pde, smp);
     if (r->field)
         for (size_t i = 0; i < N; i++) r->field[f * N + i] = (float)smp->psi[i];
+    if (r->field_eta)
+        for (size_t i = 0; i < N; i++) r->field_eta[f * N + i] = (float)smp->eta[i];
     if (r->snap && r->snap_next < r->snapshots && r->snap_frame[r->snap_next] == f) {
         double *s = r->snap + r->snap_next * (2 * N + 1);
         s[0] = smp->t;
@@ -341,7 +406,7 @@ static int write_spacetime(const run *r, size_t frames, const char *note, FILE *
     size_t N = r->model.N;
     double h = r->model.S / (double)N;
     int bad = 0;
-    if (r->spec->spacetime_format == 1) {
+    if (spacetime_kind(r->spec) == SPACETIME_BINARY) {
         float *row = malloc((N + 1) * sizeof *row);
         if (!row) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
         row[0] = (float)N;
@@ -371,6 +436,64 @@ static int write_spacetime(const run *r, size_t frames, const char *note, FILE *
     }
     if (bad) return bkf_error_set(err, BKF_EIO, "writing the spacetime field failed");
     return BKF_OK;
+}
+
+/* The same field as HDF5 (h5.h): psi and/or eta over the dimension scales
+ * t and x, and every parameter of the run as an attribute of the root. */
+static int write_spacetime_h5(const run *r, size_t frames, const char *note,
+                              bkf_io_atomic *file, bkf_error *err)
+{
+    const bkf_simulate_spec *sp = r->spec;
+    const bkf_model_params *m = &r->model;
+    size_t N = m->N;
+    double h = m->S / (double)N;
+    double *t = malloc((frames ? frames : 1) * sizeof *t), *x = malloc(N * sizeof *x);
+    if (!t || !x) {
+        free(t);
+        free(x);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    for (size_t f = 0; f < frames; f++) t[f] = r->diag[f * NCOLUMNS];
+    for (size_t i = 0; i < N; i++) x[i] = (double)i * h;
+    bkf_h5_field fields[2];
+    size_t nfields = 0;
+    if (r->field) fields[nfields++] = (bkf_h5_field){"psi", r->field, "psi(t, x)"};
+    if (r->field_eta) fields[nfields++] = (bkf_h5_field){"eta", r->field_eta, "eta(t, x)"};
+#define D(n, v) {.name = n, .kind = BKF_H5_DOUBLE, .number = (v)}
+#define I(n, v) {.name = n, .kind = BKF_H5_INT, .integer = (long long)(v)}
+#define T(n, v) {.name = n, .kind = BKF_H5_TEXT, .text = (v)}
+    const bkf_h5_attribute attrs[] = {
+        T("title", "psi(t, x) of a direct simulation of the elastic excitable medium"),
+        T("program", program(r)),
+        T("command", r->prov && r->prov->command ? r->prov->command : ""),
+        T("model", model_names[m->kind]),
+        D("gamma", m->gamma), D("c", m->c), D("nu", m->nu), D("S", m->S), I("N", N),
+        D("h", h), D("tol", r->options.tol), T("stepper", stepper_names[r->options.stepper]),
+        I("dealias", r->options.dealias),
+        D("filter", m->kind == BKF_MODEL_CHAIN ? 0 : r->options.filter),
+        D("tmax", sp->tmax), I("frames", sp->frames), T("init", sp->init ? sp->init : "uniform"),
+        I("seed", sp->seed), D("level", r->level),
+        T("interrupted", note ? note : ""),
+    };
+#undef D
+#undef I
+#undef T
+    bkf_h5_grid g = {
+        .rows = {"t", t, frames, "time"},
+        .columns = {"x", x, N, "position"},
+        .fields = fields,
+        .nfields = nfields,
+        .attributes = attrs,
+        /* an uninterrupted run has no "interrupted" attribute */
+        .nattributes = sizeof attrs / sizeof attrs[0] - (note ? 0 : 1),
+        .deflate = (unsigned)sp->spacetime_deflate,
+    };
+    bkf_error e;
+    int s = bkf_h5_write(file, &g, &e);
+    if (s) bkf_error_set(err, s, "spacetime: %s", e.message);
+    free(t);
+    free(x);
+    return s;
 }
 
 static int write_snapshots(const run *r, const char *note, FILE *out, bkf_error *err)
@@ -528,7 +651,11 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
     bkf_error e;
     double *clean = malloc(N * sizeof *clean);
     r->diag = malloc((sp->frames + 1) * NCOLUMNS * sizeof *r->diag);
-    if (sp->spacetime) r->field = malloc((sp->frames + 1) * N * sizeof *r->field);
+    unsigned fields = sp->spacetime_fields ? sp->spacetime_fields : BKF_SIMULATE_PSI;
+    if (sp->spacetime && (fields & BKF_SIMULATE_PSI))
+        r->field = malloc((sp->frames + 1) * N * sizeof *r->field);
+    if (sp->spacetime && (fields & BKF_SIMULATE_ETA))
+        r->field_eta = malloc((sp->frames + 1) * N * sizeof *r->field_eta);
     if (sp->snapshots) {
         /* one more: the state where an interrupted run stopped */
         r->snap = malloc((r->snapshots + 1) * (2 * N + 1) * sizeof *r->snap);
@@ -536,7 +663,8 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
     }
     int s = BKF_OK;
     bkf_io_table *t = NULL;
-    if (!clean || !r->diag || (sp->spacetime && !r->field) ||
+    if (!clean || !r->diag || ((fields & BKF_SIMULATE_PSI) && sp->spacetime && !r->field) ||
+        ((fields & BKF_SIMULATE_ETA) && sp->spacetime && !r->field_eta) ||
         (sp->snapshots && (!r->snap || !r->snap_frame))) {
         s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
         goto done;
@@ -648,14 +776,21 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
     if (!s && have_summary) s = write_summary(t, r, &ms, &fi, period_ref, err);
     if (!s && sp->spacetime)
         s = bkf_io_table_commentf(t, err, "spacetime: %s (%s)", sp->spacetime,
-                     sp->spacetime_format == 1 ? "binary matrix, float32" : "text nonuniform matrix");
+                     spacetime_kind(sp) == SPACETIME_BINARY ? "binary matrix, float32"
+                     : spacetime_kind(sp) == SPACETIME_HDF5
+                         ? (fields == BKF_SIMULATE_PSI   ? "hdf5, psi[t, x] float32"
+                            : fields == BKF_SIMULATE_ETA ? "hdf5, eta[t, x] float32"
+                                                         : "hdf5, psi[t, x] and eta[t, x] float32")
+                         : "text nonuniform matrix");
     for (size_t f = 0; !s && f < r->frame_index; f++) {
         bkf_io_value v[NCOLUMNS];
         for (size_t k = 0; k < NCOLUMNS; k++) v[k].number = r->diag[f * NCOLUMNS + k];
         s = bkf_io_table_row(t, v, err);
     }
     if (!s) s = bkf_io_table_finish(t, err);
-    if (!s && st_file)
+    if (!s && st_file && spacetime_kind(sp) == SPACETIME_HDF5)
+        s = write_spacetime_h5(r, r->frame_index, canceled ? interrupted : NULL, st_file, err);
+    else if (!s && st_file)
         s = write_spacetime(r, r->frame_index, canceled ? interrupted : NULL,
                             bkf_io_atomic_stream(st_file), err);
     if (!s && sn_file)
@@ -697,6 +832,7 @@ static int simulate(const bkf_simulate_spec *sp, FILE *out, bkf_io_format format
     bkf_pde_free(r.pde);
     free(r.diag);
     free(r.field);
+    free(r.field_eta);
     free(r.snap);
     free(r.snap_frame);
     bkf_init_free(&r.init);

@@ -74,7 +74,8 @@ static pthread_once_t keys_once = PTHREAD_ONCE_INIT;
 static void build_keys(void)
 {
     static const char *const refused[] = {"spacetime", "spacetime-format", "snapshots",
-                                          "snapshot-count"};
+                                          "snapshot-count", "spacetime-fields",
+                                          "spacetime-deflate"};
     size_t n = 0;
     for (size_t i = 0; i < bkf_sweep_noptions && n < KEYS_MAX; i++) all_keys[n++] = bkf_sweep_options[i];
     for (size_t i = 0; i < bkf_simulate_noptions && n < KEYS_MAX; i++) {

@@ -1,0 +1,236 @@
+/* HDF5 fields on a grid (h5.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "bkfront/h5.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/types.h>
+
+#include <hdf5.h>
+#include <hdf5_hl.h>
+
+/* Chunks of about 1 MiB of float32: what HDF5's default chunk cache holds,
+ * and a row at a time for very wide grids. */
+#define CHUNK_VALUES 262144u
+
+/* The innermost description on HDF5's error stack: the cause, not the
+ * chain of callers that passed it on. */
+static herr_t first_description(unsigned n, const H5E_error2_t *e, void *data)
+{
+    char *buf = data;
+    if (n == 0 && e->desc && *e->desc) snprintf(buf, 160, "%s (%s)", e->desc, e->func_name);
+    return 0;
+}
+
+typedef struct {
+    hid_t file, scale[2];
+    const char *step; /* the failed call, for the message */
+    char cause[160];
+} writer;
+
+/* Records the first failure: `ok` false means the call named `step` failed. */
+static int check(writer *w, int ok, const char *step)
+{
+    if (ok || w->step) return ok;
+    w->step = step;
+    w->cause[0] = '\0';
+    H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, first_description, w->cause);
+    return 0;
+}
+
+static int attribute(writer *w, hid_t on, const bkf_h5_attribute *a)
+{
+    hid_t space = H5Screate(H5S_SCALAR), type = -1, attr = -1;
+    int ok = check(w, space >= 0, "H5Screate");
+    if (ok && a->kind == BKF_H5_TEXT) {
+        type = H5Tcopy(H5T_C_S1);
+        ok = check(w, type >= 0, "H5Tcopy") &&
+             check(w, H5Tset_size(type, H5T_VARIABLE) >= 0, "H5Tset_size") &&
+             check(w, H5Tset_cset(type, H5T_CSET_UTF8) >= 0, "H5Tset_cset");
+    }
+    hid_t file_type = a->kind == BKF_H5_TEXT  ? type
+                      : a->kind == BKF_H5_INT ? H5T_STD_I64LE
+                                              : H5T_IEEE_F64LE;
+    if (ok) ok = check(w, (attr = H5Acreate2(on, a->name, file_type, space, H5P_DEFAULT,
+                                             H5P_DEFAULT)) >= 0, "H5Acreate2");
+    if (ok) {
+        long long i = a->integer;
+        const char *text = a->text ? a->text : "";
+        herr_t r = a->kind == BKF_H5_TEXT  ? H5Awrite(attr, type, &text)
+                   : a->kind == BKF_H5_INT ? H5Awrite(attr, H5T_NATIVE_LLONG, &i)
+                                           : H5Awrite(attr, H5T_NATIVE_DOUBLE, &a->number);
+        ok = check(w, r >= 0, "H5Awrite");
+    }
+    if (attr >= 0) ok = check(w, H5Aclose(attr) >= 0, "H5Aclose") && ok;
+    if (type >= 0) ok = check(w, H5Tclose(type) >= 0, "H5Tclose") && ok;
+    if (space >= 0) ok = check(w, H5Sclose(space) >= 0, "H5Sclose") && ok;
+    return ok;
+}
+
+static int long_name(writer *w, hid_t on, const char *text)
+{
+    if (!text) return 1;
+    bkf_h5_attribute a = {.name = "long_name", .kind = BKF_H5_TEXT, .text = text};
+    return attribute(w, on, &a);
+}
+
+static int axis(writer *w, int k, const bkf_h5_axis *ax)
+{
+    hsize_t n = ax->count;
+    hid_t space = H5Screate_simple(1, &n, NULL), d = -1;
+    int ok = check(w, space >= 0, "H5Screate_simple");
+    if (ok) ok = check(w, (d = H5Dcreate2(w->file, ax->name, H5T_IEEE_F64LE, space, H5P_DEFAULT,
+                                          H5P_DEFAULT, H5P_DEFAULT)) >= 0, "H5Dcreate2");
+    if (ok && n)
+        ok = check(w, H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT,
+                               ax->values) >= 0, "H5Dwrite");
+    if (ok) ok = check(w, H5DSset_scale(d, ax->name) >= 0, "H5DSset_scale");
+    if (ok) ok = long_name(w, d, ax->long_name);
+    if (space >= 0) ok = check(w, H5Sclose(space) >= 0, "H5Sclose") && ok;
+    w->scale[k] = d; /* closed with the file */
+    return ok;
+}
+
+static int field(writer *w, const bkf_h5_grid *g, const bkf_h5_field *f)
+{
+    hsize_t dims[2] = {g->rows.count, g->columns.count};
+    hsize_t chunk[2];
+    chunk[1] = dims[1] < CHUNK_VALUES ? dims[1] : CHUNK_VALUES;
+    chunk[0] = CHUNK_VALUES / chunk[1];
+    if (chunk[0] > dims[0]) chunk[0] = dims[0];
+    hid_t space = H5Screate_simple(2, dims, NULL), dcpl = H5Pcreate(H5P_DATASET_CREATE), d = -1;
+    int ok = check(w, space >= 0, "H5Screate_simple") && check(w, dcpl >= 0, "H5Pcreate");
+    /* a chunk may not be empty: a grid without rows has no chunks */
+    if (ok && dims[0] && dims[1]) {
+        ok = check(w, H5Pset_chunk(dcpl, 2, chunk) >= 0, "H5Pset_chunk");
+        if (ok && g->deflate)
+            ok = check(w, H5Zfilter_avail(H5Z_FILTER_DEFLATE) > 0, "H5Zfilter_avail(deflate)") &&
+                 check(w, H5Pset_shuffle(dcpl) >= 0, "H5Pset_shuffle") &&
+                 check(w, H5Pset_deflate(dcpl, g->deflate) >= 0, "H5Pset_deflate");
+    }
+    if (ok) ok = check(w, (d = H5Dcreate2(w->file, f->name, H5T_IEEE_F32LE, space, H5P_DEFAULT,
+                                          dcpl, H5P_DEFAULT)) >= 0, "H5Dcreate2");
+    if (ok && dims[0] && dims[1])
+        ok = check(w, H5Dwrite(d, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT,
+                               f->values) >= 0, "H5Dwrite");
+    for (unsigned k = 0; ok && k < 2; k++)
+        ok = check(w, H5DSattach_scale(d, w->scale[k], k) >= 0, "H5DSattach_scale") &&
+             check(w, H5DSset_label(d, k, k ? g->columns.name : g->rows.name) >= 0,
+                   "H5DSset_label");
+    if (ok) ok = long_name(w, d, f->long_name);
+    if (d >= 0) ok = check(w, H5Dclose(d) >= 0, "H5Dclose") && ok;
+    if (dcpl >= 0) ok = check(w, H5Pclose(dcpl) >= 0, "H5Pclose") && ok;
+    if (space >= 0) ok = check(w, H5Sclose(space) >= 0, "H5Sclose") && ok;
+    return ok;
+}
+
+static int valid_name(const char *name)
+{
+    return name && *name && !strchr(name, '/') && strcmp(name, ".") != 0;
+}
+
+static int check_grid(const bkf_h5_grid *g, bkf_error *err)
+{
+    if (!g || !g->nfields || !g->fields)
+        return bkf_error_set(err, BKF_EINPUT, "HDF5 grid: no fields to write");
+    if (g->deflate > BKF_H5_DEFLATE_MAX)
+        return bkf_error_set(err, BKF_EINPUT, "HDF5 grid: deflate %u is not in [0, %d]",
+                             g->deflate, BKF_H5_DEFLATE_MAX);
+    const bkf_h5_axis *ax[2] = {&g->rows, &g->columns};
+    const char *names[64];
+    size_t n = 0;
+    for (int k = 0; k < 2; k++) {
+        if (!valid_name(ax[k]->name) || (ax[k]->count && !ax[k]->values))
+            return bkf_error_set(err, BKF_EINPUT, "HDF5 grid: axis %d needs a name without '/' "
+                                 "and its values", k);
+        names[n++] = ax[k]->name;
+    }
+    if (g->nfields > 62) return bkf_error_set(err, BKF_EINPUT, "HDF5 grid: at most 62 fields");
+    for (size_t i = 0; i < g->nfields; i++) {
+        const bkf_h5_field *f = &g->fields[i];
+        if (!valid_name(f->name) ||
+            (g->rows.count && g->columns.count && !f->values))
+            return bkf_error_set(err, BKF_EINPUT, "HDF5 grid: field %zu needs a name without '/' "
+                                 "and its values", i);
+        names[n++] = f->name;
+    }
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = 0; j < i; j++)
+            if (strcmp(names[i], names[j]) == 0)
+                return bkf_error_set(err, BKF_EINPUT, "HDF5 grid: the name '%s' is given twice",
+                                     names[i]);
+    for (size_t i = 0; i < g->nattributes; i++)
+        if (!g->attributes || !g->attributes[i].name || !*g->attributes[i].name)
+            return bkf_error_set(err, BKF_EINPUT, "HDF5 grid: attribute %zu has no name", i);
+    return BKF_OK;
+}
+
+int bkf_h5_write(bkf_io_atomic *file, const bkf_h5_grid *g, bkf_error *err)
+{
+    int s = check_grid(g, err);
+    if (s) return s;
+    FILE *stream = bkf_io_atomic_stream(file);
+    if (!stream) return bkf_error_set(err, BKF_EINPUT, "HDF5 output: no file to write into");
+
+    /* HDF5 prints its error stack by default: a library must not. */
+    H5E_auto2_t old_func = NULL;
+    void *old_data = NULL;
+    if (H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data) < 0 ||
+        H5Eset_auto2(H5E_DEFAULT, NULL, NULL) < 0)
+        return bkf_error_set(err, BKF_EIO, "HDF5 output: the HDF5 library does not start");
+    writer w = {.file = -1, .scale = {-1, -1}};
+    /* The file is built in memory (the core driver, no backing store) and
+     * its image goes through the atomic writer's stream: HDF5 never writes
+     * to a file itself.  A write that fails inside HDF5 leaves a file it can
+     * neither close nor forget (1.10 then crashes at exit), and a file
+     * reopened by name could be another one. */
+    /* The core driver grows its image by whole increments (and zeroes
+     * them): one increment a little above the raw data holds the whole
+     * file (chunk indices and headers add ~2%), so the peak is the image
+     * once, not twice. */
+    double bytes = 1048576.0 + 8.0 * (double)(g->rows.count + g->columns.count) +
+                   1.05 * 4.0 * (double)g->nfields * (double)g->rows.count *
+                       (double)g->columns.count;
+    if (g->deflate) bytes /= 8; /* grown as needed */
+    size_t increment = bytes > 268435456.0 ? 268435456u : (size_t)bytes;
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    int ok = check(&w, fapl >= 0, "H5Pcreate");
+    /* a strong close closes whatever is still open on a failure */
+    if (ok) ok = check(&w, H5Pset_fapl_core(fapl, increment, 0) >= 0, "H5Pset_fapl_core") &&
+                 check(&w, H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) >= 0,
+                       "H5Pset_fclose_degree");
+    if (ok) ok = check(&w, (w.file = H5Fcreate("bkfront-spacetime.h5", H5F_ACC_TRUNC,
+                                               H5P_DEFAULT, fapl)) >= 0, "H5Fcreate");
+    if (fapl >= 0) ok = check(&w, H5Pclose(fapl) >= 0, "H5Pclose") && ok;
+    if (ok) ok = axis(&w, 0, &g->rows) && axis(&w, 1, &g->columns);
+    for (size_t i = 0; ok && i < g->nfields; i++) ok = field(&w, g, &g->fields[i]);
+    for (size_t i = 0; ok && i < g->nattributes; i++) ok = attribute(&w, w.file, &g->attributes[i]);
+    for (int k = 0; k < 2; k++)
+        if (w.scale[k] >= 0) ok = check(&w, H5Dclose(w.scale[k]) >= 0, "H5Dclose") && ok;
+    void *image = NULL;
+    ssize_t size = -1;
+    if (ok) ok = check(&w, H5Fflush(w.file, H5F_SCOPE_GLOBAL) >= 0, "H5Fflush") &&
+                 check(&w, (size = H5Fget_file_image(w.file, NULL, 0)) > 0, "H5Fget_file_image");
+    if (ok && !(image = malloc((size_t)size))) {
+        H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
+        H5Fclose(w.file);
+        return bkf_error_set(err, BKF_ENOMEM, "HDF5 output: out of memory for a %zd-byte file",
+                             size);
+    }
+    if (ok) ok = check(&w, H5Fget_file_image(w.file, image, (size_t)size) == size,
+                       "H5Fget_file_image");
+    if (w.file >= 0) ok = check(&w, H5Fclose(w.file) >= 0, "H5Fclose") && ok;
+    H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
+    if (!ok) {
+        free(image);
+        return bkf_error_set(err, BKF_EIO, "writing the HDF5 file failed: %s: %s", w.step,
+                             w.cause[0] ? w.cause : "no description");
+    }
+    int bad = fwrite(image, 1, (size_t)size, stream) != (size_t)size || fflush(stream) != 0;
+    free(image);
+    if (bad) return bkf_error_set(err, BKF_EIO, "writing the HDF5 file failed: %s",
+                                  strerror(errno));
+    return BKF_OK;
+}
