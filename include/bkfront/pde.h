@@ -177,6 +177,12 @@ int bkf_pde_set_state(bkf_pde *pde, const double *psi, const double *eta, double
  * function of x at every N. */
 int bkf_pde_init_uniform(bkf_pde *pde, double amp, unsigned long seed, bkf_error *err);
 
+/* Adds to psi the band-limited noise of bkf_pde_init_uniform (rms amp in
+ * [0, 10], modes 1 <= j <= J, the same function of x for the same seed):
+ * the perturbation of a state set by bkf_pde_set_state, e.g. a computed
+ * wave of the chain.  The time is kept. */
+int bkf_pde_add_noise(bkf_pde *pde, double amp, unsigned long seed, bkf_error *err);
+
 /* The global oscillation (the limit cycle at mu = gamma, which needs
  * |nu| < 1) at the phase where psi = nu rising, plus amp cos(q_j x) added to
  * psi, with q_j = 2 pi j/S, 0 <= j < N/2. */

@@ -613,6 +613,20 @@ int bkf_pde_init_uniform(bkf_pde *m, double amp, unsigned long seed, bkf_error *
     return rc;
 }
 
+int bkf_pde_add_noise(bkf_pde *m, double amp, unsigned long seed, bkf_error *err)
+{
+    if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
+    int s = check_amp("amp", amp, err);
+    if (s || amp == 0) return s;
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    s = noise(m, amp, seed, m->psit, err);
+    bkf_gsl_handler_pop(handler);
+    if (s) return s;
+    for (size_t i = 0; i < m->N; i++) m->y[i] += m->psit[i];
+    mark_set(m);
+    return BKF_OK;
+}
+
 static int pde_init_oscillation_body(bkf_pde *m, size_t j, double amp, bkf_error *err)
 {
     if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");

@@ -50,3 +50,99 @@ TEST(cli_chain_bad_input)
                                      "--S", "20", "--N", "20"),
                              "speeds", "--N", "N without chain");
 }
+
+/* bkfront check --model chain: the chain simulated by bkf_pde (its own
+ * integrator) from each computed wave plus noise.  Stable waves keep the
+ * predicted speed to 1e-8 and agree; the run's growth never contradicts the
+ * multipliers (no conflicts), and the verdicts are the library's. */
+static void check_chain_table(const char *model, size_t N, double S)
+{
+    char words[256];
+    snprintf(words, sizeof words, "check --model chain %s --no-progress", model);
+    int code = -1;
+    char *out = bkf_cli_stdout(words, &code);
+    CHECK_MSG(code == 0, "%s: exit %d", words, code);
+    bkf_model_params p = bkf_model_params_paper();
+    CHECK(sscanf(model, "--gamma %lf --c %lf --nu %lf", &p.gamma, &p.c, &p.nu) == 3);
+    p.S = S;
+    p.N = N;
+    p.kind = BKF_MODEL_CHAIN;
+    bkf_chainwave_options o = bkf_chainwave_options_default();
+    o.tol = 1e-10;
+    bkf_chainwave_table t;
+    bkf_error e;
+    CHECK_MSG(bkf_chainwave_find(&p, 1, 0, &o, &t, &e) == BKF_OK, "%s", e.message);
+    size_t stable = 0;
+    for (size_t i = 0; i < t.count; i++) {
+        const bkf_chainwave *w = &t.waves[i];
+        double n, v, rel;
+        char verdict[32], spectral[32], growth[32];
+        CHECK(bkf_tsv_cell(out, (int)i, "n", &n, NULL, 0) && n == (double)w->n);
+        CHECK(bkf_tsv_cell(out, (int)i, "v_pred", &v, NULL, 0) && v == w->v);
+        CHECK(bkf_tsv_cell(out, (int)i, "rel_err", &rel, NULL, 0));
+        CHECK(bkf_tsv_cell(out, (int)i, "verdict", NULL, verdict, sizeof verdict));
+        CHECK(bkf_tsv_cell(out, (int)i, "spectral", NULL, spectral, sizeof spectral));
+        CHECK(bkf_tsv_cell(out, (int)i, "growth_verdict", NULL, growth, sizeof growth));
+        CHECK(strcmp(spectral, bkf_chainwave_verdict_name(w->verdict)) == 0);
+        if (w->verdict == BKF_CHAINWAVE_STABLE) {
+            stable++;
+            CHECK_MSG(strcmp(verdict, "agrees") == 0, "n = %zu: %s", w->n, verdict);
+            CHECK_MSG(fabs(rel) <= 1e-8, "n = %zu: rel_err %g", w->n, rel);
+            CHECK_MSG(strcmp(growth, "grows") != 0, "n = %zu: a stable wave grows", w->n);
+        } else {
+            CHECK_MSG(strcmp(verdict, "unstable") == 0, "n = %zu: %s", w->n, verdict);
+            CHECK_MSG(strcmp(growth, "decays") != 0, "n = %zu: an unstable wave decays", w->n);
+        }
+        bkf_test_note("%s n = %zu: |m| %.9f, rel_err %.2g, run %s, %s", model, w->n,
+                      w->mult_abs, rel, growth, verdict);
+    }
+    CHECK(stable >= 3 && stable < t.count); /* both kinds were judged */
+    bkf_chainwave_table_free(&t);
+    free(out);
+}
+
+TEST(cli_chain_check_paper)
+{
+    check_chain_table("--gamma 2 --c 0.3 --nu -0.96 --S 20", 20, 20.0);
+}
+
+TEST(cli_chain_check_second_set)
+{
+    check_chain_table("--gamma 3 --c 0.3 --nu -0.9 --S 16", 16, 16.0);
+}
+
+/* --init front:n=K on the chain seeds the chain's own wave: its period
+ * shows at every block (the continuum's seed turns irregular there). */
+TEST(cli_chain_init_front_is_the_chains_wave)
+{
+    char *out = bkf_cli_stdout("simulate --model chain --init front:n=4 --tmax 100 --frames 2",
+                               NULL);
+    bkf_model_params p = bkf_model_params_paper();
+    p.N = 20;
+    p.kind = BKF_MODEL_CHAIN;
+    bkf_chainwave_options o = bkf_chainwave_options_default();
+    o.stability = 0;
+    o.tol = 1e-10;
+    bkf_chainwave_table t;
+    bkf_error e;
+    CHECK(bkf_chainwave_find(&p, 4, 4, &o, &t, &e) == BKF_OK && t.count == 1);
+    const char *line = strstr(out, "# front (the chain's own rotating wave): n 4");
+    CHECK_MSG(line, "%s", out);
+    const char *vp = line ? strstr(line, "v_pred ") : NULL;
+    CHECK(vp && strtod(vp + 7, NULL) == t.waves[0].v);
+    const char *per = strstr(out, "# period at x = 0: ");
+    CHECK(per);
+    double P = per ? strtod(per + 19, NULL) : 0;
+    CHECK_CLOSE(P, t.waves[0].P, 1e-7, 0.0);
+    bkf_test_note("period at a block %.12g, the wave's P %.12g", P, t.waves[0].P);
+    bkf_chainwave_table_free(&t);
+    free(out);
+    bkf_cli_expect_bad_input(BKF_CLI("simulate", "--model", "chain", "--init", "front:n=21"),
+                             "simulate", "n = 21", "n > N on the chain");
+    bkf_cli_expect_bad_input(BKF_CLI("check", "--model", "chain", "--S", "20.5"), "check",
+                             "--N", "chain without blocks");
+    bkf_cli_expect_bad_input(BKF_CLI("check", "--model", "chain", "--n", "21"), "check",
+                             "n = 21", "n > N");
+    bkf_cli_expect_bad_input(BKF_CLI("check", "--model", "chain", "--gamma", "40"), "check",
+                             "gamma", "gamma beyond the chain's range");
+}
