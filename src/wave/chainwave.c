@@ -83,6 +83,8 @@ typedef struct {
     double gamma, nu, K;
     size_t ncols;
     int sens;
+    bkf_chainwave_param sens_param; /* what the last column differentiates:
+                                       K (h, S, c through K), nu or gamma */
     double *dphi; /* psi_i^2 - 1 at the current stage */
     size_t max_steps;
     size_t steps;
@@ -116,7 +118,16 @@ static int chain_rhs(double t, const double *y, double *f, void *data)
     }
     if (c->sens) {
         double *fk = f + 2 * N * c->ncols;
-        for (size_t i = 0; i < N; i++) fk[N + i] += lap(psi, i, N) / g;
+        if (c->sens_param == BKF_CHAINWAVE_PARAM_NU)
+            for (size_t i = 0; i < N; i++) fk[N + i] += 1.0 / g;
+        else if (c->sens_param == BKF_CHAINWAVE_PARAM_GAMMA)
+            for (size_t i = 0; i < N; i++) {
+                double p = psi[i];
+                fk[i] += eta[i] - (p * p * p / 3.0 - p);
+                fk[N + i] += (p - c->nu - K * lap(psi, i, N)) / (g * g);
+            }
+        else
+            for (size_t i = 0; i < N; i++) fk[N + i] += lap(psi, i, N) / g;
     }
     return GSL_SUCCESS;
 }
@@ -734,5 +745,220 @@ int bkf_chainwave_find(const bkf_model_params *p, size_t n_from, size_t n_to,
     work_free(&w);
     free(c.dphi);
     bkf_gsl_handler_pop(handler);
+    return s;
+}
+
+/* ------------------------------------------------------------ branches */
+
+const char *bkf_chainwave_param_name(bkf_chainwave_param param)
+{
+    switch (param) {
+    case BKF_CHAINWAVE_PARAM_H: return "h";
+    case BKF_CHAINWAVE_PARAM_S: return "S";
+    case BKF_CHAINWAVE_PARAM_C: return "c";
+    case BKF_CHAINWAVE_PARAM_NU: return "nu";
+    case BKF_CHAINWAVE_PARAM_GAMMA: return "gamma";
+    }
+    return NULL;
+}
+
+typedef struct {
+    flow_ctx *c;
+    work *w;
+    double tol;
+    size_t dim, n;
+    const bkf_model_params *base;
+    bkf_chainwave_param param;
+    int stability;
+    double *J;            /* (2N + 1)^2 scratch for the multipliers */
+    bkf_chainwave_branch_visitor visit;
+    void *data;
+    bkf_chainwave_branch_report *rep;
+    double v0;
+    int status;           /* a failure inside accept */
+    bkf_error err;
+} branch_data;
+
+/* The model at parameter value `value`, into c (and *q); returns dK/dvalue
+ * for the parameters that act through K (0 for nu and gamma). */
+static double branch_set(const branch_data *b, double value, bkf_model_params *q)
+{
+    *q = *b->base;
+    double N = (double)b->base->N;
+    switch (b->param) {
+    case BKF_CHAINWAVE_PARAM_H: q->S = value * N; break;
+    case BKF_CHAINWAVE_PARAM_S: q->S = value; break;
+    case BKF_CHAINWAVE_PARAM_C: q->c = value; break;
+    case BKF_CHAINWAVE_PARAM_NU: q->nu = value; break;
+    case BKF_CHAINWAVE_PARAM_GAMMA: q->gamma = value; break;
+    }
+    double h = q->S / N;
+    flow_ctx *c = b->c;
+    c->K = q->c * q->c / (h * h);
+    c->nu = q->nu;
+    c->gamma = q->gamma;
+    c->sens_param = b->param;
+    switch (b->param) {
+    case BKF_CHAINWAVE_PARAM_H: return -2.0 * c->K / h;
+    case BKF_CHAINWAVE_PARAM_S: return -2.0 * c->K / q->S;
+    case BKF_CHAINWAVE_PARAM_C: return 2.0 * q->c / (h * h);
+    default: return 0.0;
+    }
+}
+
+static int branch_residual(const double *u, double *g, double *jac, void *data, bkf_error *err)
+{
+    branch_data *b = data;
+    size_t n2 = b->dim - 2;
+    bkf_model_params q;
+    double dK = branch_set(b, u[b->dim - 1], &q);
+    int s = residual(b->c, b->w, u, b->tol, g, jac, b->dim, err);
+    if (s == BKF_EBUDGET || s == BKF_EBLOWUP || s == BKF_ENUMERIC) return BKF_ENUMERIC;
+    if (s || !jac) return s;
+    /* the sensitivity column is d/dK for h, S and c, the direct one else */
+    if (b->param <= BKF_CHAINWAVE_PARAM_C)
+        for (size_t k = 0; k < n2; k++) jac[k * b->dim + n2 + 1] *= dK;
+    if (b->param == BKF_CHAINWAVE_PARAM_NU) jac[n2 * b->dim + n2 + 1] = -1.0;
+    return BKF_OK;
+}
+
+static int branch_accept(const double *u, const double *tangent, int is_fold, void *data)
+{
+    (void)tangent;
+    branch_data *b = data;
+    size_t n2 = b->dim - 2, N = b->base->N;
+    bkf_chainwave_branch_point pt;
+    memset(&pt, 0, sizeof pt);
+    bkf_model_params q;
+    pt.value = u[b->dim - 1];
+    branch_set(b, pt.value, &q);
+    pt.S = q.S;
+    pt.h = q.S / (double)N;
+    pt.K = b->c->K;
+    pt.c = q.c;
+    pt.nu = q.nu;
+    pt.gamma = q.gamma;
+    pt.tau = u[n2];
+    pt.v = pt.h / pt.tau;
+    pt.P = (double)N * pt.tau / (double)b->n;
+    pt.is_fold = is_fold;
+    pt.verdict = BKF_CHAINWAVE_NOT_COMPUTED;
+    pt.mult_abs = pt.sigma_max = pt.trivial_err = NAN;
+    if (b->stability) {
+        double *G = b->J + (n2 + 1) * (n2 + 1);
+        double re, im;
+        int s = residual(b->c, b->w, u, b->tol, G, b->J, n2 + 1, &b->err);
+        if (!s) s = multipliers(b->c, b->w->M, &pt.trivial_err, &re, &im, &b->err);
+        if (s) {
+            b->status = s;
+            return 1;
+        }
+        pt.mult_abs = hypot(re, im);
+        pt.sigma_max = log(pt.mult_abs) / pt.tau;
+        if (pt.mult_abs - pt.trivial_err > 1.0) pt.verdict = BKF_CHAINWAVE_UNSTABLE;
+        else if (pt.mult_abs + pt.trivial_err < 1.0) pt.verdict = BKF_CHAINWAVE_STABLE;
+        else pt.verdict = BKF_CHAINWAVE_UNRESOLVED;
+    }
+    bkf_chainwave_branch_report *r = b->rep;
+    if (is_fold) r->folds++;
+    else r->points++;
+    r->last_value = pt.value;
+    r->last_v = pt.v;
+    if (b->v0 == 0.0) b->v0 = pt.v;
+    if (b->visit && b->visit(&pt, b->data)) return 1;
+    if (pt.v < 1e-3 * b->v0) {
+        r->pinned = 1;
+        return 1;
+    }
+    return 0;
+}
+
+int bkf_chainwave_branch(const bkf_model_params *p, size_t n, size_t root,
+                         bkf_chainwave_param param, double from, double to,
+                         const bkf_chainwave_options *o, bkf_chainwave_branch_visitor visit,
+                         void *data, bkf_chainwave_branch_report *rep, bkf_error *err)
+{
+    bkf_chainwave_branch_report own;
+    if (!rep) rep = &own;
+    memset(rep, 0, sizeof *rep);
+    if (!p || !o) return bkf_error_set(err, BKF_EINPUT, "chainwave: NULL argument");
+    const char *name = bkf_chainwave_param_name(param);
+    if (!name) return bkf_error_set(err, BKF_EINPUT, "param: %d is not h, S, c, nu or gamma",
+                                    (int)param);
+    if (!(isfinite(from) && isfinite(to) && from != to))
+        return bkf_error_set(err, BKF_EINPUT, "from = %g, to = %g: two different finite values "
+                             "of %s are needed", from, to, name);
+    flow_ctx c;
+    flow_init(&c, p, o);
+    branch_data b = {&c, NULL, fmin(1e-4, o->tol), 2 * p->N + 2, n, p, param, o->stability,
+                     NULL, visit, data, rep, 0.0, 0, {{0}, 0}};
+    bkf_model_params qa, qb;
+    branch_set(&b, from, &qa);
+    branch_set(&b, to, &qb);
+    int s = bkf_chainwave_check(&qa, n, o, err);
+    if (!s) s = bkf_chainwave_check(&qb, n, o, err);
+    if (s) return s;
+    if (root < 1) return bkf_error_set(err, BKF_EINPUT, "root = 0 must be >= 1");
+    bkf_chainwave_options fo = *o;
+    fo.stability = 0;
+    bkf_chainwave_table t;
+    s = bkf_chainwave_find(&qa, n, n, &fo, &t, err);
+    if (!s && t.count < root)
+        s = bkf_error_set(err, BKF_EINPUT, "%s = %g: n = %zu has %zu chain wave(s), not root %zu"
+                          "%s%s", name, from, n, t.count, root, t.note[0] ? ": " : "", t.note);
+    size_t N = p->N, n2 = 2 * N, dim = n2 + 2;
+    double *u0 = malloc(dim * sizeof *u0), *scale = malloc(dim * sizeof *scale);
+    work w;
+    int have_w = work_alloc(&w, N);
+    c.dphi = malloc(N * sizeof *c.dphi);
+    b.w = &w;
+    b.J = o->stability ? malloc((n2 + 2) * (n2 + 1) * sizeof *b.J) : NULL; /* J, then G */
+    if (!s && (!u0 || !scale || !have_w || !c.dphi || (o->stability && !b.J)))
+        s = bkf_error_set(err, BKF_ENOMEM, "chainwave: out of memory");
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    if (!s) {
+        const bkf_chainwave *w0 = &t.waves[root - 1];
+        memcpy(u0, w0->psi, N * sizeof *u0);
+        memcpy(u0 + N, w0->eta, N * sizeof *u0);
+        u0[n2] = w0->tau;
+        u0[n2 + 1] = from;
+        /* the state counts as one unit whatever N (as in find_n) */
+        for (size_t k = 0; k < n2; k++) scale[k] = sqrt((double)n2);
+        scale[n2] = w0->tau;
+        scale[n2 + 1] = fabs(to - from);
+        bkf_cont_options co = bkf_cont_options_default(n2 + 1);
+        co.scale = scale;
+        co.step_initial = 0.02;
+        co.step_max = 0.1;
+        co.step_min = 1e-7;
+        co.newton_tol = 10.0 * b.tol;
+        co.max_points = 4000;
+        co.stop_index = (int)(n2 + 1);
+        co.stop_min = fmin(from, to);
+        co.stop_max = fmax(from, to);
+        bkf_cont_report cr;
+        bkf_error ce;
+        int cs = bkf_cont_run(branch_residual, branch_accept, &b, u0, (int)(n2 + 1),
+                              to > from ? +1 : -1, &co, &cr, &ce);
+        if (b.status) s = bkf_error_set(err, b.status, "%s", b.err.message);
+        else if (cs == BKF_ENOMEM || cs == BKF_EINPUT) s = bkf_error_set(err, cs, "%s", ce.message);
+        else {
+            rep->reached = cs == BKF_OK && cr.reached_bound && !rep->pinned &&
+                           fabs(rep->last_value - to) <= 1e-9 * fabs(to - from);
+            if (rep->pinned)
+                snprintf(rep->note, sizeof rep->note, "the fronts stop propagating near %s = %.9g "
+                         "(v %.3g, below 1e-3 of its start)", name, rep->last_value, rep->last_v);
+            else if (!rep->reached)
+                snprintf(rep->note, sizeof rep->note, "the branch ends at %s = %.9g (v %.9g)%s%.200s",
+                         name, rep->last_value, rep->last_v, cs ? ": " : "", cs ? ce.message : "");
+        }
+    }
+    bkf_gsl_handler_pop(handler);
+    bkf_chainwave_table_free(&t);
+    free(u0);
+    free(scale);
+    work_free(&w);
+    free(c.dphi);
+    free(b.J);
     return s;
 }
