@@ -15,6 +15,12 @@
 #include <string.h>
 
 #define NEWTON_MAX_ITER 25
+/* Integration tolerance of the continuation in K from the uncoupled chain.
+ * It only has to follow the branch and bracket its crossings of the target
+ * K (each crossing is then solved by Newton at the caller's tol), so it is
+ * loose whatever tol: at 1e-8 it cost 3/4 of the table for the same waves
+ * (N = 20, 40: the same crossings and folds at 1e-4 as at 1e-8). */
+#define CONT_TOL 1e-4
 
 bkf_chainwave_options bkf_chainwave_options_default(void)
 {
@@ -85,7 +91,7 @@ typedef struct {
     int sens;
     bkf_chainwave_param sens_param; /* what the last column differentiates:
                                        K (h, S, c through K), nu or gamma */
-    double *dphi; /* psi_i^2 - 1 at the current stage */
+    double *dphi; /* gamma (psi_i^2 - 1) at the current stage */
     size_t max_steps;
     size_t steps;
 } flow_ctx;
@@ -95,26 +101,37 @@ static double lap(const double *x, size_t i, size_t N)
     return x[(i + 1) % N] - 2.0 * x[i] + x[(i + N - 1) % N];
 }
 
+/* The linear part of the eta equation, -(x_i - K lap(x)_i) / gamma, for one
+ * column: the ring's ends apart so that the inner loop has no modulo and
+ * vectorises (the variational columns are most of the work). */
+static void eta_coupling(const double *x, double *f, size_t N, double a, double b)
+{
+    f[0] = a * x[0] + b * (x[1] + x[N - 1]);
+    for (size_t i = 1; i + 1 < N; i++) f[i] = a * x[i] + b * (x[i + 1] + x[i - 1]);
+    f[N - 1] = a * x[N - 1] + b * (x[0] + x[N - 2]);
+}
+
 static int chain_rhs(double t, const double *y, double *f, void *data)
 {
     (void)t;
     flow_ctx *c = data;
     size_t N = c->N;
     double g = c->gamma, K = c->K;
+    /* -(x - K (x+ - 2x + x-))/g = a x + b (x+ + x-) */
+    double a = -(1.0 + 2.0 * K) / g, b = K / g;
     const double *psi = y, *eta = y + N;
     for (size_t i = 0; i < N; i++) {
         double p = psi[i];
-        c->dphi[i] = p * p - 1.0;
+        c->dphi[i] = g * (p * p - 1.0);
         f[i] = g * (eta[i] - (p * p * p / 3.0 - p));
-        f[N + i] = -(p - c->nu - K * lap(psi, i, N)) / g;
     }
+    eta_coupling(psi, f + N, N, a, b);
+    for (size_t i = 0; i < N; i++) f[N + i] += c->nu / g;
     for (size_t j = 0; j < c->ncols; j++) {
         const double *w = y + 2 * N * (j + 1);
         double *fw = f + 2 * N * (j + 1);
-        for (size_t i = 0; i < N; i++) {
-            fw[i] = g * (w[N + i] - c->dphi[i] * w[i]);
-            fw[N + i] = -(w[i] - K * lap(w, i, N)) / g;
-        }
+        for (size_t i = 0; i < N; i++) fw[i] = g * w[N + i] - c->dphi[i] * w[i];
+        eta_coupling(w, fw + N, N, a, b);
     }
     if (c->sens) {
         double *fk = f + 2 * N * c->ncols;
@@ -255,38 +272,81 @@ static double max_abs(const double *x, size_t n)
     return m;
 }
 
-/* Newton at fixed K on x = (u, tau), integrations at tolerance tol, until
- * the step is below tol (relative to max(|x|, 1)).  On success w->M holds
- * the monodromy at the solution. */
-static int newton(flow_ctx *c, work *w, double *x, double tol, size_t *iterations,
-                  double *res_out, bkf_error *err)
+/* The Newton matrix of one wave, LU-factorised, kept across iterations and
+ * across the two tolerances of solve_x: a variational integration costs
+ * 2N + 2 plain ones, so the matrix is rebuilt only when the chord
+ * iteration stops contracting. */
+typedef struct {
+    size_t n;          /* 2N + 1 */
+    double *J, *G;
+    gsl_permutation *perm;
+    gsl_vector *dx;
+    int factored;
+} newton_lu;
+
+static int newton_lu_alloc(newton_lu *L, size_t N)
 {
-    size_t n = 2 * c->N + 1;
-    double *G = malloc(n * sizeof *G), *J = malloc(n * n * sizeof *J);
-    gsl_permutation *perm = gsl_permutation_alloc(n);
-    gsl_vector *dx = gsl_vector_alloc(n);
-    int s = (G && J && perm && dx) ? BKF_OK
-                                   : bkf_error_set(err, BKF_ENOMEM, "chainwave: out of memory");
+    L->n = 2 * N + 1;
+    L->J = malloc(L->n * L->n * sizeof *L->J);
+    L->G = malloc(L->n * sizeof *L->G);
+    L->perm = gsl_permutation_alloc(L->n);
+    L->dx = gsl_vector_alloc(L->n);
+    L->factored = 0;
+    return L->J && L->G && L->perm && L->dx;
+}
+
+static void newton_lu_free(newton_lu *L)
+{
+    free(L->J);
+    free(L->G);
+    if (L->perm) gsl_permutation_free(L->perm);
+    if (L->dx) gsl_vector_free(L->dx);
+}
+
+/* Residual at x into L->G and, with jac, the Newton matrix, factorised. */
+static int newton_eval(flow_ctx *c, work *w, newton_lu *L, const double *x, double tol,
+                       int jac, bkf_error *err)
+{
+    int s = residual(c, w, x, tol, L->G, jac ? L->J : NULL, L->n, err);
+    if (s || !jac) return s;
+    L->factored = 0;
+    gsl_matrix_view Jm = gsl_matrix_view_array(L->J, L->n, L->n);
+    int sign;
+    if (gsl_linalg_LU_decomp(&Jm.matrix, L->perm, &sign))
+        return bkf_error_set(err, BKF_ENUMERIC, "chainwave: singular Newton matrix (a fold?)");
+    for (size_t k = 0; k < L->n; k++)
+        if (L->J[k * L->n + k] == 0.0 || !isfinite(L->J[k * L->n + k]))
+            return bkf_error_set(err, BKF_ENUMERIC, "chainwave: singular Newton matrix (a fold?)");
+    L->factored = 1;
+    return BKF_OK;
+}
+
+/* Chord-Newton at fixed K on x = (u, tau), integrations at tolerance tol,
+ * until the step is below tol (relative to max(|x|, 1)); the matrix is
+ * L's if factored (a previous solve nearby), else built at x, and rebuilt
+ * where the steps stop shrinking fast.  With final_jac the last evaluation
+ * at the solution carries the variational matrix (w->M: the monodromy
+ * there; L is refactorised with it), else it is a plain flow; either way
+ * *res_out is the residual at the returned x. */
+static int newton(flow_ctx *c, work *w, newton_lu *L, double *x, double tol, int final_jac,
+                  size_t *iterations, double *res_out, bkf_error *err)
+{
+    size_t n = L->n;
+    int fresh = !L->factored;
+    int s = newton_eval(c, w, L, x, tol, fresh, err);
     int converged = 0;
     double prev = INFINITY;
     for (int it = 0; !s && it < NEWTON_MAX_ITER; it++) {
-        s = residual(c, w, x, tol, G, J, n, err);
-        if (s) break;
         (*iterations)++;
-        double r = max_abs(G, n);
-        *res_out = r;
-        if (converged) break; /* one more residual with the final M */
-        gsl_matrix_view Jm = gsl_matrix_view_array(J, n, n);
-        gsl_vector_view Gv = gsl_vector_view_array(G, n);
-        int sign;
-        if (gsl_linalg_LU_decomp(&Jm.matrix, perm, &sign) ||
-            gsl_linalg_LU_solve(&Jm.matrix, perm, &Gv.vector, dx)) {
+        gsl_matrix_view Jm = gsl_matrix_view_array(L->J, n, n);
+        gsl_vector_view Gv = gsl_vector_view_array(L->G, n);
+        if (gsl_linalg_LU_solve(&Jm.matrix, L->perm, &Gv.vector, L->dx)) {
             s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: singular Newton matrix (a fold?)");
             break;
         }
         double step = 0.0;
         for (size_t k = 0; k < n; k++) {
-            double d = gsl_vector_get(dx, k);
+            double d = gsl_vector_get(L->dx, k);
             x[k] -= d;
             step = fmax(step, fabs(d) / fmax(1.0, fabs(x[k])));
         }
@@ -294,21 +354,30 @@ static int newton(flow_ctx *c, work *w, double *x, double tol, size_t *iteration
             s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: Newton left tau > 0");
             break;
         }
-        if (step <= tol) converged = 1;
-        else if (it > 6 && step > prev) {
+        if (step <= tol) {
+            converged = 1;
+            break;
+        }
+        if (it > 6 && step > prev && fresh) {
             s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: Newton does not converge "
                               "(step %.3g after %d iterations)", step, it + 1);
             break;
         }
+        /* a chord step that contracts by less than 10 is not worth
+           keeping its matrix: rebuild it at the new point */
+        int rebuild = step > 0.1 * prev;
+        s = newton_eval(c, w, L, x, tol, rebuild, err);
+        fresh = rebuild;
         prev = step;
     }
     if (!s && !converged)
         s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: Newton did not converge in %d "
                           "iterations", NEWTON_MAX_ITER);
-    free(G);
-    free(J);
-    if (perm) gsl_permutation_free(perm);
-    if (dx) gsl_vector_free(dx);
+    if (!s) s = newton_eval(c, w, L, x, tol, final_jac, err);
+    if (!s) {
+        (*iterations)++;
+        *res_out = max_abs(L->G, n);
+    }
     return s;
 }
 
@@ -377,15 +446,18 @@ static int solve_x(flow_ctx *c, work *w, const bkf_model_params *p, size_t n, do
     double res = 0.0, triv[2] = {NAN, NAN}, mre[2] = {NAN, NAN}, mim[2] = {NAN, NAN};
     double tau[2];
     size_t steps0 = c->steps;
-    int s = BKF_OK;
+    newton_lu L;
+    int s = newton_lu_alloc(&L, N) ? BKF_OK
+                                   : bkf_error_set(err, BKF_ENOMEM, "chainwave: out of memory");
     for (int pass = 0; pass < 2 && !s; pass++) {
         double itol = o->tol * (pass == 0 ? 0.1 : 0.01);
-        s = newton(c, w, x, itol, &wave->newton_iterations, &res, err);
+        s = newton(c, w, &L, x, itol, o->stability, &wave->newton_iterations, &res, err);
         if (!s) tau[pass] = x[n2];
         if (!s && o->stability)
             s = multipliers(c, w->M, &triv[pass], &mre[pass], &mim[pass], err);
     }
     wave->steps = c->steps - steps0;
+    newton_lu_free(&L);
     if (s) return s;
     wave->psi = malloc(N * sizeof *wave->psi);
     wave->eta = malloc(N * sizeof *wave->eta);
@@ -627,7 +699,7 @@ static int find_n(const bkf_model_params *p, size_t n, const bkf_chainwave_optio
     size_t N = p->N, n2 = 2 * N, dim = n2 + 2;
     double Kt = c->K;
     double *u0 = malloc(dim * sizeof *u0);
-    cont_data d = {c, w, fmin(1e-4, o->tol), Kt, dim, malloc(dim * sizeof(double)), 0, NULL, 0,
+    cont_data d = {c, w, CONT_TOL, Kt, dim, malloc(dim * sizeof(double)), 0, NULL, 0,
                    0, 0, 0};
     int s = (u0 && d.prev) ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "chainwave: out of memory");
     /* K = 0: the uncoupled blocks on the van der Pol cycle at mu = gamma,
