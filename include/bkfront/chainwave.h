@@ -132,6 +132,65 @@ int bkf_chainwave_find(const bkf_model_params *params, size_t n_from, size_t n_t
                        const bkf_chainwave_options *options, bkf_chainwave_table *table,
                        bkf_error *err);
 
+/* ------------------------------------------------------------ branches */
+
+/* The parameter a branch follows, the chain's N and n held fixed: h moves
+ * S = N h with it (blocks per unit length 1/h; so does S, the two differ
+ * only in the value reported), c moves K = c^2/h^2 alone, nu and gamma the
+ * blocks' own dynamics.  A finer chain of the same S is another N: the
+ * discrete family N = 20, 40, 80 is bkf_chainwave_find at each N. */
+typedef enum {
+    BKF_CHAINWAVE_PARAM_H = 0,
+    BKF_CHAINWAVE_PARAM_S = 1,
+    BKF_CHAINWAVE_PARAM_C = 2,
+    BKF_CHAINWAVE_PARAM_NU = 3,
+    BKF_CHAINWAVE_PARAM_GAMMA = 4
+} bkf_chainwave_param;
+
+/* "h", "S", "c", "nu", "gamma"; NULL otherwise. */
+const char *bkf_chainwave_param_name(bkf_chainwave_param param);
+
+typedef struct {
+    double value;             /* the parameter */
+    double S, h, K, c, nu, gamma;
+    double tau, v, P;         /* v = h / tau, P = N tau / n */
+    int is_fold;              /* a fold in the parameter (located) */
+    /* with options->stability (else NOT_COMPUTED and NaN): the multipliers
+     * at the point, from the variational equations at the branch's
+     * tolerance; trivial_err is their gauge */
+    bkf_chainwave_verdict verdict;
+    double mult_abs, sigma_max, trivial_err;
+} bkf_chainwave_branch_point;
+
+/* Called for each accepted point in order along the branch; nonzero stops. */
+typedef int (*bkf_chainwave_branch_visitor)(const bkf_chainwave_branch_point *point,
+                                            void *data);
+
+typedef struct {
+    size_t points, folds;
+    int reached;              /* the branch reached `to` */
+    int pinned;               /* stopped because v fell below 1e-3 of its start:
+                                 the fronts stop propagating */
+    double last_value, last_v;
+    char note[320];           /* why the branch ended before `to`, or empty */
+} bkf_chainwave_branch_report;
+
+/* The wave `root` (1 the fastest, bkf_chainwave_find's order) of n fronts
+ * at param = from (the other parameters from params; N fixed) followed by
+ * pseudo-arclength continuation (module continuation, through folds) to
+ * param = to.  The branch ends early where the continuation cannot go on
+ * (report->note), or where the fronts stop propagating (v below 1e-3 of its
+ * start: report->pinned); both are results, BKF_OK.  The points' accuracy
+ * is that of the continuation's corrector (integration tolerance
+ * options->tol / 10); solve a point again with bkf_chainwave_solve for
+ * error estimates.  BKF_EINPUT: bad parameters (as bkf_chainwave_check at
+ * both ends), from == to, no wave `root` at `from`. */
+int bkf_chainwave_branch(const bkf_model_params *params, size_t n, size_t root,
+                         bkf_chainwave_param param, double from, double to,
+                         const bkf_chainwave_options *options,
+                         bkf_chainwave_branch_visitor visit, void *data,
+                         bkf_chainwave_branch_report *report, bkf_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -27,6 +27,26 @@
  * decided growth that contradicts it is a conflict (bkf_check_conflict).
  * The verdict is bkf_check_judge's.
  *
+ * The chain (model kind BKF_MODEL_CHAIN, model->N blocks): every rotating
+ * wave of bkf_chainwave_find (n = 1 .. N/2, or options->n; tolerance
+ * BKF_CHECK_CHAIN_WAVE_TOL, with its multipliers) is set on the blocks
+ * plus the band-limited noise (bkf_pde_add_noise) and simulated by bkf_pde
+ * (rk8pd, tol options->tol or BKF_CHECK_CHAIN_RUN_TOL), sampled at every
+ * shift time m tau, where the unperturbed wave is the start shifted by m
+ * blocks, W_m.  There the state u = W_m + delta_m W_m' + w, W_m' the
+ * field at W_m and w orthogonal to it: delta_m is the phase the fronts
+ * have gained, which a speed v_meas = v_pred (1 + s) makes grow as s t, so
+ * s is the least-squares slope of delta over the later half of the coherent
+ * part (as above); the deviation is max |w| (the phase is not a
+ * deviation: the time translation neither grows nor decays); the front
+ * count is the number of rising crossings of nu around the ring.  The
+ * growth fit, the verdict and the conflict rule are those of the
+ * continuum, with the multipliers' verdict as the spectrum (sigma_max =
+ * ln|m| / tau).  Row: grid BKF_CHECK_GRID_CHAIN, N the blocks, root the
+ * wave's index within its n (1 the fastest), tail the wave's Newton
+ * residual; options N, N_max, stepper, filter, frame, grid, points,
+ * resolution and mapped_* are not used.
+ *
  * The library never prints and never exits: rows go to the caller's
  * visitor, warnings to its warning callback. */
 #ifndef BKFRONT_CHECK_H
@@ -50,7 +70,8 @@ extern "C" {
 typedef enum {
     BKF_CHECK_GRID_AUTO = 0,    /* uniform up to BKF_CHECK_AUTO_UNIFORM_MAX, else mapped */
     BKF_CHECK_GRID_UNIFORM = 1, /* always the spectral grid, up to N_max */
-    BKF_CHECK_GRID_MAPPED = 2   /* always the adapted grid (moving frame only) */
+    BKF_CHECK_GRID_MAPPED = 2,  /* always the adapted grid (moving frame only) */
+    BKF_CHECK_GRID_CHAIN = 3    /* a row's grid only: the chain's own blocks */
 } bkf_check_grid;
 
 typedef enum {
@@ -71,7 +92,7 @@ typedef enum {
 /* "agrees", "disagrees", "unstable", "unresolved", "conflicts"; "unknown"
  * otherwise. */
 const char *bkf_check_verdict_name(bkf_check_verdict verdict);
-/* "auto", "uniform", "mapped"; "unknown" otherwise. */
+/* "auto", "uniform", "mapped", "chain"; "unknown" otherwise. */
 const char *bkf_check_grid_name(bkf_check_grid grid);
 
 /* The uniform grid's cap under BKF_CHECK_GRID_AUTO: from N = 16384 on the
@@ -95,6 +116,10 @@ const char *bkf_check_grid_name(bkf_check_grid grid);
 #define BKF_CHECK_REL_TOL_DEFAULT 1e-6
 #define BKF_CHECK_PERTURB_DEFAULT 1e-6
 #define BKF_CHECK_RESOLUTION_DEFAULT 1e-5
+/* The chain: the waves' tolerance (their v to ~1e-10, so that a measured
+ * speed is judged to 1e-8), and the run's local error tolerance. */
+#define BKF_CHECK_CHAIN_WAVE_TOL 1e-10
+#define BKF_CHECK_CHAIN_RUN_TOL 1e-12
 #define BKF_CHECK_POINTS_DEFAULT 768
 /* Ranges (see bkf_check_options). */
 #define BKF_CHECK_FRONTS_MAX 100000
@@ -140,8 +165,9 @@ bkf_check_options bkf_check_options_default(void);
 
 /* Validation alone: BKF_EINPUT with a one-line message naming the option
  * (or model parameter) and its range.  The model needs gamma in the cycle
- * solver's range, c >= 0, |nu| < 1 and S > 0; its N and kind are not used
- * (the check runs the continuum). */
+ * solver's range, c >= 0, |nu| < 1 and S > 0; kind continuum (N not used:
+ * the check picks the grid) or chain (bkf_chainwave_check: N blocks in
+ * [2, 400], gamma <= 30, n <= N). */
 int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *options,
                        bkf_error *err);
 
@@ -291,15 +317,17 @@ int bkf_check_run(const bkf_model_params *model, const bkf_check_options *option
  * filled from bkf_check_spec_default through the table bkf_check_keys,
  * checked, and written as the table of rows with its comment lines. */
 typedef struct {
-    bkf_model_params model;    /* gamma, c, nu, S; N and kind are not used */
+    bkf_model_params model;    /* gamma, c, nu, S, kind (key model); N not used: with
+                                  kind chain the blocks are options.N, S when it is
+                                  BKF_CHECK_N_DEFAULT (beyond the chain's range) */
     bkf_check_options options; /* frame lab with grid auto means grid uniform */
 } bkf_check_spec;
 
 /* The paper's model and bkf_check_options_default: `bkfront check`. */
 bkf_check_spec bkf_check_spec_default(void);
 
-/* The keys, named as the flags: gamma, c, nu, S, n, N, N-max, tmax, tol,
- * filter, stepper, rel-tol, perturb, seed, frame, grid, points, resolution;
+/* The keys, named as the flags: gamma, c, nu, S, model, n, N, N-max, tmax,
+ * tol, filter, stepper, rel-tol, perturb, seed, frame, grid, points, resolution;
  * scene keys only: mapped-tol, mapped-max-steps.  (Not bkf_check_options,
  * the name of the run's options.) */
 extern const bkf_option bkf_check_keys[];

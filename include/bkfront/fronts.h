@@ -99,12 +99,16 @@ typedef struct {
     int stability;          /* each point's spectral verdict, and where it changes */
     double stability_tol;   /* as bkf_fronts_spec's: [1e-10, 1e-2], 0: 1e-6; only with
                                stability */
+    int model;              /* 0 continuum (default), 1 chain: bkf_chainwave_branch on the
+                               chain of N blocks, along S, nu, gamma, c or h (index 4, chain
+                               only: S = N h moves with it, S not given) */
+    size_t N;               /* with model chain: blocks, [2, 400]; 0 (default): S */
 } bkf_fronts_branch_spec;
 
 bkf_fronts_branch_spec bkf_fronts_branch_spec_default(void);
 
 /* The keys: param, from, to, n, root, gamma, c, nu, S, tol, max-points,
- * stability, stability-tol. */
+ * stability, stability-tol, model, N. */
 extern const bkf_option bkf_fronts_branch_options[];
 extern const size_t bkf_fronts_branch_noptions;
 

@@ -15,6 +15,9 @@
  * the derivatives spectral (FFT); the error is O(h^6) for a resolved field.
  * Each front also carries its instantaneous velocity -psi_t/psi_x (psi_t
  * from a cubic through the four nearest points: a diagnostic, O(h^4)).
+ * On the chain (model kind BKF_MODEL_CHAIN) there is no field between the
+ * blocks and a front can be one block wide: psi and eta are linear across
+ * the cell, and psi_t there is gamma (eta - phi(level)).
  *
  * Fronts are tracked from sample to sample while their count stays the same
  * (matched by the cyclic assignment closest to the positions predicted from

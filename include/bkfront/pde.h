@@ -201,7 +201,9 @@ int bkf_pde_init_oscillation(bkf_pde *pde, size_t j, double amp, bkf_error *err)
 /* Adds band-limited noise of rms `amp` in [0, 10] to psi (eta unchanged),
  * drawn as bkf_pde_init_uniform's: the same seed gives the same function of
  * x at every N.  The global oscillation plus noise is an arbitrary start
- * near the oscillation, every mode perturbed at once. */
+ * near the oscillation, every mode perturbed at once; added to a state set
+ * by bkf_pde_set_state (a computed wave of the chain), its perturbation.
+ * The time is kept. */
 int bkf_pde_add_noise(bkf_pde *pde, double amp, unsigned long seed, bkf_error *err);
 
 /* What n fronts of a travelling wave are: the request that

@@ -128,7 +128,10 @@ typedef struct {
     char *output;             /* the file it writes (a figure: the first image) */
     size_t *users;            /* products that need it */
     size_t nusers;
-    size_t data_product;      /* FIGURE: the product it shows */
+    size_t data_product;      /* FIGURE: the product it shows (the first of
+                                 data = A,B,...) */
+    size_t *data_products;    /* FIGURE: every product it shows, in order */
+    size_t ndata;
 } bkf_scene_step;
 
 typedef struct {

@@ -21,7 +21,14 @@ extern "C" {
  * the root's v_err and the number of roots for n.  Needs |nu| < 1, c >= 0
  * and a root for (n, root) (BKF_EINPUT otherwise, naming how many n have
  * fronts).  `info` may be NULL; `clean_psi`, if non-NULL, receives the N
- * values of psi before the noise. */
+ * values of psi before the noise.
+ * On the chain (model kind BKF_MODEL_CHAIN) the seed is the chain's own
+ * rotating wave instead (bkf_chainwave_find for n, root `root` in its order,
+ * tolerance max(spec->tol, 1e-10); mirrored for direction +1), plus the
+ * noise (bkf_pde_add_noise); info gets its v, v_err, T = P (the period of
+ * each block), stretch 1, mu NaN, and how many waves n has.  n in [1, N];
+ * no wave for n (its branch from the uncoupled chain ends before the
+ * chain's coupling) is BKF_EINPUT naming n and N. */
 int bkf_seed_front(bkf_pde *pde, const bkf_pde_front_spec *spec, bkf_pde_front_info *info,
                    double *clean_psi, bkf_error *err);
 

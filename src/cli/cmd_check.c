@@ -28,7 +28,8 @@ static void check_help(FILE *out)
     cli_options g[3];
     groups_of(NULL, g);
     fprintf(out,
-        "usage: bkfront check [--gamma G] [--c C] [--nu V] [--S S] [--n K] [--N N]\n"
+        "usage: bkfront check [--gamma G] [--c C] [--nu V] [--S S] [--model continuum|chain]\n"
+        "                     [--n K] [--N N]\n"
         "                     [--N-max M] [--tmax T] [--tol E] [--rel-tol R] [--perturb A]\n"
         "                     [--seed K] [--stepper S] [--frame lab|moving]\n"
         "                     [--grid auto|uniform|mapped] [--points M]\n"
@@ -85,6 +86,12 @@ static void check_help(FILE *out)
         "                    spectrum says no), agrees, disagrees (stable, rel_err beyond\n"
         "                    --rel-tol), unresolved (not run; or the adapted grid's run\n"
         "                    exceeded %d steps or could not be set up, with a warning)\n"
+        "\n"
+        "With --model chain: the chain of --N blocks (default S), every rotating wave of\n"
+        "bkfront speeds --model chain seeded with the noise and run on the blocks (rk8pd,\n"
+        "tol 1e-12 unless --tol), sampled at every shift time tau: v_meas from the phase\n"
+        "the fronts gain, the deviation orthogonal to it, spectral the multipliers'\n"
+        "verdict, grid chain, N the blocks, tail the wave's Newton residual.\n"
         "\n"
         "exit status: 0 ok, 1 a stable front disagrees or a run conflicts with the\n"
         "spectrum (the table is written; or a numerical failure), 2 bad input\n",

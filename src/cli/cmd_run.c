@@ -194,9 +194,12 @@ static void print_plan(const bkf_scene *sc, const bkf_scene_plan *plan, FILE *ou
                     p->name, p->line);
         }
         if (st->kind == BKF_SCENE_STEP_FIGURE) {
-            const bkf_scene_product *d = &sc->products[st->data_product];
-            fprintf(out, "\tgnuplot on the data of [%s %s] -> %s\n", bkf_scene_kind_name(d->kind),
-                    d->name, st->output);
+            fprintf(out, "\tgnuplot on the data of");
+            for (size_t k = 0; k < st->ndata; k++) {
+                const bkf_scene_product *d = &sc->products[st->data_products[k]];
+                fprintf(out, "%s[%s %s]", k ? ", " : " ", bkf_scene_kind_name(d->kind), d->name);
+            }
+            fprintf(out, " -> %s\n", st->output);
         } else {
             char *cmd = bkf_scene_step_command(st);
             fprintf(out, "\t" CLI_PROGRAM " %s\n", cmd ? cmd : "?");

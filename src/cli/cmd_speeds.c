@@ -119,10 +119,18 @@ static void branch_help(FILE *out)
     cli_options g[2];
     branch_groups(NULL, g);
     fprintf(out,
-        "usage: bkfront branch --param S|nu|gamma|c --from A --to B [--n N] [--root I]\n"
+        "usage: bkfront branch --param S|nu|gamma|c|h --from A --to B [--n N] [--root I]\n"
         "                      --gamma G --c C --nu V --S L  (all but the --param one)\n"
         "                      [--tol E] [--max-points N] [--stability [--stability-tol E]]\n"
+        "                      [--model continuum|chain [--N N]]\n"
         "                      [--format tsv|json] [--out FILE]\n"
+        "\n"
+        "With --model chain: one rotating wave of the chain of --N blocks (bkfront speeds\n"
+        "--model chain; --root in its order) followed at fixed N and n, along S, nu, gamma,\n"
+        "c or h (the spacing; S = N h moves with it, S not given); columns point (point or\n"
+        "fold), value, S, h, gamma, c, nu, K, n, v, P, tau, stable, mult_abs, sigma_max,\n"
+        "trivial_err (the multipliers with --stability); the comments say how the branch\n"
+        "ended (the end, a failed step, or pinning: v below 1e-3 of its start).\n"
         "\n"
         "The branch v_n(p) of allowed front speeds along one parameter p, by\n"
         "pseudo-arclength continuation from p = A towards p = B. It passes folds,\n"

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bkfront/chainwave.h"
 #include "bkfront/comoving.h"
 #include "bkfront/cycle.h"
 #include "bkfront/measure.h"
@@ -47,6 +48,7 @@ const char *bkf_check_grid_name(bkf_check_grid grid)
     case BKF_CHECK_GRID_AUTO: return "auto";
     case BKF_CHECK_GRID_UNIFORM: return "uniform";
     case BKF_CHECK_GRID_MAPPED: return "mapped";
+    case BKF_CHECK_GRID_CHAIN: return "chain";
     }
     return "unknown";
 }
@@ -101,6 +103,14 @@ int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *o
     if (bkf_model_check_nu_active(model->nu, &e))
         return bkf_error_set(err, BKF_EINPUT, "%s; there are no fronts", e.message);
     if (bkf_model_check_positive("S", model->S, err)) return BKF_EINPUT;
+    if (model->kind == BKF_MODEL_CHAIN) {
+        bkf_chainwave_options co = bkf_chainwave_options_default();
+        co.tol = BKF_CHECK_CHAIN_WAVE_TOL;
+        if (bkf_chainwave_check(model, o->n ? o->n : 1, &co, err)) return BKF_EINPUT;
+    } else if (model->kind != BKF_MODEL_CONTINUUM) {
+        return bkf_error_set(err, BKF_EINPUT, "model: %d is not continuum or chain",
+                             (int)model->kind);
+    }
     if (o->n > BKF_CHECK_FRONTS_MAX)
         return bkf_error_set(err, BKF_EINPUT, "n: %zu is outside [1, %d] (0: every n)", o->n,
                              BKF_CHECK_FRONTS_MAX);
@@ -798,11 +808,249 @@ static void check_spectrum(const check_ctx *c, const bkf_speeds_root *sr, bkf_ch
     bkf_trainspec_result_free(&res);
 }
 
+/* ------------------------------------------------------------ the chain */
+
+/* The run sampled at the shift times m tau (see check.h): the phase the
+ * fronts gained, the deviation orthogonal to it, the front count. */
+typedef struct {
+    size_t N, cap, count;
+    double tau, nu;
+    const double *u0, *f0; /* the wave and the field at it (2N values) */
+    double ff;             /* |f0|^2 */
+    double *t, *phase, *dev;
+    size_t *fronts;
+    int oom;
+} chain_obs;
+
+/* Rising crossings of nu around the ring. */
+static size_t chain_fronts(const double *psi, size_t N, double nu)
+{
+    size_t count = 0;
+    for (size_t i = 0; i < N; i++)
+        count += psi[i] < nu && psi[(i + 1) % N] >= nu;
+    return count;
+}
+
+static int chain_observe(const bkf_pde_sample *smp, void *data)
+{
+    chain_obs *ob = data;
+    size_t N = ob->N;
+    if (ob->count == ob->cap) {
+        size_t cap = ob->cap ? 2 * ob->cap : 256;
+        double *t = realloc(ob->t, cap * sizeof *t);
+        if (t) ob->t = t;
+        double *ph = realloc(ob->phase, cap * sizeof *ph);
+        if (ph) ob->phase = ph;
+        double *d = realloc(ob->dev, cap * sizeof *d);
+        if (d) ob->dev = d;
+        size_t *fr = realloc(ob->fronts, cap * sizeof *fr);
+        if (fr) ob->fronts = fr;
+        if (!t || !ph || !d || !fr) return ob->oom = 1;
+        ob->cap = cap;
+    }
+    size_t m = (size_t)llround(smp->t / ob->tau) % N;
+    /* W_m: block i is block i + m of the start (both fields) */
+    double dot = 0.0;
+    for (size_t k = 0; k < 2 * N; k++) {
+        size_t j = (k < N ? 0 : N) + (k % N + m) % N;
+        double u = k < N ? smp->psi[k] : smp->eta[k - N];
+        dot += (u - ob->u0[j]) * ob->f0[j];
+    }
+    double delta = dot / ob->ff, dev = 0.0;
+    for (size_t k = 0; k < 2 * N; k++) {
+        size_t j = (k < N ? 0 : N) + (k % N + m) % N;
+        double u = k < N ? smp->psi[k] : smp->eta[k - N];
+        dev = fmax(dev, fabs(u - ob->u0[j] - delta * ob->f0[j]));
+    }
+    size_t r = ob->count++;
+    ob->t[r] = smp->t;
+    ob->phase[r] = delta;
+    ob->dev[r] = isfinite(dev) ? dev : INFINITY;
+    ob->fronts[r] = chain_fronts(smp->psi, N, ob->nu);
+    return 0;
+}
+
+static void chain_reader(size_t i, const void *data, double *t, size_t *fronts, double *dev)
+{
+    const chain_obs *ob = data;
+    *t = ob->t[i];
+    *fronts = ob->fronts[i];
+    *dev = ob->dev[i];
+}
+
+/* The sample nearest to time t. */
+static size_t chain_sample_at(const chain_obs *ob, double t)
+{
+    size_t best = 0;
+    for (size_t r = 1; r < ob->count; r++)
+        if (fabs(ob->t[r] - t) < fabs(ob->t[best] - t)) best = r;
+    return best;
+}
+
+static int check_chain_wave(const check_ctx *c, const bkf_chainwave *w, bkf_check_row *row,
+                            bkf_error *err)
+{
+    const bkf_check_options *o = c->o;
+    const bkf_model_params *p = c->model;
+    size_t N = p->N, n = w->n;
+    bkf_pde_options po = bkf_pde_options_default();
+    po.tol = o->tol ? o->tol : BKF_CHECK_CHAIN_RUN_TOL;
+    po.stepper = BKF_PDE_RK8PD;
+    po.filter = 0;
+    po.cancel = check_cancel(c);
+    double *f0 = malloc(2 * N * sizeof *f0), *u0 = malloc(2 * N * sizeof *u0);
+    chain_obs ob = {N, 0, 0, w->tau, p->nu, u0, f0, 0.0, NULL, NULL, NULL, NULL, 0};
+    bkf_pde *pde = NULL;
+    int s = (f0 && u0) ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (!s) {
+        double K = p->c * p->c * (double)(N * N) / (p->S * p->S);
+        memcpy(u0, w->psi, N * sizeof *u0);
+        memcpy(u0 + N, w->eta, N * sizeof *u0);
+        for (size_t i = 0; i < N; i++) {
+            double x = w->psi[i];
+            double lap = w->psi[(i + 1) % N] - 2.0 * x + w->psi[(i + N - 1) % N];
+            f0[i] = p->gamma * (w->eta[i] - bkf_model_friction(x));
+            f0[N + i] = -(x - p->nu - K * lap) / p->gamma;
+        }
+        for (size_t k = 0; k < 2 * N; k++) ob.ff += f0[k] * f0[k];
+        pde = bkf_pde_alloc(p, &po, err);
+        if (!pde) s = BKF_ENOMEM;
+    }
+    bkf_error e;
+    if (!s) s = bkf_pde_set_state(pde, w->psi, w->eta, 0.0, err);
+    if (!s) s = bkf_pde_add_noise(pde, o->perturb, o->seed, err);
+    /* the run ends on a shift time, the last sample with it */
+    double t_end = ceil(o->tmax / w->tau - 1e-9) * w->tau;
+    if (!s) {
+        s = bkf_pde_run(pde, t_end, w->tau, chain_observe, &ob, check_progress, (void *)c, &e);
+        if (ob.oom) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    int blew_up = (s == BKF_EBLOWUP || s == BKF_ENUMERIC) && ob.count >= 2;
+    if (blew_up) s = BKF_OK;
+    if (s == BKF_ECANCELED) bkf_error_set(err, s, "canceled");
+    else if (s && !ob.oom && pde)
+        bkf_error_set(err, s, "n = %zu, chain of %zu blocks: %s", n, N, e.message);
+    if (!s && ob.count) {
+        int constant = 1;
+        for (size_t r = 1; r < ob.count; r++) constant &= ob.fronts[r] == ob.fronts[0];
+        row->fronts_start = (double)ob.fronts[0];
+        row->fronts_end = (double)ob.fronts[ob.count - 1];
+        row->deviation_start = ob.dev[0];
+        row->deviation_mid = ob.dev[chain_sample_at(&ob, 0.5 * t_end)];
+        row->deviation_end = ob.dev[ob.count - 1];
+        double t_lin;
+        /* the count a rotating wave keeps is its own (a coarse chain shows
+           n fronts as n crossings only where they are wider than a block) */
+        size_t n_seen = ob.fronts[0];
+        if ((s = fit_deviation(chain_reader, &ob, ob.count, n_seen, o, &row->growth, &t_lin)))
+            bkf_error_set(err, s, "out of memory");
+        size_t last = coherent_end(chain_reader, &ob, ob.count, n_seen, 0, speed_bound(o), o->tmax);
+        size_t first = chain_sample_at(&ob, 0.5 * ob.t[last]);
+        if (!s && last >= FIT_MIN_RECORDS && last - first >= 2) {
+            double mt = 0, mp = 0, stt = 0, stp = 0, rss = 0;
+            size_t m = last - first + 1;
+            for (size_t r = first; r <= last; r++) mt += ob.t[r] / (double)m, mp += ob.phase[r] / (double)m;
+            for (size_t r = first; r <= last; r++) {
+                stt += (ob.t[r] - mt) * (ob.t[r] - mt);
+                stp += (ob.t[r] - mt) * (ob.phase[r] - mp);
+            }
+            double slope = stp / stt;
+            for (size_t r = first; r <= last; r++) {
+                double d = ob.phase[r] - mp - slope * (ob.t[r] - mt);
+                rss += d * d;
+            }
+            /* u(t) = W(t + delta(t)): the fronts run at v (1 + d delta/dt) */
+            row->v_meas = w->v * (1.0 + slope);
+            row->v_meas_err = w->v * sqrt(rss / (double)(m - 2) / stt);
+            row->rel_err = slope;
+            row->fit_from = ob.t[first];
+            row->fit_to = ob.t[last];
+        }
+        if (!s) {
+            int stable;
+            row->verdict = bkf_check_judge(n_seen, blew_up, constant, n_seen, row->deviation_end,
+                                           &row->growth, row->spectral, row->sigma_max,
+                                           row->rel_err, o->rel_tol, &stable);
+            row->stable = stable;
+            if (blew_up) row->reason = BKF_EBLOWUP;
+        }
+    }
+    bkf_pde_free(pde);
+    free(f0);
+    free(u0);
+    free(ob.t);
+    free(ob.phase);
+    free(ob.dev);
+    free(ob.fronts);
+    return s;
+}
+
+static bkf_trainspec_verdict chain_spectral(bkf_chainwave_verdict v)
+{
+    switch (v) {
+    case BKF_CHAINWAVE_STABLE: return BKF_TRAINSPEC_STABLE;
+    case BKF_CHAINWAVE_UNSTABLE: return BKF_TRAINSPEC_UNSTABLE;
+    default: return BKF_TRAINSPEC_UNRESOLVED;
+    }
+}
+
+static int check_chain_run(const bkf_model_params *model, const bkf_check_options *o,
+                           const bkf_check_hooks *hooks, bkf_error *err)
+{
+    bkf_chainwave_options co = bkf_chainwave_options_default();
+    co.tol = BKF_CHECK_CHAIN_WAVE_TOL;
+    bkf_chainwave_table tab;
+    bkf_error e;
+    int s = bkf_chainwave_find(model, o->n ? o->n : 1, o->n, &co, &tab, &e);
+    if (s) {
+        bkf_chainwave_table_free(&tab);
+        return bkf_error_set(err, s, "the chain's waves: %s", e.message);
+    }
+    check_ctx c = {model, o, hooks, o->tol ? o->tol : BKF_CHECK_CHAIN_RUN_TOL, NAN, 0, 0,
+                   tab.count};
+    bkf_check_info info = {tab.count, NAN, (long)(o->n ? o->n : model->N / 2), tab.note, c.tol,
+                           NAN, model->N};
+    int stop = hooks && hooks->begin ? hooks->begin(&info, hooks->data) : 0;
+    const volatile sig_atomic_t *cancel = check_cancel(&c);
+    for (size_t i = 0; !s && !stop && i < tab.count; i++) {
+        if (cancel && *cancel) {
+            s = bkf_error_set(err, BKF_ECANCELED, "canceled after %zu of %zu waves", i,
+                              tab.count);
+            break;
+        }
+        const bkf_chainwave *w = &tab.waves[i];
+        size_t root = 1;
+        for (size_t k = i; k > 0 && tab.waves[k - 1].n == w->n; k--) root++;
+        bkf_check_row row;
+        bkf_speeds_root sr = {0};
+        sr.v = w->v;
+        sr.v_err = w->v_err;
+        row_init(&row, w->n, root, &sr);
+        row.grid = BKF_CHECK_GRID_CHAIN;
+        row.N = model->N;
+        row.tail = w->residual;
+        row.spectral = chain_spectral(w->verdict);
+        row.sigma_max = w->sigma_max;
+        row.sigma_max_err = w->sigma_max_err;
+        c.root_index = i;
+        s = check_chain_wave(&c, w, &row, err);
+        if (!s && row.verdict == BKF_CHECK_CONFLICTS)
+            check_warn(&c, "n = %zu, wave %zu: the simulation's perturbation %s at %.3g +- %.3g "
+                       "per unit time, the multipliers say %s (|m| %.9g)", row.n, row.root,
+                       bkf_check_growth_name(row.growth.verdict), row.growth.rate,
+                       row.growth.rate_err, bkf_chainwave_verdict_name(w->verdict), w->mult_abs);
+        if (!s && hooks && hooks->row) stop = hooks->row(&row, hooks->data);
+    }
+    bkf_chainwave_table_free(&tab);
+    return s;
+}
+
 int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
                   const bkf_check_hooks *hooks, bkf_error *err)
 {
     int s = bkf_check_validate(model, o, err);
     if (s) return s;
+    if (model->kind == BKF_MODEL_CHAIN) return check_chain_run(model, o, hooks, err);
     bkf_model_params sp = {model->gamma, model->c, model->nu, model->S, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_options so = bkf_speeds_options_default();
     so.tol = 1e-12;
@@ -864,6 +1112,8 @@ static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", 
                                              NULL};
 static const char *const frame_names[] = {"moving", "lab", NULL};
 static const char *const grid_names[] = {"auto", "uniform", "mapped", NULL};
+static const char *const model_names[] = {"continuum", "chain", NULL};
+_Static_assert(sizeof(bkf_model_kind) == sizeof(int), "bkf_model_kind is not int-sized");
 
 /* The seed is an unsigned long: up to 19 digits always fit. */
 static int set_seed(void *spec, const char *text, bkf_error *err)
@@ -895,6 +1145,11 @@ const bkf_option bkf_check_keys[] = {
     {.name = "S", .type = BKF_OPT_DOUBLE, .offset = MODEL(S),
      .flags = BKF_OPT_MIN | BKF_OPT_MIN_OPEN, .min = 0, .form = "S", .shown_default = "20",
      .help = "system size, > 0"},
+    {.name = "model", .type = BKF_OPT_CHOICE, .offset = MODEL(kind), .choices = model_names,
+     .form = "continuum|chain", .shown_default = "continuum",
+     .help = "chain: the chain of --N blocks (spacing h = S/N), its own\n"
+             "rotating waves (bkfront speeds --model chain) seeded and\n"
+             "simulated on the blocks; columns as below (docs/cli/check.md)"},
     {.name = "n", .type = BKF_OPT_COUNT, .offset = OPT(n), .flags = BOUNDED, .min = 1,
      .max = BKF_CHECK_FRONTS_MAX, .form = "K",
      .help = "check n = K only; default every n with a root"},
@@ -902,7 +1157,8 @@ const bkf_option bkf_check_keys[] = {
      .min = BKF_PDE_N_MIN, .max = BKF_PDE_N_MAX, .form = "N", .shown_default = "512",
      .help = "smallest grid, even; each root runs on the smallest\n"
              "N = N 2^k that resolves its wave (Fourier coefficients\n"
-             "above N/3 below --resolution of the largest)"},
+             "above N/3 below --resolution of the largest); with\n"
+             "--model chain: blocks, in [2, 400], default S (whole)"},
     {.name = "N-max", .type = BKF_OPT_COUNT, .offset = OPT(N_max), .flags = BOUNDED,
      .min = BKF_PDE_N_MIN, .max = BKF_PDE_N_MAX, .form = "M", .shown_default = "65536",
      .help = "largest grid, >= --N; roots needing more are reported\n"
@@ -977,11 +1233,41 @@ bkf_check_spec bkf_check_spec_default(void)
     return s;
 }
 
+/* The model the spec runs: the chain's blocks from the key N (S by default). */
+static int spec_model(const bkf_check_spec *spec, const char *p, bkf_model_params *model,
+                      bkf_error *err)
+{
+    *model = spec->model;
+    if (model->kind != BKF_MODEL_CHAIN) return BKF_OK;
+    size_t N = spec->options.N;
+    if (N == BKF_CHECK_N_DEFAULT) {
+        double S = model->S;
+        if (!(S >= BKF_CHAINWAVE_N_MIN && S <= BKF_CHAINWAVE_N_MAX && S == floor(S)))
+            return bkf_error_set(err, BKF_EINPUT, "%sN: the number of blocks, in [%d, %d], is "
+                                 "needed with %smodel chain (the default, S = %g, is not one)",
+                                 p, BKF_CHAINWAVE_N_MIN, BKF_CHAINWAVE_N_MAX, p, S);
+        N = (size_t)S;
+    }
+    model->N = N;
+    return BKF_OK;
+}
+
 int bkf_check_spec_check(const bkf_check_spec *spec, const char *prefix, bkf_error *err)
 {
     const char *p = prefix ? prefix : "";
     if (!spec) return bkf_error_set(err, BKF_EINPUT, "no spec given");
     const bkf_check_options *o = &spec->options;
+    if (spec->model.kind == BKF_MODEL_CHAIN) {
+        bkf_model_params m;
+        bkf_error e;
+        int s = spec_model(spec, p, &m, err);
+        if (s) return s;
+        bkf_check_options oc = *o;
+        oc.N = BKF_CHECK_N_DEFAULT; /* the grid's N: the chain uses its blocks */
+        if (bkf_check_validate(&m, &oc, &e))
+            return bkf_error_set(err, BKF_EINPUT, "%s%s", p, e.message);
+        return BKF_OK;
+    }
     if (o->N % 2)
         return bkf_error_set(err, BKF_EINPUT,
                              "%sN: %zu must be even for the continuum model (spectral)", p, o->N);
@@ -1113,17 +1399,36 @@ static int row_spectral_unstable(const bkf_check_row *r)
     return r->spectral == BKF_TRAINSPEC_UNSTABLE;
 }
 
-static int write_table(const check_sink *k, const bkf_check_spec *spec,
+static int write_table(const check_sink *k, const bkf_model_params *m,
                        const bkf_check_options *o, FILE *out, bkf_io_format format,
                        const bkf_provenance *prov, bkf_error *err)
 {
-    const bkf_model_params *m = &spec->model;
+    int chain = m->kind == BKF_MODEL_CHAIN;
     char a[32], b[32], c[32], d[32], e[32], f[32], g[32];
     bkf_io_table *t = bkf_io_table_alloc(out, format, columns, NCOLUMNS, err);
     if (!t) return BKF_ENOMEM;
     int s = bkf_io_table_commentf(t, err, "%s check: predicted front speeds against seeded simulations",
                     prov && prov->program ? prov->program : "libbkfront");
-    if (!s)
+    if (!s && chain)
+        s = bkf_io_table_commentf(t, err,
+                    "model chain: gamma %s, c %s, nu %s, S %s, N %zu blocks (h = %s); its "
+                    "rotating waves (tol %.0e, multipliers) seeded on the blocks, run rk8pd tol "
+                    "%s, sampled at every shift time tau",
+                    bkf_format_number(m->gamma, a, sizeof a), bkf_format_number(m->c, b, sizeof b),
+                    bkf_format_number(m->nu, c, sizeof c), bkf_format_number(m->S, d, sizeof d),
+                    m->N, bkf_format_number(m->S / (double)m->N, e, sizeof e),
+                    BKF_CHECK_CHAIN_WAVE_TOL, bkf_format_number(k->info.tol, f, sizeof f));
+    if (!s && chain)
+        s = bkf_io_table_commentf(t, err,
+                    "tmax %s, perturbation rms %s (seed %lu), agreement asked %s; v_meas from "
+                    "the phase the fronts gain, deviation orthogonal to it, spectral = the "
+                    "multipliers' verdict, tail = the wave's Newton residual",
+                    bkf_format_number(o->tmax, a, sizeof a), bkf_format_number(o->perturb, b, sizeof b),
+                    o->seed, bkf_format_number(o->rel_tol, c, sizeof c));
+    if (!s && chain)
+        s = bkf_io_table_commentf(t, err, "waves: %zu (n <= %ld)%s%s", k->info.roots,
+                    k->info.n_max, k->note[0] ? "; " : "", k->note);
+    if (!s && !chain)
         s = bkf_io_table_commentf(t, err,
                     "model continuum: gamma %s, c %s, nu %s, S %s, N %zu (h = %s); tol %s, "
                     "stepper %s, dealias off, filter %s",
@@ -1131,10 +1436,10 @@ static int write_table(const check_sink *k, const bkf_check_spec *spec,
                     bkf_format_number(m->S, d, sizeof d), o->N, bkf_format_number(m->S / (double)o->N, e, sizeof e),
                     bkf_format_number(k->info.tol, f, sizeof f), stepper_names[o->stepper],
                     o->filter == 0 ? "off" : bkf_format_number(o->filter, g, sizeof g));
-    if (!s)
+    if (!s && !chain)
         s = bkf_io_table_commentf(t, err, "frame: %s",
                     o->frame == BKF_CHECK_FRAME_LAB ? "lab" : "moving with v_pred of each root");
-    if (!s)
+    if (!s && !chain)
         s = bkf_io_table_commentf(t, err,
                     "tmax %s, perturbation rms %s (seed %lu), agreement asked %s, grid %s: "
                     "uniform %zu .. %zu (resolution %.0e, samples every %s), adapted %zu points "
@@ -1143,7 +1448,7 @@ static int write_table(const check_sink *k, const bkf_check_spec *spec,
                     bkf_format_number(o->rel_tol, c, sizeof c), bkf_check_grid_name(o->grid), o->N,
                     k->info.N_cap, o->resolution, bkf_format_number(BKF_CHECK_SAMPLE_DT, d, sizeof d),
                     o->points, k->info.mapped_tol, BKF_CHECK_MAPPED_SAMPLE_DT);
-    if (!s)
+    if (!s && !chain)
         s = bkf_io_table_commentf(t, err, "speeds: k(nu) %s, n_max %ld, %zu roots%s%s",
                     bkf_format_number(k->info.k, a, sizeof a), k->info.n_max, k->info.roots,
                     k->note[0] ? "; " : "", k->note);
@@ -1211,9 +1516,12 @@ int bkf_check_write(const bkf_check_spec *spec, FILE *out, bkf_io_format format,
         own.warning = hooks->warning ? sink_warning : NULL;
         own.cancel = hooks->cancel;
     }
-    s = bkf_check_run(&spec->model, &o, &own, err);
+    bkf_model_params model;
+    if ((s = spec_model(spec, "", &model, err))) return s;
+    if (model.kind == BKF_MODEL_CHAIN) o.N = BKF_CHECK_N_DEFAULT;
+    s = bkf_check_run(&model, &o, &own, err);
     if (!s && k.failed) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    if (!s) s = write_table(&k, spec, &o, out, format, prov, err);
+    if (!s) s = write_table(&k, &model, &o, out, format, prov, err);
     size_t nd = 0, nc = 0;
     for (size_t i = 0; !s && i < k.count; i++) {
         nd += row_disagrees(&k.rows[i]);

@@ -539,8 +539,9 @@ static int write_summary(bkf_io_table *t, const run *r, const bkf_measure_summar
                          sp->frames);
     if (!s && front)
         s = bkf_io_table_commentf(t, err,
-                     "front: n %zu, root %zu of %zu, v_pred %s (err %.2g), mu %s, T %s, period at "
+                     "front%s: n %zu, root %zu of %zu, v_pred %s (err %.2g), mu %s, T %s, period at "
                      "a point %s, direction %s",
+                     r->model.kind == BKF_MODEL_CHAIN ? " (the chain's own rotating wave)" : "",
                      in->front.n, in->front.root, fi->roots_for_n, NUM(fi->v, a), fi->v_err,
                      NUM(fi->mu, b), NUM(fi->T, c), NUM(fi->period_fixed, d),
                      in->front.direction < 0 ? "-x (left)" : "+x (right)");

@@ -816,6 +816,36 @@ static int key_line(const bkf_scene *s, const bkf_scene_product *p, const char *
 
 static int validate_plan(parse_state *st);
 
+/* The products a figure's data = A,B,... names (spaces around the names
+ * ignored), as indices into *out (malloc'd; NULL when none); *bad: the
+ * first name that is no product of the scene, or NULL.  0: out of memory. */
+static int figure_data(const bkf_scene *s, const char *data, size_t **out, size_t *count,
+                       char *bad, size_t badsize)
+{
+    *out = NULL;
+    *count = 0;
+    if (bad && badsize) bad[0] = '\0';
+    char buf[BKF_SCENE_VALUE_LEN];
+    snprintf(buf, sizeof buf, "%s", data);
+    char *save = NULL;
+    for (char *t = strtok_r(buf, ",", &save); t; t = strtok_r(NULL, ",", &save)) {
+        while (*t == ' ' || *t == '\t') t++;
+        size_t len = strlen(t);
+        while (len && (t[len - 1] == ' ' || t[len - 1] == '\t')) t[--len] = '\0';
+        const bkf_scene_product *d = bkf_scene_find(s, t, 0);
+        if (!d) {
+            if (bad && badsize) snprintf(bad, badsize, "%s", t);
+            return 1;
+        }
+        size_t *g = grow_for_push(*out, *count, sizeof *g);
+        if (!g) return 0;
+        *out = g;
+        g[(*count)++] = (size_t)(d - s->products);
+    }
+    if (*count == 0 && bad && badsize) snprintf(bad, badsize, "%s", data);
+    return 1;
+}
+
 /* What needs the whole scene: required keys, references, the model's
  * parameters where a product needs them. */
 static int check_scene(parse_state *st)
@@ -829,9 +859,16 @@ static int check_scene(parse_state *st)
         if (p->kind == BKF_SCENE_FIGURE) {
             const char *data = entry_value(p->entries, p->nentries, "data");
             if (!data) return fail(st, p->line, "[figure %s]: give data = NAME of the product shown", p->name);
-            if (!bkf_scene_find(s, data, 0))
+            size_t *idx, count;
+            char bad[BKF_SCENE_VALUE_LEN];
+            if (!figure_data(s, data, &idx, &count, bad, sizeof bad)) {
+                st->status = bkf_error_set(st->err, BKF_ENOMEM, "out of memory");
+                return 0;
+            }
+            free(idx);
+            if (bad[0])
                 return fail(st, entry_line(p, "data"), "data: no product named '%s' in this scene",
-                            data);
+                            bad);
             continue;
         }
         if (p->kind == BKF_SCENE_FRICTION) continue;
@@ -1180,6 +1217,20 @@ static int model_args(arg_list *b, const bkf_scene *s, const bkf_scene_product *
     return 1;
 }
 
+/* The chain's keys for speeds, branch and check: `model = chain` from the
+ * product or [model] (the continuum, their default, goes unsaid, so plans
+ * of continuum scenes read as before) and with it, when with_N, the blocks
+ * N from the product or [accuracy] (the simulations' N: on the chain the
+ * grid is the blocks, so a scene's waves and runs have the same chain). */
+static int chain_args(arg_list *b, const bkf_scene *s, const bkf_scene_product *p, int with_N)
+{
+    const char *m = bkf_scene_value(s, p, "model");
+    if (!m || strcmp(m, "chain") != 0) return 1;
+    if (!arg_push(b, "model", m, 0, 0)) return 0;
+    const char *N = bkf_scene_value(s, p, "N");
+    return !with_N || !N || arg_push(b, "N", N, 0, 0);
+}
+
 /* Keys of a catalogued product's own section that the kind's recipe below
  * does not pass: every key of the product's table reaches it. */
 static int other_keys(arg_list *b, const bkf_scene_product *p)
@@ -1233,7 +1284,7 @@ static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
     switch (p->kind) {
     case BKF_SCENE_SPEEDS: {
         FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1);
+        ok = ok && model_args(&b, s, p, 1, 1) && chain_args(&b, s, p, 1);
         PAIR("n", OWN("n"));
         PAIR("nmax", OWN("nmax"));
         PAIR("tol", bkf_scene_value(s, p, "tol"));
@@ -1305,7 +1356,7 @@ static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
             PAIR("param", param);
             PAIR("from", from);
             PAIR("to", OWN("to"));
-            ok = ok && model_args(&b, s, p, 1, 1);
+            ok = ok && model_args(&b, s, p, 1, 1) && chain_args(&b, s, p, 1);
             PAIR("n", ns[i]);
             PAIR("root", OWN("root"));
             PAIR("max-points", OWN("max_points"));
@@ -1381,7 +1432,7 @@ static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
     }
     case BKF_SCENE_CHECK: {
         FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1);
+        ok = ok && model_args(&b, s, p, 1, 1) && chain_args(&b, s, p, 0);
         PAIR("n", OWN("n"));
         PAIR("N", bkf_scene_value(s, p, "N"));
         PAIR("tmax", OWN("tmax"));
@@ -1454,8 +1505,13 @@ static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
     }
     case BKF_SCENE_FIGURE: {
         if (!o->figures) return 1;
-        const bkf_scene_product *data = bkf_scene_find(s, OWN("data"), 0);
-        size_t di = (size_t)(data - s->products);
+        size_t *shown, nshown;
+        if (!figure_data(s, OWN("data"), &shown, &nshown, NULL, 0)) return 0;
+        if (nshown == 0) { /* checked when parsed */
+            free(shown);
+            return 0;
+        }
+        size_t di = shown[0];
         unsigned formats = 0;
         v = OWN("formats");
         if (v) {
@@ -1476,7 +1532,13 @@ static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
             else
                 free(path);
         }
-        return finish_step(plan, index, BKF_SCENE_STEP_FIGURE, "figure", ok, &b, first, di);
+        if (!finish_step(plan, index, BKF_SCENE_STEP_FIGURE, "figure", ok, &b, first, di)) {
+            free(shown);
+            return 0;
+        }
+        plan->steps[plan->nsteps - 1].data_products = shown;
+        plan->steps[plan->nsteps - 1].ndata = nshown;
+        return 1;
     }
     case BKF_SCENE_NKINDS:
         break;
@@ -1528,6 +1590,7 @@ void bkf_scene_plan_free(bkf_scene_plan *plan)
         args_free(plan->steps[i].args, plan->steps[i].nargs);
         free(plan->steps[i].output);
         free(plan->steps[i].users);
+        free(plan->steps[i].data_products);
     }
     free(plan->steps);
     for (size_t i = 0; plan->products && i < plan->nproducts; i++) free(plan->products[i].steps);
@@ -1685,9 +1748,20 @@ static int append(char *buf, size_t size, const char *sep, const char *text)
 
 /* The default script's name: the kind's, but a stability product's shows
  * what its mode computed. */
-static const char *default_script(const bkf_scene *sc, const bkf_scene_product *data)
+static int is_chain(const bkf_scene *sc, const bkf_scene_product *p)
+{
+    const char *m = bkf_scene_value(sc, p, "model");
+    return m && strcmp(m, "chain") == 0;
+}
+
+static const char *default_script(const bkf_scene *sc, const bkf_scene_step *fig,
+                                  const bkf_scene_product *data)
 {
     if (data->kind == BKF_SCENE_SWEEP) return "sweep_map";
+    /* speeds of chains (beside the continuum's): their own figure */
+    if (data->kind == BKF_SCENE_SPEEDS)
+        for (size_t d = 0; d < fig->ndata; d++)
+            if (is_chain(sc, &sc->products[fig->data_products[d]])) return "chain_speeds";
     if (data->kind != BKF_SCENE_STABILITY) return kind_names[data->kind];
     const char *d = bkf_scene_value(sc, data, "diagram"), *l = bkf_scene_value(sc, data, "line");
     if (d && strcmp(d, "yes") == 0) return "diagram";
@@ -1701,7 +1775,6 @@ static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
 {
     const bkf_scene_product *fig = &sc->products[step->users[0]];
     const bkf_scene_product *data = &sc->products[step->data_product];
-    const bkf_scene_product_plan *dp = &plan->products[step->data_product];
     const char *scene_dir = o->scene_dir ? o->scene_dir : ".";
     const char *plots_dir = o->plots_dir ? o->plots_dir : "plots";
     char script[4096];
@@ -1711,30 +1784,43 @@ static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
     else if (own)
         snprintf(script, sizeof script, "%.2000s/%.2000s", scene_dir, own);
     else
-        snprintf(script, sizeof script, "%.2000s/%.64s.gp", plots_dir, default_script(sc, data));
+        snprintf(script, sizeof script, "%.2000s/%.64s.gp", plots_dir,
+                 default_script(sc, step, data));
 
     char files[8192] = "", labels[4096] = "";
-    for (size_t i = 0; i < dp->nsteps; i++) {
-        const bkf_scene_step *ds = &plan->steps[dp->steps[i]];
-        if (!append(files, sizeof files, " ", ds->output))
-            return bkf_error_set(err, BKF_EINPUT, "figure %s: too many data files", fig->name);
-        const char *value = "";
-        if (data->kind == BKF_SCENE_PERIOD || data->kind == BKF_SCENE_DISPERSION)
-            value = arg_value(ds, "nu");
-        else if (data->kind == BKF_SCENE_BRANCH || data->kind == BKF_SCENE_STABILITY)
-            value = arg_value(ds, "n");
-        else if (data->kind == BKF_SCENE_SWEEP)
-            /* the map, then the Floquet diagram of each gamma */
-            value = strcmp(ds->product, "sweep") == 0 ? "map" : arg_value(ds, "gamma");
-        if (data->kind == BKF_SCENE_PROFILE) {
-            char **items;
-            size_t count;
-            if (!list_values(arg_value(ds, "n"), &items, &count))
-                return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-            for (size_t k = 0; k < count; k++) append(labels, sizeof labels, " ", items[k]);
-            list_values_free(items, count);
-        } else if (value && *value)
-            append(labels, sizeof labels, " ", value);
+    for (size_t d = 0; d < step->ndata; d++) {
+        const bkf_scene_product *shown = &sc->products[step->data_products[d]];
+        const bkf_scene_product_plan *dp = &plan->products[step->data_products[d]];
+        for (size_t i = 0; i < dp->nsteps; i++) {
+            const bkf_scene_step *ds = &plan->steps[dp->steps[i]];
+            if (!append(files, sizeof files, " ", ds->output))
+                return bkf_error_set(err, BKF_EINPUT, "figure %s: too many data files",
+                                     fig->name);
+            const char *value = "";
+            if (shown->kind == BKF_SCENE_PERIOD || shown->kind == BKF_SCENE_DISPERSION)
+                value = arg_value(ds, "nu");
+            else if (shown->kind == BKF_SCENE_BRANCH || shown->kind == BKF_SCENE_STABILITY)
+                value = arg_value(ds, "n");
+            else if (shown->kind == BKF_SCENE_SWEEP)
+                /* the map, then the Floquet diagram of each gamma */
+                value = strcmp(ds->product, "sweep") == 0 ? "map" : arg_value(ds, "gamma");
+            else if (shown->kind == BKF_SCENE_SPEEDS && step->ndata > 1) {
+                /* which table is which: the chain's blocks, or the continuum */
+                const char *m = arg_value(ds, "model");
+                value = "continuum";
+                if (m && strcmp(m, "chain") == 0)
+                    value = arg_value(ds, "N") ? arg_value(ds, "N") : arg_value(ds, "S");
+            }
+            if (shown->kind == BKF_SCENE_PROFILE) {
+                char **items;
+                size_t count;
+                if (!list_values(arg_value(ds, "n"), &items, &count))
+                    return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+                for (size_t k = 0; k < count; k++) append(labels, sizeof labels, " ", items[k]);
+                list_values_free(items, count);
+            } else if (value && *value)
+                append(labels, sizeof labels, " ", value);
+        }
     }
     bkf_plot_job *job = bkf_plot_job_alloc(script, err);
     if (!job) return BKF_EINPUT;
@@ -1788,10 +1874,12 @@ int bkf_scene_run_step(const bkf_scene *s, const bkf_scene_plan *plan, size_t i,
         return bkf_error_set(err, BKF_EINPUT, "scene: no such step");
     const bkf_scene_step *step = &plan->steps[i];
     if (step->kind == BKF_SCENE_STEP_FIGURE) {
-        const bkf_scene_product_plan *dp = &plan->products[step->data_product];
-        for (size_t k = 0; done && k < dp->nsteps; k++)
-            if (dp->steps[k] < i && done[dp->steps[k]])
-                return bkf_error_set(err, BKF_ENUMERIC, "skipped: its data failed");
+        for (size_t d = 0; d < step->ndata; d++) {
+            const bkf_scene_product_plan *dp = &plan->products[step->data_products[d]];
+            for (size_t k = 0; done && k < dp->nsteps; k++)
+                if (dp->steps[k] < i && done[dp->steps[k]])
+                    return bkf_error_set(err, BKF_ENUMERIC, "skipped: its data failed");
+        }
         return run_figure(s, plan, step, o, warning, wsize, err);
     }
     if (step->entry) {

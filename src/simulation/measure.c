@@ -275,6 +275,12 @@ static double cell_root(const bkf_measure *m, const double *psi, size_t j, doubl
 {
     size_t N = m->p.model.N, k = (j + 1) % N;
     double h = m->h, L = m->level;
+    if (m->p.model.kind == BKF_MODEL_CHAIN) {
+        /* a chain has no field between its blocks: the spectral Hermite
+           through fronts one block wide invents a shape; linear instead */
+        *slope = (psi[k] - psi[j]) / h;
+        return (L - psi[j]) / (psi[k] - psi[j]);
+    }
     double a[3] = {psi[j] - L, m->d1[j] * h, m->d2[j] * h * h};
     double b[3] = {psi[k] - L, m->d1[k] * h, m->d2[k] * h * h};
     double lo = 0, hi = 1;
@@ -329,15 +335,24 @@ static size_t find_fronts(bkf_measure *m, const double *psi, const double *eta, 
                 int below = psi[q] < L;
                 if ((prev_state < 0) == below) j = q;
             }
-            double slope;
+            double slope, pt;
             double w = cell_root(m, psi, j, &slope);
             size_t k = (j + 1) % N;
-            /* psi_t at the crossing: cubic Lagrange through j-1 .. j+2 */
-            size_t jm = (j + N - 1) % N, kp = (k + 1) % N;
-            double pt = -w * (w - 1) * (w - 2) / 6 * m->psit[jm] +
-                        (w + 1) * (w - 1) * (w - 2) / 2 * m->psit[j] -
-                        (w + 1) * w * (w - 2) / 2 * m->psit[k] +
-                        (w + 1) * w * (w - 1) / 6 * m->psit[kp];
+            if (m->p.model.kind == BKF_MODEL_CHAIN) {
+                /* a cubic through four blocks cannot follow psi_t across a
+                   front one block wide: its sign flipped at the back of a
+                   pulse (N 20, n 4: 4 or 8 fronts by turns).  psi_t where
+                   psi = L is gamma (eta - phi(L)), eta the slow variable,
+                   linear across the cell as psi is (see cell_root) */
+                pt = g * (eta[j] + w * (eta[k] - eta[j]) - bkf_model_friction(L));
+            } else {
+                /* psi_t at the crossing: cubic Lagrange through j-1 .. j+2 */
+                size_t jm = (j + N - 1) % N, kp = (k + 1) % N;
+                pt = -w * (w - 1) * (w - 2) / 6 * m->psit[jm] +
+                     (w + 1) * (w - 1) * (w - 2) / 2 * m->psit[j] -
+                     (w + 1) * w * (w - 2) / 2 * m->psit[k] +
+                     (w + 1) * w * (w - 1) / 6 * m->psit[kp];
+            }
             if (pt > 0) {
                 if (count < cap) {
                     double x = ((double)j + w) * m->h;

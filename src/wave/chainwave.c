@@ -15,6 +15,12 @@
 #include <string.h>
 
 #define NEWTON_MAX_ITER 25
+/* Integration tolerance of the continuation in K from the uncoupled chain.
+ * It only has to follow the branch and bracket its crossings of the target
+ * K (each crossing is then solved by Newton at the caller's tol), so it is
+ * loose whatever tol: at 1e-8 it cost 3/4 of the table for the same waves
+ * (N = 20, 40: the same crossings and folds at 1e-4 as at 1e-8). */
+#define CONT_TOL 1e-4
 
 bkf_chainwave_options bkf_chainwave_options_default(void)
 {
@@ -83,7 +89,9 @@ typedef struct {
     double gamma, nu, K;
     size_t ncols;
     int sens;
-    double *dphi; /* psi_i^2 - 1 at the current stage */
+    bkf_chainwave_param sens_param; /* what the last column differentiates:
+                                       K (h, S, c through K), nu or gamma */
+    double *dphi; /* gamma (psi_i^2 - 1) at the current stage */
     size_t max_steps;
     size_t steps;
 } flow_ctx;
@@ -93,30 +101,50 @@ static double lap(const double *x, size_t i, size_t N)
     return x[(i + 1) % N] - 2.0 * x[i] + x[(i + N - 1) % N];
 }
 
+/* The linear part of the eta equation, -(x_i - K lap(x)_i) / gamma, for one
+ * column: the ring's ends apart so that the inner loop has no modulo and
+ * vectorises (the variational columns are most of the work). */
+static void eta_coupling(const double *x, double *f, size_t N, double a, double b)
+{
+    f[0] = a * x[0] + b * (x[1] + x[N - 1]);
+    for (size_t i = 1; i + 1 < N; i++) f[i] = a * x[i] + b * (x[i + 1] + x[i - 1]);
+    f[N - 1] = a * x[N - 1] + b * (x[0] + x[N - 2]);
+}
+
 static int chain_rhs(double t, const double *y, double *f, void *data)
 {
     (void)t;
     flow_ctx *c = data;
     size_t N = c->N;
     double g = c->gamma, K = c->K;
+    /* -(x - K (x+ - 2x + x-))/g = a x + b (x+ + x-) */
+    double a = -(1.0 + 2.0 * K) / g, b = K / g;
     const double *psi = y, *eta = y + N;
     for (size_t i = 0; i < N; i++) {
         double p = psi[i];
-        c->dphi[i] = p * p - 1.0;
+        c->dphi[i] = g * (p * p - 1.0);
         f[i] = g * (eta[i] - (p * p * p / 3.0 - p));
-        f[N + i] = -(p - c->nu - K * lap(psi, i, N)) / g;
     }
+    eta_coupling(psi, f + N, N, a, b);
+    for (size_t i = 0; i < N; i++) f[N + i] += c->nu / g;
     for (size_t j = 0; j < c->ncols; j++) {
         const double *w = y + 2 * N * (j + 1);
         double *fw = f + 2 * N * (j + 1);
-        for (size_t i = 0; i < N; i++) {
-            fw[i] = g * (w[N + i] - c->dphi[i] * w[i]);
-            fw[N + i] = -(w[i] - K * lap(w, i, N)) / g;
-        }
+        for (size_t i = 0; i < N; i++) fw[i] = g * w[N + i] - c->dphi[i] * w[i];
+        eta_coupling(w, fw + N, N, a, b);
     }
     if (c->sens) {
         double *fk = f + 2 * N * c->ncols;
-        for (size_t i = 0; i < N; i++) fk[N + i] += lap(psi, i, N) / g;
+        if (c->sens_param == BKF_CHAINWAVE_PARAM_NU)
+            for (size_t i = 0; i < N; i++) fk[N + i] += 1.0 / g;
+        else if (c->sens_param == BKF_CHAINWAVE_PARAM_GAMMA)
+            for (size_t i = 0; i < N; i++) {
+                double p = psi[i];
+                fk[i] += eta[i] - (p * p * p / 3.0 - p);
+                fk[N + i] += (p - c->nu - K * lap(psi, i, N)) / (g * g);
+            }
+        else
+            for (size_t i = 0; i < N; i++) fk[N + i] += lap(psi, i, N) / g;
     }
     return GSL_SUCCESS;
 }
@@ -244,38 +272,81 @@ static double max_abs(const double *x, size_t n)
     return m;
 }
 
-/* Newton at fixed K on x = (u, tau), integrations at tolerance tol, until
- * the step is below tol (relative to max(|x|, 1)).  On success w->M holds
- * the monodromy at the solution. */
-static int newton(flow_ctx *c, work *w, double *x, double tol, size_t *iterations,
-                  double *res_out, bkf_error *err)
+/* The Newton matrix of one wave, LU-factorised, kept across iterations and
+ * across the two tolerances of solve_x: a variational integration costs
+ * 2N + 2 plain ones, so the matrix is rebuilt only when the chord
+ * iteration stops contracting. */
+typedef struct {
+    size_t n;          /* 2N + 1 */
+    double *J, *G;
+    gsl_permutation *perm;
+    gsl_vector *dx;
+    int factored;
+} newton_lu;
+
+static int newton_lu_alloc(newton_lu *L, size_t N)
 {
-    size_t n = 2 * c->N + 1;
-    double *G = malloc(n * sizeof *G), *J = malloc(n * n * sizeof *J);
-    gsl_permutation *perm = gsl_permutation_alloc(n);
-    gsl_vector *dx = gsl_vector_alloc(n);
-    int s = (G && J && perm && dx) ? BKF_OK
-                                   : bkf_error_set(err, BKF_ENOMEM, "chainwave: out of memory");
+    L->n = 2 * N + 1;
+    L->J = malloc(L->n * L->n * sizeof *L->J);
+    L->G = malloc(L->n * sizeof *L->G);
+    L->perm = gsl_permutation_alloc(L->n);
+    L->dx = gsl_vector_alloc(L->n);
+    L->factored = 0;
+    return L->J && L->G && L->perm && L->dx;
+}
+
+static void newton_lu_free(newton_lu *L)
+{
+    free(L->J);
+    free(L->G);
+    if (L->perm) gsl_permutation_free(L->perm);
+    if (L->dx) gsl_vector_free(L->dx);
+}
+
+/* Residual at x into L->G and, with jac, the Newton matrix, factorised. */
+static int newton_eval(flow_ctx *c, work *w, newton_lu *L, const double *x, double tol,
+                       int jac, bkf_error *err)
+{
+    int s = residual(c, w, x, tol, L->G, jac ? L->J : NULL, L->n, err);
+    if (s || !jac) return s;
+    L->factored = 0;
+    gsl_matrix_view Jm = gsl_matrix_view_array(L->J, L->n, L->n);
+    int sign;
+    if (gsl_linalg_LU_decomp(&Jm.matrix, L->perm, &sign))
+        return bkf_error_set(err, BKF_ENUMERIC, "chainwave: singular Newton matrix (a fold?)");
+    for (size_t k = 0; k < L->n; k++)
+        if (L->J[k * L->n + k] == 0.0 || !isfinite(L->J[k * L->n + k]))
+            return bkf_error_set(err, BKF_ENUMERIC, "chainwave: singular Newton matrix (a fold?)");
+    L->factored = 1;
+    return BKF_OK;
+}
+
+/* Chord-Newton at fixed K on x = (u, tau), integrations at tolerance tol,
+ * until the step is below tol (relative to max(|x|, 1)); the matrix is
+ * L's if factored (a previous solve nearby), else built at x, and rebuilt
+ * where the steps stop shrinking fast.  With final_jac the last evaluation
+ * at the solution carries the variational matrix (w->M: the monodromy
+ * there; L is refactorised with it), else it is a plain flow; either way
+ * *res_out is the residual at the returned x. */
+static int newton(flow_ctx *c, work *w, newton_lu *L, double *x, double tol, int final_jac,
+                  size_t *iterations, double *res_out, bkf_error *err)
+{
+    size_t n = L->n;
+    int fresh = !L->factored;
+    int s = newton_eval(c, w, L, x, tol, fresh, err);
     int converged = 0;
     double prev = INFINITY;
     for (int it = 0; !s && it < NEWTON_MAX_ITER; it++) {
-        s = residual(c, w, x, tol, G, J, n, err);
-        if (s) break;
         (*iterations)++;
-        double r = max_abs(G, n);
-        *res_out = r;
-        if (converged) break; /* one more residual with the final M */
-        gsl_matrix_view Jm = gsl_matrix_view_array(J, n, n);
-        gsl_vector_view Gv = gsl_vector_view_array(G, n);
-        int sign;
-        if (gsl_linalg_LU_decomp(&Jm.matrix, perm, &sign) ||
-            gsl_linalg_LU_solve(&Jm.matrix, perm, &Gv.vector, dx)) {
+        gsl_matrix_view Jm = gsl_matrix_view_array(L->J, n, n);
+        gsl_vector_view Gv = gsl_vector_view_array(L->G, n);
+        if (gsl_linalg_LU_solve(&Jm.matrix, L->perm, &Gv.vector, L->dx)) {
             s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: singular Newton matrix (a fold?)");
             break;
         }
         double step = 0.0;
         for (size_t k = 0; k < n; k++) {
-            double d = gsl_vector_get(dx, k);
+            double d = gsl_vector_get(L->dx, k);
             x[k] -= d;
             step = fmax(step, fabs(d) / fmax(1.0, fabs(x[k])));
         }
@@ -283,21 +354,50 @@ static int newton(flow_ctx *c, work *w, double *x, double tol, size_t *iteration
             s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: Newton left tau > 0");
             break;
         }
-        if (step <= tol) converged = 1;
-        else if (it > 6 && step > prev) {
+        /* the monodromy at x feeds the multipliers, which can be far more
+           sensitive to x than v is (gamma 10, n 6: 8e-6 from stopping at a
+           step of tol); chord steps are cheap, so go on to 1e-3 tol, or
+           until rounding stops the steps shrinking */
+        if (step <= 1e-3 * tol || (step <= tol && step > 0.5 * prev)) {
+            converged = 1;
+            break;
+        }
+        if (it > 6 && step > prev && fresh) {
             s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: Newton does not converge "
                               "(step %.3g after %d iterations)", step, it + 1);
             break;
         }
+        /* a chord step that contracts by less than 10 is not worth
+           keeping its matrix: rebuild it at the new point */
+        int rebuild = step > 0.1 * prev;
+        s = newton_eval(c, w, L, x, tol, rebuild, err);
+        fresh = rebuild;
         prev = step;
     }
     if (!s && !converged)
         s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: Newton did not converge in %d "
                           "iterations", NEWTON_MAX_ITER);
-    free(G);
-    free(J);
-    if (perm) gsl_permutation_free(perm);
-    if (dx) gsl_vector_free(dx);
+    if (!s && final_jac) {
+        /* The monodromy is the exact derivative of the discrete map of the
+           flow that carries the variational columns (its own, shorter,
+           steps), and its multipliers are those of that map's fixed point:
+           one full Newton step on that flow moves x there from the plain
+           flows' fixed point, which is off by the two flows' truncation
+           errors (gamma 10, n 6, |m| 200: error estimates of 20 tol without
+           it, against 0.4 tol). */
+        s = newton_eval(c, w, L, x, tol, 1, err);
+        gsl_matrix_view Jm = gsl_matrix_view_array(L->J, n, n);
+        gsl_vector_view Gv = gsl_vector_view_array(L->G, n);
+        if (!s && gsl_linalg_LU_solve(&Jm.matrix, L->perm, &Gv.vector, L->dx))
+            s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: singular Newton matrix (a fold?)");
+        for (size_t k = 0; !s && k < n; k++) x[k] -= gsl_vector_get(L->dx, k);
+        if (!s) (*iterations)++;
+    }
+    if (!s) s = newton_eval(c, w, L, x, tol, final_jac, err);
+    if (!s) {
+        (*iterations)++;
+        *res_out = max_abs(L->G, n);
+    }
     return s;
 }
 
@@ -366,15 +466,18 @@ static int solve_x(flow_ctx *c, work *w, const bkf_model_params *p, size_t n, do
     double res = 0.0, triv[2] = {NAN, NAN}, mre[2] = {NAN, NAN}, mim[2] = {NAN, NAN};
     double tau[2];
     size_t steps0 = c->steps;
-    int s = BKF_OK;
+    newton_lu L;
+    int s = newton_lu_alloc(&L, N) ? BKF_OK
+                                   : bkf_error_set(err, BKF_ENOMEM, "chainwave: out of memory");
     for (int pass = 0; pass < 2 && !s; pass++) {
         double itol = o->tol * (pass == 0 ? 0.1 : 0.01);
-        s = newton(c, w, x, itol, &wave->newton_iterations, &res, err);
+        s = newton(c, w, &L, x, itol, o->stability, &wave->newton_iterations, &res, err);
         if (!s) tau[pass] = x[n2];
         if (!s && o->stability)
             s = multipliers(c, w->M, &triv[pass], &mre[pass], &mim[pass], err);
     }
     wave->steps = c->steps - steps0;
+    newton_lu_free(&L);
     if (s) return s;
     wave->psi = malloc(N * sizeof *wave->psi);
     wave->eta = malloc(N * sizeof *wave->eta);
@@ -616,7 +719,7 @@ static int find_n(const bkf_model_params *p, size_t n, const bkf_chainwave_optio
     size_t N = p->N, n2 = 2 * N, dim = n2 + 2;
     double Kt = c->K;
     double *u0 = malloc(dim * sizeof *u0);
-    cont_data d = {c, w, fmin(1e-4, o->tol), Kt, dim, malloc(dim * sizeof(double)), 0, NULL, 0,
+    cont_data d = {c, w, CONT_TOL, Kt, dim, malloc(dim * sizeof(double)), 0, NULL, 0,
                    0, 0, 0};
     int s = (u0 && d.prev) ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "chainwave: out of memory");
     /* K = 0: the uncoupled blocks on the van der Pol cycle at mu = gamma,
@@ -734,5 +837,220 @@ int bkf_chainwave_find(const bkf_model_params *p, size_t n_from, size_t n_to,
     work_free(&w);
     free(c.dphi);
     bkf_gsl_handler_pop(handler);
+    return s;
+}
+
+/* ------------------------------------------------------------ branches */
+
+const char *bkf_chainwave_param_name(bkf_chainwave_param param)
+{
+    switch (param) {
+    case BKF_CHAINWAVE_PARAM_H: return "h";
+    case BKF_CHAINWAVE_PARAM_S: return "S";
+    case BKF_CHAINWAVE_PARAM_C: return "c";
+    case BKF_CHAINWAVE_PARAM_NU: return "nu";
+    case BKF_CHAINWAVE_PARAM_GAMMA: return "gamma";
+    }
+    return NULL;
+}
+
+typedef struct {
+    flow_ctx *c;
+    work *w;
+    double tol;
+    size_t dim, n;
+    const bkf_model_params *base;
+    bkf_chainwave_param param;
+    int stability;
+    double *J;            /* (2N + 1)^2 scratch for the multipliers */
+    bkf_chainwave_branch_visitor visit;
+    void *data;
+    bkf_chainwave_branch_report *rep;
+    double v0;
+    int status;           /* a failure inside accept */
+    bkf_error err;
+} branch_data;
+
+/* The model at parameter value `value`, into c (and *q); returns dK/dvalue
+ * for the parameters that act through K (0 for nu and gamma). */
+static double branch_set(const branch_data *b, double value, bkf_model_params *q)
+{
+    *q = *b->base;
+    double N = (double)b->base->N;
+    switch (b->param) {
+    case BKF_CHAINWAVE_PARAM_H: q->S = value * N; break;
+    case BKF_CHAINWAVE_PARAM_S: q->S = value; break;
+    case BKF_CHAINWAVE_PARAM_C: q->c = value; break;
+    case BKF_CHAINWAVE_PARAM_NU: q->nu = value; break;
+    case BKF_CHAINWAVE_PARAM_GAMMA: q->gamma = value; break;
+    }
+    double h = q->S / N;
+    flow_ctx *c = b->c;
+    c->K = q->c * q->c / (h * h);
+    c->nu = q->nu;
+    c->gamma = q->gamma;
+    c->sens_param = b->param;
+    switch (b->param) {
+    case BKF_CHAINWAVE_PARAM_H: return -2.0 * c->K / h;
+    case BKF_CHAINWAVE_PARAM_S: return -2.0 * c->K / q->S;
+    case BKF_CHAINWAVE_PARAM_C: return 2.0 * q->c / (h * h);
+    default: return 0.0;
+    }
+}
+
+static int branch_residual(const double *u, double *g, double *jac, void *data, bkf_error *err)
+{
+    branch_data *b = data;
+    size_t n2 = b->dim - 2;
+    bkf_model_params q;
+    double dK = branch_set(b, u[b->dim - 1], &q);
+    int s = residual(b->c, b->w, u, b->tol, g, jac, b->dim, err);
+    if (s == BKF_EBUDGET || s == BKF_EBLOWUP || s == BKF_ENUMERIC) return BKF_ENUMERIC;
+    if (s || !jac) return s;
+    /* the sensitivity column is d/dK for h, S and c, the direct one else */
+    if (b->param <= BKF_CHAINWAVE_PARAM_C)
+        for (size_t k = 0; k < n2; k++) jac[k * b->dim + n2 + 1] *= dK;
+    if (b->param == BKF_CHAINWAVE_PARAM_NU) jac[n2 * b->dim + n2 + 1] = -1.0;
+    return BKF_OK;
+}
+
+static int branch_accept(const double *u, const double *tangent, int is_fold, void *data)
+{
+    (void)tangent;
+    branch_data *b = data;
+    size_t n2 = b->dim - 2, N = b->base->N;
+    bkf_chainwave_branch_point pt;
+    memset(&pt, 0, sizeof pt);
+    bkf_model_params q;
+    pt.value = u[b->dim - 1];
+    branch_set(b, pt.value, &q);
+    pt.S = q.S;
+    pt.h = q.S / (double)N;
+    pt.K = b->c->K;
+    pt.c = q.c;
+    pt.nu = q.nu;
+    pt.gamma = q.gamma;
+    pt.tau = u[n2];
+    pt.v = pt.h / pt.tau;
+    pt.P = (double)N * pt.tau / (double)b->n;
+    pt.is_fold = is_fold;
+    pt.verdict = BKF_CHAINWAVE_NOT_COMPUTED;
+    pt.mult_abs = pt.sigma_max = pt.trivial_err = NAN;
+    if (b->stability) {
+        double *G = b->J + (n2 + 1) * (n2 + 1);
+        double re, im;
+        int s = residual(b->c, b->w, u, b->tol, G, b->J, n2 + 1, &b->err);
+        if (!s) s = multipliers(b->c, b->w->M, &pt.trivial_err, &re, &im, &b->err);
+        if (s) {
+            b->status = s;
+            return 1;
+        }
+        pt.mult_abs = hypot(re, im);
+        pt.sigma_max = log(pt.mult_abs) / pt.tau;
+        if (pt.mult_abs - pt.trivial_err > 1.0) pt.verdict = BKF_CHAINWAVE_UNSTABLE;
+        else if (pt.mult_abs + pt.trivial_err < 1.0) pt.verdict = BKF_CHAINWAVE_STABLE;
+        else pt.verdict = BKF_CHAINWAVE_UNRESOLVED;
+    }
+    bkf_chainwave_branch_report *r = b->rep;
+    if (is_fold) r->folds++;
+    else r->points++;
+    r->last_value = pt.value;
+    r->last_v = pt.v;
+    if (b->v0 == 0.0) b->v0 = pt.v;
+    if (b->visit && b->visit(&pt, b->data)) return 1;
+    if (pt.v < 1e-3 * b->v0) {
+        r->pinned = 1;
+        return 1;
+    }
+    return 0;
+}
+
+int bkf_chainwave_branch(const bkf_model_params *p, size_t n, size_t root,
+                         bkf_chainwave_param param, double from, double to,
+                         const bkf_chainwave_options *o, bkf_chainwave_branch_visitor visit,
+                         void *data, bkf_chainwave_branch_report *rep, bkf_error *err)
+{
+    bkf_chainwave_branch_report own;
+    if (!rep) rep = &own;
+    memset(rep, 0, sizeof *rep);
+    if (!p || !o) return bkf_error_set(err, BKF_EINPUT, "chainwave: NULL argument");
+    const char *name = bkf_chainwave_param_name(param);
+    if (!name) return bkf_error_set(err, BKF_EINPUT, "param: %d is not h, S, c, nu or gamma",
+                                    (int)param);
+    if (!(isfinite(from) && isfinite(to) && from != to))
+        return bkf_error_set(err, BKF_EINPUT, "from = %g, to = %g: two different finite values "
+                             "of %s are needed", from, to, name);
+    flow_ctx c;
+    flow_init(&c, p, o);
+    branch_data b = {&c, NULL, fmin(1e-4, o->tol), 2 * p->N + 2, n, p, param, o->stability,
+                     NULL, visit, data, rep, 0.0, 0, {{0}, 0}};
+    bkf_model_params qa, qb;
+    branch_set(&b, from, &qa);
+    branch_set(&b, to, &qb);
+    int s = bkf_chainwave_check(&qa, n, o, err);
+    if (!s) s = bkf_chainwave_check(&qb, n, o, err);
+    if (s) return s;
+    if (root < 1) return bkf_error_set(err, BKF_EINPUT, "root = 0 must be >= 1");
+    bkf_chainwave_options fo = *o;
+    fo.stability = 0;
+    bkf_chainwave_table t;
+    s = bkf_chainwave_find(&qa, n, n, &fo, &t, err);
+    if (!s && t.count < root)
+        s = bkf_error_set(err, BKF_EINPUT, "%s = %g: n = %zu has %zu chain wave(s), not root %zu"
+                          "%s%s", name, from, n, t.count, root, t.note[0] ? ": " : "", t.note);
+    size_t N = p->N, n2 = 2 * N, dim = n2 + 2;
+    double *u0 = malloc(dim * sizeof *u0), *scale = malloc(dim * sizeof *scale);
+    work w;
+    int have_w = work_alloc(&w, N);
+    c.dphi = malloc(N * sizeof *c.dphi);
+    b.w = &w;
+    b.J = o->stability ? malloc((n2 + 2) * (n2 + 1) * sizeof *b.J) : NULL; /* J, then G */
+    if (!s && (!u0 || !scale || !have_w || !c.dphi || (o->stability && !b.J)))
+        s = bkf_error_set(err, BKF_ENOMEM, "chainwave: out of memory");
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    if (!s) {
+        const bkf_chainwave *w0 = &t.waves[root - 1];
+        memcpy(u0, w0->psi, N * sizeof *u0);
+        memcpy(u0 + N, w0->eta, N * sizeof *u0);
+        u0[n2] = w0->tau;
+        u0[n2 + 1] = from;
+        /* the state counts as one unit whatever N (as in find_n) */
+        for (size_t k = 0; k < n2; k++) scale[k] = sqrt((double)n2);
+        scale[n2] = w0->tau;
+        scale[n2 + 1] = fabs(to - from);
+        bkf_cont_options co = bkf_cont_options_default(n2 + 1);
+        co.scale = scale;
+        co.step_initial = 0.02;
+        co.step_max = 0.1;
+        co.step_min = 1e-7;
+        co.newton_tol = 10.0 * b.tol;
+        co.max_points = 4000;
+        co.stop_index = (int)(n2 + 1);
+        co.stop_min = fmin(from, to);
+        co.stop_max = fmax(from, to);
+        bkf_cont_report cr;
+        bkf_error ce;
+        int cs = bkf_cont_run(branch_residual, branch_accept, &b, u0, (int)(n2 + 1),
+                              to > from ? +1 : -1, &co, &cr, &ce);
+        if (b.status) s = bkf_error_set(err, b.status, "%s", b.err.message);
+        else if (cs == BKF_ENOMEM || cs == BKF_EINPUT) s = bkf_error_set(err, cs, "%s", ce.message);
+        else {
+            rep->reached = cs == BKF_OK && cr.reached_bound && !rep->pinned &&
+                           fabs(rep->last_value - to) <= 1e-9 * fabs(to - from);
+            if (rep->pinned)
+                snprintf(rep->note, sizeof rep->note, "the fronts stop propagating near %s = %.9g "
+                         "(v %.3g, below 1e-3 of its start)", name, rep->last_value, rep->last_v);
+            else if (!rep->reached)
+                snprintf(rep->note, sizeof rep->note, "the branch ends at %s = %.9g (v %.9g)%s%.200s",
+                         name, rep->last_value, rep->last_v, cs ? ": " : "", cs ? ce.message : "");
+        }
+    }
+    bkf_gsl_handler_pop(handler);
+    bkf_chainwave_table_free(&t);
+    free(u0);
+    free(scale);
+    work_free(&w);
+    free(c.dphi);
+    free(b.J);
     return s;
 }

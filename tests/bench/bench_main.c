@@ -70,6 +70,7 @@ void bench_floquet(void);
 void bench_speeds(void);
 void bench_pde(void);
 void bench_trainspec(void);
+void bench_chain(void);
 
 int main(int argc, char **argv)
 {
@@ -79,5 +80,6 @@ int main(int argc, char **argv)
     if (!only || strcmp(only, "floquet") == 0) bench_floquet();
     if (!only || strcmp(only, "pde") == 0) bench_pde();
     if (!only || strcmp(only, "trainspec") == 0) bench_trainspec();
+    if (!only || strcmp(only, "chain") == 0) bench_chain();
     return 0;
 }

@@ -13,6 +13,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bkfront/chainwave.h"
 #include "bkfront/plot.h"
 #include "bkfront/scene.h"
 #include "cli_support.h"
@@ -404,6 +405,90 @@ TEST(run_stability_scene_writes_spectra_and_figure)
     CHECK(t4 && strstr(t4, "# root: n 4,") && strstr(t4, "# stable: yes;"));
     free(t2);
     free(t4);
+    free(r);
+    remove_tree(dir);
+    free(path);
+    free(dir);
+}
+
+/* The chain's keys reach the products: `model = chain` in [model] and the
+ * blocks N of [accuracy] (or the product's own N) make speeds tables of
+ * those chains, read back and put against bkf_chainwave_find on the same
+ * chain; a product's own model = continuum keeps the continuum (no blocks);
+ * one figure shows the three tables (data = A,B,C) with the chain's
+ * script.  Without a model key the plan passes none (continuum scenes plan
+ * as before). */
+TEST(run_chain_scene_keys_reach_the_products)
+{
+    const char *text = "[model]\ngamma = 2\nc = 0.3\nnu = -0.96\nS = 8\nmodel = chain\n"
+                       "[accuracy]\nN = 16\n"
+                       "[speeds cont]\nmodel = continuum\nnmax = 2\n"
+                       "[speeds ch16]\nnmax = 2\n"
+                       "[speeds ch8]\nN = 8\nnmax = 2\nstability = yes\n"
+                       "[figure f]\ndata = cont, ch16,ch8\n";
+    bkf_scene *sc = parse_ok(text);
+    bkf_scene_plan plan;
+    bkf_error e = {0};
+    bkf_scene_plan_options po = {.outdir = "out", .formats = 1, .figures = 1};
+    CHECK_STATUS(bkf_scene_make_plan(sc, &po, &plan, &e), BKF_OK);
+    const bkf_scene_step *fig = &plan.steps[plan.nsteps - 1];
+    CHECK(fig->kind == BKF_SCENE_STEP_FIGURE && fig->ndata == 3);
+    for (size_t k = 0; k < fig->ndata && k < 3; k++)
+        CHECK(fig->data_products[k] == k); /* in the order of data = ... */
+    bkf_scene_plan_free(&plan);
+    bkf_scene_free(sc);
+    sc = parse_ok(MODEL "[speeds]\n");
+    CHECK_STATUS(bkf_scene_make_plan(sc, &po, &plan, &e), BKF_OK);
+    char *cmd = bkf_scene_step_command(&plan.steps[0]);
+    CHECK_MSG(cmd && !strstr(cmd, "--model") && !strstr(cmd, "--N"), "%s", cmd);
+    free(cmd);
+    bkf_scene_plan_free(&plan);
+    bkf_scene_free(sc);
+
+    char *dir = temp_dir();
+    char *path = write_scene(dir, text);
+    char outdir[512];
+    snprintf(outdir, sizeof outdir, "%s/out", dir);
+    run_result *r = run_cli((char *[]){"run", "--out", outdir, "--plots",
+                                       BKF_SOURCE_DIR "/plots", path, NULL});
+    CHECK_MSG(r->code == 0, "exit %d: %s\n%s", r->code, r->err, r->out);
+    CHECK(starts_with_bytes(outdir, "f.png", "\x89PNG", 4));
+    CHECK(file_size(outdir, "f.png") > 5000);
+    static const char *const names[] = {"cont", "ch16", "ch8"};
+    static const size_t blocks[] = {0, 16, 8};
+    for (int k = 0; k < 3; k++) {
+        char file[700];
+        snprintf(file, sizeof file, "%s/%s.tsv", outdir, names[k]);
+        char *t = bkf_cli_read_file(file);
+        CHECK_MSG(t, "%s", file);
+        if (!t) continue;
+        char want[64];
+        snprintf(want, sizeof want, "N %zu blocks", blocks[k]);
+        CHECK_MSG(blocks[k] ? strstr(t, want) != NULL : strstr(t, "blocks") == NULL, "%s: %s",
+                  names[k], t);
+        char stable[32];
+        CHECK((k == 2) == bkf_tsv_cell(t, 0, "stable", NULL, stable, sizeof stable));
+        if (blocks[k]) {
+            bkf_model_params p = bkf_model_params_paper();
+            p.S = 8.0;
+            p.N = blocks[k];
+            p.kind = BKF_MODEL_CHAIN;
+            bkf_chainwave_options o = bkf_chainwave_options_default();
+            o.stability = 0;
+            bkf_chainwave_table w;
+            CHECK_MSG(bkf_chainwave_find(&p, 1, 2, &o, &w, &e) == BKF_OK, "%s", e.message);
+            double v = NAN;
+            CHECK(w.count == 2);
+            for (size_t i = 0; i < w.count; i++) {
+                CHECK(bkf_tsv_cell(t, (int)i, "v", &v, NULL, 0));
+                CHECK_CLOSE(v, w.waves[i].v, 1e-8, 0.0);
+            }
+            bkf_test_note("%s: n = 2 v %.12g (library %.12g)", names[k], v,
+                          w.count ? w.waves[w.count - 1].v : 0);
+            bkf_chainwave_table_free(&w);
+        }
+        free(t);
+    }
     free(r);
     remove_tree(dir);
     free(path);
