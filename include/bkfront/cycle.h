@@ -139,6 +139,11 @@ int bkf_cycle_estimate(bkf_cycle *cycle, double mu, double nu, const bkf_cycle_o
  * continuation) on the shooting equations with warm starts and step control.
  * Every accepted point is solved to options->tol (with its error estimate) and
  * passed to `visit`, in order from `from` to `to`; both ends are included.
+ * The continuation's parameter derivative comes from the variational
+ * equations.  A point the solve cannot meet tol at (inside a canard
+ * explosion) is retried at looser tolerances up to 1e-6 and passed with
+ * model "shooting-relaxed" and its honest (larger) period_err, or, failing
+ * that, with model "refused" and NaN values; the branch goes on past it.
  * At most max_points points (0: no limit, beyond the driver's own). */
 typedef enum { BKF_CYCLE_ALONG_MU = 0, BKF_CYCLE_ALONG_NU = 1 } bkf_cycle_param;
 typedef int (*bkf_cycle_visit)(const bkf_cycle_result *point, void *data);

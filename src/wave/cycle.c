@@ -30,6 +30,13 @@
 #include <string.h>
 
 enum { DIM = 5, IX = 0, IY = 1, IVX = 2, IVY = 3, IL = 4 };
+/* Branch shots add the sensitivity (px, py) = d(x, y)/dq to the parameter
+ * q of the branch (ln mu or nu): the continuation's parameter derivative
+ * then comes from the same integration as the rest, where a difference
+ * quotient over any fixed step in q either straddled the canard explosion
+ * (at mu 10 it is narrower in nu than the step 1e-6: the tangent turned
+ * and the steps fell below step_min) or drowned in its noise. */
+enum { DIM_SENS = 7, IPX = 5, IPY = 6 };
 
 /* Above this mu the explicit stepper's step is limited by stability, not
  * accuracy (the fast rate is ~mu); measured crossover, see docs/benchmarks.md. */
@@ -54,8 +61,11 @@ enum { DIM = 5, IX = 0, IY = 1, IVX = 2, IVY = 3, IL = 4 };
 
 typedef struct {
     double mu, nu, a, b;
+    int sens;  /* 0: DIM states; 1: DIM_SENS, (px, py) along ln mu; 2: along nu */
     size_t rhs_calls, jacobian_calls;
 } flow_params;
+
+static size_t flow_dim(const flow_params *p) { return p->sens ? DIM_SENS : DIM; }
 
 /* An integrator: one GSL step/control/evolve set for one tolerance. */
 typedef struct {
@@ -96,6 +106,22 @@ struct bkf_cycle {
 
 static double lienard_F(double x) { return x * x * x / 3.0 - x; }
 
+/* d(px, py)/dz = A (px, py) + df/dq.  With x' = a y - mu F(x) (a b = mu),
+ * y' = (nu - x)/a: along ln mu, df/dq = mu (b y - F(x), -b (nu - x)/a^2)
+ * (da/dmu = b); along nu, (0, 1/a). */
+static void flow_sens_rhs(const flow_params *p, const double *s, double damping, double *ds)
+{
+    double x = s[IX];
+    ds[IPX] = -damping * s[IPX] + p->a * s[IPY];
+    ds[IPY] = -s[IPX] / p->a;
+    if (p->sens == 1) {
+        ds[IPX] += p->mu * (p->b * s[IY] - lienard_F(x));
+        ds[IPY] -= p->mu * p->b * (p->nu - x) / (p->a * p->a);
+    } else {
+        ds[IPY] += 1.0 / p->a;
+    }
+}
+
 static int flow_rhs(double t, const double s[], double ds[], void *params)
 {
     (void)t;
@@ -108,6 +134,7 @@ static int flow_rhs(double t, const double s[], double ds[], void *params)
     ds[IVX] = -damping * s[IVX] + p->a * s[IVY];
     ds[IVY] = -s[IVX] / p->a;
     ds[IL] = -damping;
+    if (p->sens) flow_sens_rhs(p, s, damping, ds);
     return GSL_SUCCESS;
 }
 
@@ -119,16 +146,28 @@ static int flow_jacobian(double t, const double s[], double *dfds, double dfdt[]
     double damping = p->mu * (x * x - 1.0);
     double ddamping = 2.0 * p->mu * x;
     p->jacobian_calls++;
-    memset(dfds, 0, sizeof(double) * DIM * DIM);
-    dfds[IX * DIM + IX] = -damping;
-    dfds[IX * DIM + IY] = p->a;
-    dfds[IY * DIM + IX] = -1.0 / p->a;
-    dfds[IVX * DIM + IX] = -ddamping * s[IVX];
-    dfds[IVX * DIM + IVX] = -damping;
-    dfds[IVX * DIM + IVY] = p->a;
-    dfds[IVY * DIM + IVX] = -1.0 / p->a;
-    dfds[IL * DIM + IX] = -ddamping;
-    for (int i = 0; i < DIM; i++) dfdt[i] = 0.0;
+    const size_t n = flow_dim(p);
+    memset(dfds, 0, sizeof(double) * n * n);
+    dfds[IX * n + IX] = -damping;
+    dfds[IX * n + IY] = p->a;
+    dfds[IY * n + IX] = -1.0 / p->a;
+    dfds[IVX * n + IX] = -ddamping * s[IVX];
+    dfds[IVX * n + IVX] = -damping;
+    dfds[IVX * n + IVY] = p->a;
+    dfds[IVY * n + IVX] = -1.0 / p->a;
+    dfds[IL * n + IX] = -ddamping;
+    if (p->sens) {
+        dfds[IPX * n + IX] = -ddamping * s[IPX];
+        dfds[IPX * n + IPX] = -damping;
+        dfds[IPX * n + IPY] = p->a;
+        dfds[IPY * n + IPX] = -1.0 / p->a;
+        if (p->sens == 1) {
+            dfds[IPX * n + IX] -= p->mu * (x * x - 1.0);
+            dfds[IPX * n + IY] = p->mu * p->b;
+            dfds[IPY * n + IX] = p->mu * p->b / (p->a * p->a);
+        }
+    }
+    for (size_t i = 0; i < n; i++) dfdt[i] = 0.0;
     return GSL_SUCCESS;
 }
 
@@ -182,6 +221,7 @@ static const int bd_n[BD_ROWS] = {2, 6, 10, 14, 22, 34, 50, 70};
 
 typedef struct {
     double det_inv, ha, h_a, cx, cl;
+    double kpx, kpy, kqx; /* h d(px', px', py')/d(x, y, x): the sensitivity's coupling */
 } bd_matrix;
 
 /* I - h J(s0); 0 if it is (nearly) singular, which an unstable stretch of
@@ -196,6 +236,12 @@ static int bd_matrix_set(bd_matrix *m, const flow_params *p, const double *s0, d
     m->h_a = h / p->a;
     m->cx = 2.0 * h * p->mu * x * s0[IVX];
     m->cl = 2.0 * h * p->mu * x;
+    if (p->sens) {
+        int along_mu = p->sens == 1;
+        m->kpx = -2.0 * h * p->mu * x * s0[IPX] - (along_mu ? h * p->mu * (x * x - 1.0) : 0.0);
+        m->kpy = along_mu ? h * p->mu * p->b : 0.0;
+        m->kqx = along_mu ? h * p->mu * p->b / (p->a * p->a) : 0.0;
+    }
     return 1;
 }
 
@@ -220,8 +266,23 @@ static int bd_midpoint(flow_params *p, const double *s0, const double *f0, doubl
         z3 = (r3) - h_a * z2;                                                                     \
         z4 = (r4) - cl * z0;                                                                      \
     } while (0)
-    double z0, z1, z2, z3, z4;
+    /* the sensitivity (px, py): the (x, y) block again, coupled to (z0, z1) */
+#define BD_SOLVE_SENS(r5, r6)                                                                     \
+    do {                                                                                          \
+        double q6 = (r6) + m.kqx * z0;                                                            \
+        z5 = ((r5) + m.kpx * z0 + m.kpy * z1 + ha * q6) * di;                                     \
+        z6 = q6 - h_a * z5;                                                                       \
+    } while (0)
+    const int sens = p->sens != 0;
+    double z0, z1, z2, z3, z4, z5 = 0.0, z6 = 0.0, d5 = 0.0, d6 = 0.0, px = 0.0, py = 0.0;
     BD_SOLVE(hs * f0[0], hs * f0[1], hs * f0[2], hs * f0[3], hs * f0[4]);
+    if (sens) {
+        BD_SOLVE_SENS(hs * f0[IPX], hs * f0[IPY]);
+        d5 = z5;
+        d6 = z6;
+        px = s0[IPX] + d5;
+        py = s0[IPY] + d6;
+    }
     double d0 = z0, d1 = z1, d2 = z2, d3 = z3, d4 = z4;
     double x = s0[0] + d0, y = s0[1] + d1, vx = s0[2] + d2, vy = s0[3] + d3, L = s0[4] + d4;
     for (int k = 1; k <= n; k++) {
@@ -229,6 +290,17 @@ static int bd_midpoint(flow_params *p, const double *s0, const double *f0, doubl
         double g0 = a * y - mu * (x * x * x / 3.0 - x), g1 = (nu - x) * ia;
         double g2 = -damping * vx + a * vy, g3 = -vx * ia, g4 = -damping;
         BD_SOLVE(hs * g0 - d0, hs * g1 - d1, hs * g2 - d2, hs * g3 - d3, hs * g4 - d4);
+        if (sens) {
+            double st[DIM_SENS] = {x, y, vx, vy, L, px, py}, gs[DIM_SENS];
+            flow_sens_rhs(p, st, damping, gs);
+            BD_SOLVE_SENS(hs * gs[IPX] - d5, hs * gs[IPY] - d6);
+            if (k < n) {
+                d5 += 2.0 * z5;
+                d6 += 2.0 * z6;
+                px += d5;
+                py += d6;
+            }
+        }
         if (k == n) break;
         d0 += 2.0 * z0;
         d1 += 2.0 * z1;
@@ -242,6 +314,11 @@ static int bd_midpoint(flow_params *p, const double *s0, const double *f0, doubl
         L += d4;
     }
 #undef BD_SOLVE
+#undef BD_SOLVE_SENS
+    if (sens) {
+        out[IPX] = px + z5;
+        out[IPY] = py + z6;
+    }
     out[0] = x + z0;
     out[1] = y + z1;
     out[2] = vx + z2;
@@ -265,7 +342,8 @@ static double bd_work(int j)
 static int bd_apply(integrator *in, double *t, double t1, double *h, double *s)
 {
     flow_params *p = in->flow;
-    double f0[DIM], table[BD_ROWS][DIM], row[DIM], hopt[BD_ROWS], work[BD_ROWS];
+    double f0[DIM_SENS], table[BD_ROWS][DIM_SENS], row[DIM_SENS], hopt[BD_ROWS], work[BD_ROWS];
+    const int n = (int)flow_dim(p);
     int k = in->row_target;
     flow_rhs(0.0, s, f0, p);
     for (int attempt = 0; attempt < 200; attempt++) {
@@ -280,18 +358,19 @@ static int bd_apply(integrator *in, double *t, double t1, double *h, double *s)
             for (int c = 1; c <= j; c++) {
                 double q = (double)bd_n[j] / bd_n[j - c];
                 q = 1.0 / (q * q - 1.0);
-                for (int i = 0; i < DIM; i++) {
+                for (int i = 0; i < n; i++) {
                     double prev = table[c - 1][i];
                     table[c - 1][i] = row[i];
                     row[i] += (row[i] - prev) * q;
                 }
             }
-            memcpy(table[j], row, sizeof row);
+            memcpy(table[j], row, sizeof(double) * (size_t)n);
             /* rows below k - 2 can neither be accepted nor enter the
              * choice of the next row */
             if (j == 0 || j < k - 2) continue;
             double e = 0.0;
-            for (int i = IX; i <= IVY; i++) {
+            for (int i = IX; i < n; i++) {
+                if (i == IL) continue;
                 double d = fabs(table[j][i] - table[j - 1][i]) / (in->tol * (1.0 + fabs(table[j][i])));
                 if (i >= IVX) d /= BD_VARIATIONAL_SLACK;
                 if (d > e) e = d;
@@ -312,7 +391,7 @@ static int bd_apply(integrator *in, double *t, double t1, double *h, double *s)
             if (!(fabs(*h) > 1e-14 * fmax(1.0, fabs(*t)))) return BKF_ENUMERIC;
             continue;
         }
-        memcpy(s, table[accepted], sizeof row);
+        memcpy(s, table[accepted], sizeof(double) * (size_t)n);
         *t = last ? t1 : *t + H;
         int knew = accepted;
         if (accepted >= 2 && work[accepted - 1] < 0.8 * work[accepted]) knew = accepted - 1;
@@ -355,7 +434,7 @@ const char *bkf_cycle_stepper_name(bkf_stepper_kind kind)
 static int integrator_init(integrator *in, flow_params *flow, bkf_stepper_kind kind, int restarts,
                            double tol)
 {
-    static const double scale[DIM] = {1.0, 1.0, 1.0, 1.0, 1.0};
+    static const double scale[DIM_SENS] = {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0};
     (void)restarts;
     memset(in, 0, sizeof *in);
     in->flow = flow;
@@ -365,7 +444,7 @@ static int integrator_init(integrator *in, flow_params *flow, bkf_stepper_kind k
     if (kind == BKF_STEPPER_EXTRAPOLATION) return BKF_OK;
     const gsl_odeiv2_step_type *type =
         kind == BKF_STEPPER_IMPLICIT ? gsl_odeiv2_step_bsimp : gsl_odeiv2_step_rk8pd;
-    in->system = (gsl_odeiv2_system){flow_rhs, flow_jacobian, DIM, flow};
+    in->system = (gsl_odeiv2_system){flow_rhs, flow_jacobian, flow_dim(flow), flow};
     in->driver = gsl_odeiv2_driver_alloc_scaled_new(&in->system, type, 1e-3, tol, tol, 1.0, 0.0, scale);
     if (!in->driver) return BKF_ENOMEM;
     in->step = in->driver->s;
@@ -433,7 +512,7 @@ static int locate_event(integrator *in, const flow_params *p, event_fn g, double
     double t = t0 + (t1 - t0) * g0 / (g0 - g1);
     if (!(t > t0 && t < t1)) t = 0.5 * (t0 + t1);
     for (int iter = 0; iter < 60; iter++) {
-        memcpy(s, s0, sizeof(double) * DIM);
+        memcpy(s, s0, sizeof(double) * flow_dim(p));
         if (integrator_to(in, t0, s, t) != BKF_OK) return BKF_ENUMERIC;
         double gdot, gt = g(p, s, &gdot);
         if (gt == 0.0) break;
@@ -476,6 +555,7 @@ typedef struct {
     double dT;           /* dT/dy0 */
     double log_mult;     /* L at the return */
     double xmax, xmin;
+    double px, py;       /* the parameter sensitivity at the return (branch shots) */
 } shot;
 
 static int node_push(bkf_cycle *c, double t, const double *s)
@@ -493,10 +573,10 @@ static int node_push(bkf_cycle *c, double t, const double *s)
 
 /* Integrate one turn from (nu, y0) back to the section.  With `keep` the
  * accepted steps are stored for the profile and the extrema of x located. */
-static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0, bkf_cycle *keep,
-                 shot *out, bkf_error *err)
+static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0, const double *p0,
+                 bkf_cycle *keep, shot *out, bkf_error *err)
 {
-    double s[DIM] = {p->nu, y0, 0.0, 1.0, 0.0}, s_prev[DIM];
+    double s[DIM_SENS] = {p->nu, y0, 0.0, 1.0, 0.0, p0 ? p0[0] : 0.0, p0 ? p0[1] : 0.0}, s_prev[DIM_SENS];
     double t = 0.0, t_prev, h = 0.01 / fmax(1.0, p->mu);
     int went_below = 0;
     /* The downward passage must go clearly below the section before an
@@ -526,7 +606,7 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
         if (keep) {
             double xd_prev = flow_xdot(p, s_prev), xd = flow_xdot(p, s);
             if ((xd_prev > 0) != (xd > 0)) {
-                double te, se[DIM];
+                double te, se[DIM_SENS];
                 if (locate_event(aux, p, event_extremum, t_prev, s_prev, t, s, &te, se) != BKF_OK)
                     return bkf_error_set(err, BKF_ENUMERIC,
                                          "cycle at mu = %.15g, nu = %.15g: extremum not located", p->mu,
@@ -560,7 +640,7 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
         if (keep && node_push(keep, t, s) != BKF_OK)
             return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
-    double T, sr[DIM];
+    double T, sr[DIM_SENS];
     if (locate_event(aux, p, event_section, t_prev, s_prev, t, s, &T, sr) != BKF_OK)
         return bkf_error_set(err, BKF_ENUMERIC,
                              "cycle at mu = %.15g, nu = %.15g: return to the section not located", p->mu,
@@ -572,6 +652,8 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
     out->log_mult = sr[IL];
     out->xmax = xmax;
     out->xmin = xmin;
+    out->px = sr[IPX];
+    out->py = sr[IPY];
     return BKF_OK;
 }
 
@@ -694,7 +776,7 @@ static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, 
     in->noisy = 0;
     for (int iter = 0; iter < MAX_NEWTON; iter++) {
         shot sh = {0};
-        int rc = shoot(in, aux, p, *y0, keep ? c : NULL, &sh, err);
+        int rc = shoot(in, aux, p, *y0, NULL, keep ? c : NULL, &sh, err);
         if (rc != BKF_OK) return rc;
         (*iterations)++;
         double g = sh.y_return - *y0;
@@ -1201,7 +1283,11 @@ static void branch_params(const branch_ctx *b, double q, double *mu, double *nu)
     *nu = b->along == BKF_CYCLE_ALONG_MU ? b->fixed : q;
 }
 
-/* G = ln w(P) - ln w0 and dG/d ln w0 from one shot at (w0, q). */
+/* G = ln w(P) - ln w0 and, if dg, its derivatives (d/d ln w0, d/dq) from
+ * one shot at (w0, q) that carries the variational column and the
+ * parameter sensitivity.  At fixed w0 the start (nu, y0 = w0/a + b F(nu))
+ * moves with q, and so do the section and the scaling of w = a (y - b F(nu));
+ * y' = 0 on the section, so the moving return time leaves dy/dq = py. */
 static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, double *dg,
                        bkf_error *err)
 {
@@ -1212,21 +1298,31 @@ static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, d
                              nu);
     flow_params p = {0};
     flow_set(&p, mu, nu);
+    int along_mu = b->along == BKF_CYCLE_ALONG_MU;
+    p.sens = dg ? (along_mu ? 1 : 2) : 0;
     bkf_stepper_kind kind = b->options.stepper;
     if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu);
     integrator in = {0}, aux = {0};
     double tol = fmax(0.1 * b->options.tol, 1e-13);
     int rc = BKF_ENOMEM;
     if (integrator_init(&in, &p, kind, 0, tol) == BKF_OK && integrator_init(&aux, &p, kind, 1, tol) == BKF_OK) {
-        double w0 = exp(ln_w0);
+        double w0 = exp(ln_w0), Fn = lienard_F(nu), a2 = p.a * p.a;
+        double p0[2] = {along_mu ? 0.0 : 1.0,
+                        along_mu ? mu * (-w0 * p.b / a2 + Fn / (a2 * p.a)) : p.b * (nu * nu - 1.0)};
         shot sh = {0};
-        rc = shoot(&in, &aux, &p, section_y_of_slope(&p, w0), NULL, &sh, err);
+        rc = shoot(&in, &aux, &p, section_y_of_slope(&p, w0), p0, NULL, &sh, err);
         if (rc == BKF_OK) {
-            double w_return = p.a * (sh.y_return - p.b * lienard_F(nu));
+            double w_return = p.a * (sh.y_return - p.b * Fn);
             if (!(w_return > 0)) rc = bkf_error_set(err, BKF_ENUMERIC, "return below the section");
             else {
                 *g = log(w_return) - ln_w0;
-                if (dg) *dg = sh.dP * w0 / w_return - 1.0;
+                if (dg) {
+                    double dw = along_mu ? mu * p.b * (sh.y_return - p.b * Fn) +
+                                               p.a * (sh.py - mu * Fn / (a2 * p.a))
+                                         : p.a * (sh.py - p.b * (nu * nu - 1.0));
+                    dg[0] = sh.dP * w0 / w_return - 1.0;
+                    dg[1] = dw / w_return;
+                }
             }
         }
     }
@@ -1238,17 +1334,12 @@ static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, d
 static int branch_residual(const double *u, double *g, double *jac, void *data, bkf_error *err)
 {
     const branch_ctx *b = data;
-    double dg;
-    int rc = branch_shot(b, u[0], u[1], g, jac ? &dg : NULL, err);
-    if (rc != BKF_OK || !jac) return rc == BKF_ENOMEM ? rc : (rc ? BKF_ENUMERIC : BKF_OK);
-    /* the parameter derivative by a forward difference: one more shot */
-    double h = 1e-6 * fmax(1.0, fabs(u[1])), g2;
-    rc = branch_shot(b, u[0], u[1] + h, &g2, NULL, err);
-    if (rc != BKF_OK) return rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
-    jac[0] = dg;
-    jac[1] = (g2 - g[0]) / h;
-    return BKF_OK;
+    int rc = branch_shot(b, u[0], u[1], g, jac, err);
+    return rc == BKF_OK || rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
 }
+
+/* The loosest tolerance a refused branch point is retried at. */
+#define BRANCH_RELAX_MAX 1e-6
 
 static int branch_accept(const double *u, const double *tangent, int is_fold, void *data)
 {
@@ -1264,6 +1355,30 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     if (q == b->q_to) *(b->along == BKF_CYCLE_ALONG_MU ? &mu : &nu) = b->to;
     b->cycle->warm_slope = exp(u[0]);
     int rc = bkf_cycle_solve(b->cycle, mu, nu, &b->options, b->err);
+    /* A point whose T cannot be had to tol (inside the canard explosion T
+     * moves by dT/dmu ~ 1e5 at mu 3.65, nu 0.99, and forward shooting
+     * amplifies the integration's rounding by as much: the solve refuses,
+     * or its Newton drowns in that noise) is given at the tightest
+     * tolerance it meets, marked, and the branch goes on. */
+    bkf_cycle_options relaxed = b->options;
+    int refused = bkf_status_is_numerical(rc);
+    while (bkf_status_is_numerical(rc) && relaxed.tol < BRANCH_RELAX_MAX) {
+        relaxed.tol = fmin(10.0 * relaxed.tol, BRANCH_RELAX_MAX);
+        b->cycle->warm_slope = exp(u[0]);
+        rc = bkf_cycle_solve(b->cycle, mu, nu, &relaxed, b->err);
+        if (rc == BKF_OK) b->cycle->result.model = "shooting-relaxed";
+    }
+    if (refused && rc != BKF_OK && rc != BKF_ENOMEM) {
+        /* nothing met even the loosest: a row that says so */
+        bkf_cycle_result r = {.mu = mu, .nu = nu, .stepper = "none", .model = "refused"};
+        r.period = r.period_err = r.xmax = r.xmin = r.multiplier = r.log_multiplier = NAN;
+        r.log_multiplier_err = r.return_map_slope = r.section_y = r.section_slope = NAN;
+        if (b->visit(&r, b->visit_data) != 0) {
+            b->visit_status = -1;
+            return 1;
+        }
+        return 0;
+    }
     if (rc != BKF_OK) {
         b->visit_status = rc;
         return 1;

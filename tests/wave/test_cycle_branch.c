@@ -4,6 +4,11 @@
 
 #include "bkfront/cycle.h"
 
+#include <math.h>
+#include <string.h>
+
+#include "taylor_reference.h"
+
 typedef struct {
     double param[512];
     double period[512];
@@ -63,4 +68,90 @@ TEST(cycle_branch_rejects_bad_input)
     CHECK_STATUS(bkf_cycle_branch(BKF_CYCLE_ALONG_MU, 1.0, -2.0, 0.0, NULL, 0, collect, &got, &e), BKF_EINPUT);
     CHECK_STATUS(bkf_cycle_branch(BKF_CYCLE_ALONG_NU, 0.0, 1.5, 1.0, NULL, 0, collect, &got, &e), BKF_EINPUT);
     CHECK_STATUS(bkf_cycle_branch(BKF_CYCLE_ALONG_MU, 1.0, 2.0, 0.0, NULL, 0, NULL, &got, &e), BKF_EINPUT);
+}
+
+/* Through the canard explosion: the branch reaches its end, every row is a
+ * value or an honest refusal, and sampled values agree with the long-double
+ * Taylor reference (mu <= 20) or with a cold solve within the estimates. */
+typedef struct {
+    double mu[1024], nu[1024], period[1024], err[1024];
+    int relaxed[1024];
+    size_t n, refused;
+} canard_rows;
+
+static int collect_canard(const bkf_cycle_result *r, void *data)
+{
+    canard_rows *c = data;
+    if (!strcmp(r->model, "refused")) c->refused++;
+    if (c->n < 1024 && strcmp(r->model, "refused")) {
+        c->mu[c->n] = r->mu;
+        c->nu[c->n] = r->nu;
+        c->period[c->n] = r->period;
+        c->err[c->n] = r->period_err;
+        c->relaxed[c->n] = !strcmp(r->model, "shooting-relaxed");
+        c->n++;
+    }
+    return 0;
+}
+
+static void check_canard_branch(bkf_cycle_param along, double from, double to, double fixed)
+{
+    static canard_rows got;
+    memset(&got, 0, sizeof got);
+    bkf_cycle_options o = bkf_cycle_options_default();
+    bkf_error e;
+    int rc = bkf_cycle_branch(along, from, to, fixed, &o, 0, collect_canard, &got, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    if (rc != BKF_OK) return;
+    CHECK(got.n >= 10);
+    double last = along == BKF_CYCLE_ALONG_MU ? got.mu[got.n - 1] : got.nu[got.n - 1];
+    CHECK_CLOSE(last, to, 1e-12, 1e-12);
+    size_t relaxed = 0, stride = got.n / 8 + 1;
+    for (size_t i = 0; i < got.n; i++) {
+        relaxed += (size_t)got.relaxed[i];
+        /* an unrelaxed row meets tol; a relaxed one says by how much it misses */
+        if (!got.relaxed[i]) CHECK(got.err[i] <= o.tol * got.period[i]);
+        /* every stride-th row and the first relaxed one (the reference is
+         * slow inside the canard) */
+        if (i % stride && !(got.relaxed[i] && relaxed == 1)) continue;
+        if (got.mu[i] <= 20.0) {
+            /* the reference's secant needs a start near the cycle: a loose cold solve's */
+            bkf_cycle_options loose = o;
+            loose.tol = 1e-6;
+            bkf_cycle_result guess;
+            double slope = bkf_cycle_period(got.mu[i], got.nu[i], &loose, &guess, &e) == BKF_OK
+                               ? guess.section_slope
+                               : 1.0;
+            double unc, ref = taylor_period(got.mu[i], got.nu[i], slope, &unc);
+            CHECK_MSG(fabs(got.period[i] - ref) <= 3.0 * got.err[i] + unc,
+                      "mu %.17g nu %.17g: T %.17g ref %.17g (unc %.2g) err %.2g", got.mu[i],
+                      got.nu[i], got.period[i], ref, unc, got.err[i]);
+        } else {
+            bkf_cycle_result cold;
+            CHECK_STATUS(bkf_cycle_period(got.mu[i], got.nu[i], &o, &cold, &e), BKF_OK);
+            CHECK(fabs(got.period[i] - cold.period) <= 3.0 * (got.err[i] + cold.period_err));
+        }
+    }
+    bkf_test_note("%zu rows, %zu relaxed, %zu refused", got.n, relaxed, got.refused);
+}
+
+TEST(cycle_branch_mu_through_the_canard_at_nu_0_99)
+{
+    check_canard_branch(BKF_CYCLE_ALONG_MU, 0.1, 1e4, 0.99);
+}
+
+TEST(cycle_branch_mu_through_the_canard_at_nu_minus_0_99)
+{
+    check_canard_branch(BKF_CYCLE_ALONG_MU, 0.1, 1e4, -0.99);
+}
+
+TEST(cycle_branch_nu_through_the_canard_at_mu_3_65)
+{
+    check_canard_branch(BKF_CYCLE_ALONG_NU, 0.0, 0.99, 3.65);
+    check_canard_branch(BKF_CYCLE_ALONG_NU, 0.0, -0.99, 3.65);
+}
+
+TEST(cycle_branch_nu_through_the_canard_at_mu_10)
+{
+    check_canard_branch(BKF_CYCLE_ALONG_NU, 0.0, -0.999, 10.0);
 }
