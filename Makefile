@@ -13,6 +13,10 @@ VALGRIND_PACKAGES := valgrind
 # Only for `make mpi` (bkfront sweep under mpirun) and `make test-mpi`.
 MPI_PACKAGES      := libopenmpi-dev openmpi-bin
 FUZZ_PACKAGES     := clang libclang-rt-dev
+# Only for `make bench`: the references it is timed against (AUTO-07p's
+# collocation, whose equation files gfortran compiles; scipy's Radau), so
+# that `make test` needs none of them.
+BENCH_PACKAGES    := auto-07p gfortran python3-scipy
 PKGS         := gsl nlopt fftw3 inih lapacke hdf5-serial
 
 CC       ?= cc
@@ -121,10 +125,13 @@ run: deps
 	./$(CLI) run --out plots/out/paper fronts/paper.scene
 
 bench: deps
+	@$(call install_missing,$(BENCH_PACKAGES))
 	@$(MAKE) --no-print-directory bench-built
 
-bench-built: $(BENCH) $(CLI)
+bench-built: $(BENCH) $(CLI) $(SHLIB)
 	./$(BENCH)
+	BKFRONT_LIBRARY=$(abspath $(BUILD)/$(SONAME)) PYTHONPATH=$(CURDIR)/python \
+	  $(PYTHON) tests/bench/bench_auto.py
 	@mkdir -p plots/out
 	./$(CLI) bench --out plots/out/work_precision.tsv
 	tests/bench/bench_sweep.sh ./$(CLI)

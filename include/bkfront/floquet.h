@@ -46,7 +46,9 @@ extern "C" {
 
 typedef struct {
     double tol;               /* absolute accuracy of lambda, [1e-14, 1e-1]; default 1e-10 */
-    bkf_stepper_kind stepper; /* as in cycle.h; auto: rk8pd for gamma <= 30 */
+    bkf_stepper_kind stepper; /* as in cycle.h; auto: rk8pd for gamma <= 30;
+                                 extrapolation: the cycle by bd2x2, the
+                                 monodromy by bsimp (rk8pd where auto would) */
     /* Scans for peaks of lambda over K (threshold, diagram): c q runs over
      * (0, p_max] on scan_points even points, each peak refined by NLopt. */
     double p_max;             /* default 6 */

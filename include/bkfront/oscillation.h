@@ -54,7 +54,7 @@ typedef struct {
     double tol;             /* absolute on lambda and the boundaries; default 1e-10 */
     double cq_max;          /* scans: peaks sought for c q in (0, cq_max]; NaN: 6 */
     double nu_step;         /* scans: step in nu, (0, 1]; NaN: 0.01 */
-    int stepper;            /* index in auto, explicit, implicit */
+    int stepper;            /* index in auto, explicit, implicit, extrapolation */
     /* A refused dispersion row (its estimate stayed above tol) is kept with
      * kind "refused" and reported here as "row q = Q refused: WHY"; NULL:
      * not reported.  Not a key. */

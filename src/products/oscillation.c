@@ -41,9 +41,11 @@ static const bkf_io_column diagram_columns[] = {
     {"from_m", BKF_IO_NUMBER},   {"to_m", BKF_IO_NUMBER},
 };
 
-static const char *const stepper_names[] = {"auto", "explicit", "implicit", NULL};
+static const char *const stepper_names[] = {"auto", "explicit", "implicit", "extrapolation",
+                                            NULL};
 static const bkf_stepper_kind stepper_kinds[] = {BKF_STEPPER_AUTO, BKF_STEPPER_EXPLICIT,
-                                                 BKF_STEPPER_IMPLICIT};
+                                                 BKF_STEPPER_IMPLICIT, BKF_STEPPER_EXTRAPOLATION};
+#define NSTEPPERS (sizeof stepper_kinds / sizeof stepper_kinds[0])
 static const char *const along_names[] = {"c", "gamma", NULL};
 
 /* "A:B" with -1 < A < B < 1. */
@@ -127,9 +129,11 @@ const bkf_option bkf_oscillation_options[] = {
      .help = "step of the scan in nu, in (0, 1]. Stable or unstable\n"
              "windows narrower than H may be missed"},
     {.name = "stepper", .type = BKF_OPT_CHOICE, .offset = offsetof(bkf_oscillation_spec, stepper),
-     .choices = stepper_names, .form = "auto|explicit|implicit", .shown_default = "auto",
-     .help = "integrator: rk8pd (explicit), bsimp (implicit), or by\n"
-             "stiffness (implicit above gamma = 30)"},
+     .choices = stepper_names, .form = "auto|explicit|implicit|extrapolation",
+     .shown_default = "auto",
+     .help = "integrator: rk8pd (explicit), bsimp (implicit), the cycle\n"
+             "by bd2x2 and the monodromy by bsimp (extrapolation), or by\n"
+             "stiffness (as extrapolation above gamma = 30)"},
 };
 const size_t bkf_oscillation_noptions =
     sizeof bkf_oscillation_options / sizeof bkf_oscillation_options[0];
@@ -166,7 +170,7 @@ bkf_floquet_options bkf_oscillation_floquet_options(const bkf_oscillation_spec *
     o.tol = spec->tol;
     if (!isnan(spec->cq_max)) o.p_max = spec->cq_max;
     if (!isnan(spec->nu_step)) o.nu_step = spec->nu_step;
-    o.stepper = (unsigned)spec->stepper < 3 ? stepper_kinds[spec->stepper] : BKF_STEPPER_AUTO;
+    o.stepper = (unsigned)spec->stepper < NSTEPPERS ? stepper_kinds[spec->stepper] : BKF_STEPPER_AUTO;
     return o;
 }
 
@@ -293,8 +297,9 @@ int bkf_oscillation_check(const bkf_oscillation_spec *sp, const char *prefix, bk
     if (!(o.nu_step > 0 && o.nu_step <= 1))
         return bkf_error_set(err, BKF_EINPUT, "%snu-step: %s is outside (0, 1]", p,
                              bkf_format_number(o.nu_step, a, sizeof a));
-    if ((unsigned)sp->stepper > 2)
-        return bkf_error_set(err, BKF_EINPUT, "%sstepper: not auto, explicit or implicit", p);
+    if ((unsigned)sp->stepper >= NSTEPPERS)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%sstepper: not auto, explicit, implicit or extrapolation", p);
     if (scanning) {
         if (!(sp->search_lo > -1.0 && sp->search_hi < 1.0 && sp->search_lo < sp->search_hi))
             return bkf_error_set(err, BKF_EINPUT, "%ssearch: needs -1 < A < B < 1", p);

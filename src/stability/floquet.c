@@ -260,8 +260,9 @@ static int check_options(const bkf_floquet_options *o, bkf_error *err)
     int rc = bkf_model_check_tol(o->tol, err);
     if (rc != BKF_OK) return rc;
     if (o->stepper != BKF_STEPPER_AUTO && o->stepper != BKF_STEPPER_EXPLICIT &&
-        o->stepper != BKF_STEPPER_IMPLICIT)
-        return bkf_error_set(err, BKF_EINPUT, "stepper must be auto, explicit or implicit");
+        o->stepper != BKF_STEPPER_IMPLICIT && o->stepper != BKF_STEPPER_EXTRAPOLATION)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "stepper must be auto, explicit, implicit or extrapolation");
     if (!isfinite(o->p_max) || o->p_max <= 0.0 || o->p_max > 1e4)
         return bkf_error_set(err, BKF_EINPUT, "p_max = %g must be in (0, 1e4]", o->p_max);
     if (o->scan_points < 4 || o->scan_points > 100000)
@@ -350,6 +351,10 @@ static int floquet_set_body(bkf_floquet *f, double gamma, double c, double nu,
     f->lp = (lin_params){gamma, nu, 1.0, 0};
     bkf_stepper_kind kind = o.stepper;
     if (kind == BKF_STEPPER_AUTO) kind = gamma > STIFF_GAMMA ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
+    /* bd2x2 integrates the cycle's own states only (cycle.c): the cycle
+     * above was solved with it, the monodromy's 2x2 and log systems take
+     * the other stiff stepper, as under auto. */
+    if (kind == BKF_STEPPER_EXTRAPOLATION) kind = BKF_STEPPER_IMPLICIT;
     /* below these local tolerances the steppers only accumulate rounding */
     double floor_tol = kind == BKF_STEPPER_IMPLICIT ? 1e-14 : 1e-16;
     double tol_int = fmax(0.1 * o.tol, floor_tol * TOL_RATIO);
@@ -627,7 +632,7 @@ static int log_jac(double t, const double s[], double *J, double dfdt[], void *p
 static const gsl_odeiv2_step_type *log_stepper(const bkf_floquet *f, double K)
 {
     if (f->kind != BKF_STEPPER_IMPLICIT) return gsl_odeiv2_step_rk8pd;
-    if (f->opt.stepper == BKF_STEPPER_AUTO && sqrt(K) >= f->gamma) return gsl_odeiv2_step_rk8pd;
+    if (f->opt.stepper != BKF_STEPPER_IMPLICIT && sqrt(K) >= f->gamma) return gsl_odeiv2_step_rk8pd;
     return gsl_odeiv2_step_bsimp;
 }
 

@@ -38,10 +38,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Measured for this use (tests/bench/bench_speeds.c, nu = -0.96): at tol
- * 1e-10 rk8pd is faster than bsimp up to mu ~ 50 (8 ms against 11 ms at
- * mu = 50), bsimp beyond; the cycle module's own switch is at 30. */
-#define STEPPER_SWITCH_MU 50.0
 /* Grid samples only decide signs; 1e-6 costs a third of 1e-10 at mu ~ 50. */
 #define COARSE_TOL 1e-6
 #define GRID_STEP 0.3
@@ -161,12 +157,13 @@ static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf
     if (mu > BKF_CYCLE_MU_MAX) mu = BKF_CYCLE_MU_MAX; /* rounding in mu_of_s */
     bkf_cycle_options o = bkf_cycle_options_default();
     o.tol = precise ? tol : g->tol_coarse;
-    bkf_stepper_kind first = mu <= STEPPER_SWITCH_MU ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_IMPLICIT;
+    /* The engine's own choice (bd2x2 above BKF_CYCLE_STIFF_MU, bsimp where
+     * bd2x2 refuses); "the other" is the stepper it does not try there. */
     bkf_error e = {0};
     int rc = BKF_ENUMERIC;
     for (int attempt = 0; attempt < 3 && bkf_status_is_numerical(rc); attempt++) {
-        o.stepper = attempt < 2 ? first
-                    : first == BKF_STEPPER_EXPLICIT ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
+        o.stepper = attempt < 2 ? BKF_STEPPER_AUTO
+                    : mu <= BKF_CYCLE_STIFF_MU ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
         o.warm_start = attempt == 0;
         rc = bkf_cycle_solve(cycle, mu, g->p.nu, &o, &e);
     }
@@ -1202,7 +1199,6 @@ static int branch_T(branch_ctx *b, double mu, double nu, double *T, double *T_er
 {
     bkf_cycle_options o = bkf_cycle_options_default();
     o.tol = b->tol;
-    o.stepper = mu <= STEPPER_SWITCH_MU ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_IMPLICIT;
     bkf_error e = {0};
     int rc = bkf_cycle_solve(b->cycle, mu, nu, &o, &e);
     if (rc) return bkf_error_set(err, rc, "period at mu = %.17g, nu = %.17g: %s", mu, nu, e.message);

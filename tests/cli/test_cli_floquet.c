@@ -4,6 +4,8 @@
 #include "harness.h"
 #include "cli_support.h"
 
+#include "bkfront/floquet.h"
+
 #include <fcntl.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -224,4 +226,34 @@ TEST(cli_floquet_no_threshold_is_an_answer)
     CHECK(strstr(r.out, "unstable throughout") != NULL);
     CHECK(strstr(r.out, "\tnan\tnan\tnone\t") != NULL);
     bkf_cli_result_free(&r);
+}
+
+/* Issue 20: --stepper extrapolation is offered (the cycle by bd2x2, said in
+ * the comment line) and gives the library's lambda with that stepper to the
+ * digit; an unknown stepper is refused naming all four. */
+TEST(cli_floquet_extrapolation_stepper_is_the_library_s)
+{
+    fq_run r = FQ("--gamma", "100", "--c", "0.3", "--nu", "-0.5", "--q", "3", "--tol", "1e-8",
+                  "--stepper", "extrapolation");
+    CHECK_MSG(r.code == 0 && r.err[0] == '\0', "exit %d: %s", r.code, r.err);
+    CHECK_MSG(strstr(r.out, "; stepper bd2x2;"), "%s", r.out);
+    double lambda;
+    CHECK(fq_field(r.out, 0, "lambda", &lambda, NULL, 0));
+    bkf_floquet_options o = bkf_floquet_options_default();
+    o.tol = 1e-8;
+    o.stepper = BKF_STEPPER_EXTRAPOLATION;
+    bkf_floquet *f = bkf_floquet_alloc();
+    bkf_floquet_point p;
+    bkf_error e;
+    CHECK(f);
+    CHECK_MSG(bkf_floquet_set(f, 100.0, 0.3, -0.5, &o, &e) == BKF_OK, "%s", e.message);
+    CHECK_MSG(bkf_floquet_eval(f, 3.0, &p, &e) == BKF_OK, "%s", e.message);
+    CHECK_MSG(lambda == p.lambda, "CLI %.17g, library %.17g", lambda, p.lambda);
+    bkf_floquet_free(f);
+    fq_free(&r);
+    fq_bad(FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "1", "--stepper", "bd2x2"),
+           "--stepper", "unknown stepper");
+    r = FQ("--gamma", "2", "--c", "0.3", "--nu", "-0.9", "--q", "1", "--stepper", "bd2x2");
+    CHECK_MSG(strstr(r.err, "extrapolation"), "%s", r.err);
+    fq_free(&r);
 }

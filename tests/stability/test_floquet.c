@@ -586,3 +586,43 @@ TEST(floquet_m1_err_agrees_with_lambda_err)
     bkf_floquet_free(f);
     bkf_floquet_free(ref);
 }
+
+/* Issue 20: the extrapolation stepper solves the cycle with bd2x2 (the
+ * monodromy has no bd2x2 and takes bsimp).  Independent checks: at q = 0 the
+ * perturbation is the cycle's own variational flow, so m1 = 1 (translation)
+ * and m1 m2 = exp(L) of the cycle; at q > 0 lambda agrees with bsimp's
+ * (the implicit stepper, cycle and monodromy) within the two estimates. */
+TEST(floquet_extrapolation_stepper_solves_the_cycle_with_bd2x2)
+{
+    bkf_floquet_options o = bkf_floquet_options_default();
+    o.tol = 1e-8;
+    bkf_floquet *fx = bkf_floquet_alloc(), *fi = bkf_floquet_alloc();
+    CHECK(fx && fi);
+    bkf_error e;
+    o.stepper = BKF_STEPPER_EXTRAPOLATION;
+    CHECK_MSG(bkf_floquet_set(fx, 100.0, 0.3, -0.5, &o, &e) == BKF_OK, "%s", e.message);
+    o.stepper = BKF_STEPPER_IMPLICIT;
+    CHECK_MSG(bkf_floquet_set(fi, 100.0, 0.3, -0.5, &o, &e) == BKF_OK, "%s", e.message);
+    const bkf_cycle_result *cx = bkf_floquet_cycle(fx), *ci = bkf_floquet_cycle(fi);
+    CHECK_MSG(strcmp(cx->stepper, "bd2x2") == 0, "cycle by %s", cx->stepper);
+    CHECK_MSG(strcmp(ci->stepper, "bsimp") == 0, "cycle by %s", ci->stepper);
+    bkf_floquet_point p0 = eval(fx, 0.0);
+    CHECK_MSG(fabs(hypot(p0.m1_re, p0.m1_im) - 1.0) <= p0.m1_err + 1e-8, "q 0: m1 %.12g",
+              p0.m1_re);
+    CHECK_MSG(fabs(p0.log_det - cx->log_multiplier) <= 1e-6 * fabs(cx->log_multiplier),
+              "q 0: L %.12g against the cycle's %.12g", p0.log_det, cx->log_multiplier);
+    const double qs[] = {1.0, 3.0, 10.0};
+    for (size_t i = 0; i < sizeof qs / sizeof qs[0]; i++) {
+        bkf_floquet_point px = eval(fx, qs[i]), pi = eval(fi, qs[i]);
+        bkf_test_note("q %g: lambda %.12g (bd2x2 cycle) - %.12g (bsimp) = %.2g, errs %.2g %.2g",
+                      qs[i], px.lambda, pi.lambda, px.lambda - pi.lambda, px.lambda_err,
+                      pi.lambda_err);
+        CHECK_MSG(fabs(px.lambda - pi.lambda) <= px.lambda_err + pi.lambda_err,
+                  "q %g: lambda %.12g against bsimp's %.12g", qs[i], px.lambda, pi.lambda);
+    }
+    o.stepper = (bkf_stepper_kind)7;
+    CHECK(bkf_floquet_set(fx, 100.0, 0.3, -0.5, &o, &e) == BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "auto, explicit, implicit or extrapolation"), "%s", e.message);
+    bkf_floquet_free(fx);
+    bkf_floquet_free(fi);
+}

@@ -38,7 +38,8 @@ typedef struct {
 
 /* n T v sqrt(1 - c^2/v^2) / S - 1 with v itself as the unknown and T at
  * tol 1e-12, in a fresh solve every time: nothing shared with the module
- * but the cycle solver. */
+ * but the cycle solver, and above the stiffness threshold not its stepper
+ * either (the module takes the automatic bd2x2 there, this bsimp). */
 static double condition_in_v(double v, void *data)
 {
     const cond *c = data;
@@ -46,6 +47,7 @@ static double condition_in_v(double v, void *data)
     bkf_cycle_options o = bkf_cycle_options_default();
     o.tol = 1e-12;
     o.warm_start = 0;
+    if (c->p.gamma / w > BKF_CYCLE_STIFF_MU) o.stepper = BKF_STEPPER_IMPLICIT;
     bkf_cycle_result r;
     bkf_error e;
     CHECK_MSG(bkf_cycle_period(c->p.gamma / w, c->p.nu, &o, &r, &e) == BKF_OK, "%s", e.message);
