@@ -55,12 +55,21 @@ typedef struct {
                            windows classify alike or the next doubling would
                            pass this; a column says which (settled, budget).
                            0: every run stops at tmax */
+    int product;        /* index in regime, speeds, threshold (bkf_sweep_product_names):
+                           what a row holds (BKF_SWEEP_REGIME: a simulation's regime;
+                           speeds: bkf_fronts_find with stability at the point's
+                           gamma, c, nu, S; threshold: the global oscillation's
+                           Floquet boundaries in nu at its gamma, c) */
     /* Not keys: what the caller supplies for a run it may stop or watch. */
     const volatile sig_atomic_t *cancel; /* raised: no new point starts, the
                                             ones in flight stop, BKF_ECANCELED */
     void (*progress)(size_t done, size_t total, void *data); /* after each row */
     void *data;
 } bkf_sweep_spec;
+
+enum { BKF_SWEEP_REGIME = 0, BKF_SWEEP_SPEEDS = 1, BKF_SWEEP_THRESHOLD = 2 };
+/* "regime", "speeds", "threshold", NULL. */
+extern const char *const bkf_sweep_product_names[];
 
 bkf_sweep_spec bkf_sweep_spec_default(void);
 /* Frees the lists (seeds). */

@@ -384,3 +384,167 @@ TEST(cli_sweep_settle_mode_follows_simulate_runs_of_doubling_length)
     free(never);
     free(out);
 }
+
+/* The lists of n the sweep's speeds product should give, from a table of
+ * `bkfront speeds --stability` (rows in increasing n): allowed, every n;
+ * stable, the n with a root whose stable cell is yes. */
+static void speeds_lists(const char *table, char *allowed, char *stable, size_t size)
+{
+    allowed[0] = stable[0] = '\0';
+    char verdict[32];
+    double n, last_a = -1, last_s = -1;
+    for (int r = 0; bkf_tsv_cell(table, r, "n", &n, NULL, 0); r++) {
+        if (n != last_a)
+            snprintf(allowed + strlen(allowed), size - strlen(allowed), "%s%.0f",
+                     *allowed ? "," : "", n);
+        last_a = n;
+        if (bkf_tsv_cell(table, r, "stable", NULL, verdict, sizeof verdict) &&
+            strcmp(verdict, "yes") == 0 && n != last_s) {
+            snprintf(stable + strlen(stable), size - strlen(stable), "%s%.0f", *stable ? "," : "",
+                     n);
+            last_s = n;
+        }
+    }
+    if (!*allowed) snprintf(allowed, size, "-");
+    if (!*stable) snprintf(stable, size, "-");
+}
+
+/* --product speeds: each row is bkfront speeds --stability at its point
+ * (the CLI's table read back), 1 and 2 threads give one table. */
+TEST(cli_sweep_speeds_product_is_speeds_stability_at_each_point)
+{
+    char dir[] = "/tmp/bkf_sweep_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char *one = path_in(dir, "one.tsv"), *two = path_in(dir, "two.tsv");
+#define SPEEDS_GRID "--product", "speeds", "--x", "nu=-0.95,-0.9", "--S", "10", "--no-progress"
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", SPEEDS_GRID, "--threads", "1", "--out", one)));
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", SPEEDS_GRID, "--threads", "2", "--out", two)));
+    char *a = bkf_cli_read_file(one), *b = bkf_cli_read_file(two);
+    CHECK(a && b);
+    CHECK_MSG(strcmp(a, b) == 0, "1 and 2 threads differ:\n%s\n---\n%s", a, b);
+    CHECK(strstr(a, "# sweep: product speeds; "));
+    const char *nus[] = {"-0.95", "-0.9"};
+    for (int i = 0; i < 2; i++) {
+        char cmd[160], allowed[256], stable[256], got[256], status[16];
+        snprintf(cmd, sizeof cmd, "speeds --stability --gamma 2 --c 0.3 --nu %s --S 10", nus[i]);
+        char *cli = bkf_cli_stdout(cmd, NULL);
+        CHECK(cli);
+        speeds_lists(cli, allowed, stable, sizeof allowed);
+        double count, n_max;
+        CHECK(bkf_tsv_cell(a, i, "status", NULL, status, sizeof status) &&
+              strcmp(status, "ok") == 0);
+        CHECK(bkf_tsv_cell(a, i, "allowed", NULL, got, sizeof got));
+        CHECK_MSG(strcmp(got, allowed) == 0, "nu %s: allowed %s, speeds: %s", nus[i], got,
+                  allowed);
+        CHECK(bkf_tsv_cell(a, i, "allowed_count", &count, NULL, 0));
+        CHECK(bkf_tsv_cell(a, i, "n_max", &n_max, NULL, 0));
+        CHECK(count >= 1 && n_max == count && strstr(cli, "# n_max ") &&
+              atoi(strstr(cli, "# n_max ") + 8) == (int)n_max);
+        CHECK(bkf_tsv_cell(a, i, "stable", NULL, got, sizeof got));
+        CHECK_MSG(strcmp(got, stable) == 0, "nu %s: stable %s, speeds: %s", nus[i], got, stable);
+        free(cli);
+    }
+    /* the table of another product is not resumed */
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--product", "threshold", "--x", "nu=-0.95,-0.9",
+                                     "--S", "10", "--no-progress", "--resume", "--out", one),
+                             "sweep", "resume", "--resume on a speeds table");
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--x", "nu=-0.95,-0.9", "--S", "10",
+                                     "--no-progress", "--resume", "--out", one),
+                             "sweep", "resume", "--resume of a regime sweep on a speeds table");
+    char *after = bkf_cli_read_file(one);
+    CHECK(after && strcmp(after, a) == 0);
+    /* a point where the product has no stability (c = 0) is bad input */
+    char *never = path_in(dir, "never.tsv");
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--product", "speeds", "--x", "c=0.3,0", "--out",
+                                     never),
+                             "sweep", "c", "c = 0 in the grid of the speeds product");
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--product", "colour", "--out", never), "sweep",
+                             "product", "an unknown product");
+    CHECK(access(never, F_OK) != 0);
+#undef SPEEDS_GRID
+    free(never);
+    free(after);
+    free(a);
+    free(b);
+    free(one);
+    free(two);
+}
+
+/* --product threshold: the row is bkfront floquet --threshold at its gamma,
+ * c (the same numbers to the digit), and the lowest boundary of each kind
+ * is floquet --diagram's; 1 and 2 threads give one table. */
+TEST(cli_sweep_threshold_product_is_floquet_threshold_at_each_point)
+{
+    char dir[] = "/tmp/bkf_sweep_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char *one = path_in(dir, "one.tsv"), *two = path_in(dir, "two.tsv");
+    /* 1.875: two long-wave boundaries below 0 and no period doubling; 2:
+     * period doubling first */
+#define THRESHOLD_GRID "--product", "threshold", "--x", "gamma=1.875,2", "--no-progress"
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", THRESHOLD_GRID, "--threads", "1", "--out", one)));
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", THRESHOLD_GRID, "--threads", "2", "--out", two)));
+#undef THRESHOLD_GRID
+    char *a = bkf_cli_read_file(one), *b = bkf_cli_read_file(two);
+    CHECK(a && b);
+    CHECK_MSG(strcmp(a, b) == 0, "1 and 2 threads differ:\n%s\n---\n%s", a, b);
+    const char *gammas[] = {"1.875", "2"};
+    for (int i = 0; i < 2; i++) {
+        char cmd[128], x[64], y[64];
+        snprintf(cmd, sizeof cmd, "floquet --threshold --gamma %s --c 0.3", gammas[i]);
+        char *th = bkf_cli_stdout(cmd, NULL);
+        snprintf(cmd, sizeof cmd, "floquet --diagram --gamma %s --c 0.3", gammas[i]);
+        char *dg = bkf_cli_stdout(cmd, NULL);
+        CHECK(th && dg);
+        const char *pairs[][2] = {{"nu_threshold", "nu_pd"}, {"nu_threshold_err", "nu_pd_err"},
+                                  {"kind", "kind"}, {"q_c", "q_c"},
+                                  {"stable_above", "stable_above"}};
+        for (int k = 0; k < 5; k++) {
+            CHECK(bkf_tsv_cell(a, i, pairs[k][0], NULL, x, sizeof x));
+            CHECK(bkf_tsv_cell(th, 0, pairs[k][1], NULL, y, sizeof y));
+            CHECK_MSG(strcmp(x, y) == 0, "gamma %s: %s %s, floquet --threshold: %s", gammas[i],
+                      pairs[k][0], x, y);
+        }
+        /* the diagram's first boundary of each kind (nan: none) */
+        const char *kinds[][2] = {{"period_doubling", "nu_period_doubling"},
+                                  {"long_wave", "nu_long_wave"}};
+        for (int k = 0; k < 2; k++) {
+            snprintf(y, sizeof y, "nan");
+            for (int r = 0; bkf_tsv_cell(dg, r, "to_kind", NULL, x, sizeof x); r++)
+                if (strcmp(x, kinds[k][0]) == 0) {
+                    CHECK(bkf_tsv_cell(dg, r, "nu_to", NULL, y, sizeof y));
+                    break;
+                }
+            CHECK(bkf_tsv_cell(a, i, kinds[k][1], NULL, x, sizeof x));
+            CHECK_MSG(strcmp(x, y) == 0, "gamma %s: %s %s, floquet --diagram: %s", gammas[i],
+                      kinds[k][1], x, y);
+        }
+        free(th);
+        free(dg);
+    }
+    char kind[32];
+    CHECK(bkf_tsv_cell(a, 0, "kind", NULL, kind, sizeof kind) && strcmp(kind, "long_wave") == 0);
+    CHECK(bkf_tsv_cell(a, 0, "nu_period_doubling", NULL, kind, sizeof kind) &&
+          strcmp(kind, "nan") == 0);
+    /* the scene key: a [sweep] with product = threshold writes the CLI's table */
+    char *scene = path_in(dir, "th.scene"), *out = path_in(dir, "scene"), *table = NULL;
+    FILE *f = fopen(scene, "w");
+    CHECK(f);
+    fputs("[model]\ngamma = 2\nc = 0.3\nnu = -0.96\nS = 20\n"
+          "[sweep th]\nproduct = threshold\nx = gamma=1.875,2\n", f);
+    fclose(f);
+    bkf_cli_result r = bkf_cli_run(BKF_CLI_ARGS("run", "--no-figures", "--out", out, scene), NULL);
+    CHECK_MSG(r.code == 0, "bkfront run: exit %d, %s", r.code, r.err);
+    bkf_cli_result_free(&r);
+    char *path = path_in(out, "th.tsv");
+    table = bkf_cli_read_file(path);
+    CHECK_MSG(table && strcmp(table, a) == 0, "the scene's table differs:\n%s\n---\n%s",
+              table ? table : "(none)", a);
+    free(path);
+    free(table);
+    free(scene);
+    free(out);
+    free(a);
+    free(b);
+    free(one);
+    free(two);
+}
