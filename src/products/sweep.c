@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <pthread.h>
 #include <inttypes.h>
 #include <stdarg.h>
@@ -70,6 +71,13 @@ const bkf_option bkf_sweep_options[] = {
              "(and their front counts, for fronts and pacemakers), or the\n"
              "next doubling would pass T; column settled says which\n"
              "(settled, budget); T >= tmax, in (0, 1e6]"},
+    {.name = "fields", .type = BKF_OPT_TEXT, .offset = SPEC(fields), .form = "DIR",
+     .shown_default = "none",
+     .help = "keep each point's spacetime field psi(t, x) as HDF5 in\n"
+             "DIR/point_I.h5 (I the point; the file of simulate\n"
+             "--spacetime FILE.h5, the parameters as attributes), written\n"
+             "atomically by the thread or MPI worker that computes the\n"
+             "point; with --tmax-budget the last run's; product regime only"},
 };
 const size_t bkf_sweep_noptions = sizeof bkf_sweep_options / sizeof bkf_sweep_options[0];
 
@@ -333,13 +341,39 @@ static int check_product(int product, const bkf_simulate_spec *sim, const char *
     return bkf_simulate_check(sim, prefix, err);
 }
 
+char *bkf_sweep_field_path(const bkf_sweep_spec *sp, size_t index)
+{
+    if (!sp || !sp->fields) return NULL;
+    size_t len = strlen(sp->fields) + 48;
+    char *path = malloc(len);
+    if (path) snprintf(path, len, "%s/point_%zu.h5", sp->fields, index);
+    return path;
+}
+
+/* Point i's simulation writing its field (sweep.h: fields); *path is the
+ * file's name, owned by the caller (NULL without fields). */
+static int with_field(const bkf_sweep_spec *sp, size_t i, bkf_simulate_spec *sim, char **path,
+                      bkf_error *err)
+{
+    *path = NULL;
+    if (!sp->fields) return BKF_OK;
+    if (!(*path = bkf_sweep_field_path(sp, i)))
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    sim->spacetime = *path;
+    sim->spacetime_format = 2; /* hdf5, whatever the directory's name */
+    /* a stopped run leaves no partial field under the point's name */
+    sim->discard_canceled = 1;
+    return BKF_OK;
+}
+
 int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err)
 {
     if (!sp) return bkf_error_set(err, BKF_EINPUT, "no sweep spec given");
     if (!prefix) prefix = "";
     if (sp->sim.spacetime || sp->sim.snapshots)
-        return bkf_error_set(err, BKF_EINPUT, "%s%s: not in a sweep (no fields per point)", prefix,
-                             sp->sim.spacetime ? "spacetime" : "snapshots");
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%s%s: not in a sweep (a field per point: %sfields DIR)", prefix,
+                             sp->sim.spacetime ? "spacetime" : "snapshots", prefix);
     size_t of = sp->of ? sp->of : 1;
     if (sp->task >= of)
         return bkf_error_set(err, BKF_EINPUT, "%stask: %zu is not in [0, %zu] (%sof %zu)", prefix,
@@ -352,6 +386,18 @@ int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err
     if (sp->product != BKF_SWEEP_REGIME && sp->tmax_budget > 0)
         return bkf_error_set(err, BKF_EINPUT, "%stmax-budget: only with %sproduct regime", prefix,
                              prefix);
+    if (sp->fields) {
+        struct stat st;
+        if (sp->product != BKF_SWEEP_REGIME)
+            return bkf_error_set(err, BKF_EINPUT, "%sfields: only with %sproduct regime", prefix,
+                                 prefix);
+        if (stat(sp->fields, &st) != 0 || !S_ISDIR(st.st_mode) ||
+            access(sp->fields, W_OK | X_OK) != 0) {
+            char shown[80];
+            return bkf_error_set(err, BKF_EINPUT, "%sfields: '%s' is not a writable directory",
+                                 prefix, bkf_option_shown(sp->fields, shown, sizeof shown));
+        }
+    }
     plan p;
     int s = make_plan(sp, prefix, &p, err);
     if (s) return s;
@@ -360,7 +406,11 @@ int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err
     for (size_t i = 0; !s && i < p.count; i++) {
         bkf_simulate_spec sim;
         s = point_spec(sp, &p, i, &sim, prefix, err);
+        char *field = NULL;
+        /* the field's size and its file, as simulate --spacetime judges them */
+        if (!s) s = with_field(sp, i, &sim, &field, err);
         if (!s) s = check_product(sp->product, &sim, prefix, err);
+        free(field);
         if (!s && sp->tmax_budget > 0 && sp->tmax_budget < sim.tmax) {
             char b[32], m[32];
             s = bkf_error_set(err, BKF_EINPUT, "%stmax-budget: %s is below tmax %s of point %zu",
@@ -668,6 +718,8 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
     if (point_spec(sp, p, i, &sim, "", err)) return NULL;
     if (sp->product == BKF_SWEEP_SPEEDS) return speeds_row(&sim, i, err);
     if (sp->product == BKF_SWEEP_THRESHOLD) return threshold_row(&sim, i, err);
+    char *field;
+    if (with_field(sp, i, &sim, &field, err)) return NULL;
     bkf_simulate_outcome o;
     bkf_error e;
     int s = bkf_simulate_outcome_of(&sim, &o, &e);
@@ -691,6 +743,7 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
             break;
         }
     }
+    free(field);
     if (s && !bkf_status_is_numerical(s)) {
         bkf_error_set(err, s, "point %zu: %s", i, e.message);
         return NULL;

@@ -6,6 +6,11 @@
 #include "harness.h"
 #include "cli_support.h"
 
+#include <dirent.h>
+#include <math.h>
+#include <sys/stat.h>
+#include <hdf5.h>
+#include <hdf5_hl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -192,16 +197,23 @@ TEST(cli_sweep_mpi_farm_equals_serial)
     CHECK(mkdtemp(dir));
     char *serial = serial_table(dir);
     CHECK(serial);
+    /* the fields of a serial run, to be the MPI workers' byte for byte */
+    char *serial_fields = path_in(dir, "serial_fields"), *mpi_fields = path_in(dir, "mpi_fields");
+    char *fields_table = path_in(dir, "fields.tsv");
+    CHECK(mkdir(serial_fields, 0755) == 0 && mkdir(mpi_fields, 0755) == 0);
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", GRID, "--threads", "1", "--fields", serial_fields,
+                              "--out", fields_table)));
     for (int np = 2; np <= 3; np++) {
         char *out = path_in(dir, np == 2 ? "np2.tsv" : "np3.tsv");
-        char cmd[2048];
+        char cmd[2048], fields[1100] = "";
+        if (np == 3) snprintf(fields, sizeof fields, "--fields %s", mpi_fields);
         snprintf(cmd, sizeof cmd,
                  "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe "
                  "-np %d --mca btl self,vader --mca oob_tcp_if_include lo --mca "
                  "btl_tcp_if_include lo %s sweep --x nu=-0.96,-0.94 --inits "
                  "'front:n=4;uniform:amp=0.01' --seeds 1,2 --tmax 30 --N 256 --no-progress "
-                 "--out %s >%s/mpi.log 2>&1",
-                 np, mpi_cli, out, dir);
+                 "%s --out %s >%s/mpi.log 2>&1",
+                 np, mpi_cli, fields, out, dir);
         int rc = system(cmd);
         char *log = path_in(dir, "mpi.log");
         char *text = bkf_cli_read_file(log);
@@ -213,6 +225,20 @@ TEST(cli_sweep_mpi_farm_equals_serial)
         free(t);
         free(out);
     }
+    /* every point's field, written by the worker that computed it */
+    for (int i = 0; i < POINTS; i++) {
+        char name[32];
+        snprintf(name, sizeof name, "point_%d.h5", i);
+        char *a = path_in(serial_fields, name), *b = path_in(mpi_fields, name);
+        char cmd[2200];
+        snprintf(cmd, sizeof cmd, "cmp -s %s %s", a, b);
+        CHECK_MSG(system(cmd) == 0, "-np 3: %s is not the serial run's", b);
+        free(a);
+        free(b);
+    }
+    free(serial_fields);
+    free(mpi_fields);
+    free(fields_table);
     free(serial);
 }
 
@@ -547,4 +573,117 @@ TEST(cli_sweep_threshold_product_is_floquet_threshold_at_each_point)
     free(b);
     free(one);
     free(two);
+}
+
+/* Dataset `name` of an HDF5 file as doubles (malloc'ed), its size in *n. */
+static double *h5_read(hid_t f, const char *name, size_t *n)
+{
+    int rank;
+    hsize_t dims[2] = {1, 1};
+    if (H5LTget_dataset_ndims(f, name, &rank) < 0 || rank < 1 || rank > 2 ||
+        H5LTget_dataset_info(f, name, dims, NULL, NULL) < 0)
+        return NULL;
+    *n = (size_t)(dims[0] * (rank == 2 ? dims[1] : 1));
+    double *v = malloc(*n * sizeof *v);
+    if (v && H5LTread_dataset_double(f, name, v) < 0) {
+        free(v);
+        return NULL;
+    }
+    return v;
+}
+
+/* The field files of two runs hold the same t, x and psi, bit for bit, and
+ * the same parameters (numbers; the command differs by design). */
+static int same_field(const char *a_path, const char *b_path, char *why, size_t size)
+{
+    hid_t a = H5Fopen(a_path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    hid_t b = H5Fopen(b_path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    int ok = a >= 0 && b >= 0;
+    if (!ok) snprintf(why, size, "cannot open %s or %s", a_path, b_path);
+    const char *sets[] = {"t", "x", "psi"};
+    for (int k = 0; ok && k < 3; k++) {
+        size_t na = 0, nb = 0;
+        double *va = h5_read(a, sets[k], &na), *vb = h5_read(b, sets[k], &nb);
+        ok = va && vb && na == nb && na > 0 && memcmp(va, vb, na * sizeof *va) == 0;
+        if (!ok) snprintf(why, size, "dataset %s differs (%zu and %zu values)", sets[k], na, nb);
+        free(va);
+        free(vb);
+    }
+    const char *numbers[] = {"gamma", "c", "nu", "S", "tmax", "tol", "level", "N", "seed",
+                             "frames"};
+    for (int k = 0; ok && k < 10; k++) {
+        double x = NAN, y = NAN;
+        ok = H5LTget_attribute_double(a, "/", numbers[k], &x) >= 0 &&
+             H5LTget_attribute_double(b, "/", numbers[k], &y) >= 0 && x == y;
+        if (!ok) snprintf(why, size, "attribute %s: %.17g and %.17g", numbers[k], x, y);
+    }
+    if (a >= 0) H5Fclose(a);
+    if (b >= 0) H5Fclose(b);
+    return ok;
+}
+
+/* --fields DIR: one HDF5 file per point, named by the point, each the file
+ * bkfront simulate --spacetime X.h5 writes for that point; nothing else in
+ * the directory (no temporary left), the table the same as without fields;
+ * bad --fields is bad input. */
+TEST(cli_sweep_fields_are_simulate_spacetime_files_per_point)
+{
+    char dir[] = "/tmp/bkf_sweep_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char *fields = path_in(dir, "fields"), *with = path_in(dir, "with.tsv"),
+         *without = path_in(dir, "without.tsv");
+    CHECK(mkdir(fields, 0755) == 0);
+#define FIELDS_GRID "--x", "nu=-0.96,-0.94", "--inits",                       \
+                    "oscillation:noise=0.01;uniform:amp=0.01",                  \
+                    "--seeds", "1,2", "--tmax", "8", "--N", "256", "--frames", "16",    \
+                    "--no-progress"
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", FIELDS_GRID, "--threads", "2", "--fields", fields,
+                              "--out", with)));
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", FIELDS_GRID, "--threads", "1", "--out", without)));
+#undef FIELDS_GRID
+    char *a = bkf_cli_read_file(with), *b = bkf_cli_read_file(without);
+    CHECK(a && b && strcmp(a, b) == 0);
+    size_t files = 0;
+    DIR *d = opendir(fields);
+    CHECK(d);
+    for (struct dirent *e; d && (e = readdir(d));)
+        if (e->d_name[0] != '.') {
+            int i = -1, n = 0;
+            CHECK_MSG(sscanf(e->d_name, "point_%d.h5%n", &i, &n) == 1 &&
+                          e->d_name[n] == '\0' && i >= 0 && i < POINTS,
+                      "unexpected file %s in --fields", e->d_name);
+            files++;
+        }
+    if (d) closedir(d);
+    CHECK_MSG(files == POINTS, "%zu field files for %d points", files, POINTS);
+    /* point i = ((init * 2 + x) * 2 + seed) */
+    const char *inits[] = {"oscillation:noise=0.01", "uniform:amp=0.01"};
+    const char *nus[] = {"-0.96", "-0.94"};
+    for (int i = 0; i < POINTS; i++) {
+        char name[32], sim_name[32], why[160] = "";
+        snprintf(name, sizeof name, "point_%d.h5", i);
+        snprintf(sim_name, sizeof sim_name, "simulate_%d.h5", i);
+        char *got = path_in(fields, name), *want = path_in(dir, sim_name);
+        CHECK(run_ok(BKF_CLI_ARGS("simulate", "--nu", nus[(i / 2) % 2], "--init", inits[i / 4],
+                                  "--seed", i % 2 ? "2" : "1", "--tmax", "8", "--N", "256",
+                                  "--frames", "16", "--no-progress", "--spacetime", want,
+                                  "--out", "/dev/null")));
+        CHECK_MSG(same_field(got, want, why, sizeof why), "point %d: %s", i, why);
+        free(got);
+        free(want);
+    }
+    char *never = path_in(dir, "never.tsv"), *nodir = path_in(dir, "no_such_dir");
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--nu", "-0.9", "--fields", nodir, "--out", never),
+                             "sweep", "fields", "a missing directory");
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--product", "threshold", "--fields", fields,
+                                     "--out", never),
+                             "sweep", "fields", "fields of a theory product");
+    CHECK(access(never, F_OK) != 0);
+    free(never);
+    free(nodir);
+    free(a);
+    free(b);
+    free(fields);
+    free(with);
+    free(without);
 }
