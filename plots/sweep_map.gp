@@ -25,20 +25,31 @@ dg = (G_max > G_min ? (G_max - G_min) / 12.0 : 0.1)
 nseed = SEED_max - SEED_min + 1
 xoff(s) = (strstrt(s, 'oscillation') > 0 ? 0.5 : -0.5) * dnu
 yoff(k) = (nseed > 1 ? (k - SEED_min) / (nseed - 1.0) - 0.5 : 0) * dg
-# the boundaries of every gamma, one curve per kind
+# the boundaries of every gamma, one table per kind: nu, gamma and the
+# branch, which a curve follows from gamma to gamma: the side of the
+# boundary where the oscillation is stable (the interval above it, stable
+# or not) and the sign of nu.  Joined in file order, two boundaries of one
+# kind at one gamma made a segment between them (long wave at gamma 1.875:
+# -0.916, where it becomes stable, and -0.829, where it stops being).
 $PD << EOD
 EOD
 $LW << EOD
 EOD
+branch(s, nu) = (s eq 'stable' ? 1 : 0) + (nu > 0 ? 2 : 0)
 if (nfiles > 1) {
     set table $PD
-    plot for [i = 2:nfiles] word(files, i) using 'nu_from':(real(word(values, i))) \
+    plot for [i = 2:nfiles] word(files, i) \
+        using 'nu_from':(real(word(values, i))):(branch(strcol('stability'), column('nu_from'))) \
         with table if (strcol('from_kind') eq 'period_doubling')
     set table $LW
-    plot for [i = 2:nfiles] word(files, i) using 'nu_from':(real(word(values, i))) \
+    plot for [i = 2:nfiles] word(files, i) \
+        using 'nu_from':(real(word(values, i))):(branch(strcol('stability'), column('nu_from'))) \
         with table if (strcol('from_kind') eq 'long_wave')
     unset table
 }
+# one curve per branch: a point of another branch is undefined, which
+# breaks the line instead of joining across it
+on(b) = (column(3) == b ? column(2) : NaN)
 set xrange [NU_min - 1.5 * dnu : NU_max + 1.5 * dnu]
 set yrange [G_min - 1.5 * dg : G_max + 1.5 * dg]
 set xlabel '{/Symbol n}'
@@ -50,13 +61,17 @@ plot f using ($6 + xoff(strcol(2))):($4 + yoff($3)):(colour(regime(strcol(10))))
         with points pt 5 ps 1.2 lc rgb variable notitle, \
      for [r = 0:5] NaN with points pt 5 ps 1.2 lc rgb colour(r) \
         title word('continuous\_slip global\_oscillation pacemakers propagating\_fronts irregular failed', r + 1), \
-     $PD using 1:2 with linespoints lw 2 dt 2 pt 7 ps 0.5 lc rgb '#000000' title 'period doubling (Floquet)', \
-     $LW using 1:2 with linespoints lw 2 pt 7 ps 0.5 lc rgb '#000000' title 'long wave (Floquet)'
+     for [b = 0:3] $PD using 1:(on(b)) with linespoints lw 2 dt 2 pt 7 ps 0.5 lc rgb '#000000' \
+        title (b == 0 ? 'period doubling (Floquet)' : ''), \
+     for [b = 0:3] $LW using 1:(on(b)) with linespoints lw 2 pt 7 ps 0.5 lc rgb '#000000' \
+        title (b == 0 ? 'long wave (Floquet)' : '')
 set title 'fronts at the end of the run'
 set cbrange [0:*]
 set cblabel 'fronts'
 set palette rgb 33,13,10
 plot f using ($6 + xoff(strcol(2))):($4 + yoff($3)):11 with points pt 5 ps 1.2 lc palette notitle, \
-     $PD using 1:2 with linespoints lw 2 dt 2 pt 7 ps 0.5 lc rgb '#000000' title 'period doubling (Floquet)', \
-     $LW using 1:2 with linespoints lw 2 pt 7 ps 0.5 lc rgb '#000000' title 'long wave (Floquet)'
+     for [b = 0:3] $PD using 1:(on(b)) with linespoints lw 2 dt 2 pt 7 ps 0.5 lc rgb '#000000' \
+        title (b == 0 ? 'period doubling (Floquet)' : ''), \
+     for [b = 0:3] $LW using 1:(on(b)) with linespoints lw 2 pt 7 ps 0.5 lc rgb '#000000' \
+        title (b == 0 ? 'long wave (Floquet)' : '')
 unset multiplot

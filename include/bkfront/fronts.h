@@ -76,6 +76,14 @@ void bkf_fronts_root_values(const bkf_speeds_root *root, bkf_io_value *values);
 int bkf_fronts_write(const bkf_fronts_spec *spec, FILE *out, bkf_io_format format,
                      const bkf_provenance *provenance, bkf_error *err);
 
+/* The numbers of bkf_fronts_write's table without the table (continuum
+ * only): every root into *table (free it with bkf_speeds_table_free) and,
+ * with spec->stability, its verdict into (*stable)[i] (malloc'ed, NULL
+ * without stability): 1 yes, 0 no, -1 unresolved (the table's stable
+ * column, a spectrum refused with BKF_ETOL or BKF_EBUDGET included). */
+int bkf_fronts_find(const bkf_fronts_spec *spec, bkf_speeds_table *table, int **stable,
+                    bkf_error *err);
+
 /* With model = chain (bkf_chainwave_find: every wave connected to the
  * uncoupled chain, n <= N/2 unless n or nmax say otherwise; tol in
  * [1e-11, 1e-3]; method and stability-tol do not apply) the columns are

@@ -115,8 +115,10 @@ typedef struct {
 } bkf_simulate_outcome;
 
 /* The run of bkf_simulate_write, the same numbers bit for bit, without a
- * table: spec must name no data file (spacetime, snapshots).  Stopped
- * through spec->cancel: BKF_ECANCELED and no outcome. */
+ * table: spec may name a spacetime file (written as bkf_simulate_write
+ * writes it, but for the command attribute: the provenance is none) and no
+ * snapshots.  Stopped through spec->cancel: BKF_ECANCELED, no outcome and
+ * the spacetime file left as it was. */
 int bkf_simulate_outcome_of(const bkf_simulate_spec *spec, bkf_simulate_outcome *outcome,
                             bkf_error *err);
 

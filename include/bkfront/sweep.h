@@ -55,6 +55,18 @@ typedef struct {
                            windows classify alike or the next doubling would
                            pass this; a column says which (settled, budget).
                            0: every run stops at tmax */
+    int product;        /* index in regime, speeds, threshold (bkf_sweep_product_names):
+                           what a row holds (BKF_SWEEP_REGIME: a simulation's regime;
+                           speeds: bkf_fronts_find with stability at the point's
+                           gamma, c, nu, S; threshold: the global oscillation's
+                           Floquet boundaries in nu at its gamma, c) */
+    const char *fields; /* a directory, NULL: none.  Each point's spacetime
+                           field psi(t, x) as HDF5 in DIR/point_I.h5 (I the
+                           point; bkf_simulate_write's --spacetime FILE.h5,
+                           the point's parameters as attributes), written
+                           atomically by whoever computes the point; with
+                           tmax_budget the last run's.  Regime product only;
+                           not part of the definition (it changes no row) */
     /* Not keys: what the caller supplies for a run it may stop or watch. */
     const volatile sig_atomic_t *cancel; /* raised: no new point starts, the
                                             ones in flight stop, BKF_ECANCELED */
@@ -62,11 +74,20 @@ typedef struct {
     void *data;
 } bkf_sweep_spec;
 
+enum { BKF_SWEEP_REGIME = 0, BKF_SWEEP_SPEEDS = 1, BKF_SWEEP_THRESHOLD = 2 };
+/* "regime", "speeds", "threshold", NULL. */
+extern const char *const bkf_sweep_product_names[];
+
 bkf_sweep_spec bkf_sweep_spec_default(void);
 /* Frees the lists (seeds). */
 void bkf_sweep_spec_free(bkf_sweep_spec *spec);
 
-/* The sweep's own keys: x, y, zip, seeds, inits, threads, task, of.  The
+/* The name of point i's field file under spec->fields (caller frees), NULL
+ * without fields or memory. */
+char *bkf_sweep_field_path(const bkf_sweep_spec *spec, size_t index);
+
+/* The sweep's own keys: x, y, product, zip, seeds, inits, threads, task, of,
+ * tmax-budget, fields.  The
  * simulation's keys are bkf_simulate_options, applied to spec.sim. */
 extern const bkf_option bkf_sweep_options[];
 extern const size_t bkf_sweep_noptions;

@@ -3,6 +3,7 @@
 #include "bkfront/h5.h"
 
 #include <errno.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -79,10 +80,12 @@ static int long_name(writer *w, hid_t on, const char *text)
 static int axis(writer *w, int k, const bkf_h5_axis *ax)
 {
     hsize_t n = ax->count;
-    hid_t space = H5Screate_simple(1, &n, NULL), d = -1;
-    int ok = check(w, space >= 0, "H5Screate_simple");
+    hid_t space = H5Screate_simple(1, &n, NULL), dcpl = H5Pcreate(H5P_DATASET_CREATE), d = -1;
+    int ok = check(w, space >= 0, "H5Screate_simple") && check(w, dcpl >= 0, "H5Pcreate") &&
+             check(w, H5Pset_obj_track_times(dcpl, 0) >= 0, "H5Pset_obj_track_times");
     if (ok) ok = check(w, (d = H5Dcreate2(w->file, ax->name, H5T_IEEE_F64LE, space, H5P_DEFAULT,
-                                          H5P_DEFAULT, H5P_DEFAULT)) >= 0, "H5Dcreate2");
+                                          dcpl, H5P_DEFAULT)) >= 0, "H5Dcreate2");
+    if (dcpl >= 0) ok = check(w, H5Pclose(dcpl) >= 0, "H5Pclose") && ok;
     if (ok && n)
         ok = check(w, H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT,
                                ax->values) >= 0, "H5Dwrite");
@@ -101,7 +104,8 @@ static int field(writer *w, const bkf_h5_grid *g, const bkf_h5_field *f)
     chunk[0] = CHUNK_VALUES / chunk[1];
     if (chunk[0] > dims[0]) chunk[0] = dims[0];
     hid_t space = H5Screate_simple(2, dims, NULL), dcpl = H5Pcreate(H5P_DATASET_CREATE), d = -1;
-    int ok = check(w, space >= 0, "H5Screate_simple") && check(w, dcpl >= 0, "H5Pcreate");
+    int ok = check(w, space >= 0, "H5Screate_simple") && check(w, dcpl >= 0, "H5Pcreate") &&
+             check(w, H5Pset_obj_track_times(dcpl, 0) >= 0, "H5Pset_obj_track_times");
     /* a chunk may not be empty: a grid without rows has no chunks */
     if (ok && dims[0] && dims[1]) {
         ok = check(w, H5Pset_chunk(dcpl, 2, chunk) >= 0, "H5Pset_chunk");
@@ -167,12 +171,39 @@ static int check_grid(const bkf_h5_grid *g, bkf_error *err)
     return BKF_OK;
 }
 
+/* Debian's HDF5 is not built thread-safe (its global state, the error
+ * stack, the open-file list where the core driver's fixed name would
+ * clash): every HDF5 call of the library is made under this lock, so that
+ * a sweep's threads may each write their point's field.  The file's bytes
+ * go to the disk outside it. */
+static pthread_mutex_t h5_lock = PTHREAD_MUTEX_INITIALIZER;
+
+/* The file's image in memory (malloc'ed), or a status. */
+static int build_image(const bkf_h5_grid *g, void **image_out, ssize_t *size_out,
+                       bkf_error *err);
+
 int bkf_h5_write(bkf_io_atomic *file, const bkf_h5_grid *g, bkf_error *err)
 {
     int s = check_grid(g, err);
     if (s) return s;
     FILE *stream = bkf_io_atomic_stream(file);
     if (!stream) return bkf_error_set(err, BKF_EINPUT, "HDF5 output: no file to write into");
+    void *image = NULL;
+    ssize_t size = 0;
+    pthread_mutex_lock(&h5_lock);
+    s = build_image(g, &image, &size, err);
+    pthread_mutex_unlock(&h5_lock);
+    if (s) return s;
+    int bad = fwrite(image, 1, (size_t)size, stream) != (size_t)size || fflush(stream) != 0;
+    free(image);
+    if (bad) return bkf_error_set(err, BKF_EIO, "writing the HDF5 file failed: %s",
+                                  strerror(errno));
+    return BKF_OK;
+}
+
+static int build_image(const bkf_h5_grid *g, void **image_out, ssize_t *size_out,
+                       bkf_error *err)
+{
 
     /* HDF5 prints its error stack by default: a library must not. */
     H5E_auto2_t old_func = NULL;
@@ -201,8 +232,15 @@ int bkf_h5_write(bkf_io_atomic *file, const bkf_h5_grid *g, bkf_error *err)
     if (ok) ok = check(&w, H5Pset_fapl_core(fapl, increment, 0) >= 0, "H5Pset_fapl_core") &&
                  check(&w, H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) >= 0,
                        "H5Pset_fclose_degree");
+    /* No modification times in the objects: the same field is the same
+     * bytes (a sweep's point, computed again or elsewhere, gives its file
+     * bit for bit). */
+    hid_t fcpl = ok ? H5Pcreate(H5P_FILE_CREATE) : -1;
+    if (ok) ok = check(&w, fcpl >= 0, "H5Pcreate") &&
+                 check(&w, H5Pset_obj_track_times(fcpl, 0) >= 0, "H5Pset_obj_track_times");
     if (ok) ok = check(&w, (w.file = H5Fcreate("bkfront-spacetime.h5", H5F_ACC_TRUNC,
-                                               H5P_DEFAULT, fapl)) >= 0, "H5Fcreate");
+                                               fcpl, fapl)) >= 0, "H5Fcreate");
+    if (fcpl >= 0) ok = check(&w, H5Pclose(fcpl) >= 0, "H5Pclose") && ok;
     if (fapl >= 0) ok = check(&w, H5Pclose(fapl) >= 0, "H5Pclose") && ok;
     if (ok) ok = axis(&w, 0, &g->rows) && axis(&w, 1, &g->columns);
     for (size_t i = 0; ok && i < g->nfields; i++) ok = field(&w, g, &g->fields[i]);
@@ -228,9 +266,7 @@ int bkf_h5_write(bkf_io_atomic *file, const bkf_h5_grid *g, bkf_error *err)
         return bkf_error_set(err, BKF_EIO, "writing the HDF5 file failed: %s: %s", w.step,
                              w.cause[0] ? w.cause : "no description");
     }
-    int bad = fwrite(image, 1, (size_t)size, stream) != (size_t)size || fflush(stream) != 0;
-    free(image);
-    if (bad) return bkf_error_set(err, BKF_EIO, "writing the HDF5 file failed: %s",
-                                  strerror(errno));
+    *image_out = image;
+    *size_out = size;
     return BKF_OK;
 }

@@ -509,6 +509,39 @@ static int write_chain(const bkf_fronts_spec *spec, FILE *out, bkf_io_format for
     return s;
 }
 
+int bkf_fronts_find(const bkf_fronts_spec *spec, bkf_speeds_table *table, int **stable,
+                    bkf_error *err)
+{
+    memset(table, 0, sizeof *table);
+    *stable = NULL;
+    int s = bkf_fronts_check(spec, "", err);
+    if (s) return s;
+    if (spec->model == 1)
+        return bkf_error_set(err, BKF_EINPUT, "model: the roots of the continuum only");
+    bkf_model_params params;
+    bkf_speeds_options options;
+    bkf_fronts_setup(spec, &params, &options);
+    s = bkf_speeds_find(&params, &options, table, err);
+    if (s || !spec->stability) return s;
+    root_spectra spectra = {0};
+    s = find_spectra(&params, table, spec->stability_tol, &spectra, err);
+    if (!s && !(*stable = malloc((table->count ? table->count : 1) * sizeof **stable)))
+        s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    /* the stable column of the table: yes, no, or unresolved however it was */
+    for (size_t i = 0; !s && i < table->count; i++)
+        (*stable)[i] = !verdict_resolved(&spectra.verdicts[i])                       ? -1
+                       : spectra.verdicts[i].spectrum.verdict == BKF_TRAINSPEC_STABLE ? 1
+                       : spectra.verdicts[i].spectrum.verdict == BKF_TRAINSPEC_UNSTABLE ? 0
+                                                                                        : -1;
+    root_spectra_free(&spectra, table->count);
+    if (s) {
+        bkf_speeds_table_free(table);
+        free(*stable);
+        *stable = NULL;
+    }
+    return s;
+}
+
 int bkf_fronts_write(const bkf_fronts_spec *spec, FILE *out, bkf_io_format format,
                      const bkf_provenance *prov, bkf_error *err)
 {

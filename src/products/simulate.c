@@ -496,6 +496,15 @@ static int write_spacetime_h5(const run *r, size_t frames, const char *note,
     return s;
 }
 
+/* The spacetime file in its format. */
+static int write_spacetime_file(const run *r, const char *note, bkf_io_atomic *file,
+                                bkf_error *err)
+{
+    if (spacetime_kind(r->spec) == SPACETIME_HDF5)
+        return write_spacetime_h5(r, r->frame_index, note, file, err);
+    return write_spacetime(r, r->frame_index, note, bkf_io_atomic_stream(file), err);
+}
+
 static int write_snapshots(const run *r, const char *note, FILE *out, bkf_error *err)
 {
     static const bkf_io_column cols[] = {
@@ -757,6 +766,8 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
             s = bkf_error_set(err, BKF_ECANCELED, "%s", interrupted);
             goto done;
         }
+        /* a sweep's field: the file bkf_simulate_write would write */
+        if (st_file && (s = write_spacetime_file(r, NULL, st_file, err))) goto done;
         const bkf_pde_stats *st = bkf_pde_get_stats(r->pde);
         *r->outcome = (bkf_simulate_outcome){ms, period_ref, bkf_pde_time(r->pde), st->steps,
                                              st->rejected, N};
@@ -789,11 +800,7 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
         s = bkf_io_table_row(t, v, err);
     }
     if (!s) s = bkf_io_table_finish(t, err);
-    if (!s && st_file && spacetime_kind(sp) == SPACETIME_HDF5)
-        s = write_spacetime_h5(r, r->frame_index, canceled ? interrupted : NULL, st_file, err);
-    else if (!s && st_file)
-        s = write_spacetime(r, r->frame_index, canceled ? interrupted : NULL,
-                            bkf_io_atomic_stream(st_file), err);
+    if (!s && st_file) s = write_spacetime_file(r, canceled ? interrupted : NULL, st_file, err);
     if (!s && sn_file)
         s = write_snapshots(r, canceled ? interrupted : NULL, bkf_io_atomic_stream(sn_file), err);
     if (!s && canceled) s = bkf_error_set(err, BKF_ECANCELED, "%s", interrupted);
@@ -850,8 +857,7 @@ int bkf_simulate_outcome_of(const bkf_simulate_spec *sp, bkf_simulate_outcome *o
                             bkf_error *err)
 {
     if (!outcome) return bkf_error_set(err, BKF_EINPUT, "no outcome given");
-    if (sp && (sp->spacetime || sp->snapshots))
-        return bkf_error_set(err, BKF_EINPUT, "%s: no data files without a table",
-                             sp->spacetime ? "spacetime" : "snapshots");
+    if (sp && sp->snapshots)
+        return bkf_error_set(err, BKF_EINPUT, "snapshots: no snapshots without a table");
     return simulate(sp, NULL, BKF_IO_TSV, NULL, outcome, err);
 }

@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <pthread.h>
 #include <inttypes.h>
 #include <stdarg.h>
@@ -16,8 +17,10 @@
 #include <omp.h>
 #endif
 
+#include "bkfront/fronts.h"
 #include "bkfront/io.h"
 #include "bkfront/measure.h"
+#include "bkfront/oscillation.h"
 #include "bkfront/version.h"
 
 /* Seeds pass through a list of doubles: exact up to 2^53. */
@@ -25,12 +28,22 @@
 
 #define SPEC(field) offsetof(bkf_sweep_spec, field)
 
+const char *const bkf_sweep_product_names[] = {"regime", "speeds", "threshold", NULL};
+
 const bkf_option bkf_sweep_options[] = {
     {.name = "x", .type = BKF_OPT_TEXT, .offset = SPEC(x), .form = "NAME=LIST",
      .help = "first axis: NAME one of gamma, c, nu, S, N, tmax, seed;\n"
              "LIST as V1,V2,... or A:B:N"},
     {.name = "y", .type = BKF_OPT_TEXT, .offset = SPEC(y), .form = "NAME=LIST",
      .help = "second axis, as --x"},
+    {.name = "product", .type = BKF_OPT_CHOICE, .offset = SPEC(product),
+     .choices = bkf_sweep_product_names, .form = "regime|speeds|threshold",
+     .shown_default = "regime",
+     .help = "what a row holds: regime, the direct simulation's;\n"
+             "speeds, the allowed and stable n (bkfront speeds --stability\n"
+             "at the point's gamma, c, nu, S); threshold, the global\n"
+             "oscillation's Floquet boundaries in nu at its gamma, c\n"
+             "(bkfront floquet --threshold and --diagram)"},
     {.name = "zip", .type = BKF_OPT_SWITCH, .offset = SPEC(zip),
      .help = "x and y are a list of pairs (equal lengths), not a grid"},
     {.name = "seeds", .type = BKF_OPT_COUNT_LIST, .offset = SPEC(seeds), .min = 0,
@@ -58,6 +71,13 @@ const bkf_option bkf_sweep_options[] = {
              "(and their front counts, for fronts and pacemakers), or the\n"
              "next doubling would pass T; column settled says which\n"
              "(settled, budget); T >= tmax, in (0, 1e6]"},
+    {.name = "fields", .type = BKF_OPT_TEXT, .offset = SPEC(fields), .form = "DIR",
+     .shown_default = "none",
+     .help = "keep each point's spacetime field psi(t, x) as HDF5 in\n"
+             "DIR/point_I.h5 (I the point; the file of simulate\n"
+             "--spacetime FILE.h5, the parameters as attributes), written\n"
+             "atomically by the thread or MPI worker that computes the\n"
+             "point; with --tmax-budget the last run's; product regime only"},
 };
 const size_t bkf_sweep_noptions = sizeof bkf_sweep_options / sizeof bkf_sweep_options[0];
 
@@ -277,19 +297,107 @@ static int point_spec(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_sim
     return s;
 }
 
+/* A point of the speeds product: the roots of bkfront speeds --stability
+ * (its defaults: tol, method, stability tolerance). */
+static bkf_fronts_spec speeds_spec(const bkf_simulate_spec *sim)
+{
+    bkf_fronts_spec f = bkf_fronts_spec_default();
+    f.gamma = sim->model.gamma;
+    f.c = sim->model.c;
+    f.nu = sim->model.nu;
+    f.S = sim->model.S;
+    f.stability = 1;
+    return f;
+}
+
+/* A point of the threshold product: bkfront floquet --threshold's spec. */
+static bkf_oscillation_spec threshold_spec(const bkf_simulate_spec *sim)
+{
+    bkf_oscillation_spec o = bkf_oscillation_spec_default();
+    o.threshold = 1;
+    o.gamma = sim->model.gamma;
+    o.c = sim->model.c;
+    return o;
+}
+
+/* The point against its product's own checks (the messages name the keys
+ * as that product does). */
+static int check_product(int product, const bkf_simulate_spec *sim, const char *prefix,
+                         bkf_error *err)
+{
+    if (product == BKF_SWEEP_SPEEDS) {
+        if (sim->chain)
+            return bkf_error_set(err, BKF_EINPUT, "%smodel: the speeds product is the continuum's",
+                                 prefix);
+        bkf_fronts_spec f = speeds_spec(sim);
+        return bkf_fronts_check(&f, prefix, err);
+    }
+    if (product == BKF_SWEEP_THRESHOLD) {
+        bkf_oscillation_spec o = threshold_spec(sim);
+        int s = bkf_oscillation_check(&o, prefix, err);
+        bkf_oscillation_spec_free(&o);
+        return s;
+    }
+    return bkf_simulate_check(sim, prefix, err);
+}
+
+char *bkf_sweep_field_path(const bkf_sweep_spec *sp, size_t index)
+{
+    if (!sp || !sp->fields) return NULL;
+    size_t len = strlen(sp->fields) + 48;
+    char *path = malloc(len);
+    if (path) snprintf(path, len, "%s/point_%zu.h5", sp->fields, index);
+    return path;
+}
+
+/* Point i's simulation writing its field (sweep.h: fields); *path is the
+ * file's name, owned by the caller (NULL without fields). */
+static int with_field(const bkf_sweep_spec *sp, size_t i, bkf_simulate_spec *sim, char **path,
+                      bkf_error *err)
+{
+    *path = NULL;
+    if (!sp->fields) return BKF_OK;
+    if (!(*path = bkf_sweep_field_path(sp, i)))
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    sim->spacetime = *path;
+    sim->spacetime_format = 2; /* hdf5, whatever the directory's name */
+    /* a stopped run leaves no partial field under the point's name */
+    sim->discard_canceled = 1;
+    return BKF_OK;
+}
+
 int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err)
 {
     if (!sp) return bkf_error_set(err, BKF_EINPUT, "no sweep spec given");
     if (!prefix) prefix = "";
     if (sp->sim.spacetime || sp->sim.snapshots)
-        return bkf_error_set(err, BKF_EINPUT, "%s%s: not in a sweep (no fields per point)", prefix,
-                             sp->sim.spacetime ? "spacetime" : "snapshots");
+        return bkf_error_set(err, BKF_EINPUT,
+                             "%s%s: not in a sweep (a field per point: %sfields DIR)", prefix,
+                             sp->sim.spacetime ? "spacetime" : "snapshots", prefix);
     size_t of = sp->of ? sp->of : 1;
     if (sp->task >= of)
         return bkf_error_set(err, BKF_EINPUT, "%stask: %zu is not in [0, %zu] (%sof %zu)", prefix,
                              sp->task, of - 1, prefix, of);
     if (!(sp->tmax_budget >= 0))
         return bkf_error_set(err, BKF_EINPUT, "%stmax-budget: not a number > 0", prefix);
+    if (sp->product < BKF_SWEEP_REGIME || sp->product > BKF_SWEEP_THRESHOLD)
+        return bkf_error_set(err, BKF_EINPUT, "%sproduct: not one of regime, speeds, threshold",
+                             prefix);
+    if (sp->product != BKF_SWEEP_REGIME && sp->tmax_budget > 0)
+        return bkf_error_set(err, BKF_EINPUT, "%stmax-budget: only with %sproduct regime", prefix,
+                             prefix);
+    if (sp->fields) {
+        struct stat st;
+        if (sp->product != BKF_SWEEP_REGIME)
+            return bkf_error_set(err, BKF_EINPUT, "%sfields: only with %sproduct regime", prefix,
+                                 prefix);
+        if (stat(sp->fields, &st) != 0 || !S_ISDIR(st.st_mode) ||
+            access(sp->fields, W_OK | X_OK) != 0) {
+            char shown[80];
+            return bkf_error_set(err, BKF_EINPUT, "%sfields: '%s' is not a writable directory",
+                                 prefix, bkf_option_shown(sp->fields, shown, sizeof shown));
+        }
+    }
     plan p;
     int s = make_plan(sp, prefix, &p, err);
     if (s) return s;
@@ -298,7 +406,11 @@ int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err
     for (size_t i = 0; !s && i < p.count; i++) {
         bkf_simulate_spec sim;
         s = point_spec(sp, &p, i, &sim, prefix, err);
-        if (!s) s = bkf_simulate_check(&sim, prefix, err);
+        char *field = NULL;
+        /* the field's size and its file, as simulate --spacetime judges them */
+        if (!s) s = with_field(sp, i, &sim, &field, err);
+        if (!s) s = check_product(sp->product, &sim, prefix, err);
+        free(field);
         if (!s && sp->tmax_budget > 0 && sp->tmax_budget < sim.tmax) {
             char b[32], m[32];
             s = bkf_error_set(err, BKF_EINPUT, "%stmax-budget: %s is below tmax %s of point %zu",
@@ -329,6 +441,27 @@ static const char *const column_names[] = {
 #define NCOLS (sizeof column_names / sizeof column_names[0])
 /* Columns fixed by the point alone (point .. tmax): what --resume compares. */
 #define NKEYCOLS 8
+/* The other products' columns between the key columns and status. */
+static const char *const speeds_columns[] = {"n_max", "allowed_count", "allowed", "stable_count",
+                                             "stable", "unresolved"};
+static const char *const threshold_columns[] = {
+    "nu_threshold", "nu_threshold_err", "kind", "q_c", "stable_above", "nu_period_doubling",
+    "nu_long_wave"};
+
+/* The columns of a product between the key columns and status. */
+static const char *const *product_columns(int product, size_t *count)
+{
+    if (product == BKF_SWEEP_SPEEDS) {
+        *count = sizeof speeds_columns / sizeof *speeds_columns;
+        return speeds_columns;
+    }
+    if (product == BKF_SWEEP_THRESHOLD) {
+        *count = sizeof threshold_columns / sizeof *threshold_columns;
+        return threshold_columns;
+    }
+    *count = NCOLS - NKEYCOLS - 1;
+    return column_names + NKEYCOLS;
+}
 
 /* A growing text. */
 typedef struct {
@@ -395,16 +528,28 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
     plan p;
     if (make_plan(sp, "", &p, err)) return NULL;
     const bkf_simulate_spec *b = &sp->sim;
-    static const char *const steppers[] = {"rk8pd", "rkck", "rkf45", "etdrk4"};
+    /* simulate's stepper choices (lawson8 was shown as rk8pd: two sweeps
+     * that differ only there had one definition) */
+    static const char *const steppers[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8"};
     char g[32], c[32], nu[32], S[32], tm[32], tol[32], fi[32], lv[32];
     text t = {0};
-    addf(&t, "# bkfront %s sweep: regime of a direct simulation at %zu points\n",
-         BKF_VERSION_STRING, p.count);
+    static const char *const titles[] = {
+        "regime of a direct simulation",
+        "allowed and stable numbers of fronts (bkfront speeds --stability)",
+        "Floquet boundaries of the global oscillation in nu (bkfront floquet --threshold, "
+        "--diagram)"};
+    addf(&t, "# bkfront %s sweep: %s at %zu points\n", BKF_VERSION_STRING, titles[sp->product],
+         p.count);
     /* The definition: every key that changes a row, and nothing that does
      * not (threads, task, the command line), so that --resume and --merge
      * recognise the same sweep however it was run. */
+    /* the product named only when it is not the regime: the tables of
+     * sweeps from before the other products stay resumable */
+    addf(&t, "# sweep: ");
+    if (sp->product != BKF_SWEEP_REGIME)
+        addf(&t, "product %s; ", bkf_sweep_product_names[sp->product]);
     addf(&t,
-         "# sweep: x %s; y %s; zip %d; seeds %zu; inits %s; base: gamma %s c %s nu %s S %s N %zu "
+         "x %s; y %s; zip %d; seeds %zu; inits %s; base: gamma %s c %s nu %s S %s N %zu "
          "model %s tmax %s tol %s init %s seed %" PRIu64 " stepper %s dealias %d filter %s level "
          "%s frames %zu; version %s\n",
          sp->x ? sp->x : "-", sp->y ? sp->y : "-", sp->zip, sp->seeds.count,
@@ -412,7 +557,7 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
          bkf_format_number(b->model.c, c, sizeof c), bkf_format_number(b->model.nu, nu, sizeof nu),
          bkf_format_number(b->model.S, S, sizeof S), b->model.N, b->chain ? "chain" : "continuum",
          bkf_format_number(b->tmax, tm, sizeof tm), bkf_format_number(b->tol, tol, sizeof tol),
-         b->init ? b->init : "uniform", b->seed, steppers[b->stepper & 3], b->dealias,
+         b->init ? b->init : "uniform", b->seed, steppers[(size_t)b->stepper < sizeof steppers / sizeof *steppers ? b->stepper : 0], b->dealias,
          bkf_format_number(b->filter, fi, sizeof fi), bkf_format_number(b->level, lv, sizeof lv),
          b->frames, BKF_VERSION_STRING);
     if (sp->tmax_budget > 0) {
@@ -425,14 +570,26 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
         addf(&t, "\n");
     }
     addf(&t, "# points: %zu\n", p.count);
-    addf(&t, "# regime: continuous_slip, global_oscillation, period_doubled_pacemakers, "
-             "propagating_fronts, irregular (bkfront simulate's, over the last half of the run); "
-             "none when the run failed (status)\n");
-    for (size_t k = 0; k < NCOLS; k++) {
-        if (k == NCOLS - 1 && sp->tmax_budget > 0) addf(&t, "\tsettled");
-        addf(&t, "%s%s", k ? "\t" : "", column_names[k]);
-    }
-    addf(&t, "\n");
+    if (sp->product == BKF_SWEEP_REGIME)
+        addf(&t, "# regime: continuous_slip, global_oscillation, period_doubled_pacemakers, "
+                 "propagating_fronts, irregular (bkfront simulate's, over the last half of the "
+                 "run); none when the run failed (status)\n");
+    else if (sp->product == BKF_SWEEP_SPEEDS)
+        addf(&t, "# speeds: allowed, the n with a root of bkfront speeds; stable, the n with a "
+                 "root whose ring spectrum is stable; unresolved, the n with a root whose verdict "
+                 "is not resolved; lists as 1,3,4 (- when empty); init, seed and tmax do not "
+                 "change a row\n");
+    else
+        addf(&t, "# threshold: the lowest stability boundary of the global oscillation in nu in "
+                 "[-0.999, 0.999] (bkfront floquet --threshold: nu_threshold, its kind, q_c, "
+                 "stable_above), and the lowest of each kind over the diagram (floquet --diagram; "
+                 "nan: none); nu, S, init, seed and tmax do not change a row\n");
+    size_t ncols;
+    const char *const *cols = product_columns(sp->product, &ncols);
+    for (size_t k = 0; k < NKEYCOLS; k++) addf(&t, "%s%s", k ? "\t" : "", column_names[k]);
+    for (size_t k = 0; k < ncols; k++) addf(&t, "\t%s", cols[k]);
+    if (sp->tmax_budget > 0) addf(&t, "\tsettled");
+    addf(&t, "\tstatus\n");
     plan_free(&p);
     if (t.failed) {
         free(t.s);
@@ -442,10 +599,127 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
     return t.s;
 }
 
+/* The row's text, or NULL and err (out of memory). */
+static char *row_done(text *t, bkf_error *err)
+{
+    if (t->failed) {
+        free(t->s);
+        bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        return NULL;
+    }
+    return t->s;
+}
+
+/* The n of the roots with flag 1 (all roots: flags NULL), each once, as
+ * "1,3,4" ("-" for none); their count into *count. */
+static void add_n_list(text *t, const bkf_speeds_table *tab, const int *flags, int want,
+                       size_t *count)
+{
+    size_t k = 0, last = 0;
+    for (size_t i = 0; i < tab->count; i++) {
+        if (flags && flags[i] != want) continue;
+        if (k && tab->roots[i].n == last) continue;
+        addf(t, "%s%zu", k ? "," : "", tab->roots[i].n);
+        last = tab->roots[i].n;
+        k++;
+    }
+    if (!k) addf(t, "-");
+    *count = k;
+}
+
+/* The speeds product's cells: the roots are ordered by n, so each list is
+ * in increasing n. */
+static char *speeds_row(const bkf_simulate_spec *sim, size_t i, bkf_error *err)
+{
+    bkf_fronts_spec f = speeds_spec(sim);
+    bkf_speeds_table tab;
+    int *stable = NULL;
+    bkf_error e;
+    int s = bkf_fronts_find(&f, &tab, &stable, &e);
+    if (s && !bkf_status_is_numerical(s)) {
+        bkf_error_set(err, s, "point %zu: %s", i, e.message);
+        return NULL;
+    }
+    text t = {0};
+    add_key(&t, i, sim);
+    if (s) {
+        addf(&t, "\tnan\tnan\t-\tnan\t-\t-");
+    } else {
+        /* the counts come before their lists: written after them */
+        text lists[3] = {{0}, {0}, {0}};
+        size_t n[3];
+        add_n_list(&lists[0], &tab, NULL, 0, &n[0]);
+        add_n_list(&lists[1], &tab, stable, 1, &n[1]);
+        add_n_list(&lists[2], &tab, stable, -1, &n[2]);
+        addf(&t, "\t%ld\t%zu\t%s\t%zu\t%s\t%s", tab.n_max, n[0], lists[0].s ? lists[0].s : "",
+             n[1], lists[1].s ? lists[1].s : "", lists[2].s ? lists[2].s : "");
+        for (int k = 0; k < 3; k++) {
+            t.failed |= lists[k].failed;
+            free(lists[k].s);
+        }
+        bkf_speeds_table_free(&tab);
+        free(stable);
+    }
+    addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
+    return row_done(&t, err);
+}
+
+/* The lowest boundary of each kind over the diagram. */
+typedef struct {
+    double pd, lw;
+} lowest_boundaries;
+
+static int lowest_of_kind(const bkf_floquet_interval *iv, void *data)
+{
+    lowest_boundaries *b = data;
+    /* intervals come in increasing nu: the first of a kind is its lowest */
+    if (iv->to.kind == BKF_BOUNDARY_PERIOD_DOUBLING && isnan(b->pd)) b->pd = iv->nu_to;
+    if (iv->to.kind == BKF_BOUNDARY_LONG_WAVE && isnan(b->lw)) b->lw = iv->nu_to;
+    return 0;
+}
+
+/* The threshold product's cells: the numbers of bkfront floquet --threshold
+ * and --diagram at the point's gamma and c. */
+static char *threshold_row(const bkf_simulate_spec *sim, size_t i, bkf_error *err)
+{
+    bkf_oscillation_spec o = threshold_spec(sim);
+    bkf_floquet_options fo = bkf_oscillation_floquet_options(&o);
+    bkf_floquet_threshold th;
+    lowest_boundaries low = {NAN, NAN};
+    bkf_error e;
+    int s = bkf_floquet_threshold_find(o.gamma, o.c, o.search_lo, o.search_hi, &fo, &th, &e);
+    if (!s) s = bkf_floquet_diagram(o.gamma, o.c, o.search_lo, o.search_hi, &fo, lowest_of_kind,
+                                    &low, &e);
+    bkf_oscillation_spec_free(&o);
+    if (s && !bkf_status_is_numerical(s)) {
+        bkf_error_set(err, s, "point %zu: %s", i, e.message);
+        return NULL;
+    }
+    text t = {0};
+    add_key(&t, i, sim);
+    if (s) {
+        addf(&t, "\tnan\tnan\tnone\tnan\tnan\tnan\tnan");
+    } else {
+        add_number(&t, th.nu);
+        add_number(&t, th.nu_err);
+        addf(&t, "\t%s", bkf_floquet_boundary_name(th.kind));
+        add_number(&t, th.q);
+        addf(&t, "\t%d", th.stable_above);
+        add_number(&t, low.pd);
+        add_number(&t, low.lw);
+    }
+    addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
+    return row_done(&t, err);
+}
+
 static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error *err)
 {
     bkf_simulate_spec sim;
     if (point_spec(sp, p, i, &sim, "", err)) return NULL;
+    if (sp->product == BKF_SWEEP_SPEEDS) return speeds_row(&sim, i, err);
+    if (sp->product == BKF_SWEEP_THRESHOLD) return threshold_row(&sim, i, err);
+    char *field;
+    if (with_field(sp, i, &sim, &field, err)) return NULL;
     bkf_simulate_outcome o;
     bkf_error e;
     int s = bkf_simulate_outcome_of(&sim, &o, &e);
@@ -469,6 +743,7 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
             break;
         }
     }
+    free(field);
     if (s && !bkf_status_is_numerical(s)) {
         bkf_error_set(err, s, "point %zu: %s", i, e.message);
         return NULL;
@@ -499,12 +774,7 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
         if (sp->tmax_budget > 0) addf(&t, "\t%s", settled);
     }
     addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
-    if (t.failed) {
-        free(t.s);
-        bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        return NULL;
-    }
-    return t.s;
+    return row_done(&t, err);
 }
 
 char *bkf_sweep_row(const bkf_sweep_spec *sp, size_t index, bkf_error *err)

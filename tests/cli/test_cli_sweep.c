@@ -6,6 +6,11 @@
 #include "harness.h"
 #include "cli_support.h"
 
+#include <dirent.h>
+#include <math.h>
+#include <sys/stat.h>
+#include <hdf5.h>
+#include <hdf5_hl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -192,16 +197,23 @@ TEST(cli_sweep_mpi_farm_equals_serial)
     CHECK(mkdtemp(dir));
     char *serial = serial_table(dir);
     CHECK(serial);
+    /* the fields of a serial run, to be the MPI workers' byte for byte */
+    char *serial_fields = path_in(dir, "serial_fields"), *mpi_fields = path_in(dir, "mpi_fields");
+    char *fields_table = path_in(dir, "fields.tsv");
+    CHECK(mkdir(serial_fields, 0755) == 0 && mkdir(mpi_fields, 0755) == 0);
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", GRID, "--threads", "1", "--fields", serial_fields,
+                              "--out", fields_table)));
     for (int np = 2; np <= 3; np++) {
         char *out = path_in(dir, np == 2 ? "np2.tsv" : "np3.tsv");
-        char cmd[2048];
+        char cmd[2048], fields[1100] = "";
+        if (np == 3) snprintf(fields, sizeof fields, "--fields %s", mpi_fields);
         snprintf(cmd, sizeof cmd,
                  "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe "
                  "-np %d --mca btl self,vader --mca oob_tcp_if_include lo --mca "
                  "btl_tcp_if_include lo %s sweep --x nu=-0.96,-0.94 --inits "
                  "'front:n=4;uniform:amp=0.01' --seeds 1,2 --tmax 30 --N 256 --no-progress "
-                 "--out %s >%s/mpi.log 2>&1",
-                 np, mpi_cli, out, dir);
+                 "%s --out %s >%s/mpi.log 2>&1",
+                 np, mpi_cli, fields, out, dir);
         int rc = system(cmd);
         char *log = path_in(dir, "mpi.log");
         char *text = bkf_cli_read_file(log);
@@ -213,6 +225,20 @@ TEST(cli_sweep_mpi_farm_equals_serial)
         free(t);
         free(out);
     }
+    /* every point's field, written by the worker that computed it */
+    for (int i = 0; i < POINTS; i++) {
+        char name[32];
+        snprintf(name, sizeof name, "point_%d.h5", i);
+        char *a = path_in(serial_fields, name), *b = path_in(mpi_fields, name);
+        char cmd[2200];
+        snprintf(cmd, sizeof cmd, "cmp -s %s %s", a, b);
+        CHECK_MSG(system(cmd) == 0, "-np 3: %s is not the serial run's", b);
+        free(a);
+        free(b);
+    }
+    free(serial_fields);
+    free(mpi_fields);
+    free(fields_table);
     free(serial);
 }
 
@@ -383,4 +409,281 @@ TEST(cli_sweep_settle_mode_follows_simulate_runs_of_doubling_length)
                              "sweep", "tmax-budget", "a budget below tmax");
     free(never);
     free(out);
+}
+
+/* The lists of n the sweep's speeds product should give, from a table of
+ * `bkfront speeds --stability` (rows in increasing n): allowed, every n;
+ * stable, the n with a root whose stable cell is yes. */
+static void speeds_lists(const char *table, char *allowed, char *stable, size_t size)
+{
+    allowed[0] = stable[0] = '\0';
+    char verdict[32];
+    double n, last_a = -1, last_s = -1;
+    for (int r = 0; bkf_tsv_cell(table, r, "n", &n, NULL, 0); r++) {
+        if (n != last_a)
+            snprintf(allowed + strlen(allowed), size - strlen(allowed), "%s%.0f",
+                     *allowed ? "," : "", n);
+        last_a = n;
+        if (bkf_tsv_cell(table, r, "stable", NULL, verdict, sizeof verdict) &&
+            strcmp(verdict, "yes") == 0 && n != last_s) {
+            snprintf(stable + strlen(stable), size - strlen(stable), "%s%.0f", *stable ? "," : "",
+                     n);
+            last_s = n;
+        }
+    }
+    if (!*allowed) snprintf(allowed, size, "-");
+    if (!*stable) snprintf(stable, size, "-");
+}
+
+/* --product speeds: each row is bkfront speeds --stability at its point
+ * (the CLI's table read back), 1 and 2 threads give one table. */
+TEST(cli_sweep_speeds_product_is_speeds_stability_at_each_point)
+{
+    char dir[] = "/tmp/bkf_sweep_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char *one = path_in(dir, "one.tsv"), *two = path_in(dir, "two.tsv");
+#define SPEEDS_GRID "--product", "speeds", "--x", "nu=-0.95,-0.9", "--S", "10", "--no-progress"
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", SPEEDS_GRID, "--threads", "1", "--out", one)));
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", SPEEDS_GRID, "--threads", "2", "--out", two)));
+    char *a = bkf_cli_read_file(one), *b = bkf_cli_read_file(two);
+    CHECK(a && b);
+    CHECK_MSG(strcmp(a, b) == 0, "1 and 2 threads differ:\n%s\n---\n%s", a, b);
+    CHECK(strstr(a, "# sweep: product speeds; "));
+    const char *nus[] = {"-0.95", "-0.9"};
+    for (int i = 0; i < 2; i++) {
+        char cmd[160], allowed[256], stable[256], got[256], status[16];
+        snprintf(cmd, sizeof cmd, "speeds --stability --gamma 2 --c 0.3 --nu %s --S 10", nus[i]);
+        char *cli = bkf_cli_stdout(cmd, NULL);
+        CHECK(cli);
+        speeds_lists(cli, allowed, stable, sizeof allowed);
+        double count, n_max;
+        CHECK(bkf_tsv_cell(a, i, "status", NULL, status, sizeof status) &&
+              strcmp(status, "ok") == 0);
+        CHECK(bkf_tsv_cell(a, i, "allowed", NULL, got, sizeof got));
+        CHECK_MSG(strcmp(got, allowed) == 0, "nu %s: allowed %s, speeds: %s", nus[i], got,
+                  allowed);
+        CHECK(bkf_tsv_cell(a, i, "allowed_count", &count, NULL, 0));
+        CHECK(bkf_tsv_cell(a, i, "n_max", &n_max, NULL, 0));
+        CHECK(count >= 1 && n_max == count && strstr(cli, "# n_max ") &&
+              atoi(strstr(cli, "# n_max ") + 8) == (int)n_max);
+        CHECK(bkf_tsv_cell(a, i, "stable", NULL, got, sizeof got));
+        CHECK_MSG(strcmp(got, stable) == 0, "nu %s: stable %s, speeds: %s", nus[i], got, stable);
+        free(cli);
+    }
+    /* the table of another product is not resumed */
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--product", "threshold", "--x", "nu=-0.95,-0.9",
+                                     "--S", "10", "--no-progress", "--resume", "--out", one),
+                             "sweep", "resume", "--resume on a speeds table");
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--x", "nu=-0.95,-0.9", "--S", "10",
+                                     "--no-progress", "--resume", "--out", one),
+                             "sweep", "resume", "--resume of a regime sweep on a speeds table");
+    char *after = bkf_cli_read_file(one);
+    CHECK(after && strcmp(after, a) == 0);
+    /* a point where the product has no stability (c = 0) is bad input */
+    char *never = path_in(dir, "never.tsv");
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--product", "speeds", "--x", "c=0.3,0", "--out",
+                                     never),
+                             "sweep", "c", "c = 0 in the grid of the speeds product");
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--product", "colour", "--out", never), "sweep",
+                             "product", "an unknown product");
+    CHECK(access(never, F_OK) != 0);
+#undef SPEEDS_GRID
+    free(never);
+    free(after);
+    free(a);
+    free(b);
+    free(one);
+    free(two);
+}
+
+/* --product threshold: the row is bkfront floquet --threshold at its gamma,
+ * c (the same numbers to the digit), and the lowest boundary of each kind
+ * is floquet --diagram's; 1 and 2 threads give one table. */
+TEST(cli_sweep_threshold_product_is_floquet_threshold_at_each_point)
+{
+    char dir[] = "/tmp/bkf_sweep_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char *one = path_in(dir, "one.tsv"), *two = path_in(dir, "two.tsv");
+    /* 1.875: two long-wave boundaries below 0 and no period doubling; 2:
+     * period doubling first */
+#define THRESHOLD_GRID "--product", "threshold", "--x", "gamma=1.875,2", "--no-progress"
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", THRESHOLD_GRID, "--threads", "1", "--out", one)));
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", THRESHOLD_GRID, "--threads", "2", "--out", two)));
+#undef THRESHOLD_GRID
+    char *a = bkf_cli_read_file(one), *b = bkf_cli_read_file(two);
+    CHECK(a && b);
+    CHECK_MSG(strcmp(a, b) == 0, "1 and 2 threads differ:\n%s\n---\n%s", a, b);
+    const char *gammas[] = {"1.875", "2"};
+    for (int i = 0; i < 2; i++) {
+        char cmd[128], x[64], y[64];
+        snprintf(cmd, sizeof cmd, "floquet --threshold --gamma %s --c 0.3", gammas[i]);
+        char *th = bkf_cli_stdout(cmd, NULL);
+        snprintf(cmd, sizeof cmd, "floquet --diagram --gamma %s --c 0.3", gammas[i]);
+        char *dg = bkf_cli_stdout(cmd, NULL);
+        CHECK(th && dg);
+        const char *pairs[][2] = {{"nu_threshold", "nu_pd"}, {"nu_threshold_err", "nu_pd_err"},
+                                  {"kind", "kind"}, {"q_c", "q_c"},
+                                  {"stable_above", "stable_above"}};
+        for (int k = 0; k < 5; k++) {
+            CHECK(bkf_tsv_cell(a, i, pairs[k][0], NULL, x, sizeof x));
+            CHECK(bkf_tsv_cell(th, 0, pairs[k][1], NULL, y, sizeof y));
+            CHECK_MSG(strcmp(x, y) == 0, "gamma %s: %s %s, floquet --threshold: %s", gammas[i],
+                      pairs[k][0], x, y);
+        }
+        /* the diagram's first boundary of each kind (nan: none) */
+        const char *kinds[][2] = {{"period_doubling", "nu_period_doubling"},
+                                  {"long_wave", "nu_long_wave"}};
+        for (int k = 0; k < 2; k++) {
+            snprintf(y, sizeof y, "nan");
+            for (int r = 0; bkf_tsv_cell(dg, r, "to_kind", NULL, x, sizeof x); r++)
+                if (strcmp(x, kinds[k][0]) == 0) {
+                    CHECK(bkf_tsv_cell(dg, r, "nu_to", NULL, y, sizeof y));
+                    break;
+                }
+            CHECK(bkf_tsv_cell(a, i, kinds[k][1], NULL, x, sizeof x));
+            CHECK_MSG(strcmp(x, y) == 0, "gamma %s: %s %s, floquet --diagram: %s", gammas[i],
+                      kinds[k][1], x, y);
+        }
+        free(th);
+        free(dg);
+    }
+    char kind[32];
+    CHECK(bkf_tsv_cell(a, 0, "kind", NULL, kind, sizeof kind) && strcmp(kind, "long_wave") == 0);
+    CHECK(bkf_tsv_cell(a, 0, "nu_period_doubling", NULL, kind, sizeof kind) &&
+          strcmp(kind, "nan") == 0);
+    /* the scene key: a [sweep] with product = threshold writes the CLI's table */
+    char *scene = path_in(dir, "th.scene"), *out = path_in(dir, "scene"), *table = NULL;
+    FILE *f = fopen(scene, "w");
+    CHECK(f);
+    fputs("[model]\ngamma = 2\nc = 0.3\nnu = -0.96\nS = 20\n"
+          "[sweep th]\nproduct = threshold\nx = gamma=1.875,2\n", f);
+    fclose(f);
+    bkf_cli_result r = bkf_cli_run(BKF_CLI_ARGS("run", "--no-figures", "--out", out, scene), NULL);
+    CHECK_MSG(r.code == 0, "bkfront run: exit %d, %s", r.code, r.err);
+    bkf_cli_result_free(&r);
+    char *path = path_in(out, "th.tsv");
+    table = bkf_cli_read_file(path);
+    CHECK_MSG(table && strcmp(table, a) == 0, "the scene's table differs:\n%s\n---\n%s",
+              table ? table : "(none)", a);
+    free(path);
+    free(table);
+    free(scene);
+    free(out);
+    free(a);
+    free(b);
+    free(one);
+    free(two);
+}
+
+/* Dataset `name` of an HDF5 file as doubles (malloc'ed), its size in *n. */
+static double *h5_read(hid_t f, const char *name, size_t *n)
+{
+    int rank;
+    hsize_t dims[2] = {1, 1};
+    if (H5LTget_dataset_ndims(f, name, &rank) < 0 || rank < 1 || rank > 2 ||
+        H5LTget_dataset_info(f, name, dims, NULL, NULL) < 0)
+        return NULL;
+    *n = (size_t)(dims[0] * (rank == 2 ? dims[1] : 1));
+    double *v = malloc(*n * sizeof *v);
+    if (v && H5LTread_dataset_double(f, name, v) < 0) {
+        free(v);
+        return NULL;
+    }
+    return v;
+}
+
+/* The field files of two runs hold the same t, x and psi, bit for bit, and
+ * the same parameters (numbers; the command differs by design). */
+static int same_field(const char *a_path, const char *b_path, char *why, size_t size)
+{
+    hid_t a = H5Fopen(a_path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    hid_t b = H5Fopen(b_path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    int ok = a >= 0 && b >= 0;
+    if (!ok) snprintf(why, size, "cannot open %s or %s", a_path, b_path);
+    const char *sets[] = {"t", "x", "psi"};
+    for (int k = 0; ok && k < 3; k++) {
+        size_t na = 0, nb = 0;
+        double *va = h5_read(a, sets[k], &na), *vb = h5_read(b, sets[k], &nb);
+        ok = va && vb && na == nb && na > 0 && memcmp(va, vb, na * sizeof *va) == 0;
+        if (!ok) snprintf(why, size, "dataset %s differs (%zu and %zu values)", sets[k], na, nb);
+        free(va);
+        free(vb);
+    }
+    const char *numbers[] = {"gamma", "c", "nu", "S", "tmax", "tol", "level", "N", "seed",
+                             "frames"};
+    for (int k = 0; ok && k < 10; k++) {
+        double x = NAN, y = NAN;
+        ok = H5LTget_attribute_double(a, "/", numbers[k], &x) >= 0 &&
+             H5LTget_attribute_double(b, "/", numbers[k], &y) >= 0 && x == y;
+        if (!ok) snprintf(why, size, "attribute %s: %.17g and %.17g", numbers[k], x, y);
+    }
+    if (a >= 0) H5Fclose(a);
+    if (b >= 0) H5Fclose(b);
+    return ok;
+}
+
+/* --fields DIR: one HDF5 file per point, named by the point, each the file
+ * bkfront simulate --spacetime X.h5 writes for that point; nothing else in
+ * the directory (no temporary left), the table the same as without fields;
+ * bad --fields is bad input. */
+TEST(cli_sweep_fields_are_simulate_spacetime_files_per_point)
+{
+    char dir[] = "/tmp/bkf_sweep_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char *fields = path_in(dir, "fields"), *with = path_in(dir, "with.tsv"),
+         *without = path_in(dir, "without.tsv");
+    CHECK(mkdir(fields, 0755) == 0);
+#define FIELDS_GRID "--x", "nu=-0.96,-0.94", "--inits",                       \
+                    "oscillation:noise=0.01;uniform:amp=0.01",                  \
+                    "--seeds", "1,2", "--tmax", "8", "--N", "256", "--frames", "16",    \
+                    "--no-progress"
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", FIELDS_GRID, "--threads", "2", "--fields", fields,
+                              "--out", with)));
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", FIELDS_GRID, "--threads", "1", "--out", without)));
+#undef FIELDS_GRID
+    char *a = bkf_cli_read_file(with), *b = bkf_cli_read_file(without);
+    CHECK(a && b && strcmp(a, b) == 0);
+    size_t files = 0;
+    DIR *d = opendir(fields);
+    CHECK(d);
+    for (struct dirent *e; d && (e = readdir(d));)
+        if (e->d_name[0] != '.') {
+            int i = -1, n = 0;
+            CHECK_MSG(sscanf(e->d_name, "point_%d.h5%n", &i, &n) == 1 &&
+                          e->d_name[n] == '\0' && i >= 0 && i < POINTS,
+                      "unexpected file %s in --fields", e->d_name);
+            files++;
+        }
+    if (d) closedir(d);
+    CHECK_MSG(files == POINTS, "%zu field files for %d points", files, POINTS);
+    /* point i = ((init * 2 + x) * 2 + seed) */
+    const char *inits[] = {"oscillation:noise=0.01", "uniform:amp=0.01"};
+    const char *nus[] = {"-0.96", "-0.94"};
+    for (int i = 0; i < POINTS; i++) {
+        char name[32], sim_name[32], why[160] = "";
+        snprintf(name, sizeof name, "point_%d.h5", i);
+        snprintf(sim_name, sizeof sim_name, "simulate_%d.h5", i);
+        char *got = path_in(fields, name), *want = path_in(dir, sim_name);
+        CHECK(run_ok(BKF_CLI_ARGS("simulate", "--nu", nus[(i / 2) % 2], "--init", inits[i / 4],
+                                  "--seed", i % 2 ? "2" : "1", "--tmax", "8", "--N", "256",
+                                  "--frames", "16", "--no-progress", "--spacetime", want,
+                                  "--out", "/dev/null")));
+        CHECK_MSG(same_field(got, want, why, sizeof why), "point %d: %s", i, why);
+        free(got);
+        free(want);
+    }
+    char *never = path_in(dir, "never.tsv"), *nodir = path_in(dir, "no_such_dir");
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--nu", "-0.9", "--fields", nodir, "--out", never),
+                             "sweep", "fields", "a missing directory");
+    bkf_cli_expect_bad_input(BKF_CLI("sweep", "--product", "threshold", "--fields", fields,
+                                     "--out", never),
+                             "sweep", "fields", "fields of a theory product");
+    CHECK(access(never, F_OK) != 0);
+    free(never);
+    free(nodir);
+    free(a);
+    free(b);
+    free(fields);
+    free(with);
+    free(without);
 }
