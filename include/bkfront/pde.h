@@ -77,12 +77,16 @@
  * the energy and mean residuals give NaN for it.
  *
  * Stepper BKF_PDE_LAWSON8 shares that integrator's variables, sampling and
- * limits (continuum only, no dealiasing, no quadratures) but takes Lawson
+ * limits (continuum only, no dealiasing) but takes Lawson
  * (integrating-factor) steps: GSL's rk8pd on v = exp(-L tau) u over each
- * step, its embedded estimate against the same tol.  Eighth order: at tol
- * 1e-9 a moving front takes steps of 0.025 where etdrk4 takes 0.003 and
+ * step, its embedded estimate against the same tol.  It integrates the
+ * quadratures Q and D as the Runge-Kutta path does (the same stages, the
+ * same control tol (1 + |Q|), tol (1 + |D|)); on moving fronts D's error,
+ * not the fields', sets its steps (0.02 at tol 1e-9, where the fields
+ * alone allowed 0.025).  Eighth order: at tol
+ * 1e-9 a moving front takes steps of 0.02 where etdrk4 takes 0.003 and
  * rk8pd is capped at 3/omega_max (0.008 at N 8192), the same number of
- * steps from N 512 to 65536: the modes that turn by more than 3.5 pi a
+ * steps from N 512 to 16384 (to 65536 before the quadratures): the modes that turn by more than 3.5 pi a
  * step feel only their own branch of the explicit term (its coupling
  * of the two branches, oscillating at 2 w_k, resonated in rk8pd's stages
  * and grew them from rounding; see src/simulation/pde_etd.c), at the

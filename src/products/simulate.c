@@ -133,7 +133,8 @@ const bkf_option bkf_simulate_options[] = {
              "etdrk4: exponential Runge-Kutta (continuum only; the wave\n"
              "part exact, no step cap from N; energy_residual and\n"
              "mean_residual are nan with it); lawson8: the same with\n"
-             "rk8pd's order 8 (integrating factor: long steps at tight tol)"},
+             "rk8pd's order 8 and both residuals (integrating factor: long\n"
+             "steps at tight tol)"},
     {.name = "dealias", .type = BKF_OPT_SWITCH, .offset = SPEC(dealias),
      .help = "continuum only: 2/3-rule projection of the right-hand side"},
     {.name = "filter", .type = BKF_OPT_DOUBLE, .offset = SPEC(filter), .flags = BOUNDED, .min = 0,

@@ -42,10 +42,12 @@
  * tried first: its factor-2 rungs cost up to 1.6x in steps (n = 11 at the
  * paper's parameters wanted ~0.09 and got 0.0625).
  *
- * The quadratures Q and D of the Runge-Kutta path are not tracked (they
- * would need the time derivatives at every step end, more than doubling
- * the cost): samples and the state carry NaN there, so the energy and mean
- * residuals are NaN for this stepper. */
+ * The quadratures Q and D of the Runge-Kutta path are not tracked by
+ * etdrk4 (they would need the time derivatives at every step end, more
+ * than doubling the cost): samples and the state carry NaN there, so the
+ * energy and mean residuals are NaN for it.  lawson8 carries them as one
+ * more complex unknown (index n2: Q + i D) with no linear part, integrated
+ * by the same rk8pd stages (see quadrature_rates). */
 #include <complex.h>
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_math.h>
@@ -88,6 +90,7 @@ struct bkf_pde_etd {
     double complex *lam;    /* eigenvalue of each index */
     double *ratio;          /* gamma / w_k */
     double *sigma;          /* filter rate of mode k (0 without the filter) */
+    /* n2 values each, plus (lawson8) the quadratures Q + i D at index n2 */
     double complex *a, *sa, *s, *nu, *na, *nb, *nc_, *anew, *nnew;
     double complex *pk;     /* psi_k of the state being evaluated */
     double psi_max;         /* max |psi| of the state a (valid with have_nu) */
@@ -102,6 +105,8 @@ struct bkf_pde_etd {
     lawson_set lset[ETD_SETS];
     size_t lsets;           /* sets in use: fewer at large N (memory) */
     lawson_set *lcur;       /* the current step's */
+    size_t calls;           /* rk8pd's evaluations in the current step */
+    int quad_off;           /* this evaluation's quadrature rates are unused */
     bkf_pde *owner;
     /* Fast modes k >= kfast (lawson8; nc: none): see averaged_cross() */
     size_t kfast, nu_kfast;
@@ -172,7 +177,7 @@ bkf_pde_etd *bkf_pde_etd_alloc(bkf_pde *m)
                                  &etd->nb, &etd->nc_, &etd->anew, &etd->nnew};
     int bad = !etd->lam || !etd->ratio || !etd->sigma;
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++) {
-        *arrays[i] = calloc(n2, sizeof(double complex));
+        *arrays[i] = calloc(n2 + 1, sizeof(double complex));
         bad |= !*arrays[i];
     }
     etd->pk = calloc(nc, sizeof *etd->pk);
@@ -201,12 +206,12 @@ bkf_pde_etd *bkf_pde_etd_alloc(bkf_pde *m)
     etd->expo = 0.25;
     if (m->o.stepper == BKF_PDE_LAWSON8) {
         etd->expo = 1.0 / 8.0;
-        etd->rk = gsl_odeiv2_step_alloc(gsl_odeiv2_step_rk8pd, 2 * n2);
+        etd->rk = gsl_odeiv2_step_alloc(gsl_odeiv2_step_rk8pd, 2 * n2 + 2);
         if (!etd->rk) {
             bkf_pde_etd_free(etd);
             return NULL;
         }
-        etd->sys = (gsl_odeiv2_system){lawson_rhs, NULL, 2 * n2, m};
+        etd->sys = (gsl_odeiv2_system){lawson_rhs, NULL, 2 * n2 + 2, m};
         etd->jac = fftw_malloc(N * sizeof(double));
         etd->hr = fftw_malloc(N * sizeof(double));
         etd->hc = fftw_malloc(nc * sizeof(fftw_complex));
@@ -345,8 +350,60 @@ static size_t fast_start(const bkf_pde_etd *etd, const bkf_pde *m, double h)
     return etd->nc;
 }
 
-/* The explicit part N(a) in the a+- variables into out; *psi_max gets
- * max |psi|.  Nonzero if the field is not finite or beyond BLOWUP. */
+/* The quadratures' rates of the state a into q (lawson8): Q' = mean(psi)
+ * and D' = dH/dt (pde.h), the derivatives the Runge-Kutta path integrates
+ * (src/simulation/pde.c: rhs, rhs_frame), in a form that needs two more
+ * transforms per evaluation where the x-space form of rhs_frame would need
+ * four.  With u = gamma (eta - phi(psi)), J = gamma (psi^2 - 1),
+ * f = psi - nu - c^2 L psi and the filter F, the general
+ *     dH/dt = h sum [u u_t + f psi_t]
+ * becomes, after psi_t = u - F psi + V psi_x and eta_t = -f/gamma + V eta_x,
+ *     dH/dt = h [gamma V sum u eta_x - sum J u psi_t - sum f F psi]
+ * (V sum f psi_x = 0: a skew operator).  Only J u is a product in x; the
+ * sums are Parseval sums over the spectra psi_t, u, eta and psi, which the
+ * a+- state gives.  Expects what nonlinear() leaves: m->lap = N psi,
+ * m->rbuf = gamma (psi - psi^3/3) and m->cbuf its transform, etd->pk. */
+static void quadrature_rates(bkf_pde *m, const double complex *a, double complex *q)
+{
+    bkf_pde_etd *etd = m->etd;
+    size_t N = m->N, nc = etd->nc;
+    double g = m->p.gamma, inv = 1.0 / (double)N;
+    const double *ap = (const double *)a, *am = (const double *)(a + nc);
+    const double *pk = (const double *)etd->pk, *rk = (const double *)m->cbuf;
+    double *hc = (double *)etd->hc;
+    for (size_t k = 0; k < nc; k++) {
+        double wg = 1.0 / etd->ratio[k];
+        hc[2 * k] = -(ap[2 * k + 1] - am[2 * k + 1]) * wg;
+        hc[2 * k + 1] = (ap[2 * k] - am[2 * k]) * wg;
+    }
+    fftw_execute_dft_c2r(m->bwd, etd->hc, etd->hr);
+    for (size_t i = 0; i < N; i++) {
+        double x = m->lap[i] * inv;
+        etd->hr[i] = g * (x * x - 1.0) * (g * etd->hr[i] * inv + m->rbuf[i]);
+    }
+    fftw_execute_dft_r2c(m->fwd, etd->hr, etd->hk);
+    const double *gk = (const double *)etd->hk;
+    double ju = 0.0, ff = 0.0, ue = 0.0;
+    for (size_t k = 0; k < nc; k++) {
+        double wt = k == 0 || 2 * k == N ? 1.0 : 2.0, wg = 1.0 / etd->ratio[k];
+        double adv = cimag(etd->lam[k] + etd->lam[nc + k]) / 2, sg = etd->sigma[k];
+        double er = -(ap[2 * k + 1] - am[2 * k + 1]) * wg, ei = (ap[2 * k] - am[2 * k]) * wg;
+        double pr = pk[2 * k], pi = pk[2 * k + 1];
+        double ur = g * er + rk[2 * k], ui = g * ei + rk[2 * k + 1];
+        double xr = ur - sg * pr - adv * pi, xi = ui - sg * pi + adv * pr;
+        double w2 = (g * wg) * (g * wg);
+        ju += wt * (gk[2 * k] * xr + gk[2 * k + 1] * xi);
+        ff += wt * w2 * sg * (pr * pr + pi * pi);
+        ue += wt * adv * (ui * er - ur * ei);
+    }
+    /* Parseval: sum_i a_i b_i = (1/N) sum_k A_k conj(B_k) */
+    double dD = m->h * inv * (g * ue - ju - ff);
+    q[0] = pk[0] * inv + I * dD;
+}
+
+/* The explicit part N(a) in the a+- variables into out (and lawson8's
+ * quadrature rates into out[n2]); *psi_max gets max |psi|.  Nonzero if
+ * the field is not finite or beyond BLOWUP. */
 static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, double *psi_max)
 {
     bkf_pde_etd *etd = m->etd;
@@ -380,6 +437,10 @@ static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, d
         out[k] = 0.5 * (np - r);
         out[nc + k] = 0.5 * (np + r);
     }
+    if (etd->rk) {
+        if (etd->quad_off) out[etd->n2] = 0;
+        else quadrature_rates(m, a, out + etd->n2);
+    }
     if (etd->kfast < nc) averaged_cross(m, a, out);
     return 0;
 }
@@ -397,7 +458,8 @@ static void to_physical(bkf_pde *m, const double complex *a, double *y)
     for (size_t k = 0; k < nc; k++) cb[k] = I / etd->ratio[k] * (a[k] - a[nc + k]);
     fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
     for (size_t i = 0; i < N; i++) y[N + i] = m->lap[i] * inv;
-    y[2 * N] = y[2 * N + 1] = NAN;
+    y[2 * N] = etd->rk ? creal(a[etd->n2]) : NAN;
+    y[2 * N + 1] = etd->rk ? cimag(a[etd->n2]) : NAN;
 }
 
 static void from_physical(bkf_pde *m)
@@ -415,6 +477,7 @@ static void from_physical(bkf_pde *m)
         etd->a[k] = 0.5 * (etd->pk[k] - r);
         etd->a[nc + k] = 0.5 * (etd->pk[k] + r);
     }
+    etd->a[etd->n2] = m->y[2 * N] + I * m->y[2 * N + 1];
     etd->valid = 1;
     etd->have_nu = 0;
 }
@@ -519,14 +582,13 @@ static const double complex *rotation(bkf_pde_etd *etd, double tau)
     return s->E[k];
 }
 
-static int lawson_rhs(double tau, const double y[], double dydt[], void *params)
+/* One evaluation of v' = exp(-L tau) N(exp(L tau) v). */
+static int lawson_stage(bkf_pde *m, double tau, const double y[], double dydt[])
 {
-    bkf_pde *m = params;
     bkf_pde_etd *etd = m->etd;
     size_t n2 = etd->n2;
     const double complex *v = (const double complex *)y;
     double complex *out = (double complex *)dydt;
-    m->stats.rhs_calls++;
     if (tau == 0) return nonlinear(m, v, out, NULL) ? GSL_EBADFUNC : GSL_SUCCESS;
     const double complex *E = rotation(etd, tau);
     if (!E) return GSL_ENOMEM;
@@ -548,6 +610,22 @@ static int lawson_rhs(double tau, const double y[], double dydt[], void *params)
     return GSL_SUCCESS;
 }
 
+static int lawson_rhs(double tau, const double y[], double dydt[], void *params)
+{
+    bkf_pde *m = params;
+    bkf_pde_etd *etd = m->etd;
+    m->stats.rhs_calls++;
+    /* GSL evaluates rk8pd's stages 2..13 in order, and stages 2..5 have
+     * weight 0 in both of its solutions (its A and Abar): their Q' and D'
+     * would reach nothing, as no rate depends on Q or D (a third of the
+     * quadratures' cost) */
+    size_t stage = ++etd->calls + 1;
+    etd->quad_off = stage <= 5;
+    int rc = lawson_stage(m, tau, y, dydt);
+    etd->quad_off = 0;
+    return rc;
+}
+
 /* One lawson8 step, with the contract of step(). */
 static int step_lawson(bkf_pde *m, double h, double *err_ratio, double *psi_max_new)
 {
@@ -561,7 +639,8 @@ static int step_lawson(bkf_pde *m, double h, double *err_ratio, double *psi_max_
         if (nonlinear(m, etd->a, etd->nu, NULL)) return STEP_NONFINITE;
         etd->nu_kfast = etd->kfast;
     }
-    memcpy(etd->anew, etd->a, n2 * sizeof *etd->a);
+    memcpy(etd->anew, etd->a, (n2 + 1) * sizeof *etd->a);
+    etd->calls = 0;
     int rc = gsl_odeiv2_step_apply(etd->rk, 0.0, h, (double *)etd->anew, (double *)etd->s,
                                    (const double *)etd->nu, NULL, &etd->sys);
     if (rc == GSL_ENOMEM) return STEP_NOMEM;
@@ -577,6 +656,14 @@ static int step_lawson(bkf_pde *m, double h, double *err_ratio, double *psi_max_
     double scale = m->o.tol * (1.0 + etd->psi_max);
     double e = fmax(field_max(m, etd->s, 0), field_max(m, etd->s, 1));
     *err_ratio = isfinite(e) ? e / scale : INFINITY;
+    /* the quadratures under the Runge-Kutta path's control, tol (1 + |y|)
+     * per component: their rk8pd error is the largest part of the estimate
+     * on moving fronts (0.1-0.8 of tol where the fields' is 0.003) */
+    for (int j = 0; j < 2; j++) {
+        double q = j ? cimag(etd->anew[n2]) : creal(etd->anew[n2]);
+        double dq = j ? cimag(etd->s[n2]) : creal(etd->s[n2]);
+        *err_ratio = fmax(*err_ratio, fabs(dq) / (m->o.tol * (1.0 + fabs(q))));
+    }
     return STEP_OK;
 }
 
@@ -607,7 +694,7 @@ int bkf_pde_etd_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer
     double t0 = m->t;
     m->stats.stopped = 0;
     if (!etd->valid) from_physical(m);
-    m->y[2 * N] = m->y[2 * N + 1] = NAN;
+    if (!etd->rk) m->y[2 * N] = m->y[2 * N + 1] = NAN;
     if (!etd->have_nu) {
         if (nonlinear(m, etd->a, etd->nu, &etd->psi_max))
             return bkf_error_set(err, BKF_EBLOWUP, "the initial state is not finite or too large");

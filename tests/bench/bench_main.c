@@ -69,6 +69,7 @@ static void bench_period(void)
 void bench_floquet(void);
 void bench_speeds(void);
 void bench_pde(void);
+void bench_pde_cost(void);
 void bench_trainspec(void);
 void bench_chain(void);
 
@@ -79,6 +80,7 @@ int main(int argc, char **argv)
     if (!only || strcmp(only, "speeds") == 0) bench_speeds();
     if (!only || strcmp(only, "floquet") == 0) bench_floquet();
     if (!only || strcmp(only, "pde") == 0) bench_pde();
+    if (!only || strcmp(only, "pde-cost") == 0) bench_pde_cost();
     if (!only || strcmp(only, "trainspec") == 0) bench_trainspec();
     if (!only || strcmp(only, "chain") == 0) bench_chain();
     return 0;

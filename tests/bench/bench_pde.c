@@ -16,13 +16,16 @@
 #include <unistd.h>
 
 void bench_pde(void);
+void bench_pde_cost(void);
 
-static double pd_now(void)
+static double pd_clock(clockid_t id)
 {
     struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
+    clock_gettime(id, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
+
+static double pd_now(void) { return pd_clock(CLOCK_MONOTONIC); }
 
 static int pd_compare(const void *a, const void *b)
 {
@@ -46,7 +49,7 @@ static int pd_observe(const bkf_pde_sample *s, void *data)
 typedef enum { IC_FRONT, IC_UNIFORM, IC_OSCILLATION } pd_ic;
 
 typedef struct {
-    double seconds;
+    double seconds, cpu, h_min;
     size_t steps;
     double v_pred, v_meas;
     const char *regime;
@@ -54,14 +57,15 @@ typedef struct {
 
 /* One run: allocation, initial state, integration to tmax, with or without
  * measurements every 0.1. */
-static int one_run(pd_ic ic, size_t n, double nu, size_t N, double tol, double tmax, int measure,
-                   pd_run *out)
+static int run_with(pd_ic ic, size_t n, double nu, size_t N, double tol, double tmax, int measure,
+                    bkf_pde_stepper stepper, pd_run *out)
 {
     bkf_model_params p = {2.0, 0.3, nu, 20.0, N, BKF_MODEL_CONTINUUM};
     bkf_pde_options o = bkf_pde_options_default();
     o.tol = tol;
+    o.stepper = stepper;
     bkf_error e;
-    double t0 = pd_now();
+    double t0 = pd_now(), c0 = pd_clock(CLOCK_PROCESS_CPUTIME_ID);
     bkf_pde *m = bkf_pde_alloc(&p, &o, &e);
     if (!m) return -1;
     bkf_pde_front_info fi = {0};
@@ -88,13 +92,21 @@ static int one_run(pd_ic ic, size_t n, double nu, size_t N, double tol, double t
     memset(&sum, 0, sizeof sum);
     if (!s && ms) s = bkf_measure_summarize(ms, &sum, &e);
     out->seconds = pd_now() - t0;
+    out->cpu = pd_clock(CLOCK_PROCESS_CPUTIME_ID) - c0;
     out->steps = bkf_pde_get_stats(m)->steps;
+    out->h_min = bkf_pde_get_stats(m)->h_min;
     out->v_pred = fi.v;
     out->v_meas = ms ? -sum.speed : NAN;
     out->regime = ms ? bkf_regime_name(sum.regime) : "-";
     bkf_measure_free(ms);
     bkf_pde_free(m);
     return s;
+}
+
+static int one_run(pd_ic ic, size_t n, double nu, size_t N, double tol, double tmax, int measure,
+                   pd_run *out)
+{
+    return run_with(ic, n, nu, N, tol, tmax, measure, bkf_pde_options_default().stepper, out);
 }
 
 static double median_run(pd_ic ic, size_t n, double nu, size_t N, double tol, double tmax,
@@ -222,6 +234,66 @@ void bench_pde(void)
                    f ? " --stepper rk8pd --frame lab" : "", tc < 0 ? "failed" : a);
             fflush(stdout);
         }
+    }
+    printf("\n");
+}
+
+/* Issue 20's goal, simulate's cost per unit time no faster than N log N:
+ * CPU seconds of the seeded n = 4 front (tol 1e-9, tmax 125, measured
+ * every 0.1 as bkfront simulate does) against N for the three steppers
+ * that reach large N, one run each (N 8192 with rk8pd takes minutes).
+ * N doubles from 512 to 8192, or to BKF_BENCH_PDE_N_MAX (up to 65536 is
+ * sensible; rk8pd and etdrk4 stop at 8192 unless BKF_BENCH_PDE_ALL is set).
+ * The fit: cost per unit time = C N log2 N by least squares in the log
+ * (the spread, the largest factor between a point and the fit, says how
+ * far from N log N), and the exponent p of N^p between the first and the
+ * last N (N log N alone gives p = 1.08 from 512 to 8192). */
+void bench_pde_cost(void)
+{
+    size_t n_max = 8192;
+    const char *env = getenv("BKF_BENCH_PDE_N_MAX");
+    if (env && atol(env) >= 512) n_max = (size_t)atol(env);
+    int all = getenv("BKF_BENCH_PDE_ALL") != NULL;
+    static const struct {
+        bkf_pde_stepper s;
+        const char *name;
+    } steppers[] = {{BKF_PDE_RK8PD, "rk8pd"}, {BKF_PDE_ETDRK4, "etdrk4"},
+                    {BKF_PDE_LAWSON8, "lawson8"}};
+    const double tmax = 125;
+    printf("## pde: cost against N, seeded n = 4 front, tol 1e-9, tmax %g, one run each, "
+           "one core\n\n", tmax);
+    printf("| stepper | N | steps | smallest step | CPU | CPU per unit time | "
+           "/ (N log2 N) | v_meas - v_pred (relative) |\n");
+    printf("|:---|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (size_t k = 0; k < sizeof steppers / sizeof steppers[0]; k++) {
+        double lx[16], ly[16], ln[16];
+        size_t m = 0;
+        for (size_t N = 512; N <= n_max && m < 16; N *= 2) {
+            if (N > 8192 && steppers[k].s != BKF_PDE_LAWSON8 && !all) break;
+            pd_run r;
+            memset(&r, 0, sizeof r);
+            int s = run_with(IC_FRONT, 4, -0.96, N, 1e-9, tmax, 1, steppers[k].s, &r);
+            if (s != BKF_OK) {
+                printf("| %s | %zu | failed | | | | | |\n", steppers[k].name, N);
+                continue;
+            }
+            double per = r.cpu / tmax, nl = (double)N * log2((double)N);
+            printf("| %s | %zu | %zu | %.3g | %.2f s | %.3g s | %.3g us | %.1e |\n",
+                   steppers[k].name, N, r.steps, r.h_min, r.cpu, per, per / nl * 1e6,
+                   (r.v_meas - r.v_pred) / r.v_pred);
+            fflush(stdout);
+            lx[m] = log(nl);
+            ly[m] = log(per);
+            ln[m] = log((double)N);
+            m++;
+        }
+        if (m < 2) continue;
+        double c = 0, dev = 0;
+        for (size_t i = 0; i < m; i++) c += (ly[i] - lx[i]) / (double)m;
+        for (size_t i = 0; i < m; i++) dev = fmax(dev, fabs(ly[i] - lx[i] - c));
+        double p = (ly[m - 1] - ly[0]) / (ln[m - 1] - ln[0]);
+        printf("| %s fit | | | | | N^%.2f | C = %.3g us (spread x%.2f) | |\n",
+               steppers[k].name, p, exp(c) * 1e6, exp(dev));
     }
     printf("\n");
 }
