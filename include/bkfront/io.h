@@ -99,8 +99,8 @@ typedef struct bkf_io_atomic bkf_io_atomic;
  * (PID the writing process, TAG up to 8 hex digits), held under an
  * exclusive flock() until it is renamed or removed.  A process killed
  * outright (SIGKILL) leaves its temporary; the next open for the same target
- * removes every such temporary whose PID does not exist here and that no
- * one holds locked (a live writer in another PID namespace keeps its lock,
+ * removes every such temporary whose PID does not exist here (or is a
+ * zombie: exited, not yet reaped) and that no one holds locked (a live writer in another PID namespace keeps its lock,
  * and its temporary).  A chain of symbolic links is followed to its end
  * (the final file is replaced, never a link of the chain; a loop is
  * BKF_EINPUT).  BKF_EINPUT when the target cannot be written there:

@@ -170,9 +170,9 @@ static int sweep_run(int argc, char **argv, bkf_error *err)
     }
     if (!s && !a.cli.out) s = bkf_error_set(err, BKF_EINPUT, "--out is required (FILE)");
     if (!s) s = bkf_sweep_check(&a.spec, "--", err);
-    if (!s && sweep_mpi_size() > 1 && (a.spec.of > 1 || a.spec.threads > 1))
-        s = bkf_error_set(err, BKF_EINPUT, "--%s: not with mpirun (the farm spreads the points)",
-                          a.spec.of > 1 ? "of" : "threads");
+    /* under mpirun the ranks are the cores: one run each unless --threads */
+    if (!s && sweep_mpi_on() && !a.spec.threads) a.spec.threads = 1;
+    if (!s) s = sweep_mpi_check(&a.spec, err);
     if (s) goto done;
     bkf_sweep_table *table = NULL;
     if (rank == 0) s = bkf_sweep_table_open(a.cli.out, &a.spec, a.cli.resume, &table, err);
@@ -187,7 +187,7 @@ static int sweep_run(int argc, char **argv, bkf_error *err)
     a.spec.data = &bar;
     a.spec.cancel = cli_cancel_begin();
     sink k = {table};
-    if (sweep_mpi_size() > 1)
+    if (sweep_mpi_on())
         s = sweep_mpi_farm(&a.spec, table, &bar, err);
     else
         s = bkf_sweep_run(&a.spec, bkf_sweep_table_done(table), append, &k, err);

@@ -10,6 +10,14 @@ int sweep_mpi_start(int *argc, char ***argv)
     return 0;
 }
 
+int sweep_mpi_on(void) { return 0; }
+
+int sweep_mpi_check(const bkf_sweep_spec *spec, bkf_error *err)
+{
+    (void)spec, (void)err;
+    return BKF_OK;
+}
+
 int sweep_mpi_size(void) { return 1; }
 
 int sweep_mpi_agree(int status) { return status; }
@@ -26,6 +34,8 @@ int sweep_mpi_end(int status) { return status; }
 #else
 
 #include <mpi.h>
+#include <omp.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -34,19 +44,38 @@ int sweep_mpi_end(int status) { return status; }
 
 enum { TAG_READY = 1, TAG_ROW, TAG_FAIL, TAG_WORK, TAG_STOP };
 
-static int started, rank, size = 1;
+static int started, rank, size = 1, provided;
 
 int sweep_mpi_start(int *argc, char ***argv)
 {
     /* Only under a launcher: a plain `bkfront sweep` of the MPI build
      * stays one process without starting MPI's runtime. */
     if (!getenv("OMPI_COMM_WORLD_SIZE") && !getenv("PMI_SIZE") && !getenv("PMIX_RANK")) return 0;
-    if (MPI_Init(argc, argv) != MPI_SUCCESS) return 0;
+    /* Serialized: the compute threads of a rank (--threads) take turns
+     * at asking rank 0 for points; rank 0's own compute threads make no
+     * MPI call at all. */
+    if (MPI_Init_thread(argc, argv, MPI_THREAD_SERIALIZED, &provided) != MPI_SUCCESS) return 0;
     started = 1;
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     MPI_Comm_size(MPI_COMM_WORLD, &size);
     if (rank != 0 && !freopen("/dev/null", "w", stderr)) return rank;
     return rank;
+}
+
+int sweep_mpi_on(void) { return started; }
+
+int sweep_mpi_check(const bkf_sweep_spec *sp, bkf_error *err)
+{
+    if (!started) return BKF_OK;
+    if (sp->of > 1)
+        return bkf_error_set(err, BKF_EINPUT, "--of: not with mpirun (the farm spreads the points)");
+    int threads = sp->threads ? (int)sp->threads : 1;
+    if (provided < MPI_THREAD_FUNNELED || (threads > 1 && provided < MPI_THREAD_SERIALIZED))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "--threads: this MPI library runs no threads (MPI_THREAD_%s)%s",
+                             threads > 1 ? "SERIALIZED" : "FUNNELED",
+                             threads > 1 ? "; give 1" : "");
+    return BKF_OK;
 }
 
 int sweep_mpi_size(void) { return size; }
@@ -59,13 +88,74 @@ int sweep_mpi_agree(int status)
 
 int sweep_mpi_end(int status)
 {
-    if (started) MPI_Finalize();
+    /* Stopped by a signal: mpirun forwards SIGTERM and SIGINT while it
+     * tears the job down, and MPI_Finalize would then wait for it until
+     * its SIGKILL a second later; the table is closed already. */
+    if (started && status != BKF_ECANCELED) MPI_Finalize();
     return status;
 }
 
-/* Rank 0: waits for a message without spinning a core that a worker
- * could use (a blocking receive polls in OpenMPI); 1 ms is far below a
- * point's run. */
+/* Rank 0's state, shared by its manager (the main thread: every MPI call
+ * of rank 0) and its compute threads. */
+typedef struct {
+    const bkf_sweep_spec *sp;
+    bkf_sweep_table *table;
+    progress_bar *bar;
+    size_t count, next, todo, finished;
+    int status, unwritable;
+    bkf_error *err;
+    pthread_mutex_t lock;
+} farm;
+
+/* The next point nobody has (0: none left, or the sweep stops). */
+static int claim(farm *f, size_t *index)
+{
+    pthread_mutex_lock(&f->lock);
+    const unsigned char *done = bkf_sweep_table_done(f->table);
+    while (f->next < f->count && done[f->next]) f->next++;
+    if (!f->status && f->sp->cancel && *f->sp->cancel)
+        f->status = bkf_error_set(f->err, BKF_ECANCELED, "canceled");
+    int got = !f->status && f->next < f->count;
+    if (got) *index = f->next++;
+    pthread_mutex_unlock(&f->lock);
+    return got;
+}
+
+/* A point's row to the table, or its failure (row NULL, e) to the farm:
+ * the first failure stops the handing out.  A row that finishes after
+ * that (a signal, another point's failure) is still a finished row: kept
+ * unless the table itself failed. */
+static void deliver(farm *f, size_t index, const char *row, const bkf_error *e)
+{
+    pthread_mutex_lock(&f->lock);
+    bkf_error mine = {0};
+    int s = BKF_OK;
+    if (row && !f->unwritable) {
+        s = bkf_sweep_table_append(f->table, index, row, &mine);
+        f->unwritable = s != BKF_OK;
+        if (!s) progress_count(f->bar, ++f->finished, f->todo);
+    } else if (!row) {
+        s = e->status ? e->status : BKF_EIO;
+        mine = *e;
+    }
+    if (s && !f->status) f->status = bkf_error_set(f->err, s, "%s", mine.message);
+    pthread_mutex_unlock(&f->lock);
+}
+
+/* A compute thread of rank 0. */
+static void compute(farm *f)
+{
+    for (size_t i; claim(f, &i);) {
+        bkf_error e = {0};
+        char *row = bkf_sweep_row(f->sp, i, &e);
+        deliver(f, i, row, &e);
+        free(row);
+    }
+}
+
+/* Rank 0's main thread: waits for a message without spinning a core that
+ * a compute thread could use (a blocking receive polls in OpenMPI); 1 ms
+ * is far below a point's run. */
 static void probe(MPI_Status *st)
 {
     for (int flag = 0;;) {
@@ -75,76 +165,111 @@ static void probe(MPI_Status *st)
     }
 }
 
-static int manager(const bkf_sweep_spec *sp, bkf_sweep_table *table, progress_bar *bar,
-                   bkf_error *err)
+/* Hands out points to the compute threads of ranks 1 .. K-1 as they ask,
+ * until every one of them is told to stop.  Each rank's thread 0 says in
+ * its first message how many threads the rank has (OpenMP may give fewer
+ * than asked), so every thread is waited for exactly. */
+static void manage(farm *f)
 {
-    size_t count = bkf_sweep_count(sp), next = 0, todo = 0, finished = 0;
-    const unsigned char *done = bkf_sweep_table_done(table);
-    for (size_t i = 0; i < count; i++) todo += !done[i];
-    int s = BKF_OK, active = size - 1;
+    long unannounced = size - 1, running = 0;
     char *buf = NULL;
-    while (active > 0) {
+    while (unannounced > 0 || running > 0) {
         MPI_Status st;
         probe(&st);
         int len;
         MPI_Get_count(&st, MPI_CHAR, &len);
         char *g = realloc(buf, (size_t)len + 1);
-        if (!g) {
-            s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-            break;
-        }
+        /* without room for a message the farm cannot go on; every finished
+         * row is on disk already */
+        if (!g) MPI_Abort(MPI_COMM_WORLD, 1);
         buf = g;
         MPI_Recv(buf, len, MPI_CHAR, st.MPI_SOURCE, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
         buf[len] = '\0';
-        if (st.MPI_TAG == TAG_ROW && !s) {
+        if (st.MPI_TAG == TAG_READY && atoi(buf) > 0) {
+            unannounced--;
+            running += atoi(buf);
+        } else if (st.MPI_TAG == TAG_ROW) {
             /* "INDEX\tREST": the row itself starts with its index */
-            size_t index = strtoull(buf, NULL, 10);
-            s = bkf_sweep_table_append(table, index, buf, err);
-            if (!s) progress_count(bar, ++finished, todo);
-        } else if (st.MPI_TAG == TAG_FAIL && !s) {
-            s = bkf_error_set(err, buf[0] ? atoi(buf) : BKF_EIO, "%s",
-                              strchr(buf, ' ') ? strchr(buf, ' ') + 1 : buf);
+            deliver(f, strtoull(buf, NULL, 10), buf, NULL);
+        } else if (st.MPI_TAG == TAG_FAIL) {
+            bkf_error e = {.status = buf[0] ? atoi(buf) : BKF_EIO};
+            const char *text = strchr(buf, ' ') ? strchr(buf, ' ') + 1 : buf;
+            snprintf(e.message, sizeof e.message, "%s", text);
+            deliver(f, 0, NULL, &e);
         }
-        while (next < count && done[next]) next++;
-        if (!s && sp->cancel && *sp->cancel) s = bkf_error_set(err, BKF_ECANCELED, "canceled");
-        if (!s && next < count) {
-            uint64_t i = next++;
-            MPI_Send(&i, 1, MPI_UINT64_T, st.MPI_SOURCE, TAG_WORK, MPI_COMM_WORLD);
+        size_t i;
+        if (claim(f, &i)) {
+            uint64_t w = i;
+            MPI_Send(&w, 1, MPI_UINT64_T, st.MPI_SOURCE, TAG_WORK, MPI_COMM_WORLD);
         } else {
             MPI_Send(NULL, 0, MPI_UINT64_T, st.MPI_SOURCE, TAG_STOP, MPI_COMM_WORLD);
-            active--;
+            running--;
         }
     }
     free(buf);
-    return s;
 }
 
-static int worker(const bkf_sweep_spec *sp)
+/* A compute thread of ranks 1 .. K-1: its message (the first: the rank's
+ * thread count) and the answer, a point or stop, are one exchange that
+ * the rank's other threads do not interleave with theirs. */
+static void serve(const bkf_sweep_spec *sp)
 {
-    MPI_Send(NULL, 0, MPI_CHAR, 0, TAG_READY, MPI_COMM_WORLD);
+    char *msg = NULL;
+    int tag = TAG_READY;
+    char ready[32];
+    snprintf(ready, sizeof ready, "%d", omp_get_thread_num() == 0 ? omp_get_num_threads() : 0);
     for (;;) {
         uint64_t i;
         MPI_Status st;
-        MPI_Recv(&i, 1, MPI_UINT64_T, 0, MPI_ANY_TAG, MPI_COMM_WORLD, &st);
-        if (st.MPI_TAG == TAG_STOP) return BKF_OK;
-        bkf_error e = {0};
-        char *row = bkf_sweep_row(sp, (size_t)i, &e);
-        if (row) {
-            MPI_Send(row, (int)strlen(row), MPI_CHAR, 0, TAG_ROW, MPI_COMM_WORLD);
-            free(row);
-        } else {
-            char msg[BKF_ERROR_LEN + 16];
-            snprintf(msg, sizeof msg, "%d %s", e.status, e.message);
-            MPI_Send(msg, (int)strlen(msg), MPI_CHAR, 0, TAG_FAIL, MPI_COMM_WORLD);
+        const char *out = msg ? msg : ready;
+#pragma omp critical(bkf_sweep_mpi)
+        {
+            MPI_Send(out, (int)strlen(out), MPI_CHAR, 0, tag, MPI_COMM_WORLD);
+            MPI_Recv(&i, 1, MPI_UINT64_T, 0, MPI_ANY_TAG, MPI_COMM_WORLD, &st);
         }
+        free(msg);
+        msg = NULL;
+        if (st.MPI_TAG == TAG_STOP) return;
+        bkf_error e = {0};
+        if ((msg = bkf_sweep_row(sp, (size_t)i, &e))) {
+            tag = TAG_ROW;
+        } else {
+            tag = TAG_FAIL;
+            size_t n = BKF_ERROR_LEN + 16;
+            if ((msg = malloc(n))) snprintf(msg, n, "%d %s", e.status, e.message);
+        }
+        /* out of memory for the message itself: the failure without text */
+        if (!msg) snprintf(ready, sizeof ready, "%d out of memory", BKF_ENOMEM);
     }
 }
 
 int sweep_mpi_farm(const bkf_sweep_spec *sp, bkf_sweep_table *table, progress_bar *bar,
                    bkf_error *err)
 {
-    int s = rank == 0 ? manager(sp, table, bar, err) : worker(sp);
-    /* every rank leaves with the manager's verdict */
+    int threads = sp->threads ? (int)sp->threads : 1, s = BKF_OK;
+    if (rank == 0) {
+        farm f = {.sp = sp, .table = table, .bar = bar, .count = bkf_sweep_count(sp), .err = err};
+        pthread_mutex_init(&f.lock, NULL);
+        const unsigned char *done = bkf_sweep_table_done(table);
+        for (size_t i = 0; i < f.count; i++) f.todo += !done[i];
+        /* the main thread manages (MPI_THREAD_FUNNELED), the others compute;
+         * alone (OpenMP gave no more threads), it computes after managing */
+#pragma omp parallel num_threads(threads + 1)
+        {
+            if (omp_get_thread_num() == 0) {
+                manage(&f);
+                if (omp_get_num_threads() == 1) compute(&f);
+            } else {
+                compute(&f);
+            }
+        }
+        pthread_mutex_destroy(&f.lock);
+        s = f.status;
+    } else {
+#pragma omp parallel num_threads(threads)
+        serve(sp);
+    }
+    /* every rank leaves with rank 0's verdict */
     return sweep_mpi_agree(s);
 }
 

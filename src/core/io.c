@@ -549,6 +549,25 @@ static size_t temp_base_len(const char *base)
     return n < TEMP_BASE_MAX ? n : TEMP_BASE_MAX;
 }
 
+/* Whether PID names no live process here: none at all, or one that has
+ * exited and waits for its parent to reap it (a zombie holds no file and
+ * no lock; a writer killed with its parent, as kill -9 of an MPI job does,
+ * stays one until its new parent gets to it). */
+static int pid_gone(long pid)
+{
+    if (kill((pid_t)pid, 0) != 0) return errno == ESRCH;
+    char path[48], buf[512];
+    snprintf(path, sizeof path, "/proc/%ld/stat", pid);
+    FILE *f = fopen(path, "re");
+    if (!f) return 0;
+    size_t n = fread(buf, 1, sizeof buf - 1, f);
+    fclose(f);
+    buf[n] = '\0';
+    /* "pid (comm) state ...": comm may hold anything, the last ')' ends it */
+    const char *end = strrchr(buf, ')');
+    return end && end[1] == ' ' && (end[2] == 'Z' || end[2] == 'X');
+}
+
 static void remove_stale_temps(const char *dir, const char *base)
 {
     DIR *d = opendir(dir);
@@ -568,7 +587,7 @@ static void remove_stale_temps(const char *dir, const char *base)
         const char *tag = end + 1;
         size_t tlen = strlen(tag);
         if (tlen == 0 || tlen > 8 || strspn(tag, "0123456789abcdef") != tlen) continue;
-        if (kill((pid_t)pid, 0) == 0 || errno != ESRCH) continue; /* alive, or not ours */
+        if (!pid_gone(pid)) continue; /* alive, or not ours */
         size_t nlen = strlen(n);
         char *full = malloc(dlen + nlen + 2);
         if (!full) break;

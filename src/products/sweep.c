@@ -54,7 +54,10 @@ const bkf_option bkf_sweep_options[] = {
      .help = "initial states of every point (as --init), separated by ';'"},
     {.name = "threads", .type = BKF_OPT_COUNT, .offset = SPEC(threads),
      .flags = BKF_OPT_MIN | BKF_OPT_MAX, .min = 1, .max = 4096, .form = "K",
-     .shown_default = "every core", .help = "OpenMP threads, one run each, in [1, 4096]"},
+     .shown_default = "every core; under mpirun 1 a rank",
+     .help = "OpenMP threads, one run each, in [1, 4096]; under mpirun\n"
+             "the compute threads of every rank (rank 0's beside its\n"
+             "manager): -np K --threads T runs K T points at once"},
     {.name = "task", .type = BKF_OPT_COUNT, .offset = SPEC(task), .flags = BKF_OPT_MIN | BKF_OPT_MAX,
      .min = 0, .max = 1000000, .form = "I", .shown_default = "0",
      .help = "with --of K: compute only the points i with i % K == I\n"
@@ -77,7 +80,8 @@ const bkf_option bkf_sweep_options[] = {
              "DIR/point_I.h5 (I the point; the file of simulate\n"
              "--spacetime FILE.h5, the parameters as attributes), written\n"
              "atomically by the thread or MPI worker that computes the\n"
-             "point; with --tmax-budget the last run's; product regime only"},
+             "point; with --tmax-budget the last run's; product regime only;\n"
+             "with --resume only the points computed now have one"},
 };
 const size_t bkf_sweep_noptions = sizeof bkf_sweep_options / sizeof bkf_sweep_options[0];
 

@@ -183,46 +183,75 @@ TEST(cli_sweep_refuses_bad_input_anywhere_in_the_grid)
     free(out);
 }
 
-/* The MPI build (make mpi): mpirun -np 2 (one worker) and -np 3 (two) give
- * the serial table, with OpenMPI kept on this machine (shared memory and
- * loopback only). */
+/* The MPI build and mpirun, kept on this machine (shared memory and
+ * loopback only); NULL (the test skipped) when either is missing. */
+static const char *mpi_cli(void)
+{
+    const char *cli = BKF_SOURCE_DIR "/build/mpi/bkfront";
+    if (access(cli, X_OK) == 0 && access("/usr/bin/mpirun", X_OK) == 0) return cli;
+    bkf_test_note("skipped: %s or mpirun missing (make test-mpi builds and runs it)", cli);
+    return NULL;
+}
+
+#define MPIRUN "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 exec mpirun " \
+               "--oversubscribe --mca btl self,vader --mca oob_tcp_if_include lo "       \
+               "--mca btl_tcp_if_include lo"
+
+/* `mpirun -np NP bkfront sweep ARGS` in a shell, its output to log: the
+ * shell's pid (the shell becomes mpirun), or the exit status when wait. */
+static int mpi_sweep(int np, const char *args, const char *log, int wait)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, MPIRUN " -np %d %s sweep %s >%s 2>&1", np, mpi_cli(), args, log);
+    if (wait) return system(cmd);
+    pid_t pid = fork();
+    if (pid == 0) {
+        setpgid(0, 0); /* a job of its own, as a terminal would start it */
+        execl("/bin/sh", "sh", "-c", cmd, (char *)NULL);
+        _exit(127);
+    }
+    return (int)pid;
+}
+
+#define MPI_GRID "--x nu=-0.96,-0.94 --inits 'front:n=4;uniform:amp=0.01' --seeds 1,2 " \
+                 "--tmax 30 --N 256 --no-progress"
+
+/* mpirun -np 1 (rank 0 alone: the manager's own compute thread does every
+ * point), -np 2, -np 3 and -np 2 with two threads a rank (hybrid) give
+ * the serial table, and the fields are the serial run's byte for byte. */
 TEST(cli_sweep_mpi_farm_equals_serial)
 {
-    const char *mpi_cli = BKF_SOURCE_DIR "/build/mpi/bkfront";
-    if (access(mpi_cli, X_OK) != 0 || access("/usr/bin/mpirun", X_OK) != 0) {
-        bkf_test_note("skipped: %s or mpirun missing (make test-mpi builds and runs it)", mpi_cli);
-        return;
-    }
+    if (!mpi_cli()) return;
     char dir[] = "/tmp/bkf_sweep_XXXXXX";
     CHECK(mkdtemp(dir));
     char *serial = serial_table(dir);
     CHECK(serial);
     /* the fields of a serial run, to be the MPI workers' byte for byte */
     char *serial_fields = path_in(dir, "serial_fields"), *mpi_fields = path_in(dir, "mpi_fields");
-    char *fields_table = path_in(dir, "fields.tsv");
+    char *fields_table = path_in(dir, "fields.tsv"), *log = path_in(dir, "mpi.log");
     CHECK(mkdir(serial_fields, 0755) == 0 && mkdir(mpi_fields, 0755) == 0);
     CHECK(run_ok(BKF_CLI_ARGS("sweep", GRID, "--threads", "1", "--fields", serial_fields,
                               "--out", fields_table)));
-    for (int np = 2; np <= 3; np++) {
-        char *out = path_in(dir, np == 2 ? "np2.tsv" : "np3.tsv");
-        char cmd[2048], fields[1100] = "";
-        if (np == 3) snprintf(fields, sizeof fields, "--fields %s", mpi_fields);
-        snprintf(cmd, sizeof cmd,
-                 "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe "
-                 "-np %d --mca btl self,vader --mca oob_tcp_if_include lo --mca "
-                 "btl_tcp_if_include lo %s sweep --x nu=-0.96,-0.94 --inits "
-                 "'front:n=4;uniform:amp=0.01' --seeds 1,2 --tmax 30 --N 256 --no-progress "
-                 "%s --out %s >%s/mpi.log 2>&1",
-                 np, mpi_cli, fields, out, dir);
-        int rc = system(cmd);
-        char *log = path_in(dir, "mpi.log");
+    const struct {
+        int np;
+        const char *extra;
+    } runs[] = {{1, ""}, {2, ""}, {3, "--fields"}, {2, "--threads 2"}};
+    for (size_t k = 0; k < sizeof runs / sizeof *runs; k++) {
+        char *out = path_in(dir, "mpi.tsv");
+        char args[2048];
+        snprintf(args, sizeof args, MPI_GRID " %s%s%s --out %s", runs[k].extra,
+                 strcmp(runs[k].extra, "--fields") == 0 ? " " : "",
+                 strcmp(runs[k].extra, "--fields") == 0 ? mpi_fields : "", out);
+        int rc = mpi_sweep(runs[k].np, args, log, 1);
         char *text = bkf_cli_read_file(log);
-        CHECK_MSG(rc == 0, "mpirun -np %d: status %d: %s", np, rc, text ? text : "");
+        CHECK_MSG(rc == 0, "mpirun -np %d %s: status %d: %s", runs[k].np, runs[k].extra, rc,
+                  text ? text : "");
         free(text);
-        free(log);
         char *t = bkf_cli_read_file(out);
-        CHECK_MSG(t && strcmp(t, serial) == 0, "-np %d differs from serial:\n%s", np, t);
+        CHECK_MSG(t && strcmp(t, serial) == 0, "-np %d %s differs from serial:\n%s", runs[k].np,
+                  runs[k].extra, t);
         free(t);
+        unlink(out);
         free(out);
     }
     /* every point's field, written by the worker that computed it */
@@ -236,10 +265,152 @@ TEST(cli_sweep_mpi_farm_equals_serial)
         free(a);
         free(b);
     }
+    free(log);
     free(serial_fields);
     free(mpi_fields);
     free(fields_table);
     free(serial);
+}
+
+/* The data rows of a table (after '#' lines and the column names). */
+static size_t data_rows(const char *t)
+{
+    size_t rows = 0;
+    for (const char *p = t; p && (p = strchr(p, '\n')); p++) rows += p[1] && p[1] != '#';
+    return rows ? rows - 1 : 0;
+}
+
+/* Every line of `part` is a line of `whole` (a finished row is the serial
+ * run's row of its point), and part ends with a newline. */
+static int rows_are_of(const char *part, const char *whole)
+{
+    if (!part || !*part || part[strlen(part) - 1] != '\n') return 0;
+    for (const char *p = part; *p;) {
+        size_t len = (size_t)(strchr(p, '\n') + 1 - p);
+        int ok = 0;
+        for (const char *w = whole; w && *w && !ok; w = strchr(w, '\n') ? strchr(w, '\n') + 1 : NULL)
+            ok = strncmp(w, p, len) == 0;
+        if (!ok) {
+            bkf_test_note("not a line of the serial table: %.*s", (int)len, p);
+            return 0;
+        }
+        p += len;
+    }
+    return 1;
+}
+
+/* The pids whose parent is `parent` (mpirun's ranks), at most max. */
+static size_t children_of(pid_t parent, pid_t *pids, size_t max)
+{
+    size_t n = 0;
+    DIR *d = opendir("/proc");
+    for (struct dirent *e; d && n < max && (e = readdir(d));) {
+        if (e->d_name[0] < '0' || e->d_name[0] > '9') continue;
+        char path[300], buf[512];
+        snprintf(path, sizeof path, "/proc/%s/stat", e->d_name);
+        FILE *f = fopen(path, "r");
+        if (!f) continue;
+        size_t len = fread(buf, 1, sizeof buf - 1, f);
+        fclose(f);
+        buf[len] = '\0';
+        /* pid (comm) state ppid: comm may hold spaces, the last ')' ends it */
+        char *close = strrchr(buf, ')');
+        int ppid;
+        if (close && sscanf(close + 1, " %*c %d", &ppid) == 1 && ppid == parent)
+            pids[n++] = (pid_t)atoi(e->d_name);
+    }
+    if (d) closedir(d);
+    return n;
+}
+
+/* mpirun -np 2 stopped three ways, each after at least two more rows:
+ * SIGTERM and SIGINT to mpirun (which sends the ranks SIGTERM, then
+ * SIGKILL a second later), then kill -9 of mpirun and every rank at once.
+ * Each time the table holds only whole rows, each the serial run's row of
+ * its point, and --resume under mpirun goes on from there; the last
+ * resume gives the serial table, and its fields, byte for byte, with no
+ * temporary left behind by the killed ranks. */
+TEST(cli_sweep_mpi_signals_and_kill_keep_rows_and_resume_completes)
+{
+    if (!mpi_cli()) return;
+    char dir[] = "/tmp/bkf_sweep_XXXXXX";
+    CHECK(mkdtemp(dir));
+#define KILL_GRID "--x", "nu=-0.98:-0.82:6", "--seeds", "1:4:4", "--tmax", "400", "--N", "256", \
+                  "--init", "uniform:amp=0.01", "--frames", "50", "--no-progress"
+#define POINTS_KILL 24
+    char *whole = path_in(dir, "whole.tsv"), *cut = path_in(dir, "cut.tsv");
+    char *log = path_in(dir, "mpi.log"), *wf = path_in(dir, "serial_fields");
+    char *mf = path_in(dir, "mpi_fields");
+    CHECK(mkdir(wf, 0755) == 0 && mkdir(mf, 0755) == 0);
+    CHECK(run_ok(BKF_CLI_ARGS("sweep", KILL_GRID, "--fields", wf, "--out", whole)));
+    char *serial = bkf_cli_read_file(whole);
+    CHECK(serial && data_rows(serial) == POINTS_KILL);
+    char args[2048];
+    snprintf(args, sizeof args,
+             "--x nu=-0.98:-0.82:6 --seeds 1:4:4 --tmax 400 --N 256 --init uniform:amp=0.01 "
+             "--frames 50 --no-progress --fields %s --resume --out %s",
+             mf, cut);
+    const int sigs[] = {SIGTERM, SIGINT, SIGKILL};
+    size_t before = 0;
+    for (int k = 0; k < 3; k++) {
+        pid_t pid = (pid_t)mpi_sweep(2, args, log, 0);
+        CHECK(pid > 0);
+        /* two more rows than the last run left */
+        size_t rows = 0;
+        for (int i = 0; i < 3000 && rows < before + 2; i++) {
+            char *t = bkf_cli_read_file(cut);
+            rows = data_rows(t);
+            free(t);
+            nanosleep(&(struct timespec){0, 10000000}, NULL);
+        }
+        CHECK_MSG(rows >= before + 2 && rows < POINTS_KILL, "run %d: %zu rows before the signal", k, rows);
+        if (sigs[k] == SIGKILL) {
+            pid_t ranks[8];
+            size_t n = children_of(pid, ranks, 8);
+            CHECK_MSG(n == 2, "%zu ranks under mpirun", n);
+            kill(pid, SIGKILL);
+            for (size_t r = 0; r < n; r++) kill(ranks[r], SIGKILL);
+        } else {
+            kill(pid, sigs[k]);
+        }
+        int st;
+        CHECK(waitpid(pid, &st, 0) == pid);
+        char *t = bkf_cli_read_file(cut), *l = bkf_cli_read_file(log);
+        CHECK_MSG(rows_are_of(t, serial), "run %d: the table after the signal:\n%s", k, t);
+        before = data_rows(t);
+        CHECK_MSG(before >= rows && before < POINTS_KILL, "run %d: %zu rows", k, before);
+        if (sigs[k] != SIGKILL)
+            CHECK_MSG(l && strstr(l, "interrupted (SIGTERM): every finished row is in"),
+                      "run %d: %s", k, l ? l : "");
+        free(l);
+        free(t);
+    }
+    int rc = mpi_sweep(2, args, log, 1);
+    CHECK_MSG(rc == 0, "the last resume: status %d", rc);
+    char *t = bkf_cli_read_file(cut);
+    CHECK_MSG(t && strcmp(t, serial) == 0, "resumed:\n%s", t);
+    free(t);
+    /* the fields: the serial run's, and nothing else (the killed ranks'
+     * temporaries removed when their points were computed again) */
+    size_t files = 0;
+    DIR *d = opendir(mf);
+    for (struct dirent *e; d && (e = readdir(d));) {
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+        char *a = path_in(wf, e->d_name), *b = path_in(mf, e->d_name), cmd[2200];
+        snprintf(cmd, sizeof cmd, "cmp -s %s %s", a, b);
+        CHECK_MSG(system(cmd) == 0, "%s is not the serial run's field", e->d_name);
+        files++;
+        free(a);
+        free(b);
+    }
+    if (d) closedir(d);
+    CHECK_MSG(files == POINTS_KILL, "%zu files in the fields directory", files);
+    free(serial);
+    free(whole);
+    free(cut);
+    free(log);
+    free(wf);
+    free(mf);
 }
 
 /* SIGTERM in the middle: exit 143, one line, every row on disk whole; the

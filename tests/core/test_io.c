@@ -593,6 +593,50 @@ TEST(io_stale_cleanup_spares_a_locked_temporary)
     rmdir(dir);
 }
 
+/* A writer killed outright may stay a zombie for a while (its parent died
+ * with it, as in kill -9 of an MPI job, and the new parent has not reaped
+ * it): its PID still answers kill(pid, 0), but it holds no lock, and its
+ * temporary goes at the next open. */
+TEST(io_stale_cleanup_removes_a_zombie_writer_s_temporary)
+{
+    char dir[] = "/tmp/bkf_io_test_XXXXXX";
+    make_dir(dir);
+    pid_t pid = fork();
+    if (pid == 0) _exit(0);
+    CHECK(pid > 0);
+    /* not reaped yet: a zombie once it has exited */
+    char stat_path[64], state = 0;
+    snprintf(stat_path, sizeof stat_path, "/proc/%ld/stat", (long)pid);
+    for (int i = 0; i < 500 && state != 'Z'; i++) {
+        FILE *f = fopen(stat_path, "r");
+        char buf[512] = "";
+        if (f) {
+            size_t n = fread(buf, 1, sizeof buf - 1, f);
+            buf[n] = '\0';
+            fclose(f);
+        }
+        const char *end = strrchr(buf, ')');
+        state = end ? end[2] : 0;
+        if (state != 'Z') usleep(10000);
+    }
+    CHECK_MSG(state == 'Z' && kill(pid, 0) == 0, "the child is not a zombie (%c)", state);
+    char path[256], temp[300];
+    snprintf(path, sizeof path, "%s/out.tsv", dir);
+    snprintf(temp, sizeof temp, "%s/.out.tsv.tmp.%ld.1234abcd", dir, (long)pid);
+    int fd = open(temp, O_WRONLY | O_CREAT | O_EXCL, 0644);
+    CHECK(fd >= 0);
+    close(fd);
+    bkf_error e = {0};
+    bkf_io_atomic *a = bkf_io_atomic_open(path, &e);
+    CHECK_MSG(a, "%s", e.message);
+    bkf_io_atomic_abort(a);
+    CHECK_MSG(!file_exists(temp), "a zombie writer's temporary stayed");
+    int st;
+    CHECK(waitpid(pid, &st, 0) == pid);
+    CHECK(dir_entries(dir) == 0);
+    rmdir(dir);
+}
+
 /* A chain of links is followed to its end: out -> l2 -> data.tsv (missing)
  * writes data.tsv and leaves both links links; a loop is refused. */
 TEST(io_atomic_follows_a_dangling_chain_and_refuses_a_loop)
