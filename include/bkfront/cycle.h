@@ -25,8 +25,14 @@ extern "C" {
 
 #define BKF_CYCLE_MU_MIN 1e-6
 #define BKF_CYCLE_MU_MAX 1e6
-/* Above this mu the automatic stepper is the stiff one (bd2x2). */
-#define BKF_CYCLE_STIFF_MU 30.0
+/* Above this mu the automatic stepper is the stiff one (bd2x2), except at
+ * tol below BKF_CYCLE_STIFF_TOL_MIN up to BKF_CYCLE_EXPLICIT_MU_MAX. */
+#define BKF_CYCLE_STIFF_MU 20.0
+/* Up to here rk8pd stays the automatic engine's fallback (and its choice at
+ * tol < BKF_CYCLE_STIFF_TOL_MIN, where bd2x2's estimate floor cannot meet
+ * tol); above it bsimp is the fallback. */
+#define BKF_CYCLE_EXPLICIT_MU_MAX 30.0
+#define BKF_CYCLE_STIFF_TOL_MIN 1e-12
 
 typedef enum {
     BKF_STEPPER_AUTO = 0,     /* explicit below the stiffness threshold */
