@@ -416,15 +416,17 @@ static int bd_apply(integrator *in, double *t, double t1, double *h, double *s)
  * measured far more accurate per tolerance than msbdf near the knees, where
  * the msbdf period wandered at 1e-7 relative whatever the tolerance
  * (mu = 1e4, nu = 0.999). */
-/* bd2x2 above STIFF_MU: measured per T at tol 1e-8..1e-12 (docs/benchmarks.md,
+/* bd2x2 above STIFF_MU at tol 1e-8..1e-12: measured per T (docs/benchmarks.md,
  * issue 20), rk8pd's stability-limited steps (about 140 a unit of mu per
- * period) cost more than bd2x2 from mu 12-20 on (mu 30, tol 1e-10: 1.7 ms
- * against 0.73-0.81 ms); at tol 1e-6 the crossover is nearer 20-25.  Below
- * BKF_CYCLE_STIFF_TOL_MIN bd2x2's estimate floor refuses, so up to
- * EXPLICIT_MU_MAX rk8pd answers there as it did before the switch moved. */
+ * period) cost more than bd2x2 from mu 12-20 on there (mu 30, tol 1e-10:
+ * 1.7 ms against 0.73-0.81 ms).  At tol 1e-6 rk8pd is as fast up to mu 30,
+ * and bd2x2's loose-tolerance estimate flattered by 3.4 at mu 27.5, nu 0.5,
+ * tol 1e-2; below BKF_CYCLE_STIFF_TOL_MIN bd2x2's estimate floor refuses.
+ * There rk8pd answers up to EXPLICIT_MU_MAX, as before the switch moved. */
 static bkf_stepper_kind auto_stepper(double mu, double tol)
 {
-    if (mu > EXPLICIT_MU_MAX || (mu > STIFF_MU && tol >= BKF_CYCLE_STIFF_TOL_MIN))
+    if (mu > EXPLICIT_MU_MAX ||
+        (mu > STIFF_MU && tol >= BKF_CYCLE_STIFF_TOL_MIN && tol <= BKF_CYCLE_STIFF_TOL_MAX))
         return BKF_STEPPER_EXTRAPOLATION;
     return BKF_STEPPER_EXPLICIT;
 }
