@@ -959,11 +959,6 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
      * (measured: bsimp at 1e-15 takes ~1e5 steps a period at mu = 1e4). */
     const double tol_floor = kind != BKF_STEPPER_EXPLICIT ? 1e-14 : 1e-16;
     if (tol_int / TOL_RATIO < tol_floor) tol_int = tol_floor * TOL_RATIO;
-    /* The coarse stage lands y0 on the cycle for the tight solves, whose
-     * first shot then needs no confirming one if its step is below
-     * sqrt(q_goal) (see newton_at): at local tol 1e-5 the landing was
-     * 1-3e-6 off at mu 1e3-1e4, just too far at tol 1e-10, and cost one
-     * more tight shot than a landing at 1e-6 does. */
     /* bd2x2's coarse stage lands y0 on the cycle for the tight solves,
      * whose first shot then needs no confirming one if its step is below
      * sqrt(q_goal) (see newton_at): at local tol 1e-5 the landing was

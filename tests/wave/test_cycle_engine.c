@@ -83,6 +83,8 @@ TEST(cycle_engine_switch_at_mu_20_against_taylor)
                 }
                 if (!isfinite(ref)) ref = taylor_period(mus[i], nus[j], r.section_slope, &unc);
                 double err = fabs(r.period - ref), ratio = fmax(err - unc, 0.0) / r.period_err;
+                CHECK_MSG(unc <= 1e-3 * tols[k] * r.period, "mu %g nu %g: reference uncertain by %.2g",
+                          mus[i], nus[j], unc / r.period);
                 CHECK_MSG(err <= tols[k] * r.period + unc, "mu %g nu %g tol %g %s: error %.3g > tol", mus[i],
                           nus[j], tols[k], r.stepper, err / r.period);
                 CHECK_MSG(ratio <= 3.0, "mu %g nu %g tol %g %s: estimate %.3g optimistic by %.3g", mus[i],
