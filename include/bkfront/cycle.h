@@ -25,8 +25,16 @@ extern "C" {
 
 #define BKF_CYCLE_MU_MIN 1e-6
 #define BKF_CYCLE_MU_MAX 1e6
-/* Above this mu the automatic stepper is the stiff one (bd2x2). */
-#define BKF_CYCLE_STIFF_MU 30.0
+/* Above BKF_CYCLE_EXPLICIT_MU_MAX the automatic stepper is the stiff one
+ * (bd2x2); above BKF_CYCLE_STIFF_MU it is too at tol in
+ * [BKF_CYCLE_STIFF_TOL_MIN, BKF_CYCLE_STIFF_TOL_MAX] (below, bd2x2's estimate
+ * floor cannot meet tol; above, rk8pd is as fast there).  Up to
+ * BKF_CYCLE_EXPLICIT_MU_MAX rk8pd is also the fallback where bd2x2 refuses,
+ * above it bsimp. */
+#define BKF_CYCLE_STIFF_MU 20.0
+#define BKF_CYCLE_EXPLICIT_MU_MAX 30.0
+#define BKF_CYCLE_STIFF_TOL_MIN 1e-12
+#define BKF_CYCLE_STIFF_TOL_MAX 1e-8
 
 typedef enum {
     BKF_STEPPER_AUTO = 0,     /* explicit below the stiffness threshold */

@@ -78,7 +78,8 @@ const bkf_option bkf_period_options[] = {
      .help = "integrator: rk8pd (explicit), GSL's bsimp with the analytic\n"
              "Jacobian (implicit; the former stiff default), bd2x2:\n"
              "the same extrapolation method with closed-form 2x2 solves\n"
-             "(extrapolation), or auto: rk8pd for mu <= 30, else bd2x2"},
+             "(extrapolation), or auto: bd2x2 above mu 30 (above 20 at tol\n"
+             "1e-12..1e-8), else rk8pd"},
 };
 const size_t bkf_period_noptions = sizeof bkf_period_options / sizeof bkf_period_options[0];
 

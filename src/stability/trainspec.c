@@ -804,8 +804,9 @@ static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train
      * bd2x2, the stiff default since issue 20, takes longer steps than
      * bsimp: on n = 12 (mu 47) 4 substeps a step were then pre-asymptotic
      * (convergence ratio 23 against fifth order's 32); the meshes keep
-     * bsimp's steps, for which the substep counts were measured. */
-    if (x->mu > BKF_CYCLE_STIFF_MU) co.stepper = BKF_STEPPER_IMPLICIT;
+     * bsimp's steps, for which the substep counts were measured, and
+     * rk8pd's up to mu 30 as before bd2x2 took over from mu 20. */
+    co.stepper = x->mu > BKF_CYCLE_EXPLICIT_MU_MAX ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
     int rc = bkf_cycle_solve(x->cycle, x->mu, x->nu, &co, err);
     if (rc != BKF_OK) return rc;
     const bkf_cycle_result *cr = bkf_cycle_get(x->cycle);

@@ -41,6 +41,7 @@ enum { DIM_SENS = 7, IPX = 5, IPY = 6 };
 /* Above this mu the explicit stepper's step is limited by stability, not
  * accuracy (the fast rate is ~mu); measured crossover, see docs/benchmarks.md. */
 #define STIFF_MU BKF_CYCLE_STIFF_MU
+#define EXPLICIT_MU_MAX BKF_CYCLE_EXPLICIT_MU_MAX
 /* Ratio of the two integration tolerances whose answers give the error
  * estimate. */
 #define TOL_RATIO 10.0
@@ -415,9 +416,19 @@ static int bd_apply(integrator *in, double *t, double t1, double *h, double *s)
  * measured far more accurate per tolerance than msbdf near the knees, where
  * the msbdf period wandered at 1e-7 relative whatever the tolerance
  * (mu = 1e4, nu = 0.999). */
-static bkf_stepper_kind auto_stepper(double mu)
+/* bd2x2 above STIFF_MU at tol 1e-8..1e-12: measured per T (docs/benchmarks.md,
+ * issue 20), rk8pd's stability-limited steps (about 140 a unit of mu per
+ * period) cost more than bd2x2 from mu 12-20 on there (mu 30, tol 1e-10:
+ * 1.7 ms against 0.73-0.81 ms).  At tol 1e-6 rk8pd is as fast up to mu 30,
+ * and bd2x2's loose-tolerance estimate flattered by 3.4 at mu 27.5, nu 0.5,
+ * tol 1e-2; below BKF_CYCLE_STIFF_TOL_MIN bd2x2's estimate floor refuses.
+ * There rk8pd answers up to EXPLICIT_MU_MAX, as before the switch moved. */
+static bkf_stepper_kind auto_stepper(double mu, double tol)
 {
-    return mu > STIFF_MU ? BKF_STEPPER_EXTRAPOLATION : BKF_STEPPER_EXPLICIT;
+    if (mu > EXPLICIT_MU_MAX ||
+        (mu > STIFF_MU && tol >= BKF_CYCLE_STIFF_TOL_MIN && tol <= BKF_CYCLE_STIFF_TOL_MAX))
+        return BKF_STEPPER_EXTRAPOLATION;
+    return BKF_STEPPER_EXPLICIT;
 }
 
 const char *bkf_cycle_stepper_name(bkf_stepper_kind kind)
@@ -767,10 +778,12 @@ static double period_error(const converged *a, const converged *b, const flow_pa
  * t_goal T) and the step is either below y_goal or no longer shrinking
  * quadratically, i.e. down to the integration's noise. */
 static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, double t_goal,
-                     double y_goal, double y_scale, double q_goal, int keep, size_t *iterations, converged *out, bkf_error *err)
+                     double y_goal, double y_scale, double q_goal, int keep, int land, size_t *iterations,
+                     converged *out, bkf_error *err)
 {
     flow_params *p = &c->flow;
-    double lo = p->b * lienard_F(p->nu), hi = GSL_POSINF;
+    const double y_still = p->b * lienard_F(p->nu); /* x' = 0 on the section */
+    double lo = y_still, hi = GSL_POSINF;
     double previous_step = GSL_POSINF, stride = 0.0;
     int inversions = 0;
     in->noisy = 0;
@@ -780,7 +793,17 @@ static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, 
         if (rc != BKF_OK) return rc;
         (*iterations)++;
         double g = sh.y_return - *y0;
-        double step = -g / (sh.dP - 1.0);
+        /* The return map of a planar flow has the slope exp(L) x'(y0)/x'(P(y0))
+         * (Liouville).  Where the cycle attracts like exp(-O(mu)) that is far
+         * below what the variational column resolves, whose dP is then noise
+         * of either sign: at mu 1e3 a coarse dP of -0.03 put Newton beyond
+         * P(y0), and the safeguard bisected to half the start (two wasted
+         * shots).  Only for bd2x2 (no GSL driver): rk8pd's and bsimp's
+         * Newton paths, and so their digits, stay as they were. */
+        double dP = sh.dP, w_return = sh.y_return - y_still;
+        double slope_L = !in->driver && w_return > 0 ? exp(sh.log_mult) * (*y0 - y_still) / w_return : NAN;
+        if (slope_L >= 0 && slope_L < 1e-6) dP = slope_L;
+        double step = -g / (dP - 1.0);
         if (g > 0) lo = fmax(lo, sh.y_return);
         else if (g < 0) hi = fmin(hi, sh.y_return);
         double next = *y0 + step;
@@ -816,16 +839,21 @@ static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, 
         double t_corr = sh.dT * step;
         int small = fabs(t_corr) <= t_goal * sh.period;
         /* what the integration error alone moves the fixed point by */
-        double noise = 10.0 * in->tol * fmax(1.0, fabs(*y0)) / (1.0 - fmin(sh.dP, 0.999999));
+        double noise = 10.0 * in->tol * fmax(1.0, fabs(*y0)) / (1.0 - fmin(dP, 0.999999));
         /* or the step is so small that what the first-order correction
          * leaves, ~ step^2 amplified by 1/(1 - P'), is far below the goal */
         double rel_step = fabs(step) / y_scale;
         /* (not when keeping the trajectory: the stored profile is that of
          * this shot, which must itself be within y_goal of the cycle) */
-        int quadratic = !keep && q_goal > 0 && rel_step * rel_step <= q_goal * (1.0 - fmin(sh.dP, 0.999999));
+        int quadratic = !keep && q_goal > 0 && rel_step * rel_step <= q_goal * (1.0 - fmin(dP, 0.999999));
         int at_noise = inverted || fabs(step) <= fmax(y_goal, noise) ||
                        fabs(step) > 0.25 * previous_step || quadratic;
-        if (!safeguarded && small && at_noise) {
+        /* A stage that only has to bring y0 within y_goal of the cycle (the
+         * coarse one) is done when the Newton point is: where P' ~ 0 the
+         * return has landed on the cycle to |P'| |step| plus this shot's
+         * integration error, so no shot needs to confirm it. */
+        int landed = land && slope_L >= 0 && slope_L < 1e-3 && slope_L * fabs(step) <= y_goal;
+        if (!safeguarded && small && (at_noise || landed)) {
             out->period = sh.period + t_corr;
             out->log_mult = sh.log_mult;
             out->y0 = next;
@@ -910,7 +938,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
     flow_params *p = &c->flow;
     p->rhs_calls = p->jacobian_calls = 0;
     bkf_stepper_kind kind = opt.stepper;
-    if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu);
+    if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu, opt.tol);
 
     double slope = c->warm_slope > 0 ? c->warm_slope
                    : opt.warm_start && c->have_solution ? warm_slope
@@ -931,7 +959,15 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
      * (measured: bsimp at 1e-15 takes ~1e5 steps a period at mu = 1e4). */
     const double tol_floor = kind != BKF_STEPPER_EXPLICIT ? 1e-14 : 1e-16;
     if (tol_int / TOL_RATIO < tol_floor) tol_int = tol_floor * TOL_RATIO;
-    double tol_loose = fmax(tol_int, 1e-5 * fmin(1.0, sqrt(1.0 - nu * nu)));
+    /* bd2x2's coarse stage lands y0 on the cycle for the tight solves,
+     * whose first shot then needs no confirming one if its step is below
+     * sqrt(q_goal) (see newton_at): at local tol 1e-5 the landing was
+     * 1-3e-6 off at mu 1e3-1e4, just too far at tol 1e-10, and cost one
+     * more tight shot than a landing at 1e-6 does.  (Not for rk8pd: inside
+     * the canard at mu 3.65 the tighter landing changed which relaxed branch
+     * points were accepted, and one's estimate flattered by 5.) */
+    double land_tol = kind == BKF_STEPPER_EXTRAPOLATION ? fmin(0.1 * sqrt(opt.tol), 1e-5) : 1e-5;
+    double tol_loose = fmax(tol_int, land_tol * fmin(1.0, sqrt(1.0 - nu * nu)));
     integrator coarse = {0}, fine = {0}, finer = {0}, aux = {0};
     size_t iterations = 0;
     converged a, b;
@@ -950,7 +986,8 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
      * looked decreasing and Newton cycled for 60 steps.  Such noise shows as
      * brackets that invert; the coarse solve then tightens its tolerance. */
     for (double y_start = y0;;) {
-        rc = newton_at(c, &coarse, &aux, &y0, 1e-3, 1e-4 * y_scale, y_scale, 0.0, 0, &iterations, &a, err);
+        rc = newton_at(c, &coarse, &aux, &y0, 1e-3, 1e-4 * y_scale, y_scale, 0.0, 0, 1, &iterations, &a,
+                       err);
         if (rc == BKF_OK || !coarse.noisy || tol_loose <= tol_int) break;
         tol_loose = fmax(tol_int, 1e-2 * tol_loose);
         size_t coarse_steps = coarse.steps, aux_steps = aux.steps;
@@ -977,13 +1014,13 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
      * local tolerance (1e-3 of it for rk8pd, ~1e-2 for bsimp, measured), so
      * at tol 1e-6 the answer needs no 1e-7 shot; the estimate stays the
      * coarse solve's, which bounds b's.  Not for rk8pd near its stability
-     * limit (mu > STIFF_MU/3): there its steps are set by stability, not by
+     * limit (mu > EXPLICIT_MU_MAX/3): there its steps are set by stability, not by
      * the tolerance, two tolerances a factor 10 apart take nearly the same
      * steps and their difference missed the error (mu 30, nu 0: true/estimated
      * 14 with a factor 10); there the pair is a factor 100 apart, which makes
      * the tighter solve's steps tolerance-limited again. */
     if (tol_loose <= 1.01 * FAST_SPAN * tol_int) {
-        int step_set_by_tol = kind != BKF_STEPPER_EXPLICIT || mu <= STIFF_MU / 3.0;
+        int step_set_by_tol = kind != BKF_STEPPER_EXPLICIT || mu <= EXPLICIT_MU_MAX / 3.0;
         double tol_b = tol_loose / (step_set_by_tol ? TOL_RATIO : TOL_RATIO * TOL_RATIO);
         if (tol_b >= tol_floor) {
             size_t aux_steps = aux.steps;
@@ -994,7 +1031,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
             tighten_turn(&fine);
             aux.steps = aux_steps;
             rc = newton_at(c, &fine, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, y_scale, q_goal, 1,
-                           &iterations, &b, err);
+                           0, &iterations, &b, err);
             if (rc != BKF_OK) goto done;
             double period_err = period_error(&a, &b, p, kind);
             if (ACCEPT_MARGIN * period_err > opt.tol * b.period) {
@@ -1007,7 +1044,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
                 converged a2;
                 double y_b = y0;
                 rc = newton_at(c, &coarse, &aux, &y_b, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale,
-                               y_scale, q_goal, 0, &iterations, &a2, err);
+                               y_scale, q_goal, 0, 0, &iterations, &a2, err);
                 if (rc != BKF_OK) goto done;
                 double err2 = period_error(&a2, &b, p, kind);
                 if (ACCEPT_MARGIN * err2 <= opt.tol * b.period) {
@@ -1044,9 +1081,11 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
             integrator_init(&aux, p, kind, 1, tol_int / TOL_RATIO) != BKF_OK)
             goto fail_mem;
         aux.steps = aux_steps;
-        rc = newton_at(c, &fine, &aux, &y0, 0.1 * sqrt(opt.tol), opt.tol * y_scale, y_scale, q_goal, 0, &iterations, &a, err);
+        rc = newton_at(c, &fine, &aux, &y0, 0.1 * sqrt(opt.tol), opt.tol * y_scale, y_scale, q_goal, 0, 0,
+                       &iterations, &a, err);
         if (rc != BKF_OK) goto done;
-        rc = newton_at(c, &finer, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, y_scale, q_goal, 1, &iterations, &b, err);
+        rc = newton_at(c, &finer, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, y_scale, q_goal, 1, 0,
+                       &iterations, &b, err);
         if (rc != BKF_OK) goto done;
         double period_err = period_error(&a, &b, p, kind);
         seen[n_seen].tol = a.tol;
@@ -1099,10 +1138,12 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
      * the tightest tolerances it refuses where bsimp answers (mu 47.07,
      * nu -0.96, tol 1e-12: estimate 7.2e-13): the automatic choice then
      * falls back to bsimp, never answering less than before bd2x2. */
-    if (bkf_status_is_numerical(rc) && (!options || options->stepper == BKF_STEPPER_AUTO) &&
-        auto_stepper(mu) == BKF_STEPPER_EXTRAPOLATION) {
-        bkf_cycle_options o = options ? *options : bkf_cycle_options_default();
-        o.stepper = BKF_STEPPER_IMPLICIT;
+    bkf_cycle_options o = options ? *options : bkf_cycle_options_default();
+    if (bkf_status_is_numerical(rc) && o.stepper == BKF_STEPPER_AUTO &&
+        auto_stepper(mu, o.tol) == BKF_STEPPER_EXTRAPOLATION) {
+        /* up to EXPLICIT_MU_MAX the engine that answered before bd2x2 took
+         * over there: rk8pd */
+        o.stepper = mu <= EXPLICIT_MU_MAX ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_IMPLICIT;
         rc = cycle_solve_body(c, mu, nu, &o, err);
     }
     bkf_gsl_handler_pop(handler);
@@ -1301,7 +1342,7 @@ static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, d
     int along_mu = b->along == BKF_CYCLE_ALONG_MU;
     p.sens = dg ? (along_mu ? 1 : 2) : 0;
     bkf_stepper_kind kind = b->options.stepper;
-    if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu);
+    if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu, b->options.tol);
     integrator in = {0}, aux = {0};
     double tol = fmax(0.1 * b->options.tol, 1e-13);
     int rc = BKF_ENOMEM;

@@ -157,13 +157,14 @@ static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf
     if (mu > BKF_CYCLE_MU_MAX) mu = BKF_CYCLE_MU_MAX; /* rounding in mu_of_s */
     bkf_cycle_options o = bkf_cycle_options_default();
     o.tol = precise ? tol : g->tol_coarse;
-    /* The engine's own choice (bd2x2 above BKF_CYCLE_STIFF_MU, bsimp where
-     * bd2x2 refuses); "the other" is the stepper it does not try there. */
+    /* The engine's own choice (bd2x2 above BKF_CYCLE_STIFF_MU, rk8pd or
+     * above BKF_CYCLE_EXPLICIT_MU_MAX bsimp where bd2x2 refuses); "the
+     * other" is the stepper it does not try there. */
     bkf_error e = {0};
     int rc = BKF_ENUMERIC;
     for (int attempt = 0; attempt < 3 && bkf_status_is_numerical(rc); attempt++) {
         o.stepper = attempt < 2 ? BKF_STEPPER_AUTO
-                    : mu <= BKF_CYCLE_STIFF_MU ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
+                    : mu <= BKF_CYCLE_EXPLICIT_MU_MAX ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
         o.warm_start = attempt == 0;
         rc = bkf_cycle_solve(cycle, mu, g->p.nu, &o, &e);
     }

@@ -51,6 +51,50 @@ TEST(cycle_engine_bd2x2_meets_tol_against_taylor)
     bkf_test_note("largest true/estimated error ratio: %.3g", worst);
 }
 
+/* engine2: the automatic switch moved from mu 30 to 20 for tol 1e-12..1e-8
+ * (rk8pd's stability-limited steps cost 2-3 times bd2x2's at mu 30, tol
+ * 1e-10); outside that window rk8pd answers up to mu 30 as before, and is
+ * the fallback there.  Each answer against the Taylor reference: within
+ * tol, its estimate optimistic by at most 3. */
+TEST(cycle_engine_switch_at_mu_20_against_taylor)
+{
+    const double mus[] = {19.5, 20.5, 26};
+    const double nus[] = {0.0, -0.96, 0.99};
+    const double tols[] = {1e-6, 1e-8, 1e-10, 1e-12};
+    size_t bd = 0;
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++)
+        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+            double ref = NAN, unc = 0.0;
+            for (size_t k = 0; k < sizeof tols / sizeof tols[0]; k++) {
+                bkf_cycle_result r;
+                bkf_error e = {0};
+                int rc = solve_with(mus[i], nus[j], tols[k], BKF_STEPPER_AUTO, &r, &e);
+                CHECK_MSG(rc == BKF_OK, "mu %g nu %g tol %g: %s", mus[i], nus[j], tols[k], e.message);
+                if (rc != BKF_OK) continue;
+                int window = tols[k] >= BKF_CYCLE_STIFF_TOL_MIN && tols[k] <= BKF_CYCLE_STIFF_TOL_MAX;
+                if (mus[i] > BKF_CYCLE_STIFF_MU && window) {
+                    /* bd2x2, or rk8pd where bd2x2 refused */
+                    CHECK_MSG(strcmp(r.stepper, "bd2x2") == 0 || strcmp(r.stepper, "rk8pd") == 0,
+                              "mu %g tol %g: %s", mus[i], tols[k], r.stepper);
+                    bd += strcmp(r.stepper, "bd2x2") == 0;
+                } else {
+                    CHECK_MSG(strcmp(r.stepper, "rk8pd") == 0, "mu %g tol %g: auto chose %s", mus[i],
+                              tols[k], r.stepper);
+                }
+                if (!isfinite(ref)) ref = taylor_period(mus[i], nus[j], r.section_slope, &unc);
+                double err = fabs(r.period - ref), ratio = fmax(err - unc, 0.0) / r.period_err;
+                CHECK_MSG(unc <= 1e-3 * tols[k] * r.period, "mu %g nu %g: reference uncertain by %.2g",
+                          mus[i], nus[j], unc / r.period);
+                CHECK_MSG(err <= tols[k] * r.period + unc, "mu %g nu %g tol %g %s: error %.3g > tol", mus[i],
+                          nus[j], tols[k], r.stepper, err / r.period);
+                CHECK_MSG(ratio <= 3.0, "mu %g nu %g tol %g %s: estimate %.3g optimistic by %.3g", mus[i],
+                          nus[j], tols[k], r.stepper, r.period_err / r.period, ratio);
+            }
+        }
+    /* mu 20.5 and 26 at tol 1e-8 and 1e-10 at least (1e-12 may fall back) */
+    CHECK_MSG(bd >= 12, "bd2x2 answered %zu times", bd);
+}
+
 /* The former stiff default stays selectable and agrees within the two
  * estimates; bd2x2 is selectable below the stiffness threshold too. */
 TEST(cycle_engine_steppers_selectable_and_agree)
