@@ -27,7 +27,9 @@
  * Error estimates: every wave is solved twice, with integration tolerances
  * tol/10 and tol/100; the differences are the error estimates and the
  * values reported are the tighter solve's.  BKF_ETOL when an estimate
- * stays above tol (relative, on v and on the multipliers' moduli).
+ * stays above tol: relative on v; on the leading multiplier's modulus
+ * tol max(1, |m|), absolute up to |m| = 1 where the verdict is decided,
+ * relative beyond (the growth exponent ln|m| to tol absolute).
  *
  * The library never prints and never exits. */
 #ifndef BKFRONT_CHAINWAVE_H
@@ -54,8 +56,8 @@ extern "C" {
 #define BKF_CHAINWAVE_K_REACH 1.5
 
 typedef struct {
-    double tol;          /* relative accuracy of v and of the multipliers'
-                            moduli, [1e-11, 1e-3]; default 1e-8 */
+    double tol;          /* relative accuracy of v, of the leading |m| tol
+                            max(1, |m|); [1e-11, 1e-3]; default 1e-8 */
     int stability;       /* compute the multipliers (default 1) */
     size_t max_steps;    /* integration steps per flow over tau; default 200000 */
 } bkf_chainwave_options;

@@ -521,9 +521,15 @@ static int solve_x(flow_ctx *c, work *w, const bkf_model_params *p, size_t n, do
     if (wave->v_err > o->tol * wave->v)
         s = bkf_error_set(err, BKF_ETOL, "chainwave: estimated relative error %.3g of v for "
                           "n = %zu exceeds tol %g", wave->v_err / wave->v, n, o->tol);
-    else if (o->stability && wave->mult_abs_err > o->tol)
+    /* absolute on |m| up to 1, relative beyond: the verdict is decided at
+       |m| = 1, and above it |m| is exp(sigma_max tau), whose relative error
+       is the absolute error of the growth exponent (the continuum's sigma
+       is asked to tol absolute); an absolute tol on |m| ~ 200 (gamma 10,
+       n 6) asked 14 digits of it and refused whole tables */
+    else if (o->stability && wave->mult_abs_err > o->tol * fmax(1.0, wave->mult_abs))
         s = bkf_error_set(err, BKF_ETOL, "chainwave: estimated error %.3g of the leading "
-                          "multiplier for n = %zu exceeds tol %g", wave->mult_abs_err, n, o->tol);
+                          "multiplier |m| = %.6g for n = %zu exceeds tol %g x max(1, |m|)",
+                          wave->mult_abs_err, wave->mult_abs, n, o->tol);
     if (s) bkf_chainwave_clear(wave);
     return s;
 }
