@@ -170,7 +170,9 @@ TEST(chainwave_antiphase_is_two_blocks)
 /* As h -> 0 at fixed S and n the lattice Laplacian on a mode of
  * wavenumber q is -(4/h^2) sin^2(q h/2) = -q^2 (1 - q^2 h^2/12 + ...): the
  * speed converges to the continuum root at second order, error ratio 4
- * per halving of h. */
+ * per halving of h, once h is well below the front's width (n = 1 here;
+ * n = 4's fronts are ~1 block wide up to 80 blocks and reach the ratio 4
+ * only beyond 160: docs/numerics.md). */
 TEST(chainwave_continuum_limit_second_order)
 {
     bkf_model_params cont = bkf_model_params_paper();
