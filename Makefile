@@ -30,7 +30,7 @@ PKG_LIBS   = $(shell pkg-config --libs $(PKGS))
 override CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -Iinclude $(PKG_CFLAGS) $(SANITIZE) -fopenmp
 override LDFLAGS += $(SANITIZE) -fopenmp
 # SUNDIALS (CVODE for the comoving simulation) ships no pkg-config file.
-SUNDIALS_LIBS := -lsundials_cvode -lsundials_sunlinsolband -lsundials_sunmatrixband \
+SUNDIALS_LIBS := -lsundials_cvodes -lsundials_sunlinsolband -lsundials_sunmatrixband \
                  -lsundials_nvecserial
 # HDF5's dimension scales (H5DS) are in its high-level library, which
 # hdf5-serial.pc does not list; its -L is that of hdf5-serial.

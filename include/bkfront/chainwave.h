@@ -27,7 +27,9 @@
  * Error estimates: every wave is solved twice, with integration tolerances
  * tol/10 and tol/100; the differences are the error estimates and the
  * values reported are the tighter solve's.  BKF_ETOL when an estimate
- * stays above tol (relative, on v and on the multipliers' moduli).
+ * stays above tol: relative on v; on the leading multiplier's modulus
+ * tol max(1, |m|), absolute up to |m| = 1 where the verdict is decided,
+ * relative beyond (the growth exponent ln|m| to tol absolute).
  *
  * The library never prints and never exits. */
 #ifndef BKFRONT_CHAINWAVE_H
@@ -45,19 +47,32 @@ extern "C" {
 #define BKF_CHAINWAVE_N_MAX 400
 #define BKF_CHAINWAVE_TOL_MIN 1e-11
 #define BKF_CHAINWAVE_TOL_MAX 1e-3
-/* gamma at most: beyond it the blocks' cycle is a stiff relaxation
- * oscillation and the explicit stepper of the variational equations would
- * need too many steps (refused rather than slow). */
-#define BKF_CHAINWAVE_GAMMA_MAX 30.0
+/* gamma up to BKF_CHAINWAVE_GAMMA_EXPLICIT: the flow and its variational
+ * equations by an explicit stepper (GSL rk8pd).  Where the blocks' cycle
+ * is a stiff relaxation oscillation an implicit one (SUNDIALS CVODES: BDF
+ * with the analytic Jacobian, the variational columns as forward
+ * sensitivities) is the option: gamma up to BKF_CHAINWAVE_GAMMA_MAX, only
+ * with options.stepper = BKF_CHAINWAVE_STEPPER_IMPLICIT for now (the
+ * continuation from the uncoupled chain is still too slow there for the
+ * automatic choice: see docs/numerics.md). */
+#define BKF_CHAINWAVE_GAMMA_EXPLICIT 30.0
+#define BKF_CHAINWAVE_GAMMA_MAX 100.0
 /* How far beyond the target coupling K a branch is followed for crossings
  * that a fold beyond the target would bring back. */
 #define BKF_CHAINWAVE_K_REACH 1.5
 
+typedef enum {
+    BKF_CHAINWAVE_STEPPER_AUTO = 0,     /* explicit (the only one up to gamma 30) */
+    BKF_CHAINWAVE_STEPPER_EXPLICIT = 1, /* GSL rk8pd (slow above it, but independent) */
+    BKF_CHAINWAVE_STEPPER_IMPLICIT = 2  /* CVODES BDF with sensitivities */
+} bkf_chainwave_stepper;
+
 typedef struct {
-    double tol;          /* relative accuracy of v and of the multipliers'
-                            moduli, [1e-11, 1e-3]; default 1e-8 */
+    double tol;          /* relative accuracy of v, of the leading |m| tol
+                            max(1, |m|); [1e-11, 1e-3]; default 1e-8 */
     int stability;       /* compute the multipliers (default 1) */
     size_t max_steps;    /* integration steps per flow over tau; default 200000 */
+    bkf_chainwave_stepper stepper; /* default AUTO */
 } bkf_chainwave_options;
 
 bkf_chainwave_options bkf_chainwave_options_default(void);

@@ -9,6 +9,11 @@
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_linalg.h>
 #include <gsl/gsl_odeiv2.h>
+#include <cvodes/cvodes.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
 #include <math.h>
 #include <stdlib.h>
 #include <stdio.h>
@@ -24,7 +29,7 @@
 
 bkf_chainwave_options bkf_chainwave_options_default(void)
 {
-    bkf_chainwave_options o = {1e-8, 1, 200000};
+    bkf_chainwave_options o = {1e-8, 1, 200000, BKF_CHAINWAVE_STEPPER_AUTO};
     return o;
 }
 
@@ -59,10 +64,13 @@ int bkf_chainwave_check(const bkf_model_params *p, size_t n, const bkf_chainwave
                         bkf_error *err)
 {
     if (!p || !o) return bkf_error_set(err, BKF_EINPUT, "chainwave: NULL argument");
-    if (!(p->gamma > 0.0 && p->gamma <= BKF_CHAINWAVE_GAMMA_MAX))
+    double gmax = o->stepper == BKF_CHAINWAVE_STEPPER_IMPLICIT ? BKF_CHAINWAVE_GAMMA_MAX
+                                                               : BKF_CHAINWAVE_GAMMA_EXPLICIT;
+    if (!(p->gamma > 0.0 && p->gamma <= gmax))
         return bkf_error_set(err, BKF_EINPUT,
-                             "gamma = %g is outside (0, %g] (the chain's waves are integrated "
-                             "with an explicit stepper)", p->gamma, BKF_CHAINWAVE_GAMMA_MAX);
+                             "gamma = %g is outside (0, %g] for the chain's waves%s", p->gamma,
+                             gmax, gmax < BKF_CHAINWAVE_GAMMA_MAX
+                                       ? " (up to 100 with the implicit stepper)" : "");
     int s = bkf_model_check_nonnegative("c", p->c, err);
     if (!s) s = bkf_model_check_nu_active(p->nu, err);
     if (!s) s = bkf_model_check_positive("S", p->S, err);
@@ -77,6 +85,10 @@ int bkf_chainwave_check(const bkf_model_params *p, size_t n, const bkf_chainwave
                              BKF_CHAINWAVE_TOL_MIN, BKF_CHAINWAVE_TOL_MAX);
     if (o->max_steps < 1)
         return bkf_error_set(err, BKF_EINPUT, "max_steps = 0 must be >= 1");
+    if (o->stepper != BKF_CHAINWAVE_STEPPER_AUTO && o->stepper != BKF_CHAINWAVE_STEPPER_EXPLICIT &&
+        o->stepper != BKF_CHAINWAVE_STEPPER_IMPLICIT)
+        return bkf_error_set(err, BKF_EINPUT, "stepper = %d is not auto (0), explicit (1) or "
+                             "implicit (2)", (int)o->stepper);
     return BKF_OK;
 }
 
@@ -94,6 +106,7 @@ typedef struct {
     double *dphi; /* gamma (psi_i^2 - 1) at the current stage */
     size_t max_steps;
     size_t steps;
+    bkf_chainwave_stepper stepper;
 } flow_ctx;
 
 static double lap(const double *x, size_t i, size_t N)
@@ -111,10 +124,10 @@ static void eta_coupling(const double *x, double *f, size_t N, double a, double 
     f[N - 1] = a * x[N - 1] + b * (x[0] + x[N - 2]);
 }
 
-static int chain_rhs(double t, const double *y, double *f, void *data)
+/* The chain's field at y = (psi, eta) into f; c->dphi keeps the friction's
+ * slopes there for the variational columns. */
+static void base_rhs(flow_ctx *c, const double *y, double *f)
 {
-    (void)t;
-    flow_ctx *c = data;
     size_t N = c->N;
     double g = c->gamma, K = c->K;
     /* -(x - K (x+ - 2x + x-))/g = a x + b (x+ + x-) */
@@ -127,26 +140,209 @@ static int chain_rhs(double t, const double *y, double *f, void *data)
     }
     eta_coupling(psi, f + N, N, a, b);
     for (size_t i = 0; i < N; i++) f[N + i] += c->nu / g;
-    for (size_t j = 0; j < c->ncols; j++) {
-        const double *w = y + 2 * N * (j + 1);
-        double *fw = f + 2 * N * (j + 1);
-        for (size_t i = 0; i < N; i++) fw[i] = g * w[N + i] - c->dphi[i] * w[i];
-        eta_coupling(w, fw + N, N, a, b);
-    }
-    if (c->sens) {
-        double *fk = f + 2 * N * c->ncols;
-        if (c->sens_param == BKF_CHAINWAVE_PARAM_NU)
-            for (size_t i = 0; i < N; i++) fk[N + i] += 1.0 / g;
-        else if (c->sens_param == BKF_CHAINWAVE_PARAM_GAMMA)
-            for (size_t i = 0; i < N; i++) {
-                double p = psi[i];
-                fk[i] += eta[i] - (p * p * p / 3.0 - p);
-                fk[N + i] += (p - c->nu - K * lap(psi, i, N)) / (g * g);
-            }
-        else
-            for (size_t i = 0; i < N; i++) fk[N + i] += lap(psi, i, N) / g;
-    }
+}
+
+/* One variational column: fw = J(y) w, with c->dphi set by base_rhs at y. */
+static void column_rhs(const flow_ctx *c, const double *w, double *fw)
+{
+    size_t N = c->N;
+    double g = c->gamma, a = -(1.0 + 2.0 * c->K) / g, b = c->K / g;
+    for (size_t i = 0; i < N; i++) fw[i] = g * w[N + i] - c->dphi[i] * w[i];
+    eta_coupling(w, fw + N, N, a, b);
+}
+
+/* The inhomogeneous part of the sensitivity column: d(field)/d(parameter)
+ * at y, added to fk. */
+static void param_rhs(const flow_ctx *c, const double *y, double *fk)
+{
+    size_t N = c->N;
+    double g = c->gamma, K = c->K;
+    const double *psi = y, *eta = y + N;
+    if (c->sens_param == BKF_CHAINWAVE_PARAM_NU)
+        for (size_t i = 0; i < N; i++) fk[N + i] += 1.0 / g;
+    else if (c->sens_param == BKF_CHAINWAVE_PARAM_GAMMA)
+        for (size_t i = 0; i < N; i++) {
+            double p = psi[i];
+            fk[i] += eta[i] - (p * p * p / 3.0 - p);
+            fk[N + i] += (p - c->nu - K * lap(psi, i, N)) / (g * g);
+        }
+    else
+        for (size_t i = 0; i < N; i++) fk[N + i] += lap(psi, i, N) / g;
+}
+
+static int chain_rhs(double t, const double *y, double *f, void *data)
+{
+    (void)t;
+    flow_ctx *c = data;
+    size_t N = c->N;
+    base_rhs(c, y, f);
+    for (size_t j = 0; j < c->ncols; j++) column_rhs(c, y + 2 * N * (j + 1), f + 2 * N * (j + 1));
+    if (c->sens) param_rhs(c, y, f + 2 * N * c->ncols);
     return GSL_SUCCESS;
+}
+
+/* ------------------------------------------- the implicit flow (CVODES) */
+
+/* Above BKF_CHAINWAVE_GAMMA_EXPLICIT the blocks' cycle is a stiff
+ * relaxation oscillation: on its slow branches the friction's slope
+ * gamma (psi^2 - 1) ~ 3 gamma limits an explicit step to ~1/gamma while
+ * the branch takes ~gamma.  There the flow and its variational columns
+ * are integrated by CVODES: BDF on the 2N states with the analytic
+ * Jacobian (dense: the ring's corners make a band as wide as the chain),
+ * the 2N + 1 columns as forward sensitivities (staggered corrector on the
+ * same Newton matrix, their errors controlled too). */
+typedef struct {
+    flow_ctx *c;
+    char message[200];
+} implicit_ctx;
+
+static int cv_rhs(realtype t, N_Vector y, N_Vector f, void *data)
+{
+    (void)t;
+    implicit_ctx *x = data;
+    base_rhs(x->c, N_VGetArrayPointer(y), N_VGetArrayPointer(f));
+    return 0;
+}
+
+static int cv_jac(realtype t, N_Vector y, N_Vector f, SUNMatrix J, void *data, N_Vector t1,
+                  N_Vector t2, N_Vector t3)
+{
+    (void)t, (void)f, (void)t1, (void)t2, (void)t3;
+    implicit_ctx *x = data;
+    const flow_ctx *c = x->c;
+    size_t N = c->N;
+    const double *psi = N_VGetArrayPointer(y);
+    double g = c->gamma, a = -(1.0 + 2.0 * c->K) / g, b = c->K / g;
+    SUNMatZero(J);
+    for (size_t i = 0; i < N; i++) {
+        SM_ELEMENT_D(J, i, i) = -g * (psi[i] * psi[i] - 1.0);
+        SM_ELEMENT_D(J, i, N + i) = g;
+        SM_ELEMENT_D(J, N + i, i) += a;
+        SM_ELEMENT_D(J, N + i, (i + 1) % N) += b;
+        SM_ELEMENT_D(J, N + i, (i + N - 1) % N) += b;
+    }
+    return 0;
+}
+
+static int cv_sens(int ns, realtype t, N_Vector y, N_Vector ydot, N_Vector *yS, N_Vector *ySdot,
+                   void *data, N_Vector t1, N_Vector t2)
+{
+    (void)t, (void)ydot, (void)t1, (void)t2;
+    implicit_ctx *x = data;
+    flow_ctx *c = x->c;
+    const double *Y = N_VGetArrayPointer(y);
+    for (size_t i = 0; i < c->N; i++) c->dphi[i] = c->gamma * (Y[i] * Y[i] - 1.0);
+    for (int j = 0; j < ns; j++)
+        column_rhs(c, N_VGetArrayPointer(yS[j]), N_VGetArrayPointer(ySdot[j]));
+    param_rhs(c, Y, N_VGetArrayPointer(ySdot[ns - 1]));
+    return 0;
+}
+
+static void cv_errors(int code, const char *module, const char *function, char *msg, void *data)
+{
+    (void)code, (void)module;
+    implicit_ctx *x = data;
+    snprintf(x->message, sizeof x->message, "%s: %s", function, msg);
+}
+
+/* BDF's global error is a multiple of its local tolerance, and its step
+ * sequence (so its map) jumps with x at that level, which stalls Newton
+ * above the caller's tolerance; the local tolerance is this much tighter
+ * than the explicit stepper's. */
+#ifndef IMPLICIT_TOL_FACTOR
+#define IMPLICIT_TOL_FACTOR 1e-3
+#endif
+
+static int flow_implicit(flow_ctx *c, const double *u, double tau, double tol, double *out,
+                         double *M, double *dk, bkf_error *err)
+{
+    size_t N = c->N, n2 = 2 * N;
+    int jac = M != NULL, ns = (int)n2 + 1;
+    implicit_ctx x = {c, ""};
+    tol *= IMPLICIT_TOL_FACTOR;
+    SUNContext ctx = NULL;
+    void *cv = NULL;
+    N_Vector y = NULL, *yS = NULL;
+    SUNMatrix A = NULL;
+    SUNLinearSolver LS = NULL;
+    int s = BKF_OK;
+    if (SUNContext_Create(NULL, &ctx) || !(y = N_VNew_Serial((sunindextype)n2, ctx)) ||
+        !(cv = CVodeCreate(CV_BDF, ctx)) ||
+        !(A = SUNDenseMatrix((sunindextype)n2, (sunindextype)n2, ctx)) ||
+        !(LS = SUNLinSol_Dense(y, A, ctx)) || (jac && !(yS = N_VCloneVectorArray(ns, y)))) {
+        s = bkf_error_set(err, BKF_ENOMEM, "chainwave: out of memory");
+        goto done;
+    }
+    memcpy(N_VGetArrayPointer(y), u, n2 * sizeof(double));
+    if (jac)
+        for (int j = 0; j < ns; j++) {
+            N_VConst(0.0, yS[j]);
+            if (j < (int)n2) N_VGetArrayPointer(yS[j])[j] = 1.0;
+        }
+    if (CVodeSetErrHandlerFn(cv, cv_errors, &x) || CVodeInit(cv, cv_rhs, 0.0, y) ||
+        CVodeSetUserData(cv, &x) || CVodeSStolerances(cv, tol, tol) ||
+        CVodeSetLinearSolver(cv, LS, A) || CVodeSetJacFn(cv, cv_jac) ||
+        CVodeSetMaxNumSteps(cv, (long)c->max_steps) || CVodeSetStopTime(cv, tau)) {
+        s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: CVODES set-up failed: %s", x.message);
+        goto done;
+    }
+    if (jac) {
+        double *atol = malloc((size_t)ns * sizeof *atol);
+        if (!atol) {
+            s = bkf_error_set(err, BKF_ENOMEM, "chainwave: out of memory");
+            goto done;
+        }
+        for (int j = 0; j < ns; j++) atol[j] = tol;
+        int bad = CVodeSensInit(cv, ns, CV_STAGGERED, cv_sens, yS) ||
+                  CVodeSensSStolerances(cv, tol, atol) || CVodeSetSensErrCon(cv, SUNTRUE);
+        free(atol);
+        if (bad) {
+            s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: CVODES set-up failed: %s",
+                              x.message);
+            goto done;
+        }
+    }
+    double t = 0.0;
+    int cs = CVode(cv, tau, y, &t, CV_NORMAL);
+    long nst = 0;
+    CVodeGetNumSteps(cv, &nst);
+    c->steps += (size_t)nst;
+    if (cs == CV_TOO_MUCH_WORK) {
+        s = bkf_error_set(err, BKF_EBUDGET, "chainwave: the flow over tau = %g needs more than "
+                          "max_steps = %zu steps", tau, c->max_steps);
+        goto done;
+    }
+    if (cs < 0) {
+        s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: integration over tau = %g failed (%s)",
+                          tau, x.message);
+        goto done;
+    }
+    if (jac && CVodeGetSens(cv, &t, yS)) {
+        s = bkf_error_set(err, BKF_ENUMERIC, "chainwave: CVODES sensitivities: %s", x.message);
+        goto done;
+    }
+    const double *Y = N_VGetArrayPointer(y);
+    for (size_t i = 0; i < n2; i++)
+        if (!isfinite(Y[i])) {
+            s = bkf_error_set(err, BKF_EBLOWUP, "chainwave: the flow over tau = %g blew up", tau);
+            goto done;
+        }
+    memcpy(out, Y, n2 * sizeof *out);
+    if (jac) {
+        for (size_t j = 0; j < n2; j++) {
+            const double *w = N_VGetArrayPointer(yS[j]);
+            for (size_t i = 0; i < n2; i++) M[i * n2 + j] = w[i];
+        }
+        memcpy(dk, N_VGetArrayPointer(yS[n2]), n2 * sizeof *dk);
+    }
+done:
+    if (yS) N_VDestroyVectorArray(yS, ns);
+    if (LS) SUNLinSolFree(LS);
+    if (A) SUNMatDestroy(A);
+    if (cv) CVodeFree(&cv);
+    if (y) N_VDestroy(y);
+    if (ctx) SUNContext_Free(&ctx);
+    return s;
 }
 
 /* Integrates u over tau at relative and absolute tolerance tol; with jac,
@@ -154,6 +350,9 @@ static int chain_rhs(double t, const double *y, double *f, void *data)
 static int flow(flow_ctx *c, const double *u, double tau, double tol, double *out, double *M,
                 double *dk, bkf_error *err)
 {
+    if (c->stepper == BKF_CHAINWAVE_STEPPER_IMPLICIT ||
+        (c->stepper == BKF_CHAINWAVE_STEPPER_AUTO && c->gamma > BKF_CHAINWAVE_GAMMA_EXPLICIT))
+        return flow_implicit(c, u, tau, tol, out, M, dk, err);
     size_t N = c->N, n2 = 2 * N;
     int jac = M != NULL;
     c->ncols = jac ? n2 + 1 : 0;
@@ -451,6 +650,7 @@ static void flow_init(flow_ctx *c, const bkf_model_params *p, const bkf_chainwav
     double h = p->S / (double)p->N;
     c->K = p->c * p->c / (h * h);
     c->max_steps = o->max_steps;
+    c->stepper = o->stepper;
 }
 
 /* Solve from x at two integration tolerances (tol/10, tol/100) and fill wave. */
@@ -521,9 +721,15 @@ static int solve_x(flow_ctx *c, work *w, const bkf_model_params *p, size_t n, do
     if (wave->v_err > o->tol * wave->v)
         s = bkf_error_set(err, BKF_ETOL, "chainwave: estimated relative error %.3g of v for "
                           "n = %zu exceeds tol %g", wave->v_err / wave->v, n, o->tol);
-    else if (o->stability && wave->mult_abs_err > o->tol)
+    /* absolute on |m| up to 1, relative beyond: the verdict is decided at
+       |m| = 1, and above it |m| is exp(sigma_max tau), whose relative error
+       is the absolute error of the growth exponent (the continuum's sigma
+       is asked to tol absolute); an absolute tol on |m| ~ 200 (gamma 10,
+       n 6) asked 14 digits of it and refused whole tables */
+    else if (o->stability && wave->mult_abs_err > o->tol * fmax(1.0, wave->mult_abs))
         s = bkf_error_set(err, BKF_ETOL, "chainwave: estimated error %.3g of the leading "
-                          "multiplier for n = %zu exceeds tol %g", wave->mult_abs_err, n, o->tol);
+                          "multiplier |m| = %.6g for n = %zu exceeds tol %g x max(1, |m|)",
+                          wave->mult_abs_err, wave->mult_abs, n, o->tol);
     if (s) bkf_chainwave_clear(wave);
     return s;
 }

@@ -24,10 +24,12 @@ static bkf_model_params chain(size_t N, double S)
     return p;
 }
 
-static bkf_chainwave find_one(const bkf_model_params *p, size_t n, double tol)
+static bkf_chainwave find_with(const bkf_model_params *p, size_t n, double tol,
+                               bkf_chainwave_stepper stepper)
 {
     bkf_chainwave_options o = bkf_chainwave_options_default();
     o.tol = tol;
+    o.stepper = stepper;
     bkf_chainwave_table t;
     bkf_error e;
     int s = bkf_chainwave_find(p, n, n, &o, &t, &e);
@@ -37,6 +39,11 @@ static bkf_chainwave find_one(const bkf_model_params *p, size_t n, double tol)
     t.count = 0;
     bkf_chainwave_table_free(&t);
     return w;
+}
+
+static bkf_chainwave find_one(const bkf_model_params *p, size_t n, double tol)
+{
+    return find_with(p, n, tol, BKF_CHAINWAVE_STEPPER_AUTO);
 }
 
 /* n = N: every block on the global oscillation, P = T(mu = gamma); the
@@ -163,7 +170,9 @@ TEST(chainwave_antiphase_is_two_blocks)
 /* As h -> 0 at fixed S and n the lattice Laplacian on a mode of
  * wavenumber q is -(4/h^2) sin^2(q h/2) = -q^2 (1 - q^2 h^2/12 + ...): the
  * speed converges to the continuum root at second order, error ratio 4
- * per halving of h. */
+ * per halving of h, once h is well below the front's width (n = 1 here;
+ * n = 4's fronts are ~1 block wide up to 80 blocks and reach the ratio 4
+ * only beyond 160: docs/numerics.md). */
 TEST(chainwave_continuum_limit_second_order)
 {
     bkf_model_params cont = bkf_model_params_paper();
@@ -287,4 +296,71 @@ TEST(chainwave_bad_input)
     p.nu = -0.96;
     o.tol = 1.0;
     CHECK_STATUS(bkf_chainwave_check(&p, 1, &o, &e), BKF_EINPUT);
+}
+
+/* A strongly unstable wave (gamma 10, n 6 on 20 blocks: |m| ~ 200) at tol
+ * 1e-8: its modulus is asked to tol |m| (absolute on ln|m|), not to 1e-8
+ * absolute, so the wave is answered (it was refused, and with it the whole
+ * table); the verdict is certain and the estimate covers the distance to
+ * a solve at tol 1e-10 (plus that solve's own estimate). */
+TEST(chainwave_large_multiplier_tolerance_is_relative)
+{
+    bkf_model_params p = chain(20, 20.0);
+    p.gamma = 10.0;
+    bkf_chainwave a = find_one(&p, 6, 1e-8), b = find_one(&p, 6, 1e-10);
+    CHECK(a.verdict == BKF_CHAINWAVE_UNSTABLE && b.verdict == BKF_CHAINWAVE_UNSTABLE);
+    CHECK(a.mult_abs > 100.0);
+    /* beyond 1e-8 absolute: the case the old tolerance refused */
+    CHECK(a.mult_abs_err > 1e-8 && a.mult_abs_err <= 1e-8 * a.mult_abs);
+    double dm = fabs(a.mult_abs - b.mult_abs), dv = fabs(a.v - b.v);
+    CHECK_MSG(dm <= a.mult_abs_err + b.mult_abs_err, "|m| %.15g vs %.15g, estimate %.3g",
+              a.mult_abs, b.mult_abs, a.mult_abs_err);
+    CHECK(dv <= a.v_err + b.v_err);
+    bkf_test_note("n = 6: |m| = %.15g +- %.2g (tol 1e-10: %.15g +- %.2g), |dm| = %.2g, "
+                  "v %.15g, |dv| = %.2g (v_err %.2g)", a.mult_abs, a.mult_abs_err, b.mult_abs,
+                  b.mult_abs_err, dm, a.v, dv, a.v_err);
+    bkf_chainwave_clear(&a);
+    bkf_chainwave_clear(&b);
+}
+
+/* The implicit stepper (CVODES: BDF, the variational columns as
+ * sensitivities).  At gamma 40, beyond the explicit stepper's range: n = N
+ * is the global oscillation, P = T(mu = gamma) of the cycle engine.  At
+ * gamma 10 a travelling wave agrees with the explicit stepper at a tight
+ * tol (they share nothing but the right-hand side). */
+TEST(chainwave_implicit_stepper)
+{
+    bkf_model_params p = chain(8, 8.0);
+    p.gamma = 40.0;
+    p.nu = -0.92;
+    bkf_chainwave u = find_with(&p, 8, 1e-6, BKF_CHAINWAVE_STEPPER_IMPLICIT);
+    bkf_cycle_options co = bkf_cycle_options_default();
+    co.tol = 1e-12;
+    bkf_cycle_result cr;
+    bkf_error e;
+    CHECK(bkf_cycle_period(p.gamma, p.nu, &co, &cr, &e) == BKF_OK);
+    CHECK_MSG(fabs(u.P - cr.period) <= u.P_err + 1e-12 * cr.period && u.P_err <= 1e-6 * u.P,
+              "P %.15g +- %.2g, T %.15g", u.P, u.P_err, cr.period);
+    bkf_test_note("gamma 40, n = N = 8: P = %.15g +- %.2g, T(40) = %.15g, |m| %.9f +- %.2g, "
+                  "%zu steps", u.P, u.P_err, cr.period, u.mult_abs, u.mult_abs_err, u.steps);
+    bkf_chainwave_clear(&u);
+    /* without the option gamma 40 is refused, naming gamma */
+    bkf_chainwave_options o = bkf_chainwave_options_default();
+    CHECK_STATUS(bkf_chainwave_check(&p, 8, &o, &e), BKF_EINPUT);
+    CHECK(strstr(e.message, "gamma = 40") != NULL);
+
+    p.gamma = 10.0;
+    bkf_chainwave a = find_with(&p, 2, 1e-6, BKF_CHAINWAVE_STEPPER_IMPLICIT);
+    bkf_chainwave b = find_with(&p, 2, 1e-9, BKF_CHAINWAVE_STEPPER_EXPLICIT);
+    CHECK_MSG(fabs(a.v - b.v) <= a.v_err + b.v_err, "v %.15g +- %.2g, explicit %.15g", a.v,
+              a.v_err, b.v);
+    CHECK_MSG(fabs(a.mult_abs - b.mult_abs) <= a.mult_abs_err + b.mult_abs_err,
+              "|m| %.15g +- %.2g, explicit %.15g", a.mult_abs, a.mult_abs_err, b.mult_abs);
+    CHECK(a.verdict == b.verdict && a.verdict != BKF_CHAINWAVE_UNRESOLVED);
+    bkf_test_note("gamma 10, n = 2: v %.15g +- %.2g (explicit %.15g), |m| %.12g +- %.2g "
+                  "(explicit %.12g), %s; steps %zu (explicit %zu)", a.v, a.v_err, b.v,
+                  a.mult_abs, a.mult_abs_err, b.mult_abs, bkf_chainwave_verdict_name(a.verdict),
+                  a.steps, b.steps);
+    bkf_chainwave_clear(&a);
+    bkf_chainwave_clear(&b);
 }
