@@ -567,6 +567,7 @@ typedef struct {
     double log_mult;     /* L at the return */
     double xmax, xmin;
     double px, py;       /* the parameter sensitivity at the return (branch shots) */
+    double xdot;         /* x' at the return */
 } shot;
 
 static int node_push(bkf_cycle *c, double t, const double *s)
@@ -665,6 +666,7 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
     out->xmin = xmin;
     out->px = sr[IPX];
     out->py = sr[IPY];
+    out->xdot = flow_xdot(p, sr);
     return BKF_OK;
 }
 
@@ -1374,6 +1376,10 @@ typedef struct {
     int visit_status;
     bkf_error *err;
     double from, to, q_from, q_to;
+    /* the last accepted point and its tangent, for the amplitude stretches */
+    double last_u[2], last_t[2];
+    int have_last, skip_visit, steep, landed;
+    size_t rows;
 } branch_ctx;
 
 static void branch_params(const branch_ctx *b, double q, double *mu, double *nu)
@@ -1388,13 +1394,22 @@ static void branch_params(const branch_ctx *b, double q, double *mu, double *nu)
  * moves with q, and so do the section and the scaling of w = a (y - b F(nu));
  * y' = 0 on the section, so the moving return time leaves dy/dq = py. */
 static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, double *dg,
-                       bkf_error *err)
+                       double *ln_t, double *dln_t, bkf_error *err)
 {
     double mu, nu;
     branch_params(b, q, &mu, &nu);
     if (check_inputs(mu, nu, NULL, err) != BKF_OK)
         return bkf_error_set(err, BKF_ENUMERIC, "branch left the valid range at mu = %.15g, nu = %.15g", mu,
                              nu);
+    /* Shots for nu < 0 are those of the mirror image x -> -x, at -nu (same
+     * T): there the section x = nu lies where the jump leaves the left
+     * knee, f'(0) is tiny (4e-3 at mu 848, nu -0.999) and ln f'(0) carries
+     * the return's absolute error magnified 1/f'(0) (G noisy at 1e-8, above
+     * the corrector's tolerance); at -nu it is crossed mid-jump. */
+    /* (Only on branches along mu: along nu the direct shots pass 0 -> -0.999
+     * at mu 10, while the mirror's fail at nu 0.99874 as 0 -> 0.999 does.) */
+    double mirror = b->along == BKF_CYCLE_ALONG_MU && nu < 0 ? -1.0 : 1.0;
+    nu *= mirror;
     flow_params p = {0};
     flow_set(&p, mu, nu);
     int along_mu = b->along == BKF_CYCLE_ALONG_MU;
@@ -1420,7 +1435,16 @@ static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, d
                                                p.a * (sh.py - mu * Fn / (a2 * p.a))
                                          : p.a * (sh.py - p.b * (nu * nu - 1.0));
                     dg[0] = sh.dP * w0 / w_return - 1.0;
-                    dg[1] = dw / w_return;
+                    dg[1] = (along_mu ? 1.0 : mirror) * dw / w_return;
+                }
+                if (ln_t) {
+                    /* the return time and its derivatives (y0 moves by w0/a
+                     * per unit ln w0; x(T) = nu, which moves along nu) */
+                    *ln_t = log(sh.period);
+                    if (dln_t && dg) {
+                        dln_t[0] = sh.dT * w0 / p.a / sh.period;
+                        dln_t[1] = (along_mu ? -sh.px : mirror * (1.0 - sh.px)) / (sh.xdot * sh.period);
+                    }
                 }
             }
         }
@@ -1433,18 +1457,36 @@ static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, d
 static int branch_residual(const double *u, double *g, double *jac, void *data, bkf_error *err)
 {
     const branch_ctx *b = data;
-    int rc = branch_shot(b, u[0], u[1], g, jac, err);
+    int rc = branch_shot(b, u[0], u[1], g, jac, NULL, NULL, err);
     return rc == BKF_OK || rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
 }
 
 /* The loosest tolerance a refused branch point is retried at. */
 #define BRANCH_RELAX_MAX 1e-6
 
+/* Where the branch's tangent in (ln f'(0), q) has a q component below
+ * STEEP_ENTER the cycle is inside a canard explosion: its amplitude changes
+ * by O(1) over an interval of q as narrow as 1e-9 (mu 11.2, nu 0.999), G
+ * moves by dG/dq ~ 1e9 per unit q, and the corrector in q stops on its step
+ * (1e-11) with the residual still at the integration noise (1e-2).  There the
+ * amplitude is the parameter (branch_amplitude) until the tangent's q
+ * component is back above STEEP_LEAVE. */
+#define STEEP_ENTER 1e-3
+#define STEEP_LEAVE 0.5
+
 static int branch_accept(const double *u, const double *tangent, int is_fold, void *data)
 {
-    (void)tangent;
     (void)is_fold; /* T(mu) and T(nu) have no folds; a located one is still a valid point */
     branch_ctx *b = data;
+    memcpy(b->last_u, u, sizeof b->last_u);
+    if (tangent) memcpy(b->last_t, tangent, sizeof b->last_t);
+    b->have_last = 1;
+    if (b->skip_visit) {
+        /* a restart's first point, visited already at the end of the last stretch */
+        b->skip_visit = 0;
+        return 0;
+    }
+    bkf_error solve_err;
     double mu, nu, q = u[1];
     /* the ends are requested values: give them back exactly, not exp(ln A) */
     if (fabs(q - b->q_from) <= 1e-12 * fmax(1.0, fabs(q))) q = b->q_from;
@@ -1452,8 +1494,11 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     branch_params(b, q, &mu, &nu);
     if (q == b->q_from) *(b->along == BKF_CYCLE_ALONG_MU ? &mu : &nu) = b->from;
     if (q == b->q_to) *(b->along == BKF_CYCLE_ALONG_MU ? &mu : &nu) = b->to;
-    b->cycle->warm_slope = exp(u[0]);
-    int rc = bkf_cycle_solve(b->cycle, mu, nu, &b->options, b->err);
+    /* (u[0] is the mirror's slope for nu < 0: the solve then starts from the
+     * previous point's cycle) */
+    double warm = nu >= 0 || b->along == BKF_CYCLE_ALONG_NU ? exp(u[0]) : 0.0;
+    b->cycle->warm_slope = warm;
+    int rc = bkf_cycle_solve(b->cycle, mu, nu, &b->options, &solve_err);
     /* A point whose T cannot be had to tol (inside the canard explosion T
      * moves by dT/dmu ~ 1e5 at mu 3.65, nu 0.99, and forward shooting
      * amplifies the integration's rounding by as much: the solve refuses,
@@ -1463,8 +1508,8 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     int refused = bkf_status_is_numerical(rc);
     while (bkf_status_is_numerical(rc) && relaxed.tol < BRANCH_RELAX_MAX) {
         relaxed.tol = fmin(10.0 * relaxed.tol, BRANCH_RELAX_MAX);
-        b->cycle->warm_slope = exp(u[0]);
-        rc = bkf_cycle_solve(b->cycle, mu, nu, &relaxed, b->err);
+        b->cycle->warm_slope = warm;
+        rc = bkf_cycle_solve(b->cycle, mu, nu, &relaxed, &solve_err);
         if (rc == BKF_OK) b->cycle->result.model = "shooting-relaxed";
     }
     if (refused && rc != BKF_OK && rc != BKF_ENOMEM) {
@@ -1476,17 +1521,158 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
             b->visit_status = -1;
             return 1;
         }
-        return 0;
+    } else {
+        if (rc != BKF_OK) {
+            if (b->err) *b->err = solve_err;
+            b->visit_status = rc;
+            return 1;
+        }
+        if (b->visit(&b->cycle->result, b->visit_data) != 0) {
+            b->visit_status = -1;
+            return 1;
+        }
     }
-    if (rc != BKF_OK) {
-        b->visit_status = rc;
-        return 1;
-    }
-    if (b->visit(&b->cycle->result, b->visit_data) != 0) {
-        b->visit_status = -1;
+    b->rows++;
+    if (tangent && fabs(tangent[1]) < STEEP_ENTER && q != b->q_to) {
+        b->steep = 1;
         return 1;
     }
     return 0;
+}
+
+/* q where G(ln w0, q) = 0 at a fixed amplitude ln w0, beyond q0 in the
+ * direction dir (q is monotone on the branch: dG/d ln w0 = P' - 1 < 0 on an
+ * attracting cycle, so q never folds), by a bracket grown from the
+ * predicted step and Illinois regula falsi.  No Newton step in q: inside a
+ * canard G is noisy at 1e-2 while dG/dq ~ 1e9, and at the corner where the
+ * canard grows its head dG/dq does not even have its sign.  The root is
+ * known to the band where the noise hides the sign of G: a bracket below
+ * 1e-13 of q ends the search (the row is solved afresh at that q anyway).
+ * *dg: the derivatives at the root. */
+static int branch_solve_q(const branch_ctx *b, double ln_w0, double q0, double step, int dir, double tol,
+                          double reach, double *q, double *dg, int *shots, bkf_error *err)
+{
+    const double band = 1e-13 * fmax(1.0, fabs(q0));
+    double a = q0, ga, x, gx;
+    int rc = branch_shot(b, ln_w0, a, &ga, dg, NULL, NULL, err);
+    *shots = 1;
+    if (rc != BKF_OK) return rc;
+    if (fabs(ga) <= tol) {
+        *q = a;
+        return BKF_OK;
+    }
+    double d = fmax(fabs(step), band), g0 = ga;
+    for (int way = dir;;) {
+        if (d > reach) {
+            /* a canard narrower than its noise (mu 10, nu 0.998740451245:
+             * ~1e-12 in nu) may hold the last point past this amplitude's root */
+            if (way != dir) return bkf_error_set(err, BKF_ENUMERIC, "no root of G within %g of q = %.15g", reach, q0);
+            way = -dir;
+            d = fmax(fabs(step), band);
+            a = q0;
+            ga = g0;
+        }
+        x = q0 + way * d;
+        rc = branch_shot(b, ln_w0, x, &gx, dg, NULL, NULL, err);
+        ++*shots;
+        if (rc != BKF_OK) return rc;
+        if ((gx > 0) != (ga > 0) || fabs(gx) <= tol) break;
+        a = x;
+        ga = gx;
+        d *= 4.0;
+    }
+    int side = 0;
+    for (int it = 0; it < 100 && fabs(gx) > tol && fabs(x - a) > band; it++) {
+        double c = x - gx * (x - a) / (gx - ga), gc;
+        if (!(c > fmin(a, x) && c < fmax(a, x))) c = 0.5 * (a + x);
+        rc = branch_shot(b, ln_w0, c, &gc, dg, NULL, NULL, err);
+        ++*shots;
+        if (rc != BKF_OK) return rc;
+        if ((gc > 0) == (gx > 0)) {
+            x = c;
+            gx = gc;
+            if (side == 1) ga *= 0.5;
+            side = 1;
+        } else {
+            a = x;
+            ga = gx;
+            x = c;
+            gx = gc;
+            side = -1;
+        }
+    }
+    *q = x;
+    return BKF_OK;
+}
+
+/* Through a canard: steps in ln w0 from the last accepted point, q solved
+ * at each (the amplitude as the parameter, as AUTO-like codes continue in a
+ * shape measure where the parameter barely moves).  In (ln w0, q) the
+ * canard is a segment at one q (to 1e-9), reached through a corner that
+ * pseudo-arclength steps above step_min cannot turn; at fixed ln w0 the
+ * root in q is smooth.  (While a canard grows its head the jump through
+ * the section, and so ln w0, stay the relaxation cycle's: that part of the
+ * canard is a point of the plane and is stepped over; its cycles exist
+ * only within ~1e-9 of q, where no row meets even 1e-6.)  The amplitude
+ * moves along sign(dG/dq) times dir; if no root lies that way the other.
+ * Returns once the branch leans back towards q (the tangent's q component
+ * above STEEP_LEAVE), with the last point in b->last_u; on the way the
+ * points are visited.  A canard across the end lands on it (b->landed). */
+static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced, bkf_error *err)
+{
+    /* entered after a failed stretch: not back before the canard */
+    int seen_steep = !forced, shots = 0, tries = 0;
+    double u[2] = {b->last_u[0], b->last_u[1]}, dg[2], g;
+    const double h_min = 1e-6, h_max = 0.25, tol = fmax(1e-10, 10.0 * b->options.tol);
+    int rc = branch_shot(b, u[0], u[1], &g, dg, NULL, NULL, err);
+    if (rc != BKF_OK) return rc;
+    double sign = (dg[1] > 0 ? 1.0 : -1.0) * dir, h = 0.02, slope = fabs(dg[0] / dg[1]);
+    for (int steps = 0; b->rows < max_rows;) {
+        double lw = u[0] + sign * h, q = u[1];
+        double reach = fmax(1e-6 * fmax(1.0, fabs(u[1])), 8.0 * slope * h);
+        rc = branch_solve_q(b, lw, u[1], slope * h, dir, tol, reach, &q, dg, &shots, err);
+        if (rc == BKF_OK && (q - b->q_to) * dir >= 0) {
+            /* the end lies inside the canard: land on it, ln w0 by Newton
+             * at q = q_to (dG/d ln w0 = P' - 1 is well away from 0) */
+            double x = u[0] + (lw - u[0]) * (b->q_to - u[1]) / (q - u[1]);
+            double lo = fmin(u[0], lw), hi = fmax(u[0], lw);
+            for (int it = 0; it < 20; it++) {
+                rc = branch_shot(b, x, b->q_to, &g, dg, NULL, NULL, err);
+                if (rc != BKF_OK) return rc;
+                double next = fmin(hi, fmax(lo, x - g / dg[0]));
+                if (fabs(g) <= tol || fabs(next - x) <= 1e-12 * fmax(1.0, fabs(x))) break;
+                x = next;
+            }
+            double end[2] = {x, b->q_to};
+            b->landed = 1;
+            branch_accept(end, NULL, 0, b);
+            return BKF_OK;
+        }
+        if (rc != BKF_OK) {
+            if (rc == BKF_ENOMEM) return rc;
+            if (steps == 0 && tries++ == 0) {
+                sign = -sign; /* at the corner dG/dq's sign said nothing */
+                continue;
+            }
+            h *= 0.5;
+            if (h < h_min) return rc;
+            continue;
+        }
+        steps++;
+        slope = fabs(q - u[1]) / h;
+        u[0] = lw;
+        u[1] = q;
+        double norm = hypot(dg[0], dg[1]);
+        /* the unit null vector of (dG/d ln w0, dG/dq), pointing along the walk */
+        double t[2] = {sign * fabs(dg[1]) / norm, dir * fabs(dg[0]) / norm};
+        if (branch_accept(u, t, 0, b) && !b->steep) return BKF_OK; /* visit asked to stop */
+        b->steep = 0;
+        if (fabs(t[1]) < STEEP_ENTER) seen_steep = 1;
+        if (fabs(t[1]) > STEEP_LEAVE && (seen_steep || steps >= 10)) return BKF_OK;
+        if (shots <= 6) h = fmin(1.5 * h, h_max);
+        else if (shots > 12) h = fmax(0.5 * h, h_min);
+    }
+    return BKF_OK;
 }
 
 static int cycle_branch_body(bkf_cycle_param along, double from, double to, double fixed,
@@ -1507,7 +1693,8 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
     if (rc != BKF_OK) return rc;
     if (from == to) return bkf_error_set(err, BKF_EINPUT, "branch needs from != to");
 
-    branch_ctx b = {along, fixed, opt, bkf_cycle_alloc(), visit, data, 0, err, 0.0, 0.0, 0.0, 0.0};
+    branch_ctx b = {.along = along, .fixed = fixed, .options = opt, .cycle = bkf_cycle_alloc(),
+                    .visit = visit, .visit_data = data, .err = err};
     if (!b.cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     rc = bkf_cycle_solve(b.cycle, mu_from, nu_from, &opt, err);
     if (rc != BKF_OK) {
@@ -1522,6 +1709,16 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
     b.q_to = q_to;
     double u0[2] = {log(b.cycle->result.section_slope), q_from};
     b.cycle->have_solution = 0; /* the first accepted point solves it again, from u0 */
+    if (nu_from < 0 && along == BKF_CYCLE_ALONG_MU) {
+        /* the branch's shots are the mirror's (branch_shot): its slope */
+        rc = bkf_cycle_solve(b.cycle, mu_from, -nu_from, &opt, err);
+        if (rc != BKF_OK) {
+            bkf_cycle_free(b.cycle);
+            return rc;
+        }
+        u0[0] = log(b.cycle->result.section_slope);
+        b.cycle->have_solution = 0;
+    }
 
     bkf_cont_options co = bkf_cont_options_default(1);
     co.step_max = along == BKF_CYCLE_ALONG_MU ? 0.7 : 0.05;
@@ -1530,11 +1727,39 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
     co.stop_index = 1;
     co.stop_min = fmin(q_from, q_to);
     co.stop_max = fmax(q_from, q_to);
-    if (max_points) co.max_points = max_points;
+    size_t limit = max_points ? max_points : co.max_points;
+    int dir = q_to > q_from ? 1 : -1;
     bkf_cont_report report;
-    rc = bkf_cont_run(branch_residual, branch_accept, &b, u0, 1, q_to > q_from ? 1 : -1, &co, &report, err);
+    /* pseudo-arclength stretches, and amplitude stretches where the branch
+     * stands nearly upright in q (a canard) or where a stretch failed */
+    for (int stretch = 0;; stretch++) {
+        co.max_points = limit - b.rows + (b.skip_visit ? 1 : 0);
+        b.steep = 0;
+        rc = bkf_cont_run(branch_residual, branch_accept, &b, u0, 1, dir, &co, &report, err);
+        if (b.visit_status != 0 || b.rows >= limit) break;
+        if (rc == BKF_OK && !b.steep) break;
+        if (rc != BKF_OK && (rc != BKF_ENUMERIC || !b.have_last || b.rows == 0 || stretch >= 10)) break;
+        bkf_error walk_err;
+        int walk = branch_amplitude(&b, dir, limit, rc != BKF_OK, &walk_err);
+        if (b.visit_status != 0 || b.rows >= limit || (walk == BKF_OK && b.landed)) {
+            rc = BKF_OK;
+            break;
+        }
+        if (walk != BKF_OK) {
+            /* the stretch's own failure says more when the walk got nowhere */
+            if (rc == BKF_OK) *err = walk_err;
+            rc = walk;
+            break;
+        }
+        memcpy(u0, b.last_u, sizeof u0);
+        b.skip_visit = 1;
+    }
     bkf_cycle_free(b.cycle);
     if (b.visit_status > 0) return b.visit_status;
+    if (rc == BKF_OK && b.visit_status == 0 && b.rows < limit && b.have_last &&
+        fabs(b.last_u[1] - q_to) > 1e-12 * fmax(1.0, fabs(q_to)))
+        return bkf_error_set(err, BKF_ENUMERIC, "branch ended at q = %.17g before its end %.17g (canard)",
+                             b.last_u[1], q_to);
     if (b.visit_status < 0) return BKF_OK;
     return rc;
 }
