@@ -49,7 +49,10 @@ enum {
     BKF_OPT_LOG_SWITCH = 1u << 5,/* geometric when the int at log_offset is set */
     BKF_OPT_REQUIRED = 1u << 6,  /* the caller reports it missing ("--mu is required") */
     BKF_OPT_CLI_ONLY = 1u << 7,  /* a flag with no scene key (--out, --help) */
-    BKF_OPT_SCENE_ONLY = 1u << 8 /* a scene key with no flag */
+    BKF_OPT_SCENE_ONLY = 1u << 8,/* a scene key with no flag */
+    BKF_OPT_RUN_FILE = 1u << 9   /* a data file of one run (simulate's spacetime and
+                                    snapshots): not a key of a sweep, whose points
+                                    keep their fields by --fields */
 };
 
 /* A list of values: V (count 1), V1,V2,... or A:B:N.  from and to are the

@@ -93,9 +93,10 @@ extern const bkf_option bkf_sweep_options[];
 extern const size_t bkf_sweep_noptions;
 
 /* Every key of a sweep in one table, offsets in bkf_sweep_spec: its own,
- * then the simulation's but those of the data files a sweep refuses
- * (spacetime, spacetime-format, snapshots, snapshot-count).  The flags of
- * `bkfront sweep` and the keys of a scene's [sweep]. */
+ * then the simulation's but those of one run's data files
+ * (BKF_OPT_RUN_FILE: spacetime..., snapshots...).  The flags of `bkfront
+ * sweep` and the keys of a scene's [sweep].  Built once; NULL with *count
+ * 0 only when that allocation failed. */
 const bkf_option *bkf_sweep_keys(size_t *count);
 
 /* The whole grid, before any run: every axis value through the simulation's

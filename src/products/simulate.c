@@ -150,6 +150,7 @@ const bkf_option bkf_simulate_options[] = {
      .help = "rows of the diagnostics and the spacetime field, evenly\n"
              "spaced over [0, tmax] (F + 1 rows with t = 0), in [1, 1e6]"},
     {.name = "spacetime", .type = BKF_OPT_TEXT, .offset = SPEC(spacetime), .form = "FILE",
+     .flags = BKF_OPT_RUN_FILE,
      .help = "psi(x, t) at the frames for gnuplot: text is the nonuniform\n"
              "matrix format (first row N x_0 .. x_{N-1}, then t psi ...;\n"
              "plot 'FILE' nonuniform matrix with image), binary the same\n"
@@ -157,20 +158,22 @@ const bkf_option bkf_simulate_options[] = {
              "hdf5 datasets psi[t, x] (float32) with t and x as dimension\n"
              "scales and the parameters as attributes (h5py, xarray)"},
     {.name = "spacetime-format", .type = BKF_OPT_CHOICE, .offset = SPEC(spacetime_format),
-     .choices = spacetime_names, .form = "text|binary|hdf5",
+     .choices = spacetime_names, .form = "text|binary|hdf5", .flags = BKF_OPT_RUN_FILE,
      .shown_default = "hdf5 for FILE.h5, .hdf5, .he5, else text",
      .help = "the spacetime file's format"},
     {.name = "spacetime-fields", .type = BKF_OPT_CUSTOM, .set = set_fields, .form = "LIST",
+     .flags = BKF_OPT_RUN_FILE,
      .shown_default = "psi",
      .help = "the fields of the spacetime file: psi, eta or psi,eta\n(eta only in hdf5)"},
     {.name = "spacetime-deflate", .type = BKF_OPT_COUNT, .offset = SPEC(spacetime_deflate),
-     .flags = BOUNDED, .min = 1, .max = BKF_H5_DEFLATE_MAX, .form = "L",
+     .flags = BOUNDED | BKF_OPT_RUN_FILE, .min = 1, .max = BKF_H5_DEFLATE_MAX, .form = "L",
      .shown_default = "none",
      .help = "hdf5 only: gzip level of the fields' chunks, in [1, 9]"},
     {.name = "snapshots", .type = BKF_OPT_TEXT, .offset = SPEC(snapshots), .form = "FILE",
+     .flags = BKF_OPT_RUN_FILE,
      .help = "TSV with columns t, x, psi, eta at K frames spread over\nthe run"},
     {.name = "snapshot-count", .type = BKF_OPT_COUNT, .offset = SPEC(snapshot_count),
-     .flags = BOUNDED, .min = 1, .max = BKF_SIMULATE_SNAPSHOTS_MAX, .form = "K",
+     .flags = BOUNDED | BKF_OPT_RUN_FILE, .min = 1, .max = BKF_SIMULATE_SNAPSHOTS_MAX, .form = "K",
      .shown_default = "2", .help = "snapshots (the last at tmax), in [1, 1e5]"},
 };
 const size_t bkf_simulate_noptions = sizeof bkf_simulate_options / sizeof bkf_simulate_options[0];

@@ -89,25 +89,22 @@ const size_t bkf_sweep_noptions = sizeof bkf_sweep_options / sizeof bkf_sweep_op
  * first member. */
 _Static_assert(offsetof(bkf_sweep_spec, sim) == 0, "sim must be the sweep spec's first member");
 
-/* Room for the sweep's keys and the simulation's. */
-#define KEYS_MAX 64
-static bkf_option all_keys[KEYS_MAX];
+/* The sweep's keys and the simulation's but its files (BKF_OPT_RUN_FILE),
+ * allocated once: a fixed table would drop keys silently as simulate gains
+ * them. */
+static bkf_option *all_keys;
 static size_t nall_keys;
 static pthread_once_t keys_once = PTHREAD_ONCE_INIT;
 
 static void build_keys(void)
 {
-    static const char *const refused[] = {"spacetime", "spacetime-format", "snapshots",
-                                          "snapshot-count", "spacetime-fields",
-                                          "spacetime-deflate"};
+    all_keys = malloc((bkf_sweep_noptions + bkf_simulate_noptions) * sizeof *all_keys);
+    if (!all_keys) return;
     size_t n = 0;
-    for (size_t i = 0; i < bkf_sweep_noptions && n < KEYS_MAX; i++) all_keys[n++] = bkf_sweep_options[i];
-    for (size_t i = 0; i < bkf_simulate_noptions && n < KEYS_MAX; i++) {
-        int skip = 0;
-        for (size_t k = 0; k < sizeof refused / sizeof *refused; k++)
-            skip |= strcmp(bkf_simulate_options[i].name, refused[k]) == 0;
-        if (!skip) all_keys[n++] = bkf_simulate_options[i];
-    }
+    for (size_t i = 0; i < bkf_sweep_noptions; i++) all_keys[n++] = bkf_sweep_options[i];
+    for (size_t i = 0; i < bkf_simulate_noptions; i++)
+        if (!(bkf_simulate_options[i].flags & BKF_OPT_RUN_FILE))
+            all_keys[n++] = bkf_simulate_options[i];
     nall_keys = n;
 }
 

@@ -5,6 +5,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
 #include "cli_support.h"
+#include "bkfront/simulate.h"
+#include "bkfront/sweep.h"
 
 #include <dirent.h>
 #include <math.h>
@@ -179,6 +181,26 @@ TEST(cli_sweep_refuses_bad_input_anywhere_in_the_grid)
                              "task", "a task index past --of");
     bkf_cli_expect_bad_input(BKF_CLI("sweep", "--x", "nu=-0.9"), "sweep", "out",
                              "no --out");
+    /* one run's data files are refused by name; every other simulate key
+     * is a sweep key (none dropped from the table) */
+    size_t nkeys = 0, expected = bkf_sweep_noptions;
+    const bkf_option *keys = bkf_sweep_keys(&nkeys);
+    for (size_t i = 0; i < bkf_simulate_noptions; i++) {
+        const char *name = bkf_simulate_options[i].name;
+        int in_keys = 0;
+        for (size_t k = 0; k < nkeys; k++) in_keys |= strcmp(keys[k].name, name) == 0;
+        if (bkf_simulate_options[i].flags & BKF_OPT_RUN_FILE) {
+            CHECK_MSG(!in_keys, "the run file key %s is a sweep key", name);
+            char flag[64];
+            snprintf(flag, sizeof flag, "--%s", name);
+            bkf_cli_expect_bad_input(BKF_CLI("sweep", flag, "1", "--out", out), "sweep", name,
+                                     "one run's data file");
+        } else {
+            CHECK_MSG(in_keys, "the simulate key %s is missing from the sweep's keys", name);
+            expected++;
+        }
+    }
+    CHECK_MSG(nkeys == expected, "%zu sweep keys, expected %zu", nkeys, expected);
     CHECK_MSG(access(out, F_OK) != 0, "a refused sweep wrote %s", out);
     free(out);
 }
