@@ -1413,6 +1413,32 @@ static void branch_params(const branch_ctx *b, double q, double *mu, double *nu)
     *nu = b->along == BKF_CYCLE_ALONG_MU ? b->fixed : q;
 }
 
+/* The corrector's integration tolerance.  Its shots need only bring the
+ * point within one first-order step of the cycle (co.newton_tol = 0.1
+ * sqrt(tol) in ln w0), which each row's estimate then takes at the pair's
+ * tolerances (branch_estimate), so they integrate 100 times above that
+ * (where P' ~ 0 their error moves the fixed point by as much).  In the
+ * canard's neighbourhood (8 mu^2 (1 - |nu|) in [1/4, 4], twice that of the
+ * conditioning floor) an error on the repelling slow branch grows like
+ * exp(mu x the time there), G at a loose tolerance is noise, and the
+ * amplitude walk needs its sign: there the shots are at the looser
+ * tolerance of the pair, whose last one is then the estimate's own.  So
+ * are rk8pd's: its steps grow only like tol^(-1/8), and a loose corrector
+ * saved less than the estimate's extra shot cost (mu 1, along nu: 1.39
+ * cold solves a row against 1.2). */
+static int branch_near_canard(double mu, double nu)
+{
+    double x = 8.0 * mu * mu * (1.0 - fabs(nu));
+    return mu >= 1.0 && x >= 0.25 && x <= 4.0;
+}
+
+static double branch_tol(double tol, double mu, double nu, bkf_stepper_kind kind)
+{
+    double tight = pair_tol(tol, nu, kind);
+    if (branch_near_canard(mu, nu) || kind == BKF_STEPPER_EXPLICIT) return tight;
+    return fmax(tight, 1e-3 * sqrt(tol) * fmin(1.0, sqrt(1.0 - nu * nu)));
+}
+
 /* G = ln w(P) - ln w0 and, if dg, its derivatives (d/d ln w0, d/dq) from
  * one shot at (w0, q) that carries the variational column and the
  * parameter sensitivity.  At fixed w0 the start (nu, y0 = w0/a + b F(nu))
@@ -1442,9 +1468,7 @@ static int branch_shot(branch_ctx *b, double ln_w0, double q, double *g, double 
     bkf_stepper_kind kind = b->options.stepper;
     if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu, b->options.tol);
     integrator in = {0}, aux = {0};
-    /* the looser tolerance of a cold solve's pair: the accepted point's
-     * last shot is then that solve's looser one (branch_estimate) */
-    double tol = pair_tol(b->options.tol, nu, kind);
+    double tol = branch_tol(b->options.tol, mu, nu, kind);
     int rc = BKF_ENOMEM;
     b->last.valid = 0;
     if (integrator_init(&in, &p, kind, 0, tol) == BKF_OK && integrator_init(&aux, &p, kind, 1, tol) == BKF_OK) {
@@ -1561,6 +1585,10 @@ static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu,
     if (!b->last.valid || b->last.u[0] != u[0] || b->last.u[1] != u[1] ||
         b->last.flow.nu != (mirrored ? -nu : nu))
         return BKF_ENUMERIC;
+    /* Near the canard the mirror's estimate flatters (mu 9.4735, nu -0.999:
+     * the pair at +0.999 said 1.7e-12, the Taylor reference is 7.7e-12 off;
+     * docs/accuracy.md): there a row for nu < 0 is solved at its own nu. */
+    if (mirrored && branch_near_canard(mu, nu)) return BKF_ENUMERIC;
     bkf_cycle *c = b->cycle;
     double tol = b->options.tol;
     converged a, fine;
@@ -1572,16 +1600,18 @@ static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu,
     bkf_stepper_kind kind = b->options.stepper;
     if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(p->mu, tol);
     integrator in = {0}, aux = {0};
-    double tol_a = b->last.in.tol, tol_b = tol_a / TOL_RATIO, floor = 0.0, y_real = 0.0;
+    double tol_a = pair_tol(tol, p->nu, kind), tol_b = tol_a / TOL_RATIO, floor = 0.0, y_real = 0.0;
     double y0 = b->last.y0, y_scale = fmax(fabs(y0), 1e-3);
     size_t steps = 0, shots = 0;
     integrator looser = b->last.in;
+    looser.tol = tol_a;
     int rc = BKF_ENOMEM;
     if (integrator_init(&in, p, kind, 0, tol_a) == BKF_OK && integrator_init(&aux, p, kind, 1, tol_b) == BKF_OK) {
         rc = BKF_OK;
-        if (!branch_one_shot(&b->last.in, &b->last.flow, &b->last.sh, y0, tol, &a)) {
-            /* the corrector stopped farther from the cycle than one step
-             * corrects: Newton at this q, from that step */
+        if (b->last.in.tol != tol_a || !branch_one_shot(&b->last.in, &b->last.flow, &b->last.sh, y0, tol, &a)) {
+            /* a looser corrector shot, or one farther from the cycle than
+             * one step corrects: Newton at this q, from that step */
+            looser.capped = 0;
             const flow_params *f = &b->last.flow;
             const shot *sh = &b->last.sh;
             double slope_L, dP = map_slope(&b->last.in, sh, y0, f->b * lienard_F(f->nu), &slope_L);
