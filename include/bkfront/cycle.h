@@ -145,8 +145,11 @@ int bkf_cycle_estimate(bkf_cycle *cycle, double mu, double nu, const bkf_cycle_o
  * ln mu) or along nu (BKF_CYCLE_ALONG_NU) from `from` to `to`, the other
  * parameter held at `fixed`, by pseudo-arclength continuation (module
  * continuation) on the shooting equations with warm starts and step control.
- * Every accepted point is solved to options->tol (with its error estimate) and
- * passed to `visit`, in order from `from` to `to`; both ends are included.
+ * Every accepted point is given to options->tol with its error estimate
+ * (the continuation's last shot there and one tighter solve from it, or a
+ * fresh solve where that pair cannot vouch for tol) and passed to `visit`,
+ * in order from `from` to `to`; both ends are included.  A point's work
+ * counters hold every integration since the previous point.
  * The continuation's parameter derivative comes from the variational
  * equations.  A point the solve cannot meet tol at (inside a canard
  * explosion) is retried at looser tolerances up to 1e-6 and passed with

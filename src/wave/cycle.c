@@ -826,6 +826,20 @@ static int conditioning_floor(flow_params *p, bkf_stepper_kind kind, double tol,
     return rc;
 }
 
+/* The return map's slope for Newton at y0.  A planar flow's return map has
+ * the slope exp(L) x'(y0)/x'(P(y0)) (Liouville), *slope_L.  Where the cycle
+ * attracts like exp(-O(mu)) that is far below what the variational column
+ * resolves, whose dP is then noise of either sign: at mu 1e3 a coarse dP of
+ * -0.03 put Newton beyond P(y0), and the safeguard bisected to half the
+ * start (two wasted shots).  Only for bd2x2 (no GSL driver): rk8pd's and
+ * bsimp's Newton paths, and so their digits, stay as they were. */
+static double map_slope(const integrator *in, const shot *sh, double y0, double y_still, double *slope_L)
+{
+    double w_return = sh->y_return - y_still;
+    *slope_L = !in->driver && w_return > 0 ? exp(sh->log_mult) * (y0 - y_still) / w_return : NAN;
+    return *slope_L >= 0 && *slope_L < 1e-6 ? *slope_L : sh->dP;
+}
+
 /* Newton on g(y0) = P(y0) - y0 at one integration tolerance, from y0,
  * safeguarded by the bracket that each return gives: P is increasing and the
  * cycle attracting, so g(y0) > 0 puts the cycle above both y0 and P(y0).
@@ -850,16 +864,7 @@ static int newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, 
         if (rc != BKF_OK) return rc;
         (*iterations)++;
         double g = sh.y_return - *y0;
-        /* The return map of a planar flow has the slope exp(L) x'(y0)/x'(P(y0))
-         * (Liouville).  Where the cycle attracts like exp(-O(mu)) that is far
-         * below what the variational column resolves, whose dP is then noise
-         * of either sign: at mu 1e3 a coarse dP of -0.03 put Newton beyond
-         * P(y0), and the safeguard bisected to half the start (two wasted
-         * shots).  Only for bd2x2 (no GSL driver): rk8pd's and bsimp's
-         * Newton paths, and so their digits, stay as they were. */
-        double dP = sh.dP, w_return = sh.y_return - y_still;
-        double slope_L = !in->driver && w_return > 0 ? exp(sh.log_mult) * (*y0 - y_still) / w_return : NAN;
-        if (slope_L >= 0 && slope_L < 1e-6) dP = slope_L;
+        double slope_L, dP = map_slope(in, &sh, *y0, y_still, &slope_L);
         double step = -g / (dP - 1.0);
         if (g > 0) lo = fmax(lo, sh.y_return);
         else if (g < 0) hi = fmin(hi, sh.y_return);
@@ -981,6 +986,24 @@ static void store_result(bkf_cycle *c, const converged *a, const converged *b, d
     c->profile_stepper = p->mu <= 100 ? BKF_STEPPER_EXPLICIT : kind;
 }
 
+/* Below these local tolerances the steppers only accumulate rounding
+ * (measured: bsimp at 1e-15 takes ~1e5 steps a period at mu = 1e4). */
+static double tol_floor_of(bkf_stepper_kind kind) { return kind != BKF_STEPPER_EXPLICIT ? 1e-14 : 1e-16; }
+
+/* The looser local tolerance of the classic error-estimate pair (the
+ * tighter is TOL_RATIO below it).  The global error of T is a modest
+ * multiple of the local tolerance; the safety factor was measured over the
+ * benchmark box (docs/benchmarks.md).  Looser local tolerances buy almost
+ * nothing with these steppers, and near |nu| = 1 the cycle is small (radius
+ * 2 sqrt(1 - nu^2)): at mu = 1e-3, nu = 0.999, a local 1e-3 let the orbit
+ * drift off the weakly attracting cycle and never return to the section. */
+static double pair_tol(double tol, double nu, bkf_stepper_kind kind)
+{
+    double tol_int = fmin(0.1 * tol, 1e-5 * fmin(1.0, sqrt(1.0 - nu * nu)));
+    double floor = tol_floor_of(kind);
+    return tol_int / TOL_RATIO < floor ? floor * TOL_RATIO : tol_int;
+}
+
 static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
                             bkf_error *err)
 {
@@ -1004,18 +1027,8 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
     double y0 = section_y_of_slope(p, slope);
     double y_scale = fmax(fabs(y0), 1e-3);
 
-    /* The global error of T is a modest multiple of the local tolerance; the
-     * safety factor was measured over the benchmark box (docs/benchmarks.md). */
-    double tol_int = 0.1 * opt.tol;
-    /* Looser local tolerances buy almost nothing with these steppers, and
-     * near |nu| = 1 the cycle is small (radius 2 sqrt(1 - nu^2)): at
-     * mu = 1e-3, nu = 0.999, tol_int = 1e-3 let the orbit drift off the
-     * weakly attracting cycle and never return to the section. */
-    tol_int = fmin(tol_int, 1e-5 * fmin(1.0, sqrt(1.0 - nu * nu)));
-    /* Below these local tolerances the steppers only accumulate rounding
-     * (measured: bsimp at 1e-15 takes ~1e5 steps a period at mu = 1e4). */
-    const double tol_floor = kind != BKF_STEPPER_EXPLICIT ? 1e-14 : 1e-16;
-    if (tol_int / TOL_RATIO < tol_floor) tol_int = tol_floor * TOL_RATIO;
+    double tol_int = pair_tol(opt.tol, nu, kind);
+    const double tol_floor = tol_floor_of(kind);
     /* bd2x2's coarse stage lands y0 on the cycle for the tight solves,
      * whose first shot then needs no confirming one if its step is below
      * sqrt(q_goal) (see newton_at): at local tol 1e-5 the landing was
@@ -1380,6 +1393,18 @@ typedef struct {
     double last_u[2], last_t[2];
     int have_last, skip_visit, steep, landed;
     size_t rows;
+    /* The last shot with derivatives: the continuation evaluates its
+     * tangent, and the amplitude walk its last root, at the point it then
+     * accepts, so that shot is the looser solve of the point's estimate. */
+    struct {
+        double u[2], y0;
+        shot sh;
+        flow_params flow; /* the mirror's for nu < 0 along mu */
+        integrator in;    /* its tolerance and turn-limit count (no stepper) */
+        int valid;
+    } last;
+    /* work of every shot since the last visited row, reported with it */
+    size_t work_rhs, work_jac, work_steps, work_shots;
 } branch_ctx;
 
 static void branch_params(const branch_ctx *b, double q, double *mu, double *nu)
@@ -1388,12 +1413,38 @@ static void branch_params(const branch_ctx *b, double q, double *mu, double *nu)
     *nu = b->along == BKF_CYCLE_ALONG_MU ? b->fixed : q;
 }
 
+/* The corrector's integration tolerance.  Its shots need only bring the
+ * point within one first-order step of the cycle (co.newton_tol = 0.1
+ * sqrt(tol) in ln w0), which each row's estimate then takes at the pair's
+ * tolerances (branch_estimate), so they integrate 100 times above that
+ * (where P' ~ 0 their error moves the fixed point by as much).  In the
+ * canard's neighbourhood (8 mu^2 (1 - |nu|) in [1/4, 4], twice that of the
+ * conditioning floor) an error on the repelling slow branch grows like
+ * exp(mu x the time there), G at a loose tolerance is noise, and the
+ * amplitude walk needs its sign: there the shots are at the looser
+ * tolerance of the pair, whose last one is then the estimate's own.  So
+ * are rk8pd's: its steps grow only like tol^(-1/8), and a loose corrector
+ * saved less than the estimate's extra shot cost (mu 1, along nu: 1.39
+ * cold solves a row against 1.2). */
+static int branch_near_canard(double mu, double nu)
+{
+    double x = 8.0 * mu * mu * (1.0 - fabs(nu));
+    return mu >= 1.0 && x >= 0.25 && x <= 4.0;
+}
+
+static double branch_tol(double tol, double mu, double nu, bkf_stepper_kind kind)
+{
+    double tight = pair_tol(tol, nu, kind);
+    if (branch_near_canard(mu, nu) || kind == BKF_STEPPER_EXPLICIT) return tight;
+    return fmax(tight, 1e-3 * sqrt(tol) * fmin(1.0, sqrt(1.0 - nu * nu)));
+}
+
 /* G = ln w(P) - ln w0 and, if dg, its derivatives (d/d ln w0, d/dq) from
  * one shot at (w0, q) that carries the variational column and the
  * parameter sensitivity.  At fixed w0 the start (nu, y0 = w0/a + b F(nu))
  * moves with q, and so do the section and the scaling of w = a (y - b F(nu));
  * y' = 0 on the section, so the moving return time leaves dy/dq = py. */
-static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, double *dg,
+static int branch_shot(branch_ctx *b, double ln_w0, double q, double *g, double *dg,
                        double *ln_t, double *dln_t, bkf_error *err)
 {
     double mu, nu;
@@ -1417,14 +1468,26 @@ static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, d
     bkf_stepper_kind kind = b->options.stepper;
     if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu, b->options.tol);
     integrator in = {0}, aux = {0};
-    double tol = fmax(0.1 * b->options.tol, 1e-13);
+    double tol = branch_tol(b->options.tol, mu, nu, kind);
     int rc = BKF_ENOMEM;
+    b->last.valid = 0;
     if (integrator_init(&in, &p, kind, 0, tol) == BKF_OK && integrator_init(&aux, &p, kind, 1, tol) == BKF_OK) {
         double w0 = exp(ln_w0), Fn = lienard_F(nu), a2 = p.a * p.a;
         double p0[2] = {along_mu ? 0.0 : 1.0,
                         along_mu ? mu * (-w0 * p.b / a2 + Fn / (a2 * p.a)) : p.b * (nu * nu - 1.0)};
         shot sh = {0};
-        rc = shoot(&in, &aux, &p, section_y_of_slope(&p, w0), p0, NULL, &sh, err);
+        double y0 = section_y_of_slope(&p, w0);
+        rc = shoot(&in, &aux, &p, y0, p0, NULL, &sh, err);
+        b->work_shots++;
+        if (rc == BKF_OK && dg) {
+            b->last.u[0] = ln_w0;
+            b->last.u[1] = q;
+            b->last.y0 = y0;
+            b->last.sh = sh;
+            b->last.flow = p;
+            b->last.in = (integrator){.tol = tol, .capped = in.capped};
+            b->last.valid = 1;
+        }
         if (rc == BKF_OK) {
             double w_return = p.a * (sh.y_return - p.b * Fn);
             if (!(w_return > 0)) rc = bkf_error_set(err, BKF_ENUMERIC, "return below the section");
@@ -1449,6 +1512,9 @@ static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, d
             }
         }
     }
+    b->work_rhs += p.rhs_calls;
+    b->work_jac += p.jacobian_calls;
+    b->work_steps += in.steps + aux.steps;
     integrator_free(&in);
     integrator_free(&aux);
     return rc == BKF_ENOMEM ? bkf_error_set(err, BKF_ENOMEM, "out of memory") : rc;
@@ -1456,13 +1522,145 @@ static int branch_shot(const branch_ctx *b, double ln_w0, double q, double *g, d
 
 static int branch_residual(const double *u, double *g, double *jac, void *data, bkf_error *err)
 {
-    const branch_ctx *b = data;
+    branch_ctx *b = data;
     int rc = branch_shot(b, u[0], u[1], g, jac, NULL, NULL, err);
     return rc == BKF_OK || rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
 }
 
 /* The loosest tolerance a refused branch point is retried at. */
 #define BRANCH_RELAX_MAX 1e-6
+
+/* One shot's period corrected to the fixed point y0 + step, step the Newton
+ * step from that shot, as newton_at accepts it without a confirming shot:
+ * the step's first-order effect on T below 0.1 sqrt(tol) T and its square,
+ * amplified by 1/(1 - P'), below 1e-2 tol.  0 if the shot is too far from
+ * the cycle for that. */
+static int branch_one_shot(const integrator *in, const flow_params *p, const shot *sh, double y0, double tol,
+                           converged *out)
+{
+    double y_still = p->b * lienard_F(p->nu), slope_L;
+    double dP = map_slope(in, sh, y0, y_still, &slope_L);
+    double step = -(sh->y_return - y0) / (dP - 1.0), rel = step / fmax(fabs(y0), 1e-3);
+    if (!(fabs(sh->dT * step) <= 0.1 * sqrt(tol) * sh->period) ||
+        !(rel * rel <= 1e-2 * tol * (1.0 - fmin(dP, 0.999999))))
+        return 0;
+    *out = (converged){.period = sh->period + sh->dT * step, .log_mult = sh->log_mult, .y0 = y0 + step,
+                       .xmax = sh->xmax, .xmin = sh->xmin, .return_slope = sh->dP, .dT = sh->dT,
+                       .tol = in->tol};
+    return 1;
+}
+
+/* Where the mirror's cycle (x -> -x, y -> -y) crosses its section
+ * downward, the cycle at -nu crosses its own upward: that crossing, located
+ * between the stored nodes of the mirror's last shot, is the row's section
+ * point.  *y: in the unmirrored coordinates. */
+static int branch_mirror_section(bkf_cycle *c, integrator *aux, double *y)
+{
+    const flow_params *p = &c->flow;
+    for (size_t i = 1; i < c->node_count; i++) {
+        const node *n0 = &c->nodes[i - 1], *n1 = &c->nodes[i];
+        if (!(n0->s[0] > p->nu && n1->s[0] <= p->nu)) continue;
+        double s0[DIM] = {n0->s[0], n0->s[1], 0.0, 1.0, 0.0}, s1[DIM] = {n1->s[0], n1->s[1], 0.0, 1.0, 0.0};
+        double te, se[DIM];
+        if (locate_event(aux, p, event_section, n0->t, s0, n1->t, s1, &te, se) != BKF_OK) return BKF_ENUMERIC;
+        *y = -se[IY];
+        return BKF_OK;
+    }
+    return BKF_ENUMERIC;
+}
+
+/* The row at the accepted point u from the continuation's own last shot
+ * there (the looser solve of the estimate, at a cold solve's looser pair
+ * tolerance) and one shot TOL_RATIO tighter from its fixed point, each
+ * corrected to first order in y0 as newton_at would accept it: the pair a
+ * cold solve ends with, without its coarse Newton and without re-solving
+ * the point.  Anything else (no such shot, a shot too far from the cycle
+ * for one step, an estimate that misses tol) returns nonzero, and the point
+ * is solved afresh. */
+static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu, bkf_error *err)
+{
+    int mirrored = b->along == BKF_CYCLE_ALONG_MU && nu < 0;
+    /* (the row's ends are the requested values: a shot at exp(ln mu) is
+     * within an ulp of mu, but one at another nu is not the row's) */
+    if (!b->last.valid || b->last.u[0] != u[0] || b->last.u[1] != u[1] ||
+        b->last.flow.nu != (mirrored ? -nu : nu))
+        return BKF_ENUMERIC;
+    /* Near the canard the mirror's estimate flatters (mu 9.4735, nu -0.999:
+     * the pair at +0.999 said 1.7e-12, the Taylor reference is 7.7e-12 off;
+     * docs/accuracy.md): there a row for nu < 0 is solved at its own nu. */
+    if (mirrored && branch_near_canard(mu, nu)) return BKF_ENUMERIC;
+    bkf_cycle *c = b->cycle;
+    double tol = b->options.tol;
+    converged a, fine;
+    flow_params *p = &c->flow;
+    if (!branch_one_shot(&b->last.in, &b->last.flow, &b->last.sh, b->last.y0, tol, &a)) return BKF_ENUMERIC;
+    *p = b->last.flow;
+    p->sens = 0;
+    p->rhs_calls = p->jacobian_calls = 0;
+    bkf_stepper_kind kind = b->options.stepper;
+    if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(p->mu, tol);
+    integrator in = {0}, aux = {0};
+    double tol_a = pair_tol(tol, p->nu, kind), tol_b = tol_a / TOL_RATIO, floor = 0.0, y_real = 0.0;
+    double y0 = b->last.y0, y_scale = fmax(fabs(y0), 1e-3);
+    size_t steps = 0, shots = 0;
+    integrator looser = b->last.in;
+    looser.tol = tol_a;
+    int rc = BKF_ENOMEM;
+    if (integrator_init(&in, p, kind, 0, tol_a) == BKF_OK && integrator_init(&aux, p, kind, 1, tol_b) == BKF_OK) {
+        rc = BKF_OK;
+        if (b->last.in.tol != tol_a || !branch_one_shot(&b->last.in, &b->last.flow, &b->last.sh, y0, tol, &a)) {
+            /* a looser corrector shot, or one farther from the cycle than
+             * one step corrects: Newton at this q, from that step */
+            looser.capped = 0;
+            const flow_params *f = &b->last.flow;
+            const shot *sh = &b->last.sh;
+            double slope_L, dP = map_slope(&b->last.in, sh, y0, f->b * lienard_F(f->nu), &slope_L);
+            y0 -= (sh->y_return - y0) / (dP - 1.0);
+            rc = newton_at(c, &in, &aux, &y0, 0.1 * sqrt(tol), tol * y_scale, y_scale, 1e-2 * tol, 0, 0, &shots,
+                           &a, err);
+            steps += in.steps;
+            looser.capped += in.capped;
+        }
+        integrator_free(&in);
+        /* the tighter solve from the looser one's fixed point, usually one
+         * shot (its trajectory gives xmax, xmin and the mirror's section) */
+        if (rc == BKF_OK && integrator_init(&in, p, kind, 0, tol_b) != BKF_OK) rc = BKF_ENOMEM;
+        y0 = a.y0;
+        if (rc == BKF_OK) {
+            rc = newton_at(c, &in, &aux, &y0, 0.1 * sqrt(tol), 0.1 * tol * y_scale, y_scale, 1e-2 * tol, 1, 0,
+                           &shots, &fine, err);
+        }
+        if (rc == BKF_OK) rc = conditioning_floor(p, kind, tol_a, fine.y0, &floor, &steps, err);
+        if (rc == BKF_OK && mirrored) rc = branch_mirror_section(c, &aux, &y_real);
+    }
+    if (rc == BKF_OK) {
+        double period_err = capped_floor(period_error(&a, &fine, p, kind, floor), &looser, fine.period);
+        if (ACCEPT_MARGIN * period_err > tol * fine.period) {
+            rc = BKF_ETOL;
+        } else {
+            /* (the work counters are the branch's: branch_accept) */
+            integrator none = {0};
+            store_result(c, &a, &fine, period_err, fine.y0, kind, tol_b, &none, &none, &none, &none, 0);
+            bkf_cycle_result *r = &c->result;
+            flow_set(p, mu, nu);
+            r->mu = mu;
+            r->nu = nu;
+            if (mirrored) {
+                r->xmax = -fine.xmin;
+                r->xmin = -fine.xmax;
+                r->section_y = y_real;
+                r->section_slope = p->a * (y_real - p->b * lienard_F(nu));
+            }
+        }
+    }
+    b->work_rhs += p->rhs_calls;
+    b->work_jac += p->jacobian_calls;
+    b->work_steps += in.steps + aux.steps + steps;
+    b->work_shots += shots;
+    integrator_free(&in);
+    integrator_free(&aux);
+    return rc;
+}
 
 /* Where the branch's tangent in (ln f'(0), q) has a q component below
  * STEEP_ENTER the cycle is inside a canard explosion: its amplitude changes
@@ -1473,6 +1671,33 @@ static int branch_residual(const double *u, double *g, double *jac, void *data, 
  * component is back above STEEP_LEAVE. */
 #define STEEP_ENTER 1e-3
 #define STEEP_LEAVE 0.5
+
+/* A solve of a branch point, its work added to the branch's (a failed
+ * solve keeps no counters: its work is not counted). */
+static int branch_solve_counted(branch_ctx *b, double mu, double nu, const bkf_cycle_options *o, bkf_error *err)
+{
+    int rc = bkf_cycle_solve(b->cycle, mu, nu, o, err);
+    if (rc == BKF_OK) {
+        const bkf_cycle_result *r = &b->cycle->result;
+        b->work_rhs += r->rhs_calls;
+        b->work_jac += r->jacobian_calls;
+        b->work_steps += r->steps;
+        b->work_shots += r->newton_iterations;
+    }
+    return rc;
+}
+
+/* A row's work counters: every shot since the last row (the continuation's
+ * corrector and tangent, the amplitude walk's roots, the estimate or the
+ * solve), so that they say what the row cost. */
+static void branch_work(branch_ctx *b, bkf_cycle_result *r)
+{
+    r->rhs_calls = b->work_rhs;
+    r->jacobian_calls = b->work_jac;
+    r->steps = b->work_steps;
+    r->newton_iterations = b->work_shots;
+    b->work_rhs = b->work_jac = b->work_steps = b->work_shots = 0;
+}
 
 static int branch_accept(const double *u, const double *tangent, int is_fold, void *data)
 {
@@ -1497,8 +1722,11 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     /* (u[0] is the mirror's slope for nu < 0: the solve then starts from the
      * previous point's cycle) */
     double warm = nu >= 0 || b->along == BKF_CYCLE_ALONG_NU ? exp(u[0]) : 0.0;
-    b->cycle->warm_slope = warm;
-    int rc = bkf_cycle_solve(b->cycle, mu, nu, &b->options, &solve_err);
+    int rc = branch_estimate(b, u, mu, nu, &solve_err);
+    if (rc != BKF_OK && rc != BKF_ENOMEM) {
+        b->cycle->warm_slope = warm;
+        rc = branch_solve_counted(b, mu, nu, &b->options, &solve_err);
+    }
     /* A point whose T cannot be had to tol (inside the canard explosion T
      * moves by dT/dmu ~ 1e5 at mu 3.65, nu 0.99, and forward shooting
      * amplifies the integration's rounding by as much: the solve refuses,
@@ -1509,7 +1737,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     while (bkf_status_is_numerical(rc) && relaxed.tol < BRANCH_RELAX_MAX) {
         relaxed.tol = fmin(10.0 * relaxed.tol, BRANCH_RELAX_MAX);
         b->cycle->warm_slope = warm;
-        rc = bkf_cycle_solve(b->cycle, mu, nu, &relaxed, &solve_err);
+        rc = branch_solve_counted(b, mu, nu, &relaxed, &solve_err);
         if (rc == BKF_OK) b->cycle->result.model = "shooting-relaxed";
     }
     if (refused && rc != BKF_OK && rc != BKF_ENOMEM) {
@@ -1517,6 +1745,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
         bkf_cycle_result r = {.mu = mu, .nu = nu, .stepper = "none", .model = "refused"};
         r.period = r.period_err = r.xmax = r.xmin = r.multiplier = r.log_multiplier = NAN;
         r.log_multiplier_err = r.return_map_slope = r.section_y = r.section_slope = NAN;
+        branch_work(b, &r);
         if (b->visit(&r, b->visit_data) != 0) {
             b->visit_status = -1;
             return 1;
@@ -1527,6 +1756,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
             b->visit_status = rc;
             return 1;
         }
+        branch_work(b, &b->cycle->result);
         if (b->visit(&b->cycle->result, b->visit_data) != 0) {
             b->visit_status = -1;
             return 1;
@@ -1549,7 +1779,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
  * known to the band where the noise hides the sign of G: a bracket below
  * 1e-13 of q ends the search (the row is solved afresh at that q anyway).
  * *dg: the derivatives at the root. */
-static int branch_solve_q(const branch_ctx *b, double ln_w0, double q0, double step, int dir, double tol,
+static int branch_solve_q(branch_ctx *b, double ln_w0, double q0, double step, int dir, double tol,
                           double reach, double *q, double *dg, int *shots, bkf_error *err)
 {
     const double band = 1e-13 * fmax(1.0, fabs(q0));
@@ -1696,7 +1926,10 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
     branch_ctx b = {.along = along, .fixed = fixed, .options = opt, .cycle = bkf_cycle_alloc(),
                     .visit = visit, .visit_data = data, .err = err};
     if (!b.cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    rc = bkf_cycle_solve(b.cycle, mu_from, nu_from, &opt, err);
+    /* the start's slope; for nu < 0 along mu the branch's shots are the
+     * mirror's (branch_shot), and so is the slope */
+    rc = branch_solve_counted(&b, mu_from, nu_from < 0 && along == BKF_CYCLE_ALONG_MU ? -nu_from : nu_from,
+                              &opt, err);
     if (rc != BKF_OK) {
         bkf_cycle_free(b.cycle);
         return rc;
@@ -1708,22 +1941,16 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
     b.q_from = q_from;
     b.q_to = q_to;
     double u0[2] = {log(b.cycle->result.section_slope), q_from};
-    b.cycle->have_solution = 0; /* the first accepted point solves it again, from u0 */
-    if (nu_from < 0 && along == BKF_CYCLE_ALONG_MU) {
-        /* the branch's shots are the mirror's (branch_shot): its slope */
-        rc = bkf_cycle_solve(b.cycle, mu_from, -nu_from, &opt, err);
-        if (rc != BKF_OK) {
-            bkf_cycle_free(b.cycle);
-            return rc;
-        }
-        u0[0] = log(b.cycle->result.section_slope);
-        b.cycle->have_solution = 0;
-    }
+    b.cycle->have_solution = 0; /* the first accepted point is estimated again, from u0 */
 
     bkf_cont_options co = bkf_cont_options_default(1);
     co.step_max = along == BKF_CYCLE_ALONG_MU ? 0.7 : 0.05;
     co.step_initial = 0.5 * co.step_max;
-    co.newton_tol = fmax(1e-10, 10.0 * opt.tol);
+    /* The corrector need only come within one first-order step of the
+     * branch: each row's estimate corrects the last shot to the cycle at
+     * its q (branch_estimate), whose Newton accepts a step of relative size
+     * up to 0.1 sqrt(tol). */
+    co.newton_tol = fmax(1e-10, 0.1 * sqrt(opt.tol));
     co.stop_index = 1;
     co.stop_min = fmin(q_from, q_to);
     co.stop_max = fmax(q_from, q_to);
