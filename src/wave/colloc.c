@@ -65,6 +65,7 @@ struct bkf_colloc {
     gauss_table g;
     size_t iterations, solves;
     double trace, log_mult;
+    size_t pair_n; /* the coarser mesh of the last accepted pair */
 };
 
 /* ------------------------------------------------------------ tables */
@@ -754,8 +755,9 @@ int bkf_colloc_solve(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_erro
     c->have_solution = 0;
     int rc = converge(c, fmax(tol, 1e-6), err);
     if (rc != BKF_OK) return rc;
-    size_t n = c->n;
-    (void)warm;
+    /* a warm start's mesh is the last finer one: the pair starts again from
+     * the coarser, or each warm solve would double it */
+    size_t n = warm && c->pair_n ? c->pair_n : c->n;
     if (n < MIN_INTERVALS) n = MIN_INTERVALS;
     for (int round = 0; round < 5; round++) {
         rc = equidistribute(c, n);
@@ -782,7 +784,7 @@ int bkf_colloc_solve(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_erro
             out->newton_iterations = c->iterations;
             out->interval_solves = c->solves;
             c->have_solution = 1;
-            /* the next warm start begins from the coarser mesh of the pair */
+            c->pair_n = n;
             return BKF_OK;
         }
         /* the error of T_N falls like N^-2m: the N whose pair meets tol,
