@@ -13,6 +13,7 @@
 #include "bkfront/asymptotics.h"
 #include "bkfront/continuation.h"
 #include "bkfront/cycle.h"
+#include "bkfront/colloc.h"
 #include "bkfront/speeds.h"
 #include "bkfront/chainwave.h"
 #include "bkfront/asymfit.h"

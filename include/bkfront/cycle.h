@@ -40,14 +40,17 @@ typedef enum {
     BKF_STEPPER_AUTO = 0,     /* explicit below the stiffness threshold */
     BKF_STEPPER_EXPLICIT = 1, /* gsl rk8pd */
     BKF_STEPPER_IMPLICIT = 2, /* gsl bsimp with analytic Jacobian */
-    BKF_STEPPER_EXTRAPOLATION = 3 /* the same method (semi-implicit midpoint
+    BKF_STEPPER_EXTRAPOLATION = 3, /* the same method (semi-implicit midpoint
                                      extrapolation) with closed-form 2x2 solves
                                      and only (x, y) under error control; the
                                      default above the stiffness threshold */
+    BKF_STEPPER_COLLOCATION = 4  /* Gauss-Legendre collocation (colloc.h) on an
+                                    adapted mesh; where it refuses (canards,
+                                    conditioning) the solve shoots as auto would */
 } bkf_stepper_kind;
 
 /* The stepper's name as in bkf_cycle_result.stepper: "rk8pd", "bsimp",
- * "bd2x2" ("auto" for BKF_STEPPER_AUTO); NULL for an unknown kind. */
+ * "bd2x2", "colloc" ("auto" for BKF_STEPPER_AUTO); NULL for an unknown kind. */
 const char *bkf_cycle_stepper_name(bkf_stepper_kind kind);
 
 typedef struct {

@@ -27,9 +27,9 @@ static const bkf_io_column columns[] = {
 };
 #define NCOLUMNS (sizeof columns / sizeof columns[0])
 
-static const char *const stepper_names[] = {"auto", "explicit", "implicit", "extrapolation", NULL};
-static const bkf_stepper_kind stepper_kinds[] = {BKF_STEPPER_AUTO, BKF_STEPPER_EXPLICIT,
-                                                 BKF_STEPPER_IMPLICIT, BKF_STEPPER_EXTRAPOLATION};
+static const char *const stepper_names[] = {"auto", "explicit", "implicit", "extrapolation", "collocation", NULL};
+static const bkf_stepper_kind stepper_kinds[] = {BKF_STEPPER_AUTO, BKF_STEPPER_EXPLICIT, BKF_STEPPER_IMPLICIT,
+                                                 BKF_STEPPER_EXTRAPOLATION, BKF_STEPPER_COLLOCATION};
 static const char *const method_names[] = {"auto", "asymptotic", "leading", "shooting", NULL};
 static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYMPTOTIC,
                                                 BKF_METHOD_LEADING, BKF_METHOD_SHOOTING};
@@ -73,13 +73,16 @@ const bkf_option bkf_period_options[] = {
              "numerical failure (exit 1). --continue needs shooting or\n"
              "auto (then it shoots)"},
     {.name = "stepper", .type = BKF_OPT_CHOICE, .offset = offsetof(bkf_period_spec, stepper),
-     .choices = stepper_names, .form = "auto|explicit|implicit|extrapolation",
+     .choices = stepper_names, .form = "auto|explicit|implicit|extrapolation|collocation",
      .shown_default = "auto",
      .help = "integrator: rk8pd (explicit), GSL's bsimp with the analytic\n"
              "Jacobian (implicit; the former stiff default), bd2x2:\n"
              "the same extrapolation method with closed-form 2x2 solves\n"
-             "(extrapolation), or auto: bd2x2 above mu 30 (above 20 at tol\n"
-             "1e-12..1e-8), else rk8pd"},
+             "(extrapolation), colloc: Gauss-Legendre collocation on an\n"
+             "adapted mesh (collocation; up to mu 150 outside canards,\n"
+             "elsewhere and where it refuses the solve shoots as auto),\n"
+             "or auto: bd2x2 above mu 30 (above 20 at tol 1e-12..1e-8),\n"
+             "else rk8pd"},
 };
 const size_t bkf_period_noptions = sizeof bkf_period_options / sizeof bkf_period_options[0];
 

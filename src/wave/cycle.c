@@ -19,6 +19,7 @@
 #include "bkfront/cycle.h"
 
 #include "bkfront/asymptotics.h"
+#include "bkfront/colloc.h"
 #include "bkfront/continuation.h"
 #include "bkfront/model.h"
 
@@ -100,6 +101,7 @@ struct bkf_cycle {
     size_t node_count, node_capacity;
     double profile_tol;
     bkf_stepper_kind profile_stepper;
+    bkf_colloc *colloc; /* the collocation engine and its last solution (warm starts) */
 };
 
 
@@ -423,13 +425,17 @@ static int bd_apply(integrator *in, double *t, double t1, double *h, double *s)
  * and bd2x2's loose-tolerance estimate flattered by 3.4 at mu 27.5, nu 0.5,
  * tol 1e-2; below BKF_CYCLE_STIFF_TOL_MIN bd2x2's estimate floor refuses.
  * There rk8pd answers up to EXPLICIT_MU_MAX, as before the switch moved. */
-static bkf_stepper_kind auto_stepper(double mu, double tol)
+static bkf_stepper_kind shooting_stepper(double mu, double tol)
 {
     if (mu > EXPLICIT_MU_MAX ||
         (mu > STIFF_MU && tol >= BKF_CYCLE_STIFF_TOL_MIN && tol <= BKF_CYCLE_STIFF_TOL_MAX))
         return BKF_STEPPER_EXTRAPOLATION;
     return BKF_STEPPER_EXPLICIT;
 }
+
+/* The automatic choice stays shooting: collocation (BKF_STEPPER_COLLOCATION)
+ * is selectable; docs/benchmarks.md (2026-11-25) has where it is faster. */
+static bkf_stepper_kind auto_stepper(double mu, double tol) { return shooting_stepper(mu, tol); }
 
 const char *bkf_cycle_stepper_name(bkf_stepper_kind kind)
 {
@@ -438,6 +444,7 @@ const char *bkf_cycle_stepper_name(bkf_stepper_kind kind)
     case BKF_STEPPER_EXPLICIT: return "rk8pd";
     case BKF_STEPPER_IMPLICIT: return "bsimp";
     case BKF_STEPPER_EXTRAPOLATION: return "bd2x2";
+    case BKF_STEPPER_COLLOCATION: return "colloc";
     }
     return NULL;
 }
@@ -683,6 +690,7 @@ void bkf_cycle_free(bkf_cycle *cycle)
 {
     if (!cycle) return;
     free(cycle->nodes);
+    bkf_colloc_free(cycle->colloc);
     free(cycle);
 }
 
@@ -946,8 +954,10 @@ static int check_inputs(double mu, double nu, const bkf_cycle_options *o, bkf_er
     rc = bkf_model_check_tol(o->tol, err);
     if (rc != BKF_OK) return rc;
     if (o->stepper != BKF_STEPPER_AUTO && o->stepper != BKF_STEPPER_EXPLICIT &&
-        o->stepper != BKF_STEPPER_IMPLICIT && o->stepper != BKF_STEPPER_EXTRAPOLATION)
-        return bkf_error_set(err, BKF_EINPUT, "stepper must be auto, explicit, implicit or extrapolation");
+        o->stepper != BKF_STEPPER_IMPLICIT && o->stepper != BKF_STEPPER_EXTRAPOLATION &&
+        o->stepper != BKF_STEPPER_COLLOCATION)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "stepper must be auto, explicit, implicit, extrapolation or collocation");
     return BKF_OK;
 }
 
@@ -1004,6 +1014,147 @@ static double pair_tol(double tol, double nu, bkf_stepper_kind kind)
     return tol_int / TOL_RATIO < floor ? floor * TOL_RATIO : tol_int;
 }
 
+/* ------------------------------------------------------ collocation */
+
+/* Up to this mu the cold guess is the harmonic circle, above it one loose
+ * shot (the cycle attracts like exp(L), L = -7 at mu 1: one turn lands it). */
+#define COLLOC_CIRCLE_MU 1.0
+#define COLLOC_GUESS_TOL 1e-5
+/* A warm start reuses the last solution within this distance in (ln mu, nu). */
+#define COLLOC_WARM_LN_MU 1.0
+#define COLLOC_WARM_NU 0.2
+/* Above this mu the guess from one loose shot is not yet turned into a mesh
+ * the collocation Newton converges on (measured: no convergence from mu 200
+ * at nu -0.96 and 0.99, from 300-500 at nu 0): refused at once, shooting
+ * answers (docs/numerics.md, "The collocation engine"). */
+#define COLLOC_MU_MAX 150.0
+
+/* The extremes of x from the collocation nodes: each sign change of x'
+ * between nodes is located by the shooting engine's event Newton,
+ * integrating from the node (x' = 0 makes x there second order in the time
+ * error, which the polynomial between mesh points, of stage order m + 1,
+ * would not give to tol). */
+static int colloc_extremes(bkf_cycle *c, bkf_error *err)
+{
+    flow_params *p = &c->flow;
+    integrator in = {0};
+    if (integrator_init(&in, p, c->profile_stepper, 1, c->profile_tol) != BKF_OK) {
+        integrator_free(&in);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    double xmax = p->nu, xmin = p->nu;
+    int rc = BKF_OK;
+    for (size_t j = 0; j < c->node_count && rc == BKF_OK; j++) {
+        const node *n0 = &c->nodes[j], *n1 = &c->nodes[j + 1 < c->node_count ? j + 1 : 0];
+        double s0[DIM] = {n0->s[0], n0->s[1], 0, 0, 0}, s1[DIM] = {n1->s[0], n1->s[1], 0, 0, 0};
+        double t1 = j + 1 < c->node_count ? n1->t : c->result.period;
+        if ((flow_xdot(p, s0) > 0) == (flow_xdot(p, s1) > 0)) continue;
+        double te, se[DIM];
+        if (locate_event(&in, p, event_extremum, n0->t, s0, t1, s1, &te, se) != BKF_OK) {
+            rc = bkf_error_set(err, BKF_ENUMERIC, "cycle at mu = %.15g, nu = %.15g: extremum not located", p->mu,
+                               p->nu);
+            break;
+        }
+        xmax = fmax(xmax, se[IX]);
+        xmin = fmin(xmin, se[IX]);
+    }
+    c->result.xmax = xmax;
+    c->result.xmin = xmin;
+    c->result.steps += in.steps;
+    integrator_free(&in);
+    return rc;
+}
+
+/* The cycle by collocation (colloc.h) into c; a numerical failure (refusal)
+ * leaves c's solution as it was, and the caller shoots. */
+static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error *err)
+{
+    flow_params *p = &c->flow;
+    const double mu = p->mu, nu = p->nu;
+    /* in the canard's neighbourhood the cyclic solve is conditioned like
+     * exp(mu x the time on the repelling branch): shooting with its
+     * conditioning floor answers there */
+    double canard = 8.0 * mu * mu * (1.0 - fabs(nu));
+    if (mu >= 1.0 && canard > 0.3 && canard < 3.0)
+        return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: canard region", mu, nu);
+    if (mu > COLLOC_MU_MAX)
+        return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g: above %g", mu, COLLOC_MU_MAX);
+    if (!c->colloc && !(c->colloc = bkf_colloc_alloc())) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    size_t steps = 0, shots = 0;
+    int rc = BKF_OK;
+    int warm = opt->warm_start && c->have_solution && fabs(log(mu / c->result.mu)) <= COLLOC_WARM_LN_MU &&
+               fabs(nu - c->result.nu) <= COLLOC_WARM_NU && bkf_colloc_warm(c->colloc, mu, nu);
+    bkf_colloc_result r;
+    for (int cold = warm ? 0 : 1; cold < 2; cold++) {
+        if (!cold) {
+            rc = bkf_colloc_solve(c->colloc, opt->tol, &r, err);
+            if (rc == BKF_OK || rc == BKF_ENOMEM) break;
+            continue;
+        }
+        if (mu <= COLLOC_CIRCLE_MU) {
+            rc = bkf_colloc_guess_circle(c->colloc, mu, nu, 16, err);
+        } else {
+            integrator in = {0}, aux = {0};
+            bkf_stepper_kind kind = shooting_stepper(mu, 1e-10);
+            double tol = COLLOC_GUESS_TOL * fmin(1.0, sqrt(1.0 - nu * nu));
+            shot sh = {0};
+            rc = integrator_init(&in, p, kind, 0, tol) == BKF_OK && integrator_init(&aux, p, kind, 1, tol) == BKF_OK
+                     ? shoot(&in, &aux, p, section_y_of_slope(p, guess_slope(mu, nu)), NULL, c, &sh, err)
+                     : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            steps += in.steps + aux.steps;
+            shots++;
+            integrator_free(&in);
+            integrator_free(&aux);
+            if (rc == BKF_OK) {
+                size_t n = c->node_count;
+                double *buf = malloc(3 * n * sizeof *buf);
+                if (!buf) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+                for (size_t j = 0; j < n; j++) {
+                    buf[j] = c->nodes[j].t;
+                    buf[n + j] = c->nodes[j].s[0];
+                    buf[2 * n + j] = c->nodes[j].s[1];
+                }
+                rc = bkf_colloc_guess_nodes(c->colloc, mu, nu, buf, buf + n, buf + 2 * n, n, sh.period, err);
+                free(buf);
+            }
+        }
+        if (rc == BKF_OK) rc = bkf_colloc_solve(c->colloc, opt->tol, &r, err);
+    }
+    if (rc != BKF_OK) return rc;
+    size_t n = bkf_colloc_nodes(c->colloc, NULL, NULL, NULL, 0);
+    double *buf = malloc(3 * n * sizeof *buf);
+    if (!buf) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    bkf_colloc_nodes(c->colloc, buf, buf + n, buf + 2 * n, n);
+    c->node_count = 0;
+    for (size_t j = 0; j < n && rc == BKF_OK; j++)
+        rc = node_push(c, buf[j], (const double[]){buf[n + j], buf[2 * n + j]});
+    free(buf);
+    if (rc != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    bkf_cycle_result *res = &c->result;
+    res->mu = mu;
+    res->nu = nu;
+    res->period = r.period;
+    res->period_err = r.period_err;
+    res->log_multiplier = r.log_multiplier;
+    res->log_multiplier_err = r.log_multiplier_err;
+    res->multiplier = exp(r.log_multiplier);
+    res->return_map_slope = r.return_map_slope;
+    res->section_y = r.section_y;
+    res->section_slope = p->a * (r.section_y - p->b * lienard_F(nu));
+    res->steps = steps + r.interval_solves;
+    res->newton_iterations = shots + r.newton_iterations;
+    res->stepper = bkf_cycle_stepper_name(BKF_STEPPER_COLLOCATION);
+    res->model = "shooting";
+    c->profile_tol = fmax(0.01 * opt->tol, 1e-14);
+    c->profile_stepper = mu <= 100 ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_EXTRAPOLATION;
+    c->have_solution = 1;
+    rc = colloc_extremes(c, err);
+    res->rhs_calls = p->rhs_calls;
+    res->jacobian_calls = p->jacobian_calls;
+    if (rc != BKF_OK) c->have_solution = 0;
+    return rc;
+}
+
 static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
                             bkf_error *err)
 {
@@ -1019,6 +1170,21 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
     p->rhs_calls = p->jacobian_calls = 0;
     bkf_stepper_kind kind = opt.stepper;
     if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu, opt.tol);
+    if (kind == BKF_STEPPER_COLLOCATION) {
+        /* c->result is overwritten only on success */
+        bkf_cycle_result kept = c->result;
+        int had = c->have_solution;
+        rc = colloc_attempt(c, &opt, err);
+        if (rc == BKF_OK) return BKF_OK;
+        c->result = kept;
+        c->have_solution = had;
+        if (rc == BKF_ENOMEM) {
+            if (had) c->flow = previous;
+            return rc;
+        }
+        kind = shooting_stepper(mu, opt.tol);
+        p->rhs_calls = p->jacobian_calls = 0;
+    }
 
     double slope = c->warm_slope > 0 ? c->warm_slope
                    : opt.warm_start && c->have_solution ? warm_slope
@@ -1213,7 +1379,7 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
      * falls back to bsimp, never answering less than before bd2x2. */
     bkf_cycle_options o = options ? *options : bkf_cycle_options_default();
     if (bkf_status_is_numerical(rc) && o.stepper == BKF_STEPPER_AUTO &&
-        auto_stepper(mu, o.tol) == BKF_STEPPER_EXTRAPOLATION) {
+        shooting_stepper(mu, o.tol) == BKF_STEPPER_EXTRAPOLATION) {
         /* up to EXPLICIT_MU_MAX the engine that answered before bd2x2 took
          * over there: rk8pd */
         o.stepper = mu <= EXPLICIT_MU_MAX ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_IMPLICIT;
@@ -1466,7 +1632,7 @@ static int branch_shot(branch_ctx *b, double ln_w0, double q, double *g, double 
     int along_mu = b->along == BKF_CYCLE_ALONG_MU;
     p.sens = dg ? (along_mu ? 1 : 2) : 0;
     bkf_stepper_kind kind = b->options.stepper;
-    if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu, b->options.tol);
+    if (kind == BKF_STEPPER_AUTO || kind == BKF_STEPPER_COLLOCATION) kind = shooting_stepper(mu, b->options.tol);
     integrator in = {0}, aux = {0};
     double tol = branch_tol(b->options.tol, mu, nu, kind);
     int rc = BKF_ENOMEM;

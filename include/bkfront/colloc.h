@@ -1,0 +1,73 @@
+/* Gauss-Legendre collocation for the limit cycle of
+ *     f'' + mu (f^2 - 1) f' + f = nu
+ * in the cycle engine's scaled Lienard coordinates (cycle.h):
+ *     x' = a (y - b F(x)),  y' = (nu - x)/a,
+ * time normalised to s = z/T in [0, 1] with T unknown, phase x(0) = nu
+ * (the section, x' > 0).  BKF_COLLOC_M points per mesh interval; Newton with
+ * the stage values condensed per interval, then the reduced cyclic system for
+ * the mesh values and T.  The mesh equidistributes the (m+1)-th derivative
+ * (de Boor); the error estimate comes from a mesh and its bisection.
+ * docs/numerics.md, "The collocation engine".  bkf_cycle_solve uses it
+ * (stepper "colloc"); the object here is the engine itself, for the cycle
+ * module and for tests of its order. */
+#ifndef BKFRONT_COLLOC_H
+#define BKFRONT_COLLOC_H
+
+#include <stddef.h>
+#include "bkfront/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define BKF_COLLOC_M 4
+
+typedef struct bkf_colloc bkf_colloc;
+
+typedef struct {
+    double period, period_err;
+    double log_multiplier, log_multiplier_err; /* Gauss quadrature of -mu (x^2 - 1) */
+    double return_map_slope;                  /* trace of the condensed monodromy - 1 */
+    double section_y;                         /* y(0) */
+    size_t intervals;                         /* of the finer mesh of the estimate */
+    size_t newton_iterations;
+    size_t interval_solves;                   /* work: condensed interval solves */
+} bkf_colloc_result;
+
+bkf_colloc *bkf_colloc_alloc(void);
+void bkf_colloc_free(bkf_colloc *colloc);
+
+/* Initial guess from a trajectory: count nodes z[0] = 0 < z[1] < ... < T
+ * with states (x, y) at (mu, nu); the mesh is the nodes'. */
+int bkf_colloc_guess_nodes(bkf_colloc *colloc, double mu, double nu, const double *z, const double *x,
+                           const double *y, size_t count, double T, bkf_error *err);
+
+/* Initial guess for small mu: the harmonic cycle of radius 2 sqrt(1 - nu^2),
+ * T = 2 pi, on `intervals` uniform intervals. */
+int bkf_colloc_guess_circle(bkf_colloc *colloc, double mu, double nu, size_t intervals, bkf_error *err);
+
+/* Move the last solution to (mu, nu) (same f, f' on the same mesh) as the
+ * guess of the next solve; 0 if there is none. */
+int bkf_colloc_warm(bkf_colloc *colloc, double mu, double nu);
+
+/* Solve from the guess to relative accuracy tol of T (estimate from a mesh
+ * and its bisection, accepted when 3 times it is within tol).  Refuses
+ * (BKF_ENUMERIC) where Newton does not converge or the cyclic system is
+ * ill-conditioned (the product of interval maps grows past what its
+ * rounding allows: canards, where the orbit follows the repelling slow
+ * branch), BKF_ETOL where the mesh needed exceeds the engine's budget. */
+int bkf_colloc_solve(bkf_colloc *colloc, double tol, bkf_colloc_result *out, bkf_error *err);
+
+/* Newton on exactly `intervals` intervals equidistributed for the guess
+ * (no estimate): T into *period.  For studies of the order in the mesh. */
+int bkf_colloc_fixed(bkf_colloc *colloc, size_t intervals, double *period, bkf_error *err);
+
+/* The mesh points of the last solution: z = s T and (x, y) there; writes at
+ * most capacity and returns how many there are. */
+size_t bkf_colloc_nodes(const bkf_colloc *colloc, double *z, double *x, double *y, size_t capacity);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,814 @@
+/* Gauss-Legendre collocation for the limit cycle (colloc.h).
+ *
+ * Per mesh interval j (length h in s, tau = h T in z) the stage values X_i
+ * at the Gauss points c_i are the unknowns; the stage y values are linear in
+ * them, Y_i = y_j + (tau/a) (nu c_i - (A X)_i), so they are eliminated in
+ * closed form and the interval's Newton matrix is m x m, not 2m x 2m:
+ *     R_i = X_i - x_j - tau a c_i y_j - tau^2 (nu (A c)_i - (A^2 X)_i)
+ *           + tau mu (A F(X))_i = 0
+ * (a b = mu).  The end of the interval follows from the quadrature weights w:
+ *     x_{j+1} = x_j + tau a y_j + tau^2 (nu/2 - w^T A X) - tau mu w^T F(X),
+ *     y_{j+1} = y_j + (tau/a) (nu - w^T X).
+ * Newton condenses the stages per interval (one m x m LU, four right-hand
+ * sides), which leaves du_{j+1} = G_j du_j + g_j dT + r_j; the periodicity
+ * du_n = du_0 and the phase dx_0 = nu - x_0 reduce that to a 2x2 system for
+ * (dy_0, dT) through the product of the G_j.  That product is the discrete
+ * monodromy: it is stable where the cycle attracts; inside canards, where
+ * the orbit follows the repelling slow branch, its partial products grow
+ * like exp(mu x the time there), and the forward recursion's mismatch
+ * du_n - du_0 shows it: the engine refuses then (the shooting engine answers). */
+#include "bkfront/colloc.h"
+
+#include <float.h>
+#include <gsl/gsl_math.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define M BKF_COLLOC_M
+/* Newton iterations per mesh before the solve refuses. */
+#define MAX_NEWTON 30
+/* Largest partial product of interval maps, and largest relative mismatch
+ * of the forward recursion, that the cyclic solve accepts. */
+#define PRODUCT_MAX 1e10
+#define CLOSURE_MAX 1e-3
+/* Largest mesh of the pair (intervals of the finer). */
+#define MAX_INTERVALS 40000
+#define MIN_INTERVALS 8
+/* The estimate |T_N - T_2N| / EST_DIVISOR of the finer T: the error of
+ * Gauss collocation falls like h^(2m) (2^8 = 256 on bisection for m = 4);
+ * 16 keeps the estimate honest while the mesh is still outside the
+ * asymptotic range. */
+#define EST_DIVISOR 16.0
+#define ACCEPT_MARGIN 3.0
+
+typedef struct {
+    double c[M], w[M], A[M][M], A2[M][M], Ac[M], p[M];
+    double dd[M + 1];  /* divided-difference weights on the nodes (0, c_1..c_m) */
+    double mfact;      /* m! */
+} gauss_table;
+
+struct bkf_colloc {
+    double mu, nu, a, b;
+    size_t n, cap;
+    double *t;      /* mesh in s, n + 1 */
+    double *x, *y;  /* mesh values, n + 1 (index n duplicates 0) */
+    double *X;      /* stage x values, n M */
+    double T;
+    int have_guess, have_solution;
+    /* work */
+    double *Z;      /* n x 4 x M condensed columns */
+    double *lin;    /* n x 8: G (4), g (2), r (2) */
+    double *du;     /* 2 (n + 1) */
+    double *ts, *xs, *ys, *Xs; /* remesh scratch */
+    size_t scap;
+    gauss_table g;
+    size_t iterations, solves;
+    double trace, log_mult;
+    size_t pair_n; /* the coarser mesh of the last accepted pair */
+};
+
+/* ------------------------------------------------------------ tables */
+
+static void gauss_init(gauss_table *g)
+{
+    /* Legendre roots on [-1, 1] by Newton from Chebyshev-like guesses */
+    for (int i = 0; i < M; i++) {
+        double z = cos(M_PI * (i + 0.75) / (M + 0.5)), dp = 1.0;
+        for (int it = 0; it < 100; it++) {
+            double p0 = 1.0, p1 = z;
+            for (int k = 2; k <= M; k++) {
+                double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
+                p0 = p1;
+                p1 = p2;
+            }
+            if (M == 1) p0 = 1.0;
+            dp = M * (z * p1 - p0) / (z * z - 1.0);
+            double dz = p1 / dp;
+            z -= dz;
+            if (fabs(dz) < 1e-17) break;
+        }
+        g->c[M - 1 - i] = 0.5 * (1.0 + z);
+        g->w[M - 1 - i] = 1.0 / ((1.0 - z * z) * dp * dp);
+    }
+    /* A_il = integral over [0, c_i] of the Lagrange basis l_l: Gauss
+     * quadrature is exact on its degree m - 1 */
+    for (int i = 0; i < M; i++)
+        for (int l = 0; l < M; l++) {
+            double s = 0.0;
+            for (int k = 0; k < M; k++) {
+                double u = g->c[i] * g->c[k], lv = 1.0;
+                for (int q = 0; q < M; q++)
+                    if (q != l) lv *= (u - g->c[q]) / (g->c[l] - g->c[q]);
+                s += g->w[k] * lv;
+            }
+            g->A[i][l] = g->c[i] * s;
+        }
+    for (int i = 0; i < M; i++) {
+        g->Ac[i] = 0.0;
+        for (int l = 0; l < M; l++) {
+            g->Ac[i] += g->A[i][l] * g->c[l];
+            double s = 0.0;
+            for (int k = 0; k < M; k++) s += g->A[i][k] * g->A[k][l];
+            g->A2[i][l] = s;
+        }
+    }
+    for (int l = 0; l < M; l++) {
+        g->p[l] = 0.0;
+        for (int i = 0; i < M; i++) g->p[l] += g->w[i] * g->A[i][l];
+    }
+    double th[M + 1];
+    th[0] = 0.0;
+    for (int i = 0; i < M; i++) th[i + 1] = g->c[i];
+    g->mfact = 1.0;
+    for (int k = 1; k <= M; k++) g->mfact *= k;
+    for (int k = 0; k <= M; k++) {
+        double d = 1.0;
+        for (int l = 0; l <= M; l++)
+            if (l != k) d *= th[k] - th[l];
+        g->dd[k] = 1.0 / d;
+    }
+}
+
+bkf_colloc *bkf_colloc_alloc(void)
+{
+    bkf_colloc *c = calloc(1, sizeof *c);
+    if (c) gauss_init(&c->g);
+    return c;
+}
+
+void bkf_colloc_free(bkf_colloc *c)
+{
+    if (!c) return;
+    free(c->t);
+    free(c->x);
+    free(c->y);
+    free(c->X);
+    free(c->Z);
+    free(c->lin);
+    free(c->du);
+    free(c->ts);
+    free(c->xs);
+    free(c->ys);
+    free(c->Xs);
+    free(c);
+}
+
+static int grow(double **p, size_t count)
+{
+    double *q = realloc(*p, count * sizeof *q);
+    if (!q) return 0;
+    *p = q;
+    return 1;
+}
+
+static int reserve(bkf_colloc *c, size_t n)
+{
+    if (n <= c->cap) return 1;
+    size_t cap = n + n / 2 + 16;
+    if (!grow(&c->t, cap + 1) || !grow(&c->x, cap + 1) || !grow(&c->y, cap + 1) || !grow(&c->X, cap * M) ||
+        !grow(&c->Z, cap * 4 * M) || !grow(&c->lin, cap * 8) || !grow(&c->du, 2 * (cap + 1)))
+        return 0;
+    c->cap = cap;
+    return 1;
+}
+
+static int reserve_scratch(bkf_colloc *c, size_t n)
+{
+    if (n <= c->scap) return 1;
+    size_t cap = n + n / 2 + 16;
+    if (!grow(&c->ts, cap + 1) || !grow(&c->xs, cap + 1) || !grow(&c->ys, cap + 1) || !grow(&c->Xs, cap * M))
+        return 0;
+    c->scap = cap;
+    return 1;
+}
+
+static void set_params(bkf_colloc *c, double mu, double nu)
+{
+    c->mu = mu;
+    c->nu = nu;
+    c->a = sqrt(1.0 + mu * mu);
+    c->b = mu / c->a;
+}
+
+static double lienard_F(double x) { return x * x * x / 3.0 - x; }
+
+/* ------------------------------------------------- interval polynomials */
+
+/* Stage y values of interval j (linear in the stage x values). */
+static void stage_y(const bkf_colloc *c, size_t j, double *Y)
+{
+    const gauss_table *g = &c->g;
+    const double *X = c->X + j * M;
+    double tau_a = (c->t[j + 1] - c->t[j]) * c->T / c->a;
+    for (int i = 0; i < M; i++) {
+        double ax = 0.0;
+        for (int l = 0; l < M; l++) ax += g->A[i][l] * X[l];
+        Y[i] = c->y[j] + tau_a * (c->nu * g->c[i] - ax);
+    }
+}
+
+/* The collocation polynomial of interval j (degree m through its start and
+ * its stages) at theta in [0, 1]. */
+static void poly_eval(const bkf_colloc *c, size_t j, double theta, double *xv, double *yv)
+{
+    const gauss_table *g = &c->g;
+    double Y[M], th[M + 1], fx[M + 1], fy[M + 1];
+    stage_y(c, j, Y);
+    th[0] = 0.0;
+    fx[0] = c->x[j];
+    fy[0] = c->y[j];
+    for (int i = 0; i < M; i++) {
+        th[i + 1] = g->c[i];
+        fx[i + 1] = c->X[j * M + i];
+        fy[i + 1] = Y[i];
+    }
+    double sx = 0.0, sy = 0.0;
+    for (int k = 0; k <= M; k++) {
+        double l = 1.0;
+        for (int q = 0; q <= M; q++)
+            if (q != k) l *= (theta - th[q]) / (th[k] - th[q]);
+        sx += l * fx[k];
+        sy += l * fy[k];
+    }
+    *xv = sx;
+    *yv = sy;
+}
+
+/* One Gauss step of length tau from (x0, y0): the stage equations R(X) = 0
+ * by Newton from the guess in X; the end values into (x1, y1).  0 if
+ * Newton does not converge (the step is too long for its guess). */
+static int gauss_step(const bkf_colloc *c, double x0, double y0, double tau, double *X, double *x1, double *y1)
+{
+    const gauss_table *g = &c->g;
+    const double mu = c->mu, nu = c->nu, a = c->a;
+    for (int it = 0; it < 12; it++) {
+        double F[M], Fp[M], mat[M][M + 1], dmax = 0.0;
+        for (int i = 0; i < M; i++) {
+            F[i] = lienard_F(X[i]);
+            Fp[i] = X[i] * X[i] - 1.0;
+        }
+        for (int i = 0; i < M; i++) {
+            double a2x = 0.0, af = 0.0;
+            for (int l = 0; l < M; l++) {
+                a2x += g->A2[i][l] * X[l];
+                af += g->A[i][l] * F[l];
+                mat[i][l] = (i == l) + tau * tau * g->A2[i][l] + tau * mu * g->A[i][l] * Fp[l];
+            }
+            mat[i][M] = -(X[i] - x0 - tau * a * g->c[i] * y0 - tau * tau * (nu * g->Ac[i] - a2x) + tau * mu * af);
+        }
+        for (int k = 0; k < M; k++) {
+            int piv = k;
+            for (int i = k + 1; i < M; i++)
+                if (fabs(mat[i][k]) > fabs(mat[piv][k])) piv = i;
+            if (!(fabs(mat[piv][k]) > 0.0)) return 0;
+            for (int l = k; l <= M && piv != k; l++) {
+                double tmp = mat[k][l];
+                mat[k][l] = mat[piv][l];
+                mat[piv][l] = tmp;
+            }
+            for (int i = k + 1; i < M; i++) {
+                double f = mat[i][k] / mat[k][k];
+                for (int l = k; l <= M; l++) mat[i][l] -= f * mat[k][l];
+            }
+        }
+        for (int i = M - 1; i >= 0; i--) {
+            double s = mat[i][M];
+            for (int l = i + 1; l < M; l++) s -= mat[i][l] * mat[l][M];
+            mat[i][M] = s / mat[i][i];
+            X[i] += mat[i][M];
+            dmax = fmax(dmax, fabs(mat[i][M]));
+        }
+        if (!isfinite(dmax) || dmax > 10.0) return 0;
+        if (dmax <= 1e-12 * (1.0 + fabs(x0))) {
+            double pX = 0.0, wF = 0.0, wX = 0.0;
+            for (int l = 0; l < M; l++) {
+                pX += g->p[l] * X[l];
+                wF += g->w[l] * lienard_F(X[l]);
+                wX += g->w[l] * X[l];
+            }
+            *x1 = x0 + tau * a * y0 + tau * tau * (0.5 * nu - pX) - tau * mu * wF;
+            *y1 = y0 + tau / a * (nu - wX);
+            return isfinite(*x1) && isfinite(*y1);
+        }
+    }
+    return 0;
+}
+
+/* Move the solution onto the mesh ts[0..n].  The old polynomials between
+ * mesh points are only of stage order, and far off inside under-resolved
+ * fast layers (mu 1e3: the bisected guess needed Newton corrections of 1e5),
+ * so each new interval is re-integrated by Gauss steps from the nearest old
+ * mesh point (superconvergent) with the polynomials as the stages' start;
+ * where a step does not converge, the polynomial values stay. */
+static int remesh_to(bkf_colloc *c, const double *ts, size_t n)
+{
+    if (!reserve_scratch(c, n)) return BKF_ENOMEM;
+    size_t j = 0;
+    for (size_t k = 0; k < n; k++) {
+        double h = ts[k + 1] - ts[k];
+        while (j + 1 < c->n && c->t[j + 1] <= ts[k]) j++;
+        double hj = c->t[j + 1] - c->t[j], th0 = (ts[k] - c->t[j]) / hj, xv, yv, X[M];
+        if (th0 > 0.0) {
+            /* a partial step from the old mesh point */
+            double tau = (ts[k] - c->t[j]) * c->T, x1, y1;
+            for (int i = 0; i < M; i++) poly_eval(c, j, c->g.c[i] * th0, &X[i], &yv);
+            if (gauss_step(c, c->x[j], c->y[j], tau, X, &x1, &y1)) {
+                xv = x1;
+                yv = y1;
+            } else {
+                poly_eval(c, j, th0, &xv, &yv);
+            }
+        } else {
+            xv = c->x[j];
+            yv = c->y[j];
+        }
+        c->xs[k] = xv;
+        c->ys[k] = yv;
+        size_t jj = j;
+        for (int i = 0; i < M; i++) {
+            double s = ts[k] + c->g.c[i] * h, unused;
+            while (jj + 1 < c->n && c->t[jj + 1] <= s) jj++;
+            poly_eval(c, jj, (s - c->t[jj]) / (c->t[jj + 1] - c->t[jj]), &c->Xs[k * M + i], &unused);
+        }
+        double stage[M], x1, y1;
+        memcpy(stage, c->Xs + k * M, sizeof stage);
+        if (gauss_step(c, xv, yv, h * c->T, stage, &x1, &y1)) memcpy(c->Xs + k * M, stage, sizeof stage);
+    }
+    if (!reserve(c, n)) return BKF_ENOMEM;
+    memcpy(c->t, ts, (n + 1) * sizeof *ts);
+    memcpy(c->x, c->xs, n * sizeof *c->x);
+    memcpy(c->y, c->ys, n * sizeof *c->y);
+    memcpy(c->X, c->Xs, n * M * sizeof *c->X);
+    c->n = n;
+    c->x[n] = c->x[0];
+    c->y[n] = c->y[0];
+    c->t[0] = 0.0;
+    c->t[n] = 1.0;
+    return BKF_OK;
+}
+
+/* A mesh of n intervals that equidistributes |u^(m+1)|^(1/(m+1)), the
+ * (m+1)-th derivative estimated from the jumps of the polynomials' constant
+ * m-th derivatives between neighbouring intervals (de Boor; AUTO's adapt). */
+static int equidistribute(bkf_colloc *c, size_t n)
+{
+    const gauss_table *g = &c->g;
+    size_t n0 = c->n;
+    double *D = malloc(2 * n0 * sizeof *D), *rho = malloc((n0 + 1) * sizeof *rho), *ts = malloc((n + 1) * sizeof *ts);
+    if (!D || !rho || !ts) {
+        free(D);
+        free(rho);
+        free(ts);
+        return BKF_ENOMEM;
+    }
+    for (size_t j = 0; j < n0; j++) {
+        double Y[M], h = c->t[j + 1] - c->t[j], dx = g->dd[0] * c->x[j], dy = g->dd[0] * c->y[j];
+        stage_y(c, j, Y);
+        for (int i = 0; i < M; i++) {
+            dx += g->dd[i + 1] * c->X[j * M + i];
+            dy += g->dd[i + 1] * Y[i];
+        }
+        double s = g->mfact / pow(h, M);
+        D[2 * j] = dx * s;
+        D[2 * j + 1] = dy * s;
+    }
+    double total = 0.0;
+    rho[0] = 0.0;
+    for (size_t j = 0; j < n0; j++) {
+        size_t jm = j ? j - 1 : n0 - 1, jp = j + 1 < n0 ? j + 1 : 0;
+        double h = c->t[j + 1] - c->t[j], hm = c->t[jm + 1] - c->t[jm], hp = c->t[jp + 1] - c->t[jp];
+        double em = fmax(fabs(D[2 * j] - D[2 * jm]), fabs(D[2 * j + 1] - D[2 * jm + 1])) / (0.5 * (h + hm));
+        double ep = fmax(fabs(D[2 * jp] - D[2 * j]), fabs(D[2 * jp + 1] - D[2 * j + 1])) / (0.5 * (h + hp));
+        double dens = pow(0.5 * (em + ep), 1.0 / (M + 1));
+        rho[j + 1] = dens * h;
+        total += dens * h;
+    }
+    /* a floor keeps smooth stretches from being stripped of intervals */
+    double floor = 0.02 * total;
+    double acc = 0.0;
+    for (size_t j = 0; j < n0; j++) {
+        acc += rho[j + 1] + floor * (c->t[j + 1] - c->t[j]);
+        rho[j + 1] = acc;
+    }
+    total = acc;
+    ts[0] = 0.0;
+    size_t j = 0;
+    for (size_t k = 1; k < n; k++) {
+        double target = total * (double)k / (double)n;
+        while (j + 1 < n0 && rho[j + 1] < target) j++;
+        double f = (target - rho[j]) / (rho[j + 1] - rho[j]);
+        ts[k] = c->t[j] + f * (c->t[j + 1] - c->t[j]);
+    }
+    ts[n] = 1.0;
+    int rc = remesh_to(c, ts, n);
+    free(D);
+    free(rho);
+    free(ts);
+    return rc;
+}
+
+static int bisect(bkf_colloc *c)
+{
+    size_t n = 2 * c->n;
+    double *ts = malloc((n + 1) * sizeof *ts);
+    if (!ts) return BKF_ENOMEM;
+    for (size_t j = 0; j < c->n; j++) {
+        ts[2 * j] = c->t[j];
+        ts[2 * j + 1] = 0.5 * (c->t[j] + c->t[j + 1]);
+    }
+    ts[n] = 1.0;
+    int rc = remesh_to(c, ts, n);
+    free(ts);
+    return rc;
+}
+
+/* ------------------------------------------------------------- Newton */
+
+/* Condense interval j: Z = the stage corrections' columns (residual, dx_j,
+ * dy_j, dT), lin = G (row-major 2x2), g, r.  0 if the stage matrix is
+ * singular. */
+static int condense(const bkf_colloc *c, size_t j, double *Z, double *lin)
+{
+    const gauss_table *g = &c->g;
+    const double *X = c->X + j * M;
+    const double mu = c->mu, nu = c->nu, a = c->a;
+    double h = c->t[j + 1] - c->t[j], tau = h * c->T, xj = c->x[j], yj = c->y[j];
+    double F[M], Fp[M], R[M];
+    for (int i = 0; i < M; i++) {
+        F[i] = lienard_F(X[i]);
+        Fp[i] = X[i] * X[i] - 1.0;
+    }
+    double mat[M][M + 4];
+    for (int i = 0; i < M; i++) {
+        double a2x = 0.0, af = 0.0;
+        for (int l = 0; l < M; l++) {
+            a2x += g->A2[i][l] * X[l];
+            af += g->A[i][l] * F[l];
+        }
+        double lin_part = nu * g->Ac[i] - a2x;
+        R[i] = X[i] - xj - tau * a * g->c[i] * yj - tau * tau * lin_part + tau * mu * af;
+        double rtau = -a * g->c[i] * yj - 2.0 * tau * lin_part + mu * af;
+        for (int l = 0; l < M; l++)
+            mat[i][l] = (i == l) + tau * tau * g->A2[i][l] + tau * mu * g->A[i][l] * Fp[l];
+        mat[i][M] = -R[i];
+        mat[i][M + 1] = 1.0;
+        mat[i][M + 2] = tau * a * g->c[i];
+        mat[i][M + 3] = -h * rtau;
+    }
+    /* Gaussian elimination with partial pivoting on the four right-hand sides */
+    for (int k = 0; k < M; k++) {
+        int piv = k;
+        for (int i = k + 1; i < M; i++)
+            if (fabs(mat[i][k]) > fabs(mat[piv][k])) piv = i;
+        if (!(fabs(mat[piv][k]) > 0.0)) return 0;
+        if (piv != k)
+            for (int l = k; l < M + 4; l++) {
+                double tmp = mat[k][l];
+                mat[k][l] = mat[piv][l];
+                mat[piv][l] = tmp;
+            }
+        double inv = 1.0 / mat[k][k];
+        for (int i = k + 1; i < M; i++) {
+            double f = mat[i][k] * inv;
+            if (f == 0.0) continue;
+            for (int l = k + 1; l < M + 4; l++) mat[i][l] -= f * mat[k][l];
+        }
+        mat[k][k] = inv;
+    }
+    for (int col = 0; col < 4; col++) {
+        double *z = Z + col * M;
+        for (int i = M - 1; i >= 0; i--) {
+            double s = mat[i][M + col];
+            for (int l = i + 1; l < M; l++) s -= mat[i][l] * z[l];
+            z[i] = s * mat[i][i];
+        }
+    }
+    double pX = 0.0, wF = 0.0, wX = 0.0, gz[4] = {0}, wz[4] = {0};
+    for (int l = 0; l < M; l++) {
+        pX += g->p[l] * X[l];
+        wF += g->w[l] * F[l];
+        wX += g->w[l] * X[l];
+        double gl = tau * tau * g->p[l] + tau * mu * g->w[l] * Fp[l];
+        for (int col = 0; col < 4; col++) {
+            gz[col] += gl * Z[col * M + l];
+            wz[col] += g->w[l] * Z[col * M + l];
+        }
+    }
+    double Ex = c->x[j + 1] - xj - tau * a * yj - tau * tau * (0.5 * nu - pX) + tau * mu * wF;
+    double Ey = c->y[j + 1] - yj - tau / a * (nu - wX);
+    double Qt = a * yj + 2.0 * tau * (0.5 * nu - pX) - mu * wF;
+    double ta = tau / a;
+    lin[0] = 1.0 - gz[1];
+    lin[1] = tau * a - gz[2];
+    lin[2] = -ta * wz[1];
+    lin[3] = 1.0 - ta * wz[2];
+    lin[4] = h * Qt - gz[3];
+    lin[5] = h / a * (nu - wX) - ta * wz[3];
+    lin[6] = -Ex - gz[0];
+    lin[7] = -Ey - ta * wz[0];
+    return isfinite(lin[0] + lin[1] + lin[2] + lin[3] + lin[4] + lin[5] + lin[6] + lin[7]);
+}
+
+/* Integral of -mu (x^2 - 1) over the period by the Gauss quadrature of the
+ * stages. */
+static double log_multiplier(const bkf_colloc *c)
+{
+    double L = 0.0;
+    for (size_t j = 0; j < c->n; j++) {
+        double s = 0.0;
+        for (int i = 0; i < M; i++) {
+            double x = c->X[j * M + i];
+            s += c->g.w[i] * (x * x - 1.0);
+        }
+        L += (c->t[j + 1] - c->t[j]) * s;
+    }
+    return -c->mu * c->T * L;
+}
+
+/* Newton on the current mesh until the correction is below `goal`
+ * (relative to T and to the cycle's size); the last correction is applied,
+ * so what it leaves is of the order of its square. */
+static int newton(bkf_colloc *c, double goal, bkf_error *err)
+{
+    const size_t n = c->n;
+    double size = fmin(1.0, 2.0 * sqrt(fmax(1.0 - c->nu * c->nu, 0.0)));
+    double previous = INFINITY;
+    for (int it = 0; it < MAX_NEWTON; it++) {
+        c->x[n] = c->x[0];
+        c->y[n] = c->y[0];
+        double P[4] = {1, 0, 0, 1}, q[2] = {0, 0}, s[2] = {0, 0}, pmax = 1.0;
+        for (size_t j = 0; j < n; j++) {
+            double *lin = c->lin + 8 * j;
+            if (!condense(c, j, c->Z + 4 * M * j, lin))
+                return bkf_error_set(err, BKF_ENUMERIC,
+                                     "collocation at mu = %.15g, nu = %.15g: singular stage system", c->mu,
+                                     c->nu);
+            double P0 = lin[0] * P[0] + lin[1] * P[2], P1 = lin[0] * P[1] + lin[1] * P[3];
+            double P2 = lin[2] * P[0] + lin[3] * P[2], P3 = lin[2] * P[1] + lin[3] * P[3];
+            P[0] = P0, P[1] = P1, P[2] = P2, P[3] = P3;
+            double q0 = lin[0] * q[0] + lin[1] * q[1] + lin[4], q1 = lin[2] * q[0] + lin[3] * q[1] + lin[5];
+            q[0] = q0, q[1] = q1;
+            double s0 = lin[0] * s[0] + lin[1] * s[1] + lin[6], s1 = lin[2] * s[0] + lin[3] * s[1] + lin[7];
+            s[0] = s0, s[1] = s1;
+            double pm = fmax(fmax(fabs(P0), fabs(P1)), fmax(fabs(P2), fabs(P3)));
+            if (pm > pmax) pmax = pm;
+        }
+        c->solves += n;
+        c->iterations++;
+        if (!(pmax <= PRODUCT_MAX))
+            return bkf_error_set(err, BKF_ENUMERIC,
+                                 "collocation at mu = %.15g, nu = %.15g: the interval maps' product reaches "
+                                 "%.2g (repelling stretch): refused",
+                                 c->mu, c->nu, pmax);
+        c->trace = P[0] + P[3];
+        double dx0 = c->nu - c->x[0];
+        double B00 = P[0] - 1.0, B01 = P[1], B10 = P[2], B11 = P[3] - 1.0;
+        double r0 = -s[0] - B00 * dx0, r1 = -s[1] - B10 * dx0;
+        double det = B01 * q[1] - q[0] * B11;
+        if (!(fabs(det) > 1e-300) || !isfinite(det))
+            return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: singular cyclic system",
+                                 c->mu, c->nu);
+        double dy0 = (r0 * q[1] - q[0] * r1) / det, dT = (B01 * r1 - B11 * r0) / det;
+        double *du = c->du;
+        du[0] = dx0;
+        du[1] = dy0;
+        double dmax = fabs(dT) / c->T;
+        for (size_t j = 0; j < n; j++) {
+            const double *lin = c->lin + 8 * j;
+            double a0 = du[2 * j], a1 = du[2 * j + 1];
+            du[2 * j + 2] = lin[0] * a0 + lin[1] * a1 + lin[4] * dT + lin[6];
+            du[2 * j + 3] = lin[2] * a0 + lin[3] * a1 + lin[5] * dT + lin[7];
+        }
+        /* the recursion's return to du_0 measures its conditioning */
+        double scale = fmax(fabs(dx0) + fabs(dy0) + fabs(dT) / c->T, 1e-300);
+        double closure = fmax(fabs(du[2 * n] - du[0]), fabs(du[2 * n + 1] - du[1]));
+        if (!(closure <= CLOSURE_MAX * scale + 1e3 * DBL_EPSILON))
+            return bkf_error_set(err, BKF_ENUMERIC,
+                                 "collocation at mu = %.15g, nu = %.15g: the cyclic solve is ill-conditioned "
+                                 "(mismatch %.2g): refused",
+                                 c->mu, c->nu, closure / scale);
+        for (size_t j = 0; j < n; j++) {
+            const double *Z = c->Z + 4 * M * j;
+            double a0 = du[2 * j], a1 = du[2 * j + 1];
+            for (int i = 0; i < M; i++) {
+                double d = Z[i] + Z[M + i] * a0 + Z[2 * M + i] * a1 + Z[3 * M + i] * dT;
+                if (fabs(d) > dmax * size) dmax = fabs(d) / size;
+            }
+            if (fmax(fabs(a0), fabs(a1)) > dmax * size) dmax = fmax(fabs(a0), fabs(a1)) / size;
+        }
+        if (!isfinite(dmax))
+            return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: Newton diverged",
+                                 c->mu, c->nu);
+        /* damped while far (a loose guess) */
+        double lambda = dmax > 0.3 ? 0.3 / dmax : 1.0;
+        for (size_t j = 0; j < n; j++) {
+            const double *Z = c->Z + 4 * M * j;
+            double a0 = du[2 * j], a1 = du[2 * j + 1];
+            for (int i = 0; i < M; i++)
+                c->X[j * M + i] += lambda * (Z[i] + Z[M + i] * a0 + Z[2 * M + i] * a1 + Z[3 * M + i] * dT);
+            c->x[j] += lambda * a0;
+            c->y[j] += lambda * a1;
+        }
+        c->T += lambda * dT;
+        c->x[n] = c->x[0];
+        c->y[n] = c->y[0];
+        if (!(c->T > 0.0))
+            return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: T went negative",
+                                 c->mu, c->nu);
+        if (lambda == 1.0 && dmax <= goal) return BKF_OK;
+        /* stalled at rounding: no longer shrinking quadratically */
+        if (lambda == 1.0 && dmax <= 1e3 * DBL_EPSILON && dmax > 0.25 * previous) return BKF_OK;
+        previous = lambda == 1.0 ? dmax : INFINITY;
+    }
+    return bkf_error_set(err, BKF_ENUMERIC,
+                         "collocation at mu = %.15g, nu = %.15g: Newton did not converge in %d iterations", c->mu,
+                         c->nu, MAX_NEWTON);
+}
+
+/* ------------------------------------------------------------- guesses */
+
+/* Largest subdivision of a node step, and the mismatch (relative to the
+ * cycle's size) at the next node below which the Gauss steps resolve it. */
+#define GUESS_SPLIT_MAX 256
+#define GUESS_MISMATCH 1e-3
+
+int bkf_colloc_guess_nodes(bkf_colloc *c, double mu, double nu, const double *z, const double *x,
+                           const double *y, size_t count, double T, bkf_error *err)
+{
+    if (!c || count < 2 || !(T > z[count - 1]))
+        return bkf_error_set(err, BKF_EINPUT, "collocation guess needs at least 2 nodes within (0, T)");
+    set_params(c, mu, nu);
+    double size = fmin(1.0, 2.0 * sqrt(fmax(1.0 - nu * nu, 0.0)));
+    /* Each node step is covered by Gauss steps from its start, halved until
+     * they land on the next node: the mesh then resolves the cycle for m
+     * points (the shooting steps, of order up to 14, are far longer on the
+     * jumps), and the stages are consistent, which the global Newton needs
+     * (Hermite stages on the shooting mesh: corrections of 1e6 at mu 1e3). */
+    size_t n = 0;
+    for (size_t j = 0; j < count; j++) {
+        double z1 = j + 1 < count ? z[j + 1] : T, xn = x[j + 1 < count ? j + 1 : 0], yn = y[j + 1 < count ? j + 1 : 0];
+        double x1 = x[j], y1 = y[j];
+        size_t k = 1;
+        for (;; k *= 2) {
+            if (!reserve(c, n + k)) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            double tau = (z1 - z[j]) / (double)k, xs = x[j], ys = y[j];
+            int ok = 1;
+            for (size_t i = 0; i < k && ok; i++) {
+                double *X = c->X + (n + i) * M, xd = c->a * (ys - c->b * lienard_F(xs)) * tau;
+                for (int l = 0; l < M; l++) X[l] = xs + c->g.c[l] * xd;
+                c->t[n + i] = z[j] + (double)i * tau;
+                c->x[n + i] = xs;
+                c->y[n + i] = ys;
+                ok = gauss_step(c, xs, ys, tau, X, &xs, &ys);
+            }
+            x1 = xs;
+            y1 = ys;
+            /* (the last step's target is the start: a mismatch of the
+             * unconverged shot, not of the steps) */
+            double miss = fmax(fabs(x1 - xn), fabs(y1 - yn)) / size;
+            if (ok && (miss <= GUESS_MISMATCH || j + 1 == count)) break;
+            if (k >= GUESS_SPLIT_MAX)
+                return bkf_error_set(err, BKF_ENUMERIC,
+                                     "collocation at mu = %.15g, nu = %.15g: the guess is not resolved by %d "
+                                     "Gauss steps per node step",
+                                     mu, nu, GUESS_SPLIT_MAX);
+        }
+        n += k;
+    }
+    for (size_t j = 0; j < n; j++) c->t[j] /= T;
+    c->n = n;
+    c->T = T;
+    c->t[n] = 1.0;
+    c->x[n] = c->x[0];
+    c->y[n] = c->y[0];
+    c->have_guess = 1;
+    c->have_solution = 0;
+    return BKF_OK;
+}
+
+int bkf_colloc_guess_circle(bkf_colloc *c, double mu, double nu, size_t intervals, bkf_error *err)
+{
+    if (!c || intervals < 4) return bkf_error_set(err, BKF_EINPUT, "collocation guess needs at least 4 intervals");
+    if (!reserve(c, intervals)) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    set_params(c, mu, nu);
+    c->n = intervals;
+    c->T = 2.0 * M_PI;
+    double r = 2.0 * sqrt(1.0 - nu * nu);
+    for (size_t j = 0; j <= intervals; j++) {
+        double s = (double)j / (double)intervals, xv = nu + r * sin(2.0 * M_PI * s);
+        c->t[j] = s;
+        c->x[j] = xv;
+        c->y[j] = r * cos(2.0 * M_PI * s) / c->a + c->b * lienard_F(xv);
+    }
+    for (size_t j = 0; j < intervals; j++)
+        for (int i = 0; i < M; i++)
+            c->X[j * M + i] = nu + r * sin(2.0 * M_PI * (c->t[j] + c->g.c[i] / (double)intervals));
+    c->have_guess = 1;
+    c->have_solution = 0;
+    return BKF_OK;
+}
+
+int bkf_colloc_warm(bkf_colloc *c, double mu, double nu)
+{
+    if (!c || !c->have_solution) return 0;
+    double a0 = c->a, b0 = c->b;
+    set_params(c, mu, nu);
+    /* same f and f' = a (y - b F(x)) in the new scaling */
+    for (size_t j = 0; j <= c->n; j++) {
+        double fp = a0 * (c->y[j] - b0 * lienard_F(c->x[j]));
+        c->y[j] = fp / c->a + c->b * lienard_F(c->x[j]);
+    }
+    c->have_guess = 1;
+    return 1;
+}
+
+/* -------------------------------------------------------------- solve */
+
+static int converge(bkf_colloc *c, double tol, bkf_error *err)
+{
+    return newton(c, 0.01 * sqrt(tol), err);
+}
+
+int bkf_colloc_fixed(bkf_colloc *c, size_t intervals, double *period, bkf_error *err)
+{
+    if (!c || !c->have_guess) return bkf_error_set(err, BKF_EINPUT, "collocation solve before a guess");
+    if (intervals < 4 || intervals > MAX_INTERVALS)
+        return bkf_error_set(err, BKF_EINPUT, "intervals = %zu is outside [4, %d]", intervals, MAX_INTERVALS);
+    int rc = newton(c, 1e-6, err);
+    for (int pass = 0; rc == BKF_OK && pass < 2; pass++) {
+        rc = equidistribute(c, intervals);
+        if (rc == BKF_ENOMEM) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        rc = newton(c, pass ? 1e-13 : 1e-8, err);
+    }
+    if (rc != BKF_OK) return rc;
+    c->have_solution = 1;
+    *period = c->T;
+    return BKF_OK;
+}
+
+int bkf_colloc_solve(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_error *err)
+{
+    if (!c || !c->have_guess) return bkf_error_set(err, BKF_EINPUT, "collocation solve before a guess");
+    c->iterations = c->solves = 0;
+    int warm = c->have_solution;
+    c->have_solution = 0;
+    int rc = converge(c, fmax(tol, 1e-6), err);
+    if (rc != BKF_OK) return rc;
+    /* a warm start's mesh is the last finer one: the pair starts again from
+     * the coarser, or each warm solve would double it */
+    size_t n = warm && c->pair_n ? c->pair_n : c->n;
+    if (n < MIN_INTERVALS) n = MIN_INTERVALS;
+    for (int round = 0; round < 5; round++) {
+        rc = equidistribute(c, n);
+        if (rc == BKF_OK) rc = converge(c, tol, err);
+        if (rc == BKF_ENOMEM) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        if (rc != BKF_OK) return rc;
+        double T1 = c->T, L1 = log_multiplier(c);
+        rc = bisect(c);
+        if (rc == BKF_OK) rc = converge(c, tol, err);
+        if (rc == BKF_ENOMEM) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        if (rc != BKF_OK) return rc;
+        double T2 = c->T, L2 = log_multiplier(c);
+        double diff = fabs(T1 - T2);
+        double round_floor = 8.0 * DBL_EPSILON * T2 * sqrt((double)c->n);
+        double est = fmax(diff / EST_DIVISOR, round_floor);
+        if (ACCEPT_MARGIN * est <= tol * T2) {
+            out->period = T2;
+            out->period_err = est;
+            out->log_multiplier = L2;
+            out->log_multiplier_err = fabs(L1 - L2) / EST_DIVISOR + 8.0 * DBL_EPSILON * sqrt((double)c->n) * fabs(L2);
+            out->return_map_slope = c->trace - 1.0;
+            out->section_y = c->y[0];
+            out->intervals = c->n;
+            out->newton_iterations = c->iterations;
+            out->interval_solves = c->solves;
+            c->have_solution = 1;
+            c->pair_n = n;
+            return BKF_OK;
+        }
+        /* the error of T_N falls like N^-2m: the N whose pair meets tol,
+         * with a margin of 2 */
+        double need = diff * 2.0 * ACCEPT_MARGIN / (EST_DIVISOR * tol * T2);
+        double grow_by = pow(fmax(need, 1.0), 1.0 / (2 * M));
+        size_t next = (size_t)ceil((double)n * fmax(grow_by, 1.25));
+        if (2 * next > MAX_INTERVALS)
+            return bkf_error_set(err, BKF_ETOL,
+                                 "collocation at mu = %.15g, nu = %.15g: tol = %g needs more than %d intervals",
+                                 c->mu, c->nu, tol, MAX_INTERVALS);
+        n = next;
+    }
+    return bkf_error_set(err, BKF_ETOL, "collocation at mu = %.15g, nu = %.15g: estimate did not meet tol = %g",
+                         c->mu, c->nu, tol);
+}
+
+size_t bkf_colloc_nodes(const bkf_colloc *c, double *z, double *x, double *y, size_t capacity)
+{
+    if (!c || !c->have_solution) return 0;
+    for (size_t j = 0; j < c->n && j < capacity; j++) {
+        if (z) z[j] = c->t[j] * c->T;
+        if (x) x[j] = c->x[j];
+        if (y) y[j] = c->y[j];
+    }
+    return c->n;
+}

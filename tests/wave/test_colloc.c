@@ -1,0 +1,177 @@
+/* Issue 20, item 1: the collocation engine (colloc.h, stepper "colloc")
+ * against the independent long-double Taylor reference (taylor_reference.h),
+ * against the shooting engine (bd2x2, rk8pd), and its order in the mesh. */
+#include "harness.h"
+
+#include "bkfront/colloc.h"
+#include "bkfront/cycle.h"
+
+#include <float.h>
+#include <string.h>
+
+#include "taylor_reference.h"
+
+static int solve_with(double mu, double nu, double tol, bkf_stepper_kind kind, bkf_cycle_result *r,
+                      bkf_error *e)
+{
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = tol;
+    o.stepper = kind;
+    o.warm_start = 0;
+    return bkf_cycle_period(mu, nu, &o, r, e);
+}
+
+/* Within tol of the reference, the estimate optimistic by at most 3, at
+ * every point where collocation answers (it may hand a point to shooting,
+ * which answers then under its own name; most must be its own). */
+TEST(colloc_meets_tol_against_taylor)
+{
+    const double mus[] = {0.1, 1, 10, 100};
+    const double nus[] = {0.0, -0.96, 0.99};
+    const double tols[] = {1e-6, 1e-8, 1e-10, 1e-12};
+    size_t own = 0, all = 0;
+    double worst = 0.0;
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++)
+        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+            double ref = NAN, unc = 0.0;
+            for (size_t k = 0; k < sizeof tols / sizeof tols[0]; k++) {
+                bkf_cycle_result r;
+                bkf_error e = {0};
+                int rc = solve_with(mus[i], nus[j], tols[k], BKF_STEPPER_COLLOCATION, &r, &e);
+                CHECK_MSG(rc == BKF_OK, "mu %g nu %g tol %g: %s", mus[i], nus[j], tols[k], e.message);
+                all++;
+                own += strcmp(r.stepper, "colloc") == 0;
+                if (!isfinite(ref)) ref = taylor_period(mus[i], nus[j], r.section_slope, &unc);
+                double err = fabs(r.period - ref), ratio = fmax(err - unc, 0.0) / r.period_err;
+                CHECK_MSG(unc <= 1e-3 * tols[k] * r.period, "mu %g nu %g: reference uncertain by %.2g", mus[i],
+                          nus[j], unc / r.period);
+                CHECK_MSG(err <= tols[k] * r.period + unc, "mu %g nu %g tol %g %s: error %.3g > tol", mus[i], nus[j],
+                          tols[k], r.stepper, err / r.period);
+                CHECK_MSG(ratio <= 3.0, "mu %g nu %g tol %g %s: estimate %.3g optimistic by %.3g", mus[i], nus[j],
+                          tols[k], r.stepper, r.period_err / r.period, ratio);
+                if (ratio > worst) worst = ratio;
+            }
+        }
+    bkf_test_note("collocation answered %zu of %zu; largest true/estimated error ratio %.3g", own, all, worst);
+    CHECK_MSG(own * 10 >= all * 9, "collocation answered only %zu of %zu", own, all);
+}
+
+/* The two engines agree within their joint estimates; the multiplier's
+ * logarithm (Gauss quadrature of the trace) agrees with shooting's
+ * integrated Liouville value, and the condensed monodromy's eigenvalue
+ * (another route) with exp of it where it is not negligible. */
+TEST(colloc_agrees_with_shooting)
+{
+    const double mus[] = {0.3, 3, 30}; /* (at mu 100, nu -0.5 it hands the point to shooting) */
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++) {
+        bkf_cycle_result a, b;
+        bkf_error e = {0};
+        CHECK_MSG(solve_with(mus[i], -0.5, 1e-9, BKF_STEPPER_COLLOCATION, &a, &e) == BKF_OK, "%s", e.message);
+        CHECK_MSG(solve_with(mus[i], -0.5, 1e-9, BKF_STEPPER_EXTRAPOLATION, &b, &e) == BKF_OK, "%s", e.message);
+        CHECK_MSG(strcmp(a.stepper, "colloc") == 0 && strcmp(b.stepper, "bd2x2") == 0, "%s %s", a.stepper,
+                  b.stepper);
+        CHECK_MSG(fabs(a.period - b.period) <= a.period_err + b.period_err,
+                  "mu %g: colloc %.17g bd2x2 %.17g beyond %.2g + %.2g", mus[i], a.period, b.period, a.period_err,
+                  b.period_err);
+        double dL = fabs(a.log_multiplier - b.log_multiplier);
+        CHECK_MSG(dL <= a.log_multiplier_err + b.log_multiplier_err + 1e-9 * fabs(b.log_multiplier),
+                  "mu %g: log multiplier colloc %.15g shooting %.15g (errors %.2g, %.2g)", mus[i], a.log_multiplier,
+                  b.log_multiplier, a.log_multiplier_err, b.log_multiplier_err);
+        if (a.multiplier > 1e-6)
+            CHECK_MSG(fabs(a.return_map_slope - a.multiplier) <= 1e-6 * a.multiplier,
+                      "mu %g: monodromy %.15g against exp(L) %.15g", mus[i], a.return_map_slope, a.multiplier);
+        CHECK_MSG(fabs(a.xmax - b.xmax) <= 1e-8 && fabs(a.xmin - b.xmin) <= 1e-8, "mu %g: extremes %.15g %.15g vs %.15g %.15g",
+                  mus[i], a.xmax, a.xmin, b.xmax, b.xmin);
+    }
+}
+
+/* The profile re-integrated from collocation's nodes against shooting's. */
+TEST(colloc_profile_matches_shooting)
+{
+    bkf_cycle *c = bkf_cycle_alloc(), *s = bkf_cycle_alloc();
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = 1e-10;
+    o.warm_start = 0;
+    bkf_error e = {0};
+    o.stepper = BKF_STEPPER_COLLOCATION;
+    CHECK_MSG(bkf_cycle_solve(c, 20.0, 0.3, &o, &e) == BKF_OK, "%s", e.message);
+    o.stepper = BKF_STEPPER_EXPLICIT;
+    CHECK_MSG(bkf_cycle_solve(s, 20.0, 0.3, &o, &e) == BKF_OK, "%s", e.message);
+    CHECK(strcmp(bkf_cycle_get(c)->stepper, "colloc") == 0);
+    double z[64], fc[64], fs[64], T = bkf_cycle_get(s)->period;
+    for (int i = 0; i < 64; i++) z[i] = T * i / 64.0;
+    CHECK_MSG(bkf_cycle_profile_sample(c, z, 64, fc, NULL, &e) == BKF_OK, "%s", e.message);
+    CHECK_MSG(bkf_cycle_profile_sample(s, z, 64, fs, NULL, &e) == BKF_OK, "%s", e.message);
+    double worst = 0.0;
+    /* the profiles differ by f' times the difference of the periods' phase,
+     * bounded by the jumps' slope (~ mu) times |dT| */
+    for (int i = 0; i < 64; i++) worst = fmax(worst, fabs(fc[i] - fs[i]));
+    bkf_test_note("largest profile difference %.2g", worst);
+    CHECK_MSG(worst <= 1e-6, "profiles differ by %.3g", worst);
+    CHECK(bkf_cycle_mesh(c, NULL, 0) >= 16);
+    bkf_cycle_free(c);
+    bkf_cycle_free(s);
+}
+
+/* Gauss collocation with m points converges like h^(2m) in T: the ratio of
+ * successive differences on meshes of N, 2N, 4N, 8N equidistributed
+ * intervals is near 2^(2m) = 256 (measured 100-1000 before rounding). */
+TEST(colloc_order_in_the_mesh)
+{
+    bkf_colloc *c = bkf_colloc_alloc();
+    bkf_error e = {0};
+    const size_t ns[] = {6, 12, 24};
+    double T[3];
+    for (size_t k = 0; k < 3; k++) {
+        CHECK(bkf_colloc_guess_circle(c, 0.5, 0.0, 32, &e) == BKF_OK);
+        CHECK_MSG(bkf_colloc_fixed(c, ns[k], &T[k], &e) == BKF_OK, "%s", e.message);
+    }
+    double ratio = fabs(T[0] - T[1]) / fabs(T[1] - T[2]);
+    double order = log2(ratio);
+    bkf_test_note("T %.17g %.17g %.17g: ratio %.4g, order %.3g (2m = %d)", T[0], T[1], T[2], ratio, order,
+                  2 * BKF_COLLOC_M);
+    CHECK_MSG(order > 2 * BKF_COLLOC_M - 1.5 && order < 2 * BKF_COLLOC_M + 1.5, "order %.3g", order);
+    bkf_colloc_free(c);
+}
+
+/* Where it refuses (above its mu range, in the canard region) the solve
+ * shoots and says so. */
+TEST(colloc_refusals_fall_back_to_shooting)
+{
+    bkf_cycle_result r;
+    bkf_error e = {0};
+    CHECK_MSG(solve_with(1e3, 0.0, 1e-8, BKF_STEPPER_COLLOCATION, &r, &e) == BKF_OK, "%s", e.message);
+    CHECK_MSG(strcmp(r.stepper, "bd2x2") == 0, "%s", r.stepper);
+    CHECK_MSG(solve_with(3.6505, 0.99, 1e-8, BKF_STEPPER_COLLOCATION, &r, &e) == BKF_OK, "%s", e.message);
+    CHECK_MSG(strcmp(r.stepper, "rk8pd") == 0, "%s", r.stepper);
+    CHECK(strcmp(bkf_cycle_stepper_name(BKF_STEPPER_COLLOCATION), "colloc") == 0);
+}
+
+/* Warm starts on a grid reuse the last solution and mesh: every point is
+ * still collocation's, agrees with a cold bd2x2 solve within the joint
+ * estimates, and the mesh does not grow from point to point (it doubled
+ * per solve before the pair restarted from its coarser mesh). */
+TEST(colloc_warm_starts_on_a_grid)
+{
+    bkf_cycle *c = bkf_cycle_alloc();
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.stepper = BKF_STEPPER_COLLOCATION;
+    bkf_error e = {0};
+    size_t first = 0;
+    for (int k = 0; k < 12; k++) {
+        double mu = 30.0 * (1.0 + 0.02 * k);
+        CHECK_MSG(bkf_cycle_solve(c, mu, 0.2, &o, &e) == BKF_OK, "%s", e.message);
+        const bkf_cycle_result *r = bkf_cycle_get(c);
+        CHECK_MSG(strcmp(r->stepper, "colloc") == 0, "mu %g: %s", mu, r->stepper);
+        size_t n = bkf_cycle_mesh(c, NULL, 0);
+        if (!k) first = n;
+        CHECK_MSG(n <= 2 * first, "mu %g: mesh %zu after %zu", mu, n, first);
+        if (k % 4 == 3) {
+            bkf_cycle_result b;
+            CHECK_MSG(solve_with(mu, 0.2, 1e-10, BKF_STEPPER_EXTRAPOLATION, &b, &e) == BKF_OK, "%s", e.message);
+            CHECK_MSG(fabs(r->period - b.period) <= r->period_err + b.period_err, "mu %g: %.17g vs %.17g", mu,
+                      r->period, b.period);
+        }
+    }
+    bkf_cycle_free(c);
+}
