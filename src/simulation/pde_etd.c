@@ -47,7 +47,8 @@
  * than doubling the cost): samples and the state carry NaN there, so the
  * energy and mean residuals are NaN for it.  lawson8 carries them as one
  * more complex unknown (index n2: Q + i D) with no linear part, integrated
- * by the same rk8pd stages (see quadrature_rates). */
+ * (Q's rate in the linear part: q_part; D by a quadrature over the step
+ * ends: dq_increment). */
 #include <complex.h>
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_math.h>
@@ -119,6 +120,7 @@ struct bkf_pde_etd {
     bkf_pde *owner;
     /* Fast modes k >= kfast (lawson8; nc: none): see averaged_cross() */
     size_t kfast, nu_kfast;
+    int fast_drop, nu_drop; /* the set is left out of F's input (fast_start) */
     double *jac, *hr;       /* N values: gamma (1 - psi^2), a branch's field */
     fftw_complex *hc, *hk;  /* nc values: a branch's spectrum, the product's */
     double expo;            /* step control exponent: 1/(order of the estimate + 1) */
@@ -324,7 +326,8 @@ static const etd_set *coefficients(bkf_pde_etd *etd, double h)
  * unresolved tail).  As h -> 0 the set empties and the scheme is plain
  * Lawson again, so it still converges to the semi-discrete system.
  * Cost: two more transform pairs per evaluation (three times the
- * transforms) where the set is not empty; below, none. */
+ * transforms) where the set is not empty; below, none.  Used only where
+ * the set's content is not negligible (see fast_start). */
 #define FAST_MARGIN 16.0
 #define FAST_TURNS 3.5
 
@@ -348,19 +351,42 @@ static void averaged_cross(bkf_pde *m, const double complex *a, double complex *
 }
 
 /* The first fast mode for step h (see averaged_cross; nc: none): the
- * explicit term's rate is at most gamma max(1, psi_max^2 - 1) + sigma_k. */
-static size_t fast_start(const bkf_pde_etd *etd, const bkf_pde *m, double h)
+ * explicit term's rate is at most gamma max(1, psi_max^2 - 1) + sigma_k.
+ *
+ * Where the fast modes hold next to nothing, they are left out of the
+ * explicit term's input instead (fast_drop; averaged_cross is not called):
+ * they then turn exactly, forced by the rest of the field through F and
+ * damped by their own branch's filter, and nothing couples the two
+ * branches there, so nothing resonates.  Why: averaged_cross triples the
+ * transforms of an evaluation, which made a step at N 16384 cost 4.4 times
+ * one at 8192 (N log N: 2.15); a resolved field's tail there is rounding.
+ * What is left out of F is J H, H the fast modes' field: with
+ * max |H| <= (2/N) sum |a+-_k| over the set, its effect on a step,
+ * h max|J| max|H|, must stay under FAST_DROP of the step's tolerance;
+ * otherwise the set is averaged as before. */
+#define FAST_DROP 1e-2
+
+static size_t fast_start(bkf_pde_etd *etd, const bkf_pde *m, double h)
 {
+    size_t nc = etd->nc, kf = nc;
     double J = m->p.gamma * fmax(1.0, etd->psi_max * etd->psi_max - 1.0);
-    for (size_t k = 1; k < etd->nc; k++) {
-        double w = cimag(etd->lam[k] - etd->lam[etd->nc + k]) / 2;
-        if (w * h >= FAST_TURNS * M_PI && w >= FAST_MARGIN * (J + etd->sigma[k])) return k;
+    for (size_t k = 1; k < nc && kf == nc; k++) {
+        double w = cimag(etd->lam[k] - etd->lam[nc + k]) / 2;
+        if (w * h >= FAST_TURNS * M_PI && w >= FAST_MARGIN * (J + etd->sigma[k])) kf = k;
     }
-    return etd->nc;
+    /* |re| + |im| >= |z|: a bound without a square root per mode */
+    const double *ar = (const double *)etd->a;
+    double tail = 0.0;
+    for (size_t k = kf; k < nc; k++)
+        tail += fabs(ar[2 * k]) + fabs(ar[2 * k + 1]) + fabs(ar[2 * (nc + k)]) +
+                fabs(ar[2 * (nc + k) + 1]);
+    tail *= 2.0 / (double)m->N;
+    etd->fast_drop = h * J * tail <= FAST_DROP * m->o.tol * (1.0 + etd->psi_max);
+    return kf;
 }
 
-/* D' = dH/dt of the state a (lawson8; Q' = mean(psi) is pk[0] / N) (pde.h), the derivatives the Runge-Kutta path integrates
- * (src/simulation/pde.c: rhs, rhs_frame), in a form that needs two more
+/* D' = dH/dt of the state a (lawson8; pde.h), the rate the Runge-Kutta
+ * path integrates (src/simulation/pde.c: rhs, rhs_frame), in a form that needs two more
  * transforms per evaluation where the x-space form of rhs_frame would need
  * four.  With u = gamma (eta - phi(psi)), J = gamma (psi^2 - 1),
  * f = psi - nu - c^2 L psi and the filter F, the general
@@ -409,14 +435,17 @@ static double dissipation_rate(bkf_pde *m, const double complex *a)
 }
 
 /* The explicit part N(a) in the a+- variables into out (and lawson8's
- * quadrature rates into out[n2]); *psi_max gets max |psi|.  Nonzero if
+ * i D' into out[n2] unless d_off); *psi_max gets max |psi|.  Nonzero if
  * the field is not finite or beyond BLOWUP. */
 static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, double *psi_max)
 {
     bkf_pde_etd *etd = m->etd;
     size_t N = m->N, nc = etd->nc;
     double complex *cb = cbuf_of(m);
+    size_t kf = etd->kfast, kin = etd->fast_drop ? kf : nc;
     for (size_t k = 0; k < nc; k++) cb[k] = etd->pk[k] = a[k] + a[nc + k];
+    /* F's input without a negligible fast set (see fast_start) */
+    memset(cb + kin, 0, (nc - kin) * sizeof *cb);
     fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
     double g = m->p.gamma, inv = 1.0 / (double)N, big = 0.0;
     int bad = 0;
@@ -427,7 +456,7 @@ static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, d
         bad |= !(a <= BLOWUP);
         m->rbuf[i] = g * (x - x * x * x * (1.0 / 3.0));
     }
-    if (etd->kfast < nc)
+    if (kin > kf)
         for (size_t i = 0; i < N; i++) {
             double x = m->lap[i] * inv;
             etd->jac[i] = g * (1.0 - x * x);
@@ -444,9 +473,14 @@ static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, d
         out[k] = 0.5 * (np - r);
         out[nc + k] = 0.5 * (np + r);
     }
+    /* a dropped set keeps only its own branch's filter term */
+    for (size_t k = kin; k < nc; k++) {
+        out[k] += 0.5 * etd->sigma[k] * a[nc + k];
+        out[nc + k] += 0.5 * etd->sigma[k] * a[k];
+    }
     /* Q' = mean(psi) is linear: it belongs to the linear part (q_part) */
     if (etd->rk) out[etd->n2] = I * (etd->d_off ? 0.0 : dissipation_rate(m, a));
-    if (etd->kfast < nc) averaged_cross(m, a, out);
+    if (kin > kf) averaged_cross(m, a, out);
     return 0;
 }
 
@@ -719,11 +753,12 @@ static int step_lawson(bkf_pde *m, double h, double *err_ratio, double *psi_max_
     size_t n2 = etd->n2;
     lawson_select(etd, h);
     etd->kfast = fast_start(etd, m, h);
-    if (etd->kfast != etd->nu_kfast) {
+    if (etd->kfast != etd->nu_kfast || etd->fast_drop != etd->nu_drop) {
         /* the first stage must be the same right-hand side */
         m->stats.rhs_calls++;
         if (nonlinear(m, etd->a, etd->nu, NULL)) return STEP_NONFINITE;
         etd->nu_kfast = etd->kfast;
+        etd->nu_drop = etd->fast_drop;
     }
     etd->d_staged = etd->dq_n + 1 < DQ_POINTS || etd->dq_clean < DQ_POINTS;
     for (;;) {
@@ -813,6 +848,7 @@ int bkf_pde_etd_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer
             return bkf_error_set(err, BKF_EBLOWUP, "the initial state is not finite or too large");
         etd->have_nu = 1;
         etd->nu_kfast = etd->kfast;
+        etd->nu_drop = etd->fast_drop;
         m->stats.rhs_calls++;
         etd->dq_n = 0;
         etd->dq_clean = DQ_POINTS;
