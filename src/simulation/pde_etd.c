@@ -121,6 +121,7 @@ struct bkf_pde_etd {
     /* Fast modes k >= kfast (lawson8; nc: none): see averaged_cross() */
     size_t kfast, nu_kfast;
     int fast_drop, nu_drop; /* the set is left out of F's input (fast_start) */
+    size_t kin, nu_kin;     /* modes k >= kin are (nc: none) */
     double *jac, *hr;       /* N values: gamma (1 - psi^2), a branch's field */
     fftw_complex *hc, *hk;  /* nc values: a branch's spectrum, the product's */
     double expo;            /* step control exponent: 1/(order of the estimate + 1) */
@@ -213,7 +214,7 @@ bkf_pde_etd *bkf_pde_etd_alloc(bkf_pde *m)
         etd->inv_fact[k] = 1.0 / f;
     }
     etd->owner = m;
-    etd->kfast = etd->nu_kfast = nc;
+    etd->kfast = etd->nu_kfast = etd->kin = etd->nu_kin = nc;
     etd->expo = 0.25;
     if (m->o.stepper == BKF_PDE_LAWSON8) {
         etd->expo = 1.0 / 8.0;
@@ -353,18 +354,23 @@ static void averaged_cross(bkf_pde *m, const double complex *a, double complex *
 /* The first fast mode for step h (see averaged_cross; nc: none): the
  * explicit term's rate is at most gamma max(1, psi_max^2 - 1) + sigma_k.
  *
- * Where the fast modes hold next to nothing, they are left out of the
- * explicit term's input instead (fast_drop; averaged_cross is not called):
- * they then turn exactly, forced by the rest of the field through F and
- * damped by their own branch's filter, and nothing couples the two
- * branches there, so nothing resonates.  Why: averaged_cross triples the
- * transforms of an evaluation, which made a step at N 16384 cost 4.4 times
- * one at 8192 (N log N: 2.15); a resolved field's tail there is rounding.
- * What is left out of F is J H, H the fast modes' field: with
- * max |H| <= (2/N) sum |a+-_k| over the set, its effect on a step,
- * h max|J| max|H|, must stay under FAST_DROP of the step's tolerance;
- * otherwise the set is averaged as before. */
-#define FAST_DROP 1e-2
+ * Where the set is not empty and the field above some kin <= kfast holds
+ * next to nothing, the modes k >= kin are left out of F's input instead
+ * (fast_drop; averaged_cross is not called): they turn exactly, forced by
+ * the rest through F, and feed nothing back, so no coupling is left to
+ * resonate; the fast set keeps its own branch's filter only.  Why:
+ * averaged_cross triples the transforms of an evaluation, which made a
+ * step at N 16384 cost 4.4 times one at 8192 (N log N: 2.15); a resolved
+ * field's tail there is rounding.  Why kin and not kfast: with only the
+ * set left out, the modes just below it (w h just under 3.5 pi, n = 4
+ * front, N 16384) grew at about 0.25 per unit time from t = 45 and the
+ * steps fell to 0.016.  What is left out of F is J H, H the field of the
+ * modes k >= kin: with max |H| <= (2/N) sum |a+-_k| over them, its effect
+ * on a step, h max|J| max|H|, must stay under FAST_DROP of the step's
+ * tolerance (1e-2 moved the N 16384 field from N 8192's by 1.6e-11 at
+ * t = 10, 1e-4 by 2e-12, as the averaged set); otherwise the set is
+ * averaged as before. */
+#define FAST_DROP 1e-4
 
 static size_t fast_start(bkf_pde_etd *etd, const bkf_pde *m, double h)
 {
@@ -374,14 +380,26 @@ static size_t fast_start(bkf_pde_etd *etd, const bkf_pde *m, double h)
         double w = cimag(etd->lam[k] - etd->lam[nc + k]) / 2;
         if (w * h >= FAST_TURNS * M_PI && w >= FAST_MARGIN * (J + etd->sigma[k])) kf = k;
     }
-    /* |re| + |im| >= |z|: a bound without a square root per mode */
+    etd->fast_drop = 0;
+    etd->kin = nc;
+    if (kf == nc) return kf;
+    /* the lowest kin <= kf whose tail meets the bound (|re| + |im| >= |z|:
+     * no square root per mode) */
     const double *ar = (const double *)etd->a;
-    double tail = 0.0;
-    for (size_t k = kf; k < nc; k++)
-        tail += fabs(ar[2 * k]) + fabs(ar[2 * k + 1]) + fabs(ar[2 * (nc + k)]) +
-                fabs(ar[2 * (nc + k) + 1]);
-    tail *= 2.0 / (double)m->N;
-    etd->fast_drop = h * J * tail <= FAST_DROP * m->o.tol * (1.0 + etd->psi_max);
+    double tail = 0.0, bound = FAST_DROP * m->o.tol * (1.0 + etd->psi_max) * m->N / (2 * h * J);
+    size_t k = nc;
+    while (k > 1) {
+        size_t j = k - 1;
+        double t = tail + fabs(ar[2 * j]) + fabs(ar[2 * j + 1]) + fabs(ar[2 * (nc + j)]) +
+                   fabs(ar[2 * (nc + j) + 1]);
+        if (t > bound) break;
+        tail = t;
+        k = j;
+    }
+    if (k <= kf) {
+        etd->fast_drop = 1;
+        etd->kin = k;
+    }
     return kf;
 }
 
@@ -442,7 +460,7 @@ static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, d
     bkf_pde_etd *etd = m->etd;
     size_t N = m->N, nc = etd->nc;
     double complex *cb = cbuf_of(m);
-    size_t kf = etd->kfast, kin = etd->fast_drop ? kf : nc;
+    size_t kf = etd->kfast, kin = etd->kin;
     for (size_t k = 0; k < nc; k++) cb[k] = etd->pk[k] = a[k] + a[nc + k];
     /* F's input without a negligible fast set (see fast_start) */
     memset(cb + kin, 0, (nc - kin) * sizeof *cb);
@@ -456,7 +474,7 @@ static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, d
         bad |= !(a <= BLOWUP);
         m->rbuf[i] = g * (x - x * x * x * (1.0 / 3.0));
     }
-    if (kin > kf)
+    if (!etd->fast_drop && kf < nc)
         for (size_t i = 0; i < N; i++) {
             double x = m->lap[i] * inv;
             etd->jac[i] = g * (1.0 - x * x);
@@ -474,13 +492,14 @@ static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, d
         out[nc + k] = 0.5 * (np + r);
     }
     /* a dropped set keeps only its own branch's filter term */
-    for (size_t k = kin; k < nc; k++) {
-        out[k] += 0.5 * etd->sigma[k] * a[nc + k];
-        out[nc + k] += 0.5 * etd->sigma[k] * a[k];
-    }
+    if (etd->fast_drop)
+        for (size_t k = kf; k < nc; k++) {
+            out[k] += 0.5 * etd->sigma[k] * a[nc + k];
+            out[nc + k] += 0.5 * etd->sigma[k] * a[k];
+        }
     /* Q' = mean(psi) is linear: it belongs to the linear part (q_part) */
     if (etd->rk) out[etd->n2] = I * (etd->d_off ? 0.0 : dissipation_rate(m, a));
-    if (kin > kf) averaged_cross(m, a, out);
+    if (!etd->fast_drop && kf < nc) averaged_cross(m, a, out);
     return 0;
 }
 
@@ -753,12 +772,13 @@ static int step_lawson(bkf_pde *m, double h, double *err_ratio, double *psi_max_
     size_t n2 = etd->n2;
     lawson_select(etd, h);
     etd->kfast = fast_start(etd, m, h);
-    if (etd->kfast != etd->nu_kfast || etd->fast_drop != etd->nu_drop) {
+    if (etd->kfast != etd->nu_kfast || etd->fast_drop != etd->nu_drop || etd->kin != etd->nu_kin) {
         /* the first stage must be the same right-hand side */
         m->stats.rhs_calls++;
         if (nonlinear(m, etd->a, etd->nu, NULL)) return STEP_NONFINITE;
         etd->nu_kfast = etd->kfast;
         etd->nu_drop = etd->fast_drop;
+        etd->nu_kin = etd->kin;
     }
     etd->d_staged = etd->dq_n + 1 < DQ_POINTS || etd->dq_clean < DQ_POINTS;
     for (;;) {
@@ -849,6 +869,7 @@ int bkf_pde_etd_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer
         etd->have_nu = 1;
         etd->nu_kfast = etd->kfast;
         etd->nu_drop = etd->fast_drop;
+        etd->nu_kin = etd->kin;
         m->stats.rhs_calls++;
         etd->dq_n = 0;
         etd->dq_clean = DQ_POINTS;
