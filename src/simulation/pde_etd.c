@@ -46,9 +46,9 @@
  * etdrk4 (they would need the time derivatives at every step end, more
  * than doubling the cost): samples and the state carry NaN there, so the
  * energy and mean residuals are NaN for it.  lawson8 carries them as one
- * more complex unknown (index n2: Q + i D) with no linear part, integrated
- * (Q's rate in the linear part: q_part; D by a quadrature over the step
- * ends: dq_increment). */
+ * more complex unknown (index n2: Q + i D): Q's rate is linear and part of
+ * L (q_part), D is integrated over the step ends (dq_increment) or, where
+ * those do not resolve it, on rk8pd's stages. */
 #include <complex.h>
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_math.h>
