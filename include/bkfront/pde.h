@@ -284,6 +284,10 @@ typedef struct {
     size_t samples;
     double h_last, h_min, h_max;  /* accepted step sizes */
     int stopped;                  /* an observer or the progress callback stopped it */
+    /* lawson8: the summed error estimates of D's quadrature over the step
+     * ends (D's share of energy_residual's error; 0 for the other steppers,
+     * whose error control holds D with the fields) */
+    double d_err;
 } bkf_pde_stats;
 
 /* Integrates from the current time to t_end (> current time), calling

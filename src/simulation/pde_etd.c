@@ -46,8 +46,9 @@
  * etdrk4 (they would need the time derivatives at every step end, more
  * than doubling the cost): samples and the state carry NaN there, so the
  * energy and mean residuals are NaN for it.  lawson8 carries them as one
- * more complex unknown (index n2: Q + i D) with no linear part, integrated
- * by the same rk8pd stages (see quadrature_rates). */
+ * more complex unknown (index n2: Q + i D): Q's rate is linear and part of
+ * L (q_part), D is integrated over the step ends (dq_increment) or, where
+ * those do not resolve it, on rk8pd's stages. */
 #include <complex.h>
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_math.h>
@@ -77,6 +78,9 @@ typedef struct {
  * one step size h (rk8pd's 12 distinct nonzero c_i h), filled as the stages
  * ask for them. */
 #define LAWSON_TAUS 16
+/* Step ends (times and D') the quadrature of D interpolates, the new end
+ * included: degree DQ_POINTS - 1 (see dq_increment) */
+#define DQ_POINTS 9
 typedef struct {
     double h;
     unsigned long used;
@@ -106,10 +110,18 @@ struct bkf_pde_etd {
     size_t lsets;           /* sets in use: fewer at large N (memory) */
     lawson_set *lcur;       /* the current step's */
     size_t calls;           /* rk8pd's evaluations in the current step */
-    int quad_off;           /* this evaluation's quadrature rates are unused */
+    int d_off;              /* this evaluation's D' is unused (0 is put there) */
+    /* D by a multistep quadrature over the step ends (see dq_increment) */
+    int d_staged;           /* this step carries D on rk8pd's stages instead */
+    size_t dq_n;            /* step ends held, newest first */
+    double dq_t[DQ_POINTS], dq_r[DQ_POINTS];
+    double dq_inc, dq_est;  /* D's increment over the step tried and its error */
+    size_t dq_clean;        /* staged steps in a row whose ends would have done */
     bkf_pde *owner;
     /* Fast modes k >= kfast (lawson8; nc: none): see averaged_cross() */
     size_t kfast, nu_kfast;
+    int fast_drop, nu_drop; /* the set is left out of F's input (fast_start) */
+    size_t kin, nu_kin;     /* modes k >= kin are (nc: none) */
     double *jac, *hr;       /* N values: gamma (1 - psi^2), a branch's field */
     fftw_complex *hc, *hk;  /* nc values: a branch's spectrum, the product's */
     double expo;            /* step control exponent: 1/(order of the estimate + 1) */
@@ -202,7 +214,7 @@ bkf_pde_etd *bkf_pde_etd_alloc(bkf_pde *m)
         etd->inv_fact[k] = 1.0 / f;
     }
     etd->owner = m;
-    etd->kfast = etd->nu_kfast = nc;
+    etd->kfast = etd->nu_kfast = etd->kin = etd->nu_kin = nc;
     etd->expo = 0.25;
     if (m->o.stepper == BKF_PDE_LAWSON8) {
         etd->expo = 1.0 / 8.0;
@@ -315,7 +327,8 @@ static const etd_set *coefficients(bkf_pde_etd *etd, double h)
  * unresolved tail).  As h -> 0 the set empties and the scheme is plain
  * Lawson again, so it still converges to the semi-discrete system.
  * Cost: two more transform pairs per evaluation (three times the
- * transforms) where the set is not empty; below, none. */
+ * transforms) where the set is not empty; below, none.  Used only where
+ * the set's content is not negligible (see fast_start). */
 #define FAST_MARGIN 16.0
 #define FAST_TURNS 3.5
 
@@ -339,20 +352,59 @@ static void averaged_cross(bkf_pde *m, const double complex *a, double complex *
 }
 
 /* The first fast mode for step h (see averaged_cross; nc: none): the
- * explicit term's rate is at most gamma max(1, psi_max^2 - 1) + sigma_k. */
-static size_t fast_start(const bkf_pde_etd *etd, const bkf_pde *m, double h)
+ * explicit term's rate is at most gamma max(1, psi_max^2 - 1) + sigma_k.
+ *
+ * Where the set is not empty and the field above some kin <= kfast holds
+ * next to nothing, the modes k >= kin are left out of F's input instead
+ * (fast_drop; averaged_cross is not called): they turn exactly, forced by
+ * the rest through F, and feed nothing back, so no coupling is left to
+ * resonate; the fast set keeps its own branch's filter only.  Why:
+ * averaged_cross triples the transforms of an evaluation, which made a
+ * step at N 16384 cost 4.4 times one at 8192 (N log N: 2.15); a resolved
+ * field's tail there is rounding.  Why kin and not kfast: with only the
+ * set left out, the modes just below it (w h just under 3.5 pi, n = 4
+ * front, N 16384) grew at about 0.25 per unit time from t = 45 and the
+ * steps fell to 0.016.  What is left out of F is J H, H the field of the
+ * modes k >= kin: with max |H| <= (2/N) sum |a+-_k| over them, its effect
+ * on a step, h max|J| max|H|, must stay under FAST_DROP of the step's
+ * tolerance (1e-2 moved the N 16384 field from N 8192's by 1.6e-11 at
+ * t = 10, 1e-4 by 2e-12, as the averaged set); otherwise the set is
+ * averaged as before. */
+#define FAST_DROP 1e-4
+
+static size_t fast_start(bkf_pde_etd *etd, const bkf_pde *m, double h)
 {
+    size_t nc = etd->nc, kf = nc;
     double J = m->p.gamma * fmax(1.0, etd->psi_max * etd->psi_max - 1.0);
-    for (size_t k = 1; k < etd->nc; k++) {
-        double w = cimag(etd->lam[k] - etd->lam[etd->nc + k]) / 2;
-        if (w * h >= FAST_TURNS * M_PI && w >= FAST_MARGIN * (J + etd->sigma[k])) return k;
+    for (size_t k = 1; k < nc && kf == nc; k++) {
+        double w = cimag(etd->lam[k] - etd->lam[nc + k]) / 2;
+        if (w * h >= FAST_TURNS * M_PI && w >= FAST_MARGIN * (J + etd->sigma[k])) kf = k;
     }
-    return etd->nc;
+    etd->fast_drop = 0;
+    etd->kin = nc;
+    if (kf == nc) return kf;
+    /* the lowest kin <= kf whose tail meets the bound (|re| + |im| >= |z|:
+     * no square root per mode) */
+    const double *ar = (const double *)etd->a;
+    double tail = 0.0, bound = FAST_DROP * m->o.tol * (1.0 + etd->psi_max) * m->N / (2 * h * J);
+    size_t k = nc;
+    while (k > 1) {
+        size_t j = k - 1;
+        double t = tail + fabs(ar[2 * j]) + fabs(ar[2 * j + 1]) + fabs(ar[2 * (nc + j)]) +
+                   fabs(ar[2 * (nc + j) + 1]);
+        if (t > bound) break;
+        tail = t;
+        k = j;
+    }
+    if (k <= kf) {
+        etd->fast_drop = 1;
+        etd->kin = k;
+    }
+    return kf;
 }
 
-/* The quadratures' rates of the state a into q (lawson8): Q' = mean(psi)
- * and D' = dH/dt (pde.h), the derivatives the Runge-Kutta path integrates
- * (src/simulation/pde.c: rhs, rhs_frame), in a form that needs two more
+/* D' = dH/dt of the state a (lawson8; pde.h), the rate the Runge-Kutta
+ * path integrates (src/simulation/pde.c: rhs, rhs_frame), in a form that needs two more
  * transforms per evaluation where the x-space form of rhs_frame would need
  * four.  With u = gamma (eta - phi(psi)), J = gamma (psi^2 - 1),
  * f = psi - nu - c^2 L psi and the filter F, the general
@@ -363,7 +415,7 @@ static size_t fast_start(const bkf_pde_etd *etd, const bkf_pde *m, double h)
  * sums are Parseval sums over the spectra psi_t, u, eta and psi, which the
  * a+- state gives.  Expects what nonlinear() leaves: m->lap = N psi,
  * m->rbuf = gamma (psi - psi^3/3) and m->cbuf its transform, etd->pk. */
-static void quadrature_rates(bkf_pde *m, const double complex *a, double complex *q)
+static double dissipation_rate(bkf_pde *m, const double complex *a)
 {
     bkf_pde_etd *etd = m->etd;
     size_t N = m->N, nc = etd->nc;
@@ -397,19 +449,21 @@ static void quadrature_rates(bkf_pde *m, const double complex *a, double complex
         ue += wt * adv * (ui * er - ur * ei);
     }
     /* Parseval: sum_i a_i b_i = (1/N) sum_k A_k conj(B_k) */
-    double dD = m->h * inv * (g * ue - ju - ff);
-    q[0] = pk[0] * inv + I * dD;
+    return m->h * inv * (g * ue - ju - ff);
 }
 
 /* The explicit part N(a) in the a+- variables into out (and lawson8's
- * quadrature rates into out[n2]); *psi_max gets max |psi|.  Nonzero if
+ * i D' into out[n2] unless d_off); *psi_max gets max |psi|.  Nonzero if
  * the field is not finite or beyond BLOWUP. */
 static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, double *psi_max)
 {
     bkf_pde_etd *etd = m->etd;
     size_t N = m->N, nc = etd->nc;
     double complex *cb = cbuf_of(m);
+    size_t kf = etd->kfast, kin = etd->kin;
     for (size_t k = 0; k < nc; k++) cb[k] = etd->pk[k] = a[k] + a[nc + k];
+    /* F's input without a negligible fast set (see fast_start) */
+    memset(cb + kin, 0, (nc - kin) * sizeof *cb);
     fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
     double g = m->p.gamma, inv = 1.0 / (double)N, big = 0.0;
     int bad = 0;
@@ -420,7 +474,7 @@ static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, d
         bad |= !(a <= BLOWUP);
         m->rbuf[i] = g * (x - x * x * x * (1.0 / 3.0));
     }
-    if (etd->kfast < nc)
+    if (!etd->fast_drop && kf < nc)
         for (size_t i = 0; i < N; i++) {
             double x = m->lap[i] * inv;
             etd->jac[i] = g * (1.0 - x * x);
@@ -437,11 +491,15 @@ static int nonlinear(bkf_pde *m, const double complex *a, double complex *out, d
         out[k] = 0.5 * (np - r);
         out[nc + k] = 0.5 * (np + r);
     }
-    if (etd->rk) {
-        if (etd->quad_off) out[etd->n2] = 0;
-        else quadrature_rates(m, a, out + etd->n2);
-    }
-    if (etd->kfast < nc) averaged_cross(m, a, out);
+    /* a dropped set keeps only its own branch's filter term */
+    if (etd->fast_drop)
+        for (size_t k = kf; k < nc; k++) {
+            out[k] += 0.5 * etd->sigma[k] * a[nc + k];
+            out[nc + k] += 0.5 * etd->sigma[k] * a[k];
+        }
+    /* Q' = mean(psi) is linear: it belongs to the linear part (q_part) */
+    if (etd->rk) out[etd->n2] = I * (etd->d_off ? 0.0 : dissipation_rate(m, a));
+    if (!etd->fast_drop && kf < nc) averaged_cross(m, a, out);
     return 0;
 }
 
@@ -582,6 +640,24 @@ static const double complex *rotation(bkf_pde_etd *etd, double tau)
     return s->E[k];
 }
 
+/* Q's row of exp(L tau) (lawson8), applied to the state x: the change of Q.
+ *
+ * Why: Q' = psi_0 / N is linear in the state, so it is part of L, with
+ * exp(L tau) taking Q to Q + [a+_0 (e^{i tau} - 1)/i - a-_0 (e^{-i tau} - 1)/i] / N
+ * (the k = 0 branches turn at +-1).  Then the linear invariant
+ * mean(eta) + (Q - nu t)/gamma is a functional l with l L = 0, so
+ * l exp(L tau) = l, and l N(u) = nu/gamma for every u: Lawson's stages
+ * keep it to rounding, as plain Runge-Kutta does.  As an explicit rate,
+ * rotated back by exp(-L tau) like the rest, Q drifted from it by an
+ * eighth-order error (1e-12 over t = 20 at tol 1e-7, steps of 0.08).
+ * e^{i tau} - 1 is formed from sines: it must not cancel for short tau. */
+static double q_part(const bkf_pde_etd *etd, double tau, const double complex *x)
+{
+    double s = sin(0.5 * tau);
+    double complex em1 = -2.0 * s * s + I * sin(tau);
+    return creal(-I * em1 * x[0] + I * conj(em1) * x[etd->nc]) / (double)etd->owner->N;
+}
+
 /* One evaluation of v' = exp(-L tau) N(exp(L tau) v). */
 static int lawson_stage(bkf_pde *m, double tau, const double y[], double dydt[])
 {
@@ -602,6 +678,8 @@ static int lawson_stage(bkf_pde *m, double tau, const double y[], double dydt[])
         u[2 * i + 1] = er * vi + ei * vr;
     }
     if (nonlinear(m, etd->sa, out, NULL)) return GSL_EBADFUNC;
+    /* Q and D do not enter N: exp(L tau) v's own Q is not needed */
+    out[n2] += q_part(etd, -tau, out);
     for (size_t i = 0; i < n2; i++) {
         double er = e[2 * i], ei = e[2 * i + 1], or_ = dydt[2 * i], oi = dydt[2 * i + 1];
         dydt[2 * i] = er * or_ + ei * oi;
@@ -620,10 +698,71 @@ static int lawson_rhs(double tau, const double y[], double dydt[], void *params)
      * would reach nothing, as no rate depends on Q or D (a third of the
      * quadratures' cost) */
     size_t stage = ++etd->calls + 1;
-    etd->quad_off = stage <= 5;
+    etd->d_off = !etd->d_staged || stage <= 5;
     int rc = lawson_stage(m, tau, y, dydt);
-    etd->quad_off = 0;
+    etd->d_off = 0;
     return rc;
+}
+
+/* D over a step from the step ends (lawson8).
+ *
+ * Why: carried on rk8pd's stages, D had the largest error of the state
+ * (0.1-0.8 of tol where the fields' was 0.003): its rate is quadratic in
+ * the field and weights the a- branch, which in the Lawson variables turns
+ * at (v + c) q where the field turns at v q, so the stages' interior
+ * values, accurate enough for the fields, were not for D'.  Under the
+ * error control it held the steps at 0.02 instead of 0.025 (25% more)
+ * and its two transforms at 9 of the 13 stages cost 70% more per step.
+ * At the step ends the field is accurate to tol, and D'(t) there is a
+ * smooth function of time (constant for a steady wave): the polynomial
+ * through the last DQ_POINTS ends (the new one included) integrated over
+ * the step is of order DQ_POINTS + 1 in the step size, at one D'
+ * evaluation a step.  Its error estimate is the difference from the
+ * polynomial through one end fewer; stats.d_err sums it over the steps.
+ * Until DQ_POINTS - 1 ends are known (the first steps after a state is
+ * set) D rides on the stages as before, under the error control.
+ * Nodes need not be equally spaced; the integral over [0, 1] (the step)
+ * of the Lagrange basis is exact with 5 Gauss-Legendre points up to
+ * degree 9. */
+static double lagrange_integral(const double *s, const double *r, size_t n)
+{
+    static const double gx[5] = {0.0469100770306680, 0.2307653449471585, 0.5,
+                                 0.7692346550528415, 0.9530899229693320};
+    static const double gw[5] = {0.1184634425280945, 0.2393143352496832, 0.2844444444444444,
+                                 0.2393143352496832, 0.1184634425280945};
+    double sum = 0.0;
+    for (int g = 0; g < 5; g++)
+        for (size_t j = 0; j < n; j++) {
+            double l = gw[g] * r[j];
+            for (size_t k = 0; k < n; k++)
+                if (k != j) l *= (gx[g] - s[k]) / (s[j] - s[k]);
+            sum += l;
+        }
+    return sum;
+}
+
+static void dq_increment(bkf_pde_etd *etd, double h, double r_new)
+{
+    double s[DQ_POINTS], r[DQ_POINTS];
+    s[0] = 1.0;
+    r[0] = r_new;
+    for (size_t j = 1; j < DQ_POINTS; j++) {
+        s[j] = (etd->dq_t[j - 1] - etd->dq_t[0]) / h;
+        r[j] = etd->dq_r[j - 1];
+    }
+    double hi = lagrange_integral(s, r, DQ_POINTS), lo = lagrange_integral(s, r, DQ_POINTS - 1);
+    etd->dq_inc = h * hi;
+    etd->dq_est = h * fabs(hi - lo);
+}
+
+/* The accepted step end t and its D' (etd->nu[n2]) join the history. */
+static void dq_push(bkf_pde_etd *etd, double t)
+{
+    memmove(etd->dq_t + 1, etd->dq_t, (DQ_POINTS - 1) * sizeof *etd->dq_t);
+    memmove(etd->dq_r + 1, etd->dq_r, (DQ_POINTS - 1) * sizeof *etd->dq_r);
+    etd->dq_t[0] = t;
+    etd->dq_r[0] = cimag(etd->nu[etd->n2]);
+    if (etd->dq_n < DQ_POINTS) etd->dq_n++;
 }
 
 /* One lawson8 step, with the contract of step(). */
@@ -633,32 +772,61 @@ static int step_lawson(bkf_pde *m, double h, double *err_ratio, double *psi_max_
     size_t n2 = etd->n2;
     lawson_select(etd, h);
     etd->kfast = fast_start(etd, m, h);
-    if (etd->kfast != etd->nu_kfast) {
+    if (etd->kfast != etd->nu_kfast || etd->fast_drop != etd->nu_drop || etd->kin != etd->nu_kin) {
         /* the first stage must be the same right-hand side */
         m->stats.rhs_calls++;
         if (nonlinear(m, etd->a, etd->nu, NULL)) return STEP_NONFINITE;
         etd->nu_kfast = etd->kfast;
+        etd->nu_drop = etd->fast_drop;
+        etd->nu_kin = etd->kin;
     }
-    memcpy(etd->anew, etd->a, (n2 + 1) * sizeof *etd->a);
-    etd->calls = 0;
-    int rc = gsl_odeiv2_step_apply(etd->rk, 0.0, h, (double *)etd->anew, (double *)etd->s,
-                                   (const double *)etd->nu, NULL, &etd->sys);
-    if (rc == GSL_ENOMEM) return STEP_NOMEM;
-    if (rc != GSL_SUCCESS) return STEP_NONFINITE;
-    const double complex *E = rotation(etd, h);
-    if (!E) return STEP_NOMEM;
-    for (size_t i = 0; i < n2; i++) {
-        etd->anew[i] *= E[i];
-        etd->s[i] *= E[i];
+    etd->d_staged = etd->dq_n + 1 < DQ_POINTS || etd->dq_clean < DQ_POINTS;
+    for (;;) {
+        memcpy(etd->anew, etd->a, (n2 + 1) * sizeof *etd->a);
+        etd->calls = 0;
+        /* the first stage's D' too is left to dq_increment, unless staged */
+        double complex rate0 = etd->nu[n2];
+        if (!etd->d_staged) etd->nu[n2] = creal(rate0);
+        int rc = gsl_odeiv2_step_apply(etd->rk, 0.0, h, (double *)etd->anew, (double *)etd->s,
+                                       (const double *)etd->nu, NULL, &etd->sys);
+        etd->nu[n2] = rate0;
+        if (rc == GSL_ENOMEM) return STEP_NOMEM;
+        if (rc != GSL_SUCCESS) return STEP_NONFINITE;
+        const double complex *E = rotation(etd, h);
+        if (!E) return STEP_NOMEM;
+        etd->anew[n2] += q_part(etd, h, etd->anew);
+        etd->s[n2] += q_part(etd, h, etd->s);
+        for (size_t i = 0; i < n2; i++) {
+            etd->anew[i] *= E[i];
+            etd->s[i] *= E[i];
+        }
+        m->stats.rhs_calls++;
+        if (nonlinear(m, etd->anew, etd->nnew, psi_max_new)) return STEP_NONFINITE;
+        /* D's bound per step: the Runge-Kutta path's tol (1 + |D|) */
+        double d_tol = m->o.tol * (1.0 + fabs(cimag(etd->anew[n2])));
+        if (etd->dq_n + 1 >= DQ_POINTS) {
+            dq_increment(etd, h, cimag(etd->nnew[n2]));
+            /* staged, the ends must resolve D'(t) with a wide margin
+             * (DQ_POINTS steps running) before they take D over again */
+            if (etd->d_staged) etd->dq_clean = etd->dq_est <= 1e-2 * d_tol ? etd->dq_clean + 1 : 0;
+        }
+        if (etd->d_staged) break;
+        if (etd->dq_est <= d_tol) {
+            etd->anew[n2] += I * etd->dq_inc;
+            break;
+        }
+        /* the ends do not resolve D'(t) (on an under-resolved grid it
+         * oscillates at the rate the fronts cross grid points): redo the
+         * step with D on the stages */
+        m->stats.rejected++;
+        etd->dq_clean = 0;
+        etd->d_staged = 1;
     }
-    m->stats.rhs_calls++;
-    if (nonlinear(m, etd->anew, etd->nnew, psi_max_new)) return STEP_NONFINITE;
     double scale = m->o.tol * (1.0 + etd->psi_max);
     double e = fmax(field_max(m, etd->s, 0), field_max(m, etd->s, 1));
     *err_ratio = isfinite(e) ? e / scale : INFINITY;
     /* the quadratures under the Runge-Kutta path's control, tol (1 + |y|)
-     * per component: their rk8pd error is the largest part of the estimate
-     * on moving fronts (0.1-0.8 of tol where the fields' is 0.003) */
+     * per component (D's error is 0 here when dq_increment integrates it) */
     for (int j = 0; j < 2; j++) {
         double q = j ? cimag(etd->anew[n2]) : creal(etd->anew[n2]);
         double dq = j ? cimag(etd->s[n2]) : creal(etd->s[n2]);
@@ -700,7 +868,12 @@ int bkf_pde_etd_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer
             return bkf_error_set(err, BKF_EBLOWUP, "the initial state is not finite or too large");
         etd->have_nu = 1;
         etd->nu_kfast = etd->kfast;
+        etd->nu_drop = etd->fast_drop;
+        etd->nu_kin = etd->kin;
         m->stats.rhs_calls++;
+        etd->dq_n = 0;
+        etd->dq_clean = DQ_POINTS;
+        if (etd->rk) dq_push(etd, m->t);
     }
     if (observer && bkf_pde_emit(m, observer, odata, t0, m->y)) {
         m->stats.stopped = 1;
@@ -772,6 +945,10 @@ int bkf_pde_etd_run(bkf_pde *m, double t_end, double sample_dt, bkf_pde_observer
                 etd->nnew = tmp;
                 etd->psi_max = psi_max_new;
                 m->t = count == 1 ? pb : m->t + h;
+                if (etd->rk) {
+                    dq_push(etd, m->t);
+                    if (!etd->d_staged) m->stats.d_err += etd->dq_est;
+                }
                 m->stats.steps++;
                 steps_here++;
                 m->stats.h_last = h;
