@@ -154,10 +154,11 @@ static int tail_ok(const grid *g, double mu, double T)
 /* T at mu; `tol` 0 means the grid's coarse tolerance.  A failed solve is
  * retried from a cold start, then with the other stepper: warm starts from
  * far away and rk8pd inside a canard are what fails in practice. */
-static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf_error *err)
+static int solve_T_on(grid *g, int on_precise, double mu, double tol, double *T, double *T_err,
+                      bkf_error *err)
 {
     int precise = tol > 0;
-    bkf_cycle *cycle = precise ? g->precise : g->coarse;
+    bkf_cycle *cycle = on_precise ? g->precise : g->coarse;
     if (mu > BKF_CYCLE_MU_MAX) mu = BKF_CYCLE_MU_MAX; /* rounding in mu_of_s */
     bkf_cycle_options o = bkf_cycle_options_default();
     o.tol = precise ? tol : g->tol_coarse;
@@ -176,8 +177,8 @@ static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf
      * cold one (the grid's jump in the tail, mu 29.6 -> 48.6 at nu -0.96:
      * 1.0 ms against 0.44 ms); precise solves gain from it even there
      * (8.7 -> 14.2: 0.87 ms against 1.0 ms). */
-    double *mu_last = &g->mu_last[precise];
-    int warm = *mu_last > 0 && (precise || fabs(log(mu / *mu_last)) < WARM_LN_MU_MAX);
+    double *mu_last = &g->mu_last[on_precise];
+    int warm = *mu_last > 0 && (on_precise || fabs(log(mu / *mu_last)) < WARM_LN_MU_MAX);
     for (int attempt = warm ? 0 : 1; attempt < 3 && bkf_status_is_numerical(rc); attempt++) {
         o.stepper = attempt < 2 ? BKF_STEPPER_AUTO
                     : mu <= BKF_CYCLE_EXPLICIT_MU_MAX ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
@@ -196,6 +197,11 @@ static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf
     else g->coarse_solves++;
     if (mu > g->mu_max_sampled) g->mu_max_sampled = mu;
     return BKF_OK;
+}
+
+static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf_error *err)
+{
+    return solve_T_on(g, tol > 0, mu, tol, T, T_err, err);
 }
 
 static int make_sample(grid *g, double s, int precise, sample *out, bkf_error *err)
@@ -648,6 +654,10 @@ static const peval *best_eval(const polish_ctx *pc)
  * there (fewer polishing solves: 34 -> 32 for the paper's table, 104 -> 80 at
  * gamma 1, c 0.5, nu 0, S 30); 7 and 8 points gained no more. */
 #define INTERP_POINTS 6
+/* Relative error of the interpolated slope of D (measured 1e-3 at nu -0.96,
+ * mu 2-5): a prediction uncertain by more than target/this gets a coarse
+ * solve first (below). */
+#define SCOUT_SLOPE_ERROR 1e-3
 typedef struct {
     double s[INTERP_POINTS], r[INTERP_POINTS];
     int m, model;
@@ -659,9 +669,9 @@ static double model_lnT(const interp *ip, double s)
     return ip->model ? log(bkf_asym_period_large(mu_of_s(ip->gamma, s), ip->nu)) : 0.0;
 }
 
-static void interp_init(interp *ip, const grid *g, size_t i)
+static void interp_init(interp *ip, const grid *g, size_t i, size_t points)
 {
-    size_t half = INTERP_POINTS / 2, m = g->count < INTERP_POINTS ? g->count : INTERP_POINTS;
+    size_t half = points / 2, m = g->count < points ? g->count : points;
     size_t j0 = i + 1 >= half ? i + 1 - half : 0;
     if (j0 + m > g->count) j0 = g->count - m;
     size_t j1 = j0 + m - 1;
@@ -694,10 +704,12 @@ static double interp_lnT(const interp *ip, double s)
 
 /* Predicted root of level ell in cell i (ends of opposite sign) and the
  * slope of D there. */
-static void predict(const grid *g, size_t i, double ell, double *root, double *slope)
+static void predict(const grid *g, size_t i, double ell, double *root, double *slope,
+                    double *uncertainty)
 {
-    interp ip;
-    interp_init(&ip, g, i);
+    interp ip, lower;
+    interp_init(&ip, g, i, INTERP_POINTS);
+    interp_init(&lower, g, i, INTERP_POINTS - 2);
     double a = g->x[i].s, b = g->x[i + 1].s;
     double fa = lng(&g->x[i]) - ell;
     for (int it = 0; it < 80 && b - a > 4.0 * DBL_EPSILON * fabs(a + b); it++) {
@@ -712,6 +724,9 @@ static void predict(const grid *g, size_t i, double ell, double *root, double *s
     *root = 0.5 * (a + b);
     double h = 1e-4 * (g->x[i + 1].s - g->x[i].s);
     *slope = (interp_lnT(&ip, *root + h) - interp_lnT(&ip, *root - h)) / (2.0 * h) - 1.0;
+    /* the interpolant of two lower degree: its distance bounds (in practice
+     * overstates) the error of ln T at the prediction */
+    *uncertainty = fabs(interp_lnT(&ip, *root) - interp_lnT(&lower, *root));
 }
 
 typedef struct {
@@ -772,11 +787,12 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
 {
     polish_ctx pc = {.g = g, .ell = level(g, n), .nev = 0, .status = 0, .err = err};
     double sa = g->x[i].s, sb = g->x[i + 1].s;
-    double r0, slope0;
-    predict(g, i, pc.ell, &r0, &slope0);
-    /* a cubic through samples crowded into a steep canard can be useless:
-     * fall back on the cell's secant */
+    double r0, slope0, unc0;
+    predict(g, i, pc.ell, &r0, &slope0, &unc0);
+    /* an interpolant through samples crowded into a steep canard can be
+     * useless: fall back on the cell's secant */
     if (!isfinite(slope0) || slope0 == 0 || !(r0 > sa && r0 < sb)) {
+        unc0 = INFINITY;
         slope0 = (lng(&g->x[i + 1]) - lng(&g->x[i])) / (sb - sa);
         r0 = sa - (lng(&g->x[i]) - pc.ell) / slope0;
         if (!(r0 > sa && r0 < sb)) r0 = 0.5 * (sa + sb);
@@ -811,6 +827,19 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
                                  "exceeds the tolerance %g of T this root needs (outside its "
                                  "validity; use --method shooting or auto)",
                                  bkf_cycle_method_name(g->method), n, mu0, g->p.nu, bound, pc.tol);
+    }
+    if (unc0 * SCOUT_SLOPE_ERROR > target && g->tol_coarse > 10.0 * pc.tol) {
+        /* Where the samples predict the root poorly (1e-5..1e-3 in ln T next
+         * to a canard, nu -0.96, mu 2-5), the secant step after the first
+         * precise solve still misses the target and a third follows.  A
+         * solve at the coarse tolerance (2-3 times cheaper, accurate to ~1e-8)
+         * moves the prediction first, and warm-starts the precise one. */
+        double Tc, Tc_err;
+        bkf_error e = {0};
+        if (solve_T_on(g, 1, mu0, 0.0, &Tc, &Tc_err, &e) == BKF_OK) {
+            double r1 = r0 - (log(Tc) - r0 - pc.ell) / slope0;
+            if (r1 > sa && r1 < sb) r0 = r1;
+        }
     }
     double D0 = polish_f(r0, &pc);
     if (pc.status) return pc.status;
