@@ -65,6 +65,9 @@
 /* Interpolation relative to the large-mu expansion from here up (measured:
  * the root predictions for nu = -0.96 improve from 1e-5 to 1e-7 at mu > 5). */
 #define MODEL_MU_MIN 5.0
+/* Coarse solves warm-start only from a sample within this distance in
+ * ln mu (the grid's steps are 0.3 and less in ln mu). */
+#define WARM_LN_MU_MAX 0.4
 
 bkf_speeds_options bkf_speeds_options_default(void)
 {
@@ -132,6 +135,7 @@ typedef struct {
     size_t count, cap;
     size_t coarse_solves, precise_solves, formula_answers;
     double mu_max_sampled;
+    double mu_last[2];        /* the last solution in coarse, precise (0: none) */
 } grid;
 
 static double mu_of_s(double gamma, double s) { return hypot(gamma, exp(s)); }
@@ -147,22 +151,37 @@ static int tail_ok(const grid *g, double mu, double T)
     return fabs(T - T_asym) <= TAIL_KNEE_FRACTION * g->knee * pow(mu, -1.0 / 3.0);
 }
 
-/* T at mu; `tol` 0 means the grid's coarse tolerance.  A failed solve is
- * retried from a cold start, then with the other stepper: warm starts from
- * far away and rk8pd inside a canard are what fails in practice. */
-static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf_error *err)
+/* T at mu; `tol` 0 means the grid's coarse tolerance.  A scout (a solve
+ * that only places a root's first precise solve) runs on the precise solver
+ * and counts as coarse.  A failed solve is retried from a cold start, then
+ * with the other stepper: warm starts from far away and rk8pd inside a
+ * canard are what fails in practice. */
+static int solve_T_on(grid *g, int scout, double mu, double tol, double *T, double *T_err,
+                      bkf_error *err)
 {
-    int precise = tol > 0;
-    bkf_cycle *cycle = precise ? g->precise : g->coarse;
+    int precise = tol > 0 && !scout, on_precise = tol > 0;
+    bkf_cycle *cycle = on_precise ? g->precise : g->coarse;
     if (mu > BKF_CYCLE_MU_MAX) mu = BKF_CYCLE_MU_MAX; /* rounding in mu_of_s */
     bkf_cycle_options o = bkf_cycle_options_default();
-    o.tol = precise ? tol : g->tol_coarse;
+    o.tol = tol > 0 ? tol : g->tol_coarse;
+    /* Above BKF_CYCLE_STIFF_MU the engine takes its stiff stepper only for
+     * tol within its range; a looser coarse tol falls back on rk8pd or bsimp,
+     * which cost 1.5-2.6 times more there (mu 22-49, nu -0.96) than the
+     * stiff stepper at its loosest tol: ask that, it is also tighter. */
+    if (!precise && mu > BKF_CYCLE_STIFF_MU && o.tol > BKF_CYCLE_STIFF_TOL_MAX)
+        o.tol = fmax(BKF_CYCLE_STIFF_TOL_MAX, g->tol);
     /* The engine's own choice (bd2x2 above BKF_CYCLE_STIFF_MU, rk8pd or
      * above BKF_CYCLE_EXPLICIT_MU_MAX bsimp where bd2x2 refuses); "the
      * other" is the stepper it does not try there. */
     bkf_error e = {0};
     int rc = BKF_ENUMERIC;
-    for (int attempt = 0; attempt < 3 && bkf_status_is_numerical(rc); attempt++) {
+    /* A coarse solve warm-started from a sample far away costs more than a
+     * cold one (the grid's jump in the tail, mu 29.6 -> 48.6 at nu -0.96:
+     * 1.0 ms against 0.44 ms); precise solves gain from it even there
+     * (8.7 -> 14.2: 0.87 ms against 1.0 ms). */
+    double *mu_last = &g->mu_last[on_precise];
+    int warm = *mu_last > 0 && (on_precise || fabs(log(mu / *mu_last)) < WARM_LN_MU_MAX);
+    for (int attempt = warm ? 0 : 1; attempt < 3 && bkf_status_is_numerical(rc); attempt++) {
         o.stepper = attempt < 2 ? BKF_STEPPER_AUTO
                     : mu <= BKF_CYCLE_EXPLICIT_MU_MAX ? BKF_STEPPER_IMPLICIT : BKF_STEPPER_EXPLICIT;
         o.warm_start = attempt == 0;
@@ -172,6 +191,7 @@ static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf
         return bkf_error_set(err, rc, "period at mu = %.17g, nu = %.17g: %s", mu, g->p.nu,
                              e.message);
     const bkf_cycle_result *r = bkf_cycle_get(cycle);
+    *mu_last = mu;
     *T = r->period;
     *T_err = r->period_err;
     g->last_model = "shooting";
@@ -179,6 +199,11 @@ static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf
     else g->coarse_solves++;
     if (mu > g->mu_max_sampled) g->mu_max_sampled = mu;
     return BKF_OK;
+}
+
+static int solve_T(grid *g, double mu, double tol, double *T, double *T_err, bkf_error *err)
+{
+    return solve_T_on(g, 0, mu, tol, T, T_err, err);
 }
 
 static int make_sample(grid *g, double s, int precise, sample *out, bkf_error *err)
@@ -622,12 +647,25 @@ static const peval *best_eval(const polish_ctx *pc)
     return best;
 }
 
-/* ln T between samples: a cubic through up to four samples around the cell,
- * of ln T itself or, where mu >= MODEL_MU_MIN at all of them, of
- * mu^2 (ln T - ln T_expansion), which the next, O(1/mu), term of T makes
- * nearly constant: smoother by far. */
+/* ln T between samples: a polynomial through up to INTERP_POINTS samples
+ * around the cell, of ln T itself or, where mu >= MODEL_MU_MIN at all of
+ * them, of mu^2 (ln T - ln T_expansion), which the next, O(1/mu), term of T
+ * makes nearly constant: smoother by far.  The coarse samples are far more
+ * accurate than the interpolation (1e-9 against 1e-5 relative at nu -0.96,
+ * mu 2-5), so degree 5 rather than 3 predicts the roots 2-30 times closer
+ * there (fewer polishing solves: 34 -> 32 for the paper's table, 104 -> 80 at
+ * gamma 1, c 0.5, nu 0, S 30); 7 and 8 points gained no more. */
+#define INTERP_POINTS 6
+/* Relative error of the interpolated slope of D (measured 1e-3 at nu -0.96,
+ * mu 2-5): a prediction uncertain by more than target/this gets a coarse
+ * solve first (below). */
+#define SCOUT_SLOPE_ERROR 1e-3
+/* The scout's tolerance relative to the root's (at most the coarse one):
+ * 1e-7 instead of 1e-6 costs 10-30% more per scout and saved a precise solve
+ * on 2 of 12 roots of the paper's table, 4 of 37 at gamma 1, c 0.5, nu 0. */
+#define SCOUT_TOL_FACTOR 1000.0
 typedef struct {
-    double s[4], r[4];
+    double s[INTERP_POINTS], r[INTERP_POINTS];
     int m, model;
     double gamma, nu;
 } interp;
@@ -637,10 +675,13 @@ static double model_lnT(const interp *ip, double s)
     return ip->model ? log(bkf_asym_period_large(mu_of_s(ip->gamma, s), ip->nu)) : 0.0;
 }
 
-static void interp_init(interp *ip, const grid *g, size_t i)
+static void interp_init(interp *ip, const grid *g, size_t i, size_t points)
 {
-    size_t j0 = i > 0 ? i - 1 : 0, j1 = i + 2 < g->count ? i + 2 : g->count - 1;
-    ip->m = (int)(j1 - j0 + 1);
+    size_t half = points / 2, m = g->count < points ? g->count : points;
+    size_t j0 = i + 1 >= half ? i + 1 - half : 0;
+    if (j0 + m > g->count) j0 = g->count - m;
+    size_t j1 = j0 + m - 1;
+    ip->m = (int)m;
     ip->gamma = g->p.gamma;
     ip->nu = g->p.nu;
     ip->model = 1;
@@ -669,10 +710,12 @@ static double interp_lnT(const interp *ip, double s)
 
 /* Predicted root of level ell in cell i (ends of opposite sign) and the
  * slope of D there. */
-static void predict(const grid *g, size_t i, double ell, double *root, double *slope)
+static void predict(const grid *g, size_t i, double ell, double *root, double *slope,
+                    double *uncertainty)
 {
-    interp ip;
-    interp_init(&ip, g, i);
+    interp ip, lower;
+    interp_init(&ip, g, i, INTERP_POINTS);
+    interp_init(&lower, g, i, INTERP_POINTS - 2);
     double a = g->x[i].s, b = g->x[i + 1].s;
     double fa = lng(&g->x[i]) - ell;
     for (int it = 0; it < 80 && b - a > 4.0 * DBL_EPSILON * fabs(a + b); it++) {
@@ -687,6 +730,9 @@ static void predict(const grid *g, size_t i, double ell, double *root, double *s
     *root = 0.5 * (a + b);
     double h = 1e-4 * (g->x[i + 1].s - g->x[i].s);
     *slope = (interp_lnT(&ip, *root + h) - interp_lnT(&ip, *root - h)) / (2.0 * h) - 1.0;
+    /* the interpolant of two lower degree: its distance bounds (in practice
+     * overstates) the error of ln T at the prediction */
+    *uncertainty = fabs(interp_lnT(&ip, *root) - interp_lnT(&lower, *root));
 }
 
 typedef struct {
@@ -747,11 +793,12 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
 {
     polish_ctx pc = {.g = g, .ell = level(g, n), .nev = 0, .status = 0, .err = err};
     double sa = g->x[i].s, sb = g->x[i + 1].s;
-    double r0, slope0;
-    predict(g, i, pc.ell, &r0, &slope0);
-    /* a cubic through samples crowded into a steep canard can be useless:
-     * fall back on the cell's secant */
+    double r0, slope0, unc0;
+    predict(g, i, pc.ell, &r0, &slope0, &unc0);
+    /* an interpolant through samples crowded into a steep canard can be
+     * useless: fall back on the cell's secant */
     if (!isfinite(slope0) || slope0 == 0 || !(r0 > sa && r0 < sb)) {
+        unc0 = INFINITY;
         slope0 = (lng(&g->x[i + 1]) - lng(&g->x[i])) / (sb - sa);
         r0 = sa - (lng(&g->x[i]) - pc.ell) / slope0;
         if (!(r0 > sa && r0 < sb)) r0 = 0.5 * (sa + sb);
@@ -786,6 +833,20 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
                                  "exceeds the tolerance %g of T this root needs (outside its "
                                  "validity; use --method shooting or auto)",
                                  bkf_cycle_method_name(g->method), n, mu0, g->p.nu, bound, pc.tol);
+    }
+    if (unc0 * SCOUT_SLOPE_ERROR > target && g->tol_coarse > 10.0 * pc.tol) {
+        /* Where the samples predict the root poorly (1e-5..1e-3 in ln T next
+         * to a canard, nu -0.96, mu 2-5), the secant step after the first
+         * precise solve still misses the target and a third follows.  A
+         * looser solve (2-3 times cheaper) moves the prediction first, and
+         * warm-starts the precise one. */
+        double Tc, Tc_err;
+        bkf_error e = {0};
+        double scout_tol = fmin(g->tol_coarse, SCOUT_TOL_FACTOR * pc.tol);
+        if (solve_T_on(g, 1, mu0, scout_tol, &Tc, &Tc_err, &e) == BKF_OK) {
+            double r1 = r0 - (log(Tc) - r0 - pc.ell) / slope0;
+            if (r1 > sa && r1 < sb) r0 = r1;
+        }
     }
     double D0 = polish_f(r0, &pc);
     if (pc.status) return pc.status;
@@ -1228,7 +1289,14 @@ static int branch_residual(const double *u, double *g, double *jac, void *data, 
     g[0] = lnT - u[0] - (log(q.S) - log(b->n * q.c * q.gamma));
     b->have_last = 0;
     if (!jac) return BKF_OK;
-    double h = 1e-6 * mu, T2;
+    /* With h = 1e-6 mu a relative error u of T moves mu dlnT/dmu by 2u/1e-6:
+     * beyond mu ~ 100, where G_s -> 0 as g -> k, that reached |G_s| at tol
+     * 1e-8 and put a spurious fold pair on the branch near the sonic end.
+     * In the relaxation regime (mu >= TAIL_MU_MIN) ln T is nearly linear in
+     * ln mu, so a step of 2 sqrt(u) mu costs no more truncation than noise;
+     * below, where T turns fast (canards), the short step stays. */
+    double h_rel = mu >= TAIL_MU_MIN ? fmax(1e-6, 2.0 * sqrt(T_err / T)) : 1e-6;
+    double h = h_rel * mu, T2;
     if ((rc = branch_T(b, mu + h, q.nu, &T2, NULL, err))) return rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
     double dlnT_dmu = (log(T2) - lnT) / h;
     double Gs = dlnT_dmu * exp(2.0 * u[0]) / mu - 1.0, Gp;
