@@ -119,6 +119,17 @@ typedef enum {
                            exponential integrator" */
 } bkf_pde_stepper;
 
+/* The steppers' names, indexed by bkf_pde_stepper, NULL-terminated. */
+extern const char *const bkf_pde_stepper_names[];
+
+/* The stepper a product's "auto" means for this model: lawson8 for the
+ * continuum from N = BKF_PDE_AUTO_LAWSON_N on without dealiasing (its steps
+ * do not shrink with N, rk8pd's are capped by the fastest wave mode: at
+ * tol 1e-9 lawson8 is 1.6 times faster at N 4096 and about 1.1 times slower
+ * at 2048, docs/benchmarks.md), else rk8pd. */
+#define BKF_PDE_AUTO_LAWSON_N 4096
+bkf_pde_stepper bkf_pde_stepper_auto(const bkf_model_params *model, int dealias);
+
 #define BKF_PDE_N_MIN 8
 #define BKF_PDE_N_MAX 1048576
 /* The continuous-slip state psi = nu, eta = phi(nu) lies well within the

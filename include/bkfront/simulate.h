@@ -38,11 +38,15 @@ extern "C" {
 #define BKF_SIMULATE_PSI 1u
 #define BKF_SIMULATE_ETA 2u
 
+/* The simulate stepper that picks one by the model (bkf_pde_stepper_auto). */
+#define BKF_SIMULATE_STEPPER_AUTO 5
+
 typedef struct {
     bkf_model_params model; /* N 0: 512, or S blocks for the chain */
     int chain;              /* model key: index in continuum, chain */
     double tol;             /* [1e-13, 1e-2]; default 1e-9 */
-    int stepper;            /* index in rk8pd, rkck, rkf45, etdrk4 */
+    int stepper;            /* a bkf_pde_stepper, or BKF_SIMULATE_STEPPER_AUTO
+                               (bkf_pde_stepper_auto); default auto */
     int dealias;            /* switch, continuum only */
     double filter;          /* [0, 1000]; default 4 */
     double tmax;            /* (0, 1e6]; default 125 */

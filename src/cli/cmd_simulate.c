@@ -28,7 +28,7 @@ static void simulate_help(FILE *out)
     fprintf(out,
         "usage: bkfront simulate [--gamma G] [--c C] [--nu V] [--S S] [--N N] [--tmax T]\n"
         "                        [--tol E] [--init SPEC] [--seed K] [--model continuum|chain]\n"
-        "                        [--stepper rk8pd|rkck|rkf45|etdrk4|lawson8] [--dealias]\n"
+        "                        [--stepper rk8pd|rkck|rkf45|etdrk4|lawson8|auto] [--dealias]\n"
         "                        [--frames F]\n"
         "                        [--spacetime FILE] [--spacetime-format text|binary|hdf5]\n"
         "                        [--spacetime-fields LIST] [--spacetime-deflate L]\n"

@@ -18,7 +18,9 @@
 #define DEF_N 512
 
 static const char *const model_names[] = {"continuum", "chain", NULL};
-static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8", NULL};
+/* bkf_pde_stepper_names, then "auto" (BKF_SIMULATE_STEPPER_AUTO) */
+static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8", "auto", NULL};
+_Static_assert(BKF_PDE_LAWSON8 + 1 == BKF_SIMULATE_STEPPER_AUTO, "auto follows the steppers");
 static const char *const spacetime_names[] = {"text", "binary", "hdf5", NULL};
 enum { SPACETIME_TEXT, SPACETIME_BINARY, SPACETIME_HDF5 };
 
@@ -128,13 +130,15 @@ const bkf_option bkf_simulate_options[] = {
      .help = "continuum (pseudo-spectral, FFTW) or chain (Burridge-Knopoff\n"
              "blocks, finite differences, h = S/N)"},
     {.name = "stepper", .type = BKF_OPT_CHOICE, .offset = SPEC(stepper), .choices = stepper_names,
-     .form = "S", .shown_default = "rk8pd",
+     .form = "S", .shown_default = "auto",
      .help = "rk8pd, rkck, rkf45: GSL embedded Runge-Kutta pairs;\n"
              "etdrk4: exponential Runge-Kutta (continuum only; the wave\n"
              "part exact, no step cap from N; energy_residual and\n"
              "mean_residual are nan with it); lawson8: the same with\n"
              "rk8pd's order 8 and both residuals (integrating factor: long\n"
-             "steps at tight tol)"},
+             "steps at tight tol); auto: lawson8 for the continuum from\n"
+             "N 4096 without --dealias, else rk8pd (the header names the\n"
+             "one used)"},
     {.name = "dealias", .type = BKF_OPT_SWITCH, .offset = SPEC(dealias),
      .help = "continuum only: 2/3-rule projection of the right-hand side"},
     {.name = "filter", .type = BKF_OPT_DOUBLE, .offset = SPEC(filter), .flags = BOUNDED, .min = 0,
@@ -187,6 +191,7 @@ bkf_simulate_spec bkf_simulate_spec_default(void)
     s.tol = 1e-9;
     s.filter = bkf_pde_options_default().filter;
     s.tmax = 125;
+    s.stepper = BKF_SIMULATE_STEPPER_AUTO;
     s.seed = 1;
     s.level = NAN;
     s.frames = 500;
@@ -227,6 +232,8 @@ static int resolve(const bkf_simulate_spec *sp, const char *prefix, bkf_model_pa
     } else if (!N_given) {
         model->N = DEF_N;
     }
+    if (sp->stepper == BKF_SIMULATE_STEPPER_AUTO)
+        options->stepper = bkf_pde_stepper_auto(model, sp->dealias);
     if (sp->dealias && model->kind != BKF_MODEL_CONTINUUM)
         return bkf_error_set(err, BKF_EINPUT, "%sdealias: only for %smodel continuum", prefix,
                              prefix);

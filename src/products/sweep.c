@@ -531,7 +531,7 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
     const bkf_simulate_spec *b = &sp->sim;
     /* simulate's stepper choices (lawson8 was shown as rk8pd: two sweeps
      * that differ only there had one definition) */
-    static const char *const steppers[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8"};
+    static const char *const steppers[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8", "auto"};
     char g[32], c[32], nu[32], S[32], tm[32], tol[32], fi[32], lv[32];
     text t = {0};
     static const char *const titles[] = {

@@ -177,7 +177,7 @@ static const key_spec keys[] = {
     {"tmax", V_POSITIVE, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "a number > 0"},
     {"frames", V_COUNT, K(BKF_SCENE_SPACETIME), "an integer >= 1"},
     {"rel_tol", V_POSITIVE, K(BKF_SCENE_CHECK), "a number > 0"},
-    {"stepper", V_STEPPER, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "rk8pd, rkck, rkf45, etdrk4 or lawson8"},
+    {"stepper", V_STEPPER, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "rk8pd, rkck, rkf45, etdrk4, lawson8 or auto (spacetime only)"},
     {"frame", V_FRAME, K(BKF_SCENE_CHECK), "moving or lab"},
     {"grid", V_GRID, K(BKF_SCENE_CHECK), "auto, uniform or mapped"},
     {"data", V_NAME, K(BKF_SCENE_FIGURE), "the name of a product of this scene"},
@@ -293,7 +293,7 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
         return bkf_option_parse_choice(v, m, "", k, &i, err);
     }
     case V_STEPPER: {
-        static const char *const m[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8", NULL};
+        static const char *const m[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8", "auto", NULL};
         int i;
         return bkf_option_parse_choice(v, m, "", k, &i, err);
     }

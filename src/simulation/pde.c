@@ -18,6 +18,15 @@
 #include "bkfront/fft.h"
 #include "pde_internal.h"
 
+const char *const bkf_pde_stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8", NULL};
+
+bkf_pde_stepper bkf_pde_stepper_auto(const bkf_model_params *model, int dealias)
+{
+    return model->kind == BKF_MODEL_CONTINUUM && !dealias && model->N >= BKF_PDE_AUTO_LAWSON_N
+               ? BKF_PDE_LAWSON8
+               : BKF_PDE_RK8PD;
+}
+
 bkf_pde_options bkf_pde_options_default(void)
 {
     bkf_pde_options o = {1e-9, BKF_PDE_RK8PD, 0, 4.0, 0, NULL, 0.0};

@@ -129,6 +129,47 @@ TEST(cli_simulate_chain_and_continuous_slip)
     sim_free(&r);
 }
 
+/* The default stepper "auto" follows bkf_pde_stepper_auto's rule (lawson8
+ * for the continuum from N 4096 without dealiasing, rk8pd otherwise), and
+ * an automatic run is the named stepper's run, line for line apart from the
+ * command. */
+static char *without_command(const char *out)
+{
+    char *s = strdup(out), *c = s ? strstr(s, "# command:") : NULL;
+    if (c) {
+        char *e = strchr(c, '\n');
+        memmove(c, e ? e + 1 : c + strlen(c), strlen(e ? e + 1 : c) + 1);
+    }
+    return s;
+}
+
+static void expect_auto(sim_result a, sim_result b, const char *what, const char *expect)
+{
+    CHECK_MSG(a.code == 0 && b.code == 0, "%s: exit %d/%d: %s%s", what, a.code, b.code, a.err, b.err);
+    char want[64];
+    snprintf(want, sizeof want, "stepper %s,", expect);
+    CHECK_MSG(a.out && strstr(a.out, want), "%s: not %s", what, expect);
+    char *x = a.out ? without_command(a.out) : NULL, *y = b.out ? without_command(b.out) : NULL;
+    CHECK_MSG(x && y && !strcmp(x, y), "%s: auto's run differs from %s's", what, expect);
+    free(x);
+    free(y);
+    sim_free(&a);
+    sim_free(&b);
+}
+
+TEST(cli_simulate_auto_stepper_follows_its_rule)
+{
+#define RUN(...) SIM("simulate", "--nu", "-1.2", "--tmax", "1", "--frames", "2", __VA_ARGS__)
+    expect_auto(RUN("--N", "4096"), RUN("--N", "4096", "--stepper", "lawson8"), "N 4096", "lawson8");
+    expect_auto(RUN("--N", "2048"), RUN("--N", "2048", "--stepper", "rk8pd"), "N 2048", "rk8pd");
+    expect_auto(RUN("--N", "4096", "--dealias"), RUN("--N", "4096", "--dealias", "--stepper", "rk8pd"),
+                "N 4096 dealiased", "rk8pd");
+    expect_auto(RUN("--N", "4096", "--S", "4096", "--model", "chain"),
+                RUN("--N", "4096", "--S", "4096", "--model", "chain", "--stepper", "rk8pd"), "chain",
+                "rk8pd");
+#undef RUN
+}
+
 TEST(cli_simulate_rejects_bad_input)
 {
     expect_bad_input(SIM("simulate", "--N", "7"), "simulate", "--N", "odd N");
