@@ -879,8 +879,8 @@ static int period_rounding(flow_params *p, bkf_stepper_kind kind, double tol, do
  * T's response to two ulps of nu, DBL_EPSILON |dT/dnu|, which counted the
  * rounding once where it is injected at every step: against the Taylor
  * reference that floor was optimistic by up to 6.7 at mu 11.214, nu 0.999,
- * where the standard deviation is 50-100 times it; at mu 3.65, nu 0.99
- * it is 1.7-3.2 times it (docs/accuracy.md).
+ * where the standard deviation is 5.7-6.5 times it; at mu 3.6505, nu 0.99
+ * it is 2.5 times it (docs/accuracy.md).
  * Only in the canard's neighbourhood 8 mu^2 (1 - |nu|) in [0.5, 2] (the
  * explosion is at ~1) does the extra shot run: outside it |d ln T/d nu|
  * stays below 1/(1 - |nu|) and the estimates were measured honest there
