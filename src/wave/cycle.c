@@ -83,6 +83,7 @@ typedef struct {
     double max_turn; /* the turn limit of this integrator's shots */
     size_t capped;   /* steps shortened by the turn limit (shoot) */
     int noisy;       /* Newton gave up: the returns are below this tolerance's noise */
+    int rounding;    /* shoot carries the rounding's covariance (conditioning_floor) */
 } integrator;
 
 typedef struct {
@@ -575,6 +576,7 @@ typedef struct {
     double xmax, xmin;
     double px, py;       /* the parameter sensitivity at the return (branch shots) */
     double xdot;         /* x' at the return */
+    double rounding[3];  /* with in->rounding: the rounding's covariance (xx, xy, yy) at the return */
 } shot;
 
 static int node_push(bkf_cycle *c, double t, const double *s)
@@ -588,6 +590,60 @@ static int node_push(bkf_cycle *c, double t, const double *s)
     }
     c->nodes[c->node_count++] = (node){t, {s[IX], s[IY]}};
     return BKF_OK;
+}
+
+/* The rounding of one accepted step: its covariance cov = (xx, xy, yy) is
+ * carried across the step by the transition F of the (x, y) block, plus the
+ * step's own rounding, independent per step and per coordinate,
+ * (DBL_EPSILON |x|)^2 and (DBL_EPSILON |y|)^2 (one to two ulps: a step's
+ * stages add to the final sum's half ulp).  Forward, so no inversion: the
+ * repelling slow branch grows it, the attracting branches shrink it, as
+ * they do the rounding itself.  F is exact where it matters: it takes the
+ * flow f0 to f1 (a phase shift stays one: rounding along the flow jitters
+ * the time, by up to 1e-13 at a knee, and a leak of it across the flow
+ * was multiplied by dT/dy0 ~ 4e6 at mu 3.65, nu -0.99) and its determinant
+ * is exp(L1 - L0) (Liouville); only its shear along f1 is estimated, from
+ * exp of the step's mean Jacobian with the exact mean trace (closed form). */
+static void rounding_step(const flow_params *p, const double *s0, const double *s1, double h, double *cov)
+{
+    double f0x = flow_xdot(p, s0), f0y = (p->nu - s0[IX]) / p->a;
+    double f1x = flow_xdot(p, s1), f1y = (p->nu - s1[IX]) / p->a;
+    double n0 = hypot(f0x, f0y), n1 = hypot(f1x, f1y);
+    if (!(n0 > 0) || !(n1 > 0)) return;
+    double u0x = f0x / n0, u0y = f0y / n0, u1x = f1x / n1, u1y = f1y / n1;
+    /* exp(A), A = h x mean Jacobian: e^m (c I + d (A - m I)), m = tr A / 2,
+     * (A - m I)^2 = q I */
+    double j11 = s1[IL] - s0[IL], j12 = p->a * h, j21 = -h / p->a;
+    double m = 0.5 * j11, q = m * m + j12 * j21, c, d;
+    if (q > 0) {
+        double r = sqrt(q);
+        c = cosh(r);
+        d = sinh(r) / r;
+    } else if (q < 0) {
+        double r = sqrt(-q);
+        c = cos(r);
+        d = sin(r) / r;
+    } else {
+        c = d = 1.0;
+    }
+    double e = exp(m);
+    /* the shear: the estimate's image of the normal -u0y, u0x along u1 */
+    double gx = e * ((c + d * (j11 - m)) * -u0y + d * j12 * u0x);
+    double gy = e * (d * j21 * -u0y + (c - d * m) * u0x);
+    double shear = gx * u1x + gy * u1y, stretch = exp(j11) * n0 / n1, along = n1 / n0;
+    /* F = along u1 u0^T + (shear u1 + stretch n1) n0^T, n = (-u_y, u_x) */
+    double f11 = along * u1x * u0x + (shear * u1x - stretch * u1y) * -u0y;
+    double f12 = along * u1x * u0y + (shear * u1x - stretch * u1y) * u0x;
+    double f21 = along * u1y * u0x + (shear * u1y + stretch * u1x) * -u0y;
+    double f22 = along * u1y * u0y + (shear * u1y + stretch * u1x) * u0x;
+    double xx = cov[0], xy = cov[1], yy = cov[2];
+    /* F cov F^T */
+    double a11 = f11 * xx + f12 * xy, a12 = f11 * xy + f12 * yy;
+    double a21 = f21 * xx + f22 * xy, a22 = f21 * xy + f22 * yy;
+    double ex = DBL_EPSILON * s1[IX], ey = DBL_EPSILON * s1[IY];
+    cov[0] = a11 * f11 + a12 * f12 + ex * ex;
+    cov[1] = a11 * f21 + a12 * f22;
+    cov[2] = a21 * f21 + a22 * f22 + ey * ey;
 }
 
 /* Integrate one turn from (nu, y0) back to the section.  With `keep` the
@@ -604,6 +660,7 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
      * not be mistaken for the return. */
     double below_margin = 0.25 * fmin(2.0 * sqrt(1.0 - p->nu * p->nu), 1.0);
     double xmax = p->nu, xmin = p->nu;
+    double cov[3] = {0.0, 0.0, 0.0};
     if (keep) {
         keep->node_count = 0;
         if (node_push(keep, t, s) != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
@@ -656,6 +713,7 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
         }
         if (s[IX] < p->nu - below_margin) went_below = 1;
         if (went_below && s[IX] >= p->nu) break;
+        if (main_in->rounding) rounding_step(p, s_prev, s, t - t_prev, cov);
         if (keep && node_push(keep, t, s) != BKF_OK)
             return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
@@ -674,6 +732,8 @@ static int shoot(integrator *main_in, integrator *aux, flow_params *p, double y0
     out->px = sr[IPX];
     out->py = sr[IPY];
     out->xdot = flow_xdot(p, sr);
+    if (main_in->rounding) rounding_step(p, s_prev, sr, T - t_prev, cov);
+    memcpy(out->rounding, cov, sizeof cov);
     return BKF_OK;
 }
 
@@ -779,26 +839,26 @@ static double period_error(const converged *a, const converged *b, const flow_pa
     return fmax(fmax(diff, cond_floor), fmax(tol_floor, round_floor));
 }
 
-/* dT/dnu of the cycle at the fixed point y0, from one shot that carries
- * the sensitivity (px, py) to nu: the shot's own dT/dnu and dP/dnu at fixed
- * y0, plus the move of the fixed point, dy0/dnu = (dP/dnu)/(1 - P').  The
- * start (nu, y0) and the section x = nu move with nu: px starts at 1, the
- * return time moves by (1 - px)/x', and y' = 0 on the section, so
- * dP/dnu = py. */
-static int period_nu_slope(flow_params *p, bkf_stepper_kind kind, double tol, double y0, double *dT_dnu,
+/* The standard deviation of T due to rounding, from one shot at the fixed
+ * point y0 that carries the rounding's covariance (rounding_step) to the
+ * return.  There a perturbation (dx, dy) moves the return time by
+ * -dx/x' and the return by dy, hence the fixed point by dy/(1 - P') and
+ * T by dT/dy0 dy/(1 - P'). */
+static int period_rounding(flow_params *p, bkf_stepper_kind kind, double tol, double y0, double *sigma,
                            size_t *steps, bkf_error *err)
 {
     flow_params q = *p;
-    q.sens = 2;
+    q.sens = 0;
     integrator in = {0}, aux = {0};
     int rc = BKF_ENOMEM;
     if (integrator_init(&in, &q, kind, 0, tol) == BKF_OK && integrator_init(&aux, &q, kind, 1, tol) == BKF_OK) {
-        const double p0[2] = {1.0, 0.0};
         shot sh = {0};
-        rc = shoot(&in, &aux, &q, y0, p0, NULL, &sh, err);
+        in.rounding = 1;
+        rc = shoot(&in, &aux, &q, y0, NULL, NULL, &sh, err);
         if (rc == BKF_OK) {
-            double xdot = flow_xdot(&q, (const double[]){q.nu, sh.y_return});
-            *dT_dnu = (1.0 - sh.px) / xdot + sh.dT * sh.py / (1.0 - sh.dP);
+            double zx = -1.0 / sh.xdot, zy = sh.dT / (1.0 - fmin(sh.dP, 0.999999));
+            double var = zx * zx * sh.rounding[0] + 2.0 * zx * zy * sh.rounding[1] + zy * zy * sh.rounding[2];
+            *sigma = var > 0 ? sqrt(var) : 0.0;
         }
     }
     p->rhs_calls += q.rhs_calls;
@@ -810,14 +870,17 @@ static int period_nu_slope(flow_params *p, bkf_stepper_kind kind, double tol, do
 }
 
 /* The conditioning floor of the estimate inside the canard explosion.
- * There T is so ill-conditioned (d ln T/d nu ~ -3e5 at mu 3.65, nu 0.99)
- * that the integration's rounding, amplified on the repelling slow branch,
- * moves T more than two tolerances' answers differ: both carry the same
- * rounding-level bias (cold solve at mu 3.6505198, nu 0.99, tol 1e-10:
- * |T_a - T_b| 2.2e-12 T against a true 2.1e-11 T).  The floor is T's
- * response to a perturbation of nu by DBL_EPSILON (two ulps of nu near 1),
- * 6.7e-11 T there.  ln mu is left out: inside the canard d nu_c/d ln mu is
- * 1/(4 mu^2), so its term is under 2% of this one from mu 3.65 up.
+ * There T is so ill-conditioned that the integration's rounding, amplified
+ * on the repelling slow branch, moves T more than two tolerances' answers
+ * differ: both carry the same rounding-level bias (cold solve at mu
+ * 3.6505198, nu 0.99, tol 1e-10: |T_a - T_b| 2.2e-12 T against a true
+ * 2.1e-11 T).  The floor is the standard deviation of T over the rounding
+ * of every step, DBL_EPSILON relative in x and in y (period_rounding).  It replaced
+ * T's response to two ulps of nu, DBL_EPSILON |dT/dnu|, which counted the
+ * rounding once where it is injected at every step: against the Taylor
+ * reference that floor was optimistic by up to 6.7 at mu 11.214, nu 0.999,
+ * where the standard deviation is 5.7-6.5 times it; at mu 3.6505, nu 0.99
+ * it is 2.5 times it (docs/accuracy.md).
  * Only in the canard's neighbourhood 8 mu^2 (1 - |nu|) in [0.5, 2] (the
  * explosion is at ~1) does the extra shot run: outside it |d ln T/d nu|
  * stays below 1/(1 - |nu|) and the estimates were measured honest there
@@ -828,10 +891,7 @@ static int conditioning_floor(flow_params *p, bkf_stepper_kind kind, double tol,
     double x = 8.0 * p->mu * p->mu * (1.0 - fabs(p->nu));
     *floor = 0.0;
     if (p->mu < 1.0 || x < 0.5 || x > 2.0) return BKF_OK;
-    double dT_dnu = 0.0;
-    int rc = period_nu_slope(p, kind, tol, y0, &dT_dnu, steps, err);
-    if (rc == BKF_OK) *floor = DBL_EPSILON * fabs(dT_dnu);
-    return rc;
+    return period_rounding(p, kind, tol, y0, floor, steps, err);
 }
 
 /* The return map's slope for Newton at y0.  A planar flow's return map has
