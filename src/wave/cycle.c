@@ -809,6 +809,14 @@ static double capped_floor(double period_err, const integrator *looser, double p
     return looser->capped ? fmax(period_err, looser->tol * period) : period_err;
 }
 
+/* The canard explosion's neighbourhood (it is at 8 mu^2 (1 - |nu|) ~ 1),
+ * where T is ill-conditioned: see conditioning_floor. */
+static int canard_window(double mu, double nu)
+{
+    double x = 8.0 * mu * mu * (1.0 - fabs(nu));
+    return mu >= 1.0 && x >= 0.5 && x <= 2.0;
+}
+
 /* What |T_a - T_b| cannot see, measured against an independent long-double
  * Taylor integration (tests/wave/taylor_reference.h; docs/accuracy.md):
  *  - Where the two solves' errors happen to coincide, the difference is
@@ -831,7 +839,9 @@ static double period_error(const converged *a, const converged *b, const flow_pa
 {
     int implicit = kind != BKF_STEPPER_EXPLICIT;
     double size = fmin(1.0, 2.0 * sqrt(1.0 - p->nu * p->nu));
-    double per_tol = kind == BKF_STEPPER_EXTRAPOLATION ? BD_ERROR_PER_TOL : implicit ? 0.25 : 0.02;
+    double per_tol = kind == BKF_STEPPER_EXTRAPOLATION ? BD_ERROR_PER_TOL
+                     : implicit || canard_window(p->mu, p->nu) ? 0.25
+                                                               : 0.02;
     double tol_floor = per_tol * b->tol * b->period / size;
     double amplified = b->period + fmax(1.0, fabs(b->y0)) * fabs(b->dT) / (1.0 - fmin(b->return_slope, 0.999999));
     double round_floor = (implicit ? 30.0 : 8.0) * DBL_EPSILON * amplified;
@@ -888,9 +898,8 @@ static int period_rounding(flow_params *p, bkf_stepper_kind kind, double tol, do
 static int conditioning_floor(flow_params *p, bkf_stepper_kind kind, double tol, double y0, double *floor,
                               size_t *steps, bkf_error *err)
 {
-    double x = 8.0 * p->mu * p->mu * (1.0 - fabs(p->nu));
     *floor = 0.0;
-    if (p->mu < 1.0 || x < 0.5 || x > 2.0) return BKF_OK;
+    if (!canard_window(p->mu, p->nu)) return BKF_OK;
     return period_rounding(p, kind, tol, y0, floor, steps, err);
 }
 
@@ -1795,6 +1804,23 @@ static int branch_mirror_section(bkf_cycle *c, integrator *aux, double *y)
     return BKF_ENUMERIC;
 }
 
+/* The mirror's result (at -nu) as the row at nu: the extremes swap and
+ * change sign, the section point is y_real (branch_mirror_section), and the
+ * flow becomes the row's (the stored nodes stay the mirror's: the branch's
+ * cycle object only hands on its result). */
+static void branch_unmirror_result(bkf_cycle *c, double mu, double nu, double y_real)
+{
+    bkf_cycle_result *r = &c->result;
+    double xmax = r->xmax;
+    flow_set(&c->flow, mu, nu);
+    r->mu = mu;
+    r->nu = nu;
+    r->xmax = -r->xmin;
+    r->xmin = -xmax;
+    r->section_y = y_real;
+    r->section_slope = c->flow.a * (y_real - c->flow.b * lienard_F(nu));
+}
+
 /* The row at the accepted point u from the continuation's own last shot
  * there (the looser solve of the estimate, at a cold solve's looser pair
  * tolerance) and one shot TOL_RATIO tighter from its fixed point, each
@@ -1834,7 +1860,15 @@ static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu,
     int rc = BKF_ENOMEM;
     if (integrator_init(&in, p, kind, 0, tol_a) == BKF_OK && integrator_init(&aux, p, kind, 1, tol_b) == BKF_OK) {
         rc = BKF_OK;
-        if (b->last.in.tol != tol_a || !branch_one_shot(&b->last.in, &b->last.flow, &b->last.sh, y0, tol, &a)) {
+        /* Inside the canard the one-step correction of the corrector's
+         * shot is not trusted: T curves in y0 on a scale far below y0, and
+         * rows so corrected missed the Taylor reference by up to 6.2 times
+         * their estimate while within tol (mu 3.65, nu 0.98994: true 8.5e-13
+         * T, estimate 1.4e-13 T; mu 3.6506251, nu 0.99: 3.25), the pair's
+         * tighter solve, started from the corrected point, sharing the
+         * error.  Newton at this q is honest there (worst 0.8). */
+        if (b->last.in.tol != tol_a || (canard_window(mu, nu) && mu >= 2.0) ||
+            !branch_one_shot(&b->last.in, &b->last.flow, &b->last.sh, y0, tol, &a)) {
             /* a looser corrector shot, or one farther from the cycle than
              * one step corrects: Newton at this q, from that step */
             looser.capped = 0;
@@ -1867,16 +1901,10 @@ static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu,
             /* (the work counters are the branch's: branch_accept) */
             integrator none = {0};
             store_result(c, &a, &fine, period_err, fine.y0, kind, tol_b, &none, &none, &none, &none, 0);
-            bkf_cycle_result *r = &c->result;
+            if (mirrored) branch_unmirror_result(c, mu, nu, y_real);
             flow_set(p, mu, nu);
-            r->mu = mu;
-            r->nu = nu;
-            if (mirrored) {
-                r->xmax = -fine.xmin;
-                r->xmin = -fine.xmax;
-                r->section_y = y_real;
-                r->section_slope = p->a * (y_real - p->b * lienard_F(nu));
-            }
+            c->result.mu = mu;
+            c->result.nu = nu;
         }
     }
     b->work_rhs += p->rhs_calls;
@@ -1913,6 +1941,36 @@ static int branch_solve_counted(branch_ctx *b, double mu, double nu, const bkf_c
     return rc;
 }
 
+/* A row solved afresh.  Along mu, a row for nu < 0 near the canard is
+ * solved as its mirror image at -nu (same T) whose section is crossed
+ * mid-jump: at nu itself the section x = nu lies where the jump leaves the
+ * left knee, dT/dy0 is ~1e6 times larger (mu 3.6505, nu -0.99: 4.2e6
+ * against 4.2), and a warm-started relaxed solve there ended 26 times its
+ * estimate off the Taylor reference (mu 3.65053675, nu -0.99: true 3.9e-8
+ * T, estimate 1.5e-9 T). */
+static int branch_solve_row(branch_ctx *b, double mu, double nu, int mirrored, const bkf_cycle_options *o,
+                            bkf_error *err)
+{
+    int rc = branch_solve_counted(b, mu, mirrored ? -nu : nu, o, err);
+    if (rc != BKF_OK || !mirrored) return rc;
+    bkf_cycle *c = b->cycle;
+    integrator aux = {0};
+    double y_real = 0.0;
+    size_t rhs = c->flow.rhs_calls, jac = c->flow.jacobian_calls;
+    if (integrator_init(&aux, &c->flow, c->profile_stepper, 1, c->profile_tol) != BKF_OK) rc = BKF_ENOMEM;
+    else rc = branch_mirror_section(c, &aux, &y_real);
+    b->work_rhs += c->flow.rhs_calls - rhs;
+    b->work_jac += c->flow.jacobian_calls - jac;
+    b->work_steps += aux.steps;
+    integrator_free(&aux);
+    if (rc == BKF_ENOMEM) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (rc != BKF_OK)
+        return bkf_error_set(err, BKF_ENUMERIC, "cycle at mu = %.15g, nu = %.15g: the mirror's section not located",
+                             mu, nu);
+    branch_unmirror_result(c, mu, nu, y_real);
+    return BKF_OK;
+}
+
 /* A row's work counters: every shot since the last row (the continuation's
  * corrector and tangent, the amplitude walk's roots, the estimate or the
  * solve), so that they say what the row cost. */
@@ -1945,13 +2003,14 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     branch_params(b, q, &mu, &nu);
     if (q == b->q_from) *(b->along == BKF_CYCLE_ALONG_MU ? &mu : &nu) = b->from;
     if (q == b->q_to) *(b->along == BKF_CYCLE_ALONG_MU ? &mu : &nu) = b->to;
-    /* (u[0] is the mirror's slope for nu < 0: the solve then starts from the
-     * previous point's cycle) */
-    double warm = nu >= 0 || b->along == BKF_CYCLE_ALONG_NU ? exp(u[0]) : 0.0;
+    int mirrored = b->along == BKF_CYCLE_ALONG_MU && nu < 0 && branch_near_canard(mu, nu);
+    /* (u[0] is the mirror's slope for nu < 0: a solve at nu itself then
+     * starts from the previous point's cycle) */
+    double warm = nu >= 0 || b->along == BKF_CYCLE_ALONG_NU || mirrored ? exp(u[0]) : 0.0;
     int rc = branch_estimate(b, u, mu, nu, &solve_err);
     if (rc != BKF_OK && rc != BKF_ENOMEM) {
         b->cycle->warm_slope = warm;
-        rc = branch_solve_counted(b, mu, nu, &b->options, &solve_err);
+        rc = branch_solve_row(b, mu, nu, mirrored, &b->options, &solve_err);
     }
     /* A point whose T cannot be had to tol (inside the canard explosion T
      * moves by dT/dmu ~ 1e5 at mu 3.65, nu 0.99, and forward shooting
@@ -1963,7 +2022,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     while (bkf_status_is_numerical(rc) && relaxed.tol < BRANCH_RELAX_MAX) {
         relaxed.tol = fmin(10.0 * relaxed.tol, BRANCH_RELAX_MAX);
         b->cycle->warm_slope = warm;
-        rc = branch_solve_counted(b, mu, nu, &relaxed, &solve_err);
+        rc = branch_solve_row(b, mu, nu, mirrored, &relaxed, &solve_err);
         if (rc == BKF_OK) b->cycle->result.model = "shooting-relaxed";
     }
     if (refused && rc != BKF_OK && rc != BKF_ENOMEM) {

@@ -182,14 +182,20 @@ static void check_canard_branch(bkf_cycle_param along, double from, double to, d
     double last = along == BKF_CYCLE_ALONG_MU ? got.mu[got.n - 1] : got.nu[got.n - 1];
     CHECK_CLOSE(last, to, 1e-12, 1e-12);
     CHECK_MSG(got.refused_outside == 0, "%zu refused rows outside the canard", got.refused_outside);
-    size_t relaxed = 0, stride = got.n / 8 + 1;
+    size_t relaxed = 0, stride = got.n / 8 + 1, checked = 0;
+    double worst = 0.0;
     for (size_t i = 0; i < got.n; i++) {
         relaxed += (size_t)got.relaxed[i];
         /* an unrelaxed row meets tol; a relaxed one says by how much it misses */
         if (!got.relaxed[i]) CHECK(got.err[i] <= o.tol * got.period[i]);
-        /* every stride-th row and the first relaxed one (the reference is
-         * slow inside the canard) */
-        if (i % stride && !(got.relaxed[i] && relaxed == 1)) continue;
+        /* every relaxed row and every row inside the canard (where the
+         * estimates are hardest) up to mu 20, where the Taylor reference is
+         * fast (a relaxed row at mu 3.65053675, nu -0.99 was 26 times its
+         * estimate off while the first relaxed row of its branch was
+         * honest); elsewhere every stride-th row */
+        int hard = (got.relaxed[i] || in_canard(got.mu[i], got.nu[i])) && got.mu[i] <= 20.0;
+        if (i % stride && !hard) continue;
+        checked++;
         if (got.mu[i] <= 20.0) {
             /* the reference's secant needs a start near the cycle: a loose
              * cold solve's, or where that is refused (inside the canard) the
@@ -203,12 +209,16 @@ static void check_canard_branch(bkf_cycle_param along, double from, double to, d
                                ? guess.section_slope
                                : got.slope[i];
             double unc, ref = taylor_period(got.mu[i], got.nu[i], slope, &unc);
-            /* a reference that did not settle checks nothing */
-            CHECK_MSG(unc <= 1e-12 * ref, "mu %.17g nu %.17g: reference uncertainty %.2g", got.mu[i],
+            /* a reference that did not settle checks nothing (deep in the
+             * canard, mu 11.2141 at nu 0.999, long double's rounding on the
+             * repelling branch leaves it 2.5e-11 uncertain: still a tenth of
+             * the relaxed rows' estimates there) */
+            CHECK_MSG(unc <= fmax(1e-12 * ref, 0.1 * got.err[i]), "mu %.17g nu %.17g: reference uncertainty %.2g", got.mu[i],
                       got.nu[i], unc);
             CHECK_MSG(fabs(got.period[i] - ref) <= 3.0 * got.err[i] + unc,
                       "mu %.17g nu %.17g: T %.17g ref %.17g (unc %.2g) err %.2g", got.mu[i],
                       got.nu[i], got.period[i], ref, unc, got.err[i]);
+            worst = fmax(worst, fabs(got.period[i] - ref) / got.err[i]);
         } else {
             bkf_cycle_result cold;
             CHECK_STATUS(bkf_cycle_period(got.mu[i], got.nu[i], &o, &cold, &e), BKF_OK);
@@ -217,7 +227,8 @@ static void check_canard_branch(bkf_cycle_param along, double from, double to, d
                       got.period[i], cold.period, cold.period_err, got.err[i]);
         }
     }
-    bkf_test_note("%zu rows, %zu relaxed, %zu refused", got.n, relaxed, got.refused);
+    bkf_test_note("%zu rows, %zu relaxed, %zu refused, %zu checked, worst true/estimated %.2f (Taylor)", got.n,
+                  relaxed, got.refused, checked, worst);
 }
 
 TEST(cycle_branch_mu_through_the_canard_at_nu_0_99)
