@@ -42,6 +42,16 @@ void bkf_colloc_free(bkf_colloc *colloc);
 int bkf_colloc_guess_nodes(bkf_colloc *colloc, double mu, double nu, const double *z, const double *x,
                            const double *y, size_t count, double T, bkf_error *err);
 
+/* Initial guess by one turn of Gauss steps from (x0, y0) over the time T
+ * (a loose shot's section point and period), each step accepted where it
+ * and its two halves agree within local_tol (relative to the cycle's size);
+ * the mesh is the halves.  The solve's first pair is then that mesh and its
+ * coarsening (merged halves), and a finer mesh comes from another turn at
+ * a tighter local tolerance: no equidistribution, which the cold start does
+ * not survive at large mu. */
+int bkf_colloc_guess_turn(bkf_colloc *colloc, double mu, double nu, double x0, double y0, double T,
+                          double local_tol, bkf_error *err);
+
 /* Initial guess for small mu: the harmonic cycle of radius 2 sqrt(1 - nu^2),
  * T = 2 pi, on `intervals` uniform intervals. */
 int bkf_colloc_guess_circle(bkf_colloc *colloc, double mu, double nu, size_t intervals, bkf_error *err);

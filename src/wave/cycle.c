@@ -1016,18 +1016,23 @@ static double pair_tol(double tol, double nu, bkf_stepper_kind kind)
 
 /* ------------------------------------------------------ collocation */
 
-/* Up to this mu the cold guess is the harmonic circle, above it one loose
- * shot (the cycle attracts like exp(L), L = -7 at mu 1: one turn lands it). */
+/* Up to this mu the cold guess is the harmonic circle, above it two turns
+ * of Gauss steps (bkf_colloc_guess_turn; the cycle attracts like exp(L),
+ * L = -7 at mu 1: one turn lands it). */
 #define COLLOC_CIRCLE_MU 1.0
-#define COLLOC_GUESS_TOL 1e-5
 /* A warm start reuses the last solution within this distance in (ln mu, nu). */
 #define COLLOC_WARM_LN_MU 1.0
 #define COLLOC_WARM_NU 0.2
-/* Above this mu the guess from one loose shot is not yet turned into a mesh
- * the collocation Newton converges on (measured: no convergence from mu 200
- * at nu -0.96 and 0.99, from 300-500 at nu 0): refused at once, shooting
- * answers (docs/numerics.md, "The collocation engine"). */
-#define COLLOC_MU_MAX 150.0
+
+/* The local tolerance of the guess's turn for a solve at tol: the
+ * collocation error in T is far below the turn's local one (measured at
+ * tol 1e-10, mu 10-1e4: factor 30-300 gave meshes whose pair met tol first
+ * time with the least work; 1 gave meshes twice as fine, 3000 needed a
+ * second turn at mu 100-1e3).  At most 1e-8: from 1e-4 the pair's estimate
+ * failed at mu 10, tol 1e-6 (outside the asymptotic range), and from 1e-7 it
+ * was optimistic by 26 at mu 1e4, nu 0.99 (true 6e-11, well within tol). */
+#define COLLOC_TURN_TOL 100.0
+static double colloc_turn_tol(double tol) { return fmin(COLLOC_TURN_TOL * tol, 1e-8); }
 
 /* The extremes of x from the collocation nodes: each sign change of x'
  * between nodes is located by the shooting engine's event Newton,
@@ -1077,8 +1082,6 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
     double canard = 8.0 * mu * mu * (1.0 - fabs(nu));
     if (mu >= 1.0 && canard > 0.3 && canard < 3.0)
         return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: canard region", mu, nu);
-    if (mu > COLLOC_MU_MAX)
-        return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g: above %g", mu, COLLOC_MU_MAX);
     if (!c->colloc && !(c->colloc = bkf_colloc_alloc())) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     size_t steps = 0, shots = 0;
     int rc = BKF_OK;
@@ -1094,29 +1097,11 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
         if (mu <= COLLOC_CIRCLE_MU) {
             rc = bkf_colloc_guess_circle(c->colloc, mu, nu, 16, err);
         } else {
-            integrator in = {0}, aux = {0};
-            bkf_stepper_kind kind = shooting_stepper(mu, 1e-10);
-            double tol = COLLOC_GUESS_TOL * fmin(1.0, sqrt(1.0 - nu * nu));
-            shot sh = {0};
-            rc = integrator_init(&in, p, kind, 0, tol) == BKF_OK && integrator_init(&aux, p, kind, 1, tol) == BKF_OK
-                     ? shoot(&in, &aux, p, section_y_of_slope(p, guess_slope(mu, nu)), NULL, c, &sh, err)
-                     : bkf_error_set(err, BKF_ENOMEM, "out of memory");
-            steps += in.steps + aux.steps;
-            shots++;
-            integrator_free(&in);
-            integrator_free(&aux);
-            if (rc == BKF_OK) {
-                size_t n = c->node_count;
-                double *buf = malloc(3 * n * sizeof *buf);
-                if (!buf) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-                for (size_t j = 0; j < n; j++) {
-                    buf[j] = c->nodes[j].t;
-                    buf[n + j] = c->nodes[j].s[0];
-                    buf[2 * n + j] = c->nodes[j].s[1];
-                }
-                rc = bkf_colloc_guess_nodes(c->colloc, mu, nu, buf, buf + n, buf + 2 * n, n, sh.period, err);
-                free(buf);
-            }
+            /* a turn from the section point of the guessed slope lands on
+             * the cycle, another is the mesh (colloc.h) */
+            double T_hint = fmax(2.0 * M_PI, bkf_asym_period_leading(mu, nu));
+            rc = bkf_colloc_guess_turn(c->colloc, mu, nu, nu, section_y_of_slope(p, guess_slope(mu, nu)), T_hint,
+                                       colloc_turn_tol(opt->tol), err);
         }
         if (rc == BKF_OK) rc = bkf_colloc_solve(c->colloc, opt->tol, &r, err);
     }
