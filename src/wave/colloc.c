@@ -41,6 +41,18 @@
  * asymptotic range. */
 #define EST_DIVISOR 16.0
 #define ACCEPT_MARGIN 3.0
+/* The same for the pair of a turn's mesh and its coarsening: that pair is
+ * not in the asymptotic range where the finer is far below tol (mu 20.5,
+ * nu -0.96, tol 1e-10: |T_N - T_N/2| was 4 times T_N's error of 1.8e-12),
+ * and the turn's mesh is set for errors near 1e-2 tol, so a divisor of 2
+ * costs no mesh there. */
+#define PAIRED_DIVISOR 2.0
+/* and never below this fraction of the turn's local tolerance (relative):
+ * a coarsening can agree with the finer by chance (mu 28, nu 0.5, tol
+ * 1e-10: to 4e-14 against a true 7.6e-13); the true error was at most
+ * 2e-4 of the local tolerance over tests/wave/test_colloc.c,
+ * test_cycle_engine.c and test_extremes.c. */
+#define TURN_FLOOR 3e-3
 
 typedef struct {
     double c[M], w[M], A[M][M], A2[M][M], Ac[M], p[M];
@@ -892,6 +904,16 @@ int bkf_colloc_fixed(bkf_colloc *c, size_t intervals, double *period, bkf_error 
     return BKF_OK;
 }
 
+/* The rounding floor of T's estimate: mesh values rounded at eps of the
+ * state (|x| up to 2) are relative perturbations eps / size of a cycle of
+ * size 2 sqrt(1 - nu^2) (mu 10, nu -0.9999, tol 1e-12: true 1.5e-13
+ * against a floor of 3e-14 without the 1 / size). */
+static double round_floor(const bkf_colloc *c, double T)
+{
+    double size = fmin(1.0, 2.0 * sqrt(fmax(1.0 - c->nu * c->nu, 0.0)));
+    return 8.0 * DBL_EPSILON * T * sqrt((double)c->n) / size;
+}
+
 /* Keep (which = 0) or restore (1) the current solution. */
 static int keep_solution(bkf_colloc *c, int which, size_t *n, double *T, double *trace)
 {
@@ -944,7 +966,7 @@ static void fill_result(bkf_colloc *c, double est, double L1, double L2, bkf_col
     out->period = c->T;
     out->period_err = est;
     out->log_multiplier = L1;
-    out->log_multiplier_err = fabs(L1 - L2) / EST_DIVISOR + 8.0 * DBL_EPSILON * sqrt((double)c->n) * fabs(L1);
+    out->log_multiplier_err = fabs(L1 - L2) / PAIRED_DIVISOR + 8.0 * DBL_EPSILON * sqrt((double)c->n) * fabs(L1);
     out->return_map_slope = c->trace - 1.0;
     out->section_y = c->y[0];
     out->intervals = c->n;
@@ -980,7 +1002,8 @@ static int solve_paired(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_e
          * at mu 1e4, nu 0.99, tol 1e-6 the pair agreed to 1e-12 against a
          * true 6e-11 */
         double newton_left = 1e-4 * tol * T1;
-        double est = fmax(diff / EST_DIVISOR, 8.0 * DBL_EPSILON * T1 * sqrt((double)c->n)) + newton_left;
+        double est = fmax(fmax(diff / PAIRED_DIVISOR, round_floor(c, T1)), TURN_FLOOR * c->local_tol * T1) +
+                     newton_left;
         if (ACCEPT_MARGIN * est <= tol * T1) {
             fill_result(c, est, L1, L2, out);
             c->pair_n = c->n / 2;
@@ -989,7 +1012,7 @@ static int solve_paired(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_e
         }
         /* the error falls like the local tolerance^(2m/(2m+1)): the local
          * tolerance whose pair meets tol, with a margin of 2 */
-        double need = diff * 2.0 * ACCEPT_MARGIN / (EST_DIVISOR * tol * T1);
+        double need = diff * 2.0 * ACCEPT_MARGIN / (PAIRED_DIVISOR * tol * T1);
         double local = c->local_tol * pow(fmax(need, 1.5), -(2.0 * M + 1.0) / (2.0 * M));
         rc = turn_mesh(c, c->x[0], c->y[0], c->T, local, 1, err);
         if (rc != BKF_OK) return rc;
@@ -1023,8 +1046,7 @@ int bkf_colloc_solve(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_erro
         if (rc != BKF_OK) return rc;
         double T2 = c->T, L2 = log_multiplier(c);
         double diff = fabs(T1 - T2);
-        double round_floor = 8.0 * DBL_EPSILON * T2 * sqrt((double)c->n);
-        double est = fmax(diff / EST_DIVISOR, round_floor);
+        double est = fmax(diff / EST_DIVISOR, round_floor(c, T2));
         if (ACCEPT_MARGIN * est <= tol * T2) {
             out->period = T2;
             out->period_err = est;

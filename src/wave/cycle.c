@@ -433,8 +433,8 @@ static bkf_stepper_kind shooting_stepper(double mu, double tol)
     return BKF_STEPPER_EXPLICIT;
 }
 
-/* The automatic choice stays shooting: collocation (BKF_STEPPER_COLLOCATION)
- * is selectable; docs/benchmarks.md (2026-11-25) has where it is faster. */
+/* The automatic shooting stepper (a solve's automatic choice is
+ * solve_stepper, collocation where it is faster). */
 static bkf_stepper_kind auto_stepper(double mu, double tol) { return shooting_stepper(mu, tol); }
 
 const char *bkf_cycle_stepper_name(bkf_stepper_kind kind)
@@ -1140,6 +1140,29 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
     return rc;
 }
 
+/* The automatic choice of a solve: collocation where it is faster than
+ * shooting, measured by instructions per cold solve at tol 1e-10
+ * (docs/benchmarks.md, 2026-11-25 colloc2): 0.5-0.85 of shooting's at
+ * mu 10-300 (1.3 at mu 30, nu 0.99), ties at 1e3, 1.2-2 times at 1e4 and
+ * 1.8 times below mu 3.  At looser tolerances its mesh costs what it does
+ * at 1e-10 (COLLOC_TURN_TOL) and shooting is cheaper; at 1e-12 it is 0.4-0.7
+ * of shooting's.  Where it refuses (canards, the rounding floor) the solve
+ * shoots. */
+#define COLLOC_AUTO_MU_MIN 10.0
+#define COLLOC_AUTO_MU_MAX 300.0
+#define COLLOC_AUTO_TOL_MAX 1e-10
+/* and only in the relaxation regime, mu^2 (1 - |nu|) at least this: near
+ * the Hopf point and the canard (gamma 100, nu 0.9999 in the extremes
+ * matrix) the Floquet products were not checked with it */
+#define COLLOC_AUTO_RELAXATION 2.0
+static bkf_stepper_kind solve_stepper(double mu, double nu, double tol)
+{
+    if (mu >= COLLOC_AUTO_MU_MIN && mu <= COLLOC_AUTO_MU_MAX && tol <= COLLOC_AUTO_TOL_MAX * (1.0 + 1e-9) &&
+        mu * mu * (1.0 - fabs(nu)) >= COLLOC_AUTO_RELAXATION)
+        return BKF_STEPPER_COLLOCATION;
+    return auto_stepper(mu, tol);
+}
+
 static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
                             bkf_error *err)
 {
@@ -1154,7 +1177,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
     flow_params *p = &c->flow;
     p->rhs_calls = p->jacobian_calls = 0;
     bkf_stepper_kind kind = opt.stepper;
-    if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu, opt.tol);
+    if (kind == BKF_STEPPER_AUTO) kind = solve_stepper(mu, nu, opt.tol);
     if (kind == BKF_STEPPER_COLLOCATION) {
         /* c->result is overwritten only on success */
         bkf_cycle_result kept = c->result;
