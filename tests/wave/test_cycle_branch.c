@@ -97,7 +97,7 @@ static void check_branch_work(bkf_cycle_param along, double from, double to, dou
     CHECK(got.n >= 5 && got.n < 256);
     size_t cold_rhs = 0;
     /* the unit is a cold shooting solve's right-hand sides (collocation,
-     * the automatic choice at tol 1e-10 from mu 10 to 300, calls none) */
+     * the automatic choice at tol 1e-10 from mu 10, calls none) */
     bkf_cycle_options shoot = o;
     for (size_t i = 0; i < got.n && i < 256; i++) {
         bkf_cycle_result cold;
