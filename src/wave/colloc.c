@@ -41,18 +41,19 @@
  * asymptotic range. */
 #define EST_DIVISOR 16.0
 #define ACCEPT_MARGIN 3.0
-/* The same for the pair of a turn's mesh and its coarsening: that pair is
- * not in the asymptotic range where the finer is far below tol (mu 20.5,
- * nu -0.96, tol 1e-10: |T_N - T_N/2| was 4 times T_N's error of 1.8e-12),
- * and the turn's mesh is set for errors near 1e-2 tol, so a divisor of 2
- * costs no mesh there. */
-#define PAIRED_DIVISOR 2.0
+/* The same for the pair of a turn's mesh and its coarsening (merged
+ * pairs), with TURN_FLOOR below: that pair is at the edge of the asymptotic
+ * range (mu 20.5, nu -0.96, tol 1e-10: |T_N - T_N/2| was 4 times T_N's
+ * error of 1.8e-12; mu 28, nu 0.5: it agreed by chance to 4e-14 against a
+ * true 7.6e-13), which the floor covers; a divisor of 2 instead cost a
+ * second turn at mu 30-100 (1.7 times the instructions). */
+#define PAIRED_DIVISOR 16.0
 /* and never below this fraction of the turn's local tolerance (relative):
- * a coarsening can agree with the finer by chance (mu 28, nu 0.5, tol
- * 1e-10: to 4e-14 against a true 7.6e-13); the true error was at most
- * 2e-4 of the local tolerance over tests/wave/test_colloc.c,
- * test_cycle_engine.c and test_extremes.c. */
-#define TURN_FLOOR 3e-3
+ * the true error was at most 2e-4 of it over tests/wave/test_colloc.c,
+ * test_cycle_engine.c and test_extremes.c (3e-3 made the cycle's estimate
+ * at tol 1e-12 too coarse for Floquet's lambda at gamma 10, which
+ * colloc_turn_tol now also answers). */
+#define TURN_FLOOR 1e-3
 
 typedef struct {
     double c[M], w[M], A[M][M], A2[M][M], Ac[M], p[M];

@@ -1024,15 +1024,17 @@ static double pair_tol(double tol, double nu, bkf_stepper_kind kind)
 #define COLLOC_WARM_LN_MU 1.0
 #define COLLOC_WARM_NU 0.2
 
-/* The local tolerance of the guess's turn for a solve at tol: the
- * collocation error in T is far below the turn's local one (measured at
- * tol 1e-10, mu 10-1e4: factor 30-300 gave meshes whose pair met tol first
- * time with the least work; 1 gave meshes twice as fine, 3000 needed a
- * second turn at mu 100-1e3).  At most 1e-8: from 1e-4 the pair's estimate
- * failed at mu 10, tol 1e-6 (outside the asymptotic range), and from 1e-7 it
- * was optimistic by 26 at mu 1e4, nu 0.99 (true 6e-11, well within tol). */
-#define COLLOC_TURN_TOL 100.0
-static double colloc_turn_tol(double tol) { return fmin(COLLOC_TURN_TOL * tol, 1e-8); }
+/* The local tolerance of the guess's turn for a solve at tol: 1e-8 from
+ * tol 1e-10 up, falling like tol^1.5 below.  The collocation error in T is
+ * far below the turn's local one (at tol 1e-10, mu 10-1e4, local 1e-8 gave
+ * meshes whose pair met tol first time with the least work; 1e-10 meshes
+ * 1.3-1.5 times as fine); from 1e-4 the pair's estimate failed at mu 10,
+ * tol 1e-6 (outside the asymptotic range), from 1e-7 it was optimistic by
+ * 26 at mu 1e4, nu 0.99 (true 6e-11).  Below 1e-10 it falls faster than
+ * tol so that the estimate's floor (colloc.c, TURN_FLOOR: 1e-3 of it)
+ * stays near 0.01 tol at 1e-12, the cycle tolerance Floquet asks for its
+ * own 1e-10 (at 0.1 tol its lambda estimates refused at gamma 10). */
+static double colloc_turn_tol(double tol) { return 1e-8 * fmin(1.0, pow(tol / 1e-10, 1.5)); }
 
 /* The extremes of x from the collocation nodes: each sign change of x'
  * between nodes is located by the shooting engine's event Newton,
@@ -1145,7 +1147,7 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
  * (docs/benchmarks.md, 2026-11-25 colloc2; shared machine): 0.5-1 of
  * shooting's from mu 10 to 1e4 (0.45 at 1e3), 1.4 times at mu 1, nu 0.
  * At tol 1e-8 it ties from mu 1e3 (its mesh costs about what it does at
- * 1e-10, COLLOC_TURN_TOL); looser tolerances stay with shooting, whose
+ * 1e-10, colloc_turn_tol); looser tolerances stay with shooting, whose
  * switch the tests hold.  Where it refuses (canards, the rounding floor)
  * the solve shoots. */
 #define COLLOC_AUTO_MU_MIN 10.0
