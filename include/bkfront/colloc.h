@@ -6,7 +6,8 @@
  * (the section, x' > 0).  BKF_COLLOC_M points per mesh interval; Newton with
  * the stage values condensed per interval, then the reduced cyclic system for
  * the mesh values and T.  The mesh equidistributes the (m+1)-th derivative
- * (de Boor); the error estimate comes from a mesh and its bisection.
+ * (de Boor); the error estimate comes from a mesh and its bisection (from
+ * a turn's mesh, bkf_colloc_guess_turn: the mesh and its coarsening).
  * docs/numerics.md, "The collocation engine".  bkf_cycle_solve uses it
  * (stepper "colloc"); the object here is the engine itself, for the cycle
  * module and for tests of its order. */
@@ -61,7 +62,8 @@ int bkf_colloc_guess_circle(bkf_colloc *colloc, double mu, double nu, size_t int
 int bkf_colloc_warm(bkf_colloc *colloc, double mu, double nu);
 
 /* Solve from the guess to relative accuracy tol of T (estimate from a mesh
- * and its bisection, accepted when 3 times it is within tol).  Refuses
+ * and its bisection, or a turn's mesh and its coarsening, accepted when 3
+ * times it is within tol).  Refuses
  * (BKF_ENUMERIC) where Newton does not converge or the cyclic system is
  * ill-conditioned (the product of interval maps grows past what its
  * rounding allows: canards, where the orbit follows the repelling slow
