@@ -639,8 +639,10 @@ static int newton(bkf_colloc *c, double goal, bkf_error *err)
         if (lambda == 1.0 && dmax <= 1e3 * DBL_EPSILON && dmax > 0.25 * previous) return BKF_OK;
         /* or at the rounding of an ill-conditioned cyclic solve (mu 1e4,
          * nu 0.99: the product reaches 1e8 and the stages' corrections
-         * bounce at 1e-7 while T's are at 2e-15): T no longer moves */
-        if (lambda == 1.0 && dmax > 0.25 * previous && fabs(dT) <= 1e-3 * goal * goal * c->T) return BKF_OK;
+         * bounce at 1e-7 while T's are at 2e-15, for 13 iterations): T
+         * moves by less than what a converged Newton leaves (the estimate
+         * adds that, 1e-4 tol) */
+        if (lambda == 1.0 && dmax > 0.25 * previous && fabs(dT) <= goal * goal * c->T) return BKF_OK;
         previous = lambda == 1.0 ? dmax : INFINITY;
     }
     return bkf_error_set(err, BKF_ENUMERIC,
