@@ -1144,7 +1144,7 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
 
 /* The automatic choice of a solve: collocation where it is faster than
  * shooting, measured by wall time per cold solve at tol 1e-10
- * (docs/benchmarks.md, 2026-11-25 colloc2; shared machine): 0.26-0.82 of
+ * (docs/benchmarks.md, 2026-11-25 colloc2; shared machine): 0.26-0.78 of
  * shooting's from mu 10 to 1e4, 1.4 times shooting's at mu 1, nu 0.
  * At tol 1e-8 it ties from mu 1e3 (its mesh costs about what it does at
  * 1e-10, colloc_turn_tol); looser tolerances stay with shooting, whose
