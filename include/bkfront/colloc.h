@@ -6,7 +6,8 @@
  * (the section, x' > 0).  BKF_COLLOC_M points per mesh interval; Newton with
  * the stage values condensed per interval, then the reduced cyclic system for
  * the mesh values and T.  The mesh equidistributes the (m+1)-th derivative
- * (de Boor); the error estimate comes from a mesh and its bisection.
+ * (de Boor); the error estimate comes from a mesh and its bisection (from
+ * a turn's mesh, bkf_colloc_guess_turn: the mesh and its coarsening).
  * docs/numerics.md, "The collocation engine".  bkf_cycle_solve uses it
  * (stepper "colloc"); the object here is the engine itself, for the cycle
  * module and for tests of its order. */
@@ -42,6 +43,16 @@ void bkf_colloc_free(bkf_colloc *colloc);
 int bkf_colloc_guess_nodes(bkf_colloc *colloc, double mu, double nu, const double *z, const double *x,
                            const double *y, size_t count, double T, bkf_error *err);
 
+/* Initial guess by one turn of Gauss steps from (x0, y0) over the time T
+ * (a loose shot's section point and period), each step accepted where it
+ * and its two halves agree within local_tol (relative to the cycle's size);
+ * the mesh is the halves.  The solve's first pair is then that mesh and its
+ * coarsening (merged halves), and a finer mesh comes from another turn at
+ * a tighter local tolerance: no equidistribution, which the cold start does
+ * not survive at large mu. */
+int bkf_colloc_guess_turn(bkf_colloc *colloc, double mu, double nu, double x0, double y0, double T,
+                          double local_tol, bkf_error *err);
+
 /* Initial guess for small mu: the harmonic cycle of radius 2 sqrt(1 - nu^2),
  * T = 2 pi, on `intervals` uniform intervals. */
 int bkf_colloc_guess_circle(bkf_colloc *colloc, double mu, double nu, size_t intervals, bkf_error *err);
@@ -51,7 +62,8 @@ int bkf_colloc_guess_circle(bkf_colloc *colloc, double mu, double nu, size_t int
 int bkf_colloc_warm(bkf_colloc *colloc, double mu, double nu);
 
 /* Solve from the guess to relative accuracy tol of T (estimate from a mesh
- * and its bisection, accepted when 3 times it is within tol).  Refuses
+ * and its bisection, or a turn's mesh and its coarsening, accepted when 3
+ * times it is within tol).  Refuses
  * (BKF_ENUMERIC) where Newton does not converge or the cyclic system is
  * ill-conditioned (the product of interval maps grows past what its
  * rounding allows: canards, where the orbit follows the repelling slow

@@ -79,10 +79,11 @@ const bkf_option bkf_period_options[] = {
              "Jacobian (implicit; the former stiff default), bd2x2:\n"
              "the same extrapolation method with closed-form 2x2 solves\n"
              "(extrapolation), colloc: Gauss-Legendre collocation on an\n"
-             "adapted mesh (collocation; up to mu 150 outside canards,\n"
-             "elsewhere and where it refuses the solve shoots as auto),\n"
-             "or auto: bd2x2 above mu 30 (above 20 at tol 1e-12..1e-8),\n"
-             "else rk8pd"},
+             "adapted mesh (collocation; outside canards: there and\n"
+             "where it refuses the solve shoots as auto),\n"
+             "or auto: colloc from mu 10 at tol <= 1e-10 where\n"
+             "mu^2 (1 - |nu|) >= 2, else bd2x2 above mu 30 (above 20\n"
+             "at tol 1e-12..1e-8), else rk8pd"},
 };
 const size_t bkf_period_noptions = sizeof bkf_period_options / sizeof bkf_period_options[0];
 

@@ -41,6 +41,19 @@
  * asymptotic range. */
 #define EST_DIVISOR 16.0
 #define ACCEPT_MARGIN 3.0
+/* The same for the pair of a turn's mesh and its coarsening (merged
+ * pairs), with TURN_FLOOR below: that pair is at the edge of the asymptotic
+ * range (mu 20.5, nu -0.96, tol 1e-10: |T_N - T_N/2| was 4 times T_N's
+ * error of 1.8e-12; mu 28, nu 0.5: it agreed by chance to 4e-14 against a
+ * true 7.6e-13), which the floor covers; a divisor of 2 instead cost a
+ * second turn at mu 30-100 (1.7 times the instructions). */
+#define PAIRED_DIVISOR 16.0
+/* and never below this fraction of the turn's local tolerance (relative):
+ * the true error was at most 2e-4 of it over tests/wave/test_colloc.c,
+ * test_cycle_engine.c and test_extremes.c (3e-3 made the cycle's estimate
+ * at tol 1e-12 too coarse for Floquet's lambda at gamma 10, which
+ * colloc_turn_tol now also answers). */
+#define TURN_FLOOR 1e-3
 
 typedef struct {
     double c[M], w[M], A[M][M], A2[M][M], Ac[M], p[M];
@@ -66,6 +79,10 @@ struct bkf_colloc {
     size_t iterations, solves;
     double trace, log_mult;
     size_t pair_n; /* the coarser mesh of the last accepted pair */
+    int paired;    /* the mesh is pairs of half steps (bkf_colloc_guess_turn) */
+    double local_tol; /* of those steps */
+    double *keep;  /* the finer solution while its coarsening is solved */
+    size_t keep_cap;
 };
 
 /* ------------------------------------------------------------ tables */
@@ -151,6 +168,7 @@ void bkf_colloc_free(bkf_colloc *c)
     free(c->xs);
     free(c->ys);
     free(c->Xs);
+    free(c->keep);
     free(c);
 }
 
@@ -619,6 +637,12 @@ static int newton(bkf_colloc *c, double goal, bkf_error *err)
         if (lambda == 1.0 && dmax <= goal) return BKF_OK;
         /* stalled at rounding: no longer shrinking quadratically */
         if (lambda == 1.0 && dmax <= 1e3 * DBL_EPSILON && dmax > 0.25 * previous) return BKF_OK;
+        /* or at the rounding of an ill-conditioned cyclic solve (mu 1e4,
+         * nu 0.99: the product reaches 1e8 and the stages' corrections
+         * bounce at 1e-7 while T's are at 2e-15, for 13 iterations): T
+         * moves by less than what a converged Newton leaves (the estimate
+         * adds that, 1e-4 tol) */
+        if (lambda == 1.0 && dmax > 0.25 * previous && fabs(dT) <= goal * goal * c->T) return BKF_OK;
         previous = lambda == 1.0 ? dmax : INFINITY;
     }
     return bkf_error_set(err, BKF_ENUMERIC,
@@ -684,7 +708,141 @@ int bkf_colloc_guess_nodes(bkf_colloc *c, double mu, double nu, const double *z,
     c->y[n] = c->y[0];
     c->have_guess = 1;
     c->have_solution = 0;
+    c->paired = 0;
     return BKF_OK;
+}
+
+/* Step-doubled Gauss steps: a step of length tau against two of tau/2,
+ * accepted where their end values agree within the local tolerance; the
+ * error of the end values (superconvergent, order 2m) is of the step's
+ * tau^(2m+1), so the next step is scaled by its 1/(2m+1)-th root. */
+#define TURN_GROW_MAX 4.0
+#define TURN_SHRINK 0.25
+
+/* Stage guess of a step from (x0, y0): the Euler line. */
+static void stage_guess(const bkf_colloc *c, double x0, double y0, double tau, double *X)
+{
+    double xd = (c->a * y0 - c->mu * lienard_F(x0)) * tau;
+    if (fabs(xd) > 4.0) xd = copysign(4.0, xd);
+    for (int l = 0; l < M; l++) X[l] = x0 + c->g.c[l] * xd;
+}
+
+/* Two Gauss steps of tau/2 from (xs, ys): stages into Xa, Xb, ends into
+ * (xa, ya) (the middle) and (xb, yb). */
+static int half_steps(const bkf_colloc *c, double xs, double ys, double tau, double *Xa, double *Xb, double *xa,
+                      double *ya, double *xb, double *yb)
+{
+    stage_guess(c, xs, ys, 0.5 * tau, Xa);
+    if (!gauss_step(c, xs, ys, 0.5 * tau, Xa, xa, ya)) return 0;
+    stage_guess(c, *xa, *ya, 0.5 * tau, Xb);
+    return gauss_step(c, *xa, *ya, 0.5 * tau, Xb, xb, yb);
+}
+
+/* One turn from (x0, y0) on the section x = nu (x' > 0) back to it: the
+ * turn ends where it crosses the section again after half the period hint
+ * T, so the mesh closes on the section (ending at a fixed T, the closure
+ * fell in the jump, where the shot's 1e-5 in T is a shift of O(mu 1e-5 T)
+ * in x and Newton, damped, took 8-30 iterations to move it). */
+static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local_tol, int record, bkf_error *err)
+{
+    double size = fmin(1.0, 2.0 * sqrt(fmax(1.0 - c->nu * c->nu, 0.0)));
+    double tol = local_tol * size;
+    /* the first step: a unit of the fast time 1/mu, at most T/64 */
+    double t = 0.0, h = fmin(T / 64.0, 1.0 / fmax(c->mu, 1.0)), xs = x0, ys = y0;
+    size_t n = 0;
+    int closed = 0, went_down = 0;
+    while (!closed) {
+        double tau = h;
+        double Xf[M], Xa[M], Xb[M], xf, yf, xa, ya, xb, yb;
+        stage_guess(c, xs, ys, tau, Xf);
+        int ok = half_steps(c, xs, ys, tau, Xa, Xb, &xa, &ya, &xb, &yb) && gauss_step(c, xs, ys, tau, Xf, &xf, &yf);
+        double e = ok ? fmax(fabs(xf - xb), fabs(yf - yb)) : INFINITY;
+        if (!(e <= tol)) {
+            h = tau * (ok ? fmax(TURN_SHRINK, 0.9 * pow(tol / e, 1.0 / (2 * M + 1))) : TURN_SHRINK);
+            if (!(h > 1e-14 * T))
+                return bkf_error_set(err, BKF_ENUMERIC,
+                                     "collocation at mu = %.15g, nu = %.15g: the guess's step underflows",
+                                     c->mu, c->nu);
+            continue;
+        }
+        if (xs > c->nu && xb <= c->nu) went_down = 1;
+        if (went_down && xs < c->nu && xb >= c->nu) {
+            /* the section inside this step: Newton on its length */
+            double s = tau * (c->nu - xs) / (xb - xs);
+            for (int it = 0; it < 20; it++) {
+                if (!half_steps(c, xs, ys, s, Xa, Xb, &xa, &ya, &xb, &yb))
+                    return bkf_error_set(err, BKF_ENUMERIC,
+                                         "collocation at mu = %.15g, nu = %.15g: the guess's turn does not close",
+                                         c->mu, c->nu);
+                double xd = c->a * yb - c->mu * lienard_F(xb), ds = (c->nu - xb) / xd;
+                if (!(xd > 0.0)) break;
+                s = fmin(fmax(s + ds, 0.0), tau);
+                if (fabs(ds) <= 1e-13 * (t + s)) break;
+            }
+            tau = s;
+            closed = 1;
+        }
+        if (record && n + 2 > MAX_INTERVALS)
+            return bkf_error_set(err, BKF_ETOL,
+                                 "collocation at mu = %.15g, nu = %.15g: local tol %g needs more than %d intervals",
+                                 c->mu, c->nu, local_tol, MAX_INTERVALS);
+        if (!record) {
+            /* (only the landing) */
+        } else if (!reserve(c, n + 2)) {
+            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        } else {
+        c->t[n] = t;
+        c->x[n] = xs;
+        c->y[n] = ys;
+        memcpy(c->X + n * M, Xa, sizeof Xa);
+        c->t[n + 1] = t + 0.5 * tau;
+        c->x[n + 1] = xa;
+        c->y[n + 1] = ya;
+        memcpy(c->X + (n + 1) * M, Xb, sizeof Xb);
+        n += 2;
+        }
+        t += tau;
+        xs = xb;
+        ys = yb;
+        h = tau * fmin(TURN_GROW_MAX, 0.9 * pow(tol / fmax(e, 1e-300), 1.0 / (2 * M + 1)));
+        if (!closed && t > 4.0 * T)
+            return bkf_error_set(err, BKF_ENUMERIC,
+                                 "collocation at mu = %.15g, nu = %.15g: the guess's turn does not return to the "
+                                 "section",
+                                 c->mu, c->nu);
+    }
+    if (!record) {
+        c->x[0] = xs;
+        c->y[0] = ys;
+        c->T = t;
+        return BKF_OK;
+    }
+    for (size_t j = 0; j < n; j++) c->t[j] /= t;
+    c->T = t;
+    c->n = n;
+    c->t[n] = 1.0;
+    c->x[n] = c->x[0];
+    c->y[n] = c->y[0];
+    c->paired = 1;
+    c->local_tol = local_tol;
+    return BKF_OK;
+}
+
+int bkf_colloc_guess_turn(bkf_colloc *c, double mu, double nu, double x0, double y0, double T, double local_tol,
+                          bkf_error *err)
+{
+    if (!c || !(T > 0.0) || !(local_tol > 0.0) || !isfinite(x0) || !isfinite(y0))
+        return bkf_error_set(err, BKF_EINPUT, "collocation guess needs T > 0, local_tol > 0 and a finite start");
+    set_params(c, mu, nu);
+    c->have_guess = c->have_solution = 0;
+    if (!reserve(c, 1)) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    /* a first turn lands on the cycle: from a start off it by d the turn's
+     * phase is off by about d mu and the jump by d mu^2, which Newton, damped,
+     * moved in 8-13 iterations from a shot's 1e-5 at mu 300-1e4 */
+    int rc = turn_mesh(c, x0, y0, T, local_tol, 0, err);
+    if (rc == BKF_OK) rc = turn_mesh(c, c->x[0], c->y[0], c->T, local_tol, 1, err);
+    if (rc == BKF_OK) c->have_guess = 1;
+    return rc;
 }
 
 int bkf_colloc_guess_circle(bkf_colloc *c, double mu, double nu, size_t intervals, bkf_error *err)
@@ -706,12 +864,14 @@ int bkf_colloc_guess_circle(bkf_colloc *c, double mu, double nu, size_t interval
             c->X[j * M + i] = nu + r * sin(2.0 * M_PI * (c->t[j] + c->g.c[i] / (double)intervals));
     c->have_guess = 1;
     c->have_solution = 0;
+    c->paired = 0;
     return BKF_OK;
 }
 
 int bkf_colloc_warm(bkf_colloc *c, double mu, double nu)
 {
     if (!c || !c->have_solution) return 0;
+    c->paired = 0;
     double a0 = c->a, b0 = c->b;
     set_params(c, mu, nu);
     /* same f and f' = a (y - b F(x)) in the new scaling */
@@ -747,12 +907,130 @@ int bkf_colloc_fixed(bkf_colloc *c, size_t intervals, double *period, bkf_error 
     return BKF_OK;
 }
 
+/* The rounding floor of T's estimate: mesh values rounded at eps of the
+ * state (|x| up to 2) are relative perturbations eps / size of a cycle of
+ * size 2 sqrt(1 - nu^2) (mu 10, nu -0.9999, tol 1e-12: true 1.5e-13
+ * against a floor of 3e-14 without the 1 / size). */
+static double round_floor(const bkf_colloc *c, double T)
+{
+    double size = fmin(1.0, 2.0 * sqrt(fmax(1.0 - c->nu * c->nu, 0.0)));
+    return 8.0 * DBL_EPSILON * T * sqrt((double)c->n) / size;
+}
+
+/* Keep (which = 0) or restore (1) the current solution. */
+static int keep_solution(bkf_colloc *c, int which, size_t *n, double *T, double *trace)
+{
+    if (!which) {
+        size_t need = (3 + M) * (c->n + 1);
+        if (need > c->keep_cap) {
+            if (!grow(&c->keep, need)) return BKF_ENOMEM;
+            c->keep_cap = need;
+        }
+        *n = c->n;
+        *T = c->T;
+        *trace = c->trace;
+    } else if (!reserve(c, *n)) {
+        return BKF_ENOMEM;
+    }
+    size_t k = *n + 1;
+    double *kt = c->keep, *kx = kt + k, *ky = kx + k, *kX = ky + k;
+    if (!which) {
+        memcpy(kt, c->t, k * sizeof *kt);
+        memcpy(kx, c->x, k * sizeof *kx);
+        memcpy(ky, c->y, k * sizeof *ky);
+        memcpy(kX, c->X, *n * M * sizeof *kX);
+    } else {
+        memcpy(c->t, kt, k * sizeof *kt);
+        memcpy(c->x, kx, k * sizeof *kx);
+        memcpy(c->y, ky, k * sizeof *ky);
+        memcpy(c->X, kX, *n * M * sizeof *kX);
+        c->n = *n;
+        c->T = *T;
+        c->trace = *trace;
+    }
+    return BKF_OK;
+}
+
+/* Merge the mesh's interval pairs. */
+static int coarsen(bkf_colloc *c)
+{
+    size_t n = c->n / 2;
+    double *ts = malloc((n + 1) * sizeof *ts);
+    if (!ts) return BKF_ENOMEM;
+    for (size_t k = 0; k <= n; k++) ts[k] = c->t[2 * k];
+    ts[n] = 1.0;
+    int rc = remesh_to(c, ts, n);
+    free(ts);
+    return rc;
+}
+
+static void fill_result(bkf_colloc *c, double est, double L1, double L2, bkf_colloc_result *out)
+{
+    out->period = c->T;
+    out->period_err = est;
+    out->log_multiplier = L1;
+    out->log_multiplier_err = fabs(L1 - L2) / PAIRED_DIVISOR + 8.0 * DBL_EPSILON * sqrt((double)c->n) * fabs(L1);
+    out->return_map_slope = c->trace - 1.0;
+    out->section_y = c->y[0];
+    out->intervals = c->n;
+    out->newton_iterations = c->iterations;
+    out->interval_solves = c->solves;
+    c->have_solution = 1;
+}
+
+/* The solve from a mesh of half-step pairs (bkf_colloc_guess_turn): Newton
+ * on it, then on its coarsening (merged pairs: half the intervals, started
+ * from the converged finer solution), the finer T reported with
+ * |T_N - T_N/2| / EST_DIVISOR.  A mesh that does not meet tol is built
+ * again by a turn from the converged solution at the local tolerance the
+ * pair predicts; no equidistribution (from the shot's mesh at mu 1e3 it gave
+ * the mesh to spurious derivative spikes on long intervals and Newton
+ * stalled). */
+static int solve_paired(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_error *err)
+{
+    for (int round = 0; round < 5; round++) {
+        int rc = converge(c, tol, err);
+        if (rc != BKF_OK) return rc;
+        double T1 = c->T, L1 = log_multiplier(c), Tk, trace;
+        size_t nk;
+        if (keep_solution(c, 0, &nk, &Tk, &trace) != BKF_OK || coarsen(c) != BKF_OK)
+            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        rc = converge(c, tol, err);
+        double T2 = c->T, L2 = log_multiplier(c);
+        if (keep_solution(c, 1, &nk, &Tk, &trace) != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        if (rc != BKF_OK) return rc;
+        double diff = fabs(T1 - T2);
+        /* the coarser Newton starts from the finer solution, so the pair
+         * shares what Newton leaves (of the square of its goal, 1e-4 tol):
+         * at mu 1e4, nu 0.99, tol 1e-6 the pair agreed to 1e-12 against a
+         * true 6e-11 */
+        double newton_left = 1e-4 * tol * T1;
+        double est = fmax(fmax(diff / PAIRED_DIVISOR, round_floor(c, T1)), TURN_FLOOR * c->local_tol * T1) +
+                     newton_left;
+        if (ACCEPT_MARGIN * est <= tol * T1) {
+            fill_result(c, est, L1, L2, out);
+            c->pair_n = c->n / 2;
+            c->paired = 0;
+            return BKF_OK;
+        }
+        /* the error falls like the local tolerance^(2m/(2m+1)): the local
+         * tolerance whose pair meets tol, with a margin of 2 */
+        double need = diff * 2.0 * ACCEPT_MARGIN / (PAIRED_DIVISOR * tol * T1);
+        double local = c->local_tol * pow(fmax(need, 1.5), -(2.0 * M + 1.0) / (2.0 * M));
+        rc = turn_mesh(c, c->x[0], c->y[0], c->T, local, 1, err);
+        if (rc != BKF_OK) return rc;
+    }
+    return bkf_error_set(err, BKF_ETOL, "collocation at mu = %.15g, nu = %.15g: estimate did not meet tol = %g",
+                         c->mu, c->nu, tol);
+}
+
 int bkf_colloc_solve(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_error *err)
 {
     if (!c || !c->have_guess) return bkf_error_set(err, BKF_EINPUT, "collocation solve before a guess");
     c->iterations = c->solves = 0;
     int warm = c->have_solution;
     c->have_solution = 0;
+    if (c->paired && !warm) return solve_paired(c, tol, out, err);
     int rc = converge(c, fmax(tol, 1e-6), err);
     if (rc != BKF_OK) return rc;
     /* a warm start's mesh is the last finer one: the pair starts again from
@@ -771,8 +1049,7 @@ int bkf_colloc_solve(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_erro
         if (rc != BKF_OK) return rc;
         double T2 = c->T, L2 = log_multiplier(c);
         double diff = fabs(T1 - T2);
-        double round_floor = 8.0 * DBL_EPSILON * T2 * sqrt((double)c->n);
-        double est = fmax(diff / EST_DIVISOR, round_floor);
+        double est = fmax(diff / EST_DIVISOR, round_floor(c, T2));
         if (ACCEPT_MARGIN * est <= tol * T2) {
             out->period = T2;
             out->period_err = est;

@@ -434,8 +434,8 @@ static bkf_stepper_kind shooting_stepper(double mu, double tol)
     return BKF_STEPPER_EXPLICIT;
 }
 
-/* The automatic choice stays shooting: collocation (BKF_STEPPER_COLLOCATION)
- * is selectable; docs/benchmarks.md (2026-11-25) has where it is faster. */
+/* The automatic shooting stepper (a solve's automatic choice is
+ * solve_stepper, collocation where it is faster). */
 static bkf_stepper_kind auto_stepper(double mu, double tol) { return shooting_stepper(mu, tol); }
 
 const char *bkf_cycle_stepper_name(bkf_stepper_kind kind)
@@ -1085,18 +1085,25 @@ static double pair_tol(double tol, double nu, bkf_stepper_kind kind)
 
 /* ------------------------------------------------------ collocation */
 
-/* Up to this mu the cold guess is the harmonic circle, above it one loose
- * shot (the cycle attracts like exp(L), L = -7 at mu 1: one turn lands it). */
+/* Up to this mu the cold guess is the harmonic circle, above it two turns
+ * of Gauss steps (bkf_colloc_guess_turn; the cycle attracts like exp(L),
+ * L = -7 at mu 1: one turn lands it). */
 #define COLLOC_CIRCLE_MU 1.0
-#define COLLOC_GUESS_TOL 1e-5
 /* A warm start reuses the last solution within this distance in (ln mu, nu). */
 #define COLLOC_WARM_LN_MU 1.0
 #define COLLOC_WARM_NU 0.2
-/* Above this mu the guess from one loose shot is not yet turned into a mesh
- * the collocation Newton converges on (measured: no convergence from mu 200
- * at nu -0.96 and 0.99, from 300-500 at nu 0): refused at once, shooting
- * answers (docs/numerics.md, "The collocation engine"). */
-#define COLLOC_MU_MAX 150.0
+
+/* The local tolerance of the guess's turn for a solve at tol: 1e-8 from
+ * tol 1e-10 up, falling like tol^1.5 below.  The collocation error in T is
+ * far below the turn's local one (at tol 1e-10, mu 10-1e4, local 1e-8 gave
+ * meshes whose pair met tol first time with the least work; 1e-10 meshes
+ * 1.3-1.5 times as fine); from 1e-4 the pair's estimate failed at mu 10,
+ * tol 1e-6 (outside the asymptotic range), from 1e-7 it was optimistic by
+ * 26 at mu 1e4, nu 0.99 (true 6e-11).  Below 1e-10 it falls faster than
+ * tol so that the estimate's floor (colloc.c, TURN_FLOOR: 1e-3 of it)
+ * stays near 0.01 tol at 1e-12, the cycle tolerance Floquet asks for its
+ * own 1e-10 (at 0.1 tol its lambda estimates refused at gamma 10). */
+static double colloc_turn_tol(double tol) { return 1e-8 * fmin(1.0, pow(tol / 1e-10, 1.5)); }
 
 /* The extremes of x from the collocation nodes: each sign change of x'
  * between nodes is located by the shooting engine's event Newton,
@@ -1146,8 +1153,6 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
     double canard = 8.0 * mu * mu * (1.0 - fabs(nu));
     if (mu >= 1.0 && canard > 0.3 && canard < 3.0)
         return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: canard region", mu, nu);
-    if (mu > COLLOC_MU_MAX)
-        return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g: above %g", mu, COLLOC_MU_MAX);
     if (!c->colloc && !(c->colloc = bkf_colloc_alloc())) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     size_t steps = 0, shots = 0;
     int rc = BKF_OK;
@@ -1163,29 +1168,11 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
         if (mu <= COLLOC_CIRCLE_MU) {
             rc = bkf_colloc_guess_circle(c->colloc, mu, nu, 16, err);
         } else {
-            integrator in = {0}, aux = {0};
-            bkf_stepper_kind kind = shooting_stepper(mu, 1e-10);
-            double tol = COLLOC_GUESS_TOL * fmin(1.0, sqrt(1.0 - nu * nu));
-            shot sh = {0};
-            rc = integrator_init(&in, p, kind, 0, tol) == BKF_OK && integrator_init(&aux, p, kind, 1, tol) == BKF_OK
-                     ? shoot(&in, &aux, p, section_y_of_slope(p, guess_slope(mu, nu)), NULL, c, &sh, err)
-                     : bkf_error_set(err, BKF_ENOMEM, "out of memory");
-            steps += in.steps + aux.steps;
-            shots++;
-            integrator_free(&in);
-            integrator_free(&aux);
-            if (rc == BKF_OK) {
-                size_t n = c->node_count;
-                double *buf = malloc(3 * n * sizeof *buf);
-                if (!buf) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-                for (size_t j = 0; j < n; j++) {
-                    buf[j] = c->nodes[j].t;
-                    buf[n + j] = c->nodes[j].s[0];
-                    buf[2 * n + j] = c->nodes[j].s[1];
-                }
-                rc = bkf_colloc_guess_nodes(c->colloc, mu, nu, buf, buf + n, buf + 2 * n, n, sh.period, err);
-                free(buf);
-            }
+            /* a turn from the section point of the guessed slope lands on
+             * the cycle, another is the mesh (colloc.h) */
+            double T_hint = fmax(2.0 * M_PI, bkf_asym_period_leading(mu, nu));
+            rc = bkf_colloc_guess_turn(c->colloc, mu, nu, nu, section_y_of_slope(p, guess_slope(mu, nu)), T_hint,
+                                       colloc_turn_tol(opt->tol), err);
         }
         if (rc == BKF_OK) rc = bkf_colloc_solve(c->colloc, opt->tol, &r, err);
     }
@@ -1224,6 +1211,29 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
     return rc;
 }
 
+/* The automatic choice of a solve: collocation where it is faster than
+ * shooting, measured by wall time per cold solve at tol 1e-10
+ * (docs/benchmarks.md, 2026-11-25 colloc2; shared machine): 0.26-0.78 of
+ * shooting's from mu 10 to 1e4, 1.4 times shooting's at mu 1, nu 0.
+ * At tol 1e-8 it ties from mu 1e3 (its mesh costs about what it does at
+ * 1e-10, colloc_turn_tol); looser tolerances stay with shooting, whose
+ * switch the tests hold.  Where it refuses (canards, the rounding floor)
+ * the solve shoots. */
+#define COLLOC_AUTO_MU_MIN 10.0
+#define COLLOC_AUTO_MU_MAX 1e4
+#define COLLOC_AUTO_TOL_MAX 1e-10
+/* and only in the relaxation regime, mu^2 (1 - |nu|) at least this: near
+ * the Hopf point and the canard (gamma 100, nu 0.9999 in the extremes
+ * matrix) the Floquet products were not checked with it */
+#define COLLOC_AUTO_RELAXATION 2.0
+static bkf_stepper_kind solve_stepper(double mu, double nu, double tol)
+{
+    if (mu >= COLLOC_AUTO_MU_MIN && mu <= COLLOC_AUTO_MU_MAX && tol <= COLLOC_AUTO_TOL_MAX * (1.0 + 1e-9) &&
+        mu * mu * (1.0 - fabs(nu)) >= COLLOC_AUTO_RELAXATION)
+        return BKF_STEPPER_COLLOCATION;
+    return auto_stepper(mu, tol);
+}
+
 static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
                             bkf_error *err)
 {
@@ -1238,7 +1248,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
     flow_params *p = &c->flow;
     p->rhs_calls = p->jacobian_calls = 0;
     bkf_stepper_kind kind = opt.stepper;
-    if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(mu, opt.tol);
+    if (kind == BKF_STEPPER_AUTO) kind = solve_stepper(mu, nu, opt.tol);
     if (kind == BKF_STEPPER_COLLOCATION) {
         /* c->result is overwritten only on success */
         bkf_cycle_result kept = c->result;

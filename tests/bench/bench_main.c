@@ -72,6 +72,7 @@ void bench_pde(void);
 void bench_pde_cost(void);
 void bench_trainspec(void);
 void bench_chain(void);
+void bench_colloc(void);
 
 int main(int argc, char **argv)
 {
@@ -83,5 +84,6 @@ int main(int argc, char **argv)
     if (!only || strcmp(only, "pde-cost") == 0) bench_pde_cost();
     if (!only || strcmp(only, "trainspec") == 0) bench_trainspec();
     if (!only || strcmp(only, "chain") == 0) bench_chain();
+    if (!only || strcmp(only, "colloc") == 0) bench_colloc();
     return 0;
 }
