@@ -91,7 +91,7 @@ def version():
 # ------------------------------------------------------------------ period
 
 _METHODS = {"auto": 0, "asymptotic": 1, "leading": 2, "shooting": 3}
-_STEPPERS = {"auto": 0, "explicit": 1, "implicit": 2, "extrapolation": 3}
+_STEPPERS = {"auto": 0, "explicit": 1, "implicit": 2, "extrapolation": 3, "collocation": 4}
 
 
 def period(mu, nu, tol=1e-10, method="auto", stepper="auto", errors=False):
@@ -104,7 +104,7 @@ def period(mu, nu, tol=1e-10, method="auto", stepper="auto", errors=False):
     if method not in _METHODS:
         raise InputError("method must be auto, asymptotic, leading or shooting", _lib.EINPUT)
     if stepper not in _STEPPERS:
-        raise InputError("stepper must be auto, explicit, implicit or extrapolation", _lib.EINPUT)
+        raise InputError("stepper must be auto, explicit, implicit, extrapolation or collocation", _lib.EINPUT)
     mu_b, nu_b = np.broadcast_arrays(np.asarray(mu, dtype=float), np.asarray(nu, dtype=float))
     T = np.empty(mu_b.shape)
     T_err = np.empty(mu_b.shape)

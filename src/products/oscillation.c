@@ -133,7 +133,9 @@ const bkf_option bkf_oscillation_options[] = {
      .shown_default = "auto",
      .help = "integrator: rk8pd (explicit), bsimp (implicit), the cycle\n"
              "by bd2x2 and the monodromy by bsimp (extrapolation), or by\n"
-             "stiffness (as extrapolation above gamma = 30)"},
+             "stiffness (auto: the cycle as bkfront period's auto stepper,\n"
+             "collocation among them; the monodromy by bsimp above\n"
+             "gamma = 30, else rk8pd)"},
 };
 const size_t bkf_oscillation_noptions =
     sizeof bkf_oscillation_options / sizeof bkf_oscillation_options[0];

@@ -36,6 +36,16 @@ def test_period_is_vectorised_and_symmetric_in_nu():
     assert abs(bkfront.period(1e4, 0.5, tol=1e-8) / (k * 1e4) - 1) < 1e-2
 
 
+def test_period_steppers_agree_within_their_estimates():
+    # two methods: collocation and shooting (the extrapolation stepper)
+    mu = np.array([30.0, 300.0, 3000.0])
+    Tc, ec = bkfront.period(mu, -0.5, stepper="collocation", errors=True)
+    Ts, es = bkfront.period(mu, -0.5, stepper="extrapolation", errors=True)
+    assert np.all(np.abs(Tc - Ts) <= ec + es)
+    with pytest.raises(bkfront.InputError, match="collocation"):
+        bkfront.period(1, 0, stepper="spectral")
+
+
 def test_period_equals_the_cli(cli):
     out = cli("period", "--mu", "0.5:40:9", "--nu", "-0.3").stdout
     cols, rows = tsv(out)
