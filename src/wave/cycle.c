@@ -1932,7 +1932,12 @@ static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu,
  * moves by dG/dq ~ 1e9 per unit q, and the corrector in q stops on its step
  * (1e-11) with the residual still at the integration noise (1e-2).  There the
  * amplitude is the parameter (branch_amplitude) until the tangent's q
- * component is back above STEEP_LEAVE. */
+ * component is back above STEEP_LEAVE, both the one from dG and the
+ * walk's own secant: inside the canard dG/dq from the variational shot
+ * flips between ~1 and ~-1e12 from one root to the next (mu 10, nu
+ * 0.998740451246: the walk left on a dG/dq of 0.93 at ln f'(0) 2.6976, and
+ * the next stretch predicted past nu = 1), while the roots' q stays within
+ * 1e-13. */
 #define STEEP_ENTER 1e-3
 #define STEEP_LEAVE 0.5
 
@@ -2141,8 +2146,8 @@ static int branch_solve_q(branch_ctx *b, double ln_w0, double q0, double step, i
  * only within ~1e-9 of q, where no row meets even 1e-6.)  The amplitude
  * moves along sign(dG/dq) times dir; if no root lies that way the other.
  * Returns once the branch leans back towards q (the tangent's q component
- * above STEEP_LEAVE), with the last point in b->last_u; on the way the
- * points are visited.  A canard across the end lands on it (b->landed). */
+ * and the last step's above STEEP_LEAVE), with the last point in
+ * b->last_u; on the way the points are visited.  A canard across the end lands on it (b->landed). */
 static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced, bkf_error *err)
 {
     /* entered after a failed stretch: not back before the canard */
@@ -2185,6 +2190,7 @@ static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced,
         }
         steps++;
         slope = fabs(q - u[1]) / h;
+        double dq = q - u[1], secant = fabs(dq) / hypot(lw - u[0], dq);
         u[0] = lw;
         u[1] = q;
         double norm = hypot(dg[0], dg[1]);
@@ -2193,8 +2199,12 @@ static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced,
         if (branch_accept(u, t, 0, b) && !b->steep) return BKF_OK; /* visit asked to stop */
         b->steep = 0;
         if (fabs(t[1]) < STEEP_ENTER) seen_steep = 1;
-        if (fabs(t[1]) > STEEP_LEAVE && (seen_steep || steps >= 10)) return BKF_OK;
-        if (shots <= 6) h = fmin(1.5 * h, h_max);
+        if (fabs(t[1]) > STEEP_LEAVE && secant > STEEP_LEAVE && (seen_steep || steps >= 10)) return BKF_OK;
+        /* (a root within the canard's width of the last one cost its shots
+         * bracketing the noise band, which says nothing of the step: at mu
+         * 10, nu 0.99874 the head's corner is crossed in ln f'(0) from 2.70
+         * down to 0.4 with q still, and halving there left h at h_min) */
+        if (shots <= 6 || fabs(dq) <= 1e-9 * fmax(1.0, fabs(q))) h = fmin(1.5 * h, h_max);
         else if (shots > 12) h = fmax(0.5 * h, h_min);
     }
     return BKF_OK;

@@ -256,6 +256,19 @@ TEST(cycle_branch_nu_through_the_canard_at_mu_10)
     check_canard_branch(BKF_CYCLE_ALONG_NU, 0.0, -0.999, 10.0);
 }
 
+/* Along nu to +0.999 at mu 10: the canard (8 mu^2 (1 - nu) ~ 1 at nu
+ * 0.99874045124..., ~1e-12 wide in nu) is crossed by the amplitude walk
+ * from the relaxation cycle down to the small cycle, which it follows to
+ * the end; before, the walk left on a noisy dG/dq and the next stretch
+ * failed below step_min at nu 0.998740451246 (so did mu 8 and 11.2, whose
+ * canards lie at nu 0.99802 and 0.99900, the latter next to the end). */
+TEST(cycle_branch_nu_through_the_canard_at_mu_10_to_plus_0_999)
+{
+    check_canard_branch(BKF_CYCLE_ALONG_NU, 0.0, 0.999, 10.0);
+    check_canard_branch(BKF_CYCLE_ALONG_NU, 0.0, 0.999, 8.0);
+    check_canard_branch(BKF_CYCLE_ALONG_NU, 0.0, 0.999, 11.2);
+}
+
 /* Along mu through the narrow canard at nu -0.999 (mu 11.2141, ~1e-9 wide
  * in mu) up to 1e4: the amplitude walk and the mirror's shots. */
 TEST(cycle_branch_mu_through_the_canard_at_nu_minus_0_999)
