@@ -59,6 +59,12 @@ typedef struct {
     double c[M], w[M], A[M][M], A2[M][M], Ac[M], p[M];
     double dd[M + 1];  /* divided-difference weights on the nodes (0, c_1..c_m) */
     double mfact;      /* m! */
+    /* a step's stages from the polynomials of its two halves: stage i is
+     * the first half's polynomial (on the nodes 0, c) at 2 c_i, or the
+     * second's at 2 c_i - 1 */
+    double halves[M][M + 1];
+    /* the same basis in powers of theta: basis[k][p] */
+    double basis[M + 1][M + 1];
 } gauss_table;
 
 struct bkf_colloc {
@@ -86,6 +92,19 @@ struct bkf_colloc {
 };
 
 /* ------------------------------------------------------------ tables */
+
+/* The Lagrange basis on the nodes (0, c_1..c_m) at theta. */
+static void lagrange_weights(const double *c, double theta, double *l)
+{
+    double th[M + 1];
+    th[0] = 0.0;
+    for (int i = 0; i < M; i++) th[i + 1] = c[i];
+    for (int k = 0; k <= M; k++) {
+        l[k] = 1.0;
+        for (int q = 0; q <= M; q++)
+            if (q != k) l[k] *= (theta - th[q]) / (th[k] - th[q]);
+    }
+}
 
 static void gauss_init(gauss_table *g)
 {
@@ -144,6 +163,20 @@ static void gauss_init(gauss_table *g)
         for (int l = 0; l <= M; l++)
             if (l != k) d *= th[k] - th[l];
         g->dd[k] = 1.0 / d;
+    }
+    for (int i = 0; i < M; i++)
+        lagrange_weights(g->c, g->c[i] < 0.5 ? 2.0 * g->c[i] : 2.0 * g->c[i] - 1.0, g->halves[i]);
+    for (int k = 0; k <= M; k++) {
+        double *b = g->basis[k];
+        memset(b, 0, sizeof g->basis[k]);
+        b[0] = 1.0;
+        int deg = 0;
+        for (int q = 0; q <= M; q++) {
+            if (q == k) continue;
+            /* b *= (theta - th_q) / (th_k - th_q) */
+            double d = 1.0 / (th[k] - th[q]);
+            for (int p = ++deg; p >= 0; p--) b[p] = ((p ? b[p - 1] : 0.0) - th[q] * b[p]) * d;
+        }
     }
 }
 
@@ -231,32 +264,25 @@ static void stage_y(const bkf_colloc *c, size_t j, double *Y)
 static void poly_eval(const bkf_colloc *c, size_t j, double theta, double *xv, double *yv)
 {
     const gauss_table *g = &c->g;
-    double Y[M], th[M + 1], fx[M + 1], fy[M + 1];
+    double Y[M], l[M + 1];
     stage_y(c, j, Y);
-    th[0] = 0.0;
-    fx[0] = c->x[j];
-    fy[0] = c->y[j];
+    lagrange_weights(g->c, theta, l);
+    double sx = l[0] * c->x[j], sy = l[0] * c->y[j];
     for (int i = 0; i < M; i++) {
-        th[i + 1] = g->c[i];
-        fx[i + 1] = c->X[j * M + i];
-        fy[i + 1] = Y[i];
-    }
-    double sx = 0.0, sy = 0.0;
-    for (int k = 0; k <= M; k++) {
-        double l = 1.0;
-        for (int q = 0; q <= M; q++)
-            if (q != k) l *= (theta - th[q]) / (th[k] - th[q]);
-        sx += l * fx[k];
-        sy += l * fy[k];
+        sx += l[i + 1] * c->X[j * M + i];
+        sy += l[i + 1] * Y[i];
     }
     *xv = sx;
     *yv = sy;
 }
 
 /* One Gauss step of length tau from (x0, y0): the stage equations R(X) = 0
- * by Newton from the guess in X; the end values into (x1, y1).  0 if
- * Newton does not converge (the step is too long for its guess). */
-static int gauss_step(const bkf_colloc *c, double x0, double y0, double tau, double *X, double *x1, double *y1)
+ * by Newton from the guess in X, until a correction is below goal (1 +
+ * |x0|); the end values into (x1, y1).  0 if Newton does not converge (the
+ * step is too long for its guess). */
+#define STAGE_GOAL 1e-12
+static int gauss_step(const bkf_colloc *c, double x0, double y0, double tau, double goal, double *X, double *x1,
+                      double *y1)
 {
     const gauss_table *g = &c->g;
     const double mu = c->mu, nu = c->nu, a = c->a;
@@ -298,7 +324,7 @@ static int gauss_step(const bkf_colloc *c, double x0, double y0, double tau, dou
             dmax = fmax(dmax, fabs(mat[i][M]));
         }
         if (!isfinite(dmax) || dmax > 10.0) return 0;
-        if (dmax <= 1e-12 * (1.0 + fabs(x0))) {
+        if (dmax <= goal * (1.0 + fabs(x0))) {
             double pX = 0.0, wF = 0.0, wX = 0.0;
             for (int l = 0; l < M; l++) {
                 pX += g->p[l] * X[l];
@@ -331,7 +357,7 @@ static int remesh_to(bkf_colloc *c, const double *ts, size_t n)
             /* a partial step from the old mesh point */
             double tau = (ts[k] - c->t[j]) * c->T, x1, y1;
             for (int i = 0; i < M; i++) poly_eval(c, j, c->g.c[i] * th0, &X[i], &yv);
-            if (gauss_step(c, c->x[j], c->y[j], tau, X, &x1, &y1)) {
+            if (gauss_step(c, c->x[j], c->y[j], tau, STAGE_GOAL, X, &x1, &y1)) {
                 xv = x1;
                 yv = y1;
             } else {
@@ -351,7 +377,7 @@ static int remesh_to(bkf_colloc *c, const double *ts, size_t n)
         }
         double stage[M], x1, y1;
         memcpy(stage, c->Xs + k * M, sizeof stage);
-        if (gauss_step(c, xv, yv, h * c->T, stage, &x1, &y1)) memcpy(c->Xs + k * M, stage, sizeof stage);
+        if (gauss_step(c, xv, yv, h * c->T, STAGE_GOAL, stage, &x1, &y1)) memcpy(c->Xs + k * M, stage, sizeof stage);
     }
     if (!reserve(c, n)) return BKF_ENOMEM;
     memcpy(c->t, ts, (n + 1) * sizeof *ts);
@@ -684,7 +710,7 @@ int bkf_colloc_guess_nodes(bkf_colloc *c, double mu, double nu, const double *z,
                 c->t[n + i] = z[j] + (double)i * tau;
                 c->x[n + i] = xs;
                 c->y[n + i] = ys;
-                ok = gauss_step(c, xs, ys, tau, X, &xs, &ys);
+                ok = gauss_step(c, xs, ys, tau, STAGE_GOAL, X, &xs, &ys);
             }
             x1 = xs;
             y1 = ys;
@@ -718,6 +744,7 @@ int bkf_colloc_guess_nodes(bkf_colloc *c, double mu, double nu, const double *z,
  * tau^(2m+1), so the next step is scaled by its 1/(2m+1)-th root. */
 #define TURN_GROW_MAX 4.0
 #define TURN_SHRINK 0.25
+#define TURN_STAGE_GOAL 1e-4
 
 /* Stage guess of a step from (x0, y0): the Euler line. */
 static void stage_guess(const bkf_colloc *c, double x0, double y0, double tau, double *X)
@@ -727,15 +754,54 @@ static void stage_guess(const bkf_colloc *c, double x0, double y0, double tau, d
     for (int l = 0; l < M; l++) X[l] = x0 + c->g.c[l] * xd;
 }
 
-/* Two Gauss steps of tau/2 from (xs, ys): stages into Xa, Xb, ends into
- * (xa, ya) (the middle) and (xb, yb). */
-static int half_steps(const bkf_colloc *c, double xs, double ys, double tau, double *Xa, double *Xb, double *xa,
-                      double *ya, double *xb, double *yb)
+/* Stages of a step of ratio r times the length of the last one, which
+ * started at x0 with stages X: that step's polynomial beyond its end, at
+ * 1 + r c_i (the Euler line's guess took Newton a third iteration). */
+static void stage_extrapolate(const gauss_table *g, double x0, const double *X, double r, double *out)
 {
-    stage_guess(c, xs, ys, 0.5 * tau, Xa);
-    if (!gauss_step(c, xs, ys, 0.5 * tau, Xa, xa, ya)) return 0;
-    stage_guess(c, *xa, *ya, 0.5 * tau, Xb);
-    return gauss_step(c, *xa, *ya, 0.5 * tau, Xb, xb, yb);
+    double a[M + 1];
+    for (int p = 0; p <= M; p++) {
+        a[p] = g->basis[0][p] * x0;
+        for (int k = 0; k < M; k++) a[p] += g->basis[k + 1][p] * X[k];
+    }
+    for (int i = 0; i < M; i++) {
+        double theta = 1.0 + r * g->c[i], s = a[M];
+        for (int p = M - 1; p >= 0; p--) s = s * theta + a[p];
+        out[i] = s;
+    }
+}
+
+/* Extrapolate only this far (in lengths of the last step). */
+#define EXTRAPOLATE_MAX 2.0
+
+/* A Gauss step from the guess in X or, where Newton does not converge from
+ * it, from the Euler line. */
+static int guarded_step(const bkf_colloc *c, double x0, double y0, double tau, double goal, int guessed, double *X,
+                        double *x1, double *y1)
+{
+    if (guessed) {
+        double Xg[M];
+        memcpy(Xg, X, sizeof Xg);
+        if (gauss_step(c, x0, y0, tau, goal, Xg, x1, y1)) {
+            memcpy(X, Xg, sizeof Xg);
+            return 1;
+        }
+    }
+    stage_guess(c, x0, y0, tau, X);
+    return gauss_step(c, x0, y0, tau, goal, X, x1, y1);
+}
+
+/* Two Gauss steps of tau/2 from (xs, ys): stages into Xa, Xb, ends into
+ * (xa, ya) (the middle) and (xb, yb).  prev (the last half step's start
+ * and stages, of length tau/2 / ratio) or NULL: the first stages' guess. */
+static int half_steps(const bkf_colloc *c, double xs, double ys, double tau, double goal, const double *prev,
+                      double ratio, double *Xa, double *Xb, double *xa, double *ya, double *xb, double *yb)
+{
+    int guessed = prev && ratio <= EXTRAPOLATE_MAX;
+    if (guessed) stage_extrapolate(&c->g, prev[0], prev + 1, ratio, Xa);
+    if (!guarded_step(c, xs, ys, 0.5 * tau, goal, guessed, Xa, xa, ya)) return 0;
+    stage_extrapolate(&c->g, xs, Xa, 1.0, Xb);
+    return guarded_step(c, *xa, *ya, 0.5 * tau, goal, 1, Xb, xb, yb);
 }
 
 /* One turn from (x0, y0) on the section x = nu (x' > 0) back to it: the
@@ -747,15 +813,31 @@ static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local
 {
     double size = fmin(1.0, 2.0 * sqrt(fmax(1.0 - c->nu * c->nu, 0.0)));
     double tol = local_tol * size;
+    /* the stages to a small part of the local tolerance: the turn gives a
+     * mesh and a start, which the global Newton corrects anyway */
+    double goal = fmax(STAGE_GOAL, TURN_STAGE_GOAL * tol);
     /* the first step: a unit of the fast time 1/mu, at most T/64 */
     double t = 0.0, h = fmin(T / 64.0, 1.0 / fmax(c->mu, 1.0)), xs = x0, ys = y0;
-    size_t n = 0;
+    size_t n = 0, n_prev = 0;
+    double prev[M + 1], tau_prev = 1.0;
     int closed = 0, went_down = 0;
     while (!closed) {
         double tau = h;
         double Xf[M], Xa[M], Xb[M], xf, yf, xa, ya, xb, yb;
-        stage_guess(c, xs, ys, tau, Xf);
-        int ok = half_steps(c, xs, ys, tau, Xa, Xb, &xa, &ya, &xb, &yb) && gauss_step(c, xs, ys, tau, Xf, &xf, &yf);
+        int ok = half_steps(c, xs, ys, tau, goal, n_prev ? prev : NULL, tau / tau_prev, Xa, Xb, &xa, &ya, &xb, &yb);
+        if (ok) {
+            /* the full step starts from the halves' polynomials, within
+             * about the local error of its solution (the Euler line took
+             * Newton several iterations more) */
+            for (int i = 0; i < M; i++) {
+                const double *l = c->g.halves[i];
+                int first = c->g.c[i] < 0.5;
+                double s = l[0] * (first ? xs : xa);
+                for (int k = 0; k < M; k++) s += l[k + 1] * (first ? Xa : Xb)[k];
+                Xf[i] = s;
+            }
+            ok = gauss_step(c, xs, ys, tau, goal, Xf, &xf, &yf);
+        }
         double e = ok ? fmax(fabs(xf - xb), fabs(yf - yb)) : INFINITY;
         if (!(e <= tol)) {
             h = tau * (ok ? fmax(TURN_SHRINK, 0.9 * pow(tol / e, 1.0 / (2 * M + 1))) : TURN_SHRINK);
@@ -770,7 +852,7 @@ static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local
             /* the section inside this step: Newton on its length */
             double s = tau * (c->nu - xs) / (xb - xs);
             for (int it = 0; it < 20; it++) {
-                if (!half_steps(c, xs, ys, s, Xa, Xb, &xa, &ya, &xb, &yb))
+                if (!half_steps(c, xs, ys, s, goal, NULL, 1.0, Xa, Xb, &xa, &ya, &xb, &yb))
                     return bkf_error_set(err, BKF_ENUMERIC,
                                          "collocation at mu = %.15g, nu = %.15g: the guess's turn does not close",
                                          c->mu, c->nu);
@@ -802,6 +884,10 @@ static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local
         n += 2;
         }
         t += tau;
+        prev[0] = xa;
+        memcpy(prev + 1, Xb, sizeof Xb);
+        n_prev = 1;
+        tau_prev = tau;
         xs = xb;
         ys = yb;
         h = tau * fmin(TURN_GROW_MAX, 0.9 * pow(tol / fmax(e, 1e-300), 1.0 / (2 * M + 1)));
