@@ -12,7 +12,10 @@
  * stepper whose linear algebra is closed-form 2x2 (bd2x2; GSL's bsimp, the
  * same method with a general LU, stays selectable).  The error estimate comes from two solves at
  * integration tolerances a factor BKF_CYCLE_TOL_RATIO apart; the reported
- * values are those of the tighter solve. */
+ * values are those of the tighter solve.  The automatic choice is Gauss
+ * collocation (colloc.h, BKF_STEPPER_COLLOCATION; docs/numerics.md, "The
+ * collocation engine") for mu in [10, 1e4] at tol <= 1e-10 where
+ * mu^2 (1 - |nu|) >= 2, falling back to shooting where it refuses. */
 #ifndef BKFRONT_CYCLE_H
 #define BKFRONT_CYCLE_H
 
@@ -37,7 +40,8 @@ extern "C" {
 #define BKF_CYCLE_STIFF_TOL_MAX 1e-8
 
 typedef enum {
-    BKF_STEPPER_AUTO = 0,     /* explicit below the stiffness threshold */
+    BKF_STEPPER_AUTO = 0,     /* collocation where it wins (above), else shooting:
+                                 explicit below the stiffness threshold */
     BKF_STEPPER_EXPLICIT = 1, /* gsl rk8pd */
     BKF_STEPPER_IMPLICIT = 2, /* gsl bsimp with analytic Jacobian */
     BKF_STEPPER_EXTRAPOLATION = 3, /* the same method (semi-implicit midpoint
