@@ -343,17 +343,15 @@ static int gauss_step(const bkf_colloc *c, double x0, double y0, double tau, dou
 {
     const gauss_table *g = &c->g;
     const double mu = c->mu, nu = c->nu, a = c->a, tt = tau * tau, tm = tau * mu;
-    /* What does not change over the iterations, hoisted into locals (the
-     * writes through X kept the compiler from keeping the tables in
-     * registers); every sum in the order of the plain formula, so the
-     * result is the same to the bit. */
-    double B[M][M], C[M][M], A[M][M], A2[M][M], r0[M], nac[M];
+    /* What does not change over the iterations, hoisted out of them, and
+     * the stages iterated in a local copy (the stores through X made the
+     * compiler reload the tables); every sum in the order of the plain
+     * formula, so the result is the same to the bit. */
+    double B[M][M], C[M][M], r0[M], nac[M];
     for (int i = 0; i < M; i++) {
         for (int l = 0; l < M; l++) {
-            A[i][l] = g->A[i][l];
-            A2[i][l] = g->A2[i][l];
-            B[i][l] = (i == l) + tt * A2[i][l];
-            C[i][l] = tm * A[i][l];
+            B[i][l] = (i == l) + tt * g->A2[i][l];
+            C[i][l] = tm * g->A[i][l];
         }
         r0[i] = tau * a * g->c[i] * y0;
         nac[i] = nu * g->Ac[i];
@@ -369,8 +367,8 @@ static int gauss_step(const bkf_colloc *c, double x0, double y0, double tau, dou
         for (int i = 0; i < M; i++) {
             double a2x = 0.0, af = 0.0;
             for (int l = 0; l < M; l++) {
-                a2x += A2[i][l] * Xl[l];
-                af += A[i][l] * F[l];
+                a2x += g->A2[i][l] * Xl[l];
+                af += g->A[i][l] * F[l];
                 mat[i][l] = B[i][l] + C[i][l] * Fp[l];
             }
             mat[i][M] = -(Xl[i] - x0 - r0[i] - tt * (nac[i] - a2x) + tm * af);
