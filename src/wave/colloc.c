@@ -26,10 +26,12 @@
 #include <string.h>
 
 #define M BKF_COLLOC_M
-/* Complete unrolling of solve_rows' loops over the M stages (-O2 kept them
- * as loops: a quarter of a cold solve's instructions at mu 1e4); the
- * arithmetic and its order are unchanged.  (The same on the other kernels'
- * loops saved 2% more: not worth the noise.) */
+/* Complete unrolling of the loops over the M stages in solve_rows and
+ * gauss_step, whose Newton iterations are one serial chain (-O2 kept them
+ * as loops: the matrix then went through row pointers and memory, and a
+ * cold T at mu 1e4 was latency-bound); the arithmetic and its order are
+ * unchanged.  On condense, whose intervals are independent, it gained
+ * nothing. */
 #if defined(__GNUC__) && !defined(__clang__)
 #define BKF_UNROLL _Pragma("GCC unroll 8")
 #else
@@ -285,17 +287,16 @@ static void poly_eval(const bkf_colloc *c, size_t j, double theta, double *xv, d
     *yv = sy;
 }
 
-/* Gaussian elimination with partial pivoting on the M x M block of the rows
- * r, for the right-hand sides in columns M..ncol-1, which the solutions
- * overwrite.  The pivot swaps the row pointers, not the rows.  0 if the
- * block is singular.  divide: by the pivot rather than times its inverse,
- * the rounding gauss_step always had (its results decide the turn's step
+/* Gaussian elimination with partial pivoting on the M x M block of r, for
+ * the right-hand sides in columns M..ncol-1, which the solutions
+ * overwrite.  0 if the block is singular.  divide: by the pivot rather than
+ * times its inverse, the rounding gauss_step always had (its results decide the turn's step
  * acceptance, hence the mesh: the inverse moved T at mu 1e4 by 24 ulps).
  * Inlined, so that ncol and divide are constants and the loops unroll. */
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline int solve_rows(double *r[M], int ncol, int divide)
+static inline int solve_rows(double r[M][M + 4], int ncol, int divide)
 {
     BKF_UNROLL
     for (int k = 0; k < M; k++) {
@@ -308,9 +309,14 @@ static inline int solve_rows(double *r[M], int ncol, int divide)
                 piv = i;
             }
         if (!(best > 0.0)) return 0;
-        double *t = r[k];
-        r[k] = r[piv];
-        r[piv] = t;
+        if (piv != k) {
+            BKF_UNROLL
+            for (int l = k; l < ncol; l++) {
+                double t = r[k][l];
+                r[k][l] = r[piv][l];
+                r[piv][l] = t;
+            }
+        }
         double inv = 1.0 / r[k][k];
         BKF_UNROLL
         for (int i = k + 1; i < M; i++) {
@@ -348,7 +354,9 @@ static int gauss_step(const bkf_colloc *c, double x0, double y0, double tau, dou
      * compiler reload the tables); every sum in the order of the plain
      * formula, so the result is the same to the bit. */
     double B[M][M], C[M][M], r0[M], nac[M];
+    BKF_UNROLL
     for (int i = 0; i < M; i++) {
+        BKF_UNROLL
         for (int l = 0; l < M; l++) {
             B[i][l] = (i == l) + tt * g->A2[i][l];
             C[i][l] = tm * g->A[i][l];
@@ -359,13 +367,16 @@ static int gauss_step(const bkf_colloc *c, double x0, double y0, double tau, dou
     double Xl[M];
     memcpy(Xl, X, sizeof Xl);
     for (int it = 0; it < 12; it++) {
-        double F[M], Fp[M], mat[M][M + 1], dmax = 0.0;
+        double F[M], Fp[M], mat[M][M + 4], dmax = 0.0;
+        BKF_UNROLL
         for (int i = 0; i < M; i++) {
             F[i] = lienard_F(Xl[i]);
             Fp[i] = Xl[i] * Xl[i] - 1.0;
         }
+        BKF_UNROLL
         for (int i = 0; i < M; i++) {
             double a2x = 0.0, af = 0.0;
+            BKF_UNROLL
             for (int l = 0; l < M; l++) {
                 a2x += g->A2[i][l] * Xl[l];
                 af += g->A[i][l] * F[l];
@@ -373,15 +384,14 @@ static int gauss_step(const bkf_colloc *c, double x0, double y0, double tau, dou
             }
             mat[i][M] = -(Xl[i] - x0 - r0[i] - tt * (nac[i] - a2x) + tm * af);
         }
-        double *r[M];
-        for (int i = 0; i < M; i++) r[i] = mat[i];
-        if (!solve_rows(r, M + 1, 1)) {
+        if (!solve_rows(mat, M + 1, 1)) {
             memcpy(X, Xl, sizeof Xl);
             return 0;
         }
+        BKF_UNROLL
         for (int i = 0; i < M; i++) {
-            Xl[i] += r[i][M];
-            if (fabs(r[i][M]) > dmax) dmax = fabs(r[i][M]);
+            Xl[i] += mat[i][M];
+            if (fabs(mat[i][M]) > dmax) dmax = fabs(mat[i][M]);
         }
         if (!isfinite(dmax) || dmax > 10.0) {
             memcpy(X, Xl, sizeof Xl);
@@ -390,6 +400,7 @@ static int gauss_step(const bkf_colloc *c, double x0, double y0, double tau, dou
         if (dmax <= goal * (1.0 + fabs(x0))) {
             memcpy(X, Xl, sizeof Xl);
             double pX = 0.0, wF = 0.0, wX = 0.0;
+            BKF_UNROLL
             for (int l = 0; l < M; l++) {
                 pX += g->p[l] * Xl[l];
                 wF += g->w[l] * lienard_F(Xl[l]);
@@ -565,10 +576,8 @@ static int condense(const bkf_colloc *c, size_t j, double *Z, double *lin)
         mat[i][M + 2] = tau * a * g->c[i];
         mat[i][M + 3] = -h * rtau;
     }
-    double *r[M];
-    for (int i = 0; i < M; i++) r[i] = mat[i];
-    if (!solve_rows(r, M + 4, 0)) return 0;
-    /* the sums from the local rows, Z stored after (stores through Z made
+    if (!solve_rows(mat, M + 4, 0)) return 0;
+    /* the sums from the local rows, Z stored after (stores through Z make
      * the compiler reload the tables) */
     double pX = 0.0, wF = 0.0, wX = 0.0, gz[4] = {0}, wz[4] = {0};
     for (int l = 0; l < M; l++) {
@@ -577,12 +586,12 @@ static int condense(const bkf_colloc *c, size_t j, double *Z, double *lin)
         wX += g->w[l] * X[l];
         double gl = tau * tau * g->p[l] + tau * mu * g->w[l] * Fp[l];
         for (int col = 0; col < 4; col++) {
-            gz[col] += gl * r[l][M + col];
-            wz[col] += g->w[l] * r[l][M + col];
+            gz[col] += gl * mat[l][M + col];
+            wz[col] += g->w[l] * mat[l][M + col];
         }
     }
     for (int col = 0; col < 4; col++)
-        for (int i = 0; i < M; i++) Z[col * M + i] = r[i][M + col];
+        for (int i = 0; i < M; i++) Z[col * M + i] = mat[i][M + col];
     double Ex = c->x[j + 1] - xj - tau * a * yj - tau * tau * (0.5 * nu - pX) + tau * mu * wF;
     double Ey = c->y[j + 1] - yj - tau / a * (nu - wX);
     double Qt = a * yj + 2.0 * tau * (0.5 * nu - pX) - mu * wF;
