@@ -26,6 +26,17 @@
 #include <string.h>
 
 #define M BKF_COLLOC_M
+/* Complete unrolling of the loops over the M stages in solve_rows and
+ * gauss_step, whose Newton iterations are one serial chain (-O2 kept them
+ * as loops: the matrix then went through row pointers and memory, and a
+ * cold T at mu 1e4 was latency-bound); the arithmetic and its order are
+ * unchanged.  On condense, whose intervals are independent, it gained
+ * nothing. */
+#if defined(__GNUC__) && !defined(__clang__)
+#define BKF_UNROLL _Pragma("GCC unroll 8")
+#else
+#define BKF_UNROLL
+#endif
 /* Newton iterations per mesh before the solve refuses. */
 #define MAX_NEWTON 30
 /* Largest partial product of interval maps, and largest relative mismatch
@@ -276,6 +287,58 @@ static void poly_eval(const bkf_colloc *c, size_t j, double theta, double *xv, d
     *yv = sy;
 }
 
+/* Gaussian elimination with partial pivoting on the M x M block of r, for
+ * the right-hand sides in columns M..ncol-1, which the solutions
+ * overwrite.  0 if the block is singular.  divide: by the pivot rather than
+ * times its inverse, the rounding gauss_step always had (its results decide the turn's step
+ * acceptance, hence the mesh: the inverse moved T at mu 1e4 by 24 ulps).
+ * Inlined, so that ncol and divide are constants and the loops unroll. */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline int solve_rows(double r[M][M + 4], int ncol, int divide)
+{
+    BKF_UNROLL
+    for (int k = 0; k < M; k++) {
+        int piv = k;
+        double best = fabs(r[k][k]);
+        BKF_UNROLL
+        for (int i = k + 1; i < M; i++)
+            if (fabs(r[i][k]) > best) {
+                best = fabs(r[i][k]);
+                piv = i;
+            }
+        if (!(best > 0.0)) return 0;
+        if (piv != k) {
+            BKF_UNROLL
+            for (int l = k; l < ncol; l++) {
+                double t = r[k][l];
+                r[k][l] = r[piv][l];
+                r[piv][l] = t;
+            }
+        }
+        double inv = 1.0 / r[k][k];
+        BKF_UNROLL
+        for (int i = k + 1; i < M; i++) {
+            double f = divide ? r[i][k] / r[k][k] : r[i][k] * inv;
+            if (f == 0.0 && !divide) continue;
+            BKF_UNROLL
+            for (int l = k + 1; l < ncol; l++) r[i][l] -= f * r[k][l];
+        }
+        if (!divide) r[k][k] = inv;
+    }
+    BKF_UNROLL
+    for (int col = M; col < ncol; col++)
+        BKF_UNROLL
+        for (int i = M - 1; i >= 0; i--) {
+            double s = r[i][col];
+            BKF_UNROLL
+            for (int l = i + 1; l < M; l++) s -= r[i][l] * r[l][col];
+            r[i][col] = divide ? s / r[i][i] : s * r[i][i];
+        }
+    return 1;
+}
+
 /* One Gauss step of length tau from (x0, y0): the stage equations R(X) = 0
  * by Newton from the guess in X, until a correction is below goal (1 +
  * |x0|); the end values into (x1, y1).  0 if Newton does not converge (the
@@ -285,57 +348,70 @@ static int gauss_step(const bkf_colloc *c, double x0, double y0, double tau, dou
                       double *y1)
 {
     const gauss_table *g = &c->g;
-    const double mu = c->mu, nu = c->nu, a = c->a;
-    for (int it = 0; it < 12; it++) {
-        double F[M], Fp[M], mat[M][M + 1], dmax = 0.0;
-        for (int i = 0; i < M; i++) {
-            F[i] = lienard_F(X[i]);
-            Fp[i] = X[i] * X[i] - 1.0;
+    const double mu = c->mu, nu = c->nu, a = c->a, tt = tau * tau, tm = tau * mu;
+    /* What does not change over the iterations, hoisted out of them, and
+     * the stages iterated in a local copy (the stores through X made the
+     * compiler reload the tables); every sum in the order of the plain
+     * formula, so the result is the same to the bit. */
+    double B[M][M], C[M][M], r0[M], nac[M];
+    BKF_UNROLL
+    for (int i = 0; i < M; i++) {
+        BKF_UNROLL
+        for (int l = 0; l < M; l++) {
+            B[i][l] = (i == l) + tt * g->A2[i][l];
+            C[i][l] = tm * g->A[i][l];
         }
+        r0[i] = tau * a * g->c[i] * y0;
+        nac[i] = nu * g->Ac[i];
+    }
+    double Xl[M];
+    memcpy(Xl, X, sizeof Xl);
+    for (int it = 0; it < 12; it++) {
+        double F[M], Fp[M], mat[M][M + 4], dmax = 0.0;
+        BKF_UNROLL
+        for (int i = 0; i < M; i++) {
+            F[i] = lienard_F(Xl[i]);
+            Fp[i] = Xl[i] * Xl[i] - 1.0;
+        }
+        BKF_UNROLL
         for (int i = 0; i < M; i++) {
             double a2x = 0.0, af = 0.0;
+            BKF_UNROLL
             for (int l = 0; l < M; l++) {
-                a2x += g->A2[i][l] * X[l];
+                a2x += g->A2[i][l] * Xl[l];
                 af += g->A[i][l] * F[l];
-                mat[i][l] = (i == l) + tau * tau * g->A2[i][l] + tau * mu * g->A[i][l] * Fp[l];
+                mat[i][l] = B[i][l] + C[i][l] * Fp[l];
             }
-            mat[i][M] = -(X[i] - x0 - tau * a * g->c[i] * y0 - tau * tau * (nu * g->Ac[i] - a2x) + tau * mu * af);
+            mat[i][M] = -(Xl[i] - x0 - r0[i] - tt * (nac[i] - a2x) + tm * af);
         }
-        for (int k = 0; k < M; k++) {
-            int piv = k;
-            for (int i = k + 1; i < M; i++)
-                if (fabs(mat[i][k]) > fabs(mat[piv][k])) piv = i;
-            if (!(fabs(mat[piv][k]) > 0.0)) return 0;
-            for (int l = k; l <= M && piv != k; l++) {
-                double tmp = mat[k][l];
-                mat[k][l] = mat[piv][l];
-                mat[piv][l] = tmp;
-            }
-            for (int i = k + 1; i < M; i++) {
-                double f = mat[i][k] / mat[k][k];
-                for (int l = k; l <= M; l++) mat[i][l] -= f * mat[k][l];
-            }
+        if (!solve_rows(mat, M + 1, 1)) {
+            memcpy(X, Xl, sizeof Xl);
+            return 0;
         }
-        for (int i = M - 1; i >= 0; i--) {
-            double s = mat[i][M];
-            for (int l = i + 1; l < M; l++) s -= mat[i][l] * mat[l][M];
-            mat[i][M] = s / mat[i][i];
-            X[i] += mat[i][M];
-            dmax = fmax(dmax, fabs(mat[i][M]));
+        BKF_UNROLL
+        for (int i = 0; i < M; i++) {
+            Xl[i] += mat[i][M];
+            if (fabs(mat[i][M]) > dmax) dmax = fabs(mat[i][M]);
         }
-        if (!isfinite(dmax) || dmax > 10.0) return 0;
+        if (!isfinite(dmax) || dmax > 10.0) {
+            memcpy(X, Xl, sizeof Xl);
+            return 0;
+        }
         if (dmax <= goal * (1.0 + fabs(x0))) {
+            memcpy(X, Xl, sizeof Xl);
             double pX = 0.0, wF = 0.0, wX = 0.0;
+            BKF_UNROLL
             for (int l = 0; l < M; l++) {
-                pX += g->p[l] * X[l];
-                wF += g->w[l] * lienard_F(X[l]);
-                wX += g->w[l] * X[l];
+                pX += g->p[l] * Xl[l];
+                wF += g->w[l] * lienard_F(Xl[l]);
+                wX += g->w[l] * Xl[l];
             }
-            *x1 = x0 + tau * a * y0 + tau * tau * (0.5 * nu - pX) - tau * mu * wF;
+            *x1 = x0 + tau * a * y0 + tt * (0.5 * nu - pX) - tm * wF;
             *y1 = y0 + tau / a * (nu - wX);
             return isfinite(*x1) && isfinite(*y1);
         }
     }
+    memcpy(X, Xl, sizeof Xl);
     return 0;
 }
 
@@ -500,34 +576,9 @@ static int condense(const bkf_colloc *c, size_t j, double *Z, double *lin)
         mat[i][M + 2] = tau * a * g->c[i];
         mat[i][M + 3] = -h * rtau;
     }
-    /* Gaussian elimination with partial pivoting on the four right-hand sides */
-    for (int k = 0; k < M; k++) {
-        int piv = k;
-        for (int i = k + 1; i < M; i++)
-            if (fabs(mat[i][k]) > fabs(mat[piv][k])) piv = i;
-        if (!(fabs(mat[piv][k]) > 0.0)) return 0;
-        if (piv != k)
-            for (int l = k; l < M + 4; l++) {
-                double tmp = mat[k][l];
-                mat[k][l] = mat[piv][l];
-                mat[piv][l] = tmp;
-            }
-        double inv = 1.0 / mat[k][k];
-        for (int i = k + 1; i < M; i++) {
-            double f = mat[i][k] * inv;
-            if (f == 0.0) continue;
-            for (int l = k + 1; l < M + 4; l++) mat[i][l] -= f * mat[k][l];
-        }
-        mat[k][k] = inv;
-    }
-    for (int col = 0; col < 4; col++) {
-        double *z = Z + col * M;
-        for (int i = M - 1; i >= 0; i--) {
-            double s = mat[i][M + col];
-            for (int l = i + 1; l < M; l++) s -= mat[i][l] * z[l];
-            z[i] = s * mat[i][i];
-        }
-    }
+    if (!solve_rows(mat, M + 4, 0)) return 0;
+    /* the sums from the local rows, Z stored after (stores through Z make
+     * the compiler reload the tables) */
     double pX = 0.0, wF = 0.0, wX = 0.0, gz[4] = {0}, wz[4] = {0};
     for (int l = 0; l < M; l++) {
         pX += g->p[l] * X[l];
@@ -535,10 +586,12 @@ static int condense(const bkf_colloc *c, size_t j, double *Z, double *lin)
         wX += g->w[l] * X[l];
         double gl = tau * tau * g->p[l] + tau * mu * g->w[l] * Fp[l];
         for (int col = 0; col < 4; col++) {
-            gz[col] += gl * Z[col * M + l];
-            wz[col] += g->w[l] * Z[col * M + l];
+            gz[col] += gl * mat[l][M + col];
+            wz[col] += g->w[l] * mat[l][M + col];
         }
     }
+    for (int col = 0; col < 4; col++)
+        for (int i = 0; i < M; i++) Z[col * M + i] = mat[i][M + col];
     double Ex = c->x[j + 1] - xj - tau * a * yj - tau * tau * (0.5 * nu - pX) + tau * mu * wF;
     double Ey = c->y[j + 1] - yj - tau / a * (nu - wX);
     double Qt = a * yj + 2.0 * tau * (0.5 * nu - pX) - mu * wF;
