@@ -1103,12 +1103,16 @@ static int coarsen(bkf_colloc *c)
     return rc;
 }
 
-static void fill_result(bkf_colloc *c, double est, double L1, double L2, bkf_colloc_result *out)
+/* The solution on c's mesh into *out: T with its estimate est, the log
+ * multiplier L with the pair's other value L_other (divided as T's
+ * difference is: divisor) and its rounding. */
+static void fill_result(bkf_colloc *c, double est, double L, double L_other, double divisor,
+                        bkf_colloc_result *out)
 {
     out->period = c->T;
     out->period_err = est;
-    out->log_multiplier = L1;
-    out->log_multiplier_err = fabs(L1 - L2) / PAIRED_DIVISOR + 8.0 * DBL_EPSILON * sqrt((double)c->n) * fabs(L1);
+    out->log_multiplier = L;
+    out->log_multiplier_err = fabs(L - L_other) / divisor + 8.0 * DBL_EPSILON * sqrt((double)c->n) * fabs(L);
     out->return_map_slope = c->trace - 1.0;
     out->section_y = c->y[0];
     out->intervals = c->n;
@@ -1147,7 +1151,7 @@ static int solve_paired(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_e
         double est = fmax(fmax(diff / PAIRED_DIVISOR, round_floor(c, T1)), TURN_FLOOR * c->local_tol * T1) +
                      newton_left;
         if (ACCEPT_MARGIN * est <= tol * T1) {
-            fill_result(c, est, L1, L2, out);
+            fill_result(c, est, L1, L2, PAIRED_DIVISOR, out);
             c->pair_n = c->n / 2;
             c->paired = 0;
             return BKF_OK;
@@ -1190,16 +1194,7 @@ int bkf_colloc_solve(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_erro
         double diff = fabs(T1 - T2);
         double est = fmax(diff / EST_DIVISOR, round_floor(c, T2));
         if (ACCEPT_MARGIN * est <= tol * T2) {
-            out->period = T2;
-            out->period_err = est;
-            out->log_multiplier = L2;
-            out->log_multiplier_err = fabs(L1 - L2) / EST_DIVISOR + 8.0 * DBL_EPSILON * sqrt((double)c->n) * fabs(L2);
-            out->return_map_slope = c->trace - 1.0;
-            out->section_y = c->y[0];
-            out->intervals = c->n;
-            out->newton_iterations = c->iterations;
-            out->interval_solves = c->solves;
-            c->have_solution = 1;
+            fill_result(c, est, L2, L1, EST_DIVISOR, out);
             c->pair_n = n;
             return BKF_OK;
         }
