@@ -162,7 +162,10 @@ int bkf_cycle_estimate(bkf_cycle *cycle, double mu, double nu, const bkf_cycle_o
  * explosion) is retried at looser tolerances up to 1e-6 and passed with
  * model "shooting-relaxed" and its honest (larger) period_err, or, failing
  * that, with model "refused" and NaN values; the branch goes on past it.
- * At most max_points points (0: no limit, beyond the driver's own). */
+ * At most max_points points (0: no limit, beyond the driver's own, 10000
+ * rows: a branch that spends those short of `to`, its steps shrunk to a
+ * creep, returns BKF_EBUDGET naming where it stopped, after visiting the
+ * rows it has). */
 typedef enum { BKF_CYCLE_ALONG_MU = 0, BKF_CYCLE_ALONG_NU = 1 } bkf_cycle_param;
 typedef int (*bkf_cycle_visit)(const bkf_cycle_result *point, void *data);
 int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed,

@@ -2288,6 +2288,19 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
     }
     bkf_cycle_free(b.cycle);
     if (b.visit_status > 0) return b.visit_status;
+    /* the driver's own row budget (no max_points asked) is not an end: a
+     * branch that spent it short of `to` (steps shrunk to creeping, as
+     * towards nu -0.999 at mu 1e3, where the section sits at the knee) is
+     * reported, never passed off as complete */
+    if (rc == BKF_OK && !max_points && b.visit_status == 0 && b.rows >= limit && b.have_last &&
+        fabs(b.last_u[1] - q_to) > 1e-12 * fmax(1.0, fabs(q_to))) {
+        int mu_along = along == BKF_CYCLE_ALONG_MU;
+        return bkf_error_set(err, BKF_EBUDGET,
+                             "branch along %s stopped after %zu rows at %s = %.17g, short of its end %.17g "
+                             "(the steps had shrunk; continue from there or split the range)",
+                             mu_along ? "mu" : "nu", b.rows, mu_along ? "mu" : "nu",
+                             mu_along ? exp(b.last_u[1]) : b.last_u[1], to);
+    }
     if (rc == BKF_OK && b.visit_status == 0 && b.rows < limit && b.have_last &&
         fabs(b.last_u[1] - q_to) > 1e-12 * fmax(1.0, fabs(q_to)))
         return bkf_error_set(err, BKF_ENUMERIC, "branch ended at q = %.17g before its end %.17g (canard)",

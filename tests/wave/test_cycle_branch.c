@@ -5,6 +5,7 @@
 #include "bkfront/cycle.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "taylor_reference.h"
@@ -283,4 +284,31 @@ TEST(cycle_branch_mu_through_the_canard_at_nu_minus_0_999)
 TEST(cycle_branch_mu_through_the_canard_at_nu_0_999)
 {
     check_canard_branch(BKF_CYCLE_ALONG_MU, 0.1, 1e4, 0.999);
+}
+
+static int count_rows(const bkf_cycle_result *r, void *data)
+{
+    (void)r;
+    ++*(size_t *)data;
+    return 0;
+}
+
+/* A branch that spends the driver's row budget short of its end is a
+ * failure that says where it stopped, not a complete branch: towards nu
+ * -0.999 at mu 1e3 the steps shrink until 10000 rows end near -0.9988
+ * (about 60 s of CPU, so it runs only when BKF_TEST_SLOW is set). */
+TEST(cycle_branch_budget_spent_short_of_the_end_is_reported)
+{
+    const char *slow = getenv("BKF_TEST_SLOW");
+    if (!slow || !*slow) {
+        bkf_test_note("skipped: about 60 s of CPU; BKF_TEST_SLOW=1 runs it");
+        return;
+    }
+    bkf_cycle_options o = bkf_cycle_options_default();
+    bkf_error e;
+    size_t rows = 0;
+    int rc = bkf_cycle_branch(BKF_CYCLE_ALONG_NU, 0.0, -0.999, 1000.0, &o, 0, count_rows, &rows, &e);
+    CHECK_STATUS(rc, BKF_EBUDGET);
+    CHECK_MSG(strstr(e.message, "short of its end -0.999") != NULL, "%s", e.message);
+    CHECK(rows == 10000);
 }
