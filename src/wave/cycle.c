@@ -434,10 +434,6 @@ static bkf_stepper_kind shooting_stepper(double mu, double tol)
     return BKF_STEPPER_EXPLICIT;
 }
 
-/* The automatic shooting stepper (a solve's automatic choice is
- * solve_stepper, collocation where it is faster). */
-static bkf_stepper_kind auto_stepper(double mu, double tol) { return shooting_stepper(mu, tol); }
-
 const char *bkf_cycle_stepper_name(bkf_stepper_kind kind)
 {
     switch (kind) {
@@ -1154,7 +1150,6 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
     if (mu >= 1.0 && canard > 0.3 && canard < 3.0)
         return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: canard region", mu, nu);
     if (!c->colloc && !(c->colloc = bkf_colloc_alloc())) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    size_t steps = 0, shots = 0;
     int rc = BKF_OK;
     int warm = opt->warm_start && c->have_solution && fabs(log(mu / c->result.mu)) <= COLLOC_WARM_LN_MU &&
                fabs(nu - c->result.nu) <= COLLOC_WARM_NU && bkf_colloc_warm(c->colloc, mu, nu);
@@ -1197,8 +1192,8 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
     res->return_map_slope = r.return_map_slope;
     res->section_y = r.section_y;
     res->section_slope = p->a * (r.section_y - p->b * lienard_F(nu));
-    res->steps = steps + r.interval_solves;
-    res->newton_iterations = shots + r.newton_iterations;
+    res->steps = r.interval_solves;
+    res->newton_iterations = r.newton_iterations;
     res->stepper = bkf_cycle_stepper_name(BKF_STEPPER_COLLOCATION);
     res->model = "shooting";
     c->profile_tol = fmax(0.01 * opt->tol, 1e-14);
@@ -1231,7 +1226,7 @@ static bkf_stepper_kind solve_stepper(double mu, double nu, double tol)
     if (mu >= COLLOC_AUTO_MU_MIN && mu <= COLLOC_AUTO_MU_MAX && tol <= COLLOC_AUTO_TOL_MAX * (1.0 + 1e-9) &&
         mu * mu * (1.0 - fabs(nu)) >= COLLOC_AUTO_RELAXATION)
         return BKF_STEPPER_COLLOCATION;
-    return auto_stepper(mu, tol);
+    return shooting_stepper(mu, tol);
 }
 
 static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
@@ -1450,6 +1445,16 @@ done:
 int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
                     bkf_error *err)
 {
+    if (!c) return bkf_error_set(err, BKF_EINPUT, "cycle object is NULL");
+    /* Both engines write the profile's nodes before they know whether the
+     * solve meets tol; a failure keeps the previous solution, so its nodes
+     * (and their tolerance and stepper) are set aside and put back. */
+    node *kept_nodes = c->nodes;
+    size_t kept_count = c->node_count, kept_capacity = c->node_capacity;
+    double kept_tol = c->profile_tol;
+    bkf_stepper_kind kept_stepper = c->profile_stepper;
+    c->nodes = NULL;
+    c->node_count = c->node_capacity = 0;
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     int rc = cycle_solve_body(c, mu, nu, options, err);
     /* bd2x2's estimate floor is 16 times bsimp's (BD_ERROR_PER_TOL), so at
@@ -1465,6 +1470,15 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
         rc = cycle_solve_body(c, mu, nu, &o, err);
     }
     bkf_gsl_handler_pop(handler);
+    node *dropped = rc == BKF_OK ? kept_nodes : c->nodes;
+    if (rc != BKF_OK) {
+        c->nodes = kept_nodes;
+        c->node_count = kept_count;
+        c->node_capacity = kept_capacity;
+        c->profile_tol = kept_tol;
+        c->profile_stepper = kept_stepper;
+    }
+    free(dropped);
     return rc;
 }
 
@@ -1860,7 +1874,7 @@ static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu,
     p->sens = 0;
     p->rhs_calls = p->jacobian_calls = 0;
     bkf_stepper_kind kind = b->options.stepper;
-    if (kind == BKF_STEPPER_AUTO) kind = auto_stepper(p->mu, tol);
+    if (kind == BKF_STEPPER_AUTO) kind = shooting_stepper(p->mu, tol);
     integrator in = {0}, aux = {0};
     double tol_a = pair_tol(tol, p->nu, kind), tol_b = tol_a / TOL_RATIO, floor = 0.0, y_real = 0.0;
     double y0 = b->last.y0, y_scale = fmax(fabs(y0), 1e-3);

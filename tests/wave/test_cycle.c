@@ -213,6 +213,32 @@ TEST(cycle_profile_is_the_cycle)
     bkf_cycle_free(c);
 }
 
+/* A refused solve keeps the previous solution, its profile included: the
+ * profile at z = 0 is still on the kept cycle's section (f = nu, f' its
+ * section slope) and closes after a period, though the refused solve (the
+ * canard at mu 3.6505, nu 0.99, tol 1e-10) had integrated other cycles. */
+TEST(cycle_refused_solve_keeps_the_previous_profile)
+{
+    bkf_cycle *c = bkf_cycle_alloc();
+    bkf_error e;
+    bkf_cycle_options o = bkf_cycle_options_default();
+    CHECK_STATUS(bkf_cycle_solve(c, 2.0, -0.3, &o, &e), BKF_OK);
+    const bkf_cycle_result *r = bkf_cycle_get(c);
+    double slope = r->section_slope, period = r->period;
+    int rc = bkf_cycle_solve(c, 3.65051977535718, 0.99, &o, &e);
+    CHECK_MSG(bkf_status_is_numerical(rc), "the canard point was answered (%d): pick a refused one", rc);
+    r = bkf_cycle_get(c);
+    CHECK(r->mu == 2.0 && r->nu == -0.3);
+    double f, fp, f2;
+    CHECK_STATUS(bkf_cycle_profile(c, 0.0, &f, &fp, &e), BKF_OK);
+    CHECK_CLOSE(f, -0.3, 0.0, 1e-12);
+    CHECK_CLOSE(fp, slope, 1e-10, 1e-10);
+    CHECK_STATUS(bkf_cycle_profile(c, 0.37 * period, &f, NULL, &e), BKF_OK);
+    CHECK_STATUS(bkf_cycle_profile(c, 1.37 * period, &f2, NULL, &e), BKF_OK);
+    CHECK_CLOSE(f2, f, 1e-9, 1e-9);
+    bkf_cycle_free(c);
+}
+
 TEST(cycle_warm_start_agrees_with_cold)
 {
     bkf_cycle *c = bkf_cycle_alloc();
