@@ -1107,9 +1107,8 @@ _Static_assert(sizeof(bkf_pde_stepper) == sizeof(int), "bkf_pde_stepper is not i
 _Static_assert(sizeof(bkf_check_frame) == sizeof(int), "bkf_check_frame is not int-sized");
 _Static_assert(sizeof(bkf_check_grid) == sizeof(int), "bkf_check_grid is not int-sized");
 
-/* Indexed by bkf_pde_stepper, bkf_check_frame and bkf_check_grid. */
-static const char *const stepper_names[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8",
-                                             NULL};
+/* Indexed by bkf_check_frame and bkf_check_grid (the steppers'
+ * names: bkf_pde_stepper_names). */
 static const char *const frame_names[] = {"moving", "lab", NULL};
 static const char *const grid_names[] = {"auto", "uniform", "mapped", NULL};
 static const char *const model_names[] = {"continuum", "chain", NULL};
@@ -1174,7 +1173,7 @@ const bkf_option bkf_check_keys[] = {
     {.name = "filter", .type = BKF_OPT_DOUBLE, .offset = OPT(filter), .flags = BOUNDED,
      .min = 0, .max = BKF_CHECK_FILTER_MAX, .form = "F", .shown_default = "4",
      .help = "spectral filter, as in bkfront simulate,\nin [0, 1000]"},
-    {.name = "stepper", .type = BKF_OPT_CHOICE, .offset = OPT(stepper), .choices = stepper_names,
+    {.name = "stepper", .type = BKF_OPT_CHOICE, .offset = OPT(stepper), .choices = bkf_pde_stepper_names,
      .form = "S", .shown_default = "etdrk4",
      .help = "etdrk4 (exponential, the wave part of every mode exact,\n"
              "steps set by the physics), lawson8 (the same with rk8pd's\n"
@@ -1434,7 +1433,7 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
                     "stepper %s, dealias off, filter %s",
                     bkf_format_number(m->gamma, a, sizeof a), bkf_format_number(m->c, b, sizeof b), bkf_format_number(m->nu, c, sizeof c),
                     bkf_format_number(m->S, d, sizeof d), o->N, bkf_format_number(m->S / (double)o->N, e, sizeof e),
-                    bkf_format_number(k->info.tol, f, sizeof f), stepper_names[o->stepper],
+                    bkf_format_number(k->info.tol, f, sizeof f), bkf_pde_stepper_names[o->stepper],
                     o->filter == 0 ? "off" : bkf_format_number(o->filter, g, sizeof g));
     if (!s && !chain)
         s = bkf_io_table_commentf(t, err, "frame: %s",

@@ -82,7 +82,7 @@ int bkf_pde_check(const bkf_model_params *p, const bkf_pde_options *o, bkf_error
         return bkf_error_set(err, BKF_EINPUT,
                              "stepper must be rk8pd, rkck, rkf45, etdrk4 or lawson8");
     int exponential = o->stepper == BKF_PDE_ETDRK4 || o->stepper == BKF_PDE_LAWSON8;
-    const char *sname = o->stepper == BKF_PDE_ETDRK4 ? "etdrk4" : "lawson8";
+    const char *sname = bkf_pde_stepper_names[o->stepper];
     if (exponential && p->kind != BKF_MODEL_CONTINUUM)
         return bkf_error_set(err, BKF_EINPUT, "the %s stepper applies to the continuum model only",
                              sname);
