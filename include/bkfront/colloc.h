@@ -38,11 +38,6 @@ typedef struct {
 bkf_colloc *bkf_colloc_alloc(void);
 void bkf_colloc_free(bkf_colloc *colloc);
 
-/* Initial guess from a trajectory: count nodes z[0] = 0 < z[1] < ... < T
- * with states (x, y) at (mu, nu); the mesh is the nodes'. */
-int bkf_colloc_guess_nodes(bkf_colloc *colloc, double mu, double nu, const double *z, const double *x,
-                           const double *y, size_t count, double T, bkf_error *err);
-
 /* Initial guess by one turn of Gauss steps from (x0, y0) over the time T
  * (a loose shot's section point and period), each step accepted where it
  * and its two halves agree within local_tol (relative to the cycle's size);

@@ -731,66 +731,6 @@ static int newton(bkf_colloc *c, double goal, bkf_error *err)
 
 /* ------------------------------------------------------------- guesses */
 
-/* Largest subdivision of a node step, and the mismatch (relative to the
- * cycle's size) at the next node below which the Gauss steps resolve it. */
-#define GUESS_SPLIT_MAX 256
-#define GUESS_MISMATCH 1e-3
-
-int bkf_colloc_guess_nodes(bkf_colloc *c, double mu, double nu, const double *z, const double *x,
-                           const double *y, size_t count, double T, bkf_error *err)
-{
-    if (!c || count < 2 || !(T > z[count - 1]))
-        return bkf_error_set(err, BKF_EINPUT, "collocation guess needs at least 2 nodes within (0, T)");
-    set_params(c, mu, nu);
-    double size = fmin(1.0, 2.0 * sqrt(fmax(1.0 - nu * nu, 0.0)));
-    /* Each node step is covered by Gauss steps from its start, halved until
-     * they land on the next node: the mesh then resolves the cycle for m
-     * points (the shooting steps, of order up to 14, are far longer on the
-     * jumps), and the stages are consistent, which the global Newton needs
-     * (Hermite stages on the shooting mesh: corrections of 1e6 at mu 1e3). */
-    size_t n = 0;
-    for (size_t j = 0; j < count; j++) {
-        double z1 = j + 1 < count ? z[j + 1] : T, xn = x[j + 1 < count ? j + 1 : 0], yn = y[j + 1 < count ? j + 1 : 0];
-        double x1 = x[j], y1 = y[j];
-        size_t k = 1;
-        for (;; k *= 2) {
-            if (!reserve(c, n + k)) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-            double tau = (z1 - z[j]) / (double)k, xs = x[j], ys = y[j];
-            int ok = 1;
-            for (size_t i = 0; i < k && ok; i++) {
-                double *X = c->X + (n + i) * M, xd = c->a * (ys - c->b * lienard_F(xs)) * tau;
-                for (int l = 0; l < M; l++) X[l] = xs + c->g.c[l] * xd;
-                c->t[n + i] = z[j] + (double)i * tau;
-                c->x[n + i] = xs;
-                c->y[n + i] = ys;
-                ok = gauss_step(c, xs, ys, tau, STAGE_GOAL, X, &xs, &ys);
-            }
-            x1 = xs;
-            y1 = ys;
-            /* (the last step's target is the start: a mismatch of the
-             * unconverged shot, not of the steps) */
-            double miss = fmax(fabs(x1 - xn), fabs(y1 - yn)) / size;
-            if (ok && (miss <= GUESS_MISMATCH || j + 1 == count)) break;
-            if (k >= GUESS_SPLIT_MAX)
-                return bkf_error_set(err, BKF_ENUMERIC,
-                                     "collocation at mu = %.15g, nu = %.15g: the guess is not resolved by %d "
-                                     "Gauss steps per node step",
-                                     mu, nu, GUESS_SPLIT_MAX);
-        }
-        n += k;
-    }
-    for (size_t j = 0; j < n; j++) c->t[j] /= T;
-    c->n = n;
-    c->T = T;
-    c->t[n] = 1.0;
-    c->x[n] = c->x[0];
-    c->y[n] = c->y[0];
-    c->have_guess = 1;
-    c->have_solution = 0;
-    c->paired = 0;
-    return BKF_OK;
-}
-
 /* Step-doubled Gauss steps: a step of length tau against two of tau/2,
  * accepted where their end values agree within the local tolerance; the
  * error of the end values (superconvergent, order 2m) is of the step's
