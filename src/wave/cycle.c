@@ -1092,19 +1092,23 @@ static double pair_tol(double tol, double nu, bkf_stepper_kind kind)
  * (bkf_colloc_guess_turn; the cycle attracts like exp(L), L = -7 at mu 1:
  * one turn lands it). */
 #define COLLOC_SERIES_MU 1.0
-/* The uniform mesh whose pair with its bisection meets tol at the first
- * try: the fewest intervals that did (tol 1e-10, nu 0) were 12 at mu 1e-3,
- * 14 at 0.1, 18 at 0.3, 20 at 0.5, 24 at 1, fewer on smaller cycles (16 at
- * mu 1, nu -0.96; 14 at nu 0.99), and they grow like tol^(-1/8) (T's error
- * falls like N^-8: at 1e-12, 24 at mu 0.1, 38 at mu 1; at 1e-6, 6-10). */
 /* Beyond the series' radius (mu 1 at |nu| 0.3-0.7: its smallest term is
  * 0.4-0.5 of the radius) Newton needs 12-15 iterations, a cold solve 1.3-1.4M
  * instructions against rk8pd's 0.86-0.89M; at 0.11 (mu 0.7, nu -0.5) 7,
  * 0.48M against 0.84M.  The automatic choice shoots above this. */
 #define COLLOC_SERIES_RESIDUAL_MAX 0.2
+/* The uniform mesh whose pair with its bisection meets tol at the first
+ * try: the fewest intervals that did (tol 1e-10) were 12 at mu 1e-3, 14
+ * at 0.1, 18 at 0.3, 20 at 0.5, 24 at 1 (nu 0); at mu 1 26 at nu 0.8, 24
+ * at 0.85, 20 at 0.9, 18 at 0.95, 14 at 0.99 (the cycle's sharpest near
+ * |nu| 0.8, not at nu 0); they grow like tol^(-1/8) (T's error falls like
+ * N^-8: at 1e-12, 24 at mu 0.1, 38 at mu 1; at 1e-6, 6-10).  Too few cost
+ * the equidistributed rounds (mu 1, nu 0.85 on 22: 1069k instructions
+ * against 430k on 24). */
 static size_t colloc_series_intervals(double mu, double nu, double tol)
 {
-    double n = (16.0 + 10.0 * mu * sqrt(1.0 - nu * nu)) * pow(1e-10 / tol, 0.125);
+    double shape = 1.1 * fmin(1.0, (1.0 - fabs(nu)) / 0.15);
+    double n = (16.0 + 10.0 * mu * shape) * pow(1e-10 / tol, 0.125);
     return (size_t)fmin(fmax(ceil(n), 6.0), 4000.0);
 }
 /* A warm start reuses the last solution within this distance in (ln mu, nu). */
@@ -1270,9 +1274,10 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, int declin
 #define COLLOC_AUTO_RELAXATION 2.0
 /* Up to mu 1 the series path (bkf_colloc_guess_series) from tol 1e-6 down:
  * callgrind instructions per cold solve (docs/benchmarks.md, colsmall),
- * against rk8pd's: 0.49-0.53 at tol 1e-10 from mu 1e-3 to 0.3 (217-286k
- * against 404-652k), 0.45-0.69 at mu 1 (0.98 at nu 0.9999, tol 1e-6),
- * 0.38-0.72 at tol 1e-8 and 1e-12, 0.60-0.67 at tol 1e-6 below mu 0.3.
+ * against rk8pd's over mu 3e-3..1 x nu 0, 0.3, -0.6, 0.85, -0.95, 0.999,
+ * -0.9999: 0.36-0.69 at tol 1e-10 (217-507k against 404-935k), 0.44-0.84 at
+ * tol 1e-6 but 1.00-1.02 at nu -0.9999 from mu 0.5 (169k against 165k:
+ * two shots there), 0.38-0.69 at tol 1e-8 and 0.44-0.56 at 1e-12.
  * Beyond the series' radius it declines (COLLOC_SERIES_RESIDUAL_MAX). */
 #define COLLOC_AUTO_SERIES_TOL_MAX 1e-6
 /* The rounding floor of the series path's estimate (colloc.c's
@@ -1284,10 +1289,23 @@ static double colloc_series_floor(double mu, double nu, double tol)
     double size = fmin(1.0, 2.0 * sqrt(1.0 - nu * nu));
     return 8.0 * DBL_EPSILON * sqrt(2.0 * (double)colloc_series_intervals(mu, nu, tol)) / size;
 }
+/* Where the series is beyond its radius (its smallest term above
+ * COLLOC_SERIES_RESIDUAL_MAX; measured: at mu 0.8 for |nu| 0.3-0.6, at
+ * 0.85 for 0.15-0.7, at 0.9 for 0.12-0.75, at 1 for 0.08-0.75) the
+ * automatic choice shoots without trying it: the series and the mesh's
+ * evaluation, thrown away, cost 5-11% of the shot (mu 1, nu -0.5: 912k
+ * instructions against 864k).  Outside this outline the residual test in
+ * colloc_attempt still declines. */
+static int colloc_series_beyond_radius(double mu, double nu)
+{
+    double a = fabs(nu);
+    return (mu >= 0.85 && a >= 0.08 + 0.5 * (1.0 - mu) && a <= 0.78) || (mu >= 0.75 && a >= 0.25 && a <= 0.65);
+}
+
 static bkf_stepper_kind solve_stepper(double mu, double nu, double tol, int series_off)
 {
     if (!series_off && mu <= COLLOC_SERIES_MU && tol <= COLLOC_AUTO_SERIES_TOL_MAX * (1.0 + 1e-9) &&
-        colloc_series_floor(mu, nu, tol) * ACCEPT_MARGIN <= tol)
+        colloc_series_floor(mu, nu, tol) * ACCEPT_MARGIN <= tol && !colloc_series_beyond_radius(mu, nu))
         return BKF_STEPPER_COLLOCATION;
     if (mu >= COLLOC_AUTO_MU_MIN && mu <= COLLOC_AUTO_MU_MAX && tol <= COLLOC_AUTO_TOL_MAX * (1.0 + 1e-9) &&
         mu * mu * (1.0 - fabs(nu)) >= COLLOC_AUTO_RELAXATION)
