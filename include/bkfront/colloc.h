@@ -52,6 +52,22 @@ int bkf_colloc_guess_turn(bkf_colloc *colloc, double mu, double nu, double x0, d
  * T = 2 pi, on `intervals` uniform intervals. */
 int bkf_colloc_guess_circle(bkf_colloc *colloc, double mu, double nu, size_t intervals, bkf_error *err);
 
+/* Initial guess for small mu: the Lindstedt (Poincare-Lindstedt) series of
+ * the cycle in mu to `order` (at most 12; 0: the order past which Newton's
+ * iterations stop falling, 2 to 6 by mu), truncated earlier at its smallest
+ * term where mu is beyond its radius (about 1 at nu 0, less at |nu| ~ 0.5),
+ * on `intervals` uniform intervals; *residual (may be NULL): the last term
+ * kept over the cycle's radius 2 sqrt(1 - nu^2), the guess's error where
+ * the series converges.  The solve then keeps the mesh uniform: the pair
+ * is this mesh and its bisection, the finer started from the coarser's
+ * polynomials (docs/numerics.md, "The collocation engine"). */
+int bkf_colloc_guess_series(bkf_colloc *colloc, double mu, double nu, int order, size_t intervals,
+                            double *residual, bkf_error *err);
+
+/* The period 2 pi / omega of that series (the same truncation), NaN
+ * outside mu >= 0, |nu| < 1, order >= 0. */
+double bkf_colloc_series_period(double mu, double nu, int order);
+
 /* Move the last solution to (mu, nu) (same f, f' on the same mesh) as the
  * guess of the next solve; 0 if there is none. */
 int bkf_colloc_warm(bkf_colloc *colloc, double mu, double nu);
@@ -69,8 +85,15 @@ int bkf_colloc_solve(bkf_colloc *colloc, double tol, bkf_colloc_result *out, bkf
  * (no estimate): T into *period.  For studies of the order in the mesh. */
 int bkf_colloc_fixed(bkf_colloc *colloc, size_t intervals, double *period, bkf_error *err);
 
-/* The mesh points of the last solution: z = s T and (x, y) there; writes at
- * most capacity and returns how many there are. */
+/* The extremes of x over the last solution: where x' changes sign
+ * between mesh points, Newton on the length of a Gauss step from the
+ * interval's start whose end has x' = 0 (end values superconvergent, x
+ * there second order in the step's error). */
+int bkf_colloc_extremes(const bkf_colloc *colloc, double *xmax, double *xmin, bkf_error *err);
+
+/* The mesh points of the last solution (or, before the first solve, of
+ * the guess): z = s T and (x, y) there; writes at most capacity and
+ * returns how many there are. */
 size_t bkf_colloc_nodes(const bkf_colloc *colloc, double *z, double *x, double *y, size_t capacity);
 
 #ifdef __cplusplus

@@ -81,8 +81,9 @@ const bkf_option bkf_period_options[] = {
              "(extrapolation), colloc: Gauss-Legendre collocation on an\n"
              "adapted mesh (collocation; outside canards: there and\n"
              "where it refuses the solve shoots as auto),\n"
-             "or auto: colloc from mu 10 at tol <= 1e-10 where\n"
-             "mu^2 (1 - |nu|) >= 2, else bd2x2 above mu 30 (above 20\n"
+             "or auto: colloc up to mu 1 at tol <= 1e-6 and from\n"
+             "mu 10 at tol <= 1e-10 where mu^2 (1 - |nu|) >= 2,\n"
+             "else bd2x2 above mu 30 (above 20\n"
              "at tol 1e-12..1e-8), else rk8pd"},
 };
 const size_t bkf_period_noptions = sizeof bkf_period_options / sizeof bkf_period_options[0];

@@ -22,6 +22,7 @@
 #include <float.h>
 #include <gsl/gsl_math.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -97,6 +98,7 @@ struct bkf_colloc {
     double trace, log_mult;
     size_t pair_n; /* the coarser mesh of the last accepted pair */
     int paired;    /* the mesh is pairs of half steps (bkf_colloc_guess_turn) */
+    int uniform;   /* a uniform mesh of a smooth cycle (bkf_colloc_guess_series) */
     double local_tol; /* of those steps */
     double *keep;  /* the finer solution while its coarsening is solved */
     size_t keep_cap;
@@ -191,10 +193,18 @@ static void gauss_init(gauss_table *g)
     }
 }
 
+/* The tables are the same for every object: built once (a cold T at
+ * mu 0.1 built them per solve, 36k of its 250k instructions). */
+static gauss_table gauss_shared;
+static pthread_once_t gauss_once = PTHREAD_ONCE_INIT;
+static void gauss_shared_init(void) { gauss_init(&gauss_shared); }
+
 bkf_colloc *bkf_colloc_alloc(void)
 {
     bkf_colloc *c = calloc(1, sizeof *c);
-    if (c) gauss_init(&c->g);
+    if (!c) return NULL;
+    pthread_once(&gauss_once, gauss_shared_init);
+    c->g = gauss_shared;
     return c;
 }
 
@@ -914,6 +924,7 @@ int bkf_colloc_guess_turn(bkf_colloc *c, double mu, double nu, double x0, double
         return bkf_error_set(err, BKF_EINPUT, "collocation guess needs T > 0, local_tol > 0 and a finite start");
     set_params(c, mu, nu);
     c->have_guess = c->have_solution = 0;
+    c->uniform = 0;
     if (!reserve(c, 1)) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     /* a first turn lands on the cycle: from a start off it by d the turn's
      * phase is off by about d mu and the jump by d mu^2, which Newton, damped,
@@ -944,6 +955,270 @@ int bkf_colloc_guess_circle(bkf_colloc *c, double mu, double nu, size_t interval
     c->have_guess = 1;
     c->have_solution = 0;
     c->paired = 0;
+    c->uniform = 0;
+    return BKF_OK;
+}
+
+/* ------------------------------------------------- Lindstedt series */
+
+/* u = f - nu in the time tau = omega z solves
+ *     omega^2 u'' + mu omega (d/dtau) G(u) + u = 0,  G(u) = u^3/3 + nu u^2 - w u,
+ * w = 1 - nu^2 (G' = (u + nu)^2 - 1).  With u = sum mu^k u_k, omega =
+ * sum mu^k omega_k and u_0 = r sin tau, order k + 1 reads
+ *     u_{k+1}'' + u_{k+1} = R_{k+1} = sum_{j=1}^{k+1} W_j u_{k+1-j}''
+ *                                     - sum_{i=0}^{k} omega_i G_{k-i}',
+ * W_j the mu^j coefficient of 1 - omega^2, G_j that of G(u).  Its cos tau
+ * part vanishes for one amplitude correction B_k sin tau of u_k (it adds
+ * -2 w B_k cos tau: the fundamental of G'(u_0) sin tau is 2 w sin tau),
+ * which at k = 0 fixes r = 2 sqrt(w); its sin tau part for omega_{k+1}
+ * (-2 omega_{k+1} u_0'' = 2 r omega_{k+1} sin tau).  The rest is solved
+ * harmonic by harmonic, with u_{k+1}(0) = 0 (the phase x(0) = nu).
+ * Products on a grid of SERIES_GRID points, harmonics by direct sums: u_k
+ * has harmonics up to 2k + 1, G_k up to 2k + 3, below SERIES_GRID / 2 up
+ * to SERIES_ORDER_MAX.  omega is even in mu (mu -> -mu, tau -> -tau). */
+#define SERIES_ORDER_MAX 12
+#define SERIES_GRID 64
+#define SERIES_HARM (2 * SERIES_ORDER_MAX + 3)
+
+typedef struct {
+    double omega;                /* sum of the orders kept */
+    double ca[SERIES_HARM + 1];  /* u = sum ca_n cos n tau + sb_n sin n tau */
+    double sb[SERIES_HARM + 1];
+    int harmonics, order;        /* highest harmonic, highest order kept */
+    double residual;             /* the last term kept over the radius */
+    double omega_k[SERIES_ORDER_MAX + 1];
+} lindstedt_series;
+
+/* DFT of v on the grid of P points: cos and sin coefficients up to
+ * harmonic h, from the tables cm[n][p] = cos(2 pi n p / P), sm likewise
+ * (dense rows: the loops vectorise). */
+typedef double series_row[SERIES_GRID];
+static void series_dft(int P, const series_row *cm, const series_row *sm, const double *v, int h, double *a,
+                       double *b)
+{
+    for (int n = 0; n <= h; n++) {
+        double sa = 0.0, sbv = 0.0;
+        for (int p = 0; p < P; p++) {
+            sa += v[p] * cm[n][p];
+            sbv += v[p] * sm[n][p];
+        }
+        a[n] = (n ? 2.0 : 1.0) * sa / P;
+        b[n] = n ? 2.0 * sbv / P : 0.0;
+    }
+}
+
+static void series_grid(int P, const series_row *cm, const series_row *sm, const double *a, const double *b, int h,
+                        double *v)
+{
+    for (int p = 0; p < P; p++) v[p] = a[0];
+    for (int n = 1; n <= h; n++)
+        for (int p = 0; p < P; p++) v[p] += a[n] * cm[n][p] + b[n] * sm[n][p];
+}
+
+/* The series to `order` (at most SERIES_ORDER_MAX), or fewer where its
+ * terms stop shrinking (it converges for mu below a radius of order 1,
+ * smaller at |nu| ~ 0.5: truncated at its smallest term).  residual: the
+ * last term kept, relative to the cycle's radius (the size of what is
+ * left out, where the terms shrink geometrically). */
+static void lindstedt(double mu, double nu, int order, lindstedt_series *out)
+{
+    enum { PMAX = SERIES_GRID, K = SERIES_ORDER_MAX, H = SERIES_HARM };
+    if (!(mu > 0.0)) order = 0;
+    if (order > K) order = K;
+    /* the grid resolves G_{order-1}'s harmonics, up to 2 order + 1, without
+     * aliasing: P > 2 (2 order + 1) */
+    int P = 8;
+    while (P <= 2 * (2 * order + 1)) P *= 2;
+    double ct[PMAX], st[PMAX];
+    series_row cm[H + 1], sm[H + 1];
+    for (int p = 0; p < P; p++) {
+        ct[p] = cos(2.0 * M_PI * p / P);
+        st[p] = sin(2.0 * M_PI * p / P);
+    }
+    for (int n = 0; n <= 2 * order + 1 && n <= H; n++)
+        for (int p = 0, q = 0; p < P; p++, q = (q + n) & (P - 1)) {
+            cm[n][p] = ct[q];
+            sm[n][p] = st[q];
+        }
+    const double w = 1.0 - nu * nu, r = 2.0 * sqrt(w);
+    static const double zero[H + 1];
+    double ua[K + 1][H + 1], ub[K + 1][H + 1], ga[K + 1][H + 1], gb[K + 1][H + 1];
+    double u[K + 1][PMAX], sq[K + 1][PMAX], om[K + 1], W[K + 2];
+    memset(ua, 0, sizeof ua);
+    memset(ub, 0, sizeof ub);
+    memset(out, 0, sizeof *out);
+    ub[0][1] = r;
+    om[0] = 1.0;
+    /* the mu^k coefficient of G(u) on the grid, its harmonics into ga, gb */
+#define SERIES_G(k)                                                                         \
+    do {                                                                                    \
+        series_grid(P, cm, sm, ua[k], ub[k], 2 * (k) + 1, u[k]);                            \
+        double gv[PMAX];                                                                     \
+        for (int p = 0; p < P; p++) {                                                       \
+            double s2 = 0.0, s3 = 0.0;                                                      \
+            for (int i = 0; i <= (k); i++) s2 += u[i][p] * u[(k) - i][p];                   \
+            sq[k][p] = s2;                                                                  \
+            for (int i = 0; i <= (k); i++) s3 += u[i][p] * sq[(k) - i][p];                  \
+            gv[p] = s3 / 3.0 + nu * s2 - w * u[k][p];                                       \
+        }                                                                                   \
+        series_dft(P, cm, sm, gv, 2 * (k) + 3, ga[k], gb[k]);                               \
+    } while (0)
+    SERIES_G(0);
+    double sum_a[H + 1] = {0}, sum_b[H + 1] = {0}, omega = 1.0, scale = r, last = r;
+    memcpy(sum_b, ub[0], sizeof sum_b);
+    int kept = 0;
+    for (int k = 0; k < order; k++) {
+        double ra[H + 1], rb[H + 1];
+        int h = 2 * k + 3;
+        for (int pass = 0; pass < 2; pass++) {
+            /* W_j = -(sum_{i=0}^{j} omega_i omega_{j-i}), omega_{k+1} not yet known */
+            for (int j = 1; j <= k + 1; j++) {
+                double s = 0.0;
+                for (int i = 1; i < j; i++) s += om[i] * om[j - i];
+                W[j] = -(s + (j <= k ? 2.0 * om[j] : 0.0));
+            }
+            for (int n = 0; n <= h; n++) {
+                double sa = 0.0, sbv = 0.0;
+                for (int j = 1; j <= k + 1; j++) {
+                    const double *pa = n <= 2 * (k + 1 - j) + 1 ? ua[k + 1 - j] : zero;
+                    const double *pb = n <= 2 * (k + 1 - j) + 1 ? ub[k + 1 - j] : zero;
+                    sa -= W[j] * n * n * pa[n];
+                    sbv -= W[j] * n * n * pb[n];
+                }
+                for (int i = 0; i <= k; i++) {
+                    if (n > 2 * (k - i) + 3) continue;
+                    sa -= om[i] * n * gb[k - i][n];
+                    sbv += om[i] * n * ga[k - i][n];
+                }
+                ra[n] = sa;
+                rb[n] = sbv;
+            }
+            if (pass || k == 0) break;
+            /* the amplitude correction B sin tau of u_k, and what it adds
+             * to G_k: G'(u_0) B sin tau = B (2 w sin tau - w sin 3 tau +
+             * nu r - nu r cos 2 tau) (r^2 = 4 w), to (u^2)_k 2 u_0 B sin tau */
+            double B = ra[1] / (2.0 * w);
+            ub[k][1] += B;
+            sum_b[1] += pow(mu, k) * B;
+            ga[k][0] += B * nu * r;
+            ga[k][2] -= B * nu * r;
+            gb[k][1] += 2.0 * B * w;
+            gb[k][3] -= B * w;
+            for (int p = 0, q = 0; p < P; p++, q = (q + 1) & (P - 1)) {
+                u[k][p] += B * st[q];
+                sq[k][p] += 2.0 * B * st[q] * u[0][p];
+            }
+        }
+        om[k + 1] = -rb[1] / (2.0 * r);
+        ua[k + 1][0] = ra[0];
+        double phase = ra[0];
+        for (int n = 2; n <= h; n++) {
+            ua[k + 1][n] = ra[n] / (1.0 - n * n);
+            ub[k + 1][n] = rb[n] / (1.0 - n * n);
+            phase += ua[k + 1][n];
+        }
+        ua[k + 1][1] = -phase;
+        ub[k + 1][1] = 0.0;
+        if (k + 1 < order) SERIES_G(k + 1);
+        /* the size of the term mu^(k+1) u_{k+1} */
+        double mk = pow(mu, k + 1), size = 0.0;
+        for (int n = 0; n <= h; n++) size += fabs(ua[k + 1][n]) + fabs(ub[k + 1][n]);
+        size *= mk;
+        if (size > last) break; /* diverging: keep up to the smallest term */
+        for (int n = 0; n <= h; n++) {
+            sum_a[n] += mk * ua[k + 1][n];
+            sum_b[n] += mk * ub[k + 1][n];
+        }
+        omega += mk * om[k + 1];
+        kept = k + 1;
+        out->harmonics = h;
+        last = size;
+    }
+#undef SERIES_G
+    /* the amplitude correction of the last order kept is the next order's
+     * (B_kept, unknown): it is part of the truncation error */
+    memcpy(out->ca, sum_a, sizeof sum_a);
+    memcpy(out->sb, sum_b, sizeof sum_b);
+    memcpy(out->omega_k, om, sizeof(double) * (size_t)(kept + 1));
+    if (!kept) out->harmonics = 1;
+    out->omega = omega;
+    out->order = kept;
+    out->residual = kept ? last / scale : 1.0;
+}
+
+double bkf_colloc_series_period(double mu, double nu, int order)
+{
+    if (!(mu >= 0.0) || !isfinite(mu) || !(fabs(nu) < 1.0) || order < 0) return NAN;
+    lindstedt_series s;
+    lindstedt(mu, nu, order, &s);
+    return 2.0 * M_PI / s.omega;
+}
+
+/* u and du/dtau of the series at the angle whose cosine and sine are
+ * (c1, s1). */
+static void series_eval(const lindstedt_series *s, double c1, double s1, double *u, double *du)
+{
+    double cn = 1.0, sn = 0.0, v = s->ca[0], d = 0.0;
+    for (int n = 1; n <= s->harmonics; n++) {
+        double c2 = cn * c1 - sn * s1;
+        sn = sn * c1 + cn * s1;
+        cn = c2;
+        v += s->ca[n] * cn + s->sb[n] * sn;
+        d += n * (s->sb[n] * cn - s->ca[n] * sn);
+    }
+    *u = v;
+    *du = d;
+}
+
+/* The series order past which Newton's iterations no longer fall: the
+ * fewest interval solves of a cold solve at tol 1e-10 (nu 0, -0.5, -0.96,
+ * 0.99) came from order 2 up to mu 0.1, 4 at 0.2-0.3, 6 at 0.5-1 (8 at
+ * mu 0.7 saved one iteration at nu -0.5 but doubles the grid). */
+static int series_order(double mu)
+{
+    int k = 2;
+    while (k < 6 && pow(mu, k) > 0.02) k += 2;
+    return k;
+}
+
+int bkf_colloc_guess_series(bkf_colloc *c, double mu, double nu, int order, size_t intervals, double *residual,
+                            bkf_error *err)
+{
+    if (!c || intervals < 4 || intervals > MAX_INTERVALS || order < 0 || !(mu > 0.0) || !(fabs(nu) < 1.0))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "collocation series guess needs mu > 0, |nu| < 1, order >= 0 and intervals in [4, %d]",
+                             MAX_INTERVALS);
+    if (!reserve(c, intervals)) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    set_params(c, mu, nu);
+    lindstedt_series s;
+    lindstedt(mu, nu, order ? order : series_order(mu), &s);
+    if (residual) *residual = s.residual;
+    c->n = intervals;
+    c->T = 2.0 * M_PI / s.omega;
+    /* the points 2 pi (j + theta) / n by rotations of 2 pi / n from theta */
+    const double step = 2.0 * M_PI / (double)intervals, cs = cos(step), ss = sin(step);
+    for (int k = 0; k <= M; k++) {
+        double theta = k ? c->g.c[k - 1] : 0.0, ck = cos(step * theta), sk = sin(step * theta);
+        for (size_t j = 0; j < intervals + (k == 0); j++) {
+            double u, du;
+            series_eval(&s, ck, sk, &u, &du);
+            if (k) {
+                c->X[j * M + k - 1] = nu + u;
+            } else {
+                c->t[j] = (double)j / (double)intervals;
+                c->x[j] = nu + u;
+                c->y[j] = s.omega * du / c->a + c->b * lienard_F(nu + u);
+            }
+            double c2 = ck * cs - sk * ss;
+            sk = sk * cs + ck * ss;
+            ck = c2;
+        }
+    }
+    c->t[intervals] = 1.0;
+    c->have_guess = 1;
+    c->have_solution = 0;
+    c->paired = 0;
+    c->uniform = 1;
     return BKF_OK;
 }
 
@@ -951,6 +1226,7 @@ int bkf_colloc_warm(bkf_colloc *c, double mu, double nu)
 {
     if (!c || !c->have_solution) return 0;
     c->paired = 0;
+    c->uniform = 0;
     double a0 = c->a, b0 = c->b;
     set_params(c, mu, nu);
     /* same f and f' = a (y - b F(x)) in the new scaling */
@@ -1107,19 +1383,26 @@ static int solve_paired(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_e
                          c->mu, c->nu, tol);
 }
 
-int bkf_colloc_solve(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_error *err)
+/* The error of T_N falls like N^-2m: the N whose pair meets tol, with a
+ * margin of 2 (0 and err set where that exceeds the budget). */
+static size_t next_intervals(const bkf_colloc *c, size_t n, double diff, double tol, double T, bkf_error *err)
 {
-    if (!c || !c->have_guess) return bkf_error_set(err, BKF_EINPUT, "collocation solve before a guess");
-    c->iterations = c->solves = 0;
-    int warm = c->have_solution;
-    c->have_solution = 0;
-    if (c->paired && !warm) return solve_paired(c, tol, out, err);
-    int rc = converge(c, fmax(tol, 1e-6), err);
-    if (rc != BKF_OK) return rc;
-    /* a warm start's mesh is the last finer one: the pair starts again from
-     * the coarser, or each warm solve would double it */
-    size_t n = warm && c->pair_n ? c->pair_n : c->n;
-    if (n < MIN_INTERVALS) n = MIN_INTERVALS;
+    double need = diff * 2.0 * ACCEPT_MARGIN / (EST_DIVISOR * tol * T);
+    double grow_by = pow(fmax(need, 1.0), 1.0 / (2 * M));
+    size_t next = (size_t)ceil((double)n * fmax(grow_by, 1.25));
+    if (2 * next > MAX_INTERVALS) {
+        bkf_error_set(err, BKF_ETOL, "collocation at mu = %.15g, nu = %.15g: tol = %g needs more than %d intervals",
+                      c->mu, c->nu, tol, MAX_INTERVALS);
+        return 0;
+    }
+    return next;
+}
+
+/* From the converged mesh of n intervals: equidistributed meshes of n
+ * (growing) intervals and their bisections until the pair meets tol. */
+static int solve_equidistributed(bkf_colloc *c, double tol, size_t n, bkf_colloc_result *out, bkf_error *err)
+{
+    int rc;
     for (int round = 0; round < 5; round++) {
         rc = equidistribute(c, n);
         if (rc == BKF_OK) rc = converge(c, tol, err);
@@ -1138,24 +1421,153 @@ int bkf_colloc_solve(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_erro
             c->pair_n = n;
             return BKF_OK;
         }
-        /* the error of T_N falls like N^-2m: the N whose pair meets tol,
-         * with a margin of 2 */
-        double need = diff * 2.0 * ACCEPT_MARGIN / (EST_DIVISOR * tol * T2);
-        double grow_by = pow(fmax(need, 1.0), 1.0 / (2 * M));
-        size_t next = (size_t)ceil((double)n * fmax(grow_by, 1.25));
-        if (2 * next > MAX_INTERVALS)
-            return bkf_error_set(err, BKF_ETOL,
-                                 "collocation at mu = %.15g, nu = %.15g: tol = %g needs more than %d intervals",
-                                 c->mu, c->nu, tol, MAX_INTERVALS);
+        size_t next = next_intervals(c, n, diff, tol, T2, err);
+        if (!next) return BKF_ETOL;
         n = next;
     }
     return bkf_error_set(err, BKF_ETOL, "collocation at mu = %.15g, nu = %.15g: estimate did not meet tol = %g",
                          c->mu, c->nu, tol);
 }
 
+/* Bisect a mesh of a smooth cycle from its own polynomials (no Gauss steps
+ * as remesh_to takes: those are for fast layers, which a cycle at small mu
+ * has none of; the finer Newton corrects the polynomials' stage-order
+ * error in two iterations). */
+static int bisect_smooth(bkf_colloc *c)
+{
+    const size_t n = c->n;
+    if (!reserve_scratch(c, 2 * n)) return BKF_ENOMEM;
+    double lm[M + 1], la[M][M + 1], lb[M][M + 1];
+    lagrange_weights(c->g.c, 0.5, lm);
+    for (int i = 0; i < M; i++) {
+        lagrange_weights(c->g.c, 0.5 * c->g.c[i], la[i]);
+        lagrange_weights(c->g.c, 0.5 * (1.0 + c->g.c[i]), lb[i]);
+    }
+    for (size_t j = 0; j < n; j++) {
+        const double *X = c->X + j * M;
+        double Y[M], xm = lm[0] * c->x[j], ym = lm[0] * c->y[j];
+        stage_y(c, j, Y);
+        for (int k = 0; k < M; k++) {
+            xm += lm[k + 1] * X[k];
+            ym += lm[k + 1] * Y[k];
+        }
+        c->ts[2 * j] = c->t[j];
+        c->ts[2 * j + 1] = 0.5 * (c->t[j] + c->t[j + 1]);
+        c->xs[2 * j] = c->x[j];
+        c->ys[2 * j] = c->y[j];
+        c->xs[2 * j + 1] = xm;
+        c->ys[2 * j + 1] = ym;
+        for (int i = 0; i < M; i++) {
+            double sa = la[i][0] * c->x[j], sb = lb[i][0] * c->x[j];
+            for (int k = 0; k < M; k++) {
+                sa += la[i][k + 1] * X[k];
+                sb += lb[i][k + 1] * X[k];
+            }
+            c->Xs[2 * j * M + i] = sa;
+            c->Xs[(2 * j + 1) * M + i] = sb;
+        }
+    }
+    if (!reserve(c, 2 * n)) return BKF_ENOMEM;
+    memcpy(c->t, c->ts, 2 * n * sizeof *c->t);
+    memcpy(c->x, c->xs, 2 * n * sizeof *c->x);
+    memcpy(c->y, c->ys, 2 * n * sizeof *c->y);
+    memcpy(c->X, c->Xs, 2 * n * M * sizeof *c->X);
+    c->n = 2 * n;
+    c->t[c->n] = 1.0;
+    c->x[c->n] = c->x[0];
+    c->y[c->n] = c->y[0];
+    return BKF_OK;
+}
+
+/* The solve from a series guess (bkf_colloc_guess_series): Newton on its
+ * uniform mesh, then on the bisection started from the polynomials; where
+ * the pair misses tol, the equidistributed rounds go on from there at the
+ * predicted size. */
+static int solve_uniform(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_error *err)
+{
+    c->uniform = 0;
+    int rc = converge(c, tol, err);
+    if (rc != BKF_OK) return rc;
+    size_t n = c->n;
+    double T1 = c->T, L1 = log_multiplier(c);
+    if (bisect_smooth(c) != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    rc = converge(c, tol, err);
+    if (rc != BKF_OK) return rc;
+    double T2 = c->T, L2 = log_multiplier(c);
+    double diff = fabs(T1 - T2);
+    double est = fmax(diff / EST_DIVISOR, round_floor(c, T2));
+    if (ACCEPT_MARGIN * est <= tol * T2) {
+        fill_result(c, est, L2, L1, EST_DIVISOR, out);
+        c->pair_n = n;
+        return BKF_OK;
+    }
+    /* finer meshes only raise the rounding floor (mu 1e-3, nu 0.9999,
+     * tol 1e-12: the rounds went on to 40000 intervals, 7.8M instructions,
+     * before refusing) */
+    if (ACCEPT_MARGIN * round_floor(c, T2) > tol * T2)
+        return bkf_error_set(err, BKF_ETOL,
+                             "collocation at mu = %.15g, nu = %.15g: its rounding floor %.2g exceeds tol = %g / %g",
+                             c->mu, c->nu, round_floor(c, T2) / T2, tol, ACCEPT_MARGIN);
+    size_t next = next_intervals(c, n, diff, tol, T2, err);
+    return next ? solve_equidistributed(c, tol, next, out, err) : BKF_ETOL;
+}
+
+int bkf_colloc_solve(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_error *err)
+{
+    if (!c || !c->have_guess) return bkf_error_set(err, BKF_EINPUT, "collocation solve before a guess");
+    c->iterations = c->solves = 0;
+    int warm = c->have_solution;
+    c->have_solution = 0;
+    if (c->paired && !warm) return solve_paired(c, tol, out, err);
+    if (c->uniform && !warm) return solve_uniform(c, tol, out, err);
+    int rc = converge(c, fmax(tol, 1e-6), err);
+    if (rc != BKF_OK) return rc;
+    /* a warm start's mesh is the last finer one: the pair starts again from
+     * the coarser, or each warm solve would double it */
+    size_t n = warm && c->pair_n ? c->pair_n : c->n;
+    if (n < MIN_INTERVALS) n = MIN_INTERVALS;
+    return solve_equidistributed(c, tol, n, out, err);
+}
+
+/* x' = a (y - b F(x)) and x'' = (nu - x) - mu (x^2 - 1) x' at (x, y). */
+static double colloc_xdot(const bkf_colloc *c, double x, double y) { return c->a * (y - c->b * lienard_F(x)); }
+
+int bkf_colloc_extremes(const bkf_colloc *c, double *xmax, double *xmin, bkf_error *err)
+{
+    if (!c || !c->have_solution) return bkf_error_set(err, BKF_EINPUT, "collocation extremes before a solution");
+    double hi = c->nu, lo = c->nu;
+    for (size_t j = 0; j < c->n; j++) {
+        double d0 = colloc_xdot(c, c->x[j], c->y[j]), d1 = colloc_xdot(c, c->x[j + 1], c->y[j + 1]);
+        if ((d0 > 0) == (d1 > 0)) continue;
+        /* Newton on the length s of a Gauss step from mesh point j whose
+         * end has x' = 0: the end values are superconvergent (order 2m),
+         * x there is second order in the error of s */
+        double tau = (c->t[j + 1] - c->t[j]) * c->T, s = tau * d0 / (d0 - d1), xe = c->x[j], ye, X[M], unused;
+        int located = 0;
+        for (int it = 0; it < 20 && !located; it++) {
+            for (int i = 0; i < M; i++) poly_eval(c, j, c->g.c[i] * s / tau, &X[i], &unused);
+            if (!gauss_step(c, c->x[j], c->y[j], s, STAGE_GOAL, X, &xe, &ye)) break;
+            double g = colloc_xdot(c, xe, ye), gp = (c->nu - xe) - c->mu * (xe * xe - 1.0) * g;
+            double ds = gp != 0.0 ? -g / gp : 0.0;
+            if (!isfinite(ds)) break;
+            double next = fmin(fmax(s + ds, 0.0), tau);
+            located = fabs(next - s) <= 1e-10 * tau;
+            s = next;
+        }
+        if (!located)
+            return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: extremum not located",
+                                 c->mu, c->nu);
+        hi = fmax(hi, xe);
+        lo = fmin(lo, xe);
+    }
+    *xmax = hi;
+    *xmin = lo;
+    return BKF_OK;
+}
+
 size_t bkf_colloc_nodes(const bkf_colloc *c, double *z, double *x, double *y, size_t capacity)
 {
-    if (!c || !c->have_solution) return 0;
+    if (!c || !(c->have_solution || c->have_guess)) return 0;
     for (size_t j = 0; j < c->n && j < capacity; j++) {
         if (z) z[j] = c->t[j] * c->T;
         if (x) x[j] = c->x[j];

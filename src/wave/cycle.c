@@ -103,6 +103,12 @@ struct bkf_cycle {
     double profile_tol;
     bkf_stepper_kind profile_stepper;
     bkf_colloc *colloc; /* the collocation engine and its last solution (warm starts) */
+    /* the automatic choice keeps shooting up to mu 1 (the branch's rows:
+     * its amplitude walk starts from a shooting solve's section point; from
+     * the series path's, the canard branches at nu +-0.999 found no root of
+     * G, and the branch cost test's mu 0.1 -> 1e4 row rose to 1.30 cold
+     * solves) */
+    int series_off;
 };
 
 
@@ -1081,10 +1087,30 @@ static double pair_tol(double tol, double nu, bkf_stepper_kind kind)
 
 /* ------------------------------------------------------ collocation */
 
-/* Up to this mu the cold guess is the harmonic circle, above it two turns
- * of Gauss steps (bkf_colloc_guess_turn; the cycle attracts like exp(L),
- * L = -7 at mu 1: one turn lands it). */
-#define COLLOC_CIRCLE_MU 1.0
+/* Up to this mu the cold guess is the Lindstedt series on a uniform mesh
+ * (bkf_colloc_guess_series), above it two turns of Gauss steps
+ * (bkf_colloc_guess_turn; the cycle attracts like exp(L), L = -7 at mu 1:
+ * one turn lands it). */
+#define COLLOC_SERIES_MU 1.0
+/* Beyond the series' radius (mu 1 at |nu| 0.3-0.7: its smallest term is
+ * 0.4-0.5 of the radius) Newton needs 12-15 iterations, a cold solve 1.3-1.4M
+ * instructions against rk8pd's 0.86-0.89M; at 0.11 (mu 0.7, nu -0.5) 7,
+ * 0.48M against 0.84M.  The automatic choice shoots above this. */
+#define COLLOC_SERIES_RESIDUAL_MAX 0.2
+/* The uniform mesh whose pair with its bisection meets tol at the first
+ * try: the fewest intervals that did (tol 1e-10) were 12 at mu 1e-3, 14
+ * at 0.1, 18 at 0.3, 20 at 0.5, 24 at 1 (nu 0); at mu 1 26 at nu 0.8, 24
+ * at 0.85, 20 at 0.9, 18 at 0.95, 14 at 0.99 (the cycle's sharpest near
+ * |nu| 0.8, not at nu 0); they grow like tol^(-1/8) (T's error falls like
+ * N^-8: at 1e-12, 24 at mu 0.1, 38 at mu 1; at 1e-6, 6-10).  Too few cost
+ * the equidistributed rounds (mu 1, nu 0.85 on 22: 1069k instructions
+ * against 430k on 24). */
+static size_t colloc_series_intervals(double mu, double nu, double tol)
+{
+    double shape = 1.1 * fmin(1.0, (1.0 - fabs(nu)) / 0.15);
+    double n = (16.0 + 10.0 * mu * shape) * pow(1e-10 / tol, 0.125);
+    return (size_t)fmin(fmax(ceil(n), 6.0), 4000.0);
+}
 /* A warm start reuses the last solution within this distance in (ln mu, nu). */
 #define COLLOC_WARM_LN_MU 1.0
 #define COLLOC_WARM_NU 0.2
@@ -1106,7 +1132,7 @@ static double colloc_turn_tol(double tol) { return 1e-8 * fmin(1.0, pow(tol / 1e
  * integrating from the node (x' = 0 makes x there second order in the time
  * error, which the polynomial between mesh points, of stage order m + 1,
  * would not give to tol). */
-static int colloc_extremes(bkf_cycle *c, bkf_error *err)
+static int colloc_extremes_shot(bkf_cycle *c, bkf_error *err)
 {
     flow_params *p = &c->flow;
     integrator in = {0};
@@ -1137,17 +1163,35 @@ static int colloc_extremes(bkf_cycle *c, bkf_error *err)
     return rc;
 }
 
+/* Up to mu 1 from the collocation solution itself (bkf_colloc_extremes:
+ * Gauss steps from the mesh point before each sign change of x'): the
+ * event Newton above, integrating from the node with rk8pd at 0.01 tol,
+ * was 69k of the 380k instructions of a cold solve at mu 0.1, nu 0, tol
+ * 1e-10 (callgrind), the Gauss steps about 15k.  Above (a turn's mesh,
+ * whose intervals in the jumps the partial Gauss steps did not always
+ * converge on: mu 300, nu 0) and where they fail, the event Newton. */
+static int colloc_extremes(bkf_cycle *c, bkf_error *err)
+{
+    if (c->flow.mu <= COLLOC_SERIES_MU &&
+        bkf_colloc_extremes(c->colloc, &c->result.xmax, &c->result.xmin, NULL) == BKF_OK)
+        return BKF_OK;
+    return colloc_extremes_shot(c, err);
+}
+
 /* The cycle by collocation (colloc.h) into c; a numerical failure (refusal)
- * leaves c's solution as it was, and the caller shoots. */
-static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error *err)
+ * leaves c's solution as it was, and the caller shoots.  declinable (the
+ * automatic choice): a small-mu point whose series guess is poor is left
+ * to shooting at once. */
+static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, int declinable, bkf_error *err)
 {
     flow_params *p = &c->flow;
     const double mu = p->mu, nu = p->nu;
     /* in the canard's neighbourhood the cyclic solve is conditioned like
      * exp(mu x the time on the repelling branch): shooting with its
-     * conditioning floor answers there */
+     * conditioning floor answers there (up to mu 1 that factor is at most
+     * e^T and the series path answers: mu 1, nu -0.96 was refused) */
     double canard = 8.0 * mu * mu * (1.0 - fabs(nu));
-    if (mu >= 1.0 && canard > 0.3 && canard < 3.0)
+    if (mu > COLLOC_SERIES_MU && canard > 0.3 && canard < 3.0)
         return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: canard region", mu, nu);
     if (!c->colloc && !(c->colloc = bkf_colloc_alloc())) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     int rc = BKF_OK;
@@ -1160,8 +1204,15 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
             if (rc == BKF_OK || rc == BKF_ENOMEM) break;
             continue;
         }
-        if (mu <= COLLOC_CIRCLE_MU) {
-            rc = bkf_colloc_guess_circle(c->colloc, mu, nu, 16, err);
+        if (mu <= COLLOC_SERIES_MU) {
+            double residual;
+            rc = bkf_colloc_guess_series(c->colloc, mu, nu, 0, colloc_series_intervals(mu, nu, opt->tol), &residual,
+                                         err);
+            if (rc == BKF_OK && declinable && residual > COLLOC_SERIES_RESIDUAL_MAX)
+                return bkf_error_set(err, BKF_ENUMERIC,
+                                     "collocation at mu = %.15g, nu = %.15g: the series guess is off by %.2g: "
+                                     "shooting answers",
+                                     mu, nu, residual);
         } else {
             /* a turn from the section point of the guessed slope lands on
              * the cycle, another is the mesh (colloc.h) */
@@ -1221,8 +1272,41 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
  * the Hopf point and the canard (gamma 100, nu 0.9999 in the extremes
  * matrix) the Floquet products were not checked with it */
 #define COLLOC_AUTO_RELAXATION 2.0
-static bkf_stepper_kind solve_stepper(double mu, double nu, double tol)
+/* Up to mu 1 the series path (bkf_colloc_guess_series) from tol 1e-6 down:
+ * callgrind instructions per cold solve (docs/benchmarks.md, colsmall),
+ * against rk8pd's over mu 3e-3..1 x nu 0, 0.3, -0.6, 0.85, -0.95, 0.999,
+ * -0.9999: 0.36-0.69 at tol 1e-10 (217-507k against 404-935k), 0.44-0.84 at
+ * tol 1e-6 but 1.00-1.02 at nu -0.9999 from mu 0.5 (169k against 165k:
+ * two shots there), 0.38-0.69 at tol 1e-8 and 0.44-0.56 at 1e-12.
+ * Beyond the series' radius it declines (COLLOC_SERIES_RESIDUAL_MAX). */
+#define COLLOC_AUTO_SERIES_TOL_MAX 1e-6
+/* The rounding floor of the series path's estimate (colloc.c's
+ * round_floor on the bisected mesh): near the Hopf point, where the cycle
+ * is small, it exceeds the tightest tolerances (mu 1e-3, nu 0.9999, tol
+ * 1e-12), which shooting then answers. */
+static double colloc_series_floor(double mu, double nu, double tol)
 {
+    double size = fmin(1.0, 2.0 * sqrt(1.0 - nu * nu));
+    return 8.0 * DBL_EPSILON * sqrt(2.0 * (double)colloc_series_intervals(mu, nu, tol)) / size;
+}
+/* Where the series is beyond its radius (its smallest term above
+ * COLLOC_SERIES_RESIDUAL_MAX; measured: at mu 0.8 for |nu| 0.3-0.6, at
+ * 0.85 for 0.15-0.7, at 0.9 for 0.12-0.75, at 1 for 0.08-0.75) the
+ * automatic choice shoots without trying it: the series and the mesh's
+ * evaluation, thrown away, cost 5-11% of the shot (mu 1, nu -0.5: 912k
+ * instructions against 864k).  Outside this outline the residual test in
+ * colloc_attempt still declines. */
+static int colloc_series_beyond_radius(double mu, double nu)
+{
+    double a = fabs(nu);
+    return (mu >= 0.85 && a >= 0.08 + 0.5 * (1.0 - mu) && a <= 0.78) || (mu >= 0.75 && a >= 0.25 && a <= 0.65);
+}
+
+static bkf_stepper_kind solve_stepper(double mu, double nu, double tol, int series_off)
+{
+    if (!series_off && mu <= COLLOC_SERIES_MU && tol <= COLLOC_AUTO_SERIES_TOL_MAX * (1.0 + 1e-9) &&
+        colloc_series_floor(mu, nu, tol) * ACCEPT_MARGIN <= tol && !colloc_series_beyond_radius(mu, nu))
+        return BKF_STEPPER_COLLOCATION;
     if (mu >= COLLOC_AUTO_MU_MIN && mu <= COLLOC_AUTO_MU_MAX && tol <= COLLOC_AUTO_TOL_MAX * (1.0 + 1e-9) &&
         mu * mu * (1.0 - fabs(nu)) >= COLLOC_AUTO_RELAXATION)
         return BKF_STEPPER_COLLOCATION;
@@ -1243,12 +1327,12 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
     flow_params *p = &c->flow;
     p->rhs_calls = p->jacobian_calls = 0;
     bkf_stepper_kind kind = opt.stepper;
-    if (kind == BKF_STEPPER_AUTO) kind = solve_stepper(mu, nu, opt.tol);
+    if (kind == BKF_STEPPER_AUTO) kind = solve_stepper(mu, nu, opt.tol, c->series_off);
     if (kind == BKF_STEPPER_COLLOCATION) {
         /* c->result is overwritten only on success */
         bkf_cycle_result kept = c->result;
         int had = c->have_solution;
-        rc = colloc_attempt(c, &opt, err);
+        rc = colloc_attempt(c, &opt, opt.stepper == BKF_STEPPER_AUTO, err);
         if (rc == BKF_OK) return BKF_OK;
         c->result = kept;
         c->have_solution = had;
@@ -1260,9 +1344,12 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
         p->rhs_calls = p->jacobian_calls = 0;
     }
 
-    double slope = c->warm_slope > 0 ? c->warm_slope
-                   : opt.warm_start && c->have_solution ? warm_slope
-                                                        : guess_slope(mu, nu);
+    /* (not from a collocation solution: its section point differs from
+     * shooting's within tol, and a list's row would then differ from the
+     * same point solved alone, as `period --mu 0.5,5` did at mu 5 in the
+     * 16th digit once mu 0.5 was collocation's) */
+    int warm_shot = opt.warm_start && c->have_solution && strcmp(c->result.stepper, "colloc") != 0;
+    double slope = c->warm_slope > 0 ? c->warm_slope : warm_shot ? warm_slope : guess_slope(mu, nu);
     c->warm_slope = 0.0;
     double y0 = section_y_of_slope(p, slope);
     double y_scale = fmax(fabs(y0), 1e-3);
@@ -2262,6 +2349,7 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
                     .visit = visit, .visit_data = data, .err = err,
                     .mirror_shots = branch_mirrors(along, from, to, fixed)};
     if (!b.cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    b.cycle->series_off = 1;
     /* the start's slope; where the branch's shots are the mirror's, so is
      * the slope */
     rc = branch_solve_counted(&b, mu_from, b.mirror_shots ? -nu_from : nu_from, &opt, err);

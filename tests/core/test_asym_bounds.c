@@ -101,7 +101,9 @@ TEST(asym_forced_formula_refuses_outside_its_bound)
     bkf_cycle *c = bkf_cycle_alloc();
     o.tol = 1e-10;
     CHECK_STATUS(bkf_cycle_estimate(c, 1, 0, &o, BKF_METHOD_AUTO, &r, &e), BKF_OK);
-    CHECK(strcmp(r.model, "shooting") == 0 && r.rhs_calls > 0);
+    /* (the automatic choice at mu 1 is collocation, which calls no
+     * right-hand side: the work shows as Newton iterations) */
+    CHECK(strcmp(r.model, "shooting") == 0 && r.newton_iterations > 0 && r.steps > 0);
     CHECK_CLOSE(r.period, 6.663286859323130, 1e-10, 0);
     bkf_cycle_free(c);
 }

@@ -225,3 +225,131 @@ TEST(colloc_large_mu_against_bd2x2)
         }
     bkf_test_note("collocation answered %zu of %zu; largest true/estimated error ratio %.3g", own, all, worst);
 }
+
+/* The small-mu cold guess (bkf_colloc_guess_series) against closed forms:
+ * its omega_2 is -s2(nu) = -(1 - nu^2)(3 + 29 nu^2)/48 (the second-order
+ * Lindstedt result in asymptotics.c, derived separately), its omega_4 at
+ * nu 0 the classical 17/3072 (omega_6 = 35/884736 next); its period's
+ * error against the Taylor reference falls like mu^(k+2) when the series
+ * is cut at even order k (omega is even in mu), and the guess's mesh
+ * values' distance to the solved cycle (same normalised time s = z/T, the
+ * phase x(0) = nu fixed) falls like mu^k at least. */
+TEST(colloc_series_against_closed_forms)
+{
+    const double nus[] = {0.0, -0.5, -0.96, 0.99, 0.9999};
+    for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+        double mu = 1e-3, omega = 6.283185307179586 / bkf_colloc_series_period(mu, nus[j], 2);
+        double s2 = (1.0 - nus[j] * nus[j]) * (3.0 + 29.0 * nus[j] * nus[j]) / 48.0;
+        CHECK_MSG(fabs((omega - 1.0) / (mu * mu) + s2) <= 1e-6 * s2, "nu %g: omega_2 %.12g, -s2 %.12g", nus[j],
+                  (omega - 1.0) / (mu * mu), -s2);
+    }
+    double mu = 0.05, omega = 6.283185307179586 / bkf_colloc_series_period(mu, 0.0, 4);
+    double w4 = (omega - 1.0 + mu * mu / 16.0) / (mu * mu * mu * mu);
+    CHECK_MSG(fabs(w4 - 17.0 / 3072.0) <= 1e-8, "omega_4 %.12g, want 17/3072 = %.12g", w4, 17.0 / 3072.0);
+    omega = 6.283185307179586 / bkf_colloc_series_period(mu, 0.0, 6);
+    double w6 = (omega - 1.0 + mu * mu / 16.0 - 17.0 / 3072.0 * pow(mu, 4)) / pow(mu, 6);
+    CHECK_MSG(fabs(w6 - 35.0 / 884736.0) <= 2e-3 * 35.0 / 884736.0, "omega_6 %.12g, want 35/884736 = %.12g", w6,
+              35.0 / 884736.0);
+    CHECK(isnan(bkf_colloc_series_period(0.1, 1.0, 2)) && isnan(bkf_colloc_series_period(-1.0, 0.0, 2)));
+
+    const double orders[] = {0, 2, 4};
+    const double mus[] = {0.05, 0.1};
+    const double nus2[] = {0.0, -0.96};
+    for (size_t j = 0; j < 2; j++) {
+        double ref[2], unc;
+        for (size_t i = 0; i < 2; i++) ref[i] = taylor_period(mus[i], nus2[j], 2.0 * sqrt(1.0 - nus2[j] * nus2[j]), &unc);
+        for (size_t k = 0; k < sizeof orders / sizeof orders[0]; k++) {
+            double e0 = fabs(bkf_colloc_series_period(mus[0], nus2[j], (int)orders[k]) - ref[0]);
+            double e1 = fabs(bkf_colloc_series_period(mus[1], nus2[j], (int)orders[k]) - ref[1]);
+            double slope = log(e1 / e0) / log(mus[1] / mus[0]);
+            bkf_test_note("nu %g, order %g: period error %.3g at mu %g, %.3g at %g: slope %.3f (series: %g)",
+                          nus2[j], orders[k], e0 / ref[0], mus[0], e1 / ref[1], mus[1], slope, orders[k] + 2);
+            CHECK_MSG(fabs(slope - (orders[k] + 2)) <= 0.3, "nu %g order %g: slope %.3f", nus2[j], orders[k], slope);
+        }
+    }
+
+    /* the shape */
+    bkf_colloc *c = bkf_colloc_alloc();
+    bkf_error e = {0};
+    enum { N = 16 };
+    for (int order = 1; order <= 4; order++) {
+        double dist[2];
+        for (size_t i = 0; i < 2; i++) {
+            double guess[N], x[2 * N];
+            CHECK(bkf_colloc_guess_series(c, mus[i], -0.5, order, N, NULL, &e) == BKF_OK);
+            CHECK(bkf_colloc_nodes(c, NULL, guess, NULL, N) == N);
+            bkf_colloc_result r;
+            CHECK_MSG(bkf_colloc_solve(c, 1e-9, &r, &e) == BKF_OK, "%s", e.message);
+            /* (the bisection keeps the guess's mesh points at even indices) */
+            CHECK_MSG(r.intervals == 2 * N, "mu %g: %zu intervals", mus[i], r.intervals);
+            CHECK(bkf_colloc_nodes(c, NULL, x, NULL, 2 * N) == 2 * N);
+            double d = 0.0;
+            for (int k = 0; k < N; k++) d = fmax(d, fabs(guess[k] - x[2 * k]));
+            dist[i] = d;
+        }
+        double slope = log(dist[1] / dist[0]) / log(mus[1] / mus[0]);
+        bkf_test_note("nu -0.5, order %d: guess off by %.3g at mu %g, %.3g at %g: slope %.3f", order, dist[0], mus[0],
+                      dist[1], mus[1], slope);
+        CHECK_MSG(slope >= order - 0.3, "order %d: slope %.3f", order, slope);
+    }
+    bkf_colloc_free(c);
+}
+
+/* The series path (mu <= 1: bkf_colloc_guess_series, uniform mesh and its
+ * bisection) against the Taylor reference over mu 1e-3..1, nu 0, -0.96,
+ * 0.99, 0.9999 and tol 1e-6..1e-12: every answer within tol, its estimate
+ * never optimistic (true/estimated <= 1), collocation's own answer except
+ * where its rounding floor exceeds tol (near the Hopf point at 1e-12,
+ * where shooting answers), its extremes within 1e-9 of rk8pd's at tol
+ * 1e-10.  The automatic choice answers the same points within tol as
+ * well. */
+TEST(colloc_series_path_against_taylor)
+{
+    const double mus[] = {1e-3, 0.01, 0.1, 0.3, 1.0};
+    const double nus[] = {0.0, -0.96, 0.99, 0.9999};
+    const double tols[] = {1e-6, 1e-8, 1e-10, 1e-12};
+    size_t own = 0, all = 0, auto_colloc = 0;
+    double worst = 0.0;
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++)
+        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+            double ref = NAN, unc = 0.0;
+            for (size_t k = 0; k < sizeof tols / sizeof tols[0]; k++)
+                for (int automatic = 0; automatic < 2; automatic++) {
+                    bkf_cycle_result r;
+                    bkf_error e = {0};
+                    int rc = solve_with(mus[i], nus[j], tols[k],
+                                        automatic ? BKF_STEPPER_AUTO : BKF_STEPPER_COLLOCATION, &r, &e);
+                    CHECK_MSG(rc == BKF_OK, "mu %g nu %g tol %g: %s", mus[i], nus[j], tols[k], e.message);
+                    int colloc = strcmp(r.stepper, "colloc") == 0;
+                    if (automatic) {
+                        auto_colloc += colloc;
+                    } else {
+                        all++;
+                        own += colloc;
+                        CHECK_MSG(colloc || (tols[k] < 1e-11 && fabs(nus[j]) > 0.999), "mu %g nu %g tol %g: %s",
+                                  mus[i], nus[j], tols[k], r.stepper);
+                    }
+                    if (!isfinite(ref)) ref = taylor_period(mus[i], nus[j], r.section_slope, &unc);
+                    double err = fabs(r.period - ref), ratio = fmax(err - unc, 0.0) / r.period_err;
+                    CHECK_MSG(unc <= 1e-3 * tols[k] * r.period, "mu %g nu %g: reference uncertain by %.2g", mus[i],
+                              nus[j], unc / r.period);
+                    CHECK_MSG(err <= tols[k] * r.period + unc, "mu %g nu %g tol %g %s: error %.3g > tol", mus[i],
+                              nus[j], tols[k], r.stepper, err / r.period);
+                    CHECK_MSG(ratio <= 1.0, "mu %g nu %g tol %g %s: estimate %.3g optimistic by %.3g", mus[i],
+                              nus[j], tols[k], r.stepper, r.period_err / r.period, ratio);
+                    if (colloc && ratio > worst) worst = ratio;
+                    if (colloc && !automatic && k == 2) {
+                        /* the extremes (Gauss steps from the mesh) against rk8pd's event Newton */
+                        bkf_cycle_result b;
+                        CHECK(solve_with(mus[i], nus[j], 1e-12, BKF_STEPPER_EXPLICIT, &b, &e) == BKF_OK);
+                        CHECK_MSG(fabs(r.xmax - b.xmax) <= 1e-9 && fabs(r.xmin - b.xmin) <= 1e-9,
+                                  "mu %g nu %g: extremes %.15g %.15g vs %.15g %.15g", mus[i], nus[j], r.xmax, r.xmin,
+                                  b.xmax, b.xmin);
+                    }
+                }
+        }
+    bkf_test_note("collocation answered %zu of %zu (automatic choice: %zu); largest true/estimated %.3g", own, all,
+                  auto_colloc, worst);
+    CHECK_MSG(auto_colloc >= own - 2, "the automatic choice took collocation %zu times, %zu possible", auto_colloc,
+              own);
+}
