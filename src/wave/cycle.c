@@ -1085,6 +1085,13 @@ static double pair_tol(double tol, double nu, bkf_stepper_kind kind)
  * of Gauss steps (bkf_colloc_guess_turn; the cycle attracts like exp(L),
  * L = -7 at mu 1: one turn lands it). */
 #define COLLOC_CIRCLE_MU 1.0
+/* From this mu (past the canard explosion, 8 mu^2 (1 - |nu|) >= 3) the
+ * cold start lands from the left slow branch (bkf_colloc_guess_relaxation):
+ * a quarter of a turn instead of a whole one, 0.35-0.4 of the Gauss steps
+ * of the landing at mu 30-1e4.  The branch attracts like exp(-0.15 mu^2)
+ * on the way to the fold (colloc.c, LANDING_X): below 10 the slow-fast
+ * picture it relies on fades. */
+#define COLLOC_RELAXATION_MU 10.0
 /* A warm start reuses the last solution within this distance in (ln mu, nu). */
 #define COLLOC_WARM_LN_MU 1.0
 #define COLLOC_WARM_NU 0.2
@@ -1162,6 +1169,11 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, bkf_error 
         }
         if (mu <= COLLOC_CIRCLE_MU) {
             rc = bkf_colloc_guess_circle(c->colloc, mu, nu, 16, err);
+        } else if (mu >= COLLOC_RELAXATION_MU && canard >= 3.0) {
+            /* a landing from the left slow branch through the fold, then
+             * the turn that is the mesh (colloc.h) */
+            rc = bkf_colloc_guess_relaxation(c->colloc, mu, nu, bkf_asym_period_leading(mu, nu),
+                                             colloc_turn_tol(opt->tol), err);
         } else {
             /* a turn from the section point of the guessed slope lands on
              * the cycle, another is the mesh (colloc.h) */
