@@ -1083,7 +1083,8 @@ static double pair_tol(double tol, double nu, bkf_stepper_kind kind)
 
 /* Up to this mu the cold guess is the harmonic circle, above it two turns
  * of Gauss steps (bkf_colloc_guess_turn; the cycle attracts like exp(L),
- * L = -7 at mu 1: one turn lands it). */
+ * L = -7 at mu 1: one turn lands it), or from COLLOC_RELAXATION_MU a
+ * quarter turn and one (bkf_colloc_guess_relaxation). */
 #define COLLOC_CIRCLE_MU 1.0
 /* From this mu (past the canard explosion, 8 mu^2 (1 - |nu|) >= 3) the
  * cold start lands from the left slow branch (bkf_colloc_guess_relaxation):
