@@ -1088,7 +1088,7 @@ static double pair_tol(double tol, double nu, bkf_stepper_kind kind)
 #define COLLOC_CIRCLE_MU 1.0
 /* From this mu (past the canard explosion, 8 mu^2 (1 - |nu|) >= 3) the
  * cold start lands from the left slow branch (bkf_colloc_guess_relaxation):
- * a quarter of a turn instead of a whole one, 0.35-0.4 of the Gauss steps
+ * a quarter of a turn instead of a whole one, 0.27-0.38 of the Gauss steps
  * of the landing at mu 30-1e4.  The branch attracts like exp(-0.15 mu^2)
  * on the way to the fold (colloc.c, LANDING_X): below 10 the slow-fast
  * picture it relies on fades. */
