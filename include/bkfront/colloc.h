@@ -48,6 +48,15 @@ void bkf_colloc_free(bkf_colloc *colloc);
 int bkf_colloc_guess_turn(bkf_colloc *colloc, double mu, double nu, double x0, double y0, double T,
                           double local_tol, bkf_error *err);
 
+/* The same in the relaxation regime (mu >= 10 past the canard explosion)
+ * without the first turn: the landing starts on the left slow branch at
+ * x = -1.5 (on the slow manifold to first order) and ends where it crosses
+ * the section, which the cycle's attraction through the fold makes the
+ * cycle's section point whatever happened before the fold; the turn that
+ * is the mesh starts there.  T: a hint of the period (its scale only). */
+int bkf_colloc_guess_relaxation(bkf_colloc *colloc, double mu, double nu, double T, double local_tol,
+                                bkf_error *err);
+
 /* Initial guess for small mu: the harmonic cycle of radius 2 sqrt(1 - nu^2),
  * T = 2 pi, on `intervals` uniform intervals. */
 int bkf_colloc_guess_circle(bkf_colloc *colloc, double mu, double nu, size_t intervals, bkf_error *err);

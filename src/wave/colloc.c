@@ -66,6 +66,13 @@
  * at tol 1e-12 too coarse for Floquet's lambda at gamma 10, which
  * colloc_turn_tol now also answers). */
 #define TURN_FLOOR 1e-3
+/* Newton's goal in that pair, times sqrt(tol): what it leaves, of the
+ * square, is 1e-2 tol, added to the estimate.  The turn's mesh values and
+ * stages start the finer Newton within about 1e-6 (mu 30-1e4, tol 1e-10),
+ * and the coarser from the finer's: 0.01 (converge's) took each a second
+ * or third iteration for a T that had moved by 1e-15 relative (the stages
+ * were still moving at 1e-7 - 1e-8). */
+#define PAIRED_GOAL 0.1
 
 typedef struct {
     double c[M], w[M], A[M][M], A2[M][M], Ac[M], p[M];
@@ -744,7 +751,14 @@ static int newton(bkf_colloc *c, double goal, bkf_error *err)
 /* Step-doubled Gauss steps: a step of length tau against two of tau/2,
  * accepted where their end values agree within the local tolerance; the
  * error of the end values (superconvergent, order 2m) is of the step's
- * tau^(2m+1), so the next step is scaled by its 1/(2m+1)-th root. */
+ * tau^(2m+1), so the next step is scaled by its 1/(2m+1)-th root, and by
+ * the predictive factor of Gustafsson's controller (Hairer-Wanner IV.8, as
+ * in RADAU5), which extrapolates the change of the error constant from the
+ * last two accepted steps: along a slow branch towards its fold the
+ * constant grew by 1.4 a step and the plain rule was rejected every third
+ * step, in a jump's entry by 1e4 a step (mu 1e3, nu -0.96: 84 rejections
+ * in 180 steps of a turn, 17 with the prediction; Gauss steps per turn 786
+ * -> 611).  No growth right after a rejection. */
 #define TURN_GROW_MAX 4.0
 #define TURN_SHRINK 0.25
 #define TURN_STAGE_GOAL 1e-4
@@ -808,22 +822,36 @@ static int half_steps(const bkf_colloc *c, double xs, double ys, double tau, dou
 }
 
 /* One turn from (x0, y0) on the section x = nu (x' > 0) back to it: the
- * turn ends where it crosses the section again after half the period hint
- * T, so the mesh closes on the section (ending at a fixed T, the closure
- * fell in the jump, where the shot's 1e-5 in T is a shift of O(mu 1e-5 T)
- * in x and Newton, damped, took 8-30 iterations to move it). */
-static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local_tol, int record, bkf_error *err)
+ * turn ends where it next crosses the section upwards after crossing it
+ * downwards, so the mesh closes on the section (ending at a fixed T, the
+ * closure fell in the jump, where the shot's 1e-5 in T is a shift of
+ * O(mu 1e-5 T) in x and Newton, damped, took 8-30 iterations to move it).
+ * from_below: (x0, y0) is below the section on the way up (a landing from
+ * the left slow branch), and the first upward crossing ends it. */
+static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local_tol, int record, int from_below,
+                     bkf_error *err)
 {
     double size = fmin(1.0, 2.0 * sqrt(fmax(1.0 - c->nu * c->nu, 0.0)));
     double tol = local_tol * size;
     /* the stages to a small part of the local tolerance: the turn gives a
      * mesh and a start, which the global Newton corrects anyway */
     double goal = fmax(STAGE_GOAL, TURN_STAGE_GOAL * tol);
+    /* the full step only measures the halves' error: what its Newton
+     * leaves, of the square of its last correction, is then 1e-2 of the
+     * local tolerance (one iteration from the halves' polynomials instead
+     * of two) */
+    double full_goal = fmax(goal, 0.1 * sqrt(tol));
     /* the first step: a unit of the fast time 1/mu, at most T/64 */
     double t = 0.0, h = fmin(T / 64.0, 1.0 / fmax(c->mu, 1.0)), xs = x0, ys = y0;
     size_t n = 0, n_prev = 0;
     double prev[M + 1], tau_prev = 1.0;
-    int closed = 0, went_down = 0;
+    /* the last accepted step and its error (floored: an error of 0 would
+     * make the prediction 0), for the predictive factor */
+    double e_acc = 0.0, tau_acc = 1.0;
+    int closed = 0, went_down = from_below, rejected = 0;
+    /* about what mu 1e4 needs, so that the arrays do not grow step by step
+     * (their reallocation was 4% of a cold solve there) */
+    if (record && !reserve(c, 640)) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     while (!closed) {
         double tau = h;
         double Xf[M], Xa[M], Xb[M], xf, yf, xa, ya, xb, yb;
@@ -839,11 +867,12 @@ static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local
                 for (int k = 0; k < M; k++) s += l[k + 1] * (first ? Xa : Xb)[k];
                 Xf[i] = s;
             }
-            ok = gauss_step(c, xs, ys, tau, goal, Xf, &xf, &yf);
+            ok = gauss_step(c, xs, ys, tau, full_goal, Xf, &xf, &yf);
         }
         double e = ok ? fmax(fabs(xf - xb), fabs(yf - yb)) : INFINITY;
         if (!(e <= tol)) {
             h = tau * (ok ? fmax(TURN_SHRINK, 0.9 * pow(tol / e, 1.0 / (2 * M + 1))) : TURN_SHRINK);
+            rejected = 1;
             if (!(h > 1e-14 * T))
                 return bkf_error_set(err, BKF_ENUMERIC,
                                      "collocation at mu = %.15g, nu = %.15g: the guess's step underflows",
@@ -893,7 +922,19 @@ static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local
         tau_prev = tau;
         xs = xb;
         ys = yb;
-        h = tau * fmin(TURN_GROW_MAX, 0.9 * pow(tol / fmax(e, 1e-300), 1.0 / (2 * M + 1)));
+        /* the prediction (tau / tau_acc) (e_acc / ee)^(1/(2m+1)) where it is
+         * below 1, under the one root (pow was 4% of a cold solve) */
+        double ee = fmax(e, 1e-6 * tol), r = 1.0;
+        if (e_acc > 0.0) {
+            double q = tau / tau_acc, qn = 1.0;
+            for (int k = 0; k < 2 * M + 1; k++) qn *= q;
+            r = fmin(1.0, qn * e_acc / ee);
+        }
+        double factor = 0.9 * pow(tol / ee * r, 1.0 / (2 * M + 1));
+        h = tau * fmin(rejected ? 1.0 : TURN_GROW_MAX, factor);
+        e_acc = ee;
+        tau_acc = tau;
+        rejected = 0;
         if (!closed && t > 4.0 * T)
             return bkf_error_set(err, BKF_ENUMERIC,
                                  "collocation at mu = %.15g, nu = %.15g: the guess's turn does not return to the "
@@ -929,8 +970,34 @@ int bkf_colloc_guess_turn(bkf_colloc *c, double mu, double nu, double x0, double
     /* a first turn lands on the cycle: from a start off it by d the turn's
      * phase is off by about d mu and the jump by d mu^2, which Newton, damped,
      * moved in 8-13 iterations from a shot's 1e-5 at mu 300-1e4 */
-    int rc = turn_mesh(c, x0, y0, T, local_tol, 0, err);
-    if (rc == BKF_OK) rc = turn_mesh(c, c->x[0], c->y[0], c->T, local_tol, 1, err);
+    int rc = turn_mesh(c, x0, y0, T, local_tol, 0, 0, err);
+    if (rc == BKF_OK) rc = turn_mesh(c, c->x[0], c->y[0], c->T, local_tol, 1, 0, err);
+    if (rc == BKF_OK) c->have_guess = 1;
+    return rc;
+}
+
+/* The landing's start on the left slow branch.  Only what happens from the
+ * fold on reaches the section: the branch attracts like exp(-mu^2 times
+ * the integral of (x^2 - 1)^2 / (nu - x) dx), about exp(-0.15 mu^2) from
+ * here to the fold (15 at mu 10), and every orbit on the branch leaves the
+ * fold along the same jump.  (A start nearer the fold saves little: at
+ * -1.2, 40 of about 1200 Gauss steps at mu 1e3, and the pair's Newton
+ * iterations varied more than that; the attraction at mu 10 would be
+ * exp(-1).) */
+#define LANDING_X (-1.5)
+
+int bkf_colloc_guess_relaxation(bkf_colloc *c, double mu, double nu, double T, double local_tol, bkf_error *err)
+{
+    if (!c || !(mu >= 1.0) || !(fabs(nu) < 1.0) || !(T > 0.0) || !(local_tol > 0.0))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "collocation guess needs mu >= 1, |nu| < 1, T > 0 and local_tol > 0");
+    set_params(c, mu, nu);
+    c->have_guess = c->have_solution = 0;
+    if (!reserve(c, 1)) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    /* on the slow manifold to first order: x' = a (y - b F(x)) = y' / (b F'(x)) */
+    double x0 = LANDING_X, y0 = c->b * lienard_F(x0) + (nu - x0) / (c->a * c->a * c->b * (x0 * x0 - 1.0));
+    int rc = turn_mesh(c, x0, y0, T, local_tol, 0, 1, err);
+    if (rc == BKF_OK) rc = turn_mesh(c, c->x[0], c->y[0], T, local_tol, 1, 0, err);
     if (rc == BKF_OK) c->have_guess = 1;
     return rc;
 }
@@ -1306,17 +1373,38 @@ static int keep_solution(bkf_colloc *c, int which, size_t *n, double *T, double 
     return BKF_OK;
 }
 
-/* Merge the mesh's interval pairs. */
-static int coarsen(bkf_colloc *c)
+/* Merge the mesh's interval pairs: the merged interval's stages are its
+ * halves' polynomials at its Gauss points (fixed Lagrange weights,
+ * gauss_table.halves), the mesh values kept.  remesh_to evaluated the
+ * basis at each point and re-solved each merged interval by a Gauss step
+ * (7-10% of a cold solve at mu 30-1e4); without the Gauss step the
+ * coarser Newton took as many iterations (mu 30-1e4, nu 0, -0.96, 0.99,
+ * 0.999, tol 1e-10: 3.8% fewer instructions over the 16 points, none more
+ * than 1% more), its first correction being the shift of the jumps that
+ * the coarser T brings (1e-3 at mu 1e4). */
+static void coarsen(bkf_colloc *c)
 {
+    const gauss_table *g = &c->g;
     size_t n = c->n / 2;
-    double *ts = malloc((n + 1) * sizeof *ts);
-    if (!ts) return BKF_ENOMEM;
-    for (size_t k = 0; k <= n; k++) ts[k] = c->t[2 * k];
-    ts[n] = 1.0;
-    int rc = remesh_to(c, ts, n);
-    free(ts);
-    return rc;
+    for (size_t k = 0; k < n; k++) {
+        double X[M];
+        for (int i = 0; i < M; i++) {
+            const double *l = g->halves[i];
+            size_t j = 2 * k + (g->c[i] < 0.5 ? 0 : 1);
+            double s = l[0] * c->x[j];
+            for (int q = 0; q < M; q++) s += l[q + 1] * c->X[j * M + q];
+            X[i] = s;
+        }
+        /* in place: index k was read at k / 2, before this write */
+        c->t[k] = c->t[2 * k];
+        c->x[k] = c->x[2 * k];
+        c->y[k] = c->y[2 * k];
+        memcpy(c->X + k * M, X, sizeof X);
+    }
+    c->n = n;
+    c->t[n] = 1.0;
+    c->x[n] = c->x[0];
+    c->y[n] = c->y[0];
 }
 
 /* The solution on c's mesh into *out: T with its estimate est, the log
@@ -1348,22 +1436,21 @@ static void fill_result(bkf_colloc *c, double est, double L, double L_other, dou
 static int solve_paired(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_error *err)
 {
     for (int round = 0; round < 5; round++) {
-        int rc = converge(c, tol, err);
+        int rc = newton(c, PAIRED_GOAL * sqrt(tol), err);
         if (rc != BKF_OK) return rc;
         double T1 = c->T, L1 = log_multiplier(c), Tk, trace;
         size_t nk;
-        if (keep_solution(c, 0, &nk, &Tk, &trace) != BKF_OK || coarsen(c) != BKF_OK)
-            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        rc = converge(c, tol, err);
+        if (keep_solution(c, 0, &nk, &Tk, &trace) != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        coarsen(c);
+        rc = newton(c, PAIRED_GOAL * sqrt(tol), err);
         double T2 = c->T, L2 = log_multiplier(c);
         if (keep_solution(c, 1, &nk, &Tk, &trace) != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
         if (rc != BKF_OK) return rc;
         double diff = fabs(T1 - T2);
         /* the coarser Newton starts from the finer solution, so the pair
-         * shares what Newton leaves (of the square of its goal, 1e-4 tol):
-         * at mu 1e4, nu 0.99, tol 1e-6 the pair agreed to 1e-12 against a
-         * true 6e-11 */
-        double newton_left = 1e-4 * tol * T1;
+         * shares what Newton leaves (of the square of its goal): at mu 1e4,
+         * nu 0.99, tol 1e-6 the pair agreed to 1e-12 against a true 6e-11 */
+        double newton_left = PAIRED_GOAL * PAIRED_GOAL * tol * T1;
         double est = fmax(fmax(diff / PAIRED_DIVISOR, round_floor(c, T1)), TURN_FLOOR * c->local_tol * T1) +
                      newton_left;
         if (ACCEPT_MARGIN * est <= tol * T1) {
@@ -1376,7 +1463,7 @@ static int solve_paired(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_e
          * tolerance whose pair meets tol, with a margin of 2 */
         double need = diff * 2.0 * ACCEPT_MARGIN / (PAIRED_DIVISOR * tol * T1);
         double local = c->local_tol * pow(fmax(need, 1.5), -(2.0 * M + 1.0) / (2.0 * M));
-        rc = turn_mesh(c, c->x[0], c->y[0], c->T, local, 1, err);
+        rc = turn_mesh(c, c->x[0], c->y[0], c->T, local, 1, 0, err);
         if (rc != BKF_OK) return rc;
     }
     return bkf_error_set(err, BKF_ETOL, "collocation at mu = %.15g, nu = %.15g: estimate did not meet tol = %g",

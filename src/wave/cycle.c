@@ -1090,7 +1090,8 @@ static double pair_tol(double tol, double nu, bkf_stepper_kind kind)
 /* Up to this mu the cold guess is the Lindstedt series on a uniform mesh
  * (bkf_colloc_guess_series), above it two turns of Gauss steps
  * (bkf_colloc_guess_turn; the cycle attracts like exp(L), L = -7 at mu 1:
- * one turn lands it). */
+ * one turn lands it), or from COLLOC_RELAXATION_MU a quarter turn and one
+ * (bkf_colloc_guess_relaxation). */
 #define COLLOC_SERIES_MU 1.0
 /* Beyond the series' radius (mu 1 at |nu| 0.3-0.7: its smallest term is
  * 0.4-0.5 of the radius) Newton needs 12-15 iterations, a cold solve 1.3-1.4M
@@ -1111,6 +1112,13 @@ static size_t colloc_series_intervals(double mu, double nu, double tol)
     double n = (16.0 + 10.0 * mu * shape) * pow(1e-10 / tol, 0.125);
     return (size_t)fmin(fmax(ceil(n), 6.0), 4000.0);
 }
+/* From this mu (past the canard explosion, 8 mu^2 (1 - |nu|) >= 3) the
+ * cold start lands from the left slow branch (bkf_colloc_guess_relaxation):
+ * a quarter of a turn instead of a whole one, 0.27-0.38 of the Gauss steps
+ * of the landing at mu 30-1e4.  The branch attracts like exp(-0.15 mu^2)
+ * on the way to the fold (colloc.c, LANDING_X): below 10 the slow-fast
+ * picture it relies on fades. */
+#define COLLOC_RELAXATION_MU 10.0
 /* A warm start reuses the last solution within this distance in (ln mu, nu). */
 #define COLLOC_WARM_LN_MU 1.0
 #define COLLOC_WARM_NU 0.2
@@ -1213,6 +1221,11 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, int declin
                                      "collocation at mu = %.15g, nu = %.15g: the series guess is off by %.2g: "
                                      "shooting answers",
                                      mu, nu, residual);
+        } else if (mu >= COLLOC_RELAXATION_MU && canard >= 3.0) {
+            /* a landing from the left slow branch through the fold, then
+             * the turn that is the mesh (colloc.h) */
+            rc = bkf_colloc_guess_relaxation(c->colloc, mu, nu, bkf_asym_period_leading(mu, nu),
+                                             colloc_turn_tol(opt->tol), err);
         } else {
             /* a turn from the section point of the guessed slope lands on
              * the cycle, another is the mesh (colloc.h) */

@@ -353,3 +353,79 @@ TEST(colloc_series_path_against_taylor)
     CHECK_MSG(auto_colloc >= own - 2, "the automatic choice took collocation %zu times, %zu possible", auto_colloc,
               own);
 }
+
+/* The cold start from the left slow branch (bkf_colloc_guess_relaxation:
+ * the automatic cold start from mu 10 past the canard explosion) meets tol
+ * with an honest estimate, true / estimated <= 1, over mu 30 - 1e4, nu 0,
+ * -0.96, 0.99, 0.999 and tol 1e-6 - 1e-12: against the Taylor reference up
+ * to mu 100, against bd2x2 at tol 1e-12 (1e-11 where it refuses) above,
+ * its own estimate subtracted from the difference. */
+TEST(colloc_relaxation_start_meets_tol)
+{
+    const double mus[] = {30, 100, 300, 1e3, 1e4};
+    const double nus[] = {0.0, -0.96, 0.99, 0.999};
+    const double tols[] = {1e-6, 1e-8, 1e-10, 1e-12};
+    double worst = 0.0;
+    size_t own = 0, all = 0;
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++)
+        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+            double ref = NAN, unc = 0.0;
+            for (size_t k = 0; k < sizeof tols / sizeof tols[0]; k++) {
+                bkf_cycle_result r;
+                bkf_error e = {0};
+                int rc = solve_with(mus[i], nus[j], tols[k], BKF_STEPPER_COLLOCATION, &r, &e);
+                /* (at tol 1e-12 it may refuse at its rounding floor) */
+                CHECK_MSG(rc == BKF_OK || (rc == BKF_ETOL && tols[k] < 1e-11), "mu %g nu %g tol %g: %s", mus[i],
+                          nus[j], tols[k], e.message);
+                if (rc != BKF_OK) continue;
+                all++;
+                CHECK_MSG(strcmp(r.stepper, "colloc") == 0 || tols[k] < 1e-11, "mu %g nu %g tol %g: answered by %s",
+                          mus[i], nus[j], tols[k], r.stepper);
+                if (strcmp(r.stepper, "colloc") != 0) continue;
+                own++;
+                if (!isfinite(ref)) {
+                    if (mus[i] <= 100) {
+                        ref = taylor_period(mus[i], nus[j], r.section_slope, &unc);
+                    } else {
+                        bkf_cycle_result b;
+                        int brc = solve_with(mus[i], nus[j], 1e-12, BKF_STEPPER_EXTRAPOLATION, &b, &e);
+                        if (brc != BKF_OK) brc = solve_with(mus[i], nus[j], 1e-11, BKF_STEPPER_EXTRAPOLATION, &b, &e);
+                        CHECK_MSG(brc == BKF_OK, "mu %g nu %g: reference: %s", mus[i], nus[j], e.message);
+                        if (brc != BKF_OK) break;
+                        ref = b.period;
+                        unc = b.period_err;
+                    }
+                }
+                double err = fabs(r.period - ref), ratio = fmax(err - unc, 0.0) / r.period_err;
+                CHECK_MSG(err <= tols[k] * r.period + unc, "mu %g nu %g tol %g: error %.3g > tol", mus[i], nus[j],
+                          tols[k], err / r.period);
+                CHECK_MSG(ratio <= 1.0, "mu %g nu %g tol %g: estimate %.3g optimistic by %.3g", mus[i], nus[j],
+                          tols[k], r.period_err / r.period, ratio);
+                worst = fmax(worst, ratio);
+            }
+        }
+    bkf_test_note("collocation answered %zu of %zu; largest true/estimated error ratio %.3g", own, all, worst);
+    CHECK_MSG(own * 10 >= all * 9, "collocation answered only %zu of %zu", own, all);
+}
+
+/* The start called directly: bad input refused with the parameters named,
+ * and a start it accepts solves to the cycle. */
+TEST(colloc_relaxation_start_rejects_bad_input)
+{
+    bkf_colloc *c = bkf_colloc_alloc();
+    CHECK(c != NULL);
+    bkf_error e = {0};
+    CHECK(bkf_colloc_guess_relaxation(c, 0.5, 0.0, 10.0, 1e-8, &e) == BKF_EINPUT);
+    CHECK(strstr(e.message, "mu >= 1") != NULL);
+    CHECK(bkf_colloc_guess_relaxation(c, 100.0, 1.0, 10.0, 1e-8, &e) == BKF_EINPUT);
+    CHECK(bkf_colloc_guess_relaxation(c, 100.0, 0.0, 0.0, 1e-8, &e) == BKF_EINPUT);
+    CHECK(bkf_colloc_guess_relaxation(c, 100.0, 0.0, 10.0, 0.0, &e) == BKF_EINPUT);
+    bkf_colloc_result r;
+    CHECK(bkf_colloc_solve(c, 1e-10, &r, &e) == BKF_EINPUT); /* no guess was made */
+    /* and a start it accepts is the cycle: T against the asymptotic
+     * leading term's relative error O(mu^(-2/3)) at mu 1e3 */
+    CHECK(bkf_colloc_guess_relaxation(c, 1e3, 0.0, 1614.0, 1e-8, &e) == BKF_OK);
+    CHECK(bkf_colloc_solve(c, 1e-10, &r, &e) == BKF_OK);
+    CHECK_MSG(fabs(r.period / (1e3 * (3.0 - 2.0 * log(2.0))) - 1.0) < 0.03, "T %.10g", r.period);
+    bkf_colloc_free(c);
+}
