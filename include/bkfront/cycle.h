@@ -165,7 +165,9 @@ int bkf_cycle_estimate(bkf_cycle *cycle, double mu, double nu, const bkf_cycle_o
  * At most max_points points (0: no limit, beyond the driver's own, 10000
  * rows: a branch that spends those short of `to`, its steps shrunk to a
  * creep, returns BKF_EBUDGET naming where it stopped, after visiting the
- * rows it has). */
+ * rows it has).  Along nu at mu >= 100 a branch crossing nu = 0 is
+ * continued as two halves meeting there (the row at 0 visited once;
+ * max_points counts both halves' rows, the driver's budget each half's). */
 typedef enum { BKF_CYCLE_ALONG_MU = 0, BKF_CYCLE_ALONG_NU = 1 } bkf_cycle_param;
 typedef int (*bkf_cycle_visit)(const bkf_cycle_result *point, void *data);
 int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed,

@@ -1667,6 +1667,7 @@ typedef struct {
     /* a shooting row outside the collocation rows' domain was seen, and
      * one back inside it hands the branch to them (branch_colloc) */
     int left_colloc, to_colloc;
+    int mirror_shots; /* every shot is the mirror image's (branch_mirrors) */
     size_t rows;
     /* The last shot with derivatives: the continuation evaluates its
      * tangent, and the amplitude walk its last root, at the point it then
@@ -1674,7 +1675,7 @@ typedef struct {
     struct {
         double u[2], y0;
         shot sh;
-        flow_params flow; /* the mirror's for nu < 0 along mu */
+        flow_params flow; /* the mirror's where the shots are (mirror_shots) */
         integrator in;    /* its tolerance and turn-limit count (no stepper) */
         int valid;
     } last;
@@ -1714,6 +1715,28 @@ static double branch_tol(double tol, double mu, double nu, bkf_stepper_kind kind
     return fmax(tight, 1e-3 * sqrt(tol) * fmin(1.0, sqrt(1.0 - nu * nu)));
 }
 
+/* Shots for nu < 0 are those of the mirror image x -> -x, at -nu (same
+ * T): there the section x = nu lies where the jump leaves the left knee,
+ * f'(0) is tiny (4e-3 at mu 848, nu -0.999) and ln f'(0) carries the
+ * return's absolute error magnified 1/f'(0) (G noisy at 1e-8, above the
+ * corrector's tolerance); at -nu it is crossed mid-jump.  Along nu only from
+ * BRANCH_NU_MIRROR_MU: below it the direct shots pass 0 -> -0.999 (mu 10:
+ * 107 rows, none relaxed, where the mirror's 0 -> 0.999 relaxes 10 in the
+ * canard); from mu 100 the canard lies beyond the box's |nu| <= 0.9999, and
+ * the direct shots' steps shrink towards the knee (0 -> -0.999: 191 rows at
+ * mu 100, 227 at 300, and at 1e3 a creep of 1e-12 steps near -0.9982 that
+ * spent 10000 rows) while the mirror's take 28-33 rows at every mu from 300
+ * to 1e4.  A branch's shots are all the mirror's or none (G's even
+ * extension is kinked at nu = 0, where pseudo-arclength from 0 towards
+ * -0.999 at mu 100 turned back); one along nu that crosses 0 is split there
+ * (bkf_cycle_branch). */
+#define BRANCH_NU_MIRROR_MU 100.0
+static int branch_mirrors(bkf_cycle_param along, double from, double to, double fixed)
+{
+    if (along == BKF_CYCLE_ALONG_MU) return fixed < 0;
+    return fixed >= BRANCH_NU_MIRROR_MU && from <= 0 && to <= 0 && (from < 0 || to < 0);
+}
+
 /* G = ln w(P) - ln w0 and, if dg, its derivatives (d/d ln w0, d/dq) from
  * one shot at (w0, q) that carries the variational column and the
  * parameter sensitivity.  At fixed w0 the start (nu, y0 = w0/a + b F(nu))
@@ -1727,14 +1750,7 @@ static int branch_shot(branch_ctx *b, double ln_w0, double q, double *g, double 
     if (check_inputs(mu, nu, NULL, err) != BKF_OK)
         return bkf_error_set(err, BKF_ENUMERIC, "branch left the valid range at mu = %.15g, nu = %.15g", mu,
                              nu);
-    /* Shots for nu < 0 are those of the mirror image x -> -x, at -nu (same
-     * T): there the section x = nu lies where the jump leaves the left
-     * knee, f'(0) is tiny (4e-3 at mu 848, nu -0.999) and ln f'(0) carries
-     * the return's absolute error magnified 1/f'(0) (G noisy at 1e-8, above
-     * the corrector's tolerance); at -nu it is crossed mid-jump. */
-    /* (Only on branches along mu: along nu the direct shots pass 0 -> -0.999
-     * at mu 10, while the mirror's fail at nu 0.99874 as 0 -> 0.999 does.) */
-    double mirror = b->along == BKF_CYCLE_ALONG_MU && nu < 0 ? -1.0 : 1.0;
+    double mirror = b->mirror_shots ? -1.0 : 1.0;
     nu *= mirror;
     flow_params p = {0};
     flow_set(&p, mu, nu);
@@ -1871,7 +1887,7 @@ static void branch_unmirror_result(bkf_cycle *c, double mu, double nu, double y_
  * is solved afresh. */
 static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu, bkf_error *err)
 {
-    int mirrored = b->along == BKF_CYCLE_ALONG_MU && nu < 0;
+    int mirrored = b->mirror_shots;
     /* (the row's ends are the requested values: a shot at exp(ln mu) is
      * within an ulp of mu, but one at another nu is not the row's) */
     if (!b->last.valid || b->last.u[0] != u[0] || b->last.u[1] != u[1] ||
@@ -2057,9 +2073,9 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     bkf_error solve_err;
     double mu, nu, q = branch_row_params(b, u[1], &mu, &nu);
     int mirrored = b->along == BKF_CYCLE_ALONG_MU && nu < 0 && branch_near_canard(mu, nu);
-    /* (u[0] is the mirror's slope for nu < 0: a solve at nu itself then
+    /* (u[0] is the mirror's slope where the shots are mirrored: a solve at nu itself then
      * starts from the previous point's cycle) */
-    double warm = nu >= 0 || b->along == BKF_CYCLE_ALONG_NU || mirrored ? exp(u[0]) : 0.0;
+    double warm = !b->mirror_shots || mirrored ? exp(u[0]) : 0.0;
     int rc = branch_estimate(b, u, mu, nu, &solve_err);
     if (rc != BKF_OK && rc != BKF_ENOMEM) {
         b->cycle->warm_slope = warm;
@@ -2434,14 +2450,13 @@ static int branch_colloc(branch_ctx *b, double q, int dir, size_t limit, int vis
 }
 
 /* The shooting continuation's start at q: the slope of a solve there
- * (for nu < 0 along mu the branch's shots are the mirror's, branch_shot,
- * and so is the slope); the first accepted point is estimated again, from
- * u0. */
+ * (where the branch's shots are the mirror's, branch_mirrors, so is the
+ * slope); the first accepted point is estimated again, from u0. */
 static int branch_shooting_start(branch_ctx *b, double q, double *u0, bkf_error *err)
 {
     double mu, nu;
     q = branch_row_params(b, q, &mu, &nu);
-    int rc = branch_solve_counted(b, mu, nu < 0 && b->along == BKF_CYCLE_ALONG_MU ? -nu : nu, &b->options, err);
+    int rc = branch_solve_counted(b, mu, b->mirror_shots ? -nu : nu, &b->options, err);
     if (rc != BKF_OK) return rc;
     u0[0] = log(b->cycle->result.section_slope);
     u0[1] = q;
@@ -2468,7 +2483,8 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
     if (from == to) return bkf_error_set(err, BKF_EINPUT, "branch needs from != to");
 
     branch_ctx b = {.along = along, .fixed = fixed, .options = opt, .cycle = bkf_cycle_alloc(),
-                    .visit = visit, .visit_data = data, .err = err};
+                    .visit = visit, .visit_data = data, .err = err,
+                    .mirror_shots = branch_mirrors(along, from, to, fixed)};
     if (!b.cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     double q_from = along == BKF_CYCLE_ALONG_MU ? log(from) : from;
     double q_to = along == BKF_CYCLE_ALONG_MU ? log(to) : to;
@@ -2559,12 +2575,58 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
     return rc;
 }
 
+/* The two halves of a branch along nu split at nu = 0 (branch_mirrors):
+ * the second half's first row is the first half's last, so it is not
+ * visited again, and its work goes to the row after it. */
+typedef struct {
+    bkf_cycle_visit visit;
+    void *data;
+    size_t rows;
+    int skip_first, stopped;
+    size_t rhs, jac, steps, shots;
+} branch_halves;
+
+static int branch_halves_visit(const bkf_cycle_result *point, void *data)
+{
+    branch_halves *h = data;
+    if (h->skip_first) {
+        h->skip_first = 0;
+        h->rhs = point->rhs_calls;
+        h->jac = point->jacobian_calls;
+        h->steps = point->steps;
+        h->shots = point->newton_iterations;
+        return 0;
+    }
+    bkf_cycle_result r = *point;
+    r.rhs_calls += h->rhs;
+    r.jacobian_calls += h->jac;
+    r.steps += h->steps;
+    r.newton_iterations += h->shots;
+    h->rhs = h->jac = h->steps = h->shots = 0;
+    h->rows++;
+    int stop = h->visit(&r, h->data);
+    if (stop) h->stopped = 1;
+    return stop;
+}
+
 int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed,
                      const bkf_cycle_options *options, size_t max_points, bkf_cycle_visit visit,
                      void *data, bkf_error *err)
 {
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
-    int rc = cycle_branch_body(along, from, to, fixed, options, max_points, visit, data, err);
+    int rc;
+    if (along == BKF_CYCLE_ALONG_NU && visit && branch_mirrors(along, fmin(from, 0.0), fmin(to, 0.0), fixed) &&
+        from * to < 0) {
+        branch_halves h = {.visit = visit, .data = data};
+        rc = cycle_branch_body(along, from, 0.0, fixed, options, max_points, branch_halves_visit, &h, err);
+        if (rc == BKF_OK && !h.stopped && (!max_points || h.rows < max_points)) {
+            h.skip_first = 1;
+            rc = cycle_branch_body(along, 0.0, to, fixed, options, max_points ? max_points - h.rows + 1 : 0,
+                                   branch_halves_visit, &h, err);
+        }
+    } else {
+        rc = cycle_branch_body(along, from, to, fixed, options, max_points, visit, data, err);
+    }
     bkf_gsl_handler_pop(handler);
     return rc;
 }
