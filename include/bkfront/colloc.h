@@ -75,7 +75,9 @@ size_t bkf_colloc_nodes(const bkf_colloc *colloc, double *z, double *x, double *
 
 /* Continuation: a path holds a branch's last two rows, and each next row
  * is solved on a mesh predicted from them, not re-meshed (the rows of
- * bkf_cycle_branch where collocation answers). */
+ * bkf_cycle_branch where collocation answers, up to mu 2: above it the
+ * fast layers move across a mesh so predicted, and the rows are built by
+ * turns). */
 typedef struct bkf_colloc_path bkf_colloc_path;
 
 bkf_colloc_path *bkf_colloc_path_alloc(void);

@@ -2009,11 +2009,21 @@ static int branch_solve_counted(branch_ctx *b, double mu, double nu, const bkf_c
  * against 4.2), and a warm-started relaxed solve there ended 26 times its
  * estimate off the Taylor reference (mu 3.65053675, nu -0.99: true 3.9e-8
  * T, estimate 1.5e-9 T). */
+static int branch_unmirror_row(branch_ctx *b, double mu, double nu, bkf_error *err);
+
 static int branch_solve_row(branch_ctx *b, double mu, double nu, int mirrored, const bkf_cycle_options *o,
                             bkf_error *err)
 {
     int rc = branch_solve_counted(b, mu, mirrored ? -nu : nu, o, err);
     if (rc != BKF_OK || !mirrored) return rc;
+    return branch_unmirror_row(b, mu, nu, err);
+}
+
+/* The mirror's solution in b->cycle (at -nu, its nodes stored) as the row
+ * at nu: its section located between the nodes, the result unmirrored. */
+static int branch_unmirror_row(branch_ctx *b, double mu, double nu, bkf_error *err)
+{
+    int rc = BKF_OK;
     bkf_cycle *c = b->cycle;
     integrator aux = {0};
     double y_real = 0.0;
@@ -2289,6 +2299,8 @@ static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced,
 #define BRANCH_COLLOC_STEP_MU 0.35
 #define BRANCH_COLLOC_STEP_NU 0.05
 #define BRANCH_COLLOC_STEP_MIN 1e-4
+/* Rows on a path up to this mu, by turns above it (branch_colloc_turn). */
+#define BRANCH_COLLOC_TURN_MU 2.0
 
 static int branch_colloc_kind(const branch_ctx *b) { return b->options.stepper == BKF_STEPPER_COLLOCATION; }
 
@@ -2319,9 +2331,11 @@ static int branch_colloc_between(const branch_ctx *b, double q0, double q1)
     return !((z >= lo && a <= hi) || (-a >= lo && -z <= hi));
 }
 
-/* The row in b->cycle (c->colloc holds r's solution) visited, its work the
- * branch's since the last row. */
-static int branch_colloc_visit(branch_ctx *b, const bkf_colloc_result *r, bkf_error *err)
+/* The row at (mu, nu) in b->cycle (c->colloc holds r's solution, the
+ * mirror's at -nu if mirrored) visited, its work the branch's since the
+ * last row. */
+static int branch_colloc_visit(branch_ctx *b, const bkf_colloc_result *r, double mu, double nu, int mirrored,
+                               bkf_error *err)
 {
     bkf_cycle *c = b->cycle;
     c->flow.rhs_calls = c->flow.jacobian_calls = 0;
@@ -2331,56 +2345,68 @@ static int branch_colloc_visit(branch_ctx *b, const bkf_colloc_result *r, bkf_er
     b->work_rhs += c->result.rhs_calls;
     b->work_jac += c->result.jacobian_calls;
     b->work_shots += c->result.newton_iterations;
+    if (mirrored && (rc = branch_unmirror_row(b, mu, nu, err)) != BKF_OK) return rc;
     branch_work(b, &c->result);
     if (b->visit(&c->result, b->visit_data) != 0) b->visit_status = -1;
     b->rows++;
     return BKF_OK;
 }
 
-/* A new mesh at (mu, nu) from c->colloc's solution (the last row, or the
- * row whose pair missed tol): the cold start's turns (colloc_attempt) from
- * its section point, whose meshes are a third of an equidistributed
- * pair's (bkf_colloc_solve warm: 1100 intervals at mu 100 against 370). */
-static int branch_colloc_remesh(bkf_cycle *c, double mu, double nu, double tol, bkf_colloc_result *r,
-                                bkf_error *err)
+/* A row's cycle from the predicted section slope w and period T (in the
+ * solved coordinates): the cold start's turns (colloc_attempt) from that
+ * section point and the solve of their pair.  At large mu the layers move
+ * in normalised time from row to row (the down jump's s at nu 0.96), so a
+ * path's mesh predicted index by index needed 15-30 Newton iterations
+ * even at steps of 0.02 in ln mu, where a turn from the predicted point
+ * follows them and Newton takes 2-4. */
+static int branch_colloc_turn(bkf_cycle *c, double w, double T, double tol, bkf_colloc_result *r, bkf_error *err)
 {
-    size_t n = bkf_colloc_nodes(c->colloc, NULL, NULL, NULL, 0);
-    double z[2], x[2], y[2];
-    if (n < 2 || bkf_colloc_nodes(c->colloc, z, x, y, 2) < 2)
-        return bkf_error_set(err, BKF_ENUMERIC, "collocation path without a solution");
-    double T_hint = fmax(2.0 * M_PI, c->result.period);
-    int rc = bkf_colloc_guess_turn(c->colloc, mu, nu, nu, y[0], T_hint, colloc_turn_tol(tol), err);
+    const flow_params *p = &c->flow;
+    int rc = bkf_colloc_guess_turn(c->colloc, p->mu, p->nu, p->nu, section_y_of_slope(p, w), fmax(2.0 * M_PI, T),
+                                   colloc_turn_tol(tol), err);
     return rc == BKF_OK ? bkf_colloc_solve(c->colloc, tol, r, err) : rc;
 }
 
 /* Collocation rows from q (visited already unless visit_first) towards
- * q_to, for as long as their domain lasts: a cold solve at q, warm solves
- * (bkf_colloc_solve's equidistributed pair) until the path has two rows on
- * meshes of the same size, then bkf_colloc_continue; a row whose pair
- * misses tol is re-meshed by a warm solve there.  The step grows while
- * Newton needs at most two iterations a mesh and halves where it refuses.
- * Returns with the last visited row's q in b->last_u[1] (b->landed at
- * q_to); a cold solve that refuses is BKF_ENUMERIC with no row visited.
- * Where the next step would leave the domain or cannot be taken, the
- * caller continues by shooting from that row. */
+ * q_to, for as long as their domain lasts: a cold solve at q, then up to
+ * BRANCH_COLLOC_TURN_MU rows on a path (bkf_colloc_continue: the mesh
+ * predicted index by index from the last two rows, Newton on the pair; a
+ * row whose pair misses tol is re-meshed by turns), above it every row by
+ * turns from the section point and period predicted by the secant in q of
+ * the last two rows' ln f'(0) and ln T.  The step grows while the rows
+ * converge in few iterations and halves where they refuse.  Along mu for
+ * nu < 0 the rows are the mirror's, as the shots are (solved at -nu: the
+ * section x = nu at the left knee); along nu they are not (mu 100, nu
+ * 0.6375: a collocation solve there misses its estimate 1.4 times, at
+ * -0.6375 it does not).  Returns with the
+ * last visited row's q in b->last_u[1] (b->landed at q_to); a cold solve
+ * that refuses is BKF_ENUMERIC with no row visited.  Where the next step
+ * would leave the domain or cannot be taken, the caller continues by
+ * shooting from that row. */
 static int branch_colloc(branch_ctx *b, double q, int dir, size_t limit, int visit_first, bkf_error *err)
 {
     bkf_cycle *c = b->cycle;
+    const double sign = b->mirror_shots && b->along == BKF_CYCLE_ALONG_MU ? -1.0 : 1.0;
     double mu, nu;
     q = branch_row_params(b, q, &mu, &nu);
     bkf_cycle_options opt = b->options;
     opt.warm_start = 0;
-    flow_set(&c->flow, mu, nu);
+    flow_set(&c->flow, mu, sign * nu);
     c->flow.rhs_calls = c->flow.jacobian_calls = 0;
     int rc = colloc_attempt(c, &opt, err);
+    /* the last two rows' q, ln f'(0) and ln T in the solved coordinates */
+    double hist[2][3] = {{q, log(c->result.section_slope), log(c->result.period)}};
+    if (rc == BKF_OK && sign < 0.0) rc = branch_unmirror_row(b, mu, nu, err);
     if (rc != BKF_OK) {
         c->have_solution = 0;
-        return rc;
+        return rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
     }
     b->work_steps += c->result.steps;
     b->work_rhs += c->result.rhs_calls;
     b->work_jac += c->result.jacobian_calls;
     b->work_shots += c->result.newton_iterations;
+    memcpy(hist[1], hist[0], sizeof hist[1]);
+    int have = 1;
     if (visit_first) {
         branch_work(b, &c->result);
         if (b->visit(&c->result, b->visit_data) != 0) b->visit_status = -1;
@@ -2397,25 +2423,28 @@ static int branch_colloc(branch_ctx *b, double q, int dir, size_t limit, int vis
         if ((qn - b->q_to) * dir >= 0.0 || fabs(qn - b->q_to) <= 1e-12 * fmax(1.0, fabs(qn))) qn = b->q_to;
         if (!branch_colloc_between(b, q, qn)) break;
         qn = branch_row_params(b, qn, &mu, &nu);
-        flow_set(&c->flow, mu, nu);
+        flow_set(&c->flow, mu, sign * nu);
         bkf_colloc_result r;
         bkf_error row_err;
-        int row = BKF_ETOL, continued = path_rows >= 1;
+        int row = BKF_ETOL, continued = path_rows >= 1 && mu <= BRANCH_COLLOC_TURN_MU;
         if (continued) {
-            row = bkf_colloc_continue(c->colloc, path, mu, nu, opt.tol, &r, &row_err);
+            row = bkf_colloc_continue(c->colloc, path, mu, sign * nu, opt.tol, &r, &row_err);
             b->work_steps += r.interval_solves;
             b->work_shots += r.newton_iterations;
         }
         if (row == BKF_ETOL) {
             continued = 0;
-            /* re-mesh: a warm solve from the row's own solution (or the
-             * path's newest row) */
-            row = branch_colloc_remesh(c, mu, nu, opt.tol, &r, &row_err);
+            /* turns from the predicted section point */
+            double f = have == 2 ? (qn - hist[1][0]) / (hist[1][0] - hist[0][0]) : 0.0;
+            double lw = hist[1][1] + f * (hist[1][1] - hist[0][1]), lT = hist[1][2] + f * (hist[1][2] - hist[0][2]);
+            row = branch_colloc_turn(c, exp(lw), exp(lT), opt.tol, &r, &row_err);
             if (row == BKF_OK) {
                 b->work_steps += r.interval_solves;
                 b->work_shots += r.newton_iterations;
-                if (bkf_colloc_path_push(path, c->colloc) != BKF_OK) row = BKF_ENOMEM;
-                path_rows = 1;
+                if (mu <= BRANCH_COLLOC_TURN_MU) {
+                    if (bkf_colloc_path_push(path, c->colloc) != BKF_OK) row = BKF_ENOMEM;
+                    path_rows = 1;
+                }
             } else if (row != BKF_ENOMEM) {
                 /* the object's solution is gone: shooting goes on from q */
                 break;
@@ -2431,16 +2460,21 @@ static int branch_colloc(branch_ctx *b, double q, int dir, size_t limit, int vis
             continue;
         }
         /* (r's counters were added above: the row's visit adds only the
-         * extremes' integration) */
+         * extremes' integration and the mirror's section) */
         size_t iterations = r.newton_iterations;
         r.interval_solves = r.newton_iterations = 0;
-        rc = branch_colloc_visit(b, &r, err);
+        memcpy(hist[0], hist[1], sizeof hist[1]);
+        hist[1][0] = qn;
+        hist[1][1] = log(c->flow.a * (r.section_y - c->flow.b * lienard_F(c->flow.nu)));
+        hist[1][2] = log(r.period);
+        have = 2;
+        rc = branch_colloc_visit(b, &r, mu, nu, sign < 0.0, err);
         if (rc != BKF_OK) break;
         q = qn;
         b->last_u[0] = log(c->result.section_slope);
         b->last_u[1] = q;
         b->have_last = 1;
-        if (continued && iterations <= 7) step = fmin(1.5 * step, step_max);
+        if (!continued || iterations <= 7) step = fmin(1.5 * step, step_max);
     }
     bkf_colloc_path_free(path);
     b->last_u[1] = q;
