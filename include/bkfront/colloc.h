@@ -105,6 +105,37 @@ int bkf_colloc_extremes(const bkf_colloc *colloc, double *xmax, double *xmin, bk
  * returns how many there are. */
 size_t bkf_colloc_nodes(const bkf_colloc *colloc, double *z, double *x, double *y, size_t capacity);
 
+/* Continuation: a path holds a branch's last two rows, and each next row
+ * is solved on a mesh predicted from them, not re-meshed (the rows of
+ * bkf_cycle_branch where collocation answers, up to mu 2: above it the
+ * fast layers move across a mesh so predicted, and the rows are built by
+ * turns). */
+typedef struct bkf_colloc_path bkf_colloc_path;
+
+bkf_colloc_path *bkf_colloc_path_alloc(void);
+void bkf_colloc_path_free(bkf_colloc_path *path);
+
+/* Start the path again from colloc's last solution (a bkf_colloc_solve:
+ * its mesh, the finer of its pair, an even number of intervals).  Rows
+ * that bkf_colloc_continue adds are on meshes predicted from it, index by
+ * index.  BKF_EINPUT without a solution, BKF_ENOMEM. */
+int bkf_colloc_path_push(bkf_colloc_path *path, const bkf_colloc *colloc);
+
+/* The row at (mu, nu): the mesh, the mesh values, the stages and T
+ * predicted per mesh index from the path's two rows (the secant in ln mu,
+ * or in nu where mu did not change; the logarithms of the interval lengths,
+ * so that layers narrowing like a power of mu are followed), or from its
+ * one row; Newton on that mesh and on its coarsening (merged pairs, started
+ * from the finer solution), the finer T reported with |T_N - T_N/2| / 16 as
+ * bkf_colloc_solve's pair does.  On success the row joins the path.
+ * BKF_ETOL when the estimate misses tol (the mesh no longer fits the cycle:
+ * colloc then holds the row's solution, from which a warm bkf_colloc_solve
+ * re-meshes), BKF_ENUMERIC when Newton refuses (colloc then holds the path's
+ * newest row, at its own parameters); out's work counters (Newton
+ * iterations, interval solves) are set in either case. */
+int bkf_colloc_continue(bkf_colloc *colloc, bkf_colloc_path *path, double mu, double nu, double tol,
+                        bkf_colloc_result *out, bkf_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1190,6 +1190,8 @@ static int colloc_extremes(bkf_cycle *c, bkf_error *err)
  * leaves c's solution as it was, and the caller shoots.  declinable (the
  * automatic choice): a small-mu point whose series guess is poor is left
  * to shooting at once. */
+static int colloc_store(bkf_cycle *c, const bkf_colloc_result *r, const bkf_cycle_options *opt, bkf_error *err);
+
 static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, int declinable, bkf_error *err)
 {
     flow_params *p = &c->flow;
@@ -1236,6 +1238,17 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, int declin
         if (rc == BKF_OK) rc = bkf_colloc_solve(c->colloc, opt->tol, &r, err);
     }
     if (rc != BKF_OK) return rc;
+    return colloc_store(c, &r, opt, err);
+}
+
+/* The collocation solution r (in c->colloc, at c->flow's parameters) as
+ * c's solution: its nodes, result and extremes. */
+static int colloc_store(bkf_cycle *c, const bkf_colloc_result *rp, const bkf_cycle_options *opt, bkf_error *err)
+{
+    flow_params *p = &c->flow;
+    const double mu = p->mu, nu = p->nu;
+    const bkf_colloc_result r = *rp;
+    int rc = BKF_OK;
     size_t n = bkf_colloc_nodes(c->colloc, NULL, NULL, NULL, 0);
     double *buf = malloc(3 * n * sizeof *buf);
     if (!buf) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
@@ -1751,6 +1764,9 @@ typedef struct {
     /* the last accepted point and its tangent, for the amplitude stretches */
     double last_u[2], last_t[2];
     int have_last, skip_visit, steep, landed;
+    /* a shooting row outside the collocation rows' domain was seen, and
+     * one back inside it hands the branch to them (branch_colloc) */
+    int left_colloc, to_colloc;
     int mirror_shots; /* every shot is the mirror image's (branch_mirrors) */
     size_t rows;
     /* The last shot with derivatives: the continuation evaluates its
@@ -2093,11 +2109,21 @@ static int branch_solve_counted(branch_ctx *b, double mu, double nu, const bkf_c
  * against 4.2), and a warm-started relaxed solve there ended 26 times its
  * estimate off the Taylor reference (mu 3.65053675, nu -0.99: true 3.9e-8
  * T, estimate 1.5e-9 T). */
+static int branch_unmirror_row(branch_ctx *b, double mu, double nu, bkf_error *err);
+
 static int branch_solve_row(branch_ctx *b, double mu, double nu, int mirrored, const bkf_cycle_options *o,
                             bkf_error *err)
 {
     int rc = branch_solve_counted(b, mu, mirrored ? -nu : nu, o, err);
     if (rc != BKF_OK || !mirrored) return rc;
+    return branch_unmirror_row(b, mu, nu, err);
+}
+
+/* The mirror's solution in b->cycle (at -nu, its nodes stored) as the row
+ * at nu: its section located between the nodes, the result unmirrored. */
+static int branch_unmirror_row(branch_ctx *b, double mu, double nu, bkf_error *err)
+{
+    int rc = BKF_OK;
     bkf_cycle *c = b->cycle;
     integrator aux = {0};
     double y_real = 0.0;
@@ -2128,6 +2154,20 @@ static void branch_work(branch_ctx *b, bkf_cycle_result *r)
     b->work_rhs = b->work_jac = b->work_steps = b->work_shots = 0;
 }
 
+/* A row's parameters at q; the ends are requested values: given back
+ * exactly, not exp(ln A).  Returns q, snapped to an end within 1e-12. */
+static double branch_row_params(const branch_ctx *b, double q, double *mu, double *nu)
+{
+    if (fabs(q - b->q_from) <= 1e-12 * fmax(1.0, fabs(q))) q = b->q_from;
+    if (fabs(q - b->q_to) <= 1e-12 * fmax(1.0, fabs(q))) q = b->q_to;
+    branch_params(b, q, mu, nu);
+    if (q == b->q_from) *(b->along == BKF_CYCLE_ALONG_MU ? mu : nu) = b->from;
+    if (q == b->q_to) *(b->along == BKF_CYCLE_ALONG_MU ? mu : nu) = b->to;
+    return q;
+}
+
+static int branch_colloc_at(const branch_ctx *b, double mu, double nu);
+
 static int branch_accept(const double *u, const double *tangent, int is_fold, void *data)
 {
     (void)is_fold; /* T(mu) and T(nu) have no folds; a located one is still a valid point */
@@ -2141,13 +2181,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
         return 0;
     }
     bkf_error solve_err;
-    double mu, nu, q = u[1];
-    /* the ends are requested values: give them back exactly, not exp(ln A) */
-    if (fabs(q - b->q_from) <= 1e-12 * fmax(1.0, fabs(q))) q = b->q_from;
-    if (fabs(q - b->q_to) <= 1e-12 * fmax(1.0, fabs(q))) q = b->q_to;
-    branch_params(b, q, &mu, &nu);
-    if (q == b->q_from) *(b->along == BKF_CYCLE_ALONG_MU ? &mu : &nu) = b->from;
-    if (q == b->q_to) *(b->along == BKF_CYCLE_ALONG_MU ? &mu : &nu) = b->to;
+    double mu, nu, q = branch_row_params(b, u[1], &mu, &nu);
     int mirrored = b->along == BKF_CYCLE_ALONG_MU && nu < 0 && branch_near_canard(mu, nu);
     /* (u[0] is the mirror's slope where the shots are mirrored: a solve at nu itself then
      * starts from the previous point's cycle) */
@@ -2195,6 +2229,12 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     b->rows++;
     if (tangent && fabs(tangent[1]) < STEEP_ENTER && q != b->q_to) {
         b->steep = 1;
+        return 1;
+    }
+    if (!branch_colloc_at(b, mu, nu)) {
+        b->left_colloc = 1;
+    } else if (b->left_colloc && q != b->q_to && !refused && strcmp(b->cycle->result.model, "shooting-relaxed")) {
+        b->to_colloc = 1;
         return 1;
     }
     return 0;
@@ -2340,6 +2380,224 @@ static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced,
     return BKF_OK;
 }
 
+/* ----------------------------------------------------- collocation rows */
+
+/* Away from the canard the branch's rows are collocation solves on a path
+ * (bkf_colloc_continue: the mesh and solution predicted from the last two
+ * rows, Newton on the pair, no re-meshing while the pair meets tol), which
+ * cost a fraction of a cold solve of either engine.  Their domain: mu up
+ * to COLLOC_AUTO_MU_MAX, outside 8 mu^2 (1 - |nu|) in [0.2, 5] for mu >= 1
+ * (wider than branch_near_canard's [1/4, 4], where the shooting rows and
+ * the amplitude walk keep the canard's rows as they were, and than
+ * colloc_attempt's refusal), with the automatic stepper at tol <=
+ * COLLOC_AUTO_TOL_MAX or with collocation asked for. */
+#define BRANCH_COLLOC_CANARD_LO 0.2
+#define BRANCH_COLLOC_CANARD_HI 5.0
+/* Steps in q (ln mu or nu): the first, the largest (about as many rows per
+ * decade of mu as the shooting branch's, the same largest step along nu),
+ * and the smallest before the rows hand over to shooting. */
+#define BRANCH_COLLOC_STEP_MU 0.35
+#define BRANCH_COLLOC_STEP_NU 0.05
+#define BRANCH_COLLOC_STEP_MIN 1e-4
+/* Rows on a path up to this mu, by turns above it (branch_colloc_turn). */
+#define BRANCH_COLLOC_TURN_MU 2.0
+
+static int branch_colloc_kind(const branch_ctx *b) { return b->options.stepper == BKF_STEPPER_COLLOCATION; }
+
+static int branch_colloc_at(const branch_ctx *b, double mu, double nu)
+{
+    double x = 8.0 * mu * mu * (1.0 - fabs(nu));
+    return branch_colloc_kind(b) && mu <= COLLOC_AUTO_MU_MAX * (1.0 + 1e-12) &&
+           !(mu >= 1.0 && x >= BRANCH_COLLOC_CANARD_LO && x <= BRANCH_COLLOC_CANARD_HI);
+}
+
+/* The same for every point between q0 and q1: the window's band in q
+ * (along mu an interval of mu, along nu one of |nu| on either side) must
+ * not meet the segment. */
+static int branch_colloc_between(const branch_ctx *b, double q0, double q1)
+{
+    double mu0, nu0, mu1, nu1;
+    branch_params(b, q0, &mu0, &nu0);
+    branch_params(b, q1, &mu1, &nu1);
+    if (!branch_colloc_at(b, mu0, nu0) || !branch_colloc_at(b, mu1, nu1)) return 0;
+    if (b->along == BKF_CYCLE_ALONG_MU) {
+        double d = 8.0 * (1.0 - fabs(nu0));
+        double lo = fmax(1.0, sqrt(BRANCH_COLLOC_CANARD_LO / d)), hi = sqrt(BRANCH_COLLOC_CANARD_HI / d);
+        return !(lo <= hi && fmax(mu0, mu1) >= lo && fmin(mu0, mu1) <= hi);
+    }
+    if (mu0 < 1.0) return 1;
+    double d = 8.0 * mu0 * mu0, lo = 1.0 - BRANCH_COLLOC_CANARD_HI / d, hi = 1.0 - BRANCH_COLLOC_CANARD_LO / d;
+    double a = fmin(nu0, nu1), z = fmax(nu0, nu1);
+    return !((z >= lo && a <= hi) || (-a >= lo && -z <= hi));
+}
+
+/* The row at (mu, nu) in b->cycle (c->colloc holds r's solution, the
+ * mirror's at -nu if mirrored) visited, its work the branch's since the
+ * last row. */
+static int branch_colloc_visit(branch_ctx *b, const bkf_colloc_result *r, double mu, double nu, int mirrored,
+                               bkf_error *err)
+{
+    bkf_cycle *c = b->cycle;
+    c->flow.rhs_calls = c->flow.jacobian_calls = 0;
+    int rc = colloc_store(c, r, &b->options, err);
+    if (rc != BKF_OK) return rc;
+    b->work_steps += c->result.steps;
+    b->work_rhs += c->result.rhs_calls;
+    b->work_jac += c->result.jacobian_calls;
+    b->work_shots += c->result.newton_iterations;
+    if (mirrored && (rc = branch_unmirror_row(b, mu, nu, err)) != BKF_OK) return rc;
+    branch_work(b, &c->result);
+    if (b->visit(&c->result, b->visit_data) != 0) b->visit_status = -1;
+    b->rows++;
+    return BKF_OK;
+}
+
+/* A row's cycle from the predicted section slope w and period T (in the
+ * solved coordinates): the cold start's turns (colloc_attempt) from that
+ * section point and the solve of their pair.  At large mu the layers move
+ * in normalised time from row to row (the down jump's s at nu 0.96), so a
+ * path's mesh predicted index by index needed 15-30 Newton iterations
+ * even at steps of 0.02 in ln mu, where a turn from the predicted point
+ * follows them and Newton takes 2-4. */
+static int branch_colloc_turn(bkf_cycle *c, double w, double T, double tol, bkf_colloc_result *r, bkf_error *err)
+{
+    const flow_params *p = &c->flow;
+    int rc = bkf_colloc_guess_turn(c->colloc, p->mu, p->nu, p->nu, section_y_of_slope(p, w), fmax(2.0 * M_PI, T),
+                                   colloc_turn_tol(tol), err);
+    return rc == BKF_OK ? bkf_colloc_solve(c->colloc, tol, r, err) : rc;
+}
+
+/* Collocation rows from q (visited already unless visit_first) towards
+ * q_to, for as long as their domain lasts: a cold solve at q, then up to
+ * BRANCH_COLLOC_TURN_MU rows on a path (bkf_colloc_continue: the mesh
+ * predicted index by index from the last two rows, Newton on the pair; a
+ * row whose pair misses tol is re-meshed by turns), above it every row by
+ * turns from the section point and period predicted by the secant in q of
+ * the last two rows' ln f'(0) and ln T.  The step grows while the rows
+ * converge in few iterations and halves where they refuse.  Along mu for
+ * nu < 0 the rows are the mirror's, as the shots are (solved at -nu: the
+ * section x = nu at the left knee); along nu they are not (mu 100, nu
+ * 0.6375: a collocation solve there misses its estimate 1.4 times, at
+ * -0.6375 it does not).  Returns with the
+ * last visited row's q in b->last_u[1] (b->landed at q_to); a cold solve
+ * that refuses is BKF_ENUMERIC with no row visited.  Where the next step
+ * would leave the domain or cannot be taken, the caller continues by
+ * shooting from that row. */
+static int branch_colloc(branch_ctx *b, double q, int dir, size_t limit, int visit_first, bkf_error *err)
+{
+    bkf_cycle *c = b->cycle;
+    const double sign = b->mirror_shots && b->along == BKF_CYCLE_ALONG_MU ? -1.0 : 1.0;
+    double mu, nu;
+    q = branch_row_params(b, q, &mu, &nu);
+    bkf_cycle_options opt = b->options;
+    opt.warm_start = 0;
+    flow_set(&c->flow, mu, sign * nu);
+    c->flow.rhs_calls = c->flow.jacobian_calls = 0;
+    int rc = colloc_attempt(c, &opt, 0, err);
+    /* the last two rows' q, ln f'(0) and ln T in the solved coordinates */
+    double hist[2][3] = {{q, log(c->result.section_slope), log(c->result.period)}};
+    if (rc == BKF_OK && sign < 0.0) rc = branch_unmirror_row(b, mu, nu, err);
+    if (rc != BKF_OK) {
+        c->have_solution = 0;
+        return rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
+    }
+    b->work_steps += c->result.steps;
+    b->work_rhs += c->result.rhs_calls;
+    b->work_jac += c->result.jacobian_calls;
+    b->work_shots += c->result.newton_iterations;
+    memcpy(hist[1], hist[0], sizeof hist[1]);
+    int have = 1;
+    if (visit_first) {
+        branch_work(b, &c->result);
+        if (b->visit(&c->result, b->visit_data) != 0) b->visit_status = -1;
+        b->rows++;
+    }
+    bkf_colloc_path *path = bkf_colloc_path_alloc();
+    if (!path) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    const double step_max = b->along == BKF_CYCLE_ALONG_MU ? BRANCH_COLLOC_STEP_MU : BRANCH_COLLOC_STEP_NU;
+    double step = 0.5 * step_max;
+    int path_rows = bkf_colloc_path_push(path, c->colloc) == BKF_OK;
+    rc = BKF_OK;
+    while (b->visit_status == 0 && b->rows < limit && q != b->q_to) {
+        double qn = q + dir * step;
+        if ((qn - b->q_to) * dir >= 0.0 || fabs(qn - b->q_to) <= 1e-12 * fmax(1.0, fabs(qn))) qn = b->q_to;
+        if (!branch_colloc_between(b, q, qn)) break;
+        qn = branch_row_params(b, qn, &mu, &nu);
+        flow_set(&c->flow, mu, sign * nu);
+        bkf_colloc_result r;
+        bkf_error row_err;
+        int row = BKF_ETOL, continued = path_rows >= 1 && mu <= BRANCH_COLLOC_TURN_MU;
+        if (continued) {
+            row = bkf_colloc_continue(c->colloc, path, mu, sign * nu, opt.tol, &r, &row_err);
+            b->work_steps += r.interval_solves;
+            b->work_shots += r.newton_iterations;
+        }
+        if (row == BKF_ETOL) {
+            continued = 0;
+            /* turns from the predicted section point */
+            double f = have == 2 ? (qn - hist[1][0]) / (hist[1][0] - hist[0][0]) : 0.0;
+            double lw = hist[1][1] + f * (hist[1][1] - hist[0][1]), lT = hist[1][2] + f * (hist[1][2] - hist[0][2]);
+            row = branch_colloc_turn(c, exp(lw), exp(lT), opt.tol, &r, &row_err);
+            if (row == BKF_OK) {
+                b->work_steps += r.interval_solves;
+                b->work_shots += r.newton_iterations;
+                if (mu <= BRANCH_COLLOC_TURN_MU) {
+                    if (bkf_colloc_path_push(path, c->colloc) != BKF_OK) row = BKF_ENOMEM;
+                    path_rows = 1;
+                }
+            } else if (row != BKF_ENOMEM) {
+                /* the object's solution is gone: shooting goes on from q */
+                break;
+            }
+        }
+        if (row == BKF_ENOMEM) {
+            rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            break;
+        }
+        if (row != BKF_OK) {
+            step *= 0.5;
+            if (step < BRANCH_COLLOC_STEP_MIN) break;
+            continue;
+        }
+        /* (r's counters were added above: the row's visit adds only the
+         * extremes' integration and the mirror's section) */
+        size_t iterations = r.newton_iterations;
+        r.interval_solves = r.newton_iterations = 0;
+        memcpy(hist[0], hist[1], sizeof hist[1]);
+        hist[1][0] = qn;
+        hist[1][1] = log(c->flow.a * (r.section_y - c->flow.b * lienard_F(c->flow.nu)));
+        hist[1][2] = log(r.period);
+        have = 2;
+        rc = branch_colloc_visit(b, &r, mu, nu, sign < 0.0, err);
+        if (rc != BKF_OK) break;
+        q = qn;
+        b->last_u[0] = log(c->result.section_slope);
+        b->last_u[1] = q;
+        b->have_last = 1;
+        if (!continued || iterations <= 7) step = fmin(1.5 * step, step_max);
+    }
+    bkf_colloc_path_free(path);
+    b->last_u[1] = q;
+    b->have_last = 1;
+    b->landed = q == b->q_to;
+    return rc;
+}
+
+/* The shooting continuation's start at q: the slope of a solve there
+ * (where the branch's shots are the mirror's, branch_mirrors, so is the
+ * slope); the first accepted point is estimated again, from u0. */
+static int branch_shooting_start(branch_ctx *b, double q, double *u0, bkf_error *err)
+{
+    double mu, nu;
+    q = branch_row_params(b, q, &mu, &nu);
+    int rc = branch_solve_counted(b, mu, b->mirror_shots ? -nu : nu, &b->options, err);
+    if (rc != BKF_OK) return rc;
+    u0[0] = log(b->cycle->result.section_slope);
+    u0[1] = q;
+    b->cycle->have_solution = 0;
+    return BKF_OK;
+}
+
 static int cycle_branch_body(bkf_cycle_param along, double from, double to, double fixed,
                              const bkf_cycle_options *options, size_t max_points, bkf_cycle_visit visit,
                              void *data, bkf_error *err)
@@ -2363,21 +2621,20 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
                     .mirror_shots = branch_mirrors(along, from, to, fixed)};
     if (!b.cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     b.cycle->series_off = 1;
-    /* the start's slope; where the branch's shots are the mirror's, so is
-     * the slope */
-    rc = branch_solve_counted(&b, mu_from, b.mirror_shots ? -nu_from : nu_from, &opt, err);
-    if (rc != BKF_OK) {
-        bkf_cycle_free(b.cycle);
-        return rc;
-    }
     double q_from = along == BKF_CYCLE_ALONG_MU ? log(from) : from;
     double q_to = along == BKF_CYCLE_ALONG_MU ? log(to) : to;
     b.from = from;
     b.to = to;
     b.q_from = q_from;
     b.q_to = q_to;
-    double u0[2] = {log(b.cycle->result.section_slope), q_from};
-    b.cycle->have_solution = 0; /* the first accepted point is estimated again, from u0 */
+    double u0[2];
+    int dir = q_to > q_from ? 1 : -1;
+    if (branch_colloc_at(&b, mu_from, nu_from)) b.to_colloc = 1;
+    else rc = branch_shooting_start(&b, q_from, u0, err);
+    if (rc != BKF_OK) {
+        bkf_cycle_free(b.cycle);
+        return rc;
+    }
 
     bkf_cont_options co = bkf_cont_options_default(1);
     co.step_max = along == BKF_CYCLE_ALONG_MU ? 0.7 : 0.05;
@@ -2391,15 +2648,27 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
     co.stop_min = fmin(q_from, q_to);
     co.stop_max = fmax(q_from, q_to);
     size_t limit = max_points ? max_points : co.max_points;
-    int dir = q_to > q_from ? 1 : -1;
     bkf_cont_report report;
     /* pseudo-arclength stretches, and amplitude stretches where the branch
-     * stands nearly upright in q (a canard) or where a stretch failed */
+     * stands nearly upright in q (a canard) or where a stretch failed;
+     * collocation rows where they answer (branch_colloc_at) */
     for (int stretch = 0;; stretch++) {
+        if (b.to_colloc) {
+            b.to_colloc = b.left_colloc = 0;
+            int first = b.rows == 0;
+            rc = branch_colloc(&b, first ? q_from : b.last_u[1], dir, limit, first, err);
+            if (rc == BKF_ENOMEM || b.visit_status != 0 || b.rows >= limit || b.landed) break;
+            /* shooting from the last row (not visited again), or from the
+             * start where its cold collocation solve refused */
+            rc = branch_shooting_start(&b, b.rows ? b.last_u[1] : q_from, u0, err);
+            if (rc != BKF_OK) break;
+            b.skip_visit = b.rows > 0;
+        }
         co.max_points = limit - b.rows + (b.skip_visit ? 1 : 0);
         b.steep = 0;
         rc = bkf_cont_run(branch_residual, branch_accept, &b, u0, 1, dir, &co, &report, err);
         if (b.visit_status != 0 || b.rows >= limit) break;
+        if (b.to_colloc) continue;
         if (rc == BKF_OK && !b.steep) break;
         if (rc != BKF_OK && (rc != BKF_ENUMERIC || !b.have_last || b.rows == 0 || stretch >= 10)) break;
         bkf_error walk_err;
@@ -2408,6 +2677,7 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
             rc = BKF_OK;
             break;
         }
+        if (walk == BKF_OK && b.to_colloc) continue;
         if (walk != BKF_OK) {
             /* the stretch's own failure says more when the walk got nowhere */
             if (rc == BKF_OK) *err = walk_err;

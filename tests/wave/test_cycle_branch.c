@@ -310,3 +310,110 @@ TEST(cycle_branch_nu_to_minus_0_999_at_large_mu)
     CHECK_STATUS(bkf_cycle_branch(BKF_CYCLE_ALONG_NU, 0.9, -0.9, 1000.0, &o, 12, count_rows, &rows, &e), BKF_OK);
     CHECK(rows == 12);
 }
+
+/* Collocation rows (stepper collocation, outside the canard): every such
+ * row against an independent shooting solve at tol 1e-12 (rk8pd up to mu
+ * 20, bd2x2 or bsimp above), the true error within the row's own
+ * estimate; every row outside the canard band 8 mu^2 (1 - |nu|) in
+ * [0.2, 5] (mu >= 1) by collocation; the rows' count bounded (the steps
+ * collapsed to 0.02 in ln mu at nu -0.96: 739 rows); their work against
+ * cold collocation solves at the same points, in the same counter on both
+ * sides (condensed interval solves and the extremes' steps: a row above mu
+ * 2 is the cold solve's turns and pair from a predicted section point, a
+ * row below it Newton on a path, whose turns neither side counts). */
+typedef struct {
+    double mu[512], nu[512], period[512], err[512];
+    size_t steps[512], n, colloc, outside, outside_colloc;
+} colloc_rows;
+
+static int outside_canard_band(double mu, double nu)
+{
+    double x = 8.0 * mu * mu * (1.0 - fabs(nu));
+    return mu < 1.0 || x < 0.2 || x > 5.0;
+}
+
+static int collect_colloc(const bkf_cycle_result *r, void *data)
+{
+    colloc_rows *c = data;
+    int is_colloc = !strcmp(r->stepper, "colloc");
+    if (outside_canard_band(r->mu, r->nu)) {
+        c->outside++;
+        c->outside_colloc += is_colloc;
+    }
+    if (c->n < 512 && is_colloc) {
+        c->mu[c->colloc] = r->mu;
+        c->nu[c->colloc] = r->nu;
+        c->period[c->colloc] = r->period;
+        c->err[c->colloc] = r->period_err;
+        c->steps[c->colloc] = r->steps;
+        c->colloc++;
+    }
+    c->n++;
+    return 0;
+}
+
+static void check_colloc_branch(bkf_cycle_param along, double from, double to, double fixed, double work_bound,
+                                size_t max_rows)
+{
+    static colloc_rows got;
+    memset(&got, 0, sizeof got);
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.stepper = BKF_STEPPER_COLLOCATION;
+    bkf_error e;
+    int rc = bkf_cycle_branch(along, from, to, fixed, &o, 0, collect_colloc, &got, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    CHECK_MSG(got.n <= max_rows, "%zu rows (bound %zu)", got.n, max_rows);
+    CHECK_MSG(got.outside_colloc == got.outside, "%zu of %zu rows outside the canard by collocation",
+              got.outside_colloc, got.outside);
+    double worst = 0.0;
+    size_t row_steps = 0, cold_steps = 0;
+    for (size_t i = 0; i < got.colloc; i++) {
+        bkf_cycle_options ref = o;
+        ref.tol = 1e-12;
+        ref.stepper = got.mu[i] <= BKF_CYCLE_STIFF_MU ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_EXTRAPOLATION;
+        bkf_cycle_result r, cold;
+        int rrc = bkf_cycle_period(got.mu[i], got.nu[i], &ref, &r, &e);
+        if (rrc != BKF_OK) {
+            ref.stepper = BKF_STEPPER_IMPLICIT;
+            rrc = bkf_cycle_period(got.mu[i], got.nu[i], &ref, &r, &e);
+        }
+        CHECK_STATUS(rrc, BKF_OK);
+        CHECK(got.err[i] <= o.tol * got.period[i]);
+        double ratio = (fabs(got.period[i] - r.period) - r.period_err) / got.err[i];
+        CHECK_MSG(ratio <= 1.0, "mu %.17g nu %.17g: T %.17g (err %.2g) reference %.17g (err %.2g)", got.mu[i],
+                  got.nu[i], got.period[i], got.err[i], r.period, r.period_err);
+        worst = fmax(worst, ratio);
+        CHECK_STATUS(bkf_cycle_period(got.mu[i], got.nu[i], &o, &cold, &e), BKF_OK);
+        if (strcmp(cold.stepper, "colloc")) continue;
+        cold_steps += cold.steps;
+        row_steps += got.steps[i];
+    }
+    double work = (double)row_steps / (double)cold_steps;
+    CHECK_MSG(work <= work_bound, "rows cost %.2f cold collocation solves each (bound %.2f)", work, work_bound);
+    bkf_test_note("%zu rows (%zu colloc), worst true/estimated %.2f, %.2f cold collocation solves a row", got.n,
+                  got.colloc, worst, work);
+}
+
+/* (5 decades of mu: at most 12 rows a decade) */
+TEST(cycle_branch_colloc_rows_along_mu)
+{
+    check_colloc_branch(BKF_CYCLE_ALONG_MU, 0.1, 1e4, 0.0, 1.5, 60);
+}
+
+/* nu < 0: the rows are the mirror's at -nu (the section mid-jump) */
+TEST(cycle_branch_colloc_rows_along_mu_at_nu_minus_0_96)
+{
+    check_colloc_branch(BKF_CYCLE_ALONG_MU, 0.1, 1e4, -0.96, 1.5, 60);
+}
+
+TEST(cycle_branch_colloc_rows_along_nu)
+{
+    check_colloc_branch(BKF_CYCLE_ALONG_NU, -0.9, 0.9, 10.0, 1.5, 50);
+}
+
+/* at mu 100 the branch runs as two halves meeting at 0, the first the
+ * mirror's (112 rows at 11 ms each before the rows followed the layers) */
+TEST(cycle_branch_colloc_rows_along_nu_at_mu_100)
+{
+    check_colloc_branch(BKF_CYCLE_ALONG_NU, -0.9, 0.9, 100.0, 1.5, 50);
+}
