@@ -167,7 +167,13 @@ int bkf_cycle_estimate(bkf_cycle *cycle, double mu, double nu, const bkf_cycle_o
  * creep, returns BKF_EBUDGET naming where it stopped, after visiting the
  * rows it has).  Along nu at mu >= 100 a branch crossing nu = 0 is
  * continued as two halves meeting there (the row at 0 visited once;
- * max_points counts both halves' rows, the driver's budget each half's). */
+ * max_points counts both halves' rows, the driver's budget each half's).
+ * With the automatic stepper at tol <= 1e-10, or with collocation asked
+ * for, the rows outside the canard's neighbourhood (mu <= 1e4, not 8 mu^2
+ * (1 - |nu|) in [0.2, 5] for mu >= 1) are collocation rows (stepper
+ * "colloc": a path up to mu 2, the cold start's turns from the predicted
+ * section point above); the automatic rows along mu before a canard the
+ * branch has yet to cross shoot, as do the canard's own rows. */
 typedef enum { BKF_CYCLE_ALONG_MU = 0, BKF_CYCLE_ALONG_NU = 1 } bkf_cycle_param;
 typedef int (*bkf_cycle_visit)(const bkf_cycle_result *point, void *data);
 int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed,

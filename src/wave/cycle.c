@@ -2005,8 +2005,10 @@ static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu,
     *p = b->last.flow;
     p->sens = 0;
     p->rhs_calls = p->jacobian_calls = 0;
+    /* (the shooting rows of a collocation branch shoot as the automatic
+     * ones: they were rk8pd at every mu and named "colloc") */
     bkf_stepper_kind kind = b->options.stepper;
-    if (kind == BKF_STEPPER_AUTO) kind = shooting_stepper(p->mu, tol);
+    if (kind == BKF_STEPPER_AUTO || kind == BKF_STEPPER_COLLOCATION) kind = shooting_stepper(p->mu, tol);
     integrator in = {0}, aux = {0};
     double tol_a = pair_tol(tol, p->nu, kind), tol_b = tol_a / TOL_RATIO, floor = 0.0, y_real = 0.0;
     double y0 = b->last.y0, y_scale = fmax(fabs(y0), 1e-3);
@@ -2167,11 +2169,13 @@ static double branch_row_params(const branch_ctx *b, double q, double *mu, doubl
 }
 
 static int branch_colloc_at(const branch_ctx *b, double mu, double nu);
+static int branch_colloc_between(const branch_ctx *b, double q0, double q1);
 
 static int branch_accept(const double *u, const double *tangent, int is_fold, void *data)
 {
     (void)is_fold; /* T(mu) and T(nu) have no folds; a located one is still a valid point */
     branch_ctx *b = data;
+    double q_prev = b->have_last ? b->last_u[1] : u[1];
     memcpy(b->last_u, u, sizeof b->last_u);
     if (tangent) memcpy(b->last_t, tangent, sizeof b->last_t);
     b->have_last = 1;
@@ -2231,9 +2235,12 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
         b->steep = 1;
         return 1;
     }
-    if (!branch_colloc_at(b, mu, nu)) {
-        b->left_colloc = 1;
-    } else if (b->left_colloc && q != b->q_to && !refused && strcmp(b->cycle->result.model, "shooting-relaxed")) {
+    /* (a shooting step can cross the canard band whole: mu 0.95 -> 1.32 at
+     * nu 0.5, whose band is mu in [1, 1.12]; the rows then came back to
+     * collocation never) */
+    int here = branch_colloc_at(b, mu, nu);
+    if (!here || !branch_colloc_between(b, q_prev, q)) b->left_colloc = 1;
+    if (here && b->left_colloc && q != b->q_to && !refused && strcmp(b->cycle->result.model, "shooting-relaxed")) {
         b->to_colloc = 1;
         return 1;
     }
@@ -2402,13 +2409,41 @@ static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced,
 /* Rows on a path up to this mu, by turns above it (branch_colloc_turn). */
 #define BRANCH_COLLOC_TURN_MU 2.0
 
-static int branch_colloc_kind(const branch_ctx *b) { return b->options.stepper == BKF_STEPPER_COLLOCATION; }
+static int branch_colloc_kind(const branch_ctx *b)
+{
+    return b->options.stepper == BKF_STEPPER_COLLOCATION ||
+           (b->options.stepper == BKF_STEPPER_AUTO && b->options.tol <= COLLOC_AUTO_TOL_MAX * (1.0 + 1e-9));
+}
+
+/* The canard band along mu at nu, [*lo, *hi] in mu (empty if lo > hi). */
+static void branch_colloc_band(double nu, double *lo, double *hi)
+{
+    double d = 8.0 * (1.0 - fabs(nu));
+    *lo = fmax(1.0, sqrt(BRANCH_COLLOC_CANARD_LO / d));
+    *hi = sqrt(BRANCH_COLLOC_CANARD_HI / d);
+}
+
+/* The automatic rows along mu before a canard band that the branch has yet
+ * to cross shoot: the amplitude walk through the explosion is sensitive to
+ * the steps that reach it, and from collocation rows handing over at the
+ * band's edge (mu 5 at nu -0.999) it found no root of G at mu 11.2141,
+ * where the shooting rows from mu 0.1 pass (the shooting rows there were
+ * the automatic ones before). */
+static int branch_colloc_before_band(const branch_ctx *b, double mu, double nu)
+{
+    if (b->options.stepper != BKF_STEPPER_AUTO || b->along != BKF_CYCLE_ALONG_MU) return 0;
+    double lo, hi;
+    branch_colloc_band(nu, &lo, &hi);
+    if (lo > hi) return 0;
+    return b->to > b->from ? mu < lo && b->to >= lo : mu > hi && b->to <= hi;
+}
 
 static int branch_colloc_at(const branch_ctx *b, double mu, double nu)
 {
     double x = 8.0 * mu * mu * (1.0 - fabs(nu));
     return branch_colloc_kind(b) && mu <= COLLOC_AUTO_MU_MAX * (1.0 + 1e-12) &&
-           !(mu >= 1.0 && x >= BRANCH_COLLOC_CANARD_LO && x <= BRANCH_COLLOC_CANARD_HI);
+           !(mu >= 1.0 && x >= BRANCH_COLLOC_CANARD_LO && x <= BRANCH_COLLOC_CANARD_HI) &&
+           !branch_colloc_before_band(b, mu, nu);
 }
 
 /* The same for every point between q0 and q1: the window's band in q
@@ -2421,8 +2456,8 @@ static int branch_colloc_between(const branch_ctx *b, double q0, double q1)
     branch_params(b, q1, &mu1, &nu1);
     if (!branch_colloc_at(b, mu0, nu0) || !branch_colloc_at(b, mu1, nu1)) return 0;
     if (b->along == BKF_CYCLE_ALONG_MU) {
-        double d = 8.0 * (1.0 - fabs(nu0));
-        double lo = fmax(1.0, sqrt(BRANCH_COLLOC_CANARD_LO / d)), hi = sqrt(BRANCH_COLLOC_CANARD_HI / d);
+        double lo, hi;
+        branch_colloc_band(nu0, &lo, &hi);
         return !(lo <= hi && fmax(mu0, mu1) >= lo && fmin(mu0, mu1) <= hi);
     }
     if (mu0 < 1.0) return 1;
