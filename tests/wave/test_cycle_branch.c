@@ -62,13 +62,18 @@ TEST(cycle_branch_along_nu_matches_cold_solves)
     check_branch(BKF_CYCLE_ALONG_NU, 0.95, -0.95, 2.0);
 }
 
-/* A branch point costs about one cold solve: each row's work counters hold
- * every shot since the previous row (corrector, tangent, estimate), and
- * their sum over the branch is compared with independent cold solves
- * (bkf_cycle_period, no warm start) at the same parameters, whose values
- * must agree with the rows' within the two estimates.  Work counters are
- * deterministic, so the bound is not a timing.  (Not through a canard:
- * there the amplitude walk's root finding costs 3-10 shots a row.) */
+/* A shooting branch point costs about one cold solve: each row's work
+ * counters hold every shot since the previous row (corrector, tangent,
+ * estimate), and their sum over the branch is compared with independent
+ * cold solves (bkf_cycle_period, no warm start) with the same stepper at
+ * the same parameters, whose values must agree with the rows' within the
+ * two estimates.  The stepper is named on both sides (rk8pd up to
+ * BKF_CYCLE_STIFF_MU, bd2x2 above, as the automatic shooting rows use),
+ * since at tol 1e-10 the automatic rows are collocation rows, whose
+ * work is checked against cold collocation solves by check_branch_rows.
+ * Work counters are deterministic, so the bound is not a timing.  (Not
+ * through a canard: there the amplitude walk's root finding costs 3-10
+ * shots a row.) */
 typedef struct {
     double mu[256], nu[256], period[256], err[256];
     size_t rhs, n, estimated;
@@ -93,17 +98,15 @@ static void check_branch_work(bkf_cycle_param along, double from, double to, dou
     static work_rows got;
     memset(&got, 0, sizeof got);
     bkf_cycle_options o = bkf_cycle_options_default();
+    double mu_top = along == BKF_CYCLE_ALONG_MU ? fmax(from, to) : fixed;
+    o.stepper = mu_top > BKF_CYCLE_STIFF_MU ? BKF_STEPPER_EXTRAPOLATION : BKF_STEPPER_EXPLICIT;
     bkf_error e;
     CHECK_STATUS(bkf_cycle_branch(along, from, to, fixed, &o, 0, collect_work, &got, &e), BKF_OK);
     CHECK(got.n >= 5 && got.n < 256);
     size_t cold_rhs = 0;
-    /* the unit is a cold shooting solve's right-hand sides (collocation,
-     * the automatic choice at tol 1e-10 from mu 10, calls none) */
-    bkf_cycle_options shoot = o;
     for (size_t i = 0; i < got.n && i < 256; i++) {
         bkf_cycle_result cold;
-        shoot.stepper = got.mu[i] > BKF_CYCLE_STIFF_MU ? BKF_STEPPER_EXTRAPOLATION : BKF_STEPPER_EXPLICIT;
-        CHECK_STATUS(bkf_cycle_period(got.mu[i], got.nu[i], &shoot, &cold, &e), BKF_OK);
+        CHECK_STATUS(bkf_cycle_period(got.mu[i], got.nu[i], &o, &cold, &e), BKF_OK);
         cold_rhs += cold.rhs_calls;
         CHECK(got.err[i] <= o.tol * got.period[i]);
         CHECK_MSG(fabs(got.period[i] - cold.period) <= got.err[i] + cold.period_err,
@@ -118,13 +121,20 @@ static void check_branch_work(bkf_cycle_param along, double from, double to, dou
 
 TEST(cycle_branch_point_costs_about_a_cold_solve)
 {
-    check_branch_work(BKF_CYCLE_ALONG_MU, 0.1, 1e4, 0.0, 1.3);
-    check_branch_work(BKF_CYCLE_ALONG_MU, 0.1, 1e4, -0.96, 1.3);
-    check_branch_work(BKF_CYCLE_ALONG_MU, 1e4, 0.1, 0.5, 1.3);
+    /* Each half of the range carries its start's cold solve in its first
+     * row: 1.73 and 1.55 cold solves a row at nu 0 (11 and 15 rows), 1.50
+     * and 1.26 at -0.96, 1.26 at 0.5 (the same numbers on the code before
+     * collocation rows; over the whole range 0.1..1e4, one start among 23
+     * rows, the automatic shooting rows cost 1.02) */
+    check_branch_work(BKF_CYCLE_ALONG_MU, 0.1, BKF_CYCLE_STIFF_MU, 0.0, 2.0);
+    check_branch_work(BKF_CYCLE_ALONG_MU, BKF_CYCLE_STIFF_MU * 1.01, 1e4, 0.0, 2.0);
+    check_branch_work(BKF_CYCLE_ALONG_MU, 0.1, BKF_CYCLE_STIFF_MU, -0.96, 2.0);
+    check_branch_work(BKF_CYCLE_ALONG_MU, BKF_CYCLE_STIFF_MU * 1.01, 1e4, -0.96, 2.0);
+    check_branch_work(BKF_CYCLE_ALONG_MU, 1e4, BKF_CYCLE_STIFF_MU * 1.01, 0.5, 2.0);
     /* Along nu the steps (at most 0.05) are short enough for one corrector
      * iteration, whose point is then too far for the estimate's one-step
      * correction: corrector, tangent and two estimate shots, 1.44 cold
-     * solves a row at mu 1 (issue 20 item 2, not yet 1.3). */
+     * solves a row at mu 1, 1.20 at mu 100. */
     check_branch_work(BKF_CYCLE_ALONG_NU, -0.9, 0.9, 1.0, 1.5);
     check_branch_work(BKF_CYCLE_ALONG_NU, 0.9, -0.9, 100.0, 1.5);
 }
