@@ -17,9 +17,12 @@ error is <= 1e-10 at that mu (else the best one, marked).  AUTO's cost per
 point is measured on the branch: restart runs from the user point with
 NMX = 1 and NMX = 1 + STEPS, the difference divided by STEPS (process start
 and file reading cancel; AUTO's steps are its own, DSMAX mu_max/20);
-bkfront's on a branch is `period --continue mu` over the decade [mu/10, mu]
-(its own steps; their number, rows, is printed), less a cold solve at
-mu/10, divided by rows - 1; bkfront cold is a fresh solve (tol 1e-10).
+bkfront's on a branch is bkf_cycle_branch along mu over the decade
+[mu/10, mu] (its own steps; their number, rows, is printed), less a cold
+solve at mu/10, divided by rows - 1 (the engine, as AUTO's differenced runs
+measure AUTO's); the same through `period --continue mu` (the product call:
+Python's product thread and the table's columns) is printed beside it;
+bkfront cold is a fresh solve (tol 1e-10).
 scipy (Radau, analytic Jacobian, event-located return to x = nu): started
 on the cycle (bkfront's crossing point), one period, the loosest rtol of
 RTOLS whose error is <= 1e-10: a warm start, favourable to scipy.
@@ -35,6 +38,8 @@ import subprocess
 import sys
 import tempfile
 import time
+
+import cffi
 
 import bkfront
 from bkfront._lib import ffi, lib
@@ -225,21 +230,71 @@ def time_cold(mu, nu):
     return median(per)
 
 
+# The continuation engine itself, as AUTO's per-step time is (its runs are
+# differenced, so neither process start nor file reading counts):
+# bkf_cycle_branch with a visitor that only counts rows.  A `period
+# --continue mu` product call adds about 0.25 ms a call (Python's product
+# thread and the table) and about 20 us a row (the table's asymptotic
+# columns) at small mu; that is measured too (product column).
+BRANCH_FFI = cffi.FFI()
+BRANCH_FFI.cdef("""
+typedef struct { double tol; int stepper; int warm_start; } bkf_cycle_options;
+typedef struct { char message[320]; int status; } bkf_error;
+typedef int (*bkf_cycle_visit)(const void *point, void *data);
+int bkf_cycle_branch(int along, double from, double to, double fixed,
+                     const bkf_cycle_options *options, size_t max_points,
+                     bkf_cycle_visit visit, void *data, bkf_error *err);
+""")
+
+
+BRANCH_LIB = []
+
+
+def branch_engine(mu_from, mu_to, nu):
+    """Rows of bkf_cycle_branch along mu at tol 1e-10, or 0 if refused."""
+    if not BRANCH_LIB:
+        BRANCH_LIB.append(BRANCH_FFI.dlopen(os.environ.get("BKFRONT_LIBRARY", "libbkfront.so.0")))
+    blib = BRANCH_LIB[0]
+    rows = [0]
+
+    @BRANCH_FFI.callback("int(const void *, void *)")
+    def visit(point, data):
+        rows[0] += 1
+        return 0
+    opt = BRANCH_FFI.new("bkf_cycle_options *", {"tol": 1e-10, "stepper": 0, "warm_start": 1})
+    err = BRANCH_FFI.new("bkf_error *")
+    status = blib.bkf_cycle_branch(0, mu_from, mu_to, nu, opt, 0, visit, BRANCH_FFI.NULL, err)
+    return rows[0] if status == 0 else 0
+
+
 def time_branch(mu, nu):
-    """CPU seconds per point of `period --continue mu` over the decade
-    [mu/10, mu] (its rows are its own steps), less a cold solve at mu/10:
-    (seconds per point, rows), (None, 0) if refused."""
-    best = []
+    """CPU seconds per point of the branch along mu over the decade
+    [mu/10, mu] (its rows are its own steps), less a cold solve at mu/10,
+    divided by rows - 1: (engine, product call, rows), (None, None, 0) if
+    refused."""
+    engine, product = [], []
     for _ in range(REPEATS):
+        n, t0 = 0, time.process_time()
+        while True:
+            rows = branch_engine(mu / 10, mu, nu)
+            if not rows:
+                return None, None, 0
+            n += 1
+            t = time.process_time() - t0
+            if t > 0.05:
+                break
+        engine.append(t / n)
         t0 = time.process_time()
         try:
             table = bkfront.product("period", mu="%.17g:%.17g:2" % (mu / 10, mu), log=True,
                                     nu=nu, tol=1e-10, **{"continue": "mu"})
         except bkfront.Error:
-            return None, 0
-        best.append(time.process_time() - t0)
-    rows = len(table["T"])
-    return max(median(best) - time_cold(mu / 10, nu), 0.0) / (rows - 1), rows
+            return None, None, 0
+        product.append(time.process_time() - t0)
+    cold = time_cold(mu / 10, nu)
+    prows = len(table["T"])
+    return (max(median(engine) - cold, 0.0) / (rows - 1),
+            max(median(product) - cold, 0.0) / (prows - 1), rows)
 
 
 def scipy_period(mu, nu, T_ref, y0):
@@ -288,7 +343,8 @@ def main():
         NUS = [float(sys.argv[sys.argv.index("--nu") + 1])]
     print("## bkfront against AUTO-07p and scipy: T(mu, nu) at matched accuracy\n")
     print("CPU time per point, one thread; AUTO per continuation step on its branch;")
-    print("bkfront branch: per step over [mu/10, mu] (rows of that branch);")
+    print("bkfront branch: per step over [mu/10, mu] (rows of that branch), the engine")
+    print("(bkf_cycle_branch); branch by `period`: the same through the product call;")
     print("ratio = AUTO (or scipy) time / bkfront time (> 1: bkfront faster).\n")
     bkfront.period(1.0, 0.0)  # loads and warms the library before any timing
     root = tempfile.mkdtemp(prefix="bkf_auto_")
@@ -311,8 +367,9 @@ def main():
                       % (nu, ntst, steps, mu_end, itp, t))
             print("\n### nu = %g\n" % nu)
             print("| mu | AUTO NTST | AUTO err | AUTO per point | bkfront cold | ratio cold "
-                  "| bkfront branch | ratio branch | scipy rtol | scipy err | scipy | ratio scipy |")
-            print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+                  "| bkfront branch | ratio branch | branch by `period` | scipy rtol | scipy err | scipy "
+                  "| ratio scipy |")
+            print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
             for mu in MUS:
                 ref = cycle(mu, nu, 1e-12)
                 cold = time_cold(mu, nu)
@@ -333,8 +390,9 @@ def main():
                 if pick is None:
                     ends = ", ".join("%d: mu %.3g" % (n, runs[n][4]) for n in NTSTS)
                     row += ["stops (%s)" % ends, "-", "-", fmt_t(cold), "-"]
-                    bt, rows = time_branch(mu, nu)
-                    row += ["%s (%d)" % (fmt_t(bt), rows) if bt else "refused", "-"]
+                    bt, bp, rows = time_branch(mu, nu)
+                    row += ["%s (%d)" % (fmt_t(bt), rows) if bt else "refused", "-",
+                            fmt_t(bp) if bp else "-"]
                 else:
                     ntst, e, sol = pick
                     d = runs[ntst][1]
@@ -350,9 +408,9 @@ def main():
                     mark = "" if e <= TARGET else " (best)"
                     row += ["%d%s" % (ntst, mark), "%.1e" % e, fmt_t(per_auto), fmt_t(cold),
                             "%.2f" % (per_auto / cold)]
-                    bt, rows = time_branch(mu, nu)
+                    bt, bp, rows = time_branch(mu, nu)
                     row += ["%s (%d)" % (fmt_t(bt), rows) if bt else "refused",
-                            "%.2f" % (per_auto / bt) if bt else "-"]
+                            "%.2f" % (per_auto / bt) if bt else "-", fmt_t(bp) if bp else "-"]
                 sp = scipy_period(mu, nu, ref[0], ref[1]) if ref else None
                 if sp:
                     row += ["%g" % sp[0], "%.1e" % sp[1], fmt_t(sp[2]), "%.0f" % (sp[2] / cold)]
