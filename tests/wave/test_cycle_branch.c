@@ -417,10 +417,13 @@ static void check_colloc_branch(bkf_cycle_param along, double from, double to, d
 }
 
 /* The automatic rows at tol 1e-10 are collocation rows (no canard band at
- * nu 0; along nu at mu 30 the band lies beyond |nu| 0.9) */
+ * nu 0; along nu at mu 30 the band lies beyond |nu| 0.9), at nu -0.96 also
+ * before the band (mu 1 to 3.95): only from |nu| 0.99, where the amplitude
+ * walk must cross the explosion, do the rows before it shoot */
 TEST(cycle_branch_automatic_rows_are_collocation)
 {
     check_branch_rows(BKF_CYCLE_ALONG_MU, 0.1, 1e4, 0.0, 1.5, 60, BKF_STEPPER_AUTO);
+    check_branch_rows(BKF_CYCLE_ALONG_MU, 0.1, 1e4, -0.96, 1.5, 60, BKF_STEPPER_AUTO);
     check_branch_rows(BKF_CYCLE_ALONG_NU, -0.9, 0.9, 30.0, 1.5, 50, BKF_STEPPER_AUTO);
 }
 
