@@ -1133,10 +1133,25 @@ static size_t colloc_series_intervals(double mu, double nu, double tol)
  * tol so that the estimate's floor (colloc.c, TURN_FLOOR: 1e-3 of it)
  * stays near 0.01 tol at 1e-12, the cycle tolerance Floquet asks for its
  * own 1e-10 (at 0.1 tol its lambda estimates refused at gamma 10). */
-static double colloc_turn_tol(double tol) { return 1e-8 * fmin(1.0, pow(tol / 1e-10, 1.5)); }
+/* Below mu 20 the pair of a 1e-8 mesh missed tol 1e-10 at about 40% of
+ * the points of mu 10-18 x nu 0, +-0.5, 0.9, -0.96, 0.99 (its difference
+ * 5-10e-10 at mu 10, where 5e-10 passes; 1-3e-10 from mu 20), and each
+ * miss cost a second turn and pair (2.0M instructions at mu 10, nu 0
+ * against 1.2M): the local tolerance falls like mu / 20 there, at most to
+ * its half, only where it is near tol's need (tol 1e-10 and below).  Over
+ * mu 10-18 x those nus 71M instructions fell to 55M (callgrind, one cold
+ * solve each), mu 20-30 unchanged. */
+#define COLLOC_TURN_MU 20.0
+#define COLLOC_TURN_MU_FLOOR 0.5
+static double colloc_turn_tol(double tol, double mu)
+{
+    double by_mu = fmin(1.0, fmax(COLLOC_TURN_MU_FLOOR, mu / COLLOC_TURN_MU));
+    return 1e-8 * fmin(1.0, pow(tol / 1e-10, 1.5) * by_mu);
+}
 
-/* The extremes of x from the collocation nodes: each sign change of x'
- * between nodes is located by the shooting engine's event Newton,
+/* The extremes of x from the collocation nodes where bkf_colloc_extremes
+ * fails: each sign change of x' between nodes is located by the shooting
+ * engine's event Newton,
  * integrating from the node (x' = 0 makes x there second order in the time
  * error, which the polynomial between mesh points, of stage order m + 1,
  * would not give to tol). */
@@ -1171,18 +1186,15 @@ static int colloc_extremes_shot(bkf_cycle *c, bkf_error *err)
     return rc;
 }
 
-/* Up to mu 1 from the collocation solution itself (bkf_colloc_extremes:
- * Gauss steps from the mesh point before each sign change of x'): the
- * event Newton above, integrating from the node with rk8pd at 0.01 tol,
- * was 69k of the 380k instructions of a cold solve at mu 0.1, nu 0, tol
- * 1e-10 (callgrind), the Gauss steps about 15k.  Above (a turn's mesh,
- * whose intervals in the jumps the partial Gauss steps did not always
- * converge on: mu 300, nu 0) and where they fail, the event Newton. */
+/* From the collocation solution itself (bkf_colloc_extremes: Gauss steps
+ * from the mesh point nearer each sign change of x', started at the zero
+ * of x' on the interval's polynomial): the event Newton above, integrating
+ * from the node with rk8pd or bd2x2 at 0.01 tol, was 69k of the 380k
+ * instructions of a cold solve at mu 0.1, nu 0, tol 1e-10 and 14-15% of
+ * one at mu 1e4, nu -0.96 (callgrind).  Where it fails, the event Newton. */
 static int colloc_extremes(bkf_cycle *c, bkf_error *err)
 {
-    if (c->flow.mu <= COLLOC_SERIES_MU &&
-        bkf_colloc_extremes(c->colloc, &c->result.xmax, &c->result.xmin, NULL) == BKF_OK)
-        return BKF_OK;
+    if (bkf_colloc_extremes(c->colloc, &c->result.xmax, &c->result.xmin, NULL) == BKF_OK) return BKF_OK;
     return colloc_extremes_shot(c, err);
 }
 
@@ -1225,13 +1237,13 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, int declin
             /* a landing from the left slow branch through the fold, then
              * the turn that is the mesh (colloc.h) */
             rc = bkf_colloc_guess_relaxation(c->colloc, mu, nu, bkf_asym_period_leading(mu, nu),
-                                             colloc_turn_tol(opt->tol), err);
+                                             colloc_turn_tol(opt->tol, mu), err);
         } else {
             /* a turn from the section point of the guessed slope lands on
              * the cycle, another is the mesh (colloc.h) */
             double T_hint = fmax(2.0 * M_PI, bkf_asym_period_leading(mu, nu));
             rc = bkf_colloc_guess_turn(c->colloc, mu, nu, nu, section_y_of_slope(p, guess_slope(mu, nu)), T_hint,
-                                       colloc_turn_tol(opt->tol), err);
+                                       colloc_turn_tol(opt->tol, mu), err);
         }
         if (rc == BKF_OK) rc = bkf_colloc_solve(c->colloc, opt->tol, &r, err);
     }
