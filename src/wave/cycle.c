@@ -1295,8 +1295,11 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, int declin
 #define COLLOC_AUTO_TOL_MAX 1e-10
 /* and only in the relaxation regime, mu^2 (1 - |nu|) at least this: near
  * the Hopf point and the canard (gamma 100, nu 0.9999 in the extremes
- * matrix) the Floquet products were not checked with it */
-#define COLLOC_AUTO_RELAXATION 2.0
+ * matrix) the Floquet products were not checked with it.  1 (was 2): mu
+ * 10, |nu| 0.98-0.99, where collocation took 106 us against rk8pd's 590
+ * (T within 1.4e-12 of rk8pd's at tol 1e-12; the extremes matrix and the
+ * Floquet tests pass). */
+#define COLLOC_AUTO_RELAXATION 1.0
 /* Up to mu 1 the series path (bkf_colloc_guess_series) from tol 1e-6 down:
  * callgrind instructions per cold solve (docs/benchmarks.md, colsmall),
  * against rk8pd's over mu 3e-3..1 x nu 0, 0.3, -0.6, 0.85, -0.95, 0.999,
