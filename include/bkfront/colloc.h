@@ -96,8 +96,9 @@ int bkf_colloc_fixed(bkf_colloc *colloc, size_t intervals, double *period, bkf_e
 
 /* The extremes of x over the last solution: where x' changes sign
  * between mesh points, Newton on the length of a Gauss step from the
- * interval's start whose end has x' = 0 (end values superconvergent, x
- * there second order in the step's error). */
+ * interval's nearer end whose end has x' = 0 (end values superconvergent,
+ * x there second order in the step's error), started at the zero of x' on
+ * the interval's polynomial.  BKF_ENUMERIC where one is not located. */
 int bkf_colloc_extremes(const bkf_colloc *colloc, double *xmax, double *xmin, bkf_error *err);
 
 /* The mesh points of the last solution (or, before the first solve, of

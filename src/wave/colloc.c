@@ -1616,8 +1616,48 @@ int bkf_colloc_solve(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_erro
     return solve_equidistributed(c, tol, n, out, err);
 }
 
-/* x' = a (y - b F(x)) and x'' = (nu - x) - mu (x^2 - 1) x' at (x, y). */
+/* x' = a (y - b F(x)) at (x, y); its time derivative where x' = g is
+ * x'' = (nu - x) - mu (x^2 - 1) g. */
 static double colloc_xdot(const bkf_colloc *c, double x, double y) { return c->a * (y - c->b * lienard_F(x)); }
+
+/* The zero of x' on interval j's polynomial, between its ends where x'
+ * is d0 and d1 of opposite signs (Illinois regula falsi): theta in
+ * [0, 1].  The polynomial is of stage order only, so this starts the
+ * Gauss steps' Newton below, which is then within its quadratic range
+ * (from the linear interpolation of the ends' x', far off in a fast layer
+ * where x' falls by e^-3 each 1/mu, it crept along a 1/mu per iteration
+ * and did not converge in 20 at mu 300-1e4). */
+static double poly_xdot_zero(const bkf_colloc *c, size_t j, double d0, double d1)
+{
+    double lo = 0.0, hi = 1.0, glo = d0, ghi = d1, theta = 0.5;
+    int side = 0;
+    for (int it = 0; it < 60 && hi - lo > 1e-12; it++) {
+        theta = (lo * ghi - hi * glo) / (ghi - glo);
+        if (!(theta > lo && theta < hi)) theta = 0.5 * (lo + hi);
+        double xv, yv;
+        poly_eval(c, j, theta, &xv, &yv);
+        double g = colloc_xdot(c, xv, yv);
+        if (g == 0.0) return theta;
+        if ((g > 0) == (glo > 0)) {
+            lo = theta;
+            glo = g;
+            if (side == -1) ghi *= 0.5;
+            side = -1;
+        } else {
+            hi = theta;
+            ghi = g;
+            if (side == 1) glo *= 0.5;
+            side = 1;
+        }
+    }
+    return theta;
+}
+
+/* Where x at the Gauss step's end is within this of the extremum (second
+ * order in the step length's error s - s*: 0.5 |x''| (s - s*)^2), the step
+ * is taken as located: below the end values' own error. */
+#define EXTREMUM_X_GOAL 1e-15
+#define EXTREMUM_X_STALL 1e-10
 
 int bkf_colloc_extremes(const bkf_colloc *c, double *xmax, double *xmin, bkf_error *err)
 {
@@ -1627,19 +1667,26 @@ int bkf_colloc_extremes(const bkf_colloc *c, double *xmax, double *xmin, bkf_err
         double d0 = colloc_xdot(c, c->x[j], c->y[j]), d1 = colloc_xdot(c, c->x[j + 1], c->y[j + 1]);
         if ((d0 > 0) == (d1 > 0)) continue;
         /* Newton on the length s of a Gauss step from mesh point j whose
-         * end has x' = 0: the end values are superconvergent (order 2m),
-         * x there is second order in the error of s */
-        double tau = (c->t[j + 1] - c->t[j]) * c->T, s = tau * d0 / (d0 - d1), xe = c->x[j], ye, X[M], unused;
+         * end has x' = 0 (the end values are superconvergent, order 2m),
+         * from the polynomial's zero, kept in the bracket of x''s sign
+         * change by bisection */
+        double tau = (c->t[j + 1] - c->t[j]) * c->T;
+        double s = tau * poly_xdot_zero(c, j, d0, d1), xe = c->x[j], ye, X[M], unused, last = INFINITY;
+        /* from the nearer end (backwards from j + 1 past the middle): less
+         * of a partial step's error in the stiff direction */
+        int back = s > 0.5 * tau;
+        size_t k = back ? j + 1 : j;
         int located = 0;
         for (int it = 0; it < 20 && !located; it++) {
-            for (int i = 0; i < M; i++) poly_eval(c, j, c->g.c[i] * s / tau, &X[i], &unused);
-            if (!gauss_step(c, c->x[j], c->y[j], s, STAGE_GOAL, X, &xe, &ye)) break;
+            double len = back ? s - tau : s;
+            for (int i = 0; i < M; i++) poly_eval(c, j, (double)back + c->g.c[i] * len / tau, &X[i], &unused);
+            if (!guarded_step(c, c->x[k], c->y[k], len, STAGE_GOAL, 1, X, &xe, &ye)) break;
             double g = colloc_xdot(c, xe, ye), gp = (c->nu - xe) - c->mu * (xe * xe - 1.0) * g;
-            double ds = gp != 0.0 ? -g / gp : 0.0;
-            if (!isfinite(ds)) break;
-            double next = fmin(fmax(s + ds, 0.0), tau);
-            located = fabs(next - s) <= 1e-10 * tau;
-            s = next;
+            double ds = gp != 0.0 ? -g / gp : INFINITY, off = 0.5 * fabs(gp) * ds * ds;
+            located = g == 0.0 || off <= EXTREMUM_X_GOAL * (1.0 + fabs(xe)) ||
+                      (fabs(ds) > 0.5 * last && off <= EXTREMUM_X_STALL);
+            last = fabs(ds);
+            s = fmin(fmax(s + ds, 0.0), tau);
         }
         if (!located)
             return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: extremum not located",

@@ -1133,10 +1133,25 @@ static size_t colloc_series_intervals(double mu, double nu, double tol)
  * tol so that the estimate's floor (colloc.c, TURN_FLOOR: 1e-3 of it)
  * stays near 0.01 tol at 1e-12, the cycle tolerance Floquet asks for its
  * own 1e-10 (at 0.1 tol its lambda estimates refused at gamma 10). */
-static double colloc_turn_tol(double tol) { return 1e-8 * fmin(1.0, pow(tol / 1e-10, 1.5)); }
+/* Below mu 20 the pair of a 1e-8 mesh missed tol 1e-10 at about 40% of
+ * the points of mu 10-18 x nu 0, +-0.5, 0.9, -0.96, 0.99 (its difference
+ * 5-10e-10 at mu 10, where 5e-10 passes; 1-3e-10 from mu 20), and each
+ * miss cost a second turn and pair (2.0M instructions at mu 10, nu 0
+ * against 1.2M): the local tolerance falls like mu / 20 there, at most to
+ * its half, only where it is near tol's need (tol 1e-10 and below).  Over
+ * mu 10-18 x those nus 71M instructions fell to 55M (callgrind, one cold
+ * solve each), mu 20-30 unchanged. */
+#define COLLOC_TURN_MU 20.0
+#define COLLOC_TURN_MU_FLOOR 0.5
+static double colloc_turn_tol(double tol, double mu)
+{
+    double by_mu = fmin(1.0, fmax(COLLOC_TURN_MU_FLOOR, mu / COLLOC_TURN_MU));
+    return 1e-8 * fmin(1.0, pow(tol / 1e-10, 1.5) * by_mu);
+}
 
-/* The extremes of x from the collocation nodes: each sign change of x'
- * between nodes is located by the shooting engine's event Newton,
+/* The extremes of x from the collocation nodes where bkf_colloc_extremes
+ * fails: each sign change of x' between nodes is located by the shooting
+ * engine's event Newton,
  * integrating from the node (x' = 0 makes x there second order in the time
  * error, which the polynomial between mesh points, of stage order m + 1,
  * would not give to tol). */
@@ -1171,18 +1186,15 @@ static int colloc_extremes_shot(bkf_cycle *c, bkf_error *err)
     return rc;
 }
 
-/* Up to mu 1 from the collocation solution itself (bkf_colloc_extremes:
- * Gauss steps from the mesh point before each sign change of x'): the
- * event Newton above, integrating from the node with rk8pd at 0.01 tol,
- * was 69k of the 380k instructions of a cold solve at mu 0.1, nu 0, tol
- * 1e-10 (callgrind), the Gauss steps about 15k.  Above (a turn's mesh,
- * whose intervals in the jumps the partial Gauss steps did not always
- * converge on: mu 300, nu 0) and where they fail, the event Newton. */
+/* From the collocation solution itself (bkf_colloc_extremes: Gauss steps
+ * from the mesh point nearer each sign change of x', started at the zero
+ * of x' on the interval's polynomial): the event Newton above, integrating
+ * from the node with rk8pd or bd2x2 at 0.01 tol, was 69k of the 380k
+ * instructions of a cold solve at mu 0.1, nu 0, tol 1e-10 and 14-15% of
+ * one at mu 1e4, nu -0.96 (callgrind).  Where it fails, the event Newton. */
 static int colloc_extremes(bkf_cycle *c, bkf_error *err)
 {
-    if (c->flow.mu <= COLLOC_SERIES_MU &&
-        bkf_colloc_extremes(c->colloc, &c->result.xmax, &c->result.xmin, NULL) == BKF_OK)
-        return BKF_OK;
+    if (bkf_colloc_extremes(c->colloc, &c->result.xmax, &c->result.xmin, NULL) == BKF_OK) return BKF_OK;
     return colloc_extremes_shot(c, err);
 }
 
@@ -1227,13 +1239,13 @@ static int colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, int declin
             /* a landing from the left slow branch through the fold, then
              * the turn that is the mesh (colloc.h) */
             rc = bkf_colloc_guess_relaxation(c->colloc, mu, nu, bkf_asym_period_leading(mu, nu),
-                                             colloc_turn_tol(opt->tol), err);
+                                             colloc_turn_tol(opt->tol, mu), err);
         } else {
             /* a turn from the section point of the guessed slope lands on
              * the cycle, another is the mesh (colloc.h) */
             double T_hint = fmax(2.0 * M_PI, bkf_asym_period_leading(mu, nu));
             rc = bkf_colloc_guess_turn(c->colloc, mu, nu, nu, section_y_of_slope(p, guess_slope(mu, nu)), T_hint,
-                                       colloc_turn_tol(opt->tol), err);
+                                       colloc_turn_tol(opt->tol, mu), err);
         }
         if (rc == BKF_OK) rc = bkf_colloc_solve(c->colloc, opt->tol, &r, err);
     }
@@ -1296,8 +1308,11 @@ static int colloc_store(bkf_cycle *c, const bkf_colloc_result *rp, const bkf_cyc
 #define COLLOC_AUTO_TOL_MAX 1e-10
 /* and only in the relaxation regime, mu^2 (1 - |nu|) at least this: near
  * the Hopf point and the canard (gamma 100, nu 0.9999 in the extremes
- * matrix) the Floquet products were not checked with it */
-#define COLLOC_AUTO_RELAXATION 2.0
+ * matrix) the Floquet products were not checked with it.  1 (was 2): mu
+ * 10, |nu| 0.98-0.99, where collocation took 106 us against rk8pd's 590
+ * (T within 1.4e-12 of rk8pd's at tol 1e-12; the extremes matrix and the
+ * Floquet tests pass). */
+#define COLLOC_AUTO_RELAXATION 1.0
 /* Up to mu 1 the series path (bkf_colloc_guess_series) from tol 1e-6 down:
  * callgrind instructions per cold solve (docs/benchmarks.md, colsmall),
  * against rk8pd's over mu 3e-3..1 x nu 0, 0.3, -0.6, 0.85, -0.95, 0.999,
@@ -2490,9 +2505,14 @@ static int branch_colloc_visit(branch_ctx *b, const bkf_colloc_result *r, double
     return BKF_OK;
 }
 
-/* A row's cycle from the predicted section slope w and period T (in the
- * solved coordinates): the cold start's turns (colloc_attempt) from that
- * section point and the solve of their pair.  At large mu the layers move
+/* A row's cycle: in the relaxation regime (as colloc_attempt's cold
+ * start) the landing from the left slow branch, whose pair's estimate is
+ * tested over the box (colloc_relaxation_start_meets_tol); elsewhere from
+ * the predicted section slope w and period T (in the solved coordinates)
+ * the cold start's turns from that section point; then the solve of their
+ * pair.  (From a predicted section point at mu 733.8, nu 0.5 the pair
+ * agreed within the floor while T was 2.4e-11 off, twice the estimate;
+ * at mu 100, nu 0.6375 1.4 times: a row costs the same either way.)  At large mu the layers move
  * in normalised time from row to row (the down jump's s at nu 0.96), so a
  * path's mesh predicted index by index needed 15-30 Newton iterations
  * even at steps of 0.02 in ln mu, where a turn from the predicted point
@@ -2500,8 +2520,13 @@ static int branch_colloc_visit(branch_ctx *b, const bkf_colloc_result *r, double
 static int branch_colloc_turn(bkf_cycle *c, double w, double T, double tol, bkf_colloc_result *r, bkf_error *err)
 {
     const flow_params *p = &c->flow;
-    int rc = bkf_colloc_guess_turn(c->colloc, p->mu, p->nu, p->nu, section_y_of_slope(p, w), fmax(2.0 * M_PI, T),
-                                   colloc_turn_tol(tol), err);
+    int rc;
+    if (p->mu >= COLLOC_RELAXATION_MU && 8.0 * p->mu * p->mu * (1.0 - fabs(p->nu)) >= 3.0)
+        rc = bkf_colloc_guess_relaxation(c->colloc, p->mu, p->nu, bkf_asym_period_leading(p->mu, p->nu),
+                                         colloc_turn_tol(tol, p->mu), err);
+    else
+        rc = bkf_colloc_guess_turn(c->colloc, p->mu, p->nu, p->nu, section_y_of_slope(p, w), fmax(2.0 * M_PI, T),
+                                   colloc_turn_tol(tol, p->mu), err);
     return rc == BKF_OK ? bkf_colloc_solve(c->colloc, tol, r, err) : rc;
 }
 

@@ -429,3 +429,87 @@ TEST(colloc_relaxation_start_rejects_bad_input)
     CHECK_MSG(fabs(r.period / (1e3 * (3.0 - 2.0 * log(2.0))) - 1.0) < 0.03, "T %.10g", r.period);
     bkf_colloc_free(c);
 }
+
+/* The extremes from the solution itself (bkf_colloc_extremes, called
+ * directly, so that no fallback to the event Newton hides a failure) past
+ * mu 1: within 1e-9 of the shooting engine's event Newton at tol 1e-12
+ * (rk8pd to mu 100, bd2x2 above), over mu 10..1e4 x nu 0, -0.96, 0.99,
+ * 0.999 (outside the canard neighbourhood), on the meshes of the local
+ * tolerances the solve uses at tol 1e-10 and 1e-12; and through the solve
+ * (stepper colloc, tol 1e-10). */
+TEST(colloc_extremes_at_large_mu_against_shooting)
+{
+    const double mus[] = {10, 30, 100, 300, 1e3, 3e3, 1e4};
+    const double nus[] = {0.0, -0.96, 0.99, 0.999};
+    const double locals[] = {5e-9, 1e-8, 1e-11};
+    bkf_colloc *c = bkf_colloc_alloc();
+    CHECK(c != NULL);
+    double worst = 0.0;
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++)
+        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+            double mu = mus[i], nu = nus[j];
+            if (8.0 * mu * mu * (1.0 - fabs(nu)) < 3.0) continue; /* the canard: shooting answers */
+            bkf_cycle_result b, r;
+            bkf_error e = {0};
+            bkf_stepper_kind ref = mu <= 100 ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_EXTRAPOLATION;
+            int brc = solve_with(mu, nu, 1e-12, ref, &b, &e);
+            if (brc != BKF_OK) brc = solve_with(mu, nu, 1e-11, ref, &b, &e);
+            CHECK_MSG(brc == BKF_OK, "mu %g nu %g: reference: %s", mu, nu, e.message);
+            if (brc != BKF_OK) continue;
+            for (size_t k = 0; k < sizeof locals / sizeof locals[0]; k++) {
+                double tol = locals[k] < 1e-9 ? 1e-12 : 1e-10;
+                bkf_colloc_result cr;
+                int rc = bkf_colloc_guess_relaxation(c, mu, nu, b.period, locals[k], &e);
+                if (rc == BKF_OK) rc = bkf_colloc_solve(c, tol, &cr, &e);
+                /* (tol 1e-12 may be refused at the rounding floor) */
+                CHECK_MSG(rc == BKF_OK || (rc == BKF_ETOL && tol < 1e-11), "mu %g nu %g local %g: %s", mu, nu,
+                          locals[k], e.message);
+                if (rc != BKF_OK) continue;
+                double hi = NAN, lo = NAN;
+                rc = bkf_colloc_extremes(c, &hi, &lo, &e);
+                CHECK_MSG(rc == BKF_OK, "mu %g nu %g local %g: %s", mu, nu, locals[k], e.message);
+                double d = fmax(fabs(hi - b.xmax), fabs(lo - b.xmin));
+                CHECK_MSG(d <= 1e-9, "mu %g nu %g local %g: extremes %.15g %.15g vs %.15g %.15g", mu, nu, locals[k],
+                          hi, lo, b.xmax, b.xmin);
+                if (d > worst) worst = d;
+            }
+            int rc = solve_with(mu, nu, 1e-10, BKF_STEPPER_COLLOCATION, &r, &e);
+            CHECK_MSG(rc == BKF_OK && strcmp(r.stepper, "colloc") == 0, "mu %g nu %g: %s", mu, nu, e.message);
+            if (rc == BKF_OK)
+                CHECK_MSG(fabs(r.xmax - b.xmax) <= 1e-9 && fabs(r.xmin - b.xmin) <= 1e-9,
+                          "mu %g nu %g: solve's extremes %.15g %.15g vs %.15g %.15g", mu, nu, r.xmax, r.xmin, b.xmax,
+                          b.xmin);
+        }
+    bkf_colloc_free(c);
+    bkf_test_note("largest distance to the event Newton's extremes %.2g", worst);
+}
+
+/* Below mu 20 the turn's local tolerance falls with mu (cycle.c,
+ * colloc_turn_tol): T within tol of the Taylor reference and the estimate
+ * honest over mu 10-18, where the pair of the former mesh missed tol at
+ * about 40% of the points. */
+TEST(colloc_turn_tol_below_mu_20_against_taylor)
+{
+    const double mus[] = {10, 11, 12, 14, 16, 18};
+    const double nus[] = {0.0, -0.96, 0.99, 0.5, -0.5, 0.9};
+    double worst = 0.0;
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++)
+        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+            bkf_cycle_result r;
+            bkf_error e = {0};
+            int rc = solve_with(mus[i], nus[j], 1e-10, BKF_STEPPER_COLLOCATION, &r, &e);
+            CHECK_MSG(rc == BKF_OK && strcmp(r.stepper, "colloc") == 0, "mu %g nu %g: %s", mus[i], nus[j],
+                      e.message);
+            if (rc != BKF_OK) continue;
+            double unc = 0.0, ref = taylor_period(mus[i], nus[j], r.section_slope, &unc);
+            double err = fabs(r.period - ref), ratio = fmax(err - unc, 0.0) / r.period_err;
+            CHECK_MSG(unc <= 1e-13 * r.period, "mu %g nu %g: reference uncertain by %.2g", mus[i], nus[j],
+                      unc / r.period);
+            CHECK_MSG(err <= 1e-10 * r.period + unc, "mu %g nu %g: error %.3g > tol", mus[i], nus[j],
+                      err / r.period);
+            CHECK_MSG(ratio <= 1.0, "mu %g nu %g: estimate %.3g optimistic by %.3g", mus[i], nus[j],
+                      r.period_err / r.period, ratio);
+            if (ratio > worst) worst = ratio;
+        }
+    bkf_test_note("largest true/estimated error ratio %.3g", worst);
+}
