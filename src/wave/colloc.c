@@ -1826,11 +1826,17 @@ static void path_predict(const bkf_colloc_path *path, bkf_colloc *c, double mu, 
         for (size_t j = 1; j < n; j++) c->t[j] /= total;
         c->t[n] = 1.0;
     }
+    /* (with one row the other's arrays are not a row: 0 times their
+     * uninitialised values was NaN where they held NaN, and the row fell
+     * back to shooting, after an unrelated allocation pattern such as
+     * Python's importing scipy: 5 times the time of a branch) */
+    const path_row *base = path->rows == 2 ? r0 : r1;
     for (size_t j = 0; j < n; j++) {
-        double xv = r1->x[j] + r * (r1->x[j] - r0->x[j]), wv = r1->w[j] + r * (r1->w[j] - r0->w[j]);
+        double xv = r1->x[j] + r * (r1->x[j] - base->x[j]), wv = r1->w[j] + r * (r1->w[j] - base->w[j]);
         c->x[j] = xv;
         c->y[j] = wv / c->a + c->b * lienard_F(xv);
-        for (int i = 0; i < M; i++) c->X[j * M + i] = r1->X[j * M + i] + r * (r1->X[j * M + i] - r0->X[j * M + i]);
+        for (int i = 0; i < M; i++)
+            c->X[j * M + i] = r1->X[j * M + i] + r * (r1->X[j * M + i] - base->X[j * M + i]);
     }
     c->x[0] = nu; /* the phase */
     c->x[n] = c->x[0];
