@@ -1485,6 +1485,19 @@ static size_t next_intervals(const bkf_colloc *c, size_t n, double diff, double 
     return next;
 }
 
+/* The pair (T1 on a mesh of n intervals, T2 on its bisection) judged: T2
+ * with |T1 - T2| / EST_DIVISOR (or the rounding floor) into *out if that
+ * meets tol with the margin. */
+static int pair_meets_tol(bkf_colloc *c, double T1, double L1, double T2, double L2, size_t n, double tol,
+                          bkf_colloc_result *out)
+{
+    double est = fmax(fabs(T1 - T2) / EST_DIVISOR, round_floor(c, T2));
+    if (!(ACCEPT_MARGIN * est <= tol * T2)) return 0;
+    fill_result(c, est, L2, L1, EST_DIVISOR, out);
+    c->pair_n = n;
+    return 1;
+}
+
 /* From the converged mesh of n intervals: equidistributed meshes of n
  * (growing) intervals and their bisections until the pair meets tol. */
 static int solve_equidistributed(bkf_colloc *c, double tol, size_t n, bkf_colloc_result *out, bkf_error *err)
@@ -1502,12 +1515,7 @@ static int solve_equidistributed(bkf_colloc *c, double tol, size_t n, bkf_colloc
         if (rc != BKF_OK) return rc;
         double T2 = c->T, L2 = log_multiplier(c);
         double diff = fabs(T1 - T2);
-        double est = fmax(diff / EST_DIVISOR, round_floor(c, T2));
-        if (ACCEPT_MARGIN * est <= tol * T2) {
-            fill_result(c, est, L2, L1, EST_DIVISOR, out);
-            c->pair_n = n;
-            return BKF_OK;
-        }
+        if (pair_meets_tol(c, T1, L1, T2, L2, n, tol, out)) return BKF_OK;
         size_t next = next_intervals(c, n, diff, tol, T2, err);
         if (!next) return BKF_ETOL;
         n = next;
@@ -1582,12 +1590,7 @@ static int solve_uniform(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_
     if (rc != BKF_OK) return rc;
     double T2 = c->T, L2 = log_multiplier(c);
     double diff = fabs(T1 - T2);
-    double est = fmax(diff / EST_DIVISOR, round_floor(c, T2));
-    if (ACCEPT_MARGIN * est <= tol * T2) {
-        fill_result(c, est, L2, L1, EST_DIVISOR, out);
-        c->pair_n = n;
-        return BKF_OK;
-    }
+    if (pair_meets_tol(c, T1, L1, T2, L2, n, tol, out)) return BKF_OK;
     /* finer meshes only raise the rounding floor (mu 1e-3, nu 0.9999,
      * tol 1e-12: the rounds went on to 40000 intervals, 7.8M instructions,
      * before refusing) */
