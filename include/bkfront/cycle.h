@@ -14,8 +14,9 @@
  * integration tolerances a factor BKF_CYCLE_TOL_RATIO apart; the reported
  * values are those of the tighter solve.  The automatic choice is Gauss
  * collocation (colloc.h, BKF_STEPPER_COLLOCATION; docs/numerics.md, "The
- * collocation engine") for mu in [10, 1e4] at tol <= 1e-10 where
- * mu^2 (1 - |nu|) >= 2, falling back to shooting where it refuses. */
+ * collocation engine") up to mu 1 at tol <= 1e-6 (from the Lindstedt
+ * series) and for mu in [10, 1e4] at tol <= 1e-10 where
+ * mu^2 (1 - |nu|) >= 1, falling back to shooting where it refuses. */
 #ifndef BKFRONT_CYCLE_H
 #define BKFRONT_CYCLE_H
 
@@ -171,9 +172,10 @@ int bkf_cycle_estimate(bkf_cycle *cycle, double mu, double nu, const bkf_cycle_o
  * With the automatic stepper at tol <= 1e-10, or with collocation asked
  * for, the rows outside the canard's neighbourhood (mu <= 1e4, not 8 mu^2
  * (1 - |nu|) in [0.2, 5] for mu >= 1) are collocation rows (stepper
- * "colloc": a path up to mu 2, the cold start's turns from the predicted
- * section point above); the automatic rows along mu before a canard the
- * branch has yet to cross shoot, as do the canard's own rows. */
+ * "colloc": a path up to mu 2; above it the cold start's landing from the
+ * slow branch in the relaxation regime, elsewhere turns from the predicted
+ * section point); from |nu| 0.99 the automatic rows along mu before a
+ * canard the branch has yet to cross shoot, as do the canard's own rows. */
 typedef enum { BKF_CYCLE_ALONG_MU = 0, BKF_CYCLE_ALONG_NU = 1 } bkf_cycle_param;
 typedef int (*bkf_cycle_visit)(const bkf_cycle_result *point, void *data);
 int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed,

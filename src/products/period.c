@@ -82,7 +82,7 @@ const bkf_option bkf_period_options[] = {
              "adapted mesh (collocation; outside canards: there and\n"
              "where it refuses the solve shoots as auto),\n"
              "or auto: colloc up to mu 1 at tol <= 1e-6 and from\n"
-             "mu 10 at tol <= 1e-10 where mu^2 (1 - |nu|) >= 2,\n"
+             "mu 10 at tol <= 1e-10 where mu^2 (1 - |nu|) >= 1,\n"
              "else bd2x2 above mu 30 (above 20\n"
              "at tol 1e-12..1e-8), else rk8pd"},
 };
