@@ -2,42 +2,20 @@
  * T at tol 1e-10 over 11 solves, at the mus of the goal and three nus. */
 #define _POSIX_C_SOURCE 200809L
 #include "bkfront/cycle.h"
+#include "bench_util.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
 
-static double seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int by_value(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-/* median seconds, the last result in *r; negative if refused */
+/* median seconds of 11 cold solves at tol 1e-10, the last result in *r;
+ * negative if refused */
 static double median_time(double mu, double nu, bkf_stepper_kind kind, bkf_cycle_result *r)
 {
-    enum { REPS = 11 };
-    double t[REPS];
     bkf_cycle_options o = bkf_cycle_options_default();
     o.tol = 1e-10;
     o.stepper = kind;
-    o.warm_start = 0;
-    for (int i = 0; i < REPS; i++) {
-        bkf_error e;
-        double t0 = seconds();
-        int rc = bkf_cycle_period(mu, nu, &o, r, &e);
-        t[i] = seconds() - t0;
-        if (rc != BKF_OK) return -1.0;
-    }
-    qsort(t, REPS, sizeof t[0], by_value);
-    return t[REPS / 2];
+    return bench_median_period_time(mu, nu, &o, 11, r);
 }
 
 static void cell(double t)

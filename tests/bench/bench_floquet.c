@@ -4,6 +4,7 @@
  * 50 ms; the threshold nu_pd to 1e-8 under 1 s. */
 #define _POSIX_C_SOURCE 200809L
 #include "bkfront/floquet.h"
+#include "bench_util.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -11,25 +12,6 @@
 #include <time.h>
 
 void bench_floquet(void);
-
-static double fq_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int fq_compare(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double fq_median(double *t, int n)
-{
-    qsort(t, (size_t)n, sizeof *t, fq_compare);
-    return t[n / 2];
-}
 
 static void fq_time(double seconds, char *buf, size_t size)
 {
@@ -47,7 +29,7 @@ static double dispersion_time(double nu, double tol, int reps, double *worst_err
     o.tol = tol;
     *worst_err = 0;
     for (int r = 0; r < reps; r++) {
-        double t0 = fq_now();
+        double t0 = bench_seconds();
         bkf_floquet *f = bkf_floquet_alloc();
         bkf_error e;
         if (!f || bkf_floquet_set(f, 2.0, 0.3, nu, &o, &e) != BKF_OK) {
@@ -63,9 +45,9 @@ static double dispersion_time(double nu, double tol, int reps, double *worst_err
             if (p.lambda > -2 && p.lambda_err > *worst_err) *worst_err = p.lambda_err;
         }
         bkf_floquet_free(f);
-        t[r] = fq_now() - t0;
+        t[r] = bench_seconds() - t0;
     }
-    return fq_median(t, reps);
+    return bench_median(t, reps);
 }
 
 static double threshold_time(double tol, int reps, bkf_floquet_threshold *th)
@@ -75,11 +57,11 @@ static double threshold_time(double tol, int reps, bkf_floquet_threshold *th)
     o.tol = tol;
     for (int r = 0; r < reps; r++) {
         bkf_error e;
-        double t0 = fq_now();
+        double t0 = bench_seconds();
         if (bkf_floquet_threshold_find(2.0, 0.3, -0.999, 0.0, &o, th, &e) != BKF_OK) return -1;
-        t[r] = fq_now() - t0;
+        t[r] = bench_seconds() - t0;
     }
-    return fq_median(t, reps);
+    return bench_median(t, reps);
 }
 
 static int count_interval(const bkf_floquet_interval *iv, void *data)
@@ -127,17 +109,17 @@ void bench_floquet(void)
         o.tol = 1e-10;
         int n = 0;
         bkf_error e;
-        double t0 = fq_now();
+        double t0 = bench_seconds();
         int rc = bkf_floquet_diagram(2.0, 0.3, -0.999, 0.999, &o, count_interval, &n, &e);
-        double t = rc == BKF_OK ? fq_now() - t0 : -1;
+        double t = rc == BKF_OK ? bench_seconds() - t0 : -1;
         fq_time(t, a, sizeof a);
         printf("| diagram over [-0.999, 0.999], nu step 0.01 | 1e-10 | %s | %d intervals | |\n", a, n);
         o.tol = 1e-8;
         n = 0;
-        t0 = fq_now();
+        t0 = bench_seconds();
         rc = bkf_floquet_threshold_branch(BKF_FLOQUET_ALONG_GAMMA, 2.0, 4.0, 0.0, 0.3, -0.999, 0.0,
                                           &o, 0, count_point, &n, &e);
-        t = rc == BKF_OK ? fq_now() - t0 : -1;
+        t = rc == BKF_OK ? bench_seconds() - t0 : -1;
         fq_time(t, b, sizeof b);
         printf("| curve nu_pd(gamma), gamma 2 -> 4 | 1e-8 | %s | %d points | |\n", b, n);
     }

@@ -2,43 +2,12 @@
  * tables for the README.  Speed goals live here, not in the tests. */
 #define _POSIX_C_SOURCE 200809L
 #include "bkfront/cycle.h"
+#include "bench_util.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int compare_doubles(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-/* Median seconds per cold solve (fresh object, no warm start), or a
- * negative value if the solve is refused. */
-static double median_period_time(double mu, double nu, double tol, int reps, bkf_cycle_result *last)
-{
-    double times[64];
-    bkf_cycle_options o = bkf_cycle_options_default();
-    o.tol = tol;
-    if (reps > 64) reps = 64;
-    for (int i = 0; i < reps; i++) {
-        bkf_error e;
-        double t0 = now_seconds();
-        int rc = bkf_cycle_period(mu, nu, &o, last, &e);
-        times[i] = now_seconds() - t0;
-        if (rc != BKF_OK) return -1.0;
-    }
-    qsort(times, (size_t)reps, sizeof times[0], compare_doubles);
-    return times[reps / 2];
-}
 
 static void bench_period(void)
 {
@@ -54,7 +23,9 @@ static void bench_period(void)
             bkf_cycle_result r = {0}, r10 = {0};
             for (size_t k = 0; k < 3; k++) {
                 int reps = mus[i] > 30 ? 5 : 21;
-                double t = median_period_time(mus[i], nus[j], tols[k], reps, &r);
+                bkf_cycle_options o = bkf_cycle_options_default();
+                o.tol = tols[k];
+                double t = bench_median_period_time(mus[i], nus[j], &o, reps, &r);
                 if (k == 1) r10 = r;
                 if (t < 0) printf(" refused |");
                 else if (t < 1e-3) printf(" %.0f us |", t * 1e6);

@@ -7,6 +7,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "bkfront/cycle.h"
 #include "bkfront/speeds.h"
+#include "bench_util.h"
 
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_roots.h>
@@ -16,19 +17,6 @@
 #include <time.h>
 
 void bench_speeds(void);
-
-static double seconds_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int by_value(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 typedef struct {
     bkf_model_params p;
@@ -90,16 +78,16 @@ static void run_case(const speeds_case *k)
     for (int i = 0; i < REPS; i++) {
         bkf_speeds_table_free(&t);
         bkf_error e;
-        double t0 = seconds_now();
+        double t0 = bench_seconds();
         int rc = bkf_speeds_find(&k->p, &o, &t, &e);
-        times[i] = seconds_now() - t0;
+        times[i] = bench_seconds() - t0;
         if (rc != BKF_OK) {
             printf("| %s | %g | failed: %s |||||||\n", k->name, k->tol, e.message);
             bkf_speeds_table_free(&t);
             return;
         }
     }
-    qsort(times, REPS, sizeof times[0], by_value);
+    qsort(times, REPS, sizeof times[0], bench_compare_doubles);
     printf("| %s | %g | %zu | %ld | %.1f ms | %zu | %zu |", k->name, k->tol, t.count, t.n_max,
            times[REPS / 2] * 1e3, t.coarse_solves, t.precise_solves);
     if (k->reference) {
@@ -158,10 +146,10 @@ void bench_speeds(void)
         bkf_speeds_branch_report rep;
         bkf_error e;
         size_t visited = 0;
-        double t0 = seconds_now();
+        double t0 = bench_seconds();
         int rc = bkf_speeds_branch(&p, 6, 1, BKF_SPEEDS_ALONG_S, 5.0, &o, 0, count_point, &visited,
                                    &rep, &e);
-        double dt = seconds_now() - t0;
+        double dt = bench_seconds() - t0;
         if (rc != BKF_OK) {
             printf("| %g | failed: %s |||||\n", tols[i], e.message);
             continue;

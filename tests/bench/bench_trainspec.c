@@ -5,18 +5,12 @@
 #define _POSIX_C_SOURCE 200809L
 #include "bkfront/speeds.h"
 #include "bkfront/trainspec.h"
+#include "bench_util.h"
 
 #include <stdio.h>
 #include <time.h>
 
 void bench_trainspec(void);
-
-static double ts_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 void bench_trainspec(void)
 {
@@ -34,9 +28,9 @@ void bench_trainspec(void)
     for (size_t i = 0; i < table.count; i++) {
         bkf_trainspec_train t = {table.roots[i].n, table.roots[i].v};
         bkf_trainspec_result r;
-        double t0 = ts_now();
+        double t0 = bench_seconds();
         int rc = bkf_trainspec_ring(&p, &t, NULL, &r, &e);
-        double dt = ts_now() - t0;
+        double dt = bench_seconds() - t0;
         total += dt;
         if (rc != BKF_OK)
             printf("| %zu | %.4g | refused | %s | | | %.3f s |\n", t.n, table.roots[i].mu, e.message, dt);
