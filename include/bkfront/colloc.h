@@ -57,10 +57,6 @@ int bkf_colloc_guess_turn(bkf_colloc *colloc, double mu, double nu, double x0, d
 int bkf_colloc_guess_relaxation(bkf_colloc *colloc, double mu, double nu, double T, double local_tol,
                                 bkf_error *err);
 
-/* Initial guess for small mu: the harmonic cycle of radius 2 sqrt(1 - nu^2),
- * T = 2 pi, on `intervals` uniform intervals. */
-int bkf_colloc_guess_circle(bkf_colloc *colloc, double mu, double nu, size_t intervals, bkf_error *err);
-
 /* Initial guess for small mu: the Lindstedt (Poincare-Lindstedt) series of
  * the cycle in mu to `order` (at most 12; 0: the order past which Newton's
  * iterations stop falling, 2 to 6 by mu), truncated earlier at its smallest

@@ -1002,30 +1002,6 @@ int bkf_colloc_guess_relaxation(bkf_colloc *c, double mu, double nu, double T, d
     return rc;
 }
 
-int bkf_colloc_guess_circle(bkf_colloc *c, double mu, double nu, size_t intervals, bkf_error *err)
-{
-    if (!c || intervals < 4) return bkf_error_set(err, BKF_EINPUT, "collocation guess needs at least 4 intervals");
-    if (!reserve(c, intervals)) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    set_params(c, mu, nu);
-    c->n = intervals;
-    c->T = 2.0 * M_PI;
-    double r = 2.0 * sqrt(1.0 - nu * nu);
-    for (size_t j = 0; j <= intervals; j++) {
-        double s = (double)j / (double)intervals, xv = nu + r * sin(2.0 * M_PI * s);
-        c->t[j] = s;
-        c->x[j] = xv;
-        c->y[j] = r * cos(2.0 * M_PI * s) / c->a + c->b * lienard_F(xv);
-    }
-    for (size_t j = 0; j < intervals; j++)
-        for (int i = 0; i < M; i++)
-            c->X[j * M + i] = nu + r * sin(2.0 * M_PI * (c->t[j] + c->g.c[i] / (double)intervals));
-    c->have_guess = 1;
-    c->have_solution = 0;
-    c->paired = 0;
-    c->uniform = 0;
-    return BKF_OK;
-}
-
 /* ------------------------------------------------- Lindstedt series */
 
 /* u = f - nu in the time tau = omega z solves

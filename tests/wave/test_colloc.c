@@ -123,7 +123,7 @@ TEST(colloc_order_in_the_mesh)
     const size_t ns[] = {6, 12, 24};
     double T[3];
     for (size_t k = 0; k < 3; k++) {
-        CHECK(bkf_colloc_guess_circle(c, 0.5, 0.0, 32, &e) == BKF_OK);
+        CHECK(bkf_colloc_guess_series(c, 0.5, 0.0, 0, 32, NULL, &e) == BKF_OK);
         CHECK_MSG(bkf_colloc_fixed(c, ns[k], &T[k], &e) == BKF_OK, "%s", e.message);
     }
     double ratio = fabs(T[0] - T[1]) / fabs(T[1] - T[2]);
