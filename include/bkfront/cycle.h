@@ -170,8 +170,9 @@ int bkf_cycle_estimate(bkf_cycle *cycle, double mu, double nu, const bkf_cycle_o
  * continued as two halves meeting there (the row at 0 visited once;
  * max_points counts both halves' rows, the driver's budget each half's).
  * With the automatic stepper at tol <= 1e-10, or with collocation asked
- * for, the rows outside the canard's neighbourhood (mu <= 1e4, not 8 mu^2
- * (1 - |nu|) in [0.2, 5] for mu >= 1) are collocation rows (stepper
+ * for, the rows outside the steep canard's neighbourhood (mu <= 1e4, not
+ * 8 mu^2 (1 - |nu|) in [0.2, 5] for mu >= 1 where |nu| > 0.98, or along nu
+ * where nu < 0) are collocation rows (stepper
  * "colloc": a path up to mu 2; above it the cold start's landing from the
  * slow branch in the relaxation regime, elsewhere turns from the predicted
  * section point); from |nu| 0.99 the automatic rows along mu before a

@@ -513,3 +513,83 @@ TEST(colloc_turn_tol_below_mu_20_against_taylor)
         }
     bkf_test_note("largest true/estimated error ratio %.3g", worst);
 }
+
+/* At loose tolerances the series path's uniform meshes were sized for tol
+ * (6-10 intervals at 1e-6), below the range where the pair's error ratio
+ * is 2^8: T's error on them changes sign from mesh to mesh (mu 0.518,
+ * nu -0.66: 1.6e-8 on 7 intervals, 2.9e-8 on 14) and the estimate
+ * flattered, up to 36 times at the points below (all within tol).  The
+ * meshes are no coarser than tol 1e-10's now, whose estimates are honest
+ * over the scanned box: the automatic choice and collocation asked for,
+ * against the Taylor reference. */
+TEST(colloc_series_estimates_honest_at_loose_tol)
+{
+    const struct {
+        double mu, nu, tol;
+    } flattered[] = {{0.517947, -0.66, 1e-6}, {0.883835, 0.9, 1e-6}, {1.0, 0.93, 1e-7}, {0.719686, 0.03, 1e-8},
+                     {0.0727108, -0.71, 1e-6}, {0.882654, -0.81, 1e-8}, {0.719686, 0.15, 1e-6}};
+    const double mus[] = {0.05, 0.3, 0.6, 0.9};
+    const double nus[] = {-0.9, -0.4, 0.1, 0.5, 0.95};
+    const double tols[] = {1e-6, 1e-8};
+    size_t nf = sizeof flattered / sizeof flattered[0], ng = sizeof mus / sizeof mus[0] * (sizeof nus / sizeof nus[0]);
+    double worst = 0.0;
+    size_t colloc = 0, all = 0;
+    for (size_t p = 0; p < nf + ng; p++) {
+        double mu = p < nf ? flattered[p].mu : mus[(p - nf) / 5], nu = p < nf ? flattered[p].nu : nus[(p - nf) % 5];
+        double ref = NAN, unc = 0.0;
+        for (size_t k = 0; k < (p < nf ? 1 : 2); k++)
+            for (int automatic = 0; automatic < 2; automatic++) {
+                double tol = p < nf ? flattered[p].tol : tols[k];
+                bkf_cycle_result r;
+                bkf_error e = {0};
+                int rc = solve_with(mu, nu, tol, automatic ? BKF_STEPPER_AUTO : BKF_STEPPER_COLLOCATION, &r, &e);
+                CHECK_MSG(rc == BKF_OK, "mu %g nu %g tol %g: %s", mu, nu, tol, e.message);
+                all++;
+                colloc += !strcmp(r.stepper, "colloc");
+                if (!isfinite(ref)) ref = taylor_period(mu, nu, r.section_slope, &unc);
+                double err = fabs(r.period - ref), ratio = fmax(err - unc, 0.0) / r.period_err;
+                CHECK_MSG(err <= tol * r.period + unc, "mu %g nu %g tol %g %s: error %.3g > tol", mu, nu, tol, r.stepper,
+                          err / r.period);
+                CHECK_MSG(ratio <= 1.0, "mu %g nu %g tol %g %s: estimate %.3g optimistic by %.3g", mu, nu, tol,
+                          r.stepper, r.period_err / r.period, ratio);
+                worst = fmax(worst, ratio);
+            }
+    }
+    bkf_test_note("%zu of %zu solves by collocation; largest true/estimated %.3g", colloc, all, worst);
+    CHECK_MSG(colloc * 4 >= all * 3, "collocation answered only %zu of %zu", colloc, all);
+}
+
+/* In the canard band up to |nu| 0.98 collocation asked for answers at
+ * nu > 0 (the explosion is mild there) with honest estimates, against the
+ * Taylor reference; at nu < 0 its turn misjudged the error (mu 2.241,
+ * nu -0.97, tol 1e-8: 3.7 times) and the point is shooting's. */
+TEST(colloc_mild_canard_against_taylor)
+{
+    const double mus[] = {1.6, 1.844, 2.0, 2.241, 2.6, 3.2, 4.5};
+    const double nus[] = {0.95, 0.97, 0.98};
+    const double tols[] = {1e-8, 1e-10, 1e-12};
+    double worst = 0.0;
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++)
+        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+            double ref = NAN, unc = 0.0;
+            for (size_t k = 0; k < sizeof tols / sizeof tols[0]; k++) {
+                bkf_cycle_result r;
+                bkf_error e = {0};
+                CHECK_MSG(solve_with(mus[i], nus[j], tols[k], BKF_STEPPER_COLLOCATION, &r, &e) == BKF_OK,
+                          "mu %g nu %g: %s", mus[i], nus[j], e.message);
+                CHECK_MSG(!strcmp(r.stepper, "colloc"), "mu %g nu %g tol %g: %s", mus[i], nus[j], tols[k], r.stepper);
+                if (!isfinite(ref)) ref = taylor_period(mus[i], nus[j], r.section_slope, &unc);
+                double err = fabs(r.period - ref), ratio = fmax(err - unc, 0.0) / r.period_err;
+                CHECK_MSG(err <= tols[k] * r.period + unc, "mu %g nu %g tol %g: error %.3g > tol", mus[i], nus[j],
+                          tols[k], err / r.period);
+                CHECK_MSG(ratio <= 1.0, "mu %g nu %g tol %g: estimate optimistic by %.3g", mus[i], nus[j], tols[k],
+                          ratio);
+                worst = fmax(worst, ratio);
+            }
+        }
+    bkf_cycle_result r;
+    bkf_error e = {0};
+    CHECK_MSG(solve_with(2.241, -0.97, 1e-8, BKF_STEPPER_COLLOCATION, &r, &e) == BKF_OK, "%s", e.message);
+    CHECK_MSG(strcmp(r.stepper, "colloc"), "mu 2.241 nu -0.97: answered by collocation");
+    bkf_test_note("largest true/estimated %.3g", worst);
+}
