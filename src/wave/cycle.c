@@ -220,13 +220,26 @@ static void flow_set(flow_params *p, double mu, double nu)
  * controlled like (x, y) it doubled the steps. */
 #define BD_VARIATIONAL_SLACK 1e4
 /* The largest true error of T per unit local tolerance times T, measured
- * against the Taylor reference, divided by 3 (the estimate may flatter by
- * at most 3): 11 at mu 31, nu 0.99, local tol 1e-12 (relative to the
- * cycle's size, as below), 5.3 at mu 30.5, nu 0.5, local tol 8.7e-7, where
- * |T_a - T_b| was 20 times smaller.  The accepted value is the table's diagonal, but
- * the step is controlled on the error of the row below it, and on the slow
- * branches an error of tol in position is mu tol in time. */
-#define BD_ERROR_PER_TOL 4.0
+ * against the Taylor reference: 11 at mu 31, nu 0.99, local tol 1e-12
+ * (relative to the cycle's size, as below), 5.3 at mu 30.5, nu 0.5, local
+ * tol 8.7e-7, where |T_a - T_b| was 20 times smaller; over mu 20-100 x
+ * |nu| <= 0.99 at tol 1e-4 up to 16 (mu 39.86, nu -0.51: true 3.99 times
+ * the estimate with the floor at 4, a third of 11, as it was).  The
+ * accepted value is the table's diagonal, but the step is controlled on
+ * the error of the row below it, and on the slow branches an error of tol
+ * in position is mu tol in time.  At 16 the floor costs 0-4% more work
+ * (mu 30-1e4, tol 1e-4..1e-8). */
+#define BD_ERROR_PER_TOL 16.0
+/* The same for rk8pd: 0.037 at the classic pair's local tolerances, but up
+ * to about 0.3 at the loose-tol fast path's (local 1e-6 of the cycle's
+ * size: mu 7.47, nu -0.79, tol 1e-5 true 4.7 times an estimate floored at
+ * 0.02; mu 3.21, nu -0.65, tol 1e-6 6.4 times), where the errors of two
+ * local tolerances a factor 10 apart coincide.  At 0.4 no estimate
+ * flattered over mu 0.01-30 x |nu| <= 0.99 x tol 1e-4..1e-10 (test
+ * cycle_rk8pd_estimates_honest_at_loose_tol); the fast path then no longer
+ * answers tol 1e-6 (the classic pair does: 86 against 51 us a point over
+ * mu 0.3-10), elsewhere the work is unchanged. */
+#define RK8PD_ERROR_PER_TOL 0.4
 static const int bd_n[BD_ROWS] = {2, 6, 10, 14, 22, 34, 50, 70};
 
 typedef struct {
@@ -827,10 +840,12 @@ static int canard_window(double mu, double nu)
  *    gave T 3.8e-8 low, their difference 7e-10), nor is rk8pd's where its
  *    steps are set by stability (mu 7-9).  A floor proportional to the
  *    tighter solve's tolerance covers this: the largest measured error per
- *    unit tol_b T was 0.56 for bsimp and 0.037 for rk8pd (relative to the
- *    cycle's size 2 sqrt(1 - nu^2) where that is below 1, since the
- *    tolerance is absolute); the floors are over a third of that, so that
- *    the estimate is never optimistic by more than 3.
+ *    unit tol_b T was 0.56 for bsimp, 16 for bd2x2 and 0.3 for rk8pd
+ *    (relative to the cycle's size 2 sqrt(1 - nu^2) where that is below
+ *    1, since the tolerance is absolute; BD_ERROR_PER_TOL,
+ *    RK8PD_ERROR_PER_TOL); bsimp's floor is under half of that, so that
+ *    its estimate is never optimistic by more than 3 (bsimp is no
+ *    automatic choice any more), the others' cover it.
  *  - Rounding: one ulp of the return map g moves the fixed point by
  *    ulp/(1 - P') and T by dT/dy0 times that.  Near the Hopf point and in
  *    the canard region that amplification reaches 1e3-1e4 T (mu 10,
@@ -842,8 +857,8 @@ static double period_error(const converged *a, const converged *b, const flow_pa
     int implicit = kind != BKF_STEPPER_EXPLICIT;
     double size = fmin(1.0, 2.0 * sqrt(1.0 - p->nu * p->nu));
     double per_tol = kind == BKF_STEPPER_EXTRAPOLATION ? BD_ERROR_PER_TOL
-                     : implicit || canard_window(p->mu, p->nu) ? 0.25
-                                                               : 0.02;
+                     : implicit                             ? 0.25
+                                                            : RK8PD_ERROR_PER_TOL;
     double tol_floor = per_tol * b->tol * b->period / size;
     double amplified = b->period + fmax(1.0, fabs(b->y0)) * fabs(b->dT) / (1.0 - fmin(b->return_slope, 0.999999));
     double round_floor = (implicit ? 30.0 : 8.0) * DBL_EPSILON * amplified;

@@ -236,3 +236,51 @@ TEST(cycle_engine_canard_floor_matches_taylor_slope)
     CHECK_MSG(r.period_err >= floor && r.period_err <= 3.0 * floor, "estimate %.3g against eps |dT/dnu| %.3g",
               r.period_err, floor);
 }
+
+/* The shooting estimates' floors (period_error): at loose tolerances the
+ * errors of two local tolerances a factor 10 apart coincide, and the pair's
+ * difference alone flattered: rk8pd, floored at 0.02 tol_b T, up to 6.4
+ * times (mu 3.21, nu -0.65, tol 1e-6) and 4.7 (mu 7.47, nu -0.79,
+ * tol 1e-5), past the 3 the floors were set for; bd2x2, floored at 4,
+ * 3.99 (mu 39.86, nu -0.51, tol 1e-4).  With floors that cover the
+ * measured errors (0.4 and 16) rk8pd's estimates are honest, bd2x2's at
+ * most 1.4 optimistic (the pair's difference, not the floor, answers
+ * there): each point against the Taylor reference, and a grid around
+ * them. */
+TEST(cycle_engine_shooting_estimates_at_loose_tol)
+{
+    const struct {
+        double mu, nu, tol;
+        bkf_stepper_kind kind;
+    } flattered[] = {{3.21001, -0.65, 1e-6, BKF_STEPPER_EXPLICIT},   {7.46609, -0.79, 1e-5, BKF_STEPPER_EXPLICIT},
+                     {2.39377, -0.51, 1e-6, BKF_STEPPER_EXPLICIT},   {1.72714, -0.53, 1e-7, BKF_STEPPER_EXPLICIT},
+                     {39.8647, -0.51, 1e-4, BKF_STEPPER_EXTRAPOLATION}, {25.17, -0.09, 1e-6, BKF_STEPPER_EXTRAPOLATION}};
+    const size_t nf = sizeof flattered / sizeof flattered[0];
+    const double mus[] = {2.0, 3.2, 5.0, 7.5};
+    const double nus[] = {-0.79, -0.65, -0.3, 0.15, 0.8};
+    const double tols[] = {1e-5, 1e-6, 1e-7};
+    const size_t ng = sizeof mus / sizeof mus[0] * (sizeof nus / sizeof nus[0]);
+    double worst[2] = {0.0, 0.0};
+    for (size_t p = 0; p < nf + ng; p++) {
+        double mu = p < nf ? flattered[p].mu : mus[(p - nf) / 5], nu = p < nf ? flattered[p].nu : nus[(p - nf) % 5];
+        double ref = NAN, unc = 0.0;
+        for (size_t k = 0; k < (p < nf ? 1u : 3u); k++) {
+            double tol = p < nf ? flattered[p].tol : tols[k];
+            bkf_stepper_kind kind = p < nf ? flattered[p].kind : BKF_STEPPER_EXPLICIT;
+            bkf_cycle_result r;
+            bkf_error e = {0};
+            int rc = solve_with(mu, nu, tol, kind, &r, &e);
+            CHECK_MSG(rc == BKF_OK, "mu %g nu %g tol %g: %s", mu, nu, tol, e.message);
+            if (rc != BKF_OK) continue;
+            if (!isfinite(ref)) ref = taylor_period(mu, nu, r.section_slope, &unc);
+            double err = fabs(r.period - ref), ratio = fmax(err - unc, 0.0) / r.period_err;
+            int bd = kind == BKF_STEPPER_EXTRAPOLATION;
+            CHECK_MSG(err <= tol * r.period + unc, "mu %g nu %g tol %g %s: error %.3g > tol", mu, nu, tol, r.stepper,
+                      err / r.period);
+            CHECK_MSG(ratio <= (bd ? 1.5 : 1.0), "mu %g nu %g tol %g %s: estimate %.3g optimistic by %.3g", mu, nu,
+                      tol, r.stepper, r.period_err / r.period, ratio);
+            worst[bd] = fmax(worst[bd], ratio);
+        }
+    }
+    bkf_test_note("largest true/estimated: rk8pd %.3g, bd2x2 %.3g", worst[0], worst[1]);
+}
