@@ -176,7 +176,12 @@ int bkf_cycle_estimate(bkf_cycle *cycle, double mu, double nu, const bkf_cycle_o
  * "colloc": a path up to mu 2; above it the cold start's landing from the
  * slow branch in the relaxation regime, elsewhere turns from the predicted
  * section point); from |nu| 0.99 the automatic rows along mu before a
- * canard the branch has yet to cross shoot, as do the canard's own rows. */
+ * canard the branch has yet to cross shoot, as do the canard's own rows.
+ * A branch whose rows miss tol 160 times in a row (an explosion thinner
+ * than an ulp of mu: |nu| 0.9999, mu 35.37) steps over it by collocation
+ * rows along mu towards larger mu (automatic or collocation stepper);
+ * elsewhere it returns BKF_ENUMERIC, as any failure past the first row,
+ * naming the last row's mu and nu. */
 typedef enum { BKF_CYCLE_ALONG_MU = 0, BKF_CYCLE_ALONG_NU = 1 } bkf_cycle_param;
 typedef int (*bkf_cycle_visit)(const bkf_cycle_result *point, void *data);
 int bkf_cycle_branch(bkf_cycle_param along, double from, double to, double fixed,

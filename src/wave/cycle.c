@@ -1826,6 +1826,11 @@ typedef struct {
     int left_colloc, to_colloc;
     int mirror_shots; /* every shot is the mirror image's (branch_mirrors) */
     size_t rows;
+    /* rows in a row that missed tol (relaxed or refused), and whether they
+     * reached BRANCH_MISSED_MAX: a branch creeping inside an explosion it
+     * cannot cross (branch_hop) */
+    size_t missed;
+    int stuck;
     /* The last shot with derivatives: the continuation evaluates its
      * tangent, and the amplitude walk its last root, at the point it then
      * accepts, so that shot is the looser solve of the point's estimate. */
@@ -2228,6 +2233,15 @@ static double branch_row_params(const branch_ctx *b, double q, double *mu, doubl
 static int branch_colloc_at(const branch_ctx *b, double mu, double nu);
 static int branch_colloc_between(const branch_ctx *b, double q0, double q1);
 
+/* Rows in a row that may miss tol before the branch counts as stuck.  A
+ * canard the shots cross takes up to 72 (nu +-0.999 along mu: relaxed rows
+ * while the canard grows, refused ones at its head within 1e-10 of mu
+ * 11.2141166); at nu 0.9999 the explosion (mu 35.3659) is too thin for
+ * any row inside it, and the pseudo-arclength steps crept at 1e-7 of mu a
+ * row, every row relaxed or refused, for 20-26 minutes before the walk
+ * found no root of G (about 0.07 s a row). */
+#define BRANCH_MISSED_MAX 160
+
 static int branch_accept(const double *u, const double *tangent, int is_fold, void *data)
 {
     (void)is_fold; /* T(mu) and T(nu) have no folds; a located one is still a valid point */
@@ -2288,6 +2302,11 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
         }
     }
     b->rows++;
+    b->missed = refused ? b->missed + 1 : 0;
+    if (b->missed >= BRANCH_MISSED_MAX && q != b->q_to) {
+        b->stuck = 1;
+        return 1;
+    }
     if (tangent && fabs(tangent[1]) < STEEP_ENTER && q != b->q_to) {
         b->steep = 1;
         return 1;
@@ -2701,6 +2720,85 @@ static int branch_colloc(branch_ctx *b, double q, int dir, size_t limit, int vis
     return rc;
 }
 
+/* A branch stuck in a canard explosion (b->stuck: BRANCH_MISSED_MAX rows
+ * in a row missed tol) goes on past it by collocation rows, along mu
+ * towards larger mu only: past the explosion the cycle is the relaxation
+ * cycle with at most a canard head, whose cold start lands from the left
+ * slow branch (bkf_colloc_guess_relaxation) whatever the head, and whose
+ * cyclic solve, from the section at the right knee, sees the attracting
+ * branch before the repelling one (the interval maps' products stay
+ * small).  Inside the explosion no row of either engine meets tol (at nu
+ * 0.9999 it is far thinner than an ulp of mu 35.3659, where T runs from
+ * 12.6 through the maximal canard down to 113), so the branch steps over
+ * it: the first row 1e-3 in ln mu past the last one, 4 times farther while
+ * the solve refuses (up to BRANCH_COLLOC_STEP_MU), then steps growing by
+ * 1.5 while the rows answer, halved where one refuses, until the rows are
+ * back in branch_colloc's domain (b->to_colloc) or at the end (b->landed).
+ * Each row is a cold solve's pair with its estimate (at mu 35.4 the Taylor
+ * reference is 4.2e-11 from T 113.126945965576, estimate 3.9e-10; bd2x2
+ * at tol 1e-10 answered 8.7e-9 off with an estimate of 2.5e-9).  Elsewhere,
+ * or where no row answers, BKF_ENUMERIC naming where the branch stuck. */
+#define BRANCH_HOP_FIRST 1e-3
+static int branch_hop(branch_ctx *b, int dir, size_t limit, bkf_error *err)
+{
+    bkf_cycle *c = b->cycle;
+    double q = b->last_u[1], mu, nu;
+    branch_params(b, q, &mu, &nu);
+    size_t missed = b->missed;
+    b->stuck = 0;
+    b->missed = 0;
+    const double sign = b->mirror_shots ? -1.0 : 1.0;
+    const double tol = b->options.tol;
+    int hops = b->along == BKF_CYCLE_ALONG_MU && dir > 0 &&
+               (b->options.stepper == BKF_STEPPER_AUTO || b->options.stepper == BKF_STEPPER_COLLOCATION);
+    double h = BRANCH_HOP_FIRST;
+    size_t rows = 0;
+    bkf_error row_err = {0};
+    while (hops && b->visit_status == 0 && b->rows < limit) {
+        double qn = q + dir * h, mu_n, nu_n;
+        if ((qn - b->q_to) * dir >= 0.0) qn = b->q_to;
+        qn = branch_row_params(b, qn, &mu_n, &nu_n);
+        flow_set(&c->flow, mu_n, sign * nu_n);
+        c->flow.rhs_calls = c->flow.jacobian_calls = 0;
+        if (!c->colloc && !(c->colloc = bkf_colloc_alloc())) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        bkf_colloc_result r;
+        int rc = bkf_colloc_guess_relaxation(c->colloc, mu_n, sign * nu_n, bkf_asym_period_leading(mu_n, nu_n),
+                                             colloc_turn_tol(tol, mu_n), &row_err);
+        if (rc == BKF_OK) rc = bkf_colloc_solve(c->colloc, tol, &r, &row_err);
+        if (rc == BKF_ENOMEM) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        if (rc != BKF_OK) {
+            c->have_solution = 0;
+            if (rows == 0 ? (h *= 4.0) > BRANCH_COLLOC_STEP_MU : (h *= 0.5) < BRANCH_COLLOC_STEP_MIN) break;
+            continue;
+        }
+        b->work_steps += r.interval_solves;
+        b->work_shots += r.newton_iterations;
+        r.interval_solves = r.newton_iterations = 0;
+        if ((rc = branch_colloc_visit(b, &r, mu_n, nu_n, sign < 0.0, err)) != BKF_OK) return rc;
+        rows++;
+        q = qn;
+        b->last_u[0] = log(c->result.section_slope);
+        b->last_u[1] = q;
+        b->have_last = 1;
+        if (q == b->q_to) {
+            b->landed = 1;
+            return BKF_OK;
+        }
+        if (branch_colloc_at(b, mu_n, nu_n)) {
+            b->to_colloc = 1;
+            return BKF_OK;
+        }
+        h = fmin(1.5 * h, BRANCH_COLLOC_STEP_MU);
+    }
+    if (b->visit_status != 0 || b->rows >= limit) return BKF_OK;
+    if (rows) branch_params(b, q, &mu, &nu);
+    return bkf_error_set(err, BKF_ENUMERIC,
+                         "branch along %s stuck at mu = %.15g, nu = %.15g (a canard explosion): %zu rows in a "
+                         "row missed tol%s%s",
+                         b->along == BKF_CYCLE_ALONG_MU ? "mu" : "nu", mu, nu, missed,
+                         hops ? "; no collocation row past it answered: " : "", hops ? row_err.message : "");
+}
+
 /* The shooting continuation's start at q: the slope of a solve there
  * (where the branch's shots are the mirror's, branch_mirrors, so is the
  * slope); the first accepted point is estimated again, from u0. */
@@ -2714,6 +2812,21 @@ static int branch_shooting_start(branch_ctx *b, double q, double *u0, bkf_error 
     u0[1] = q;
     b->cycle->have_solution = 0;
     return BKF_OK;
+}
+
+/* A branch that fails past its first row says where it stopped in the
+ * user's parameters (the driver's messages name q, which is ln mu along
+ * mu). */
+static int branch_failed_at(const branch_ctx *b, int rc, bkf_error *err)
+{
+    if (!bkf_status_is_numerical(rc) || !err || !b->rows || !b->have_last || strstr(err->message, "stuck at"))
+        return rc;
+    double mu, nu;
+    branch_params(b, b->last_u[1], &mu, &nu);
+    char why[BKF_ERROR_LEN];
+    snprintf(why, sizeof why, "%s", err->message);
+    return bkf_error_set(err, rc, "branch along %s stuck at mu = %.15g, nu = %.15g: %s",
+                         b->along == BKF_CYCLE_ALONG_MU ? "mu" : "nu", mu, nu, why);
 }
 
 static int cycle_branch_body(bkf_cycle_param along, double from, double to, double fixed,
@@ -2773,6 +2886,7 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
     for (int stretch = 0;; stretch++) {
         if (b.to_colloc) {
             b.to_colloc = b.left_colloc = 0;
+            b.missed = 0;
             int first = b.rows == 0;
             rc = branch_colloc(&b, first ? q_from : b.last_u[1], dir, limit, first, err);
             if (rc == BKF_ENOMEM || b.visit_status != 0 || b.rows >= limit || b.landed) break;
@@ -2786,6 +2900,11 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
         b.steep = 0;
         rc = bkf_cont_run(branch_residual, branch_accept, &b, u0, 1, dir, &co, &report, err);
         if (b.visit_status != 0 || b.rows >= limit) break;
+        if (b.stuck) {
+            if ((rc = branch_hop(&b, dir, limit, err)) != BKF_OK || b.landed || b.visit_status != 0) break;
+            if (b.to_colloc) continue;
+            break;
+        }
         if (b.to_colloc) continue;
         if (rc == BKF_OK && !b.steep) break;
         if (rc != BKF_OK && (rc != BKF_ENUMERIC || !b.have_last || b.rows == 0 || stretch >= 10)) break;
@@ -2793,6 +2912,11 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
         int walk = branch_amplitude(&b, dir, limit, rc != BKF_OK, &walk_err);
         if (b.visit_status != 0 || b.rows >= limit || (walk == BKF_OK && b.landed)) {
             rc = BKF_OK;
+            break;
+        }
+        if (walk == BKF_OK && b.stuck) {
+            if ((rc = branch_hop(&b, dir, limit, err)) != BKF_OK || b.landed || b.visit_status != 0) break;
+            if (b.to_colloc) continue;
             break;
         }
         if (walk == BKF_OK && b.to_colloc) continue;
@@ -2805,6 +2929,7 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
         memcpy(u0, b.last_u, sizeof u0);
         b.skip_visit = 1;
     }
+    rc = branch_failed_at(&b, rc, err);
     bkf_cycle_free(b.cycle);
     if (b.visit_status > 0) return b.visit_status;
     /* the driver's own row budget (no max_points asked) is not an end: a

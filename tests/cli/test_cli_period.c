@@ -414,3 +414,15 @@ TEST(cli_period_library_matches_cli)
     bkf_period_spec_free(&spec);
     run_free(&r);
 }
+
+/* A branch stuck in the canard explosion at the box's edge (mu 35.3659,
+ * nu 0.9999, approached from the relaxation side, where no row steps over
+ * it) fails within seconds: exit 1, nothing on stdout, one line naming mu
+ * and nu (the library's branch_hop; it crept for minutes before). */
+TEST(cli_period_continue_stuck_in_the_canard_names_mu_and_nu)
+{
+    run_result r = RUN("period", "--mu", "36:35:2", "--nu", "0.9999", "--continue", "mu");
+    CHECK_MSG(r.code == 1 && r.out[0] == '\0' && bkf_count_lines(r.err) == 1, "exit %d: %s", r.code, r.err);
+    CHECK_MSG(strstr(r.err, "stuck at mu = 35.36") && strstr(r.err, "nu = 0.9999"), "%s", r.err);
+    run_free(&r);
+}

@@ -303,6 +303,84 @@ static int count_rows(const bkf_cycle_result *r, void *data)
     return 0;
 }
 
+/* At the box's edge |nu| = 0.9999 the canard explosion (mu 35.3659) is
+ * thinner than an ulp of mu: the shooting rows crept at 1e-7 of mu a row,
+ * every row relaxed or refused, and `period --mu 0.1:1e4:9 --log --nu
+ * 0.9999 --continue mu` failed after 20-26 minutes.  Now the branch counts
+ * the rows that miss tol in a row and, stuck, steps over the explosion by
+ * collocation rows (cycle.c, branch_hop).  Every row against the
+ * long-double Taylor reference (fast here: 0.1 s a row), the relaxed ones
+ * within their own estimates, the rows past the explosion within tol, and
+ * T's jump from the small cycle to the relaxation cycle with a canard head
+ * (T 12.4 -> 113) between two consecutive rows. */
+static void check_over_the_explosion(double nu)
+{
+    static canard_rows got;
+    memset(&got, 0, sizeof got);
+    bkf_cycle_options o = bkf_cycle_options_default();
+    bkf_error e;
+    int rc = bkf_cycle_branch(BKF_CYCLE_ALONG_MU, 25.0, 40.0, nu, &o, 0, collect_canard, &got, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    if (rc != BKF_OK || got.n < 2) return;
+    CHECK_CLOSE(got.mu[got.n - 1], 40.0, 1e-12, 0.0);
+    size_t jumps = 0, past = 0;
+    double worst = 0.0, worst_relaxed = 0.0;
+    for (size_t i = 0; i < got.n; i++) {
+        if (i) CHECK(got.mu[i] > got.mu[i - 1]);
+        if (i && got.period[i] > 100.0 && got.period[i - 1] < 20.0) jumps++;
+        if (got.period[i] > 100.0) {
+            past++;
+            /* past the explosion every row meets tol */
+            CHECK_MSG(!got.relaxed[i] && got.err[i] <= o.tol * got.period[i], "mu %.17g: err %.2g", got.mu[i],
+                      got.err[i]);
+        }
+        double unc, ref = taylor_period(got.mu[i], got.nu[i], got.slope[i], &unc);
+        CHECK_MSG(unc <= fmax(1e-12 * ref, 0.1 * got.err[i]), "mu %.17g: reference uncertainty %.2g", got.mu[i], unc);
+        double ratio = fabs(got.period[i] - ref) / got.err[i];
+        if (got.period[i] > 100.0) {
+            /* the collocation rows past the explosion: within their estimates */
+            CHECK_MSG(fabs(got.period[i] - ref) <= 3.0 * got.err[i] + unc,
+                      "mu %.17g nu %g: T %.17g ref %.17g err %.2g", got.mu[i], nu, got.period[i], ref, got.err[i]);
+            worst = fmax(worst, ratio);
+        } else if (!got.relaxed[i]) {
+            /* the shooting rows before it meet tol (their estimates flattered
+             * by up to 3.2 at mu 28.4) */
+            CHECK_MSG(fabs(got.period[i] - ref) <= o.tol * ref + unc, "mu %.17g nu %g: T %.17g ref %.17g",
+                      got.mu[i], nu, got.period[i], ref);
+        } else {
+            /* the relaxed shooting rows of the creep missed the reference by
+             * up to 17 times their estimates (measured, not fixed here) */
+            worst_relaxed = fmax(worst_relaxed, ratio);
+        }
+    }
+    CHECK(jumps == 1);
+    CHECK(past >= 5);
+    bkf_test_note("nu %g: %zu rows (%zu past the explosion), %zu refused, worst true/estimated %.2f past it, %.2f "
+                  "on the relaxed rows before",
+                  nu, got.n, past, got.refused, worst, worst_relaxed);
+}
+
+TEST(cycle_branch_mu_over_the_canard_at_nu_0_9999)
+{
+    check_over_the_explosion(0.9999);
+    check_over_the_explosion(-0.9999);
+}
+
+/* Where the branch cannot step over the explosion (along mu towards it
+ * from the relaxation side, where the rows would have to find the small
+ * cycle) it fails within seconds, naming where, not after 20 minutes. */
+TEST(cycle_branch_stuck_in_the_canard_fails_fast)
+{
+    bkf_cycle_options o = bkf_cycle_options_default();
+    bkf_error e;
+    size_t rows = 0;
+    int rc = bkf_cycle_branch(BKF_CYCLE_ALONG_MU, 36.0, 35.0, 0.9999, &o, 0, count_rows, &rows, &e);
+    CHECK_STATUS(rc, BKF_ENUMERIC);
+    CHECK_MSG(strstr(e.message, "stuck at mu = 35.36") && strstr(e.message, "nu = 0.9999"), "%s", e.message);
+    CHECK(rows >= 20);
+}
+
+
 /* Towards nu -0.999 at mu >= 1e3 the direct shots' steps shrank to 1e-12
  * near -0.9982 and spent the driver's 10000 rows (60 s); the branch's shots
  * are now the mirror image's (T(mu, -nu) = T(mu, nu)), and one that crosses
