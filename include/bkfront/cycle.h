@@ -160,9 +160,10 @@ int bkf_cycle_estimate(bkf_cycle *cycle, double mu, double nu, const bkf_cycle_o
  * counters hold every integration since the previous point.
  * The continuation's parameter derivative comes from the variational
  * equations.  A point the solve cannot meet tol at (inside a canard
- * explosion) is retried at looser tolerances up to 1e-6 and passed with
- * model "shooting-relaxed" and its honest (larger) period_err, or, failing
- * that, with model "refused" and NaN values; the branch goes on past it.
+ * explosion) is retried at looser tolerances up to 1e-6 (up to |nu| 0.999)
+ * and passed with model "shooting-relaxed" and its honest (larger)
+ * period_err, or, failing that, with model "refused" and NaN values; the
+ * branch goes on past it.
  * At most max_points points (0: no limit, beyond the driver's own, 10000
  * rows: a branch that spends those short of `to`, its steps shrunk to a
  * creep, returns BKF_EBUDGET naming where it stopped, after visiting the
