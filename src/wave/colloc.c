@@ -917,8 +917,12 @@ static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local
             e = fmax(fabs(xf - xb), fabs(yf - yb));
             rho = DBL_EPSILON * (mx + fabs(ys) + fabs(yf - ys));
         }
-        if (!(e <= tol || e <= ROUND_SIGNAL * rho)) {
-            h = tau * (ok ? fmax(TURN_SHRINK, 0.9 * pow(tol / e, 1.0 / (2 * M + 1))) : TURN_SHRINK);
+        /* the tolerance, floored at what the difference can resolve (at
+         * tol 1e-14, nu 0.999 the local tolerance, 9e-16 x the cycle's
+         * size, is below it) */
+        double tol_step = fmax(tol, ROUND_SIGNAL * rho);
+        if (!(e <= tol_step)) {
+            h = tau * (ok ? fmax(TURN_SHRINK, 0.9 * pow(tol_step / e, 1.0 / (2 * M + 1))) : TURN_SHRINK);
             rejected = 1;
             if (!(h > 1e-14 * T))
                 return bkf_error_set(err, BKF_ENUMERIC,
@@ -978,7 +982,7 @@ static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local
             for (int k = 0; k < 2 * M + 1; k++) qn *= q;
             r = fmin(1.0, qn * e_acc / ee);
         }
-        double factor = 0.9 * pow(tol / ee * r, 1.0 / (2 * M + 1));
+        double factor = 0.9 * pow(tol_step / ee * r, 1.0 / (2 * M + 1));
         h = tau * fmin(rejected ? 1.0 : TURN_GROW_MAX, factor);
         e_acc = ee;
         signal_acc = signal;
