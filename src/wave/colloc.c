@@ -843,13 +843,13 @@ static double end_value(const gauss_table *g, double x0, const double *X, double
 
 /* Two Gauss steps of tau/2 from (xs, ys): stages into Xa, Xb, ends into
  * (xa, ya) (the middle) and (xb, yb).  prev (the last half step's start
- * and stages, of length tau/2 / ratio) or NULL: the first stages' guess. */
-/* (Inlined: out of line, its call was 1% of a cold T at mu 10.) */
+ * and stages, of length tau/2 / ratio) or NULL: the first stages' guess.
+ * (Inlined: out of line, its calls were 1% of a cold T at mu 10.) */
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
 static inline int half_steps(const bkf_colloc *c, double xs, double ys, double tau, double goal, const double *prev,
-                      double ratio, double *Xa, double *Xb, double *xa, double *ya, double *xb, double *yb)
+                             double ratio, double *Xa, double *Xb, double *xa, double *ya, double *xb, double *yb)
 {
     int guessed = prev && ratio <= EXTRAPOLATE_MAX;
     if (guessed) stage_extrapolate(&c->g, prev[0], prev + 1, ratio, Xa);
