@@ -84,6 +84,8 @@ typedef struct {
     double halves[M][M + 1];
     /* the same basis in powers of theta: basis[k][p] */
     double basis[M + 1][M + 1];
+    /* the basis at theta = 1: a step's end value from its start and stages */
+    double end[M + 1];
 } gauss_table;
 
 struct bkf_colloc {
@@ -186,6 +188,7 @@ static void gauss_init(gauss_table *g)
     }
     for (int i = 0; i < M; i++)
         lagrange_weights(g->c, g->c[i] < 0.5 ? 2.0 * g->c[i] : 2.0 * g->c[i] - 1.0, g->halves[i]);
+    lagrange_weights(g->c, 1.0, g->end);
     for (int k = 0; k <= M; k++) {
         double *b = g->basis[k];
         memset(b, 0, sizeof g->basis[k]);
@@ -808,17 +811,54 @@ static int guarded_step(const bkf_colloc *c, double x0, double y0, double tau, d
     return gauss_step(c, x0, y0, tau, goal, X, x1, y1);
 }
 
+/* A turn's end values from the step's polynomial at its end, sum_k
+ * end_k (x0, X)_k (the collocation polynomial through the start and the
+ * stages), not from gauss_step's quadrature x0 + tau a y0 + tau^2 (nu/2 -
+ * p^T X) - tau mu w^T F(X): on a slow branch at large mu that sums terms
+ * of 1e4 for a change of 1e-3, and its rounding, about eps tau mu, is all
+ * the step doubling then measured (at mu 1e4, tol 1e-12 the differences
+ * were 0-1e-11 in multiples of 4.5e-13 where the local tolerance is 1e-11,
+ * steps of 1-8 where the error allowed about 80).  Both are the same
+ * polynomial; the interpolation's rounding is eps |x| (a few 1e-16), and
+ * its weight on the stages' Newton error is O(1) where the quadrature's is
+ * tau mu. */
+static double end_value(const gauss_table *g, double x0, const double *X, double *magnitude)
+{
+    double s = g->end[0] * x0, m = fabs(s);
+    for (int k = 0; k < M; k++) {
+        double v = g->end[k + 1] * X[k];
+        s += v;
+        m += fabs(v);
+    }
+    if (magnitude) *magnitude = m;
+    return s;
+}
+
+/* Below ROUND_SIGNAL times the rounding of the step doubling's difference
+ * (eps times the sum of end_value's terms for x, and of |y0| + |y1 - y0|
+ * for y1 = y0 + tau/a (nu - w^T X)) the difference says nothing about the
+ * step's truncation error: such a step is accepted, and the predictive
+ * factor (which assumes the error grows like tau^(2m+1)) is not used. */
+#define ROUND_SIGNAL 4.0
+
 /* Two Gauss steps of tau/2 from (xs, ys): stages into Xa, Xb, ends into
  * (xa, ya) (the middle) and (xb, yb).  prev (the last half step's start
- * and stages, of length tau/2 / ratio) or NULL: the first stages' guess. */
-static int half_steps(const bkf_colloc *c, double xs, double ys, double tau, double goal, const double *prev,
-                      double ratio, double *Xa, double *Xb, double *xa, double *ya, double *xb, double *yb)
+ * and stages, of length tau/2 / ratio) or NULL: the first stages' guess.
+ * (Inlined: out of line, its calls were 1% of a cold T at mu 10.) */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline int half_steps(const bkf_colloc *c, double xs, double ys, double tau, double goal, const double *prev,
+                             double ratio, double *Xa, double *Xb, double *xa, double *ya, double *xb, double *yb)
 {
     int guessed = prev && ratio <= EXTRAPOLATE_MAX;
     if (guessed) stage_extrapolate(&c->g, prev[0], prev + 1, ratio, Xa);
     if (!guarded_step(c, xs, ys, 0.5 * tau, goal, guessed, Xa, xa, ya)) return 0;
+    *xa = end_value(&c->g, xs, Xa, NULL);
     stage_extrapolate(&c->g, xs, Xa, 1.0, Xb);
-    return guarded_step(c, *xa, *ya, 0.5 * tau, goal, 1, Xb, xb, yb);
+    if (!guarded_step(c, *xa, *ya, 0.5 * tau, goal, 1, Xb, xb, yb)) return 0;
+    *xb = end_value(&c->g, *xa, Xb, NULL);
+    return 1;
 }
 
 /* One turn from (x0, y0) on the section x = nu (x' > 0) back to it: the
@@ -845,10 +885,11 @@ static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local
     double t = 0.0, h = fmin(T / 64.0, 1.0 / fmax(c->mu, 1.0)), xs = x0, ys = y0;
     size_t n = 0, n_prev = 0;
     double prev[M + 1], tau_prev = 1.0;
-    /* the last accepted step and its error (floored: an error of 0 would
-     * make the prediction 0), for the predictive factor */
+    /* the last accepted step and its error (floored at its rounding: an
+     * error of 0 would make the prediction 0), for the predictive factor;
+     * signal_acc: that error was above its rounding */
     double e_acc = 0.0, tau_acc = 1.0;
-    int closed = 0, went_down = from_below, rejected = 0;
+    int closed = 0, went_down = from_below, rejected = 0, signal_acc = 0;
     /* about what mu 1e4 needs, so that the arrays do not grow step by step
      * (their reallocation was 4% of a cold solve there) */
     if (record && !reserve(c, 640)) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
@@ -869,9 +910,19 @@ static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local
             }
             ok = gauss_step(c, xs, ys, tau, full_goal, Xf, &xf, &yf);
         }
-        double e = ok ? fmax(fabs(xf - xb), fabs(yf - yb)) : INFINITY;
-        if (!(e <= tol)) {
-            h = tau * (ok ? fmax(TURN_SHRINK, 0.9 * pow(tol / e, 1.0 / (2 * M + 1))) : TURN_SHRINK);
+        double e = INFINITY, rho = 0.0;
+        if (ok) {
+            double mx;
+            xf = end_value(&c->g, xs, Xf, &mx);
+            e = fmax(fabs(xf - xb), fabs(yf - yb));
+            rho = DBL_EPSILON * (mx + fabs(ys) + fabs(yf - ys));
+        }
+        /* the tolerance, floored at what the difference can resolve (at
+         * tol 1e-14, nu 0.999 the local tolerance, 9e-16 x the cycle's
+         * size, is below it) */
+        double tol_step = fmax(tol, ROUND_SIGNAL * rho);
+        if (!(e <= tol_step)) {
+            h = tau * (ok ? fmax(TURN_SHRINK, 0.9 * pow(tol_step / e, 1.0 / (2 * M + 1))) : TURN_SHRINK);
             rejected = 1;
             if (!(h > 1e-14 * T))
                 return bkf_error_set(err, BKF_ENUMERIC,
@@ -924,15 +975,17 @@ static int turn_mesh(bkf_colloc *c, double x0, double y0, double T, double local
         ys = yb;
         /* the prediction (tau / tau_acc) (e_acc / ee)^(1/(2m+1)) where it is
          * below 1, under the one root (pow was 4% of a cold solve) */
-        double ee = fmax(e, 1e-6 * tol), r = 1.0;
-        if (e_acc > 0.0) {
+        int signal = e > ROUND_SIGNAL * rho;
+        double ee = signal ? e : fmax(rho, 1e-6 * tol), r = 1.0;
+        if (signal && signal_acc) {
             double q = tau / tau_acc, qn = 1.0;
             for (int k = 0; k < 2 * M + 1; k++) qn *= q;
             r = fmin(1.0, qn * e_acc / ee);
         }
-        double factor = 0.9 * pow(tol / ee * r, 1.0 / (2 * M + 1));
+        double factor = 0.9 * pow(tol_step / ee * r, 1.0 / (2 * M + 1));
         h = tau * fmin(rejected ? 1.0 : TURN_GROW_MAX, factor);
         e_acc = ee;
+        signal_acc = signal;
         tau_acc = tau;
         rejected = 0;
         if (!closed && t > 4.0 * T)
@@ -1637,11 +1690,20 @@ static double poly_xdot_zero(const bkf_colloc *c, size_t j, double d0, double d1
  * is taken as located: below the end values' own error. */
 #define EXTREMUM_X_GOAL 1e-15
 #define EXTREMUM_X_STALL 1e-10
+/* A sign change of x' where no zero is located is left out where the
+ * interval's x (its ends and the last step's end) stays inside the
+ * extremes found elsewhere by this fraction of their range: on a slow
+ * branch at mu 1e4 the mesh values' off-manifold error, within the local
+ * tolerance, moves x' = a (y - b F(x)) by mu F'(x) times it (4e-9 x 1.4e4),
+ * more than x' itself (-4e-5 at x 1.55, nu 0.99), and x' changes sign
+ * between mesh points 600 long where x has no extremum; the extremes
+ * themselves lie at the ends of the jumps, on intervals of 1e-4. */
+#define EXTREMUM_STRAY_MARGIN 1e-3
 
 int bkf_colloc_extremes(const bkf_colloc *c, double *xmax, double *xmin, bkf_error *err)
 {
     if (!c || !c->have_solution) return bkf_error_set(err, BKF_EINPUT, "collocation extremes before a solution");
-    double hi = c->nu, lo = c->nu;
+    double hi = c->nu, lo = c->nu, stray_hi = -INFINITY, stray_lo = INFINITY;
     for (size_t j = 0; j < c->n; j++) {
         double d0 = colloc_xdot(c, c->x[j], c->y[j]), d1 = colloc_xdot(c, c->x[j + 1], c->y[j + 1]);
         if ((d0 > 0) == (d1 > 0)) continue;
@@ -1667,12 +1729,18 @@ int bkf_colloc_extremes(const bkf_colloc *c, double *xmax, double *xmin, bkf_err
             last = fabs(ds);
             s = fmin(fmax(s + ds, 0.0), tau);
         }
-        if (!located)
-            return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: extremum not located",
-                                 c->mu, c->nu);
+        if (!located) {
+            stray_hi = fmax(stray_hi, fmax(fmax(c->x[j], c->x[j + 1]), xe));
+            stray_lo = fmin(stray_lo, fmin(fmin(c->x[j], c->x[j + 1]), xe));
+            continue;
+        }
         hi = fmax(hi, xe);
         lo = fmin(lo, xe);
     }
+    double margin = EXTREMUM_STRAY_MARGIN * (hi - lo);
+    if (stray_hi > hi - margin || stray_lo < lo + margin)
+        return bkf_error_set(err, BKF_ENUMERIC, "collocation at mu = %.15g, nu = %.15g: extremum not located", c->mu,
+                             c->nu);
     *xmax = hi;
     *xmin = lo;
     return BKF_OK;

@@ -3,6 +3,7 @@
  * against the shooting engine (bd2x2, rk8pd), and its order in the mesh. */
 #include "harness.h"
 
+#include "bkfront/asymptotics.h"
 #include "bkfront/colloc.h"
 #include "bkfront/cycle.h"
 
@@ -592,4 +593,41 @@ TEST(colloc_mild_canard_against_taylor)
     CHECK_MSG(solve_with(2.241, -0.97, 1e-8, BKF_STEPPER_COLLOCATION, &r, &e) == BKF_OK, "%s", e.message);
     CHECK_MSG(strcmp(r.stepper, "colloc"), "mu 2.241 nu -0.97: answered by collocation");
     bkf_test_note("largest true/estimated %.3g", worst);
+}
+
+/* The turn's meshes follow the truncation error, not the rounding: a step's
+ * error grows like tau^(2m+1), so the mesh of local tolerance 1e-11 (tol
+ * 1e-12) has about (1e3)^(1/9) = 2.15 times the intervals of 1e-8's (tol
+ * 1e-10); at most twice that here.  When the step doubling measured the
+ * rounding of the quadrature end value (eps tau mu, 1e-12 on a slow branch
+ * at mu 1e4) the ratio was 4.7 at mu 1e3, nu 0.99 and 35 at mu 1e4, nu 0
+ * (15660 intervals), and the pair at 1e-12 was refused at mu 1e4, nu -0.96
+ * and 0.99. */
+TEST(colloc_turn_mesh_scales_with_the_local_tolerance)
+{
+    const double mus[] = {100, 1e3, 1e4};
+    const double nus[] = {0.0, -0.96, 0.99};
+    bkf_colloc *c = bkf_colloc_alloc();
+    CHECK(c != NULL);
+    double worst = 0.0;
+    for (size_t i = 0; i < sizeof mus / sizeof mus[0]; i++)
+        for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+            size_t n[2] = {0, 0};
+            for (int k = 0; k < 2; k++) {
+                bkf_error e = {0};
+                bkf_colloc_result r;
+                double T = bkf_asym_period_leading(mus[i], nus[j]);
+                int rc = bkf_colloc_guess_relaxation(c, mus[i], nus[j], T, k ? 1e-11 : 1e-8, &e);
+                if (rc == BKF_OK) rc = bkf_colloc_solve(c, k ? 1e-12 : 1e-10, &r, &e);
+                CHECK_MSG(rc == BKF_OK, "mu %g nu %g local %g: %s", mus[i], nus[j], k ? 1e-11 : 1e-8, e.message);
+                if (rc == BKF_OK) n[k] = r.intervals;
+            }
+            if (!n[0] || !n[1]) continue;
+            double ratio = (double)n[1] / (double)n[0];
+            CHECK_MSG(ratio <= 2.0 * pow(1e3, 1.0 / 9.0), "mu %g nu %g: %zu intervals at local 1e-11 against %zu at 1e-8",
+                      mus[i], nus[j], n[1], n[0]);
+            if (ratio > worst) worst = ratio;
+        }
+    bkf_colloc_free(c);
+    bkf_test_note("largest ratio of intervals (local 1e-11 / 1e-8) %.2f (scaling law 2.15)", worst);
 }
