@@ -896,6 +896,29 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
     /* the slope for the error estimate: the secant from the best point to
      * the farthest one, long enough that the noise of T does not matter */
     const peval *best = best_eval(&pc), *far = NULL;
+    double lo, hi;
+    if (fabs(best->D) > target && bracket_of(&pc, &lo, &hi)) {
+        /* Brent closed on a jump of T: inside a canard explosion (nu
+         * -0.9999, mu 35.3659-35.3661: T 13 -> 114) the warm-started solves
+         * can land on the wrong side (T 113 at mu 35.365918, where it is
+         * 13.2), and the best |D| sat at the cell's far end (mu 46.5 for a
+         * root near 35.37: 168 times its v_err, 3.6 tol off).  Where both
+         * ends of the bracket miss the level by more than their noise no T
+         * meets it: the root is reported as not polished. */
+        const peval *end[2] = {NULL, NULL};
+        for (size_t j = 0; j < pc.nev; j++) {
+            if (pc.ev[j].s == lo) end[0] = &pc.ev[j];
+            if (pc.ev[j].s == hi) end[1] = &pc.ev[j];
+        }
+        int jump = 1;
+        for (int k = 0; k < 2; k++)
+            if (!end[k] || fabs(end[k]->D) <= 2.0 * (target + end[k]->T_err / end[k]->T)) jump = 0;
+        if (jump)
+            return bkf_error_set(err, BKF_ENUMERIC,
+                                 "T jumps across the level of n = %.0f near mu = %.15g (a canard "
+                                 "explosion): no computed T meets it",
+                                 n, mu_of_s(g->p.gamma, lo));
+    }
     for (size_t j = 0; j < pc.nev; j++)
         if (!far || fabs(pc.ev[j].s - best->s) > fabs(far->s - best->s)) far = &pc.ev[j];
     double slope = far->s != best->s ? (far->D - best->D) / (far->s - best->s) : slope0;

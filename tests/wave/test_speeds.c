@@ -12,6 +12,7 @@
 #include "bkfront/asymptotics.h"
 #include "bkfront/cycle.h"
 #include "bkfront/speeds.h"
+#include "taylor_reference.h"
 
 static const bkf_model_params paper = {2.0, 0.3, -0.96, 20.0, 0, BKF_MODEL_CONTINUUM};
 
@@ -573,4 +574,64 @@ TEST(branch_rejects_bad_input)
                  BKF_EINPUT);
     CHECK_STATUS(bkf_speeds_branch(&p, 6, 1, BKF_SPEEDS_ALONG_S, 30.0, NULL, 0, NULL, NULL, NULL, &e),
                  BKF_EINPUT);
+}
+
+/* Honest scan (issue 20): at nu -0.9999 T explodes from 13 to 114 over mu
+ * 35.3659-35.3661 (a canard); levels between g's two sides were crossed by
+ * that jump, Brent closed on it, and the row reported was the cell's best
+ * |D|, far off: gamma 1, S 1e4, n 11118 at mu 46.53 with residual 0.04
+ * (tol 1e-4), v 3.6 tol off and 168 times its v_err (warm-started solves
+ * gave T 113 at mu 35.365918, where it is 13.2).  Every row must now meet
+ * its residual with T from the Taylor reference (nothing shared with the
+ * engine) and its v_err may not flatter by more than 3 (a Newton step with a
+ * Taylor secant); a level crossed by the jump is reported unresolved. */
+static double taylor_T(double mu, double nu, double *unc)
+{
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = 1e-6;
+    o.warm_start = 0;
+    bkf_cycle_result r;
+    bkf_error e = {0};
+    double guess = bkf_cycle_period(mu, nu, &o, &r, &e) == BKF_OK ? r.section_slope : 1.0;
+    return taylor_period(mu, nu, guess, unc);
+}
+
+TEST(speeds_canard_jump_rows_honest_or_unresolved)
+{
+    const struct {
+        double gamma, S;
+        size_t n_from, n_to;
+    } cases[] = {{1, 1e4, 11118, 11121}, {0.3, 20, 73, 77}, {0.3, 1e4, 37059, 37062}};
+    size_t checked = 0;
+    double worst = 0;
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        bkf_model_params p = {cases[k].gamma, 0.3, -0.9999, cases[k].S, 0, BKF_MODEL_CONTINUUM};
+        bkf_speeds_table t = find(p, 1e-4, cases[k].n_from, cases[k].n_to);
+        CHECK_MSG(t.unresolved > 0, "gamma %g S %g: the jump not reported", p.gamma, p.S);
+        for (size_t i = 0; i < t.count; i++) {
+            const bkf_speeds_root *r = &t.roots[i];
+            if (r->mu > 120) continue; /* the sonic tail: Taylor too slow there */
+            double unc, T = taylor_T(r->mu, p.nu, &unc);
+            double w = sqrt(1.0 - (p.c / r->v) * (p.c / r->v));
+            double D = (double)r->n * T * r->v * w / p.S - 1.0;
+            /* the slope of the residual in v by a Taylor secant */
+            double dv = 1e-4 * (r->v - p.c), v1 = r->v + dv;
+            double w1 = sqrt(1.0 - (p.c / v1) * (p.c / v1)), unc1;
+            double T1 = taylor_T(p.gamma / w1, p.nu, &unc1);
+            double slope = ((double)r->n * T1 * v1 * w1 / p.S - 1.0 - D) / dv;
+            double err = fabs(D / slope), ratio = err / r->v_err;
+            bkf_test_note("gamma %g S %g n %zu mu %.6g: residual %.2g, true %.2g est %.2g ratio %.2g",
+                          p.gamma, p.S, r->n, r->mu, D, err / r->v, r->v_err / r->v, ratio);
+            CHECK_MSG(fabs(D) <= 1e-4 + unc / T, "n %zu mu %g: residual %.3g with the Taylor T", r->n,
+                      r->mu, D);
+            CHECK_MSG(err <= 1e-4 * r->v, "n %zu mu %g: v off by %.3g tol", r->n, r->mu,
+                      err / (1e-4 * r->v));
+            CHECK_MSG(ratio <= 3.0, "n %zu mu %g: v_err flatters by %.3g", r->n, r->mu, ratio);
+            worst = fmax(worst, ratio);
+            checked++;
+        }
+        bkf_speeds_table_free(&t);
+    }
+    bkf_test_note("%zu rows checked, worst true/estimated %.3g", checked, worst);
+    CHECK(checked >= 12);
 }
