@@ -2747,6 +2747,13 @@ static int branch_colloc(branch_ctx *b, double q, int dir, size_t limit, int vis
  * at tol 1e-10 answered 8.7e-9 off with an estimate of 2.5e-9).  Elsewhere,
  * or where no row answers, BKF_ENUMERIC naming where the branch stuck. */
 #define BRANCH_HOP_FIRST 1e-3
+/* Past the steep explosion the hop's rows lie in the canard's neighbourhood
+ * that colloc_attempt refuses, where the pair's estimate |T_N - T_N/2| / 16
+ * is not verified: at nu 0.999 (a walk that found no root, hopped) one row
+ * at mu 11.3056 was 1.12 times it off.  Their estimate is the pair's whole
+ * difference (16 times), the solve asked for tol / 16 so that it still
+ * meets tol. */
+#define HOP_EST_FACTOR 16.0
 static int branch_hop(branch_ctx *b, int dir, size_t limit, bkf_error *err)
 {
     bkf_cycle *c = b->cycle;
@@ -2772,7 +2779,9 @@ static int branch_hop(branch_ctx *b, int dir, size_t limit, bkf_error *err)
         bkf_colloc_result r;
         int rc = bkf_colloc_guess_relaxation(c->colloc, mu_n, sign * nu_n, bkf_asym_period_leading(mu_n, nu_n),
                                              colloc_turn_tol(tol, mu_n), &row_err);
-        if (rc == BKF_OK) rc = bkf_colloc_solve(c->colloc, tol, &r, &row_err);
+        if (rc == BKF_OK) rc = bkf_colloc_solve(c->colloc, tol / HOP_EST_FACTOR, &r, &row_err);
+        /* (the pair's difference itself, not its sixteenth: HOP_EST_FACTOR) */
+        if (rc == BKF_OK) r.period_err *= HOP_EST_FACTOR;
         if (rc == BKF_ENOMEM) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
         if (rc != BKF_OK) {
             c->have_solution = 0;
@@ -2928,6 +2937,23 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
             break;
         }
         if (walk == BKF_OK && b.to_colloc) continue;
+        if (bkf_status_is_numerical(walk) && b.rows && b.have_last) {
+            /* a walk that found no root in the explosion (nu 0.999 with
+             * collocation asked for: "no root of G" at mu 11.2141) goes over
+             * it as a stuck branch does, or fails with its own message */
+            bkf_error hop_err;
+            int hop = branch_hop(&b, dir, limit, &hop_err);
+            if (hop == BKF_ENOMEM) {
+                *err = hop_err;
+                rc = hop;
+                break;
+            }
+            if (hop == BKF_OK && (b.landed || b.visit_status != 0)) {
+                rc = BKF_OK;
+                break;
+            }
+            if (hop == BKF_OK && b.to_colloc) continue;
+        }
         if (walk != BKF_OK) {
             /* the stretch's own failure says more when the walk got nowhere */
             if (rc == BKF_OK) *err = walk_err;

@@ -611,3 +611,47 @@ TEST(cycle_branch_colloc_rows_through_a_mild_canard)
     CHECK_MSG(down.colloc < down.n, "nu 0 -> -0.98 at mu 2: every row by collocation");
     bkf_test_note("worst true/estimated %.2f along mu, %.2f and %.2f along nu", worst, up.worst, down.worst);
 }
+
+typedef struct {
+    size_t n, past, jumps, bad_tol;
+    double last_T, worst;
+} hop_rows;
+
+static int collect_hop(const bkf_cycle_result *r, void *data)
+{
+    hop_rows *h = data;
+    h->n++;
+    if (!isfinite(r->period)) return 0;
+    if (r->period > 30.0 && h->last_T < 20.0) h->jumps++;
+    h->last_T = r->period;
+    if (r->period <= 30.0) return 0;
+    /* past the explosion: the hop's collocation rows and those after */
+    h->past++;
+    double unc, ref = taylor_period(r->mu, r->nu, r->section_slope, &unc);
+    double err = fabs(r->period - ref);
+    /* (a relaxed row says by how much it misses tol) */
+    if (err > 1e-10 * r->period + unc && strcmp(r->model, "shooting-relaxed")) h->bad_tol++;
+    h->worst = fmax(h->worst, fmax(err - unc, 0.0) / r->period_err);
+    return 0;
+}
+
+/* With collocation asked for, the amplitude walk found no root of G in the
+ * explosion at nu 0.999 (mu 11.2141) and the branch failed; it now goes
+ * over it as a stuck branch does (branch_hop), the hop's rows estimated by
+ * their pair's whole difference (one was 1.12 times its sixteenth off).
+ * Every row past the explosion against the Taylor reference (its first,
+ * at the walk's last root, is a relaxed shooting row). */
+TEST(cycle_branch_collocation_over_the_canard_at_nu_0_999)
+{
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.stepper = BKF_STEPPER_COLLOCATION;
+    hop_rows h = {.last_T = 0.0};
+    bkf_error e;
+    int rc = bkf_cycle_branch(BKF_CYCLE_ALONG_MU, 5.0, 15.0, 0.999, &o, 0, collect_hop, &h, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    CHECK(h.jumps == 1);
+    CHECK(h.past >= 5);
+    CHECK_MSG(h.bad_tol == 0, "%zu rows past the explosion beyond tol", h.bad_tol);
+    CHECK_MSG(h.worst <= 1.0, "worst true/estimated %.3g past the explosion", h.worst);
+    bkf_test_note("%zu rows, %zu past the explosion, worst true/estimated %.2f there", h.n, h.past, h.worst);
+}
