@@ -923,6 +923,20 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
         if (!far || fabs(pc.ev[j].s - best->s) > fabs(far->s - best->s)) far = &pc.ev[j];
     double slope = far->s != best->s ? (far->D - best->D) / (far->s - best->s) : slope0;
     if (!(slope < 0 || slope > 0) || (slope > 0) != (slope0 > 0)) slope = slope0;
+    /* D curves across a cell where T nears k mu (mu 1409, gamma 1, c 1,
+     * nu -0.5: d ln T/ds - 1 is -3.9e-4 at the root, the secant to the
+     * cell's far end -0.026, and v_err came out 6 times too small): the
+     * flattest secant from the best point whose difference in D stands
+     * above the noise of T (ten times the two solves' estimates), or the
+     * interpolated slope at the root, if flatter */
+    for (size_t j = 0; j < pc.nev; j++) {
+        const peval *e = &pc.ev[j];
+        double noise = 10.0 * (e->T_err / e->T + best->T_err / best->T);
+        if (e->s == best->s || !(fabs(e->D - best->D) > noise)) continue;
+        double sl = (e->D - best->D) / (e->s - best->s);
+        if ((sl > 0) == (slope0 > 0) && fabs(sl) < fabs(slope)) slope = sl;
+    }
+    if (isfinite(slope0) && fabs(slope0) < fabs(slope)) slope = slope0;
     *out = (found_root){n, best->s, best->T, best->T_err, best->D, slope, 0, best->model};
     return BKF_OK;
 }

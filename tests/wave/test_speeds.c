@@ -635,3 +635,36 @@ TEST(speeds_canard_jump_rows_honest_or_unresolved)
     bkf_test_note("%zu rows checked, worst true/estimated %.3g", checked, worst);
     CHECK(checked >= 12);
 }
+
+/* Near the sonic limit T nears k mu and the level's D = ln T - s - ell
+ * curves across a cell: the secant to the cell's far end, which v_err
+ * divided by, was 65 times steeper than D at the root (mu 1409, gamma 1,
+ * c 1, nu -0.5: -0.026 against -3.9e-4) and v_err flattered by 6.3 (3.2 at
+ * gamma 1, c 0.3, nu 0.5, n 37, tol 1e-4).  Each row against the
+ * independent root in v (T at tol 1e-12, Brent), within its v_err. */
+TEST(speeds_v_err_honest_near_the_sonic_limit)
+{
+    const struct {
+        bkf_model_params p;
+        size_t n;
+        double tol, width;
+    } cases[] = {{{1.0, 1.0, -0.5, 1e4, 0, BKF_MODEL_CONTINUUM}, 5576, 1e-8, 1e-10},
+                 {{1.0, 0.3, 0.5, 20.0, 0, BKF_MODEL_CONTINUUM}, 37, 1e-4, 1e-6},
+                 {{0.1, 0.3, -0.5, 20.0, 0, BKF_MODEL_CONTINUUM}, 371, 1e-8, 1e-11}};
+    double worst = 0.0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        bkf_speeds_table t = find(cases[i].p, cases[i].tol, cases[i].n, cases[i].n);
+        CHECK(t.count >= 1);
+        for (size_t j = 0; j < t.count; j++) {
+            const bkf_speeds_root *r = &t.roots[j];
+            double ref = reference_v(cases[i].p, (double)r->n, r->v, cases[i].width);
+            double ratio = fabs(r->v - ref) / r->v_err;
+            CHECK_MSG(ratio <= 1.0, "gamma %g c %g nu %g n %zu: v %.17g reference %.17g, v_err %.3g", cases[i].p.gamma,
+                      cases[i].p.c, cases[i].p.nu, r->n, r->v, ref, r->v_err);
+            CHECK_MSG(r->v_err <= cases[i].tol * r->v, "n %zu: v_err %.3g above tol", r->n, r->v_err / r->v);
+            worst = fmax(worst, ratio);
+        }
+        bkf_speeds_table_free(&t);
+    }
+    bkf_test_note("worst true/estimated %.3g", worst);
+}
