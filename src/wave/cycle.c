@@ -2816,6 +2816,15 @@ static int branch_hop(branch_ctx *b, int dir, size_t limit, bkf_error *err)
                          hops ? "; no collocation row past it answered: " : "", hops ? row_err.message : "");
 }
 
+/* The branch past an explosion it is stuck in, by branch_hop: 1 where
+ * collocation rows go on from there, 0 where the branch ends (landed, its
+ * visit stopped it, its rows spent, or *rc a failure). */
+static int branch_over(branch_ctx *b, int dir, size_t limit, int *rc, bkf_error *err)
+{
+    *rc = branch_hop(b, dir, limit, err);
+    return *rc == BKF_OK && b->to_colloc && !b->landed && b->visit_status == 0;
+}
+
 /* The shooting continuation's start at q: the slope of a solve there
  * (where the branch's shots are the mirror's, branch_mirrors, so is the
  * slope); the first accepted point is estimated again, from u0. */
@@ -2918,8 +2927,7 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
         rc = bkf_cont_run(branch_residual, branch_accept, &b, u0, 1, dir, &co, &report, err);
         if (b.visit_status != 0 || b.rows >= limit) break;
         if (b.stuck) {
-            if ((rc = branch_hop(&b, dir, limit, err)) != BKF_OK || b.landed || b.visit_status != 0) break;
-            if (b.to_colloc) continue;
+            if (branch_over(&b, dir, limit, &rc, err)) continue;
             break;
         }
         if (b.to_colloc) continue;
@@ -2932,8 +2940,7 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
             break;
         }
         if (walk == BKF_OK && b.stuck) {
-            if ((rc = branch_hop(&b, dir, limit, err)) != BKF_OK || b.landed || b.visit_status != 0) break;
-            if (b.to_colloc) continue;
+            if (branch_over(&b, dir, limit, &rc, err)) continue;
             break;
         }
         if (walk == BKF_OK && b.to_colloc) continue;
@@ -2942,17 +2949,13 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
              * collocation asked for: "no root of G" at mu 11.2141) goes over
              * it as a stuck branch does, or fails with its own message */
             bkf_error hop_err;
-            int hop = branch_hop(&b, dir, limit, &hop_err);
-            if (hop == BKF_ENOMEM) {
-                *err = hop_err;
+            int hop;
+            if (branch_over(&b, dir, limit, &hop, &hop_err)) continue;
+            if (hop == BKF_OK || hop == BKF_ENOMEM) {
+                if (hop == BKF_ENOMEM) *err = hop_err;
                 rc = hop;
                 break;
             }
-            if (hop == BKF_OK && (b.landed || b.visit_status != 0)) {
-                rc = BKF_OK;
-                break;
-            }
-            if (hop == BKF_OK && b.to_colloc) continue;
         }
         if (walk != BKF_OK) {
             /* the stretch's own failure says more when the walk got nowhere */

@@ -893,8 +893,6 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
             if (xu - xl <= 4.0 * DBL_EPSILON * fmax(fabs(xl), fabs(xu)) + DBL_MIN) break;
         }
     }
-    /* the slope for the error estimate: the secant from the best point to
-     * the farthest one, long enough that the noise of T does not matter */
     const peval *best = best_eval(&pc), *far = NULL;
     double lo, hi;
     if (fabs(best->D) > target && bracket_of(&pc, &lo, &hi)) {
@@ -919,16 +917,17 @@ static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
                                  "explosion): no computed T meets it",
                                  n, mu_of_s(g->p.gamma, lo));
     }
+    /* the slope for the error estimate: the flattest of the interpolated
+     * slope at the root, the secant from the best point to the farthest
+     * one and the secants from the best point that stand above the noise
+     * of T (ten times the two solves' estimates).  D curves across a cell
+     * where T nears k mu: at mu 1409 (gamma 1, c 1, nu -0.5) d ln T/ds - 1
+     * is -3.9e-4 at the root, the far secant alone -0.026, and v_err came
+     * out 6 times too small. */
     for (size_t j = 0; j < pc.nev; j++)
         if (!far || fabs(pc.ev[j].s - best->s) > fabs(far->s - best->s)) far = &pc.ev[j];
     double slope = far->s != best->s ? (far->D - best->D) / (far->s - best->s) : slope0;
     if (!(slope < 0 || slope > 0) || (slope > 0) != (slope0 > 0)) slope = slope0;
-    /* D curves across a cell where T nears k mu (mu 1409, gamma 1, c 1,
-     * nu -0.5: d ln T/ds - 1 is -3.9e-4 at the root, the secant to the
-     * cell's far end -0.026, and v_err came out 6 times too small): the
-     * flattest secant from the best point whose difference in D stands
-     * above the noise of T (ten times the two solves' estimates), or the
-     * interpolated slope at the root, if flatter */
     for (size_t j = 0; j < pc.nev; j++) {
         const peval *e = &pc.ev[j];
         double noise = 10.0 * (e->T_err / e->T + best->T_err / best->T);
