@@ -268,7 +268,11 @@ typedef struct {
  * psi_t = f'(z)/stretch.  In the model, psi(x, t) = f((x/v + t)/stretch)
  * moves towards -x at speed v.  Needs |nu| < 1 and v > c (BKF_EINPUT
  * otherwise); the wave is not checked to be periodic in x (info->residual
- * says how far).  `info` may be NULL; `clean_psi`, if non-NULL, receives the
+ * says how far).  On the continuum, psi and eta each lose the modes above
+ * what the profile resolves: those from the lowest k0 whose field stays
+ * within the cycle's tolerance times the field's largest |value| (its
+ * rounding, white and at the wrap, would otherwise fill every mode up to
+ * the grid's Nyquist; see src/simulation/pde.c: band_limit).  `info` may be NULL; `clean_psi`, if non-NULL, receives the
  * N values of psi before the noise. */
 int bkf_pde_init_front(bkf_pde *pde, const bkf_pde_wave *wave, bkf_pde_front_info *info,
                        double *clean_psi, bkf_error *err);

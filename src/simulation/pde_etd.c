@@ -125,6 +125,7 @@ struct bkf_pde_etd {
     double *jac, *hr;       /* N values: gamma (1 - psi^2), a branch's field */
     fftw_complex *hc, *hk;  /* nc values: a branch's spectrum, the product's */
     double expo;            /* step control exponent: 1/(order of the estimate + 1) */
+    int mirrored;           /* lam[nc + k] = conj(lam[k]) (no moving frame) */
 };
 
 static double complex *cbuf_of(bkf_pde *m) { return (double complex *)m->cbuf; }
@@ -213,6 +214,7 @@ bkf_pde_etd *bkf_pde_etd_alloc(bkf_pde *m)
         if (k > 0) f *= k;
         etd->inv_fact[k] = 1.0 / f;
     }
+    etd->mirrored = V == 0.0;
     etd->owner = m;
     etd->kfast = etd->nu_kfast = etd->kin = etd->nu_kin = nc;
     etd->expo = 0.25;
@@ -398,7 +400,12 @@ static size_t fast_start(bkf_pde_etd *etd, const bkf_pde *m, double h)
     }
     if (k <= kf) {
         etd->fast_drop = 1;
-        etd->kin = k;
+        /* a new kin costs an evaluation (the step's first stage must be
+         * the rate of the same kin), and the lowest one wanders by a few
+         * modes from step to step: keep the last while it is within the
+         * bound (every kin above the lowest is), and move with a margin */
+        size_t last = etd->nu_kin;
+        etd->kin = etd->nu_drop && last >= k && last <= kf ? last : GSL_MIN(kf, k + k / 16);
     }
     return kf;
 }
@@ -651,11 +658,95 @@ static const double complex *rotation(bkf_pde_etd *etd, double tau)
  * rotated back by exp(-L tau) like the rest, Q drifted from it by an
  * eighth-order error (1e-12 over t = 20 at tol 1e-7, steps of 0.08).
  * e^{i tau} - 1 is formed from sines: it must not cancel for short tau. */
-static double q_part(const bkf_pde_etd *etd, double tau, const double complex *x)
+static double q_part_of(const bkf_pde_etd *etd, double tau, double complex plus0,
+                        double complex minus0)
 {
     double s = sin(0.5 * tau);
     double complex em1 = -2.0 * s * s + I * sin(tau);
-    return creal(-I * em1 * x[0] + I * conj(em1) * x[etd->nc]) / (double)etd->owner->N;
+    return creal(-I * em1 * plus0 + I * conj(em1) * minus0) / (double)etd->owner->N;
+}
+
+static double q_part(const bkf_pde_etd *etd, double tau, const double complex *x)
+{
+    return q_part_of(etd, tau, x[0], x[etd->nc]);
+}
+
+/* lawson_stage where nothing but the rate itself is wanted (no D', no
+ * averaged fast set): the rotation, F's input, the explicit part and the
+ * rotation back in two passes over the modes instead of five.
+ *
+ * Why: past the second-level cache (N >= 16384) the passes, not the
+ * arithmetic, set a stage's cost; each pass streams n2 complex values.
+ * Nothing is stored between the passes but F's input and output: the
+ * second pass forms exp(lam tau) v again from v, and a dropped fast mode's
+ * own-branch rate rotated back, conj(E) (F - sigma E v) / 2, is
+ * (conj(E) F - sigma v) / 2 (|E| = 1). */
+static int lawson_stage_fused(bkf_pde *m, double tau, const double *e, const double *v,
+                              double *dydt)
+{
+    bkf_pde_etd *etd = m->etd;
+    size_t N = m->N, nc = etd->nc, kin = etd->kin;
+    size_t kf = etd->fast_drop ? etd->kfast : nc;
+    /* in the lab frame the a- branch turns back: E- = conj(E+), read once */
+    const double *em = etd->mirrored ? e : e + 2 * nc, *vm = v + 2 * nc;
+    const double ms = etd->mirrored ? -1.0 : 1.0;
+    double *cb = (double *)m->cbuf;
+    for (size_t k = 0; k < kin; k++) {
+        double er = e[2 * k], ei = e[2 * k + 1], vr = v[2 * k], vi = v[2 * k + 1];
+        double fr = em[2 * k], fi = ms * em[2 * k + 1], wr = vm[2 * k], wi = vm[2 * k + 1];
+        cb[2 * k] = (er * vr - ei * vi) + (fr * wr - fi * wi);
+        cb[2 * k + 1] = (er * vi + ei * vr) + (fr * wi + fi * wr);
+    }
+    memset(cb + 2 * kin, 0, 2 * (nc - kin) * sizeof *cb);
+    fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
+    double g = m->p.gamma, inv = 1.0 / (double)N;
+    int bad = 0;
+    for (size_t i = 0; i < N; i++) {
+        double x = m->lap[i] * inv;
+        bad |= !(fabs(x) <= BLOWUP);
+        m->rbuf[i] = g * (x - x * x * x * (1.0 / 3.0));
+    }
+    if (bad) return GSL_EBADFUNC;
+    fftw_execute_dft_r2c(m->fwd, m->rbuf, m->cbuf);
+    double *dm = dydt + 2 * nc;
+    for (size_t k = 0; k < nc; k++) {
+        double er = e[2 * k], ei = e[2 * k + 1], vr = v[2 * k], vi = v[2 * k + 1];
+        double fr = em[2 * k], fi = ms * em[2 * k + 1], wr = vm[2 * k], wi = vm[2 * k + 1];
+        double Fr = cb[2 * k], Fi = cb[2 * k + 1], sg = etd->sigma[k];
+        /* conj(E) F / 2 for either branch */
+        double ar = 0.5 * (er * Fr + ei * Fi), ai = 0.5 * (er * Fi - ei * Fr);
+        double br = 0.5 * (fr * Fr + fi * Fi), bi = 0.5 * (fr * Fi - fi * Fr);
+        if (k >= kf) {
+            dydt[2 * k] = ar - 0.5 * sg * vr;
+            dydt[2 * k + 1] = ai - 0.5 * sg * vi;
+            dm[2 * k] = br - 0.5 * sg * wr;
+            dm[2 * k + 1] = bi - 0.5 * sg * wi;
+        } else {
+            /* sigma (E+ v+ + E- v-) / 2, rotated back by each branch */
+            double pr = 0.5 * sg * ((er * vr - ei * vi) + (fr * wr - fi * wi));
+            double pi = 0.5 * sg * ((er * vi + ei * vr) + (fr * wi + fi * wr));
+            dydt[2 * k] = ar - (er * pr + ei * pi);
+            dydt[2 * k + 1] = ai - (er * pi - ei * pr);
+            dm[2 * k] = br - (fr * pr + fi * pi);
+            dm[2 * k + 1] = bi - (fr * pi - fi * pr);
+        }
+    }
+    /* k = 0: nu/gamma in eta_t, -+ i ratio_0 nu N / gamma / 2 on the two
+     * branches (nonlinear's r), and Q' from the unrotated rates there */
+    double complex u0p = (e[0] + I * e[1]) * (v[0] + I * v[1]);
+    double complex u0m = (em[0] + I * ms * em[1]) * (vm[0] + I * vm[1]);
+    double complex np0 = (cb[0] + I * cb[1]) - etd->sigma[0] * (u0p + u0m);
+    double complex r0 = I * etd->ratio[0] * (m->p.nu / g * (double)N);
+    double complex o0p = 0.5 * (np0 - r0), o0m = 0.5 * (np0 + r0);
+    double complex d0p = conj(e[0] + I * e[1]) * o0p, d0m = conj(em[0] + I * ms * em[1]) * o0m;
+    dydt[0] = creal(d0p);
+    dydt[1] = cimag(d0p);
+    dm[0] = creal(d0m);
+    dm[1] = cimag(d0m);
+    double *dq = dydt + 2 * etd->n2;
+    dq[0] = q_part_of(etd, -tau, o0p, o0m);
+    dq[1] = 0.0;
+    return GSL_SUCCESS;
 }
 
 /* One evaluation of v' = exp(-L tau) N(exp(L tau) v). */
@@ -668,6 +759,9 @@ static int lawson_stage(bkf_pde *m, double tau, const double y[], double dydt[])
     if (tau == 0) return nonlinear(m, v, out, NULL) ? GSL_EBADFUNC : GSL_SUCCESS;
     const double complex *E = rotation(etd, tau);
     if (!E) return GSL_ENOMEM;
+    if (etd->d_off && (etd->fast_drop || etd->kfast == etd->nc)) {
+        return lawson_stage_fused(m, tau, (const double *)E, y, dydt);
+    }
     /* in real arithmetic: C's complex product checks for infinities and
      * costs as much as the transforms here */
     const double *e = (const double *)E, *vv = y;
@@ -796,9 +890,14 @@ static int step_lawson(bkf_pde *m, double h, double *err_ratio, double *psi_max_
         if (!E) return STEP_NOMEM;
         etd->anew[n2] += q_part(etd, h, etd->anew);
         etd->s[n2] += q_part(etd, h, etd->s);
-        for (size_t i = 0; i < n2; i++) {
-            etd->anew[i] *= E[i];
-            etd->s[i] *= E[i];
+        double *an = (double *)etd->anew, *sn = (double *)etd->s;
+        const double *e = (const double *)E;
+        for (size_t i = 0; i < 2 * n2; i += 2) {
+            double er = e[i], ei = e[i + 1], ar = an[i], ai = an[i + 1], sr = sn[i], si = sn[i + 1];
+            an[i] = er * ar - ei * ai;
+            an[i + 1] = er * ai + ei * ar;
+            sn[i] = er * sr - ei * si;
+            sn[i + 1] = er * si + ei * sr;
         }
         m->stats.rhs_calls++;
         if (nonlinear(m, etd->anew, etd->nnew, psi_max_new)) return STEP_NONFINITE;
