@@ -424,6 +424,7 @@ static bkf_pde *pde_alloc_body(const bkf_model_params *params, const bkf_pde_opt
     m->t = 0.0;
     mark_set(m);
     m->stats.h_min = INFINITY;
+    m->stats.product_points = m->N;
     return m;
 nomem:
     bkf_pde_free(m);
@@ -455,6 +456,7 @@ void bkf_pde_stats_reset(bkf_pde *m)
     if (!m) return;
     memset(&m->stats, 0, sizeof m->stats);
     m->stats.h_min = INFINITY;
+    m->stats.product_points = m->N;
 }
 
 /* ------------------------------------------------------------ energy */

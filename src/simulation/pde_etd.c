@@ -57,6 +57,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bkfront/fft.h"
 #include "bkfront/model.h"
 #include "pde_internal.h"
 
@@ -126,6 +127,10 @@ struct bkf_pde_etd {
     fftw_complex *hc, *hk;  /* nc values: a branch's spectrum, the product's */
     double expo;            /* step control exponent: 1/(order of the estimate + 1) */
     int mirrored;           /* lam[nc + k] = conj(lam[k]) (no moving frame) */
+    /* The grid lawson_stage_fused forms F on (see product_grid): M points,
+     * 0 for the field's own N; its plans, made for m->cbuf, lap, rbuf */
+    size_t cm, cplanned;
+    fftw_plan cfwd, cbwd;
 };
 
 static double complex *cbuf_of(bkf_pde *m) { return (double complex *)m->cbuf; }
@@ -149,6 +154,12 @@ void bkf_pde_etd_free(bkf_pde_etd *etd)
         for (size_t k = 0; k < LAWSON_TAUS; k++) free(etd->lset[i].E[k]);
     }
     if (etd->rk) gsl_odeiv2_step_free(etd->rk);
+    if (etd->cfwd || etd->cbwd) {
+        bkf_fft_lock();
+        if (etd->cfwd) fftw_destroy_plan(etd->cfwd);
+        if (etd->cbwd) fftw_destroy_plan(etd->cbwd);
+        bkf_fft_unlock();
+    }
     free(etd->lam);
     free(etd->ratio);
     free(etd->sigma);
@@ -408,6 +419,42 @@ static size_t fast_start(bkf_pde_etd *etd, const bkf_pde *m, double h)
         etd->kin = etd->nu_drop && last >= k && last <= kf ? last : GSL_MIN(kf, k + k / 16);
     }
     return kf;
+}
+
+/* The grid of the explicit term's product where the modes k >= kin are
+ * left out of F's input (fast_drop): the smallest M = 2^j or 3 2^j with
+ * M > 6 (kin - 1), when it is at most N/2; else 0 (the field's grid).
+ *
+ * Why: F's input then holds the modes k < kin only, so its cube holds
+ * |k| <= 3 (kin - 1) < M/2: on M points, as on the field's N, the
+ * pseudo-spectral product has no aliasing, and the two give the same
+ * spectrum (the N-point one holds rounding above 3 (kin - 1), the M-point
+ * one zeros).  At N 65536 a resolved n = 4 front has kin ~ 770: the
+ * stages' transforms run on 6144 points instead of 65536, and a step's
+ * transforms no longer grow with N (only the step end's, the error's and
+ * the samples' do).  If a plan cannot be made, M is 0: the field's grid,
+ * the same rates. */
+static void product_grid(bkf_pde_etd *etd, bkf_pde *m)
+{
+    size_t M = 0;
+    if (etd->fast_drop && etd->kin < etd->nc) {
+        size_t need = 6 * (etd->kin > 0 ? etd->kin - 1 : 0) + 1, p = 16;
+        while (p < need && 3 * (p / 2) < need) p *= 2;
+        M = p >= need ? p : 3 * (p / 2);
+        if (2 * M > m->N) M = 0;
+    }
+    /* the plans of the last M are kept while the field's grid is used */
+    if (M && M != etd->cplanned) {
+        bkf_fft_lock();
+        if (etd->cfwd) fftw_destroy_plan(etd->cfwd);
+        if (etd->cbwd) fftw_destroy_plan(etd->cbwd);
+        etd->cfwd = fftw_plan_dft_r2c_1d((int)M, m->rbuf, m->cbuf, FFTW_ESTIMATE);
+        etd->cbwd = fftw_plan_dft_c2r_1d((int)M, m->cbuf, m->lap, FFTW_ESTIMATE);
+        bkf_fft_unlock();
+        etd->cplanned = etd->cfwd && etd->cbwd ? M : 0;
+    }
+    etd->cm = M && M == etd->cplanned ? M : 0;
+    m->stats.product_points = etd->cm ? etd->cm : m->N;
 }
 
 /* D' = dH/dt of the state a (lawson8; pde.h), the rate the Runge-Kutta
@@ -691,28 +738,32 @@ static int lawson_stage_fused(bkf_pde *m, double tau, const double *e, const dou
     const double *em = etd->mirrored ? e : e + 2 * nc, *vm = v + 2 * nc;
     const double ms = etd->mirrored ? -1.0 : 1.0;
     double *cb = (double *)m->cbuf;
+    /* F on M points (product_grid): the spectrum is M/N of the field's */
+    size_t M = etd->cm ? etd->cm : N, mc = M / 2 + 1;
+    fftw_plan bwd = etd->cm ? etd->cbwd : m->bwd, fwd = etd->cm ? etd->cfwd : m->fwd;
     for (size_t k = 0; k < kin; k++) {
         double er = e[2 * k], ei = e[2 * k + 1], vr = v[2 * k], vi = v[2 * k + 1];
         double fr = em[2 * k], fi = ms * em[2 * k + 1], wr = vm[2 * k], wi = vm[2 * k + 1];
         cb[2 * k] = (er * vr - ei * vi) + (fr * wr - fi * wi);
         cb[2 * k + 1] = (er * vi + ei * vr) + (fr * wi + fi * wr);
     }
-    memset(cb + 2 * kin, 0, 2 * (nc - kin) * sizeof *cb);
-    fftw_execute_dft_c2r(m->bwd, m->cbuf, m->lap);
+    memset(cb + 2 * kin, 0, 2 * (mc - kin) * sizeof *cb);
+    fftw_execute_dft_c2r(bwd, m->cbuf, m->lap);
     double g = m->p.gamma, inv = 1.0 / (double)N;
     int bad = 0;
-    for (size_t i = 0; i < N; i++) {
+    for (size_t i = 0; i < M; i++) {
         double x = m->lap[i] * inv;
         bad |= !(fabs(x) <= BLOWUP);
         m->rbuf[i] = g * (x - x * x * x * (1.0 / 3.0));
     }
     if (bad) return GSL_EBADFUNC;
-    fftw_execute_dft_r2c(m->fwd, m->rbuf, m->cbuf);
-    double *dm = dydt + 2 * nc;
+    fftw_execute_dft_r2c(fwd, m->rbuf, m->cbuf);
+    double *dm = dydt + 2 * nc, scale = (double)N / (double)M;
     for (size_t k = 0; k < nc; k++) {
         double er = e[2 * k], ei = e[2 * k + 1], vr = v[2 * k], vi = v[2 * k + 1];
         double fr = em[2 * k], fi = ms * em[2 * k + 1], wr = vm[2 * k], wi = vm[2 * k + 1];
-        double Fr = cb[2 * k], Fi = cb[2 * k + 1], sg = etd->sigma[k];
+        double Fr = k < mc ? scale * cb[2 * k] : 0.0, Fi = k < mc ? scale * cb[2 * k + 1] : 0.0;
+        double sg = etd->sigma[k];
         /* conj(E) F / 2 for either branch */
         double ar = 0.5 * (er * Fr + ei * Fi), ai = 0.5 * (er * Fi - ei * Fr);
         double br = 0.5 * (fr * Fr + fi * Fi), bi = 0.5 * (fr * Fi - fi * Fr);
@@ -735,7 +786,7 @@ static int lawson_stage_fused(bkf_pde *m, double tau, const double *e, const dou
      * branches (nonlinear's r), and Q' from the unrotated rates there */
     double complex u0p = (e[0] + I * e[1]) * (v[0] + I * v[1]);
     double complex u0m = (em[0] + I * ms * em[1]) * (vm[0] + I * vm[1]);
-    double complex np0 = (cb[0] + I * cb[1]) - etd->sigma[0] * (u0p + u0m);
+    double complex np0 = scale * (cb[0] + I * cb[1]) - etd->sigma[0] * (u0p + u0m);
     double complex r0 = I * etd->ratio[0] * (m->p.nu / g * (double)N);
     double complex o0p = 0.5 * (np0 - r0), o0m = 0.5 * (np0 + r0);
     double complex d0p = conj(e[0] + I * e[1]) * o0p, d0m = conj(em[0] + I * ms * em[1]) * o0m;
@@ -866,6 +917,7 @@ static int step_lawson(bkf_pde *m, double h, double *err_ratio, double *psi_max_
     size_t n2 = etd->n2;
     lawson_select(etd, h);
     etd->kfast = fast_start(etd, m, h);
+    product_grid(etd, m);
     if (etd->kfast != etd->nu_kfast || etd->fast_drop != etd->nu_drop || etd->kin != etd->nu_kin) {
         /* the first stage must be the same right-hand side */
         m->stats.rhs_calls++;
