@@ -34,7 +34,9 @@ extern "C" {
  * [BKF_CYCLE_STIFF_TOL_MIN, BKF_CYCLE_STIFF_TOL_MAX] (below, bd2x2's estimate
  * floor cannot meet tol; above, rk8pd is as fast there).  Up to
  * BKF_CYCLE_EXPLICIT_MU_MAX rk8pd is also the fallback where bd2x2 refuses,
- * above it bsimp. */
+ * above it bsimp.  A solve inside the canard window (8 mu^2 (1 - |nu|) in
+ * [0.5, 2], mu >= 1) takes rk8pd at every mu: bd2x2's and bsimp's estimates
+ * flatter there (docs/accuracy.md); a branch's rows do not. */
 #define BKF_CYCLE_STIFF_MU 20.0
 #define BKF_CYCLE_EXPLICIT_MU_MAX 30.0
 #define BKF_CYCLE_STIFF_TOL_MIN 1e-12

@@ -438,6 +438,14 @@ static int bd_apply(integrator *in, double *t, double t1, double *h, double *s)
  * measured far more accurate per tolerance than msbdf near the knees, where
  * the msbdf period wandered at 1e-7 relative whatever the tolerance
  * (mu = 1e4, nu = 0.999). */
+/* The canard explosion's neighbourhood (it is at 8 mu^2 (1 - |nu|) ~ 1),
+ * where T is ill-conditioned: see conditioning_floor. */
+static int canard_window(double mu, double nu)
+{
+    double x = 8.0 * mu * mu * (1.0 - fabs(nu));
+    return mu >= 1.0 && x >= 0.5 && x <= 2.0;
+}
+
 /* bd2x2 above STIFF_MU at tol 1e-8..1e-12: measured per T (docs/benchmarks.md,
  * issue 20), rk8pd's stability-limited steps (about 140 a unit of mu per
  * period) cost more than bd2x2 from mu 12-20 on there (mu 30, tol 1e-10:
@@ -451,6 +459,21 @@ static bkf_stepper_kind shooting_stepper(double mu, double tol)
         (mu > STIFF_MU && tol >= BKF_CYCLE_STIFF_TOL_MIN && tol <= BKF_CYCLE_STIFF_TOL_MAX))
         return BKF_STEPPER_EXTRAPOLATION;
     return BKF_STEPPER_EXPLICIT;
+}
+
+/* A solve's shooting stepper.  Inside the canard window rk8pd answers at
+ * every mu: there the errors of bd2x2 and bsimp grow on the repelling slow
+ * branch far beyond their floors while their pair's difference misses them
+ * (cold, mu 25-36 by 0.02 at nu 0.9999, tol 1e-6..1e-10, against the Taylor
+ * reference: bd2x2 up to 32 times its estimate, bsimp 6.8 and 4 answers
+ * outside tol, rk8pd at most 1.03; docs/accuracy.md).  The window holds
+ * bd2x2 only near |nu| = 1 (mu > STIFF_MU: |nu| > 0.99937).  (Not the
+ * branch's rows: with rk8pd there the branch over the explosion at nu
+ * 0.9999, mu 25..40, no longer stepped over it: it ran for over 12 minutes,
+ * or ended with fewer than 5 rows past it.) */
+static bkf_stepper_kind solve_shooting_stepper(double mu, double nu, double tol)
+{
+    return canard_window(mu, nu) ? BKF_STEPPER_EXPLICIT : shooting_stepper(mu, tol);
 }
 
 const char *bkf_cycle_stepper_name(bkf_stepper_kind kind)
@@ -822,14 +845,6 @@ static void tighten_turn(integrator *tighter) { tighter->max_turn = 0.5 * MAX_TU
 static double capped_floor(double period_err, const integrator *looser, double period)
 {
     return looser->capped ? fmax(period_err, looser->tol * period) : period_err;
-}
-
-/* The canard explosion's neighbourhood (it is at 8 mu^2 (1 - |nu|) ~ 1),
- * where T is ill-conditioned: see conditioning_floor. */
-static int canard_window(double mu, double nu)
-{
-    double x = 8.0 * mu * mu * (1.0 - fabs(nu));
-    return mu >= 1.0 && x >= 0.5 && x <= 2.0;
 }
 
 /* What |T_a - T_b| cannot see, measured against an independent long-double
@@ -1390,7 +1405,7 @@ static bkf_stepper_kind solve_stepper(double mu, double nu, double tol, int seri
     if (mu >= COLLOC_AUTO_MU_MIN && mu <= COLLOC_AUTO_MU_MAX && tol <= COLLOC_AUTO_TOL_MAX * (1.0 + 1e-9) &&
         mu * mu * (1.0 - fabs(nu)) >= COLLOC_AUTO_RELAXATION)
         return BKF_STEPPER_COLLOCATION;
-    return shooting_stepper(mu, tol);
+    return solve_shooting_stepper(mu, nu, tol);
 }
 
 static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
@@ -1420,7 +1435,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
             if (had) c->flow = previous;
             return rc;
         }
-        kind = shooting_stepper(mu, opt.tol);
+        kind = solve_shooting_stepper(mu, nu, opt.tol);
         p->rhs_calls = p->jacobian_calls = 0;
     }
 
@@ -1633,7 +1648,7 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
      * falls back to bsimp, never answering less than before bd2x2. */
     bkf_cycle_options o = options ? *options : bkf_cycle_options_default();
     if (bkf_status_is_numerical(rc) && o.stepper == BKF_STEPPER_AUTO &&
-        shooting_stepper(mu, o.tol) == BKF_STEPPER_EXTRAPOLATION) {
+        solve_shooting_stepper(mu, nu, o.tol) == BKF_STEPPER_EXTRAPOLATION) {
         /* up to EXPLICIT_MU_MAX the engine that answered before bd2x2 took
          * over there: rk8pd */
         o.stepper = mu <= EXPLICIT_MU_MAX ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_IMPLICIT;

@@ -273,3 +273,42 @@ TEST(cycle_engine_shooting_estimates_at_loose_tol)
     }
     bkf_test_note("largest true/estimated: rk8pd %.3g, bd2x2 %.3g", worst[0], worst[1]);
 }
+
+/* canard9999: inside the canard window near |nu| = 1 (nu +-0.9999, mu
+ * 31-36) bd2x2's and bsimp's errors grow on the repelling slow branch while
+ * their pair's difference misses them; rk8pd answers there.  Before, cold
+ * automatic solves at these points flattered by 31.9, 26.1, 13.6, 10.9,
+ * 11.3 (bd2x2) and 6.83 (bsimp, bd2x2's fallback), found by a scan of mu
+ * 25-36 by 0.02 at nu +-0.9999, +-0.9995, tol 1e-6..1e-12 against the
+ * Taylor reference (docs/accuracy.md). */
+TEST(cycle_engine_canard_9999_estimates_honest)
+{
+    const struct {
+        double mu, nu, tol;
+    } pts[] = {
+        {35.28, 0.9999, 1e-8},  {33.24, 0.9999, 1e-8},   {31.86, 0.9999, 1e-10},
+        {35.02, -0.9999, 1e-6}, {35.42, 0.9999, 1e-10}, {35.33576794, 0.9999, 1e-5},
+    };
+    double worst = 0.0;
+    size_t answered = 0;
+    for (size_t i = 0; i < sizeof pts / sizeof pts[0]; i++) {
+        bkf_cycle_result r;
+        bkf_error e = {0};
+        int rc = solve_with(pts[i].mu, pts[i].nu, pts[i].tol, BKF_STEPPER_AUTO, &r, &e);
+        if (rc == BKF_ETOL) {
+            bkf_test_note("mu %g nu %g tol %g: refused (%s)", pts[i].mu, pts[i].nu, pts[i].tol, e.message);
+            continue;
+        }
+        CHECK_MSG(rc == BKF_OK, "mu %g nu %g tol %g: %s", pts[i].mu, pts[i].nu, pts[i].tol, e.message);
+        if (rc != BKF_OK) continue;
+        answered++;
+        double ref = NAN, unc = 0.0;
+        double ratio = check_against_taylor(&r, pts[i].tol, 3.0, &ref, &unc);
+        CHECK_MSG(unc <= 1e-3 * pts[i].tol * r.period, "reference uncertain by %.2g", unc / r.period);
+        bkf_test_note("mu %g nu %g tol %g %s: true/estimated %.3g", pts[i].mu, pts[i].nu, pts[i].tol, r.stepper,
+                      ratio);
+        if (ratio > worst) worst = ratio;
+    }
+    CHECK_MSG(answered >= 5, "only %zu of 6 answered", answered);
+    bkf_test_note("largest true/estimated ratio %.3g", worst);
+}

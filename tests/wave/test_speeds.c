@@ -668,3 +668,59 @@ TEST(speeds_v_err_honest_near_the_sonic_limit)
     }
     bkf_test_note("worst true/estimated %.3g", worst);
 }
+
+/* ln T(mu(s)) - s - ell, s = ln sqrt(mu^2 - gamma^2), with T from the
+ * long-double Taylor reference; the cycle solve only gives its secant a
+ * starting slope (the fixed point does not depend on it). */
+static double taylor_D(const bkf_model_params *p, double ell, double s, double *unc)
+{
+    double mu = hypot(p->gamma, exp(s)), g = 1.0;
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = 1e-6;
+    o.warm_start = 0;
+    bkf_cycle_result r;
+    bkf_error e;
+    if (bkf_cycle_period(mu, p->nu, &o, &r, &e) == BKF_OK) g = r.section_slope;
+    double T = taylor_period(mu, p->nu, g, unc);
+    *unc /= T;
+    return log(T) - s - ell;
+}
+
+/* canard9999: inside the canard explosion at nu 0.9999 (mu 35.1-35.37) v_err
+ * flattered because T's estimate did (bd2x2, cycle.c solve_shooting_stepper):
+ * against the root of the condition with T from the Taylor reference
+ * (Newton in s to convergence, the reference's own uncertainty carried
+ * into v), n 61 at tol 1e-8 was 6.7 times v_err off, n 67 at tol 1e-6 7.9
+ * times (T 51 and 11 times its estimate). */
+TEST(speeds_v_err_honest_inside_the_canard_at_nu_0_9999)
+{
+    const struct {
+        size_t n_from, n_to;
+        double tol;
+    } cases[] = {{58, 64, 1e-8}, {64, 68, 1e-6}};
+    bkf_model_params p = {1.0, 1.0, 0.9999, 20.0, 0, BKF_MODEL_CONTINUUM};
+    double worst = 0.0;
+    size_t rows = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        bkf_speeds_table t = find(p, cases[i].tol, cases[i].n_from, cases[i].n_to);
+        for (size_t j = 0; j < t.count; j++) {
+            const bkf_speeds_root *r = &t.roots[j];
+            double ell = log(p.S / (p.c * p.gamma)) - log((double)r->n);
+            double s = 0.5 * log(r->mu * r->mu - p.gamma * p.gamma), unc, up, um, h = 1e-6;
+            double slope = (taylor_D(&p, ell, s + h, &up) - taylor_D(&p, ell, s - h, &um)) / (2.0 * h);
+            for (int it = 0; it < 3; it++) s -= taylor_D(&p, ell, s, &unc) / slope;
+            double D = taylor_D(&p, ell, s, &unc), g2 = p.gamma * p.gamma / (r->mu * r->mu);
+            double v_ref = p.c * hypot(1.0, p.gamma * exp(-s));
+            double v_unc = v_ref * (g2 * (unc + fabs(D)) / fabs(slope) + 4.0 * DBL_EPSILON);
+            double ratio = fmax(fabs(r->v - v_ref) - v_unc, 0.0) / r->v_err;
+            CHECK_MSG(ratio <= 1.0, "tol %g n %zu mu %.10g: v %.17g reference %.17g +- %.2g, v_err %.3g", cases[i].tol,
+                      r->n, r->mu, r->v, v_ref, v_unc, r->v_err);
+            CHECK_MSG(v_unc <= 0.1 * r->v_err, "n %zu: reference uncertain by %.2g", r->n, v_unc / v_ref);
+            worst = fmax(worst, ratio);
+            rows++;
+        }
+        bkf_speeds_table_free(&t);
+    }
+    CHECK(rows >= 10);
+    bkf_test_note("%zu rows, worst true/estimated %.3g", rows, worst);
+}
