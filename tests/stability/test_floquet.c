@@ -678,3 +678,49 @@ TEST(floquet_collocation_cycle_in_the_band_against_shooting)
             }
     bkf_test_note("largest difference over the sum of the estimates %.3f", worst);
 }
+
+/* Issue 20, the Floquet scan: m1 of a complex pair against the other
+ * stepper.  Its phase (the trace) moves with the cycle's T while lambda =
+ * L/2 hardly does, and m1_err took lambda's measured share of the cycle:
+ * at gamma 10, nu 0.999, c q 8, tol 1e-10 it said 2e-11 where the two
+ * steppers' m1 are 1.1e-10 apart (their cycles' T 1.1e-11 apart, 16 times
+ * that in m1): 5.3 times optimistic (0.70 now).  The wavenumbers run in
+ * the scan's order: the earlier retries leave the cycle solved as tight as
+ * it goes (the refusals at q 0.5 included).  At nu +-0.9999 (2.0-3.0 before)
+ * the reference's own m1_err is 5e-10 now and could not tell. */
+TEST(floquet_m1_err_of_a_complex_pair_carries_the_cycle)
+{
+    const double nus[] = {0.999};
+    const double cqs[] = {0, 0.15, 0.3, 0.6, 1.2, 2.4, 0.5, 1, 2, 4, 8};
+    const double qs[] = {0, 0.5, 1, 2, 4, 8};
+    for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
+        bkf_floquet_options o = bkf_floquet_options_default();
+        o.tol = 1e-11;
+        o.stepper = BKF_STEPPER_IMPLICIT;
+        bkf_floquet *ref = bkf_floquet_alloc();
+        bkf_error e;
+        CHECK(ref);
+        int rc = bkf_floquet_set(ref, 10.0, 1.0, nus[j], &o, &e);
+        CHECK_MSG(rc == BKF_OK, "nu %g: %s", nus[j], e.message);
+        bkf_floquet_point r;
+        for (size_t i = 0; i < sizeof cqs / sizeof cqs[0]; i++) {
+            rc = bkf_floquet_eval(ref, cqs[i], &r, &e);
+            CHECK_MSG(rc == BKF_OK || rc == BKF_ETOL, "reference c q %g: %s", cqs[i], e.message);
+        }
+        CHECK_MSG(r.m1_err < 1e-10, "reference m1_err %.2g", r.m1_err);
+        bkf_floquet *f = setup(10.0, 1.0, nus[j], 1e-10);
+        bkf_floquet_point p;
+        for (size_t i = 0; i < sizeof qs / sizeof qs[0]; i++) {
+            rc = bkf_floquet_eval(f, qs[i], &p, &e);
+            CHECK_MSG(rc == BKF_OK || rc == BKF_ETOL, "q %g: %s", qs[i], e.message);
+        }
+        CHECK_MSG(rc == BKF_OK && p.kind == BKF_FLOQUET_COMPLEX, "nu %g: rc %d kind %d", nus[j], rc, (int)p.kind);
+        double dm = hypot(p.m1_re - r.m1_re, p.m1_im - r.m1_im);
+        double ratio = fmax(dm - r.m1_err, 0.0) / p.m1_err;
+        bkf_test_note("nu %g: m1 - other stepper %.2g (its m1_err %.2g), m1_err %.2g: true/estimated %.2f",
+                      nus[j], dm, r.m1_err, p.m1_err, ratio);
+        CHECK_MSG(ratio <= 1.0, "nu %g: m1_err optimistic by %.3g", nus[j], ratio);
+        bkf_floquet_free(f);
+        bkf_floquet_free(ref);
+    }
+}
