@@ -756,7 +756,16 @@ static int resolve_cycle(bkf_floquet *f, double tol, bkf_error *err)
     co.warm_start = 1;
     int rc = bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
     if (rc != BKF_OK) co = f->cycle_opt;
-    if (rc != BKF_OK && bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err) != BKF_OK) {
+    /* warm from the failed attempt the restore can fail too (gamma 110, nu
+     * 0.9999: 1e-12 solved, 1e-13 refused, then 1e-12 again refused from
+     * there, and the object was lost): then cold */
+    int back = rc == BKF_OK ? BKF_OK : bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
+    if (back != BKF_OK && co.warm_start) {
+        co.warm_start = 0;
+        back = bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
+        co.warm_start = 1;
+    }
+    if (back != BKF_OK) {
         f->ready = 0;
         return rc;
     }
@@ -799,6 +808,8 @@ static double cycle_measured(bkf_floquet *f, double K, double *m1_share)
         f->loose_gen = f->cycle_gen;
     }
     if (eval_trace(f, K, 1, &a, &cyc, &e) != BKF_OK) return NAN;
+    /* what of a's estimate is the integrations' own */
+    double noise = a.lambda_err - cyc;
     double keep[4] = {f->y0, f->T, f->T_err, f->L};
     f->y0 = f->loose_y0;
     f->T = f->loose_T;
@@ -806,21 +817,29 @@ static double cycle_measured(bkf_floquet *f, double K, double *m1_share)
     f->L = f->loose_L;
     f->last_fine_key.valid = 0;
     int rc = eval_trace(f, K, 1, &b, &cyc, &e);
+    noise += b.lambda_err - cyc;
     f->last_fine_key.valid = 0;
     f->y0 = keep[0];
     f->T = keep[1];
     f->T_err = keep[2];
     f->L = keep[3];
     if (rc != BKF_OK) return NAN;
-    /* m1 moves with T at the rate the two cycles show: times T's own error
-     * where that is above a tenth of their difference (near the cycle's
-     * floor the looser cycle is hardly looser: gamma 10, nu 0.9999, T 3.6e-12
-     * apart, T_err 9e-12) */
+    /* lambda and m1 move with T at the rate the two cycles show: times T's
+     * own error where that is above a tenth of their difference.  Near the
+     * cycle's floor the looser cycle is hardly looser (gamma 30, nu 0.9999:
+     * T 1e-10 apart, the tight one's T_err 9e-11), and a tenth of the
+     * difference made lambda_err 4.7e-11 against a true 3.9e-10 at c q 0.3,
+     * tol 1e-10. */
     double dT = fabs(keep[1] - f->loose_T);
     double scale = dT > 0.0 ? fmax(0.1, keep[2] / dT) : 0.1;
+    /* a rate only where the difference stands above the integrations'
+     * noise: below, T_err / dT scaled noise (20 times pessimistic at gamma
+     * 100, nu -0.5, c q 0.9, tol 1e-8, and a refusal) */
     double m1_abs = hypot(a.m1_re, a.m1_im);
-    *m1_share = m1_abs > 0.0 ? scale * hypot(a.m1_re - b.m1_re, a.m1_im - b.m1_im) / m1_abs : INFINITY;
-    return 0.1 * fabs(a.lambda - b.lambda);
+    double dm = m1_abs > 0.0 ? hypot(a.m1_re - b.m1_re, a.m1_im - b.m1_im) / m1_abs : INFINITY;
+    *m1_share = (dm > noise ? scale : 0.1) * dm;
+    double d = fabs(a.lambda - b.lambda);
+    return (d > noise ? scale : 0.1) * d;
 }
 
 /* The best attempt so far at one wavenumber.  Once the cycle's share has
