@@ -756,15 +756,18 @@ static int resolve_cycle(bkf_floquet *f, double tol, bkf_error *err)
     co.warm_start = 1;
     int rc = bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
     if (rc != BKF_OK) co = f->cycle_opt;
-    /* warm from the failed attempt the restore can fail too (gamma 110, nu
-     * 0.9999: 1e-12 solved, 1e-13 refused, then 1e-12 again refused from
-     * there, and the object was lost): then cold */
+    /* The restore can fail too (gamma 44 and 110, nu 0.9999: 1e-12 solved
+     * warm, 1e-13 refused, then 1e-12 refused again, warm and cold, and the
+     * object was lost): then cold and looser, as bkf_floquet_set does; the
+     * looser cycle's T_err enters the estimates. */
     int back = rc == BKF_OK ? BKF_OK : bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
-    if (back != BKF_OK && co.warm_start) {
-        co.warm_start = 0;
+    for (int attempt = 0; back != BKF_OK && bkf_status_is_numerical(back) && attempt < 4; attempt++) {
+        if (co.warm_start) co.warm_start = 0;
+        else if (co.tol < 0.01) co.tol *= 10.0;
+        else break;
         back = bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
-        co.warm_start = 1;
     }
+    co.warm_start = 1;
     if (back != BKF_OK) {
         f->ready = 0;
         return rc;

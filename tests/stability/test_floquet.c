@@ -765,27 +765,37 @@ TEST(floquet_lambda_err_carries_the_cycle_at_its_floor)
     CHECK_MSG(fmax(d - err[1], 0.0) <= 10.0 * err[0], "lambda_err %.3g optimistic by more than 10", err[0]);
 }
 
-/* Issue 20, the Floquet scan, just outside the box (gamma 110 > 1e2, nu
- * 0.9999, tol 1e-8): a retry solved the cycle at 1e-12, was refused 1e-13,
- * and the restore at 1e-12, warm from the refused attempt, was refused too:
- * the object was lost ("the cycle failed on a retry") and the CLI's table
- * ended there.  Now q 0.5 answers or refuses on tol, and the object stays
- * usable: at q = 0 the multipliers are 1 and exp(L) of the cycle. */
+/* Issue 20, the Floquet scan: at gamma 44 and 110, nu 0.9999, tol 1e-8 a
+ * retry solved the cycle at 1e-12, was refused 1e-13, and the restore at
+ * 1e-12 was refused too (warm from the refused attempt and, at gamma 44,
+ * cold): the object was lost ("the cycle failed on a retry", every later
+ * q "eval before a successful set") and the CLI's table ended there.  Now
+ * each q answers or refuses on tol, and the object stays usable: at q = 0
+ * the multipliers are 1 and exp(L) of the cycle. */
 TEST(floquet_keeps_its_cycle_when_a_tighter_one_is_refused)
 {
-    bkf_floquet *f = setup(110.0, 1.0, 0.9999, 1e-8);
-    bkf_floquet_point p;
-    bkf_error e;
-    int rc = bkf_floquet_eval(f, 0.5, &p, &e);
-    CHECK_MSG(rc == BKF_OK || (rc == BKF_ETOL && isfinite(p.lambda_err)), "q 0.5: %s", e.message);
-    bkf_test_note("q 0.5: rc %d, lambda %.12g +- %.2g", rc, p.lambda, p.lambda_err);
-    rc = bkf_floquet_eval(f, 0.0, &p, &e);
-    CHECK_MSG(rc == BKF_OK, "q 0 after: %s", e.message);
-    const bkf_cycle_result *cy = bkf_floquet_cycle(f);
-    CHECK(cy);
-    if (rc == BKF_OK && cy) {
-        CHECK(p.lambda == 0.0 && p.m1_re == 1.0);
-        CHECK_CLOSE(p.log_det, cy->log_multiplier, 1e-12, 0.0);
+    const double cases[][3] = {{110.0, 1.0, 1.0}, {44.0, 0.3, 1.0}}; /* gamma, c, q */
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        bkf_floquet *f = setup(cases[k][0], cases[k][1], 0.9999, 1e-8);
+        bkf_floquet_point p;
+        bkf_error e;
+        const double qs[] = {0.5, cases[k][2]};
+        int rc = BKF_OK;
+        for (size_t i = 0; i < 2; i++) {
+            rc = bkf_floquet_eval(f, qs[i], &p, &e);
+            CHECK_MSG(rc == BKF_OK || (rc == BKF_ETOL && isfinite(p.lambda_err)), "gamma %g q %g: %s",
+                      cases[k][0], qs[i], e.message);
+            bkf_test_note("gamma %g q %g: rc %d, lambda %.12g +- %.2g", cases[k][0], qs[i], rc, p.lambda,
+                          p.lambda_err);
+        }
+        rc = bkf_floquet_eval(f, 0.0, &p, &e);
+        CHECK_MSG(rc == BKF_OK, "gamma %g q 0 after: %s", cases[k][0], e.message);
+        const bkf_cycle_result *cy = bkf_floquet_cycle(f);
+        CHECK(cy);
+        if (rc == BKF_OK && cy) {
+            CHECK(p.lambda == 0.0 && p.m1_re == 1.0);
+            CHECK_CLOSE(p.log_det, cy->log_multiplier, 1e-12, 0.0);
+        }
+        bkf_floquet_free(f);
     }
-    bkf_floquet_free(f);
 }
