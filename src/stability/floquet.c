@@ -756,7 +756,19 @@ static int resolve_cycle(bkf_floquet *f, double tol, bkf_error *err)
     co.warm_start = 1;
     int rc = bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
     if (rc != BKF_OK) co = f->cycle_opt;
-    if (rc != BKF_OK && bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err) != BKF_OK) {
+    /* The restore can fail too (gamma 44 and 110, nu 0.9999: 1e-12 solved
+     * warm, 1e-13 refused, then 1e-12 refused again, warm and cold, and the
+     * object was lost): then cold and looser, as bkf_floquet_set does; the
+     * looser cycle's T_err enters the estimates. */
+    int back = rc == BKF_OK ? BKF_OK : bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
+    for (int attempt = 0; back != BKF_OK && bkf_status_is_numerical(back) && attempt < 4; attempt++) {
+        if (co.warm_start) co.warm_start = 0;
+        else if (co.tol < 0.01) co.tol *= 10.0;
+        else break;
+        back = bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
+    }
+    co.warm_start = 1;
+    if (back != BKF_OK) {
         f->ready = 0;
         return rc;
     }
@@ -775,8 +787,12 @@ static int resolve_cycle(bkf_floquet *f, double tol, bkf_error *err)
  * a factor 10.  The bound cycle_term is far above this at tight tolerance
  * (1.3e-10 against a measured 1e-13 at gamma 2, nu -0.9, c q 0.66), where
  * the cycle cannot be solved tighter than CYCLE_TOL_MIN.  Returns NaN if
- * it cannot tell. */
-static double cycle_measured(bkf_floquet *f, double K)
+ * it cannot tell.  *m1_share is m1's own share, relative to |m1|: for a
+ * complex pair lambda = L/2 hardly moves with the cycle while m1's phase
+ * (the trace) moves with T; m1_err took lambda's share and was 5 times
+ * optimistic (gamma 10, nu 0.999, c q 8, tol 1e-10: 2e-11 against m1s of
+ * the two steppers 1.1e-10 apart, their cycles' T 1.1e-11 apart). */
+static double cycle_measured(bkf_floquet *f, double K, double *m1_share)
 {
     bkf_floquet_point a, b;
     double cyc, tight = f->cycle_opt.tol, want = fmin(100.0 * tight, 1e-3);
@@ -795,6 +811,8 @@ static double cycle_measured(bkf_floquet *f, double K)
         f->loose_gen = f->cycle_gen;
     }
     if (eval_trace(f, K, 1, &a, &cyc, &e) != BKF_OK) return NAN;
+    /* what of a's estimate is the integrations' own */
+    double noise = a.lambda_err - cyc;
     double keep[4] = {f->y0, f->T, f->T_err, f->L};
     f->y0 = f->loose_y0;
     f->T = f->loose_T;
@@ -802,13 +820,29 @@ static double cycle_measured(bkf_floquet *f, double K)
     f->L = f->loose_L;
     f->last_fine_key.valid = 0;
     int rc = eval_trace(f, K, 1, &b, &cyc, &e);
+    noise += b.lambda_err - cyc;
     f->last_fine_key.valid = 0;
     f->y0 = keep[0];
     f->T = keep[1];
     f->T_err = keep[2];
     f->L = keep[3];
     if (rc != BKF_OK) return NAN;
-    return 0.1 * fabs(a.lambda - b.lambda);
+    /* lambda and m1 move with T at the rate the two cycles show: times T's
+     * own error where that is above a tenth of their difference.  Near the
+     * cycle's floor the looser cycle is hardly looser (gamma 30, nu 0.9999:
+     * T 1e-10 apart, the tight one's T_err 9e-11), and a tenth of the
+     * difference made lambda_err 4.7e-11 against a true 3.9e-10 at c q 0.3,
+     * tol 1e-10. */
+    double dT = fabs(keep[1] - f->loose_T);
+    double scale = dT > 0.0 ? fmax(0.1, keep[2] / dT) : 0.1;
+    /* a rate only where the difference stands above the integrations'
+     * noise: below, T_err / dT scaled noise (20 times pessimistic at gamma
+     * 100, nu -0.5, c q 0.9, tol 1e-8, and a refusal) */
+    double m1_abs = hypot(a.m1_re, a.m1_im);
+    double dm = m1_abs > 0.0 ? hypot(a.m1_re - b.m1_re, a.m1_im - b.m1_im) / m1_abs : INFINITY;
+    *m1_share = (dm > noise ? scale : 0.1) * dm;
+    double d = fabs(a.lambda - b.lambda);
+    return (d > noise ? scale : 0.1) * d;
 }
 
 /* The best attempt so far at one wavenumber.  Once the cycle's share has
@@ -819,6 +853,7 @@ typedef struct {
     double cyc;               /* the cycle's share of best.lambda_err */
     int have;
     double cyc_measured;      /* INFINITY until measured */
+    double cyc_measured_m1;   /* m1's share, relative (cycle_measured) */
     size_t steps;
 } retry_best;
 
@@ -826,17 +861,17 @@ typedef struct {
  * m1_err alike (m1 carries it times |m1|): replacing it in lambda_err alone
  * left m1_err at the bound, 3.8e-7 against lambda_err 1e-10 and a true m1
  * error of 2e-11 (gamma 20, c 0.05, nu 0.9, q 2). */
-static void replace_cycle_share(bkf_floquet_point *pt, double old_cyc, double new_cyc)
+static void replace_cycle_share(bkf_floquet_point *pt, double old_cyc, double new_cyc, double new_m1)
 {
     pt->lambda_err += new_cyc - old_cyc;
-    pt->m1_err = fmax(pt->m1_err + (new_cyc - old_cyc) * hypot(pt->m1_re, pt->m1_im), 0.0);
+    pt->m1_err = fmax(pt->m1_err + (fmin(new_m1, old_cyc) - old_cyc) * hypot(pt->m1_re, pt->m1_im), 0.0);
 }
 
 static void consider(retry_best *rb, bkf_floquet_point *cand, double cand_cyc)
 {
     rb->steps += cand->steps;
     if (rb->cyc_measured < cand_cyc) {
-        replace_cycle_share(cand, cand_cyc, rb->cyc_measured);
+        replace_cycle_share(cand, cand_cyc, rb->cyc_measured, rb->cyc_measured_m1);
         cand_cyc = rb->cyc_measured;
     }
     if (!rb->have || cand->lambda_err < rb->best.lambda_err) {
@@ -874,7 +909,7 @@ static int floquet_eval_body(bkf_floquet *f, double q, bkf_floquet_point *pt, bk
      * at c q 100 and tol 1e-13 took minutes), at least RETRY_STEPS_MIN. */
     size_t steps = rc == BKF_OK ? pt->steps : 0;
     f->retry_nmax = (size_t)fmax(RETRY_STEPS_MIN, RETRY_WORK * 0.5 * (double)steps);
-    retry_best rb = {*pt, cyc, rc == BKF_OK, INFINITY, steps};
+    retry_best rb = {*pt, cyc, rc == BKF_OK, INFINITY, INFINITY, steps};
     bkf_floquet_point cand;
     bkf_error e2;
     double tl = f->tol_int, tl_min = fmax(f->tol_floor, RETRY_TOL_MIN);
@@ -898,12 +933,13 @@ static int floquet_eval_body(bkf_floquet *f, double q, bkf_floquet_point *pt, bk
             }
         } else if (cycle_matters && !measured) {
             measured = 1;
-            double cm = cycle_measured(f, K);
+            double cm_m1 = INFINITY, cm = cycle_measured(f, K, &cm_m1);
             if (!f->ready) break;
             if (cm < rb.cyc) {
-                replace_cycle_share(&rb.best, rb.cyc, cm);
+                replace_cycle_share(&rb.best, rb.cyc, cm, cm_m1);
                 rb.cyc = cm;
                 rb.cyc_measured = cm;
+                rb.cyc_measured_m1 = cm_m1;
             }
             continue;
         } else if (tl > tl_min) {
