@@ -980,7 +980,9 @@ static int period_rounding(flow_params *p, bkf_stepper_kind kind, double tol, do
  * Only in the canard's neighbourhood 8 mu^2 (1 - |nu|) in [0.5, 2] (the
  * explosion is at ~1) does the extra shot run: outside it |d ln T/d nu|
  * stays below 1/(1 - |nu|) and the estimates were measured honest there
- * (docs/accuracy.md), so the work elsewhere is unchanged. */
+ * (docs/accuracy.md), so the work elsewhere is unchanged.  For bd2x2 and
+ * bsimp it runs in the wider canard_neighbourhood, where their estimate
+ * scales it to their truncation error (TRUNCATION_PER_ROUNDING). */
 static int conditioning_floor(flow_params *p, bkf_stepper_kind kind, double tol, double y0, double *floor,
                               size_t *steps, bkf_error *err)
 {
@@ -1697,7 +1699,7 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
         solve_shooting_stepper(mu, nu, o.tol) == BKF_STEPPER_EXTRAPOLATION) {
         /* up to EXPLICIT_MU_MAX the engine that answered before bd2x2 took
          * over there: rk8pd; so in the canard's neighbourhood, where bsimp
-         * flattered at tol 1e-12 (nu 0.9999, mu 50-88: up to 8.3, answers
+         * flattered at tol 1e-12 (nu 0.9999, mu 40-88: up to 10.8, answers
          * outside tol) and rk8pd, honest there, took less time */
         o.stepper = mu <= EXPLICIT_MU_MAX || canard_neighbourhood(mu, nu) ? BKF_STEPPER_EXPLICIT
                                                                           : BKF_STEPPER_IMPLICIT;
