@@ -36,7 +36,11 @@ extern "C" {
  * BKF_CYCLE_EXPLICIT_MU_MAX rk8pd is also the fallback where bd2x2 refuses,
  * above it bsimp.  A solve inside the canard window (8 mu^2 (1 - |nu|) in
  * [0.5, 2], mu >= 1) takes rk8pd at every mu: bd2x2's and bsimp's estimates
- * flatter there (docs/accuracy.md); a branch's rows do not. */
+ * flatter there (docs/accuracy.md); a branch's rows do not.  In the wider
+ * neighbourhood (the same x in [0.5, 7]) rk8pd is the fallback where bd2x2
+ * refuses at every mu, and bd2x2's and bsimp's estimates (chosen or not)
+ * carry a larger floor there: they meet tol more often by refusing, at
+ * tight tol (bsimp at 1e-12 near |nu| = 0.9999 mostly refuses). */
 #define BKF_CYCLE_STIFF_MU 20.0
 #define BKF_CYCLE_EXPLICIT_MU_MAX 30.0
 #define BKF_CYCLE_STIFF_TOL_MIN 1e-12

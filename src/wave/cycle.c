@@ -440,10 +440,30 @@ static int bd_apply(integrator *in, double *t, double t1, double *h, double *s)
  * (mu = 1e4, nu = 0.999). */
 /* The canard explosion's neighbourhood (it is at 8 mu^2 (1 - |nu|) ~ 1),
  * where T is ill-conditioned: see conditioning_floor. */
+static double canard_x(double mu, double nu)
+{
+    return 8.0 * mu * mu * (1.0 - fabs(nu));
+}
+
 static int canard_window(double mu, double nu)
 {
-    double x = 8.0 * mu * mu * (1.0 - fabs(nu));
+    double x = canard_x(mu, nu);
     return mu >= 1.0 && x >= 0.5 && x <= 2.0;
+}
+
+/* The wider neighbourhood where the stiff pair (bd2x2, bsimp) flattered
+ * (issue 20, stiffwin): cold solves over x = 8 mu^2 (1 - |nu|) in
+ * [0.2, 10] x |nu| 0.98..0.9999 x mu 1..90 x tol 1e-6..1e-12 against the
+ * Taylor reference found true/estimated above 3 for bd2x2 or bsimp at x
+ * 0.70-6.25 (bsimp at tol 1e-12, nu 0.9999: 8.7 at mu 79.7, answers outside
+ * tol at mu 40-69; bd2x2 at tol 1e-6, nu 0.9995: 6.6 at mu 31.86), none
+ * below x 0.70 and one above 7 (bsimp, 3.07 at x 8.65, nu 0.999, tol
+ * 1e-12); rk8pd at most 1.84 over the whole scan. */
+#define CANARD_STIFF_X_MAX 7.0
+static int canard_neighbourhood(double mu, double nu)
+{
+    double x = canard_x(mu, nu);
+    return mu >= 1.0 && x >= 0.5 && x <= CANARD_STIFF_X_MAX;
 }
 
 /* bd2x2 above STIFF_MU at tol 1e-8..1e-12: measured per T (docs/benchmarks.md,
@@ -466,7 +486,10 @@ static bkf_stepper_kind shooting_stepper(double mu, double tol)
  * branch far beyond their floors while their pair's difference misses them
  * (cold, mu 25-36 by 0.02 at nu 0.9999, tol 1e-6..1e-10, against the Taylor
  * reference: bd2x2 up to 32 times its estimate, bsimp 6.8 and 4 answers
- * outside tol, rk8pd at most 1.03; docs/accuracy.md).  The window holds
+ * outside tol, rk8pd at most 1.03; docs/accuracy.md).  (In the rest of
+ * the neighbourhood bd2x2 stays the choice: with its floor there it was
+ * honest and took 1.5-3 times less time than rk8pd at tol 1e-6..1e-10;
+ * where it refuses, rk8pd answers: bkf_cycle_solve.)  The window holds
  * bd2x2 only near |nu| = 1 (mu > STIFF_MU: |nu| > 0.99937).  (Not the
  * branch's rows: with rk8pd there the branch over the explosion at nu
  * 0.9999, mu 25..40, no longer stepped over it: it ran for over 12 minutes,
@@ -879,15 +902,37 @@ static double cycle_size(double nu)
     return fmin(1.0, 2.0 * sqrt(1.0 - nu * nu));
 }
 
+/* In the canard's neighbourhood the stiff pair's errors at two local
+ * tolerances coincide: errors made on the repelling slow branch are
+ * amplified like the rounding there, and the pair's difference missed them
+ * (nu 0.9999, mu 35.3358, tol 1e-5: bd2x2's pair 2.6e-8 T apart, both
+ * 2.9e-7 T off).  Measured against the Taylor reference, the error was
+ * 0.016-0.077 times the rounding's standard deviation scaled from
+ * DBL_EPSILON to the tighter solve's local tolerance.  At 0.08, the top of
+ * that, a scan of the neighbourhood still found 3.5 (bd2x2, nu 0.999, mu
+ * 11.18, tol 1e-10) and 3.3 (bsimp, nu 0.995, mu 5.12, tol 1e-12); at 0.12
+ * none above 3 in it (docs/accuracy.md, stiffwin). */
+#define TRUNCATION_PER_ROUNDING 0.12
+/* Beyond the explosion, in the rest of the neighbourhood, the rounding is
+ * no longer amplified enough to carry that floor, yet the stiff pair's
+ * errors still coincided at up to 6.6 times the pair's floor (bd2x2 at
+ * nu 0.9995, mu 31.86, tol 1e-6: true 7.2e-7 T, estimate 1.1e-7 T; bsimp
+ * at nu 0.999, mu 16.86, tol 1e-6: 6.1): the floor per unit tol_b T is
+ * raised there by this factor. */
+#define CANARD_ERROR_PER_TOL_FACTOR 4.0
 static double period_error(const converged *a, const converged *b, const flow_params *p,
                            bkf_stepper_kind kind, double cond_floor)
 {
     int implicit = kind != BKF_STEPPER_EXPLICIT;
-    double tol_floor = error_per_tol(kind) * b->tol * b->period / cycle_size(p->nu);
+    double tol_floor = error_per_tol(kind) * b->tol * b->period / cycle_size(p->nu) *
+                       (implicit && canard_neighbourhood(p->mu, p->nu) ? CANARD_ERROR_PER_TOL_FACTOR : 1.0);
     double amplified = b->period + fmax(1.0, fabs(b->y0)) * fabs(b->dT) / (1.0 - fmin(b->return_slope, 0.999999));
     double round_floor = (implicit ? 30.0 : 8.0) * DBL_EPSILON * amplified;
     double diff = fabs(a->period - b->period) + 8.0 * DBL_EPSILON * b->period;
-    return fmax(fmax(diff, cond_floor), fmax(tol_floor, round_floor));
+    /* the stiff pair's truncation error, amplified as the rounding is
+     * (conditioning_floor) */
+    double amplified_truncation = implicit ? TRUNCATION_PER_ROUNDING * cond_floor * b->tol / DBL_EPSILON : 0.0;
+    return fmax(fmax(diff, fmax(cond_floor, amplified_truncation)), fmax(tol_floor, round_floor));
 }
 
 /* The standard deviation of T due to rounding, from one shot at the fixed
@@ -935,12 +980,15 @@ static int period_rounding(flow_params *p, bkf_stepper_kind kind, double tol, do
  * Only in the canard's neighbourhood 8 mu^2 (1 - |nu|) in [0.5, 2] (the
  * explosion is at ~1) does the extra shot run: outside it |d ln T/d nu|
  * stays below 1/(1 - |nu|) and the estimates were measured honest there
- * (docs/accuracy.md), so the work elsewhere is unchanged. */
+ * (docs/accuracy.md), so the work elsewhere is unchanged.  For bd2x2 and
+ * bsimp it runs in the wider canard_neighbourhood, where their estimate
+ * scales it to their truncation error (TRUNCATION_PER_ROUNDING). */
 static int conditioning_floor(flow_params *p, bkf_stepper_kind kind, double tol, double y0, double *floor,
                               size_t *steps, bkf_error *err)
 {
     *floor = 0.0;
-    if (!canard_window(p->mu, p->nu)) return BKF_OK;
+    if (!canard_window(p->mu, p->nu) && (kind == BKF_STEPPER_EXPLICIT || !canard_neighbourhood(p->mu, p->nu)))
+        return BKF_OK;
     return period_rounding(p, kind, tol, y0, floor, steps, err);
 }
 
@@ -1650,8 +1698,11 @@ int bkf_cycle_solve(bkf_cycle *c, double mu, double nu, const bkf_cycle_options 
     if (bkf_status_is_numerical(rc) && o.stepper == BKF_STEPPER_AUTO &&
         solve_shooting_stepper(mu, nu, o.tol) == BKF_STEPPER_EXTRAPOLATION) {
         /* up to EXPLICIT_MU_MAX the engine that answered before bd2x2 took
-         * over there: rk8pd */
-        o.stepper = mu <= EXPLICIT_MU_MAX ? BKF_STEPPER_EXPLICIT : BKF_STEPPER_IMPLICIT;
+         * over there: rk8pd; so in the canard's neighbourhood, where bsimp
+         * flattered at tol 1e-12 (nu 0.9999, mu 40-88: up to 10.8, answers
+         * outside tol) and rk8pd, honest there, took less time */
+        o.stepper = mu <= EXPLICIT_MU_MAX || canard_neighbourhood(mu, nu) ? BKF_STEPPER_EXPLICIT
+                                                                          : BKF_STEPPER_IMPLICIT;
         rc = cycle_solve_body(c, mu, nu, &o, err);
     }
     bkf_gsl_handler_pop(handler);
