@@ -438,13 +438,13 @@ static int bd_apply(integrator *in, double *t, double t1, double *h, double *s)
  * measured far more accurate per tolerance than msbdf near the knees, where
  * the msbdf period wandered at 1e-7 relative whatever the tolerance
  * (mu = 1e4, nu = 0.999). */
-/* The canard explosion's neighbourhood (it is at 8 mu^2 (1 - |nu|) ~ 1),
- * where T is ill-conditioned: see conditioning_floor. */
 static double canard_x(double mu, double nu)
 {
     return 8.0 * mu * mu * (1.0 - fabs(nu));
 }
 
+/* The canard explosion's neighbourhood (it is at 8 mu^2 (1 - |nu|) ~ 1),
+ * where T is ill-conditioned: see conditioning_floor. */
 static int canard_window(double mu, double nu)
 {
     double x = canard_x(mu, nu);
