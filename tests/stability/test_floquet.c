@@ -687,15 +687,20 @@ TEST(floquet_collocation_cycle_in_the_band_against_shooting)
  * that in m1): 5.3 times optimistic (0.70 now).  The wavenumbers run in
  * the scan's order: the earlier retries leave the cycle solved as tight as
  * it goes (the refusals at q 0.5 included).  At nu +-0.9999 (2.0-3.0 before)
- * the reference's own m1_err is 5e-10 now and could not tell. */
+ * the reference's own m1_err is 5e-10 now and could not tell.  Since the
+ * stiff pair carries its floors in the canard's neighbourhood (stiffwin;
+ * x = 8 mu^2 (1 - |nu|) = 0.8 here), bsimp's cycle is refused at tol 1e-11
+ * and its m1_err at 1e-10 is 2e-10: the reference is that, and the check is
+ * the contract of floquet_steppers_agree (the two m1 within the sum of
+ * their estimates), which no longer separates the old 5.3 (the scan in
+ * docs/accuracy.md does). */
 TEST(floquet_m1_err_of_a_complex_pair_carries_the_cycle)
 {
     const double nus[] = {0.999};
-    const double cqs[] = {0, 0.15, 0.3, 0.6, 1.2, 2.4, 0.5, 1, 2, 4, 8};
-    const double qs[] = {0, 0.5, 1, 2, 4, 8};
+    const double qs[] = {0, 0.5, 1, 2, 4, 8}; /* c = 1: c q = q */
     for (size_t j = 0; j < sizeof nus / sizeof nus[0]; j++) {
         bkf_floquet_options o = bkf_floquet_options_default();
-        o.tol = 1e-11;
+        o.tol = 1e-10;
         o.stepper = BKF_STEPPER_IMPLICIT;
         bkf_floquet *ref = bkf_floquet_alloc();
         bkf_error e;
@@ -703,11 +708,11 @@ TEST(floquet_m1_err_of_a_complex_pair_carries_the_cycle)
         int rc = bkf_floquet_set(ref, 10.0, 1.0, nus[j], &o, &e);
         CHECK_MSG(rc == BKF_OK, "nu %g: %s", nus[j], e.message);
         bkf_floquet_point r;
-        for (size_t i = 0; i < sizeof cqs / sizeof cqs[0]; i++) {
-            rc = bkf_floquet_eval(ref, cqs[i], &r, &e);
-            CHECK_MSG(rc == BKF_OK || rc == BKF_ETOL, "reference c q %g: %s", cqs[i], e.message);
+        for (size_t i = 0; i < sizeof qs / sizeof qs[0]; i++) {
+            rc = bkf_floquet_eval(ref, qs[i], &r, &e);
+            CHECK_MSG(rc == BKF_OK || rc == BKF_ETOL, "reference c q %g: %s", qs[i], e.message);
         }
-        CHECK_MSG(r.m1_err < 1e-10, "reference m1_err %.2g", r.m1_err);
+        CHECK_MSG(rc == BKF_OK && r.m1_err < 1e-9, "reference m1_err %.2g", r.m1_err);
         bkf_floquet *f = setup(10.0, 1.0, nus[j], 1e-10);
         bkf_floquet_point p;
         for (size_t i = 0; i < sizeof qs / sizeof qs[0]; i++) {
@@ -716,10 +721,10 @@ TEST(floquet_m1_err_of_a_complex_pair_carries_the_cycle)
         }
         CHECK_MSG(rc == BKF_OK && p.kind == BKF_FLOQUET_COMPLEX, "nu %g: rc %d kind %d", nus[j], rc, (int)p.kind);
         double dm = hypot(p.m1_re - r.m1_re, p.m1_im - r.m1_im);
-        double ratio = fmax(dm - r.m1_err, 0.0) / p.m1_err;
-        bkf_test_note("nu %g: m1 - other stepper %.2g (its m1_err %.2g), m1_err %.2g: true/estimated %.2f",
+        double ratio = dm / (p.m1_err + r.m1_err);
+        bkf_test_note("nu %g: m1 - other stepper %.2g (its m1_err %.2g), m1_err %.2g: over the sum %.2f",
                       nus[j], dm, r.m1_err, p.m1_err, ratio);
-        CHECK_MSG(ratio <= 1.0, "nu %g: m1_err optimistic by %.3g", nus[j], ratio);
+        CHECK_MSG(ratio <= 1.0, "nu %g: m1 apart by %.3g of the estimates' sum", nus[j], ratio);
         bkf_floquet_free(f);
         bkf_floquet_free(ref);
     }
@@ -733,7 +738,9 @@ TEST(floquet_m1_err_of_a_complex_pair_carries_the_cycle)
  * from bsimp (estimate 5.9e-11; a power iteration on either stepper's
  * cycle, rk4imp at 3e-14, lands 1.3e-10 apart, between the two).  Now both
  * refuse with estimates 1e-10.  The contract: an answer is within tol of
- * the other stepper, give or take that one's estimate. */
+ * the other stepper, give or take that one's estimate.  That stepper is
+ * bd2x2: since the stiff pair carries its floors in the canard's
+ * neighbourhood (stiffwin), bsimp's cycle is refused here at tol 1e-10. */
 TEST(floquet_lambda_err_carries_the_cycle_at_its_floor)
 {
     const double qs[] = {0, 0.5, 1};
@@ -742,7 +749,7 @@ TEST(floquet_lambda_err_carries_the_cycle_at_its_floor)
     for (int k = 0; k < 2; k++) {
         bkf_floquet_options o = bkf_floquet_options_default();
         o.tol = 1e-10;
-        if (k == 1) o.stepper = BKF_STEPPER_IMPLICIT;
+        if (k == 1) o.stepper = BKF_STEPPER_EXTRAPOLATION;
         bkf_floquet *f = bkf_floquet_alloc();
         bkf_error e;
         CHECK(f);
@@ -758,7 +765,7 @@ TEST(floquet_lambda_err_carries_the_cycle_at_its_floor)
         bkf_floquet_free(f);
     }
     double d = fabs(lambda[0] - lambda[1]);
-    bkf_test_note("lambda %.15g +- %.2g (auto, status %d), %.15g +- %.2g (bsimp, status %d): %.2g apart",
+    bkf_test_note("lambda %.15g +- %.2g (auto, status %d), %.15g +- %.2g (bd2x2, status %d): %.2g apart",
                   lambda[0], err[0], status[0], lambda[1], err[1], status[1], d);
     CHECK_MSG(status[0] != BKF_OK || d <= 1e-10 + err[1], "answered, %.3g from the other stepper (+- %.3g)", d,
               err[1]);
