@@ -306,6 +306,25 @@ static int engine_get(bkf_floquet *f, int dk, int which, engine **out)
     return BKF_OK;
 }
 
+/* The cycle at co, and where the engine refuses it, again cold, then 10
+ * times looser each time, at most `retries` times; co is left as solved.
+ * Why: near the canard (large gamma, |nu| -> 1) a warm start from across
+ * an explosion (the small and the relaxation cycle nu-close) can fail and
+ * a tight tolerance be refused, while a looser cycle is still usable: its
+ * T_err enters lambda_err. */
+static int solve_backing_off(bkf_cycle *cycle, double gamma, double nu, bkf_cycle_options *co, int retries,
+                             bkf_error *err)
+{
+    int rc = bkf_cycle_solve(cycle, gamma, nu, co, err);
+    for (int attempt = 0; bkf_status_is_numerical(rc) && attempt < retries; attempt++) {
+        if (co->warm_start) co->warm_start = 0;
+        else if (co->tol < 0.01) co->tol *= 10.0;
+        else break;
+        rc = bkf_cycle_solve(cycle, gamma, nu, co, err);
+    }
+    return rc;
+}
+
 static int floquet_set_body(bkf_floquet *f, double gamma, double c, double nu,
                             const bkf_floquet_options *options, bkf_error *err)
 {
@@ -324,18 +343,7 @@ static int floquet_set_body(bkf_floquet *f, double gamma, double c, double nu,
     co.tol = fmax(0.01 * o.tol, 1e-13);
     co.stepper = o.stepper;
     co.warm_start = 1;
-    /* Near the canard (large gamma, |nu| -> 1) the cycle engine can refuse
-     * a tight tolerance; a looser cycle is still usable because its error
-     * enters lambda_err through T_err. */
-    for (int attempt = 0;; attempt++) {
-        rc = bkf_cycle_solve(f->cycle, gamma, nu, &co, err);
-        if (!bkf_status_is_numerical(rc) || attempt == 3) break;
-        /* a warm start from across a canard explosion (large gamma, the
-         * small and the relaxation cycle nu-close) can fail: start cold */
-        if (co.warm_start) co.warm_start = 0;
-        else if (co.tol < 0.01) co.tol *= 10.0;
-        else break;
-    }
+    rc = solve_backing_off(f->cycle, gamma, nu, &co, 3, err);
     if (rc != BKF_OK) return rc;
     f->cycle_opt = co;
     const bkf_cycle_result *r = bkf_cycle_get(f->cycle);
@@ -758,15 +766,8 @@ static int resolve_cycle(bkf_floquet *f, double tol, bkf_error *err)
     if (rc != BKF_OK) co = f->cycle_opt;
     /* The restore can fail too (gamma 44 and 110, nu 0.9999: 1e-12 solved
      * warm, 1e-13 refused, then 1e-12 refused again, warm and cold, and the
-     * object was lost): then cold and looser, as bkf_floquet_set does; the
-     * looser cycle's T_err enters the estimates. */
-    int back = rc == BKF_OK ? BKF_OK : bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
-    for (int attempt = 0; back != BKF_OK && bkf_status_is_numerical(back) && attempt < 4; attempt++) {
-        if (co.warm_start) co.warm_start = 0;
-        else if (co.tol < 0.01) co.tol *= 10.0;
-        else break;
-        back = bkf_cycle_solve(f->cycle, f->gamma, f->nu, &co, err);
-    }
+     * object was lost): then cold and looser, as bkf_floquet_set does. */
+    int back = rc == BKF_OK ? BKF_OK : solve_backing_off(f->cycle, f->gamma, f->nu, &co, 4, err);
     co.warm_start = 1;
     if (back != BKF_OK) {
         f->ready = 0;
