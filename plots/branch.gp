@@ -4,7 +4,6 @@
 # gap between two verdicts) dotted grey, and the changes of stability (rows
 # of type stability) are marked.
 load plotdir.'/common.gp'
-colors = '#1f77b4 #2ca02c #d62728 #9467bd #ff7f0e #8c564b'
 pname = (param eq 'nu' ? '{/Symbol n}' : (param eq 'gamma' ? '{/Symbol g}' : param))
 set title (title ne '' ? title : sprintf('Front-speed branches along %s', pname))
 set xlabel pname
@@ -15,7 +14,7 @@ header(f) = system(sprintf("grep -m1 -v '^#' '%s'", f))
 stab = strstrt(header(word(files, 1)), "sigma_max") > 0
 if (!stab) {
 plot for [i=1:nfiles] word(files, i) using param:'v' with lines lw 2 \
-       lc rgb word(colors, (i-1)%6+1) title sprintf('n = %s', word(values, i)), \
+       lc rgb color(i) title sprintf('n = %s', word(values, i)), \
      for [i=1:nfiles] word(files, i) using param:(strcol('point') eq 'fold' ? column('v') : NaN) \
        with points pt 7 ps 1.3 lc rgb 'black' notitle, \
      for [i=1:nfiles] word(files, i) using param:(strcol('point') eq 'sonic' ? column('c') : NaN) \
@@ -29,11 +28,11 @@ on(s) = strcol('stable') eq s || strcol('point') eq 'stability'
 plot for [i=1:nfiles] word(files, i) using param:'v' with lines lw 1 dt 3 \
        lc rgb '#aaaaaa' notitle, \
      for [i=1:nfiles] word(files, i) using param:(on('yes') ? column('v') : NaN) with lines lw 2 \
-       lc rgb word(colors, (i-1)%6+1) title sprintf('n = %s', word(values, i)), \
+       lc rgb color(i) title sprintf('n = %s', word(values, i)), \
      for [i=1:nfiles] word(files, i) using param:(on('no') ? column('v') : NaN) with lines lw 3 \
        lc rgb 'white' notitle, \
      for [i=1:nfiles] word(files, i) using param:(on('no') ? column('v') : NaN) with lines lw 2 \
-       dt 2 lc rgb word(colors, (i-1)%6+1) notitle, \
+       dt 2 lc rgb color(i) notitle, \
      for [i=1:nfiles] word(files, i) using param:(strcol('point') eq 'fold' ? column('v') : NaN) \
        with points pt 7 ps 1.3 lc rgb 'black' notitle, \
      for [i=1:nfiles] word(files, i) using param:(strcol('point') eq 'sonic' ? column('c') : NaN) \

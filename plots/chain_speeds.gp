@@ -7,7 +7,6 @@
 # order (N/S)^-2 the lattice Laplacian's -q^2 (1 - q^2 h^2/12) predicts.
 minwidth = 1400
 load plotdir.'/common.gp'
-colors = '#1f77b4 #2ca02c #d62728 #9467bd #ff7f0e #8c564b'
 set multiplot layout 1, 2 title (title ne '' ? title : \
   sprintf('The chain against the continuum:  {/Symbol g} = %g,  c = %g,  {/Symbol n} = %g,  S = %g', \
           gamma, c, nu, S))
@@ -16,8 +15,18 @@ chain_title(i) = iscont(i) ? '' : sprintf('chain, N = %s', word(values, i))
 set xlabel 'number of fronts n'
 set ylabel 'front speed v'
 set logscale y
-set yrange [0.2:2.5]
-set ytics (0.2, 0.3, 0.5, 1, 2)
+# every table's speeds in view, the ticks from their range
+vlo = 1e300
+vhi = 0
+do for [i=1:nfiles] {
+  stats word(files, i) using 'v' nooutput
+  if (exists("STATS_min")) { vlo = STATS_min < vlo ? STATS_min : vlo; vhi = STATS_max > vhi ? STATS_max : vhi }
+  undefine STATS_min STATS_max
+}
+if (vhi < vlo) { vlo = 0.1; vhi = 1 }
+vpad = (vhi / vlo)**0.06 > 1.05 ? (vhi / vlo)**0.06 : 1.05
+set yrange [vlo / vpad : vhi * vpad]
+call plotdir.'/logtics.gp' 'y' sprintf('%.17g', vlo / vpad) sprintf('%.17g', vhi * vpad)
 set key top right
 set offsets 0.5, 0.5, 0, 0
 # Stability is drawn where a table has it (--stability): filled stable,
@@ -31,12 +40,12 @@ plot for [i=1:nfiles] word(files, i) using 'n':(iscont(i) ? column('v') : NaN) \
        with linespoints lw 2 pt 6 ps 1.2 lc rgb 'black' title (iscont(i) ? 'continuum' : ''), \
      for [i=1:nfiles] word(files, i) \
        using 'n':(iscont(i) || !hs[i] || strcol('stable') ne 'yes' ? NaN : column('v')) \
-       with points pt 7 ps 1.1 lc rgb word(colors, (i-1)%6+1) title (hs[i] ? chain_title(i) : ''), \
+       with points pt 7 ps 1.1 lc rgb color(i) title (hs[i] ? chain_title(i) : ''), \
      for [i=1:nfiles] word(files, i) \
        using 'n':(iscont(i) || !hs[i] || strcol('stable') eq 'yes' ? NaN : column('v')) \
-       with points pt 6 ps 1.1 lc rgb word(colors, (i-1)%6+1) notitle, \
+       with points pt 6 ps 1.1 lc rgb color(i) notitle, \
      for [i=1:nfiles] word(files, i) using 'n':(iscont(i) || hs[i] ? NaN : column('v')) \
-       with points pt 2 ps 1.1 lc rgb word(colors, (i-1)%6+1) title (hs[i] ? '' : chain_title(i)), \
+       with points pt 2 ps 1.1 lc rgb color(i) title (hs[i] ? '' : chain_title(i)), \
      NaN with points pt 7 lc rgb 'black' title 'stable', \
      NaN with points pt 6 lc rgb 'black' title 'unstable'
 unset offsets
@@ -69,6 +78,6 @@ set yrange [*:*]
 set xrange [0.8:1.25 * xmax]
 set key bottom left
 plot for [k=1:nconv] $conv using 1:(abs(column(k + 1) / vc[k] - 1)) with linespoints lw 2 pt 7 \
-       lc rgb word(colors, (k-1)%6+1) title sprintf('n = %d', k), \
+       lc rgb color(k) title sprintf('n = %d', k), \
      1e-3 / x**2 with lines dt 2 lc rgb 'black' title '{/Symbol \265} (N/S)^{-2}'
 unset multiplot

@@ -20,3 +20,19 @@ set datafile commentschars '#'
 set key box opaque
 set grid lc rgb '#dddddd'
 nfiles = words(files)
+colors = '#1f77b4 #2ca02c #d62728 #9467bd #ff7f0e #8c564b #17becf #7f7f7f #bcbd22 #e377c2'
+color(i) = word(colors, (int(i) - 1) % words(colors) + 1)
+# The inputs table f was computed at, for the names given ('gamma c nu S'),
+# from its "# command:" line (inputs.awk): every figure says what it shows.
+inputs(f, names) = system(sprintf("awk -v names='%s' -f '%s/inputs.awk' '%s'", \
+                                  names, plotdir, f))
+# The value of one input of f ('' when its command does not give it).
+input(f, name) = system(sprintf("awk -v raw=1 -v names='%s' -f '%s/inputs.awk' '%s'", \
+                                name, plotdir, f))
+# The figure's title: the scene's own, else `what` and the inputs of f.
+titled(what, f, names) = title ne '' ? title : \
+    (inputs(f, names) eq '' ? what : what.':  '.inputs(f, names))
+# A data range [lo, hi] widened by a fraction `pad` of its width on each
+# side (a point on the frame is hidden by it), on a log axis by a factor.
+padlo(lo, hi, pad) = lo - pad * (hi > lo ? hi - lo : (lo != 0 ? abs(lo) : 1))
+padhi(lo, hi, pad) = hi + pad * (hi > lo ? hi - lo : (hi != 0 ? abs(hi) : 1))

@@ -8,9 +8,8 @@ set xlabel 'wavenumber q'
 set ylabel 'growth per period {/Symbol l}_q'
 set xzeroaxis lt -1 lw 1
 set key bottom left
-colors = '#1f77b4 #2ca02c #d62728 #9467bd #ff7f0e #8c564b'
 plot for [i=1:nfiles] word(files, i) using 'q':'lambda' with lines lw 2 \
-       lc rgb word(colors, (i-1)%6+1) title sprintf('{/Symbol n} = %s', word(values, i)), \
+       lc rgb color(i) title sprintf('{/Symbol n} = %s', word(values, i)), \
      for [i=1:nfiles] word(files, i) \
        using 'q':(column('allowed') == 1 ? column('lambda') : NaN) with points pt 7 ps 0.7 \
-       lc rgb word(colors, (i-1)%6+1) notitle
+       lc rgb color(i) notitle

@@ -4,17 +4,16 @@ minwidth = 1400
 load plotdir.'/common.gp'
 f = word(files, 1)
 nn = words(values)
-colors = '#1f77b4 #2ca02c #d62728 #9467bd #ff7f0e #8c564b'
 set multiplot layout 1, 2 title (title ne '' ? title : \
   sprintf('Front profiles:  {/Symbol g} = %g,  c = %g,  {/Symbol n} = %g,  S = %g', gamma, c, nu, S))
 set xlabel 'position x (one wavelength S/n)'
 set ylabel '{/Symbol y} = f(z)'
 set key bottom right
 plot for [i=1:nn] f using (column('n') == word(values, i) + 0 ? column('x') : NaN):'f' \
-       with lines lw 2 lc rgb word(colors, (i-1)%6+1) title sprintf('n = %s', word(values, i))
+       with lines lw 2 lc rgb color(i) title sprintf('n = %s', word(values, i))
 set xlabel 'f'
 set ylabel "f'"
 set key top left
 plot for [i=1:nn] f using (column('n') == word(values, i) + 0 ? column('f') : NaN):'fprime' \
-       with lines lw 2 lc rgb word(colors, (i-1)%6+1) title sprintf('n = %s', word(values, i))
+       with lines lw 2 lc rgb color(i) title sprintf('n = %s', word(values, i))
 unset multiplot

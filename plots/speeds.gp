@@ -1,18 +1,27 @@
 # Allowed front speeds v_n against n: every root of the speed condition,
 # the large-mu quantization S/(n k gamma) and the sonic line v = c
-# (data: bkfront speeds).
+# (data: bkfront speeds).  The ranges are the data's: every root, every
+# v_asym and c in view, whatever the parameters.
 load plotdir.'/common.gp'
 f = word(files, 1)
-set title (title ne '' ? title : \
-  sprintf('Allowed front speeds:  {/Symbol g} = %g,  c = %g,  {/Symbol n} = %g,  S = %g', gamma, c, nu, S))
+set title titled('Allowed front speeds', f, 'gamma c nu S')
 set xlabel 'number of fronts n'
 set ylabel 'front speed v'
 set key top right
+cs = input(f, 'c') ne '' ? real(input(f, 'c')) : c
+stats f using 'v' nooutput name 'V'
+stats f using 'v_asym' nooutput name 'VA'
+stats f using 'n' nooutput name 'N'
+ylo = cs < V_min ? cs : V_min
+yhi = VA_max > V_max ? VA_max : V_max
 set logscale y
-set yrange [0.2:5]
-set xrange [0:*]
-set offsets 0.5, 0.5, 0, 0
+ylo = ylo / (yhi / ylo)**0.06
+yhi = yhi * (yhi / ylo)**0.06
+set yrange [ylo:yhi]
+call plotdir.'/logtics.gp' 'y' sprintf('%.17g', ylo) sprintf('%.17g', yhi)
+set xrange [0.5 : N_max + 0.5]
+if (N_max > 20) { set xtics autofreq } else { set xtics 1 }
 plot f using 'n':'v_asym' with linespoints dt 2 pt 6 lc rgb '#777777' \
        title 'S / (n k({/Symbol n}) {/Symbol g})', \
      f using 'n':'v' with points pt 7 ps 1.2 lc rgb '#d62728' title 'numerical v_n', \
-     c with lines lc rgb '#1f77b4' lw 2 title 'sound speed c'
+     cs with lines lc rgb '#1f77b4' lw 2 title 'sound speed c'

@@ -36,17 +36,27 @@ EOD
 $LW << EOD
 EOD
 branch(s, nu) = (s eq 'stable' ? 1 : 0) + (nu > 0 ? 2 : 0)
+# a boundary is drawn where the map is: points past its nu range left out
+inmap(nu, g) = nu >= NU_min - 1.5 * dnu && nu <= NU_max + 1.5 * dnu && \
+               g >= G_min - 1.5 * dg && g <= G_max + 1.5 * dg
 if (nfiles > 1) {
     set table $PD
     plot for [i = 2:nfiles] word(files, i) \
         using 'nu_from':(real(word(values, i))):(branch(strcol('stability'), column('nu_from'))) \
-        with table if (strcol('from_kind') eq 'period_doubling')
+        with table if (strcol('from_kind') eq 'period_doubling' && inmap(column('nu_from'), real(word(values, i))))
     set table $LW
     plot for [i = 2:nfiles] word(files, i) \
         using 'nu_from':(real(word(values, i))):(branch(strcol('stability'), column('nu_from'))) \
-        with table if (strcol('from_kind') eq 'long_wave')
+        with table if (strcol('from_kind') eq 'long_wave' && inmap(column('nu_from'), real(word(values, i))))
     unset table
 }
+# a table that drew no row is no datablock at all (no boundary at any
+# gamma: the oscillation stable or unstable throughout): made empty here
+set print $PD append
+print ''
+set print $LW append
+print ''
+unset print
 # one curve per branch: a point of another branch is undefined, which
 # breaks the line instead of joining across it
 on(b) = (column(3) == b ? column(2) : NaN)

@@ -1,0 +1,272 @@
+/* The figures adapt to their data: every plot script that bkfront run uses,
+ * drawn by a scene at two parameter sets far from the paper's, keeps every
+ * point it plots inside the ranges it draws (issue 36).
+ *
+ * How a point "outside" is seen: the scripts are copied with two lines after
+ * each plot command that print gnuplot's own range report (GPVAL_X_MIN ..
+ * GPVAL_Y_MAX) and replot the same command into a table, where gnuplot
+ * flags each point i (in range), o (outside the drawn ranges) or u
+ * (undefined).  A fixed range that hides data (speeds.gp's old yrange
+ * [0.2:5], which hid n >= 10 and the line v = c at gamma 6, c 0.1) shows as
+ * o points; an empty panel as a plot without any i point. */
+#define _XOPEN_SOURCE 700
+#include "harness.h"
+
+#include <dirent.h>
+#include <ftw.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "cli_support.h"
+
+#ifndef BKF_SOURCE_DIR
+#define BKF_SOURCE_DIR "."
+#endif
+
+static int remove_one(const char *path, const struct stat *st, int flag, struct FTW *ftw)
+{
+    (void)st, (void)flag, (void)ftw;
+    return remove(path);
+}
+
+static void write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    CHECK_MSG(f, "cannot write %s", path);
+    CHECK(fputs(text, f) >= 0);
+    CHECK(fclose(f) == 0);
+}
+
+/* plots/NAME.gp copied into dir with the probe after each plot command (a
+ * line starting "plot", through its continuation lines); a plot that
+ * writes a table itself (sweep_map's boundaries) is left alone. */
+static void instrument(const char *name, const char *dir, const char *probe_dir)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/plots/%s", BKF_SOURCE_DIR, name);
+    char *text = bkf_cli_read_file(path);
+    CHECK_MSG(text, "cannot read %s", path);
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *out = fopen(path, "w");
+    CHECK(out);
+    int in_plot = 0, own_table = 0;
+    for (char *line = text; *line;) {
+        size_t len = strcspn(line, "\n");
+        const char *p = line;
+        while (*p == ' ' || *p == '\t') p++;
+        if (!in_plot && strncmp(p, "plot ", 5) == 0) in_plot = 1, own_table = 0;
+        fwrite(line, 1, len, out);
+        fputc('\n', out);
+        if (in_plot) {
+            size_t k = len;
+            while (k && (line[k - 1] == ' ' || line[k - 1] == '\r')) k--;
+            char save = line[len];
+            line[len] = '\0';
+            if (strstr(line, "with table")) own_table = 1;
+            line[len] = save;
+            if (!(k && line[k - 1] == '\\')) {
+                in_plot = 0;
+                size_t dot = strcspn(name, ".");
+                if (!own_table)
+                    fprintf(out, "bkf_probe = '%s/%.*s.ranges'; load '%s/probe.gp'\n", probe_dir,
+                            (int)dot, name, probe_dir);
+            }
+        }
+        line += len + (line[len] == '\n');
+    }
+    CHECK(fclose(out) == 0);
+    free(text);
+}
+
+/* Copies plots/ (scripts instrumented, the rest as is) into dir/plots and
+ * writes the probe into dir/probe. */
+static void instrumented_plots(const char *dir)
+{
+    char plots[600], probe[600], path[1200];
+    snprintf(plots, sizeof plots, "%s/plots", dir);
+    snprintf(probe, sizeof probe, "%s/probe", dir);
+    CHECK(mkdir(plots, 0700) == 0 && mkdir(probe, 0700) == 0);
+    snprintf(path, sizeof path, "%s/probe.gp", probe);
+    write_text(path, "set print bkf_probe append\n"
+                     "print sprintf('# ranges x %.17g %.17g y %.17g %.17g', GPVAL_X_MIN, "
+                     "GPVAL_X_MAX, GPVAL_Y_MIN, GPVAL_Y_MAX)\n"
+                     "unset print\n"
+                     "set table bkf_probe append\n"
+                     "replot\n"
+                     "unset table\n");
+    DIR *d = opendir(BKF_SOURCE_DIR "/plots");
+    CHECK(d);
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        size_t n = strlen(e->d_name);
+        if (n > 3 && strcmp(e->d_name + n - 3, ".gp") == 0) {
+            instrument(e->d_name, plots, probe);
+        } else if (n > 4 && strcmp(e->d_name + n - 4, ".awk") == 0) {
+            snprintf(path, sizeof path, "%s/plots/%s", BKF_SOURCE_DIR, e->d_name);
+            char *text = bkf_cli_read_file(path);
+            CHECK(text);
+            snprintf(path, sizeof path, "%s/%s", plots, e->d_name);
+            write_text(path, text);
+            free(text);
+        }
+    }
+    closedir(d);
+}
+
+/* The probe's report of one script: every plot command of it kept its
+ * points in view, and each drew at least one.  Each fault is noted (the
+ * first of each plot); returns their number. */
+static int check_ranges(const char *dir, const char *script, const char *set)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%s/probe/%s.ranges", dir, script);
+    char *text = bkf_cli_read_file(path);
+    if (!text) {
+        bkf_test_note("%s: %s.gp drew nothing", set, script);
+        return 1;
+    }
+    int plots = 0, faults = 0, noted = 0;
+    long inside = 0;
+    double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+    for (char *line = text;;) {
+        size_t len = strcspn(line, "\n");
+        char save = line[len];
+        line[len] = '\0';
+        int last = !save;
+        if (last || strncmp(line, "# ranges ", 9) == 0) {
+            if (plots && inside == 0) {
+                bkf_test_note("%s: %s.gp plot %d: no point in view", set, script, plots);
+                faults++;
+            }
+            if (last) break;
+            plots++;
+            inside = 0;
+            noted = 0;
+            CHECK(sscanf(line, "# ranges x %lf %lf y %lf %lf", &x0, &x1, &y0, &y1) == 4);
+        } else if (line[0] && line[0] != '#') {
+            /* x y ... type: the type is the last word */
+            const char *end = line + strlen(line);
+            while (end > line && (end[-1] == ' ' || end[-1] == '\t')) end--;
+            char type = end > line ? end[-1] : 'u';
+            /* gnuplot's own report and its flags agree: x is written in the
+             * axis' format (6 digits by default; a format such as 10^{%T}
+             * is no number and not compared) */
+            char *xend;
+            double x = strtod(line, &xend);
+            int number = xend != line && (*xend == ' ' || *xend == '\t');
+            double slack = 1e-5 * (fabs(x0) + fabs(x1));
+            int out = type == 'o' ||
+                      (type == 'i' && number && !(x >= x0 - slack && x <= x1 + slack));
+            if (out && !noted++)
+                bkf_test_note("%s: %s.gp plot %d draws x in [%g, %g], y in [%g, %g]; "
+                              "outside: '%s'", set, script, plots, x0, x1, y0, y1, line);
+            faults += out;
+            inside += type == 'i';
+        }
+        line += len + 1;
+    }
+    if (plots == 0) {
+        bkf_test_note("%s: %s.gp: no plot reported", set, script);
+        faults++;
+    }
+    free(text);
+    return faults;
+}
+
+/* What every figure kind needs, cheaply: short runs, coarse grids. */
+#define FAR_BODY                                                                     \
+    "[accuracy]\ntol = 1e-8\nN = 128\n"                                                \
+    "[friction fric]\npoints = 101\n[figure fric]\ndata = fric\n"                      \
+    "[speeds table]\n[figure speeds]\ndata = table\n"                                  \
+    "[spacetime st]\ntmax = 4\nframes = 20\ninit = front:n=2,noise=0.01\n"             \
+    "[figure st]\ndata = st\n"                                                         \
+    "[dispersion disp]\nq = 0:6:25\n[figure disp]\ndata = disp\n"                      \
+    "[validity val]\nmu = 0.1:1e4:6\nnu = -0.9:0.9:4\n[figure val]\ndata = val\n"      \
+    "[profile prof]\nn = 1,2\npoints = 200\n[figure prof]\ndata = prof\n"              \
+    "[stability spec]\nn = 1,2\ntol = 1e-5\n[figure spec]\ndata = spec\n"              \
+    "[stability line]\nn = 1\nline = yes\nkappa-count = 6\ntol = 1e-5\n"              \
+    "[figure line]\ndata = line\n"                                                     \
+    "[speeds chain]\nmodel = chain\nnmax = 2\nstability = yes\n"                       \
+    "[speeds cont]\nnmax = 2\n[figure chain]\ndata = cont, chain\n"                    \
+    "[check chk]\nn = 2\ntmax = 8\nrel_tol = 0.01\n[figure chk]\ndata = chk\n"
+
+static const struct {
+    const char *name, *text;
+} far_sets[] = {
+    {"gamma 6, c 0.1, nu -0.99, S 40",
+     "[model]\ngamma = 6\nc = 0.1\nnu = -0.99\nS = 40\n" FAR_BODY
+     "[period per]\nnu = 0,-0.99\nmu = 0.1:1e4:7\n[figure per]\ndata = per\n"
+     "[branch br]\nparam = S\nto = 30\nn = 2\ntol = 1e-6\nstability = yes\n"
+     "[figure br]\ndata = br\n"
+     "[threshold th]\nalong = c\nfrom = 0.1\nto = 1\nsearch = -0.999:-0.8\ntol = 1e-6\n"
+     "[figure th]\ndata = th\n"
+     "[stability diag]\ndiagram = yes\nn = 2\nnu = -0.99\nto = -0.95\nnu-step = 0.04\n"
+     "S = 2\nS-to = 40\nS-samples = 3\ntol = 1e-4\nS-tol = 0.5\n[figure diag]\ndata = diag\n"
+     "[sweep sw]\nx = nu=-0.99:-0.95:2\ny = gamma=5:6:2\ntmax = 2\nN = 64\n"
+     "thresholds = 6\nsearch = -0.999:-0.8\n[figure sw]\ndata = sw\n"},
+    {"gamma 0.7, c 0.8, nu 0.4, S 15",
+     "[model]\ngamma = 0.7\nc = 0.8\nnu = 0.4\nS = 15\n" FAR_BODY
+     "[period per]\nnu = 0.4,0.9\nmu = 0.1:1e4:7\n[figure per]\ndata = per\n"
+     "[branch br]\nparam = S\nto = 10\nn = 1\ntol = 1e-6\nstability = yes\n"
+     "[figure br]\ndata = br\n"
+     "[threshold th]\nalong = gamma\nfrom = 2\nto = 4\ntol = 1e-6\n[figure th]\ndata = th\n"
+     "[stability diag]\ndiagram = yes\nn = 2\nnu = 0.3\nto = 0.5\nnu-step = 0.2\n"
+     "S = 2\nS-to = 15\nS-samples = 3\ntol = 1e-4\nS-tol = 0.5\n[figure diag]\ndata = diag\n"
+     "[sweep sw]\nx = nu=0.3:0.5:2\ny = gamma=0.6:0.8:2\ntmax = 2\nN = 64\n"
+     "thresholds = 0.7\n[figure sw]\ndata = sw\n"},
+};
+
+/* Every script a scene draws with (plots/KIND.gp but common.gp, logtics.gp
+ * and the benchmark's work_precision_*.gp, which draw make bench's table). */
+static const char *const scripts[] = {
+    "friction", "speeds",        "spacetime", "dispersion", "period",     "validity",
+    "profile",  "spectrum",      "branch",    "threshold",  "diagram",    "spectrum_line",
+    "check",    "chain_speeds",  "sweep_map",
+};
+
+/* A script that is neither drawn by the test nor one of the exceptions
+ * above fails it: a new figure kind is tested when it comes. */
+static int known_script(const char *file)
+{
+    if (strcmp(file, "common.gp") == 0 || strcmp(file, "logtics.gp") == 0 ||
+        strncmp(file, "work_precision_", 15) == 0)
+        return 1;
+    for (size_t i = 0; i < sizeof scripts / sizeof scripts[0]; i++)
+        if (strncmp(file, scripts[i], strlen(scripts[i])) == 0 &&
+            strcmp(file + strlen(scripts[i]), ".gp") == 0)
+            return 1;
+    return 0;
+}
+
+TEST(figures_keep_every_point_in_view_far_from_the_paper)
+{
+    DIR *d = opendir(BKF_SOURCE_DIR "/plots");
+    CHECK(d);
+    for (struct dirent *e; (e = readdir(d));) {
+        size_t n = strlen(e->d_name);
+        if (n > 3 && strcmp(e->d_name + n - 3, ".gp") == 0)
+            CHECK_MSG(known_script(e->d_name), "plots/%s is not drawn by this test",
+                      e->d_name);
+    }
+    closedir(d);
+    int faults = 0;
+    for (size_t k = 0; k < sizeof far_sets / sizeof far_sets[0]; k++) {
+        char dir[] = "/tmp/bkf_figures_XXXXXX";
+        CHECK(mkdtemp(dir));
+        instrumented_plots(dir);
+        char scene[600], out[600], plots[600];
+        snprintf(scene, sizeof scene, "%s/far.scene", dir);
+        snprintf(out, sizeof out, "%s/out", dir);
+        snprintf(plots, sizeof plots, "%s/plots", dir);
+        write_text(scene, far_sets[k].text);
+        bkf_cli_result r = BKF_CLI("run", "--out", out, "--plots", plots, scene);
+        CHECK_MSG(r.code == 0, "%s: exit %d: %s\n%s", far_sets[k].name, r.code, r.err, r.out);
+        bkf_cli_result_free(&r);
+        for (size_t i = 0; i < sizeof scripts / sizeof scripts[0]; i++)
+            faults += check_ranges(dir, scripts[i], far_sets[k].name);
+        nftw(dir, remove_one, 16, FTW_DEPTH | FTW_PHYS);
+    }
+    CHECK_MSG(faults == 0, "%d points out of view or empty plots (above)", faults);
+}
