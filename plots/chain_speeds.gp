@@ -7,9 +7,7 @@
 # order (N/S)^-2 the lattice Laplacian's -q^2 (1 - q^2 h^2/12) predicts.
 minwidth = 1400
 load plotdir.'/common.gp'
-set multiplot layout 1, 2 title (title ne '' ? title : \
-  sprintf('The chain against the continuum:  {/Symbol g} = %g,  c = %g,  {/Symbol n} = %g,  S = %g', \
-          gamma, c, nu, S))
+set multiplot layout 1, 2 title titled('The chain against the continuum', word(files, 1), 'gamma c nu S')
 iscont(i) = word(values, i) eq 'continuum'
 chain_title(i) = iscont(i) ? '' : sprintf('chain, N = %s', word(values, i))
 set xlabel 'number of fronts n'

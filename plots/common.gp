@@ -36,3 +36,7 @@ titled(what, f, names) = title ne '' ? title : \
 # side (a point on the frame is hidden by it), on a log axis by a factor.
 padlo(lo, hi, pad) = lo - pad * (hi > lo ? hi - lo : (lo != 0 ? abs(lo) : 1))
 padhi(lo, hi, pad) = hi + pad * (hi > lo ? hi - lo : (hi != 0 ? abs(hi) : 1))
+# A tick step of 1, 2 or 5 x 10^k giving about n intervals over a width w
+# (gnuplot's own step crowds a narrow panel: "0.010.020.03").
+nicestep(w, n) = (ns_s = (w > 0 ? w : 1) / n, ns_p = 10.0**floor(log10(ns_s)), \
+    ns_s / ns_p <= 1 ? ns_p : ns_s / ns_p <= 2 ? 2 * ns_p : ns_s / ns_p <= 5 ? 5 * ns_p : 10 * ns_p)

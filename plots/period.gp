@@ -14,8 +14,8 @@ plot for [i=1:nfiles] word(files, i) using 'mu':'T' with points pt 7 ps 0.6 \
        lc rgb color(i) notitle, \
      for [i=1:nfiles] word(files, i) using 'mu':(column('mu') >= 1 ? column('T_asym2') : NaN) \
        with lines lc rgb color(i) notitle, \
-     NaN with lines dt 2 lc rgb 'black' title 'k({/Symbol n}) {/Symbol m}', \
-     NaN with lines lc rgb 'black' title 'corrected asymptotics'
+     NaN with lines dt 2 lc rgb 'black' title 'leading k({/Symbol n}) {/Symbol m}', \
+     NaN with lines lc rgb 'black' title 'corrected large-{/Symbol m} ({/Symbol m} {/Symbol \263} 1)'
 set ylabel 'relative error |T_{asym} - T| / T'
 set format y '10^{%T}'
 set key bottom left
@@ -25,6 +25,6 @@ plot for [i=1:nfiles] word(files, i) using 'mu':(abs(column('T_asym') - column('
        using 'mu':(abs(column('T_asym2') - column('T'))/column('T')) \
        with linespoints pt 7 ps 0.5 lc rgb color(i) \
        title sprintf('{/Symbol n} = %s', word(values, i)), \
-     NaN with lines dt 2 lc rgb 'black' title 'k {/Symbol m}', \
-     NaN with linespoints pt 7 ps 0.5 lc rgb 'black' title 'small-{/Symbol m} ({/Symbol m} < 1), corrected ({/Symbol m} {/Symbol \263} 1)'
+     NaN with lines dt 2 lc rgb 'black' title 'leading k({/Symbol n}) {/Symbol m}', \
+     NaN with linespoints pt 7 ps 0.5 lc rgb 'black' title 'small-{/Symbol m} ({/Symbol m} < 1), corrected large-{/Symbol m} ({/Symbol m} {/Symbol \263} 1)'
 unset multiplot

@@ -4,8 +4,7 @@ minwidth = 1400
 load plotdir.'/common.gp'
 f = word(files, 1)
 nn = words(values)
-set multiplot layout 1, 2 title (title ne '' ? title : \
-  sprintf('Front profiles:  {/Symbol g} = %g,  c = %g,  {/Symbol n} = %g,  S = %g', gamma, c, nu, S))
+set multiplot layout 1, 2 title titled('Front profiles', f, 'gamma c nu S')
 set xlabel 'position x (one wavelength S/n)'
 set ylabel '{/Symbol y} = f(z)'
 set key bottom right

@@ -6,7 +6,8 @@ set xlabel '{/Symbol k} L / 2{/Symbol p}'
 set ylabel 'max Re {/Symbol s}'
 set key top right
 set xzeroaxis lc rgb '#777777' dt 2
-set title (title ne '' ? title : sprintf('Continuous spectrum on the line:  {/Symbol g} = %g,  c = %g,  {/Symbol n} = %g,  S = %g', gamma, c, nu, S))
+set title titled('Continuous spectrum on the line', word(files, 1), 'gamma c nu S')
+Sv = input(word(files, 1), 'S') ne '' ? real(input(word(files, 1), 'S')) : S
 # kappa in units of 2 pi / L, L = S/n
-plot for [i = 1:nfiles] word(files, i) using (column('kappa') * S / (2 * pi * word(values, i))):'re' \
+plot for [i = 1:nfiles] word(files, i) using (column('kappa') * Sv / (2 * pi * word(values, i))):'re' \
      with linespoints pt 7 ps 0.5 lw 2 title sprintf('n = %s', word(values, i))

@@ -4,7 +4,7 @@ load plotdir.'/common.gp'
 f = word(files, 1)
 pname = (param eq 'gamma' ? '{/Symbol g}' : (param eq '' ? 'c' : param))
 x = (param eq '' ? 'c' : param)
-set title (title ne '' ? title : 'Stability threshold of the global oscillation')
+set title titled('Stability threshold of the global oscillation', f, 'gamma c')
 set xlabel pname
 set ylabel 'threshold {/Symbol n}_{pd}'
 set y2label 'critical wavenumber q_c'
