@@ -547,6 +547,24 @@ static int diagram_curves(const bkf_stability_spec *spec, const double *nus, siz
                                           (spec->S_to - spec->S));
             s = bkf_stabmap_scan(&p, n, lo, spec->S_to, samples < 2 ? 2 : samples, &o, pts, 16,
                                  &count, err);
+            /* no crossing: the whole column is stable or unstable, and one
+             * spectrum says which (a phase diagram fills it); a refused or
+             * undecided sigma leaves the column without a row */
+            if (!s && count == 0) {
+                bkf_model_params q = p;
+                q.S = 0.5 * (lo + spec->S_to);
+                double sg, sge, v, mu;
+                bkf_error e;
+                int t = bkf_stabmap_sigma(&q, n, 0, o.tol, &sg, &sge, &v, &mu, &e);
+                if (t == BKF_ENOMEM) s = bkf_error_set(err, t, "%s", e.message);
+                if (!t) (*spectra)++;
+                if (!t && fabs(sg) > sge) {
+                    size_t curves = k->curves;
+                    k->curves = 0;
+                    add_row(k, "state", n, 0, nus[i], q.S, 0, sg < 0);
+                    k->curves = curves;
+                }
+            }
             for (size_t j = 0; !s && j < count; j++) {
                 *spectra += pts[j].evaluations;
                 size_t c = open;
@@ -659,8 +677,10 @@ static int write_diagram(const bkf_stability_spec *spec, FILE *out, bkf_io_forma
         s = bkf_io_table_commentf(
             table, err,
             "kinds: existence (S = n c gamma g_inf(nu): trains exist above), stability "
-            "(sigma_max = 0; above 1: stable above), long_wave and period_doubling (the "
-            "oscillation's mode q = 2 pi m / S at a band edge; above 1: stable above)");
+            "(sigma_max = 0; above 1: stable above), state (curve 0: a nu where n has no "
+            "crossing in S, its spectrum at S; above 1: stable there), long_wave and "
+            "period_doubling (the oscillation's mode q = 2 pi m / S at a band edge; above 1: "
+            "stable above)");
     if (!s)
         s = bkf_io_table_commentf(table, err,
                                   "work: %zu spectra (a scan in S of %zu steps per n and nu, "
