@@ -50,6 +50,9 @@ unset offsets
 # right: the fastest wave of each n (the fronts; one per n here) per table,
 # gathered into a datablock: one line per chain, N/S then v for n = 1..nconv
 nconv = 4
+do for [i=1:nfiles] {
+  if (iscont(i)) { stats word(files, i) using 'n' nooutput name 'NC'; nconv = NC_max < nconv ? int(NC_max) : nconv }
+}
 array vc[nconv]
 xmax = 1
 set print $conv

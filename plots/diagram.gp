@@ -47,15 +47,21 @@ set ylabel 'S'
 set key off
 set grid front lc rgb '#bbbbbb'
 is(k) = strcol('kind') eq k
+# the existence boundary of n, at the foot of the window where it is below
+# (trains exist throughout)
+exists_at(n) = is('existence') && column('n') == n ? \
+    (column('S') > Slo ? (column('S') < Shi ? column('S') : Shi) : Slo) : NaN
+# the oscillation's rows: none when it is stable throughout the window
+nosc = int(system(sprintf("grep -c -E '\t(long_wave|period_doubling|other)\t' '%s'", f)))
 set multiplot layout rows, cols \
   title titled('Where trains of n fronts exist and are stable', f, 'gamma c')
 do for [n = 1:nmax] {
     set title sprintf('n = %d', n)
     # where the train exists, unstable but where the stable and unknown
     # regions are laid over it
-    plot f using 'nu':(is('existence') && column('n') == n ? column('S') : NaN):(Shi) \
+    plot f using 'nu':(exists_at(n)):(Shi) \
            with filledcurves fs solid 1.0 noborder lc rgb c_unstable, \
-         f using 'nu':(is('existence') && column('n') == n ? column('S') : NaN):(Slo) \
+         f using 'nu':(exists_at(n)):(Slo) \
            with filledcurves fs solid 1.0 noborder lc rgb c_none, \
          region(n, 'stable') using 1:2 with filledcurves closed fs solid 1.0 noborder \
            lc rgb c_stable, \
@@ -63,13 +69,15 @@ do for [n = 1:nmax] {
            lc rgb '#ffffff', \
          region(n, 'undecided') using 1:2 with filledcurves closed fs pattern 4 \
            lc rgb '#777777', \
-         f using 'nu':(is('existence') && column('n') == n ? column('S') : NaN) \
-           with lines lw 2 lc rgb '#333333', \
+         f using 'nu':(exists_at(n)) with lines lw 2 lc rgb '#333333', \
          for [i = 1:ncurves] f using 'nu': \
            (is('stability') && column('n') == n && column('curve') == i ? column('S') : NaN) \
            with linespoints lw 2.5 pt 7 ps 0.6 lc rgb '#1a1a1a'
 }
 set title 'global oscillation'
+if (nosc == 0) {
+    set label 1 'stable throughout' at graph 0.5, graph 0.5 center front
+}
 plot region(0, 'oscillation') using 1:2 with filledcurves closed fs solid 1.0 noborder \
        lc rgb c_osc, \
      for [i = 1:ncurves] f using 'nu':(is('long_wave') && column('curve') == i ? column('S') : NaN) \
@@ -77,6 +85,7 @@ plot region(0, 'oscillation') using 1:2 with filledcurves closed fs solid 1.0 no
      f using 'nu':(is('period_doubling') || is('other') ? column('S') : NaN) \
        with points pt 7 ps 0.4 lc rgb '#555555'
 # the key: a panel of its own
+unset label 1
 unset title
 unset border
 unset tics
