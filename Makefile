@@ -70,7 +70,7 @@ BENCH := $(BUILD)/run_bench
 EXAMPLES := $(BUILD)/examples/check_paper
 
 .PHONY: mpi test-mpi
-.PHONY: all test run bench sanitize deps clean build-all check-built bench-built fuzz-syntax \
+.PHONY: all test run gallery bench sanitize deps clean build-all check-built bench-built fuzz-syntax \
         sanitize-built valgrind fuzz fuzz-built install uninstall FORCE
 
 all: deps
@@ -123,6 +123,18 @@ fuzz-syntax:
 run: deps
 	@$(MAKE) --no-print-directory build-all
 	./$(CLI) run --out plots/out/paper fronts/paper.scene
+
+# The gallery (plots/gallery/, shown by the README and docs/scenes.md): the
+# figures of the paper scene and of the check scene, drawn anew and copied
+# under the names the pages use (GALLERY_PAPER: the paper scene's figures).
+GALLERY_PAPER := fig1b speeds fig3a fig3b fig4a fig4b period validity profiles branch \
+                 threshold spectra line diagram
+gallery: deps
+	@$(MAKE) --no-print-directory build-all
+	./$(CLI) run --out plots/out/paper fronts/paper.scene
+	./$(CLI) run --out plots/out/check fronts/check.scene
+	for f in $(GALLERY_PAPER); do cp plots/out/paper/$$f.png plots/gallery/$$f.png || exit 1; done
+	cp plots/out/check/check_figure.png plots/gallery/check.png
 
 bench: deps
 	@$(call install_missing,$(BENCH_PACKAGES))
