@@ -276,3 +276,32 @@ TEST(figures_keep_every_point_in_view_at_gamma_0_7_c_0_8)
 {
     figures_in_view(1);
 }
+
+/* The diagram's `state` rows, which fill a column without crossing, say
+ * what the paper's table says at nu -0.96, S 20 (docs/cli/stability.md,
+ * checked against Hill's method in tests/products/test_stability.c): n = 2
+ * and 3 unstable (sigma_max 0.0697, 0.0244), n = 4 stable (-1.7e-3).  The
+ * scan's window S in [19.5, 20.5] holds no crossing of theirs (at nu -0.96
+ * and -0.959, the grid's end).  Without state rows the columns were empty. */
+TEST(diagram_state_rows_are_the_paper_verdicts)
+{
+    bkf_cli_result r = BKF_CLI("stability", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S",
+                               "19.5", "--n", "4", "--diagram", "--to", "-0.959", "--S-to", "20.5",
+                               "--nu-step", "0.5", "--S-samples", "2", "--tol", "1e-5");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    int verdict[5] = {-1, -1, -1, -1, -1};
+    for (int row = 0;; row++) {
+        char kind[32];
+        double n, above, S;
+        if (!bkf_tsv_cell(r.out, row, "kind", NULL, kind, sizeof kind)) break;
+        if (strcmp(kind, "state") != 0) continue;
+        CHECK(bkf_tsv_cell(r.out, row, "n", &n, NULL, 0) && n >= 1 && n <= 4);
+        CHECK(bkf_tsv_cell(r.out, row, "above", &above, NULL, 0));
+        CHECK(bkf_tsv_cell(r.out, row, "S", &S, NULL, 0) && S > 19.5 && S < 20.5);
+        verdict[(int)n] = (int)above;
+    }
+    CHECK_MSG(verdict[2] == 0 && verdict[3] == 0 && verdict[4] == 1,
+              "state of n = 2, 3, 4: %d %d %d (want 0 0 1)\n%s", verdict[2], verdict[3],
+              verdict[4], r.out);
+    bkf_cli_result_free(&r);
+}
