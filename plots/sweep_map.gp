@@ -17,6 +17,8 @@ colour(r) = (r == 0 ? 0x7f7f7f : r == 1 ? 0x1f77b4 : r == 2 ? 0xff7f0e : r == 3 
 stats f using 'nu' nooutput name 'NU'
 stats f using 'gamma' nooutput name 'G'
 stats f using 'seed' nooutput name 'SEED'
+stats f using 11 nooutput name 'FR'
+fmax = FR_max >= 1 ? int(FR_max) : 1
 # the initial states, in the order of the table (at most 4 told apart)
 stats f using 'point' nooutput name 'P'
 # the grid's spacing: mark offsets stay inside one cell
@@ -64,7 +66,9 @@ set xrange [NU_min - 1.5 * dnu : NU_max + 1.5 * dnu]
 set yrange [G_min - 1.5 * dg : G_max + 1.5 * dg]
 set xlabel '{/Symbol n}'
 set ylabel '{/Symbol g}'
-set key outside below center horizontal font ',9'
+# no box: gnuplot lays a key below over the x label (and an empty one is then
+# invisible)
+set key outside below center horizontal font ',9' nobox noopaque
 set multiplot layout 1, 2 title (title ne '' ? title : 'Regimes from an arbitrary initial state (left of each point: noise; right: oscillation)')
 set title 'regime'
 plot f using ($6 + xoff(strcol(2))):($4 + yoff($3)):(colour(regime(strcol(10)))) \
@@ -76,9 +80,12 @@ plot f using ($6 + xoff(strcol(2))):($4 + yoff($3)):(colour(regime(strcol(10))))
      for [b = 0:3] $LW using 1:(on(b)) with linespoints lw 2 pt 7 ps 0.5 lc rgb '#000000' \
         title (b == 0 ? 'long wave (Floquet)' : '')
 set title 'fronts at the end of the run'
-set cbrange [0:*]
+# a count: one colour per number of fronts, the bar's ticks at the integers
+set cbrange [-0.5 : fmax + 0.5]
+if (fmax < 12) { set cbtics 1 }
 set cblabel 'fronts'
 set palette rgb 33,13,10
+set palette maxcolors fmax + 1
 plot f using ($6 + xoff(strcol(2))):($4 + yoff($3)):11 with points pt 5 ps 1.2 lc palette notitle, \
      for [b = 0:3] $PD using 1:(on(b)) with linespoints lw 2 dt 2 pt 7 ps 0.5 lc rgb '#000000' \
         title (b == 0 ? 'period doubling (Floquet)' : ''), \
