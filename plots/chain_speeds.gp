@@ -51,7 +51,10 @@ unset offsets
 # gathered into a datablock: one line per chain, N/S then v for n = 1..nconv
 nconv = 4
 do for [i=1:nfiles] {
-  if (iscont(i)) { stats word(files, i) using 'n' nooutput name 'NC'; nconv = NC_max < nconv ? int(NC_max) : nconv }
+  if (iscont(i)) {
+    stats word(files, i) using 'n' nooutput name 'NC'
+    if (exists("NC_max")) { nconv = NC_max < nconv ? int(NC_max) : nconv }
+  }
 }
 array vc[nconv]
 xmax = 1
