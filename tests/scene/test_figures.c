@@ -184,7 +184,7 @@ static int check_ranges(const char *dir, const char *script, const char *set)
     "[stability spec]\nn = 1,2\ntol = 1e-5\n[figure spec]\ndata = spec\n"              \
     "[stability line]\nn = 1\nline = yes\nkappa-count = 6\ntol = 1e-5\n"              \
     "[figure line]\ndata = line\n"                                                     \
-    "[speeds chain]\nmodel = chain\nnmax = 2\nstability = yes\n"                       \
+    "[speeds chain]\nmodel = chain\nN = 60\nnmax = 2\nstability = yes\n"                       \
     "[speeds cont]\nnmax = 2\n[figure chain]\ndata = cont, chain\n"                    \
     "[check chk]\nn = 2\ntmax = 8\nrel_tol = 0.01\n[figure chk]\ndata = chk\n"
 
@@ -194,12 +194,12 @@ static const struct {
     {"gamma 6, c 0.1, nu -0.99, S 40",
      "[model]\ngamma = 6\nc = 0.1\nnu = -0.99\nS = 40\n" FAR_BODY
      "[period per]\nnu = 0,-0.99\nmu = 0.1:1e4:7\n[figure per]\ndata = per\n"
-     "[branch br]\nparam = S\nto = 30\nn = 2\ntol = 1e-6\nstability = yes\n"
+     "[branch br]\nparam = S\nto = 30\nn = 2\ntol = 1e-6\n"
      "[figure br]\ndata = br\n"
      "[threshold th]\nalong = c\nfrom = 0.1\nto = 1\nsearch = -0.999:-0.8\ntol = 1e-6\n"
      "[figure th]\ndata = th\n"
      "[stability diag]\ndiagram = yes\nn = 2\nnu = -0.99\nto = -0.95\nnu-step = 0.04\n"
-     "S = 2\nS-to = 40\nS-samples = 3\ntol = 1e-4\nS-tol = 0.5\n[figure diag]\ndata = diag\n"
+     "S = 2\nS-to = 40\nS-samples = 2\ntol = 1e-4\nS-tol = 0.5\n[figure diag]\ndata = diag\n"
      "[sweep sw]\nx = nu=-0.99:-0.95:2\ny = gamma=5:6:2\ntmax = 2\nN = 64\n"
      "thresholds = 6\nsearch = -0.999:-0.8\n[figure sw]\ndata = sw\n"},
     {"gamma 0.7, c 0.8, nu 0.4, S 15",
@@ -209,7 +209,7 @@ static const struct {
      "[figure br]\ndata = br\n"
      "[threshold th]\nalong = gamma\nfrom = 2\nto = 4\ntol = 1e-6\n[figure th]\ndata = th\n"
      "[stability diag]\ndiagram = yes\nn = 2\nnu = 0.3\nto = 0.5\nnu-step = 0.2\n"
-     "S = 2\nS-to = 15\nS-samples = 3\ntol = 1e-4\nS-tol = 0.5\n[figure diag]\ndata = diag\n"
+     "S = 2\nS-to = 15\nS-samples = 2\ntol = 1e-4\nS-tol = 0.5\n[figure diag]\ndata = diag\n"
      "[sweep sw]\nx = nu=0.3:0.5:2\ny = gamma=0.6:0.8:2\ntmax = 2\nN = 64\n"
      "thresholds = 0.7\n[figure sw]\ndata = sw\n"},
 };
