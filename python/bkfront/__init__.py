@@ -350,8 +350,15 @@ def product(name, **keys):
     def warn(message, data):
         messages.append(ffi.string(message).decode(errors="replace"))
 
+    # Handed to the worker, whose return drops the last reference: the spec
+    # is freed in that thread, where no KeyboardInterrupt can stop its
+    # destructor half-way (Python runs signal handlers in the main thread).
+    owned = [spec]
+    del spec
+
     def call(cancel):
-        # spec, keep and warn are referenced here: alive until the call returns
+        # keep and warn are referenced here: alive until the call returns
+        spec = owned.pop()
         buf = ffi.new("char **")
         size = ffi.new("size_t *")
         stream = libc.open_memstream(buf, size)
