@@ -102,3 +102,48 @@ def test_interrupted_calls_never_crash(name):
 def test_every_product_is_exercised():
     import bkfront
     assert set(PRODUCTS) | {"sweep"} == set(bkfront.products())
+
+
+REPRODUCER = r"""
+import os, random, signal, sys, threading, time
+import bkfront
+
+rng = random.Random(11)
+interrupted = 0
+for i in range(int(sys.argv[1])):
+    fired = threading.Event()
+    delay = rng.uniform(0.05, 0.4)
+
+    def kill():
+        time.sleep(delay)
+        os.kill(os.getpid(), signal.SIGINT)
+        fired.set()
+
+    try:
+        threading.Thread(target=kill).start()
+        t0 = time.monotonic()
+        try:
+            bkfront.product("period", mu="1:100:1000000", nu="0.5")
+        except KeyboardInterrupt:
+            interrupted += 1
+            waited = time.monotonic() - t0 - delay
+            assert waited < 0.5, "the library took %.2f s to stop" % waited
+        while not fired.is_set():
+            time.sleep(0.001)
+        time.sleep(0.002)
+    except KeyboardInterrupt:
+        while not fired.is_set():
+            time.sleep(0.001)
+T = bkfront.product("period", mu=1, nu=0, tol=1e-12)["T"][0]
+print(interrupted, abs(T - 6.6632868593231301897))
+"""
+
+
+def test_the_issue_reproducer_stops_at_once_and_never_crashes():
+    # issue 32: a million-point period, its 8 MB mu list freed under the
+    # library after Ctrl-C, segfaulted in 1 of 2-6 runs
+    p = subprocess.run([sys.executable, "-c", REPRODUCER, str(CALLS)], capture_output=True,
+                       text=True, timeout=300, env=dict(os.environ))
+    assert p.returncode == 0, "exit %d: %s" % (p.returncode, p.stderr[-2000:])
+    interrupted, error = p.stdout.split()
+    assert int(interrupted) == CALLS and float(error) < 1e-11
