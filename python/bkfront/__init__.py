@@ -18,9 +18,10 @@ import _thread
 import json
 import math
 import os
+import re
 import shutil
 import tempfile
-import re
+import time
 import warnings
 
 import numpy as np
@@ -268,7 +269,7 @@ def _raise_keyed(status, err):
     _raise(status, err)
 
 
-def _run(call):
+def _run(name, call):
     """Runs call(cancel) in a worker thread (cffi releases the GIL for the
     C call) so that Ctrl-C reaches Python at once.  Ctrl-C raises the
     library's cancel flag, then WAITS for the library to return (a further
@@ -303,10 +304,16 @@ def _run(call):
         wait()
     except KeyboardInterrupt:
         cancel[0] = 1
-        while started or box:
+        since = time.monotonic()
+        told = False
+        while (started or box) and not box.get("done"):
             try:
-                wait()
-                break
+                finished.acquire(timeout=0.1)
+                if not told and not box.get("done") and time.monotonic() - since > 1:
+                    told = True  # a silent wait of a minute looks like a hang
+                    warnings.warn("bkfront %s: Ctrl-C: waiting for the library to stop (a "
+                                  "product without a cancel point runs to its end, "
+                                  "docs/python.md)" % name, RuntimeWarning, stacklevel=3)
             except KeyboardInterrupt:
                 pass  # still stopping: the library has not returned yet
         raise
@@ -372,7 +379,7 @@ def product(name, **keys):
         libc.free(buf[0])
         return s, text
 
-    s, text = _run(call)
+    s, text = _run(name, call)
     for message in messages:
         warnings.warn("bkfront %s: %s" % (name, message), RuntimeWarning, stacklevel=3)
     if s:

@@ -24,7 +24,7 @@ PRODUCTS = {
     "floquet": dict(gamma=2, c=0.3, nu=-0.94, q="0.5:3:24"),
     "simulate": dict(N=64, tmax=50, frames=2),
     "check": dict(n=4, tmax=10, N=128),
-    "friction": dict(),
+    "friction": dict(points=3000),
     "bench": dict(product="pde", quick=True),
 }
 
