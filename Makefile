@@ -281,7 +281,7 @@ install: $(LIB) $(SHLIB) $(INST)/bkfront $(INST)/bkfront.pc $(INST)/_paths.py
 	ln -sf $(SONAME) $(DESTDIR)$(LIBDIR)/libbkfront.so
 	install -m 644 include/bkfront/*.h $(DESTDIR)$(INCLUDEDIR)/bkfront/
 	install -m 644 $(INST)/bkfront.pc $(DESTDIR)$(PKGCONFIGDIR)/bkfront.pc
-	install -m 644 plots/*.gp $(DESTDIR)$(DATADIR)/plots/
+	install -m 644 plots/*.gp plots/*.awk $(DESTDIR)$(DATADIR)/plots/
 	install -m 644 fronts/*.scene $(DESTDIR)$(DATADIR)/scenes/
 	install -m 644 python/bkfront/*.py $(INST)/_paths.py $(DESTDIR)$(PYTHONDIR)/bkfront/
 	install -m 644 README.md docs/*.md $(DESTDIR)$(DOCDIR)/
