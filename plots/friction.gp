@@ -8,7 +8,7 @@ set xlabel 'block velocity v'
 set ylabel 'friction force F / F_0'
 set xzeroaxis lt -1 lw 0.5
 set arrow from 0, graph 0 to 0, graph 1 nohead lc rgb '#777777' dt 3
-set label 'slip threshold' at 0.08, graph 0.08 tc rgb '#777777'
+set label 'slip threshold' at first 0, graph 0.93 offset 0.6, 0 tc rgb '#777777'
 set key bottom right
 # both laws whole over the table's velocities (the cubic creep-slip law
 # leaves [-1, 1] past v = 3: the scenes draw v in [-1, 3])
