@@ -392,12 +392,19 @@ int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err
         if (sp->product != BKF_SWEEP_REGIME)
             return bkf_error_set(err, BKF_EINPUT, "%sfields: only with %sproduct regime", prefix,
                                  prefix);
+        char shown[80];
+        /* a folder of outputs is never reached through a link, as an
+         * output file is not (io.h): one planted at its name would send
+         * every point's field elsewhere */
+        if (lstat(sp->fields, &st) == 0 && S_ISLNK(st.st_mode))
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "%sfields: '%s' is a symbolic link: outputs never write through "
+                                 "one (name the folder itself)",
+                                 prefix, bkf_option_shown(sp->fields, shown, sizeof shown));
         if (stat(sp->fields, &st) != 0 || !S_ISDIR(st.st_mode) ||
-            access(sp->fields, W_OK | X_OK) != 0) {
-            char shown[80];
+            access(sp->fields, W_OK | X_OK) != 0)
             return bkf_error_set(err, BKF_EINPUT, "%sfields: '%s' is not a writable directory",
                                  prefix, bkf_option_shown(sp->fields, shown, sizeof shown));
-        }
     }
     plan p;
     int s = make_plan(sp, prefix, &p, err);
@@ -888,6 +895,7 @@ int bkf_sweep_write(const bkf_sweep_spec *sp, FILE *out, bkf_error *err)
 
 struct bkf_sweep_table {
     char *path;
+    bkf_io_lock *lock;  /* one writer of the table at a time */
     int fd;
     size_t count, rows;
     unsigned char *done;
@@ -1041,6 +1049,16 @@ int bkf_sweep_table_open(const char *path, const bkf_sweep_spec *sp, int resume,
         t->done = calloc(p.count ? p.count : 1, 1);
     }
     if (!s && (!t || !t->path || !t->done)) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    /* before reading: a second writer (two sweeps, or one with --resume)
+     * would read rows the first is appending and then replace the file
+     * under it, losing rows */
+    if (!s) t->lock = bkf_io_lock_take(path, err);
+    if (!s && !t->lock) s = err ? err->status : BKF_EINPUT;
+    struct stat lst;
+    if (!s && lstat(path, &lst) == 0 && S_ISLNK(lst.st_mode))
+        s = bkf_error_set(err, BKF_EINPUT,
+                          "%s is a symbolic link: outputs never write through one (name the "
+                          "file itself)", path);
     table_text old = {0};
     int have_old = 0;
     if (!s && resume) {
@@ -1064,7 +1082,9 @@ int bkf_sweep_table_open(const char *path, const bkf_sweep_spec *sp, int resume,
         if (!s && have_old) t->rows = old.nrows;
     }
     if (!s) {
-        t->fd = open(path, O_WRONLY | O_APPEND | O_CLOEXEC);
+        /* the file just renamed into place; a link put there since is
+         * not followed */
+        t->fd = open(path, O_WRONLY | O_APPEND | O_NOFOLLOW | O_CLOEXEC);
         if (t->fd < 0) s = bkf_error_set(err, BKF_EIO, "%s: %s", path, strerror(errno));
     }
     table_text_free(&old);
@@ -1114,6 +1134,7 @@ int bkf_sweep_table_close(bkf_sweep_table *t, int sort, bkf_error *err)
         if (!s) s = table_write(t->path, tt.data, tt.head_len, tt.rows, tt.nrows, 1, err);
         table_text_free(&tt);
     }
+    bkf_io_lock_release(t->lock);
     free(t->path);
     free(t->done);
     free(t);
@@ -1144,14 +1165,35 @@ int bkf_sweep_merge(const char *const *inputs, size_t n, const char *out, size_t
     unsigned char *seen = s ? NULL : calloc(t[0].points, 1);
     if (!s && !seen) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     /* a point computed twice (a task run again) is one row: rows are a
-     * function of the point, so either copy is the row */
+     * function of the point, bit for bit, so two copies that differ mean
+     * that a table is damaged or not of this sweep: refused, naming the
+     * point, rather than keeping one of them at random */
+    /* for each point seen: its row's place in `all` and the table it came from */
+    size_t *at = s ? NULL : malloc(2 * t[0].points * sizeof *at), *from = at ? at + t[0].points : NULL;
+    if (!s && !at) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     for (size_t k = 0; !s && k < n; k++)
-        for (size_t i = 0; i < t[k].nrows; i++)
-            if (!seen[t[k].rows[i].index]) {
-                seen[t[k].rows[i].index] = 1;
-                all[m++] = t[k].rows[i];
+        for (size_t i = 0; !s && i < t[k].nrows; i++) {
+            const struct row *r = &t[k].rows[i];
+            if (!seen[r->index]) {
+                seen[r->index] = 1;
+                from[r->index] = k;
+                at[r->index] = m;
+                all[m++] = *r;
+                continue;
             }
+            const struct row *first = &all[at[r->index]];
+            if (first->len != r->len || memcmp(first->line, r->line, r->len) != 0)
+                s = bkf_error_set(err, BKF_EINPUT,
+                                  "merge: point %zu has two different rows, in %s and in %s (a "
+                                  "point's row is the same however the sweep is split: one of "
+                                  "them is damaged or of another build)",
+                                  r->index, inputs[from[r->index]], inputs[k]);
+        }
+    free(at);
+    bkf_io_lock *lock = NULL;
+    if (!s && !(lock = bkf_io_lock_take(out, err))) s = err ? err->status : BKF_EINPUT;
     if (!s) s = table_write(out, t[0].data, t[0].head_len, all, m, 1, err);
+    bkf_io_lock_release(lock);
     if (!s && missing) *missing = t[0].points - m;
     free(seen);
     free(all);
