@@ -184,8 +184,8 @@ static const key_spec keys[] = {
     {"script", V_TEXT, K(BKF_SCENE_FIGURE), "a gnuplot script path"},
     {"formats", V_FORMATS, K(BKF_SCENE_FIGURE), "png, pdf, svg or a list such as png,svg"},
     {"title", V_TEXT, K(BKF_SCENE_FIGURE), "text"},
-    {"width", V_PIXELS, K(BKF_SCENE_FIGURE), "an integer in [1, 8000] (pixels)"},
-    {"height", V_PIXELS, K(BKF_SCENE_FIGURE), "an integer in [1, 8000] (pixels)"},
+    {"width", V_PIXELS, K(BKF_SCENE_FIGURE), "pixels"},
+    {"height", V_PIXELS, K(BKF_SCENE_FIGURE), "pixels"},
 };
 #define NKEYS (sizeof keys / sizeof keys[0])
 
