@@ -109,23 +109,34 @@ int bkf_plot_set_number(bkf_plot_job *job, const char *name, double value, bkf_e
     return append(job, buf, err);
 }
 
-/* A gnuplot double-quoted string with every backslash and double quote
- * escaped, so that the value arrives as it is, whatever it holds.  Not
- * single quotes: gnuplot reads two quotes at the start of a token as an
- * empty string, so a value starting with a quote (a title 'x) could not be
- * written at all. */
+/* A gnuplot expression for the string `value`, exactly: single-quoted runs
+ * (inside single quotes gnuplot interprets nothing: no backslash escapes,
+ * no `command` substitution, which double quotes would run) joined by
+ * "." to "'" for each single quote.  Doubling a quote inside single
+ * quotes is not enough: gnuplot reads two quotes at the start of a token
+ * as an empty string, so a value starting with a quote failed. */
 static char *quoted(const char *value)
 {
     size_t n = 3;
-    for (const char *p = value; *p; p++) n += (*p == '"' || *p == '\\') ? 2 : 1;
+    for (const char *p = value; *p; p++) n += *p == '\'' ? 12 : 1;
     char *q = malloc(n), *w = q;
     if (!q) return NULL;
-    *w++ = '"';
+    int open = 0, pieces = 0;
     for (const char *p = value; *p; p++) {
-        if (*p == '"' || *p == '\\') *w++ = '\\';
+        if (*p == '\'') {
+            if (open) *w++ = '\'';
+            open = 0;
+            w += sprintf(w, "%s\"'\"", pieces++ ? " . " : "");
+            continue;
+        }
+        if (!open) {
+            w += sprintf(w, "%s'", pieces++ ? " . " : "");
+            open = 1;
+        }
         *w++ = *p;
     }
-    *w++ = '"';
+    if (open) *w++ = '\'';
+    if (!pieces) w += sprintf(w, "''");
     *w = '\0';
     return q;
 }
@@ -404,7 +415,7 @@ int bkf_plot_run(const bkf_plot_job *job, const bkf_plot_options *options,
             s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
             break;
         }
-        snprintf(exprs[f], m, "%sfmt = \"%s\"; out = %s", job->vars ? job->vars : "",
+        snprintf(exprs[f], m, "%sfmt = '%s'; out = %s", job->vars ? job->vars : "",
                  format_names[f], q);
         free(q);
         argv[argc++] = "-e";
