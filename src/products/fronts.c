@@ -70,7 +70,8 @@ static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYM
 #define MODEL_OPTIONS(SPEC, required)                                                        \
     BKF_PRODUCT_GAMMA_OPTION(SPEC, required),                                                \
     {.name = "c", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, c),                       \
-     .flags = (required) | BKF_OPT_MIN, .min = 0, .form = "C", .help = "sound speed, >= 0"}, \
+     .flags = (required) | BKF_OPT_MIN | BKF_OPT_MAX, .min = 0, .max = BKF_MODEL_C_MAX,     \
+     .form = "C", .help = "sound speed, in [0, 1e6]"},                                         \
     BKF_PRODUCT_NU_OPTION(SPEC, required), BKF_PRODUCT_S_OPTION(SPEC, required)
 
 #define TOL_OPTION(SPEC, what)                                                                \
@@ -659,14 +660,14 @@ static int check_end(const bkf_fronts_branch_spec *spec, const char *p, const ch
     if (spec->along == BKF_SPEEDS_ALONG_GAMMA)
         bad = !(x >= BKF_CYCLE_MU_MIN && x <= BKF_CYCLE_MU_MAX);
     else if (spec->along == BKF_SPEEDS_ALONG_C)
-        bad = !(x >= 0);
+        bad = !(x >= 0 && x <= BKF_MODEL_C_MAX);
     else if (spec->along == BKF_SPEEDS_ALONG_S)
         bad = !(x > 0);
     else
         bad = !(fabs(x) < 1);
     if (bad) {
         const char *range = spec->along == BKF_SPEEDS_ALONG_GAMMA ? "[1e-06, 1e+06]"
-                            : spec->along == BKF_SPEEDS_ALONG_C   ? ">= 0"
+                            : spec->along == BKF_SPEEDS_ALONG_C   ? "[0, 1e+06]"
                             : spec->along == BKF_SPEEDS_ALONG_S   ? "> 0"
                                                                   : "in (-1, 1)";
         return bkf_error_set(err, BKF_EINPUT, "%s%s: %s = %s is outside its range (%s)", p, end,

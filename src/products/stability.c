@@ -38,8 +38,9 @@ static const bkf_io_column diagram_columns[] = {
 const bkf_option bkf_stability_options[] = {
     BKF_PRODUCT_GAMMA_OPTION(bkf_stability_spec, BKF_OPT_REQUIRED),
     {.name = "c", .type = BKF_OPT_DOUBLE, .offset = FIELD(c),
-     .flags = BKF_OPT_REQUIRED | BKF_OPT_MIN | BKF_OPT_MIN_OPEN, .min = 0, .form = "C",
-     .help = "sound speed, > 0 (with c = 0 every mode is neutral)"},
+     .flags = BKF_OPT_REQUIRED | BKF_OPT_MIN | BKF_OPT_MIN_OPEN | BKF_OPT_MAX, .min = 0,
+     .max = BKF_MODEL_C_MAX, .form = "C",
+     .help = "sound speed, in (0, 1e6] (with c = 0 every mode is neutral)"},
     BKF_PRODUCT_NU_OPTION(bkf_stability_spec, BKF_OPT_REQUIRED),
     BKF_PRODUCT_S_OPTION(bkf_stability_spec, BKF_OPT_REQUIRED),
     {.name = "n", .type = BKF_OPT_COUNT, .offset = FIELD(n),
