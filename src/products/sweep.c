@@ -959,7 +959,7 @@ static int read_all(const char *path, char **data, size_t *size, bkf_error *err)
  * fields as there are names and a point index below the head's count, seen first, and (with
  * `key`) its key columns are those of its point. */
 static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key_spec,
-                      const plan *key_plan, bkf_error *err)
+                      const plan *key_plan, int strict, bkf_error *err)
 {
     memset(t, 0, sizeof *t);
     int s = read_all(path, &t->data, &t->size, err);
@@ -978,10 +978,11 @@ static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key
     t->head_len = (size_t)(nl + 1 - t->data);
     size_t names_tabs = 0;
     for (char *q = p; q < nl; q++) names_tabs += *q == '\t';
-    unsigned char *seen = calloc(t->points, 1);
+    /* at[i]: 1 + the place in rows of point i's row, 0 while none */
+    size_t *at = calloc(t->points, sizeof *at);
     t->rows = malloc(t->points * sizeof *t->rows);
-    if (!seen || !t->rows) {
-        free(seen);
+    if (!at || !t->rows) {
+        free(at);
         table_text_free(t);
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
@@ -993,8 +994,21 @@ static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key
         char *after;
         errno = 0;
         unsigned long long idx = strtoull(p, &after, 10);
-        int ok = tabs == names_tabs && after != p && *after == '\t' && !errno &&
-                 idx < t->points && !seen[idx];
+        int whole = tabs == names_tabs && after != p && *after == '\t' && !errno &&
+                    idx < t->points;
+        int ok = whole && !at[idx];
+        /* strict (merge): a point's second row is one row with the first
+         * when the bytes are the same, a conflict otherwise */
+        const struct row *first = whole && at[idx] ? &t->rows[at[idx] - 1] : NULL;
+        if (strict && first && (first->len != len || memcmp(first->line, p, len) != 0)) {
+            free(at);
+            table_text_free(t);
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "merge: point %llu has two different rows in %s (a point's row "
+                                 "is the same however the sweep is split: one of them is "
+                                 "damaged or of another build)",
+                                 idx, path);
+        }
         if (ok && key_spec) {
             bkf_simulate_spec sim;
             text k = {0};
@@ -1004,12 +1018,12 @@ static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key
             free(k.s);
         }
         if (ok) {
-            seen[idx] = 1;
             t->rows[t->nrows++] = (struct row){(size_t)idx, p, len};
+            at[idx] = t->nrows;
         }
         p = nl + 1;
     }
-    free(seen);
+    free(at);
     return BKF_OK;
 }
 
@@ -1063,7 +1077,7 @@ int bkf_sweep_table_open(const char *path, const bkf_sweep_spec *sp, int resume,
     int have_old = 0;
     if (!s && resume) {
         bkf_error e;
-        int r = table_read(path, &old, sp, &p, &e);
+        int r = table_read(path, &old, sp, &p, 0, &e);
         if (!r) {
             have_old = 1;
             if (old.head_len != strlen(head) || memcmp(old.data, head, old.head_len) != 0)
@@ -1130,7 +1144,7 @@ int bkf_sweep_table_close(bkf_sweep_table *t, int sort, bkf_error *err)
         s = bkf_error_set(err, BKF_EIO, "%s: %s", t->path, strerror(errno));
     if (!s && sort) {
         table_text tt;
-        s = table_read(t->path, &tt, NULL, NULL, err);
+        s = table_read(t->path, &tt, NULL, NULL, 0, err);
         if (!s) s = table_write(t->path, tt.data, tt.head_len, tt.rows, tt.nrows, 1, err);
         table_text_free(&tt);
     }
@@ -1150,7 +1164,7 @@ int bkf_sweep_merge(const char *const *inputs, size_t n, const char *out, size_t
     int s = BKF_OK;
     size_t total = 0;
     for (size_t k = 0; !s && k < n; k++) {
-        s = table_read(inputs[k], &t[k], NULL, NULL, err);
+        s = table_read(inputs[k], &t[k], NULL, NULL, 1, err);
         if (!s && k && (t[k].head_len != t[0].head_len ||
                         memcmp(t[k].data, t[0].data, t[0].head_len) != 0))
             s = bkf_error_set(err, BKF_EINPUT,

@@ -374,7 +374,7 @@ TEST(cli_outputs_merge_refuses_two_rows_of_one_point)
                                    &(bkf_cli_options){.dir = dir});
     CHECK_MSG(r.code == 0, "%s", r.err);
     bkf_cli_result_free(&r);
-    /* c.tsv: a.tsv with its first row's status changed */
+    /* row 0 of a.tsv, its status "ok" last */
     snprintf(path, sizeof path, "%s/a.tsv", dir);
     char *a = bkf_cli_read_file(path);
     CHECK(a);
@@ -382,10 +382,31 @@ TEST(cli_outputs_merge_refuses_two_rows_of_one_point)
     CHECK(row);
     char *end = strchr(row + 1, '\n');
     CHECK(end && end - row > 3 && strncmp(end - 2, "ok", 2) == 0);
+    /* d.tsv: a.tsv with row 0 again, the same bytes; e.tsv: with row 0
+     * again, changed; c.tsv: a.tsv with row 0 changed */
+    size_t rlen = (size_t)(end - row); /* "0\t...ok" without its newline */
+    char *d = malloc(strlen(a) + rlen + 2);
+    CHECK(d);
+    sprintf(d, "%s%.*s\n", a, (int)rlen - 1, row + 1);
+    snprintf(path, sizeof path, "%s/d.tsv", dir);
+    write_text(path, d);
+    memcpy(d + strlen(d) - 3, "no", 2);
+    snprintf(path, sizeof path, "%s/e.tsv", dir);
+    write_text(path, d);
+    free(d);
     memcpy(end - 2, "no", 2);
     snprintf(path, sizeof path, "%s/c.tsv", dir);
     write_text(path, a);
     free(a);
+    r = bkf_cli_run(BKF_CLI_ARGS("sweep", "--merge", "d.tsv,b.tsv", "--out", "m3.tsv"),
+                    &(bkf_cli_options){.dir = dir});
+    CHECK_MSG(r.code == 0, "%s", r.err);
+    bkf_cli_result_free(&r);
+    r = bkf_cli_run(BKF_CLI_ARGS("sweep", "--merge", "e.tsv,b.tsv", "--out", "m3.tsv"),
+                    &(bkf_cli_options){.dir = dir});
+    CHECK_MSG(r.code == 2 && strstr(r.err, "point 0 ") && strstr(r.err, "e.tsv"), "exit %d: %s",
+              r.code, r.err);
+    bkf_cli_result_free(&r);
     r = bkf_cli_run(BKF_CLI_ARGS("sweep", "--merge", "a.tsv,b.tsv,c.tsv", "--out", "m2.tsv"),
                     &(bkf_cli_options){.dir = dir});
     CHECK_MSG(r.code == 2 && strstr(r.err, "point 0 ") && strstr(r.err, "a.tsv") &&
