@@ -46,6 +46,7 @@ int bkf_model_check_nu_active(double nu, bkf_error *err);   /* |nu| < 1 */
 int bkf_model_check_positive(const char *name, double value, bkf_error *err);
 int bkf_model_check_nonnegative(const char *name, double value, bkf_error *err);
 int bkf_model_check_tol(double tol, bkf_error *err);        /* [1e-14, 1e-1] */
+int bkf_model_check_c(double c, bkf_error *err);            /* [0, BKF_MODEL_C_MAX] */
 
 #define BKF_TOL_MIN 1e-14
 #define BKF_TOL_MAX 1e-1

@@ -98,8 +98,9 @@ int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *o
     if (!(model->gamma >= BKF_CYCLE_MU_MIN && model->gamma <= BKF_CYCLE_MU_MAX))
         return bkf_error_set(err, BKF_EINPUT, "gamma: %g is outside [%g, %g]", model->gamma,
                              BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
-    if (!(model->c >= 0 && isfinite(model->c)))
-        return bkf_error_set(err, BKF_EINPUT, "c: %g must be a finite number >= 0", model->c);
+    if (!(model->c >= 0 && model->c <= BKF_MODEL_C_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "c: %g is outside [0, %g]", model->c,
+                             BKF_MODEL_C_MAX);
     if (bkf_model_check_nu_active(model->nu, &e))
         return bkf_error_set(err, BKF_EINPUT, "%s; there are no fronts", e.message);
     if (bkf_model_check_positive("S", model->S, err)) return BKF_EINPUT;

@@ -83,7 +83,7 @@ int bkf_speeds_check(const bkf_model_params *p, const bkf_speeds_options *o, bkf
         return bkf_error_set(err, BKF_EINPUT,
                              "gamma = %.15g is outside [%g, %g] (mu >= gamma must be solvable)",
                              p->gamma, BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
-    if ((rc = bkf_model_check_nonnegative("c", p->c, err))) return rc;
+    if ((rc = bkf_model_check_c(p->c, err))) return rc;
     if ((rc = bkf_model_check_positive("S", p->S, err))) return rc;
     if (!isfinite(p->nu) || fabs(p->nu) >= 1.0)
         return bkf_error_set(err, BKF_EINPUT,
