@@ -98,7 +98,9 @@ typedef struct {
     size_t mesh_steps;               /* Radau steps per period (finer mesh) */
     size_t evaluations;              /* monodromies computed */
     double work;                     /* Radau steps taken in all (see max_work) */
-    size_t curve_points;             /* heights y sampled */
+    size_t curve_points;             /* heights y sampled (0: Hill's band alone, see below) */
+    size_t hill_modes;               /* Hill's method's Fourier modes -M..M whose eigenvalues were
+                                        candidates too (0: not used, mu > 6 or too many classes) */
 } bkf_trainspec_result;
 
 /* Validation alone: BKF_EINPUT with a one-line message naming the parameter. */
