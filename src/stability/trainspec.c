@@ -866,25 +866,27 @@ static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *er
 
 /* ------------------------------------------------- Hill's candidates */
 
-/* Hill's method (hill.h) sees every eigenvalue of a band |Im sigma| <= Y at
+/* Hill's method (hill.h) sees every eigenvalue of a band of frequencies at
  * once, where the traced curves can step over one (two eigenvalues of one
  * class closer than the phase resolves; issue 31: n = 1 at mu 1.2 lost its
- * rightmost pair at Im 18.03 to its neighbour at 17.13) or cannot reach the
- * band's end at all (the curves stay right of a_lo up to |Im| 1e4 when the
- * cycle's multiplier is near 1, mu < 1).  Its eigenvalues are only the
- * candidates: each is polished on the Radau meshes, whose error estimate
- * is the one reported, so Hill's truncation never reaches a result.  It is
- * used where the profile is smooth enough for few modes (mu <= HILL_MU_MAX)
+ * rightmost pair at Im 18.03 to its neighbour at 17.13) or cannot close
+ * the window at all (the curves stay right of a_lo up to |Im| 1e4 when the
+ * cycle's multiplier is near 1, mu < 1).  Its converged eigenvalues (M and
+ * 2M modes agree, bkf_hill_leading) are candidates: each is polished on
+ * the Radau meshes, whose error estimate is the one reported, so Hill's
+ * truncation never reaches a result.  The truncation's artefacts do not
+ * converge (they move with M, at any height: 0.185 + 1.86i at M 24, mu 4).
+ * Used where the profile is smooth enough for few modes (mu <= HILL_MU_MAX)
  * and the dense eigenproblems are cheap (HILL_WORK). */
 #define HILL_MU_MAX 6.0
-#define HILL_MODES_MIN 24
-#define HILL_MODES_MAX 128
-/* sum over classes of (matrix size)^3: about 1 s of zgeev here */
+#define HILL_MODES_MIN 16
+#define HILL_MODES_MAX 64
+/* sum over classes of (the finer matrix's size)^3: about 1.5 s of zgeev */
 #define HILL_WORK 1.5e8
-/* Of the modes -M..M, those with |m| <= M/2 are trusted: the truncation's
- * artefacts sit near the largest frequencies (hill.h). */
-#define HILL_TRUST 0.5
-/* Hill's eigenvalues polished, per class, at most (the rightmost first). */
+/* Hill's eigenvalues agree at M and 2M modes this well (absolute) to be
+ * candidates; the polish takes them from there */
+#define HILL_CONVERGED 1e-5
+/* Hill's converged eigenvalues polished, per class, at most (the rightmost first). */
 #define HILL_PER_CLASS 6
 /* Hill's value and the polished one agree this well (relative to 1 +
  * |sigma|) where Hill's band stands alone */
@@ -894,18 +896,12 @@ static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *er
 
 typedef struct {
     size_t modes;        /* M, 0 when Hill was not used */
-    double y_trust;      /* the band |Im sigma| <= y_trust it vouches for */
-    double re_max;       /* the rightmost Re in the band (but the translation) */
-    int peak_inside;     /* that maximum lies below 3/4 of the band: the tail beyond falls towards r_inf */
+    double y_trust;      /* the largest |Im sigma| among its candidates */
+    int complete;        /* in every class, no unconverged eigenvalue lies right of the
+                            converged ones: Hill vouches for the rightmost */
     double complex *at;  /* candidates pushed (for the agreement check) */
     size_t count;
 } hill_stage;
-
-static int by_re_desc(const void *pa, const void *pb)
-{
-    const bkf_hill_eigenvalue *a = pa, *b = pb;
-    return (a->re < b->re) - (a->re > b->re);
-}
 
 /* Candidates from Hill's method for the classes 0..classes/2 (their
  * conjugates come from the mirror, as for the traced curves). */
@@ -915,51 +911,42 @@ static int hill_candidates(ctx *x, size_t classes, const window *win, candidates
     memset(h, 0, sizeof *h);
     if (x->mu > HILL_MU_MAX) return BKF_OK;
     size_t thetas = classes / 2 + 1;
-    /* the band the trace starts with, beyond which the spectrum is in its
-     * asymptotic regime (trace_all) */
+    /* modes to |Im sigma| ~ the band the trace starts with, beyond which the
+     * spectrum is in its asymptotic regime (trace_all): mode m sits near
+     * |Im sigma| = 2 pi m / (T s) */
     double band = fmax(2.0, x->gamma * x->v / x->c);
-    double want = ceil(band * x->T * x->s / (M_PI * HILL_TRUST * 2.0));
+    double want = ceil(band * x->T * x->s / (2.0 * M_PI));
     size_t M = (size_t)fmin(fmax(want, HILL_MODES_MIN), HILL_MODES_MAX);
-    while (M > HILL_MODES_MIN && (double)thetas * pow(4.0 * (double)M + 2.0, 3.0) > HILL_WORK) M = M * 3 / 4;
-    if ((double)thetas * pow(4.0 * (double)M + 2.0, 3.0) > HILL_WORK) return BKF_OK;
-    size_t size = 2 * (2 * M + 1);
-    bkf_hill_eigenvalue *ev = malloc(size * sizeof *ev);
+    while (M > HILL_MODES_MIN && (double)thetas * pow(8.0 * (double)M + 2.0, 3.0) > HILL_WORK) M = M * 3 / 4;
+    if ((double)thetas * pow(8.0 * (double)M + 2.0, 3.0) > HILL_WORK) return BKF_OK;
     h->at = malloc(thetas * HILL_PER_CLASS * sizeof *h->at);
-    if (!ev || !h->at) {
-        free(ev);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
+    if (!h->at) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     h->modes = M;
-    h->y_trust = 2.0 * M_PI * HILL_TRUST * (double)M / (x->T * x->s);
-    h->re_max = -INFINITY;
-    double top_re = -INFINITY;
+    h->complete = 1;
     int rc = BKF_OK;
     for (size_t cls = 0; cls < thetas && rc == BKF_OK; cls++) {
-        size_t got = 0;
+        bkf_hill_eigenvalue ev[HILL_PER_CLASS + 1];
+        size_t found = 0, unresolved = 0;
         double theta = 2.0 * M_PI * (double)cls / (double)classes;
-        rc = bkf_hill_spectrum(x->cycle, x->gamma, theta, M, ev, &got, err);
+        /* one more at class 0: the translation is among them */
+        size_t k = HILL_PER_CLASS + (cls == 0);
+        rc = bkf_hill_leading(x->cycle, x->gamma, theta, M, HILL_CONVERGED, k, ev, NULL, &found,
+                              &unresolved, err);
         if (rc != BKF_OK) break;
-        qsort(ev, got, sizeof *ev, by_re_desc);
-        size_t pushed = 0;
-        for (size_t i = 0; i < got; i++) {
+        if (unresolved > 0 || found == 0) h->complete = 0;
+        for (size_t i = 0; i < found; i++) {
             double re = ev[i].re, im = ev[i].im;
-            if (fabs(im) > h->y_trust) continue;
-            int translation = cls == 0 && hypot(re, im) < 1e-6;
-            if (!translation) {
-                h->re_max = fmax(h->re_max, re);
-                if (fabs(im) > 0.75 * h->y_trust) top_re = fmax(top_re, re);
-            }
-            if (translation || re < win->a_lo || pushed >= HILL_PER_CLASS) continue;
+            if ((cls == 0 && hypot(re, im) < 1e-6) || re < win->a_lo) continue;
             if (cand_push(cs, (candidate){re, im, cls, -1, 0}) != BKF_OK) {
                 rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
                 break;
             }
-            h->at[h->count++] = re + I * im;
-            pushed++;
+            if (h->count < thetas * HILL_PER_CLASS) h->at[h->count++] = re + I * im;
+            h->y_trust = fmax(h->y_trust, fabs(im));
         }
     }
-    h->peak_inside = h->re_max > top_re;
-    free(ev);
+    /* the band Hill resolved reaches to its modes' frequency */
+    h->y_trust = fmax(h->y_trust, 2.0 * M_PI * (double)M / (x->T * x->s));
     return rc;
 }
 
@@ -967,7 +954,7 @@ static int hill_candidates(ctx *x, size_t classes, const window *win, candidates
  * eigenvalues, polished on the fine mesh with error estimates.  The
  * candidates come from the traced curves and from Hill's method where it
  * is cheap; where the trace cannot close its window, Hill's band alone
- * serves if it vouches for its tail (hill_stage.peak_inside). */
+ * serves if it vouches for its rightmost (hill_stage.complete). */
 static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
                     window *win, double *y_max, size_t *curve_points, size_t *hill_modes, bkf_error *err)
 {
@@ -990,7 +977,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     if (rc == BKF_OK) rc = trace_all(x, win, &heights, y_max, &trace_err);
     x->max_work = max_work;
     int fallback = 0;
-    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs.modes && hs.peak_inside) {
+    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs.modes && hs.complete) {
         /* the band |Im| <= y_trust, as Hill saw it */
         fallback = 1;
         x->stop = 0;
@@ -1007,7 +994,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
         if (collect(&heights, f, classes, &cs) != BKF_OK) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     if (rc == BKF_OK) {
         qsort(cs.items, cs.count, sizeof *cs.items, by_a_desc);
-        eig = calloc(2 * (classes + 2) * (polish_n + 1), sizeof *eig);
+        eig = calloc(2 * (classes + 2) * (polish_n + HILL_PER_CLASS + 1), sizeof *eig);
         if (!eig) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     /* polish the best few of each class; mirrored classes (j > classes/2)
@@ -1015,7 +1002,10 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     for (size_t i = 0; i < cs.count && rc == BKF_OK;) {
         size_t cls = cs.items[i].cls, taken = 0, start_n = n_eig;
         for (; i < cs.count && cs.items[i].cls == cls; i++) {
-            if (taken >= polish_n || 2 * cls > classes) continue;
+            /* Hill's candidates are few and accurate: every one is polished,
+             * whatever the traced ones, whose interpolated a can rank a far
+             * eigenvalue before a near one, have taken */
+            if ((taken >= polish_n && cs.items[i].fam >= 0) || 2 * cls > classes) continue;
             candidate cd = cs.items[i];
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
             double complex sc = cd.a + I * cd.y, sf;
@@ -1215,6 +1205,22 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
     bkf_gsl_handler_pop(handler);
     if (rc != BKF_OK) bkf_trainspec_result_free(r);
     return rc;
+}
+
+int bkf_trainspec_root(const bkf_model_params *params, const bkf_speeds_root *root, double tol,
+                       size_t per_kappa, bkf_trainspec_result *result, bkf_error *err)
+{
+    if (!root) return bkf_error_set(err, BKF_EINPUT, "root is NULL");
+    bkf_trainspec_train train = {root->n, root->v};
+    bkf_trainspec_options o = bkf_trainspec_options_default();
+    o.tol = tol;
+    o.per_kappa = per_kappa;
+    return bkf_trainspec_ring(params, &train, &o, result, err);
+}
+
+const char *bkf_trainspec_kind_name(const bkf_trainspec_result *result)
+{
+    return result->complex_pair ? "complex" : "real";
 }
 
 int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,

@@ -724,3 +724,49 @@ TEST(speeds_v_err_honest_inside_the_canard_at_nu_0_9999)
     CHECK(rows >= 10);
     bkf_test_note("%zu rows, worst true/estimated %.3g", rows, worst);
 }
+
+/* Issue 36: a root does not depend on which other rows were asked for (the
+ * grid, its precise samples and each root's cold start are the whole
+ * table's): speeds --n 4 gave 0.48545916040133913, the table
+ * 0.48545916040196629. */
+TEST(speeds_root_independent_of_the_rows_asked)
+{
+    bkf_speeds_table all = find(paper, 1e-10, 1, 0);
+    CHECK(all.count == 12);
+    const size_t ns[] = {1, 4, 7, 12};
+    for (size_t k = 0; k < sizeof ns / sizeof ns[0]; k++) {
+        bkf_speeds_table one = find(paper, 1e-10, ns[k], ns[k]);
+        CHECK(one.count == 1);
+        if (one.count == 1 && all.count == 12)
+            CHECK_MSG(one.roots[0].v == all.roots[ns[k] - 1].v, "n %zu: %.17g alone, %.17g in the table", ns[k],
+                      one.roots[0].v, all.roots[ns[k] - 1].v);
+        bkf_speeds_table_free(&one);
+    }
+    bkf_speeds_table part = find(paper, 1e-10, 3, 6);
+    for (size_t i = 0; i < part.count && all.count == 12; i++) CHECK(part.roots[i].v == all.roots[i + 2].v);
+    bkf_speeds_table_free(&part);
+    bkf_speeds_table_free(&all);
+}
+
+/* Issue 31, defect 6: a root bracketed but not polished to tol is refused
+ * with its reason, never left out of a table that exits 0 (at tol 1e-13
+ * the paper's n = 1 was dropped, at 1e-14 eight of the twelve rows).  The
+ * paper's table has n_max 12 (its rows at tol 1e-10). */
+TEST(speeds_tight_tol_refuses_instead_of_dropping_roots)
+{
+    for (double tol = 1e-12; tol >= 1e-14; tol *= 0.1) {
+        bkf_speeds_options o = bkf_speeds_options_default();
+        o.tol = tol;
+        bkf_speeds_table t;
+        bkf_error e = {0};
+        int rc = bkf_speeds_find(&paper, &o, &t, &e);
+        bkf_test_note("tol %g: status %d, %zu rows%s%s", tol, rc, rc ? 0 : t.count, rc ? ": " : "",
+                      rc ? e.message : "");
+        if (rc == BKF_OK) {
+            CHECK_MSG(t.count == 12, "tol %g: %zu of the 12 rows, exit 0", tol, t.count);
+            bkf_speeds_table_free(&t);
+        } else {
+            CHECK(rc == BKF_ETOL && strstr(e.message, "n = ") && strstr(e.message, "tol"));
+        }
+    }
+}
