@@ -291,14 +291,16 @@ static int write_ring(const bkf_stability_spec *spec, const bkf_speeds_root *roo
         s = bkf_io_table_commentf(
             table, err,
             "window: Re sigma > a_lo = %.6g, |Im sigma| <= y_max = %.6g (r_inf %.6g); "
-            "work: %zu mesh steps per period, %zu monodromies, %zu heights",
+            "work: %zu mesh steps per period, %zu monodromies, %zu heights (0: Hill's band "
+            "alone), Hill's method at %zu modes (0: not used)",
             res->a_lo, res->y_max, res->r_inf, res->mesh_steps, res->evaluations,
-            res->curve_points);
+            res->curve_points, res->hill_modes);
     if (!s) s = text_result(table, "stable", verdict, err);
     if (!s) s = number_result(table, "sigma_max", res->sigma_max, err);
     if (!s) s = number_result(table, "sigma_max_im", res->sigma_max_im, err);
     if (!s) s = number_result(table, "sigma_max_err", res->sigma_max_err, err);
     if (!s) s = number_result(table, "kappa_max", res->kappa_max, err);
+    if (!s) s = number_result(table, "hill_modes", (double)res->hill_modes, err);
     if (!s) s = text_result(table, "kind", kind, err);
     if (!s) s = number_result(table, "translation_residual", res->translation_residual, err);
     if (!s) s = number_result(table, "liouville_residual", res->liouville_residual, err);
