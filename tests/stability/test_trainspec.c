@@ -240,8 +240,8 @@ static double root_v(bkf_model_params p, size_t n)
  * translation, from M and 2M modes, with nothing unconverged right of it
  * (an independent discretisation: dense Fourier-Bloch, no curves, no
  * meshes). */
-static void hill_rightmost(bkf_model_params p, double v, double theta, size_t M, double *re, double *im,
-                           double *err)
+static void hill_rightmost(bkf_model_params p, double v, double theta, size_t M, double tol, double *re,
+                           double *im, double *err)
 {
     double mu = p.gamma / sqrt(1.0 - (p.c / v) * (p.c / v));
     bkf_cycle *cy = bkf_cycle_alloc();
@@ -252,9 +252,11 @@ static void hill_rightmost(bkf_model_params p, double v, double theta, size_t M,
     bkf_hill_eigenvalue h[3];
     double herr[3];
     size_t found = 0, unresolved = 0;
-    CHECK(bkf_hill_leading(cy, p.gamma, theta, M, 1e-7, 3, h, herr, &found, &unresolved, &e) == BKF_OK);
-    CHECK_MSG(found == 3 && unresolved == 0, "Hill at M %zu: %zu converged, %zu unresolved above", M, found,
-              unresolved);
+    CHECK(bkf_hill_leading(cy, p.gamma, theta, M, tol, 3, h, herr, &found, &unresolved, &e) == BKF_OK);
+    /* tol > 1e-6 marks a steep profile: truncation artefacts (0.11 + 19i at
+     * M 64, 0.007 + 39i at 128, moving with M) stay unresolved above */
+    CHECK_MSG(found == 3 && (unresolved == 0 || tol > 1e-6), "Hill at M %zu: %zu converged, %zu unresolved above",
+              M, found, unresolved);
     size_t k = theta == 0.0 && hypot(h[0].re, h[0].im) < 1e-6 ? 1 : 0;
     *re = h[k].re, *im = h[k].im, *err = herr[k];
     bkf_cycle_free(cy);
@@ -262,10 +264,10 @@ static void hill_rightmost(bkf_model_params p, double v, double theta, size_t M,
 
 /* The ring's sigma_max against Hill's rightmost at n = 1 (one class, j =
  * 0), the same whatever per_kappa asked for. */
-static void rightmost_is_hills(bkf_model_params p, size_t M, double re_lo, double re_hi)
+static void rightmost_is_hills(bkf_model_params p, size_t M, double hill_tol, double re_lo, double re_hi)
 {
     double v = root_v(p, 1), hre, him, herr;
-    hill_rightmost(p, v, 0.0, M, &hre, &him, &herr);
+    hill_rightmost(p, v, 0.0, M, hill_tol, &hre, &him, &herr);
     CHECK_MSG(hre > re_lo && hre < re_hi, "Hill's rightmost %.10g", hre);
     for (size_t per = 1; per <= 3; per += 2) {
         bkf_trainspec_train t = {1, v};
@@ -291,7 +293,7 @@ static void rightmost_is_hills(bkf_model_params p, size_t M, double re_lo, doubl
 TEST(trainspec_rightmost_not_its_neighbour_mu_1_2)
 {
     bkf_model_params p = {1.20001, 0.188117, 0.2858, 53.5124, 0, BKF_MODEL_CONTINUUM};
-    rightmost_is_hills(p, 64, 0.0108, 0.01081);
+    rightmost_is_hills(p, 64, 1e-7, 0.0108, 0.01081);
 }
 
 /* Issue 31, defects 4 and 8: with per_kappa 1 the translation took class
@@ -301,11 +303,12 @@ TEST(trainspec_rightmost_not_its_neighbour_mu_1_2)
 TEST(trainspec_rightmost_beside_the_translation_and_where_curves_fail)
 {
     bkf_model_params p = {4.06339, 0.276186, 0.959575, 27.1676, 0, BKF_MODEL_CONTINUUM};
-    rightmost_is_hills(p, 64, -4.1e-4, -4.0e-4);
+    /* mu 4.1, nu 0.96: a steep profile, Hill's 64 and 128 modes agree to 2e-6 */
+    rightmost_is_hills(p, 64, 1e-5, -4.1e-4, -4.0e-4);
     bkf_model_params q = {0.810526, 0.0943248, 0.557499, 22.1238, 0, BKF_MODEL_CONTINUUM};
-    rightmost_is_hills(q, 32, 6.8e-3, 6.9e-3);
+    rightmost_is_hills(q, 32, 1e-7, 6.8e-3, 6.9e-3);
     bkf_model_params u = {0.573116, 0.0556376, -0.558763, 17.2603, 0, BKF_MODEL_CONTINUUM};
-    rightmost_is_hills(u, 32, 5.4e-3, 5.5e-3);
+    rightmost_is_hills(u, 32, 1e-7, 5.4e-3, 5.5e-3);
 }
 
 /* Issue 31, defect 5: the line at kappa 0 is the ring's class j = 0 (its
