@@ -30,9 +30,8 @@ static bkf_trainspec_result ring(bkf_model_params p, size_t n, double v, double 
     return r;
 }
 
-/* Hill's leading eigenvalues for Bloch angle theta of the train (n, v). */
-static size_t hill(bkf_model_params p, double v, double theta, size_t modes, bkf_hill_eigenvalue *out,
-                   double *err)
+/* The train's profile: the cycle at mu = gamma / sqrt(1 - c^2/v^2), to 1e-12. */
+static bkf_cycle *profile_of(bkf_model_params p, double v)
 {
     double mu = p.gamma / sqrt(1.0 - (p.c / v) * (p.c / v));
     bkf_cycle *cy = bkf_cycle_alloc();
@@ -40,6 +39,15 @@ static size_t hill(bkf_model_params p, double v, double theta, size_t modes, bkf
     co.tol = 1e-12;
     bkf_error e;
     CHECK_MSG(bkf_cycle_solve(cy, mu, p.nu, &co, &e) == BKF_OK, "%s", e.message);
+    return cy;
+}
+
+/* Hill's leading eigenvalues for Bloch angle theta of the train (n, v). */
+static size_t hill(bkf_model_params p, double v, double theta, size_t modes, bkf_hill_eigenvalue *out,
+                   double *err)
+{
+    bkf_cycle *cy = profile_of(p, v);
+    bkf_error e;
     size_t found = 0, unresolved = 0;
     int rc = bkf_hill_leading(cy, p.gamma, theta, modes, 1e-7, 6, out, err, &found, &unresolved, &e);
     CHECK_MSG(rc == BKF_OK, "hill: %s", e.message);
@@ -243,12 +251,8 @@ static double root_v(bkf_model_params p, size_t n)
 static void hill_rightmost(bkf_model_params p, double v, double theta, size_t M, double tol, double *re,
                            double *im, double *err)
 {
-    double mu = p.gamma / sqrt(1.0 - (p.c / v) * (p.c / v));
-    bkf_cycle *cy = bkf_cycle_alloc();
-    bkf_cycle_options co = bkf_cycle_options_default();
-    co.tol = 1e-12;
+    bkf_cycle *cy = profile_of(p, v);
     bkf_error e;
-    CHECK_MSG(bkf_cycle_solve(cy, mu, p.nu, &co, &e) == BKF_OK, "%s", e.message);
     bkf_hill_eigenvalue h[3];
     double herr[3];
     size_t found = 0, unresolved = 0;
