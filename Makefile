@@ -17,12 +17,15 @@ FUZZ_PACKAGES     := clang libclang-rt-dev
 # collocation, whose equation files gfortran compiles; scipy's Radau), so
 # that `make test` needs none of them.
 BENCH_PACKAGES    := auto-07p gfortran python3-scipy
-PKGS         := gsl nlopt fftw3 inih lapacke hdf5-serial
+PKGS         := gsl nlopt fftw3 inih lapacke
+# HDF5 is compiled against but not linked: src/core/h5.c loads it at the
+# first HDF5 write (its dependency tree was most of every process's start).
+H5_PKG       := hdf5-serial
 
 CC       ?= cc
 OPT      ?= -O2
 BUILD    ?= build
-PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS))
+PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) $(H5_PKG))
 PKG_LIBS   = $(shell pkg-config --libs $(PKGS))
 # SANITIZE carries instrumentation flags (make sanitize); CFLAGS from the
 # command line add to, never replace, the project's own.
@@ -33,9 +36,17 @@ override LDFLAGS += $(SANITIZE) -fopenmp
 SUNDIALS_LIBS := -lsundials_cvodes -lsundials_sunlinsolband -lsundials_sunmatrixband \
                  -lsundials_nvecserial
 # HDF5's dimension scales (H5DS) are in its high-level library, which
-# hdf5-serial.pc does not list; its -L is that of hdf5-serial.
-HDF5_HL_LIBS := -lhdf5_hl
-LDLIBS   += $(HDF5_HL_LIBS) $(PKG_LIBS) $(SUNDIALS_LIBS) -lm
+# hdf5-serial.pc does not list; its -L is that of hdf5-serial.  Only the
+# tests link them (to read back what the CLI wrote).
+HDF5_LIBS = -lhdf5_hl $(shell pkg-config --libs $(H5_PKG))
+# The sonames h5.c loads: those of the libraries beside the headers it is
+# compiled with (readelf reads them off the development symlinks).
+hdf5_soname = $(shell for d in $(patsubst -L%,%,$(filter -L%,$(shell pkg-config --libs-only-L $(H5_PKG)))) \
+  $(dir $(shell $(CC) -print-file-name=lib$(1).so)); do \
+  [ -e $$d/lib$(1).so ] && { readelf -d $$d/lib$(1).so | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p'; break; }; done)
+$(BUILD)/src/core/h5.o: override CFLAGS += -DBKF_HDF5_SONAME='"$(call hdf5_soname,hdf5)"' \
+  -DBKF_HDF5_HL_SONAME='"$(call hdf5_soname,hdf5_hl)"'
+LDLIBS   += $(PKG_LIBS) $(SUNDIALS_LIBS) -lm
 
 # The library's layers, lowest first (CONTRIBUTING.md): a file may include
 # the headers of its own layer and of the layers before it, never after
@@ -129,7 +140,7 @@ bench: deps
 	@$(MAKE) --no-print-directory bench-built
 
 bench-built: $(BENCH) $(CLI) $(SHLIB)
-	./$(BENCH)
+	BKFRONT_CLI=$(abspath $(CLI)) ./$(BENCH)
 	BKFRONT_LIBRARY=$(abspath $(BUILD)/$(SONAME)) PYTHONPATH=$(CURDIR)/python \
 	  $(PYTHON) tests/bench/bench_auto.py
 	@mkdir -p plots/out
@@ -248,7 +259,7 @@ $(INST)/bkfront.pc: src/bkfront.pc.in $(INST)/dirs include/bkfront/version.h
 	sed -e 's|@PREFIX@|$(PREFIX)|' -e 's|@LIBDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))|' \
 	  -e 's|@INCLUDEDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))|' \
 	  -e 's|@VERSION@|$(VERSION)|' -e 's|@REQUIRES@|$(PKGS)|' \
-	  -e 's|@LIBS_PRIVATE@|$(HDF5_HL_LIBS) $(SUNDIALS_LIBS) -lgomp -lm|' $< > $@
+	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) -lgomp -lm|' $< > $@
 
 # The Python package finds the shared library by its path relative to the
 # package, so that a staged (DESTDIR) or moved tree still works.
@@ -290,7 +301,7 @@ $(CLI): $(CLI_OBJ) $(LIB)
 CLI_TESTABLE := $(filter-out $(BUILD)/src/cli/main.o,$(CLI_OBJ))
 
 $(TESTS): $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(CLI) $(EXAMPLES)
-	$(CC) $(LDFLAGS) -o $@ $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(LDLIBS)
+	$(CC) $(LDFLAGS) -o $@ $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(LDLIBS) $(HDF5_LIBS)
 
 $(BUILD)/examples/%: $(BUILD)/docs/examples/%.o $(LIB)
 	@mkdir -p $(dir $@)
@@ -303,7 +314,8 @@ $(BENCH): $(BENCH_OBJ) $(LIB)
 # (its matrices are rescaled and finite); without it they run ~2x faster.
 $(BUILD)/src/stability/trainspec.o: override CFLAGS += -fcx-limited-range
 $(BUILD)/tests/%.o: override CFLAGS += -Itests -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' \
-  -DBKF_EXAMPLES_DIR='"$(abspath $(BUILD)/examples)"' -DBKF_SOURCE_DIR='"$(CURDIR)"'
+  -DBKF_EXAMPLES_DIR='"$(abspath $(BUILD)/examples)"' -DBKF_SOURCE_DIR='"$(CURDIR)"' \
+  -DBKF_HDF5_SONAME='"$(call hdf5_soname,hdf5)"'
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)
