@@ -255,8 +255,16 @@ $(INST)/cmd_run.o: src/cli/cmd_run.c $(INST)/dirs
 $(INST)/bkfront: $(filter-out $(BUILD)/src/cli/cmd_run.o,$(CLI_OBJ)) $(INST)/cmd_run.o $(LIB)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
+# The folders the dynamic loader searches by itself (its trusted ones and
+# those of ld.so.conf): a LIBDIR elsewhere ($$HOME/bkf/lib) goes into
+# bkfront.pc's Libs as an rpath, so that the documented
+# `cc prog.c $$(pkg-config --cflags --libs bkfront)` makes a program that runs.
+LOADER_DIRS = /lib /usr/lib /lib64 /usr/lib64 $(addprefix /lib/ /usr/lib/,$(shell $(CC) -print-multiarch)) \
+  $(shell ldconfig -v -N -X 2>/dev/null | sed -n 's|^\(/[^:]*\):.*|\1|p')
+PC_RPATH = $(if $(filter $(LIBDIR) $(LIBDIR)/,$(LOADER_DIRS)),, -Wl,-rpath,$${libdir})
 $(INST)/bkfront.pc: src/bkfront.pc.in $(INST)/dirs include/bkfront/version.h
 	sed -e 's|@PREFIX@|$(PREFIX)|' -e 's|@LIBDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))|' \
+	  -e 's|@RPATH@|$(PC_RPATH)|' \
 	  -e 's|@INCLUDEDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))|' \
 	  -e 's|@VERSION@|$(VERSION)|' -e 's|@REQUIRES@|$(PKGS)|' \
 	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) -lgomp -lm|' $< > $@
