@@ -6,7 +6,8 @@
 
 DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
                 libinih-dev libsundials-dev liblapacke-dev gnuplot-nox \
-                python3-cffi python3-numpy python3-pytest libhdf5-dev python3-h5py
+                python3-cffi python3-numpy python3-pytest libhdf5-dev python3-h5py \
+                groff-base
 # Only for `make valgrind` and `make fuzz` (libFuzzer ships with clang's
 # runtime), so that `make test` needs neither.
 VALGRIND_PACKAGES := valgrind
@@ -74,6 +75,7 @@ VERSION := $(MAJOR).$(call version_part,MINOR).$(call version_part,PATCH)
 SONAME  := libbkfront.so.$(MAJOR)
 SHLIB   := $(BUILD)/libbkfront.so.$(VERSION)
 CLI   := $(BUILD)/bkfront
+MAN   := $(BUILD)/man
 TESTS := $(BUILD)/run_tests
 BENCH := $(BUILD)/run_bench
 # C programs of docs/examples/, each linked with the library alone (no CLI
@@ -87,7 +89,27 @@ EXAMPLES := $(BUILD)/examples/check_paper
 all: deps
 	@$(MAKE) --no-print-directory build-all
 
-build-all: $(LIB) $(SHLIB) $(CLI)
+build-all: $(LIB) $(SHLIB) $(CLI) $(MAN)/.stamp
+
+# The manual pages: bkfront.1 and bkfront-NAME.1 for each subcommand, made
+# from the CLI's own --help by src/cli/man.awk, so that they cannot drift:
+# $(call man_pages,CLI,DIR).  make install installs those of the installed
+# CLI (whose run --help names the installed scripts).
+define man_pages
+@rm -rf $(2) && mkdir -p $(2)
+$(1) --help > $(2)/help.txt
+awk -v page=bkfront -v version=$(VERSION) -f src/cli/man.awk \
+  -v summary="$$(sed -n 's/^Description: //p' src/bkfront.pc.in)" $(2)/help.txt > $(2)/bkfront.1
+awk '/^subcommands:/ { f = 1; next } f && !NF { exit } f' $(2)/help.txt | \
+  while read -r name summary; do \
+    $(1) help $$name > $(2)/help.txt && \
+    awk -v page=bkfront-$$name -v version=$(VERSION) -v summary="$$summary" \
+      -f src/cli/man.awk $(2)/help.txt > $(2)/bkfront-$$name.1 || exit 1; \
+  done
+@rm -f $(2)/help.txt && touch $(2)/.stamp
+endef
+$(MAN)/.stamp: $(CLI) src/cli/man.awk src/bkfront.pc.in
+	$(call man_pages,./$(CLI),$(MAN))
 
 # The missing ones among the Debian packages $(1): apt-get update first, then
 # install (root, or sudo if not root).
@@ -234,6 +256,7 @@ LIBDIR     ?= $(PREFIX)/lib
 INCLUDEDIR ?= $(PREFIX)/include
 DATADIR    ?= $(PREFIX)/share/bkfront
 DOCDIR     ?= $(PREFIX)/share/doc/bkfront
+MANDIR     ?= $(PREFIX)/share/man
 PKGCONFIGDIR ?= $(LIBDIR)/pkgconfig
 # Where Debian's python3 looks for packages installed under PREFIX.
 PYTHONDIR  ?= $(LIBDIR)/python$(shell $(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null || echo 3)/dist-packages
@@ -262,6 +285,9 @@ $(INST)/bkfront: $(filter-out $(BUILD)/src/cli/cmd_run.o,$(CLI_OBJ)) $(INST)/cmd
 LOADER_DIRS = /lib /usr/lib /lib64 /usr/lib64 $(addprefix /lib/ /usr/lib/,$(shell $(CC) -print-multiarch)) \
   $(shell ldconfig -v -N -X 2>/dev/null | sed -n 's|^\(/[^:]*\):.*|\1|p')
 PC_RPATH = $(if $(filter $(LIBDIR) $(LIBDIR)/,$(LOADER_DIRS)),, -Wl,-rpath,$${libdir})
+$(INST)/man/.stamp: $(INST)/bkfront src/cli/man.awk src/bkfront.pc.in
+	$(call man_pages,./$(INST)/bkfront,$(INST)/man)
+
 $(INST)/bkfront.pc: src/bkfront.pc.in $(INST)/dirs include/bkfront/version.h
 	sed -e 's|@PREFIX@|$(PREFIX)|' -e 's|@LIBDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))|' \
 	  -e 's|@RPATH@|$(PC_RPATH)|' \
@@ -276,10 +302,14 @@ $(INST)/_paths.py: $(INST)/dirs
 	  "$$($(PYTHON) -c 'import os, sys; print(repr(os.path.relpath(sys.argv[1], sys.argv[2])))' \
 	     '$(LIBDIR)/$(SONAME)' '$(PYTHONDIR)/bkfront')" > $@
 
-install: $(LIB) $(SHLIB) $(INST)/bkfront $(INST)/bkfront.pc $(INST)/_paths.py
+# The manual keeps the source tree's layout (README.md beside docs/, the
+# gallery under plots/), so that its relative links resolve where installed
+# (tests/python/test_install.py checks every one).
+install: $(LIB) $(SHLIB) $(INST)/bkfront $(INST)/bkfront.pc $(INST)/_paths.py $(INST)/man/.stamp
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR) $(DESTDIR)$(PKGCONFIGDIR) \
 	  $(DESTDIR)$(INCLUDEDIR)/bkfront $(DESTDIR)$(DATADIR)/plots $(DESTDIR)$(DATADIR)/scenes \
-	  $(DESTDIR)$(PYTHONDIR)/bkfront $(DESTDIR)$(DOCDIR)/cli $(DESTDIR)$(DOCDIR)/examples
+	  $(DESTDIR)$(PYTHONDIR)/bkfront $(DESTDIR)$(DOCDIR)/docs/cli $(DESTDIR)$(DOCDIR)/docs/examples \
+	  $(DESTDIR)$(DOCDIR)/plots/gallery $(DESTDIR)$(MANDIR)/man1
 	install -m 755 $(INST)/bkfront $(DESTDIR)$(BINDIR)/bkfront
 	install -m 644 $(LIB) $(DESTDIR)$(LIBDIR)/libbkfront.a
 	install -m 755 $(SHLIB) $(DESTDIR)$(LIBDIR)/
@@ -290,15 +320,19 @@ install: $(LIB) $(SHLIB) $(INST)/bkfront $(INST)/bkfront.pc $(INST)/_paths.py
 	install -m 644 plots/*.gp $(DESTDIR)$(DATADIR)/plots/
 	install -m 644 fronts/*.scene $(DESTDIR)$(DATADIR)/scenes/
 	install -m 644 python/bkfront/*.py $(INST)/_paths.py $(DESTDIR)$(PYTHONDIR)/bkfront/
-	install -m 644 README.md docs/*.md $(DESTDIR)$(DOCDIR)/
-	install -m 644 docs/cli/*.md $(DESTDIR)$(DOCDIR)/cli/
-	install -m 644 docs/examples/*.c $(DESTDIR)$(DOCDIR)/examples/
+	install -m 644 README.md CONTRIBUTING.md $(DESTDIR)$(DOCDIR)/
+	install -m 644 docs/*.md $(DESTDIR)$(DOCDIR)/docs/
+	install -m 644 docs/cli/*.md $(DESTDIR)$(DOCDIR)/docs/cli/
+	install -m 644 docs/examples/*.c $(DESTDIR)$(DOCDIR)/docs/examples/
+	install -m 644 plots/gallery/*.png $(DESTDIR)$(DOCDIR)/plots/gallery/
+	install -m 644 $(INST)/man/*.1 $(DESTDIR)$(MANDIR)/man1/
 	@if [ -z "$(DESTDIR)" ] && [ "$$(id -u)" -eq 0 ] && command -v ldconfig >/dev/null; then ldconfig; fi
 
 uninstall:
 	rm -f $(DESTDIR)$(BINDIR)/bkfront $(DESTDIR)$(LIBDIR)/libbkfront.a \
 	  $(DESTDIR)$(LIBDIR)/libbkfront.so $(DESTDIR)$(LIBDIR)/$(SONAME) \
-	  $(DESTDIR)$(LIBDIR)/$(notdir $(SHLIB)) $(DESTDIR)$(PKGCONFIGDIR)/bkfront.pc
+	  $(DESTDIR)$(LIBDIR)/$(notdir $(SHLIB)) $(DESTDIR)$(PKGCONFIGDIR)/bkfront.pc \
+	  $(DESTDIR)$(MANDIR)/man1/bkfront.1 $(DESTDIR)$(MANDIR)/man1/bkfront-*.1
 	rm -rf $(DESTDIR)$(INCLUDEDIR)/bkfront $(DESTDIR)$(DATADIR) $(DESTDIR)$(DOCDIR) \
 	  $(DESTDIR)$(PYTHONDIR)/bkfront
 
