@@ -514,14 +514,19 @@ static int write_dispersion(const bkf_oscillation_spec *p, const bkf_provenance 
         s = bkf_io_table_comment(t, line, err);
     }
     if (!s) s = bkf_product_table_command(t, prov, err);
+    /* The refused rows, reported once when the table is done: their count,
+     * their q (the first few) and the first one's reason. */
+    size_t refused = 0;
+    char qs[160] = "", first[256] = "";
     for (size_t i = 0; i < d.count && !s; i++) {
         bkf_oscillation_row row;
         if ((s = dispersion_row(&d, i, &row, err))) break;
         const bkf_floquet_point *pt = &row.point;
-        if (row.refused && p->warn) {
-            snprintf(line, sizeof line, "row q = %s refused: %s",
-                     bkf_format_number(d.q[i], a, sizeof a), row.message);
-            p->warn(line, p->warn_data);
+        if (row.refused && refused++ < 4) {
+            size_t used = strlen(qs);
+            snprintf(qs + used, sizeof qs - used, "%s%s", refused > 1 ? ", " : "",
+                     refused > 3 ? "..." : bkf_format_number(d.q[i], a, sizeof a));
+            if (refused == 1) snprintf(first, sizeof first, "%s", row.message);
         }
         bkf_io_value v[COUNT(dispersion_columns)] = {
             {.number = pt->q},
@@ -540,6 +545,11 @@ static int write_dispersion(const bkf_oscillation_spec *p, const bkf_provenance 
             {.number = pt->det_direct},
         };
         s = bkf_io_table_row(t, v, err);
+    }
+    if (!s && refused && p->warn) {
+        snprintf(line, sizeof line, "%zu of %zu rows refused (kind refused, lambda nan) at "
+                 "q = %s; the first: %s", refused, d.count, qs, first);
+        p->warn(line, p->warn_data);
     }
     dispersion_free(&d);
     return s;
