@@ -349,3 +349,19 @@ TEST(cli_branch_stability)
     CHECK(rmdir(dir) == 0);
 #undef BRANCH3
 }
+
+/* Where the speeds are refused (|nu| so close to 1 that no cycle meets the
+ * tolerance), the one error line names the failing cycle once and says what
+ * to try: the verified range of nu and a looser tol. */
+TEST(cli_speeds_refusal_near_nu_minus_1_says_what_to_try)
+{
+    bkf_cli_result r = BKF_CLI("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.99999999",
+                               "--S", "20");
+    CHECK_MSG(r.code == 1 && r.out[0] == '\0' && bkf_count_lines(r.err) == 1, "exit %d: %s",
+              r.code, r.err);
+    int mentions = 0;
+    for (const char *m = r.err; (m = strstr(m, "mu = ")); m++) mentions++;
+    CHECK_MSG(mentions == 1, "the place is said %d times: %s", mentions, r.err);
+    CHECK_MSG(strstr(r.err, "|nu| <= 0.9999") && strstr(r.err, "looser tol"), "no hint: %s", r.err);
+    bkf_cli_result_free(&r);
+}
