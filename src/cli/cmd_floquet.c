@@ -27,11 +27,11 @@ static void floquet_help(FILE *out)
     cli_options g[2];
     groups_of(NULL, g);
     fprintf(out,
-        "usage: bkfront floquet --gamma G --c C --nu V --q LIST [--S S]\n"
-        "       bkfront floquet --threshold --gamma G --c C [--search A:B]\n"
+        "usage: bkfront floquet [--gamma G] [--c C] [--nu V] --q LIST [--S S]\n"
+        "       bkfront floquet --threshold [--gamma G] [--c C] [--search A:B]\n"
         "       bkfront floquet --threshold --along c|gamma --from A --to B\n"
-        "                       (--gamma G | --c C) [--search A:B]\n"
-        "       bkfront floquet --diagram --gamma G --c C [--search A:B]\n"
+        "                       [--gamma G | --c C] [--search A:B]\n"
+        "       bkfront floquet --diagram [--gamma G] [--c C] [--search A:B]\n"
         "   common: [--tol E] [--cq-max P] [--nu-step H]\n"
         "           [--stepper auto|explicit|implicit|extrapolation]\n"
         "           [--format tsv|json] [--out FILE]\n"
