@@ -797,7 +797,7 @@ static void check_spectrum(const check_ctx *c, const bkf_speeds_root *sr, bkf_ch
     p.kind = BKF_MODEL_CONTINUUM;
     bkf_trainspec_result res;
     bkf_error e;
-    int s = bkf_stability_root(&p, sr, bkf_trainspec_options_default().tol, 1, &res, &e);
+    int s = bkf_trainspec_root(&p, sr, bkf_trainspec_options_default().tol, 1, &res, &e);
     if (s == BKF_OK) {
         row->spectral = res.verdict;
         row->sigma_max = res.sigma_max;

@@ -9,7 +9,7 @@
 
 #include "bkfront/chainwave.h"
 #include "bkfront/cycle.h"
-#include "bkfront/stability.h"
+#include "bkfront/trainspec.h"
 
 #include "product_internal.h"
 
@@ -333,7 +333,7 @@ static double verdict_tol(double stability_tol)
 static int verdict_find(const bkf_model_params *p, const bkf_speeds_root *root, double tol,
                         root_verdict *r, bkf_error *err)
 {
-    int s = bkf_stability_root(p, root, tol, bkf_trainspec_options_default().per_kappa,
+    int s = bkf_trainspec_root(p, root, tol, bkf_trainspec_options_default().per_kappa,
                                &r->spectrum, &r->why);
     r->why.status = s;
     if (s && s != BKF_ETOL && s != BKF_EBUDGET) return bkf_error_set(err, s, "%s", r->why.message);
@@ -354,7 +354,7 @@ static void verdict_values(const root_verdict *r, bkf_io_value *v)
     v[1].number = ok ? x->sigma_max : NAN;
     v[2].number = ok ? x->sigma_max_err : NAN;
     v[3].number = ok ? x->kappa_max : NAN;
-    v[4].text = ok ? bkf_stability_kind_name(x) : NULL;
+    v[4].text = ok ? bkf_trainspec_kind_name(x) : NULL;
 }
 
 static int verdict_comment(bkf_io_table *table, double tol, bkf_error *err)
@@ -919,7 +919,7 @@ static double crossing_sigma(double x, void *data)
         c->at.point.root = t.roots[best];
         c->at.point.kind = BKF_SPEEDS_POINT;
         c->at.stability_change = 1;
-        s = bkf_stability_root(&p, &c->at.point.root, c->tol,
+        s = bkf_trainspec_root(&p, &c->at.point.root, c->tol,
                                bkf_trainspec_options_default().per_kappa, &c->at.verdict.spectrum,
                                &c->why);
         c->spectra++;
