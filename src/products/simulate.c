@@ -15,7 +15,6 @@
 #include "product_internal.h"
 
 #define PI 3.14159265358979323846
-#define DEF_N 512
 
 static const char *const model_names[] = {"continuum", "chain", NULL};
 /* bkf_pde_stepper_names, then "auto" (BKF_SIMULATE_STEPPER_AUTO) */
@@ -231,7 +230,7 @@ static int resolve(const bkf_simulate_spec *sp, const char *prefix, bkf_model_pa
                                  bkf_format_number(S, a, sizeof a));
         model->N = (size_t)S;
     } else if (!N_given) {
-        model->N = DEF_N;
+        model->N = BKF_SIMULATE_N_DEFAULT;
     }
     if (sp->stepper == BKF_SIMULATE_STEPPER_AUTO)
         options->stepper = bkf_pde_stepper_auto(model, sp->dealias);
