@@ -84,8 +84,8 @@ const bkf_option bkf_oscillation_options[] = {
      .help = "sound speed, >= 0 (> 0 for --threshold and --diagram: with\n"
              "c = 0 every q is the neutral q = 0 mode)"},
     {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_oscillation_spec, nu),
-     .flags = BOUNDED | BKF_OPT_MIN_OPEN | BKF_OPT_MAX_OPEN, .min = -1, .max = 1, .form = "V",
-     .help = "pulling rate, in (-1, 1); dispersion mode only"},
+     .flags = BOUNDED | BKF_OPT_MIN_OPEN | BKF_OPT_MAX_OPEN | BKF_OPT_FANOUT, .min = -1, .max = 1,
+     .form = "V", .help = "pulling rate, in (-1, 1); dispersion mode only"},
     {.name = "q", .type = BKF_OPT_DOUBLE_LIST, .offset = offsetof(bkf_oscillation_spec, q),
      .flags = BKF_OPT_MIN, .min = 0, .max_count = BKF_OSCILLATION_MAX_ROWS, .form = "LIST",
      .help = "wavenumbers, >= 0, c q <= 1e4: Q, Q1,Q2,... or A:B:N;\n"

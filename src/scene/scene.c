@@ -6,6 +6,7 @@
 #include <ctype.h>
 #include <ini.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -23,14 +24,68 @@
  * a range of computations, not the 1e6 of values inside one product. */
 #define SCENE_MAX_POINTS 100000u
 
-static const char *const kind_names[BKF_SCENE_NKINDS] = {
+/* The kinds of the first releases keep their numbers (scene.h); a kind a
+ * product declares later (catalog.h) gets the next.  Every kind but figure
+ * is a catalogue product's: its declaration is the whole recipe. */
+static const char *const enum_names[BKF_SCENE_NKINDS] = {
     "speeds", "period", "dispersion", "threshold", "branch", "profile",
     "validity", "friction", "spacetime", "check", "stability", "figure", "sweep"};
 
+typedef struct {
+    const char *name;
+    const bkf_catalog_entry *entry;  /* NULL: figure */
+    const bkf_catalog_kind *decl;
+} kind_info;
+
+/* The kinds' bits (K below) end under K_ACCURACY. */
+#define MAX_KINDS 29
+static kind_info kinds[MAX_KINDS];
+static size_t nkinds;
+static pthread_once_t kinds_once = PTHREAD_ONCE_INIT;
+
+/* A kind past MAX_KINDS is left out; the test that every catalogue kind
+ * is a scene's finds it. */
+static void build_kinds(void)
+{
+    for (size_t k = 0; k < BKF_SCENE_NKINDS; k++) kinds[k].name = enum_names[k];
+    nkinds = BKF_SCENE_NKINDS;
+    for (size_t i = 0; i < bkf_catalog_count(); i++) {
+        const bkf_catalog_entry *e = bkf_catalog_at(i);
+        for (size_t j = 0; j < e->nkinds; j++) {
+            size_t k = 0;
+            while (k < nkinds && strcmp(kinds[k].name, e->kinds[j].name) != 0) k++;
+            if (k == nkinds && nkinds == MAX_KINDS) continue;
+            if (k == nkinds) nkinds++;
+            kinds[k] = (kind_info){e->kinds[j].name, e, &e->kinds[j]};
+        }
+    }
+}
+
+static const kind_info *kind_at(int kind)
+{
+    pthread_once(&kinds_once, build_kinds);
+    return kind >= 0 && (size_t)kind < nkinds ? &kinds[kind] : NULL;
+}
+
+size_t bkf_scene_kind_count(void)
+{
+    pthread_once(&kinds_once, build_kinds);
+    return nkinds;
+}
+
 const char *bkf_scene_kind_name(bkf_scene_kind kind)
 {
-    return (unsigned)kind < BKF_SCENE_NKINDS ? kind_names[kind] : NULL;
+    const kind_info *k = kind_at((int)kind);
+    return k ? k->name : NULL;
 }
+
+static const char *kind_name(bkf_scene_kind kind)
+{
+    const char *n = bkf_scene_kind_name(kind);
+    return n ? n : "?";
+}
+
+static int append(char *buf, size_t size, const char *sep, const char *text);
 
 /* ------------------------------------------------------------- lookup */
 
@@ -396,33 +451,21 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
 
 /* -------------------------------------------------------- the catalogue */
 
-/* What each kind computes: the catalogue's product; the switches the kind
- * always passes, before (first) or after (last) the scene's keys; the key
- * whose list gives one step per value.  A kind whose product is not yet in
- * the catalogue cannot be planned. */
-typedef struct {
-    const char *product, *first, *last, *split;
-} kind_map_row;
-
-static const kind_map_row kind_map[BKF_SCENE_NKINDS] = {
-    [BKF_SCENE_SPEEDS] = {"speeds", NULL, NULL, NULL},
-    [BKF_SCENE_PERIOD] = {"period", NULL, NULL, "nu"},
-    [BKF_SCENE_DISPERSION] = {"floquet", NULL, NULL, "nu"},
-    [BKF_SCENE_THRESHOLD] = {"floquet", "threshold", NULL, NULL},
-    [BKF_SCENE_BRANCH] = {"branch", NULL, NULL, "n"},
-    [BKF_SCENE_PROFILE] = {"profile", NULL, NULL, NULL},
-    [BKF_SCENE_VALIDITY] = {"asymptotics", "grid", NULL, NULL},
-    [BKF_SCENE_FRICTION] = {"friction", NULL, NULL, NULL},
-    [BKF_SCENE_SPACETIME] = {"simulate", NULL, "no-progress", NULL},
-    [BKF_SCENE_CHECK] = {"check", NULL, "no-progress", NULL},
-    [BKF_SCENE_STABILITY] = {"stability", NULL, NULL, "n"},
-    [BKF_SCENE_FIGURE] = {NULL, NULL, NULL, NULL},
-    [BKF_SCENE_SWEEP] = {"sweep", NULL, "no-progress", NULL},
-};
-
 static const bkf_catalog_entry *catalog_entry(bkf_scene_kind kind)
 {
-    return kind_map[kind].product ? bkf_catalog_find(kind_map[kind].product) : NULL;
+    const kind_info *k = kind_at((int)kind);
+    return k ? k->entry : NULL;
+}
+
+/* The option of a step's product whose list a scene makes one step per
+ * value (BKF_OPT_FANOUT), or NULL. */
+static const bkf_option *fanout_option(const bkf_catalog_entry *entry)
+{
+    size_t n;
+    const bkf_option *table = entry->options(&n);
+    for (size_t i = 0; i < n; i++)
+        if (table[i].flags & BKF_OPT_FANOUT) return &table[i];
+    return NULL;
 }
 
 /* A scene key as the option's name: max_points is --max-points. */
@@ -471,8 +514,8 @@ static int apply_args(const bkf_catalog_entry *entry, const bkf_scene_arg *args,
 /* One key of a catalogued kind, through the product's table (each value of
  * the kind's split list on its own, as the plan passes them).  *known 0:
  * the product has no such key. */
-static int catalog_check_key(const bkf_catalog_entry *entry, const kind_map_row *map,
-                             const char *key, const char *value, int *known, bkf_error *err)
+static int catalog_check_key(const bkf_catalog_entry *entry, const char *key, const char *value,
+                             int *known, bkf_error *err)
 {
     char name[64];
     option_name(key, name, sizeof name);
@@ -482,7 +525,8 @@ static int catalog_check_key(const bkf_catalog_entry *entry, const kind_map_row 
     void *spec = bkf_catalog_spec_new(entry, err);
     if (!spec) return BKF_ENOMEM;
     int s = BKF_OK;
-    if (map->split && strcmp(key, map->split) == 0) {
+    const bkf_option *split = fanout_option(entry);
+    if (split && strcmp(name, split->name) == 0) {
         bkf_list list;
         s = bkf_list_parse(value, 0, 0, SCENE_MAX_POINTS, "", key, &list, err);
         for (size_t i = 0; !s && i < list.count; i++) {
@@ -594,12 +638,13 @@ static void header_line(parse_state *st, const char *line)
     char kind[BKF_SCENE_VALUE_LEN], name[BKF_SCENE_VALUE_LEN] = "", extra[BKF_SCENE_VALUE_LEN] = "";
     int fields = sscanf(a, "%255s %255s %255s", kind, name, extra);
     int k = -1;
-    for (int i = 0; fields >= 1 && i < BKF_SCENE_NKINDS; i++)
-        if (strcmp(kind, kind_names[i]) == 0) k = i;
+    size_t nk = bkf_scene_kind_count();
+    for (size_t i = 0; fields >= 1 && i < nk; i++)
+        if (strcmp(kind, kind_name((bkf_scene_kind)i)) == 0) k = (int)i;
     if (k < 0) {
-        fail(st, st->line,
-             "unknown section [%s] (model, accuracy, speeds, period, dispersion, threshold, "
-             "branch, profile, validity, friction, spacetime, check, stability, figure, sweep)", a);
+        char known[512] = "model, accuracy";
+        for (size_t i = 0; i < nk; i++) append(known, sizeof known, ", ", kind_name((bkf_scene_kind)i));
+        fail(st, st->line, "unknown section [%s] (%s)", a, known);
         return;
     }
     if (fields == 3) {
@@ -738,8 +783,7 @@ static int handler(void *user, const char *section, const char *name, const char
     bkf_error e;
     if (by_catalog) {
         int known_key;
-        int s = catalog_check_key(product, &kind_map[st->s->products[st->section_kind].kind], name,
-                                  value, &known_key, &e);
+        int s = catalog_check_key(product, name, value, &known_key, &e);
         if (s == BKF_ENOMEM) {
             st->status = bkf_error_set(st->err, s, "out of memory");
             return 0;
@@ -766,16 +810,16 @@ static const char *entry_value(const bkf_scene_entry *list, size_t n, const char
     return NULL;
 }
 
+static int takes_inherited(const bkf_scene_product *p, const char *key);
+
 const char *bkf_scene_value(const bkf_scene *s, const bkf_scene_product *p, const char *key)
 {
     const char *v = p ? entry_value(p->entries, p->nentries, key) : NULL;
     if (v) return v;
-    /* A simulation's tol is a Runge-Kutta tolerance, not the accuracy asked
-     * of a result: it is not inherited. */
-    if (p && strcmp(key, "tol") == 0 &&
-        (p->kind == BKF_SCENE_SPACETIME || p->kind == BKF_SCENE_CHECK || p->kind == BKF_SCENE_VALIDITY ||
-         p->kind == BKF_SCENE_STABILITY || p->kind == BKF_SCENE_SWEEP))
-        return NULL;
+    int accuracy = 0;
+    for (size_t i = 0; i < NKEYS; i++)
+        accuracy |= (keys[i].where & K_ACCURACY) && strcmp(keys[i].key, key) == 0;
+    if (p && accuracy && !takes_inherited(p, key)) return NULL;
     return entry_value(s->model, s->nmodel, key);
 }
 
@@ -886,7 +930,7 @@ static int check_scene(parse_state *st)
             }
             if (!bkf_scene_value(s, p, key))
                 return fail(st, p->line, "[%s %s]: %s is not set here nor in [model]",
-                            kind_names[p->kind], p->name, key);
+                            kind_name(p->kind), p->name, key);
         }
         if (p->kind == BKF_SCENE_BRANCH) {
             if (!entry_value(p->entries, p->nentries, "param"))
@@ -1200,61 +1244,7 @@ static char *out_path(const char *dir, const char *name, const char *suffix)
     return p;
 }
 
-/* The model keys every cycle-based product takes. */
-static int model_args(arg_list *b, const bkf_scene *s, const bkf_scene_product *p, int with_nu,
-                      int with_S)
-{
-    const char *skip = NULL;
-    if (p->kind == BKF_SCENE_BRANCH) skip = entry_value(p->entries, p->nentries, "param");
-    if (p->kind == BKF_SCENE_THRESHOLD) skip = entry_value(p->entries, p->nentries, "along");
-    static const char *const names[] = {"gamma", "c", "nu", "S"};
-    for (int i = 0; i < 4; i++) {
-        if ((i == 2 && !with_nu) || (i == 3 && !with_S)) continue;
-        if (skip && strcmp(skip, names[i]) == 0) continue;
-        const char *v = bkf_scene_value(s, p, names[i]);
-        if (v && !arg_push(b, names[i], v, 0, 0)) return 0;
-    }
-    return 1;
-}
-
-/* The chain's keys for speeds, branch and check: `model = chain` from the
- * product or [model] (the continuum, their default, goes unsaid, so plans
- * of continuum scenes read as before) and with it, when with_N, the blocks
- * N from the product or [accuracy] (the simulations' N: on the chain the
- * grid is the blocks, so a scene's waves and runs have the same chain). */
-static int chain_args(arg_list *b, const bkf_scene *s, const bkf_scene_product *p, int with_N)
-{
-    const char *m = bkf_scene_value(s, p, "model");
-    if (!m || strcmp(m, "chain") != 0) return 1;
-    if (!arg_push(b, "model", m, 0, 0)) return 0;
-    const char *N = bkf_scene_value(s, p, "N");
-    return !with_N || !N || arg_push(b, "N", N, 0, 0);
-}
-
-/* Keys of a catalogued product's own section that the kind's recipe below
- * does not pass: every key of the product's table reaches it. */
-static int other_keys(arg_list *b, const bkf_scene_product *p)
-{
-    const bkf_catalog_entry *entry = catalog_entry(p->kind);
-    if (!entry) return 1;
-    size_t n;
-    const bkf_option *table = entry->options(&n);
-    for (size_t i = 0; i < p->nentries; i++) {
-        char key[sizeof p->entries[i].key];
-        option_name(p->entries[i].key, key, sizeof key);
-        const bkf_option *opt = bkf_option_find(table, n, key);
-        if (!opt || arg_has(b, key)) continue;
-        const char *v = p->entries[i].value;
-        if (opt->type == BKF_OPT_SWITCH) {
-            if (strcmp(v, "no") == 0) continue;
-            v = NULL;
-        }
-        if (!arg_push(b, key, v, 0, 0)) return 0;
-    }
-    return 1;
-}
-
-/* The keys a kind always passes (kind_map), where the recipe puts them. */
+/* The switches a kind always passes (its first and last). */
 static int fixed_keys(arg_list *b, const char *keys)
 {
     char buf[64];
@@ -1265,292 +1255,333 @@ static int fixed_keys(arg_list *b, const char *keys)
     return 1;
 }
 
-static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
-                        const bkf_scene_plan_options *o)
+/* ------------------------------------------------------- a kind's steps */
+
+/* One item of a kind's keys (catalog.h's bkf_catalog_step): KEY and its
+ * marks. */
+typedef struct {
+    char key[64];
+    int inherit, names, always, has_value; /* ^, @, :=, = */
+    char value[BKF_SCENE_VALUE_LEN];       /* =TEXT, =$OTHER, :=TEXT */
+    char omit[64];                         /* !TEXT */
+    char if_key[64], if_value[64];         /* ?OTHER=TEXT */
+} key_item;
+
+static void parse_item(const char *tok, size_t len, key_item *it)
+{
+    *it = (key_item){0};
+    const char *end = tok + len;
+    if (*tok == '^') it->inherit = 1, tok++;
+    else if (*tok == '@') it->names = 1, tok++;
+    size_t n = strcspn(tok, "=!?: ");
+    snprintf(it->key, sizeof it->key, "%.*s", (int)n, tok);
+    tok += n;
+    while (tok < end) {
+        char mark = *tok++;
+        if (mark == ':' && tok < end && *tok == '=') it->always = 1, mark = '=', tok++;
+        size_t k = strcspn(tok, "!? ");
+        if (mark == '=') {
+            it->has_value = 1;
+            snprintf(it->value, sizeof it->value, "%.*s", (int)k, tok);
+        } else if (mark == '!') {
+            snprintf(it->omit, sizeof it->omit, "%.*s", (int)k, tok);
+        } else if (mark == '?') {
+            size_t e = strcspn(tok, "=!? ");
+            snprintf(it->if_key, sizeof it->if_key, "%.*s", (int)e, tok);
+            if (e < k) snprintf(it->if_value, sizeof it->if_value, "%.*s", (int)(k - e - 1), tok + e + 1);
+        }
+        tok += k;
+    }
+}
+
+/* The items of a declaration's keys (malloc'd; NULL with *n 0: none or out
+ * of memory, told apart by `text`). */
+static key_item *parse_items(const char *text, size_t *n)
+{
+    *n = 0;
+    size_t cap = 1;
+    for (const char *c = text ? text : ""; *c; c++) cap += *c == ' ';
+    key_item *items = text && *text ? calloc(cap, sizeof *items) : NULL;
+    for (const char *c = text; items && *c;) {
+        size_t len = strcspn(c, " ");
+        if (len) parse_item(c, len, &items[(*n)++]);
+        c += len + (c[len] == ' ');
+    }
+    return items;
+}
+
+/* The section's own value of an option name (written with _ or -). */
+static const char *own_value(const bkf_scene_product *p, const char *key)
+{
+    char name[64];
+    for (size_t i = 0; i < p->nentries; i++)
+        if (strcmp(option_name(p->entries[i].key, name, sizeof name), key) == 0)
+            return p->entries[i].value;
+    return NULL;
+}
+
+/* The section's own value, else, with `inherit`, [model]'s or [accuracy]'s. */
+static const char *scene_key(const bkf_scene *s, const bkf_scene_product *p, const char *key,
+                             int inherit)
+{
+    const char *v = own_value(p, key);
+    return v || !inherit ? v : entry_value(s->model, s->nmodel, key);
+}
+
+/* What an item passes for p, or NULL. */
+static const char *item_value(const bkf_scene *s, const bkf_scene_product *p, const key_item *it)
+{
+    if (it->always) return it->value;
+    const char *v = scene_key(s, p, it->key, it->inherit);
+    if (!v && it->has_value && it->value[0] == '$') {
+        const char *named = own_value(p, it->value + 1);
+        v = named ? scene_key(s, p, named, 1) : NULL;
+    } else if (!v && it->has_value) {
+        v = it->value;
+    }
+    if (v && it->omit[0] && strcmp(v, it->omit) == 0) return NULL;
+    if (v && it->if_key[0]) {
+        const char *c = scene_key(s, p, it->if_key, 1);
+        if (!c || strcmp(c, it->if_value) != 0) return NULL;
+    }
+    return v;
+}
+
+/* Whether the kind of p takes [accuracy]'s `key`: where its product has
+ * such a key, only when the kind's keys say ^KEY (a simulation's tol is its
+ * stepper's, not the accuracy asked of a result). */
+static int takes_inherited(const bkf_scene_product *p, const char *key)
+{
+    const kind_info *k = kind_at((int)p->kind);
+    if (!k || !k->entry || !catalog_option(k->entry, key)) return 1;
+    size_t n;
+    key_item *items = parse_items(k->decl->step.keys, &n);
+    int takes = 0;
+    for (size_t i = 0; i < n; i++)
+        if (strcmp(items[i].key, key) == 0) takes = items[i].inherit;
+    free(items);
+    return takes;
+}
+
+/* A file or folder the scene names (a BKF_OPT_PATH key) goes inside the
+ * output folder, as the scene's own outputs do: a relative name without
+ * "..", taken there.  Elsewhere only when the caller trusts the scene.
+ * NULL: refused (*refused set) or out of memory. */
+static char *confined_path(const char *dir, const char *value, int trust, int *refused)
+{
+    int outside = value[0] == '/';
+    for (const char *c = value; *c && !outside; c += strcspn(c, "/"), c += *c == '/')
+        if (strncmp(c, "..", 2) == 0 && (c[2] == '/' || c[2] == '\0')) outside = 1;
+    *refused = outside && !trust;
+    if (*refused) return NULL;
+    return value[0] == '/' ? strdup(value) : out_path(dir, value, "");
+}
+
+typedef struct {
+    bkf_scene_plan *plan;
+    const bkf_scene *s;
+    size_t index;
+    const bkf_scene_plan_options *o;
+    bkf_error *err;
+} plan_context;
+
+/* Pushes key = value of the step's product: a switch as the bare key
+ * (left out at "no"); a path kept inside the output folder; a list A:B:N
+ * of a key with a log switch followed by that switch. */
+static int push_key(const plan_context *c, arg_list *b, const bkf_catalog_entry *entry,
+                    const char *key, const char *value)
+{
+    size_t n;
+    const bkf_option *table = entry->options(&n);
+    const bkf_option *opt = bkf_option_find(table, n, key);
+    if (opt && opt->type == BKF_OPT_SWITCH) {
+        if (strcmp(value, "no") == 0) return BKF_OK;
+        value = NULL;
+    }
+    if (opt && (opt->flags & BKF_OPT_PATH)) {
+        const bkf_scene_product *p = &c->s->products[c->index];
+        int refused;
+        char *path = confined_path(c->plan->outdir, value, c->o->trust, &refused);
+        if (refused) {
+            char shown[96];
+            return bkf_error_set(c->err, BKF_EINPUT,
+                                 "%s:%d: [%s %s]: %s: '%s' is outside the output folder (a name "
+                                 "inside it, without '..'; --trust-scene allows it)",
+                                 c->s->path, key_line(c->s, p, key), kind_name(p->kind), p->name,
+                                 key, bkf_option_shown(value, shown, sizeof shown));
+        }
+        int ok = path && arg_push(b, key, path, 0, 0);
+        free(path);
+        return ok ? BKF_OK : bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    }
+    if (!arg_push(b, key, value, 0, 0)) return bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    if (opt && (opt->flags & BKF_OPT_LOG_SWITCH) && value && strchr(value, ':'))
+        for (size_t i = 0; i < n; i++)
+            if (table[i].type == BKF_OPT_SWITCH && table[i].offset == opt->log_offset &&
+                !arg_has(b, table[i].name) && !arg_push(b, table[i].name, NULL, 0, 0))
+                return bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    return BKF_OK;
+}
+
+/* One step of the declaration: `item` the fan-out key's value for it
+ * (NULL: none), `number` its number among count. */
+static int plan_one_step(const plan_context *c, const bkf_catalog_entry *entry,
+                         const bkf_catalog_step *d, const key_item *items, size_t nitems,
+                         const char *fkey, const char *item, size_t number, size_t count,
+                         int own)
+{
+    const bkf_scene_product *p = &c->s->products[c->index];
+    arg_list b = {0};
+    int st = fixed_keys(&b, d->first) ? BKF_OK : BKF_ENOMEM;
+    for (size_t i = 0; !st && i < nitems; i++) {
+        const key_item *it = &items[i];
+        int skipped = 0;
+        for (size_t j = 0; j < nitems; j++) {
+            const char *named = items[j].names ? own_value(p, items[j].key) : NULL;
+            if (!it->names && named && strcmp(named, it->key) == 0) skipped = 1;
+        }
+        const char *v = fkey && item && strcmp(it->key, fkey) == 0 ? item : item_value(c->s, p, it);
+        if (!skipped && v && !arg_has(&b, it->key)) st = push_key(c, &b, entry, it->key, v);
+    }
+    /* the section's other keys of the product's table, as written */
+    for (size_t i = 0; own && !st && i < p->nentries; i++) {
+        char key[sizeof p->entries[i].key];
+        option_name(p->entries[i].key, key, sizeof key);
+        if (!catalog_option(entry, key) || arg_has(&b, key)) continue;
+        const char *v = fkey && item && strcmp(key, fkey) == 0 ? item : p->entries[i].value;
+        st = push_key(c, &b, entry, key, v);
+    }
+    if (!st && !fixed_keys(&b, d->last)) st = BKF_ENOMEM;
+    char *output = NULL;
+    const char *outputs = d->outputs ? d->outputs : "out=.tsv";
+    for (const char *o = outputs; !st && *o;) {
+        size_t len = strcspn(o, " "), eq = strcspn(o, "=");
+        char key[64], suffix[64], file[BKF_SCENE_NAME_LEN + 96];
+        snprintf(key, sizeof key, "%.*s", (int)eq, o);
+        snprintf(suffix, sizeof suffix, "%.*s", (int)(len - eq - 1), o + eq + 1);
+        char *hash = strchr(suffix, '#');
+        if (hash)
+            snprintf(file, sizeof file, "%s%.*s%zu%s", p->name, (int)(hash - suffix), suffix,
+                     number, hash + 1);
+        else if (count > 1)
+            snprintf(file, sizeof file, "%s_%zu%s", p->name, number, suffix);
+        else
+            snprintf(file, sizeof file, "%s%s", p->name, suffix);
+        char *path = out_path(c->plan->outdir, file, "");
+        if (!path || !arg_push(&b, key, path, 1, 0)) st = BKF_ENOMEM;
+        if (!output)
+            output = path;
+        else
+            free(path);
+        o += len + (o[len] == ' ');
+    }
+    if (st) {
+        free(output);
+        args_free(b.v, b.n);
+        return st == BKF_ENOMEM ? bkf_error_set(c->err, st, "out of memory") : st;
+    }
+    if (!finish_step(c->plan, c->index, BKF_SCENE_STEP_PRODUCT, entry->name, 1, &b, output, 0))
+        return bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    return BKF_OK;
+}
+
+/* The steps of one declaration: one per value of its fan-out key's list. */
+static int plan_steps(const plan_context *c, const bkf_catalog_entry *entry,
+                      const bkf_catalog_step *d, int own)
+{
+    const bkf_scene_product *p = &c->s->products[c->index];
+    size_t nitems;
+    key_item *items = parse_items(d->keys, &nitems);
+    if (!items && d->keys && *d->keys) return bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    /* the list: the named section key's ("LIST>KEY": no list, no step), or
+     * the table's fan-out key's, as the items pass it (none: one step) */
+    char fkey[64] = "";
+    const char *list = NULL;
+    if (d->fanout) {
+        const char *gt = strchr(d->fanout, '>');
+        char from[64];
+        snprintf(from, sizeof from, "%.*s", (int)(gt - d->fanout), d->fanout);
+        snprintf(fkey, sizeof fkey, "%s", gt + 1);
+        list = own_value(p, from);
+    } else if (fanout_option(entry)) {
+        snprintf(fkey, sizeof fkey, "%s", fanout_option(entry)->name);
+        list = own_value(p, fkey);
+        for (size_t i = 0; i < nitems; i++)
+            if (strcmp(items[i].key, fkey) == 0) list = item_value(c->s, p, &items[i]);
+    }
+    char **values = NULL;
+    size_t count = 0;
+    int st = BKF_OK;
+    if (list && !list_values(list, &values, &count))
+        st = bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    if (!st && !list && !d->fanout)
+        st = plan_one_step(c, entry, d, items, nitems, NULL, NULL, 1, 1, own);
+    for (size_t i = 0; !st && i < count; i++)
+        st = plan_one_step(c, entry, d, items, nitems, fkey, values[i], i + 1, count, own);
+    list_values_free(values, count);
+    free(items);
+    return st;
+}
+
+static int plan_figure(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
+                       const bkf_scene_plan_options *o)
 {
     const bkf_scene_product *p = &s->products[index];
-    const kind_map_row *map = &kind_map[p->kind];
-    const char *name = map->product;
-    const char *dir = plan->outdir;
-    const char *v;
+    if (!o->figures) return 1;
+    size_t *shown, nshown;
+    if (!figure_data(s, own_value(p, "data"), &shown, &nshown, NULL, 0)) return 0;
+    if (nshown == 0) { /* checked when parsed */
+        free(shown);
+        return 0;
+    }
+    unsigned formats = 0;
+    const char *v = own_value(p, "formats");
+    if (v) {
+        formats |= strstr(v, "png") ? 1u : 0u;
+        formats |= strstr(v, "pdf") ? 2u : 0u;
+        formats |= strstr(v, "svg") ? 4u : 0u;
+    } else
+        formats = o->formats ? o->formats : 1u;
     arg_list b = {0};
     int ok = 1;
-#define KEY(x) (ok = ok && arg_push(&b, (x), NULL, 0, 0))
-#define PAIR(k, x) (ok = ok && (!(x) || arg_push(&b, (k), (x), 0, 0)))
-#define OUT(k, x) (ok = ok && (x) && arg_push(&b, (k), (x), 1, 0))
-#define OWN(x) entry_value(p->entries, p->nentries, (x))
-#define FIRST() (ok = ok && fixed_keys(&b, map->first))
-#define LAST() (ok = ok && other_keys(&b, p) && fixed_keys(&b, map->last))
-    switch (p->kind) {
-    case BKF_SCENE_SPEEDS: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1) && chain_args(&b, s, p, 1);
-        PAIR("n", OWN("n"));
-        PAIR("nmax", OWN("nmax"));
-        PAIR("tol", bkf_scene_value(s, p, "tol"));
-        PAIR("method", OWN("method"));
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+    char *first = NULL;
+    for (int f = 0; ok && f < 3; f++) {
+        if (!(formats & (1u << f))) continue;
+        char suffix[8];
+        snprintf(suffix, sizeof suffix, ".%s", bkf_plot_format_name((bkf_plot_format)f));
+        char *path = out_path(plan->outdir, p->name, suffix);
+        ok = path && arg_push(&b, "out", path, 1, 0);
+        if (!first)
+            first = path;
+        else
+            free(path);
     }
-    case BKF_SCENE_PERIOD:
-    case BKF_SCENE_DISPERSION: {
-        char **nus;
-        size_t count;
-        if (!list_values(bkf_scene_value(s, p, "nu"), &nus, &count)) return 0;
-        for (size_t i = 0; ok && i < count; i++) {
-            b = (arg_list){0};
-            char suffix[32];
-            snprintf(suffix, sizeof suffix, count > 1 ? "_%zu.tsv" : ".tsv", i + 1);
-            char *out = out_path(dir, p->name, suffix);
-            FIRST();
-            if (p->kind == BKF_SCENE_PERIOD) {
-                const char *mu = OWN("mu");
-                PAIR("mu", mu ? mu : "0.1:1e4:41");
-                if (!mu || strchr(mu, ':')) KEY("log");
-                PAIR("method", OWN("method"));
-            } else {
-                PAIR("gamma", bkf_scene_value(s, p, "gamma"));
-                PAIR("c", bkf_scene_value(s, p, "c"));
-                const char *q = OWN("q");
-                PAIR("q", q ? q : "0:6:241");
-                PAIR("S", bkf_scene_value(s, p, "S"));
-            }
-            PAIR("nu", nus[i]);
-            PAIR("tol", bkf_scene_value(s, p, "tol"));
-            LAST();
-            OUT("out", out);
-            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-        }
-        list_values_free(nus, count);
-        return ok;
+    if (!finish_step(plan, index, BKF_SCENE_STEP_FIGURE, "figure", ok, &b, first, shown[0])) {
+        free(shown);
+        return 0;
     }
-    case BKF_SCENE_THRESHOLD: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 0, 0);
-        PAIR("along", OWN("along"));
-        PAIR("from", OWN("from"));
-        PAIR("to", OWN("to"));
-        PAIR("search", OWN("search"));
-        PAIR("tol", bkf_scene_value(s, p, "tol"));
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-    }
-    case BKF_SCENE_BRANCH: {
-        char **ns;
-        size_t count;
-        v = OWN("n");
-        if (!list_values(v ? v : "1", &ns, &count)) return 0;
-        const char *param = OWN("param");
-        const char *from = OWN("from");
-        if (!from) from = bkf_scene_value(s, p, param);
-        for (size_t i = 0; ok && i < count; i++) {
-            b = (arg_list){0};
-            char suffix[32];
-            snprintf(suffix, sizeof suffix, count > 1 ? "_%zu.tsv" : ".tsv", i + 1);
-            char *out = out_path(dir, p->name, suffix);
-            FIRST();
-            PAIR("param", param);
-            PAIR("from", from);
-            PAIR("to", OWN("to"));
-            ok = ok && model_args(&b, s, p, 1, 1) && chain_args(&b, s, p, 1);
-            PAIR("n", ns[i]);
-            PAIR("root", OWN("root"));
-            PAIR("max-points", OWN("max_points"));
-            PAIR("tol", bkf_scene_value(s, p, "tol"));
-            LAST();
-            OUT("out", out);
-            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-        }
-        list_values_free(ns, count);
-        return ok;
-    }
-    case BKF_SCENE_PROFILE: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1);
-        v = OWN("n");
-        PAIR("n", v ? v : "1");
-        PAIR("root", OWN("root"));
-        PAIR("points", OWN("points"));
-        PAIR("tol", bkf_scene_value(s, p, "tol"));
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-    }
-    case BKF_SCENE_VALIDITY: {
-        FIRST();
-        v = OWN("mu");
-        PAIR("mu", v ? v : "0.1:1e4:21");
-        KEY("log");
-        v = OWN("nu");
-        PAIR("nu", v ? v : "-0.99:0.99:12");
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-    }
-    case BKF_SCENE_FRICTION: {
-        FIRST();
-        v = OWN("from");
-        PAIR("from", v ? v : "-1");
-        v = OWN("to");
-        PAIR("to", v ? v : "4");
-        v = OWN("points");
-        PAIR("points", v ? v : "601");
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-    }
-    case BKF_SCENE_SPACETIME: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1);
-        PAIR("model", bkf_scene_value(s, p, "model"));
-        v = bkf_scene_value(s, p, "N");
-        PAIR("N", v ? v : "512");
-        v = OWN("tmax");
-        PAIR("tmax", v ? v : "50");
-        v = OWN("init");
-        PAIR("init", v ? v : "uniform");
-        v = OWN("seed");
-        PAIR("seed", v ? v : "1");
-        v = OWN("frames");
-        PAIR("frames", v ? v : "500");
-        PAIR("tol", OWN("tol"));
-        PAIR("stepper", OWN("stepper"));
-        LAST();
-        char *st = out_path(dir, p->name, ".dat");
-        char *out = out_path(dir, p->name, "_diag.tsv");
-        OUT("spacetime", st);
-        OUT("out", out);
-        free(out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, st, 0);
-    }
-    case BKF_SCENE_CHECK: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1) && chain_args(&b, s, p, 0);
-        PAIR("n", OWN("n"));
-        PAIR("N", bkf_scene_value(s, p, "N"));
-        PAIR("tmax", OWN("tmax"));
-        PAIR("tol", OWN("tol"));
-        PAIR("rel-tol", OWN("rel_tol"));
-        PAIR("seed", OWN("seed"));
-        PAIR("stepper", OWN("stepper"));
-        PAIR("frame", OWN("frame"));
-        PAIR("grid", OWN("grid"));
-        PAIR("points", OWN("points"));
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-    }
-    case BKF_SCENE_STABILITY: {
-        /* one step per n: a figure shows several trains side by side */
-        char **ns;
-        size_t count;
-        v = OWN("n");
-        if (!list_values(v ? v : "1", &ns, &count)) return 0;
-        for (size_t i = 0; ok && i < count; i++) {
-            b = (arg_list){0};
-            char suffix[32];
-            snprintf(suffix, sizeof suffix, count > 1 ? "_%zu.tsv" : ".tsv", i + 1);
-            char *out = out_path(dir, p->name, suffix);
-            FIRST();
-            ok = ok && model_args(&b, s, p, 1, 1);
-            PAIR("n", ns[i]);
-            PAIR("tol", OWN("tol"));
-            LAST();
-            OUT("out", out);
-            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-        }
-        list_values_free(ns, count);
-        return ok;
-    }
-    case BKF_SCENE_SWEEP: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1);
-        PAIR("model", bkf_scene_value(s, p, "model"));
-        PAIR("N", bkf_scene_value(s, p, "N"));
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-        /* The global oscillation's stability boundaries at each gamma of
-         * `thresholds`, for the map's figure to draw over the regimes. */
-        char **gs = NULL;
-        size_t count = 0;
-        v = OWN("thresholds");
-        if (ok && v && !list_values(v, &gs, &count)) ok = 0;
-        for (size_t i = 0; ok && i < count; i++) {
-            b = (arg_list){0};
-            char suffix[48];
-            snprintf(suffix, sizeof suffix, "_floquet_%zu.tsv", i + 1);
-            char *fout = out_path(dir, p->name, suffix);
-            KEY("diagram");
-            PAIR("gamma", gs[i]);
-            PAIR("c", bkf_scene_value(s, p, "c"));
-            v = OWN("search");
-            PAIR("search", v ? v : "-0.999:0.999");
-            /* boundaries to 1e-6 in nu: far finer than any map's grid */
-            PAIR("tol", "1e-6");
-            OUT("out", fout);
-            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, "floquet", ok, &b, fout, 0);
-        }
-        list_values_free(gs, count);
-        return ok;
-    }
-    case BKF_SCENE_FIGURE: {
-        if (!o->figures) return 1;
-        size_t *shown, nshown;
-        if (!figure_data(s, OWN("data"), &shown, &nshown, NULL, 0)) return 0;
-        if (nshown == 0) { /* checked when parsed */
-            free(shown);
-            return 0;
-        }
-        size_t di = shown[0];
-        unsigned formats = 0;
-        v = OWN("formats");
-        if (v) {
-            formats |= strstr(v, "png") ? 1u : 0u;
-            formats |= strstr(v, "pdf") ? 2u : 0u;
-            formats |= strstr(v, "svg") ? 4u : 0u;
-        } else
-            formats = o->formats ? o->formats : 1u;
-        char *first = NULL;
-        for (int f = 0; ok && f < 3; f++) {
-            if (!(formats & (1u << f))) continue;
-            char suffix[8];
-            snprintf(suffix, sizeof suffix, ".%s", bkf_plot_format_name((bkf_plot_format)f));
-            char *path = out_path(dir, p->name, suffix);
-            OUT("out", path);
-            if (!first)
-                first = path;
-            else
-                free(path);
-        }
-        if (!finish_step(plan, index, BKF_SCENE_STEP_FIGURE, "figure", ok, &b, first, di)) {
-            free(shown);
-            return 0;
-        }
-        plan->steps[plan->nsteps - 1].data_products = shown;
-        plan->steps[plan->nsteps - 1].ndata = nshown;
-        return 1;
-    }
-    case BKF_SCENE_NKINDS:
-        break;
-    }
-#undef KEY
-#undef PAIR
-#undef OUT
-#undef OWN
-#undef FIRST
-#undef LAST
-    args_free(b.v, b.n);
+    plan->steps[plan->nsteps - 1].data_products = shown;
+    plan->steps[plan->nsteps - 1].ndata = nshown;
     return 1;
+}
+
+/* A section's steps: a figure's, or its kind's declaration's. */
+static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
+                        const bkf_scene_plan_options *o, bkf_error *err)
+{
+    const bkf_scene_product *p = &s->products[index];
+    const kind_info *k = kind_at((int)p->kind);
+    if (p->kind == BKF_SCENE_FIGURE)
+        return plan_figure(plan, s, index, o) ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (!k || !k->entry)
+        return bkf_error_set(err, BKF_EINPUT, "[%s %s]: no product computes this kind",
+                             kind_name(p->kind), p->name);
+    plan_context c = {plan, s, index, o, err};
+    int st = plan_steps(&c, k->entry, &k->decl->step, 1);
+    const bkf_catalog_entry *also = k->decl->also.product ? bkf_catalog_find(k->decl->also.product)
+                                                          : NULL;
+    if (!st && also) st = plan_steps(&c, also, &k->decl->also, 0);
+    return st;
 }
 
 int bkf_scene_make_plan(const bkf_scene *s, const bkf_scene_plan_options *o,
@@ -1568,19 +1599,17 @@ int bkf_scene_make_plan(const bkf_scene *s, const bkf_scene_plan_options *o,
     plan->nproducts = s->nproducts;
     planner pl = {{0}, 0};
     plan->planner_ = &pl;
-    int ok = plan->outdir && plan->products;
+    int st = plan->outdir && plan->products ? BKF_OK
+                                             : bkf_error_set(err, BKF_ENOMEM, "out of memory");
     /* Data first, figures after everything they could show. */
-    for (int pass = 0; ok && pass < 2; pass++)
-        for (size_t i = 0; ok && i < s->nproducts; i++)
+    for (int pass = 0; !st && pass < 2; pass++)
+        for (size_t i = 0; !st && i < s->nproducts; i++)
             if ((s->products[i].kind == BKF_SCENE_FIGURE) == (pass == 1))
-                ok = plan_product(plan, s, i, o);
+                st = plan_product(plan, s, i, o, err);
     lookup_free(&pl.computations);
     plan->planner_ = NULL;
-    if (!ok) {
-        bkf_scene_plan_free(plan);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
-    return BKF_OK;
+    if (st) bkf_scene_plan_free(plan);
+    return st;
 }
 
 void bkf_scene_plan_free(bkf_scene_plan *plan)
@@ -1643,7 +1672,8 @@ char *bkf_scene_step_command(const bkf_scene_step *step)
 static int validate_plan(parse_state *st)
 {
     bkf_scene_plan plan;
-    bkf_scene_plan_options o = {.outdir = ".", .figures = 0};
+    /* where the scene's paths may go is the run's to say (trust) */
+    bkf_scene_plan_options o = {.outdir = ".", .figures = 0, .trust = 1};
     bkf_error e;
     int made = bkf_scene_make_plan(st->s, &o, &plan, &e);
     if (made) {
@@ -1671,7 +1701,7 @@ static int validate_plan(parse_state *st)
                 snprintf(key, sizeof key, "%s", step->args[bad].key);
             else
                 snprintf(key, sizeof key, "%.*s", (int)strcspn(e.message, ":, "), e.message);
-            fail(st, key_line(st->s, p, key), "[%s %s]: %s", kind_names[p->kind], p->name,
+            fail(st, key_line(st->s, p, key), "[%s %s]: %s", kind_name(p->kind), p->name,
                  e.message);
         }
     }
@@ -1762,7 +1792,7 @@ static const char *default_script(const bkf_scene *sc, const bkf_scene_step *fig
     if (data->kind == BKF_SCENE_SPEEDS)
         for (size_t d = 0; d < fig->ndata; d++)
             if (is_chain(sc, &sc->products[fig->data_products[d]])) return "chain_speeds";
-    if (data->kind != BKF_SCENE_STABILITY) return kind_names[data->kind];
+    if (data->kind != BKF_SCENE_STABILITY) return kind_name(data->kind);
     const char *d = bkf_scene_value(sc, data, "diagram"), *l = bkf_scene_value(sc, data, "line");
     if (d && strcmp(d, "yes") == 0) return "diagram";
     if (l && strcmp(l, "yes") == 0) return "spectrum_line";
@@ -1828,7 +1858,7 @@ static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
     /* per file: its nu (period, dispersion) or n (branch) */
     if (!s) s = bkf_plot_set_string(job, "values", labels, err);
     if (!s) s = bkf_plot_set_string(job, "plotdir", plots_dir, err);
-    if (!s) s = bkf_plot_set_string(job, "kind", kind_names[data->kind], err);
+    if (!s) s = bkf_plot_set_string(job, "kind", kind_name(data->kind), err);
     const char *title = bkf_scene_value(sc, fig, "title");
     if (!s) s = bkf_plot_set_string(job, "title", title ? title : "", err);
     static const char *const numbers[] = {"gamma", "c", "nu", "S", "tmax"};
