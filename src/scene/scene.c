@@ -485,14 +485,13 @@ static const bkf_option *catalog_option(const bkf_catalog_entry *entry, const ch
     return opt && !(opt->flags & BKF_OPT_CLI_ONLY) ? opt : NULL;
 }
 
-/* The step's settings into `spec`: switches first (a geometric list reads
- * the log switch), outputs never, a fixed switch the product does not know
- * not at all (--no-progress is the command line's).  *bad: the arg at
- * fault. */
-/* The step's keys into `spec`.  Outputs other than the table's own ("out",
- * which the scene writes) are the product's data files (simulate's
- * spacetime): applied only for a run (`outputs`), not when a plan is
- * checked at parse time, which must not touch the file system. */
+/* The step's keys into `spec`: switches first (a geometric list reads the
+ * log switch), a fixed switch the product does not know not at all
+ * (--no-progress is the command line's); *bad: the arg at fault.  Outputs
+ * other than the table's own ("out", which the scene writes) and the files
+ * a scene names (BKF_OPT_PATH) are the product's data files: applied only
+ * for a run (`outputs`), not when a plan is checked at parse time, which
+ * must not touch the file system. */
 static int apply_args(const bkf_catalog_entry *entry, const bkf_scene_arg *args, size_t n,
                       void *spec, int outputs, size_t *bad, bkf_error *err)
 {
@@ -500,6 +499,8 @@ static int apply_args(const bkf_catalog_entry *entry, const bkf_scene_arg *args,
         for (size_t i = 0; i < n; i++) {
             const bkf_scene_arg *a = &args[i];
             if (a->output && (!outputs || strcmp(a->key, "out") == 0)) continue;
+            const bkf_option *opt = catalog_option(entry, a->key);
+            if (!outputs && opt && (opt->flags & BKF_OPT_PATH)) continue;
             if ((a->value == NULL) != (pass == 0)) continue;
             if (a->fixed && !catalog_option(entry, a->key)) continue;
             int s = bkf_catalog_apply(entry, spec, a->key, a->value, "", err);
