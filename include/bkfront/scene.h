@@ -20,6 +20,14 @@
  *   figure      a gnuplot figure of one product      (gnuplot, plots/KIND.gp)
  *   sweep       a regime map over a grid of points,  (sweep; floquet --diagram
  *               with the Floquet boundaries           per gamma of thresholds)
+ *   bench       work-precision timings               (bench)
+ *
+ * Each kind but figure is declared by its product in the catalogue
+ * (catalog.h's bkf_catalog_kind), which is all the planner knows of it.
+ * A key naming a file the product writes (BKF_OPT_PATH: simulate's
+ * snapshots, a sweep's fields) names it inside the output folder; the plan
+ * refuses anything else, "FILE:LINE: [KIND NAME]: KEY: ...", unless the
+ * caller trusts the scene (bkf_scene_plan_options.trust).
  *
  * The keys of each kind are in docs/scenes.md.  A key of a kind whose
  * product is in the catalogue (catalog.h) is checked at parse time by that
