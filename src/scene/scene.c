@@ -167,17 +167,11 @@ static int lookup_add(lookup *l, size_t h, size_t index)
 
 /* ------------------------------------------------------------ key table */
 
-typedef enum {
-    V_GAMMA, V_C, V_NU, V_NU_ANY, V_S, V_TOL, V_PDE_TOL, V_GRID_N, V_MODEL,
-    V_COUNT, V_SEED, V_NUMBER, V_POSITIVE, V_NU_LIST, V_COUNT_LIST, V_RANGE_LOG,
-    V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_METHOD, V_STEPPER, V_FRAME, V_GRID, V_FORMATS, V_TEXT, V_NAME, V_INIT, V_GAMMA_LIST
-} value_type;
+/* The keys of the scene's own sections: [model], [accuracy] and figures.
+ * A product's section has its product's keys (catalog.h). */
+typedef enum { V_GAMMA, V_C, V_NU, V_S, V_TOL, V_GRID_N, V_MODEL, V_COUNT, V_FORMATS, V_TEXT } value_type;
 
 #define K(kind) (1u << (kind))
-#define K_CYCLE (K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE) | K(BKF_SCENE_CHECK) | \
-                 K(BKF_SCENE_STABILITY))
-#define K_DATA (K_CYCLE | K(BKF_SCENE_PERIOD) | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD) | \
-                K(BKF_SCENE_VALIDITY) | K(BKF_SCENE_SPACETIME))
 #define K_MODEL (1u << 30)     /* [model] */
 #define K_ACCURACY (1u << 29)  /* [accuracy] */
 
@@ -188,54 +182,15 @@ typedef struct {
     const char *form;   /* for messages: the valid values */
 } key_spec;
 
-/* A key may appear in several rows with different types by kind. */
 static const key_spec keys[] = {
-    {"gamma", V_GAMMA, K_MODEL | K_CYCLE | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD) |
-                           K(BKF_SCENE_SPACETIME), "a number in [1e-6, 1e6]"},
-    {"c", V_C, K_MODEL | K_CYCLE | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD) |
-                   K(BKF_SCENE_SPACETIME), "a number >= 0"},
-    {"nu", V_NU, K_MODEL | K_CYCLE, "a number in (-1, 1)"},
-    {"nu", V_NU_ANY, K(BKF_SCENE_SPACETIME), "a finite number"},
-    {"nu", V_NU_LIST, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_VALIDITY),
-     "V, V1,V2,... or A:B:N, each in (-1, 1)"},
-    {"S", V_S, K_MODEL | K_CYCLE | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_SPACETIME), "a number > 0"},
-    {"model", V_MODEL, K_MODEL | K(BKF_SCENE_SPACETIME), "continuum or chain"},
-    {"tol", V_TOL, K_ACCURACY | K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE) |
-                       K(BKF_SCENE_PERIOD) | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD),
-     "a number in [1e-14, 0.1]"},
-    {"tol", V_PDE_TOL, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "a number in [1e-13, 0.01]"},
-    {"N", V_GRID_N, K_ACCURACY | K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK),
-     "an integer in [8, 1048576]"},
-    {"n", V_COUNT, K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_CHECK), "an integer >= 1"},
-    {"n", V_COUNT_LIST, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE) | K(BKF_SCENE_STABILITY),
-     "K, K1,K2,... or A:B:N, each >= 1"},
-    {"nmax", V_COUNT, K(BKF_SCENE_SPEEDS), "an integer >= 1"},
-    {"root", V_COUNT, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE), "an integer >= 1"},
-    {"mu", V_RANGE_LOG, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_VALIDITY),
-     "M or a geometric range A:B:N, in [1e-6, 1e6]"},
-    {"q", V_RANGE_LIN, K(BKF_SCENE_DISPERSION), "Q or a range A:B:N, >= 0"},
-    {"search", V_SEARCH, K(BKF_SCENE_THRESHOLD) | K(BKF_SCENE_SWEEP), "A:B with -1 < A < B < 1"},
-    {"thresholds", V_GAMMA_LIST, K(BKF_SCENE_SWEEP),
-     "G, G1,G2,... or A:B:N, each in [1e-6, 1e6]"},
-    {"along", V_ALONG, K(BKF_SCENE_THRESHOLD), "c or gamma"},
-    {"param", V_PARAM, K(BKF_SCENE_BRANCH), "S, nu, gamma or c"},
-    {"method", V_METHOD, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_SPEEDS), "auto, asymptotic, leading or shooting"},
-    {"from", V_NUMBER, K(BKF_SCENE_THRESHOLD) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_FRICTION),
-     "a finite number"},
-    {"to", V_NUMBER, K(BKF_SCENE_THRESHOLD) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_FRICTION),
-     "a finite number"},
-    {"max_points", V_COUNT, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_THRESHOLD), "an integer >= 1"},
-    {"points", V_COUNT, K(BKF_SCENE_PROFILE) | K(BKF_SCENE_FRICTION) | K(BKF_SCENE_CHECK),
-     "an integer >= 1"},
-    {"init", V_INIT, K(BKF_SCENE_SPACETIME), "uniform, front:n=K,..., oscillation:q=Q,... or file:PATH"},
-    {"seed", V_SEED, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "an integer >= 0"},
-    {"tmax", V_POSITIVE, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "a number > 0"},
-    {"frames", V_COUNT, K(BKF_SCENE_SPACETIME), "an integer >= 1"},
-    {"rel_tol", V_POSITIVE, K(BKF_SCENE_CHECK), "a number > 0"},
-    {"stepper", V_STEPPER, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "rk8pd, rkck, rkf45, etdrk4, lawson8 or auto (spacetime only)"},
-    {"frame", V_FRAME, K(BKF_SCENE_CHECK), "moving or lab"},
-    {"grid", V_GRID, K(BKF_SCENE_CHECK), "auto, uniform or mapped"},
-    {"data", V_NAME, K(BKF_SCENE_FIGURE), "the name of a product of this scene"},
+    {"gamma", V_GAMMA, K_MODEL, "a number in [1e-6, 1e6]"},
+    {"c", V_C, K_MODEL, "a number >= 0"},
+    {"nu", V_NU, K_MODEL, "a number in (-1, 1)"},
+    {"S", V_S, K_MODEL, "a number > 0"},
+    {"model", V_MODEL, K_MODEL, "continuum or chain"},
+    {"tol", V_TOL, K_ACCURACY, "a number in [1e-14, 0.1]"},
+    {"N", V_GRID_N, K_ACCURACY, "an integer in [8, 1048576]"},
+    {"data", V_TEXT, K(BKF_SCENE_FIGURE), "the name of a product of this scene"},
     {"script", V_TEXT, K(BKF_SCENE_FIGURE), "a gnuplot script path"},
     {"formats", V_FORMATS, K(BKF_SCENE_FIGURE), "png, pdf, svg or a list such as png,svg"},
     {"title", V_TEXT, K(BKF_SCENE_FIGURE), "text"},
@@ -245,47 +200,6 @@ static const key_spec keys[] = {
 #define NKEYS (sizeof keys / sizeof keys[0])
 
 /* ------------------------------------------------------------- checking */
-
-static int check_list(const char *key, const char *text, int counts, bkf_error *err)
-{
-    /* "A:B:N" is a range, anything else a comma list of single values. */
-    if (strchr(text, ':')) {
-        bkf_list r;
-        int s = bkf_list_parse(text, 0, 0, SCENE_MAX_POINTS, "", key, &r, err);
-        if (s) return s;
-        int bad = 0;
-        for (size_t i = 0; i < r.count; i++)
-            if (counts ? (r.values[i] < 1 || r.values[i] != floor(r.values[i]))
-                       : !(fabs(r.values[i]) < 1))
-                bad = 1;
-        bkf_list_free(&r);
-        if (bad)
-            return bkf_error_set(err, BKF_EINPUT, "%s: '%s' has values outside %s", key, text,
-                                 counts ? "the integers >= 1" : "(-1, 1)");
-        return BKF_OK;
-    }
-    char buf[BKF_SCENE_VALUE_LEN];
-    snprintf(buf, sizeof buf, "%s", text);
-    char *save = NULL;
-    int any = 0;
-    for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-        any = 1;
-        if (counts) {
-            size_t n;
-            int s = bkf_option_parse_count(tok, 1, 100000, "", key, &n, err);
-            if (s) return s;
-        } else {
-            double v;
-            int s = bkf_option_parse_double(tok, "", key, &v, err);
-            if (s) return s;
-            if (!(fabs(v) < 1))
-                return bkf_error_set(err, BKF_EINPUT, "%s: %s is outside (-1, 1)", key, tok);
-        }
-    }
-    if (!any || text[strlen(text) - 1] == ',' || text[0] == ',')
-        return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not a list", key, text);
-    return BKF_OK;
-}
 
 static int check_value(const key_spec *spec, const char *v, bkf_error *err)
 {
@@ -310,23 +224,15 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
                                  "nu: %s is outside (-1, 1), where there are no fronts or "
                                  "oscillations", v);
         return BKF_OK;
-    case V_NUMBER:
-    case V_NU_ANY:
-        return bkf_option_parse_double(v, "", k, &x, err);
     case V_S:
-    case V_POSITIVE:
         if ((s = bkf_option_parse_double(v, "", k, &x, err))) return s;
         if (!(x > 0)) return bkf_error_set(err, BKF_EINPUT, "%s: %s must be > 0", k, v);
         return BKF_OK;
     case V_TOL:
-    case V_PDE_TOL: {
-        double lo = spec->type == V_TOL ? 1e-14 : BKF_PDE_TOL_MIN;
-        double hi = spec->type == V_TOL ? 0.1 : BKF_PDE_TOL_MAX;
         if ((s = bkf_option_parse_double(v, "", k, &x, err))) return s;
-        if (!(x >= lo && x <= hi))
-            return bkf_error_set(err, BKF_EINPUT, "tol: %s is outside [%g, %g]", v, lo, hi);
+        if (!(x >= 1e-14 && x <= 0.1))
+            return bkf_error_set(err, BKF_EINPUT, "tol: %s is outside [%g, %g]", v, 1e-14, 0.1);
         return BKF_OK;
-    }
     case V_GRID_N:
         if ((s = bkf_option_parse_count(v, 1, BKF_PDE_N_MAX, "", k, &n, err))) return s;
         if (n < BKF_PDE_N_MIN)
@@ -337,87 +243,8 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
         int i;
         return bkf_option_parse_choice(v, m, "", k, &i, err);
     }
-    case V_ALONG: {
-        static const char *const m[] = {"c", "gamma", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
-    case V_METHOD: {
-        static const char *const m[] = {"auto", "asymptotic", "leading", "shooting", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
-    case V_STEPPER: {
-        static const char *const m[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8", "auto", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
-    case V_FRAME: {
-        static const char *const m[] = {"moving", "lab", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
-    case V_GRID: {
-        static const char *const m[] = {"auto", "uniform", "mapped", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
-    case V_PARAM: {
-        static const char *const m[] = {"S", "nu", "gamma", "c", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
     case V_COUNT:
         return bkf_option_parse_count(v, 1, 1000000, "", k, &n, err);
-    case V_SEED:
-        if (!*v || strspn(v, "0123456789") != strlen(v) || strlen(v) > 18)
-            return bkf_error_set(err, BKF_EINPUT, "seed: '%s' is not an integer in [0, 1e18)",
-                                 v);
-        return BKF_OK;
-    case V_NU_LIST:
-        return check_list(k, v, 0, err);
-    case V_GAMMA_LIST: {
-        bkf_list r;
-        if ((s = bkf_list_parse(v, 0, 0, SCENE_MAX_POINTS, "", k, &r, err))) return s;
-        int bad = 0;
-        for (size_t i = 0; i < r.count; i++)
-            bad |= !(r.values[i] >= BKF_CYCLE_MU_MIN && r.values[i] <= BKF_CYCLE_MU_MAX);
-        bkf_list_free(&r);
-        if (bad) return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not %s", k, v, spec->form);
-        return BKF_OK;
-    }
-    case V_COUNT_LIST:
-        return check_list(k, v, 1, err);
-    case V_RANGE_LOG:
-    case V_RANGE_LIN: {
-        bkf_list r;
-        int geometric = spec->type == V_RANGE_LOG;
-        if ((s = bkf_list_parse(v, geometric, 0, SCENE_MAX_POINTS, "", k, &r, err))) return s;
-        int bad = 0;
-        for (size_t i = 0; i < r.count; i++)
-            bad |= geometric ? !(r.values[i] >= BKF_CYCLE_MU_MIN && r.values[i] <= BKF_CYCLE_MU_MAX)
-                             : !(r.values[i] >= 0);
-        size_t count = r.count;
-        bkf_list_free(&r);
-        if (bad)
-            return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not %s", k, v, spec->form);
-        if (count > 100000)
-            return bkf_error_set(err, BKF_EINPUT, "%s: '%s' has more than 100000 points", k, v);
-        return BKF_OK;
-    }
-    case V_SEARCH: {
-        const char *colon = strchr(v, ':');
-        double a, b;
-        char left[BKF_SCENE_VALUE_LEN];
-        if (!colon || strchr(colon + 1, ':'))
-            return bkf_error_set(err, BKF_EINPUT, "search: '%s' is not A:B", v);
-        snprintf(left, sizeof left, "%.*s", (int)(colon - v), v);
-        if ((s = bkf_option_parse_double(left, "", k, &a, err)) || (s = bkf_option_parse_double(colon + 1, "", k, &b, err)))
-            return s;
-        if (!(-1 < a && a < b && b < 1))
-            return bkf_error_set(err, BKF_EINPUT, "search: '%s' needs -1 < A < B < 1", v);
-        return BKF_OK;
-    }
     case V_FORMATS: {
         char buf[BKF_SCENE_VALUE_LEN];
         snprintf(buf, sizeof buf, "%s", v);
@@ -432,13 +259,6 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
         if (!any) return bkf_error_set(err, BKF_EINPUT, "formats: give png, pdf or svg");
         return BKF_OK;
     }
-    case V_INIT:
-        if (!(strcmp(v, "uniform") == 0 || strncmp(v, "uniform:", 8) == 0 ||
-              strncmp(v, "front:", 6) == 0 || strncmp(v, "oscillation:", 12) == 0 ||
-              strncmp(v, "file:", 5) == 0))
-            return bkf_error_set(err, BKF_EINPUT, "init: '%s' is not %s", v, spec->form);
-        return BKF_OK;
-    case V_NAME:
     case V_TEXT:
         if (!*v) return bkf_error_set(err, BKF_EINPUT, "%s: the value is empty", k);
         for (const unsigned char *p = (const unsigned char *)v; *p; p++)
@@ -450,12 +270,6 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
 }
 
 /* -------------------------------------------------------- the catalogue */
-
-static const bkf_catalog_entry *catalog_entry(bkf_scene_kind kind)
-{
-    const kind_info *k = kind_at((int)kind);
-    return k ? k->entry : NULL;
-}
 
 /* The option of a step's product whose list a scene makes one step per
  * value (BKF_OPT_FANOUT), or NULL. */
@@ -512,44 +326,151 @@ static int apply_args(const bkf_catalog_entry *entry, const bkf_scene_arg *args,
     return BKF_OK;
 }
 
-/* One key of a catalogued kind, through the product's table (each value of
- * the kind's split list on its own, as the plan passes them).  *known 0:
- * the product has no such key. */
-static int catalog_check_key(const bkf_catalog_entry *entry, const char *key, const char *value,
-                             int *known, bkf_error *err)
+/* One item of a kind's keys (catalog.h's bkf_catalog_step): KEY and its
+ * marks. */
+typedef struct {
+    char key[64];
+    int inherit, names, always, has_value; /* ^, @, :=, = */
+    char value[BKF_SCENE_VALUE_LEN];       /* =TEXT, =$OTHER, :=TEXT */
+    char omit[64];                         /* !TEXT */
+    char if_key[64], if_value[64];         /* ?OTHER=TEXT */
+} key_item;
+
+static void parse_item(const char *tok, size_t len, key_item *it)
 {
+    *it = (key_item){0};
+    const char *end = tok + len;
+    if (*tok == '^') it->inherit = 1, tok++;
+    else if (*tok == '@') it->names = 1, tok++;
+    size_t n = strcspn(tok, "=!?: ");
+    snprintf(it->key, sizeof it->key, "%.*s", (int)n, tok);
+    tok += n;
+    while (tok < end) {
+        char mark = *tok++;
+        if (mark == ':' && tok < end && *tok == '=') it->always = 1, mark = '=', tok++;
+        size_t k = strcspn(tok, "!? ");
+        if (mark == '=') {
+            it->has_value = 1;
+            snprintf(it->value, sizeof it->value, "%.*s", (int)k, tok);
+        } else if (mark == '!') {
+            snprintf(it->omit, sizeof it->omit, "%.*s", (int)k, tok);
+        } else if (mark == '?') {
+            size_t e = strcspn(tok, "=!? ");
+            snprintf(it->if_key, sizeof it->if_key, "%.*s", (int)e, tok);
+            if (e < k) snprintf(it->if_value, sizeof it->if_value, "%.*s", (int)(k - e - 1), tok + e + 1);
+        }
+        tok += k;
+    }
+}
+
+/* The items of a declaration's keys (malloc'd; NULL with *n 0: none or out
+ * of memory, told apart by `text`). */
+static key_item *parse_items(const char *text, size_t *n)
+{
+    *n = 0;
+    size_t cap = 1;
+    for (const char *c = text ? text : ""; *c; c++) cap += *c == ' ';
+    key_item *items = text && *text ? calloc(cap, sizeof *items) : NULL;
+    for (const char *c = text; items && *c;) {
+        size_t len = strcspn(c, " ");
+        if (len) parse_item(c, len, &items[(*n)++]);
+        c += len + (c[len] == ' ');
+    }
+    return items;
+}
+
+/* A key of a kind's section: an option of its product's table, or one the
+ * kind's other step takes from the section (the list that makes its
+ * steps, each value that step's KEY; a key of its list its product has). */
+typedef struct {
+    const bkf_catalog_entry *entry;
+    const bkf_option *opt;
+    int fanout;               /* a list, checked value by value */
+} kind_key;
+
+static int kind_key_find(bkf_scene_kind kind, const char *key, kind_key *out)
+{
+    const kind_info *k = kind_at((int)kind);
+    if (!k || !k->entry) return 0;
     char name[64];
     option_name(key, name, sizeof name);
-    const bkf_option *opt = catalog_option(entry, name);
-    *known = opt != NULL;
-    if (!opt) return BKF_OK;
-    void *spec = bkf_catalog_spec_new(entry, err);
+    const bkf_option *opt = catalog_option(k->entry, name);
+    if (opt) {
+        *out = (kind_key){k->entry, opt, opt == fanout_option(k->entry)};
+        return 1;
+    }
+    const bkf_catalog_step *also = &k->decl->also;
+    const bkf_catalog_entry *a = also->product ? bkf_catalog_find(also->product) : NULL;
+    if (!a) return 0;
+    const char *gt = also->fanout ? strchr(also->fanout, '>') : NULL;
+    if (gt && strlen(key) == (size_t)(gt - also->fanout) &&
+        strncmp(key, also->fanout, (size_t)(gt - also->fanout)) == 0) {
+        *out = (kind_key){a, catalog_option(a, gt + 1), 1};
+        return out->opt != NULL;
+    }
+    size_t n;
+    key_item *items = parse_items(also->keys, &n);
+    int found = 0;
+    for (size_t i = 0; !found && i < n; i++)
+        if (!items[i].always && strcmp(items[i].key, name) == 0 && catalog_option(a, name)) {
+            *out = (kind_key){a, catalog_option(a, name), 0};
+            found = 1;
+        }
+    free(items);
+    return found;
+}
+
+/* The scene keys of a kind, for messages ("gamma, c, nu, ..."). */
+static void kind_keys_known(bkf_scene_kind kind, char *known, size_t size)
+{
+    const kind_info *k = kind_at((int)kind);
+    size_t n;
+    const bkf_option *table = k && k->entry ? k->entry->options(&n) : NULL;
+    for (size_t i = 0; table && i < n; i++)
+        if (!(table[i].flags & BKF_OPT_CLI_ONLY)) append(known, size, ", ", table[i].name);
+    const bkf_catalog_step *also = k && k->decl ? &k->decl->also : NULL;
+    if (!also || !also->product) return;
+    if (also->fanout) {
+        char list[64];
+        snprintf(list, sizeof list, "%.*s", (int)strcspn(also->fanout, ">"), also->fanout);
+        append(known, size, ", ", list);
+    }
+    size_t ni;
+    key_item *items = parse_items(also->keys, &ni);
+    kind_key kk;
+    for (size_t i = 0; i < ni; i++)
+        if (!items[i].always && !catalog_option(k->entry, items[i].key) &&
+            kind_key_find(kind, items[i].key, &kk))
+            append(known, size, ", ", items[i].key);
+    free(items);
+}
+
+/* A value of a kind's key through the option that checks the flag (a list
+ * value by value, as the plan passes them), messages naming the key as
+ * the scene wrote it where the option has another name. */
+static int kind_key_check(const kind_key *kk, const char *key, const char *value, bkf_error *err)
+{
+    void *spec = bkf_catalog_spec_new(kk->entry, err);
     if (!spec) return BKF_ENOMEM;
     int s = BKF_OK;
-    const bkf_option *split = fanout_option(entry);
-    if (split && strcmp(name, split->name) == 0) {
+    char name[64];
+    option_name(key, name, sizeof name);
+    if (kk->fanout) {
+        bkf_option named = *kk->opt;
+        named.name = strcmp(name, kk->opt->name) == 0 ? kk->opt->name : key;
         bkf_list list;
         s = bkf_list_parse(value, 0, 0, SCENE_MAX_POINTS, "", key, &list, err);
         for (size_t i = 0; !s && i < list.count; i++) {
             char item[64];
             snprintf(item, sizeof item, "%.15g", list.values[i]);
-            s = bkf_catalog_apply(entry, spec, name, item, "", err);
+            s = bkf_option_apply(&named, spec, item, "", err);
         }
         bkf_list_free(&list);
     } else {
-        s = bkf_catalog_apply(entry, spec, name, value, "", err);
+        s = bkf_catalog_apply(kk->entry, spec, kk->opt->name, value, "", err);
     }
-    bkf_catalog_spec_free(entry, spec);
+    bkf_catalog_spec_free(kk->entry, spec);
     return s;
-}
-
-/* Whether `name` is one of the comma-separated names in `list`. */
-static int listed(const char *list, const char *name)
-{
-    size_t n = strlen(name);
-    for (const char *p = list; (p = strstr(p, name)); p += n)
-        if ((p == list || p[-1] == ' ') && (p[n] == ',' || p[n] == '\0')) return 1;
-    return 0;
 }
 
 /* ------------------------------------------------------------- parsing */
@@ -739,40 +660,18 @@ static int handler(void *user, const char *section, const char *name, const char
         count = &p->nentries;
     }
     const key_spec *spec = NULL;
+    kind_key kk = {0};
+    int by_kind = st->section_kind >= 0 &&
+                  kind_key_find(st->s->products[st->section_kind].kind, name, &kk);
     char known[512] = "";
     for (size_t i = 0; i < NKEYS; i++) {
         if (!(keys[i].where & where)) continue;
         if (strcmp(keys[i].key, name) == 0) spec = &keys[i];
-        int listed = 0;
-        for (size_t j = 0; j < i; j++)
-            if ((keys[j].where & where) && strcmp(keys[j].key, keys[i].key) == 0) listed = 1;
-        if (!listed) {
-            size_t used = strlen(known);
-            snprintf(known + used, sizeof known - used, "%s%s", used ? ", " : "", keys[i].key);
-        }
+        append(known, sizeof known, ", ", keys[i].key);
     }
-    /* A catalogued product's keys are its option table's: checked by the
-     * code that checks the command-line flag. */
-    const bkf_catalog_entry *product = NULL;
-    if (st->section_kind >= 0) {
-        bkf_scene_kind kind = st->s->products[st->section_kind].kind;
-        product = catalog_entry(kind);
-        size_t n;
-        const bkf_option *table = product ? product->options(&n) : NULL;
-        for (size_t i = 0; product && i < n; i++) {
-            char shown[64];
-            if (table[i].flags & BKF_OPT_CLI_ONLY) continue;
-            if (listed(known, option_name(table[i].name, shown, sizeof shown))) continue;
-            size_t used = strlen(known);
-            snprintf(known + used, sizeof known - used, "%s%s", used ? ", " : "", table[i].name);
-        }
-    }
-    int by_catalog = 0;
-    if (product) {
-        char opt[64];
-        by_catalog = catalog_option(product, option_name(name, opt, sizeof opt)) != NULL;
-    }
-    if (!spec && !by_catalog)
+    if (st->section_kind >= 0)
+        kind_keys_known(st->s->products[st->section_kind].kind, known, sizeof known);
+    if (!spec && !by_kind)
         return fail(st, st->line, "[%s]: unknown key '%s' (%s)", st->section, name, known);
     for (size_t i = 0; i < *count; i++)
         if (strcmp((*list)[i].key, name) == 0)
@@ -782,9 +681,8 @@ static int handler(void *user, const char *section, const char *name, const char
         return fail(st, st->line, "%s: the value is longer than %d characters", name,
                     BKF_SCENE_VALUE_LEN - 1);
     bkf_error e;
-    if (by_catalog) {
-        int known_key;
-        int s = catalog_check_key(product, name, value, &known_key, &e);
+    if (by_kind) {
+        int s = kind_key_check(&kk, name, value, &e);
         if (s == BKF_ENOMEM) {
             st->status = bkf_error_set(st->err, s, "out of memory");
             return 0;
@@ -1257,59 +1155,6 @@ static int fixed_keys(arg_list *b, const char *keys)
 }
 
 /* ------------------------------------------------------- a kind's steps */
-
-/* One item of a kind's keys (catalog.h's bkf_catalog_step): KEY and its
- * marks. */
-typedef struct {
-    char key[64];
-    int inherit, names, always, has_value; /* ^, @, :=, = */
-    char value[BKF_SCENE_VALUE_LEN];       /* =TEXT, =$OTHER, :=TEXT */
-    char omit[64];                         /* !TEXT */
-    char if_key[64], if_value[64];         /* ?OTHER=TEXT */
-} key_item;
-
-static void parse_item(const char *tok, size_t len, key_item *it)
-{
-    *it = (key_item){0};
-    const char *end = tok + len;
-    if (*tok == '^') it->inherit = 1, tok++;
-    else if (*tok == '@') it->names = 1, tok++;
-    size_t n = strcspn(tok, "=!?: ");
-    snprintf(it->key, sizeof it->key, "%.*s", (int)n, tok);
-    tok += n;
-    while (tok < end) {
-        char mark = *tok++;
-        if (mark == ':' && tok < end && *tok == '=') it->always = 1, mark = '=', tok++;
-        size_t k = strcspn(tok, "!? ");
-        if (mark == '=') {
-            it->has_value = 1;
-            snprintf(it->value, sizeof it->value, "%.*s", (int)k, tok);
-        } else if (mark == '!') {
-            snprintf(it->omit, sizeof it->omit, "%.*s", (int)k, tok);
-        } else if (mark == '?') {
-            size_t e = strcspn(tok, "=!? ");
-            snprintf(it->if_key, sizeof it->if_key, "%.*s", (int)e, tok);
-            if (e < k) snprintf(it->if_value, sizeof it->if_value, "%.*s", (int)(k - e - 1), tok + e + 1);
-        }
-        tok += k;
-    }
-}
-
-/* The items of a declaration's keys (malloc'd; NULL with *n 0: none or out
- * of memory, told apart by `text`). */
-static key_item *parse_items(const char *text, size_t *n)
-{
-    *n = 0;
-    size_t cap = 1;
-    for (const char *c = text ? text : ""; *c; c++) cap += *c == ' ';
-    key_item *items = text && *text ? calloc(cap, sizeof *items) : NULL;
-    for (const char *c = text; items && *c;) {
-        size_t len = strcspn(c, " ");
-        if (len) parse_item(c, len, &items[(*n)++]);
-        c += len + (c[len] == ' ');
-    }
-    return items;
-}
 
 /* The section's own value of an option name (written with _ or -). */
 static const char *own_value(const bkf_scene_product *p, const char *key)

@@ -235,3 +235,45 @@ TEST(run_writes_no_scene_path_outside_its_folder)
     unlink(scene);
     rmdir(dir);
 }
+
+/* A section's keys are its product's (and those of the other step its kind
+ * makes): what no product has is refused, not passed over, and a value of
+ * the other step's list is checked by that step's option under the
+ * scene's name for it. */
+TEST(scene_keys_are_the_declared_products_keys)
+{
+    bkf_scene *s = NULL;
+    bkf_error e = {0};
+    /* threshold's max_points was accepted and never passed (floquet has
+     * no such key) */
+    CHECK_STATUS(bkf_scene_parse_string(MODEL "[threshold t]\nmax_points = 3\n", "t.scene", &s,
+                                        &e),
+                 BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "t.scene:7: [threshold t]: unknown key 'max_points'"), "%s",
+              e.message);
+    CHECK_STATUS(bkf_scene_parse_string(MODEL "[sweep w]\nx = nu=-0.9\nthresholds = 1,0\n",
+                                        "t.scene", &s, &e),
+                 BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "t.scene:8: thresholds: 0 is not in"), "%s", e.message);
+    CHECK_STATUS(bkf_scene_parse_string(MODEL "[sweep w]\nx = nu=-0.9\nsearch = 0.5:0.1\n",
+                                        "t.scene", &s, &e),
+                 BKF_EINPUT);
+    CHECK_MSG(strstr(e.message, "t.scene:8: search"), "%s", e.message);
+    /* and the sweep's list makes one Floquet diagram per gamma */
+    s = NULL;
+    CHECK_STATUS(bkf_scene_parse_string(MODEL "[sweep w]\nx = nu=-0.9\nthresholds = 1:2:3\n",
+                                        "t.scene", &s, &e),
+                 BKF_OK);
+    if (!s) return;
+    bkf_scene_plan plan;
+    bkf_scene_plan_options o = {.outdir = "o"};
+    CHECK_STATUS(bkf_scene_make_plan(s, &o, &plan, &e), BKF_OK);
+    CHECK(plan.nsteps == 4);
+    char *cmd = plan.nsteps == 4 ? bkf_scene_step_command(&plan.steps[2]) : NULL;
+    CHECK_MSG(cmd && strcmp(cmd, "floquet --diagram --gamma 1.5 --c 0.3 --search -0.999:0.999 "
+                                 "--tol 1e-6 --out o/w_floquet_2.tsv") == 0,
+              "got %s", cmd);
+    free(cmd);
+    bkf_scene_plan_free(&plan);
+    bkf_scene_free(s);
+}
