@@ -1672,12 +1672,11 @@ static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
             if (!append(files, sizeof files, " ", ds->output))
                 return bkf_error_set(err, BKF_EINPUT, "figure %s: too many data files",
                                      fig->name);
-            const char *value = "";
-            if (shown->kind == BKF_SCENE_PERIOD || shown->kind == BKF_SCENE_DISPERSION)
-                value = arg_value(ds, "nu");
-            else if (shown->kind == BKF_SCENE_BRANCH || shown->kind == BKF_SCENE_STABILITY)
-                value = arg_value(ds, "n");
-            else if (shown->kind == BKF_SCENE_SWEEP)
+            /* each file's value of the list that made it (nu of period
+             * and dispersion, n of branch and stability) */
+            const bkf_option *fanout = ds->entry ? fanout_option(ds->entry) : NULL;
+            const char *value = fanout ? arg_value(ds, fanout->name) : "";
+            if (shown->kind == BKF_SCENE_SWEEP)
                 /* the map, then the Floquet diagram of each gamma */
                 value = strcmp(ds->product, "sweep") == 0 ? "map" : arg_value(ds, "gamma");
             else if (shown->kind == BKF_SCENE_SPEEDS && step->ndata > 1) {
