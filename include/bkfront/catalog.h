@@ -52,6 +52,7 @@ typedef struct {
  *   KEY             the section's value, if it sets one
  *   ^KEY            the section's, else [model]'s or [accuracy]'s (an
  *                   [accuracy] key reaches a product that has it only so)
+ *   +KEY            the same, and one of them must set it
  *   ...=TEXT        ..., else TEXT (the scene's default, not the product's)
  *   ...=$OTHER      ..., else the scene's value of the key OTHER names
  *   KEY:=TEXT       always TEXT

@@ -215,34 +215,34 @@ static void check_release(void *spec)
 /* The scene kinds (bkf_catalog_kind): the keys in the order of the step's
  * command line, the scene's defaults, the files. */
 static const bkf_catalog_kind period_kinds[] = {
-    {"period", {.keys = "mu=0.1:1e4:41 method ^nu ^tol"}, {0}}};
+    {"period", {.keys = "mu=0.1:1e4:41 method +nu ^tol"}, {0}}};
 static const bkf_catalog_kind speeds_kinds[] = {
     {"speeds",
-     {.keys = "^gamma ^c ^nu ^S ^model!continuum ^N?model=chain n nmax ^tol method"}, {0}}};
+     {.keys = "+gamma +c +nu +S ^model!continuum ^N?model=chain n nmax ^tol method"}, {0}}};
 static const bkf_catalog_kind branch_kinds[] = {
     {"branch",
-     {.keys = "@param from=$param to ^gamma ^c ^nu ^S ^model!continuum ^N?model=chain n=1 root "
+     {.keys = "@param from=$param to +gamma +c +nu +S ^model!continuum ^N?model=chain n=1 root "
               "max-points ^tol"},
      {0}}};
 static const bkf_catalog_kind stability_kinds[] = {
-    {"stability", {.keys = "^gamma ^c ^nu ^S n=1 tol"}, {0}}};
+    {"stability", {.keys = "+gamma +c +nu +S n=1 tol"}, {0}}};
 static const bkf_catalog_kind asymptotics_kinds[] = {
     {"validity", {.first = "grid", .keys = "mu=0.1:1e4:21 log:=yes nu=-0.99:0.99:12"}, {0}}};
 static const bkf_catalog_kind profile_kinds[] = {
-    {"profile", {.keys = "^gamma ^c ^nu ^S n=1 root points ^tol"}, {0}}};
+    {"profile", {.keys = "+gamma +c +nu +S n=1 root points ^tol"}, {0}}};
 static const bkf_catalog_kind floquet_kinds[] = {
-    {"dispersion", {.keys = "^gamma ^c q=0:6:241 ^S ^nu ^tol"}, {0}},
-    {"threshold", {.first = "threshold", .keys = "^gamma ^c @along from to search ^tol"}, {0}}};
+    {"dispersion", {.keys = "+gamma +c q=0:6:241 ^S +nu ^tol"}, {0}},
+    {"threshold", {.first = "threshold", .keys = "+gamma +c @along from to search ^tol"}, {0}}};
 /* A simulation's tol is its stepper's, not the accuracy asked of a result:
  * not inherited. */
 static const bkf_catalog_kind simulate_kinds[] = {
     {"spacetime",
-     {.keys = "^gamma ^c ^nu ^S ^model ^N=512 tmax=50 init=uniform seed=1 frames=500 tol stepper",
+     {.keys = "+gamma +c +nu +S ^model ^N=512 tmax=50 init=uniform seed=1 frames=500 tol stepper",
       .last = "no-progress", .outputs = "spacetime=.dat out=_diag.tsv"},
      {0}}};
 static const bkf_catalog_kind check_kinds[] = {
     {"check",
-     {.keys = "^gamma ^c ^nu ^S ^model!continuum n ^N tmax tol rel-tol seed stepper frame grid "
+     {.keys = "+gamma +c +nu +S ^model!continuum n ^N tmax tol rel-tol seed stepper frame grid "
               "points",
       .last = "no-progress"},
      {0}}};
@@ -250,7 +250,7 @@ static const bkf_catalog_kind check_kinds[] = {
  * boundaries at each gamma, to 1e-6 in nu (far finer than any map's grid),
  * for the map's figure to draw over the regimes. */
 static const bkf_catalog_kind sweep_kinds[] = {
-    {"sweep", {.keys = "^gamma ^c ^nu ^S ^model ^N", .last = "no-progress"},
+    {"sweep", {.keys = "+gamma +c +nu +S ^model ^N", .last = "no-progress"},
      {.product = "floquet", .first = "diagram", .fanout = "thresholds>gamma",
       .keys = "gamma ^c search=-0.999:0.999 tol:=1e-6", .outputs = "out=_floquet_#.tsv"}}};
 static const bkf_catalog_kind friction_kinds[] = {

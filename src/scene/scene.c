@@ -330,7 +330,7 @@ static int apply_args(const bkf_catalog_entry *entry, const bkf_scene_arg *args,
  * marks. */
 typedef struct {
     char key[64];
-    int inherit, names, always, has_value; /* ^, @, :=, = */
+    int inherit, required, names, always, has_value; /* ^ (+), +, @, :=, = */
     char value[BKF_SCENE_VALUE_LEN];       /* =TEXT, =$OTHER, :=TEXT */
     char omit[64];                         /* !TEXT */
     char if_key[64], if_value[64];         /* ?OTHER=TEXT */
@@ -340,7 +340,7 @@ static void parse_item(const char *tok, size_t len, key_item *it)
 {
     *it = (key_item){0};
     const char *end = tok + len;
-    if (*tok == '^') it->inherit = 1, tok++;
+    if (*tok == '^' || *tok == '+') it->inherit = 1, it->required = *tok == '+', tok++;
     else if (*tok == '@') it->names = 1, tok++;
     size_t n = strcspn(tok, "=!?: ");
     snprintf(it->key, sizeof it->key, "%.*s", (int)n, tok);
@@ -377,6 +377,31 @@ static key_item *parse_items(const char *text, size_t *n)
         c += len + (c[len] == ' ');
     }
     return items;
+}
+
+static const char *entry_value(const bkf_scene_entry *list, size_t n, const char *key)
+{
+    for (size_t i = 0; i < n; i++)
+        if (strcmp(list[i].key, key) == 0) return list[i].value;
+    return NULL;
+}
+
+/* The section's own value of an option name (written with _ or -). */
+static const char *own_value(const bkf_scene_product *p, const char *key)
+{
+    char name[64];
+    for (size_t i = 0; i < p->nentries; i++)
+        if (strcmp(option_name(p->entries[i].key, name, sizeof name), key) == 0)
+            return p->entries[i].value;
+    return NULL;
+}
+
+/* The section's own value, else, with `inherit`, [model]'s or [accuracy]'s. */
+static const char *scene_key(const bkf_scene *s, const bkf_scene_product *p, const char *key,
+                             int inherit)
+{
+    const char *v = own_value(p, key);
+    return v || !inherit ? v : entry_value(s->model, s->nmodel, key);
 }
 
 /* A key of a kind's section: an option of its product's table, or one the
@@ -702,13 +727,6 @@ static int handler(void *user, const char *section, const char *name, const char
     return 1;
 }
 
-static const char *entry_value(const bkf_scene_entry *list, size_t n, const char *key)
-{
-    for (size_t i = 0; i < n; i++)
-        if (strcmp(list[i].key, key) == 0) return list[i].value;
-    return NULL;
-}
-
 static int takes_inherited(const bkf_scene_product *p, const char *key);
 
 const char *bkf_scene_value(const bkf_scene *s, const bkf_scene_product *p, const char *key)
@@ -796,7 +814,6 @@ static int check_scene(parse_state *st)
     bkf_scene *s = st->s;
     if (!st->seen_model) return fail(st, 1, "the scene has no [model] section");
     if (s->nproducts == 0) return fail(st, st->line, "the scene asks for no product");
-    static const char *const model_keys[] = {"gamma", "c", "nu", "S"};
     for (size_t i = 0; i < s->nproducts; i++) {
         const bkf_scene_product *p = &s->products[i];
         if (p->kind == BKF_SCENE_FIGURE) {
@@ -814,23 +831,26 @@ static int check_scene(parse_state *st)
                             bad);
             continue;
         }
-        if (p->kind == BKF_SCENE_FRICTION) continue;
-        for (size_t k = 0; k < 4; k++) {
-            const char *key = model_keys[k];
-            if (p->kind == BKF_SCENE_THRESHOLD && (strcmp(key, "nu") == 0 || strcmp(key, "S") == 0))
-                continue;
-            if ((p->kind == BKF_SCENE_PERIOD || p->kind == BKF_SCENE_VALIDITY) && strcmp(key, "nu") != 0)
-                continue;
-            if (p->kind == BKF_SCENE_DISPERSION && strcmp(key, "S") == 0) continue;
-            if (p->kind == BKF_SCENE_BRANCH || p->kind == BKF_SCENE_THRESHOLD) {
-                const char *along = entry_value(p->entries, p->nentries,
-                                                p->kind == BKF_SCENE_BRANCH ? "param" : "along");
-                if (along && strcmp(along, key) == 0) continue;
+        /* the keys its kind declares required (+KEY), but the one a
+         * continuation varies (@KEY names it) */
+        const kind_info *k = kind_at((int)p->kind);
+        size_t n = 0;
+        key_item *items = k && k->decl ? parse_items(k->decl->step.keys, &n) : NULL;
+        const char *missing = NULL;
+        for (size_t j = 0; !missing && j < n; j++) {
+            int varied = 0;
+            for (size_t v = 0; v < n; v++) {
+                const char *named = items[v].names ? own_value(p, items[v].key) : NULL;
+                varied |= named && strcmp(named, items[j].key) == 0;
             }
-            if (!bkf_scene_value(s, p, key))
-                return fail(st, p->line, "[%s %s]: %s is not set here nor in [model]",
-                            kind_name(p->kind), p->name, key);
+            if (items[j].required && !varied && !scene_key(s, p, items[j].key, 1))
+                missing = items[j].key;
         }
+        if (missing)
+            fail(st, p->line, "[%s %s]: %s is not set here nor in [model]", kind_name(p->kind),
+                 p->name, missing);
+        free(items);
+        if (missing) return 0;
         if (p->kind == BKF_SCENE_BRANCH) {
             if (!entry_value(p->entries, p->nentries, "param"))
                 return fail(st, p->line, "[branch %s]: give param = S, nu, gamma or c", p->name);
@@ -1155,24 +1175,6 @@ static int fixed_keys(arg_list *b, const char *keys)
 }
 
 /* ------------------------------------------------------- a kind's steps */
-
-/* The section's own value of an option name (written with _ or -). */
-static const char *own_value(const bkf_scene_product *p, const char *key)
-{
-    char name[64];
-    for (size_t i = 0; i < p->nentries; i++)
-        if (strcmp(option_name(p->entries[i].key, name, sizeof name), key) == 0)
-            return p->entries[i].value;
-    return NULL;
-}
-
-/* The section's own value, else, with `inherit`, [model]'s or [accuracy]'s. */
-static const char *scene_key(const bkf_scene *s, const bkf_scene_product *p, const char *key,
-                             int inherit)
-{
-    const char *v = own_value(p, key);
-    return v || !inherit ? v : entry_value(s->model, s->nmodel, key);
-}
 
 /* What an item passes for p, or NULL. */
 static const char *item_value(const bkf_scene *s, const bkf_scene_product *p, const key_item *it)
