@@ -9,8 +9,9 @@
  *         they read back bit for bit; NaN is "nan", infinities "inf"/"-inf".
  *         In text cells a backslash, tab, newline and carriage return are
  *         written as \\, \t, \n, \r so that a row stays one line.
- *   JSON  one object {"comments": [...], "columns": [...], "rows": [{...}]},
- *         each row an object keyed by column name; numbers "%.17g",
+ *   JSON  one object {"comments": [...], "columns": [...], "kinds": [...],
+ *         "rows": [{...}]}, "kinds" naming each column's kind ("number" or
+ *         "text"), each row an object keyed by column name; numbers "%.17g",
  *         non-finite numbers and NULL text are null; strings are escaped and
  *         invalid UTF-8 is replaced by U+FFFD, so the output is always valid
  *         JSON.

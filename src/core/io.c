@@ -389,6 +389,13 @@ static void write_header(bkf_io_table *t)
             if (i) puts_(t, ", ");
             put_json_string(t, t->columns[i].name);
         }
+        /* Each column's declared kind, so that a reader types a column
+         * alike whatever its values (or none) look like. */
+        puts_(t, "],\n  \"kinds\": [");
+        for (size_t i = 0; i < t->ncolumns; i++) {
+            if (i) puts_(t, ", ");
+            puts_(t, t->columns[i].kind == BKF_IO_NUMBER ? "\"number\"" : "\"text\"");
+        }
         puts_(t, "],\n  \"rows\": [");
     }
     t->header_done = 1;

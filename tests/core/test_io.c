@@ -287,6 +287,7 @@ TEST(io_json_layout)
         "    \"\"\n"
         "  ],\n"
         "  \"columns\": [\"mu\", \"T\", \"stepper\"],\n"
+        "  \"kinds\": [\"number\", \"number\", \"text\"],\n"
         "  \"rows\": [\n"
         "    {\"mu\": 1, \"T\": 0.10000000000000001, \"stepper\": \"rk8pd\"},\n"
         "    {\"mu\": null, \"T\": null, \"stepper\": null},\n"
@@ -308,6 +309,7 @@ TEST(io_json_empty_and_invalid_utf8)
     bkf_io_table_free(t);
     char *out = mem_close(&m);
     CHECK_MSG(strcmp(out, "{\n  \"comments\": [],\n  \"columns\": [\"mu\", \"T\", \"stepper\"],\n"
+                          "  \"kinds\": [\"number\", \"number\", \"text\"],\n"
                           "  \"rows\": []\n}\n") == 0,
               "got:\n%s", out);
     CHECK(bkf_test_json_valid(out));
