@@ -292,32 +292,9 @@ static int uses(const unit *a, const char *a_text, const unit *b)
     return 0;
 }
 
-/* Circles allowed for now, each an unordered pair of files of one layer
- * that use each other, directly or round a longer circle.
- *
- * products: fronts.c -> stability.c -> stabmap.c -> stability.c ->
- * fronts.c.  The branch `spectrum` (issue 35) moves the stability map
- * below the train spectra it calls; the lead removes these two lines when
- * it lands, and the test then holds the products to it. */
-static const char *const allowed_circles[][2] = {
-    {"fronts", "stability"},
-    {"stability", "stabmap"},
-    {"fronts", "stabmap"},
-};
-
-static int circle_allowed(const char *a, const char *b)
-{
-    for (size_t i = 0; i < sizeof allowed_circles / sizeof allowed_circles[0]; i++)
-        if ((strcmp(allowed_circles[i][0], a) == 0 && strcmp(allowed_circles[i][1], b) == 0) ||
-            (strcmp(allowed_circles[i][0], b) == 0 && strcmp(allowed_circles[i][1], a) == 0))
-            return 1;
-    return 0;
-}
-
 /* The circles among n units (texts the files as written): every pair i, j
- * where i reaches j and j reaches i, reported unless allowed (allow 0:
- * none is).  Returns the number reported. */
-static int circles(const char *layer, unit *u, char **texts, size_t n, int allow, int report)
+ * where i reaches j and j reaches i.  Returns their number. */
+static int circles(const char *layer, unit *u, char **texts, size_t n, int report)
 {
     static unsigned char reach[MAX_FILES][MAX_FILES];
     for (size_t i = 0; i < n; i++)
@@ -330,7 +307,6 @@ static int circles(const char *layer, unit *u, char **texts, size_t n, int allow
     for (size_t i = 0; i < n; i++)
         for (size_t j = i + 1; j < n; j++) {
             if (!reach[i][j] || !reach[j][i]) continue;
-            if (allow && circle_allowed(u[i].name, u[j].name)) continue;
             bad++;
             if (report)
                 bkf_test_note("%s: %s.c and %s.c use each other (%s)", layer, u[i].name,
@@ -396,7 +372,7 @@ TEST(layers_have_no_circles_inside)
         }
         closedir(d);
         make_units(u, texts, unit_names, n);
-        bad += circles(layers[l].name, u, texts, n, 1, 1);
+        bad += circles(layers[l].name, u, texts, n, 1);
         total += n;
         units_free(u, texts, n);
     }
@@ -415,14 +391,14 @@ TEST(layers_circle_checker_catches_circles)
     texts[1] = strdup("int b_step(void)\n{\n    return a_emit(); /* b_step */\n}\n"
                       "int a_emit_not(void)\n{\n    return 0;\n}\n");
     make_units(u, texts, two, 2);
-    CHECK(circles("t", u, texts, 2, 0, 0) == 0); /* a_emit is nobody's */
+    CHECK(circles("t", u, texts, 2, 0) == 0); /* a_emit is nobody's */
     units_free(u, texts, 2);
 
     texts[0] = strdup("int a_emit(void)\n{\n    return 1;\n}\nint a_run(void)\n{\n"
                       "    return b_step();\n}\n");
     texts[1] = strdup("int b_step(void)\n{\n    return a_emit();\n}\n");
     make_units(u, texts, two, 2);
-    CHECK(circles("t", u, texts, 2, 0, 0) == 1);
+    CHECK(circles("t", u, texts, 2, 0) == 1);
     units_free(u, texts, 2);
 
     const char *const three[] = {"x", "y", "z"};
@@ -431,7 +407,7 @@ TEST(layers_circle_checker_catches_circles)
     texts[2] = strdup("#include \"bkfront/x.h\"\nstatic int z_g(void)\n{\n    return 0;\n}\n"
                       "int z_f(void)\n{\n    return z_g();\n}\n");
     make_units(u, texts, three, 3);
-    CHECK(circles("t", u, texts, 3, 0, 0) == 3); /* every pair of the three */
+    CHECK(circles("t", u, texts, 3, 0) == 3); /* every pair of the three */
     units_free(u, texts, 3);
 
     /* a comment or a string naming a function is no use of it; a static
@@ -441,6 +417,6 @@ TEST(layers_circle_checker_catches_circles)
     texts[1] = strdup("static int x_f(void)\n{\n    return 1;\n}\nint y_f(void)\n{\n"
                       "    return x_f();\n}\n");
     make_units(u, texts, three, 2);
-    CHECK(circles("t", u, texts, 2, 0, 0) == 0);
+    CHECK(circles("t", u, texts, 2, 0) == 0);
     units_free(u, texts, 2);
 }
