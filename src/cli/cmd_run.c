@@ -48,7 +48,8 @@ static void run_help(FILE *out)
         "                  $BKFRONT_PLOTS, else this bkfront's own (below)\n"
         "  --trust-scene   let figures run the scene's own scripts (script = ...);\n"
         "                  a gnuplot script can run any shell command, so without\n"
-        "                  this flag such a scene is refused\n"
+        "                  this flag such a scene is refused; and let keys that\n"
+        "                  name files (snapshots, fields) name them outside DIR\n"
         "\n"
         "Prints one line per computation, with the warnings it raised (an\n"
         "under-resolved simulation, refused rows) under it, then the speeds tables\n"
@@ -336,7 +337,8 @@ static int run_run(int argc, char **argv, bkf_error *err)
                                 .data = &rc};
 
     bkf_scene_plan plan;
-    bkf_scene_plan_options po = {.outdir = outdir, .formats = formats, .figures = !no_figures};
+    bkf_scene_plan_options po = {.outdir = outdir, .formats = formats, .figures = !no_figures,
+                                 .trust = trust};
     if ((s = bkf_scene_make_plan(sc, &po, &plan, err))) {
         bkf_scene_free(sc);
         return s;

@@ -577,7 +577,7 @@ const bkf_option bkf_fronts_branch_options[] = {
     {.name = "to", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_fronts_branch_spec, to),
      .flags = BKF_OPT_REQUIRED, .form = "B", .help = "required; its end value (A != B)"},
     {.name = "n", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_fronts_branch_spec, n),
-     .flags = BOUNDED, .min = 1, .max = 1e9, .form = "N", .shown_default = "1",
+     .flags = BOUNDED | BKF_OPT_FANOUT, .min = 1, .max = 1e9, .form = "N", .shown_default = "1",
      .help = "number of fronts"},
     {.name = "root", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_fronts_branch_spec, root),
      .flags = BOUNDED, .min = 1, .max = 1e6, .form = "I", .shown_default = "1",

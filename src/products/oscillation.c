@@ -86,8 +86,8 @@ const bkf_option bkf_oscillation_options[] = {
      .help = "sound speed, in [0, 1e6] (> 0 for --threshold and --diagram:\n"
              "with c = 0 every q is the neutral q = 0 mode)"},
     {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_oscillation_spec, nu),
-     .flags = BOUNDED | BKF_OPT_MIN_OPEN | BKF_OPT_MAX_OPEN, .min = -1, .max = 1, .form = "V",
-     .shown_default = BKF_TEXT_OF(BKF_PAPER_NU),
+     .flags = BOUNDED | BKF_OPT_MIN_OPEN | BKF_OPT_MAX_OPEN | BKF_OPT_FANOUT, .min = -1, .max = 1,
+     .form = "V", .shown_default = BKF_TEXT_OF(BKF_PAPER_NU),
      .help = "pulling rate, in (-1, 1); dispersion mode only"},
     {.name = "q", .type = BKF_OPT_DOUBLE_LIST, .offset = offsetof(bkf_oscillation_spec, q),
      .flags = BKF_OPT_MIN, .min = 0, .max_count = BKF_OSCILLATION_MAX_ROWS, .form = "LIST",

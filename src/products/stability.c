@@ -44,7 +44,7 @@ const bkf_option bkf_stability_options[] = {
     BKF_PRODUCT_NU_OPTION(bkf_stability_spec),
     BKF_PRODUCT_S_OPTION(bkf_stability_spec),
     {.name = "n", .type = BKF_OPT_COUNT, .offset = FIELD(n),
-     .flags = BKF_OPT_REQUIRED | BOUNDED, .min = 1, .max = 1e9, .form = "N",
+     .flags = BKF_OPT_REQUIRED | BOUNDED | BKF_OPT_FANOUT, .min = 1, .max = 1e9, .form = "N",
      .help = "required; number of fronts (at most n_max, as listed by\n"
              "bkfront speeds)"},
     {.name = "root", .type = BKF_OPT_COUNT, .offset = FIELD(root), .flags = BOUNDED, .min = 1,

@@ -75,7 +75,7 @@ const bkf_option bkf_sweep_options[] = {
              "next doubling would pass T; column settled says which\n"
              "(settled, budget); T >= tmax, in (0, 1e6]"},
     {.name = "fields", .type = BKF_OPT_TEXT, .offset = SPEC(fields), .form = "DIR",
-     .shown_default = "none",
+     .flags = BKF_OPT_PATH, .shown_default = "none",
      .help = "keep each point's spacetime field psi(t, x) as HDF5 in\n"
              "DIR/point_I.h5 (I the point; the file of simulate\n"
              "--spacetime FILE.h5, the parameters as attributes), written\n"
