@@ -865,6 +865,12 @@ static void explain_undecided(const check_ctx *c, bkf_check_row *row)
     }
     const char *what = spectral ? "the spectrum's sigma_max is within its error of 0"
                                 : "the spectrum was refused";
+    if (!isfinite(g->rate)) {
+        check_warn(c, "n = %zu, root %zu: undecided: %s and the run's growth was not fitted "
+                   "(its linear part has too few samples); a spectrum decided beyond its "
+                   "error, or a longer run, would decide", row->n, row->root, what);
+        return;
+    }
     if (isfinite(row->decide_tmax))
         check_warn(c, "n = %zu, root %zu: undecided: %s and the run's growth is within its "
                    "detection limit %.2g; a run of tmax %.0f would resolve a growth of %.2g",
