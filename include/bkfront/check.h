@@ -110,6 +110,10 @@ const char *bkf_check_grid_name(bkf_check_grid grid);
  * every sample, so on the uniform grid this is also its longest step. */
 #define BKF_CHECK_SAMPLE_DT 0.25
 #define BKF_CHECK_MAPPED_SAMPLE_DT 0.5
+/* Beyond this many samples per run the spacing grows to tmax / 4096 (the
+ * chain's: to a whole number of shift times): a run's records, and so its
+ * memory, do not grow with tmax. */
+#define BKF_CHECK_SAMPLES_MAX 4096
 /* Defaults (see bkf_check_options). */
 #define BKF_CHECK_N_DEFAULT 512
 #define BKF_CHECK_N_MAX_DEFAULT 65536

@@ -275,6 +275,14 @@ static void growth_merge(bkf_check_growth *into, const bkf_check_growth *g, int 
     into->verdict = v;
 }
 
+/* The spacing of a run's samples: `base`, or tmax / BKF_CHECK_SAMPLES_MAX
+ * when that is longer, so that the records a run keeps (measurements,
+ * Bloch classes, the chain's phases) do not grow with tmax (check --n 4 at
+ * the paper's parameters: 15.8 MB at tmax 2e3, 42.6 MB at 4e4 with every
+ * 0.25 kept).  Up to tmax = 1024 (the default 125 included) nothing
+ * changes; beyond, the fits see as many samples as at tmax 1024. */
+static double sample_dt(double base, double tmax) { return fmax(base, tmax / BKF_CHECK_SAMPLES_MAX); }
+
 /* The whole run's state shared by the roots. */
 typedef struct {
     const bkf_model_params *model;
@@ -433,7 +441,8 @@ static double mapped_grid_error(const check_ctx *c, const bkf_speeds_root *sr, s
         return NAN;
     }
     double coarse = NAN, coarse_err;
-    int s = bkf_comoving_run(cm, t_to, BKF_CHECK_MAPPED_SAMPLE_DT, NULL, NULL, &e);
+    int s = bkf_comoving_run(cm, t_to, sample_dt(BKF_CHECK_MAPPED_SAMPLE_DT, c->o->tmax), NULL,
+                             NULL, &e);
     if (s == BKF_ECANCELED || s == BKF_ENOMEM) *status = s;
     if (!s && bkf_comoving_fit_drift(cm, t_from, t_to, &coarse, &coarse_err, &e) != BKF_OK)
         coarse = NAN;
@@ -464,7 +473,8 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     bkf_comoving_stats st;
     bkf_comoving_get_stats(cm, &st);
     row->tail = st.relax_change;
-    int s = bkf_comoving_run(cm, o->tmax, BKF_CHECK_MAPPED_SAMPLE_DT, check_progress, (void *)c, &e);
+    int s = bkf_comoving_run(cm, o->tmax, sample_dt(BKF_CHECK_MAPPED_SAMPLE_DT, o->tmax),
+                             check_progress, (void *)c, &e);
     bkf_comoving_get_stats(cm, &st);
     size_t R = bkf_comoving_count(cm);
     int blew_up = s == BKF_EBLOWUP && R >= 2;
@@ -715,7 +725,8 @@ static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_r
         goto done;
     }
     check_obs ob = {meas, &bloch, 0, {{0}, 0}};
-    s = bkf_pde_run(pde, o->tmax, BKF_CHECK_SAMPLE_DT, check_observe, &ob, check_progress,
+    s = bkf_pde_run(pde, o->tmax, sample_dt(BKF_CHECK_SAMPLE_DT, o->tmax), check_observe, &ob,
+                    check_progress,
                     (void *)c, &e);
     if (ob.status) {
         s = ob.status;
@@ -993,10 +1004,12 @@ static int check_chain_wave(const check_ctx *c, const bkf_chainwave *w, bkf_chec
     bkf_error e;
     if (!s) s = bkf_pde_set_state(pde, w->psi, w->eta, 0.0, err);
     if (!s) s = bkf_pde_add_noise(pde, o->perturb, o->seed, err);
-    /* the run ends on a shift time, the last sample with it */
-    double t_end = ceil(o->tmax / w->tau - 1e-9) * w->tau;
+    /* the run ends on a shift time, the last sample with it; samples at
+     * every k-th shift time (k = 1 up to tmax = 1024 tau) */
+    double dt = w->tau * ceil(sample_dt(w->tau, o->tmax) / w->tau - 1e-9);
+    double t_end = ceil(o->tmax / dt - 1e-9) * dt;
     if (!s) {
-        s = bkf_pde_run(pde, t_end, w->tau, chain_observe, &ob, check_progress, (void *)c, &e);
+        s = bkf_pde_run(pde, t_end, dt, chain_observe, &ob, check_progress, (void *)c, &e);
         if (ob.oom) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     int blew_up = (s == BKF_EBLOWUP || s == BKF_ENUMERIC) && ob.count >= 2;
@@ -1522,8 +1535,9 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
                     "per wavelength (tol %.0e, samples every %g)",
                     bkf_format_number(o->tmax, a, sizeof a), bkf_format_number(o->perturb, b, sizeof b), o->seed,
                     bkf_format_number(o->rel_tol, c, sizeof c), bkf_check_grid_name(o->grid), o->N,
-                    k->info.N_cap, o->resolution, bkf_format_number(BKF_CHECK_SAMPLE_DT, d, sizeof d),
-                    o->points, k->info.mapped_tol, BKF_CHECK_MAPPED_SAMPLE_DT);
+                    k->info.N_cap, o->resolution,
+                    bkf_format_number(sample_dt(BKF_CHECK_SAMPLE_DT, o->tmax), d, sizeof d),
+                    o->points, k->info.mapped_tol, sample_dt(BKF_CHECK_MAPPED_SAMPLE_DT, o->tmax));
     if (!s && !chain)
         s = bkf_io_table_commentf(t, err, "speeds: k(nu) %s, n_max %ld, %zu roots%s%s",
                     bkf_format_number(k->info.k, a, sizeof a), k->info.n_max, k->info.roots,
