@@ -18,11 +18,14 @@
  * wave shifted with the fronts| (on the adapted grid, from the wave relaxed
  * onto the grid); the growth rate of the perturbation is fitted to the whole
  * linear part of the run (bkf_check_fit_growth; on the uniform grid also per
- * Bloch class, see bkf_check_row.growth); the speed is fitted over the later half of the coherent
- * part of the run (front count kept and deviation <= max(100 perturb, 1e-6);
- * on uniform grids with a tail above BKF_CHECK_RESOLUTION_DEFAULT and on the
- * adapted grid also 10 times the deviation at t = min(10, tmax/4), where a
- * wave the grid does not fully resolve has settled on a plateau of its own).
+ * Bloch class, see bkf_check_row.growth); the speed is fitted over the later
+ * half of the coherent part of the run (front count kept and deviation <=
+ * max(100 perturb, 1e-6), raised to 10 times the largest deviation up to
+ * t = min(10, tmax/4): the wave's response to the noise, which steep fronts
+ * amplify a hundredfold before it decays, and the plateau a wave the grid
+ * does not fully resolve settles on).  Samples every BKF_CHECK_SAMPLE_DT
+ * (adapted grid BKF_CHECK_MAPPED_SAMPLE_DT, the chain every shift time), at
+ * most BKF_CHECK_SAMPLES_MAX per run: memory does not grow with tmax.
  * Beside the run, the spectrum of the same train (bkf_stability_root): a
  * decided growth that contradicts it is a conflict (bkf_check_conflict).
  * The verdict is bkf_check_judge's.
