@@ -113,6 +113,9 @@ typedef struct {
     double uniform_eps;   /* default 1e-2 */
     double periodic_tol;  /* default 5e-2 */
     double settled_tol;   /* the window's halves alike within it (relative); default 0.1 */
+    double frame_speed;   /* the speed of the grid's frame (bkf_pde_options.frame_speed):
+                             fronts move on the grid at their velocity less it, which the
+                             tracking predicts from; default 0 (the lab frame) */
     const double *reference; /* NULL, or N values of psi at the first sample
                                 without perturbation (a seeded travelling wave),
                                 copied: the deviation is measured from it */

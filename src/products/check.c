@@ -716,6 +716,7 @@ static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_r
     mp.model = pp;
     mp.reference = clean;
     mp.level = c->level;
+    mp.frame_speed = po.frame_speed;
     if (!(meas = bkf_measure_alloc(&mp, err))) {
         s = BKF_ENOMEM;
         goto done;
