@@ -26,7 +26,7 @@
  * does not fully resolve settles on).  Samples every BKF_CHECK_SAMPLE_DT
  * (adapted grid BKF_CHECK_MAPPED_SAMPLE_DT, the chain every shift time), at
  * most BKF_CHECK_SAMPLES_MAX per run: memory does not grow with tmax.
- * Beside the run, the spectrum of the same train (bkf_stability_root): a
+ * Beside the run, the spectrum of the same train (bkf_trainspec_root): a
  * decided growth that contradicts it is a conflict (bkf_check_conflict).
  * The verdict is bkf_check_judge's.
  *
@@ -258,7 +258,7 @@ typedef struct {
      * not their modulus).  growth is the fit with the largest rate, its
      * verdict grows when any fit grows, decays when every fit decays. */
     bkf_check_growth growth;
-    /* The spectrum of the same train (bkf_stability_root, tol 1e-6, the
+    /* The spectrum of the same train (bkf_trainspec_root, tol 1e-6, the
      * rightmost sigma per Bloch number): decided STABLE or UNSTABLE, or not
      * decided, UNRESOLVED: sigma_max within its error of 0, or refused (a
      * warning says why; also when the spectrum found no eigenvalue but the
