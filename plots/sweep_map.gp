@@ -11,9 +11,9 @@ load plotdir.'/common.gp'
 f = word(files, 1)
 regime(s) = (s eq 'continuous_slip' ? 0 : s eq 'global_oscillation' ? 1 : \
              s eq 'period_doubled_pacemakers' ? 2 : s eq 'propagating_fronts' ? 3 : \
-             s eq 'irregular' ? 4 : 5)
+             s eq 'irregular' ? 4 : s eq 'transient' ? 5 : 6)
 colour(r) = (r == 0 ? 0x7f7f7f : r == 1 ? 0x1f77b4 : r == 2 ? 0xff7f0e : r == 3 ? 0x2ca02c : \
-             r == 4 ? 0xd62728 : 0x000000)
+             r == 4 ? 0xd62728 : r == 5 ? 0x9467bd : 0x000000)
 stats f using 'nu' nooutput name 'NU'
 stats f using 'gamma' nooutput name 'G'
 stats f using 'seed' nooutput name 'SEED'
@@ -73,8 +73,8 @@ set multiplot layout 1, 2 title (title ne '' ? title : 'Regimes from an arbitrar
 set title 'regime'
 plot f using ($6 + xoff(strcol(2))):($4 + yoff($3)):(colour(regime(strcol(10)))) \
         with points pt 5 ps 1.2 lc rgb variable notitle, \
-     for [r = 0:5] NaN with points pt 5 ps 1.2 lc rgb colour(r) \
-        title word('continuous\_slip global\_oscillation pacemakers propagating\_fronts irregular failed', r + 1), \
+     for [r = 0:6] NaN with points pt 5 ps 1.2 lc rgb colour(r) \
+        title word('continuous\_slip global\_oscillation pacemakers propagating\_fronts irregular transient failed', r + 1), \
      for [b = 0:3] $PD using 1:(on(b)) with linespoints lw 2 dt 2 pt 7 ps 0.5 lc rgb '#000000' \
         title (b == 0 ? 'period doubling (Floquet)' : ''), \
      for [b = 0:3] $LW using 1:(on(b)) with linespoints lw 2 pt 7 ps 0.5 lc rgb '#000000' \

@@ -77,6 +77,8 @@ static const struct {
     double secs;
 } known_slow[] = {
     {"extremes_floquet_matrix_gamma_100", 39.8},
+    {"check_refused_spectrum_is_no_agreement", 18.0},
+    {"check_sigma_max_is_an_eigenvalue_or_nan", 11.0},
     {"extremes_floquet_matrix_gamma_to_30", 36.4},
     {"extremes_floquet_matrix_gamma_100_near_hopf", 28.3},
     {"extremes_period_matrix", 10.0},

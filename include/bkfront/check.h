@@ -18,11 +18,14 @@
  * wave shifted with the fronts| (on the adapted grid, from the wave relaxed
  * onto the grid); the growth rate of the perturbation is fitted to the whole
  * linear part of the run (bkf_check_fit_growth; on the uniform grid also per
- * Bloch class, see bkf_check_row.growth); the speed is fitted over the later half of the coherent
- * part of the run (front count kept and deviation <= max(100 perturb, 1e-6);
- * on uniform grids with a tail above BKF_CHECK_RESOLUTION_DEFAULT and on the
- * adapted grid also 10 times the deviation at t = min(10, tmax/4), where a
- * wave the grid does not fully resolve has settled on a plateau of its own).
+ * Bloch class, see bkf_check_row.growth); the speed is fitted over the later
+ * half of the coherent part of the run (front count kept and deviation <=
+ * max(100 perturb, 1e-6), raised to 10 times the largest deviation up to
+ * t = min(10, tmax/4): the wave's response to the noise, which steep fronts
+ * amplify a hundredfold before it decays, and the plateau a wave the grid
+ * does not fully resolve settles on).  Samples every BKF_CHECK_SAMPLE_DT
+ * (adapted grid BKF_CHECK_MAPPED_SAMPLE_DT, the chain every shift time), at
+ * most BKF_CHECK_SAMPLES_MAX per run: memory does not grow with tmax.
  * Beside the run, the spectrum of the same train (bkf_trainspec_root): a
  * decided growth that contradicts it is a conflict (bkf_check_conflict).
  * The verdict is bkf_check_judge's.
@@ -80,17 +83,21 @@ typedef enum {
 } bkf_check_frame;
 
 typedef enum {
-    BKF_CHECK_AGREES = 0,    /* stable, |rel_err| <= rel_tol */
-    BKF_CHECK_DISAGREES = 1, /* stable, rel_err beyond rel_tol (or not measured) */
+    BKF_CHECK_AGREES = 0,    /* stable (decided), |rel_err| <= rel_tol */
+    BKF_CHECK_DISAGREES = 1, /* stable (decided), rel_err measured and beyond rel_tol */
     BKF_CHECK_UNSTABLE = 2,  /* count or shape not kept, or the spectrum unstable: the
                                 speed is not judged */
     BKF_CHECK_UNRESOLVED = 3, /* not run to the end (see bkf_check_row.reason) */
-    BKF_CHECK_CONFLICTS = 4  /* the run's decided growth contradicts the spectrum
+    BKF_CHECK_CONFLICTS = 4, /* the run's decided growth contradicts the spectrum
                                 (bkf_check_conflict): an error, whatever the speed */
+    BKF_CHECK_UNDECIDED = 5  /* kept by the run, but its stability is decided neither by
+                                the spectrum (refused, or within its error of 0) nor by
+                                the run (growth not decays), or no speed was measured:
+                                bkf_check_row.decide_tmax says what run would decide */
 } bkf_check_verdict;
 
-/* "agrees", "disagrees", "unstable", "unresolved", "conflicts"; "unknown"
- * otherwise. */
+/* "agrees", "disagrees", "unstable", "unresolved", "conflicts",
+ * "undecided"; "unknown" otherwise. */
 const char *bkf_check_verdict_name(bkf_check_verdict verdict);
 /* "auto", "uniform", "mapped", "chain"; "unknown" otherwise. */
 const char *bkf_check_grid_name(bkf_check_grid grid);
@@ -106,6 +113,10 @@ const char *bkf_check_grid_name(bkf_check_grid grid);
  * every sample, so on the uniform grid this is also its longest step. */
 #define BKF_CHECK_SAMPLE_DT 0.25
 #define BKF_CHECK_MAPPED_SAMPLE_DT 0.5
+/* Beyond this many samples per run the spacing grows to tmax / 4096 (the
+ * chain's: to a whole number of shift times): a run's records, and so its
+ * memory, do not grow with tmax. */
+#define BKF_CHECK_SAMPLES_MAX 4096
 /* Defaults (see bkf_check_options). */
 #define BKF_CHECK_N_DEFAULT 512
 #define BKF_CHECK_N_MAX_DEFAULT 65536
@@ -248,14 +259,25 @@ typedef struct {
      * verdict grows when any fit grows, decays when every fit decays. */
     bkf_check_growth growth;
     /* The spectrum of the same train (bkf_trainspec_root, tol 1e-6, the
-     * rightmost sigma per Bloch number):
-     * UNRESOLVED also when it was refused (a warning says why). */
+     * rightmost sigma per Bloch number): decided STABLE or UNSTABLE, or not
+     * decided, UNRESOLVED: sigma_max within its error of 0, or refused (a
+     * warning says why; also when the spectrum found no eigenvalue but the
+     * translation in its window, which bounds sigma_max by the window's edge
+     * but does not measure it). */
     bkf_trainspec_verdict spectral;
-    double sigma_max, sigma_max_err; /* NaN when refused */
+    double sigma_max, sigma_max_err; /* NaN when refused or only bounded: a window's
+                                        edge is not an eigenvalue */
     double stable;          /* 1 count and shape kept (the run did not blow up, the count
                                never changed, deviation_end <= 1e-2, growth not grows),
                                0 not, NaN not run */
     bkf_check_verdict verdict;
+    /* Undecided only: the tmax of a run whose growth fit would resolve the
+     * growth still in question (the spectrum's sigma_max + its error when it
+     * gives one, else the run's own |growth|), from the fit's detection
+     * limit, which falls as 1/L with the fit's length L; NaN when no run up
+     * to BKF_CHECK_TMAX_MAX would (a warning then names what would: the
+     * spectrum, or a smaller perturbation when no speed was measured). */
+    double decide_tmax;
     int reason;             /* a bkf_status: BKF_OK for a run to the end; unstable:
                                BKF_EBLOWUP when the run blew up; unresolved: BKF_ETOL (not
                                resolved within N_max), BKF_EBUDGET (the adapted grid's step
@@ -264,13 +286,17 @@ typedef struct {
 } bkf_check_row;
 
 /* The verdict from the measured quantities and the spectrum, the one rule
- * of both grids.  The run kept the front (*stable, may be NULL, gets 1)
+ * of every grid.  The run kept the front (*stable, may be NULL, gets 1)
  * when it did not blow up, the count never changed and started at n,
  * deviation_end is finite and <= 1e-2, and the growth was not decided
  * "grows".  Then: conflicts when bkf_check_conflict; else unstable when the
  * run did not keep the front or the spectrum is unstable (an instability
- * too slow for the run: the spectrum resolves what the run cannot); else
- * agrees when |rel_err| <= rel_tol (finite), else disagrees. */
+ * too slow for the run: the spectrum resolves what the run cannot); else,
+ * unless the spectrum is decided stable or the run's growth decays (a
+ * kept front is not a stable one: a growth below the run's detection limit
+ * stays unseen), undecided; else undecided when rel_err is not finite (no
+ * speed measured is no disagreement); else agrees when |rel_err| <=
+ * rel_tol, else disagrees.  The verdict never outruns its evidence. */
 bkf_check_verdict bkf_check_judge(size_t n, int blew_up, int count_constant, size_t fronts_start,
                                   double deviation_end, const bkf_check_growth *growth,
                                   bkf_trainspec_verdict spectral, double sigma_max, double rel_err,

@@ -49,13 +49,20 @@
  *   propagating_fronts   the same front count n >= 1 throughout the window,
  *                        one unbroken set of tracks, every track moving the
  *                        same way, |speed| > 10 speed_err and the tracks'
- *                        speeds within 1% of each other
+ *                        speeds within 1% of each other, and the window
+ *                        settled (below); a product that knows the model's
+ *                        allowed speeds also asks the speed to match one
+ *                        (bkf_simulate: else transient)
  *   period_doubled_pacemakers
  *                        the signal at the probe is periodic, fronts exist in
  *                        the window and move both ways or change in number,
  *                        and the period is 1.5 to 2.5 times period_ref (when
  *                        period_ref > 0), or p = 2 (when it is not given)
- *   irregular            anything else (including transients not yet settled)
+ *   irregular            anything else, in a settled window
+ *   transient            anything else: the window has not settled
+ * The window has settled when its two halves (before and after its middle
+ * time) agree in their time-averaged spatial variance of psi and in their
+ * mean front count, each within settled_tol (relative) of the larger.
  *
  * Bounded memory.  Without t_end every sample's record is kept (about
  * 100 bytes plus 8 per front), for bkf_measure_record_at and
@@ -105,6 +112,10 @@ typedef struct {
     double slip_eps;      /* default 1e-3 */
     double uniform_eps;   /* default 1e-2 */
     double periodic_tol;  /* default 5e-2 */
+    double settled_tol;   /* the window's halves alike within it (relative); default 0.1 */
+    double frame_speed;   /* the speed of the grid's frame (bkf_pde_options.frame_speed):
+                             fronts move on the grid at their velocity less it, which the
+                             tracking predicts from; default 0 (the lab frame) */
     const double *reference; /* NULL, or N values of psi at the first sample
                                 without perturbation (a seeded travelling wave),
                                 copied: the deviation is measured from it */
@@ -129,11 +140,12 @@ typedef enum {
     BKF_REGIME_GLOBAL_OSCILLATION = 1,
     BKF_REGIME_PACEMAKERS = 2,
     BKF_REGIME_FRONTS = 3,
-    BKF_REGIME_IRREGULAR = 4
+    BKF_REGIME_IRREGULAR = 4,
+    BKF_REGIME_TRANSIENT = 5
 } bkf_regime;
 
 /* "continuous_slip", "global_oscillation", "period_doubled_pacemakers",
- * "propagating_fronts", "irregular". */
+ * "propagating_fronts", "irregular", "transient". */
 const char *bkf_regime_name(bkf_regime regime);
 
 typedef struct bkf_measure bkf_measure;
@@ -192,6 +204,7 @@ typedef struct {
     double deviation_start, deviation_mid, deviation_end; /* first, window start, last */
     double deviation_max;
     double deviation_growth;          /* ln(end/mid) / (t_end - t_mid), per unit time */
+    int settled;                      /* the window's halves alike (see the regimes) */
     bkf_regime regime;
 } bkf_measure_summary;
 

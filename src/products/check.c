@@ -28,6 +28,7 @@ const char *bkf_check_verdict_name(bkf_check_verdict verdict)
     case BKF_CHECK_UNSTABLE: return "unstable";
     case BKF_CHECK_UNRESOLVED: return "unresolved";
     case BKF_CHECK_CONFLICTS: return "conflicts";
+    case BKF_CHECK_UNDECIDED: return "undecided";
     }
     return "unknown";
 }
@@ -169,7 +170,12 @@ bkf_check_verdict bkf_check_judge(size_t n, int blew_up, int count_constant, siz
     if (stable) *stable = kept;
     if (bkf_check_conflict(growth, spectral, sigma_max)) return BKF_CHECK_CONFLICTS;
     if (!kept || spectral == BKF_TRAINSPEC_UNSTABLE) return BKF_CHECK_UNSTABLE;
-    return isfinite(rel_err) && fabs(rel_err) <= rel_tol ? BKF_CHECK_AGREES : BKF_CHECK_DISAGREES;
+    /* kept is not stable: a growth below the run's detection limit is
+     * unseen, so stability needs the spectrum's word or a decided decay */
+    if (spectral != BKF_TRAINSPEC_STABLE && growth->verdict != BKF_CHECK_GROWTH_DECAYS)
+        return BKF_CHECK_UNDECIDED;
+    if (!isfinite(rel_err)) return BKF_CHECK_UNDECIDED;
+    return fabs(rel_err) <= rel_tol ? BKF_CHECK_AGREES : BKF_CHECK_DISAGREES;
 }
 
 /* Student's t at 6 degrees of freedom, two-sided 95% (2.447), rounded up. */
@@ -270,6 +276,14 @@ static void growth_merge(bkf_check_growth *into, const bkf_check_growth *g, int 
     into->verdict = v;
 }
 
+/* The spacing of a run's samples: `base`, or tmax / BKF_CHECK_SAMPLES_MAX
+ * when that is longer, so that the records a run keeps (measurements,
+ * Bloch classes, the chain's phases) do not grow with tmax (check --n 4 at
+ * the paper's parameters: 15.8 MB at tmax 2e3, 42.6 MB at 4e4 with every
+ * 0.25 kept).  Up to tmax = 1024 (the default 125 included) nothing
+ * changes; beyond, the fits see as many samples as at tmax 1024. */
+static double sample_dt(double base, double tmax) { return fmax(base, tmax / BKF_CHECK_SAMPLES_MAX); }
+
 /* The whole run's state shared by the roots. */
 typedef struct {
     const bkf_model_params *model;
@@ -307,10 +321,14 @@ static void check_warn(const check_ctx *c, const char *fmt, ...)
 
 /* The end of the coherent part of a run: the last record, from the start
  * on, whose count is n and whose deviation is below the bound (see
- * check.h); with `settle` the bound rises to 10 times the deviation at
- * t_ref = min(10, tmax/4), by when a wave the grid does not fully resolve
- * has settled into the grid's own travelling wave (a plateau set by the
- * resolution, not a growing perturbation).  `at(i, data, &t, &fronts,
+ * check.h); with `settle` the bound rises to 10 times the largest deviation
+ * up to t_ref = min(10, tmax/4), the wave's response to the noise: a wave
+ * the grid does not fully resolve settles into the grid's own travelling
+ * wave (a plateau set by the resolution, not a growing perturbation), and
+ * steep fronts amplify the noise before it decays (gamma 6, c 0.1,
+ * nu -0.99, S 40, n 2: perturbation 1e-6, deviation 2.4e-4 at t = 6, back
+ * to 2e-5 by t = 10; a bound of 1e-4 ended the coherent part at t = 1.5 and
+ * left a stable front without a speed).  `at(i, data, &t, &fronts,
  * &deviation)` reads record i of R. */
 static double transient_end(double tmax) { return fmin(10.0, 0.25 * tmax); }
 
@@ -324,9 +342,9 @@ static size_t coherent_end(record_reader at, const void *data, size_t R, size_t 
     size_t fronts, end = 0;
     for (size_t r = 0; settle && r < R; r++) {
         at(r, data, &t, &fronts, &dev);
-        if (t < t_ref) continue;
-        if (fronts == n && isfinite(dev)) bound = fmax(bound, 10 * dev);
-        break;
+        if (fronts != n || !isfinite(dev)) break;
+        bound = fmax(bound, 10 * dev);
+        if (t >= t_ref) break;
     }
     for (size_t r = 0; r < R; r++) {
         at(r, data, &t, &fronts, &dev);
@@ -424,7 +442,8 @@ static double mapped_grid_error(const check_ctx *c, const bkf_speeds_root *sr, s
         return NAN;
     }
     double coarse = NAN, coarse_err;
-    int s = bkf_comoving_run(cm, t_to, BKF_CHECK_MAPPED_SAMPLE_DT, NULL, NULL, &e);
+    int s = bkf_comoving_run(cm, t_to, sample_dt(BKF_CHECK_MAPPED_SAMPLE_DT, c->o->tmax), NULL,
+                             NULL, &e);
     if (s == BKF_ECANCELED || s == BKF_ENOMEM) *status = s;
     if (!s && bkf_comoving_fit_drift(cm, t_from, t_to, &coarse, &coarse_err, &e) != BKF_OK)
         coarse = NAN;
@@ -455,7 +474,8 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     bkf_comoving_stats st;
     bkf_comoving_get_stats(cm, &st);
     row->tail = st.relax_change;
-    int s = bkf_comoving_run(cm, o->tmax, BKF_CHECK_MAPPED_SAMPLE_DT, check_progress, (void *)c, &e);
+    int s = bkf_comoving_run(cm, o->tmax, sample_dt(BKF_CHECK_MAPPED_SAMPLE_DT, o->tmax),
+                             check_progress, (void *)c, &e);
     bkf_comoving_get_stats(cm, &st);
     size_t R = bkf_comoving_count(cm);
     int blew_up = s == BKF_EBLOWUP && R >= 2;
@@ -697,6 +717,7 @@ static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_r
     mp.model = pp;
     mp.reference = clean;
     mp.level = c->level;
+    mp.frame_speed = po.frame_speed;
     if (!(meas = bkf_measure_alloc(&mp, err))) {
         s = BKF_ENOMEM;
         goto done;
@@ -706,7 +727,8 @@ static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_r
         goto done;
     }
     check_obs ob = {meas, &bloch, 0, {{0}, 0}};
-    s = bkf_pde_run(pde, o->tmax, BKF_CHECK_SAMPLE_DT, check_observe, &ob, check_progress,
+    s = bkf_pde_run(pde, o->tmax, sample_dt(BKF_CHECK_SAMPLE_DT, o->tmax), check_observe, &ob,
+                    check_progress,
                     (void *)c, &e);
     if (ob.status) {
         s = ob.status;
@@ -740,9 +762,7 @@ static int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_r
         bkf_error_set(err, s, "out of memory");
         goto done;
     }
-    /* A fully resolved seed has no plateau to settle on: the bound stays. */
-    size_t last = coherent_end(measure_reader, meas, R, n, row->tail > BKF_CHECK_RESOLUTION_DEFAULT,
-                               speed_bound(o), o->tmax);
+    size_t last = coherent_end(measure_reader, meas, R, n, 1, speed_bound(o), o->tmax);
     double t_end = bkf_measure_record_at(meas, last)->t;
     if (last >= FIT_MIN_RECORDS) {
         double t_from = 0.5 * t_end;
@@ -785,8 +805,36 @@ static void row_init(bkf_check_row *row, size_t n, size_t root, const bkf_speeds
     row->spectral = BKF_TRAINSPEC_UNRESOLVED;
     row->sigma_max = row->sigma_max_err = NAN;
     row->stable = NAN;
+    row->decide_tmax = NAN;
     row->verdict = BKF_CHECK_UNRESOLVED;
     row->reason = BKF_OK;
+}
+
+/* The spectrum's answer as the verdict reads it: decided stable, decided
+ * unstable, or not decided (UNRESOLVED) with a reason.  A sigma_max
+ * without a positive error is no eigenvalue but the edge of the window
+ * searched (nothing but the translation was found right of it): a bound,
+ * not a measurement, and one the search can get wrong (gamma 4.06339,
+ * c 0.276186, nu 0.959575, S 27.1676, n 1: edge -0.203, Hill's method
+ * -4.08e-4), so neither printed nor trusted. */
+static void spectrum_of(const check_ctx *c, bkf_check_row *row, int status, const char *why,
+                        bkf_trainspec_verdict verdict, double sigma_max, double sigma_max_err,
+                        double window_edge)
+{
+    if (status != BKF_OK) {
+        check_warn(c, "n = %zu, root %zu: spectrum refused: %s", row->n, row->root, why);
+        return;
+    }
+    if (!(sigma_max_err > 0) || !isfinite(sigma_max)) {
+        char a[32];
+        check_warn(c, "n = %zu, root %zu: spectrum refused: no eigenvalue but the translation "
+                   "found right of Re sigma = %s, an edge of the window searched, not a "
+                   "sigma_max", row->n, row->root, bkf_format_number(window_edge, a, sizeof a));
+        return;
+    }
+    row->spectral = verdict;
+    row->sigma_max = sigma_max;
+    row->sigma_max_err = sigma_max_err;
 }
 
 /* The spectrum of the root's train, at trainspec's default accuracy (1e-6
@@ -799,14 +847,52 @@ static void check_spectrum(const check_ctx *c, const bkf_speeds_root *sr, bkf_ch
     bkf_trainspec_result res;
     bkf_error e;
     int s = bkf_trainspec_root(&p, sr, bkf_trainspec_options_default().tol, 1, &res, &e);
-    if (s == BKF_OK) {
-        row->spectral = res.verdict;
-        row->sigma_max = res.sigma_max;
-        row->sigma_max_err = res.sigma_max_err;
-    } else {
-        check_warn(c, "n = %zu, root %zu: spectrum unresolved: %s", row->n, row->root, e.message);
-    }
+    if (s) spectrum_of(c, row, s, e.message, BKF_TRAINSPEC_UNRESOLVED, NAN, NAN, NAN);
+    else spectrum_of(c, row, s, "", res.verdict, res.sigma_max, res.sigma_max_err, res.a_lo);
     bkf_trainspec_result_free(&res);
+}
+
+/* What would decide an undecided row (check.h: decide_tmax), into the row
+ * and a warning.  The rate in question is the growth the spectrum allows
+ * (sigma_max + its error) when it gives one, else the run's own |growth|;
+ * the fit's detection limit falls about as 1/L (its ln 2 / L term exactly,
+ * the slope's standard error at least as fast), so a fit L limit / rate
+ * long resolves it. */
+static void explain_undecided(const check_ctx *c, bkf_check_row *row)
+{
+    if (row->verdict != BKF_CHECK_UNDECIDED) return;
+    const bkf_check_growth *g = &row->growth;
+    int stable = row->spectral == BKF_TRAINSPEC_STABLE || g->verdict == BKF_CHECK_GROWTH_DECAYS;
+    if (stable) {
+        check_warn(c, "n = %zu, root %zu: undecided: stable, but no speed measured (the coherent "
+                   "part of the run, count n and deviation within bound, is too short to fit); "
+                   "a smaller --perturb keeps it longer", row->n, row->root);
+        return;
+    }
+    int spectral = isfinite(row->sigma_max);
+    double rate = spectral ? row->sigma_max + row->sigma_max_err : fabs(g->rate);
+    double L = g->to - g->from;
+    if (rate > 0 && L > 0 && g->limit > 0) {
+        double t = g->from + L * g->limit / rate;
+        if (t <= BKF_CHECK_TMAX_MAX) row->decide_tmax = ceil(t);
+    }
+    const char *what = spectral ? "the spectrum's sigma_max is within its error of 0"
+                                : "the spectrum was refused";
+    if (!isfinite(g->rate)) {
+        check_warn(c, "n = %zu, root %zu: undecided: %s and the run's growth was not fitted "
+                   "(its linear part has too few samples); a spectrum decided beyond its "
+                   "error, or a longer run, would decide", row->n, row->root, what);
+        return;
+    }
+    if (isfinite(row->decide_tmax))
+        check_warn(c, "n = %zu, root %zu: undecided: %s and the run's growth is within its "
+                   "detection limit %.2g; a run of tmax %.0f would resolve a growth of %.2g",
+                   row->n, row->root, what, g->limit, row->decide_tmax, rate);
+    else
+        check_warn(c, "n = %zu, root %zu: undecided: %s and the run's growth is within its "
+                   "detection limit %.2g; no run up to tmax %g resolves a growth of %.2g: only "
+                   "a spectrum decided beyond its error would", row->n, row->root, what,
+                   g->limit, BKF_CHECK_TMAX_MAX, rate);
 }
 
 /* ------------------------------------------------------------ the chain */
@@ -920,10 +1006,12 @@ static int check_chain_wave(const check_ctx *c, const bkf_chainwave *w, bkf_chec
     bkf_error e;
     if (!s) s = bkf_pde_set_state(pde, w->psi, w->eta, 0.0, err);
     if (!s) s = bkf_pde_add_noise(pde, o->perturb, o->seed, err);
-    /* the run ends on a shift time, the last sample with it */
-    double t_end = ceil(o->tmax / w->tau - 1e-9) * w->tau;
+    /* the run ends on a shift time, the last sample with it; samples at
+     * every k-th shift time (k = 1 up to tmax = 1024 tau) */
+    double dt = w->tau * ceil(sample_dt(w->tau, o->tmax) / w->tau - 1e-9);
+    double t_end = ceil(o->tmax / dt - 1e-9) * dt;
     if (!s) {
-        s = bkf_pde_run(pde, t_end, w->tau, chain_observe, &ob, check_progress, (void *)c, &e);
+        s = bkf_pde_run(pde, t_end, dt, chain_observe, &ob, check_progress, (void *)c, &e);
         if (ob.oom) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     int blew_up = (s == BKF_EBLOWUP || s == BKF_ENUMERIC) && ob.count >= 2;
@@ -945,7 +1033,7 @@ static int check_chain_wave(const check_ctx *c, const bkf_chainwave *w, bkf_chec
         size_t n_seen = ob.fronts[0];
         if ((s = fit_deviation(chain_reader, &ob, ob.count, n_seen, o, &row->growth, &t_lin)))
             bkf_error_set(err, s, "out of memory");
-        size_t last = coherent_end(chain_reader, &ob, ob.count, n_seen, 0, speed_bound(o), o->tmax);
+        size_t last = coherent_end(chain_reader, &ob, ob.count, n_seen, 1, speed_bound(o), o->tmax);
         size_t first = chain_sample_at(&ob, 0.5 * ob.t[last]);
         if (!s && last >= FIT_MIN_RECORDS && last - first >= 2) {
             double mt = 0, mp = 0, stt = 0, stp = 0, rss = 0;
@@ -1040,6 +1128,7 @@ static int check_chain_run(const bkf_model_params *model, const bkf_check_option
                        "per unit time, the multipliers say %s (|m| %.9g)", row.n, row.root,
                        bkf_check_growth_name(row.growth.verdict), row.growth.rate,
                        row.growth.rate_err, bkf_chainwave_verdict_name(w->verdict), w->mult_abs);
+        if (!s) explain_undecided(&c, &row);
         if (!s && hooks && hooks->row) stop = hooks->row(&row, hooks->data);
     }
     bkf_chainwave_table_free(&tab);
@@ -1095,6 +1184,7 @@ int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
                        bkf_format_number(row.sigma_max, d, sizeof d),
                        bkf_format_number(row.sigma_max_err, f, sizeof f));
         }
+        if (!s) explain_undecided(&c, &row);
         if (!s && hooks && hooks->row) stop = hooks->row(&row, hooks->data);
     }
     bkf_speeds_table_free(&tab);
@@ -1314,6 +1404,7 @@ static const bkf_io_column columns[] = {
     {"sigma_max_err", BKF_IO_NUMBER},
     {"stable", BKF_IO_NUMBER},
     {"verdict", BKF_IO_TEXT},
+    {"decide_tmax", BKF_IO_NUMBER},
 };
 #define NCOLUMNS (sizeof columns / sizeof columns[0])
 
@@ -1447,20 +1538,22 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
                     "per wavelength (tol %.0e, samples every %g)",
                     bkf_format_number(o->tmax, a, sizeof a), bkf_format_number(o->perturb, b, sizeof b), o->seed,
                     bkf_format_number(o->rel_tol, c, sizeof c), bkf_check_grid_name(o->grid), o->N,
-                    k->info.N_cap, o->resolution, bkf_format_number(BKF_CHECK_SAMPLE_DT, d, sizeof d),
-                    o->points, k->info.mapped_tol, BKF_CHECK_MAPPED_SAMPLE_DT);
+                    k->info.N_cap, o->resolution,
+                    bkf_format_number(sample_dt(BKF_CHECK_SAMPLE_DT, o->tmax), d, sizeof d),
+                    o->points, k->info.mapped_tol, sample_dt(BKF_CHECK_MAPPED_SAMPLE_DT, o->tmax));
     if (!s && !chain)
         s = bkf_io_table_commentf(t, err, "speeds: k(nu) %s, n_max %ld, %zu roots%s%s",
                     bkf_format_number(k->info.k, a, sizeof a), k->info.n_max, k->info.roots,
                     k->note[0] ? "; " : "", k->note);
     if (!s && prov && prov->command) s = bkf_io_table_commentf(t, err, "command: %s", prov->command);
-    size_t stable = 0, agree = 0, unresolved = 0, disagree = 0, conflict = 0;
+    size_t stable = 0, agree = 0, unresolved = 0, disagree = 0, conflict = 0, undecided = 0;
     for (size_t i = 0; i < k->count; i++) {
         stable += k->rows[i].stable == 1;
         agree += k->rows[i].verdict == BKF_CHECK_AGREES;
         unresolved += k->rows[i].verdict == BKF_CHECK_UNRESOLVED;
         disagree += k->rows[i].verdict == BKF_CHECK_DISAGREES;
         conflict += k->rows[i].verdict == BKF_CHECK_CONFLICTS;
+        undecided += k->rows[i].verdict == BKF_CHECK_UNDECIDED;
     }
     if (!s) {
         char list[512], yes[512], no[512];
@@ -1469,8 +1562,10 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
         list_n(k, row_spectral_unstable, no, sizeof no);
         s = bkf_io_table_commentf(t, err,
                     "summary: %zu kept by the run (n = %s), %zu agree, %zu disagree, %zu "
-                    "conflict, %zu unresolved; spectrum stable n = %s, unstable n = %s",
-                    stable, stable ? list : "none", agree, disagree, conflict, unresolved,
+                    "conflict, %zu undecided, %zu unresolved; spectrum stable n = %s, unstable "
+                    "n = %s",
+                    stable, stable ? list : "none", agree, disagree, conflict, undecided,
+                    unresolved,
                     yes[0] ? yes : "none", no[0] ? no : "none");
     }
     for (size_t i = 0; !s && i < k->count; i++) {
@@ -1492,6 +1587,7 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
             {.number = r->sigma_max},          {.number = r->sigma_max_err},
             {.number = r->stable},
             {.text = bkf_check_verdict_name(r->verdict)},
+            {.number = r->decide_tmax},
         };
         s = bkf_io_table_row(t, v, err);
     }

@@ -7,7 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bkfront/chainwave.h"
 #include "bkfront/check.h"
+#include "bkfront/speeds.h"
 #include "bkfront/h5.h"
 #include "bkfront/init.h"
 #include "bkfront/measure.h"
@@ -635,6 +637,54 @@ static int write_summary(bkf_io_table *t, const run *r, const bkf_measure_summar
     return s;
 }
 
+/* Whether |speed| is an allowed speed of `fronts` fronts: a root of the
+ * speed condition (the chain: one of its own rotating waves) within three
+ * times the measurement's error and the root's, plus BKF_CHECK_REL_TOL_DEFAULT
+ * relative (the simulation's own discretization error, which speed_err does
+ * not hold).  Not found, or the roots not computed: no. */
+static int allowed_speed(const bkf_model_params *model, size_t fronts, double speed,
+                         double speed_err)
+{
+    double v = fabs(speed);
+    int found = 0;
+    bkf_error e;
+    if (model->kind == BKF_MODEL_CHAIN) {
+        bkf_chainwave_options co = bkf_chainwave_options_default();
+        co.stability = 0;
+        bkf_chainwave_table tab;
+        memset(&tab, 0, sizeof tab);
+        if (bkf_chainwave_check(model, fronts, &co, &e) == BKF_OK &&
+            bkf_chainwave_find(model, fronts, fronts, &co, &tab, &e) == BKF_OK)
+            for (size_t i = 0; i < tab.count; i++)
+                found |= fabs(v - tab.waves[i].v) <= 3 * (speed_err + tab.waves[i].v_err) +
+                                                        BKF_CHECK_REL_TOL_DEFAULT * v;
+        bkf_chainwave_table_free(&tab);
+        return found;
+    }
+    bkf_model_params p = *model;
+    p.kind = BKF_MODEL_CONTINUUM;
+    bkf_speeds_options so = bkf_speeds_options_default();
+    so.n_from = so.n_to = fronts;
+    bkf_speeds_table tab;
+    memset(&tab, 0, sizeof tab);
+    if (bkf_speeds_find(&p, &so, &tab, &e) == BKF_OK)
+        for (size_t i = 0; i < tab.count; i++)
+            found |= fabs(v - tab.roots[i].v) <= 3 * (speed_err + tab.roots[i].v_err) +
+                                                    BKF_CHECK_REL_TOL_DEFAULT * v;
+    bkf_speeds_table_free(&tab);
+    return found;
+}
+
+/* The regime as the model's speeds allow: propagating fronts only at an
+ * allowed speed (issue 31: gamma 3, c 0.8, nu 0.4, S 15 measured 1.779 +-
+ * 0.013, five errors from the only v_1 = 1.7112), else still a transient. */
+static void name_regime(const bkf_model_params *model, bkf_measure_summary *ms)
+{
+    if (ms->regime == BKF_REGIME_FRONTS &&
+        !allowed_speed(model, ms->fronts_end, ms->speed, ms->speed_err))
+        ms->regime = BKF_REGIME_TRANSIENT;
+}
+
 /* Opens `path` (so that a bad one fails before any work), NULL for none. */
 static int open_file(const bkf_simulate_spec *sp, const char *path, const char *key,
                      bkf_io_atomic **file, bkf_error *err)
@@ -770,8 +820,10 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
             bkf_error_set(err, BKF_ENUMERIC, "measurements: %s", e.message);
             goto done;
         }
-    } else
+    } else {
         have_summary = 1;
+        name_regime(&r->model, &ms);
+    }
     if (r->outcome) {
         if (canceled) {
             s = bkf_error_set(err, BKF_ECANCELED, "%s", interrupted);

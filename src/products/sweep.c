@@ -71,8 +71,9 @@ const bkf_option bkf_sweep_options[] = {
      .help = "let a run go on until its regime settles: its length doubles\n"
              "(tmax, 2 tmax, 4 tmax, ...; each a run from t = 0) until the\n"
              "regimes of two successive windows [t/2, t] and [t, 2t] agree\n"
-             "(and their front counts, for fronts and pacemakers), or the\n"
-             "next doubling would pass T; column settled says which\n"
+             "(and their front counts, for fronts and pacemakers; two\n"
+             "transients never agree), or the next doubling would pass T;\n"
+             "column settled says which\n"
              "(settled, budget); T >= tmax, in (0, 1e6]"},
     {.name = "fields", .type = BKF_OPT_TEXT, .offset = SPEC(fields), .form = "DIR",
      .flags = BKF_OPT_PATH, .shown_default = "none",
@@ -584,7 +585,7 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
     addf(&t, "# points: %zu\n", p.count);
     if (sp->product == BKF_SWEEP_REGIME)
         addf(&t, "# regime: continuous_slip, global_oscillation, period_doubled_pacemakers, "
-                 "propagating_fronts, irregular (bkfront simulate's, over the last half of the "
+                 "propagating_fronts, irregular, transient (bkfront simulate's, over the last half of the "
                  "run); none when the run failed (status)\n");
     else if (sp->product == BKF_SWEEP_SPEEDS)
         addf(&t, "# speeds: allowed, the n with a root of bkfront speeds; stable, the n with a "
@@ -748,7 +749,9 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
         const bkf_measure_summary *a = &o.summary, *b = &next.summary;
         int counted = b->regime == BKF_REGIME_FRONTS ||
                       b->regime == BKF_REGIME_PACEMAKERS;
-        int same = a->regime == b->regime && (!counted || a->fronts_end == b->fronts_end);
+        /* two transients in a row are not a settled regime */
+        int same = a->regime == b->regime && b->regime != BKF_REGIME_TRANSIENT &&
+                   (!counted || a->fronts_end == b->fronts_end);
         o = next;
         if (same) {
             settled = "settled";

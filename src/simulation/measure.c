@@ -28,6 +28,9 @@ typedef struct {
 typedef struct {
     size_t cnt;
     double msum, vsum, std_max, psi_min, psi_max, slip_max;
+    /* the window's two halves (before and after tmid): whether it settled */
+    double tmid, half_vsum[2], half_fsum[2];
+    size_t half_cnt[2];
     size_t fronts_min, fronts_max, any_minus, any_plus;
     bkf_measure_record first;   /* the window's first record */
     size_t first_index, first_seg;
@@ -80,6 +83,7 @@ const char *bkf_regime_name(bkf_regime r)
     case BKF_REGIME_GLOBAL_OSCILLATION: return "global_oscillation";
     case BKF_REGIME_PACEMAKERS: return "period_doubled_pacemakers";
     case BKF_REGIME_FRONTS: return "propagating_fronts";
+    case BKF_REGIME_TRANSIENT: return "transient";
     default: return "irregular";
     }
 }
@@ -109,6 +113,7 @@ bkf_measure_params bkf_measure_params_default(void)
     p.slip_eps = 1e-3;
     p.uniform_eps = 1e-2;
     p.periodic_tol = 5e-2;
+    p.settled_tol = 0.1;
     p.t_end = NAN;
     return p;
 }
@@ -166,9 +171,12 @@ static int check_params(const bkf_measure_params *p, bkf_error *err)
         return bkf_error_set(err, BKF_EINPUT, "period_ref = %g must be finite and >= 0",
                              p->period_ref);
     if (!(p->slip_eps > 0) || !(p->uniform_eps > 0) || !(p->periodic_tol > 0) ||
-        !isfinite(p->slip_eps + p->uniform_eps + p->periodic_tol))
-        return bkf_error_set(err, BKF_EINPUT, "slip_eps, uniform_eps and periodic_tol must be "
-                                              "finite and > 0");
+        !(p->settled_tol > 0) ||
+        !isfinite(p->slip_eps + p->uniform_eps + p->periodic_tol + p->settled_tol))
+        return bkf_error_set(err, BKF_EINPUT, "slip_eps, uniform_eps, periodic_tol and "
+                                              "settled_tol must be finite and > 0");
+    if (!isfinite(p->frame_speed))
+        return bkf_error_set(err, BKF_EINPUT, "frame_speed must be finite");
     if (!isnan(p->t_end) && !isfinite(p->t_end))
         return bkf_error_set(err, BKF_EINPUT, "t_end must be finite (or NaN: unknown)");
     if (p->reference)
@@ -481,10 +489,11 @@ static double crossing_time(const probe_point *a, const probe_point *b, double L
 }
 
 static void window_add(window_acc *w, const bkf_measure_record *rc, size_t r, size_t seg,
-                       size_t minus, size_t plus, double nu)
+                       size_t minus, size_t plus, double nu, double tmid)
 {
     if (w->cnt == 0) {
         memset(w, 0, sizeof *w);
+        w->tmid = tmid;
         w->first = *rc;
         w->first_index = r;
         w->first_seg = seg;
@@ -499,6 +508,10 @@ static void window_add(window_acc *w, const bkf_measure_record *rc, size_t r, si
     w->msum += rc->mean;
     w->vsum += rc->variance;
     w->cnt++;
+    int h = rc->t >= w->tmid;
+    w->half_vsum[h] += rc->variance;
+    w->half_fsum[h] += (double)rc->fronts;
+    w->half_cnt[h]++;
     w->std_max = fmax(w->std_max, sqrt(rc->variance));
     w->psi_min = fmin(w->psi_min, rc->min);
     w->psi_max = fmax(w->psi_max, rc->max);
@@ -624,7 +637,11 @@ int bkf_measure_add(bkf_measure *m, double t, const double *psi, const double *e
             double cost = 0;
             for (size_t i = 0; i < n; i++) {
                 double u = m->prev[i].velocity;
-                double pred = m->prev[i].x + (isfinite(u) ? u * dt : 0.0);
+                /* on the grid a front moves at its velocity less the
+                 * frame's: in check's frame of v_pred the fronts stand,
+                 * and a sample spacing of 10 predicted a lab-frame shift
+                 * of one front spacing (n = 4: v_meas 0.997, v_pred 0.485) */
+                double pred = m->prev[i].x + (isfinite(u) ? (u - m->p.frame_speed) * dt : 0.0);
                 double e = wrap(m->cur[(i + k) % n].x - pred, S);
                 cost += e * e;
             }
@@ -708,7 +725,8 @@ int bkf_measure_add(bkf_measure *m, double t, const double *psi, const double *e
         /* kept: the last record (tracking continues from it) and, in the
          * window, the current set of tracks (the speed fit) */
         if (in_window) {
-            window_add(&m->win, rc, r, m->segment, nm, n - nm, m->p.model.nu);
+            window_add(&m->win, rc, r, m->segment, nm, n - nm, m->p.model.nu,
+                       0.5 * (m->tw + m->p.t_end));
             m->keep_from = m->seg_start > m->win.first_index ? m->seg_start : m->win.first_index;
         } else
             m->keep_from = r;
@@ -922,7 +940,8 @@ int bkf_measure_summarize(const bkf_measure *m, bkf_measure_summary *s, bkf_erro
         while (first < R - 1 && m->rec[first].t < tw) first++;
         memset(&wa, 0, sizeof wa);
         for (size_t r = first; r < R; r++)
-            window_add(&wa, &m->rec[r], r, m->seg[r], m->nminus[r], m->nplus[r], m->p.model.nu);
+            window_add(&wa, &m->rec[r], r, m->seg[r], m->nminus[r], m->nplus[r], m->p.model.nu,
+                       0.5 * (tw + s->t_end));
     }
     size_t first = w->first_index;
     const bkf_measure_record *rf = &w->first;
@@ -967,6 +986,19 @@ int bkf_measure_summarize(const bkf_measure *m, bkf_measure_summary *s, bkf_erro
     /* regime */
     double range = s->psi_max - s->psi_min;
     int one_segment = w->first_seg == m->segment;
+    /* settled: the window's halves alike in their mean spatial variance and
+     * mean front count (a pattern still growing, decaying or coarsening is
+     * not yet a regime) */
+    int settled = w->half_cnt[0] > 0 && w->half_cnt[1] > 0;
+    if (settled) {
+        double va = w->half_vsum[0] / (double)w->half_cnt[0],
+               vb = w->half_vsum[1] / (double)w->half_cnt[1],
+               fa = w->half_fsum[0] / (double)w->half_cnt[0],
+               fb = w->half_fsum[1] / (double)w->half_cnt[1];
+        double tol = m->p.settled_tol;
+        settled = fabs(va - vb) <= tol * fmax(va, vb) && fabs(fa - fb) <= tol * fmax(fa, fb);
+    }
+    s->settled = settled;
     if (slip_max <= m->p.slip_eps &&
         s->slip_deviation_end <= 1.01 * s->slip_deviation_start + 1e-12)
         s->regime = BKF_REGIME_CONTINUOUS_SLIP;
@@ -974,7 +1006,8 @@ int bkf_measure_summarize(const bkf_measure *m, bkf_measure_summary *s, bkf_erro
         s->regime = BKF_REGIME_GLOBAL_OSCILLATION;
     else if (s->fronts_min == s->fronts_max && s->fronts_min >= 1 && one_segment &&
              isfinite(s->speed) && (s->moving_minus == 0 || s->moving_plus == 0) &&
-             fabs(s->speed) > 10 * s->speed_err && s->speed_spread <= 1e-2 * fabs(s->speed))
+             fabs(s->speed) > 10 * s->speed_err && s->speed_spread <= 1e-2 * fabs(s->speed) &&
+             settled)
         s->regime = BKF_REGIME_FRONTS;
     else {
         int periodic = s->period_multiplicity > 0 && isfinite(s->period);
@@ -983,7 +1016,9 @@ int bkf_measure_summarize(const bkf_measure *m, bkf_measure_summary *s, bkf_erro
         int doubled = m->p.period_ref > 0
                           ? (s->period >= 1.5 * m->p.period_ref && s->period <= 2.5 * m->p.period_ref)
                           : s->period_multiplicity == 2;
-        s->regime = periodic && fronts && doubled ? BKF_REGIME_PACEMAKERS : BKF_REGIME_IRREGULAR;
+        s->regime = periodic && fronts && doubled ? BKF_REGIME_PACEMAKERS
+                    : settled                     ? BKF_REGIME_IRREGULAR
+                                                  : BKF_REGIME_TRANSIENT;
     }
     return BKF_OK;
 }

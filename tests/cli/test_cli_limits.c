@@ -251,6 +251,34 @@ TEST(cli_run_report_to_a_full_stdout_fails)
     rmdir(dir);
 }
 
+/* check's memory does not grow with tmax either (issue 32 item 10: `check
+ * --n 4` took 15.8 MB at tmax 2e3, 42.6 MB at 4e4; about 160 bytes kept
+ * per sample of 0.25).  At most 4096 samples a run now: tmax 1e4 (4e4
+ * samples before, 6 MB and more) peaks within 3 MB of tmax 1e3. */
+static long check_peak_kb(const char *tmax)
+{
+    pid_t pid = bkf_cli_spawn(BKF_CLI_ARGS("check", "--n", "4", "--tmax", tmax, "--no-progress",
+                                           "--out", "/dev/null"),
+                              NULL, NULL, NULL);
+    CHECK(pid > 0);
+    int st;
+    struct rusage ru;
+    CHECK(wait4(pid, &st, 0, &ru) == pid);
+    CHECK_MSG(WIFEXITED(st) && WEXITSTATUS(st) == 0, "tmax %s: child status %d", tmax, st);
+    return ru.ru_maxrss;
+}
+
+TEST(cli_check_memory_does_not_grow_with_tmax)
+{
+    if (ASAN) {
+        bkf_test_note("skipped under AddressSanitizer (its quarantine holds freed memory)");
+        return;
+    }
+    long a = check_peak_kb("1000"), b = check_peak_kb("10000");
+    bkf_test_note("peak resident %ld kB at tmax 1e3, %ld kB at 1e4", a, b);
+    CHECK_MSG(b - a < 3 * 1024, "%ld kB against %ld kB", b, a);
+}
+
 /* The simulator's memory does not grow with the run's length (issue 17):
  * `--tmax 1e5 --N 8 --frames 1` kept a record per sample, 1e6 of them
  * (145 MB resident); with the measurements told where the run ends it

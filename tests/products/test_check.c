@@ -15,6 +15,8 @@
 
 #include "bkfront/catalog.h"
 #include "bkfront/check.h"
+#include "bkfront/cycle.h"
+#include "bkfront/hill.h"
 #include "bkfront/model.h"
 
 #ifndef BKF_CLI_PATH
@@ -44,11 +46,24 @@ TEST(check_judge_each_branch)
               BKF_CHECK_AGREES && st == 1);
     CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &decays, yes, -1e-3, -1e-6, 1e-6, &st) ==
           BKF_CHECK_AGREES);
-    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, unres, NAN, 3e-6, 1e-6, &st) ==
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, yes, -1e-3, 3e-6, 1e-6, &st) ==
               BKF_CHECK_DISAGREES && st == 1);
-    /* kept but nothing measured: not an agreement */
-    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, yes, -1e-3, NAN, 1e-6, &st) ==
+    /* kept is not stable: with the spectrum refused or within its error of
+     * 0 only a decided decay decides (issue 31: gamma 0.810526, c 0.0943248,
+     * nu 0.557499, S 22.1238, n 1 said agrees, Hill's sigma_max +6.8e-3) */
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, unres, NAN, 2e-7, 1e-6, &st) ==
+              BKF_CHECK_UNDECIDED && st == 1);
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, unres, NAN, 3e-6, 1e-6, &st) ==
+          BKF_CHECK_UNDECIDED);
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, unres, 1e-7, 2e-7, 1e-6, &st) ==
+          BKF_CHECK_UNDECIDED);
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &decays, unres, NAN, 2e-7, 1e-6, &st) ==
+          BKF_CHECK_AGREES);
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &decays, unres, NAN, 3e-6, 1e-6, &st) ==
           BKF_CHECK_DISAGREES);
+    /* kept and stable but no speed measured: no disagreement, undecided */
+    CHECK(bkf_check_judge(4, 0, 1, 4, 1e-5, &flat, yes, -1e-3, NAN, 1e-6, &st) ==
+          BKF_CHECK_UNDECIDED);
     /* each way of not keeping count and shape */
     CHECK(bkf_check_judge(4, 1, 1, 4, 1e-5, &flat, unres, NAN, 0, 1e-6, &st) ==
               BKF_CHECK_UNSTABLE && st == 0);
@@ -76,6 +91,7 @@ TEST(check_judge_each_branch)
     CHECK(!bkf_check_conflict(&grows, unres, NAN) && !bkf_check_conflict(&decays, unres, NAN));
     CHECK(strcmp(bkf_check_verdict_name(BKF_CHECK_UNRESOLVED), "unresolved") == 0);
     CHECK(strcmp(bkf_check_verdict_name(BKF_CHECK_CONFLICTS), "conflicts") == 0);
+    CHECK(strcmp(bkf_check_verdict_name(BKF_CHECK_UNDECIDED), "undecided") == 0);
     CHECK(strcmp(bkf_check_growth_name(BKF_CHECK_GROWTH_UNDECIDED), "undecided") == 0);
     CHECK(strcmp(bkf_check_grid_name(BKF_CHECK_GRID_MAPPED), "mapped") == 0);
 }
@@ -241,6 +257,100 @@ typedef struct {
     volatile sig_atomic_t *cancel; /* raised by the progress callback when set */
     int stop_after;                /* the row visitor returns nonzero at this row */
 } counter;
+
+/* ------------------------------------------- issue 31: away from the paper */
+
+/* The rightmost Re sigma of the n = 1 train at (gamma, nu, mu) but the
+ * translation, by Hill's method (an independent route: Fourier in xi, dense
+ * LAPACK), converged between M and 2M modes to `tol`; *err its distance. */
+static double hill_sigma_max(double gamma, double nu, double mu, size_t M, double tol, double *err)
+{
+    bkf_cycle *cy = bkf_cycle_alloc();
+    CHECK(cy);
+    bkf_cycle_options co = bkf_cycle_options_default();
+    co.tol = 1e-12;
+    bkf_error e;
+    CHECK_STATUS(bkf_cycle_solve(cy, mu, nu, &co, &e), BKF_OK);
+    bkf_hill_eigenvalue ev[4];
+    double ee[4];
+    size_t found = 0, unresolved = 0;
+    /* more modes until the leading ones converge (thin fronts need more) */
+    for (; found < 2 && M <= BKF_HILL_MODES_MAX / 2; M *= 2)
+        CHECK_STATUS(bkf_hill_leading(cy, gamma, 0.0, M, tol, 4, ev, ee, &found, &unresolved, &e),
+                     BKF_OK);
+    bkf_cycle_free(cy);
+    CHECK_MSG(found >= 2, "Hill: %zu converged", found);
+    for (size_t i = 0; i < found; i++)
+        if (hypot(ev[i].re, ev[i].im) > 10 * tol) {
+            *err = ee[i];
+            return ev[i].re;
+        }
+    *err = NAN;
+    return NAN;
+}
+
+static double mu_of(double gamma, double c, double v) { return gamma / sqrt(1 - c * c / (v * v)); }
+
+/* Issue 31, defect 1: the spectrum refused (its Radau budget) and a run
+ * that saw no growth said "agrees"; Hill's method gives sigma_max
+ * +6.8e-3.  A refused spectrum and an undecided growth decide nothing:
+ * undecided, with the tmax that would resolve the run's growth. */
+TEST(check_refused_spectrum_is_no_agreement)
+{
+    const double g = 0.810526, c = 0.0943248, nu = 0.557499, S = 22.1238;
+    bkf_check_row r = run_one(g, c, nu, S, 1, 125);
+    double err, sigma = hill_sigma_max(g, nu, mu_of(g, c, r.v_pred), 32, 1e-8, &err);
+    bkf_test_note("Hill: sigma_max %.6g +- %.2g; check: %s, decide_tmax %g", sigma, err,
+                  bkf_check_verdict_name(r.verdict), r.decide_tmax);
+    CHECK_MSG(sigma - err > 0, "Hill %g +- %g", sigma, err);
+    CHECK_MSG(r.verdict != BKF_CHECK_AGREES && r.verdict != BKF_CHECK_DISAGREES, "%s",
+              bkf_check_verdict_name(r.verdict));
+    if (r.verdict == BKF_CHECK_UNDECIDED)
+        CHECK_MSG(r.decide_tmax > 125 || isnan(r.decide_tmax), "decide_tmax %g", r.decide_tmax);
+    /* a spectrum that answers must answer as Hill does */
+    if (r.spectral != BKF_TRAINSPEC_UNRESOLVED)
+        CHECK(r.spectral == BKF_TRAINSPEC_UNSTABLE && fabs(r.sigma_max - sigma) <= 1e-4);
+}
+
+/* Issue 31, defect 2: stable fronts with steep jumps (gamma 4.3 and 6,
+ * nu near -1) amplify the noise of 1e-6 to a deviation of 2e-4 within
+ * t ~ 6 before it decays; the coherent part ended there, the speed was
+ * nan and the verdict "disagrees" (exit 1).  The speed is now fitted over
+ * the later half of the run and meets the speeds solver's root. */
+TEST(check_steep_stable_fronts_measure_their_speed)
+{
+    const double sets[][5] = {{4.30927, 0.174536, -0.972509, 14.4845, 1},
+                              {6, 0.1, -0.99, 40, 2}};
+    for (size_t i = 0; i < 2; i++) {
+        bkf_check_row r = run_one(sets[i][0], sets[i][1], sets[i][2], sets[i][3],
+                                  (size_t)sets[i][4], 125);
+        bkf_test_note("gamma %g, n %zu: v_meas %.12g +- %.2g, v_pred %.12g, fit [%g, %g], %s",
+                      sets[i][0], r.n, r.v_meas, r.v_meas_err, r.v_pred, r.fit_from, r.fit_to,
+                      bkf_check_verdict_name(r.verdict));
+        CHECK_MSG(isfinite(r.v_meas) && fabs(r.v_meas - r.v_pred) <= 1e-6 * r.v_pred,
+                  "v_meas %g, v_pred %g", r.v_meas, r.v_pred);
+        CHECK(r.fit_to == 125 && r.fit_from == 62.5);
+        CHECK(r.stable == 1 && r.verdict != BKF_CHECK_DISAGREES);
+    }
+}
+
+/* Issue 31, defect 4: a spectrum that found nothing right of its window's
+ * edge but the translation printed the edge as sigma_max with error 0
+ * (-0.2031695 +- 0 here; Hill's method: -4.08e-4).  A sigma_max is now an
+ * eigenvalue, within its error of Hill's, or nan. */
+TEST(check_sigma_max_is_an_eigenvalue_or_nan)
+{
+    const double g = 4.06339, c = 0.276186, nu = 0.959575, S = 27.1676;
+    bkf_check_row r = run_one(g, c, nu, S, 1, 125);
+    double err, sigma = hill_sigma_max(g, nu, mu_of(g, c, r.v_pred), 64, 1e-7, &err);
+    bkf_test_note("Hill: sigma_max %.6g +- %.2g; check: %.6g +- %.2g", sigma, err, r.sigma_max,
+                  r.sigma_max_err);
+    CHECK(isfinite(sigma) && sigma < 0);
+    CHECK_MSG(isnan(r.sigma_max) ||
+                  (r.sigma_max_err > 0 && fabs(r.sigma_max - sigma) <= 10 * r.sigma_max_err + err),
+              "sigma_max %g +- %g, Hill %g", r.sigma_max, r.sigma_max_err, sigma);
+    CHECK(isnan(r.sigma_max) == isnan(r.sigma_max_err));
+}
 
 static int count_begin(const bkf_check_info *info, void *data)
 {
@@ -524,7 +634,7 @@ TEST(check_catalog_writes_the_cli_table)
     char *lib_rows = data_lines(buf, &nl), *cli_rows = data_lines(cli, &nc);
     CHECK_MSG(nl == 2 && nc == 2, "%zu lines from the catalogue, %zu from the CLI", nl, nc);
     CHECK_MSG(strcmp(lib_rows, cli_rows) == 0, "catalogue:\n%s\nCLI:\n%s", lib_rows, cli_rows);
-    CHECK(strstr(lib_rows, "\tagrees\n"));
+    CHECK(strstr(lib_rows, "\tagrees\tnan\n"));
     free(lib_rows);
     free(cli_rows);
     free(cli);
@@ -623,9 +733,10 @@ TEST(check_write_disagreement_keeps_the_table)
               err.message);
     size_t lines;
     char *rows = data_lines(buf, &lines);
-    CHECK(lines == 2 && strstr(rows, "\tdisagrees\n"));
+    CHECK(lines == 2 && strstr(rows, "\tdisagrees\tnan\n"));
     CHECK_MSG(strstr(buf, "# summary: 1 kept by the run (n = 4), 0 agree, 1 disagree, 0 conflict, "
-                          "0 unresolved; spectrum stable n = 4, unstable n = none\n"),
+                          "0 undecided, 0 unresolved; spectrum stable n = 4, unstable n = "
+                          "none\n"),
               "%s", buf);
     free(rows);
     free(buf);

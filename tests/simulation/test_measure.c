@@ -226,6 +226,47 @@ TEST(measure_regimes_of_simple_fields)
     bkf_measure_free(m);
 }
 
+/* A window that has not settled is no regime yet (issue 31, defect 7: a
+ * run still in its transient was called irregular).  The same random
+ * pattern as above, once with a constant amplitude (settled: irregular)
+ * and once with one growing from 1 to 3 over the run: the window's halves
+ * then differ in mean spatial variance by a factor ~2.5, far beyond
+ * settled_tol, and the classification says transient. */
+TEST(measure_unsettled_window_is_transient)
+{
+    enum { N = 32 };
+    double psi[N], eta[N];
+    bkf_error e;
+    bkf_measure_summary s;
+    for (int grow = 0; grow < 2; grow++) {
+        bkf_measure *m = make(N, 20, 0, NAN);
+        unsigned r = 12345;
+        double vh[2] = {0, 0};
+        for (int k = 0; k < 200; k++) {
+            double amp = grow ? 1 + 2 * k / 199.0 : 1;
+            double mean = 0, var = 0;
+            for (int i = 0; i < N; i++) {
+                r = r * 1103515245u + 12345u;
+                psi[i] = ((double)(r >> 8) / 16777216.0 - 0.5) * 4 * amp;
+                eta[i] = eta_for(psi[i], 1, 2);
+                mean += psi[i] / N;
+            }
+            for (int i = 0; i < N; i++) var += (psi[i] - mean) * (psi[i] - mean) / N;
+            if (k >= 100) vh[k >= 150] += var / 50;
+            CHECK_STATUS(bkf_measure_add(m, 0.1 * k, psi, eta, &e), BKF_OK);
+        }
+        CHECK_STATUS(bkf_measure_summarize(m, &s, &e), BKF_OK);
+        /* the halves' variances computed here, independently of measure.c */
+        int unsettled = fabs(vh[0] - vh[1]) > 0.1 * fmax(vh[0], vh[1]);
+        CHECK_MSG(unsettled == grow, "halves %g, %g", vh[0], vh[1]);
+        CHECK_MSG(s.regime == (grow ? BKF_REGIME_TRANSIENT : BKF_REGIME_IRREGULAR), "%s",
+                  bkf_regime_name(s.regime));
+        CHECK(s.settled == !grow);
+        bkf_measure_free(m);
+    }
+    CHECK(strcmp(bkf_regime_name(BKF_REGIME_TRANSIENT), "transient") == 0);
+}
+
 TEST(measure_rejects_bad_input)
 {
     bkf_error e;
