@@ -76,6 +76,7 @@ static const struct {
     const char *name;
     double secs;
 } known_slow[] = {
+    {"audit_fixed_sample", 15.0},
     {"extremes_floquet_matrix_gamma_100", 39.8},
     {"extremes_floquet_matrix_gamma_to_30", 36.4},
     {"extremes_floquet_matrix_gamma_100_near_hopf", 28.3},
