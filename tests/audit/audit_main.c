@@ -79,10 +79,12 @@ int main(int argc, char **argv)
         if (pids[w] == 0) {
             for (size_t i = w; i < total; i += jobs) {
                 double ts = now();
+                clock_t cs = clock();
                 audit_rows rows = {0};
                 audit_run_set(ngiven ? i : from + i, &sets[i], &opt, &rows);
                 for (size_t k = 0; k < rows.count; k++) audit_row_write(parts[w], &rows.rows[k]);
-                fprintf(parts[w], "#time\t%zu\t%.3f\n", ngiven ? i : from + i, now() - ts);
+                fprintf(parts[w], "#time\t%zu\t%.3f\t%.3f\n", ngiven ? i : from + i, now() - ts,
+                        (double)(clock() - cs) / CLOCKS_PER_SEC);
                 fflush(parts[w]);
                 audit_rows_free(&rows);
             }
@@ -98,7 +100,7 @@ int main(int argc, char **argv)
     double wall = now() - t0;
 
     audit_rows all = {0};
-    double set_time = 0.0, slowest = 0.0;
+    double set_time = 0.0, set_cpu = 0.0, slowest = 0.0;
     size_t slowest_set = 0;
     FILE *rows_out = rows_path ? fopen(rows_path, "w") : NULL;
     if (rows_path && !rows_out) return perror(rows_path), 1;
@@ -108,9 +110,10 @@ int main(int argc, char **argv)
         while (fgets(line, sizeof line, parts[w])) {
             if (!strncmp(line, "#time\t", 6)) {
                 size_t s;
-                double t;
-                if (sscanf(line + 6, "%zu\t%lf", &s, &t) == 2) {
+                double t, cpu = 0.0;
+                if (sscanf(line + 6, "%zu\t%lf\t%lf", &s, &t, &cpu) >= 2) {
                     set_time += t;
+                    set_cpu += cpu;
                     if (t > slowest) slowest = t, slowest_set = s;
                 }
                 continue;
@@ -137,9 +140,10 @@ int main(int argc, char **argv)
     size_t defects = audit_report(stdout, &all, 20);
     size_t refusals = 0;
     for (size_t i = 0; i < all.count; i++) refusals += all.rows[i].status == AUDIT_REFUSAL;
-    printf("\naudit: %zu sets, %zu rows, %zu defects, %zu refusals; %.1f s (%.1f s a set, slowest set %zu %.1f s)%s\n",
-           total, all.count, defects, refusals, wall, total ? set_time / total : 0.0, slowest_set, slowest,
-           failed ? "; a worker failed" : "");
+    printf("\naudit: %zu sets, %zu rows, %zu defects, %zu refusals; %.1f s (a set: %.1f s, %.1f s of processor; "
+           "slowest set %zu %.1f s)%s\n",
+           total, all.count, defects, refusals, wall, total ? set_time / total : 0.0, total ? set_cpu / total : 0.0,
+           slowest_set, slowest, failed ? "; a worker failed" : "");
     audit_rows_free(&all);
     free(sets);
     return defects || failed ? 1 : 0;
