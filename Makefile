@@ -6,7 +6,8 @@
 
 DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
                 libinih-dev libsundials-dev liblapacke-dev gnuplot-nox \
-                python3-cffi python3-numpy python3-pytest libhdf5-dev python3-h5py
+                python3-cffi python3-numpy python3-pytest libhdf5-dev python3-h5py \
+                python3-matplotlib
 # Only for `make valgrind` and `make fuzz` (libFuzzer ships with clang's
 # runtime), so that `make test` needs neither.
 VALGRIND_PACKAGES := valgrind

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <signal.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -78,7 +79,11 @@ static pid_t spawn_fds(const char *const *args, const bkf_cli_options *o, int in
             name[len] = '\0';
             if (setenv(name, eq + 1, 1) != 0) _exit(126);
         }
-    const int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE, SIGALRM};
+    if (o && o->file_limit) {
+        struct rlimit lim = {o->file_limit, o->file_limit};
+        if (setrlimit(RLIMIT_FSIZE, &lim) != 0) _exit(126);
+    }
+    const int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE, SIGALRM, SIGXFSZ};
     for (size_t i = 0; i < sizeof sigs / sizeof sigs[0]; i++) signal(sigs[i], SIG_DFL);
     sigset_t none;
     sigemptyset(&none);

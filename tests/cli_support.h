@@ -22,6 +22,8 @@ typedef struct {
     const char *const *env; /* "NAME=VALUE" entries to set, NULL-terminated */
     unsigned timeout_s;     /* ended by SIGALRM after this many seconds (0:
                                by the test's own time limit only) */
+    unsigned long file_limit; /* the largest file it may write, in bytes
+                                 (RLIMIT_FSIZE, ulimit -f); 0: no limit */
 } bkf_cli_options;
 
 /* bkfront ARGS... (args NULL-terminated, without the program name); o may be

@@ -23,7 +23,7 @@
  * on uniform grids with a tail above BKF_CHECK_RESOLUTION_DEFAULT and on the
  * adapted grid also 10 times the deviation at t = min(10, tmax/4), where a
  * wave the grid does not fully resolve has settled on a plateau of its own).
- * Beside the run, the spectrum of the same train (bkf_stability_root): a
+ * Beside the run, the spectrum of the same train (bkf_trainspec_root): a
  * decided growth that contradicts it is a conflict (bkf_check_conflict).
  * The verdict is bkf_check_judge's.
  *
@@ -247,7 +247,7 @@ typedef struct {
      * not their modulus).  growth is the fit with the largest rate, its
      * verdict grows when any fit grows, decays when every fit decays. */
     bkf_check_growth growth;
-    /* The spectrum of the same train (bkf_stability_root, tol 1e-6, the
+    /* The spectrum of the same train (bkf_trainspec_root, tol 1e-6, the
      * rightmost sigma per Bloch number):
      * UNRESOLVED also when it was refused (a warning says why). */
     bkf_trainspec_verdict spectral;

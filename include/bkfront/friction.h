@@ -20,9 +20,13 @@ extern "C" {
 #endif
 
 #define BKF_FRICTION_POINTS_MAX 1000000u
+/* |v| at most: phi(v - 1) ~ v^3/3 stays finite (DBL_MAX^(1/3) ~ 5.6e102),
+ * and so does to - from. */
+#define BKF_FRICTION_V_MAX 1e100
 
 typedef struct {
-    double from, to;   /* the velocity range, from < to; default -1, 4 */
+    double from, to;   /* the velocity range, from < to, each in [-1e100, 1e100];
+                          default -1, 4 */
     size_t points;     /* evenly spaced, both ends included; default 601 */
 } bkf_friction_spec;
 

@@ -33,7 +33,7 @@ typedef struct {
                                BKF_SPEEDS_MAX_ROWS values of n */
     double tol;             /* relative on v; default 1e-10 */
     int method;             /* index in auto, asymptotic, leading, shooting */
-    int stability;          /* add each root's spectral verdict (bkf_stability_root; c > 0) */
+    int stability;          /* add each root's spectral verdict (bkf_trainspec_root; c > 0) */
     double stability_tol;   /* its absolute tolerance on sigma, [1e-10, 1e-2]; 0 (default):
                                trainspec's default, 1e-6; only with stability */
     int model;              /* 0 (default): the continuum; 1: the chain of N blocks, its

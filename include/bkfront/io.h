@@ -9,8 +9,9 @@
  *         they read back bit for bit; NaN is "nan", infinities "inf"/"-inf".
  *         In text cells a backslash, tab, newline and carriage return are
  *         written as \\, \t, \n, \r so that a row stays one line.
- *   JSON  one object {"comments": [...], "columns": [...], "rows": [{...}]},
- *         each row an object keyed by column name; numbers "%.17g",
+ *   JSON  one object {"comments": [...], "columns": [...], "kinds": [...],
+ *         "rows": [{...}]}, "kinds" naming each column's kind ("number" or
+ *         "text"), each row an object keyed by column name; numbers "%.17g",
  *         non-finite numbers and NULL text are null; strings are escaped and
  *         invalid UTF-8 is replaced by U+FFFD, so the output is always valid
  *         JSON.
@@ -93,19 +94,24 @@ size_t bkf_io_table_rows(const bkf_io_table *table);
 /* Atomic replacement of the file at `path`. */
 typedef struct bkf_io_atomic bkf_io_atomic;
 
-/* Creates the temporary file (in the target's directory, following a
- * symbolic link to its target, with the mode of an existing target or else
- * 0666 less the umask), named DIR/.BASE.tmp.PID.TAG for the target DIR/BASE
- * (PID the writing process, TAG up to 8 hex digits), held under an
- * exclusive flock() until it is renamed or removed.  A process killed
- * outright (SIGKILL) leaves its temporary; the next open for the same target
- * removes every such temporary whose PID does not exist here (or is a
- * zombie: exited, not yet reaped) and that no one holds locked (a live writer in another PID namespace keeps its lock,
- * and its temporary).  A chain of symbolic links is followed to its end
- * (the final file is replaced, never a link of the chain; a loop is
- * BKF_EINPUT).  BKF_EINPUT when the target cannot be written there:
- * missing directory, no permission, the target is a directory or another
- * non-regular file such as a device. */
+/* Creates the temporary file (in the target's directory, with the mode of
+ * an existing target or else 0666 less the umask), named
+ * DIR/.BASE.tmp.PID.TAG for the target DIR/BASE (PID the writing process,
+ * TAG up to 8 hex digits), held under an exclusive flock() until it is
+ * renamed or removed.  A process killed outright (SIGKILL) leaves its
+ * temporary; the next open for the same target removes every such
+ * temporary whose PID does not exist here (or is a zombie: exited, not yet
+ * reaped) and that no one holds locked (a live writer in another PID
+ * namespace keeps its lock, and its temporary).
+ *
+ * BKF_EINPUT when the target cannot be written there: missing directory,
+ * no permission, the target is a directory or another non-regular file
+ * such as a device; the target is a symbolic link (never written through,
+ * whether it points to a file, a folder or nothing: a link planted where
+ * an output goes would have the file it points to replaced); another
+ * atomic file of this process is open on the same file (the same folder
+ * and name however spelled, or a hard link of it: two outputs given one
+ * file); another process holds the target's lock (bkf_io_lock_take). */
 bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err);
 
 FILE *bkf_io_atomic_stream(bkf_io_atomic *file);
@@ -121,6 +127,20 @@ int bkf_io_atomic_commit(bkf_io_atomic *file, bkf_error *err);
 
 /* Closes and removes the temporary file and frees `file` (NULL is a no-op). */
 void bkf_io_atomic_abort(bkf_io_atomic *file);
+
+/* An exclusive claim on the file at `path` for a writer that keeps it for a
+ * long time and in several writes (a sweep's table: rows appended as points
+ * finish, then sorted): an open file description lock on DIR/.BASE.lock,
+ * which holds the holder's PID and is removed on release.  The kernel drops
+ * the lock when the holder dies, however it dies.  While it is held, a
+ * second bkf_io_lock_take of the same file, here or in another process, and
+ * bkf_io_atomic_open of the file in another process are BKF_EINPUT, named
+ * "being written by another run (process PID)".  NULL with err filled. */
+typedef struct bkf_io_lock bkf_io_lock;
+bkf_io_lock *bkf_io_lock_take(const char *path, bkf_error *err);
+
+/* Removes the lock file and drops the lock (NULL is a no-op). */
+void bkf_io_lock_release(bkf_io_lock *lock);
 
 /* The words as one line a POSIX shell reads back as those words: plain
  * words as they are, others in single quotes, control characters shown as

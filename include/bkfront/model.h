@@ -46,9 +46,16 @@ int bkf_model_check_nu_active(double nu, bkf_error *err);   /* |nu| < 1 */
 int bkf_model_check_positive(const char *name, double value, bkf_error *err);
 int bkf_model_check_nonnegative(const char *name, double value, bkf_error *err);
 int bkf_model_check_tol(double tol, bkf_error *err);        /* [1e-14, 1e-1] */
+int bkf_model_check_c(double c, bkf_error *err);            /* [0, BKF_MODEL_C_MAX] */
 
 #define BKF_TOL_MIN 1e-14
 #define BKF_TOL_MAX 1e-1
+
+/* The largest sound speed a product takes: beyond it k(nu) c gamma, c^2 q^2
+ * and c/v leave double's range or its precision (at c = 1e308 a Floquet
+ * threshold's q_c came out subnormal, 8.7e-309, with digits lost), and no
+ * physics of the model lies there (c of order 1). */
+#define BKF_MODEL_C_MAX 1e6
 
 #ifdef __cplusplus
 }

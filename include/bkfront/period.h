@@ -9,6 +9,7 @@
 #ifndef BKFRONT_PERIOD_H
 #define BKFRONT_PERIOD_H
 
+#include <signal.h>
 #include <stddef.h>
 #include <stdio.h>
 #include "bkfront/io.h"
@@ -27,6 +28,9 @@ typedef struct {
                            of that list, the other a single value */
     int stepper;        /* index in auto, explicit, implicit, extrapolation */
     int method;         /* index in auto, asymptotic, leading, shooting */
+    /* When non-NULL and *cancel becomes nonzero, write stops before the next
+     * point with BKF_ECANCELED (the rows written so far stay in `out`). */
+    const volatile sig_atomic_t *cancel;
 } bkf_period_spec;
 
 bkf_period_spec bkf_period_spec_default(void);

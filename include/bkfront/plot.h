@@ -5,7 +5,7 @@
  * format, in one gnuplot process.  Every script receives `fmt` ("png",
  * "pdf" or "svg") and `out` (the file to write) besides the job's own
  * variables.  Images are written to a temporary name beside the target and
- * renamed only when gnuplot exits 0 and the file is not empty, so a failed
+ * renamed only when gnuplot exits 0 and each file is a whole image, so a failed
  * figure never leaves a half-written image behind.
  *
  * gnuplot is run by fork/exec with standard input and output on /dev/null
@@ -15,6 +15,7 @@
 #ifndef BKFRONT_PLOT_H
 #define BKFRONT_PLOT_H
 
+#include <signal.h>
 #include <stddef.h>
 #include <stdio.h>
 #include "bkfront/io.h"
@@ -23,6 +24,10 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* The largest width and height of a figure, in pixels (a PNG of 30000 x
+ * 30000 takes gnuplot 2.5 GB; 8000 x 8000 about 260 MB). */
+#define BKF_PLOT_PIXELS_MAX 8000
 
 typedef enum { BKF_PLOT_PNG = 0, BKF_PLOT_PDF = 1, BKF_PLOT_SVG = 2 } bkf_plot_format;
 #define BKF_PLOT_NFORMATS 3
@@ -51,6 +56,13 @@ int bkf_plot_add_output(bkf_plot_job *job, bkf_plot_format format, const char *p
 typedef struct {
     const char *gnuplot;   /* program, looked up in PATH; NULL: "gnuplot" */
     double timeout;        /* seconds before gnuplot is killed; <= 0: 60 */
+    /* Raised (a signal handler's flag): gnuplot is killed at once and
+     * nothing is written (BKF_ECANCELED).  NULL: never. */
+    const volatile sig_atomic_t *cancel;
+    /* Told each image's temporary while it exists (armed 1) and when it is
+     * gone (armed 0), so that a signal handler may remove it.  NULL: none. */
+    void (*temp_file)(const char *path, int armed, void *data);
+    void *data;
 } bkf_plot_options;
 
 bkf_plot_options bkf_plot_options_default(void);
@@ -61,10 +73,15 @@ typedef struct {
     char warning[BKF_ERROR_LEN];  /* gnuplot's first warning line, or empty */
 } bkf_plot_report;
 
-/* Run the job.  BKF_OK when gnuplot exited 0 and wrote every output (each
- * non-empty); BKF_ENUMERIC with gnuplot's error line otherwise (also for a
- * timeout); BKF_EINPUT when gnuplot cannot be started or the job has no
- * output.  report may be NULL. */
+/* Run the job.  BKF_OK when gnuplot exited 0 and wrote every output whole
+ * (a PNG ending in its IEND chunk, a PDF in %%EOF, an SVG in </svg>);
+ * BKF_EIO when it exited 0 but an image is truncated (gnuplot does not
+ * report a failed write: a full disk, a file size limit); BKF_ENUMERIC
+ * with gnuplot's error line otherwise (also for a timeout or a signal);
+ * BKF_ECANCELED when options->cancel was raised; BKF_EINPUT when gnuplot
+ * cannot be started or the job has no output.  No image is replaced unless
+ * all are good.  gnuplot dies with the calling process.  report may be
+ * NULL. */
 int bkf_plot_run(const bkf_plot_job *job, const bkf_plot_options *options,
                  bkf_plot_report *report, bkf_error *err);
 

@@ -3,8 +3,9 @@
  * then its spectrum on the ring (bkf_trainspec_ring: one row per eigenvalue)
  * or on the infinite line (bkf_trainspec_line: the rightmost sigma against
  * the Bloch number).  The numbers are trainspec's; this module checks the
- * spec, finds the root and tabulates.  `bkfront speeds --stability` takes
- * its verdict columns from here too (bkf_stability_root).
+ * spec, finds the root and tabulates.  `bkfront speeds --stability`, the
+ * branch, `check` and the stability map (stabmap.h) call the same
+ * bkf_trainspec_root.
  *
  * bkf_stability_options is the table of its keys (flags and scene keys,
  * options.h): fill a spec from its _default, apply values through the
@@ -64,14 +65,6 @@ extern const size_t bkf_stability_noptions;
  * Whether n has a root is known only once the roots are found:
  * bkf_stability_write refuses it then (BKF_EINPUT naming n and n_max). */
 int bkf_stability_check(const bkf_stability_spec *spec, const char *prefix, bkf_error *err);
-
-/* The ring spectrum of one root of the speed condition (bkf_trainspec_ring
- * on the train n = root->n, v = root->v): *result as there. */
-int bkf_stability_root(const bkf_model_params *params, const bkf_speeds_root *root, double tol,
-                       size_t per_kappa, bkf_trainspec_result *result, bkf_error *err);
-
-/* "real" or "complex": the kind of the rightmost eigenvalue. */
-const char *bkf_stability_kind_name(const bkf_trainspec_result *result);
 
 /* The table to `out`.  Ring: one row per eigenvalue (j, kappa, re, im, err,
  * translation), comments with the verdict, sigma_max and its kappa and

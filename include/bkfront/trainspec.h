@@ -36,6 +36,7 @@
 #include <signal.h>
 #include <stddef.h>
 #include "bkfront/model.h"
+#include "bkfront/speeds.h"
 #include "bkfront/status.h"
 
 #ifdef __cplusplus
@@ -98,7 +99,9 @@ typedef struct {
     size_t mesh_steps;               /* Radau steps per period (finer mesh) */
     size_t evaluations;              /* monodromies computed */
     double work;                     /* Radau steps taken in all (see max_work) */
-    size_t curve_points;             /* heights y sampled */
+    size_t curve_points;             /* heights y sampled (0: Hill's band alone, see below) */
+    size_t hill_modes;               /* Hill's method's Fourier modes -M..M whose eigenvalues were
+                                        candidates too (0: not used, mu > 6 or too many classes) */
 } bkf_trainspec_result;
 
 /* Validation alone: BKF_EINPUT with a one-line message naming the parameter. */
@@ -113,6 +116,17 @@ int bkf_trainspec_ring(const bkf_model_params *params, const bkf_trainspec_train
                        const bkf_trainspec_options *options, bkf_trainspec_result *result,
                        bkf_error *err);
 void bkf_trainspec_result_free(bkf_trainspec_result *result);
+
+/* The one spectrum of a root of the speed condition that every product
+ * takes (`bkfront stability`, `speeds --stability`, `branch --stability`,
+ * `check`, the stability map): bkf_trainspec_ring on the train
+ * n = root->n, v = root->v at tol and per_kappa, the other options their
+ * defaults.  Its sigma_max does not depend on per_kappa. */
+int bkf_trainspec_root(const bkf_model_params *params, const bkf_speeds_root *root, double tol,
+                       size_t per_kappa, bkf_trainspec_result *result, bkf_error *err);
+
+/* "real" or "complex": the kind of the rightmost eigenvalue. */
+const char *bkf_trainspec_kind_name(const bkf_trainspec_result *result);
 
 /* The continuous spectrum on the infinite line: for each of `count` Bloch
  * numbers kappa_i = (2 pi / L) i / count, the rightmost sigma (re, im, err

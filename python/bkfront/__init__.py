@@ -14,12 +14,14 @@ calls run without the GIL, and Ctrl-C raises the library's cancel flag
 (KeyboardInterrupt once the library has stopped).  See docs/python.md.
 """
 
+import _thread
 import json
 import math
 import os
+import re
 import shutil
 import tempfile
-import threading
+import time
 import warnings
 
 import numpy as np
@@ -138,17 +140,24 @@ def period(mu, nu, tol=1e-10, method="auto", stepper="auto", errors=False):
 
 class Table(dict):
     """A product's table: a dict of numpy arrays, one per column, under the
-    CLI's column names and in its order.  ``comments`` holds the comment
-    lines (inputs, work, provenance), ``results`` the key results of its JSON
-    form (dict), ``columns`` the column names."""
+    CLI's column names and in its order.  A column's dtype is its declared
+    kind's, never its values': float64 for a number column (NaN where the
+    library wrote null), str for a text column, empty tables included.
+    ``comments`` holds the comment lines (inputs, work, provenance),
+    ``results`` the key results of its JSON form (dict), ``columns`` the
+    column names, ``kinds`` their kinds ("number" or "text")."""
 
-    def __init__(self, columns, rows, comments=(), results=None):
+    def __init__(self, columns, kinds, rows, comments=(), results=None):
         super().__init__()
         self.columns = list(columns)
+        self.kinds = list(kinds)
+        if len(self.kinds) != len(self.columns):
+            raise Error("the library's table declares %d kinds for %d columns"
+                        % (len(self.kinds), len(self.columns)), _lib.ENUMERIC)
         self.comments = list(comments)
         self.results = dict(results or {})
-        for name in self.columns:
-            self[name] = _column([row.get(name) for row in rows])
+        for name, kind in zip(self.columns, self.kinds):
+            self[name] = _column([row.get(name) for row in rows], kind)
 
     def __len__(self):
         return len(self[self.columns[0]]) if self.columns else 0
@@ -164,12 +173,13 @@ class Table(dict):
         return "\n".join(lines)
 
 
-def _column(values):
-    if all(v is None or isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
-        if values and all(isinstance(v, int) for v in values):
-            return np.array(values, dtype=np.int64)
-        return np.array([math.nan if v is None else v for v in values], dtype=float)
-    return np.array(["" if v is None else str(v) for v in values])
+def _column(values, kind):
+    if kind == "number":
+        return np.array([math.nan if v is None else float(v) for v in values], dtype=np.float64)
+    if kind == "text":
+        return np.array(["" if v is None else str(v) for v in values], dtype=np.str_)
+    raise Error("the library's table declares the unknown column kind %r" % (kind,),
+                _lib.ENUMERIC)
 
 
 def _cell(value):
@@ -185,7 +195,10 @@ def products():
 
 
 def _entry(name):
-    entry = lib.bkf_catalog_find(name.encode())
+    if not isinstance(name, str):
+        raise InputError("product: the name must be a str, one of %s (not %r)"
+                         % (", ".join(products()), name), _lib.EINPUT)
+    entry = lib.bkf_catalog_find(_c_text("product", name))
     if entry == ffi.NULL:
         raise InputError("no product %r (one of %s)" % (name, ", ".join(products())),
                          _lib.EINPUT)
@@ -208,7 +221,15 @@ def options(name):
     return keys
 
 
-def _text(value):
+def _c_text(key, text):
+    """text as the bytes of a C string; a NUL would end it early in C, so
+    that '20\\x00junk' would read as 20: refused."""
+    if "\0" in text:
+        raise InputError("%s: %r holds a NUL character" % (key, text), _lib.EINPUT)
+    return text.encode()
+
+
+def _text(key, value):
     """A keyword's value as the CLI's text: lists joined by commas, numbers
     in their shortest exact form."""
     if isinstance(value, str):
@@ -220,31 +241,81 @@ def _text(value):
     if isinstance(value, (float, np.floating)):
         return repr(float(value))
     if np.ndim(value) == 1:
-        return ",".join(_text(v) for v in np.asarray(value).tolist())
-    raise InputError("cannot pass %r as a value" % (value,), _lib.EINPUT)
+        return ",".join(_text(key, v) for v in np.asarray(value).tolist())
+    raise InputError("%s: cannot pass %r as a value" % (_keyword(key), value), _lib.EINPUT)
 
 
-def _cancellable(call):
-    """Runs call(cancel) in a thread (cffi releases the GIL for the C call)
-    so that Ctrl-C reaches Python at once: it raises the library's cancel
-    flag, waits for the library to stop and re-raises KeyboardInterrupt."""
+def _keyword(key):
+    """A key's name as a Python keyword: "stability-tol" is stability_tol,
+    "from" (a Python word) from_."""
+    key = key.replace("-", "_")
+    return key + "_" if key == "from" else key
+
+
+# The prefix the library writes before every key it names in a message
+# (the CLI passes "--"); replaced by nothing, the key by its keyword.
+_MARK = "\x01"
+
+
+def _python_message(message):
+    return re.sub(_MARK + r"([A-Za-z][A-Za-z0-9_-]*)", lambda m: _keyword(m.group(1)),
+                  message).replace(_MARK, "")
+
+
+def _raise_keyed(status, err):
+    """_raise with the keys the message names spelled as keywords."""
+    text = _python_message(ffi.string(err.message).decode(errors="replace"))
+    err.message = text.encode()[:ffi.sizeof(err.message) - 1]
+    _raise(status, err)
+
+
+def _run(name, call):
+    """Runs call(cancel) in a worker thread (cffi releases the GIL for the
+    C call) so that Ctrl-C reaches Python at once.  Ctrl-C raises the
+    library's cancel flag, then WAITS for the library to return (a further
+    Ctrl-C too), then re-raises KeyboardInterrupt: nothing the call uses is
+    freed under it.  Thread.join is not used for the wait: in Python 3.11 an
+    interrupted timed join marks a live thread stopped (bpo-45274), and a
+    later join returns at once.  Whatever the call uses it holds itself
+    (cdata kept alive by its closure), so even a KeyboardInterrupt that lands
+    before the wait starts frees nothing under the library."""
     cancel = ffi.new("int *")
     box = {}
+    finished = _thread.allocate_lock()
+    finished.acquire()
 
     def worker():
         try:
             box["value"] = call(cancel)
         except BaseException as exc:  # handed to the caller's thread
             box["error"] = exc
+        finally:
+            box["done"] = True
+            finished.release()
 
-    thread = threading.Thread(target=worker, name="bkfront", daemon=True)
-    thread.start()
+    def wait():
+        while not box.get("done"):
+            finished.acquire(timeout=0.1)
+
+    started = False
     try:
-        while thread.is_alive():
-            thread.join(0.05)
+        _thread.start_new_thread(worker, ())
+        started = True
+        wait()
     except KeyboardInterrupt:
         cancel[0] = 1
-        thread.join()
+        since = time.monotonic()
+        told = False
+        while (started or box) and not box.get("done"):
+            try:
+                finished.acquire(timeout=0.1)
+                if not told and not box.get("done") and time.monotonic() - since > 1:
+                    told = True  # a silent wait of a minute looks like a hang
+                    warnings.warn("bkfront %s: Ctrl-C: waiting for the library to stop (a "
+                                  "product without a cancel point runs to its end, "
+                                  "docs/python.md)" % name, RuntimeWarning, stacklevel=3)
+            except KeyboardInterrupt:
+                pass  # still stopping: the library has not returned yet
         raise
     if "error" in box:
         raise box["error"]
@@ -257,56 +328,67 @@ def product(name, **keys):
     its default; ``True`` sets a switch."""
     entry = _entry(name)
     err = ffi.new("bkf_error *")
-    spec = lib.bkf_catalog_spec_new(entry, err)
-    if spec == ffi.NULL:
+    raw = lib.bkf_catalog_spec_new(entry, err)
+    if raw == ffi.NULL:
         _raise(err.status or _lib.ENOMEM, err)
-    messages, keep = [], []
-    try:
-        count = ffi.new("size_t *")
-        table = entry.options(count)
-        switches = {ffi.string(table[i].name).decode() for i in range(count[0])
-                    if table[i].type == _lib.OPT_SWITCH}
-        for key, value in keys.items():
-            if value is None or value is False:
-                continue
-            key = key.replace("_", "-")
-            text = None if key in switches and value is True else _text(value)
-            # a text key keeps the pointer (options.h): alive as long as the spec
-            keep.append(ffi.NULL if text is None else ffi.new("char[]", text.encode()))
-            s = lib.bkf_catalog_apply(entry, spec, key.encode(), keep[-1], b"", err)
-            if s:
-                _raise(s, err)
-        s = entry.check(spec, b"", err)
+    # Freed when its last reference goes: the worker's, while it runs.
+    spec = ffi.gc(raw, lambda p: lib.bkf_catalog_spec_free(entry, p))
+    count = ffi.new("size_t *")
+    table = entry.options(count)
+    switches = {ffi.string(table[i].name).decode() for i in range(count[0])
+                if table[i].type == _lib.OPT_SWITCH}
+    keep = []  # a text key keeps the pointer (options.h): alive as long as the spec
+    for key, value in keys.items():
+        if value is None or value is False:
+            continue
+        key = key[:-1] if key == "from_" else key.replace("_", "-")
+        text = None if key in switches and value is True else _text(key, value)
+        keep.append(ffi.NULL if text is None else ffi.new("char[]", _c_text(_keyword(key), text)))
+        s = lib.bkf_catalog_apply(entry, spec, _c_text(_keyword(key), key), keep[-1],
+                                  _MARK.encode(), err)
         if s:
-            _raise(s, err)
+            _raise_keyed(s, err)
+    s = entry.check(spec, _MARK.encode(), err)
+    if s:
+        _raise_keyed(s, err)
+    messages = []
 
-        @ffi.callback("void(const char *, void *)")
-        def warn(message, data):
-            messages.append(ffi.string(message).decode(errors="replace"))
+    @ffi.callback("void(const char *, void *)")
+    def warn(message, data):
+        messages.append(ffi.string(message).decode(errors="replace"))
 
-        def call(cancel):
-            buf = ffi.new("char **")
-            size = ffi.new("size_t *")
-            stream = libc.open_memstream(buf, size)
-            if stream == ffi.NULL:
-                raise MemoryError("out of memory")
-            hooks = ffi.new("bkf_catalog_hooks *", {"warn": warn, "cancel": cancel})
-            prov = ffi.new("bkf_provenance *")
-            s = entry.write(spec, stream, _lib.IO_JSON, prov, hooks, err)
-            libc.fclose(stream)
-            text = ffi.string(buf[0], size[0]).decode() if buf[0] != ffi.NULL else ""
-            libc.free(buf[0])
-            return s, text
+    # Handed to the worker, whose return drops the last reference: the spec
+    # is freed in that thread, where no KeyboardInterrupt can stop its
+    # destructor half-way (Python runs signal handlers in the main thread).
+    owned = [spec]
+    del spec
 
-        s, text = _cancellable(call)
-    finally:
-        lib.bkf_catalog_spec_free(entry, spec)
+    def call(cancel):
+        # keep and warn are referenced here: alive until the call returns
+        spec = owned.pop()
+        buf = ffi.new("char **")
+        size = ffi.new("size_t *")
+        stream = libc.open_memstream(buf, size)
+        if stream == ffi.NULL:
+            raise MemoryError("out of memory")
+        hooks = ffi.new("bkf_catalog_hooks *", {"warn": warn, "cancel": cancel})
+        prov = ffi.new("bkf_provenance *")
+        s = entry.write(spec, stream, _lib.IO_JSON, prov, hooks, err)
+        libc.fclose(stream)
+        text = ffi.string(buf[0], size[0]).decode() if buf[0] != ffi.NULL else ""
+        libc.free(buf[0])
+        return s, text
+
+    s, text = _run(name, call)
     for message in messages:
         warnings.warn("bkfront %s: %s" % (name, message), RuntimeWarning, stacklevel=3)
     if s:
-        _raise(s, err)
+        _raise_keyed(s, err)
     doc = json.loads(text)
-    return Table(doc.get("columns", []), doc.get("rows", []), doc.get("comments", []),
+    if "kinds" not in doc:
+        raise Error("the library %s writes no column kinds: older than this package"
+                    % _lib.library_path(), _lib.ENUMERIC)
+    return Table(doc["columns"], doc["kinds"], doc.get("rows", []), doc.get("comments", []),
                  doc.get("results"))
 
 
@@ -319,10 +401,8 @@ def speeds(gamma, c, nu, S, **keys):
 
 def branch(**keys):
     """A branch of front speeds by continuation (``bkfront branch``), e.g.
-    ``branch(param="S", **{"from": 30}, to=5, n=6, gamma=1.5, c=0.3,
-    nu=-0.96, S=30)``; ``from_`` may be spelled for ``from``."""
-    if "from_" in keys:
-        keys["from"] = keys.pop("from_")
+    ``branch(param="S", from_=30, to=5, n=6, gamma=1.5, c=0.3, nu=-0.96,
+    S=30)``: ``--from`` is the keyword ``from_``."""
     return product("branch", **keys)
 
 
@@ -330,8 +410,6 @@ def floquet(gamma, c, **keys):
     """The Floquet stability of the global oscillation (``bkfront floquet``):
     dispersion relations (``nu=..., q=...``), the threshold
     (``threshold=True``) or the stability diagram (``diagram=True``)."""
-    if "from_" in keys:
-        keys["from"] = keys.pop("from_")
     return product("floquet", gamma=gamma, c=c, **keys)
 
 

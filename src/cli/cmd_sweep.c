@@ -111,7 +111,9 @@ static void sweep_help(FILE *out)
         "sweep loses only the points in flight, and --resume computes the rest (it refuses the\n"
         "table of another sweep: the definition line must match).  Ctrl-C stops the sweep with\n"
         "every finished row kept (exit status 130).  At the end the rows are sorted by point.\n"
-        "Bad input anywhere in the grid is refused before any run.\n"
+        "One writer at a time: while a sweep writes --out, another sweep (--resume too) or\n"
+        "--merge into it is refused (exit 2, naming the writer's process).  --merge refuses two\n"
+        "different rows of one point.  Bad input anywhere in the grid is refused before any run.\n"
         "exit status: 0 ok (failed runs are rows with their status), 1 failure, 2 bad input\n");
 }
 

@@ -10,6 +10,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <gsl/gsl_errno.h>
+#include <signal.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -97,6 +98,12 @@ int main(int argc, char **argv)
      * GSL's default abort: it keeps GSL's handler off for the whole run (a
      * library call puts back whatever handler it found, this one). */
     gsl_set_error_handler_off();
+    /* A write past the file size limit (ulimit -f) kills the process by
+     * default, leaving its temporaries behind; ignored, it fails with
+     * EFBIG like a full disk, and every writer's error path removes its
+     * temporary and reports it.  gnuplot inherits the disposition, and
+     * the figure it truncates is refused by its check (plot.h). */
+    signal(SIGXFSZ, SIG_IGN);
     const char *first = argv[1];
     if (strcmp(first, "--help") == 0 || strcmp(first, "-h") == 0) return print_help(NULL);
     if (strcmp(first, "--version") == 0) {

@@ -1,7 +1,6 @@
-/* realpath() is X/Open; _XOPEN_SOURCE 700 also brings POSIX 2008 (fsync,
- * O_CLOEXEC); flock() (sys/file.h) is BSD, under _DEFAULT_SOURCE. */
-#define _XOPEN_SOURCE 700
-#define _DEFAULT_SOURCE
+/* Open file description locks (F_OFD_SETLK) are Linux's, under
+ * _GNU_SOURCE, which also brings POSIX 2008 and flock(). */
+#define _GNU_SOURCE
 #include "bkfront/io.h"
 
 #include <dirent.h>
@@ -11,6 +10,7 @@
 #include <signal.h>
 #include <limits.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -389,6 +389,13 @@ static void write_header(bkf_io_table *t)
             if (i) puts_(t, ", ");
             put_json_string(t, t->columns[i].name);
         }
+        /* Each column's declared kind, so that a reader types a column
+         * alike whatever its values (or none) look like. */
+        puts_(t, "],\n  \"kinds\": [");
+        for (size_t i = 0; i < t->ncolumns; i++) {
+            if (i) puts_(t, ", ");
+            puts_(t, t->columns[i].kind == BKF_IO_NUMBER ? "\"number\"" : "\"text\"");
+        }
         puts_(t, "],\n  \"rows\": [");
     }
     t->header_done = 1;
@@ -444,16 +451,58 @@ int bkf_io_table_finish(bkf_io_table *t, bkf_error *err)
 
 /* ------------------------------------------------------- atomic replacement */
 
+/* Every target being written in this process (an atomic file from open to
+ * commit or abort) and every lock held (bkf_io_lock), so that one file
+ * named twice (simulate --snapshots x.tsv --out ./x.tsv, or two hard
+ * links of one file) is refused at the second open instead of one output
+ * silently replacing the other at commit.  A file is known by its folder
+ * (device and inode: every spelling and every link of the folder is the
+ * same) and its name there, and, when it exists, by its own device and
+ * inode (hard links).  Atomic files may be opened in several threads. */
+typedef struct registered {
+    struct registered *next;
+    dev_t dir_dev;
+    ino_t dir_ino;
+    const char *base;     /* the target's name in its folder */
+    int exists;           /* the target exists: dev and ino are its own */
+    dev_t dev;
+    ino_t ino;
+    const char *shown;    /* the path as the caller spelled it */
+} registered;
+
+static pthread_mutex_t registry_mutex = PTHREAD_MUTEX_INITIALIZER;
+static registered *writing; /* atomic files open */
+static registered *locked;  /* locks held: dev, ino of the lock file */
+
 struct bkf_io_atomic {
     FILE *stream;
-    char *target;    /* where commit renames to (symbolic links resolved) */
+    char *target;    /* where commit renames to: the path as given */
     char *temp;
     char *dir;       /* the target's directory, fsynced after the rename */
+    registered reg;  /* in `writing` while reg.base is set */
 };
+
+static void unregister(registered **list, registered *r)
+{
+    pthread_mutex_lock(&registry_mutex);
+    for (registered **p = list; *p; p = &(*p)->next)
+        if (*p == r) {
+            *p = r->next;
+            break;
+        }
+    pthread_mutex_unlock(&registry_mutex);
+}
+
+static int same_target(const registered *a, const registered *b)
+{
+    if (a->exists && b->exists && a->dev == b->dev && a->ino == b->ino) return 1;
+    return a->dir_dev == b->dir_dev && a->dir_ino == b->dir_ino && strcmp(a->base, b->base) == 0;
+}
 
 static void atomic_free(bkf_io_atomic *a)
 {
     if (!a) return;
+    if (a->reg.base) unregister(&writing, &a->reg);
     free(a->target);
     free(a->temp);
     free(a->dir);
@@ -481,52 +530,6 @@ static const char *shown(const char *text, char *buf, size_t size)
     }
     buf[n] = '\0';
     return buf;
-}
-
-/* A symbolic link's target is replaced, not the link: rename() over the link
- * would silently turn it into a regular file.  A chain of links is followed
- * to its end, so that a dangling chain (out -> l2 -> missing) writes the
- * missing file, not over the intermediate link l2; a loop is refused. */
-#define LINK_HOPS_MAX 40
-
-static char *resolve_target(const char *path, bkf_error *err, int *status)
-{
-    struct stat st;
-    char sp[200];
-    *status = BKF_OK;
-    if (!(lstat(path, &st) == 0 && S_ISLNK(st.st_mode))) return dup_string(path);
-    char *real = realpath(path, NULL);
-    if (real) return real;
-    char *cur = dup_string(path);
-    for (int hop = 0; cur; hop++) {
-        if (!(lstat(cur, &st) == 0 && S_ISLNK(st.st_mode))) return cur;
-        if (hop == LINK_HOPS_MAX) {
-            *status = bkf_error_set(err, BKF_EINPUT,
-                                    "output '%s': more than %d symbolic links in a row (a loop?)",
-                                    shown(path, sp, sizeof sp), LINK_HOPS_MAX);
-            break;
-        }
-        char buf[PATH_MAX];
-        ssize_t n = readlink(cur, buf, sizeof buf - 1);
-        if (n < 0 || (size_t)n >= sizeof buf - 1) {
-            *status = bkf_error_set(err, BKF_EINPUT, "cannot resolve the symbolic link '%s'",
-                                    shown(path, sp, sizeof sp));
-            break;
-        }
-        buf[n] = '\0';
-        /* relative to the directory of the link that holds it */
-        const char *slash = strrchr(cur, '/');
-        size_t dlen = buf[0] == '/' || !slash ? 0 : (size_t)(slash - cur) + 1;
-        char *next = malloc(dlen + (size_t)n + 1);
-        if (next) {
-            memcpy(next, cur, dlen);
-            memcpy(next + dlen, buf, (size_t)n + 1);
-        }
-        free(cur);
-        cur = next;
-    }
-    free(cur);
-    return NULL;
 }
 
 /* Temporaries are named DIR/.BASE.tmp.PID.TAG (TAG: up to 8 hex digits),
@@ -606,6 +609,200 @@ static void remove_stale_temps(const char *dir, const char *base)
     closedir(d);
 }
 
+/* ------------------------------------------------------------------ locks */
+
+/* The lock file of the target DIR/BASE: DIR/.BASE.lock (BASE cut as a
+ * temporary's, so that the name fits).  NULL when out of memory. */
+static char *lock_path(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    size_t dlen = slash ? (size_t)(slash - path) + 1 : 0;
+    const char *base = path + dlen;
+    size_t blen = temp_base_len(base);
+    char *l = malloc(dlen + blen + 8);
+    if (l) snprintf(l, dlen + blen + 8, "%.*s.%.*s.lock", (int)dlen, path, (int)blen, base);
+    return l;
+}
+
+/* The PID a holder wrote into its lock file, 0 when unreadable. */
+static long lock_holder(int fd)
+{
+    char buf[32];
+    ssize_t n = pread(fd, buf, sizeof buf - 1, 0);
+    if (n <= 0) return 0;
+    buf[n] = '\0';
+    long pid = strtol(buf, NULL, 10);
+    return pid > 0 ? pid : 0;
+}
+
+static int held_here(const struct stat *st)
+{
+    int found = 0;
+    pthread_mutex_lock(&registry_mutex);
+    for (registered *r = locked; r && !found; r = r->next)
+        found = r->dev == st->st_dev && r->ino == st->st_ino;
+    pthread_mutex_unlock(&registry_mutex);
+    return found;
+}
+
+/* Whether another process (or another lock of this one) holds the lock of
+ * `path`; *pid is the holder's when it said.  Tested without taking it
+ * (an open file description lock, F_OFD_GETLK), so that the test never
+ * makes the holder's own attempt fail.  A lock file that cannot be opened
+ * or tested is no lock. */
+static int locked_elsewhere(const char *path, long *pid)
+{
+    *pid = 0;
+    char *lp = lock_path(path);
+    if (!lp) return 0;
+    int fd = open(lp, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    free(lp);
+    if (fd < 0) return 0;
+    struct stat st;
+    struct flock fl = {.l_type = F_WRLCK, .l_whence = SEEK_SET};
+    int busy = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && !held_here(&st) &&
+               fcntl(fd, F_OFD_GETLK, &fl) == 0 && fl.l_type != F_UNLCK;
+    if (busy) *pid = lock_holder(fd);
+    close(fd);
+    return busy;
+}
+
+struct bkf_io_lock {
+    int fd;
+    char *path;      /* the lock file, removed on release */
+    registered reg;  /* in `locked` */
+};
+
+/* Open file description locks (fcntl F_OFD_SETLK) rather than flock():
+ * another writer's test (locked_elsewhere) can then ask without taking the
+ * lock even for an instant.  A holder removes its lock file on release; a
+ * taker that locked a file removed meanwhile (it opened the old one just
+ * before) sees that the name no longer leads to its file and tries again. */
+bkf_io_lock *bkf_io_lock_take(const char *path, bkf_error *err)
+{
+    char sp[200];
+    if (!path || !*path) {
+        bkf_error_set(err, BKF_EINPUT, "lock: the file name is empty");
+        return NULL;
+    }
+    bkf_io_lock *l = calloc(1, sizeof *l);
+    if (l) l->path = lock_path(path);
+    if (!l || !l->path) {
+        free(l);
+        bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        return NULL;
+    }
+    l->fd = -1;
+    int attempt;
+    for (attempt = 0; attempt < 20; attempt++) {
+        int fd = open(l->path, O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0666);
+        if (fd < 0) {
+            int e = errno;
+            bkf_error_set(err, BKF_EINPUT, "cannot lock '%s' (by its lock file %s): %s",
+                          shown(path, sp, sizeof sp), l->path,
+                          e == ELOOP ? "the lock file is a symbolic link" : strerror(e));
+            break;
+        }
+        struct stat st, now;
+        struct flock fl = {.l_type = F_WRLCK, .l_whence = SEEK_SET};
+        if (fstat(fd, &st) == 0 && held_here(&st)) {
+            close(fd);
+            bkf_error_set(err, BKF_EINPUT, "'%s' is already being written by this process",
+                          shown(path, sp, sizeof sp));
+            break;
+        }
+        if (fcntl(fd, F_OFD_SETLK, &fl) != 0) {
+            int e = errno;
+            long pid = (e == EAGAIN || e == EACCES) ? lock_holder(fd) : 0;
+            close(fd);
+            if (e == EAGAIN || e == EACCES) {
+                char who[64] = "";
+                if (pid) snprintf(who, sizeof who, " (process %ld)", pid);
+                bkf_error_set(err, BKF_EINPUT,
+                              "'%s' is being written by another run%s: one writer at a time "
+                              "(its lock file is %s)",
+                              shown(path, sp, sizeof sp), who, l->path);
+            } else
+                bkf_error_set(err, BKF_EINPUT, "cannot lock '%s': %s",
+                              shown(path, sp, sizeof sp), strerror(e));
+            break;
+        }
+        if (lstat(l->path, &now) != 0 || now.st_dev != st.st_dev || now.st_ino != st.st_ino) {
+            close(fd); /* the file we locked was removed by its last holder */
+            continue;
+        }
+        char pid[32];
+        int n = snprintf(pid, sizeof pid, "%ld\n", (long)getpid());
+        /* only for the message of a refused writer: best effort */
+        if (ftruncate(fd, 0) == 0) (void)!pwrite(fd, pid, (size_t)n, 0);
+        l->fd = fd;
+        l->reg.dev = st.st_dev;
+        l->reg.ino = st.st_ino;
+        pthread_mutex_lock(&registry_mutex);
+        l->reg.next = locked;
+        locked = &l->reg;
+        pthread_mutex_unlock(&registry_mutex);
+        return l;
+    }
+    if (attempt == 20)
+        bkf_error_set(err, BKF_EIO, "cannot lock '%s': its lock file %s keeps being replaced",
+                      shown(path, sp, sizeof sp), l->path);
+    free(l->path);
+    free(l);
+    return NULL;
+}
+
+void bkf_io_lock_release(bkf_io_lock *l)
+{
+    if (!l) return;
+    unregister(&locked, &l->reg);
+    /* removed while still held: whoever opens the name next gets a new file */
+    (void)unlink(l->path);
+    close(l->fd);
+    free(l->path);
+    free(l);
+}
+
+/* ------------------------------------------------------------ atomic files */
+
+/* Enters a->reg in `writing`, unless another atomic file of this process
+ * writes the same target. */
+static int register_target(bkf_io_atomic *a, const char *path, const struct stat *target,
+                           bkf_error *err)
+{
+    char sp[200], so[200];
+    struct stat dir;
+    if (stat(a->dir, &dir) != 0) return BKF_OK; /* the open that follows says why */
+    a->reg.dir_dev = dir.st_dev;
+    a->reg.dir_ino = dir.st_ino;
+    a->reg.exists = target != NULL;
+    if (target) {
+        a->reg.dev = target->st_dev;
+        a->reg.ino = target->st_ino;
+    }
+    a->reg.shown = a->target;
+    const char *slash = strrchr(a->target, '/');
+    const char *base = slash ? slash + 1 : a->target;
+    a->reg.base = base;
+    int status = BKF_OK;
+    pthread_mutex_lock(&registry_mutex);
+    for (registered *r = writing; r; r = r->next)
+        if (same_target(r, &a->reg)) {
+            status = bkf_error_set(err, BKF_EINPUT,
+                                   "output '%s' is the file '%s' that another output of this "
+                                   "run writes: give each output a file of its own",
+                                   shown(path, sp, sizeof sp), shown(r->shown, so, sizeof so));
+            break;
+        }
+    if (!status) {
+        a->reg.next = writing;
+        writing = &a->reg;
+    } else
+        a->reg.base = NULL;
+    pthread_mutex_unlock(&registry_mutex);
+    return status;
+}
+
 bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
 {
     char sp[200];
@@ -614,14 +811,8 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
         return NULL;
     }
     bkf_io_atomic *a = calloc(1, sizeof *a);
-    if (!a) {
+    if (!a || !(a->target = dup_string(path))) {
         bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        return NULL;
-    }
-    int status = BKF_OK;
-    a->target = resolve_target(path, err, &status);
-    if (!a->target) {
-        if (!status) bkf_error_set(err, BKF_ENOMEM, "out of memory");
         atomic_free(a);
         return NULL;
     }
@@ -635,11 +826,33 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
 
     mode_t mode = 0666;  /* open() applies the umask */
     struct stat st;
-    int exists = stat(a->target, &st) == 0;
+    /* lstat: a link is never followed.  One planted where an output goes
+     * (out/fr.tsv -> ../elsewhere/victim) would otherwise have the file
+     * it points to replaced; the rename of commit replaces the link itself
+     * (should one appear after this test), never what it points to. */
+    int exists = lstat(a->target, &st) == 0;
+    if (exists && S_ISLNK(st.st_mode)) {
+        bkf_error_set(err, BKF_EINPUT,
+                      "output '%s' is a symbolic link: outputs never write through one (remove "
+                      "it, or name the file itself)",
+                      shown(path, sp, sizeof sp));
+        atomic_free(a);
+        return NULL;
+    }
     if (exists && !S_ISREG(st.st_mode)) {
         /* rename() would replace a device or FIFO with a regular file. */
-        bkf_error_set(err, BKF_EINPUT, "output '%s' exists and is not a regular file",
-                      shown(path, sp, sizeof sp));
+        bkf_error_set(err, BKF_EINPUT, "output '%s' exists and is not a regular file%s",
+                      shown(path, sp, sizeof sp), S_ISDIR(st.st_mode) ? " (a directory)" : "");
+        atomic_free(a);
+        return NULL;
+    }
+    long holder;
+    if (locked_elsewhere(a->target, &holder)) {
+        char who[64] = "";
+        if (holder) snprintf(who, sizeof who, " (process %ld)", holder);
+        bkf_error_set(err, BKF_EINPUT,
+                      "output '%s' is being written by another run%s: one writer at a time",
+                      shown(path, sp, sizeof sp), who);
         atomic_free(a);
         return NULL;
     }
@@ -659,6 +872,10 @@ bkf_io_atomic *bkf_io_atomic_open(const char *path, bkf_error *err)
         a->dir[dlen] = '\0';
     } else
         strcpy(a->dir, ".");
+    if (register_target(a, path, exists ? &st : NULL, err)) {
+        atomic_free(a);
+        return NULL;
+    }
     remove_stale_temps(a->dir, base);
 
     /* O_EXCL with a fresh name rather than mkstemp(): mkstemp forces mode

@@ -45,6 +45,13 @@ int bkf_model_check_nonnegative(const char *name, double value, bkf_error *err)
     return BKF_OK;
 }
 
+int bkf_model_check_c(double c, bkf_error *err)
+{
+    if (!(c >= 0.0 && c <= BKF_MODEL_C_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "c = %g is outside [0, %g]", c, BKF_MODEL_C_MAX);
+    return BKF_OK;
+}
+
 int bkf_model_check_tol(double tol, bkf_error *err)
 {
     if (!isfinite(tol) || tol < BKF_TOL_MIN || tol > BKF_TOL_MAX)

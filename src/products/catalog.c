@@ -80,7 +80,15 @@ static void oscillation_free(void *spec) { bkf_oscillation_spec_free(spec); }
 static void approx_free(void *spec) { bkf_approx_spec_free(spec); }
 
 ADAPTERS(period, bkf_period_spec, bkf_period, period_free)
-WRITER(period, bkf_period_spec, bkf_period_write)
+/* The hooks' cancel flag stops the table between points. */
+static int period_write(const void *spec, FILE *out, bkf_io_format format,
+                        const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
+                        bkf_error *err)
+{
+    bkf_period_spec s = *(const bkf_period_spec *)spec;
+    if (hooks) s.cancel = hooks->cancel;
+    return bkf_period_write(&s, out, format, prov, err);
+}
 ADAPTERS(profile, bkf_profile_spec, bkf_profile, profile_free)
 WRITER(profile, bkf_profile_spec, bkf_profile_write)
 ADAPTERS(asymptotics, bkf_approx_spec, bkf_approx, approx_free)

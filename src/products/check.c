@@ -98,8 +98,9 @@ int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *o
     if (!(model->gamma >= BKF_CYCLE_MU_MIN && model->gamma <= BKF_CYCLE_MU_MAX))
         return bkf_error_set(err, BKF_EINPUT, "gamma: %g is outside [%g, %g]", model->gamma,
                              BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
-    if (!(model->c >= 0 && isfinite(model->c)))
-        return bkf_error_set(err, BKF_EINPUT, "c: %g must be a finite number >= 0", model->c);
+    if (!(model->c >= 0 && model->c <= BKF_MODEL_C_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "c: %g is outside [0, %g]", model->c,
+                             BKF_MODEL_C_MAX);
     if (bkf_model_check_nu_active(model->nu, &e))
         return bkf_error_set(err, BKF_EINPUT, "%s; there are no fronts", e.message);
     if (bkf_model_check_positive("S", model->S, err)) return BKF_EINPUT;
@@ -797,7 +798,7 @@ static void check_spectrum(const check_ctx *c, const bkf_speeds_root *sr, bkf_ch
     p.kind = BKF_MODEL_CONTINUUM;
     bkf_trainspec_result res;
     bkf_error e;
-    int s = bkf_stability_root(&p, sr, bkf_trainspec_options_default().tol, 1, &res, &e);
+    int s = bkf_trainspec_root(&p, sr, bkf_trainspec_options_default().tol, 1, &res, &e);
     if (s == BKF_OK) {
         row->spectral = res.verdict;
         row->sigma_max = res.sigma_max;
@@ -1136,8 +1137,9 @@ const bkf_option bkf_check_keys[] = {
     {.name = "gamma", .type = BKF_OPT_DOUBLE, .offset = MODEL(gamma), .flags = BOUNDED,
      .min = BKF_CYCLE_MU_MIN, .max = BKF_CYCLE_MU_MAX, .form = "G", .shown_default = "2",
      .help = "friction strength, in [1e-06, 1e+06]"},
-    {.name = "c", .type = BKF_OPT_DOUBLE, .offset = MODEL(c), .flags = BKF_OPT_MIN, .min = 0,
-     .form = "C", .shown_default = "0.3", .help = "sound speed, >= 0"},
+    {.name = "c", .type = BKF_OPT_DOUBLE, .offset = MODEL(c), .flags = BKF_OPT_MIN | BKF_OPT_MAX,
+     .min = 0, .max = BKF_MODEL_C_MAX, .form = "C", .shown_default = "0.3",
+     .help = "sound speed, in [0, 1e6]"},
     {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = MODEL(nu),
      .flags = BOUNDED | BKF_OPT_MIN_OPEN | BKF_OPT_MAX_OPEN, .min = -1, .max = 1, .form = "V",
      .shown_default = "-0.96", .help = "pulling rate, in (-1, 1): no fronts beyond"},

@@ -15,9 +15,12 @@ static const bkf_io_column columns[] = {{"v", BKF_IO_NUMBER},
 
 const bkf_option bkf_friction_options[] = {
     {.name = "from", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_friction_spec, from),
-     .form = "V", .shown_default = "-1", .help = "lowest block velocity"},
+     .flags = BKF_OPT_MIN | BKF_OPT_MAX, .min = -BKF_FRICTION_V_MAX, .max = BKF_FRICTION_V_MAX,
+     .form = "V", .shown_default = "-1", .help = "lowest block velocity, in [-1e100, 1e100]"},
     {.name = "to", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_friction_spec, to),
-     .form = "V", .shown_default = "4", .help = "highest block velocity, > from"},
+     .flags = BKF_OPT_MIN | BKF_OPT_MAX, .min = -BKF_FRICTION_V_MAX, .max = BKF_FRICTION_V_MAX,
+     .form = "V", .shown_default = "4",
+     .help = "highest block velocity, > from, in [-1e100, 1e100]"},
     {.name = "points", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_friction_spec, points),
      .flags = BKF_OPT_MIN | BKF_OPT_MAX, .min = 1, .max = BKF_FRICTION_POINTS_MAX, .form = "N",
      .shown_default = "601", .help = "rows, evenly spaced, both ends included"},
@@ -34,7 +37,11 @@ int bkf_friction_check(const bkf_friction_spec *spec, const char *prefix, bkf_er
 {
     const char *p = prefix ? prefix : "";
     if (!spec) return bkf_error_set(err, BKF_EINPUT, "friction: spec is NULL");
-    if (!(isfinite(spec->from) && isfinite(spec->to) && spec->to > spec->from))
+    /* the table's range, again for a spec filled in C */
+    if (!(fabs(spec->from) <= BKF_FRICTION_V_MAX && fabs(spec->to) <= BKF_FRICTION_V_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "%sfrom, %sto: each must be in [-1e+100, 1e+100]",
+                             p, p);
+    if (!(spec->to > spec->from))
         return bkf_error_set(err, BKF_EINPUT, "%sfrom, %sto: friction needs from < to", p, p);
     if (spec->points < 1 || spec->points > BKF_FRICTION_POINTS_MAX)
         return bkf_error_set(err, BKF_EINPUT, "%spoints: not in [1, %u]", p,

@@ -9,7 +9,7 @@
 
 #include "bkfront/chainwave.h"
 #include "bkfront/cycle.h"
-#include "bkfront/stability.h"
+#include "bkfront/trainspec.h"
 
 #include "product_internal.h"
 
@@ -70,7 +70,8 @@ static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYM
 #define MODEL_OPTIONS(SPEC, required)                                                        \
     BKF_PRODUCT_GAMMA_OPTION(SPEC, required),                                                \
     {.name = "c", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, c),                       \
-     .flags = (required) | BKF_OPT_MIN, .min = 0, .form = "C", .help = "sound speed, >= 0"}, \
+     .flags = (required) | BKF_OPT_MIN | BKF_OPT_MAX, .min = 0, .max = BKF_MODEL_C_MAX,     \
+     .form = "C", .help = "sound speed, in [0, 1e6]"},                                         \
     BKF_PRODUCT_NU_OPTION(SPEC, required), BKF_PRODUCT_S_OPTION(SPEC, required)
 
 #define TOL_OPTION(SPEC, what)                                                                \
@@ -331,7 +332,7 @@ static double verdict_tol(double stability_tol)
 static int verdict_find(const bkf_model_params *p, const bkf_speeds_root *root, double tol,
                         root_verdict *r, bkf_error *err)
 {
-    int s = bkf_stability_root(p, root, tol, bkf_trainspec_options_default().per_kappa,
+    int s = bkf_trainspec_root(p, root, tol, bkf_trainspec_options_default().per_kappa,
                                &r->spectrum, &r->why);
     r->why.status = s;
     if (s && s != BKF_ETOL && s != BKF_EBUDGET) return bkf_error_set(err, s, "%s", r->why.message);
@@ -352,7 +353,7 @@ static void verdict_values(const root_verdict *r, bkf_io_value *v)
     v[1].number = ok ? x->sigma_max : NAN;
     v[2].number = ok ? x->sigma_max_err : NAN;
     v[3].number = ok ? x->kappa_max : NAN;
-    v[4].text = ok ? bkf_stability_kind_name(x) : NULL;
+    v[4].text = ok ? bkf_trainspec_kind_name(x) : NULL;
 }
 
 static int verdict_comment(bkf_io_table *table, double tol, bkf_error *err)
@@ -659,14 +660,14 @@ static int check_end(const bkf_fronts_branch_spec *spec, const char *p, const ch
     if (spec->along == BKF_SPEEDS_ALONG_GAMMA)
         bad = !(x >= BKF_CYCLE_MU_MIN && x <= BKF_CYCLE_MU_MAX);
     else if (spec->along == BKF_SPEEDS_ALONG_C)
-        bad = !(x >= 0);
+        bad = !(x >= 0 && x <= BKF_MODEL_C_MAX);
     else if (spec->along == BKF_SPEEDS_ALONG_S)
         bad = !(x > 0);
     else
         bad = !(fabs(x) < 1);
     if (bad) {
         const char *range = spec->along == BKF_SPEEDS_ALONG_GAMMA ? "[1e-06, 1e+06]"
-                            : spec->along == BKF_SPEEDS_ALONG_C   ? ">= 0"
+                            : spec->along == BKF_SPEEDS_ALONG_C   ? "[0, 1e+06]"
                             : spec->along == BKF_SPEEDS_ALONG_S   ? "> 0"
                                                                   : "in (-1, 1)";
         return bkf_error_set(err, BKF_EINPUT, "%s%s: %s = %s is outside its range (%s)", p, end,
@@ -904,7 +905,7 @@ static double crossing_sigma(double x, void *data)
         c->at.point.root = t.roots[best];
         c->at.point.kind = BKF_SPEEDS_POINT;
         c->at.stability_change = 1;
-        s = bkf_stability_root(&p, &c->at.point.root, c->tol,
+        s = bkf_trainspec_root(&p, &c->at.point.root, c->tol,
                                bkf_trainspec_options_default().per_kappa, &c->at.verdict.spectrum,
                                &c->why);
         c->spectra++;

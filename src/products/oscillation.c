@@ -80,9 +80,9 @@ const bkf_option bkf_oscillation_options[] = {
      .flags = BOUNDED, .min = BKF_CYCLE_MU_MIN, .max = BKF_CYCLE_MU_MAX, .form = "G",
      .help = "friction strength, in [1e-06, 1e+06]"},
     {.name = "c", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_oscillation_spec, c),
-     .flags = BKF_OPT_MIN, .min = 0, .form = "C",
-     .help = "sound speed, >= 0 (> 0 for --threshold and --diagram: with\n"
-             "c = 0 every q is the neutral q = 0 mode)"},
+     .flags = BKF_OPT_MIN | BKF_OPT_MAX, .min = 0, .max = BKF_MODEL_C_MAX, .form = "C",
+     .help = "sound speed, in [0, 1e6] (> 0 for --threshold and --diagram:\n"
+             "with c = 0 every q is the neutral q = 0 mode)"},
     {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_oscillation_spec, nu),
      .flags = BOUNDED | BKF_OPT_MIN_OPEN | BKF_OPT_MAX_OPEN, .min = -1, .max = 1, .form = "V",
      .help = "pulling rate, in (-1, 1); dispersion mode only"},
@@ -208,8 +208,8 @@ static int check_c(const char *p, const char *key, double c, int positive, bkf_e
                              "%s%s: c = %s must be > 0 for thresholds (with c = 0 every wavenumber "
                              "is the neutral q = 0 mode)",
                              p, key, bkf_format_number(c, a, sizeof a));
-    if (!(c >= 0 && isfinite(c)))
-        return bkf_error_set(err, BKF_EINPUT, "%s%s: c = %s must be >= 0", p, key,
+    if (!(c >= 0 && c <= BKF_MODEL_C_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "%s%s: c = %s must be in [0, 1e+06]", p, key,
                              bkf_format_number(c, a, sizeof a));
     return BKF_OK;
 }

@@ -145,9 +145,21 @@ int bkf_period_check(const bkf_period_spec *spec, const char *prefix, bkf_error 
 
 typedef struct {
     bkf_io_table *table;
-    int status; /* first failure writing a row */
+    int status; /* first failure writing a row, or BKF_ECANCELED */
     bkf_error err;
+    const volatile sig_atomic_t *cancel;
+    size_t rows;
 } period_sink;
+
+/* Raised cancel flag: BKF_ECANCELED into the sink, once. */
+static int canceled(period_sink *sink)
+{
+    if (!sink->cancel || !*sink->cancel) return 0;
+    if (!sink->status)
+        sink->status = bkf_error_set(&sink->err, BKF_ECANCELED, "canceled after %zu rows",
+                                     sink->rows);
+    return 1;
+}
 
 static int add_row(period_sink *sink, const bkf_cycle_result *r)
 {
@@ -171,12 +183,13 @@ static int add_row(period_sink *sink, const bkf_cycle_result *r)
     };
     int s = bkf_io_table_row(sink->table, v, &sink->err);
     if (s && !sink->status) sink->status = s;
+    if (!s) sink->rows++;
     return s;
 }
 
 static int visit_branch_point(const bkf_cycle_result *point, void *data)
 {
-    return add_row(data, point) != BKF_OK;
+    return add_row(data, point) != BKF_OK || canceled(data);
 }
 
 static int write_comments(bkf_io_table *table, const bkf_period_spec *spec,
@@ -238,7 +251,7 @@ int bkf_period_write(const bkf_period_spec *spec, FILE *out, bkf_io_format forma
     options.stepper = stepper_kinds[spec->stepper];
     bkf_cycle_method method = method_kinds[spec->method];
 
-    period_sink sink = {0};
+    period_sink sink = {.cancel = spec->cancel};
     sink.table = bkf_io_table_alloc(out, format, columns, NCOLUMNS, err);
     if (!sink.table) return BKF_ENOMEM;
     s = write_comments(sink.table, spec, prov, err);
@@ -248,6 +261,11 @@ int bkf_period_write(const bkf_period_spec *spec, FILE *out, bkf_io_format forma
         if (!cycle) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
         for (size_t j = 0; !s && j < spec->nu.count; j++)
             for (size_t i = 0; !s && i < spec->mu.count; i++) {
+                if (canceled(&sink)) {
+                    s = sink.status;
+                    *err = sink.err;
+                    break;
+                }
                 double mu = spec->mu.values[i], nu = spec->nu.values[j];
                 bkf_error e;
                 bkf_cycle_result r;

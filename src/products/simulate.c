@@ -89,8 +89,9 @@ const bkf_option bkf_simulate_options[] = {
     {.name = "gamma", .type = BKF_OPT_DOUBLE, .offset = MODEL(gamma),
      .flags = BKF_OPT_MIN | BKF_OPT_MIN_OPEN, .min = 0, .form = "G", .shown_default = "2",
      .help = "friction strength, > 0"},
-    {.name = "c", .type = BKF_OPT_DOUBLE, .offset = MODEL(c), .flags = BKF_OPT_MIN, .min = 0,
-     .form = "C", .shown_default = "0.3", .help = "sound speed, >= 0"},
+    {.name = "c", .type = BKF_OPT_DOUBLE, .offset = MODEL(c), .flags = BKF_OPT_MIN | BKF_OPT_MAX,
+     .min = 0, .max = BKF_MODEL_C_MAX, .form = "C", .shown_default = "0.3",
+     .help = "sound speed, in [0, 1e6]"},
     {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = MODEL(nu), .flags = BOUNDED,
      .min = -BKF_PDE_NU_MAX, .max = BKF_PDE_NU_MAX, .form = "V", .shown_default = "-0.96",
      .help = "pulling rate, in [-100, 100] (|nu| >= 1: continuous slip\n"

@@ -38,8 +38,9 @@ static const bkf_io_column diagram_columns[] = {
 const bkf_option bkf_stability_options[] = {
     BKF_PRODUCT_GAMMA_OPTION(bkf_stability_spec, BKF_OPT_REQUIRED),
     {.name = "c", .type = BKF_OPT_DOUBLE, .offset = FIELD(c),
-     .flags = BKF_OPT_REQUIRED | BKF_OPT_MIN | BKF_OPT_MIN_OPEN, .min = 0, .form = "C",
-     .help = "sound speed, > 0 (with c = 0 every mode is neutral)"},
+     .flags = BKF_OPT_REQUIRED | BKF_OPT_MIN | BKF_OPT_MIN_OPEN | BKF_OPT_MAX, .min = 0,
+     .max = BKF_MODEL_C_MAX, .form = "C",
+     .help = "sound speed, in (0, 1e6] (with c = 0 every mode is neutral)"},
     BKF_PRODUCT_NU_OPTION(bkf_stability_spec, BKF_OPT_REQUIRED),
     BKF_PRODUCT_S_OPTION(bkf_stability_spec, BKF_OPT_REQUIRED),
     {.name = "n", .type = BKF_OPT_COUNT, .offset = FIELD(n),
@@ -199,21 +200,6 @@ int bkf_stability_check(const bkf_stability_spec *spec, const char *prefix, bkf_
     return bkf_fronts_check(&f, prefix, err);
 }
 
-int bkf_stability_root(const bkf_model_params *params, const bkf_speeds_root *root, double tol,
-                       size_t per_kappa, bkf_trainspec_result *result, bkf_error *err)
-{
-    bkf_trainspec_train train = {root->n, root->v};
-    bkf_trainspec_options o = bkf_trainspec_options_default();
-    o.tol = tol;
-    o.per_kappa = per_kappa;
-    return bkf_trainspec_ring(params, &train, &o, result, err);
-}
-
-const char *bkf_stability_kind_name(const bkf_trainspec_result *result)
-{
-    return result->complex_pair ? "complex" : "real";
-}
-
 /* The root (n, root) of the speed condition, or BKF_EINPUT saying why
  * there is none. */
 static int find_root(const bkf_stability_spec *spec, bkf_model_params *params,
@@ -290,7 +276,7 @@ static int write_ring(const bkf_stability_spec *spec, const bkf_speeds_root *roo
     if (s) return s;
     if (!s) s = write_root(table, spec, root, err);
     const char *verdict = bkf_trainspec_verdict_name(res->verdict);
-    const char *kind = bkf_stability_kind_name(res);
+    const char *kind = bkf_trainspec_kind_name(res);
     if (!s)
         s = bkf_io_table_commentf(
             table, err,
@@ -306,14 +292,16 @@ static int write_ring(const bkf_stability_spec *spec, const bkf_speeds_root *roo
         s = bkf_io_table_commentf(
             table, err,
             "window: Re sigma > a_lo = %.6g, |Im sigma| <= y_max = %.6g (r_inf %.6g); "
-            "work: %zu mesh steps per period, %zu monodromies, %zu heights",
+            "work: %zu mesh steps per period, %zu monodromies, %zu heights (0: Hill's band "
+            "alone), Hill's method at %zu modes (0: not used)",
             res->a_lo, res->y_max, res->r_inf, res->mesh_steps, res->evaluations,
-            res->curve_points);
+            res->curve_points, res->hill_modes);
     if (!s) s = text_result(table, "stable", verdict, err);
     if (!s) s = number_result(table, "sigma_max", res->sigma_max, err);
     if (!s) s = number_result(table, "sigma_max_im", res->sigma_max_im, err);
     if (!s) s = number_result(table, "sigma_max_err", res->sigma_max_err, err);
     if (!s) s = number_result(table, "kappa_max", res->kappa_max, err);
+    if (!s) s = number_result(table, "hill_modes", (double)res->hill_modes, err);
     if (!s) s = text_result(table, "kind", kind, err);
     if (!s) s = number_result(table, "translation_residual", res->translation_residual, err);
     if (!s) s = number_result(table, "liouville_residual", res->liouville_residual, err);
@@ -707,7 +695,7 @@ int bkf_stability_write(const bkf_stability_spec *spec, FILE *out, bkf_io_format
         return s;
     }
     bkf_trainspec_result res;
-    s = bkf_stability_root(&params, &root, spec->tol, spec->per_kappa, &res, err);
+    s = bkf_trainspec_root(&params, &root, spec->tol, spec->per_kappa, &res, err);
     if (!s) s = write_ring(spec, &root, &res, out, format, prov, err);
     bkf_trainspec_result_free(&res);
     return s;

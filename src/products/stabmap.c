@@ -1,12 +1,12 @@
 #include "bkfront/stabmap.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "bkfront/floquet.h"
 #include "bkfront/speeds.h"
-#include "bkfront/stability.h"
 #include "bkfront/trainspec.h"
 
 bkf_stabmap_options bkf_stabmap_options_default(void)
@@ -41,7 +41,7 @@ int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near, d
     bkf_speeds_root root = t.roots[best];
     bkf_speeds_table_free(&t);
     bkf_trainspec_result r;
-    s = bkf_stability_root(params, &root, tol, 1, &r, err);
+    s = bkf_trainspec_root(params, &root, tol, 1, &r, err);
     if (!s) {
         *sigma = r.sigma_max;
         *sigma_err = r.sigma_max_err;

@@ -392,12 +392,19 @@ int bkf_sweep_check(const bkf_sweep_spec *sp, const char *prefix, bkf_error *err
         if (sp->product != BKF_SWEEP_REGIME)
             return bkf_error_set(err, BKF_EINPUT, "%sfields: only with %sproduct regime", prefix,
                                  prefix);
+        char shown[80];
+        /* a folder of outputs is never reached through a link, as an
+         * output file is not (io.h): one planted at its name would send
+         * every point's field elsewhere */
+        if (lstat(sp->fields, &st) == 0 && S_ISLNK(st.st_mode))
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "%sfields: '%s' is a symbolic link: outputs never write through "
+                                 "one (name the folder itself)",
+                                 prefix, bkf_option_shown(sp->fields, shown, sizeof shown));
         if (stat(sp->fields, &st) != 0 || !S_ISDIR(st.st_mode) ||
-            access(sp->fields, W_OK | X_OK) != 0) {
-            char shown[80];
+            access(sp->fields, W_OK | X_OK) != 0)
             return bkf_error_set(err, BKF_EINPUT, "%sfields: '%s' is not a writable directory",
                                  prefix, bkf_option_shown(sp->fields, shown, sizeof shown));
-        }
     }
     plan p;
     int s = make_plan(sp, prefix, &p, err);
@@ -888,6 +895,7 @@ int bkf_sweep_write(const bkf_sweep_spec *sp, FILE *out, bkf_error *err)
 
 struct bkf_sweep_table {
     char *path;
+    bkf_io_lock *lock;  /* one writer of the table at a time */
     int fd;
     size_t count, rows;
     unsigned char *done;
@@ -951,7 +959,7 @@ static int read_all(const char *path, char **data, size_t *size, bkf_error *err)
  * fields as there are names and a point index below the head's count, seen first, and (with
  * `key`) its key columns are those of its point. */
 static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key_spec,
-                      const plan *key_plan, bkf_error *err)
+                      const plan *key_plan, int strict, bkf_error *err)
 {
     memset(t, 0, sizeof *t);
     int s = read_all(path, &t->data, &t->size, err);
@@ -970,10 +978,11 @@ static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key
     t->head_len = (size_t)(nl + 1 - t->data);
     size_t names_tabs = 0;
     for (char *q = p; q < nl; q++) names_tabs += *q == '\t';
-    unsigned char *seen = calloc(t->points, 1);
+    /* at[i]: 1 + the place in rows of point i's row, 0 while none */
+    size_t *at = calloc(t->points, sizeof *at);
     t->rows = malloc(t->points * sizeof *t->rows);
-    if (!seen || !t->rows) {
-        free(seen);
+    if (!at || !t->rows) {
+        free(at);
         table_text_free(t);
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
@@ -985,8 +994,21 @@ static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key
         char *after;
         errno = 0;
         unsigned long long idx = strtoull(p, &after, 10);
-        int ok = tabs == names_tabs && after != p && *after == '\t' && !errno &&
-                 idx < t->points && !seen[idx];
+        int whole = tabs == names_tabs && after != p && *after == '\t' && !errno &&
+                    idx < t->points;
+        int ok = whole && !at[idx];
+        /* strict (merge): a point's second row is one row with the first
+         * when the bytes are the same, a conflict otherwise */
+        const struct row *first = whole && at[idx] ? &t->rows[at[idx] - 1] : NULL;
+        if (strict && first && (first->len != len || memcmp(first->line, p, len) != 0)) {
+            free(at);
+            table_text_free(t);
+            return bkf_error_set(err, BKF_EINPUT,
+                                 "merge: point %llu has two different rows in %s (a point's row "
+                                 "is the same however the sweep is split: one of them is "
+                                 "damaged or of another build)",
+                                 idx, path);
+        }
         if (ok && key_spec) {
             bkf_simulate_spec sim;
             text k = {0};
@@ -996,12 +1018,12 @@ static int table_read(const char *path, table_text *t, const bkf_sweep_spec *key
             free(k.s);
         }
         if (ok) {
-            seen[idx] = 1;
             t->rows[t->nrows++] = (struct row){(size_t)idx, p, len};
+            at[idx] = t->nrows;
         }
         p = nl + 1;
     }
-    free(seen);
+    free(at);
     return BKF_OK;
 }
 
@@ -1041,11 +1063,21 @@ int bkf_sweep_table_open(const char *path, const bkf_sweep_spec *sp, int resume,
         t->done = calloc(p.count ? p.count : 1, 1);
     }
     if (!s && (!t || !t->path || !t->done)) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    /* before reading: a second writer (two sweeps, or one with --resume)
+     * would read rows the first is appending and then replace the file
+     * under it, losing rows */
+    if (!s) t->lock = bkf_io_lock_take(path, err);
+    if (!s && !t->lock) s = err ? err->status : BKF_EINPUT;
+    struct stat lst;
+    if (!s && lstat(path, &lst) == 0 && S_ISLNK(lst.st_mode))
+        s = bkf_error_set(err, BKF_EINPUT,
+                          "%s is a symbolic link: outputs never write through one (name the "
+                          "file itself)", path);
     table_text old = {0};
     int have_old = 0;
     if (!s && resume) {
         bkf_error e;
-        int r = table_read(path, &old, sp, &p, &e);
+        int r = table_read(path, &old, sp, &p, 0, &e);
         if (!r) {
             have_old = 1;
             if (old.head_len != strlen(head) || memcmp(old.data, head, old.head_len) != 0)
@@ -1064,7 +1096,9 @@ int bkf_sweep_table_open(const char *path, const bkf_sweep_spec *sp, int resume,
         if (!s && have_old) t->rows = old.nrows;
     }
     if (!s) {
-        t->fd = open(path, O_WRONLY | O_APPEND | O_CLOEXEC);
+        /* the file just renamed into place; a link put there since is
+         * not followed */
+        t->fd = open(path, O_WRONLY | O_APPEND | O_NOFOLLOW | O_CLOEXEC);
         if (t->fd < 0) s = bkf_error_set(err, BKF_EIO, "%s: %s", path, strerror(errno));
     }
     table_text_free(&old);
@@ -1110,10 +1144,11 @@ int bkf_sweep_table_close(bkf_sweep_table *t, int sort, bkf_error *err)
         s = bkf_error_set(err, BKF_EIO, "%s: %s", t->path, strerror(errno));
     if (!s && sort) {
         table_text tt;
-        s = table_read(t->path, &tt, NULL, NULL, err);
+        s = table_read(t->path, &tt, NULL, NULL, 0, err);
         if (!s) s = table_write(t->path, tt.data, tt.head_len, tt.rows, tt.nrows, 1, err);
         table_text_free(&tt);
     }
+    bkf_io_lock_release(t->lock);
     free(t->path);
     free(t->done);
     free(t);
@@ -1129,7 +1164,7 @@ int bkf_sweep_merge(const char *const *inputs, size_t n, const char *out, size_t
     int s = BKF_OK;
     size_t total = 0;
     for (size_t k = 0; !s && k < n; k++) {
-        s = table_read(inputs[k], &t[k], NULL, NULL, err);
+        s = table_read(inputs[k], &t[k], NULL, NULL, 1, err);
         if (!s && k && (t[k].head_len != t[0].head_len ||
                         memcmp(t[k].data, t[0].data, t[0].head_len) != 0))
             s = bkf_error_set(err, BKF_EINPUT,
@@ -1144,14 +1179,35 @@ int bkf_sweep_merge(const char *const *inputs, size_t n, const char *out, size_t
     unsigned char *seen = s ? NULL : calloc(t[0].points, 1);
     if (!s && !seen) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     /* a point computed twice (a task run again) is one row: rows are a
-     * function of the point, so either copy is the row */
+     * function of the point, bit for bit, so two copies that differ mean
+     * that a table is damaged or not of this sweep: refused, naming the
+     * point, rather than keeping one of them at random */
+    /* for each point seen: its row's place in `all` and the table it came from */
+    size_t *at = s ? NULL : malloc(2 * t[0].points * sizeof *at), *from = at ? at + t[0].points : NULL;
+    if (!s && !at) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     for (size_t k = 0; !s && k < n; k++)
-        for (size_t i = 0; i < t[k].nrows; i++)
-            if (!seen[t[k].rows[i].index]) {
-                seen[t[k].rows[i].index] = 1;
-                all[m++] = t[k].rows[i];
+        for (size_t i = 0; !s && i < t[k].nrows; i++) {
+            const struct row *r = &t[k].rows[i];
+            if (!seen[r->index]) {
+                seen[r->index] = 1;
+                from[r->index] = k;
+                at[r->index] = m;
+                all[m++] = *r;
+                continue;
             }
+            const struct row *first = &all[at[r->index]];
+            if (first->len != r->len || memcmp(first->line, r->line, r->len) != 0)
+                s = bkf_error_set(err, BKF_EINPUT,
+                                  "merge: point %zu has two different rows, in %s and in %s (a "
+                                  "point's row is the same however the sweep is split: one of "
+                                  "them is damaged or of another build)",
+                                  r->index, inputs[from[r->index]], inputs[k]);
+        }
+    free(at);
+    bkf_io_lock *lock = NULL;
+    if (!s && !(lock = bkf_io_lock_take(out, err))) s = err ? err->status : BKF_EINPUT;
     if (!s) s = table_write(out, t[0].data, t[0].head_len, all, m, 1, err);
+    bkf_io_lock_release(lock);
     if (!s && missing) *missing = t[0].points - m;
     free(seen);
     free(all);

@@ -1,5 +1,6 @@
 /* gnuplot jobs and data files (plot.h). */
-#define _POSIX_C_SOURCE 200809L
+/* strsignal and prctl's PR_SET_PDEATHSIG are GNU and Linux. */
+#define _GNU_SOURCE
 #include "bkfront/plot.h"
 
 #include "bkfront/io.h"
@@ -10,6 +11,7 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/prctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -107,20 +109,34 @@ int bkf_plot_set_number(bkf_plot_job *job, const char *name, double value, bkf_e
     return append(job, buf, err);
 }
 
-/* A gnuplot single-quoted string: nothing is special inside but the quote
- * itself, which is doubled. */
+/* A gnuplot expression for the string `value`, exactly: single-quoted runs
+ * (inside single quotes gnuplot interprets nothing: no backslash escapes,
+ * no `command` substitution, which double quotes would run) joined by
+ * "." to "'" for each single quote.  Doubling a quote inside single
+ * quotes is not enough: gnuplot reads two quotes at the start of a token
+ * as an empty string, so a value starting with a quote failed. */
 static char *quoted(const char *value)
 {
     size_t n = 3;
-    for (const char *p = value; *p; p++) n += *p == '\'' ? 2 : 1;
+    for (const char *p = value; *p; p++) n += *p == '\'' ? 12 : 1;
     char *q = malloc(n), *w = q;
     if (!q) return NULL;
-    *w++ = '\'';
+    int open = 0, pieces = 0;
     for (const char *p = value; *p; p++) {
-        if (*p == '\'') *w++ = '\'';
+        if (*p == '\'') {
+            if (open) *w++ = '\'';
+            open = 0;
+            w += sprintf(w, "%s\"'\"", pieces++ ? " . " : "");
+            continue;
+        }
+        if (!open) {
+            w += sprintf(w, "%s'", pieces++ ? " . " : "");
+            open = 1;
+        }
         *w++ = *p;
     }
-    *w++ = '\'';
+    if (open) *w++ = '\'';
+    if (!pieces) w += sprintf(w, "''");
     *w = '\0';
     return q;
 }
@@ -169,7 +185,7 @@ int bkf_plot_add_output(bkf_plot_job *job, bkf_plot_format format, const char *p
 
 bkf_plot_options bkf_plot_options_default(void)
 {
-    bkf_plot_options o = {NULL, 60.0};
+    bkf_plot_options o = {NULL, 60.0, NULL, NULL, NULL};
     return o;
 }
 
@@ -207,22 +223,32 @@ static void read_back(int fd, char *buf, size_t size)
     buf[n] = '\0';
 }
 
+/* How run_captured's child ended when it did not exit by itself. */
+enum { RUN_EXITED = 0, RUN_TIMED_OUT, RUN_CANCELED, RUN_SIGNALED };
+
 /* Runs argv with stdin and stdout on /dev/null and stderr into `errbuf`.
- * Returns the exit code, -1 when killed (timeout) and -2 when it could not
- * be started (127 from the child: exec failed). */
-static int run_captured(char *const argv[], double timeout, char *errbuf, size_t size,
-                        int *timed_out)
+ * Returns the exit code, -1 when it did not exit (*how says why: killed at
+ * the timeout, stopped because *cancel was raised, or ended by a signal,
+ * *sig) and -2 when it could not be started (127 from the child: exec
+ * failed).  The child dies with its parent (PR_SET_PDEATHSIG): a bkfront
+ * ended by a second Ctrl-C or SIGKILL leaves no gnuplot drawing on. */
+static int run_captured(char *const argv[], double timeout, const volatile sig_atomic_t *cancel,
+                        char *errbuf, size_t size, int *how, int *sig)
 {
-    *timed_out = 0;
+    *how = RUN_EXITED;
+    *sig = 0;
     errbuf[0] = '\0';
     int efd = temp_file();
     if (efd < 0) return -2;
+    pid_t parent = getpid();
     pid_t pid = fork();
     if (pid < 0) {
         close(efd);
         return -2;
     }
     if (pid == 0) {
+        (void)prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (getppid() != parent) _exit(127); /* the parent died before the prctl */
         int null = open("/dev/null", O_RDWR);
         if (null >= 0) {
             dup2(null, 0);
@@ -238,10 +264,14 @@ static int run_captured(char *const argv[], double timeout, char *errbuf, size_t
         pid_t w = waitpid(pid, &status, WNOHANG);
         if (w == pid) break;
         if (w < 0 && errno != EINTR) break;
-        if (now_seconds() - t0 > timeout) {
+        int stop = cancel && *cancel ? RUN_CANCELED
+                   : now_seconds() - t0 > timeout ? RUN_TIMED_OUT
+                                                  : RUN_EXITED;
+        if (stop) {
             kill(pid, SIGKILL);
-            waitpid(pid, &status, 0);
-            *timed_out = 1;
+            while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+            }
+            *how = stop;
             break;
         }
         struct timespec nap = {0, 5000000};
@@ -249,8 +279,64 @@ static int run_captured(char *const argv[], double timeout, char *errbuf, size_t
     }
     read_back(efd, errbuf, size);
     close(efd);
-    if (*timed_out || !WIFEXITED(status)) return -1;
-    return WEXITSTATUS(status);
+    if (*how) return -1;
+    if (WIFSIGNALED(status)) {
+        *how = RUN_SIGNALED;
+        *sig = WTERMSIG(status);
+        return -1;
+    }
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+/* Whether the file at `path` is a whole image of its format, by its first
+ * and last bytes: gnuplot exits 0 even when writing the image failed (a
+ * full disk, a file size limit), leaving a truncated file behind.  A PNG
+ * ends with its IEND chunk, a PDF with %%EOF, an SVG with </svg> (the text
+ * formats perhaps followed by white space). */
+static int image_whole(const char *path, bkf_plot_format format, char *why, size_t wsize)
+{
+    static const char png_sig[8] = "\x89PNG\r\n\x1a\n";
+    static const char png_end[12] = "\0\0\0\0IEND\xae\x42\x60\x82";
+    int fd = open(path, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+    struct stat st;
+    if (fd < 0 || fstat(fd, &st) != 0) {
+        if (fd >= 0) close(fd);
+        snprintf(why, wsize, "it cannot be read back");
+        return 0;
+    }
+    char head[17] = {0}, tail[1024];
+    size_t nt = st.st_size < (off_t)sizeof tail ? (size_t)st.st_size : sizeof tail;
+    ssize_t h = pread(fd, head, sizeof head - 1, 0);
+    ssize_t t = pread(fd, tail, nt, st.st_size - (off_t)nt);
+    close(fd);
+    if (st.st_size == 0) {
+        snprintf(why, wsize, "it is empty");
+        return 0;
+    }
+    if (h < 0 || t != (ssize_t)nt) {
+        snprintf(why, wsize, "it cannot be read back");
+        return 0;
+    }
+    int ok = 0;
+    const char *missing = "";
+    if (format == BKF_PLOT_PNG) {
+        ok = h >= 8 && memcmp(head, png_sig, 8) == 0 && nt >= 12 &&
+             memcmp(tail + nt - 12, png_end, 12) == 0;
+        missing = "no IEND chunk at its end";
+    } else {
+        while (nt && strchr(" \t\r\n", tail[nt - 1])) nt--;
+        const char *start = head + strspn(head, " \t\r\n");
+        if (format == BKF_PLOT_PDF) {
+            ok = memcmp(head, "%PDF-", 5) == 0 && nt >= 5 && memcmp(tail + nt - 5, "%%EOF", 5) == 0;
+            missing = "no %%EOF trailer";
+        } else {
+            ok = (strncmp(start, "<?xml", 5) == 0 || strncmp(start, "<svg", 4) == 0) && nt >= 6 &&
+                 memcmp(tail + nt - 6, "</svg>", 6) == 0;
+            missing = "no closing </svg>";
+        }
+    }
+    if (!ok) snprintf(why, wsize, "%lld bytes, %s", (long long)st.st_size, missing);
+    return ok;
 }
 
 /* gnuplot's error report is a few lines: the offending command, a caret,
@@ -320,6 +406,7 @@ int bkf_plot_run(const bkf_plot_job *job, const bkf_plot_options *options,
             s = bkf_error_set(err, e.status ? e.status : BKF_EINPUT, "%s", e.message);
             break;
         }
+        if (o.temp_file) o.temp_file(bkf_io_atomic_temp_path(parts[f]), 1, o.data);
         char *q = quoted(bkf_io_atomic_temp_path(parts[f]));
         size_t m = (job->vars ? job->vars_len : 0) + (q ? strlen(q) : 0) + 64;
         exprs[f] = q ? malloc(m) : NULL;
@@ -340,18 +427,23 @@ int bkf_plot_run(const bkf_plot_job *job, const bkf_plot_options *options,
 
     if (!s) {
         char errbuf[16384], line[BKF_ERROR_LEN - 64];
-        int timed_out;
+        int how, sig;
         double t0 = now_seconds();
-        int code = run_captured(argv, timeout, errbuf, sizeof errbuf, &timed_out);
+        int code = run_captured(argv, timeout, o.cancel, errbuf, sizeof errbuf, &how, &sig);
         r.seconds = now_seconds() - t0;
         r.exit_code = code < 0 ? -1 : code;
         if (code == -2 || code == 127) {
             s = bkf_error_set(err, BKF_EINPUT,
                               "cannot run %s (install gnuplot, e.g. the Debian package "
                               "gnuplot-nox)", program);
-        } else if (timed_out) {
+        } else if (how == RUN_CANCELED) {
+            s = bkf_error_set(err, BKF_ECANCELED, "gnuplot stopped: no figure written");
+        } else if (how == RUN_TIMED_OUT) {
             s = bkf_error_set(err, BKF_ENUMERIC, "gnuplot %s killed after %g s", job->script,
                               timeout);
+        } else if (how == RUN_SIGNALED) {
+            s = bkf_error_set(err, BKF_ENUMERIC, "gnuplot %s ended by signal %d (%s)",
+                              job->script, sig, strsignal(sig));
         } else if (code != 0) {
             pick_line(errbuf, 0, line, sizeof line);
             s = bkf_error_set(err, BKF_ENUMERIC, "gnuplot exited %d: %s", code,
@@ -359,21 +451,30 @@ int bkf_plot_run(const bkf_plot_job *job, const bkf_plot_options *options,
         } else {
             pick_line(errbuf, 1, r.warning, sizeof r.warning);
             for (int f = 0; f < BKF_PLOT_NFORMATS && !s; f++) {
+                char why[128];
                 if (!parts[f]) continue;
                 struct stat st;
                 if (stat(bkf_io_atomic_temp_path(parts[f]), &st) != 0 || st.st_size == 0)
                     s = bkf_error_set(err, BKF_ENUMERIC,
                                       "gnuplot exited 0 but wrote no %s (does %s set output?)",
                                       job->outputs[f], job->script);
+                else if (!image_whole(bkf_io_atomic_temp_path(parts[f]), (bkf_plot_format)f, why,
+                                      sizeof why))
+                    s = bkf_error_set(err, BKF_EIO,
+                                      "gnuplot exited 0 but its %s image %s is not whole (%s: "
+                                      "a full disk or a file size limit?); not written",
+                                      format_names[f], job->outputs[f], why);
             }
             for (int f = 0; f < BKF_PLOT_NFORMATS && !s; f++) {
                 if (!parts[f]) continue;
+                if (o.temp_file) o.temp_file(bkf_io_atomic_temp_path(parts[f]), 0, o.data);
                 s = bkf_io_atomic_commit(parts[f], err);
                 parts[f] = NULL;
             }
         }
     }
     for (int f = 0; f < BKF_PLOT_NFORMATS; f++) {
+        if (parts[f] && o.temp_file) o.temp_file(bkf_io_atomic_temp_path(parts[f]), 0, o.data);
         bkf_io_atomic_abort(parts[f]);
         free(exprs[f]);
     }
@@ -386,8 +487,8 @@ int bkf_plot_probe(const char *gnuplot, char *version, size_t size, bkf_error *e
     const char *program = gnuplot && *gnuplot ? gnuplot : "gnuplot";
     char *argv[] = {(char *)program, "-e", "print GPVAL_VERSION", NULL};
     char buf[1024];
-    int timed_out;
-    int code = run_captured(argv, 20.0, buf, sizeof buf, &timed_out);
+    int how, sig;
+    int code = run_captured(argv, 20.0, NULL, buf, sizeof buf, &how, &sig);
     if (code != 0)
         return bkf_error_set(err, BKF_EINPUT,
                              "cannot run %s (install gnuplot, e.g. the Debian package "

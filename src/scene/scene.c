@@ -114,7 +114,7 @@ static int lookup_add(lookup *l, size_t h, size_t index)
 
 typedef enum {
     V_GAMMA, V_C, V_NU, V_NU_ANY, V_S, V_TOL, V_PDE_TOL, V_GRID_N, V_MODEL,
-    V_COUNT, V_SEED, V_NUMBER, V_POSITIVE, V_NU_LIST, V_COUNT_LIST, V_RANGE_LOG,
+    V_COUNT, V_PIXELS, V_SEED, V_NUMBER, V_POSITIVE, V_NU_LIST, V_COUNT_LIST, V_RANGE_LOG,
     V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_METHOD, V_STEPPER, V_FRAME, V_GRID, V_FORMATS, V_TEXT, V_NAME, V_INIT, V_GAMMA_LIST
 } value_type;
 
@@ -184,8 +184,8 @@ static const key_spec keys[] = {
     {"script", V_TEXT, K(BKF_SCENE_FIGURE), "a gnuplot script path"},
     {"formats", V_FORMATS, K(BKF_SCENE_FIGURE), "png, pdf, svg or a list such as png,svg"},
     {"title", V_TEXT, K(BKF_SCENE_FIGURE), "text"},
-    {"width", V_COUNT, K(BKF_SCENE_FIGURE), "an integer >= 1 (pixels)"},
-    {"height", V_COUNT, K(BKF_SCENE_FIGURE), "an integer >= 1 (pixels)"},
+    {"width", V_PIXELS, K(BKF_SCENE_FIGURE), "pixels"},
+    {"height", V_PIXELS, K(BKF_SCENE_FIGURE), "pixels"},
 };
 #define NKEYS (sizeof keys / sizeof keys[0])
 
@@ -314,6 +314,8 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
     }
     case V_COUNT:
         return bkf_option_parse_count(v, 1, 1000000, "", k, &n, err);
+    case V_PIXELS:
+        return bkf_option_parse_count(v, 1, BKF_PLOT_PIXELS_MAX, "", k, &n, err);
     case V_SEED:
         if (!*v || strspn(v, "0123456789") != strlen(v) || strlen(v) > 18)
             return bkf_error_set(err, BKF_EINPUT, "seed: '%s' is not an integer in [0, 1e18)",
@@ -918,6 +920,8 @@ int bkf_scene_parse_string(const char *text, const char *name, bkf_scene **out, 
         free(s);
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
+    /* A UTF-8 byte order mark, which some editors put first, is not text. */
+    if (strncmp(text, "\xEF\xBB\xBF", 3) == 0) text += 3;
     parse_state st = {.s = s, .name = s->path, .text = text, .err = err, .section_kind = -3};
     /* Strict: no Python-style continuation lines, comments with ; or #. */
     ini_allow_multiline = 0;
@@ -1844,8 +1848,8 @@ static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
     if (!s) s = bkf_plot_set_string(job, "param", param ? param : "", err);
     size_t w = 900, h = 600;
     const char *wt = bkf_scene_value(sc, fig, "width"), *ht = bkf_scene_value(sc, fig, "height");
-    if (wt) bkf_option_parse_count(wt, 1, 1000000, "", "width", &w, NULL);
-    if (ht) bkf_option_parse_count(ht, 1, 1000000, "", "height", &h, NULL);
+    if (wt) bkf_option_parse_count(wt, 1, BKF_PLOT_PIXELS_MAX, "", "width", &w, NULL);
+    if (ht) bkf_option_parse_count(ht, 1, BKF_PLOT_PIXELS_MAX, "", "height", &h, NULL);
     if (!s) s = bkf_plot_set_number(job, "width", (double)w, err);
     if (!s) s = bkf_plot_set_number(job, "height", (double)h, err);
     for (size_t i = 0; !s && i < step->nargs; i++) {
@@ -1857,7 +1861,11 @@ static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
         s = bkf_plot_add_output(job, f, path, err);
     }
     bkf_plot_report report;
-    if (!s) s = bkf_plot_run(job, NULL, &report, err);
+    bkf_plot_options po = bkf_plot_options_default();
+    po.cancel = o->hooks.cancel;
+    po.temp_file = o->temp_file;
+    po.data = o->data;
+    if (!s) s = bkf_plot_run(job, &po, &report, err);
     if (!s && warning) snprintf(warning, wsize, "%s", report.warning);
     bkf_plot_job_free(job);
     return s;

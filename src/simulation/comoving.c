@@ -458,7 +458,7 @@ static int check_params(const bkf_comoving_params *p, bkf_error *err)
     if (!p) return bkf_error_set(err, BKF_EINPUT, "parameters are NULL");
     int s;
     if ((s = bkf_model_check_positive("gamma", p->model.gamma, err))) return s;
-    if ((s = bkf_model_check_nonnegative("c", p->model.c, err))) return s;
+    if ((s = bkf_model_check_c(p->model.c, err))) return s;
     if ((s = bkf_model_check_positive("S", p->model.S, err))) return s;
     if ((s = bkf_model_check_nu_active(p->model.nu, err))) return s;
     if (p->n < 1) return bkf_error_set(err, BKF_EINPUT, "n = %zu: must be >= 1", p->n);

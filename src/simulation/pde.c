@@ -44,7 +44,7 @@ int bkf_pde_check(const bkf_model_params *p, const bkf_pde_options *o, bkf_error
     if (!p) return bkf_error_set(err, BKF_EINPUT, "parameters are NULL");
     int s;
     if ((s = bkf_model_check_positive("gamma", p->gamma, err))) return s;
-    if ((s = bkf_model_check_nonnegative("c", p->c, err))) return s;
+    if ((s = bkf_model_check_c(p->c, err))) return s;
     if (!(fabs(p->nu) <= BKF_PDE_NU_MAX))
         return bkf_error_set(err, BKF_EINPUT,
                              "nu = %.15g is outside [-%g, %g]: beyond, the uniform slip state "

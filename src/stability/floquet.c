@@ -280,7 +280,7 @@ static int check_gamma_c(double gamma, double c, bkf_error *err)
     if (!isfinite(gamma) || gamma < BKF_CYCLE_MU_MIN || gamma > BKF_CYCLE_MU_MAX)
         return bkf_error_set(err, BKF_EINPUT, "gamma = %.15g is outside [%g, %g]", gamma,
                              BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
-    return bkf_model_check_nonnegative("c", c, err);
+    return bkf_model_check_c(c, err);
 }
 
 static int engine_get(bkf_floquet *f, int dk, int which, engine **out)

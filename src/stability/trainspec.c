@@ -3,6 +3,7 @@
 #include "bkfront/trainspec.h"
 
 #include "bkfront/cycle.h"
+#include "bkfront/hill.h"
 
 #include <gsl/gsl_math.h>
 
@@ -863,22 +864,137 @@ static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *er
     return BKF_OK;
 }
 
+/* ------------------------------------------------- Hill's candidates */
+
+/* Hill's method (hill.h) sees every eigenvalue of a band of frequencies at
+ * once, where the traced curves can step over one (two eigenvalues of one
+ * class closer than the phase resolves; issue 31: n = 1 at mu 1.2 lost its
+ * rightmost pair at Im 18.03 to its neighbour at 17.13) or cannot close
+ * the window at all (the curves stay right of a_lo up to |Im| 1e4 when the
+ * cycle's multiplier is near 1, mu < 1).  Its converged eigenvalues (M and
+ * 2M modes agree, bkf_hill_leading) are candidates: each is polished on
+ * the Radau meshes, whose error estimate is the one reported, so Hill's
+ * truncation never reaches a result.  The truncation's artefacts do not
+ * converge (they move with M, at any height: 0.185 + 1.86i at M 24, mu 4).
+ * Used where the profile is smooth enough for few modes (mu <= HILL_MU_MAX)
+ * and the dense eigenproblems are cheap (HILL_WORK). */
+#define HILL_MU_MAX 6.0
+#define HILL_MODES_MIN 16
+#define HILL_MODES_MAX 64
+/* sum over classes of (the finer matrix's size)^3: about 1.5 s of zgeev */
+#define HILL_WORK 1.5e8
+/* Hill's eigenvalues agree at M and 2M modes this well (absolute) to be
+ * candidates; the polish takes them from there */
+#define HILL_CONVERGED 1e-5
+/* Hill's converged eigenvalues polished, per class, at most (the rightmost first). */
+#define HILL_PER_CLASS 6
+/* Hill's value and the polished one agree this well (relative to 1 +
+ * |sigma|) where Hill's band stands alone */
+#define HILL_AGREE 1e-3
+/* the share of the work budget the trace may spend where Hill answered */
+#define HILL_TRACE_SHARE 0.2
+
+typedef struct {
+    size_t modes;        /* M, 0 when Hill was not used */
+    double y_trust;      /* the largest |Im sigma| among its candidates */
+    int complete;        /* in every class, no unconverged eigenvalue lies right of the
+                            converged ones: Hill vouches for the rightmost */
+    double complex *at;  /* candidates pushed (for the agreement check) */
+    size_t count;
+} hill_stage;
+
+/* Candidates from Hill's method for the classes 0..classes/2 (their
+ * conjugates come from the mirror, as for the traced curves). */
+static int hill_candidates(ctx *x, size_t classes, const window *win, candidates *cs, hill_stage *h,
+                           bkf_error *err)
+{
+    memset(h, 0, sizeof *h);
+    if (x->mu > HILL_MU_MAX) return BKF_OK;
+    size_t thetas = classes / 2 + 1;
+    /* modes to |Im sigma| ~ the band the trace starts with, beyond which the
+     * spectrum is in its asymptotic regime (trace_all): mode m sits near
+     * |Im sigma| = 2 pi m / (T s) */
+    double band = fmax(2.0, x->gamma * x->v / x->c);
+    double want = ceil(band * x->T * x->s / (2.0 * M_PI));
+    size_t M = (size_t)fmin(fmax(want, HILL_MODES_MIN), HILL_MODES_MAX);
+    while (M > HILL_MODES_MIN && (double)thetas * pow(8.0 * (double)M + 2.0, 3.0) > HILL_WORK) M = M * 3 / 4;
+    if ((double)thetas * pow(8.0 * (double)M + 2.0, 3.0) > HILL_WORK) return BKF_OK;
+    h->at = malloc(thetas * HILL_PER_CLASS * sizeof *h->at);
+    if (!h->at) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    h->modes = M;
+    h->complete = 1;
+    int rc = BKF_OK;
+    for (size_t cls = 0; cls < thetas && rc == BKF_OK; cls++) {
+        bkf_hill_eigenvalue ev[HILL_PER_CLASS + 1];
+        size_t found = 0, unresolved = 0;
+        double theta = 2.0 * M_PI * (double)cls / (double)classes;
+        /* one more at class 0: the translation is among them */
+        size_t k = HILL_PER_CLASS + (cls == 0);
+        rc = bkf_hill_leading(x->cycle, x->gamma, theta, M, HILL_CONVERGED, k, ev, NULL, &found,
+                              &unresolved, err);
+        if (rc != BKF_OK) break;
+        if (unresolved > 0 || found == 0) h->complete = 0;
+        for (size_t i = 0; i < found; i++) {
+            double re = ev[i].re, im = ev[i].im;
+            if ((cls == 0 && hypot(re, im) < 1e-6) || re < win->a_lo) continue;
+            if (cand_push(cs, (candidate){re, im, cls, -1, 0}) != BKF_OK) {
+                rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+                break;
+            }
+            if (h->count < thetas * HILL_PER_CLASS) h->at[h->count++] = re + I * im;
+            h->y_trust = fmax(h->y_trust, fabs(im));
+        }
+    }
+    /* the band Hill resolved reaches to its modes' frequency */
+    h->y_trust = fmax(h->y_trust, 2.0 * M_PI * (double)M / (x->T * x->s));
+    return rc;
+}
+
 /* Spectrum in `classes` phase classes: per class the `keep` rightmost
- * eigenvalues, polished on the fine mesh with error estimates. */
+ * eigenvalues, polished on the fine mesh with error estimates.  The
+ * candidates come from the traced curves and from Hill's method where it
+ * is cheap; where the trace cannot close its window, Hill's band alone
+ * serves if it vouches for its rightmost (hill_stage.complete). */
 static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
-                    window *win, double *y_max, size_t *curve_points, bkf_error *err)
+                    window *win, double *y_max, size_t *curve_points, size_t *hill_modes, bkf_error *err)
 {
     curve heights = {0};
     candidates cs = {0};
     bkf_trainspec_eigenvalue *eig = NULL;
     size_t n_eig = 0;
-    int rc = trace_all(x, win, &heights, y_max, err);
+    hill_stage hs;
+    /* how many are polished per class does not depend on how many are
+     * reported: the rightmost must not depend on per_kappa */
+    size_t polish_n = (keep > 3 ? keep : 3) + 2;
+    int rc = hill_candidates(x, classes, win, &cs, &hs, err);
+    *hill_modes = hs.modes;
+    double max_work = x->max_work;
+    /* where Hill has answered the trace is the cross-check: it may spend a
+     * fifth of the budget, the rest polishes */
+    if (rc == BKF_OK && hs.modes) x->max_work = x->work + HILL_TRACE_SHARE * (max_work - x->work);
+    double a_hi = win->a_hi;
+    bkf_error trace_err = {0};
+    if (rc == BKF_OK) rc = trace_all(x, win, &heights, y_max, &trace_err);
+    x->max_work = max_work;
+    int fallback = 0;
+    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs.modes && hs.complete) {
+        /* the band |Im| <= y_trust, as Hill saw it */
+        fallback = 1;
+        x->stop = 0;
+        heights.count = 0;
+        *y_max = hs.y_trust;
+        win->a_hi = a_hi;
+        x->substeps = SUBSTEPS_START;
+        rc = meshes_for(x, hs.y_trust, win, err);
+    } else if (rc != BKF_OK) {
+        if (err) *err = trace_err;
+    }
     if (rc == BKF_OK) *curve_points += heights.count;
     for (int f = 0; f < FAMILIES && rc == BKF_OK; f++)
         if (collect(&heights, f, classes, &cs) != BKF_OK) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     if (rc == BKF_OK) {
         qsort(cs.items, cs.count, sizeof *cs.items, by_a_desc);
-        eig = calloc(2 * (classes + 2) * (keep + 2), sizeof *eig);
+        eig = calloc(2 * (classes + 2) * (polish_n + HILL_PER_CLASS + 1), sizeof *eig);
         if (!eig) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     /* polish the best few of each class; mirrored classes (j > classes/2)
@@ -886,7 +1002,10 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     for (size_t i = 0; i < cs.count && rc == BKF_OK;) {
         size_t cls = cs.items[i].cls, taken = 0, start_n = n_eig;
         for (; i < cs.count && cs.items[i].cls == cls; i++) {
-            if (taken >= keep + 2 || 2 * cls > classes) continue;
+            /* Hill's candidates are few and accurate: every one is polished,
+             * whatever the traced ones, whose interpolated a can rank a far
+             * eigenvalue before a near one, have taken */
+            if ((taken >= polish_n && cs.items[i].fam >= 0) || 2 * cls > classes) continue;
             candidate cd = cs.items[i];
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
             double complex sc = cd.a + I * cd.y, sf;
@@ -964,7 +1083,10 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
         size_t w = 0;
         for (size_t i = 0; i < n_eig; i++) {
             size_t same = 0;
-            for (size_t k = 0; k < w; k++) same += eig[k].j == eig[i].j;
+            /* the translation is reported besides the `keep`, never instead of one
+             * (with keep 1 it took class 0's only place: issue 31's window edge
+             * -0.203 printed for sigma_max -4.08e-4) */
+            for (size_t k = 0; k < w; k++) same += eig[k].j == eig[i].j && !eig[k].translation;
             /* a conjugate pair (j = 0 or n/2) is never split by the cut */
             int partner = w > 0 && eig[w - 1].j == eig[i].j &&
                           fabs(eig[w - 1].re - eig[i].re) <= eig[w - 1].err + eig[i].err &&
@@ -973,6 +1095,22 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
         }
         n_eig = w;
     }
+    if (rc == BKF_OK && fallback) {
+        /* Hill's band alone: its rightmost eigenvalue must be one the
+         * meshes confirm, else the band's candidates were not converged */
+        double complex top = NAN;
+        for (size_t k = 0; k < n_eig; k++)
+            if (!eig[k].translation && !(creal(top) >= eig[k].re)) top = eig[k].re + I * eig[k].im;
+        double miss = INFINITY;
+        for (size_t k = 0; k < hs.count; k++) miss = fmin(miss, cabs(hs.at[k] - conj(top)));
+        for (size_t k = 0; k < hs.count; k++) miss = fmin(miss, cabs(hs.at[k] - top));
+        if (isfinite(creal(top)) && !(miss <= HILL_AGREE * (1.0 + cabs(top))))
+            rc = bkf_error_set(err, BKF_ETOL,
+                               "spectrum: the curves could not be traced (%s); Hill's method at %zu modes and "
+                               "the Radau meshes disagree on the rightmost eigenvalue by %.3g",
+                               trace_err.message, hs.modes, miss);
+    }
+    free(hs.at);
     free(heights.h);
     free(cs.items);
     if (rc != BKF_OK) {
@@ -1024,7 +1162,7 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
     window win = initial_window(&x, &r->r_inf);
     if (rc == BKF_OK)
         rc = spectrum(&x, t->n, o.per_kappa, &r->eigenvalues, &r->count, &win, &r->y_max,
-                             &r->curve_points, err);
+                      &r->curve_points, &r->hill_modes, err);
     rc = stopped(&x, rc, err);
     if (rc == BKF_OK) {
         r->params = *p;
@@ -1069,6 +1207,22 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
     return rc;
 }
 
+int bkf_trainspec_root(const bkf_model_params *params, const bkf_speeds_root *root, double tol,
+                       size_t per_kappa, bkf_trainspec_result *result, bkf_error *err)
+{
+    if (!root) return bkf_error_set(err, BKF_EINPUT, "root is NULL");
+    bkf_trainspec_train train = {root->n, root->v};
+    bkf_trainspec_options o = bkf_trainspec_options_default();
+    o.tol = tol;
+    o.per_kappa = per_kappa;
+    return bkf_trainspec_ring(params, &train, &o, result, err);
+}
+
+const char *bkf_trainspec_kind_name(const bkf_trainspec_result *result)
+{
+    return result->complex_pair ? "complex" : "real";
+}
+
 int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
                        const bkf_trainspec_options *options, size_t count, bkf_trainspec_eigenvalue *out,
                        bkf_error *err)
@@ -1085,14 +1239,19 @@ int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
     size_t points = 0, n_eig = 0;
     window win = initial_window(&x, &r_inf);
     bkf_trainspec_eigenvalue *eig = NULL;
-    if (rc == BKF_OK) rc = spectrum(&x, count, 1, &eig, &n_eig, &win, &y_max, &points, err);
+    size_t hill_modes = 0;
+    if (rc == BKF_OK) rc = spectrum(&x, count, 1, &eig, &n_eig, &win, &y_max, &points, &hill_modes, err);
     rc = stopped(&x, rc, err);
     if (rc == BKF_OK) {
         double L = x.L;
         for (size_t i = 0; i < count; i++)
             out[i] = (bkf_trainspec_eigenvalue){NAN, NAN, NAN, i, 2.0 * M_PI * (double)i / ((double)count * L), 0};
+        /* the rightmost of each class (the translation too: the branch it is on
+         * passes through 0 at kappa 0); not the last listed, which at kappa 0 was
+         * the translation below class 0's rightmost (issue 31: 8.8e-11 for 0.0697) */
         for (size_t k = 0; k < n_eig; k++) {
             size_t j = eig[k].j;
+            if (out[j].re >= eig[k].re) continue;
             out[j].re = eig[k].re;
             out[j].im = eig[k].im;
             out[j].err = eig[k].err;

@@ -71,7 +71,7 @@ int bkf_chainwave_check(const bkf_model_params *p, size_t n, const bkf_chainwave
                              "gamma = %g is outside (0, %g] for the chain's waves%s", p->gamma,
                              gmax, gmax < BKF_CHAINWAVE_GAMMA_MAX
                                        ? " (up to 100 with the implicit stepper)" : "");
-    int s = bkf_model_check_nonnegative("c", p->c, err);
+    int s = bkf_model_check_c(p->c, err);
     if (!s) s = bkf_model_check_nu_active(p->nu, err);
     if (!s) s = bkf_model_check_positive("S", p->S, err);
     if (s) return s;

@@ -83,7 +83,7 @@ int bkf_speeds_check(const bkf_model_params *p, const bkf_speeds_options *o, bkf
         return bkf_error_set(err, BKF_EINPUT,
                              "gamma = %.15g is outside [%g, %g] (mu >= gamma must be solvable)",
                              p->gamma, BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
-    if ((rc = bkf_model_check_nonnegative("c", p->c, err))) return rc;
+    if ((rc = bkf_model_check_c(p->c, err))) return rc;
     if ((rc = bkf_model_check_positive("S", p->S, err))) return rc;
     if (!isfinite(p->nu) || fabs(p->nu) >= 1.0)
         return bkf_error_set(err, BKF_EINPUT,
@@ -358,6 +358,7 @@ typedef struct {
 typedef struct {
     grid g;
     double n_from, n_last;       /* requested levels (n_last may be lowered to n_max) */
+    double grid_last;            /* levels 1..grid_last shape the grid, whatever was requested */
     double n_max;                /* levels 1..n_max have a root */
     int dips;
     double g_inf_ln;
@@ -553,7 +554,7 @@ static int resolve_levels(search *sr, bkf_error *err)
         for (size_t i = 0; i + 1 < g->count && !changed; i++) {
             cell_info c = classify(g, i);
             double first, last;
-            levels_in(g, c.lo, c.hi, sr->n_from, sr->n_last, &first, &last);
+            levels_in(g, c.lo, c.hi, 1.0, sr->grid_last, &first, &last);
             if (first > last) continue;
             const sample *a = &g->x[i], *b = &g->x[i + 1];
             if (c.shape != CELL_UNKNOWN) {
@@ -565,7 +566,7 @@ static int resolve_levels(search *sr, bkf_error *err)
                     double n_near = round(exp(g->lnA - lj));
                     if (n_near < 1) n_near = 1;
                     if (fabs(lj - level(g, n_near)) <= 2.0 * g->x[j].u &&
-                        n_near >= sr->n_from && n_near <= sr->n_last) {
+                        n_near <= sr->grid_last) {
                         int rc = try_upgrade(sr, j, n_near, err);
                         if (rc) return rc;
                         changed = 1;
@@ -788,6 +789,10 @@ static int formula_root(const grid *g, double n, double r0, double width, bkf_as
  * end sens is large and T may be looser, up to 10 tol (beyond, the noise of
  * T would keep |D| from reaching tol); at a fold sens -> 0 and v_err says
  * what was reached. */
+/* A root not polished to tol is tried at this many times tol, to tell a
+ * tol beyond what T gives there (refused) from no T at all (unresolved). */
+#define LOOSE_FACTOR 100.0
+
 static int polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root *out,
                   bkf_error *err)
 {
@@ -1103,10 +1108,16 @@ static int speeds_find_body(const bkf_model_params *p, const bkf_speeds_options 
     sr.n_from = (double)o.n_from;
     double n_star = ceil(exp(g->lnA - g->lnk)) - 1.0; /* levels strictly above k */
     double n_req_last = o.n_to ? (double)o.n_to : sr.n_from + BKF_SPEEDS_MAX_ROWS - 1;
-    double n_target = fmin(n_req_last, n_star);
-    if (n_target < sr.n_from) n_target = 0;
+    /* The grid, its refinement and its precise samples are those of the
+     * whole table (levels 1 .. BKF_SPEEDS_MAX_ROWS, or the last requested
+     * if beyond), so a root does not depend on which rows were asked for:
+     * speeds --n 4 gave 0.48545916040133913 where the table gave
+     * 0.48545916040196629 (issue 36). */
+    double grid_last = fmax(n_req_last, (double)BKF_SPEEDS_MAX_ROWS);
+    double n_target = fmin(grid_last, n_star);
+    if (n_target < 1) n_target = 0;
     if ((rc = first_sample(&sr, log(T_gamma), T_gamma_err / T_gamma + 8.0 * DBL_EPSILON,
-                           fmax(level(g, sr.n_from), g->lnk), err)))
+                           fmax(level(g, 1.0), g->lnk), err)))
         goto done;
     if ((rc = build_grid(&sr, n_target, err))) goto done;
     if ((rc = find_n_max(&sr, err))) goto done;
@@ -1115,10 +1126,13 @@ static int speeds_find_body(const bkf_model_params *p, const bkf_speeds_options 
     t->dips_below_k = sr.dips;
     t->g_inf = sr.dips ? exp(sr.g_inf_ln) : t->k;
     sr.n_last = fmin(n_req_last, sr.n_max);
+    sr.grid_last = fmin(grid_last, sr.n_max);
     if (!o.n_to && sr.n_max > n_req_last) t->truncated = 1;
 
     if (sr.n_last >= sr.n_from) {
         if ((rc = resolve_levels(&sr, err))) goto done;
+        /* the last sample's precise solve, as the table's (the tail's roots) */
+        if (sr.asym_mu0 > 0 && (rc = upgrade(g, g->count - 1, err))) goto done;
         /* brackets, cell by cell so that precise solves warm-start */
         for (size_t i = 0; i + 1 < g->count; i++) {
             cell_info c = classify(g, i);
@@ -1142,10 +1156,33 @@ static int speeds_find_body(const bkf_model_params *p, const bkf_speeds_options 
                     found_cap = nc;
                 }
                 bkf_error pe = {0};
+                /* each root's precise solves start cold: warm from the root
+                 * polished before, its value would depend on the rows asked */
+                g->mu_last[1] = 0;
                 rc = polish(g, fs, n, i, &found[nfound], &pe);
                 if (bkf_status_is_numerical(rc) && !(g->formula_refused && g->method != BKF_METHOD_AUTO)) {
-                    /* one root lost is reported, not the whole table (a
-                     * formula the user asked for and refused is the answer) */
+                    /* Had at a looser tolerance, the root exists and the tol
+                     * asked is beyond what T gives there: refused, never left
+                     * out of a table that succeeds (issue 31: at tol 1e-14 the
+                     * paper's table kept 4 of its 12 rows, exit 0).  Not had
+                     * at all (inside a canard explosion T jumps across the
+                     * level): reported as unresolved, the other rows stand. */
+                    double tol = g->tol;
+                    found_root loose;
+                    bkf_error le = {0};
+                    g->tol = fmin(LOOSE_FACTOR * tol, BKF_TOL_MAX);
+                    g->mu_last[1] = 0;
+                    int lrc = g->tol > tol ? polish(g, fs, n, i, &loose, &le) : rc;
+                    g->tol = tol;
+                    if (lrc == BKF_OK) {
+                        rc = bkf_error_set(err, BKF_ETOL,
+                                           "n = %.0f: the root near mu = %.6g (v = %.6g) cannot be polished "
+                                           "to tol %g, only to %g (%s)",
+                                           n, mu_of_s(g->p.gamma, loose.s),
+                                           g->p.c / sqrt(1.0 - pow(g->p.gamma / mu_of_s(g->p.gamma, loose.s), 2)),
+                                           tol, fmin(LOOSE_FACTOR * tol, BKF_TOL_MAX), pe.message);
+                        goto done;
+                    }
                     note_unresolved(&sr, n, g->x[i].mu, "root not polished (T failed)");
                     rc = BKF_OK;
                     continue;

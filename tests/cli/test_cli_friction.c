@@ -1,6 +1,7 @@
 /* bkfront friction: a catalogue product run from its own flags. */
 #include "harness.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "cli_support.h"
@@ -37,5 +38,29 @@ TEST(cli_friction_rejects_bad_input)
     }
     bkf_cli_result r = BKF_CLI("friction", "--from", "3", "--to", "1");
     CHECK_MSG(r.code == 2 && r.out[0] == '\0', "%s", r.err);
+    bkf_cli_result_free(&r);
+}
+
+/* A range whose arithmetic overflows is refused with the range, not
+ * printed as inf and nan rows: phi(v - 1) ~ v^3/3 overflows beyond about
+ * 5.6e102, and to - from beyond DBL_MAX. */
+TEST(cli_friction_refuses_ranges_that_overflow)
+{
+    const char *bad[][4] = {{"--to", "1e308", "--points", "5"},
+                            {"--from", "-1e200", "--to", "1e200"},
+                            {"--from", "-1e103", "--to", "0"},
+                            {"--from", "1e-3", "--to", "2e100"}};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        bkf_cli_result r = BKF_CLI("friction", bad[i][0], bad[i][1], bad[i][2], bad[i][3]);
+        CHECK_MSG(r.code == 2 && r.out[0] == '\0' && strstr(r.err, "1e+100"), "%s %s: %d %s",
+                  bad[i][0], bad[i][1], r.code, r.err);
+        bkf_cli_result_free(&r);
+    }
+    /* the ends of the range: every number finite, the closed form's sign */
+    bkf_cli_result r = BKF_CLI("friction", "--from", "-1e100", "--to", "1e100", "--points", "3");
+    CHECK_MSG(r.code == 0, "%s", r.err);
+    double cs;
+    CHECK(bkf_tsv_cell(r.out, 0, "creep_slip", &cs, NULL, 0) && isfinite(cs) && cs < -1e299);
+    CHECK(bkf_tsv_cell(r.out, 2, "creep_slip", &cs, NULL, 0) && isfinite(cs) && cs > 1e299);
     bkf_cli_result_free(&r);
 }

@@ -151,7 +151,7 @@ TEST(cli_simulate_blames_the_parameter_not_the_state)
     } cases[] = {
         {"--gamma", "1e300", "gamma = 1e+300 is outside [1e-06, 1e+06]"},
         {"--gamma", "1e-300", "gamma = 1e-300 is outside [1e-06, 1e+06]"},
-        {"--c", "1e200", "c = 1e+200"},
+        {"--c", "1e200", "--c: 1e200 is not in [0, 1e+06]"},
         {"--S", "1e-300", "S = 1e-300"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -281,4 +281,37 @@ TEST(cli_simulate_memory_does_not_grow_with_tmax)
     free(t);
     unlink(diag);
     rmdir(dir);
+}
+
+/* The sound speed has one cap for every product (BKF_MODEL_C_MAX): beyond
+ * it k(nu) c gamma overflowed into a printed "inf", and a Floquet
+ * threshold's q_c became subnormal (8.7e-309, digits lost) with exit 0. */
+TEST(cli_sound_speed_is_capped_everywhere)
+{
+    static const char *const runs[][14] = {
+        {"speeds", "--gamma", "2", "--nu", "-0.96", "--S", "20", "--c"},
+        {"branch", "--param", "S", "--from", "20", "--to", "21", "--gamma", "2", "--nu", "-0.96",
+         "--c"},
+        {"stability", "--gamma", "2", "--nu", "-0.96", "--S", "20", "--n", "4", "--c"},
+        {"floquet", "--gamma", "2", "--nu", "-0.96", "--q", "0", "--c"},
+        {"floquet", "--threshold", "--gamma", "2", "--c"},
+        {"check", "--n", "4", "--c"},
+        {"simulate", "--tmax", "1", "--c"},
+        {"sweep", "--out", "/tmp/bkf_never_written.tsv", "--tmax", "1", "--c"},
+        {"profile", "--gamma", "2", "--nu", "-0.96", "--S", "20", "--n", "4", "--c"},
+        {"branch", "--param", "c", "--from", "0.3", "--gamma", "2", "--nu", "-0.96", "--S", "20",
+         "--to"},
+        {"floquet", "--threshold", "--along", "c", "--from", "0.1", "--gamma", "2", "--to"},
+    };
+    for (size_t i = 0; i < sizeof runs / sizeof runs[0]; i++) {
+        const char *args[16];
+        size_t n = 0;
+        for (; n < 14 && runs[i][n]; n++) args[n] = runs[i][n];
+        args[n++] = "1e308";
+        args[n] = NULL;
+        bkf_cli_result r = bkf_cli_run(args, NULL);
+        CHECK_MSG(r.code == 2 && strstr(r.err, "1e+06") && r.out[0] == '\0', "%s ... %s: %d %s",
+                  args[0], args[n - 2], r.code, r.err);
+        bkf_cli_result_free(&r);
+    }
 }

@@ -694,5 +694,9 @@ TEST(api_fuzz_io)
     CHECK_EINPUT(bkf_io_atomic_commit(NULL, err));
     CHECK(bkf_io_atomic_stream(NULL) == NULL && bkf_io_atomic_temp_path(NULL) == NULL);
     bkf_io_atomic_abort(NULL);
+    CHECK_NULL_EINPUT(bkf_io_lock_take(NULL, err));
+    CHECK_NULL_EINPUT(bkf_io_lock_take("", err));
+    CHECK_NULL_EINPUT(bkf_io_lock_take("/nonexistent-dir-bkf/x.tsv", err));
+    bkf_io_lock_release(NULL);
     fclose(devnull);
 }

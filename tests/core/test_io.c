@@ -4,6 +4,7 @@
 #include "harness.h"
 
 #include <errno.h>
+#include <signal.h>
 #include <stdint.h>
 #include <string.h>
 #include <fcntl.h>
@@ -287,6 +288,7 @@ TEST(io_json_layout)
         "    \"\"\n"
         "  ],\n"
         "  \"columns\": [\"mu\", \"T\", \"stepper\"],\n"
+        "  \"kinds\": [\"number\", \"number\", \"text\"],\n"
         "  \"rows\": [\n"
         "    {\"mu\": 1, \"T\": 0.10000000000000001, \"stepper\": \"rk8pd\"},\n"
         "    {\"mu\": null, \"T\": null, \"stepper\": null},\n"
@@ -308,6 +310,7 @@ TEST(io_json_empty_and_invalid_utf8)
     bkf_io_table_free(t);
     char *out = mem_close(&m);
     CHECK_MSG(strcmp(out, "{\n  \"comments\": [],\n  \"columns\": [\"mu\", \"T\", \"stepper\"],\n"
+                          "  \"kinds\": [\"number\", \"number\", \"text\"],\n"
                           "  \"rows\": []\n}\n") == 0,
               "got:\n%s", out);
     CHECK(bkf_test_json_valid(out));
@@ -472,27 +475,186 @@ TEST(io_atomic_abort_leaves_nothing)
     rmdir(dir);
 }
 
-TEST(io_atomic_follows_symlink)
+/* A link where an output goes is never written through: not to a file
+ * (which would be replaced), a folder, nothing (a dangling link would
+ * create its target) or a chain of links; the link and what it points to
+ * stay as they were, and no temporary is left. */
+TEST(io_atomic_never_writes_through_a_symlink)
 {
     char dir[] = "/tmp/bkf_io_test_XXXXXX";
     make_dir(dir);
-    char real[256], link[256];
-    snprintf(real, sizeof real, "%s/real.tsv", dir);
-    snprintf(link, sizeof link, "%s/link.tsv", dir);
-    FILE *f = fopen(real, "w");
-    fputs("old\n", f);
+    char victim[256], folder[256], link[256], l2[256];
+    snprintf(victim, sizeof victim, "%s/victim.tsv", dir);
+    snprintf(folder, sizeof folder, "%s/folder", dir);
+    snprintf(link, sizeof link, "%s/out.tsv", dir);
+    snprintf(l2, sizeof l2, "%s/l2", dir);
+    FILE *f = fopen(victim, "w");
+    fputs("precious\n", f);
     fclose(f);
-    CHECK(symlink("real.tsv", link) == 0);
+    CHECK(mkdir(folder, 0755) == 0);
+    const char *targets[] = {"victim.tsv", "folder", "missing.tsv", "l2", "out.tsv"};
+    for (size_t i = 0; i < sizeof targets / sizeof targets[0]; i++) {
+        unlink(l2);
+        if (strcmp(targets[i], "l2") == 0) CHECK(symlink("victim.tsv", l2) == 0);
+        CHECK(symlink(targets[i], link) == 0);
+        bkf_error e = {0};
+        bkf_io_atomic *a = bkf_io_atomic_open(link, &e);
+        if (a) { /* the old code: write through the link */
+            fputs("new\n", bkf_io_atomic_stream(a));
+            bkf_io_atomic_commit(a, &e);
+        }
+        CHECK_MSG(!a, "a link to %s was written through", targets[i]);
+        CHECK_MSG(e.status == BKF_EINPUT && strstr(e.message, "symbolic link"), "%s: %s",
+                  targets[i], e.message);
+        struct stat st;
+        CHECK(lstat(link, &st) == 0 && S_ISLNK(st.st_mode));
+        char *v = slurp(victim);
+        CHECK_MSG(strcmp(v, "precious\n") == 0, "the file behind a link to %s changed", targets[i]);
+        CHECK(lstat(victim, &st) == 0 && S_ISREG(st.st_mode));
+        char missing[256];
+        snprintf(missing, sizeof missing, "%s/missing.tsv", dir);
+        CHECK_MSG(!file_exists(missing), "a dangling link created its target");
+        unlink(link);
+    }
+    unlink(l2);
+    /* the folder holds only what the test made: no temporary left */
+    CHECK(dir_entries(dir) == 2);
+    rmdir(folder);
+    unlink(victim);
+    rmdir(dir);
+}
+
+/* One file given to two outputs open at once (simulate --snapshots x.tsv
+ * --out x.tsv) is refused at the second open however it is spelled: the
+ * same name, another spelling of the folder, a link to the folder, a hard
+ * link of the file.  Once the first is committed the name is free again. */
+TEST(io_atomic_refuses_one_file_for_two_outputs)
+{
+    char dir[] = "/tmp/bkf_io_test_XXXXXX";
+    make_dir(dir);
+    char path[256], sub[256], dirlink[256], hard[256];
+    snprintf(path, sizeof path, "%s/x.tsv", dir);
+    snprintf(sub, sizeof sub, "%s/sub", dir);
+    snprintf(dirlink, sizeof dirlink, "%s/alias", dir);
+    snprintf(hard, sizeof hard, "%s/hard.tsv", dir);
+    CHECK(mkdir(sub, 0755) == 0);
+    CHECK(symlink(".", dirlink) == 0);
+    char spelled[4][300];
+    snprintf(spelled[0], sizeof spelled[0], "%s/x.tsv", dir);
+    snprintf(spelled[1], sizeof spelled[1], "%s/sub/../x.tsv", dir);
+    snprintf(spelled[2], sizeof spelled[2], "%s//./x.tsv", dir);
+    snprintf(spelled[3], sizeof spelled[3], "%s/alias/x.tsv", dir);
+    for (int exists = 0; exists < 2; exists++) {
+        if (exists) {
+            FILE *f = fopen(path, "w");
+            fputs("old\n", f);
+            fclose(f);
+            CHECK(link(path, hard) == 0);
+        }
+        bkf_error e = {0};
+        bkf_io_atomic *first = bkf_io_atomic_open(path, &e);
+        CHECK_MSG(first, "%s", e.message);
+        for (int k = 0; k < 4 + exists; k++) {
+            const char *other = k < 4 ? spelled[k] : hard;
+            bkf_io_atomic *second = bkf_io_atomic_open(other, &e);
+            CHECK_MSG(!second, "%s opened while %s is being written", other, path);
+            bkf_io_atomic_abort(second);
+            CHECK_MSG(e.status == BKF_EINPUT && strstr(e.message, "another output"), "%s",
+                      e.message);
+        }
+        /* another file in the same folder is no clash */
+        char y[300];
+        snprintf(y, sizeof y, "%s/y.tsv", dir);
+        bkf_io_atomic *other = bkf_io_atomic_open(y, &e);
+        CHECK_MSG(other, "%s", e.message);
+        bkf_io_atomic_abort(other);
+        fputs("new\n", bkf_io_atomic_stream(first));
+        CHECK_STATUS(bkf_io_atomic_commit(first, &e), BKF_OK);
+        bkf_io_atomic *again = bkf_io_atomic_open(spelled[1], &e);
+        CHECK_MSG(again, "%s", e.message);
+        bkf_io_atomic_abort(again);
+    }
+    unlink(hard);
+    unlink(path);
+    unlink(dirlink);
+    rmdir(sub);
+    CHECK(dir_entries(dir) == 0);
+    rmdir(dir);
+}
+
+/* One writer at a time on a file held by bkf_io_lock_take: a second lock
+ * (here or in another process) and another process's atomic writer are
+ * refused while it is held, named by the holder's PID; the lock file goes
+ * on release, and a lock left by a dead holder (SIGKILL) is no lock. */
+TEST(io_lock_one_writer_at_a_time)
+{
+    char dir[] = "/tmp/bkf_io_test_XXXXXX";
+    make_dir(dir);
+    char path[256], lockfile[300];
+    snprintf(path, sizeof path, "%s/r.tsv", dir);
+    snprintf(lockfile, sizeof lockfile, "%s/.r.tsv.lock", dir);
     bkf_error e = {0};
-    bkf_io_atomic *a = bkf_io_atomic_open(link, &e);
-    CHECK(a);
-    fputs("new\n", bkf_io_atomic_stream(a));
+    bkf_io_lock *l = bkf_io_lock_take(path, &e);
+    CHECK_MSG(l, "%s", e.message);
+    CHECK(!bkf_io_lock_take(path, &e));
+    CHECK_MSG(strstr(e.message, "already being written by this process"), "%s", e.message);
+    /* our own atomic writer may replace the file we hold */
+    bkf_io_atomic *a = bkf_io_atomic_open(path, &e);
+    CHECK_MSG(a, "%s", e.message);
+    fputs("mine\n", bkf_io_atomic_stream(a));
     CHECK_STATUS(bkf_io_atomic_commit(a, &e), BKF_OK);
-    struct stat st;
-    CHECK(lstat(link, &st) == 0 && S_ISLNK(st.st_mode));
-    CHECK(strcmp(slurp(real), "new\n") == 0);
-    unlink(link);
-    unlink(real);
+    bkf_io_lock_release(l);
+    CHECK(!file_exists(lockfile));
+    /* another process holds it (a child that took it after the fork: a
+     * lock taken before would be shared with the child) */
+    int up[2], down[2];
+    CHECK(pipe(up) == 0 && pipe(down) == 0);
+    pid_t kid = fork();
+    if (kid == 0) {
+        bkf_error k = {0};
+        bkf_io_lock *mine = bkf_io_lock_take(path, &k);
+        char c = mine ? 'y' : 'n';
+        if (write(up[1], &c, 1) != 1 || read(down[0], &c, 1) != 1) _exit(2);
+        bkf_io_lock_release(mine);
+        _exit(mine ? 0 : 1);
+    }
+    char c = 0;
+    CHECK(read(up[0], &c, 1) == 1 && c == 'y');
+    char want[64];
+    snprintf(want, sizeof want, "process %ld", (long)kid);
+    CHECK(!bkf_io_lock_take(path, &e));
+    CHECK_MSG(strstr(e.message, want) && strstr(e.message, "another run"), "%s", e.message);
+    a = bkf_io_atomic_open(path, &e);
+    CHECK_MSG(!a, "replaced a file another process holds");
+    bkf_io_atomic_abort(a);
+    CHECK_MSG(strstr(e.message, want) && strstr(e.message, "another run"), "%s", e.message);
+    CHECK(write(down[1], "x", 1) == 1);
+    int st = 0;
+    CHECK(waitpid(kid, &st, 0) == kid);
+    CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+    /* a holder killed outright leaves its lock file, but no lock */
+    kid = fork();
+    if (kid == 0) {
+        bkf_error k = {0};
+        if (!bkf_io_lock_take(path, &k)) _exit(1);
+        raise(SIGKILL);
+    }
+    CHECK(waitpid(kid, &st, 0) == kid);
+    CHECK(WIFSIGNALED(st));
+    CHECK(file_exists(lockfile));
+    l = bkf_io_lock_take(path, &e);
+    CHECK_MSG(l, "%s", e.message);
+    bkf_io_lock_release(l);
+    /* a link planted at the lock file's name is not followed */
+    char victim[256];
+    snprintf(victim, sizeof victim, "%s/victim", dir);
+    CHECK(symlink("victim", lockfile) == 0);
+    CHECK(!bkf_io_lock_take(path, &e));
+    CHECK_MSG(strstr(e.message, "symbolic link"), "%s", e.message);
+    CHECK(!file_exists(victim));
+    unlink(lockfile);
+    unlink(path);
+    CHECK(dir_entries(dir) == 0);
     rmdir(dir);
 }
 
@@ -634,44 +796,5 @@ TEST(io_stale_cleanup_removes_a_zombie_writer_s_temporary)
     int st;
     CHECK(waitpid(pid, &st, 0) == pid);
     CHECK(dir_entries(dir) == 0);
-    rmdir(dir);
-}
-
-/* A chain of links is followed to its end: out -> l2 -> data.tsv (missing)
- * writes data.tsv and leaves both links links; a loop is refused. */
-TEST(io_atomic_follows_a_dangling_chain_and_refuses_a_loop)
-{
-    char dir[] = "/tmp/bkf_io_test_XXXXXX";
-    make_dir(dir);
-    char out[256], l2[256], data[256];
-    snprintf(out, sizeof out, "%s/out.tsv", dir);
-    snprintf(l2, sizeof l2, "%s/l2", dir);
-    snprintf(data, sizeof data, "%s/data.tsv", dir);
-    CHECK(symlink("l2", out) == 0);
-    CHECK(symlink("data.tsv", l2) == 0);
-    bkf_error e = {0};
-    bkf_io_atomic *a = bkf_io_atomic_open(out, &e);
-    CHECK_MSG(a, "%s", e.message);
-    fputs("x\n", bkf_io_atomic_stream(a));
-    CHECK_STATUS(bkf_io_atomic_commit(a, &e), BKF_OK);
-    struct stat st;
-    CHECK(lstat(out, &st) == 0 && S_ISLNK(st.st_mode));
-    CHECK_MSG(lstat(l2, &st) == 0 && S_ISLNK(st.st_mode), "the intermediate link was replaced");
-    CHECK(strcmp(slurp(data), "x\n") == 0);
-    unlink(out);
-    unlink(l2);
-    unlink(data);
-    /* out -> l2 -> out */
-    CHECK(symlink("l2", out) == 0);
-    CHECK(symlink("out.tsv", l2) == 0);
-    a = bkf_io_atomic_open(out, &e);
-    CHECK(!a);
-    CHECK_MSG(e.status == BKF_EINPUT && strstr(e.message, "symbolic links in a row"), "%s",
-              e.message);
-    CHECK(lstat(out, &st) == 0 && S_ISLNK(st.st_mode) && lstat(l2, &st) == 0 &&
-          S_ISLNK(st.st_mode));
-    CHECK(dir_entries(dir) == 2);
-    unlink(out);
-    unlink(l2);
     rmdir(dir);
 }

@@ -112,3 +112,33 @@ TEST(catalog_required_keys_are_named)
     CHECK(err.status == BKF_EINPUT);
     bkf_catalog_spec_free(e, spec);
 }
+
+/* The hooks' cancel flag stops period between points, on a grid and along a
+ * branch (issue 32: Python's Ctrl-C raises it and waits for the product). */
+TEST(catalog_period_stops_on_the_cancel_flag)
+{
+    const bkf_catalog_entry *e = bkf_catalog_find("period");
+    const char *grid[] = {"mu", "1:100:100000", "nu", "0.5", NULL};
+    const char *along[] = {"mu", "1:100:50", "nu", "0.5", "continue", "mu", NULL};
+    const char *const *cases[] = {grid, along};
+    for (size_t c = 0; c < 2; c++) {
+        bkf_error err = {0};
+        void *spec = bkf_catalog_spec_new(e, &err);
+        CHECK(spec != NULL);
+        for (const char *const *kv = cases[c]; *kv; kv += 2)
+            CHECK_STATUS(bkf_catalog_apply(e, spec, kv[0], kv[1], "", &err), BKF_OK);
+        CHECK_STATUS(e->check(spec, "", &err), BKF_OK);
+        volatile sig_atomic_t cancel = 1;
+        bkf_catalog_hooks hooks = {.cancel = &cancel};
+        char *buf = NULL;
+        size_t size = 0;
+        FILE *out = open_memstream(&buf, &size);
+        CHECK_STATUS(e->write(spec, out, BKF_IO_TSV, NULL, &hooks, &err), BKF_ECANCELED);
+        fclose(out);
+        CHECK_MSG(strstr(err.message, "canceled") != NULL, "%s", err.message);
+        /* at most the branch's first point: 1e5 points would take minutes */
+        CHECK(strstr(buf, "1\t0.5\t") == NULL || c == 1);
+        free(buf);
+        bkf_catalog_spec_free(e, spec);
+    }
+}

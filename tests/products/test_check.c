@@ -308,7 +308,7 @@ TEST(check_refuses_bad_options)
     expect_refused(&b, &d, "gamma", "[1e-06, 1e+06]");
     b = m;
     b.c = -0.1;
-    expect_refused(&b, &d, "c", ">= 0");
+    expect_refused(&b, &d, "c", "[0, 1e+06]");
 }
 
 /* --------------------------------------------------- stops and outcomes */
@@ -554,7 +554,7 @@ TEST(check_catalog_refuses_bad_keys)
     bkf_check_spec *spec = bkf_catalog_spec_new(entry, &err);
     CHECK(spec);
     expect_key_refused(entry, spec, "gamma", "0", "[1e-06, 1e+06]");
-    expect_key_refused(entry, spec, "c", "-1", ">= 0");
+    expect_key_refused(entry, spec, "c", "-1", "[0, 1e+06]");
     expect_key_refused(entry, spec, "nu", "1", "(-1, 1)");
     expect_key_refused(entry, spec, "S", "0", "> 0");
     expect_key_refused(entry, spec, "n", "0", "[1, 100000]");

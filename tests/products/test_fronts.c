@@ -206,7 +206,7 @@ static bkf_trainspec_result spectrum_at(size_t n, double S, double v, double dv,
     CHECK_MSG(fabs(t.roots[best].v - v) < dv, "S %.17g: root v %.17g, want %.17g", S,
               t.roots[best].v, v);
     bkf_trainspec_result r;
-    CHECK_STATUS(bkf_stability_root(&p, &t.roots[best], tol, 3, &r, &e), BKF_OK);
+    CHECK_STATUS(bkf_trainspec_root(&p, &t.roots[best], tol, 3, &r, &e), BKF_OK);
     bkf_speeds_table_free(&t);
     return r;
 }
@@ -246,7 +246,7 @@ TEST(products_branch_stability_change_is_where_sigma_max_vanishes)
 
     bkf_trainspec_result r = spectrum_at(3, S, v, 1e-7, tol);
     CHECK_MSG(fabs(r.sigma_max) <= tol, "S %.17g: sigma_max %.3g", S, r.sigma_max);
-    CHECK(strcmp(kind, bkf_stability_kind_name(&r)) == 0);
+    CHECK(strcmp(kind, bkf_trainspec_kind_name(&r)) == 0);
     bkf_test_note("n = 3 changes stability at S = %.10f (v = %.10f): sigma_max %.2g, kappa %.4g, "
                   "%s", S, v, r.sigma_max, r.kappa_max, kind);
     bkf_trainspec_result_free(&r);

@@ -168,3 +168,40 @@ def test_ctrl_c_cancels_a_long_call():
     out, _ = p.communicate(timeout=30)
     assert p.returncode == 3, out
     assert time.time() - t0 < 5
+
+
+def test_a_column_is_typed_by_its_kind_never_by_its_values():
+    # issue 32: t was int64 at frames=5 (t = 0, 1, ...), float64 at frames=10
+    for frames in (5, 10):
+        assert bkfront.simulate(tmax=5, N=32, frames=frames)["t"].dtype == np.float64
+    f = bkfront.product("friction")
+    assert f["v"].dtype == np.float64  # was int64: its values are whole numbers
+    full = bkfront.speeds(2, 0.3, -0.96, 20)
+    empty = bkfront.speeds(2, 0.3, -0.96, 20, n=13)  # n_max 12: no root
+    assert len(empty) == 0 and empty.columns == full.columns
+    for name in full.columns:
+        assert empty[name].dtype.kind == full[name].dtype.kind, name
+    assert full["n"].dtype == np.float64 and full["model"].dtype.kind == "U"
+    assert full["flags"].dtype.kind == "U" and empty.kinds == full.kinds
+
+
+def test_text_with_a_nul_and_a_name_that_is_no_str_are_refused():
+    # '20\x00junk' read as 20 through the C string before
+    with pytest.raises(bkfront.InputError, match="NUL"):
+        bkfront.speeds(2, 0.3, -0.96, "20\x00junk")
+    with pytest.raises(bkfront.InputError, match="NUL"):
+        bkfront.product("period", mu="1\x002", nu=0)
+    for name in (None, 3, b"period"):
+        with pytest.raises(bkfront.InputError, match="name"):
+            bkfront.product(name)
+
+
+def test_messages_name_keys_as_the_keywords_they_are():
+    # issue 36: branch() said "from is required" though its keyword is from_
+    with pytest.raises(bkfront.InputError) as e:
+        bkfront.branch(param="S", to=5, n=6, gamma=1.5, c=0.3, nu=-0.96, S=30)
+    assert "from_ is required" in str(e.value)
+    with pytest.raises(bkfront.InputError, match=r"^stability_tol: "):
+        bkfront.speeds(2, 0.3, -0.96, 20, stability_tol=-1)
+    with pytest.raises(bkfront.InputError, match=r"^frobnicate: not a key of speeds"):
+        bkfront.speeds(2, 0.3, -0.96, 20, frobnicate=1)

@@ -5,9 +5,12 @@
 #include "harness.h"
 
 #include <dirent.h>
+#include <pthread.h>
 #include <fcntl.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -746,6 +749,158 @@ TEST(plot_temporaries_are_exclusive)
     bkf_plot_job_free(job);
     unlink(out);
     unlink(victim);
+    unlink(script);
+    CHECK(rmdir(dir) == 0);
+}
+
+/* Text reaches gnuplot as it was given, whatever it holds: a script
+ * prints the variable into its "image" (an SVG, so that the check of a
+ * whole image passes) and the file is compared with the text. */
+TEST(plot_strings_reach_gnuplot_as_given)
+{
+    char dir[] = "/tmp/bkfront-plot-XXXXXX";
+    CHECK(mkdtemp(dir));
+    char script[256], out[256];
+    snprintf(script, sizeof script, "%s/echo.gp", dir);
+    snprintf(out, sizeof out, "%s/t.svg", dir);
+    FILE *f = fopen(script, "w");
+    CHECK(f);
+    fputs("set print out\nprint '<svg>' . title . '</svg>'\nunset print\n", f);
+    fclose(f);
+    const char *texts[] = {"'It''s", "'", "''", "\"q\" 'x'", "back\\slash\\", "\\n\\t\\101",
+                           "$HOME `id` @x {a_b} \"`id`\"", "", "caf\xc3\xa9"};
+    for (size_t i = 0; i < sizeof texts / sizeof texts[0]; i++) {
+        bkf_error e = {0};
+        bkf_plot_job *job = bkf_plot_job_alloc(script, &e);
+        CHECK(job);
+        CHECK_STATUS(bkf_plot_set_string(job, "title", texts[i], &e), BKF_OK);
+        CHECK_STATUS(bkf_plot_add_output(job, BKF_PLOT_SVG, out, &e), BKF_OK);
+        int s = bkf_plot_run(job, NULL, NULL, &e);
+        CHECK_MSG(s == BKF_OK, "%s: %s", texts[i], e.message);
+        char want[256];
+        snprintf(want, sizeof want, "<svg>%s</svg>\n", texts[i]);
+        char *got = bkf_cli_read_file(out);
+        CHECK_MSG(got && strcmp(got, want) == 0, "%s arrived as %s", texts[i], got ? got : "");
+        free(got);
+        bkf_plot_job_free(job);
+        unlink(out);
+    }
+    unlink(script);
+    CHECK(rmdir(dir) == 0);
+}
+
+/* gnuplot exits 0 after a write that failed (a full disk; here the file
+ * size limit, SIGXFSZ ignored as bkfront does): the image is truncated and
+ * must not be committed.  Run in a child (the limit is its own); the
+ * statuses come back through a pipe. */
+TEST(plot_truncated_image_is_not_committed)
+{
+    char dir[] = "/tmp/bkfront-plot-XXXXXX";
+    CHECK(mkdtemp(dir));
+    char script[256], out[3][256];
+    snprintf(script, sizeof script, "%s/big.gp", dir);
+    FILE *f = fopen(script, "w");
+    CHECK(f);
+    fputs("if (fmt eq 'png') set terminal pngcairo size 3000,2000\n"
+          "if (fmt eq 'pdf') set terminal pdfcairo size 30cm,20cm\n"
+          "if (fmt eq 'svg') set terminal svg size 3000,2000\n"
+          "set output out\nset samples 2000\nplot for [i=1:20] sin(i*x)/i\n",
+          f);
+    fclose(f);
+    const char *ext[3] = {"png", "pdf", "svg"};
+    int fds[2];
+    CHECK(pipe(fds) == 0);
+    pid_t kid = fork();
+    if (kid == 0) {
+        struct rlimit lim = {12000, 12000};
+        signal(SIGXFSZ, SIG_IGN);
+        if (setrlimit(RLIMIT_FSIZE, &lim) != 0) _exit(2);
+        for (int k = 0; k < 3; k++) {
+            char path[256];
+            snprintf(path, sizeof path, "%s/f.%s", dir, ext[k]);
+            bkf_error e = {0};
+            bkf_plot_job *job = bkf_plot_job_alloc(script, &e);
+            int s = job ? bkf_plot_add_output(job, (bkf_plot_format)k, path, &e) : BKF_ENOMEM;
+            if (!s) s = bkf_plot_run(job, NULL, NULL, &e);
+            bkf_plot_job_free(job);
+            char line[600];
+            int n = snprintf(line, sizeof line, "%d %.500s\n", s, e.message);
+            if (write(fds[1], line, (size_t)n) != n) _exit(3);
+        }
+        _exit(0);
+    }
+    close(fds[1]);
+    char buf[4096] = "";
+    size_t got = 0;
+    for (ssize_t k; (k = read(fds[0], buf + got, sizeof buf - 1 - got)) > 0;) got += (size_t)k;
+    buf[got] = '\0';
+    close(fds[0]);
+    int st = 0;
+    CHECK(waitpid(kid, &st, 0) == kid && WIFEXITED(st) && WEXITSTATUS(st) == 0);
+    const char *line = buf;
+    for (int k = 0; k < 3; k++) {
+        int s = atoi(line);
+        CHECK_MSG(s == BKF_EIO && strstr(line, "not whole"), "%s: %.300s", ext[k], line);
+        snprintf(out[k], sizeof out[k], "%s/f.%s", dir, ext[k]);
+        struct stat sb;
+        CHECK_MSG(stat(out[k], &sb) != 0, "a truncated %s was committed", ext[k]);
+        line = strchr(line, '\n');
+        CHECK(line);
+        line++;
+    }
+    /* nothing else is left: no temporary */
+    DIR *d = opendir(dir);
+    CHECK(d);
+    int n = 0;
+    for (struct dirent *de; (de = readdir(d)) != NULL;)
+        n += de->d_name[0] != '.' || strstr(de->d_name, ".tmp.") != NULL;
+    closedir(d);
+    CHECK_MSG(n == 1, "%d entries besides the script", n - 1);
+    unlink(script);
+    CHECK(rmdir(dir) == 0);
+}
+
+/* The cancel flag stops gnuplot at once: BKF_ECANCELED, no image.  The
+ * flag is raised by a thread (not SIGALRM: the runner's time limit is the
+ * test's alarm). */
+static volatile sig_atomic_t plot_cancel;
+static void *raise_plot_cancel(void *unused)
+{
+    (void)unused;
+    struct timespec nap = {0, 300000000};
+    nanosleep(&nap, NULL);
+    plot_cancel = 1;
+    return NULL;
+}
+
+TEST(plot_cancel_stops_gnuplot)
+{
+    char dir[] = "/tmp/bkfront-plot-XXXXXX";
+    CHECK(mkdtemp(dir));
+    char script[256], out[256];
+    snprintf(script, sizeof script, "%s/slow.gp", dir);
+    snprintf(out, sizeof out, "%s/f.png", dir);
+    FILE *f = fopen(script, "w");
+    CHECK(f);
+    fputs("pause 30\nset terminal pngcairo\nset output out\nplot sin(x)\n", f);
+    fclose(f);
+    bkf_error e = {0};
+    bkf_plot_job *job = bkf_plot_job_alloc(script, &e);
+    CHECK_STATUS(bkf_plot_add_output(job, BKF_PLOT_PNG, out, &e), BKF_OK);
+    pthread_t raiser;
+    CHECK(pthread_create(&raiser, NULL, raise_plot_cancel, NULL) == 0);
+    bkf_plot_options o = bkf_plot_options_default();
+    o.cancel = &plot_cancel;
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    CHECK_STATUS(bkf_plot_run(job, &o, NULL, &e), BKF_ECANCELED);
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    double dt = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    CHECK(pthread_join(raiser, NULL) == 0);
+    CHECK_MSG(dt < 2, "stopped after %.2f s", dt);
+    struct stat sb;
+    CHECK(stat(out, &sb) != 0);
+    bkf_plot_job_free(job);
     unlink(script);
     CHECK(rmdir(dir) == 0);
 }

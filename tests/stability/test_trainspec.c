@@ -6,6 +6,7 @@
 #include "harness.h"
 
 #include "bkfront/hill.h"
+#include "bkfront/speeds.h"
 #include "bkfront/trainspec.h"
 
 #include <string.h>
@@ -29,9 +30,8 @@ static bkf_trainspec_result ring(bkf_model_params p, size_t n, double v, double 
     return r;
 }
 
-/* Hill's leading eigenvalues for Bloch angle theta of the train (n, v). */
-static size_t hill(bkf_model_params p, double v, double theta, size_t modes, bkf_hill_eigenvalue *out,
-                   double *err)
+/* The train's profile: the cycle at mu = gamma / sqrt(1 - c^2/v^2), to 1e-12. */
+static bkf_cycle *profile_of(bkf_model_params p, double v)
 {
     double mu = p.gamma / sqrt(1.0 - (p.c / v) * (p.c / v));
     bkf_cycle *cy = bkf_cycle_alloc();
@@ -39,6 +39,15 @@ static size_t hill(bkf_model_params p, double v, double theta, size_t modes, bkf
     co.tol = 1e-12;
     bkf_error e;
     CHECK_MSG(bkf_cycle_solve(cy, mu, p.nu, &co, &e) == BKF_OK, "%s", e.message);
+    return cy;
+}
+
+/* Hill's leading eigenvalues for Bloch angle theta of the train (n, v). */
+static size_t hill(bkf_model_params p, double v, double theta, size_t modes, bkf_hill_eigenvalue *out,
+                   double *err)
+{
+    bkf_cycle *cy = profile_of(p, v);
+    bkf_error e;
     size_t found = 0, unresolved = 0;
     int rc = bkf_hill_leading(cy, p.gamma, theta, modes, 1e-7, 6, out, err, &found, &unresolved, &e);
     CHECK_MSG(rc == BKF_OK, "hill: %s", e.message);
@@ -217,5 +226,116 @@ TEST(trainspec_budget_and_cancel)
     o.max_work = 0;
     CHECK_MSG(bkf_trainspec_ring(&p, &t, &o, &r, &e) == BKF_OK, "%s", e.message);
     CHECK(r.work >= (double)r.mesh_steps * 0.5 * (double)r.evaluations / 2 && r.work <= 4e7);
+    bkf_trainspec_result_free(&r);
+}
+
+/* ------------------------------------------- issue 31: one spectrum per train */
+
+/* The fastest root of n at p (bkf_speeds_find, tol 1e-10). */
+static double root_v(bkf_model_params p, size_t n)
+{
+    bkf_speeds_options so = bkf_speeds_options_default();
+    so.n_from = so.n_to = n;
+    bkf_speeds_table t;
+    bkf_error e;
+    CHECK_MSG(bkf_speeds_find(&p, &so, &t, &e) == BKF_OK && t.count >= 1, "speeds: %s", e.message);
+    double v = t.roots[0].v;
+    bkf_speeds_table_free(&t);
+    return v;
+}
+
+/* Hill's rightmost eigenvalue at Bloch angle theta other than the
+ * translation, from M and 2M modes, with nothing unconverged right of it
+ * (an independent discretisation: dense Fourier-Bloch, no curves, no
+ * meshes). */
+static void hill_rightmost(bkf_model_params p, double v, double theta, size_t M, double tol, double *re,
+                           double *im, double *err)
+{
+    bkf_cycle *cy = profile_of(p, v);
+    bkf_error e;
+    bkf_hill_eigenvalue h[3];
+    double herr[3];
+    size_t found = 0, unresolved = 0;
+    CHECK(bkf_hill_leading(cy, p.gamma, theta, M, tol, 3, h, herr, &found, &unresolved, &e) == BKF_OK);
+    /* tol > 1e-6 marks a steep profile: truncation artefacts (0.11 + 19i at
+     * M 64, 0.007 + 39i at 128, moving with M) stay unresolved above */
+    CHECK_MSG(found == 3 && (unresolved == 0 || tol > 1e-6), "Hill at M %zu: %zu converged, %zu unresolved above",
+              M, found, unresolved);
+    size_t k = theta == 0.0 && hypot(h[0].re, h[0].im) < 1e-6 ? 1 : 0;
+    *re = h[k].re, *im = h[k].im, *err = herr[k];
+    bkf_cycle_free(cy);
+}
+
+/* The ring's sigma_max against Hill's rightmost at n = 1 (one class, j =
+ * 0), the same whatever per_kappa asked for. */
+static void rightmost_is_hills(bkf_model_params p, size_t M, double hill_tol, double re_lo, double re_hi)
+{
+    double v = root_v(p, 1), hre, him, herr;
+    hill_rightmost(p, v, 0.0, M, hill_tol, &hre, &him, &herr);
+    CHECK_MSG(hre > re_lo && hre < re_hi, "Hill's rightmost %.10g", hre);
+    for (size_t per = 1; per <= 3; per += 2) {
+        bkf_trainspec_train t = {1, v};
+        bkf_trainspec_options o = bkf_trainspec_options_default();
+        o.per_kappa = per;
+        bkf_trainspec_result r;
+        bkf_error e;
+        int rc = bkf_trainspec_ring(&p, &t, &o, &r, &e);
+        CHECK_MSG(rc == BKF_OK, "gamma %g per_kappa %zu: %s", p.gamma, per, e.message);
+        if (rc != BKF_OK) continue;
+        bkf_test_note("gamma %g mu %.4g per_kappa %zu: sigma_max %.10g%+.8gi (err %.2g), Hill %.10g%+.8gi", p.gamma,
+                      r.mu, per, r.sigma_max, r.sigma_max_im, r.sigma_max_err, hre, him);
+        CHECK_MSG(fabs(r.sigma_max - hre) <= r.sigma_max_err + herr + 1e-9,
+                  "per_kappa %zu: sigma_max %.10g (err %.2g) against Hill's %.10g (err %.2g)", per, r.sigma_max,
+                  r.sigma_max_err, hre, herr);
+        CHECK(fabs(fabs(r.sigma_max_im) - fabs(him)) <= r.sigma_max_err + herr + 1e-9);
+        bkf_trainspec_result_free(&r);
+    }
+}
+
+/* Issue 31, defect 3: the traced curves stepped over the rightmost pair
+ * (0.0108024 + 18.03i) to its neighbour (0.0106571 + 17.13i). */
+TEST(trainspec_rightmost_not_its_neighbour_mu_1_2)
+{
+    bkf_model_params p = {1.20001, 0.188117, 0.2858, 53.5124, 0, BKF_MODEL_CONTINUUM};
+    rightmost_is_hills(p, 64, 1e-7, 0.0108, 0.01081);
+}
+
+/* Issue 31, defects 4 and 8: with per_kappa 1 the translation took class
+ * 0's only place, and sigma_max was the window's edge -0.2032 (true
+ * -4.08e-4); at mu 0.81 and 0.57 the curves never closed their window and
+ * the spectrum was refused, unstable by Hill's method. */
+TEST(trainspec_rightmost_beside_the_translation_and_where_curves_fail)
+{
+    bkf_model_params p = {4.06339, 0.276186, 0.959575, 27.1676, 0, BKF_MODEL_CONTINUUM};
+    /* mu 4.1, nu 0.96: a steep profile, Hill's 64 and 128 modes agree to 2e-6 */
+    rightmost_is_hills(p, 64, 1e-5, -4.1e-4, -4.0e-4);
+    bkf_model_params q = {0.810526, 0.0943248, 0.557499, 22.1238, 0, BKF_MODEL_CONTINUUM};
+    rightmost_is_hills(q, 32, 1e-7, 6.8e-3, 6.9e-3);
+    bkf_model_params u = {0.573116, 0.0556376, -0.558763, 17.2603, 0, BKF_MODEL_CONTINUUM};
+    rightmost_is_hills(u, 32, 1e-7, 5.4e-3, 5.5e-3);
+}
+
+/* Issue 31, defect 5: the line at kappa 0 is the ring's class j = 0 (its
+ * rightmost, translation included: 0.0697 at the paper's n = 2, where the
+ * line printed the translation 8.8e-11). */
+TEST(trainspec_line_at_kappa_0_is_the_rings_j_0)
+{
+    bkf_model_params p = paper();
+    bkf_trainspec_train t = {2, v_n2};
+    bkf_trainspec_eigenvalue line[4];
+    bkf_error e;
+    CHECK_MSG(bkf_trainspec_line(&p, &t, NULL, 4, line, &e) == BKF_OK, "%s", e.message);
+    bkf_trainspec_result r = ring(p, 2, v_n2, 1e-6);
+    double best = -INFINITY, err = 0;
+    for (size_t i = 0; i < r.count; i++)
+        if (r.eigenvalues[i].j == 0 && r.eigenvalues[i].re > best) best = r.eigenvalues[i].re, err = r.eigenvalues[i].err;
+    CHECK(best > 0.069 && best < 0.0698);
+    CHECK_MSG(fabs(line[0].re - best) <= err + line[0].err, "line at kappa 0: %.10g, ring's j = 0: %.10g", line[0].re,
+              best);
+    /* and sample 2 (theta = pi) is the ring's j = 1 */
+    best = -INFINITY;
+    for (size_t i = 0; i < r.count; i++)
+        if (r.eigenvalues[i].j == 1 && r.eigenvalues[i].re > best) best = r.eigenvalues[i].re, err = r.eigenvalues[i].err;
+    CHECK(fabs(line[2].re - best) <= err + line[2].err);
     bkf_trainspec_result_free(&r);
 }
