@@ -489,7 +489,7 @@ static void audit_spectrum(ctx *x, const bkf_speeds_root *rt, size_t root_index,
     stage("hill");
     bkf_trainspec_result r;
     bkf_error e;
-    int rc = bkf_stability_root(&x->p, rt, 1e-6, 3, &r, &e);
+    int rc = bkf_trainspec_root(&x->p, rt, 1e-6, 3, &r, &e);
     stage("ring");
     if (rc != BKF_OK) {
         if (h.decided)
