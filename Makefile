@@ -7,7 +7,7 @@
 DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
                 libinih-dev libsundials-dev liblapacke-dev gnuplot-nox \
                 python3-cffi python3-numpy python3-pytest libhdf5-dev python3-h5py \
-                python3-matplotlib
+                python3-matplotlib groff-base
 # Only for `make valgrind` and `make fuzz` (libFuzzer ships with clang's
 # runtime), so that `make test` needs neither.
 VALGRIND_PACKAGES := valgrind
@@ -18,12 +18,15 @@ FUZZ_PACKAGES     := clang libclang-rt-dev
 # collocation, whose equation files gfortran compiles; scipy's Radau), so
 # that `make test` needs none of them.
 BENCH_PACKAGES    := auto-07p gfortran python3-scipy
-PKGS         := gsl nlopt fftw3 inih lapacke hdf5-serial
+PKGS         := gsl nlopt fftw3 inih lapacke
+# HDF5 is compiled against but not linked: src/core/h5.c loads it at the
+# first HDF5 write (its dependency tree was most of every process's start).
+H5_PKG       := hdf5-serial
 
 CC       ?= cc
 OPT      ?= -O2
 BUILD    ?= build
-PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS))
+PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) $(H5_PKG))
 PKG_LIBS   = $(shell pkg-config --libs $(PKGS))
 # SANITIZE carries instrumentation flags (make sanitize); CFLAGS from the
 # command line add to, never replace, the project's own.
@@ -34,9 +37,17 @@ override LDFLAGS += $(SANITIZE) -fopenmp
 SUNDIALS_LIBS := -lsundials_cvodes -lsundials_sunlinsolband -lsundials_sunmatrixband \
                  -lsundials_nvecserial
 # HDF5's dimension scales (H5DS) are in its high-level library, which
-# hdf5-serial.pc does not list; its -L is that of hdf5-serial.
-HDF5_HL_LIBS := -lhdf5_hl
-LDLIBS   += $(HDF5_HL_LIBS) $(PKG_LIBS) $(SUNDIALS_LIBS) -lm
+# hdf5-serial.pc does not list; its -L is that of hdf5-serial.  Only the
+# tests link them (to read back what the CLI wrote).
+HDF5_LIBS = -lhdf5_hl $(shell pkg-config --libs $(H5_PKG))
+# The sonames h5.c loads: those of the libraries beside the headers it is
+# compiled with (readelf reads them off the development symlinks).
+hdf5_soname = $(shell for d in $(patsubst -L%,%,$(filter -L%,$(shell pkg-config --libs-only-L $(H5_PKG)))) \
+  $(dir $(shell $(CC) -print-file-name=lib$(1).so)); do \
+  [ -e $$d/lib$(1).so ] && { readelf -d $$d/lib$(1).so | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p'; break; }; done)
+$(BUILD)/src/core/h5.o: override CFLAGS += -DBKF_HDF5_SONAME='"$(call hdf5_soname,hdf5)"' \
+  -DBKF_HDF5_HL_SONAME='"$(call hdf5_soname,hdf5_hl)"'
+LDLIBS   += $(PKG_LIBS) $(SUNDIALS_LIBS) -lm
 
 # The library's layers, lowest first (CONTRIBUTING.md): a file may include
 # the headers of its own layer and of the layers before it, never after
@@ -64,6 +75,7 @@ VERSION := $(MAJOR).$(call version_part,MINOR).$(call version_part,PATCH)
 SONAME  := libbkfront.so.$(MAJOR)
 SHLIB   := $(BUILD)/libbkfront.so.$(VERSION)
 CLI   := $(BUILD)/bkfront
+MAN   := $(BUILD)/man
 TESTS := $(BUILD)/run_tests
 BENCH := $(BUILD)/run_bench
 # The audit (tests/audit/): random parameter sets, every product against an
@@ -81,7 +93,27 @@ EXAMPLES := $(BUILD)/examples/check_paper
 all: deps
 	@$(MAKE) --no-print-directory build-all
 
-build-all: $(LIB) $(SHLIB) $(CLI)
+build-all: $(LIB) $(SHLIB) $(CLI) $(MAN)/.stamp
+
+# The manual pages: bkfront.1 and bkfront-NAME.1 for each subcommand, made
+# from the CLI's own --help by src/cli/man.awk, so that they cannot drift:
+# $(call man_pages,CLI,DIR).  make install installs those of the installed
+# CLI (whose run --help names the installed scripts).
+define man_pages
+@rm -rf $(2) && mkdir -p $(2)
+$(1) --help > $(2)/help.txt
+awk -v page=bkfront -v version=$(VERSION) -f src/cli/man.awk \
+  -v summary="$$(sed -n 's/^Description: //p' src/bkfront.pc.in)" $(2)/help.txt > $(2)/bkfront.1
+awk '/^subcommands:/ { f = 1; next } f && !NF { exit } f' $(2)/help.txt | \
+  while read -r name summary; do \
+    $(1) help $$name > $(2)/help.txt && \
+    awk -v page=bkfront-$$name -v version=$(VERSION) -v summary="$$summary" \
+      -f src/cli/man.awk $(2)/help.txt > $(2)/bkfront-$$name.1 || exit 1; \
+  done
+@rm -f $(2)/help.txt && touch $(2)/.stamp
+endef
+$(MAN)/.stamp: $(CLI) src/cli/man.awk src/bkfront.pc.in
+	$(call man_pages,./$(CLI),$(MAN))
 
 # The missing ones among the Debian packages $(1): apt-get update first, then
 # install (root, or sudo if not root).
@@ -143,7 +175,7 @@ bench: deps
 	@$(MAKE) --no-print-directory bench-built
 
 bench-built: $(BENCH) $(CLI) $(SHLIB)
-	./$(BENCH)
+	BKFRONT_CLI=$(abspath $(CLI)) ./$(BENCH)
 	BKFRONT_LIBRARY=$(abspath $(BUILD)/$(SONAME)) PYTHONPATH=$(CURDIR)/python \
 	  $(PYTHON) tests/bench/bench_auto.py
 	@mkdir -p plots/out
@@ -237,6 +269,7 @@ LIBDIR     ?= $(PREFIX)/lib
 INCLUDEDIR ?= $(PREFIX)/include
 DATADIR    ?= $(PREFIX)/share/bkfront
 DOCDIR     ?= $(PREFIX)/share/doc/bkfront
+MANDIR     ?= $(PREFIX)/share/man
 PKGCONFIGDIR ?= $(LIBDIR)/pkgconfig
 # Where Debian's python3 looks for packages installed under PREFIX.
 PYTHONDIR  ?= $(LIBDIR)/python$(shell $(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null || echo 3)/dist-packages
@@ -258,11 +291,22 @@ $(INST)/cmd_run.o: src/cli/cmd_run.c $(INST)/dirs
 $(INST)/bkfront: $(filter-out $(BUILD)/src/cli/cmd_run.o,$(CLI_OBJ)) $(INST)/cmd_run.o $(LIB)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
+# The folders the dynamic loader searches by itself (its trusted ones and
+# those of ld.so.conf): a LIBDIR elsewhere ($$HOME/bkf/lib) goes into
+# bkfront.pc's Libs as an rpath, so that the documented
+# `cc prog.c $$(pkg-config --cflags --libs bkfront)` makes a program that runs.
+LOADER_DIRS = /lib /usr/lib /lib64 /usr/lib64 $(addprefix /lib/ /usr/lib/,$(shell $(CC) -print-multiarch)) \
+  $(shell ldconfig -v -N -X 2>/dev/null | sed -n 's|^\(/[^:]*\):.*|\1|p')
+PC_RPATH = $(if $(filter $(LIBDIR) $(LIBDIR)/,$(LOADER_DIRS)),, -Wl,-rpath,$${libdir})
+$(INST)/man/.stamp: $(INST)/bkfront src/cli/man.awk src/bkfront.pc.in
+	$(call man_pages,./$(INST)/bkfront,$(INST)/man)
+
 $(INST)/bkfront.pc: src/bkfront.pc.in $(INST)/dirs include/bkfront/version.h
 	sed -e 's|@PREFIX@|$(PREFIX)|' -e 's|@LIBDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))|' \
+	  -e 's|@RPATH@|$(PC_RPATH)|' \
 	  -e 's|@INCLUDEDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))|' \
 	  -e 's|@VERSION@|$(VERSION)|' -e 's|@REQUIRES@|$(PKGS)|' \
-	  -e 's|@LIBS_PRIVATE@|$(HDF5_HL_LIBS) $(SUNDIALS_LIBS) -lgomp -lm|' $< > $@
+	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) -lgomp -lm|' $< > $@
 
 # The Python package finds the shared library by its path relative to the
 # package, so that a staged (DESTDIR) or moved tree still works.
@@ -271,10 +315,14 @@ $(INST)/_paths.py: $(INST)/dirs
 	  "$$($(PYTHON) -c 'import os, sys; print(repr(os.path.relpath(sys.argv[1], sys.argv[2])))' \
 	     '$(LIBDIR)/$(SONAME)' '$(PYTHONDIR)/bkfront')" > $@
 
-install: $(LIB) $(SHLIB) $(INST)/bkfront $(INST)/bkfront.pc $(INST)/_paths.py
+# The manual keeps the source tree's layout (README.md beside docs/, the
+# gallery under plots/), so that its relative links resolve where installed
+# (tests/python/test_install.py checks every one).
+install: $(LIB) $(SHLIB) $(INST)/bkfront $(INST)/bkfront.pc $(INST)/_paths.py $(INST)/man/.stamp
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR) $(DESTDIR)$(PKGCONFIGDIR) \
 	  $(DESTDIR)$(INCLUDEDIR)/bkfront $(DESTDIR)$(DATADIR)/plots $(DESTDIR)$(DATADIR)/scenes \
-	  $(DESTDIR)$(PYTHONDIR)/bkfront $(DESTDIR)$(DOCDIR)/cli $(DESTDIR)$(DOCDIR)/examples
+	  $(DESTDIR)$(PYTHONDIR)/bkfront $(DESTDIR)$(DOCDIR)/docs/cli $(DESTDIR)$(DOCDIR)/docs/examples \
+	  $(DESTDIR)$(DOCDIR)/plots/gallery $(DESTDIR)$(MANDIR)/man1
 	install -m 755 $(INST)/bkfront $(DESTDIR)$(BINDIR)/bkfront
 	install -m 644 $(LIB) $(DESTDIR)$(LIBDIR)/libbkfront.a
 	install -m 755 $(SHLIB) $(DESTDIR)$(LIBDIR)/
@@ -285,15 +333,19 @@ install: $(LIB) $(SHLIB) $(INST)/bkfront $(INST)/bkfront.pc $(INST)/_paths.py
 	install -m 644 plots/*.gp $(DESTDIR)$(DATADIR)/plots/
 	install -m 644 fronts/*.scene $(DESTDIR)$(DATADIR)/scenes/
 	install -m 644 python/bkfront/*.py $(INST)/_paths.py $(DESTDIR)$(PYTHONDIR)/bkfront/
-	install -m 644 README.md docs/*.md $(DESTDIR)$(DOCDIR)/
-	install -m 644 docs/cli/*.md $(DESTDIR)$(DOCDIR)/cli/
-	install -m 644 docs/examples/*.c $(DESTDIR)$(DOCDIR)/examples/
+	install -m 644 README.md CONTRIBUTING.md $(DESTDIR)$(DOCDIR)/
+	install -m 644 docs/*.md $(DESTDIR)$(DOCDIR)/docs/
+	install -m 644 docs/cli/*.md $(DESTDIR)$(DOCDIR)/docs/cli/
+	install -m 644 docs/examples/*.c $(DESTDIR)$(DOCDIR)/docs/examples/
+	install -m 644 plots/gallery/*.png $(DESTDIR)$(DOCDIR)/plots/gallery/
+	install -m 644 $(INST)/man/*.1 $(DESTDIR)$(MANDIR)/man1/
 	@if [ -z "$(DESTDIR)" ] && [ "$$(id -u)" -eq 0 ] && command -v ldconfig >/dev/null; then ldconfig; fi
 
 uninstall:
 	rm -f $(DESTDIR)$(BINDIR)/bkfront $(DESTDIR)$(LIBDIR)/libbkfront.a \
 	  $(DESTDIR)$(LIBDIR)/libbkfront.so $(DESTDIR)$(LIBDIR)/$(SONAME) \
-	  $(DESTDIR)$(LIBDIR)/$(notdir $(SHLIB)) $(DESTDIR)$(PKGCONFIGDIR)/bkfront.pc
+	  $(DESTDIR)$(LIBDIR)/$(notdir $(SHLIB)) $(DESTDIR)$(PKGCONFIGDIR)/bkfront.pc \
+	  $(DESTDIR)$(MANDIR)/man1/bkfront.1 $(DESTDIR)$(MANDIR)/man1/bkfront-*.1
 	rm -rf $(DESTDIR)$(INCLUDEDIR)/bkfront $(DESTDIR)$(DATADIR) $(DESTDIR)$(DOCDIR) \
 	  $(DESTDIR)$(PYTHONDIR)/bkfront
 
@@ -304,7 +356,7 @@ $(CLI): $(CLI_OBJ) $(LIB)
 CLI_TESTABLE := $(filter-out $(BUILD)/src/cli/main.o,$(CLI_OBJ))
 
 $(TESTS): $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(CLI) $(EXAMPLES)
-	$(CC) $(LDFLAGS) -o $@ $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(LDLIBS)
+	$(CC) $(LDFLAGS) -o $@ $(TEST_OBJ) $(CLI_TESTABLE) $(LIB) $(LDLIBS) $(HDF5_LIBS)
 
 $(BUILD)/examples/%: $(BUILD)/docs/examples/%.o $(LIB)
 	@mkdir -p $(dir $@)
@@ -320,7 +372,8 @@ $(AUDIT): $(BUILD)/tests/audit/audit_main.o $(BUILD)/tests/audit/audit.o $(LIB)
 # (its matrices are rescaled and finite); without it they run ~2x faster.
 $(BUILD)/src/stability/trainspec.o: override CFLAGS += -fcx-limited-range
 $(BUILD)/tests/%.o: override CFLAGS += -Itests -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' \
-  -DBKF_EXAMPLES_DIR='"$(abspath $(BUILD)/examples)"' -DBKF_SOURCE_DIR='"$(CURDIR)"'
+  -DBKF_EXAMPLES_DIR='"$(abspath $(BUILD)/examples)"' -DBKF_SOURCE_DIR='"$(CURDIR)"' \
+  -DBKF_HDF5_SONAME='"$(call hdf5_soname,hdf5)"'
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)

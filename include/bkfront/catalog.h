@@ -37,6 +37,50 @@ typedef struct {
     int keep_canceled;
 } bkf_catalog_hooks;
 
+/* How a scene's section becomes computations of a product (scene.h): a
+ * product gets a scene kind by declaring it here, in its catalogue entry,
+ * and the flags of its option table (options.h) say the rest per key:
+ * BKF_OPT_CLI_ONLY keys are not scene keys, the BKF_OPT_FANOUT key's list
+ * is one step per value, a BKF_OPT_PATH key names a file inside the output
+ * folder.
+ *
+ * A step passes, in this order: the switches of `first`; the keys of
+ * `keys`; the section's other keys of the product's table, as written (the
+ * kind's own product only); the switches of `last`; its files.  `keys` is
+ * the order of the step's command line, items separated by spaces:
+ *
+ *   KEY             the section's value, if it sets one
+ *   ^KEY            the section's, else [model]'s or [accuracy]'s (an
+ *                   [accuracy] key reaches a product that has it only so)
+ *   +KEY            the same, and one of them must set it
+ *   ...=TEXT        ..., else TEXT (the scene's default, not the product's)
+ *   ...=$OTHER      ..., else the scene's value of the key OTHER names
+ *   KEY:=TEXT       always TEXT
+ *   ...!TEXT        left out when it is TEXT (the default goes unsaid)
+ *   ...?OTHER=TEXT  only when OTHER's value (own or inherited) is TEXT
+ *   @KEY            the section's value, which names a key of the list
+ *                   that is then left out (the parameter a branch varies)
+ *
+ * A value A:B:N of a key with BKF_OPT_LOG_SWITCH is geometric: its switch
+ * follows it.  `outputs` is "KEY=SUFFIX ...": the files NAME + SUFFIX in
+ * the output folder, the first the one figures show; with several steps
+ * (a list of the fan-out key) NAME_1 + SUFFIX, NAME_2 + SUFFIX, ...; '#' in
+ * SUFFIX is the step's number always.  NULL: "out=.tsv". */
+typedef struct {
+    const char *product;  /* NULL: the entry's own */
+    const char *first, *keys, *last, *outputs;
+    const char *fanout;   /* NULL: the table's BKF_OPT_FANOUT key; "LIST>KEY": the
+                             section's key LIST (a scene key of the kind), one
+                             step per value, passed as KEY */
+} bkf_catalog_step;
+
+typedef struct {
+    const char *name;     /* the section's kind: [NAME] or [NAME LABEL] */
+    bkf_catalog_step step;
+    bkf_catalog_step also; /* product NULL: none; else steps of another product
+                              the kind makes too (a sweep's Floquet boundaries) */
+} bkf_catalog_kind;
+
 typedef struct {
     const char *name;     /* "period": the subcommand and the key of a scene step */
     const char *summary;  /* one line */
@@ -50,6 +94,8 @@ typedef struct {
                  const bkf_provenance *provenance, const bkf_catalog_hooks *hooks,
                  bkf_error *err);
     void (*release)(void *spec);                           /* frees lists; not the spec */
+    const bkf_catalog_kind *kinds;                         /* its scene kinds */
+    size_t nkinds;
 } bkf_catalog_entry;
 
 size_t bkf_catalog_count(void);

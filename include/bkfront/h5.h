@@ -9,7 +9,10 @@
  * (io.h), so it takes the place of its target only at
  * bkf_io_atomic_commit, like every other output.  The HDF5 library's own error printing is switched off
  * while it works (and restored after); every HDF5 call is checked, and the
- * first failure is returned with HDF5's description of it.  Thread-safe:
+ * first failure is returned with HDF5's description of it.  HDF5 itself is
+ * not linked: the first write loads it (the soname bkfront was compiled
+ * against), and where it cannot be loaded every write is BKF_EIO with a
+ * message naming it; nothing else needs HDF5.  Thread-safe:
  * the HDF5 calls of concurrent writes are made one write at a time (the
  * HDF5 library itself is not built thread-safe). */
 #ifndef BKFRONT_H5_H

@@ -29,8 +29,20 @@ typedef struct {
     bkf_model_kind kind; /* continuum or chain */
 } bkf_model_params;
 
-/* The paper's parameters (gamma 2, c 0.3, nu -0.96, S 20, continuum, N 512). */
+/* The paper's parameters (gamma 2, c 0.3, nu -0.96, S 20, continuum, N 512):
+ * every command's default for the model parameters it does not vary. */
+#define BKF_PAPER_GAMMA 2
+#define BKF_PAPER_C 0.3
+#define BKF_PAPER_NU -0.96
+#define BKF_PAPER_S 20
+/* A macro's value as text ("2"): the option tables' shown defaults. */
+#define BKF_TEXT_OF(x) BKF_TEXT_OF_(x)
+#define BKF_TEXT_OF_(x) #x
 bkf_model_params bkf_model_params_paper(void);
+
+/* Each of *gamma, *c, *nu, *S (a NULL is skipped) that is NaN (not given)
+ * becomes the paper's value. */
+void bkf_model_paper_where_unset(double *gamma, double *c, double *nu, double *S);
 
 /* Creep-slip friction phi(psi) = psi^3/3 - psi and its slope. */
 double bkf_model_friction(double psi);

@@ -50,9 +50,14 @@ enum {
     BKF_OPT_REQUIRED = 1u << 6,  /* the caller reports it missing ("--mu is required") */
     BKF_OPT_CLI_ONLY = 1u << 7,  /* a flag with no scene key (--out, --help) */
     BKF_OPT_SCENE_ONLY = 1u << 8,/* a scene key with no flag */
-    BKF_OPT_RUN_FILE = 1u << 9   /* a data file of one run (simulate's spacetime and
+    BKF_OPT_RUN_FILE = 1u << 9,  /* a data file of one run (simulate's spacetime and
                                     snapshots): not a key of a sweep, whose points
                                     keep their fields by --fields */
+    /* What a scene does with the key (catalog.h's scene kinds): */
+    BKF_OPT_FANOUT = 1u << 10,   /* a list in a scene is one step per value, each
+                                    with its own file (nu = -0.90,-0.92: two runs) */
+    BKF_OPT_PATH = 1u << 11      /* names a file or folder the product writes: in a
+                                    scene, inside the output folder (or refused) */
 };
 
 /* A list of values: V (count 1), V1,V2,... or A:B:N.  from and to are the

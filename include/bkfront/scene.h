@@ -20,6 +20,14 @@
  *   figure      a gnuplot figure of one product      (gnuplot, plots/KIND.gp)
  *   sweep       a regime map over a grid of points,  (sweep; floquet --diagram
  *               with the Floquet boundaries           per gamma of thresholds)
+ *   bench       work-precision timings               (bench)
+ *
+ * Each kind but figure is declared by its product in the catalogue
+ * (catalog.h's bkf_catalog_kind), which is all the planner knows of it.
+ * A key naming a file the product writes (BKF_OPT_PATH: simulate's
+ * snapshots, a sweep's fields) names it inside the output folder; the plan
+ * refuses anything else, "FILE:LINE: [KIND NAME]: KEY: ...", unless the
+ * caller trusts the scene (bkf_scene_plan_options.trust).
  *
  * The keys of each kind are in docs/scenes.md.  A key of a kind whose
  * product is in the catalogue (catalog.h) is checked at parse time by that
@@ -63,7 +71,11 @@ typedef enum {
     BKF_SCENE_NKINDS
 } bkf_scene_kind;
 
+/* The kinds: those of the enum, then any a product of the catalogue
+ * declares beyond them (catalog.h), numbered from BKF_SCENE_NKINDS on.
+ * The name is NULL past bkf_scene_kind_count(). */
 const char *bkf_scene_kind_name(bkf_scene_kind kind);
+size_t bkf_scene_kind_count(void);
 
 /* One key = value of a section, as written (checked at parse time). */
 typedef struct {
@@ -154,6 +166,9 @@ typedef struct {
     unsigned formats;         /* figure formats when a figure sets none: bit 0 png,
                                  1 pdf, 2 svg; 0: png */
     int figures;              /* 0: leave figures out of the plan */
+    int trust;                /* 1: a key naming a file (simulate's snapshots, a
+                                 sweep's fields) may name it outside outdir;
+                                 0: such a scene is refused with the key's line */
 } bkf_scene_plan_options;
 
 int bkf_scene_make_plan(const bkf_scene *s, const bkf_scene_plan_options *options,

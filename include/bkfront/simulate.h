@@ -38,11 +38,14 @@ extern "C" {
 #define BKF_SIMULATE_PSI 1u
 #define BKF_SIMULATE_ETA 2u
 
+/* The continuum's grid points when N is not given (the chain's: S blocks). */
+#define BKF_SIMULATE_N_DEFAULT 512
+
 /* The simulate stepper that picks one by the model (bkf_pde_stepper_auto). */
 #define BKF_SIMULATE_STEPPER_AUTO 5
 
 typedef struct {
-    bkf_model_params model; /* N 0: 512, or S blocks for the chain */
+    bkf_model_params model; /* N 0: BKF_SIMULATE_N_DEFAULT, or S blocks for the chain */
     int chain;              /* model key: index in continuum, chain */
     double tol;             /* [1e-13, 1e-2]; default 1e-9 */
     int stepper;            /* a bkf_pde_stepper, or BKF_SIMULATE_STEPPER_AUTO

@@ -156,6 +156,14 @@ int bkf_sweep_table_close(bkf_sweep_table *table, int sort, bkf_error *err);
 int bkf_sweep_merge(const char *const *inputs, size_t ninputs, const char *out,
                     size_t *missing, bkf_error *err);
 
+/* The finished table at `path` (every row of its sweep, or of a merge)
+ * replaced atomically by the same table as JSON, in the layout of every
+ * product's JSON (io.h: "comments", "columns", "rows"; text columns as
+ * strings, numbers as numbers, nan as null).  A JSON table can no longer be
+ * resumed or merged: it is the finished form.  BKF_EINPUT when `path` is
+ * not a sweep table or lacks rows. */
+int bkf_sweep_table_json(const char *path, bkf_error *err);
+
 #ifdef __cplusplus
 }
 #endif

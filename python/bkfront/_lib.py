@@ -80,6 +80,8 @@ typedef struct {
     int (*write)(const void *spec, FILE *out, int format, const bkf_provenance *provenance,
                  const bkf_catalog_hooks *hooks, bkf_error *err);
     void (*release)(void *spec);
+    const void *kinds;
+    size_t nkinds;
 } bkf_catalog_entry;
 size_t bkf_catalog_count(void);
 const bkf_catalog_entry *bkf_catalog_at(size_t i);

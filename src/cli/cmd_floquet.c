@@ -27,11 +27,11 @@ static void floquet_help(FILE *out)
     cli_options g[2];
     groups_of(NULL, g);
     fprintf(out,
-        "usage: bkfront floquet --gamma G --c C --nu V --q LIST [--S S]\n"
-        "       bkfront floquet --threshold --gamma G --c C [--search A:B]\n"
+        "usage: bkfront floquet [--gamma G] [--c C] [--nu V] --q LIST [--S S]\n"
+        "       bkfront floquet --threshold [--gamma G] [--c C] [--search A:B]\n"
         "       bkfront floquet --threshold --along c|gamma --from A --to B\n"
-        "                       (--gamma G | --c C) [--search A:B]\n"
-        "       bkfront floquet --diagram --gamma G --c C [--search A:B]\n"
+        "                       [--gamma G | --c C] [--search A:B]\n"
+        "       bkfront floquet --diagram [--gamma G] [--c C] [--search A:B]\n"
         "   common: [--tol E] [--cq-max P] [--nu-step H]\n"
         "           [--stepper auto|explicit|implicit|extrapolation]\n"
         "           [--format tsv|json] [--out FILE]\n"
@@ -55,8 +55,8 @@ static void floquet_help(FILE *out)
         "  m1_err            estimated absolute error of m1\n"
         "  kind              of m1: real_positive, real_negative or complex; refused\n"
         "                    where lambda_err stays above --tol after the retries\n"
-        "                    (lambda and the multipliers are then nan, and a warning\n"
-        "                    goes to stderr)\n"
+        "                    (lambda and the multipliers are then nan; one warning\n"
+        "                    line on stderr counts them and gives the first's reason)\n"
         "  allowed           1 if q = 2 pi j/S for an integer j, else 0; nan without --S\n"
         "  lambda_slip       growth of a perturbation of continuous slip psi = nu over\n"
         "                    the same time T: T max Re s, s^2 + gamma phi'(nu) s + K = 0\n"

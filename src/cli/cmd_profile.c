@@ -19,7 +19,7 @@ static void profile_help(FILE *out)
     cli_options g[2];
     groups_of(NULL, g);
     fprintf(out,
-        "usage: bkfront profile --nu V (--gamma G --c C --S L --n LIST [--root I] | --mu M)\n"
+        "usage: bkfront profile [--nu V] ([--gamma G] [--c C] [--S L] --n LIST [--root I] | --mu M)\n"
         "                       [--points P] [--tol E] [--format tsv|json] [--out FILE]\n"
         "\n"
         "The front profile: f(z) and f'(z) over one period of the limit cycle of\n"

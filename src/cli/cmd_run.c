@@ -48,14 +48,17 @@ static void run_help(FILE *out)
         "                  $BKFRONT_PLOTS, else this bkfront's own (below)\n"
         "  --trust-scene   let figures run the scene's own scripts (script = ...);\n"
         "                  a gnuplot script can run any shell command, so without\n"
-        "                  this flag such a scene is refused\n"
+        "                  this flag such a scene is refused; and let keys that\n"
+        "                  name files (snapshots, fields) name them outside DIR\n"
         "\n"
-        "Prints one line per computation, then the speeds tables and the files\n"
-        "written. Ctrl-C (SIGINT) or SIGTERM stops the whole run: the computation\n"
-        "under way stops without replacing its files, the finished ones keep\n"
-        "theirs, no later one starts (exit 130, 143 for SIGTERM); a second signal\n"
-        "ends it at once. exit status: 0 every product done, 1 a computation or\n"
-        "figure failed (the others are still produced), 2 bad scene or options.\n"
+        "Prints one line per computation, with the warnings it raised (an\n"
+        "under-resolved simulation, refused rows) under it, then the speeds tables\n"
+        "and the files written. Ctrl-C (SIGINT) or SIGTERM stops the whole run:\n"
+        "the computation under way stops without replacing its files, the\n"
+        "finished ones keep theirs, no later one starts (exit 130, 143 for\n"
+        "SIGTERM); a second signal ends it at once. exit status: 0 every product\n"
+        "done, 1 a computation or figure failed (the others are still produced),\n"
+        "2 bad scene or options.\n"
         "\n"
         "A scene is trusted input only with --trust-scene (docs/scenes.md#trust).\n"
         "This bkfront's gnuplot scripts: " BKF_PLOTS_DIR "\n");
@@ -142,11 +145,36 @@ static int check_trust(const bkf_scene *sc, bkf_error *err)
  * product writes itself, e.g. simulate's spacetime and snapshots), each
  * guarded by the signal cleanup until it is committed or removed. */
 #define RUN_TEMPS 4
+/* The warnings of the step under way, shown under its line: a step's
+ * warning (an under-resolved simulation, refused rows) is otherwise only a
+ * comment in one of its files. */
+#define RUN_WARNINGS 8
 typedef struct {
     char path[RUN_TEMPS][4096];
     int slot[RUN_TEMPS];
     int used[RUN_TEMPS];
+    char warning[RUN_WARNINGS][BKF_ERROR_LEN];
+    size_t warnings; /* raised by the step, also those beyond RUN_WARNINGS */
 } run_context;
+
+static void step_warning(const char *message, void *data)
+{
+    run_context *rc = data;
+    if (rc->warnings < RUN_WARNINGS)
+        snprintf(rc->warning[rc->warnings], sizeof rc->warning[0], "%s", message);
+    rc->warnings++;
+}
+
+static void print_step_warnings(run_context *rc)
+{
+    /* (simulate's messages say "warning:" themselves) */
+    for (size_t k = 0; k < rc->warnings && k < RUN_WARNINGS; k++)
+        printf("        %s%s\n", strncmp(rc->warning[k], "warning:", 8) ? "warning: " : "",
+               rc->warning[k]);
+    if (rc->warnings > RUN_WARNINGS)
+        printf("        (and %zu more warnings)\n", rc->warnings - RUN_WARNINGS);
+    rc->warnings = 0;
+}
 
 static void guard_temp(const char *path, int armed, void *data)
 {
@@ -303,12 +331,14 @@ static int run_run(int argc, char **argv, bkf_error *err)
                                 .command_prefix = CLI_PROGRAM,
                                 .plots_dir = plots_dir,
                                 .scene_dir = scene_dir,
-                                .hooks = {.temp_file = guard_temp, .data = &rc},
+                                .hooks = {.temp_file = guard_temp, .warn = step_warning,
+                                          .data = &rc},
                                 .temp_file = guard_temp,
                                 .data = &rc};
 
     bkf_scene_plan plan;
-    bkf_scene_plan_options po = {.outdir = outdir, .formats = formats, .figures = !no_figures};
+    bkf_scene_plan_options po = {.outdir = outdir, .formats = formats, .figures = !no_figures,
+                                 .trust = trust};
     if ((s = bkf_scene_make_plan(sc, &po, &plan, err))) {
         bkf_scene_free(sc);
         return s;
@@ -362,6 +392,7 @@ static int run_run(int argc, char **argv, bkf_error *err)
                st->product, p->name,
                status == BKF_ECANCELED ? "stopped" : status ? "FAILED" : "done  ", dt,
                st->output);
+        print_step_warnings(&rc);
         if (status) {
             printf("        %s:%d [%s %s]: %s\n", sc->path, p->line, bkf_scene_kind_name(p->kind),
                    p->name, e.message);

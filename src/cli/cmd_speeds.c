@@ -68,7 +68,7 @@ static void speeds_help(FILE *out)
     cli_options g[2];
     speeds_groups(NULL, g);
     fprintf(out,
-        "usage: bkfront speeds --gamma G --c C --nu V --S L [--n N | --nmax N]\n"
+        "usage: bkfront speeds [--gamma G] [--c C] [--nu V] [--S L] [--n N | --nmax N]\n"
         "                      [--tol E] [--method auto|asymptotic|leading|shooting]\n"
         "                      [--stability [--stability-tol E]]\n"
         "                      [--model continuum|chain [--N N]]\n"
@@ -120,7 +120,7 @@ static void branch_help(FILE *out)
     branch_groups(NULL, g);
     fprintf(out,
         "usage: bkfront branch --param S|nu|gamma|c|h --from A --to B [--n N] [--root I]\n"
-        "                      --gamma G --c C --nu V --S L  (all but the --param one)\n"
+        "                      [--gamma G] [--c C] [--nu V] [--S L]  (not the --param one)\n"
         "                      [--tol E] [--max-points N] [--stability [--stability-tol E]]\n"
         "                      [--model continuum|chain [--N N]]\n"
         "                      [--format tsv|json] [--out FILE]\n"

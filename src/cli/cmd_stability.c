@@ -24,10 +24,10 @@ static void stability_help(FILE *out)
     cli_options g[2];
     groups_of(NULL, g);
     fprintf(out,
-        "usage: bkfront stability --gamma G --c C --nu V --S L --n N [--root I]\n"
+        "usage: bkfront stability [--gamma G] [--c C] [--nu V] [--S L] --n N [--root I]\n"
         "                         [--tol E] [--per-kappa K] [--line [--kappa-count M]]\n"
         "                         [--format tsv|json] [--out FILE]\n"
-        "       bkfront stability --boundary | --diagram --gamma G --c C --nu V --S L\n"
+        "       bkfront stability --boundary | --diagram [--gamma G] [--c C] [--nu V] [--S L]\n"
         "                         --n N --to V2 --S-to L2 [--nu-step H] [--S-tol E]\n"
         "\n"
         "The spectral stability of the train of n fronts at root I of the speed\n"

@@ -37,9 +37,10 @@ typedef struct {
     bkf_sweep_spec spec;
     cli_progress_spec progress;
     sweep_cli_spec cli;
+    cli_output_spec output; /* its format only: --out is the table's */
 } sweep_args;
 
-#define NGROUPS 3
+#define NGROUPS 4
 
 /* The sweep's keys (the simulation's among them, but not its data files),
  * then the command line's own. */
@@ -51,6 +52,14 @@ static void groups_of(sweep_args *a, cli_options g[NGROUPS])
     g[1] = (cli_options){cli_progress_options, cli_progress_noptions, a ? &a->progress : NULL};
     g[2] = (cli_options){sweep_cli_options, sizeof sweep_cli_options / sizeof *sweep_cli_options,
                          a ? &a->cli : NULL};
+    /* --format (cli_output_options[0]): json converts the finished table */
+    g[3] = (cli_options){cli_output_options, 1, a ? &a->output : NULL};
+}
+
+/* --format json: the finished table at --out becomes JSON. */
+static int finish_format(const sweep_args *a, bkf_error *err)
+{
+    return a->output.format == BKF_IO_JSON ? bkf_sweep_table_json(a->cli.out, err) : BKF_OK;
 }
 
 static void sweep_help(FILE *out)
@@ -61,7 +70,8 @@ static void sweep_help(FILE *out)
         "usage: bkfront sweep --out FILE [--x NAME=LIST [--y NAME=LIST [--zip]]] [--seeds LIST]\n"
         "                     [--inits SPEC;SPEC;...] [--threads K] [--task I --of K] [--resume]\n"
         "                     [simulate's keys: --gamma G --c C --nu V --S S --tmax T ...]\n"
-        "       bkfront sweep --merge FILE,FILE,... --out FILE\n"
+        "                     [--format tsv|json]\n"
+        "       bkfront sweep --merge FILE,FILE,... --out FILE [--format tsv|json]\n"
         "       mpirun -np K bkfront sweep ...   (the MPI build, make mpi)\n"
         "\n"
         "The regime of a direct simulation (bkfront simulate) at every point of a grid of one or\n"
@@ -110,7 +120,9 @@ static void sweep_help(FILE *out)
         "Rows are appended to --out as points finish, each whole and flushed to disk: a killed\n"
         "sweep loses only the points in flight, and --resume computes the rest (it refuses the\n"
         "table of another sweep: the definition line must match).  Ctrl-C stops the sweep with\n"
-        "every finished row kept (exit status 130).  At the end the rows are sorted by point.\n"
+        "every finished row kept (exit status 130).  At the end the rows are sorted by point;\n"
+        "with --format json the finished table is then replaced by its JSON (no longer\n"
+        "resumable; a task's or a resumed table stays TSV, --merge ... --format json converts).\n"
         "One writer at a time: while a sweep writes --out, another sweep (--resume too) or\n"
         "--merge into it is refused (exit 2, naming the writer's process).  --merge refuses two\n"
         "different rows of one point.  Bad input anywhere in the grid is refused before any run.\n"
@@ -132,8 +144,9 @@ static int append(size_t index, const char *row, void *data, bkf_error *err)
 }
 
 /* "A,B,C" into a NULL-terminated array of pointers into a copy. */
-static int merge_tables(const sweep_cli_spec *c, bkf_error *err)
+static int merge_tables(const sweep_args *a, bkf_error *err)
 {
+    const sweep_cli_spec *c = &a->cli;
     if (!c->out) return bkf_error_set(err, BKF_EINPUT, "--out is required (FILE)");
     char *copy = strdup(c->merge);
     size_t n = 1;
@@ -154,6 +167,7 @@ static int merge_tables(const sweep_cli_spec *c, bkf_error *err)
         s = bkf_error_set(err, BKF_ENUMERIC,
                           "merge: %zu points are in none of the tables (%s has the others)",
                           missing, c->out);
+    if (!s) s = finish_format(a, err);
     free(copy);
     free(files);
     return s;
@@ -161,16 +175,20 @@ static int merge_tables(const sweep_cli_spec *c, bkf_error *err)
 
 static int sweep_run(int argc, char **argv, bkf_error *err)
 {
-    sweep_args a = {bkf_sweep_spec_default(), {0}, {0}};
+    sweep_args a = {bkf_sweep_spec_default(), {0}, {0}, {0}};
     int rank = sweep_mpi_start(&argc, &argv);
     cli_options g[NGROUPS];
     groups_of(&a, g);
     int s = cli_parse_options(g, NGROUPS, argc, argv, NULL, err);
     if (!s && a.cli.merge) {
-        s = rank == 0 ? merge_tables(&a.cli, err) : BKF_OK;
+        s = rank == 0 ? merge_tables(&a, err) : BKF_OK;
         goto done;
     }
     if (!s && !a.cli.out) s = bkf_error_set(err, BKF_EINPUT, "--out is required (FILE)");
+    if (!s && a.output.format == BKF_IO_JSON && (a.cli.resume || a.spec.of > 1))
+        s = bkf_error_set(err, BKF_EINPUT, "--format json: the finished table only, not with "
+                          "%s (a task's table or the one resumed stays TSV; --merge FILE,... "
+                          "--format json converts)", a.cli.resume ? "--resume" : "--task/--of");
     if (!s) s = bkf_sweep_check(&a.spec, "--", err);
     /* under mpirun the ranks are the cores: one run each unless --threads */
     if (!s && sweep_mpi_on() && !a.spec.threads) a.spec.threads = 1;
@@ -198,6 +216,7 @@ static int sweep_run(int argc, char **argv, bkf_error *err)
     if (rank == 0) {
         int c = bkf_sweep_table_close(table, !s, s ? NULL : err);
         if (!s) s = c;
+        if (!s) s = finish_format(&a, err);
     }
     if (s == BKF_ECANCELED)
         bkf_error_set(err, s, "interrupted (%s): every finished row is in %s; --resume continues",

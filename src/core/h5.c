@@ -9,8 +9,53 @@
 #include <string.h>
 #include <sys/types.h>
 
+#include <dlfcn.h>
 #include <hdf5.h>
 #include <hdf5_hl.h>
+
+/* HDF5 is loaded at the first write, not linked: its dependency tree
+ * (libcurl, gnutls, krb5, ldap, ...) took two thirds of every bkfront
+ * process's start, HDF5 file or not.  The headers give the types and
+ * signatures; the sonames are those of the libraries the headers belong to
+ * (the Makefile reads them off the development files), so the loaded ABI is
+ * the compiled one, and the version is checked once more after loading. */
+#ifndef BKF_HDF5_SONAME
+#error "BKF_HDF5_SONAME (the soname of libhdf5, e.g. libhdf5_serial.so.103) is set by the Makefile"
+#endif
+#ifndef BKF_HDF5_HL_SONAME
+#error "BKF_HDF5_HL_SONAME (the soname of libhdf5_hl) is set by the Makefile"
+#endif
+
+/* The functions called, from libhdf5 then (H5DS) libhdf5_hl. */
+#define H5_FUNCTIONS(X)                                                                      \
+    X(H5open) X(H5get_libversion) X(H5Aclose) X(H5Acreate2) X(H5Awrite) X(H5Dclose)          \
+    X(H5Dcreate2) X(H5Dwrite) X(H5Eget_auto2) X(H5Eset_auto2) X(H5Ewalk2) X(H5Fclose)       \
+    X(H5Fcreate) X(H5Fflush) X(H5Fget_file_image) X(H5Pclose) X(H5Pcreate) X(H5Pset_chunk)  \
+    X(H5Pset_deflate) X(H5Pset_fapl_core) X(H5Pset_fclose_degree) X(H5Pset_obj_track_times)   \
+    X(H5Pset_shuffle) X(H5Sclose) X(H5Screate) X(H5Screate_simple) X(H5Tclose) X(H5Tcopy)    \
+    X(H5Tset_cset) X(H5Tset_size) X(H5Zfilter_avail)
+#define H5_HL_FUNCTIONS(X) X(H5DSattach_scale) X(H5DSset_label) X(H5DSset_scale)
+/* The library's predefined types and property classes: variables, valid
+ * after H5open (what the header's H5T_NATIVE_DOUBLE etc. expand to). */
+#define H5_IDS(X)                                                                            \
+    X(H5T_C_S1_g) X(H5T_STD_I64LE_g) X(H5T_IEEE_F64LE_g) X(H5T_IEEE_F32LE_g)                 \
+    X(H5T_NATIVE_LLONG_g) X(H5T_NATIVE_DOUBLE_g) X(H5T_NATIVE_FLOAT_g)                       \
+    X(H5P_CLS_DATASET_CREATE_ID_g) X(H5P_CLS_FILE_ACCESS_ID_g) X(H5P_CLS_FILE_CREATE_ID_g)
+
+#define H5_POINTER(f) __typeof__(f) *f;
+#define H5_ID(v) hid_t v;
+static struct {
+    H5_FUNCTIONS(H5_POINTER)
+    H5_HL_FUNCTIONS(H5_POINTER)
+    H5_IDS(H5_ID)
+} h5;
+
+/* The header's flag macros (H5F_ACC_TRUNC) call H5check and H5open, which
+ * are not linked: the loader has called H5open, the version is checked. */
+#undef H5CHECK
+#define H5CHECK
+#undef H5OPEN
+#define H5OPEN
 
 /* Chunks of about 1 MiB of float32: what HDF5's default chunk cache holds,
  * and a row at a time for very wide grids. */
@@ -37,36 +82,36 @@ static int check(writer *w, int ok, const char *step)
     if (ok || w->step) return ok;
     w->step = step;
     w->cause[0] = '\0';
-    H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, first_description, w->cause);
+    h5.H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, first_description, w->cause);
     return 0;
 }
 
 static int attribute(writer *w, hid_t on, const bkf_h5_attribute *a)
 {
-    hid_t space = H5Screate(H5S_SCALAR), type = -1, attr = -1;
+    hid_t space = h5.H5Screate(H5S_SCALAR), type = -1, attr = -1;
     int ok = check(w, space >= 0, "H5Screate");
     if (ok && a->kind == BKF_H5_TEXT) {
-        type = H5Tcopy(H5T_C_S1);
+        type = h5.H5Tcopy(h5.H5T_C_S1_g);
         ok = check(w, type >= 0, "H5Tcopy") &&
-             check(w, H5Tset_size(type, H5T_VARIABLE) >= 0, "H5Tset_size") &&
-             check(w, H5Tset_cset(type, H5T_CSET_UTF8) >= 0, "H5Tset_cset");
+             check(w, h5.H5Tset_size(type, H5T_VARIABLE) >= 0, "H5Tset_size") &&
+             check(w, h5.H5Tset_cset(type, H5T_CSET_UTF8) >= 0, "H5Tset_cset");
     }
     hid_t file_type = a->kind == BKF_H5_TEXT  ? type
-                      : a->kind == BKF_H5_INT ? H5T_STD_I64LE
-                                              : H5T_IEEE_F64LE;
-    if (ok) ok = check(w, (attr = H5Acreate2(on, a->name, file_type, space, H5P_DEFAULT,
+                      : a->kind == BKF_H5_INT ? h5.H5T_STD_I64LE_g
+                                              : h5.H5T_IEEE_F64LE_g;
+    if (ok) ok = check(w, (attr = h5.H5Acreate2(on, a->name, file_type, space, H5P_DEFAULT,
                                              H5P_DEFAULT)) >= 0, "H5Acreate2");
     if (ok) {
         long long i = a->integer;
         const char *text = a->text ? a->text : "";
-        herr_t r = a->kind == BKF_H5_TEXT  ? H5Awrite(attr, type, &text)
-                   : a->kind == BKF_H5_INT ? H5Awrite(attr, H5T_NATIVE_LLONG, &i)
-                                           : H5Awrite(attr, H5T_NATIVE_DOUBLE, &a->number);
+        herr_t r = a->kind == BKF_H5_TEXT  ? h5.H5Awrite(attr, type, &text)
+                   : a->kind == BKF_H5_INT ? h5.H5Awrite(attr, h5.H5T_NATIVE_LLONG_g, &i)
+                                           : h5.H5Awrite(attr, h5.H5T_NATIVE_DOUBLE_g, &a->number);
         ok = check(w, r >= 0, "H5Awrite");
     }
-    if (attr >= 0) ok = check(w, H5Aclose(attr) >= 0, "H5Aclose") && ok;
-    if (type >= 0) ok = check(w, H5Tclose(type) >= 0, "H5Tclose") && ok;
-    if (space >= 0) ok = check(w, H5Sclose(space) >= 0, "H5Sclose") && ok;
+    if (attr >= 0) ok = check(w, h5.H5Aclose(attr) >= 0, "H5Aclose") && ok;
+    if (type >= 0) ok = check(w, h5.H5Tclose(type) >= 0, "H5Tclose") && ok;
+    if (space >= 0) ok = check(w, h5.H5Sclose(space) >= 0, "H5Sclose") && ok;
     return ok;
 }
 
@@ -80,18 +125,18 @@ static int long_name(writer *w, hid_t on, const char *text)
 static int axis(writer *w, int k, const bkf_h5_axis *ax)
 {
     hsize_t n = ax->count;
-    hid_t space = H5Screate_simple(1, &n, NULL), dcpl = H5Pcreate(H5P_DATASET_CREATE), d = -1;
+    hid_t space = h5.H5Screate_simple(1, &n, NULL), dcpl = h5.H5Pcreate(h5.H5P_CLS_DATASET_CREATE_ID_g), d = -1;
     int ok = check(w, space >= 0, "H5Screate_simple") && check(w, dcpl >= 0, "H5Pcreate") &&
-             check(w, H5Pset_obj_track_times(dcpl, 0) >= 0, "H5Pset_obj_track_times");
-    if (ok) ok = check(w, (d = H5Dcreate2(w->file, ax->name, H5T_IEEE_F64LE, space, H5P_DEFAULT,
+             check(w, h5.H5Pset_obj_track_times(dcpl, 0) >= 0, "H5Pset_obj_track_times");
+    if (ok) ok = check(w, (d = h5.H5Dcreate2(w->file, ax->name, h5.H5T_IEEE_F64LE_g, space, H5P_DEFAULT,
                                           dcpl, H5P_DEFAULT)) >= 0, "H5Dcreate2");
-    if (dcpl >= 0) ok = check(w, H5Pclose(dcpl) >= 0, "H5Pclose") && ok;
+    if (dcpl >= 0) ok = check(w, h5.H5Pclose(dcpl) >= 0, "H5Pclose") && ok;
     if (ok && n)
-        ok = check(w, H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT,
+        ok = check(w, h5.H5Dwrite(d, h5.H5T_NATIVE_DOUBLE_g, H5S_ALL, H5S_ALL, H5P_DEFAULT,
                                ax->values) >= 0, "H5Dwrite");
-    if (ok) ok = check(w, H5DSset_scale(d, ax->name) >= 0, "H5DSset_scale");
+    if (ok) ok = check(w, h5.H5DSset_scale(d, ax->name) >= 0, "H5DSset_scale");
     if (ok) ok = long_name(w, d, ax->long_name);
-    if (space >= 0) ok = check(w, H5Sclose(space) >= 0, "H5Sclose") && ok;
+    if (space >= 0) ok = check(w, h5.H5Sclose(space) >= 0, "H5Sclose") && ok;
     w->scale[k] = d; /* closed with the file */
     return ok;
 }
@@ -103,30 +148,30 @@ static int field(writer *w, const bkf_h5_grid *g, const bkf_h5_field *f)
     chunk[1] = dims[1] < CHUNK_VALUES ? dims[1] : CHUNK_VALUES;
     chunk[0] = CHUNK_VALUES / chunk[1];
     if (chunk[0] > dims[0]) chunk[0] = dims[0];
-    hid_t space = H5Screate_simple(2, dims, NULL), dcpl = H5Pcreate(H5P_DATASET_CREATE), d = -1;
+    hid_t space = h5.H5Screate_simple(2, dims, NULL), dcpl = h5.H5Pcreate(h5.H5P_CLS_DATASET_CREATE_ID_g), d = -1;
     int ok = check(w, space >= 0, "H5Screate_simple") && check(w, dcpl >= 0, "H5Pcreate") &&
-             check(w, H5Pset_obj_track_times(dcpl, 0) >= 0, "H5Pset_obj_track_times");
+             check(w, h5.H5Pset_obj_track_times(dcpl, 0) >= 0, "H5Pset_obj_track_times");
     /* a chunk may not be empty: a grid without rows has no chunks */
     if (ok && dims[0] && dims[1]) {
-        ok = check(w, H5Pset_chunk(dcpl, 2, chunk) >= 0, "H5Pset_chunk");
+        ok = check(w, h5.H5Pset_chunk(dcpl, 2, chunk) >= 0, "H5Pset_chunk");
         if (ok && g->deflate)
-            ok = check(w, H5Zfilter_avail(H5Z_FILTER_DEFLATE) > 0, "H5Zfilter_avail(deflate)") &&
-                 check(w, H5Pset_shuffle(dcpl) >= 0, "H5Pset_shuffle") &&
-                 check(w, H5Pset_deflate(dcpl, g->deflate) >= 0, "H5Pset_deflate");
+            ok = check(w, h5.H5Zfilter_avail(H5Z_FILTER_DEFLATE) > 0, "h5.H5Zfilter_avail(deflate)") &&
+                 check(w, h5.H5Pset_shuffle(dcpl) >= 0, "H5Pset_shuffle") &&
+                 check(w, h5.H5Pset_deflate(dcpl, g->deflate) >= 0, "H5Pset_deflate");
     }
-    if (ok) ok = check(w, (d = H5Dcreate2(w->file, f->name, H5T_IEEE_F32LE, space, H5P_DEFAULT,
+    if (ok) ok = check(w, (d = h5.H5Dcreate2(w->file, f->name, h5.H5T_IEEE_F32LE_g, space, H5P_DEFAULT,
                                           dcpl, H5P_DEFAULT)) >= 0, "H5Dcreate2");
     if (ok && dims[0] && dims[1])
-        ok = check(w, H5Dwrite(d, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT,
+        ok = check(w, h5.H5Dwrite(d, h5.H5T_NATIVE_FLOAT_g, H5S_ALL, H5S_ALL, H5P_DEFAULT,
                                f->values) >= 0, "H5Dwrite");
     for (unsigned k = 0; ok && k < 2; k++)
-        ok = check(w, H5DSattach_scale(d, w->scale[k], k) >= 0, "H5DSattach_scale") &&
-             check(w, H5DSset_label(d, k, k ? g->columns.name : g->rows.name) >= 0,
+        ok = check(w, h5.H5DSattach_scale(d, w->scale[k], k) >= 0, "H5DSattach_scale") &&
+             check(w, h5.H5DSset_label(d, k, k ? g->columns.name : g->rows.name) >= 0,
                    "H5DSset_label");
     if (ok) ok = long_name(w, d, f->long_name);
-    if (d >= 0) ok = check(w, H5Dclose(d) >= 0, "H5Dclose") && ok;
-    if (dcpl >= 0) ok = check(w, H5Pclose(dcpl) >= 0, "H5Pclose") && ok;
-    if (space >= 0) ok = check(w, H5Sclose(space) >= 0, "H5Sclose") && ok;
+    if (d >= 0) ok = check(w, h5.H5Dclose(d) >= 0, "H5Dclose") && ok;
+    if (dcpl >= 0) ok = check(w, h5.H5Pclose(dcpl) >= 0, "H5Pclose") && ok;
+    if (space >= 0) ok = check(w, h5.H5Sclose(space) >= 0, "H5Sclose") && ok;
     return ok;
 }
 
@@ -182,6 +227,60 @@ static pthread_mutex_t h5_lock = PTHREAD_MUTEX_INITIALIZER;
 static int build_image(const bkf_h5_grid *g, void **image_out, ssize_t *size_out,
                        bkf_error *err);
 
+/* The library's symbol `name` from `lib`, or NULL with the message set. */
+static void *symbol(void *lib, const char *soname, const char *name, int *status,
+                    bkf_error *err)
+{
+    void *p = dlsym(lib, name);
+    if (!p && !*status)
+        *status = bkf_error_set(err, BKF_EIO, "HDF5 output: %s has no symbol %s (an HDF5 "
+                                "other than the %d.%d.%d bkfront was built with)", soname, name,
+                                H5_VERS_MAJOR, H5_VERS_MINOR, H5_VERS_RELEASE);
+    return p;
+}
+
+/* Loads HDF5 once per process (under h5_lock): BKF_OK, or BKF_EIO with
+ * what is missing, said again at every later call. */
+static int load_hdf5(bkf_error *err)
+{
+    static int loaded; /* 0: not tried, 1: loaded, else the failure's status */
+    static bkf_error failure;
+    if (loaded == 1) return BKF_OK;
+    if (loaded) {
+        if (err) *err = failure;
+        return loaded;
+    }
+    int s = BKF_OK;
+    void *lib = dlopen(BKF_HDF5_SONAME, RTLD_NOW | RTLD_LOCAL);
+    void *hl = lib ? dlopen(BKF_HDF5_HL_SONAME, RTLD_NOW | RTLD_LOCAL) : NULL;
+    if (!hl) {
+        s = bkf_error_set(&failure, BKF_EIO, "HDF5 output needs the HDF5 library, which does "
+                          "not load: %s (Debian: apt-get install libhdf5-dev)", dlerror());
+    } else {
+#define H5_LOAD(f) h5.f = (__typeof__(f) *)symbol(lib, BKF_HDF5_SONAME, #f, &s, &failure);
+#define H5_LOAD_HL(f) h5.f = (__typeof__(f) *)symbol(hl, BKF_HDF5_HL_SONAME, #f, &s, &failure);
+        H5_FUNCTIONS(H5_LOAD)
+        H5_HL_FUNCTIONS(H5_LOAD_HL)
+        unsigned major = 0, minor = 0, release = 0;
+        if (!s && (h5.H5open() < 0 || h5.H5get_libversion(&major, &minor, &release) < 0))
+            s = bkf_error_set(&failure, BKF_EIO, "HDF5 output: the HDF5 library does not start");
+        /* HDF5 changes its ABI between minor versions */
+        if (!s && (major != H5_VERS_MAJOR || minor != H5_VERS_MINOR))
+            s = bkf_error_set(&failure, BKF_EIO, "HDF5 output: %s is HDF5 %u.%u.%u, bkfront was "
+                              "built with %d.%d.%d", BKF_HDF5_SONAME, major, minor, release,
+                              H5_VERS_MAJOR, H5_VERS_MINOR, H5_VERS_RELEASE);
+        hid_t *id;
+#define H5_LOAD_ID(v)                                                                        \
+        if ((id = symbol(lib, BKF_HDF5_SONAME, #v, &s, &failure))) h5.v = *id;
+        if (!s) { H5_IDS(H5_LOAD_ID) }
+    }
+    /* A failed load keeps its libraries: HDF5 may have registered exit
+     * handlers, and dlclose would leave them pointing nowhere. */
+    loaded = s ? s : 1;
+    if (s && err) *err = failure;
+    return s;
+}
+
 int bkf_h5_write(bkf_io_atomic *file, const bkf_h5_grid *g, bkf_error *err)
 {
     int s = check_grid(g, err);
@@ -191,7 +290,8 @@ int bkf_h5_write(bkf_io_atomic *file, const bkf_h5_grid *g, bkf_error *err)
     void *image = NULL;
     ssize_t size = 0;
     pthread_mutex_lock(&h5_lock);
-    s = build_image(g, &image, &size, err);
+    s = load_hdf5(err);
+    if (!s) s = build_image(g, &image, &size, err);
     pthread_mutex_unlock(&h5_lock);
     if (s) return s;
     int bad = fwrite(image, 1, (size_t)size, stream) != (size_t)size || fflush(stream) != 0;
@@ -208,8 +308,8 @@ static int build_image(const bkf_h5_grid *g, void **image_out, ssize_t *size_out
     /* HDF5 prints its error stack by default: a library must not. */
     H5E_auto2_t old_func = NULL;
     void *old_data = NULL;
-    if (H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data) < 0 ||
-        H5Eset_auto2(H5E_DEFAULT, NULL, NULL) < 0)
+    if (h5.H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data) < 0 ||
+        h5.H5Eset_auto2(H5E_DEFAULT, NULL, NULL) < 0)
         return bkf_error_set(err, BKF_EIO, "HDF5 output: the HDF5 library does not start");
     writer w = {.file = -1, .scale = {-1, -1}};
     /* The file is built in memory (the core driver, no backing store) and
@@ -226,41 +326,41 @@ static int build_image(const bkf_h5_grid *g, void **image_out, ssize_t *size_out
                        (double)g->columns.count;
     if (g->deflate) bytes /= 8; /* grown as needed */
     size_t increment = bytes > 268435456.0 ? 268435456u : (size_t)bytes;
-    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    hid_t fapl = h5.H5Pcreate(h5.H5P_CLS_FILE_ACCESS_ID_g);
     int ok = check(&w, fapl >= 0, "H5Pcreate");
     /* a strong close closes whatever is still open on a failure */
-    if (ok) ok = check(&w, H5Pset_fapl_core(fapl, increment, 0) >= 0, "H5Pset_fapl_core") &&
-                 check(&w, H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) >= 0,
+    if (ok) ok = check(&w, h5.H5Pset_fapl_core(fapl, increment, 0) >= 0, "H5Pset_fapl_core") &&
+                 check(&w, h5.H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG) >= 0,
                        "H5Pset_fclose_degree");
     /* No modification times in the objects: the same field is the same
      * bytes (a sweep's point, computed again or elsewhere, gives its file
      * bit for bit). */
-    hid_t fcpl = ok ? H5Pcreate(H5P_FILE_CREATE) : -1;
+    hid_t fcpl = ok ? h5.H5Pcreate(h5.H5P_CLS_FILE_CREATE_ID_g) : -1;
     if (ok) ok = check(&w, fcpl >= 0, "H5Pcreate") &&
-                 check(&w, H5Pset_obj_track_times(fcpl, 0) >= 0, "H5Pset_obj_track_times");
-    if (ok) ok = check(&w, (w.file = H5Fcreate("bkfront-spacetime.h5", H5F_ACC_TRUNC,
+                 check(&w, h5.H5Pset_obj_track_times(fcpl, 0) >= 0, "H5Pset_obj_track_times");
+    if (ok) ok = check(&w, (w.file = h5.H5Fcreate("bkfront-spacetime.h5", H5F_ACC_TRUNC,
                                                fcpl, fapl)) >= 0, "H5Fcreate");
-    if (fcpl >= 0) ok = check(&w, H5Pclose(fcpl) >= 0, "H5Pclose") && ok;
-    if (fapl >= 0) ok = check(&w, H5Pclose(fapl) >= 0, "H5Pclose") && ok;
+    if (fcpl >= 0) ok = check(&w, h5.H5Pclose(fcpl) >= 0, "H5Pclose") && ok;
+    if (fapl >= 0) ok = check(&w, h5.H5Pclose(fapl) >= 0, "H5Pclose") && ok;
     if (ok) ok = axis(&w, 0, &g->rows) && axis(&w, 1, &g->columns);
     for (size_t i = 0; ok && i < g->nfields; i++) ok = field(&w, g, &g->fields[i]);
     for (size_t i = 0; ok && i < g->nattributes; i++) ok = attribute(&w, w.file, &g->attributes[i]);
     for (int k = 0; k < 2; k++)
-        if (w.scale[k] >= 0) ok = check(&w, H5Dclose(w.scale[k]) >= 0, "H5Dclose") && ok;
+        if (w.scale[k] >= 0) ok = check(&w, h5.H5Dclose(w.scale[k]) >= 0, "H5Dclose") && ok;
     void *image = NULL;
     ssize_t size = -1;
-    if (ok) ok = check(&w, H5Fflush(w.file, H5F_SCOPE_GLOBAL) >= 0, "H5Fflush") &&
-                 check(&w, (size = H5Fget_file_image(w.file, NULL, 0)) > 0, "H5Fget_file_image");
+    if (ok) ok = check(&w, h5.H5Fflush(w.file, H5F_SCOPE_GLOBAL) >= 0, "H5Fflush") &&
+                 check(&w, (size = h5.H5Fget_file_image(w.file, NULL, 0)) > 0, "H5Fget_file_image");
     if (ok && !(image = malloc((size_t)size))) {
-        H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
-        H5Fclose(w.file);
+        h5.H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
+        h5.H5Fclose(w.file);
         return bkf_error_set(err, BKF_ENOMEM, "HDF5 output: out of memory for a %zd-byte file",
                              size);
     }
-    if (ok) ok = check(&w, H5Fget_file_image(w.file, image, (size_t)size) == size,
+    if (ok) ok = check(&w, h5.H5Fget_file_image(w.file, image, (size_t)size) == size,
                        "H5Fget_file_image");
-    if (w.file >= 0) ok = check(&w, H5Fclose(w.file) >= 0, "H5Fclose") && ok;
-    H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
+    if (w.file >= 0) ok = check(&w, h5.H5Fclose(w.file) >= 0, "H5Fclose") && ok;
+    h5.H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
     if (!ok) {
         free(image);
         return bkf_error_set(err, BKF_EIO, "writing the HDF5 file failed: %s: %s", w.step,

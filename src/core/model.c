@@ -4,8 +4,16 @@
 
 bkf_model_params bkf_model_params_paper(void)
 {
-    return (bkf_model_params){.gamma = 2.0, .c = 0.3, .nu = -0.96, .S = 20.0,
-                              .kind = BKF_MODEL_CONTINUUM, .N = 512};
+    return (bkf_model_params){.gamma = BKF_PAPER_GAMMA, .c = BKF_PAPER_C, .nu = BKF_PAPER_NU,
+                              .S = BKF_PAPER_S, .kind = BKF_MODEL_CONTINUUM, .N = 512};
+}
+
+void bkf_model_paper_where_unset(double *gamma, double *c, double *nu, double *S)
+{
+    if (gamma && isnan(*gamma)) *gamma = BKF_PAPER_GAMMA;
+    if (c && isnan(*c)) *c = BKF_PAPER_C;
+    if (nu && isnan(*nu)) *nu = BKF_PAPER_NU;
+    if (S && isnan(*S)) *S = BKF_PAPER_S;
 }
 
 double bkf_model_friction(double psi) { return psi * psi * psi / 3.0 - psi; }

@@ -218,7 +218,52 @@ static void check_release(void *spec)
 
 #define ENTRY(name, T, summary) \
     {#name, summary, NULL, NULL, sizeof(T), name##_options, name##_init, name##_check, \
-     name##_write, name##_release}
+     name##_write, name##_release, name##_kinds, sizeof name##_kinds / sizeof name##_kinds[0]}
+
+/* The scene kinds (bkf_catalog_kind): the keys in the order of the step's
+ * command line, the scene's defaults, the files. */
+static const bkf_catalog_kind period_kinds[] = {
+    {"period", {.keys = "mu=0.1:1e4:41 method +nu ^tol"}, {0}}};
+static const bkf_catalog_kind speeds_kinds[] = {
+    {"speeds",
+     {.keys = "+gamma +c +nu +S ^model!continuum ^N?model=chain n nmax ^tol method"}, {0}}};
+static const bkf_catalog_kind branch_kinds[] = {
+    {"branch",
+     {.keys = "@param from=$param to +gamma +c +nu +S ^model!continuum ^N?model=chain n=1 root "
+              "max-points ^tol"},
+     {0}}};
+static const bkf_catalog_kind stability_kinds[] = {
+    {"stability", {.keys = "+gamma +c +nu +S n=1 tol"}, {0}}};
+static const bkf_catalog_kind asymptotics_kinds[] = {
+    {"validity", {.first = "grid", .keys = "mu=0.1:1e4:21 log:=yes nu=-0.99:0.99:12"}, {0}}};
+static const bkf_catalog_kind profile_kinds[] = {
+    {"profile", {.keys = "+gamma +c +nu +S n=1 root points ^tol"}, {0}}};
+static const bkf_catalog_kind floquet_kinds[] = {
+    {"dispersion", {.keys = "+gamma +c q=0:6:241 ^S +nu ^tol"}, {0}},
+    {"threshold", {.first = "threshold", .keys = "+gamma +c @along from to search ^tol"}, {0}}};
+/* A simulation's tol is its stepper's, not the accuracy asked of a result:
+ * not inherited. */
+static const bkf_catalog_kind simulate_kinds[] = {
+    {"spacetime",
+     {.keys = "+gamma +c +nu +S ^model ^N=512 tmax=50 init=uniform seed=1 frames=500 tol stepper",
+      .last = "no-progress", .outputs = "spacetime=.dat out=_diag.tsv"},
+     {0}}};
+static const bkf_catalog_kind check_kinds[] = {
+    {"check",
+     {.keys = "+gamma +c +nu +S ^model!continuum n ^N tmax tol rel-tol seed stepper frame grid "
+              "points",
+      .last = "no-progress"},
+     {0}}};
+/* With thresholds = G1,G2,...: the global oscillation's stability
+ * boundaries at each gamma, to 1e-6 in nu (far finer than any map's grid),
+ * for the map's figure to draw over the regimes. */
+static const bkf_catalog_kind sweep_kinds[] = {
+    {"sweep", {.keys = "+gamma +c +nu +S ^model ^N", .last = "no-progress"},
+     {.product = "floquet", .first = "diagram", .fanout = "thresholds>gamma",
+      .keys = "gamma ^c search=-0.999:0.999 tol:=1e-6", .outputs = "out=_floquet_#.tsv"}}};
+static const bkf_catalog_kind friction_kinds[] = {
+    {"friction", {.keys = "from=-1 to=4 points=601"}, {0}}};
+static const bkf_catalog_kind bench_kinds[] = {{"bench", {.keys = "product quick"}, {0}}};
 
 static const bkf_catalog_entry entries[] = {
     ENTRY(period, bkf_period_spec,

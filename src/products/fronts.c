@@ -64,15 +64,15 @@ static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYM
 
 #define BOUNDED (BKF_OPT_MIN | BKF_OPT_MAX)
 
-/* The model's keys, shared by both products' tables (REQUIRED: speeds needs
- * every one; branch all but the continued one, which its check sees).  nu's
+/* The model's keys, shared by both products' tables, the paper's values by
+ * default (branch: but the continued one, which its check sees).  nu's
  * range is the checks' (check_nu), whose message says why. */
-#define MODEL_OPTIONS(SPEC, required)                                                        \
-    BKF_PRODUCT_GAMMA_OPTION(SPEC, required),                                                \
+#define MODEL_OPTIONS(SPEC)                                                                  \
+    BKF_PRODUCT_GAMMA_OPTION(SPEC),                                                          \
     {.name = "c", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, c),                       \
-     .flags = (required) | BKF_OPT_MIN | BKF_OPT_MAX, .min = 0, .max = BKF_MODEL_C_MAX,     \
-     .form = "C", .help = "sound speed, in [0, 1e6]"},                                         \
-    BKF_PRODUCT_NU_OPTION(SPEC, required), BKF_PRODUCT_S_OPTION(SPEC, required)
+     .flags = BKF_OPT_MIN | BKF_OPT_MAX, .min = 0, .max = BKF_MODEL_C_MAX, .form = "C",       \
+     .shown_default = BKF_TEXT_OF(BKF_PAPER_C), .help = "sound speed, in [0, 1e6]"},          \
+    BKF_PRODUCT_NU_OPTION(SPEC), BKF_PRODUCT_S_OPTION(SPEC)
 
 #define TOL_OPTION(SPEC, what)                                                                \
     {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, tol), .flags = BOUNDED,  \
@@ -89,7 +89,7 @@ static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYM
 /* ---------------------------------------------------------------- speeds */
 
 const bkf_option bkf_fronts_options[] = {
-    MODEL_OPTIONS(bkf_fronts_spec, BKF_OPT_REQUIRED),
+    MODEL_OPTIONS(bkf_fronts_spec),
     {.name = "n", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_fronts_spec, n), .flags = BOUNDED,
      .min = 1, .max = 1e9, .form = "N", .help = "only the roots for this n"},
     {.name = "nmax", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_fronts_spec, nmax),
@@ -127,6 +127,7 @@ bkf_fronts_spec bkf_fronts_spec_default(void)
     bkf_fronts_spec s;
     memset(&s, 0, sizeof s);
     s.gamma = s.c = s.nu = s.S = NAN;
+    bkf_model_paper_where_unset(&s.gamma, &s.c, &s.nu, &s.S);
     s.tol = bkf_speeds_options_default().tol;
     s.method = 0;
     return s;
@@ -576,13 +577,13 @@ const bkf_option bkf_fronts_branch_options[] = {
     {.name = "to", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_fronts_branch_spec, to),
      .flags = BKF_OPT_REQUIRED, .form = "B", .help = "required; its end value (A != B)"},
     {.name = "n", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_fronts_branch_spec, n),
-     .flags = BOUNDED, .min = 1, .max = 1e9, .form = "N", .shown_default = "1",
+     .flags = BOUNDED | BKF_OPT_FANOUT, .min = 1, .max = 1e9, .form = "N", .shown_default = "1",
      .help = "number of fronts"},
     {.name = "root", .type = BKF_OPT_COUNT, .offset = offsetof(bkf_fronts_branch_spec, root),
      .flags = BOUNDED, .min = 1, .max = 1e6, .form = "I", .shown_default = "1",
      .help = "which root of this n at p = A to follow, 1 being the\n"
              "fastest (as listed by bkfront speeds)"},
-    MODEL_OPTIONS(bkf_fronts_branch_spec, 0),
+    MODEL_OPTIONS(bkf_fronts_branch_spec),
     TOL_OPTION(bkf_fronts_branch_spec, "relative accuracy asked of T and v"),
     {.name = "max-points", .type = BKF_OPT_COUNT,
      .offset = offsetof(bkf_fronts_branch_spec, max_points), .flags = BOUNDED, .min = 1,
@@ -638,6 +639,19 @@ static double *param_field(bkf_model_params *p, bkf_speeds_param along)
 static double param_value(bkf_model_params p, bkf_speeds_param along)
 {
     return *param_field(&p, along);
+}
+
+/* The spec with the parameters not given (NaN) at the paper's values, but
+ * the continued one (and S with h) left as it is. */
+static bkf_fronts_branch_spec branch_resolved(const bkf_fronts_branch_spec *spec)
+{
+    bkf_fronts_branch_spec r = *spec;
+    int moves_S = spec->along == BKF_SPEEDS_ALONG_S || spec->along == ALONG_H;
+    bkf_model_paper_where_unset(spec->along == BKF_SPEEDS_ALONG_GAMMA ? NULL : &r.gamma,
+                                spec->along == BKF_SPEEDS_ALONG_C ? NULL : &r.c,
+                                spec->along == BKF_SPEEDS_ALONG_NU ? NULL : &r.nu,
+                                moves_S ? NULL : &r.S);
+    return r;
 }
 
 /* The fixed parameters with the continued one at x. */
@@ -718,9 +732,9 @@ static int chain_branch_check(const bkf_fronts_branch_spec *spec, const char *p,
             return bkf_error_set(err, BKF_EINPUT, "%s%s: it moves with the continued parameter "
                                  "(%sparam %s); give %sfrom and %sto instead", p,
                                  param_names[k], p, name, p, p);
-        if (!continued && isnan(values[k]))
-            return bkf_error_set(err, BKF_EINPUT, "%s%s is required", p, param_names[k]);
     }
+    bkf_fronts_branch_spec resolved = branch_resolved(spec);
+    spec = &resolved;
     if (!(isfinite(spec->from) && isfinite(spec->to)))
         return bkf_error_set(err, BKF_EINPUT, "%sfrom, %sto: %s's ends are required", p, p, name);
     if (spec->from == spec->to)
@@ -769,9 +783,9 @@ int bkf_fronts_branch_check(const bkf_fronts_branch_spec *spec, const char *pref
                                  "%s%s: this is the continued parameter (%sparam %s); give its "
                                  "range with %sfrom and %sto instead",
                                  p, name, p, name, p, p);
-        if (k != spec->along && isnan(values[k]))
-            return bkf_error_set(err, BKF_EINPUT, "%s%s is required", p, param_names[k]);
     }
+    bkf_fronts_branch_spec resolved = branch_resolved(spec);
+    spec = &resolved;
     int s;
     if (spec->along != BKF_SPEEDS_ALONG_NU && (s = check_nu(p, spec->nu, err))) return s;
     if ((s = check_end(spec, p, "from", spec->from, err))) return s;
@@ -1277,6 +1291,8 @@ int bkf_fronts_branch_write(const bkf_fronts_branch_spec *spec, FILE *out, bkf_i
 {
     int s = bkf_fronts_branch_check(spec, "", err);
     if (s) return s;
+    bkf_fronts_branch_spec resolved = branch_resolved(spec);
+    spec = &resolved;
     if (spec->model == 1) return write_chain_branch(spec, out, format, prov, err);
     bkf_speeds_options o = bkf_speeds_options_default();
     o.tol = spec->tol;

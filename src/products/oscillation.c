@@ -78,13 +78,16 @@ static int set_search(void *vspec, const char *text, bkf_error *err)
 const bkf_option bkf_oscillation_options[] = {
     {.name = "gamma", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_oscillation_spec, gamma),
      .flags = BOUNDED, .min = BKF_CYCLE_MU_MIN, .max = BKF_CYCLE_MU_MAX, .form = "G",
+     .shown_default = BKF_TEXT_OF(BKF_PAPER_GAMMA),
      .help = "friction strength, in [1e-06, 1e+06]"},
     {.name = "c", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_oscillation_spec, c),
      .flags = BKF_OPT_MIN | BKF_OPT_MAX, .min = 0, .max = BKF_MODEL_C_MAX, .form = "C",
+     .shown_default = BKF_TEXT_OF(BKF_PAPER_C),
      .help = "sound speed, in [0, 1e6] (> 0 for --threshold and --diagram:\n"
              "with c = 0 every q is the neutral q = 0 mode)"},
     {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = offsetof(bkf_oscillation_spec, nu),
-     .flags = BOUNDED | BKF_OPT_MIN_OPEN | BKF_OPT_MAX_OPEN, .min = -1, .max = 1, .form = "V",
+     .flags = BOUNDED | BKF_OPT_MIN_OPEN | BKF_OPT_MAX_OPEN | BKF_OPT_FANOUT, .min = -1, .max = 1,
+     .form = "V", .shown_default = BKF_TEXT_OF(BKF_PAPER_NU),
      .help = "pulling rate, in (-1, 1); dispersion mode only"},
     {.name = "q", .type = BKF_OPT_DOUBLE_LIST, .offset = offsetof(bkf_oscillation_spec, q),
      .flags = BKF_OPT_MIN, .min = 0, .max_count = BKF_OSCILLATION_MAX_ROWS, .form = "LIST",
@@ -214,6 +217,19 @@ static int check_c(const char *p, const char *key, double c, int positive, bkf_e
     return BKF_OK;
 }
 
+/* The spec with what a mode uses and was not given at the paper's values:
+ * gamma and c but the one a curve runs along; nu in the dispersion mode. */
+static bkf_oscillation_spec resolved(const bkf_oscillation_spec *sp)
+{
+    bkf_oscillation_spec r = *sp;
+    bkf_oscillation_mode mode = bkf_oscillation_mode_of(sp);
+    int curve = mode == BKF_OSCILLATION_CURVE;
+    bkf_model_paper_where_unset(curve && sp->along == BKF_FLOQUET_ALONG_GAMMA ? NULL : &r.gamma,
+                                curve && sp->along == BKF_FLOQUET_ALONG_C ? NULL : &r.c,
+                                mode == BKF_OSCILLATION_DISPERSION ? &r.nu : NULL, NULL);
+    return r;
+}
+
 /* Which keys each mode takes and needs, in the order a user meets them. */
 static int check_keys(const bkf_oscillation_spec *sp, const char *p, bkf_error *err)
 {
@@ -242,13 +258,6 @@ static int check_keys(const bkf_oscillation_spec *sp, const char *p, bkf_error *
     } else if (given_from || given_to)
         return bkf_error_set(err, BKF_EINPUT, "%s%s: only with %salong", p,
                              given_from ? "from" : "to", p);
-    int need_gamma = !(mode == BKF_OSCILLATION_CURVE && sp->along == BKF_FLOQUET_ALONG_GAMMA);
-    int need_c = !(mode == BKF_OSCILLATION_CURVE && sp->along == BKF_FLOQUET_ALONG_C);
-    if (need_gamma && isnan(sp->gamma))
-        return bkf_error_set(err, BKF_EINPUT, "%sgamma is required (a number in [%g, %g])", p,
-                             BKF_CYCLE_MU_MIN, BKF_CYCLE_MU_MAX);
-    if (need_c && isnan(sp->c))
-        return bkf_error_set(err, BKF_EINPUT, "%sc is required (a number >= 0)", p);
     if (mode != BKF_OSCILLATION_DISPERSION) {
         if (!isnan(sp->nu))
             return bkf_error_set(err, BKF_EINPUT, "%snu: not used by %s%s, which scans nu (see %ssearch)",
@@ -262,7 +271,6 @@ static int check_keys(const bkf_oscillation_spec *sp, const char *p, bkf_error *
     if (!isnan(sp->cq_max) || !isnan(sp->nu_step))
         return bkf_error_set(err, BKF_EINPUT, "%s%s: only with %sthreshold or %sdiagram", p,
                              !isnan(sp->cq_max) ? "cq-max" : "nu-step", p, p);
-    if (isnan(sp->nu)) return bkf_error_set(err, BKF_EINPUT, "%snu is required (a number in (-1, 1))", p);
     if (!sp->q.count || !sp->q.values)
         return bkf_error_set(err, BKF_EINPUT, "%sq is required (Q, Q1,Q2,... or A:B:N, each >= 0)", p);
     return BKF_OK;
@@ -274,6 +282,8 @@ int bkf_oscillation_check(const bkf_oscillation_spec *sp, const char *prefix, bk
     const char *p = prefix ? prefix : "";
     int s = check_keys(sp, p, err);
     if (s) return s;
+    bkf_oscillation_spec r = resolved(sp);
+    sp = &r;
     bkf_oscillation_mode mode = bkf_oscillation_mode_of(sp);
     int scanning = mode != BKF_OSCILLATION_DISPERSION;
     char a[32];
@@ -480,8 +490,9 @@ static int dispersion_row(dispersion *d, size_t i, bkf_oscillation_row *row, bkf
 int bkf_oscillation_dispersion(const bkf_oscillation_spec *spec, bkf_oscillation_visit visit,
                                void *data, bkf_cycle_result *cycle, bkf_error *err)
 {
+    bkf_oscillation_spec r = resolved(spec);
     dispersion d;
-    int s = dispersion_begin(spec, &d, err);
+    int s = dispersion_begin(&r, &d, err);
     if (!s && cycle) *cycle = *d.cycle;
     for (size_t i = 0; !s && i < d.count; i++) {
         bkf_oscillation_row row;
@@ -514,14 +525,19 @@ static int write_dispersion(const bkf_oscillation_spec *p, const bkf_provenance 
         s = bkf_io_table_comment(t, line, err);
     }
     if (!s) s = bkf_product_table_command(t, prov, err);
+    /* The refused rows, reported once when the table is done: their count,
+     * their q (the first few) and the first one's reason. */
+    size_t refused = 0;
+    char qs[160] = "", first[256] = "";
     for (size_t i = 0; i < d.count && !s; i++) {
         bkf_oscillation_row row;
         if ((s = dispersion_row(&d, i, &row, err))) break;
         const bkf_floquet_point *pt = &row.point;
-        if (row.refused && p->warn) {
-            snprintf(line, sizeof line, "row q = %s refused: %s",
-                     bkf_format_number(d.q[i], a, sizeof a), row.message);
-            p->warn(line, p->warn_data);
+        if (row.refused && refused++ < 4) {
+            size_t used = strlen(qs);
+            snprintf(qs + used, sizeof qs - used, "%s%s", refused > 1 ? ", " : "",
+                     refused > 3 ? "..." : bkf_format_number(d.q[i], a, sizeof a));
+            if (refused == 1) snprintf(first, sizeof first, "%s", row.message);
         }
         bkf_io_value v[COUNT(dispersion_columns)] = {
             {.number = pt->q},
@@ -540,6 +556,11 @@ static int write_dispersion(const bkf_oscillation_spec *p, const bkf_provenance 
             {.number = pt->det_direct},
         };
         s = bkf_io_table_row(t, v, err);
+    }
+    if (!s && refused && p->warn) {
+        snprintf(line, sizeof line, "%zu of %zu rows refused (kind refused, lambda nan) at "
+                 "q = %s; the first: %s", refused, d.count, qs, first);
+        p->warn(line, p->warn_data);
     }
     dispersion_free(&d);
     return s;
@@ -697,6 +718,8 @@ int bkf_oscillation_write(const bkf_oscillation_spec *spec, FILE *out, bkf_io_fo
 {
     int s = bkf_oscillation_check(spec, "", err);
     if (s) return s;
+    bkf_oscillation_spec r = resolved(spec);
+    spec = &r;
     bkf_oscillation_mode mode = bkf_oscillation_mode_of(spec);
     size_t ncols;
     const bkf_io_column *cols = bkf_oscillation_columns(mode, &ncols);

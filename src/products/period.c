@@ -48,7 +48,7 @@ const bkf_option bkf_period_options[] = {
      .help = "required; mu in [1e-06, 1e+06]: M, M1,M2,... or A:B:N\n"
              "(N points from A to B, ends included; N = 1 needs A = B)"},
     {.name = "nu", .type = BKF_OPT_DOUBLE_LIST, .offset = offsetof(bkf_period_spec, nu),
-     .flags = BKF_OPT_REQUIRED, .form = "LIST",
+     .flags = BKF_OPT_REQUIRED | BKF_OPT_FANOUT, .form = "LIST",
      .help = "required; nu in (-1, 1): for |nu| >= 1 there is no limit\n"
              "cycle (uniform continuous slip is stable)\n"
              "With lists for both, the points form a grid, mu varying\n"

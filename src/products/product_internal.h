@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include "bkfront/cycle.h"
 #include "bkfront/io.h"
+#include "bkfront/model.h"
 #include "bkfront/options.h"
 #include "bkfront/status.h"
 
@@ -20,20 +21,22 @@ int bkf_product_table_open(FILE *out, bkf_io_format format, const bkf_io_column 
 /* "command: COMMAND" when the provenance has one. */
 int bkf_product_table_command(bkf_io_table *table, const bkf_provenance *prov, bkf_error *err);
 
-/* The model's keys as the tables of the cycle-based products write them
- * (REQUIRED: BKF_OPT_REQUIRED or 0); c's range differs between products. */
-#define BKF_PRODUCT_GAMMA_OPTION(SPEC, required)                                            \
+/* The model's keys as the tables of the cycle-based products write them,
+ * each defaulting to the paper's value (bkf_model_paper_where_unset:
+ * a spec keeps NaN for "not given"); c's range differs between products. */
+#define BKF_PRODUCT_GAMMA_OPTION(SPEC)                                                      \
     {.name = "gamma", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, gamma),              \
-     .flags = (required) | BKF_OPT_MIN | BKF_OPT_MAX, .min = BKF_CYCLE_MU_MIN,              \
-     .max = BKF_CYCLE_MU_MAX, .form = "G",                                                  \
+     .flags = BKF_OPT_MIN | BKF_OPT_MAX, .min = BKF_CYCLE_MU_MIN,                           \
+     .max = BKF_CYCLE_MU_MAX, .form = "G", .shown_default = BKF_TEXT_OF(BKF_PAPER_GAMMA),   \
      .help = "friction strength, in [1e-06, 1e+06] (mu >= gamma must be\n"                  \
              "solvable)"}
-#define BKF_PRODUCT_NU_OPTION(SPEC, required)                                               \
-    {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, nu), .flags = (required), \
-     .form = "V", .help = "pulling rate in (-1, 1); |nu| >= 1 has no fronts"}
-#define BKF_PRODUCT_S_OPTION(SPEC, required)                                                \
+#define BKF_PRODUCT_NU_OPTION(SPEC)                                                         \
+    {.name = "nu", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, nu), .form = "V",       \
+     .shown_default = BKF_TEXT_OF(BKF_PAPER_NU),                                            \
+     .help = "pulling rate in (-1, 1); |nu| >= 1 has no fronts"}
+#define BKF_PRODUCT_S_OPTION(SPEC)                                                          \
     {.name = "S", .type = BKF_OPT_DOUBLE, .offset = offsetof(SPEC, S),                      \
-     .flags = (required) | BKF_OPT_MIN | BKF_OPT_MIN_OPEN, .min = 0, .form = "L",           \
-     .help = "system size, > 0"}
+     .flags = BKF_OPT_MIN | BKF_OPT_MIN_OPEN, .min = 0, .form = "L",                        \
+     .shown_default = BKF_TEXT_OF(BKF_PAPER_S), .help = "system size, > 0"}
 
 #endif

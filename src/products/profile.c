@@ -18,17 +18,20 @@ static const bkf_io_column columns[] = {
 const bkf_option bkf_profile_options[] = {
     {.name = "gamma", .type = BKF_OPT_DOUBLE,
      .offset = offsetof(bkf_profile_spec, params) + offsetof(bkf_model_params, gamma),
-     .form = "G", .help = "friction strength, as in bkfront speeds"},
+     .form = "G", .shown_default = BKF_TEXT_OF(BKF_PAPER_GAMMA),
+     .help = "friction strength, as in bkfront speeds"},
     {.name = "c", .type = BKF_OPT_DOUBLE,
      .offset = offsetof(bkf_profile_spec, params) + offsetof(bkf_model_params, c),
      .flags = BKF_OPT_MIN | BKF_OPT_MAX, .min = 0, .max = BKF_MODEL_C_MAX, .form = "C",
+     .shown_default = BKF_TEXT_OF(BKF_PAPER_C),
      .help = "sound speed, in [0, 1e6], as in bkfront speeds"},
     {.name = "nu", .type = BKF_OPT_DOUBLE,
      .offset = offsetof(bkf_profile_spec, params) + offsetof(bkf_model_params, nu),
-     .flags = BKF_OPT_REQUIRED, .form = "V", .help = "required; pulling rate in (-1, 1)"},
+     .form = "V", .shown_default = BKF_TEXT_OF(BKF_PAPER_NU),
+     .help = "pulling rate in (-1, 1)"},
     {.name = "S", .type = BKF_OPT_DOUBLE,
      .offset = offsetof(bkf_profile_spec, params) + offsetof(bkf_model_params, S), .form = "L",
-     .help = "system size, as in bkfront speeds"},
+     .shown_default = BKF_TEXT_OF(BKF_PAPER_S), .help = "system size, as in bkfront speeds"},
     {.name = "n", .type = BKF_OPT_COUNT_LIST, .offset = offsetof(bkf_profile_spec, n),
      .flags = BKF_OPT_MAX, .max = BKF_PROFILE_MAX_N, .max_count = BKF_PROFILE_MAX_LIST,
      .form = "LIST", .help = "numbers of fronts: K, K1,K2,... or A:B:N (at most 1000)"},
@@ -65,12 +68,23 @@ void bkf_profile_spec_free(bkf_profile_spec *spec)
     bkf_option_free_lists(bkf_profile_options, bkf_profile_noptions, spec);
 }
 
+/* The spec with the model not given at the paper's values: nu always, and
+ * gamma, c, S without --mu (with it they are not taken). */
+static bkf_profile_spec resolved(const bkf_profile_spec *spec)
+{
+    bkf_profile_spec r = *spec;
+    int at_mu = !isnan(spec->mu);
+    bkf_model_paper_where_unset(at_mu ? NULL : &r.params.gamma, at_mu ? NULL : &r.params.c,
+                                &r.params.nu, at_mu ? NULL : &r.params.S);
+    return r;
+}
+
 int bkf_profile_check(const bkf_profile_spec *spec, const char *prefix, bkf_error *err)
 {
     const char *p = prefix ? prefix : "";
     bkf_error e;
-    if (isnan(spec->params.nu)) return bkf_error_set(err, BKF_EINPUT, "%snu is required", p);
-    if (bkf_model_check_nu_active(spec->params.nu, &e))
+    bkf_profile_spec r = resolved(spec);
+    if (bkf_model_check_nu_active(r.params.nu, &e))
         return bkf_error_set(err, BKF_EINPUT, "%snu: %s", p, e.message);
     int model = !isnan(spec->params.gamma) || !isnan(spec->params.c) ||
                 !isnan(spec->params.S) || spec->n.count || spec->root;
@@ -81,16 +95,11 @@ int bkf_profile_check(const bkf_profile_spec *spec, const char *prefix, bkf_erro
                                  p, p, p, p, p);
         return BKF_OK;
     }
-    const int missing[] = {isnan(spec->params.gamma), isnan(spec->params.c),
-                           isnan(spec->params.S), spec->n.count == 0};
-    const char *names[] = {"gamma", "c", "S", "n"};
-    for (int i = 0; i < 4; i++)
-        if (missing[i])
-            return bkf_error_set(err, BKF_EINPUT, "%s%s: required unless %smu is given", p,
-                                 names[i], p);
+    if (!spec->n.count)
+        return bkf_error_set(err, BKF_EINPUT, "%sn: required unless %smu is given", p, p);
     bkf_speeds_options o = bkf_speeds_options_default();
     o.tol = spec->tol;
-    if (bkf_speeds_check(&spec->params, &o, &e))
+    if (bkf_speeds_check(&r.params, &o, &e))
         return bkf_error_set(err, BKF_EINPUT, "%s", e.message);
     return BKF_OK;
 }
@@ -123,6 +132,8 @@ int bkf_profile_write(const bkf_profile_spec *p, FILE *out, bkf_io_format format
 {
     int s = bkf_profile_check(p, "", err);
     if (s) return s;
+    bkf_profile_spec r = resolved(p);
+    p = &r;
     bkf_io_table *table = bkf_io_table_alloc(out, format, columns, NCOLUMNS, err);
     if (!table) return BKF_ENOMEM;
     bkf_cycle *cycle = bkf_cycle_alloc();

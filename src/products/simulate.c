@@ -15,7 +15,6 @@
 #include "product_internal.h"
 
 #define PI 3.14159265358979323846
-#define DEF_N 512
 
 static const char *const model_names[] = {"continuum", "chain", NULL};
 /* bkf_pde_stepper_names, then "auto" (BKF_SIMULATE_STEPPER_AUTO) */
@@ -155,7 +154,7 @@ const bkf_option bkf_simulate_options[] = {
      .help = "rows of the diagnostics and the spacetime field, evenly\n"
              "spaced over [0, tmax] (F + 1 rows with t = 0), in [1, 1e6]"},
     {.name = "spacetime", .type = BKF_OPT_TEXT, .offset = SPEC(spacetime), .form = "FILE",
-     .flags = BKF_OPT_RUN_FILE,
+     .flags = BKF_OPT_RUN_FILE | BKF_OPT_PATH,
      .help = "psi(x, t) at the frames for gnuplot: text is the nonuniform\n"
              "matrix format (first row N x_0 .. x_{N-1}, then t psi ...;\n"
              "plot 'FILE' nonuniform matrix with image), binary the same\n"
@@ -175,7 +174,7 @@ const bkf_option bkf_simulate_options[] = {
      .shown_default = "none",
      .help = "hdf5 only: gzip level of the fields' chunks, in [1, 9]"},
     {.name = "snapshots", .type = BKF_OPT_TEXT, .offset = SPEC(snapshots), .form = "FILE",
-     .flags = BKF_OPT_RUN_FILE,
+     .flags = BKF_OPT_RUN_FILE | BKF_OPT_PATH,
      .help = "TSV with columns t, x, psi, eta at K frames spread over\nthe run"},
     {.name = "snapshot-count", .type = BKF_OPT_COUNT, .offset = SPEC(snapshot_count),
      .flags = BOUNDED | BKF_OPT_RUN_FILE, .min = 1, .max = BKF_SIMULATE_SNAPSHOTS_MAX, .form = "K",
@@ -231,7 +230,7 @@ static int resolve(const bkf_simulate_spec *sp, const char *prefix, bkf_model_pa
                                  bkf_format_number(S, a, sizeof a));
         model->N = (size_t)S;
     } else if (!N_given) {
-        model->N = DEF_N;
+        model->N = BKF_SIMULATE_N_DEFAULT;
     }
     if (sp->stepper == BKF_SIMULATE_STEPPER_AUTO)
         options->stepper = bkf_pde_stepper_auto(model, sp->dealias);

@@ -36,15 +36,15 @@ static const bkf_io_column diagram_columns[] = {
 #define FIELD(f) offsetof(bkf_stability_spec, f)
 
 const bkf_option bkf_stability_options[] = {
-    BKF_PRODUCT_GAMMA_OPTION(bkf_stability_spec, BKF_OPT_REQUIRED),
+    BKF_PRODUCT_GAMMA_OPTION(bkf_stability_spec),
     {.name = "c", .type = BKF_OPT_DOUBLE, .offset = FIELD(c),
-     .flags = BKF_OPT_REQUIRED | BKF_OPT_MIN | BKF_OPT_MIN_OPEN | BKF_OPT_MAX, .min = 0,
-     .max = BKF_MODEL_C_MAX, .form = "C",
+     .flags = BKF_OPT_MIN | BKF_OPT_MIN_OPEN | BKF_OPT_MAX, .min = 0,
+     .max = BKF_MODEL_C_MAX, .form = "C", .shown_default = BKF_TEXT_OF(BKF_PAPER_C),
      .help = "sound speed, in (0, 1e6] (with c = 0 every mode is neutral)"},
-    BKF_PRODUCT_NU_OPTION(bkf_stability_spec, BKF_OPT_REQUIRED),
-    BKF_PRODUCT_S_OPTION(bkf_stability_spec, BKF_OPT_REQUIRED),
+    BKF_PRODUCT_NU_OPTION(bkf_stability_spec),
+    BKF_PRODUCT_S_OPTION(bkf_stability_spec),
     {.name = "n", .type = BKF_OPT_COUNT, .offset = FIELD(n),
-     .flags = BKF_OPT_REQUIRED | BOUNDED, .min = 1, .max = 1e9, .form = "N",
+     .flags = BKF_OPT_REQUIRED | BOUNDED | BKF_OPT_FANOUT, .min = 1, .max = 1e9, .form = "N",
      .help = "required; number of fronts (at most n_max, as listed by\n"
              "bkfront speeds)"},
     {.name = "root", .type = BKF_OPT_COUNT, .offset = FIELD(root), .flags = BOUNDED, .min = 1,
@@ -95,6 +95,7 @@ bkf_stability_spec bkf_stability_spec_default(void)
     bkf_stability_spec s;
     memset(&s, 0, sizeof s);
     s.gamma = s.c = s.nu = s.S = NAN;
+    bkf_model_paper_where_unset(&s.gamma, &s.c, &s.nu, &s.S);
     s.n = 0;
     s.root = 1;
     bkf_trainspec_options o = bkf_trainspec_options_default();

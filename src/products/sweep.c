@@ -75,7 +75,7 @@ const bkf_option bkf_sweep_options[] = {
              "next doubling would pass T; column settled says which\n"
              "(settled, budget); T >= tmax, in (0, 1e6]"},
     {.name = "fields", .type = BKF_OPT_TEXT, .offset = SPEC(fields), .form = "DIR",
-     .shown_default = "none",
+     .flags = BKF_OPT_PATH, .shown_default = "none",
      .help = "keep each point's spacetime field psi(t, x) as HDF5 in\n"
              "DIR/point_I.h5 (I the point; the file of simulate\n"
              "--spacetime FILE.h5, the parameters as attributes), written\n"
@@ -539,7 +539,11 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
     /* simulate's stepper choices (lawson8 was shown as rk8pd: two sweeps
      * that differ only there had one definition) */
     static const char *const steppers[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8", "auto"};
-    char g[32], c[32], nu[32], S[32], tm[32], tol[32], fi[32], lv[32];
+    char g[32], c[32], nu[32], S[32], tm[32], tol[32], fi[32], lv[32], N[32];
+    /* the N the base point's run uses (the rows' N), not the key's 0 */
+    if (b->model.N) snprintf(N, sizeof N, "%zu", b->model.N);
+    else if (b->chain) snprintf(N, sizeof N, "S");
+    else snprintf(N, sizeof N, "%d", BKF_SIMULATE_N_DEFAULT);
     text t = {0};
     static const char *const titles[] = {
         "regime of a direct simulation",
@@ -557,13 +561,13 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
     if (sp->product != BKF_SWEEP_REGIME)
         addf(&t, "product %s; ", bkf_sweep_product_names[sp->product]);
     addf(&t,
-         "x %s; y %s; zip %d; seeds %zu; inits %s; base: gamma %s c %s nu %s S %s N %zu "
+         "x %s; y %s; zip %d; seeds %zu; inits %s; base: gamma %s c %s nu %s S %s N %s "
          "model %s tmax %s tol %s init %s seed %" PRIu64 " stepper %s dealias %d filter %s level "
          "%s frames %zu; version %s\n",
          sp->x ? sp->x : "-", sp->y ? sp->y : "-", sp->zip, sp->seeds.count,
          sp->inits ? sp->inits : "-", bkf_format_number(b->model.gamma, g, sizeof g),
          bkf_format_number(b->model.c, c, sizeof c), bkf_format_number(b->model.nu, nu, sizeof nu),
-         bkf_format_number(b->model.S, S, sizeof S), b->model.N, b->chain ? "chain" : "continuum",
+         bkf_format_number(b->model.S, S, sizeof S), N, b->chain ? "chain" : "continuum",
          bkf_format_number(b->tmax, tm, sizeof tm), bkf_format_number(b->tol, tol, sizeof tol),
          b->init ? b->init : "uniform", b->seed, steppers[(size_t)b->stepper < sizeof steppers / sizeof *steppers ? b->stepper : 0], b->dealias,
          bkf_format_number(b->filter, fi, sizeof fi), bkf_format_number(b->level, lv, sizeof lv),
@@ -1213,5 +1217,111 @@ int bkf_sweep_merge(const char *const *inputs, size_t n, const char *out, size_t
     free(all);
     for (size_t k = 0; k < n; k++) table_text_free(&t[k]);
     free(t);
+    return s;
+}
+
+/* The columns that hold text (the others hold numbers). */
+static int text_column(const char *name, size_t len)
+{
+    static const char *const texts[] = {"init",   "regime",     "settled", "status", "allowed",
+                                        "stable", "unresolved", "kind"};
+    for (size_t k = 0; k < sizeof texts / sizeof *texts; k++)
+        if (strlen(texts[k]) == len && strncmp(texts[k], name, len) == 0) return 1;
+    return 0;
+}
+
+/* The fields of a tab-separated line (without its newline) into copies in
+ * `fields` (an array of n pointers into one malloc'ed block, *block). */
+static int split_line(const char *line, size_t len, size_t n, char **fields, char **block)
+{
+    char *b = malloc(len + 1);
+    if (!b) return BKF_ENOMEM;
+    memcpy(b, line, len);
+    b[len] = '\0';
+    size_t k = 0;
+    for (char *p = b; k < n; k++) {
+        fields[k] = p;
+        char *tab = strchr(p, '\t');
+        if (!tab) {
+            k++;
+            break;
+        }
+        *tab = '\0';
+        p = tab + 1;
+    }
+    *block = b;
+    return k == n ? BKF_OK : BKF_EINPUT;
+}
+
+int bkf_sweep_table_json(const char *path, bkf_error *err)
+{
+    if (!path) return bkf_error_set(err, BKF_EINPUT, "no table path given");
+    table_text t;
+    int s = table_read(path, &t, NULL, NULL, 0, err);
+    if (s) return s;
+    /* the head: comment lines, then the column names */
+    const char *names = t.data;
+    for (const char *nl; *names == '#' && (nl = strchr(names, '\n'));) names = nl + 1;
+    size_t names_len = (size_t)(t.data + t.head_len - 1 - names), ncols = 1;
+    for (size_t i = 0; i < names_len; i++) ncols += names[i] == '\t';
+    bkf_io_column *cols = calloc(ncols, sizeof *cols);
+    char **fields = calloc(ncols, sizeof *fields);
+    bkf_io_value *v = calloc(ncols, sizeof *v);
+    char *name_block = NULL;
+    if (!cols || !fields || !v) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (!s && split_line(names, names_len, ncols, fields, &name_block))
+        s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    for (size_t k = 0; !s && k < ncols; k++)
+        cols[k] = (bkf_io_column){fields[k], text_column(fields[k], strlen(fields[k]))
+                                                 ? BKF_IO_TEXT : BKF_IO_NUMBER};
+    bkf_io_atomic *f = s ? NULL : bkf_io_atomic_open(path, err);
+    if (!s && !f) s = err ? err->status : BKF_EIO;
+    bkf_io_table *out = s ? NULL : bkf_io_table_alloc(bkf_io_atomic_stream(f), BKF_IO_JSON, cols,
+                                                      ncols, err);
+    if (!s && !out) s = err ? err->status : BKF_ENOMEM;
+    for (const char *c = t.data; !s && c < names;) {
+        const char *nl = strchr(c, '\n'); /* the head's lines are whole */
+        const char *text = c + (nl - c >= 2 && c[1] == ' ' ? 2 : 1); /* after "# " */
+        size_t len = (size_t)(nl - text);
+        char line[1024];
+        if (len >= sizeof line)
+            s = bkf_error_set(err, BKF_EINPUT, "%s: a comment line longer than %zu bytes", path,
+                              sizeof line - 1);
+        if (!s) {
+            memcpy(line, text, len);
+            line[len] = '\0';
+            s = bkf_io_table_comment(out, line, err);
+        }
+        c = nl + 1;
+    }
+    for (size_t i = 0; !s && i < t.nrows; i++) {
+        char *block = NULL;
+        /* the row without its newline */
+        if (split_line(t.rows[i].line, t.rows[i].len - 1, ncols, fields, &block))
+            s = block ? bkf_error_set(err, BKF_EINPUT, "%s: a row without its %zu fields", path,
+                                      ncols)
+                      : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        for (size_t k = 0; !s && k < ncols; k++) {
+            char *end;
+            v[k] = (bkf_io_value){0};
+            if (cols[k].kind == BKF_IO_TEXT) v[k].text = fields[k];
+            else if ((v[k].number = strtod(fields[k], &end)), end == fields[k] || *end)
+                s = bkf_error_set(err, BKF_EINPUT, "%s: column %s holds '%s', not a number",
+                                  path, cols[k].name, fields[k]);
+        }
+        if (!s) s = bkf_io_table_row(out, v, err);
+        free(block);
+    }
+    if (!s) s = bkf_io_table_finish(out, err);
+    bkf_io_table_free(out);
+    if (f) {
+        if (s) bkf_io_atomic_abort(f);
+        else s = bkf_io_atomic_commit(f, err);
+    }
+    free(name_block);
+    free(cols);
+    free(fields);
+    free(v);
+    table_text_free(&t);
     return s;
 }

@@ -6,6 +6,7 @@
 #include <ctype.h>
 #include <ini.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -23,14 +24,68 @@
  * a range of computations, not the 1e6 of values inside one product. */
 #define SCENE_MAX_POINTS 100000u
 
-static const char *const kind_names[BKF_SCENE_NKINDS] = {
+/* The kinds of the first releases keep their numbers (scene.h); a kind a
+ * product declares later (catalog.h) gets the next.  Every kind but figure
+ * is a catalogue product's: its declaration is the whole recipe. */
+static const char *const enum_names[BKF_SCENE_NKINDS] = {
     "speeds", "period", "dispersion", "threshold", "branch", "profile",
     "validity", "friction", "spacetime", "check", "stability", "figure", "sweep"};
 
+typedef struct {
+    const char *name;
+    const bkf_catalog_entry *entry;  /* NULL: figure */
+    const bkf_catalog_kind *decl;
+} kind_info;
+
+/* The kinds' bits (K below) end under K_ACCURACY. */
+#define MAX_KINDS 29
+static kind_info kinds[MAX_KINDS];
+static size_t nkinds;
+static pthread_once_t kinds_once = PTHREAD_ONCE_INIT;
+
+/* A kind past MAX_KINDS is left out; the test that every catalogue kind
+ * is a scene's finds it. */
+static void build_kinds(void)
+{
+    for (size_t k = 0; k < BKF_SCENE_NKINDS; k++) kinds[k].name = enum_names[k];
+    nkinds = BKF_SCENE_NKINDS;
+    for (size_t i = 0; i < bkf_catalog_count(); i++) {
+        const bkf_catalog_entry *e = bkf_catalog_at(i);
+        for (size_t j = 0; j < e->nkinds; j++) {
+            size_t k = 0;
+            while (k < nkinds && strcmp(kinds[k].name, e->kinds[j].name) != 0) k++;
+            if (k == nkinds && nkinds == MAX_KINDS) continue;
+            if (k == nkinds) nkinds++;
+            kinds[k] = (kind_info){e->kinds[j].name, e, &e->kinds[j]};
+        }
+    }
+}
+
+static const kind_info *kind_at(int kind)
+{
+    pthread_once(&kinds_once, build_kinds);
+    return kind >= 0 && (size_t)kind < nkinds ? &kinds[kind] : NULL;
+}
+
+size_t bkf_scene_kind_count(void)
+{
+    pthread_once(&kinds_once, build_kinds);
+    return nkinds;
+}
+
 const char *bkf_scene_kind_name(bkf_scene_kind kind)
 {
-    return (unsigned)kind < BKF_SCENE_NKINDS ? kind_names[kind] : NULL;
+    const kind_info *k = kind_at((int)kind);
+    return k ? k->name : NULL;
 }
+
+static const char *kind_name(bkf_scene_kind kind)
+{
+    const char *n = bkf_scene_kind_name(kind);
+    return n ? n : "?";
+}
+
+static int append(char *buf, size_t size, const char *sep, const char *text);
 
 /* ------------------------------------------------------------- lookup */
 
@@ -112,17 +167,11 @@ static int lookup_add(lookup *l, size_t h, size_t index)
 
 /* ------------------------------------------------------------ key table */
 
-typedef enum {
-    V_GAMMA, V_C, V_NU, V_NU_ANY, V_S, V_TOL, V_PDE_TOL, V_GRID_N, V_MODEL,
-    V_COUNT, V_PIXELS, V_SEED, V_NUMBER, V_POSITIVE, V_NU_LIST, V_COUNT_LIST, V_RANGE_LOG,
-    V_RANGE_LIN, V_SEARCH, V_ALONG, V_PARAM, V_METHOD, V_STEPPER, V_FRAME, V_GRID, V_FORMATS, V_TEXT, V_NAME, V_INIT, V_GAMMA_LIST
-} value_type;
+/* The keys of the scene's own sections: [model], [accuracy] and figures.
+ * A product's section has its product's keys (catalog.h). */
+typedef enum { V_GAMMA, V_C, V_NU, V_S, V_TOL, V_GRID_N, V_MODEL, V_PIXELS, V_FORMATS, V_TEXT } value_type;
 
 #define K(kind) (1u << (kind))
-#define K_CYCLE (K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE) | K(BKF_SCENE_CHECK) | \
-                 K(BKF_SCENE_STABILITY))
-#define K_DATA (K_CYCLE | K(BKF_SCENE_PERIOD) | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD) | \
-                K(BKF_SCENE_VALIDITY) | K(BKF_SCENE_SPACETIME))
 #define K_MODEL (1u << 30)     /* [model] */
 #define K_ACCURACY (1u << 29)  /* [accuracy] */
 
@@ -133,54 +182,15 @@ typedef struct {
     const char *form;   /* for messages: the valid values */
 } key_spec;
 
-/* A key may appear in several rows with different types by kind. */
 static const key_spec keys[] = {
-    {"gamma", V_GAMMA, K_MODEL | K_CYCLE | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD) |
-                           K(BKF_SCENE_SPACETIME), "a number in [1e-6, 1e6]"},
-    {"c", V_C, K_MODEL | K_CYCLE | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD) |
-                   K(BKF_SCENE_SPACETIME), "a number >= 0"},
-    {"nu", V_NU, K_MODEL | K_CYCLE, "a number in (-1, 1)"},
-    {"nu", V_NU_ANY, K(BKF_SCENE_SPACETIME), "a finite number"},
-    {"nu", V_NU_LIST, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_VALIDITY),
-     "V, V1,V2,... or A:B:N, each in (-1, 1)"},
-    {"S", V_S, K_MODEL | K_CYCLE | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_SPACETIME), "a number > 0"},
-    {"model", V_MODEL, K_MODEL | K(BKF_SCENE_SPACETIME), "continuum or chain"},
-    {"tol", V_TOL, K_ACCURACY | K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE) |
-                       K(BKF_SCENE_PERIOD) | K(BKF_SCENE_DISPERSION) | K(BKF_SCENE_THRESHOLD),
-     "a number in [1e-14, 0.1]"},
-    {"tol", V_PDE_TOL, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "a number in [1e-13, 0.01]"},
-    {"N", V_GRID_N, K_ACCURACY | K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK),
-     "an integer in [8, 1048576]"},
-    {"n", V_COUNT, K(BKF_SCENE_SPEEDS) | K(BKF_SCENE_CHECK), "an integer >= 1"},
-    {"n", V_COUNT_LIST, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE) | K(BKF_SCENE_STABILITY),
-     "K, K1,K2,... or A:B:N, each >= 1"},
-    {"nmax", V_COUNT, K(BKF_SCENE_SPEEDS), "an integer >= 1"},
-    {"root", V_COUNT, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_PROFILE), "an integer >= 1"},
-    {"mu", V_RANGE_LOG, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_VALIDITY),
-     "M or a geometric range A:B:N, in [1e-6, 1e6]"},
-    {"q", V_RANGE_LIN, K(BKF_SCENE_DISPERSION), "Q or a range A:B:N, >= 0"},
-    {"search", V_SEARCH, K(BKF_SCENE_THRESHOLD) | K(BKF_SCENE_SWEEP), "A:B with -1 < A < B < 1"},
-    {"thresholds", V_GAMMA_LIST, K(BKF_SCENE_SWEEP),
-     "G, G1,G2,... or A:B:N, each in [1e-6, 1e6]"},
-    {"along", V_ALONG, K(BKF_SCENE_THRESHOLD), "c or gamma"},
-    {"param", V_PARAM, K(BKF_SCENE_BRANCH), "S, nu, gamma or c"},
-    {"method", V_METHOD, K(BKF_SCENE_PERIOD) | K(BKF_SCENE_SPEEDS), "auto, asymptotic, leading or shooting"},
-    {"from", V_NUMBER, K(BKF_SCENE_THRESHOLD) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_FRICTION),
-     "a finite number"},
-    {"to", V_NUMBER, K(BKF_SCENE_THRESHOLD) | K(BKF_SCENE_BRANCH) | K(BKF_SCENE_FRICTION),
-     "a finite number"},
-    {"max_points", V_COUNT, K(BKF_SCENE_BRANCH) | K(BKF_SCENE_THRESHOLD), "an integer >= 1"},
-    {"points", V_COUNT, K(BKF_SCENE_PROFILE) | K(BKF_SCENE_FRICTION) | K(BKF_SCENE_CHECK),
-     "an integer >= 1"},
-    {"init", V_INIT, K(BKF_SCENE_SPACETIME), "uniform, front:n=K,..., oscillation:q=Q,... or file:PATH"},
-    {"seed", V_SEED, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "an integer >= 0"},
-    {"tmax", V_POSITIVE, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "a number > 0"},
-    {"frames", V_COUNT, K(BKF_SCENE_SPACETIME), "an integer >= 1"},
-    {"rel_tol", V_POSITIVE, K(BKF_SCENE_CHECK), "a number > 0"},
-    {"stepper", V_STEPPER, K(BKF_SCENE_SPACETIME) | K(BKF_SCENE_CHECK), "rk8pd, rkck, rkf45, etdrk4, lawson8 or auto (spacetime only)"},
-    {"frame", V_FRAME, K(BKF_SCENE_CHECK), "moving or lab"},
-    {"grid", V_GRID, K(BKF_SCENE_CHECK), "auto, uniform or mapped"},
-    {"data", V_NAME, K(BKF_SCENE_FIGURE), "the name of a product of this scene"},
+    {"gamma", V_GAMMA, K_MODEL, "a number in [1e-6, 1e6]"},
+    {"c", V_C, K_MODEL, "a number >= 0"},
+    {"nu", V_NU, K_MODEL, "a number in (-1, 1)"},
+    {"S", V_S, K_MODEL, "a number > 0"},
+    {"model", V_MODEL, K_MODEL, "continuum or chain"},
+    {"tol", V_TOL, K_ACCURACY, "a number in [1e-14, 0.1]"},
+    {"N", V_GRID_N, K_ACCURACY, "an integer in [8, 1048576]"},
+    {"data", V_TEXT, K(BKF_SCENE_FIGURE), "the name of a product of this scene"},
     {"script", V_TEXT, K(BKF_SCENE_FIGURE), "a gnuplot script path"},
     {"formats", V_FORMATS, K(BKF_SCENE_FIGURE), "png, pdf, svg or a list such as png,svg"},
     {"title", V_TEXT, K(BKF_SCENE_FIGURE), "text"},
@@ -190,47 +200,6 @@ static const key_spec keys[] = {
 #define NKEYS (sizeof keys / sizeof keys[0])
 
 /* ------------------------------------------------------------- checking */
-
-static int check_list(const char *key, const char *text, int counts, bkf_error *err)
-{
-    /* "A:B:N" is a range, anything else a comma list of single values. */
-    if (strchr(text, ':')) {
-        bkf_list r;
-        int s = bkf_list_parse(text, 0, 0, SCENE_MAX_POINTS, "", key, &r, err);
-        if (s) return s;
-        int bad = 0;
-        for (size_t i = 0; i < r.count; i++)
-            if (counts ? (r.values[i] < 1 || r.values[i] != floor(r.values[i]))
-                       : !(fabs(r.values[i]) < 1))
-                bad = 1;
-        bkf_list_free(&r);
-        if (bad)
-            return bkf_error_set(err, BKF_EINPUT, "%s: '%s' has values outside %s", key, text,
-                                 counts ? "the integers >= 1" : "(-1, 1)");
-        return BKF_OK;
-    }
-    char buf[BKF_SCENE_VALUE_LEN];
-    snprintf(buf, sizeof buf, "%s", text);
-    char *save = NULL;
-    int any = 0;
-    for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-        any = 1;
-        if (counts) {
-            size_t n;
-            int s = bkf_option_parse_count(tok, 1, 100000, "", key, &n, err);
-            if (s) return s;
-        } else {
-            double v;
-            int s = bkf_option_parse_double(tok, "", key, &v, err);
-            if (s) return s;
-            if (!(fabs(v) < 1))
-                return bkf_error_set(err, BKF_EINPUT, "%s: %s is outside (-1, 1)", key, tok);
-        }
-    }
-    if (!any || text[strlen(text) - 1] == ',' || text[0] == ',')
-        return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not a list", key, text);
-    return BKF_OK;
-}
 
 static int check_value(const key_spec *spec, const char *v, bkf_error *err)
 {
@@ -255,23 +224,15 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
                                  "nu: %s is outside (-1, 1), where there are no fronts or "
                                  "oscillations", v);
         return BKF_OK;
-    case V_NUMBER:
-    case V_NU_ANY:
-        return bkf_option_parse_double(v, "", k, &x, err);
     case V_S:
-    case V_POSITIVE:
         if ((s = bkf_option_parse_double(v, "", k, &x, err))) return s;
         if (!(x > 0)) return bkf_error_set(err, BKF_EINPUT, "%s: %s must be > 0", k, v);
         return BKF_OK;
     case V_TOL:
-    case V_PDE_TOL: {
-        double lo = spec->type == V_TOL ? 1e-14 : BKF_PDE_TOL_MIN;
-        double hi = spec->type == V_TOL ? 0.1 : BKF_PDE_TOL_MAX;
         if ((s = bkf_option_parse_double(v, "", k, &x, err))) return s;
-        if (!(x >= lo && x <= hi))
-            return bkf_error_set(err, BKF_EINPUT, "tol: %s is outside [%g, %g]", v, lo, hi);
+        if (!(x >= 1e-14 && x <= 0.1))
+            return bkf_error_set(err, BKF_EINPUT, "tol: %s is outside [%g, %g]", v, 1e-14, 0.1);
         return BKF_OK;
-    }
     case V_GRID_N:
         if ((s = bkf_option_parse_count(v, 1, BKF_PDE_N_MAX, "", k, &n, err))) return s;
         if (n < BKF_PDE_N_MIN)
@@ -282,89 +243,8 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
         int i;
         return bkf_option_parse_choice(v, m, "", k, &i, err);
     }
-    case V_ALONG: {
-        static const char *const m[] = {"c", "gamma", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
-    case V_METHOD: {
-        static const char *const m[] = {"auto", "asymptotic", "leading", "shooting", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
-    case V_STEPPER: {
-        static const char *const m[] = {"rk8pd", "rkck", "rkf45", "etdrk4", "lawson8", "auto", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
-    case V_FRAME: {
-        static const char *const m[] = {"moving", "lab", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
-    case V_GRID: {
-        static const char *const m[] = {"auto", "uniform", "mapped", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
-    case V_PARAM: {
-        static const char *const m[] = {"S", "nu", "gamma", "c", NULL};
-        int i;
-        return bkf_option_parse_choice(v, m, "", k, &i, err);
-    }
-    case V_COUNT:
-        return bkf_option_parse_count(v, 1, 1000000, "", k, &n, err);
     case V_PIXELS:
         return bkf_option_parse_count(v, 1, BKF_PLOT_PIXELS_MAX, "", k, &n, err);
-    case V_SEED:
-        if (!*v || strspn(v, "0123456789") != strlen(v) || strlen(v) > 18)
-            return bkf_error_set(err, BKF_EINPUT, "seed: '%s' is not an integer in [0, 1e18)",
-                                 v);
-        return BKF_OK;
-    case V_NU_LIST:
-        return check_list(k, v, 0, err);
-    case V_GAMMA_LIST: {
-        bkf_list r;
-        if ((s = bkf_list_parse(v, 0, 0, SCENE_MAX_POINTS, "", k, &r, err))) return s;
-        int bad = 0;
-        for (size_t i = 0; i < r.count; i++)
-            bad |= !(r.values[i] >= BKF_CYCLE_MU_MIN && r.values[i] <= BKF_CYCLE_MU_MAX);
-        bkf_list_free(&r);
-        if (bad) return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not %s", k, v, spec->form);
-        return BKF_OK;
-    }
-    case V_COUNT_LIST:
-        return check_list(k, v, 1, err);
-    case V_RANGE_LOG:
-    case V_RANGE_LIN: {
-        bkf_list r;
-        int geometric = spec->type == V_RANGE_LOG;
-        if ((s = bkf_list_parse(v, geometric, 0, SCENE_MAX_POINTS, "", k, &r, err))) return s;
-        int bad = 0;
-        for (size_t i = 0; i < r.count; i++)
-            bad |= geometric ? !(r.values[i] >= BKF_CYCLE_MU_MIN && r.values[i] <= BKF_CYCLE_MU_MAX)
-                             : !(r.values[i] >= 0);
-        size_t count = r.count;
-        bkf_list_free(&r);
-        if (bad)
-            return bkf_error_set(err, BKF_EINPUT, "%s: '%s' is not %s", k, v, spec->form);
-        if (count > 100000)
-            return bkf_error_set(err, BKF_EINPUT, "%s: '%s' has more than 100000 points", k, v);
-        return BKF_OK;
-    }
-    case V_SEARCH: {
-        const char *colon = strchr(v, ':');
-        double a, b;
-        char left[BKF_SCENE_VALUE_LEN];
-        if (!colon || strchr(colon + 1, ':'))
-            return bkf_error_set(err, BKF_EINPUT, "search: '%s' is not A:B", v);
-        snprintf(left, sizeof left, "%.*s", (int)(colon - v), v);
-        if ((s = bkf_option_parse_double(left, "", k, &a, err)) || (s = bkf_option_parse_double(colon + 1, "", k, &b, err)))
-            return s;
-        if (!(-1 < a && a < b && b < 1))
-            return bkf_error_set(err, BKF_EINPUT, "search: '%s' needs -1 < A < B < 1", v);
-        return BKF_OK;
-    }
     case V_FORMATS: {
         char buf[BKF_SCENE_VALUE_LEN];
         snprintf(buf, sizeof buf, "%s", v);
@@ -379,13 +259,6 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
         if (!any) return bkf_error_set(err, BKF_EINPUT, "formats: give png, pdf or svg");
         return BKF_OK;
     }
-    case V_INIT:
-        if (!(strcmp(v, "uniform") == 0 || strncmp(v, "uniform:", 8) == 0 ||
-              strncmp(v, "front:", 6) == 0 || strncmp(v, "oscillation:", 12) == 0 ||
-              strncmp(v, "file:", 5) == 0))
-            return bkf_error_set(err, BKF_EINPUT, "init: '%s' is not %s", v, spec->form);
-        return BKF_OK;
-    case V_NAME:
     case V_TEXT:
         if (!*v) return bkf_error_set(err, BKF_EINPUT, "%s: the value is empty", k);
         for (const unsigned char *p = (const unsigned char *)v; *p; p++)
@@ -398,33 +271,15 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
 
 /* -------------------------------------------------------- the catalogue */
 
-/* What each kind computes: the catalogue's product; the switches the kind
- * always passes, before (first) or after (last) the scene's keys; the key
- * whose list gives one step per value.  A kind whose product is not yet in
- * the catalogue cannot be planned. */
-typedef struct {
-    const char *product, *first, *last, *split;
-} kind_map_row;
-
-static const kind_map_row kind_map[BKF_SCENE_NKINDS] = {
-    [BKF_SCENE_SPEEDS] = {"speeds", NULL, NULL, NULL},
-    [BKF_SCENE_PERIOD] = {"period", NULL, NULL, "nu"},
-    [BKF_SCENE_DISPERSION] = {"floquet", NULL, NULL, "nu"},
-    [BKF_SCENE_THRESHOLD] = {"floquet", "threshold", NULL, NULL},
-    [BKF_SCENE_BRANCH] = {"branch", NULL, NULL, "n"},
-    [BKF_SCENE_PROFILE] = {"profile", NULL, NULL, NULL},
-    [BKF_SCENE_VALIDITY] = {"asymptotics", "grid", NULL, NULL},
-    [BKF_SCENE_FRICTION] = {"friction", NULL, NULL, NULL},
-    [BKF_SCENE_SPACETIME] = {"simulate", NULL, "no-progress", NULL},
-    [BKF_SCENE_CHECK] = {"check", NULL, "no-progress", NULL},
-    [BKF_SCENE_STABILITY] = {"stability", NULL, NULL, "n"},
-    [BKF_SCENE_FIGURE] = {NULL, NULL, NULL, NULL},
-    [BKF_SCENE_SWEEP] = {"sweep", NULL, "no-progress", NULL},
-};
-
-static const bkf_catalog_entry *catalog_entry(bkf_scene_kind kind)
+/* The option of a step's product whose list a scene makes one step per
+ * value (BKF_OPT_FANOUT), or NULL. */
+static const bkf_option *fanout_option(const bkf_catalog_entry *entry)
 {
-    return kind_map[kind].product ? bkf_catalog_find(kind_map[kind].product) : NULL;
+    size_t n;
+    const bkf_option *table = entry->options(&n);
+    for (size_t i = 0; i < n; i++)
+        if (table[i].flags & BKF_OPT_FANOUT) return &table[i];
+    return NULL;
 }
 
 /* A scene key as the option's name: max_points is --max-points. */
@@ -444,14 +299,13 @@ static const bkf_option *catalog_option(const bkf_catalog_entry *entry, const ch
     return opt && !(opt->flags & BKF_OPT_CLI_ONLY) ? opt : NULL;
 }
 
-/* The step's settings into `spec`: switches first (a geometric list reads
- * the log switch), outputs never, a fixed switch the product does not know
- * not at all (--no-progress is the command line's).  *bad: the arg at
- * fault. */
-/* The step's keys into `spec`.  Outputs other than the table's own ("out",
- * which the scene writes) are the product's data files (simulate's
- * spacetime): applied only for a run (`outputs`), not when a plan is
- * checked at parse time, which must not touch the file system. */
+/* The step's keys into `spec`: switches first (a geometric list reads the
+ * log switch), a fixed switch the product does not know not at all
+ * (--no-progress is the command line's); *bad: the arg at fault.  Outputs
+ * other than the table's own ("out", which the scene writes) and the files
+ * a scene names (BKF_OPT_PATH) are the product's data files: applied only
+ * for a run (`outputs`), not when a plan is checked at parse time, which
+ * must not touch the file system. */
 static int apply_args(const bkf_catalog_entry *entry, const bkf_scene_arg *args, size_t n,
                       void *spec, int outputs, size_t *bad, bkf_error *err)
 {
@@ -459,6 +313,8 @@ static int apply_args(const bkf_catalog_entry *entry, const bkf_scene_arg *args,
         for (size_t i = 0; i < n; i++) {
             const bkf_scene_arg *a = &args[i];
             if (a->output && (!outputs || strcmp(a->key, "out") == 0)) continue;
+            const bkf_option *opt = catalog_option(entry, a->key);
+            if (!outputs && opt && (opt->flags & BKF_OPT_PATH)) continue;
             if ((a->value == NULL) != (pass == 0)) continue;
             if (a->fixed && !catalog_option(entry, a->key)) continue;
             int s = bkf_catalog_apply(entry, spec, a->key, a->value, "", err);
@@ -470,43 +326,176 @@ static int apply_args(const bkf_catalog_entry *entry, const bkf_scene_arg *args,
     return BKF_OK;
 }
 
-/* One key of a catalogued kind, through the product's table (each value of
- * the kind's split list on its own, as the plan passes them).  *known 0:
- * the product has no such key. */
-static int catalog_check_key(const bkf_catalog_entry *entry, const kind_map_row *map,
-                             const char *key, const char *value, int *known, bkf_error *err)
+/* One item of a kind's keys (catalog.h's bkf_catalog_step): KEY and its
+ * marks. */
+typedef struct {
+    char key[64];
+    int inherit, required, names, always, has_value; /* ^ (+), +, @, :=, = */
+    char value[BKF_SCENE_VALUE_LEN];       /* =TEXT, =$OTHER, :=TEXT */
+    char omit[64];                         /* !TEXT */
+    char if_key[64], if_value[64];         /* ?OTHER=TEXT */
+} key_item;
+
+static void parse_item(const char *tok, size_t len, key_item *it)
+{
+    *it = (key_item){0};
+    const char *end = tok + len;
+    if (*tok == '^' || *tok == '+') it->inherit = 1, it->required = *tok == '+', tok++;
+    else if (*tok == '@') it->names = 1, tok++;
+    size_t n = strcspn(tok, "=!?: ");
+    snprintf(it->key, sizeof it->key, "%.*s", (int)n, tok);
+    tok += n;
+    while (tok < end) {
+        char mark = *tok++;
+        if (mark == ':' && tok < end && *tok == '=') it->always = 1, mark = '=', tok++;
+        size_t k = strcspn(tok, "!? ");
+        if (mark == '=') {
+            it->has_value = 1;
+            snprintf(it->value, sizeof it->value, "%.*s", (int)k, tok);
+        } else if (mark == '!') {
+            snprintf(it->omit, sizeof it->omit, "%.*s", (int)k, tok);
+        } else if (mark == '?') {
+            size_t e = strcspn(tok, "=!? ");
+            snprintf(it->if_key, sizeof it->if_key, "%.*s", (int)e, tok);
+            if (e < k) snprintf(it->if_value, sizeof it->if_value, "%.*s", (int)(k - e - 1), tok + e + 1);
+        }
+        tok += k;
+    }
+}
+
+/* The items of a declaration's keys (malloc'd; NULL with *n 0: none or out
+ * of memory, told apart by `text`). */
+static key_item *parse_items(const char *text, size_t *n)
+{
+    *n = 0;
+    size_t cap = 1;
+    for (const char *c = text ? text : ""; *c; c++) cap += *c == ' ';
+    key_item *items = text && *text ? calloc(cap, sizeof *items) : NULL;
+    for (const char *c = text; items && *c;) {
+        size_t len = strcspn(c, " ");
+        if (len) parse_item(c, len, &items[(*n)++]);
+        c += len + (c[len] == ' ');
+    }
+    return items;
+}
+
+static const char *entry_value(const bkf_scene_entry *list, size_t n, const char *key)
+{
+    for (size_t i = 0; i < n; i++)
+        if (strcmp(list[i].key, key) == 0) return list[i].value;
+    return NULL;
+}
+
+/* The section's own value of an option name (written with _ or -). */
+static const char *own_value(const bkf_scene_product *p, const char *key)
 {
     char name[64];
+    for (size_t i = 0; i < p->nentries; i++)
+        if (strcmp(option_name(p->entries[i].key, name, sizeof name), key) == 0)
+            return p->entries[i].value;
+    return NULL;
+}
+
+/* The section's own value, else, with `inherit`, [model]'s or [accuracy]'s. */
+static const char *scene_key(const bkf_scene *s, const bkf_scene_product *p, const char *key,
+                             int inherit)
+{
+    const char *v = own_value(p, key);
+    return v || !inherit ? v : entry_value(s->model, s->nmodel, key);
+}
+
+/* A key of a kind's section: an option of its product's table, or one the
+ * kind's other step takes from the section (the list that makes its
+ * steps, each value that step's KEY; a key of its list its product has). */
+typedef struct {
+    const bkf_catalog_entry *entry;
+    const bkf_option *opt;
+    int fanout;               /* a list, checked value by value */
+} kind_key;
+
+static int kind_key_find(bkf_scene_kind kind, const char *key, kind_key *out)
+{
+    const kind_info *k = kind_at((int)kind);
+    if (!k || !k->entry) return 0;
+    char name[64];
     option_name(key, name, sizeof name);
-    const bkf_option *opt = catalog_option(entry, name);
-    *known = opt != NULL;
-    if (!opt) return BKF_OK;
-    void *spec = bkf_catalog_spec_new(entry, err);
+    const bkf_option *opt = catalog_option(k->entry, name);
+    if (opt) {
+        *out = (kind_key){k->entry, opt, opt == fanout_option(k->entry)};
+        return 1;
+    }
+    const bkf_catalog_step *also = &k->decl->also;
+    const bkf_catalog_entry *a = also->product ? bkf_catalog_find(also->product) : NULL;
+    if (!a) return 0;
+    const char *gt = also->fanout ? strchr(also->fanout, '>') : NULL;
+    if (gt && strlen(key) == (size_t)(gt - also->fanout) &&
+        strncmp(key, also->fanout, (size_t)(gt - also->fanout)) == 0) {
+        *out = (kind_key){a, catalog_option(a, gt + 1), 1};
+        return out->opt != NULL;
+    }
+    size_t n;
+    key_item *items = parse_items(also->keys, &n);
+    int found = 0;
+    for (size_t i = 0; !found && i < n; i++)
+        if (!items[i].always && strcmp(items[i].key, name) == 0 && catalog_option(a, name)) {
+            *out = (kind_key){a, catalog_option(a, name), 0};
+            found = 1;
+        }
+    free(items);
+    return found;
+}
+
+/* The scene keys of a kind, for messages ("gamma, c, nu, ..."). */
+static void kind_keys_known(bkf_scene_kind kind, char *known, size_t size)
+{
+    const kind_info *k = kind_at((int)kind);
+    size_t n;
+    const bkf_option *table = k && k->entry ? k->entry->options(&n) : NULL;
+    for (size_t i = 0; table && i < n; i++)
+        if (!(table[i].flags & BKF_OPT_CLI_ONLY)) append(known, size, ", ", table[i].name);
+    const bkf_catalog_step *also = k && k->decl ? &k->decl->also : NULL;
+    if (!also || !also->product) return;
+    if (also->fanout) {
+        char list[64];
+        snprintf(list, sizeof list, "%.*s", (int)strcspn(also->fanout, ">"), also->fanout);
+        append(known, size, ", ", list);
+    }
+    size_t ni;
+    key_item *items = parse_items(also->keys, &ni);
+    kind_key kk;
+    for (size_t i = 0; i < ni; i++)
+        if (!items[i].always && !catalog_option(k->entry, items[i].key) &&
+            kind_key_find(kind, items[i].key, &kk))
+            append(known, size, ", ", items[i].key);
+    free(items);
+}
+
+/* A value of a kind's key through the option that checks the flag (a list
+ * value by value, as the plan passes them), messages naming the key as
+ * the scene wrote it where the option has another name. */
+static int kind_key_check(const kind_key *kk, const char *key, const char *value, bkf_error *err)
+{
+    void *spec = bkf_catalog_spec_new(kk->entry, err);
     if (!spec) return BKF_ENOMEM;
     int s = BKF_OK;
-    if (map->split && strcmp(key, map->split) == 0) {
+    char name[64];
+    option_name(key, name, sizeof name);
+    if (kk->fanout) {
+        bkf_option named = *kk->opt;
+        named.name = strcmp(name, kk->opt->name) == 0 ? kk->opt->name : key;
         bkf_list list;
         s = bkf_list_parse(value, 0, 0, SCENE_MAX_POINTS, "", key, &list, err);
         for (size_t i = 0; !s && i < list.count; i++) {
             char item[64];
             snprintf(item, sizeof item, "%.15g", list.values[i]);
-            s = bkf_catalog_apply(entry, spec, name, item, "", err);
+            s = bkf_option_apply(&named, spec, item, "", err);
         }
         bkf_list_free(&list);
     } else {
-        s = bkf_catalog_apply(entry, spec, name, value, "", err);
+        s = bkf_catalog_apply(kk->entry, spec, kk->opt->name, value, "", err);
     }
-    bkf_catalog_spec_free(entry, spec);
+    bkf_catalog_spec_free(kk->entry, spec);
     return s;
-}
-
-/* Whether `name` is one of the comma-separated names in `list`. */
-static int listed(const char *list, const char *name)
-{
-    size_t n = strlen(name);
-    for (const char *p = list; (p = strstr(p, name)); p += n)
-        if ((p == list || p[-1] == ' ') && (p[n] == ',' || p[n] == '\0')) return 1;
-    return 0;
 }
 
 /* ------------------------------------------------------------- parsing */
@@ -596,12 +585,13 @@ static void header_line(parse_state *st, const char *line)
     char kind[BKF_SCENE_VALUE_LEN], name[BKF_SCENE_VALUE_LEN] = "", extra[BKF_SCENE_VALUE_LEN] = "";
     int fields = sscanf(a, "%255s %255s %255s", kind, name, extra);
     int k = -1;
-    for (int i = 0; fields >= 1 && i < BKF_SCENE_NKINDS; i++)
-        if (strcmp(kind, kind_names[i]) == 0) k = i;
+    size_t nk = bkf_scene_kind_count();
+    for (size_t i = 0; fields >= 1 && i < nk; i++)
+        if (strcmp(kind, kind_name((bkf_scene_kind)i)) == 0) k = (int)i;
     if (k < 0) {
-        fail(st, st->line,
-             "unknown section [%s] (model, accuracy, speeds, period, dispersion, threshold, "
-             "branch, profile, validity, friction, spacetime, check, stability, figure, sweep)", a);
+        char known[512] = "model, accuracy";
+        for (size_t i = 0; i < nk; i++) append(known, sizeof known, ", ", kind_name((bkf_scene_kind)i));
+        fail(st, st->line, "unknown section [%s] (%s)", a, known);
         return;
     }
     if (fields == 3) {
@@ -695,40 +685,18 @@ static int handler(void *user, const char *section, const char *name, const char
         count = &p->nentries;
     }
     const key_spec *spec = NULL;
+    kind_key kk = {0};
+    int by_kind = st->section_kind >= 0 &&
+                  kind_key_find(st->s->products[st->section_kind].kind, name, &kk);
     char known[512] = "";
     for (size_t i = 0; i < NKEYS; i++) {
         if (!(keys[i].where & where)) continue;
         if (strcmp(keys[i].key, name) == 0) spec = &keys[i];
-        int listed = 0;
-        for (size_t j = 0; j < i; j++)
-            if ((keys[j].where & where) && strcmp(keys[j].key, keys[i].key) == 0) listed = 1;
-        if (!listed) {
-            size_t used = strlen(known);
-            snprintf(known + used, sizeof known - used, "%s%s", used ? ", " : "", keys[i].key);
-        }
+        append(known, sizeof known, ", ", keys[i].key);
     }
-    /* A catalogued product's keys are its option table's: checked by the
-     * code that checks the command-line flag. */
-    const bkf_catalog_entry *product = NULL;
-    if (st->section_kind >= 0) {
-        bkf_scene_kind kind = st->s->products[st->section_kind].kind;
-        product = catalog_entry(kind);
-        size_t n;
-        const bkf_option *table = product ? product->options(&n) : NULL;
-        for (size_t i = 0; product && i < n; i++) {
-            char shown[64];
-            if (table[i].flags & BKF_OPT_CLI_ONLY) continue;
-            if (listed(known, option_name(table[i].name, shown, sizeof shown))) continue;
-            size_t used = strlen(known);
-            snprintf(known + used, sizeof known - used, "%s%s", used ? ", " : "", table[i].name);
-        }
-    }
-    int by_catalog = 0;
-    if (product) {
-        char opt[64];
-        by_catalog = catalog_option(product, option_name(name, opt, sizeof opt)) != NULL;
-    }
-    if (!spec && !by_catalog)
+    if (st->section_kind >= 0)
+        kind_keys_known(st->s->products[st->section_kind].kind, known, sizeof known);
+    if (!spec && !by_kind)
         return fail(st, st->line, "[%s]: unknown key '%s' (%s)", st->section, name, known);
     for (size_t i = 0; i < *count; i++)
         if (strcmp((*list)[i].key, name) == 0)
@@ -738,10 +706,8 @@ static int handler(void *user, const char *section, const char *name, const char
         return fail(st, st->line, "%s: the value is longer than %d characters", name,
                     BKF_SCENE_VALUE_LEN - 1);
     bkf_error e;
-    if (by_catalog) {
-        int known_key;
-        int s = catalog_check_key(product, &kind_map[st->s->products[st->section_kind].kind], name,
-                                  value, &known_key, &e);
+    if (by_kind) {
+        int s = kind_key_check(&kk, name, value, &e);
         if (s == BKF_ENOMEM) {
             st->status = bkf_error_set(st->err, s, "out of memory");
             return 0;
@@ -761,23 +727,16 @@ static int handler(void *user, const char *section, const char *name, const char
     return 1;
 }
 
-static const char *entry_value(const bkf_scene_entry *list, size_t n, const char *key)
-{
-    for (size_t i = 0; i < n; i++)
-        if (strcmp(list[i].key, key) == 0) return list[i].value;
-    return NULL;
-}
+static int takes_inherited(const bkf_scene_product *p, const char *key);
 
 const char *bkf_scene_value(const bkf_scene *s, const bkf_scene_product *p, const char *key)
 {
     const char *v = p ? entry_value(p->entries, p->nentries, key) : NULL;
     if (v) return v;
-    /* A simulation's tol is a Runge-Kutta tolerance, not the accuracy asked
-     * of a result: it is not inherited. */
-    if (p && strcmp(key, "tol") == 0 &&
-        (p->kind == BKF_SCENE_SPACETIME || p->kind == BKF_SCENE_CHECK || p->kind == BKF_SCENE_VALIDITY ||
-         p->kind == BKF_SCENE_STABILITY || p->kind == BKF_SCENE_SWEEP))
-        return NULL;
+    int accuracy = 0;
+    for (size_t i = 0; i < NKEYS; i++)
+        accuracy |= (keys[i].where & K_ACCURACY) && strcmp(keys[i].key, key) == 0;
+    if (p && accuracy && !takes_inherited(p, key)) return NULL;
     return entry_value(s->model, s->nmodel, key);
 }
 
@@ -855,7 +814,6 @@ static int check_scene(parse_state *st)
     bkf_scene *s = st->s;
     if (!st->seen_model) return fail(st, 1, "the scene has no [model] section");
     if (s->nproducts == 0) return fail(st, st->line, "the scene asks for no product");
-    static const char *const model_keys[] = {"gamma", "c", "nu", "S"};
     for (size_t i = 0; i < s->nproducts; i++) {
         const bkf_scene_product *p = &s->products[i];
         if (p->kind == BKF_SCENE_FIGURE) {
@@ -873,23 +831,26 @@ static int check_scene(parse_state *st)
                             bad);
             continue;
         }
-        if (p->kind == BKF_SCENE_FRICTION) continue;
-        for (size_t k = 0; k < 4; k++) {
-            const char *key = model_keys[k];
-            if (p->kind == BKF_SCENE_THRESHOLD && (strcmp(key, "nu") == 0 || strcmp(key, "S") == 0))
-                continue;
-            if ((p->kind == BKF_SCENE_PERIOD || p->kind == BKF_SCENE_VALIDITY) && strcmp(key, "nu") != 0)
-                continue;
-            if (p->kind == BKF_SCENE_DISPERSION && strcmp(key, "S") == 0) continue;
-            if (p->kind == BKF_SCENE_BRANCH || p->kind == BKF_SCENE_THRESHOLD) {
-                const char *along = entry_value(p->entries, p->nentries,
-                                                p->kind == BKF_SCENE_BRANCH ? "param" : "along");
-                if (along && strcmp(along, key) == 0) continue;
+        /* the keys its kind declares required (+KEY), but the one a
+         * continuation varies (@KEY names it) */
+        const kind_info *k = kind_at((int)p->kind);
+        size_t n = 0;
+        key_item *items = k && k->decl ? parse_items(k->decl->step.keys, &n) : NULL;
+        const char *missing = NULL;
+        for (size_t j = 0; !missing && j < n; j++) {
+            int varied = 0;
+            for (size_t v = 0; v < n; v++) {
+                const char *named = items[v].names ? own_value(p, items[v].key) : NULL;
+                varied |= named && strcmp(named, items[j].key) == 0;
             }
-            if (!bkf_scene_value(s, p, key))
-                return fail(st, p->line, "[%s %s]: %s is not set here nor in [model]",
-                            kind_names[p->kind], p->name, key);
+            if (items[j].required && !varied && !scene_key(s, p, items[j].key, 1))
+                missing = items[j].key;
         }
+        if (missing)
+            fail(st, p->line, "[%s %s]: %s is not set here nor in [model]", kind_name(p->kind),
+                 p->name, missing);
+        free(items);
+        if (missing) return 0;
         if (p->kind == BKF_SCENE_BRANCH) {
             if (!entry_value(p->entries, p->nentries, "param"))
                 return fail(st, p->line, "[branch %s]: give param = S, nu, gamma or c", p->name);
@@ -1204,61 +1165,7 @@ static char *out_path(const char *dir, const char *name, const char *suffix)
     return p;
 }
 
-/* The model keys every cycle-based product takes. */
-static int model_args(arg_list *b, const bkf_scene *s, const bkf_scene_product *p, int with_nu,
-                      int with_S)
-{
-    const char *skip = NULL;
-    if (p->kind == BKF_SCENE_BRANCH) skip = entry_value(p->entries, p->nentries, "param");
-    if (p->kind == BKF_SCENE_THRESHOLD) skip = entry_value(p->entries, p->nentries, "along");
-    static const char *const names[] = {"gamma", "c", "nu", "S"};
-    for (int i = 0; i < 4; i++) {
-        if ((i == 2 && !with_nu) || (i == 3 && !with_S)) continue;
-        if (skip && strcmp(skip, names[i]) == 0) continue;
-        const char *v = bkf_scene_value(s, p, names[i]);
-        if (v && !arg_push(b, names[i], v, 0, 0)) return 0;
-    }
-    return 1;
-}
-
-/* The chain's keys for speeds, branch and check: `model = chain` from the
- * product or [model] (the continuum, their default, goes unsaid, so plans
- * of continuum scenes read as before) and with it, when with_N, the blocks
- * N from the product or [accuracy] (the simulations' N: on the chain the
- * grid is the blocks, so a scene's waves and runs have the same chain). */
-static int chain_args(arg_list *b, const bkf_scene *s, const bkf_scene_product *p, int with_N)
-{
-    const char *m = bkf_scene_value(s, p, "model");
-    if (!m || strcmp(m, "chain") != 0) return 1;
-    if (!arg_push(b, "model", m, 0, 0)) return 0;
-    const char *N = bkf_scene_value(s, p, "N");
-    return !with_N || !N || arg_push(b, "N", N, 0, 0);
-}
-
-/* Keys of a catalogued product's own section that the kind's recipe below
- * does not pass: every key of the product's table reaches it. */
-static int other_keys(arg_list *b, const bkf_scene_product *p)
-{
-    const bkf_catalog_entry *entry = catalog_entry(p->kind);
-    if (!entry) return 1;
-    size_t n;
-    const bkf_option *table = entry->options(&n);
-    for (size_t i = 0; i < p->nentries; i++) {
-        char key[sizeof p->entries[i].key];
-        option_name(p->entries[i].key, key, sizeof key);
-        const bkf_option *opt = bkf_option_find(table, n, key);
-        if (!opt || arg_has(b, key)) continue;
-        const char *v = p->entries[i].value;
-        if (opt->type == BKF_OPT_SWITCH) {
-            if (strcmp(v, "no") == 0) continue;
-            v = NULL;
-        }
-        if (!arg_push(b, key, v, 0, 0)) return 0;
-    }
-    return 1;
-}
-
-/* The keys a kind always passes (kind_map), where the recipe puts them. */
+/* The switches a kind always passes (its first and last). */
 static int fixed_keys(arg_list *b, const char *keys)
 {
     char buf[64];
@@ -1269,292 +1176,262 @@ static int fixed_keys(arg_list *b, const char *keys)
     return 1;
 }
 
-static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
-                        const bkf_scene_plan_options *o)
+/* ------------------------------------------------------- a kind's steps */
+
+/* What an item passes for p, or NULL. */
+static const char *item_value(const bkf_scene *s, const bkf_scene_product *p, const key_item *it)
+{
+    if (it->always) return it->value;
+    const char *v = scene_key(s, p, it->key, it->inherit);
+    if (!v && it->has_value && it->value[0] == '$') {
+        const char *named = own_value(p, it->value + 1);
+        v = named ? scene_key(s, p, named, 1) : NULL;
+    } else if (!v && it->has_value) {
+        v = it->value;
+    }
+    if (v && it->omit[0] && strcmp(v, it->omit) == 0) return NULL;
+    if (v && it->if_key[0]) {
+        const char *c = scene_key(s, p, it->if_key, 1);
+        if (!c || strcmp(c, it->if_value) != 0) return NULL;
+    }
+    return v;
+}
+
+/* Whether the kind of p takes [accuracy]'s `key`: where its product has
+ * such a key, only when the kind's keys say ^KEY (a simulation's tol is its
+ * stepper's, not the accuracy asked of a result). */
+static int takes_inherited(const bkf_scene_product *p, const char *key)
+{
+    const kind_info *k = kind_at((int)p->kind);
+    if (!k || !k->entry || !catalog_option(k->entry, key)) return 1;
+    size_t n;
+    key_item *items = parse_items(k->decl->step.keys, &n);
+    int takes = 0;
+    for (size_t i = 0; i < n; i++)
+        if (strcmp(items[i].key, key) == 0) takes = items[i].inherit;
+    free(items);
+    return takes;
+}
+
+/* A file or folder the scene names (a BKF_OPT_PATH key) goes inside the
+ * output folder, as the scene's own outputs do: a relative name without
+ * "..", taken there.  Elsewhere only when the caller trusts the scene.
+ * NULL: refused (*refused set) or out of memory. */
+static char *confined_path(const char *dir, const char *value, int trust, int *refused)
+{
+    int outside = value[0] == '/';
+    for (const char *c = value; *c && !outside; c += strcspn(c, "/"), c += *c == '/')
+        if (strncmp(c, "..", 2) == 0 && (c[2] == '/' || c[2] == '\0')) outside = 1;
+    *refused = outside && !trust;
+    if (*refused) return NULL;
+    return value[0] == '/' ? strdup(value) : out_path(dir, value, "");
+}
+
+typedef struct {
+    bkf_scene_plan *plan;
+    const bkf_scene *s;
+    size_t index;
+    const bkf_scene_plan_options *o;
+    bkf_error *err;
+} plan_context;
+
+/* Pushes key = value of the step's product: a switch as the bare key
+ * (left out at "no"); a path kept inside the output folder; a list A:B:N
+ * of a key with a log switch followed by that switch. */
+static int push_key(const plan_context *c, arg_list *b, const bkf_catalog_entry *entry,
+                    const char *key, const char *value)
+{
+    size_t n;
+    const bkf_option *table = entry->options(&n);
+    const bkf_option *opt = bkf_option_find(table, n, key);
+    if (opt && opt->type == BKF_OPT_SWITCH) {
+        if (strcmp(value, "no") == 0) return BKF_OK;
+        value = NULL;
+    }
+    if (opt && (opt->flags & BKF_OPT_PATH)) {
+        const bkf_scene_product *p = &c->s->products[c->index];
+        int refused;
+        char *path = confined_path(c->plan->outdir, value, c->o->trust, &refused);
+        if (refused) {
+            char shown[96];
+            return bkf_error_set(c->err, BKF_EINPUT,
+                                 "%s:%d: [%s %s]: %s: '%s' is outside the output folder (a name "
+                                 "inside it, without '..'; --trust-scene allows it)",
+                                 c->s->path, key_line(c->s, p, key), kind_name(p->kind), p->name,
+                                 key, bkf_option_shown(value, shown, sizeof shown));
+        }
+        int ok = path && arg_push(b, key, path, 0, 0);
+        free(path);
+        return ok ? BKF_OK : bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    }
+    if (!arg_push(b, key, value, 0, 0)) return bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    if (opt && (opt->flags & BKF_OPT_LOG_SWITCH) && value && strchr(value, ':'))
+        for (size_t i = 0; i < n; i++)
+            if (table[i].type == BKF_OPT_SWITCH && table[i].offset == opt->log_offset &&
+                !arg_has(b, table[i].name) && !arg_push(b, table[i].name, NULL, 0, 0))
+                return bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    return BKF_OK;
+}
+
+/* One step of the declaration: `item` the fan-out key's value for it
+ * (NULL: none), `number` its number among count. */
+static int plan_one_step(const plan_context *c, const bkf_catalog_entry *entry,
+                         const bkf_catalog_step *d, const key_item *items, size_t nitems,
+                         const char *fkey, const char *item, size_t number, size_t count,
+                         int own)
+{
+    const bkf_scene_product *p = &c->s->products[c->index];
+    arg_list b = {0};
+    int st = fixed_keys(&b, d->first) ? BKF_OK : BKF_ENOMEM;
+    for (size_t i = 0; !st && i < nitems; i++) {
+        const key_item *it = &items[i];
+        int skipped = 0;
+        for (size_t j = 0; j < nitems; j++) {
+            const char *named = items[j].names ? own_value(p, items[j].key) : NULL;
+            if (!it->names && named && strcmp(named, it->key) == 0) skipped = 1;
+        }
+        const char *v = fkey && item && strcmp(it->key, fkey) == 0 ? item : item_value(c->s, p, it);
+        if (!skipped && v && !arg_has(&b, it->key)) st = push_key(c, &b, entry, it->key, v);
+    }
+    /* the section's other keys of the product's table, as written */
+    for (size_t i = 0; own && !st && i < p->nentries; i++) {
+        char key[sizeof p->entries[i].key];
+        option_name(p->entries[i].key, key, sizeof key);
+        if (!catalog_option(entry, key) || arg_has(&b, key)) continue;
+        const char *v = fkey && item && strcmp(key, fkey) == 0 ? item : p->entries[i].value;
+        st = push_key(c, &b, entry, key, v);
+    }
+    if (!st && !fixed_keys(&b, d->last)) st = BKF_ENOMEM;
+    char *output = NULL;
+    const char *outputs = d->outputs ? d->outputs : "out=.tsv";
+    for (const char *o = outputs; !st && *o;) {
+        size_t len = strcspn(o, " "), eq = strcspn(o, "=");
+        char key[64], suffix[64], file[BKF_SCENE_NAME_LEN + 96];
+        snprintf(key, sizeof key, "%.*s", (int)eq, o);
+        snprintf(suffix, sizeof suffix, "%.*s", (int)(len - eq - 1), o + eq + 1);
+        char *hash = strchr(suffix, '#');
+        if (hash)
+            snprintf(file, sizeof file, "%s%.*s%zu%s", p->name, (int)(hash - suffix), suffix,
+                     number, hash + 1);
+        else if (count > 1)
+            snprintf(file, sizeof file, "%s_%zu%s", p->name, number, suffix);
+        else
+            snprintf(file, sizeof file, "%s%s", p->name, suffix);
+        char *path = out_path(c->plan->outdir, file, "");
+        if (!path || !arg_push(&b, key, path, 1, 0)) st = BKF_ENOMEM;
+        if (!output)
+            output = path;
+        else
+            free(path);
+        o += len + (o[len] == ' ');
+    }
+    if (st) {
+        free(output);
+        args_free(b.v, b.n);
+        return st == BKF_ENOMEM ? bkf_error_set(c->err, st, "out of memory") : st;
+    }
+    if (!finish_step(c->plan, c->index, BKF_SCENE_STEP_PRODUCT, entry->name, 1, &b, output, 0))
+        return bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    return BKF_OK;
+}
+
+/* The steps of one declaration: one per value of its fan-out key's list. */
+static int plan_steps(const plan_context *c, const bkf_catalog_entry *entry,
+                      const bkf_catalog_step *d, int own)
+{
+    const bkf_scene_product *p = &c->s->products[c->index];
+    size_t nitems;
+    key_item *items = parse_items(d->keys, &nitems);
+    if (!items && d->keys && *d->keys) return bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    /* the list: the named section key's ("LIST>KEY": no list, no step), or
+     * the table's fan-out key's, as the items pass it (none: one step) */
+    char fkey[64] = "";
+    const char *list = NULL;
+    if (d->fanout) {
+        const char *gt = strchr(d->fanout, '>');
+        char from[64];
+        snprintf(from, sizeof from, "%.*s", (int)(gt - d->fanout), d->fanout);
+        snprintf(fkey, sizeof fkey, "%s", gt + 1);
+        list = own_value(p, from);
+    } else if (fanout_option(entry)) {
+        snprintf(fkey, sizeof fkey, "%s", fanout_option(entry)->name);
+        list = own_value(p, fkey);
+        for (size_t i = 0; i < nitems; i++)
+            if (strcmp(items[i].key, fkey) == 0) list = item_value(c->s, p, &items[i]);
+    }
+    char **values = NULL;
+    size_t count = 0;
+    int st = BKF_OK;
+    if (list && !list_values(list, &values, &count))
+        st = bkf_error_set(c->err, BKF_ENOMEM, "out of memory");
+    if (!st && !list && !d->fanout)
+        st = plan_one_step(c, entry, d, items, nitems, NULL, NULL, 1, 1, own);
+    for (size_t i = 0; !st && i < count; i++)
+        st = plan_one_step(c, entry, d, items, nitems, fkey, values[i], i + 1, count, own);
+    list_values_free(values, count);
+    free(items);
+    return st;
+}
+
+static int plan_figure(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
+                       const bkf_scene_plan_options *o)
 {
     const bkf_scene_product *p = &s->products[index];
-    const kind_map_row *map = &kind_map[p->kind];
-    const char *name = map->product;
-    const char *dir = plan->outdir;
-    const char *v;
+    if (!o->figures) return 1;
+    size_t *shown, nshown;
+    if (!figure_data(s, own_value(p, "data"), &shown, &nshown, NULL, 0)) return 0;
+    if (nshown == 0) { /* checked when parsed */
+        free(shown);
+        return 0;
+    }
+    unsigned formats = 0;
+    const char *v = own_value(p, "formats");
+    if (v) {
+        formats |= strstr(v, "png") ? 1u : 0u;
+        formats |= strstr(v, "pdf") ? 2u : 0u;
+        formats |= strstr(v, "svg") ? 4u : 0u;
+    } else
+        formats = o->formats ? o->formats : 1u;
     arg_list b = {0};
     int ok = 1;
-#define KEY(x) (ok = ok && arg_push(&b, (x), NULL, 0, 0))
-#define PAIR(k, x) (ok = ok && (!(x) || arg_push(&b, (k), (x), 0, 0)))
-#define OUT(k, x) (ok = ok && (x) && arg_push(&b, (k), (x), 1, 0))
-#define OWN(x) entry_value(p->entries, p->nentries, (x))
-#define FIRST() (ok = ok && fixed_keys(&b, map->first))
-#define LAST() (ok = ok && other_keys(&b, p) && fixed_keys(&b, map->last))
-    switch (p->kind) {
-    case BKF_SCENE_SPEEDS: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1) && chain_args(&b, s, p, 1);
-        PAIR("n", OWN("n"));
-        PAIR("nmax", OWN("nmax"));
-        PAIR("tol", bkf_scene_value(s, p, "tol"));
-        PAIR("method", OWN("method"));
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
+    char *first = NULL;
+    for (int f = 0; ok && f < 3; f++) {
+        if (!(formats & (1u << f))) continue;
+        char suffix[8];
+        snprintf(suffix, sizeof suffix, ".%s", bkf_plot_format_name((bkf_plot_format)f));
+        char *path = out_path(plan->outdir, p->name, suffix);
+        ok = path && arg_push(&b, "out", path, 1, 0);
+        if (!first)
+            first = path;
+        else
+            free(path);
     }
-    case BKF_SCENE_PERIOD:
-    case BKF_SCENE_DISPERSION: {
-        char **nus;
-        size_t count;
-        if (!list_values(bkf_scene_value(s, p, "nu"), &nus, &count)) return 0;
-        for (size_t i = 0; ok && i < count; i++) {
-            b = (arg_list){0};
-            char suffix[32];
-            snprintf(suffix, sizeof suffix, count > 1 ? "_%zu.tsv" : ".tsv", i + 1);
-            char *out = out_path(dir, p->name, suffix);
-            FIRST();
-            if (p->kind == BKF_SCENE_PERIOD) {
-                const char *mu = OWN("mu");
-                PAIR("mu", mu ? mu : "0.1:1e4:41");
-                if (!mu || strchr(mu, ':')) KEY("log");
-                PAIR("method", OWN("method"));
-            } else {
-                PAIR("gamma", bkf_scene_value(s, p, "gamma"));
-                PAIR("c", bkf_scene_value(s, p, "c"));
-                const char *q = OWN("q");
-                PAIR("q", q ? q : "0:6:241");
-                PAIR("S", bkf_scene_value(s, p, "S"));
-            }
-            PAIR("nu", nus[i]);
-            PAIR("tol", bkf_scene_value(s, p, "tol"));
-            LAST();
-            OUT("out", out);
-            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-        }
-        list_values_free(nus, count);
-        return ok;
+    if (!finish_step(plan, index, BKF_SCENE_STEP_FIGURE, "figure", ok, &b, first, shown[0])) {
+        free(shown);
+        return 0;
     }
-    case BKF_SCENE_THRESHOLD: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 0, 0);
-        PAIR("along", OWN("along"));
-        PAIR("from", OWN("from"));
-        PAIR("to", OWN("to"));
-        PAIR("search", OWN("search"));
-        PAIR("tol", bkf_scene_value(s, p, "tol"));
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-    }
-    case BKF_SCENE_BRANCH: {
-        char **ns;
-        size_t count;
-        v = OWN("n");
-        if (!list_values(v ? v : "1", &ns, &count)) return 0;
-        const char *param = OWN("param");
-        const char *from = OWN("from");
-        if (!from) from = bkf_scene_value(s, p, param);
-        for (size_t i = 0; ok && i < count; i++) {
-            b = (arg_list){0};
-            char suffix[32];
-            snprintf(suffix, sizeof suffix, count > 1 ? "_%zu.tsv" : ".tsv", i + 1);
-            char *out = out_path(dir, p->name, suffix);
-            FIRST();
-            PAIR("param", param);
-            PAIR("from", from);
-            PAIR("to", OWN("to"));
-            ok = ok && model_args(&b, s, p, 1, 1) && chain_args(&b, s, p, 1);
-            PAIR("n", ns[i]);
-            PAIR("root", OWN("root"));
-            PAIR("max-points", OWN("max_points"));
-            PAIR("tol", bkf_scene_value(s, p, "tol"));
-            LAST();
-            OUT("out", out);
-            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-        }
-        list_values_free(ns, count);
-        return ok;
-    }
-    case BKF_SCENE_PROFILE: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1);
-        v = OWN("n");
-        PAIR("n", v ? v : "1");
-        PAIR("root", OWN("root"));
-        PAIR("points", OWN("points"));
-        PAIR("tol", bkf_scene_value(s, p, "tol"));
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-    }
-    case BKF_SCENE_VALIDITY: {
-        FIRST();
-        v = OWN("mu");
-        PAIR("mu", v ? v : "0.1:1e4:21");
-        KEY("log");
-        v = OWN("nu");
-        PAIR("nu", v ? v : "-0.99:0.99:12");
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-    }
-    case BKF_SCENE_FRICTION: {
-        FIRST();
-        v = OWN("from");
-        PAIR("from", v ? v : "-1");
-        v = OWN("to");
-        PAIR("to", v ? v : "4");
-        v = OWN("points");
-        PAIR("points", v ? v : "601");
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-    }
-    case BKF_SCENE_SPACETIME: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1);
-        PAIR("model", bkf_scene_value(s, p, "model"));
-        v = bkf_scene_value(s, p, "N");
-        PAIR("N", v ? v : "512");
-        v = OWN("tmax");
-        PAIR("tmax", v ? v : "50");
-        v = OWN("init");
-        PAIR("init", v ? v : "uniform");
-        v = OWN("seed");
-        PAIR("seed", v ? v : "1");
-        v = OWN("frames");
-        PAIR("frames", v ? v : "500");
-        PAIR("tol", OWN("tol"));
-        PAIR("stepper", OWN("stepper"));
-        LAST();
-        char *st = out_path(dir, p->name, ".dat");
-        char *out = out_path(dir, p->name, "_diag.tsv");
-        OUT("spacetime", st);
-        OUT("out", out);
-        free(out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, st, 0);
-    }
-    case BKF_SCENE_CHECK: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1) && chain_args(&b, s, p, 0);
-        PAIR("n", OWN("n"));
-        PAIR("N", bkf_scene_value(s, p, "N"));
-        PAIR("tmax", OWN("tmax"));
-        PAIR("tol", OWN("tol"));
-        PAIR("rel-tol", OWN("rel_tol"));
-        PAIR("seed", OWN("seed"));
-        PAIR("stepper", OWN("stepper"));
-        PAIR("frame", OWN("frame"));
-        PAIR("grid", OWN("grid"));
-        PAIR("points", OWN("points"));
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        return finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-    }
-    case BKF_SCENE_STABILITY: {
-        /* one step per n: a figure shows several trains side by side */
-        char **ns;
-        size_t count;
-        v = OWN("n");
-        if (!list_values(v ? v : "1", &ns, &count)) return 0;
-        for (size_t i = 0; ok && i < count; i++) {
-            b = (arg_list){0};
-            char suffix[32];
-            snprintf(suffix, sizeof suffix, count > 1 ? "_%zu.tsv" : ".tsv", i + 1);
-            char *out = out_path(dir, p->name, suffix);
-            FIRST();
-            ok = ok && model_args(&b, s, p, 1, 1);
-            PAIR("n", ns[i]);
-            PAIR("tol", OWN("tol"));
-            LAST();
-            OUT("out", out);
-            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-        }
-        list_values_free(ns, count);
-        return ok;
-    }
-    case BKF_SCENE_SWEEP: {
-        FIRST();
-        ok = ok && model_args(&b, s, p, 1, 1);
-        PAIR("model", bkf_scene_value(s, p, "model"));
-        PAIR("N", bkf_scene_value(s, p, "N"));
-        LAST();
-        char *out = out_path(dir, p->name, ".tsv");
-        OUT("out", out);
-        ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, name, ok, &b, out, 0);
-        /* The global oscillation's stability boundaries at each gamma of
-         * `thresholds`, for the map's figure to draw over the regimes. */
-        char **gs = NULL;
-        size_t count = 0;
-        v = OWN("thresholds");
-        if (ok && v && !list_values(v, &gs, &count)) ok = 0;
-        for (size_t i = 0; ok && i < count; i++) {
-            b = (arg_list){0};
-            char suffix[48];
-            snprintf(suffix, sizeof suffix, "_floquet_%zu.tsv", i + 1);
-            char *fout = out_path(dir, p->name, suffix);
-            KEY("diagram");
-            PAIR("gamma", gs[i]);
-            PAIR("c", bkf_scene_value(s, p, "c"));
-            v = OWN("search");
-            PAIR("search", v ? v : "-0.999:0.999");
-            /* boundaries to 1e-6 in nu: far finer than any map's grid */
-            PAIR("tol", "1e-6");
-            OUT("out", fout);
-            ok = finish_step(plan, index, BKF_SCENE_STEP_PRODUCT, "floquet", ok, &b, fout, 0);
-        }
-        list_values_free(gs, count);
-        return ok;
-    }
-    case BKF_SCENE_FIGURE: {
-        if (!o->figures) return 1;
-        size_t *shown, nshown;
-        if (!figure_data(s, OWN("data"), &shown, &nshown, NULL, 0)) return 0;
-        if (nshown == 0) { /* checked when parsed */
-            free(shown);
-            return 0;
-        }
-        size_t di = shown[0];
-        unsigned formats = 0;
-        v = OWN("formats");
-        if (v) {
-            formats |= strstr(v, "png") ? 1u : 0u;
-            formats |= strstr(v, "pdf") ? 2u : 0u;
-            formats |= strstr(v, "svg") ? 4u : 0u;
-        } else
-            formats = o->formats ? o->formats : 1u;
-        char *first = NULL;
-        for (int f = 0; ok && f < 3; f++) {
-            if (!(formats & (1u << f))) continue;
-            char suffix[8];
-            snprintf(suffix, sizeof suffix, ".%s", bkf_plot_format_name((bkf_plot_format)f));
-            char *path = out_path(dir, p->name, suffix);
-            OUT("out", path);
-            if (!first)
-                first = path;
-            else
-                free(path);
-        }
-        if (!finish_step(plan, index, BKF_SCENE_STEP_FIGURE, "figure", ok, &b, first, di)) {
-            free(shown);
-            return 0;
-        }
-        plan->steps[plan->nsteps - 1].data_products = shown;
-        plan->steps[plan->nsteps - 1].ndata = nshown;
-        return 1;
-    }
-    case BKF_SCENE_NKINDS:
-        break;
-    }
-#undef KEY
-#undef PAIR
-#undef OUT
-#undef OWN
-#undef FIRST
-#undef LAST
-    args_free(b.v, b.n);
+    plan->steps[plan->nsteps - 1].data_products = shown;
+    plan->steps[plan->nsteps - 1].ndata = nshown;
     return 1;
+}
+
+/* A section's steps: a figure's, or its kind's declaration's. */
+static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
+                        const bkf_scene_plan_options *o, bkf_error *err)
+{
+    const bkf_scene_product *p = &s->products[index];
+    const kind_info *k = kind_at((int)p->kind);
+    if (p->kind == BKF_SCENE_FIGURE)
+        return plan_figure(plan, s, index, o) ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (!k || !k->entry)
+        return bkf_error_set(err, BKF_EINPUT, "[%s %s]: no product computes this kind",
+                             kind_name(p->kind), p->name);
+    plan_context c = {plan, s, index, o, err};
+    int st = plan_steps(&c, k->entry, &k->decl->step, 1);
+    const bkf_catalog_entry *also = k->decl->also.product ? bkf_catalog_find(k->decl->also.product)
+                                                          : NULL;
+    if (!st && also) st = plan_steps(&c, also, &k->decl->also, 0);
+    return st;
 }
 
 int bkf_scene_make_plan(const bkf_scene *s, const bkf_scene_plan_options *o,
@@ -1572,19 +1449,17 @@ int bkf_scene_make_plan(const bkf_scene *s, const bkf_scene_plan_options *o,
     plan->nproducts = s->nproducts;
     planner pl = {{0}, 0};
     plan->planner_ = &pl;
-    int ok = plan->outdir && plan->products;
+    int st = plan->outdir && plan->products ? BKF_OK
+                                             : bkf_error_set(err, BKF_ENOMEM, "out of memory");
     /* Data first, figures after everything they could show. */
-    for (int pass = 0; ok && pass < 2; pass++)
-        for (size_t i = 0; ok && i < s->nproducts; i++)
+    for (int pass = 0; !st && pass < 2; pass++)
+        for (size_t i = 0; !st && i < s->nproducts; i++)
             if ((s->products[i].kind == BKF_SCENE_FIGURE) == (pass == 1))
-                ok = plan_product(plan, s, i, o);
+                st = plan_product(plan, s, i, o, err);
     lookup_free(&pl.computations);
     plan->planner_ = NULL;
-    if (!ok) {
-        bkf_scene_plan_free(plan);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
-    return BKF_OK;
+    if (st) bkf_scene_plan_free(plan);
+    return st;
 }
 
 void bkf_scene_plan_free(bkf_scene_plan *plan)
@@ -1647,7 +1522,8 @@ char *bkf_scene_step_command(const bkf_scene_step *step)
 static int validate_plan(parse_state *st)
 {
     bkf_scene_plan plan;
-    bkf_scene_plan_options o = {.outdir = ".", .figures = 0};
+    /* where the scene's paths may go is the run's to say (trust) */
+    bkf_scene_plan_options o = {.outdir = ".", .figures = 0, .trust = 1};
     bkf_error e;
     int made = bkf_scene_make_plan(st->s, &o, &plan, &e);
     if (made) {
@@ -1675,7 +1551,7 @@ static int validate_plan(parse_state *st)
                 snprintf(key, sizeof key, "%s", step->args[bad].key);
             else
                 snprintf(key, sizeof key, "%.*s", (int)strcspn(e.message, ":, "), e.message);
-            fail(st, key_line(st->s, p, key), "[%s %s]: %s", kind_names[p->kind], p->name,
+            fail(st, key_line(st->s, p, key), "[%s %s]: %s", kind_name(p->kind), p->name,
                  e.message);
         }
     }
@@ -1766,7 +1642,7 @@ static const char *default_script(const bkf_scene *sc, const bkf_scene_step *fig
     if (data->kind == BKF_SCENE_SPEEDS)
         for (size_t d = 0; d < fig->ndata; d++)
             if (is_chain(sc, &sc->products[fig->data_products[d]])) return "chain_speeds";
-    if (data->kind != BKF_SCENE_STABILITY) return kind_names[data->kind];
+    if (data->kind != BKF_SCENE_STABILITY) return kind_name(data->kind);
     const char *d = bkf_scene_value(sc, data, "diagram"), *l = bkf_scene_value(sc, data, "line");
     if (d && strcmp(d, "yes") == 0) return "diagram";
     if (l && strcmp(l, "yes") == 0) return "spectrum_line";
@@ -1800,12 +1676,11 @@ static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
             if (!append(files, sizeof files, " ", ds->output))
                 return bkf_error_set(err, BKF_EINPUT, "figure %s: too many data files",
                                      fig->name);
-            const char *value = "";
-            if (shown->kind == BKF_SCENE_PERIOD || shown->kind == BKF_SCENE_DISPERSION)
-                value = arg_value(ds, "nu");
-            else if (shown->kind == BKF_SCENE_BRANCH || shown->kind == BKF_SCENE_STABILITY)
-                value = arg_value(ds, "n");
-            else if (shown->kind == BKF_SCENE_SWEEP)
+            /* each file's value of the list that made it (nu of period
+             * and dispersion, n of branch and stability) */
+            const bkf_option *fanout = ds->entry ? fanout_option(ds->entry) : NULL;
+            const char *value = fanout ? arg_value(ds, fanout->name) : "";
+            if (shown->kind == BKF_SCENE_SWEEP)
                 /* the map, then the Floquet diagram of each gamma */
                 value = strcmp(ds->product, "sweep") == 0 ? "map" : arg_value(ds, "gamma");
             else if (shown->kind == BKF_SCENE_SPEEDS && step->ndata > 1) {
@@ -1832,7 +1707,7 @@ static int run_figure(const bkf_scene *sc, const bkf_scene_plan *plan,
     /* per file: its nu (period, dispersion) or n (branch) */
     if (!s) s = bkf_plot_set_string(job, "values", labels, err);
     if (!s) s = bkf_plot_set_string(job, "plotdir", plots_dir, err);
-    if (!s) s = bkf_plot_set_string(job, "kind", kind_names[data->kind], err);
+    if (!s) s = bkf_plot_set_string(job, "kind", kind_name(data->kind), err);
     const char *title = bkf_scene_value(sc, fig, "title");
     if (!s) s = bkf_plot_set_string(job, "title", title ? title : "", err);
     static const char *const numbers[] = {"gamma", "c", "nu", "S", "tmax"};

@@ -546,14 +546,6 @@ double bkf_pde_sample_mean_residual(const bkf_pde *m, const bkf_pde_sample *s)
 }
 
 /* The observer's view of a full state vector. */
-int bkf_pde_emit(bkf_pde *m, bkf_pde_observer observer, void *data, double t, const double *y)
-{
-    size_t N = m->N;
-    bkf_pde_sample s = {t, y, y + N, y[2 * N], y[2 * N + 1]};
-    m->stats.samples++;
-    return observer(&s, data);
-}
-
 int bkf_pde_set_state(bkf_pde *m, const double *psi, const double *eta, double t,
                       bkf_error *err)
 {

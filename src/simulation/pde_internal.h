@@ -1,6 +1,7 @@
 /* Internal to the simulator (src/pde.c, src/pde_etd.c): the object's
  * layout and the pieces the exponential integrator shares with the
- * Runge-Kutta loop.  Not installed, not part of the API. */
+ * Runge-Kutta loop, below both: pde.c calls the integrator, which calls
+ * nothing of pde.c.  Not installed, not part of the API. */
 #ifndef BKFRONT_PDE_INTERNAL_H
 #define BKFRONT_PDE_INTERNAL_H
 
@@ -55,8 +56,18 @@ struct bkf_pde {
 };
 
 
-/* The observer's view of a full state vector (psi, eta, Q, D). */
-int bkf_pde_emit(bkf_pde *m, bkf_pde_observer observer, void *data, double t, const double *y);
+/* The observer's view of a full state vector (psi, eta, Q, D).  Here, with
+ * the layout both steppers share, so that the exponential integrator hands
+ * its samples out without calling back into the simulator (pde.c uses
+ * pde_etd.c, never the other way round). */
+static inline int bkf_pde_emit(bkf_pde *m, bkf_pde_observer observer, void *data, double t,
+                               const double *y)
+{
+    size_t N = m->N;
+    bkf_pde_sample s = {t, y, y + N, y[2 * N], y[2 * N + 1]};
+    m->stats.samples++;
+    return observer(&s, data);
+}
 
 /* Exponential integrator (src/pde_etd.c). */
 bkf_pde_etd *bkf_pde_etd_alloc(bkf_pde *m);

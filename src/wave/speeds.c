@@ -140,6 +140,22 @@ typedef struct {
 
 static double mu_of_s(double gamma, double s) { return hypot(gamma, exp(s)); }
 
+/* |nu| up to which the speeds are verified (docs/accuracy.md, Extremes). */
+#define NU_VERIFIED 0.9999
+
+/* A refused period as the speeds' failure: the cycle's message (it names mu
+ * and nu) and what to try. */
+static int period_refused(int rc, const bkf_error *e, double nu, bkf_error *err)
+{
+    const char *hint = !bkf_status_is_numerical(rc) ? ""
+                       : fabs(nu) > NU_VERIFIED
+                           ? "; |nu| > 0.9999 is beyond the range where the speeds are verified "
+                             "(docs/accuracy.md): try a looser tol, or |nu| <= 0.9999"
+                       : rc == BKF_ETOL ? "; a looser tol may succeed"
+                                        : "";
+    return bkf_error_set(err, rc, "%s%s", e->message, hint);
+}
+
 static double level(const grid *g, double n) { return g->lnA - log(n); }
 
 static int tail_ok(const grid *g, double mu, double T)
@@ -187,9 +203,7 @@ static int solve_T_on(grid *g, int scout, double mu, double tol, double *T, doub
         o.warm_start = attempt == 0;
         rc = bkf_cycle_solve(cycle, mu, g->p.nu, &o, &e);
     }
-    if (rc != BKF_OK)
-        return bkf_error_set(err, rc, "period at mu = %.17g, nu = %.17g: %s", mu, g->p.nu,
-                             e.message);
+    if (rc != BKF_OK) return period_refused(rc, &e, g->p.nu, err);
     const bkf_cycle_result *r = bkf_cycle_get(cycle);
     *mu_last = mu;
     *T = r->period;
@@ -1052,7 +1066,7 @@ static int find_c0(const bkf_model_params *p, const bkf_speeds_options *o, bkf_s
     if (!cycle) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     int rc = bkf_cycle_estimate(cycle, p->gamma, p->nu, &co, o->method, &r, &e);
     bkf_cycle_free(cycle);
-    if (rc) return bkf_error_set(err, rc, "period at mu = gamma = %.15g: %s", p->gamma, e.message);
+    if (rc) return period_refused(rc, &e, p->nu, err);
     if (strcmp(r.model, "shooting") == 0) t->precise_solves = 1;
     else t->formula_answers = 1;
     t->mu_grid_max = p->gamma;
@@ -1336,7 +1350,7 @@ static int branch_T(branch_ctx *b, double mu, double nu, double *T, double *T_er
     o.tol = b->tol;
     bkf_error e = {0};
     int rc = bkf_cycle_solve(b->cycle, mu, nu, &o, &e);
-    if (rc) return bkf_error_set(err, rc, "period at mu = %.17g, nu = %.17g: %s", mu, nu, e.message);
+    if (rc) return period_refused(rc, &e, nu, err);
     *T = bkf_cycle_get(b->cycle)->period;
     if (T_err) *T_err = bkf_cycle_get(b->cycle)->period_err;
     b->rep.solves++;

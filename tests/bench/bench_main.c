@@ -44,6 +44,7 @@ void bench_pde_cost(void);
 void bench_trainspec(void);
 void bench_chain(void);
 void bench_colloc(void);
+void bench_start(void);
 
 int main(int argc, char **argv)
 {
@@ -56,5 +57,6 @@ int main(int argc, char **argv)
     if (!only || strcmp(only, "trainspec") == 0) bench_trainspec();
     if (!only || strcmp(only, "chain") == 0) bench_chain();
     if (!only || strcmp(only, "colloc") == 0) bench_colloc();
+    if (!only || strcmp(only, "start") == 0) bench_start();
     return 0;
 }

@@ -134,8 +134,7 @@ TEST(cli_speeds_rejects_bad_input)
               "--S", "--S 0");
     bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "nan", "--S", "20"), "speeds",
               "--nu", "--nu nan");
-    bad_input(RUN("speeds", "--c", "0.3", "--nu", "-0.96", "--S", "20"), "speeds", "--gamma",
-              "missing --gamma");
+    /* (a missing --gamma is the paper's: test_cli_defaults.c) */
     bad_input(RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20", "--tol",
                   "1"),
               "speeds", "--tol", "--tol 1");
@@ -348,4 +347,20 @@ TEST(cli_branch_stability)
     CHECK_MSG(access(path, F_OK) != 0, "%s written on bad input", path);
     CHECK(rmdir(dir) == 0);
 #undef BRANCH3
+}
+
+/* Where the speeds are refused (|nu| so close to 1 that no cycle meets the
+ * tolerance), the one error line names the failing cycle once and says what
+ * to try: the verified range of nu and a looser tol. */
+TEST(cli_speeds_refusal_near_nu_minus_1_says_what_to_try)
+{
+    bkf_cli_result r = BKF_CLI("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.99999999",
+                               "--S", "20");
+    CHECK_MSG(r.code == 1 && r.out[0] == '\0' && bkf_count_lines(r.err) == 1, "exit %d: %s",
+              r.code, r.err);
+    int mentions = 0;
+    for (const char *m = r.err; (m = strstr(m, "mu = ")); m++) mentions++;
+    CHECK_MSG(mentions == 1, "the place is said %d times: %s", mentions, r.err);
+    CHECK_MSG(strstr(r.err, "|nu| <= 0.9999") && strstr(r.err, "looser tol"), "no hint: %s", r.err);
+    bkf_cli_result_free(&r);
 }

@@ -183,3 +183,240 @@ TEST(layers_checker_catches_violations)
     CHECK(violations("t", cli, "#include \"bkfront/pde.h\"\n#include \"bkfront/speeds.h\"\n",
                      0) == 0);
 }
+
+/* ------------------------------------------------------------ circles */
+
+/* Inside a layer, dependencies point one way: no file uses another that
+ * uses it back (directly or round a longer circle).  File X uses file Y
+ * when X includes Y's public header (bkfront/Y.h; Y.c in the same layer)
+ * or names a function Y defines (outside comments and strings): the
+ * second sees what a shared private header hides (pde.c and pde_etd.c both
+ * include pde_internal.h). */
+
+#define MAX_FILES 64
+#define MAX_DEFS 512
+
+typedef struct {
+    char name[64];            /* "pde" for pde.c */
+    char *code;               /* the text without comments and strings */
+    char *defs[MAX_DEFS];     /* the functions it defines, not static */
+    size_t ndefs;
+} unit;
+
+/* The text with comments and string and character literals blanked out. */
+static char *code_of(const char *text)
+{
+    char *c = strdup(text);
+    if (!c) return NULL;
+    for (char *p = c; *p; p++) {
+        if (p[0] == '/' && p[1] == '*') {
+            char *e = strstr(p + 2, "*/");
+            char *end = e ? e + 2 : p + strlen(p);
+            for (; p < end; p++)
+                if (*p != '\n') *p = ' ';
+            p--;
+        } else if (p[0] == '/' && p[1] == '/') {
+            for (; *p && *p != '\n'; p++) *p = ' ';
+            p--;
+        } else if (*p == '"' || *p == '\'') {
+            char q = *p;
+            for (p++; *p && *p != q; p++) {
+                if (*p == '\\' && p[1]) *p++ = ' ';
+                if (*p != '\n') *p = ' ';
+            }
+            if (!*p) break;
+        }
+    }
+    return c;
+}
+
+static int ident_char(char c)
+{
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+}
+
+/* The functions a file defines at file scope, not static: a body's '{' at
+ * the start of a line, after a declaration starting at column 0. */
+static void find_defs(unit *u)
+{
+    const char *code = u->code;
+    for (const char *p = code; (p = strstr(p, "\n{")) != NULL; p++) {
+        const char *start = p; /* back to the declaration's first line */
+        while (start > code) {
+            const char *line = start - 1;
+            while (line > code && line[-1] != '\n') line--;
+            start = line;
+            if (*line != ' ' && *line != '\t' && *line != '\n') break;
+        }
+        if (strncmp(start, "static", 6) == 0) continue;
+        const char *paren = memchr(start, '(', (size_t)(p - start));
+        if (!paren) continue;
+        const char *e = paren;
+        while (e > start && e[-1] == ' ') e--;
+        const char *b = e;
+        while (b > start && ident_char(b[-1])) b--;
+        if (b == e || u->ndefs == MAX_DEFS) continue;
+        u->defs[u->ndefs] = strndup(b, (size_t)(e - b));
+        if (u->defs[u->ndefs]) u->ndefs++;
+    }
+}
+
+/* Whether `code` names `word` as a whole identifier. */
+static int names(const char *code, const char *word)
+{
+    size_t n = strlen(word);
+    for (const char *p = code; (p = strstr(p, word)) != NULL; p += n)
+        if ((p == code || !ident_char(p[-1])) && !ident_char(p[n])) return 1;
+    return 0;
+}
+
+/* Whether `code` includes "bkfront/NAME.h". */
+static int includes_header(const char *text, const char *name)
+{
+    char inc[96];
+    snprintf(inc, sizeof inc, "\"bkfront/%s.h\"", name);
+    for (const char *p = text; (p = strstr(p, "#include")) != NULL; p++) {
+        const char *q = p + 8;
+        while (*q == ' ' || *q == '\t') q++;
+        if (strncmp(q, inc, strlen(inc)) == 0) return 1;
+    }
+    return 0;
+}
+
+/* Whether unit a uses unit b (texts: the files as written). */
+static int uses(const unit *a, const char *a_text, const unit *b)
+{
+    if (includes_header(a_text, b->name)) return 1;
+    for (size_t i = 0; i < b->ndefs; i++)
+        if (names(a->code, b->defs[i])) return 1;
+    return 0;
+}
+
+/* The circles among n units (texts the files as written): every pair i, j
+ * where i reaches j and j reaches i.  Returns their number. */
+static int circles(const char *layer, unit *u, char **texts, size_t n, int report)
+{
+    static unsigned char reach[MAX_FILES][MAX_FILES];
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = 0; j < n; j++) reach[i][j] = i != j && uses(&u[i], texts[i], &u[j]);
+    for (size_t k = 0; k < n; k++) /* Warshall: the closure */
+        for (size_t i = 0; i < n; i++)
+            for (size_t j = 0; i != k && j < n; j++)
+                if (reach[i][k] && reach[k][j]) reach[i][j] = 1;
+    int bad = 0;
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = i + 1; j < n; j++) {
+            if (!reach[i][j] || !reach[j][i]) continue;
+            bad++;
+            if (report)
+                bkf_test_note("%s: %s.c and %s.c use each other (%s)", layer, u[i].name,
+                              u[j].name,
+                              reach[i][j] && uses(&u[i], texts[i], &u[j]) &&
+                                      uses(&u[j], texts[j], &u[i])
+                                  ? "directly"
+                                  : "round a circle");
+        }
+    return bad;
+}
+
+static void units_free(unit *u, char **texts, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        free(u[i].code);
+        for (size_t d = 0; d < u[i].ndefs; d++) free(u[i].defs[d]);
+        free(texts[i]);
+    }
+}
+
+/* The units of texts[] named names[] (the texts taken over). */
+static size_t make_units(unit *u, char **texts, const char *const *unit_names, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        u[i] = (unit){0};
+        snprintf(u[i].name, sizeof u[i].name, "%s", unit_names[i]);
+        u[i].code = code_of(texts[i]);
+        CHECK(u[i].code);
+        if (u[i].code) find_defs(&u[i]);
+    }
+    return n;
+}
+
+TEST(layers_have_no_circles_inside)
+{
+    int bad = 0;
+    size_t total = 0;
+    for (size_t l = 0; l < NLAYERS; l++) {
+        char dir[1024];
+        snprintf(dir, sizeof dir, "%s/src/%s", BKF_SOURCE_DIR, layers[l].name);
+        DIR *d = opendir(dir);
+        CHECK_MSG(d, "cannot open %s", dir);
+        if (!d) continue;
+        static unit u[MAX_FILES];
+        static char *texts[MAX_FILES];
+        const char *unit_names[MAX_FILES];
+        char stems[MAX_FILES][64];
+        size_t n = 0;
+        for (struct dirent *e; (e = readdir(d)) != NULL;) {
+            size_t len = strlen(e->d_name);
+            if (len < 3 || e->d_name[0] == '.' || strcmp(e->d_name + len - 2, ".c") != 0) continue;
+            CHECK_MSG(n < MAX_FILES, "more than %d files in %s", MAX_FILES, dir);
+            if (n == MAX_FILES) break;
+            char path[1400];
+            snprintf(path, sizeof path, "%.1023s/%.255s", dir, e->d_name);
+            texts[n] = slurp(path);
+            CHECK_MSG(texts[n], "cannot read %s", path);
+            if (!texts[n]) continue;
+            snprintf(stems[n], sizeof stems[n], "%.*s", (int)(len - 2), e->d_name);
+            unit_names[n] = stems[n];
+            n++;
+        }
+        closedir(d);
+        make_units(u, texts, unit_names, n);
+        bad += circles(layers[l].name, u, texts, n, 1);
+        total += n;
+        units_free(u, texts, n);
+    }
+    CHECK_MSG(total > 30, "only %zu files read: wrong source folder?", total);
+    CHECK_MSG(bad == 0, "%d pairs of files of one layer use each other (listed above)", bad);
+}
+
+TEST(layers_circle_checker_catches_circles)
+{
+    /* planted: a calls b, b calls back a; a circle of three through a
+     * header; and a one-way chain, which is no circle */
+    const char *const two[] = {"a", "b"};
+    char *texts[3];
+    unit u[3];
+    texts[0] = strdup("#include \"bkfront/b.h\"\nint a_run(void)\n{\n    return b_step();\n}\n");
+    texts[1] = strdup("int b_step(void)\n{\n    return a_emit(); /* b_step */\n}\n"
+                      "int a_emit_not(void)\n{\n    return 0;\n}\n");
+    make_units(u, texts, two, 2);
+    CHECK(circles("t", u, texts, 2, 0) == 0); /* a_emit is nobody's */
+    units_free(u, texts, 2);
+
+    texts[0] = strdup("int a_emit(void)\n{\n    return 1;\n}\nint a_run(void)\n{\n"
+                      "    return b_step();\n}\n");
+    texts[1] = strdup("int b_step(void)\n{\n    return a_emit();\n}\n");
+    make_units(u, texts, two, 2);
+    CHECK(circles("t", u, texts, 2, 0) == 1);
+    units_free(u, texts, 2);
+
+    const char *const three[] = {"x", "y", "z"};
+    texts[0] = strdup("#include \"bkfront/y.h\"\nint x_f(void)\n{\n    return y_f();\n}\n");
+    texts[1] = strdup("int y_f(void)\n{\n    return z_f();\n}\n");
+    texts[2] = strdup("#include \"bkfront/x.h\"\nstatic int z_g(void)\n{\n    return 0;\n}\n"
+                      "int z_f(void)\n{\n    return z_g();\n}\n");
+    make_units(u, texts, three, 3);
+    CHECK(circles("t", u, texts, 3, 0) == 3); /* every pair of the three */
+    units_free(u, texts, 3);
+
+    /* a comment or a string naming a function is no use of it; a static
+     * function is nobody else's */
+    texts[0] = strdup("int x_f(void)\n{\n    return 0; /* y_f() */\n}\n"
+                      "const char *x_s = \"y_f\";\n");
+    texts[1] = strdup("static int x_f(void)\n{\n    return 1;\n}\nint y_f(void)\n{\n"
+                      "    return x_f();\n}\n");
+    make_units(u, texts, three, 2);
+    CHECK(circles("t", u, texts, 2, 0) == 0);
+    units_free(u, texts, 2);
+}

@@ -104,11 +104,11 @@ TEST(catalog_required_keys_are_named)
 {
     /* The command line's parser enforces required flags; through the
      * catalogue the check does, with the key's name and range. */
-    const bkf_catalog_entry *e = bkf_catalog_find("speeds");
+    const bkf_catalog_entry *e = bkf_catalog_find("period");
     bkf_error err;
     void *spec = bkf_catalog_spec_new(e, &err);
     CHECK_STATUS(e->check(spec, "", &err), BKF_EINPUT);
-    CHECK_MSG(strstr(err.message, "gamma is required") == err.message, "%s", err.message);
+    CHECK_MSG(strstr(err.message, "mu is required") == err.message, "%s", err.message);
     CHECK(err.status == BKF_EINPUT);
     bkf_catalog_spec_free(e, spec);
 }

@@ -222,7 +222,7 @@ TEST(products_stability_reachable_from_the_catalogue)
     bkf_error err;
     void *spec = bkf_catalog_spec_new(e, &err);
     CHECK(spec);
-    CHECK_STATUS(e->check(spec, "", &err), BKF_EINPUT); /* gamma .. n required */
+    CHECK_STATUS(e->check(spec, "", &err), BKF_EINPUT); /* n required */
     const char *kv[] = {"gamma", "2", "c", "0.3", "nu", "-0.96", "S", "20", "n", "3",
                         "tol", "1e-5", "per-kappa", "2", "line", NULL, "kappa-count", "5"};
     for (size_t i = 0; i < sizeof kv / sizeof kv[0]; i += 2)

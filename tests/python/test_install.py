@@ -16,6 +16,7 @@ import pytest
 
 import bkfront
 from conftest import SOURCE, tsv
+from test_docs_links import dead_links, pages
 
 PROGRAM = r"""
 #include <stdio.h>
@@ -60,12 +61,17 @@ def test_external_program_links_through_pkg_config(prefix, tmp_path):
     src = tmp_path / "prog.c"
     src.write_text(PROGRAM)
     exe = tmp_path / "prog"
-    subprocess.run(["cc", "-std=c11", "-Wall", "-Werror", str(src), "-o", str(exe)] + flags +
-                   ["-Wl,-rpath," + libdir], check=True)
+    # the documented command alone: a PREFIX outside the loader's folders
+    # needs no -Wl,-rpath nor LD_LIBRARY_PATH of the user's
+    subprocess.run(["cc", "-std=c11", "-Wall", "-Werror", str(src), "-o", str(exe)] + flags,
+                   check=True)
     # linked to the shared library by its SONAME, not the archive
     needed = subprocess.run(["readelf", "-d", str(exe)], capture_output=True, text=True).stdout
     assert "[libbkfront.so.0]" in needed
-    out = subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.split()
+    run_env = {k: v for k, v in os.environ.items() if k != "LD_LIBRARY_PATH"}
+    r = subprocess.run([str(exe)], capture_output=True, text=True, env=run_env)
+    assert r.returncode == 0, r.stderr
+    out = r.stdout.split()
     assert out[0] == bkfront.version()
     assert abs(float(out[1]) - 6.6632868593231302) <= float(out[2])
 
@@ -135,6 +141,49 @@ def test_installed_python_package(prefix, tmp_path):
     assert round(float(rows[5]["v"]), 4) == 0.3750
 
 
+def test_installed_manual_links_resolve(prefix):
+    root = os.path.join(prefix, "share", "doc", "bkfront")
+    assert len(pages(root)) == len(pages(SOURCE))
+    assert dead_links(root) == []
+
+
+def _words(text):
+    return text.split()
+
+
+def test_installed_man_pages_are_the_help(prefix):
+    """bkfront(1) and bkfront-NAME(1) for every subcommand: each renders
+    without a groff warning, and its text holds every word of the help,
+    in order (nothing lost or mangled by the conversion)."""
+    cli = os.path.join(prefix, "bin", "bkfront")
+    man1 = os.path.join(prefix, "share", "man", "man1")
+    top = subprocess.run([cli, "--help"], capture_output=True, text=True, check=True).stdout
+    names = top.split("subcommands:\n")[1].split("\n\n")[0].split("\n")
+    names = [l.split()[0] for l in names]
+    assert len(names) >= 13 and "speeds" in names
+    pages_ = {"bkfront": top}
+    for name in names:
+        pages_["bkfront-" + name] = subprocess.run([cli, "help", name], capture_output=True,
+                                                   text=True, check=True).stdout
+    assert sorted(os.listdir(man1)) == sorted(p + ".1" for p in pages_)
+    for page, help_text in pages_.items():
+        r = subprocess.run(["groff", "-man", "-Tascii", "-ww", "-rHY=0", "-rLL=300n", "-P-cbou",
+                            os.path.join(man1, page + ".1")], capture_output=True, text=True)
+        assert r.returncode == 0 and r.stderr == "", (page, r.stderr)
+        rendered = _words(r.stdout)
+        assert page in rendered[:6]
+        # every word of the help, in order ("usage:" and the list headings
+        # become the page's own headings, a subcommand NAME bkfront-NAME(1))
+        k = 0
+        for w in _words(help_text):
+            if w in ("usage:", "options:", "columns:", "subcommands:"):
+                continue
+            while k < len(rendered) and rendered[k] not in (w, "bkfront-%s(1)" % w):
+                k += 1
+            assert k < len(rendered), "%s: the help's word %r is not in the page" % (page, w)
+            k += 1
+
+
 def test_destdir_staging_and_uninstall(tmp_path):
     stage = str(tmp_path / "stage")
     make("install", "DESTDIR=" + stage, "PREFIX=/opt/bkf")
@@ -142,7 +191,7 @@ def test_destdir_staging_and_uninstall(tmp_path):
     assert sorted(os.listdir(stage)) == ["opt"]
     for f in ["bin/bkfront", "include/bkfront/bkfront.h", "lib/libbkfront.so",
               "lib/pkgconfig/bkfront.pc", "share/bkfront/plots/speeds.gp",
-              "share/doc/bkfront/python.md"]:
+              "share/doc/bkfront/docs/python.md", "share/man/man1/bkfront-speeds.1"]:
         assert os.path.exists(os.path.join(root, f)), f
     pc = open(os.path.join(root, "lib/pkgconfig/bkfront.pc")).read()
     assert "prefix=/opt/bkf\n" in pc and stage not in pc

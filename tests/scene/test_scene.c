@@ -596,6 +596,29 @@ TEST(run_keeps_going_past_a_failed_product)
     free(dir);
 }
 
+/* A warning a step raises reaches the terminal under the step's line, not
+ * only its file: fronts seeded on a grid too coarse for them (gamma 20,
+ * c 0.05, nu 0.9, S 100, n 5 at N 1024, simulate.c's case). */
+TEST(run_shows_a_step_s_warnings)
+{
+    char *dir = temp_dir();
+    char *path = write_scene(dir, "[model]\ngamma = 20\nc = 0.05\nnu = 0.9\nS = 100\n"
+                                  "[accuracy]\nN = 1024\n"
+                                  "[spacetime thin]\ntmax = 0.5\ninit = front:n=5\n");
+    char outdir[512];
+    snprintf(outdir, sizeof outdir, "%s/out", dir);
+    run_result *r = run_cli((char *[]){"run", "--no-figures", "--out", outdir, path, NULL});
+    CHECK_MSG(r->code == 0, "exit %d: %s", r->code, r->err);
+    const char *step = strstr(r->out, "thin.dat\n");
+    CHECK_MSG(step && strncmp(step + 9, "        warning: N = 1024 does not resolve", 42) == 0,
+              "no warning under the step:\n%s", r->out);
+    CHECK_MSG(!strstr(step + 9, "warning: warning"), "%s", r->out);
+    free(r);
+    remove_tree(dir);
+    free(path);
+    free(dir);
+}
+
 /* x over one period is one wavelength: n T v sqrt(1 - c^2/v^2) = S, the
  * speed condition itself; and f(0) = nu rising (the section). */
 TEST(profile_spans_one_wavelength)

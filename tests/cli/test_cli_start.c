@@ -1,0 +1,67 @@
+/* A process start pays only for what its command uses: the CLI's
+ * dependency tree (as the dynamic loader resolves it) holds no HDF5 and
+ * none of HDF5's own tree (libcurl, ...); HDF5 is loaded at the first HDF5
+ * write, and where it cannot be loaded only that write fails, with a line
+ * that says so.  (What an HDF5 file holds: test_h5.c and
+ * tests/python/test_spacetime_h5.py.) */
+#define _DEFAULT_SOURCE
+#include "cli_support.h"
+#include "harness.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+TEST(cli_start_loads_no_hdf5)
+{
+    /* the loader lists every object it would map, transitively, and stops */
+    bkf_cli_options o = {.env = (const char *const[]){"LD_TRACE_LOADED_OBJECTS=1", NULL}};
+    bkf_cli_result r = bkf_cli_run(BKF_CLI_ARGS("--version"), &o);
+    CHECK_MSG(r.code == 0 && strstr(r.out, "libgsl"), "no loader trace: %s%s", r.out, r.err);
+    const char *banned[] = {"libhdf5", "libcurl", "libgnutls", "libkrb5", "libldap"};
+    for (size_t i = 0; i < sizeof banned / sizeof banned[0]; i++)
+        CHECK_MSG(!strstr(r.out, banned[i]), "bkfront loads %s at start:\n%s", banned[i], r.out);
+    bkf_cli_result_free(&r);
+}
+
+/* An unloadable HDF5 (an empty file under its soname, found first through
+ * LD_LIBRARY_PATH): every other command runs, and an HDF5 spacetime fails
+ * with exit 1, one line naming the library, and no file. */
+TEST(cli_hdf5_missing_fails_only_the_hdf5_write)
+{
+    char dir[] = "/tmp/bkf_noh5_XXXXXX";
+    CHECK(mkdtemp(dir) != NULL);
+    char fake[128], env[160];
+    snprintf(fake, sizeof fake, "%s/%s", dir, BKF_HDF5_SONAME);
+    FILE *f = fopen(fake, "w");
+    CHECK(f != NULL);
+    fclose(f);
+    snprintf(env, sizeof env, "LD_LIBRARY_PATH=%s", dir);
+    bkf_cli_options o = {.dir = dir, .env = (const char *const[]){env, NULL}};
+    bkf_cli_result r = bkf_cli_run(BKF_CLI_ARGS("--version"), &o);
+    CHECK_MSG(r.code == 0 && strncmp(r.out, "bkfront ", 8) == 0, "--version: %d %s", r.code,
+              r.err);
+    bkf_cli_result_free(&r);
+    r = bkf_cli_run(BKF_CLI_ARGS("simulate", "--N", "64", "--S", "16", "--tmax", "1",
+                                 "--frames", "2", "--no-progress", "--spacetime", "st.h5",
+                                 "--out", "diag.tsv"), &o);
+    CHECK_MSG(r.code == 1, "exit %d, stderr %s", r.code, r.err);
+    CHECK_MSG(strstr(r.err, "HDF5 output needs the HDF5 library") && strstr(r.err, BKF_HDF5_SONAME)
+              && bkf_count_lines(r.err) == 1, "stderr: %s", r.err);
+    char path[160];
+    snprintf(path, sizeof path, "%s/st.h5", dir);
+    CHECK_MSG(access(path, F_OK) != 0, "st.h5 was written");
+    snprintf(path, sizeof path, "%s/diag.tsv", dir);
+    CHECK_MSG(access(path, F_OK) != 0, "diag.tsv was written by a failed run");
+    /* the text format needs no HDF5 */
+    bkf_cli_result_free(&r);
+    r = bkf_cli_run(BKF_CLI_ARGS("simulate", "--N", "64", "--S", "16", "--tmax", "1",
+                                 "--frames", "2", "--no-progress", "--spacetime", "st.dat",
+                                 "--out", "diag.tsv"), &o);
+    CHECK_MSG(r.code == 0, "text spacetime: exit %d, %s", r.code, r.err);
+    bkf_cli_result_free(&r);
+    char cmd[200];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    CHECK(system(cmd) == 0);
+}
