@@ -315,7 +315,7 @@ void check_warn(const check_ctx *c, const char *fmt, ...)
 double check_transient_end(double tmax) { return fmin(10.0, 0.25 * tmax); }
 
 size_t check_coherent_end(record_reader at, const void *data, size_t R, size_t n, int settle,
-                           double bound, double tmax)
+                          double bound, double tmax)
 {
     double t_ref = check_transient_end(tmax), t, dev;
     size_t fronts, end = 0;
@@ -343,7 +343,7 @@ double check_linear_bound(const bkf_check_options *o) { return fmax(10 * o->pert
  * end of the transient, t = min(10, tmax/4), to the end of the coherent
  * part under linear_bound.  *t_to gets that end (for the Bloch classes). */
 int check_fit_deviation(record_reader at, const void *data, size_t R, size_t n,
-                         const bkf_check_options *o, bkf_check_growth *g, double *t_to)
+                        const bkf_check_options *o, bkf_check_growth *g, double *t_to)
 {
     double *t = malloc((R + 1) * sizeof *t), *d = malloc((R + 1) * sizeof *d);
     if (!t || !d) {

@@ -17,6 +17,8 @@
  * or the height of one tracked peak of lambda. */
 #include "bkfront/floquet.h"
 
+#include "floquet_internal.h"
+
 #include "bkfront/continuation.h"
 #include "bkfront/model.h"
 
@@ -28,37 +30,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* State layout: M is stored by columns, column j = (d_psi, d_eta) from the
- * unit start vector e_j; P = dM/dK the same way. */
-enum { IX = 0, IY = 1, IM = 2, IL = 6, IP = 7 };
-enum { DIM_PLAIN = 7, DIM_DK = 11 };
-
-/* As in cycle.c: above this gamma the explicit stepper's step is limited by
- * stability, not accuracy. */
-#define STIFF_GAMMA 30.0
-#define TOL_RATIO 10.0
-/* Beyond K ~ 1e8 a period holds ~1e4 oscillations of the perturbation: the
- * integration is no longer a sensible way to get the answer. */
-#define K_MAX 1e8
-#define MAX_STEPS 5000000
-#define MAX_PEAKS 64
-/* Grid peaks lower than this are not refined: a refined peak rises above
- * its grid value by far less than this on any grid fine enough to see it. */
-#define PEAK_FLOOR (-1.0)
-/* Scans only locate peaks, refined afterwards, so they run loose. */
-#define SCAN_TOL 1e-7
-/* Retries of a wavenumber whose estimate misses tol (bkf_floquet_eval). */
-#define RETRY_TOL_MIN 1e-13
-#define CYCLE_TOL_MIN 1e-13
-#define RETRY_WORK 30.0
-#define RETRY_STEPS_MIN 50000.0
-
 /* ------------------------------------------------------------ the flow */
-
-typedef struct {
-    double gamma, nu, K;
-    size_t rhs_calls;
-} lin_params;
 
 static double lienard_F(double x) { return x * x * x / 3.0 - x; }
 
@@ -131,59 +103,6 @@ static int jac_dk(double t, const double s[], double *J, double d[], void *p) { 
 
 /* ------------------------------------------------------------- object */
 
-/* One integration at one tolerance: the GSL driver is kept between
- * wavenumbers, so its step-size guess carries over. */
-typedef struct {
-    gsl_odeiv2_driver *driver;
-    gsl_odeiv2_system system;
-    double tol;
-} engine;
-
-/* Slots of the trace integration: the scan, the two tolerances of the
- * estimate, and the two of a retry at a tighter tolerance.  Separate slots
- * for the retry keep the usual drivers (and their step-size guesses) when
- * one wavenumber needs more. */
-enum { ENG_SCAN = 0, ENG_COARSE = 1, ENG_FINE = 2, ENG_RETRY_COARSE = 3, ENG_RETRY_FINE = 4, ENG_SLOTS = 5 };
-
-typedef struct {
-    double M[4];      /* row-major */
-    double tr, L, det;
-    double dtr;       /* d trace / dK (with dk) */
-    size_t steps;
-} raw;
-
-struct bkf_floquet {
-    double gamma, c, nu;
-    bkf_floquet_options opt;
-    bkf_cycle *cycle;
-    int ready;
-    double x0, y0, T, T_err, L;
-    lin_params lp;
-    bkf_stepper_kind kind;
-    engine eng[2][ENG_SLOTS]; /* [with dM/dK][slot] */
-    engine eng_log[2];        /* log-column integrations, [coarse, fine] */
-    double tol_int;           /* coarse integration tolerance; fine = /TOL_RATIO */
-    double tol_floor;         /* tightest coarse tolerance worth a retry */
-    double tol_retry;         /* tolerance of the retry slots */
-    size_t retry_nmax;        /* step budget of one retry integration */
-    bkf_cycle_options cycle_opt; /* of the cycle solved last */
-    unsigned cycle_gen;          /* counts the cycles solved */
-    /* The finer integration of the last eval_trace: a retry 10 times
-     * tighter than that attempt integrates at exactly its tolerance, so
-     * it takes it as its coarser half instead of repeating it. */
-    struct {
-        double K, tol;
-        unsigned cycle_gen;
-        int valid;
-    } last_fine_key;
-    raw last_fine;
-    /* The cycle 100 times looser (cycle_measured), kept while cycle_gen
-     * stays loose_gen. */
-    double loose_tol;
-    unsigned loose_gen;
-    double loose_y0, loose_T, loose_T_err, loose_L;
-};
-
 bkf_floquet_options bkf_floquet_options_default(void)
 {
     return (bkf_floquet_options){.tol = 1e-10,
@@ -255,7 +174,7 @@ const bkf_cycle_result *bkf_floquet_cycle(const bkf_floquet *f)
     return f && f->ready ? bkf_cycle_get(f->cycle) : NULL;
 }
 
-static int check_options(const bkf_floquet_options *o, bkf_error *err)
+int floquet_check_options(const bkf_floquet_options *o, bkf_error *err)
 {
     int rc = bkf_model_check_tol(o->tol, err);
     if (rc != BKF_OK) return rc;
@@ -275,7 +194,7 @@ static int check_options(const bkf_floquet_options *o, bkf_error *err)
     return BKF_OK;
 }
 
-static int check_gamma_c(double gamma, double c, bkf_error *err)
+int floquet_check_gamma_c(double gamma, double c, bkf_error *err)
 {
     if (!isfinite(gamma) || gamma < BKF_CYCLE_MU_MIN || gamma > BKF_CYCLE_MU_MAX)
         return bkf_error_set(err, BKF_EINPUT, "gamma = %.15g is outside [%g, %g]", gamma,
@@ -330,8 +249,8 @@ static int floquet_set_body(bkf_floquet *f, double gamma, double c, double nu,
 {
     if (!f) return bkf_error_set(err, BKF_EINPUT, "floquet object is NULL");
     bkf_floquet_options o = options ? *options : bkf_floquet_options_default();
-    int rc = check_options(&o, err);
-    if (rc == BKF_OK) rc = check_gamma_c(gamma, c, err);
+    int rc = floquet_check_options(&o, err);
+    if (rc == BKF_OK) rc = floquet_check_gamma_c(gamma, c, err);
     if (rc == BKF_OK) rc = bkf_model_check_nu_active(nu, err);
     if (rc != BKF_OK) return rc;
     f->ready = 0;
@@ -385,10 +304,9 @@ int bkf_floquet_set(bkf_floquet *f, double gamma, double c, double nu,
 
 /* ------------------------------------------------------------ monodromy */
 
-
 static double k2_of(const bkf_floquet *f, double q) { return 1.0 + f->c * f->c * q * q; }
 
-static int integrate(bkf_floquet *f, double K, int dk, int which, raw *out, bkf_error *err)
+int floquet_integrate(bkf_floquet *f, double K, int dk, int which, raw *out, bkf_error *err)
 {
     engine *e;
     if (engine_get(f, dk, which, &e) != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
@@ -414,18 +332,12 @@ static int integrate(bkf_floquet *f, double K, int dk, int which, raw *out, bkf_
     return BKF_OK;
 }
 
-typedef struct {
-    double m1_re, m1_im, m2_re, m2_im, lambda;
-    bkf_floquet_kind kind;
-    double m1_abs_scaled;   /* |m1| / e^s (see multipliers_scaled) */
-} mults;
-
 /* Eigenvalues of a real 2x2 M = e^s Mt from the trace of Mt and ln det M.
  * The determinant is Liouville's, exact where the matrix's own would cancel
  * (det ~ 1e-50 from entries of order 1), and the small multiplier is
  * det/m1.  lambda comes from logs, so it stays right when m1 itself
  * underflows (the log-column integration reaches lambda ~ -2e4). */
-static mults multipliers_scaled(double trt, double L, double s)
+mults floquet_multipliers_scaled(double trt, double L, double s)
 {
     mults m = {0};
     double Dt = exp(L - 2.0 * s), half = 0.5 * trt, disc = half * half - Dt;
@@ -450,8 +362,6 @@ static mults multipliers_scaled(double trt, double L, double s)
     }
     return m;
 }
-
-static mults multipliers(double tr, double L) { return multipliers_scaled(tr, L, 0.0); }
 
 /* How far lambda may move with the cycle's own error: the end time moves
  * M by A(0) M dT; the start point's error, of the same order in the cycle's
@@ -546,9 +456,9 @@ static int eval_trace(bkf_floquet *f, double K, int retry, bkf_floquet_point *pt
         a = f->last_fine;
         a.steps = 0;
     } else {
-        rc = integrate(f, K, 0, retry ? ENG_RETRY_COARSE : ENG_COARSE, &a, err);
+        rc = floquet_integrate(f, K, 0, retry ? ENG_RETRY_COARSE : ENG_COARSE, &a, err);
     }
-    if (rc == BKF_OK) rc = integrate(f, K, 0, retry ? ENG_RETRY_FINE : ENG_FINE, &b, err);
+    if (rc == BKF_OK) rc = floquet_integrate(f, K, 0, retry ? ENG_RETRY_FINE : ENG_FINE, &b, err);
     f->last_fine_key.valid = 0;
     if (rc != BKF_OK) return rc;
     f->last_fine = b;
@@ -577,7 +487,7 @@ static int eval_trace(bkf_floquet *f, double K, int retry, bkf_floquet_point *pt
     return BKF_OK;
 }
 
-static int eval_k2(bkf_floquet *f, double K, bkf_floquet_point *pt, bkf_error *err)
+int floquet_eval_k2(bkf_floquet *f, double K, bkf_floquet_point *pt, bkf_error *err)
 {
     double cyc;
     return eval_trace(f, K, 0, pt, &cyc, err);
@@ -710,7 +620,7 @@ static int eval_log(bkf_floquet *f, double K, double tl, bkf_floquet_point *pt, 
     int rc = integrate_log(f, K, 0, tl, &a, err);
     if (rc == BKF_OK) rc = integrate_log(f, K, 1, tl / TOL_RATIO, &b, err);
     if (rc != BKF_OK) return rc;
-    mults ma = multipliers_scaled(a.trt, a.L, a.s), mb = multipliers_scaled(b.trt, b.L, b.s);
+    mults ma = floquet_multipliers_scaled(a.trt, a.L, a.s), mb = floquet_multipliers_scaled(b.trt, b.L, b.s);
     fill_point(pt, K, f, &mb);
     /* the coarse trace on the fine one's scale, for the difference */
     double tra = a.trt * exp(a.s - b.s);
@@ -982,10 +892,10 @@ int bkf_floquet_eval(bkf_floquet *f, double q, bkf_floquet_point *pt, bkf_error 
     return rc;
 }
 
-static int longwave_at(bkf_floquet *f, int which, double *a, bkf_error *err)
+int floquet_longwave_at(bkf_floquet *f, int which, double *a, bkf_error *err)
 {
     raw r;
-    int rc = integrate(f, 1.0, 1, which, &r, err);
+    int rc = floquet_integrate(f, 1.0, 1, which, &r, err);
     if (rc != BKF_OK) return rc;
     /* m1 + D/m1 = trace with D independent of K, so at m1 = 1:
      * dm1/dK = (dtrace/dK)/(1 - D) */
@@ -1004,8 +914,8 @@ static int floquet_longwave_body(bkf_floquet *f, double *a, double *a_err, bkf_e
     if (!f || !f->ready)
         return bkf_error_set(err, BKF_EINPUT, "floquet: longwave before a successful set");
     double ac, af;
-    int rc = longwave_at(f, ENG_COARSE, &ac, err);
-    if (rc == BKF_OK) rc = longwave_at(f, ENG_FINE, &af, err);
+    int rc = floquet_longwave_at(f, ENG_COARSE, &ac, err);
+    if (rc == BKF_OK) rc = floquet_longwave_at(f, ENG_FINE, &af, err);
     if (rc != BKF_OK) return rc;
     if (a) *a = af;
     if (a_err) {
@@ -1035,844 +945,3 @@ double bkf_floquet_slip_rate(double gamma, double c, double nu, double q)
     return disc > 0.0 ? 0.5 * (b + sqrt(disc)) : 0.5 * b;
 }
 
-/* ---------------------------------------------------------------- peaks */
-
-typedef struct {
-    bkf_floquet *f;
-    nlopt_opt opt;
-    double sign;
-    int status;
-    bkf_error *err;
-} peak_ctx;
-
-static double peak_objective(unsigned n, const double *x, double *grad, void *data)
-{
-    (void)n;
-    (void)grad;
-    peak_ctx *pc = data;
-    raw r;
-    if (pc->status == BKF_OK) pc->status = integrate(pc->f, x[0], 0, ENG_FINE, &r, pc->err);
-    /* NLopt's objective cannot fail: stop it, the status is read afterwards */
-    if (pc->status != BKF_OK) {
-        nlopt_force_stop(pc->opt);
-        return 0.0;
-    }
-    return pc->sign * r.tr;
-}
-
-/* The K in [lo, hi] maximising sign * trace, searched from *K. */
-static int maximise_trace(bkf_floquet *f, double sign, double lo, double hi, double *K,
-                          double *value, bkf_error *err)
-{
-    nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, 1);
-    if (!opt) return bkf_error_set(err, BKF_ENOMEM, "out of memory (NLopt)");
-    peak_ctx pc = {f, opt, sign, BKF_OK, err};
-    nlopt_set_max_objective(opt, peak_objective, &pc);
-    nlopt_set_lower_bounds1(opt, lo);
-    nlopt_set_upper_bounds1(opt, hi);
-    /* the peak's height is quadratic in the error of its place: a relative
-     * 1e-7 in K is far below any tolerance in lambda */
-    nlopt_set_xtol_rel(opt, 1e-7);
-    nlopt_set_maxeval(opt, 200);
-    nlopt_set_initial_step1(opt, 0.25 * (hi - lo));
-    double x = fmin(fmax(*K, lo), hi), fx = 0.0;
-    nlopt_result res = nlopt_optimize(opt, &x, &fx);
-    nlopt_destroy(opt);
-    if (pc.status != BKF_OK) return pc.status;
-    if (res < 0 && res != NLOPT_ROUNDOFF_LIMITED)
-        return bkf_error_set(err, BKF_ENUMERIC,
-                             "peak of lambda at gamma = %.15g, nu = %.15g near K = %.15g: NLopt failed (%d)",
-                             f->gamma, f->nu, *K, (int)res);
-    *K = x;
-    *value = fx;
-    return BKF_OK;
-}
-
-/* Local peak of sign * trace near K, searched in windows of half-width w,
- * moved while the maximum sits on a window's edge.  K never goes below 1. */
-static int track_peak(bkf_floquet *f, double sign, double *K, double w, double *value,
-                      bkf_error *err)
-{
-    double center = *K;
-    for (int attempt = 0; attempt < 8; attempt++) {
-        double lo = fmax(1.0, center - w), hi = fmin(K_MAX, center + w);
-        double x = center;
-        int rc = maximise_trace(f, sign, lo, hi, &x, value, err);
-        if (rc != BKF_OK) return rc;
-        double edge_tol = 1e-6 * (hi - lo);
-        int at_lo = x - lo <= edge_tol && lo > 1.0;
-        int at_hi = hi - x <= edge_tol && hi < K_MAX;
-        *K = x;
-        if (!at_lo && !at_hi) return BKF_OK;
-        center = x;
-        w *= 1.5;
-    }
-    return BKF_OK;
-}
-
-typedef struct {
-    double K, lambda, lambda_err, m_re, m_im;
-    double sign;
-    int region;      /* sign region of the trace counted from K = 1 */
-} peak;
-
-typedef struct {
-    bkf_floquet_stability s;
-    peak peaks[MAX_PEAKS];
-    size_t npeaks;   /* refined peaks (region-0 band peak excluded when a > 0) */
-} stability_full;
-
-static double dk_of_p(double p, double dp) { return fmax(2.0 * p * dp, dp * dp); }
-
-/* A refined peak: the K of the maximum, then lambda with its error there. */
-static int refine_peak(bkf_floquet *f, double sign, double K_guess, double w, peak *out,
-                       bkf_error *err)
-{
-    double K = K_guess, value;
-    int rc = track_peak(f, sign, &K, w, &value, err);
-    if (rc != BKF_OK) return rc;
-    bkf_floquet_point pt;
-    rc = eval_k2(f, K, &pt, err);
-    if (rc != BKF_OK) return rc;
-    out->K = K;
-    out->lambda = pt.lambda;
-    out->lambda_err = pt.lambda_err;
-    out->m_re = pt.m1_re;
-    out->m_im = pt.m1_im;
-    out->sign = sign;
-    return BKF_OK;
-}
-
-static int stability_scan(bkf_floquet *f, stability_full *sf, bkf_error *err)
-{
-    memset(sf, 0, sizeof *sf);
-    bkf_floquet_stability *s = &sf->s;
-    s->nu = f->nu;
-    int rc = bkf_floquet_longwave(f, &s->longwave, &s->longwave_err, err);
-    if (rc != BKF_OK) return rc;
-    size_t n = f->opt.scan_points;
-    double dp = f->opt.p_max / (double)n;
-    double *tr = malloc((n + 1) * sizeof *tr);
-    if (!tr) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    for (size_t j = 0; j <= n && rc == BKF_OK; j++) {
-        raw r;
-        double p = dp * (double)j;
-        rc = integrate(f, 1.0 + p * p, 0, ENG_SCAN, &r, err);
-        tr[j] = r.tr;
-    }
-    int region = 0;
-    double best = -HUGE_VAL;
-    for (size_t j = 1; j < n && rc == BKF_OK; j++) {
-        if ((tr[j] > 0.0) != (tr[j - 1] > 0.0)) region++;
-        double here = fabs(tr[j]);
-        if (!(here >= fabs(tr[j - 1]) && here > fabs(tr[j + 1]))) continue;
-        double sign = tr[j] > 0.0 ? 1.0 : -1.0;
-        /* the long-wave band's own peak is the long-wave instability */
-        if (region == 0 && s->longwave > 0.0) continue;
-        mults m = multipliers(tr[j], f->L);
-        if (m.lambda < PEAK_FLOOR || sf->npeaks == MAX_PEAKS) continue;
-        double p = dp * (double)j;
-        peak pk;
-        rc = refine_peak(f, sign, 1.0 + p * p, dk_of_p(p, dp), &pk, err);
-        if (rc != BKF_OK) break;
-        pk.region = region;
-        sf->peaks[sf->npeaks++] = pk;
-        if (pk.lambda > best) {
-            best = pk.lambda;
-            s->lambda_peak = pk.lambda;
-            s->lambda_peak_err = pk.lambda_err;
-            s->k2_peak = pk.K;
-            s->q_peak = f->c > 0.0 ? sqrt(fmax(pk.K - 1.0, 0.0)) / f->c : 0.0;
-            s->m_re = pk.m_re;
-            s->m_im = pk.m_im;
-        }
-    }
-    free(tr);
-    if (rc != BKF_OK) return rc;
-    s->peaks = sf->npeaks;
-    if (sf->npeaks == 0) s->lambda_peak = s->lambda_peak_err = s->q_peak = s->k2_peak = s->m_re = s->m_im = NAN;
-    s->stable = s->longwave < 0.0 && !(best >= 0.0);
-    return BKF_OK;
-}
-
-static int floquet_stability_at_body(bkf_floquet *f, bkf_floquet_stability *out, bkf_error *err)
-{
-    if (!f || !f->ready)
-        return bkf_error_set(err, BKF_EINPUT, "floquet: stability before a successful set");
-    if (!out) return bkf_error_set(err, BKF_EINPUT, "floquet: stability result is NULL");
-    stability_full *sf = malloc(sizeof *sf);
-    if (!sf) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    int rc = stability_scan(f, sf, err);
-    if (rc == BKF_OK) *out = sf->s;
-    free(sf);
-    return rc;
-}
-
-int bkf_floquet_stability_at(bkf_floquet *f, bkf_floquet_stability *out, bkf_error *err)
-{
-    bkf_gsl_handler *handler = bkf_gsl_handler_push();
-    int rc = floquet_stability_at_body(f, out, err);
-    bkf_gsl_handler_pop(handler);
-    return rc;
-}
-
-/* ----------------------------------------------------------- boundaries */
-
-/* One indicator whose zero in nu is a stability boundary: the long-wave
- * coefficient, or the height of the peak of sign * trace tracked from K_a
- * (at nu_a) to K_b (at nu_b). */
-typedef struct {
-    bkf_floquet *f;
-    const bkf_floquet_options *opt;
-    double gamma, c;
-    int longwave;
-    double sign;
-    double nu_a, K_a, nu_b, K_b, w;
-    double K_last;   /* where the last evaluation found the peak */
-    int status;
-    bkf_error err;
-} indicator;
-
-static int indicator_eval(indicator *ind, double nu, double *value)
-{
-    int rc = bkf_floquet_set(ind->f, ind->gamma, ind->c, nu, ind->opt, &ind->err);
-    if (rc != BKF_OK) return rc;
-    if (ind->longwave) return longwave_at(ind->f, ENG_FINE, value, &ind->err);
-    double t = ind->nu_b != ind->nu_a ? (nu - ind->nu_a) / (ind->nu_b - ind->nu_a) : 0.0;
-    double K = ind->K_a + t * (ind->K_b - ind->K_a), v;
-    rc = track_peak(ind->f, ind->sign, &K, ind->w, &v, &ind->err);
-    if (rc != BKF_OK) return rc;
-    ind->K_last = K;
-    *value = multipliers(ind->sign * v, ind->f->L).lambda;
-    return BKF_OK;
-}
-
-/* Brent's method on the indicator over [lo, hi] (values f_lo, f_hi of
- * opposite signs), to |hi - lo| <= xtol.  On return (success or not)
- * root/f_root are the best point and its value, other/f_other the opposite
- * end of the last bracket. */
-typedef struct {
-    double root, f_root, other, f_other, slope;
-} bracket;
-
-static int indicator_root(indicator *ind, double lo, double f_lo, double hi, double f_hi,
-                          double xtol, bracket *br)
-{
-    /* Brent (1973), as in zeroin: b the best, c the opposite end */
-    double a = lo, b = hi, c = hi, fa = f_lo, fb = f_hi, fc = f_hi, d = 0.0, e = 0.0;
-    int rc = BKF_OK;
-    br->slope = (f_hi - f_lo) / (hi - lo);
-    for (int iter = 0; iter < 100; iter++) {
-        if ((fb > 0.0) == (fc > 0.0)) {
-            c = a;
-            fc = fa;
-            d = e = b - a;
-        }
-        if (fabs(fc) < fabs(fb)) {
-            a = b;
-            b = c;
-            c = a;
-            fa = fb;
-            fb = fc;
-            fc = fa;
-        }
-        double tol1 = 2.0 * DBL_EPSILON * fabs(b) + 0.5 * xtol;
-        double xm = 0.5 * (c - b);
-        if (fabs(xm) <= tol1 || fb == 0.0) break;
-        if (fabs(e) >= tol1 && fabs(fa) > fabs(fb)) {
-            double s = fb / fa, p, q, r;
-            if (a == c) {
-                p = 2.0 * xm * s;
-                q = 1.0 - s;
-            } else {
-                q = fa / fc;
-                r = fb / fc;
-                p = s * (2.0 * xm * q * (q - r) - (b - a) * (r - 1.0));
-                q = (q - 1.0) * (r - 1.0) * (s - 1.0);
-            }
-            if (p > 0.0) q = -q;
-            p = fabs(p);
-            if (2.0 * p < fmin(3.0 * xm * q - fabs(tol1 * q), fabs(e * q))) {
-                e = d;
-                d = p / q;
-            } else {
-                d = xm;
-                e = d;
-            }
-        } else {
-            d = xm;
-            e = d;
-        }
-        double from = b, f_from = fb, trial = b + (fabs(d) > tol1 ? d : (xm > 0.0 ? tol1 : -tol1));
-        double f_trial = 0.0;
-        rc = indicator_eval(ind, trial, &f_trial);
-        /* a cycle the engine cannot solve (the inside of a canard explosion
-         * is exponentially thin in nu) need not stop the search: the bracket
-         * still holds a root, try points nearer the bracket's middle */
-        for (int retry = 0; bkf_status_is_numerical(rc) && retry < 4; retry++) {
-            trial = from + (0.5 + 0.1 * retry) * (c - from);
-            rc = indicator_eval(ind, trial, &f_trial);
-        }
-        if (rc != BKF_OK) {
-            b = from;
-            fb = f_from;
-            break;
-        }
-        a = from;
-        fa = f_from;
-        b = trial;
-        fb = f_trial;
-        if (c != b && fc != fb) br->slope = (fc - fb) / (c - b);
-    }
-    br->root = b;
-    br->f_root = fb;
-    br->other = c;
-    br->f_other = fc;
-    return rc;
-}
-
-/* Past this the indicator did not go to zero in the final bracket: it
- * jumps there.  A continuous crossing with the bracket at the tolerance
- * would need a slope beyond 1e5 per unit nu to leave such a value. */
-#define JUMP_VALUE 1e-3
-
-/* Locate one indicator's zero in [nu_a, nu_b] and describe it.  On failure
- * *fail_near is the end of the last bracket nearest nu_a. */
-static int locate(indicator *ind, double f_a, double f_b, bkf_floquet_threshold *th,
-                  double *fail_near)
-{
-    bkf_floquet *f = ind->f;
-    double lo = fmin(ind->nu_a, ind->nu_b), hi = fmax(ind->nu_a, ind->nu_b);
-    double f_lo = ind->nu_a < ind->nu_b ? f_a : f_b, f_hi = ind->nu_a < ind->nu_b ? f_b : f_a;
-    double xtol = fmax(0.5 * f->opt.tol, 1e-13);
-    bracket br;
-    int rc = indicator_root(ind, lo, f_lo, hi, f_hi, xtol, &br);
-    if (rc != BKF_OK) {
-        if (fail_near)
-            *fail_near = fabs(br.root - ind->nu_a) < fabs(br.other - ind->nu_a) ? br.root : br.other;
-        return rc;
-    }
-    double nu = br.root, v;
-    int jump = fmin(fabs(br.f_root), fabs(br.f_other)) > JUMP_VALUE;
-    rc = indicator_eval(ind, nu, &v);
-    if (rc != BKF_OK) return rc;
-    memset(th, 0, sizeof *th);
-    th->gamma = ind->gamma;
-    th->c = ind->c;
-    th->nu = nu;
-    th->discontinuous = jump;
-    double value_err;
-    if (ind->longwave) {
-        double a, a_err;
-        rc = bkf_floquet_longwave(f, &a, &a_err, &ind->err);
-        if (rc != BKF_OK) return rc;
-        th->kind = BKF_BOUNDARY_LONG_WAVE;
-        th->k2 = 1.0;
-        th->q = 0.0;
-        th->m_re = 1.0;
-        th->lambda = 0.0;
-        th->longwave = a;
-        value_err = a_err + fabs(a - v);
-    } else {
-        bkf_floquet_point pt;
-        rc = eval_k2(f, ind->K_last, &pt, &ind->err);
-        if (rc != BKF_OK) return rc;
-        th->kind = ind->sign < 0.0 ? BKF_BOUNDARY_PERIOD_DOUBLING : BKF_BOUNDARY_OTHER;
-        th->k2 = pt.k2;
-        th->q = pt.q;
-        th->m_re = pt.m1_re;
-        th->m_im = pt.m1_im;
-        th->lambda = pt.lambda;
-        value_err = pt.lambda_err + fabs(pt.lambda - v);
-        rc = bkf_floquet_longwave(f, &th->longwave, NULL, &ind->err);
-        if (rc != BKF_OK) return rc;
-    }
-    if (jump) th->kind = BKF_BOUNDARY_OTHER;
-    double slope = br.slope;
-    th->nu_err = fabs(br.root - br.other) +
-                 (!jump && slope != 0.0 && isfinite(slope) ? value_err / fabs(slope) : 0.0);
-    return BKF_OK;
-}
-
-/* The indicators that could explain the change between a stable and an
- * unstable end; the one whose zero lies nearest the stable end is the
- * boundary (a second zero further in is inside the unstable interval). */
-static int boundary_between(bkf_floquet *f, double gamma, double c, double nu_s,
-                            const stability_full *st_s, double nu_u, const stability_full *st_u,
-                            bkf_floquet_threshold *th, bkf_error *err)
-{
-    int found = 0, failed = 0;
-    double fail_dist = HUGE_VAL;
-    bkf_error fail_err = {0};
-    double dp = f->opt.p_max / (double)f->opt.scan_points;
-    indicator ind;
-    bkf_floquet_threshold cand;
-    if (st_u->s.longwave > 0.0 && st_s->s.longwave < 0.0) {
-        memset(&ind, 0, sizeof ind);
-        ind = (indicator){.f = f, .opt = &f->opt, .gamma = gamma, .c = c, .longwave = 1,
-                          .nu_a = nu_s, .nu_b = nu_u};
-        double near = nu_s;
-        int rc = locate(&ind, st_s->s.longwave, st_u->s.longwave, &cand, &near);
-        if (rc == BKF_OK) {
-            *th = cand;
-            found = 1;
-        } else if (bkf_status_is_numerical(rc)) {
-            failed = 1;
-            fail_dist = fabs(near - nu_s);
-            fail_err = ind.err;
-        } else {
-            *err = ind.err;
-            return rc;
-        }
-    }
-    for (size_t i = 0; i < st_u->npeaks; i++) {
-        const peak *pu = &st_u->peaks[i];
-        if (!(pu->lambda >= 0.0)) continue;
-        /* the same tongue at the stable end: same sign, nearest K */
-        double K_s = pu->K, best = HUGE_VAL;
-        for (size_t j = 0; j < st_s->npeaks; j++) {
-            const peak *ps = &st_s->peaks[j];
-            if (ps->sign != pu->sign) continue;
-            if (fabs(ps->K - pu->K) < best) {
-                best = fabs(ps->K - pu->K);
-                K_s = ps->K;
-            }
-        }
-        double p = sqrt(fmax(pu->K - 1.0, 0.0));
-        double w = fmax(fabs(K_s - pu->K), 2.0 * dk_of_p(p, dp));
-        memset(&ind, 0, sizeof ind);
-        ind = (indicator){.f = f, .opt = &f->opt, .gamma = gamma, .c = c, .sign = pu->sign,
-                          .nu_a = nu_s, .K_a = K_s, .nu_b = nu_u, .K_b = pu->K, .w = w};
-        double v_s, v_u, near = nu_s;
-        int rc = indicator_eval(&ind, nu_s, &v_s);
-        if (rc == BKF_OK) rc = indicator_eval(&ind, nu_u, &v_u);
-        if (rc == BKF_OK && !(v_s < 0.0 && v_u >= 0.0)) continue;
-        if (rc == BKF_OK) rc = locate(&ind, v_s, v_u, &cand, &near);
-        if (rc == BKF_OK) {
-            if (!found || fabs(cand.nu - nu_s) < fabs(th->nu - nu_s)) *th = cand;
-            found = 1;
-        } else if (bkf_status_is_numerical(rc)) {
-            failed = 1;
-            fail_dist = fmin(fail_dist, fabs(near - nu_s));
-            fail_err = ind.err;
-        } else {
-            *err = ind.err;
-            return rc;
-        }
-    }
-    /* a candidate that failed matters only if its zero could lie nearer the
-     * stable end than the boundary found */
-    if (failed && (!found || fail_dist < fabs(th->nu - nu_s))) {
-        *err = fail_err;
-        return BKF_ENUMERIC;
-    }
-    if (!found)
-        return bkf_error_set(err, BKF_ENUMERIC,
-                             "stability changes between nu = %.10g and %.10g (gamma = %.15g) but no "
-                             "indicator changes sign there",
-                             nu_s, nu_u, gamma);
-    th->stable_above = nu_s > nu_u;
-    return BKF_OK;
-}
-
-static int check_scan_inputs(double gamma, double c, double nu_lo, double nu_hi,
-                             const bkf_floquet_options *o, bkf_error *err)
-{
-    int rc = check_options(o, err);
-    if (rc == BKF_OK) rc = check_gamma_c(gamma, c, err);
-    if (rc != BKF_OK) return rc;
-    if (!(c > 0.0))
-        return bkf_error_set(err, BKF_EINPUT,
-                             "c = %.15g: thresholds need c > 0 (with c = 0 every wavenumber is the "
-                             "neutral q = 0 mode)",
-                             c);
-    if ((rc = bkf_model_check_nu_active(nu_lo, err)) || (rc = bkf_model_check_nu_active(nu_hi, err)))
-        return rc;
-    if (!(nu_lo < nu_hi))
-        return bkf_error_set(err, BKF_EINPUT, "the nu range needs lo < hi (got %g, %g)", nu_lo, nu_hi);
-    return BKF_OK;
-}
-
-/* Scan [nu_lo, nu_hi] upward; `each_boundary` is called for every change of
- * stability (located), `until_first` stops after the first. */
-typedef int (*boundary_fn)(const bkf_floquet_threshold *th, double nu_prev, int stable_prev,
-                           void *data);
-
-static int scan_nu(double gamma, double c, double nu_lo, double nu_hi,
-                   const bkf_floquet_options *o, boundary_fn each, void *data, int *first_stable,
-                   int *last_stable, size_t *changes, bkf_error *err)
-{
-    int rc = check_scan_inputs(gamma, c, nu_lo, nu_hi, o, err);
-    if (rc != BKF_OK) return rc;
-    bkf_floquet *f = bkf_floquet_alloc();
-    stability_full *prev = malloc(sizeof *prev), *cur = malloc(sizeof *cur);
-    if (!f || !prev || !cur) {
-        bkf_floquet_free(f);
-        free(prev);
-        free(cur);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
-    size_t n = (size_t)ceil((nu_hi - nu_lo) / o->nu_step - 1e-9);
-    if (n < 1) n = 1;
-    *changes = 0;
-    for (size_t i = 0; i <= n && rc == BKF_OK; i++) {
-        double nu = i == n ? nu_hi : nu_lo + (nu_hi - nu_lo) * (double)i / (double)n;
-        rc = bkf_floquet_set(f, gamma, c, nu, o, err);
-        if (rc == BKF_OK) rc = stability_scan(f, cur, err);
-        if (rc != BKF_OK) break;
-        if (i == 0) *first_stable = cur->s.stable;
-        if (i > 0 && cur->s.stable != prev->s.stable) {
-            bkf_floquet_threshold th;
-            const stability_full *st_s = cur->s.stable ? cur : prev;
-            const stability_full *st_u = cur->s.stable ? prev : cur;
-            rc = boundary_between(f, gamma, c, st_s->s.nu, st_s, st_u->s.nu, st_u, &th, err);
-            if (rc != BKF_OK) break;
-            (*changes)++;
-            if (each(&th, prev->s.nu, prev->s.stable, data)) break;
-        }
-        *last_stable = cur->s.stable;
-        stability_full *t = prev;
-        prev = cur;
-        cur = t;
-    }
-    bkf_floquet_free(f);
-    free(prev);
-    free(cur);
-    return rc;
-}
-
-static int keep_first(const bkf_floquet_threshold *th, double nu_prev, int stable_prev, void *data)
-{
-    (void)nu_prev;
-    (void)stable_prev;
-    *(bkf_floquet_threshold *)data = *th;
-    return 1;
-}
-
-static int floquet_threshold_find_body(double gamma, double c, double nu_lo, double nu_hi,
-                                       const bkf_floquet_options *options, bkf_floquet_threshold *out,
-                                       bkf_error *err)
-{
-    if (!out) return bkf_error_set(err, BKF_EINPUT, "threshold result is NULL");
-    bkf_floquet_options o = options ? *options : bkf_floquet_options_default();
-    int first = 0, last = 0;
-    size_t changes = 0;
-    int rc = scan_nu(gamma, c, nu_lo, nu_hi, &o, keep_first, out, &first, &last, &changes, err);
-    if (rc != BKF_OK) return rc;
-    if (changes == 0) {
-        /* stable or unstable throughout the scan: an answer */
-        *out = (bkf_floquet_threshold){.gamma = gamma, .c = c, .nu = NAN, .nu_err = NAN,
-                                       .kind = BKF_BOUNDARY_NONE, .q = NAN, .k2 = NAN,
-                                       .m_re = NAN, .m_im = NAN, .lambda = NAN,
-                                       .stable_above = first, .longwave = NAN};
-    }
-    return BKF_OK;
-}
-
-int bkf_floquet_threshold_find(double gamma, double c, double nu_lo, double nu_hi,
-                               const bkf_floquet_options *options, bkf_floquet_threshold *out,
-                               bkf_error *err)
-{
-    bkf_gsl_handler *handler = bkf_gsl_handler_push();
-    int rc = floquet_threshold_find_body(gamma, c, nu_lo, nu_hi, options, out, err);
-    bkf_gsl_handler_pop(handler);
-    return rc;
-}
-
-/* --------------------------------------------------------------- diagram */
-
-typedef struct {
-    double gamma, c, nu_lo, nu_hi;
-    bkf_floquet_interval current;
-    bkf_floquet_interval_visit visit;
-    void *data;
-    int stopped;
-} diagram_ctx;
-
-static bkf_floquet_threshold scan_end(double gamma, double c, double nu)
-{
-    bkf_floquet_threshold t;
-    memset(&t, 0, sizeof t);
-    t.gamma = gamma;
-    t.c = c;
-    t.nu = nu;
-    t.kind = BKF_BOUNDARY_SCAN_END;
-    t.q = t.k2 = t.m_re = t.m_im = t.lambda = t.longwave = NAN;
-    return t;
-}
-
-static int diagram_boundary(const bkf_floquet_threshold *th, double nu_prev, int stable_prev,
-                            void *data)
-{
-    (void)nu_prev;
-    diagram_ctx *d = data;
-    d->current.stable = stable_prev;
-    d->current.to = *th;
-    d->current.nu_to = th->nu;
-    if (d->visit(&d->current, d->data)) {
-        d->stopped = 1;
-        return 1;
-    }
-    d->current.from = *th;
-    d->current.nu_from = th->nu;
-    return 0;
-}
-
-static int floquet_diagram_body(double gamma, double c, double nu_lo, double nu_hi,
-                                const bkf_floquet_options *options, bkf_floquet_interval_visit visit,
-                                void *data, bkf_error *err)
-{
-    if (!visit) return bkf_error_set(err, BKF_EINPUT, "diagram visit callback is NULL");
-    bkf_floquet_options o = options ? *options : bkf_floquet_options_default();
-    diagram_ctx d;
-    memset(&d, 0, sizeof d);
-    d.gamma = gamma;
-    d.c = c;
-    d.nu_lo = nu_lo;
-    d.nu_hi = nu_hi;
-    d.visit = visit;
-    d.data = data;
-    d.current.from = scan_end(gamma, c, nu_lo);
-    d.current.nu_from = nu_lo;
-    int first = 0, last = 0;
-    size_t changes = 0;
-    int rc = scan_nu(gamma, c, nu_lo, nu_hi, &o, diagram_boundary, &d, &first, &last, &changes, err);
-    if (rc != BKF_OK || d.stopped) return rc;
-    d.current.stable = last;
-    d.current.to = scan_end(gamma, c, nu_hi);
-    d.current.nu_to = nu_hi;
-    visit(&d.current, data);
-    return BKF_OK;
-}
-
-int bkf_floquet_diagram(double gamma, double c, double nu_lo, double nu_hi,
-                        const bkf_floquet_options *options, bkf_floquet_interval_visit visit,
-                        void *data, bkf_error *err)
-{
-    bkf_gsl_handler *handler = bkf_gsl_handler_push();
-    int rc = floquet_diagram_body(gamma, c, nu_lo, nu_hi, options, visit, data, err);
-    bkf_gsl_handler_pop(handler);
-    return rc;
-}
-
-/* ------------------------------------------------------- threshold curve */
-
-/* Continuation unknowns: finite-q boundary u = (K, nu, s), equations
- * sign * trace - (1 + D) = 0 (a multiplier at sign * 1) and dtrace/dK = 0
- * (at the peak); long-wave boundary u = (nu, s), equation a = 0.  s is c or
- * ln gamma. */
-typedef struct {
-    bkf_floquet_param along;
-    double gamma, c;           /* the fixed one is used */
-    bkf_floquet_options opt;
-    bkf_floquet *f;
-    int longwave;
-    double sign;
-    double from, to, s_from, s_to;
-    double w;                  /* peak window for polishing */
-    int stable_above;
-    bkf_floquet_threshold_visit visit;
-    void *visit_data;
-    int visit_status;
-    bkf_error *err;
-} branch_ctx;
-
-static void branch_params(const branch_ctx *b, double s, double *gamma, double *c)
-{
-    *gamma = b->along == BKF_FLOQUET_ALONG_GAMMA ? exp(s) : b->gamma;
-    *c = b->along == BKF_FLOQUET_ALONG_C ? s : b->c;
-}
-
-static int branch_eval(branch_ctx *b, double K, double nu, double s, double *g, bkf_error *err)
-{
-    double gamma, c;
-    branch_params(b, s, &gamma, &c);
-    if (!(fabs(nu) < 1.0) || !(K >= 1.0) || !(K <= K_MAX))
-        return bkf_error_set(err, BKF_ENUMERIC, "threshold curve left the valid range");
-    int rc = bkf_floquet_set(b->f, gamma, c, nu, &b->opt, err);
-    /* any failure but memory shrinks the continuation's step */
-    if (rc != BKF_OK) return rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
-    if (b->longwave) return longwave_at(b->f, ENG_FINE, &g[0], err);
-    raw r;
-    rc = integrate(b->f, K, 1, ENG_FINE, &r, err);
-    if (rc != BKF_OK) return rc;
-    g[0] = b->sign * r.tr - (1.0 + exp(r.L));
-    g[1] = r.dtr;
-    return BKF_OK;
-}
-
-static int branch_residual(const double *u, double *g, double *jac, void *data, bkf_error *err)
-{
-    branch_ctx *b = data;
-    int lw = b->longwave;
-    size_t n = lw ? 1 : 2, N = n + 1;
-    double K = lw ? 1.0 : u[0], nu = u[N - 2], s = u[N - 1];
-    int rc = branch_eval(b, K, nu, s, g, err);
-    if (rc != BKF_OK || !jac) return rc == BKF_ENOMEM ? rc : (rc ? BKF_ENUMERIC : BKF_OK);
-    /* forward differences with steps well above the integration noise
-     * (the driver's own would be ~1e-8, where noise of 1e-12 in g is a
-     * 1e-4 error in the Jacobian) */
-    double uh[3], g2[2];
-    for (size_t j = 0; j < N; j++) {
-        memcpy(uh, u, N * sizeof *u);
-        double h = 1e-6 * fmax(1.0, fabs(u[j]));
-        uh[j] += h;
-        h = uh[j] - u[j];
-        rc = branch_eval(b, lw ? 1.0 : uh[0], uh[N - 2], uh[N - 1], g2, err);
-        if (rc != BKF_OK) return rc == BKF_ENOMEM ? rc : BKF_ENUMERIC;
-        for (size_t i = 0; i < n; i++) jac[i * N + j] = (g2[i] - g[i]) / h;
-    }
-    /* put the cycle back at u: the polish after acceptance starts from it */
-    return BKF_OK;
-}
-
-/* At fixed parameter, the boundary near nu0 by root finding in a bracket
- * widened until the indicator changes sign. */
-static int polish(const branch_ctx *b, double gamma, double c, double K0, double nu0,
-                  bkf_floquet_threshold *th, bkf_error *err)
-{
-    indicator ind;
-    memset(&ind, 0, sizeof ind);
-    ind = (indicator){.f = b->f, .opt = &b->opt, .gamma = gamma, .c = c, .longwave = b->longwave, .sign = b->sign,
-                      .K_a = K0, .K_b = K0, .w = b->w};
-    double delta = 1e-4;
-    for (int attempt = 0; attempt < 5; attempt++, delta *= 8.0) {
-        double lo = fmax(nu0 - delta, -1.0 + 1e-9), hi = fmin(nu0 + delta, 1.0 - 1e-9);
-        ind.nu_a = lo;
-        ind.nu_b = hi;
-        double f_lo, f_hi;
-        int rc = indicator_eval(&ind, lo, &f_lo);
-        if (rc == BKF_OK) rc = indicator_eval(&ind, hi, &f_hi);
-        if (rc != BKF_OK) {
-            *err = ind.err;
-            return rc;
-        }
-        if ((f_lo < 0.0) == (f_hi < 0.0)) continue;
-        rc = locate(&ind, f_lo, f_hi, th, NULL);
-        if (rc != BKF_OK) {
-            *err = ind.err;
-            return rc;
-        }
-        th->stable_above = b->stable_above;
-        return BKF_OK;
-    }
-    return bkf_error_set(err, BKF_ENUMERIC,
-                         "threshold curve: no sign change of the indicator near nu = %.10g", nu0);
-}
-
-static int branch_accept(const double *u, const double *tangent, int is_fold, void *data)
-{
-    (void)tangent;
-    (void)is_fold;
-    branch_ctx *b = data;
-    size_t N = b->longwave ? 2 : 3;
-    double s = u[N - 1];
-    /* the ends are requested values: give them back exactly */
-    double par;
-    if (fabs(s - b->s_from) <= 1e-12 * fmax(1.0, fabs(s))) s = b->s_from;
-    if (fabs(s - b->s_to) <= 1e-12 * fmax(1.0, fabs(s))) s = b->s_to;
-    par = s == b->s_from ? b->from : s == b->s_to ? b->to
-          : b->along == BKF_FLOQUET_ALONG_GAMMA ? exp(s)
-                                                : s;
-    double gamma = b->along == BKF_FLOQUET_ALONG_GAMMA ? par : b->gamma;
-    double c = b->along == BKF_FLOQUET_ALONG_C ? par : b->c;
-    bkf_floquet_threshold th;
-    int rc = polish(b, gamma, c, b->longwave ? 1.0 : u[0], u[N - 2], &th, b->err);
-    if (rc != BKF_OK) {
-        b->visit_status = rc;
-        return 1;
-    }
-    if (b->visit(&th, b->visit_data) != 0) {
-        b->visit_status = -1;
-        return 1;
-    }
-    return 0;
-}
-
-static int floquet_threshold_branch_body(bkf_floquet_param along, double from, double to, double gamma,
-                                         double c, double nu_lo, double nu_hi,
-                                         const bkf_floquet_options *options, size_t max_points,
-                                         bkf_floquet_threshold_visit visit, void *data, bkf_error *err)
-{
-    if (!visit) return bkf_error_set(err, BKF_EINPUT, "threshold visit callback is NULL");
-    if (along != BKF_FLOQUET_ALONG_C && along != BKF_FLOQUET_ALONG_GAMMA)
-        return bkf_error_set(err, BKF_EINPUT, "threshold curve parameter must be c or gamma");
-    bkf_floquet_options o = options ? *options : bkf_floquet_options_default();
-    double g_from = along == BKF_FLOQUET_ALONG_GAMMA ? from : gamma;
-    double c_from = along == BKF_FLOQUET_ALONG_C ? from : c;
-    double g_to = along == BKF_FLOQUET_ALONG_GAMMA ? to : gamma;
-    double c_to = along == BKF_FLOQUET_ALONG_C ? to : c;
-    int rc = check_scan_inputs(g_from, c_from, nu_lo, nu_hi, &o, err);
-    if (rc == BKF_OK) rc = check_scan_inputs(g_to, c_to, nu_lo, nu_hi, &o, err);
-    if (rc != BKF_OK) return rc;
-    if (from == to) return bkf_error_set(err, BKF_EINPUT, "threshold curve needs from != to");
-
-    bkf_floquet_threshold start;
-    rc = bkf_floquet_threshold_find(g_from, c_from, nu_lo, nu_hi, &o, &start, err);
-    if (rc != BKF_OK) return rc;
-    if (start.kind == BKF_BOUNDARY_NONE)
-        return bkf_error_set(err, BKF_ENUMERIC,
-                             "no boundary to follow: no change of stability for nu in [%.15g, "
-                             "%.15g] at gamma = %.15g, c = %.15g (global oscillations %s "
-                             "throughout, scan step %g)",
-                             nu_lo, nu_hi, g_from, c_from, start.stable_above ? "stable" : "unstable",
-                             o.nu_step);
-
-    branch_ctx b;
-    memset(&b, 0, sizeof b);
-    b.along = along;
-    b.gamma = gamma;
-    b.c = c;
-    b.opt = o;
-    b.f = bkf_floquet_alloc();
-    if (!b.f) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    b.longwave = start.kind == BKF_BOUNDARY_LONG_WAVE;
-    b.sign = start.kind == BKF_BOUNDARY_PERIOD_DOUBLING ? -1.0 : 1.0;
-    b.from = from;
-    b.to = to;
-    b.s_from = along == BKF_FLOQUET_ALONG_GAMMA ? log(from) : from;
-    b.s_to = along == BKF_FLOQUET_ALONG_GAMMA ? log(to) : to;
-    double dp = o.p_max / (double)o.scan_points;
-    b.w = 2.0 * dk_of_p(sqrt(fmax(start.k2 - 1.0, 0.0)), dp);
-    b.stable_above = start.stable_above;
-    b.visit = visit;
-    b.visit_data = data;
-    b.err = err;
-
-    double u0[3];
-    size_t n = b.longwave ? 1 : 2;
-    if (b.longwave) {
-        u0[0] = start.nu;
-        u0[1] = b.s_from;
-    } else {
-        u0[0] = start.k2;
-        u0[1] = start.nu;
-        u0[2] = b.s_from;
-    }
-    bkf_cont_options co = bkf_cont_options_default(n);
-    co.step_max = 0.1;
-    co.step_initial = 0.02;
-    co.newton_tol = fmax(1e-9, 10.0 * o.tol);
-    co.stop_index = (int)n;
-    co.stop_min = fmin(b.s_from, b.s_to);
-    co.stop_max = fmax(b.s_from, b.s_to);
-    if (max_points) co.max_points = max_points;
-    bkf_cont_report report;
-    rc = bkf_cont_run(branch_residual, branch_accept, &b, u0, (int)n, b.s_to > b.s_from ? 1 : -1,
-                      &co, &report, err);
-    bkf_floquet_free(b.f);
-    if (b.visit_status > 0) return b.visit_status;
-    if (b.visit_status < 0) return BKF_OK;
-    return rc;
-}
-
-int bkf_floquet_threshold_branch(bkf_floquet_param along, double from, double to, double gamma,
-                                 double c, double nu_lo, double nu_hi,
-                                 const bkf_floquet_options *options, size_t max_points,
-                                 bkf_floquet_threshold_visit visit, void *data, bkf_error *err)
-{
-    bkf_gsl_handler *handler = bkf_gsl_handler_push();
-    int rc = floquet_threshold_branch_body(along, from, to, gamma, c, nu_lo, nu_hi, options, max_points, visit, data, err);
-    bkf_gsl_handler_pop(handler);
-    return rc;
-}

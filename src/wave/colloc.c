@@ -162,11 +162,13 @@ static int solve_paired(bkf_colloc *c, double tol, bkf_colloc_result *out, bkf_e
         if (rc != BKF_OK) return rc;
         double T1 = c->T, L1 = colloc_log_multiplier(c), Tk, trace;
         size_t nk;
-        if (colloc_keep_solution(c, 0, &nk, &Tk, &trace) != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        if (colloc_keep_solution(c, 0, &nk, &Tk, &trace) != BKF_OK)
+            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
         coarsen(c);
         rc = colloc_newton(c, PAIRED_GOAL * sqrt(tol), err);
         double T2 = c->T, L2 = colloc_log_multiplier(c);
-        if (colloc_keep_solution(c, 1, &nk, &Tk, &trace) != BKF_OK) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        if (colloc_keep_solution(c, 1, &nk, &Tk, &trace) != BKF_OK)
+            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
         if (rc != BKF_OK) return rc;
         double diff = fabs(T1 - T2);
         /* the coarser Newton starts from the finer solution, so the pair

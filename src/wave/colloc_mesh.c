@@ -158,8 +158,9 @@ int colloc_reserve(bkf_colloc *c, size_t n)
 {
     if (n <= c->cap) return 1;
     size_t cap = n + n / 2 + 16;
-    if (!colloc_grow(&c->t, cap + 1) || !colloc_grow(&c->x, cap + 1) || !colloc_grow(&c->y, cap + 1) || !colloc_grow(&c->X, cap * M) ||
-        !colloc_grow(&c->Z, cap * 4 * M) || !colloc_grow(&c->lin, cap * 8) || !colloc_grow(&c->du, 2 * (cap + 1)))
+    if (!colloc_grow(&c->t, cap + 1) || !colloc_grow(&c->x, cap + 1) || !colloc_grow(&c->y, cap + 1) ||
+        !colloc_grow(&c->X, cap * M) || !colloc_grow(&c->Z, cap * 4 * M) || !colloc_grow(&c->lin, cap * 8) ||
+        !colloc_grow(&c->du, 2 * (cap + 1)))
         return 0;
     c->cap = cap;
     return 1;
@@ -169,7 +170,8 @@ int colloc_reserve_scratch(bkf_colloc *c, size_t n)
 {
     if (n <= c->scap) return 1;
     size_t cap = n + n / 2 + 16;
-    if (!colloc_grow(&c->ts, cap + 1) || !colloc_grow(&c->xs, cap + 1) || !colloc_grow(&c->ys, cap + 1) || !colloc_grow(&c->Xs, cap * M))
+    if (!colloc_grow(&c->ts, cap + 1) || !colloc_grow(&c->xs, cap + 1) || !colloc_grow(&c->ys, cap + 1) ||
+        !colloc_grow(&c->Xs, cap * M))
         return 0;
     c->scap = cap;
     return 1;
@@ -380,7 +382,8 @@ static int remesh_to(bkf_colloc *c, const double *ts, size_t n)
         }
         double stage[M], x1, y1;
         memcpy(stage, c->Xs + k * M, sizeof stage);
-        if (colloc_gauss_step(c, xv, yv, h * c->T, STAGE_GOAL, stage, &x1, &y1)) memcpy(c->Xs + k * M, stage, sizeof stage);
+        if (colloc_gauss_step(c, xv, yv, h * c->T, STAGE_GOAL, stage, &x1, &y1))
+            memcpy(c->Xs + k * M, stage, sizeof stage);
     }
     if (!colloc_reserve(c, n)) return BKF_ENOMEM;
     memcpy(c->t, ts, (n + 1) * sizeof *ts);

@@ -53,7 +53,8 @@ static int path_reserve(bkf_colloc_path *path, size_t n)
     size_t cap = n + n / 2 + 16;
     for (int k = 0; k < 2; k++) {
         path_row *r = &path->row[k];
-        if (!colloc_grow(&r->t, cap + 1) || !colloc_grow(&r->x, cap + 1) || !colloc_grow(&r->w, cap + 1) || !colloc_grow(&r->X, cap * M))
+        if (!colloc_grow(&r->t, cap + 1) || !colloc_grow(&r->x, cap + 1) || !colloc_grow(&r->w, cap + 1) ||
+            !colloc_grow(&r->X, cap * M))
             return 0;
     }
     path->cap = cap;

@@ -103,7 +103,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
      * brackets that invert; the coarse solve then tightens its tolerance. */
     for (double y_start = y0;;) {
         rc = cycle_newton_at(c, &coarse, &aux, &y0, 1e-3, 1e-4 * y_scale, y_scale, 0.0, 0, 1, &iterations, &a,
-                       err);
+                             err);
         if (rc == BKF_OK || !coarse.noisy || tol_loose <= tol_int) break;
         tol_loose = fmax(tol_int, 1e-2 * tol_loose);
         size_t coarse_steps = coarse.steps, aux_steps = aux.steps;
@@ -153,7 +153,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
             tighten_turn(&fine);
             aux.steps = aux_steps;
             rc = cycle_newton_at(c, &fine, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, y_scale, q_goal, 1,
-                           0, &iterations, &b, err);
+                                 0, &iterations, &b, err);
             if (rc != BKF_OK) goto done;
             double period_err = cycle_period_error(&a, &b, p, kind, cond_floor);
             if (ACCEPT_MARGIN * period_err > opt.tol * b.period) {
@@ -166,7 +166,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
                 converged a2;
                 double y_b = y0;
                 rc = cycle_newton_at(c, &coarse, &aux, &y_b, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale,
-                               y_scale, q_goal, 0, 0, &iterations, &a2, err);
+                                     y_scale, q_goal, 0, 0, &iterations, &a2, err);
                 if (rc != BKF_OK) goto done;
                 double err2 = cycle_period_error(&a2, &b, p, kind, cond_floor);
                 if (ACCEPT_MARGIN * err2 <= opt.tol * b.period) {
@@ -176,7 +176,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
             }
             if (ACCEPT_MARGIN * period_err <= opt.tol * b.period) {
                 cycle_store_result(c, &a, &b, period_err, y0, kind, tol_b, &coarse, &fine, &finer, &aux,
-                             iterations);
+                                   iterations);
                 rc = BKF_OK;
                 goto done;
             }
@@ -204,10 +204,10 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
             goto fail_mem;
         aux.steps = aux_steps;
         rc = cycle_newton_at(c, &fine, &aux, &y0, 0.1 * sqrt(opt.tol), opt.tol * y_scale, y_scale, q_goal, 0, 0,
-                       &iterations, &a, err);
+                             &iterations, &a, err);
         if (rc != BKF_OK) goto done;
         rc = cycle_newton_at(c, &finer, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, y_scale, q_goal, 1, 0,
-                       &iterations, &b, err);
+                             &iterations, &b, err);
         if (rc != BKF_OK) goto done;
         double period_err = cycle_period_error(&a, &b, p, kind, cond_floor);
         seen[n_seen].tol = a.tol;
@@ -229,7 +229,7 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
                 goto done;
             }
             cycle_store_result(c, &a, &b, period_err, y0, kind, tol_int / TOL_RATIO, &coarse, &fine,
-                         &finer, &aux, iterations);
+                               &finer, &aux, iterations);
             rc = BKF_OK;
             goto done;
         }

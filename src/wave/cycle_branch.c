@@ -138,7 +138,8 @@ static int branch_shot(branch_ctx *b, double ln_w0, double q, double *g, double 
     double tol = branch_tol(b->options.tol, mu, nu, kind);
     int rc = BKF_ENOMEM;
     b->last.valid = 0;
-    if (cycle_integrator_init(&in, &p, kind, 0, tol) == BKF_OK && cycle_integrator_init(&aux, &p, kind, 1, tol) == BKF_OK) {
+    if (cycle_integrator_init(&in, &p, kind, 0, tol) == BKF_OK &&
+        cycle_integrator_init(&aux, &p, kind, 1, tol) == BKF_OK) {
         double w0 = exp(ln_w0), Fn = lienard_F(nu), a2 = p.a * p.a;
         double p0[2] = {along_mu ? 0.0 : 1.0,
                         along_mu ? mu * (-w0 * p.b / a2 + Fn / (a2 * p.a)) : p.b * (nu * nu - 1.0)};
@@ -236,7 +237,8 @@ static int branch_mirror_section(bkf_cycle *c, integrator *aux, double *y)
         if (!(n0->s[0] > p->nu && n1->s[0] <= p->nu)) continue;
         double s0[DIM] = {n0->s[0], n0->s[1], 0.0, 1.0, 0.0}, s1[DIM] = {n1->s[0], n1->s[1], 0.0, 1.0, 0.0};
         double te, se[DIM];
-        if (cycle_locate_event(aux, p, cycle_event_section, n0->t, s0, n1->t, s1, &te, se) != BKF_OK) return BKF_ENUMERIC;
+        if (cycle_locate_event(aux, p, cycle_event_section, n0->t, s0, n1->t, s1, &te, se) != BKF_OK)
+            return BKF_ENUMERIC;
         *y = -se[IY];
         return BKF_OK;
     }
@@ -299,7 +301,8 @@ static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu,
     integrator looser = b->last.in;
     looser.tol = tol_a;
     int rc = BKF_ENOMEM;
-    if (cycle_integrator_init(&in, p, kind, 0, tol_a) == BKF_OK && cycle_integrator_init(&aux, p, kind, 1, tol_b) == BKF_OK) {
+    if (cycle_integrator_init(&in, p, kind, 0, tol_a) == BKF_OK &&
+        cycle_integrator_init(&aux, p, kind, 1, tol_b) == BKF_OK) {
         rc = BKF_OK;
         /* Inside the canard the one-step correction of the corrector's
          * shot is not trusted: T curves in y0 on a scale far below y0, and
@@ -318,7 +321,7 @@ static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu,
             double slope_L, dP = cycle_map_slope(&b->last.in, sh, y0, f->b * lienard_F(f->nu), &slope_L);
             y0 -= (sh->y_return - y0) / (dP - 1.0);
             rc = cycle_newton_at(c, &in, &aux, &y0, 0.1 * sqrt(tol), tol * y_scale, y_scale, 1e-2 * tol, 0, 0, &shots,
-                           &a, err);
+                                 &a, err);
             steps += in.steps;
             looser.capped += in.capped;
         }
@@ -329,7 +332,7 @@ static int branch_estimate(branch_ctx *b, const double *u, double mu, double nu,
         y0 = a.y0;
         if (rc == BKF_OK) {
             rc = cycle_newton_at(c, &in, &aux, &y0, 0.1 * sqrt(tol), 0.1 * tol * y_scale, y_scale, 1e-2 * tol, 1, 0,
-                           &shots, &fine, err);
+                                 &shots, &fine, err);
         }
         if (rc == BKF_OK) rc = cycle_conditioning_floor(p, kind, tol_a, fine.y0, &floor, &steps, err);
         if (rc == BKF_OK && mirrored) rc = branch_mirror_section(c, &aux, &y_real);

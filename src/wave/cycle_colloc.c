@@ -171,8 +171,8 @@ int cycle_colloc_attempt(bkf_cycle *c, const bkf_cycle_options *opt, int declina
             /* a turn from the section point of the guessed slope lands on
              * the cycle, another is the mesh (colloc.h) */
             double T_hint = fmax(2.0 * M_PI, bkf_asym_period_leading(mu, nu));
-            rc = bkf_colloc_guess_turn(c->colloc, mu, nu, nu, cycle_section_y_of_slope(p, cycle_guess_slope(mu, nu)), T_hint,
-                                       cycle_colloc_turn_tol(opt->tol, mu), err);
+            rc = bkf_colloc_guess_turn(c->colloc, mu, nu, nu, cycle_section_y_of_slope(p, cycle_guess_slope(mu, nu)),
+                                       T_hint, cycle_colloc_turn_tol(opt->tol, mu), err);
         }
         if (rc == BKF_OK) rc = bkf_colloc_solve(c->colloc, opt->tol, &r, err);
     }

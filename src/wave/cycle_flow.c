@@ -430,7 +430,7 @@ const char *bkf_cycle_stepper_name(bkf_stepper_kind kind)
 }
 
 int cycle_integrator_init(integrator *in, flow_params *flow, bkf_stepper_kind kind, int restarts,
-                           double tol)
+                          double tol)
 {
     static const double scale[DIM_SENS] = {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0};
     (void)restarts;
@@ -500,8 +500,8 @@ int cycle_integrator_to(integrator *in, double t0, double *s, double t1)
  * integrated afresh from (t0, s0).  On return s holds the state at the root. */
 
 int cycle_locate_event(integrator *in, const flow_params *p, event_fn g, double t0,
-                        const double *s0, double t1, const double *s1, double *t_root,
-                        double *s)
+                       const double *s0, double t1, const double *s1, double *t_root,
+                       double *s)
 {
     double unused;
     double g0 = g(p, s0, &unused), g1 = g(p, s1, &unused);

@@ -90,7 +90,7 @@ static void rounding_step(const flow_params *p, const double *s0, const double *
 /* Integrate one turn from (nu, y0) back to the section.  With `keep` the
  * accepted steps are stored for the profile and the extrema of x located. */
 int cycle_shoot(integrator *main_in, integrator *aux, flow_params *p, double y0, const double *p0,
-                 bkf_cycle *keep, shot *out, bkf_error *err)
+                bkf_cycle *keep, shot *out, bkf_error *err)
 {
     double s[DIM_SENS] = {p->nu, y0, 0.0, 1.0, 0.0, p0 ? p0[0] : 0.0, p0 ? p0[1] : 0.0}, s_prev[DIM_SENS];
     double t = 0.0, t_prev, h = 0.01 / fmax(1.0, p->mu);
@@ -286,7 +286,7 @@ double cycle_size(double nu)
  * raised there by this factor. */
 #define CANARD_ERROR_PER_TOL_FACTOR 4.0
 double cycle_period_error(const converged *a, const converged *b, const flow_params *p,
-                           bkf_stepper_kind kind, double cond_floor)
+                          bkf_stepper_kind kind, double cond_floor)
 {
     int implicit = kind != BKF_STEPPER_EXPLICIT;
     double tol_floor = cycle_error_per_tol(kind) * b->tol * b->period / cycle_size(p->nu) *
@@ -312,7 +312,8 @@ static int period_rounding(flow_params *p, bkf_stepper_kind kind, double tol, do
     q.sens = 0;
     integrator in = {0}, aux = {0};
     int rc = BKF_ENOMEM;
-    if (cycle_integrator_init(&in, &q, kind, 0, tol) == BKF_OK && cycle_integrator_init(&aux, &q, kind, 1, tol) == BKF_OK) {
+    if (cycle_integrator_init(&in, &q, kind, 0, tol) == BKF_OK &&
+        cycle_integrator_init(&aux, &q, kind, 1, tol) == BKF_OK) {
         shot sh = {0};
         in.rounding = 1;
         rc = cycle_shoot(&in, &aux, &q, y0, NULL, NULL, &sh, err);
@@ -349,10 +350,11 @@ static int period_rounding(flow_params *p, bkf_stepper_kind kind, double tol, do
  * bsimp it runs in the wider canard_neighbourhood, where their estimate
  * scales it to their truncation error (TRUNCATION_PER_ROUNDING). */
 int cycle_conditioning_floor(flow_params *p, bkf_stepper_kind kind, double tol, double y0, double *floor,
-                              size_t *steps, bkf_error *err)
+                             size_t *steps, bkf_error *err)
 {
     *floor = 0.0;
-    if (!cycle_canard_window(p->mu, p->nu) && (kind == BKF_STEPPER_EXPLICIT || !cycle_canard_neighbourhood(p->mu, p->nu)))
+    if (!cycle_canard_window(p->mu, p->nu) &&
+        (kind == BKF_STEPPER_EXPLICIT || !cycle_canard_neighbourhood(p->mu, p->nu)))
         return BKF_OK;
     return period_rounding(p, kind, tol, y0, floor, steps, err);
 }
@@ -380,8 +382,8 @@ double cycle_map_slope(const integrator *in, const shot *sh, double y0, double y
  * t_goal T) and the step is either below y_goal or no longer shrinking
  * quadratically, i.e. down to the integration's noise. */
 int cycle_newton_at(bkf_cycle *c, integrator *in, integrator *aux, double *y0, double t_goal,
-                     double y_goal, double y_scale, double q_goal, int keep, int land, size_t *iterations,
-                     converged *out, bkf_error *err)
+                    double y_goal, double y_scale, double q_goal, int keep, int land, size_t *iterations,
+                    converged *out, bkf_error *err)
 {
     flow_params *p = &c->flow;
     const double y_still = p->b * lienard_F(p->nu); /* x' = 0 on the section */
@@ -486,9 +488,9 @@ int cycle_check_inputs(double mu, double nu, const bkf_cycle_options *o, bkf_err
 
 /* The accepted solve b, with a the looser solve of the error estimate. */
 void cycle_store_result(bkf_cycle *c, const converged *a, const converged *b, double period_err,
-                         double y0, bkf_stepper_kind kind, double profile_tol,
-                         const integrator *i1, const integrator *i2, const integrator *i3,
-                         const integrator *i4, size_t iterations)
+                        double y0, bkf_stepper_kind kind, double profile_tol,
+                        const integrator *i1, const integrator *i2, const integrator *i3,
+                        const integrator *i4, size_t iterations)
 {
     const flow_params *p = &c->flow;
     bkf_cycle_result *r = &c->result;
