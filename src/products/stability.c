@@ -447,6 +447,13 @@ static int write_boundary(const bkf_stability_spec *spec, FILE *out, bkf_io_form
                                   "end: %s after %zu points, %zu spectra; last nu tried %.6g%s%s",
                                   bkf_stabmap_end_name(rep.end), rep.points, rep.evaluations,
                                   rep.nu_end, rep.note[0] ? "; " : "", rep.note);
+    for (size_t i = 0; !s && i < sink.n; i++)
+        if (isfinite(sink.p[i].sigma_bound)) {
+            char note[200];
+            s = bkf_io_table_commentf(
+                table, err, "at nu %s: %s", bkf_format_number(sink.p[i].nu, a, sizeof a),
+                bkf_trainspec_bound_note(sink.p[i].sigma_bound, note, sizeof note));
+        }
     if (!s) s = text_result(table, "end", bkf_stabmap_end_name(rep.end), err);
     if (!s) s = number_result(table, "points", (double)rep.points, err);
     if (!s) s = number_result(table, "evaluations", (double)rep.evaluations, err);
