@@ -209,6 +209,17 @@ TEST(cli_stability_window_edge_is_no_sigma_max)
                       sj, ej, hill);
         }
         bkf_cli_result_free(&r);
+        /* branch --stability prints each point's spectrum by the same rule */
+        bkf_cli_result b = BKF_CLI("branch", "--gamma", q[0], "--c", q[1], "--nu", q[2], "--n",
+                                   "1", "--param", "S", "--from", q[3], "--to", "60",
+                                   "--max-points", "1", "--stability");
+        CHECK_MSG(b.code == 0, "exit %d: %s", b.code, b.err);
+        CHECK(bkf_tsv_cell(b.out, 0, "sigma_max", &sigma, NULL, 0) &&
+              bkf_tsv_cell(b.out, 0, "sigma_max_err", &sigma_err, NULL, 0));
+        CHECK_MSG(isnan(sigma) ? strstr(b.out, "every eigenvalue left of") != NULL
+                               : sigma_err > 0 && fabs(sigma - hill) <= sigma_err + herr,
+                  "branch: sigma_max %.10g +- %.3g, Hill %.10g", sigma, sigma_err, hill);
+        bkf_cli_result_free(&b);
         bkf_cli_result_free(&s);
     }
 }
