@@ -1815,11 +1815,14 @@ typedef struct {
 static void worker_warn(const char *message, void *data)
 {
     run_worker *w = data;
+    /* (a product may warn from threads of its own, a sweep's) */
+    pthread_mutex_lock(&w->q->hook_lock);
     if (w->nwarnings < BKF_SCENE_WARNINGS) {
         snprintf(w->warning[w->nwarnings], sizeof w->warning[0], "%s", message);
         w->warnings[w->nwarnings] = w->warning[w->nwarnings];
     }
     w->nwarnings++;
+    pthread_mutex_unlock(&w->q->hook_lock);
 }
 
 static int worker_progress(double fraction, void *data)
