@@ -1,10 +1,11 @@
 /* bkfront run SCENE: the products of a scene (bkfront/scene.h), computed
  * lazily, with figures.
  *
- * The library parses the scene, makes the plan and carries out each step;
- * this file turns flags into those calls and prints the progress lines,
- * the speeds tables and the files written.  A failing product does not
- * stop the others; figures of failed data are skipped and said so. */
+ * The library parses the scene, makes the plan and carries out its steps,
+ * --jobs of them at once; this file turns flags into those calls and
+ * prints the progress lines, the speeds tables and the files written.  A
+ * failing product does not stop the others; figures of failed data are
+ * skipped and said so. */
 #define _POSIX_C_SOURCE 200809L
 #include "args.h"
 #include "commands.h"
@@ -404,13 +405,14 @@ static int run_run(int argc, char **argv, bkf_error *err)
      * process at once (temporaries removed). */
     const volatile sig_atomic_t *cancel = cli_cancel_begin();
     ro.hooks.cancel = cancel;
-    int ran = bkf_scene_run(sc, &plan, &ro, step_status, err);
-    if (ran == BKF_ENOMEM) {
+    /* BKF_ECANCELED is told below, with the signal's name */
+    int run_status = bkf_scene_run(sc, &plan, &ro, step_status, err);
+    if (run_status == BKF_ENOMEM) {
         cli_cancel_end();
         free(step_status);
         bkf_scene_plan_free(&plan);
         bkf_scene_free(sc);
-        return ran;
+        return run_status;
     }
     double total = now() - t_all;
     int canceled = *cancel != 0;
