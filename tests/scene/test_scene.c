@@ -796,7 +796,7 @@ TEST(run_jobs_write_the_serial_files)
     /* the lines: [K/11] once each; a figure's after its data's */
     const char *at[12] = {0};
     for (int k = 1; k <= 11; k++) {
-        char tag[16];
+        char tag[32];
         snprintf(tag, sizeof tag, "[%d/11] ", k);
         at[k] = strstr(r->out, tag);
         CHECK_MSG(at[k] && !strstr(at[k] + 1, tag), "step %d: not one line\n%s", k, r->out);
