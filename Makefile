@@ -58,7 +58,7 @@ CLI_SRC   := $(wildcard src/cli/*.c)
 # tests/*.c are the runner (main.c) and the helpers every folder shares
 # (cli_support.c); the tests themselves sit in tests/LAYER/.
 TEST_SRC  := $(wildcard tests/*.c tests/*/*.c)
-TEST_SRC  := $(filter-out tests/fuzz/% tests/bench/%,$(TEST_SRC))
+TEST_SRC  := $(filter-out tests/fuzz/% tests/bench/% tests/audit/audit_main.c,$(TEST_SRC))
 BENCH_SRC := $(wildcard tests/bench/*.c)
 
 LIB_OBJ   := $(LIB_SRC:%.c=$(BUILD)/%.o)
@@ -78,11 +78,15 @@ CLI   := $(BUILD)/bkfront
 MAN   := $(BUILD)/man
 TESTS := $(BUILD)/run_tests
 BENCH := $(BUILD)/run_bench
+# The audit (tests/audit/): random parameter sets, every product against an
+# independent route; its checks are also linked into run_tests.
+AUDIT := $(BUILD)/audit
 # C programs of docs/examples/, each linked with the library alone (no CLI
 # code): the proof that a product is reachable from C.
 EXAMPLES := $(BUILD)/examples/check_paper
 
 .PHONY: mpi test-mpi
+.PHONY: audit
 .PHONY: all test run gallery bench sanitize deps clean build-all check-built bench-built fuzz-syntax \
         sanitize-built valgrind fuzz fuzz-built install uninstall FORCE
 
@@ -143,7 +147,7 @@ test: deps
 # an external program links through pkg-config.  tests/run_suites ends with
 # one line `N passed, N failed` summing both.
 PYTHON ?= /usr/bin/python3
-check-built: $(CLI) $(TESTS) $(BENCH) fuzz-syntax $(if $(SANITIZE),,$(SHLIB))
+check-built: $(CLI) $(TESTS) $(BENCH) $(AUDIT) fuzz-syntax $(if $(SANITIZE),,$(SHLIB))
 	@BKFRONT_LIBRARY=$(abspath $(BUILD)/$(SONAME)) BKFRONT_CLI=$(abspath $(CLI)) \
 	  BKF_MAKE="$(MAKE)" BKF_BUILD=$(BUILD) PYTHONPATH=$(CURDIR)/python \
 	  tests/run_suites ./$(TESTS) $(if $(SANITIZE),,$(PYTHON) tests/python)
@@ -152,6 +156,15 @@ fuzz-syntax:
 	@for t in $(FUZZ_NAMES); do \
 	  $(CC) $(CFLAGS) -Itests/fuzz -Isrc/cli -fsyntax-only tests/fuzz/fuzz_$$t.c || exit 1; \
 	done
+
+# make audit [AUDIT_SETS=N] [AUDIT_SEED=S] [AUDIT_JOBS=J] [AUDIT_FLAGS=...]:
+# N random sets (default 200) in J workers (default 2); exit 1 on a defect.
+AUDIT_SETS ?= 200
+AUDIT_SEED ?= 1
+AUDIT_JOBS ?= 2
+audit: deps
+	@$(MAKE) --no-print-directory $(AUDIT)
+	./$(AUDIT) --sets $(AUDIT_SETS) --seed $(AUDIT_SEED) --jobs $(AUDIT_JOBS) $(AUDIT_FLAGS)
 
 run: deps
 	@$(MAKE) --no-print-directory build-all
@@ -363,6 +376,9 @@ $(BUILD)/examples/%: $(BUILD)/docs/examples/%.o $(LIB)
 
 $(BENCH): $(BENCH_OBJ) $(LIB)
 	$(CC) $(LDFLAGS) -o $@ $(BENCH_OBJ) $(LIB) $(LDLIBS)
+
+$(AUDIT): $(BUILD)/tests/audit/audit_main.o $(BUILD)/tests/audit/audit.o $(LIB)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 # The monodromy's complex products need no C99 Annex G infinity recovery
 # (its matrices are rescaled and finite); without it they run ~2x faster.

@@ -81,6 +81,7 @@ static const struct {
     {"check_sigma_max_is_an_eigenvalue_or_nan", 11.0},
     {"extremes_floquet_matrix_gamma_to_30", 36.4},
     {"extremes_floquet_matrix_gamma_100_near_hopf", 28.3},
+    {"audit_fixed_sample", 15.0},
     {"extremes_period_matrix", 10.0},
     {"cli_check_adapted_grid_error_covers_the_grid_thin_fronts", 13.0},
     {"cli_check_adapted_grid", 6.1},

@@ -693,13 +693,16 @@ static double taylor_D(const bkf_model_params *p, double ell, double s, double *
  * against the root of the condition with T from the Taylor reference
  * (Newton in s to convergence, the reference's own uncertainty carried
  * into v), n 61 at tol 1e-8 was 6.7 times v_err off, n 67 at tol 1e-6 7.9
- * times (T 51 and 11 times its estimate). */
+ * times (T 51 and 11 times its estimate).  Since each root's solves start
+ * cold (a root independent of the rows asked), the roots at mu 35.36-35.37
+ * are had to 1e-7, not 1e-8: at 1e-8 the table is refused naming them
+ * (speeds_tight_tol_refuses_instead_of_dropping_roots has the rule). */
 TEST(speeds_v_err_honest_inside_the_canard_at_nu_0_9999)
 {
     const struct {
         size_t n_from, n_to;
         double tol;
-    } cases[] = {{58, 64, 1e-8}, {64, 68, 1e-6}};
+    } cases[] = {{58, 64, 1e-7}, {64, 68, 1e-6}};
     bkf_model_params p = {1.0, 1.0, 0.9999, 20.0, 0, BKF_MODEL_CONTINUUM};
     double worst = 0.0;
     size_t rows = 0;
