@@ -59,7 +59,9 @@ typedef struct {
     double nu, S, S_err;
     double v, mu;            /* the root there */
     double sigma, sigma_err; /* sigma_max at (nu, S) as computed: within a few
-                                sigma_err of 0 */
+                                sigma_err of 0; NaN where the spectrum nearest 0
+                                was only its window's edge (sigma_bound) */
+    double sigma_bound;      /* that edge (every eigenvalue left of it), else NaN */
     double slope;            /* d sigma_max / dS across the final bracket */
     int stable_above;        /* stable just above S (sigma_max < 0 there) */
     size_t evaluations;      /* spectra computed for this point */

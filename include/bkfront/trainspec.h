@@ -90,6 +90,9 @@ typedef struct {
     size_t count;
     /* the rightmost eigenvalue other than the translation */
     double sigma_max, sigma_max_im, sigma_max_err, kappa_max;
+    int sigma_is_bound;              /* nothing but the translation right of a_lo: sigma_max is
+                                        a_lo, error 0, a bound and no eigenvalue (see
+                                        bkf_trainspec_shown_of) */
     int complex_pair;                /* Im sigma_max != 0 beyond its error */
     bkf_trainspec_verdict verdict;
     double translation_residual;     /* |sigma| of the translation mode as computed */
@@ -127,6 +130,28 @@ int bkf_trainspec_root(const bkf_model_params *params, const bkf_speeds_root *ro
 
 /* "real" or "complex": the kind of the rightmost eigenvalue. */
 const char *bkf_trainspec_kind_name(const bkf_trainspec_result *result);
+
+/* The rightmost eigenvalue as every product prints it (speeds --stability,
+ * stability, branch --stability, check).  When the window held nothing
+ * but the translation (sigma_is_bound), the result's sigma_max is the
+ * window's left edge a_lo with error 0 and verdict stable when a_lo < 0:
+ * every other eigenvalue lies left of a_lo.  That bound is evidence the
+ * verdict and the searches that bracket on sigma_max may use, but it is no
+ * eigenvalue (issue 31: -0.00876 printed where Hill's method gives
+ * -0.0160), so here sigma_max, sigma_max_im, sigma_max_err and kappa_max
+ * are NaN, kind NULL and bound a_lo; otherwise they are the result's and
+ * bound is NaN. */
+typedef struct {
+    double sigma_max, sigma_max_im, sigma_max_err, kappa_max;
+    const char *kind; /* bkf_trainspec_kind_name, or NULL */
+    double bound;     /* every eigenvalue but the translation left of it, or NaN */
+} bkf_trainspec_shown;
+bkf_trainspec_shown bkf_trainspec_shown_of(const bkf_trainspec_result *result);
+
+/* The products' one line about such a bound (bound finite): "sigma_max
+ * nan: no eigenvalue but the translation found right of Re sigma = B (the
+ * window's edge): every eigenvalue left of B", into buf; returns buf. */
+const char *bkf_trainspec_bound_note(double bound, char *buf, size_t size);
 
 /* The continuous spectrum on the infinite line: for each of `count` Bloch
  * numbers kappa_i = (2 pi / L) i / count, the rightmost sigma (re, im, err

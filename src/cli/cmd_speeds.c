@@ -35,7 +35,9 @@
 #define STABILITY_HELP                                                                 \
     "  stable         yes, no, or unresolved (sigma_max within its error of 0,\n"   \
     "                 or the spectrum failed: a comment says why, numbers nan)\n"   \
-    "  sigma_max      the rightmost Re sigma but the translation's 0\n"             \
+    "  sigma_max      the rightmost Re sigma but the translation's 0; nan when the\n" \
+    "                 window held nothing else (a comment: every eigenvalue left\n"  \
+    "                 of its edge)\n"                                                \
     "  sigma_max_err  its estimated absolute error\n"                               \
     "  kappa_max      its Bloch number 2 pi j / S\n"                                \
     "  kind           real, or complex (a conjugate pair)\n"

@@ -345,16 +345,24 @@ static int verdict_resolved(const root_verdict *r)
     return r->why.status == BKF_OK;
 }
 
-/* The stable, sigma_max, sigma_max_err, kappa_max and kind cells. */
+/* The stable, sigma_max, sigma_max_err, kappa_max and kind cells; a
+ * sigma_max that is only the window's bound is nan (bkf_trainspec_shown_of),
+ * its verdict kept. */
 static void verdict_values(const root_verdict *r, bkf_io_value *v)
 {
-    const bkf_trainspec_result *x = &r->spectrum;
     int ok = verdict_resolved(r);
-    v[0].text = ok ? bkf_trainspec_verdict_name(x->verdict) : "unresolved";
-    v[1].number = ok ? x->sigma_max : NAN;
-    v[2].number = ok ? x->sigma_max_err : NAN;
-    v[3].number = ok ? x->kappa_max : NAN;
-    v[4].text = ok ? bkf_trainspec_kind_name(x) : NULL;
+    bkf_trainspec_shown x = bkf_trainspec_shown_of(&r->spectrum);
+    v[0].text = ok ? bkf_trainspec_verdict_name(r->spectrum.verdict) : "unresolved";
+    v[1].number = ok ? x.sigma_max : NAN;
+    v[2].number = ok ? x.sigma_max_err : NAN;
+    v[3].number = ok ? x.kappa_max : NAN;
+    v[4].text = ok ? x.kind : NULL;
+}
+
+/* The window's edge when a resolved verdict's sigma_max is only that bound, else NaN. */
+static double verdict_bound(const root_verdict *r)
+{
+    return verdict_resolved(r) ? bkf_trainspec_shown_of(&r->spectrum).bound : NAN;
 }
 
 static int verdict_comment(bkf_io_table *table, double tol, bkf_error *err)
@@ -399,9 +407,15 @@ static int spectra_comments(bkf_io_table *table, const bkf_speeds_table *t, cons
     int s = verdict_comment(table, r->tol, err);
     for (size_t i = 0, root = 1; !s && i < t->count; i++) {
         root = i > 0 && t->roots[i - 1].n == t->roots[i].n ? root + 1 : 1;
+        char note[200];
+        double bound = verdict_bound(&r->verdicts[i]);
         if (!verdict_resolved(&r->verdicts[i]))
             s = bkf_io_table_commentf(table, err, "stability of n %zu, root %zu unresolved: %s",
                                       t->roots[i].n, root, r->verdicts[i].why.message);
+        else if (isfinite(bound))
+            s = bkf_io_table_commentf(table, err, "stability of n %zu, root %zu: %s",
+                                      t->roots[i].n, root,
+                                      bkf_trainspec_bound_note(bound, note, sizeof note));
     }
     return s;
 }
@@ -1136,6 +1150,20 @@ static int branch_verdict_comments(bkf_io_table *table, bkf_speeds_param along,
         } else if (!verdict_resolved(&r->verdict)) {
             s = bkf_io_table_commentf(table, err, "stability at %s = %s unresolved: %s", pname,
                                       bkf_format_number(x, a, sizeof a), r->verdict.why.message);
+        } else if (isfinite(verdict_bound(&r->verdict))) {
+            /* one line for the run of points bounded only, at its largest bound */
+            size_t j = i;
+            double bound = verdict_bound(&r->verdict);
+            while (j + 1 < sink->count && !sink->rows[j + 1].stability_change &&
+                   isfinite(verdict_bound(&sink->rows[j + 1].verdict)))
+                bound = fmax(bound, verdict_bound(&sink->rows[++j].verdict));
+            char note[200];
+            s = bkf_io_table_commentf(
+                table, err, "stability at %zu point(s) from %s = %s to %s: %s", j - i + 1, pname,
+                bkf_format_number(x, a, sizeof a),
+                bkf_format_number(row_param(&sink->rows[j], along), b, sizeof b),
+                bkf_trainspec_bound_note(bound, note, sizeof note));
+            i = j;
         }
     }
     for (size_t i = 0; !s && i < bv->nmissed; i++)

@@ -277,13 +277,19 @@ static int write_ring(const bkf_stability_spec *spec, const bkf_speeds_root *roo
     if (s) return s;
     if (!s) s = write_root(table, spec, root, err);
     const char *verdict = bkf_trainspec_verdict_name(res->verdict);
-    const char *kind = bkf_trainspec_kind_name(res);
-    if (!s)
+    bkf_trainspec_shown shown = bkf_trainspec_shown_of(res);
+    const char *kind = shown.kind;
+    char note[200];
+    if (!s && isfinite(shown.bound))
+        s = bkf_io_table_commentf(table, err, "stable: %s; %s", verdict,
+                                  bkf_trainspec_bound_note(shown.bound, note, sizeof note));
+    else if (!s)
         s = bkf_io_table_commentf(
             table, err,
             "stable: %s; sigma_max %.17g%+.17g i (err %.3g) at kappa %.17g, kind %s "
             "(the rightmost sigma but the translation)",
-            verdict, res->sigma_max, res->sigma_max_im, res->sigma_max_err, res->kappa_max, kind);
+            verdict, shown.sigma_max, shown.sigma_max_im, shown.sigma_max_err, shown.kappa_max,
+            kind);
     if (!s)
         s = bkf_io_table_commentf(table, err,
                                   "gauges: translation_residual %.3g (|sigma| of the mode "
@@ -298,10 +304,11 @@ static int write_ring(const bkf_stability_spec *spec, const bkf_speeds_root *roo
             res->a_lo, res->y_max, res->r_inf, res->mesh_steps, res->evaluations,
             res->curve_points, res->hill_modes);
     if (!s) s = text_result(table, "stable", verdict, err);
-    if (!s) s = number_result(table, "sigma_max", res->sigma_max, err);
-    if (!s) s = number_result(table, "sigma_max_im", res->sigma_max_im, err);
-    if (!s) s = number_result(table, "sigma_max_err", res->sigma_max_err, err);
-    if (!s) s = number_result(table, "kappa_max", res->kappa_max, err);
+    if (!s) s = number_result(table, "sigma_max", shown.sigma_max, err);
+    if (!s) s = number_result(table, "sigma_max_im", shown.sigma_max_im, err);
+    if (!s) s = number_result(table, "sigma_max_err", shown.sigma_max_err, err);
+    if (!s) s = number_result(table, "kappa_max", shown.kappa_max, err);
+    if (!s) s = number_result(table, "sigma_bound", shown.bound, err);
     if (!s) s = number_result(table, "hill_modes", (double)res->hill_modes, err);
     if (!s) s = text_result(table, "kind", kind, err);
     if (!s) s = number_result(table, "translation_residual", res->translation_residual, err);
@@ -440,6 +447,13 @@ static int write_boundary(const bkf_stability_spec *spec, FILE *out, bkf_io_form
                                   "end: %s after %zu points, %zu spectra; last nu tried %.6g%s%s",
                                   bkf_stabmap_end_name(rep.end), rep.points, rep.evaluations,
                                   rep.nu_end, rep.note[0] ? "; " : "", rep.note);
+    for (size_t i = 0; !s && i < sink.n; i++)
+        if (isfinite(sink.p[i].sigma_bound)) {
+            char note[200];
+            s = bkf_io_table_commentf(
+                table, err, "at nu %s: %s", bkf_format_number(sink.p[i].nu, a, sizeof a),
+                bkf_trainspec_bound_note(sink.p[i].sigma_bound, note, sizeof note));
+        }
     if (!s) s = text_result(table, "end", bkf_stabmap_end_name(rep.end), err);
     if (!s) s = number_result(table, "points", (double)rep.points, err);
     if (!s) s = number_result(table, "evaluations", (double)rep.evaluations, err);

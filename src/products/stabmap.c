@@ -21,8 +21,12 @@ const char *bkf_stabmap_end_name(bkf_stabmap_end end)
     return (unsigned)end < sizeof names / sizeof names[0] ? names[end] : "?";
 }
 
-int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near, double tol,
-                      double *sigma, double *sigma_err, double *v, double *mu, bkf_error *err)
+/* bkf_stabmap_sigma, and in *bound the window's edge when sigma is only
+ * that bound (bkf_trainspec_shown_of), else NaN: brackets use the bound's
+ * sign, the point printed does not show it as sigma. */
+static int sigma_and_bound(const bkf_model_params *params, size_t n, double v_near, double tol,
+                           double *sigma, double *sigma_err, double *v, double *mu,
+                           double *bound, bkf_error *err)
 {
     bkf_speeds_options o = bkf_speeds_options_default();
     o.n_from = o.n_to = n;
@@ -47,9 +51,17 @@ int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near, d
         *sigma_err = r.sigma_max_err;
         *v = root.v;
         *mu = root.mu;
+        *bound = bkf_trainspec_shown_of(&r).bound;
     }
     bkf_trainspec_result_free(&r);
     return s;
+}
+
+int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near, double tol,
+                      double *sigma, double *sigma_err, double *v, double *mu, bkf_error *err)
+{
+    double bound;
+    return sigma_and_bound(params, n, v_near, tol, sigma, sigma_err, v, mu, &bound, err);
 }
 
 /* sigma_max along S at fixed nu, the root continued by v ~ S (v = S/(n T)
@@ -63,7 +75,7 @@ typedef struct {
 } sigma_fn;
 
 typedef struct {
-    double S, f, err, v, mu;
+    double S, f, err, v, mu, bound;
 } sample;
 
 static int eval_at(sigma_fn *fn, double S, sample *out, bkf_error *err)
@@ -73,8 +85,8 @@ static int eval_at(sigma_fn *fn, double S, sample *out, bkf_error *err)
     double v_near = fn->v_ref > 0 ? fn->v_ref * S / fn->S_ref : 0;
     fn->evaluations++;
     out->S = S;
-    return bkf_stabmap_sigma(&p, fn->n, v_near, fn->tol, &out->f, &out->err, &out->v, &out->mu,
-                             err);
+    return sigma_and_bound(&p, fn->n, v_near, fn->tol, &out->f, &out->err, &out->v, &out->mu,
+                           &out->bound, err);
 }
 
 static int sign_of(double f) { return f > 0 ? 1 : -1; }
@@ -121,8 +133,10 @@ static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_sta
     pt->S_err = fabs(b.S - a.S) > S_tol ? fmin(half, lin) : fmax(half, best.err / fabs(slope));
     pt->v = best.v;
     pt->mu = best.mu;
-    pt->sigma = best.f;
-    pt->sigma_err = best.err;
+    int bounded = isfinite(best.bound);
+    pt->sigma = bounded ? NAN : best.f;
+    pt->sigma_err = bounded ? NAN : best.err;
+    pt->sigma_bound = best.bound;
     pt->slope = slope;
     pt->stable_above = slope < 0;
     return BKF_OK;

@@ -4,12 +4,14 @@
 
 #include "bkfront/cycle.h"
 #include "bkfront/hill.h"
+#include "bkfront/options.h"
 
 #include <gsl/gsl_math.h>
 
 #include <complex.h>
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -1191,6 +1193,7 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
             /* nothing right of a_lo but the translation */
             r->sigma_max = win.a_lo;
             r->sigma_max_err = 0.0;
+            r->sigma_is_bound = 1;
             r->verdict = BKF_TRAINSPEC_STABLE;
         } else {
             r->complex_pair = fabs(r->sigma_max_im) > r->sigma_max_err;
@@ -1221,6 +1224,24 @@ int bkf_trainspec_root(const bkf_model_params *params, const bkf_speeds_root *ro
 const char *bkf_trainspec_kind_name(const bkf_trainspec_result *result)
 {
     return result->complex_pair ? "complex" : "real";
+}
+
+bkf_trainspec_shown bkf_trainspec_shown_of(const bkf_trainspec_result *r)
+{
+    if (r->sigma_is_bound) return (bkf_trainspec_shown){NAN, NAN, NAN, NAN, NULL, r->sigma_max};
+    return (bkf_trainspec_shown){r->sigma_max, r->sigma_max_im, r->sigma_max_err, r->kappa_max,
+                                 bkf_trainspec_kind_name(r), NAN};
+}
+
+const char *bkf_trainspec_bound_note(double bound, char *buf, size_t size)
+{
+    char b[32];
+    bkf_format_number(bound, b, sizeof b);
+    snprintf(buf, size,
+             "sigma_max nan: no eigenvalue but the translation found right of Re sigma = %s (the "
+             "edge of the window searched): every eigenvalue left of %s",
+             b, b);
+    return buf;
 }
 
 int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,

@@ -499,7 +499,14 @@ static void audit_spectrum(ctx *x, const bkf_speeds_root *rt, size_t root_index,
             add_row(x, "stability", AUDIT_REFUSAL, repro, "n %zu mu %.4g: %s", rt->n, rt->mu, e.message);
         return;
     }
-    if (!isfinite(r.sigma_max) || !isfinite(r.sigma_max_err)) {
+    bkf_trainspec_shown shown = bkf_trainspec_shown_of(&r);
+    if (isfinite(shown.bound)) {
+        /* no eigenvalue but a bound (the products print nan): right when
+         * Hill's rightmost lies left of it */
+        add_row(x, "stability", h.decided && h.re > shown.bound + h.err ? AUDIT_DEFECT : AUDIT_OK, repro,
+                "n %zu mu %.4g: every eigenvalue left of %.8g (%s), Hill %.8g +- %.2g%s", rt->n, rt->mu, shown.bound,
+                bkf_trainspec_verdict_name(r.verdict), h.re, h.err, h.decided ? "" : " (unconverged)");
+    } else if (!isfinite(r.sigma_max) || !isfinite(r.sigma_max_err)) {
         add_row(x, "stability", AUDIT_DEFECT, repro, "n %zu: sigma_max %g +- %g not a result", rt->n, r.sigma_max,
                 r.sigma_max_err);
     } else if (h.decided) {

@@ -9,6 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bkfront/cycle.h"
+#include "bkfront/hill.h"
 #include "bkfront/speeds.h"
 #include "bkfront/trainspec.h"
 
@@ -133,6 +135,93 @@ TEST(cli_speeds_stability_verdicts_are_the_stability_commands)
     }
     CHECK(!bkf_tsv_cell(s.out, 5, "n", NULL, NULL, 0));
     bkf_cli_result_free(&s);
+}
+
+/* Hill's rightmost Re sigma but the translation (an independent route:
+ * Fourier in xi, dense LAPACK) of the n = 1 train at speed v, converged
+ * between 32 and 64 modes; *err its estimate. */
+static double hill_rightmost(double gamma, double c, double nu, double v, double *err)
+{
+    bkf_cycle *cy = bkf_cycle_alloc();
+    CHECK(cy);
+    bkf_cycle_options co = bkf_cycle_options_default();
+    co.tol = 1e-12;
+    bkf_error e;
+    CHECK_MSG(bkf_cycle_solve(cy, gamma / sqrt(1 - c * c / (v * v)), nu, &co, &e) == BKF_OK, "%s",
+              e.message);
+    bkf_hill_eigenvalue ev[4];
+    double ee[4];
+    size_t found = 0;
+    CHECK_MSG(bkf_hill_leading(cy, gamma, 0.0, 32, 1e-8, 4, ev, ee, &found, NULL, &e) == BKF_OK,
+              "%s", e.message);
+    bkf_cycle_free(cy);
+    for (size_t i = 0; i < found; i++)
+        if (hypot(ev[i].re, ev[i].im) > 1e-6) {
+            *err = ee[i];
+            return ev[i].re;
+        }
+    CHECK_MSG(0, "Hill: no eigenvalue but the translation converged (%zu)", found);
+    return NAN;
+}
+
+/* Issue 31, defect 4: where the window held nothing but the translation,
+ * speeds --stability and stability printed the window's edge as sigma_max
+ * with error 0 (-0.00876 and -0.00799 here; Hill's method: -0.0160 and
+ * -0.0139).  The edge is a bound (every eigenvalue left of it, so the
+ * verdict stays "yes"), said so in a comment, and sigma_max an eigenvalue
+ * within its error of Hill's, or nan. */
+TEST(cli_stability_window_edge_is_no_sigma_max)
+{
+    const char *sets[][4] = {{"0.347068", "0.985633", "-0.949565", "22.4207"},
+                             {"0.725442", "1.2769", "0.979048", "15.9207"}};
+    for (size_t k = 0; k < 2; k++) {
+        const char *const *q = sets[k];
+        bkf_cli_result s = BKF_CLI("speeds", "--gamma", q[0], "--c", q[1], "--nu", q[2], "--S",
+                                   q[3], "--n", "1", "--stability");
+        CHECK_MSG(s.code == 0, "exit %d: %s", s.code, s.err);
+        double v, sigma, sigma_err;
+        char verdict[32];
+        CHECK(bkf_tsv_cell(s.out, 0, "v", &v, NULL, 0));
+        CHECK(bkf_tsv_cell(s.out, 0, "stable", NULL, verdict, sizeof verdict));
+        CHECK(bkf_tsv_cell(s.out, 0, "sigma_max", &sigma, NULL, 0) &&
+              bkf_tsv_cell(s.out, 0, "sigma_max_err", &sigma_err, NULL, 0));
+        double herr, hill = hill_rightmost(strtod(q[0], NULL), strtod(q[1], NULL),
+                                           strtod(q[2], NULL), v, &herr);
+        bkf_test_note("set %zu: Hill %.6g +- %.2g; speeds %s, %.6g +- %.2g", k, hill, herr,
+                      verdict, sigma, sigma_err);
+        CHECK(hill < 0 && strcmp(verdict, "yes") == 0);
+        CHECK_MSG(isnan(sigma) ? isnan(sigma_err) && strstr(s.out, "every eigenvalue left of")
+                               : sigma_err > 0 && fabs(sigma - hill) <= sigma_err + herr,
+                  "speeds: sigma_max %.10g +- %.3g, Hill %.10g", sigma, sigma_err, hill);
+        bkf_cli_result r = BKF_CLI("stability", "--gamma", q[0], "--c", q[1], "--nu", q[2],
+                                   "--S", q[3], "--n", "1", "--format", "json");
+        CHECK_MSG(r.code == 0 && bkf_test_json_valid(r.out), "exit %d: %s", r.code, r.err);
+        const char *at = strstr(r.out, "\"sigma_max\": ");
+        CHECK(at);
+        at += strlen("\"sigma_max\": ");
+        if (strncmp(at, "null", 4) == 0) {
+            double bound = json_result(r.out, "sigma_bound");
+            CHECK_MSG(bound > hill && bound < 0, "bound %g, Hill %g", bound, hill);
+            CHECK(strstr(r.out, "every eigenvalue left of"));
+        } else {
+            double sj = strtod(at, NULL), ej = json_result(r.out, "sigma_max_err");
+            CHECK_MSG(ej > 0 && fabs(sj - hill) <= ej + herr, "stability: %.10g +- %.3g, Hill %.10g",
+                      sj, ej, hill);
+        }
+        bkf_cli_result_free(&r);
+        /* branch --stability prints each point's spectrum by the same rule */
+        bkf_cli_result b = BKF_CLI("branch", "--gamma", q[0], "--c", q[1], "--nu", q[2], "--n",
+                                   "1", "--param", "S", "--from", q[3], "--to", "60",
+                                   "--max-points", "1", "--stability");
+        CHECK_MSG(b.code == 0, "exit %d: %s", b.code, b.err);
+        CHECK(bkf_tsv_cell(b.out, 0, "sigma_max", &sigma, NULL, 0) &&
+              bkf_tsv_cell(b.out, 0, "sigma_max_err", &sigma_err, NULL, 0));
+        CHECK_MSG(isnan(sigma) ? strstr(b.out, "every eigenvalue left of") != NULL
+                               : sigma_err > 0 && fabs(sigma - hill) <= sigma_err + herr,
+                  "branch: sigma_max %.10g +- %.3g, Hill %.10g", sigma, sigma_err, hill);
+        bkf_cli_result_free(&b);
+        bkf_cli_result_free(&s);
+    }
 }
 
 TEST(cli_stability_line_and_json)
