@@ -187,6 +187,8 @@ void bkf_scene_argv_free(char **argv);
 
 /* ------------------------------------------------------------------- run */
 
+struct bkf_scene_step_report; /* below */
+
 typedef struct {
     /* Provenance of the tables: the program opening their first comment
      * (NULL: "libbkfront") and the text before the step's command in the
@@ -200,8 +202,31 @@ typedef struct {
      * (armed 1), and when it is gone (armed 0), so that a signal handler
      * may remove it; NULL: nobody is told. */
     void (*temp_file)(const char *path, int armed, void *data);
-    void *data;               /* for temp_file */
+    void *data;               /* for temp_file and step_done */
+    /* bkf_scene_run: how many steps at once (0 or 1: one after the other,
+     * in the caller's thread).  Steps that do not need each other run on
+     * their own threads; a figure starts once every step of its data is
+     * done.  The files are those of a serial run, byte for byte. */
+    unsigned jobs;
+    /* bkf_scene_run: told of each step as it ends, one call at a time
+     * (never two at once), in the order they end; NULL: nobody is told. */
+    void (*step_done)(const struct bkf_scene_step_report *report, void *data);
 } bkf_scene_run_options;
+
+/* A step that ended.  A step stopped because hooks.cancel was raised is
+ * BKF_ECANCELED, whatever it returned.  `warnings` are those its product
+ * raised through hooks.warn (an under-resolved simulation, refused rows),
+ * the first BKF_SCENE_WARNINGS of them; `nwarnings` counts them all. */
+#define BKF_SCENE_WARNINGS 8
+typedef struct bkf_scene_step_report {
+    size_t step;
+    int status;
+    double seconds;              /* wall time of the step */
+    const char *message;         /* why it failed ("" when it did not) */
+    const char *gnuplot_warning; /* a figure's warning from gnuplot ("": none) */
+    const char *const *warnings;
+    size_t nwarnings;
+} bkf_scene_step_report;
 
 /* Carries out step `i` of the plan (data steps write their files
  * atomically; a figure runs gnuplot).  `done` holds the status of every
@@ -211,6 +236,18 @@ typedef struct {
 int bkf_scene_run_step(const bkf_scene *s, const bkf_scene_plan *plan, size_t i,
                        const int *done, const bkf_scene_run_options *options, char *warning,
                        size_t wsize, bkf_error *err);
+
+/* Carries out every step of the plan, options->jobs at a time, and writes
+ * each step's status to status[i] (plan->nsteps entries; a step not run
+ * because hooks.cancel was raised is BKF_ECANCELED and is not reported).
+ * A failing step stops no other: the steps that do not need it still run,
+ * figures of its data are skipped.  hooks.warn goes to the report of its
+ * step, not to hooks.warn; hooks.progress and both temp_file callbacks are
+ * called one at a time.  Returns BKF_OK when every step was run (each may
+ * have failed), BKF_ECANCELED when the cancel flag left some unrun,
+ * BKF_ENOMEM. */
+int bkf_scene_run(const bkf_scene *s, const bkf_scene_plan *plan,
+                  const bkf_scene_run_options *options, int *status, bkf_error *err);
 
 #ifdef __cplusplus
 }

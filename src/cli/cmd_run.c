@@ -1,10 +1,11 @@
 /* bkfront run SCENE: the products of a scene (bkfront/scene.h), computed
  * lazily, with figures.
  *
- * The library parses the scene, makes the plan and carries out each step;
- * this file turns flags into those calls and prints the progress lines,
- * the speeds tables and the files written.  A failing product does not
- * stop the others; figures of failed data are skipped and said so. */
+ * The library parses the scene, makes the plan and carries out its steps,
+ * --jobs of them at once; this file turns flags into those calls and
+ * prints the progress lines, the speeds tables and the files written.  A
+ * failing product does not stop the others; figures of failed data are
+ * skipped and said so. */
 #define _POSIX_C_SOURCE 200809L
 #include "args.h"
 #include "commands.h"
@@ -15,6 +16,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "bkfront/scene.h"
 
@@ -29,7 +31,7 @@ static void run_help(FILE *out)
 {
     fprintf(out,
         "usage: bkfront run [--plan] [--out DIR] [--formats LIST] [--no-figures]\n"
-        "                   [--plots DIR] [--trust-scene] SCENE\n"
+        "                   [--plots DIR] [--trust-scene] [--jobs N] SCENE\n"
         "\n"
         "Compute what the scene file SCENE asks for (an INI file: [model],\n"
         "[accuracy] and one section per product; see docs/scenes.md) and\n"
@@ -50,15 +52,19 @@ static void run_help(FILE *out)
         "                  a gnuplot script can run any shell command, so without\n"
         "                  this flag such a scene is refused; and let keys that\n"
         "                  name files (snapshots, fields) name them outside DIR\n"
+        "  --jobs N        computations run at once, 1 to 1024 (a figure waits for\n"
+        "                  its data); default the number of online CPUs; 1: one\n"
+        "                  after the other. The files are the same for every N\n"
         "\n"
-        "Prints one line per computation, with the warnings it raised (an\n"
-        "under-resolved simulation, refused rows) under it, then the speeds tables\n"
-        "and the files written. Ctrl-C (SIGINT) or SIGTERM stops the whole run:\n"
-        "the computation under way stops without replacing its files, the\n"
-        "finished ones keep theirs, no later one starts (exit 130, 143 for\n"
-        "SIGTERM); a second signal ends it at once. exit status: 0 every product\n"
-        "done, 1 a computation or figure failed (the others are still produced),\n"
-        "2 bad scene or options.\n"
+        "Prints one line per computation as it ends, [K/TOTAL] its place in the\n"
+        "plan, with the warnings it raised (an under-resolved simulation, refused\n"
+        "rows) under it, then the speeds tables and the files written. Ctrl-C\n"
+        "(SIGINT) or SIGTERM stops the whole run: the computations under way stop\n"
+        "at their next check without replacing their files, the finished ones\n"
+        "keep theirs, no later one starts (exit 130, 143 for SIGTERM); a second\n"
+        "signal ends it at once. exit status: 0 every product done, 1 a\n"
+        "computation or figure failed (the others are still produced), 2 bad\n"
+        "scene or options.\n"
         "\n"
         "A scene is trusted input only with --trust-scene (docs/scenes.md#trust).\n"
         "This bkfront's gnuplot scripts: " BKF_PLOTS_DIR "\n");
@@ -141,40 +147,21 @@ static int check_trust(const bkf_scene *sc, bkf_error *err)
     return BKF_OK;
 }
 
-/* The temporaries being written (a step's table and the data files a
+/* The temporaries being written (each step's table and the data files a
  * product writes itself, e.g. simulate's spacetime and snapshots), each
- * guarded by the signal cleanup until it is committed or removed. */
-#define RUN_TEMPS 4
-/* The warnings of the step under way, shown under its line: a step's
- * warning (an under-resolved simulation, refused rows) is otherwise only a
- * comment in one of its files. */
-#define RUN_WARNINGS 8
+ * guarded by the signal cleanup until it is committed or removed.  The
+ * library calls guard_temp one call at a time, whichever job writes. */
+#define RUN_TEMPS 16
 typedef struct {
     char path[RUN_TEMPS][4096];
     int slot[RUN_TEMPS];
     int used[RUN_TEMPS];
-    char warning[RUN_WARNINGS][BKF_ERROR_LEN];
-    size_t warnings; /* raised by the step, also those beyond RUN_WARNINGS */
+    const bkf_scene *sc;
+    const bkf_scene_plan *plan;
+    size_t failed;
+    int worst;
+    char first_failure[BKF_ERROR_LEN];
 } run_context;
-
-static void step_warning(const char *message, void *data)
-{
-    run_context *rc = data;
-    if (rc->warnings < RUN_WARNINGS)
-        snprintf(rc->warning[rc->warnings], sizeof rc->warning[0], "%s", message);
-    rc->warnings++;
-}
-
-static void print_step_warnings(run_context *rc)
-{
-    /* (simulate's messages say "warning:" themselves) */
-    for (size_t k = 0; k < rc->warnings && k < RUN_WARNINGS; k++)
-        printf("        %s%s\n", strncmp(rc->warning[k], "warning:", 8) ? "warning: " : "",
-               rc->warning[k]);
-    if (rc->warnings > RUN_WARNINGS)
-        printf("        (and %zu more warnings)\n", rc->warnings - RUN_WARNINGS);
-    rc->warnings = 0;
-}
 
 static void guard_temp(const char *path, int armed, void *data)
 {
@@ -192,6 +179,46 @@ static void guard_temp(const char *path, int armed, void *data)
             return;
         }
     }
+}
+
+/* One line per step as it ends, [K/TOTAL] its place in the plan, and
+ * under it what the step raised: a product's warning (an under-resolved
+ * simulation, refused rows) is otherwise only a comment in one of its
+ * files.  The library calls this one step at a time. */
+static void step_done(const bkf_scene_step_report *r, void *data)
+{
+    run_context *rc = data;
+    const bkf_scene *sc = rc->sc;
+    const bkf_scene_step *st = &rc->plan->steps[r->step];
+    const bkf_scene_product *p = &sc->products[st->users[0]];
+    printf("[%zu/%zu] %-11s %-18s %s %6.2f s  %s\n", r->step + 1, rc->plan->nsteps, st->product,
+           p->name,
+           r->status == BKF_ECANCELED ? "stopped" : r->status ? "FAILED" : "done  ", r->seconds,
+           st->output);
+    /* (simulate's messages say "warning:" themselves) */
+    for (size_t k = 0; k < r->nwarnings && k < BKF_SCENE_WARNINGS; k++)
+        printf("        %s%s\n", strncmp(r->warnings[k], "warning:", 8) ? "warning: " : "",
+               r->warnings[k]);
+    if (r->nwarnings > BKF_SCENE_WARNINGS)
+        printf("        (and %zu more warnings)\n", r->nwarnings - BKF_SCENE_WARNINGS);
+    if (r->status) {
+        char why[BKF_ERROR_LEN];
+        if (r->status == BKF_ECANCELED)
+            snprintf(why, sizeof why, "stopped by %s; its files were not replaced",
+                     cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT");
+        else
+            snprintf(why, sizeof why, "%s", r->message);
+        printf("        %s:%d [%s %s]: %s\n", sc->path, p->line, bkf_scene_kind_name(p->kind),
+               p->name, why);
+        rc->failed++;
+        if (!rc->first_failure[0])
+            snprintf(rc->first_failure, sizeof rc->first_failure, "%s:%d [%s %s]: %.200s",
+                     sc->path, p->line, bkf_scene_kind_name(p->kind), p->name, why);
+        if (severity(r->status) > severity(rc->worst)) rc->worst = r->status;
+    } else if (r->gnuplot_warning[0]) {
+        printf("        gnuplot: %s\n", r->gnuplot_warning);
+    }
+    fflush(stdout);
 }
 
 /* ------------------------------------------------------------------ run */
@@ -258,7 +285,7 @@ static int run_run(int argc, char **argv, bkf_error *err)
     /* One positional argument, the scene; the rest are flags. */
     char **flags_argv = calloc((size_t)argc + 1, sizeof *flags_argv);
     if (!flags_argv) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    static const char *const valued[] = {"--out", "--formats", "--plots", NULL};
+    static const char *const valued[] = {"--out", "--formats", "--plots", "--jobs", NULL};
     const char *scene_path = NULL;
     int fargc = 0, s = BKF_OK;
     flags_argv[fargc++] = argv[0];
@@ -277,7 +304,7 @@ static int run_run(int argc, char **argv, bkf_error *err)
                               a, scene_path);
         }
     }
-    const char *out = NULL, *formats_text = NULL, *plots = NULL;
+    const char *out = NULL, *formats_text = NULL, *plots = NULL, *jobs_text = NULL;
     int plan_only = 0, no_figures = 0, trust = 0;
     const cli_flag flags[] = {
         {"--plan", NULL, NULL, &plan_only},
@@ -286,6 +313,7 @@ static int run_run(int argc, char **argv, bkf_error *err)
         {"--out", &out, "a folder", NULL},
         {"--formats", &formats_text, "png, pdf, svg or a list", NULL},
         {"--plots", &plots, "a folder", NULL},
+        {"--jobs", &jobs_text, "a count of computations at once", NULL},
     };
     if (!s) s = cli_parse_flags(flags, sizeof flags / sizeof flags[0], fargc, flags_argv, err);
     free(flags_argv);
@@ -293,6 +321,12 @@ static int run_run(int argc, char **argv, bkf_error *err)
     if (!scene_path) return bkf_error_set(err, BKF_EINPUT, "SCENE: give a scene file, e.g. fronts/paper.scene");
     unsigned formats = 1;
     if (formats_text && (s = parse_formats(formats_text, &formats, err))) return s;
+    /* Every online CPU by default: the steps are independent and each is
+     * one thread (a sweep's own threads aside). */
+    size_t jobs = 1;
+    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+    if (cpus > 1) jobs = cpus > 1024 ? 1024 : (size_t)cpus;
+    if (jobs_text && (s = cli_parse_count("--jobs", jobs_text, 1024, &jobs, err))) return s;
     if (out && !*out) return bkf_error_set(err, BKF_EINPUT, "--out: the folder name is empty");
 
     bkf_scene *sc = NULL;
@@ -331,10 +365,11 @@ static int run_run(int argc, char **argv, bkf_error *err)
                                 .command_prefix = CLI_PROGRAM,
                                 .plots_dir = plots_dir,
                                 .scene_dir = scene_dir,
-                                .hooks = {.temp_file = guard_temp, .warn = step_warning,
-                                          .data = &rc},
+                                .hooks = {.temp_file = guard_temp, .data = &rc},
                                 .temp_file = guard_temp,
-                                .data = &rc};
+                                .data = &rc,
+                                .jobs = (unsigned)jobs,
+                                .step_done = step_done};
 
     bkf_scene_plan plan;
     bkf_scene_plan_options po = {.outdir = outdir, .formats = formats, .figures = !no_figures,
@@ -343,6 +378,8 @@ static int run_run(int argc, char **argv, bkf_error *err)
         bkf_scene_free(sc);
         return s;
     }
+    rc.sc = sc;
+    rc.plan = &plan;
     if (plan_only) {
         print_plan(sc, &plan, stdout);
         bkf_scene_plan_free(&plan);
@@ -361,50 +398,21 @@ static int run_run(int argc, char **argv, bkf_error *err)
         bkf_scene_free(sc);
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
-    int worst = BKF_OK;
-    size_t failed = 0, ran = 0;
-    char first_failure[BKF_ERROR_LEN] = "";
     double t_all = now();
-    /* The first SIGINT or SIGTERM stops the whole run: the step under way
-     * stops at its next check (its files are not replaced), the steps done
-     * keep their files, no later step starts.  A second one ends the
+    /* The first SIGINT or SIGTERM stops the whole run: the steps under way
+     * stop at their next check (their files are not replaced), the steps
+     * done keep their files, no later step starts.  A second one ends the
      * process at once (temporaries removed). */
     const volatile sig_atomic_t *cancel = cli_cancel_begin();
     ro.hooks.cancel = cancel;
-    for (size_t i = 0; i < plan.nsteps && !*cancel; i++, ran++) {
-        bkf_scene_step *st = &plan.steps[i];
-        const bkf_scene_product *p = &sc->products[st->users[0]];
-        bkf_error e = {0};
-        char warning[BKF_ERROR_LEN] = "";
-        double t0 = now();
-        int status = bkf_scene_run_step(sc, &plan, i, step_status, &ro, warning,
-                                        sizeof warning, &e);
-        /* A step that finished although the signal came is complete and
-         * kept; one that failed because of it was stopped, not wrong. */
-        if (status && *cancel) {
-            status = BKF_ECANCELED;
-            snprintf(e.message, sizeof e.message, "stopped by %s; its files were not replaced",
-                     cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT");
-        }
-        step_status[i] = status;
-        double dt = now() - t0;
-        printf("[%zu/%zu] %-11s %-18s %s %6.2f s  %s\n", i + 1, plan.nsteps,
-               st->product, p->name,
-               status == BKF_ECANCELED ? "stopped" : status ? "FAILED" : "done  ", dt,
-               st->output);
-        print_step_warnings(&rc);
-        if (status) {
-            printf("        %s:%d [%s %s]: %s\n", sc->path, p->line, bkf_scene_kind_name(p->kind),
-                   p->name, e.message);
-            failed++;
-            if (!first_failure[0])
-                snprintf(first_failure, sizeof first_failure, "%s:%d [%s %s]: %.200s", sc->path,
-                         p->line, bkf_scene_kind_name(p->kind), p->name, e.message);
-            if (severity(status) > severity(worst)) worst = status;
-        } else if (warning[0]) {
-            printf("        gnuplot: %s\n", warning);
-        }
-        fflush(stdout);
+    /* BKF_ECANCELED is told below, with the signal's name */
+    int run_status = bkf_scene_run(sc, &plan, &ro, step_status, err);
+    if (run_status == BKF_ENOMEM) {
+        cli_cancel_end();
+        free(step_status);
+        bkf_scene_plan_free(&plan);
+        bkf_scene_free(sc);
+        return run_status;
     }
     double total = now() - t_all;
     int canceled = *cancel != 0;
@@ -412,7 +420,7 @@ static int run_run(int argc, char **argv, bkf_error *err)
     if (canceled) {
         const char *sig = cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT";
         size_t nsteps = plan.nsteps, done = 0;
-        for (size_t i = 0; i < ran; i++) done += step_status[i] == BKF_OK;
+        for (size_t i = 0; i < nsteps; i++) done += step_status[i] == BKF_OK;
         printf("\ninterrupted (%s): %zu of %zu computations done, the rest not run\n", sig, done,
                nsteps);
         fflush(stdout);
@@ -455,9 +463,10 @@ static int run_run(int argc, char **argv, bkf_error *err)
     free(step_status);
     bkf_scene_plan_free(&plan);
     bkf_scene_free(sc);
-    if (failed)
-        return bkf_error_set(err, worst ? worst : BKF_ENUMERIC, "%zu of the computations failed; first: %s",
-                             failed, first_failure);
+    if (rc.failed)
+        return bkf_error_set(err, rc.worst ? rc.worst : BKF_ENUMERIC,
+                             "%zu of the computations failed; first: %s", rc.failed,
+                             rc.first_failure);
     return reported;
 }
 

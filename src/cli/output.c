@@ -25,7 +25,7 @@
  *    the exit status still says which signal it was.
  * Only async-signal-safe calls in the handler: unlink, signal, raise.
  * A signal that was ignored when the handlers went in (nohup) stays ignored. */
-#define CLI_MAX_PENDING 4
+#define CLI_MAX_PENDING 16 /* a step's table and its own files, on each of a few jobs */
 static char pending_temp[CLI_MAX_PENDING][4096];
 static volatile sig_atomic_t pending_armed[CLI_MAX_PENDING];
 static volatile sig_atomic_t cancel_active, cancel_flag;

@@ -378,7 +378,8 @@ TEST(cli_run_sigint_stops_the_whole_scene)
     snprintf(outpath, sizeof outpath, "%s/stdout", dir);
     snprintf(errpath, sizeof errpath, "%s/stderr", dir);
     snprintf(odir, sizeof odir, "%s/o", dir);
-    pid_t pid = bkf_cli_spawn(BKF_CLI_ARGS("run", "--out", "o", "t.scene"),
+    /* one job: the order of the steps is the plan's */
+    pid_t pid = bkf_cli_spawn(BKF_CLI_ARGS("run", "--jobs", "1", "--out", "o", "t.scene"),
                               &(bkf_cli_options){.dir = dir}, outpath, errpath);
     CHECK(pid > 0);
     wait_computing(pid, odir, "b.dat", 0.3);
@@ -404,6 +405,70 @@ TEST(cli_run_sigint_stops_the_whole_scene)
     CHECK_MSG(stat(path, &sb) != 0, "a step after the signal ran");
     snprintf(path, sizeof path, "%s/o/f.png", dir);
     CHECK_MSG(stat(path, &sb) != 0, "the figure after the signal was drawn");
+    CHECK_MSG(count_entries(odir, ".", NULL, 0) == 2, "a temporary stayed"); /* . and .. */
+    free(out);
+    free(err);
+    remove_dir(odir);
+    remove_dir(dir);
+}
+
+/* One SIGINT stops every job of a parallel run: two simulations far too
+ * long to finish, running side by side (both temporaries exist at once),
+ * both stop without replacing the complete files of an earlier run; the
+ * steps left waiting for a free job never start, nor the figure of a
+ * stopped step; no temporary stays, exit 130. */
+TEST(cli_run_sigint_stops_every_job)
+{
+    char dir[] = "/tmp/bkf_sig_jobs_XXXXXX";
+    make_dir(dir);
+    char path[4096];
+    snprintf(path, sizeof path, "%s/t.scene", dir);
+    write_text(path, "[model]\ngamma = 2\nc = 0.3\nnu = -0.96\nS = 20\n"
+                     "[spacetime a]\ntmax = 1e6\nN = 128\nframes = 1000\n"
+                     "[spacetime b]\ntmax = 1e6\nN = 128\nframes = 1000\nnu = -0.9\n"
+                     "[friction f]\nfrom = -1\nto = 4\n"
+                     "[period p]\nmu = 1:10:5\n[figure a]\ndata = a\n");
+    snprintf(path, sizeof path, "%s/o", dir);
+    CHECK(mkdir(path, 0777) == 0);
+    static const char earlier[] = "complete data of an earlier run\n";
+    static const char *const kept[] = {"a.dat", "a_diag.tsv", "b.dat", "b_diag.tsv"};
+    for (int i = 0; i < 4; i++) {
+        snprintf(path, sizeof path, "%s/o/%s", dir, kept[i]);
+        write_text(path, earlier);
+    }
+    char outpath[4096], errpath[4096], odir[4096];
+    snprintf(outpath, sizeof outpath, "%s/stdout", dir);
+    snprintf(errpath, sizeof errpath, "%s/stderr", dir);
+    snprintf(odir, sizeof odir, "%s/o", dir);
+    /* two jobs: a and b start at once; f and p wait for a free job */
+    pid_t pid = bkf_cli_spawn(BKF_CLI_ARGS("run", "--jobs", "2", "--out", "o", "t.scene"),
+                              &(bkf_cli_options){.dir = dir}, outpath, errpath);
+    CHECK(pid > 0);
+    wait_computing(pid, odir, "a.dat", 0);
+    wait_computing(pid, odir, "b.dat", 0.3);
+    CHECK_MSG(count_entries(odir, ".a.dat.tmp.", NULL, 0) == 1,
+              "the two simulations did not run at once");
+    CHECK(kill(pid, SIGINT) == 0);
+    int status = wait_status(pid);
+    CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 130, "status %d", status);
+    char *out = slurp(outpath), *err = slurp(errpath);
+    CHECK(out && err);
+    bkf_test_note("stdout: %s", out);
+    CHECK(strstr(out, "interrupted (SIGINT): 0 of 5 computations done"));
+    CHECK(strstr(out, "stopped by SIGINT"));
+    CHECK(strstr(err, "interrupted (SIGINT)") && bkf_count_lines(err) == 1);
+    for (int i = 0; i < 4; i++) {
+        snprintf(path, sizeof path, "%s/o/%s", dir, kept[i]);
+        char *text = slurp(path);
+        CHECK_MSG(text && strcmp(text, earlier) == 0, "%s was replaced", kept[i]);
+        free(text);
+    }
+    struct stat sb;
+    static const char *const never[] = {"f.tsv", "p.tsv", "a.png"};
+    for (int i = 0; i < 3; i++) {
+        snprintf(path, sizeof path, "%s/o/%s", dir, never[i]);
+        CHECK_MSG(stat(path, &sb) != 0, "%s: written after the signal", never[i]);
+    }
     CHECK_MSG(count_entries(odir, ".", NULL, 0) == 2, "a temporary stayed"); /* . and .. */
     free(out);
     free(err);

@@ -7,6 +7,7 @@
 #include <dirent.h>
 #include <pthread.h>
 #include <fcntl.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <signal.h>
@@ -252,6 +253,89 @@ TEST(plan_refuses_an_output_folder_figures_cannot_list)
 }
 
 /* ------------------------------------------------------------------- run */
+
+/* bkf_scene_run, as a library caller sees it: the reports come one at a
+ * time, one per step, each figure's after every step of its data; a flag
+ * raised before the run leaves every step unrun and unreported. */
+typedef struct {
+    size_t order[32];
+    size_t n;
+    int inside;     /* a report under way: two at once would see it set */
+    int overlapped;
+} report_log;
+
+static void log_report(const bkf_scene_step_report *r, void *data)
+{
+    report_log *log = data;
+    if (log->inside++) log->overlapped = 1;
+    if (log->n < 32) log->order[log->n] = r->step;
+    log->n++;
+    struct timespec nap = {0, 2000000}; /* long enough for another to come in */
+    nanosleep(&nap, NULL);
+    log->inside--;
+}
+
+TEST(scene_run_reports_each_step_after_its_data)
+{
+    char dir[] = "/tmp/bkfront-jobs-XXXXXX";
+    CHECK(mkdtemp(dir));
+    bkf_scene *sc = parse_ok("[model]\ngamma = 1.3\nc = 0.7\nnu = -0.5\nS = 12\n"
+                             "[friction fr]\nfrom = -1\nto = 3\n[figure fr]\ndata = fr\n"
+                             "[period period]\nnu = 0,-0.5,-0.9\nmu = 0.1:100:9\n"
+                             "[figure period]\ndata = period\n"
+                             "[profile profiles]\nn = 1,2\n[figure both]\ndata = profiles, fr\n");
+    bkf_scene_plan plan;
+    bkf_error e = {0};
+    bkf_scene_plan_options po = {.outdir = dir, .formats = 1, .figures = 1};
+    CHECK_STATUS(bkf_scene_make_plan(sc, &po, &plan, &e), BKF_OK);
+    CHECK(plan.nsteps == 8); /* fr, 3 periods, profiles; 3 figures */
+    int status[32];
+    report_log log = {0};
+    bkf_scene_run_options ro = {.plots_dir = BKF_SOURCE_DIR "/plots", .jobs = 4,
+                                .step_done = log_report, .data = &log};
+    CHECK_STATUS(bkf_scene_run(sc, &plan, &ro, status, &e), BKF_OK);
+    CHECK_MSG(log.n == plan.nsteps && !log.overlapped, "%zu reports, overlapped %d", log.n,
+              log.overlapped);
+    size_t when[32];
+    for (size_t i = 0; i < plan.nsteps; i++) when[i] = SIZE_MAX;
+    for (size_t k = 0; k < log.n && k < 32; k++) {
+        CHECK(log.order[k] < plan.nsteps && when[log.order[k]] == SIZE_MAX);
+        when[log.order[k]] = k;
+    }
+    for (size_t i = 0; i < plan.nsteps; i++) {
+        CHECK_MSG(status[i] == BKF_OK, "step %zu: status %d", i + 1, status[i]);
+        const bkf_scene_step *st = &plan.steps[i];
+        if (st->kind != BKF_SCENE_STEP_FIGURE) continue;
+        for (size_t d = 0; d < st->ndata; d++) {
+            const bkf_scene_product_plan *pp = &plan.products[st->data_products[d]];
+            for (size_t k = 0; k < pp->nsteps; k++)
+                CHECK_MSG(when[pp->steps[k]] < when[i], "figure %zu reported before step %zu",
+                          i + 1, pp->steps[k] + 1);
+        }
+    }
+
+    /* canceled before it began: nothing runs, nothing is told */
+    static volatile sig_atomic_t raised = 1;
+    ro.hooks.cancel = &raised;
+    log = (report_log){0};
+    CHECK_STATUS(bkf_scene_run(sc, &plan, &ro, status, &e), BKF_ECANCELED);
+    CHECK(log.n == 0);
+    for (size_t i = 0; i < plan.nsteps; i++) CHECK(status[i] == BKF_ECANCELED);
+
+    bkf_scene_plan_free(&plan);
+    bkf_scene_free(sc);
+    DIR *d = opendir(dir);
+    CHECK(d);
+    struct dirent *ent;
+    char path[512];
+    while ((ent = readdir(d)))
+        if (ent->d_name[0] != '.') {
+            snprintf(path, sizeof path, "%s/%s", dir, ent->d_name);
+            unlink(path);
+        }
+    closedir(d);
+    rmdir(dir);
+}
 
 #ifdef BKF_CLI_PATH
 
@@ -583,14 +667,20 @@ TEST(run_keeps_going_past_a_failed_product)
                                         "[friction f]\n[figure f]\ndata = f\n");
     char outdir[512];
     snprintf(outdir, sizeof outdir, "%s/out", dir);
-    run_result *r = run_cli((char *[]){"run", "--out", outdir, "--plots",
-                                       BKF_SOURCE_DIR "/plots", path, NULL});
-    CHECK_MSG(r->code == 2, "exit %d: %s", r->code, r->err);
-    CHECK(strstr(r->out, "skipped: its data failed"));
-    CHECK(strstr(r->err, "[profile p]") && strstr(r->err, "n = 40"));
-    CHECK(file_size(outdir, "f.png") > 0);
-    CHECK(file_size(outdir, "p.tsv") < 0 && file_size(outdir, "p.png") < 0);
-    free(r);
+    /* one after the other, and beside each other: a failure stops no other
+     * job, and the figure of its data waits for it and is skipped */
+    static char *const jobs[] = {"1", "2"};
+    for (int j = 0; j < 2; j++) {
+        run_result *r = run_cli((char *[]){"run", "--jobs", jobs[j], "--out", outdir, "--plots",
+                                           BKF_SOURCE_DIR "/plots", path, NULL});
+        CHECK_MSG(r->code == 2, "--jobs %s: exit %d: %s", jobs[j], r->code, r->err);
+        CHECK(strstr(r->out, "skipped: its data failed"));
+        CHECK(strstr(r->err, "[profile p]") && strstr(r->err, "n = 40"));
+        CHECK(file_size(outdir, "f.png") > 0);
+        CHECK(file_size(outdir, "p.tsv") < 0 && file_size(outdir, "p.png") < 0);
+        free(r);
+        remove_tree(outdir);
+    }
     remove_tree(dir);
     free(path);
     free(dir);
@@ -604,16 +694,140 @@ TEST(run_shows_a_step_s_warnings)
     char *dir = temp_dir();
     char *path = write_scene(dir, "[model]\ngamma = 20\nc = 0.05\nnu = 0.9\nS = 100\n"
                                   "[accuracy]\nN = 1024\n"
-                                  "[spacetime thin]\ntmax = 0.5\ninit = front:n=5\n");
+                                  "[spacetime thin]\ntmax = 0.5\ninit = front:n=5\n"
+                                  "[friction f]\n[period p]\nmu = 1:10:5\n");
     char outdir[512];
     snprintf(outdir, sizeof outdir, "%s/out", dir);
-    run_result *r = run_cli((char *[]){"run", "--no-figures", "--out", outdir, path, NULL});
+    /* two jobs: the warning stays with its step, whichever ends first */
+    run_result *r = run_cli((char *[]){"run", "--jobs", "2", "--no-figures", "--out", outdir,
+                                       path, NULL});
     CHECK_MSG(r->code == 0, "exit %d: %s", r->code, r->err);
     const char *step = strstr(r->out, "thin.dat\n");
     CHECK_MSG(step && strncmp(step + 9, "        warning: N = 1024 does not resolve", 42) == 0,
               "no warning under the step:\n%s", r->out);
     CHECK_MSG(!strstr(step + 9, "warning: warning"), "%s", r->out);
     free(r);
+    remove_tree(dir);
+    free(path);
+    free(dir);
+}
+
+/* Several independent steps and their figures: what a parallel run must
+ * keep apart (two threads in gnuplot, a simulation beside the root
+ * finders, two rows of one product). */
+#define JOBS_SCENE                                                                   \
+    "[model]\ngamma = 1.3\nc = 0.7\nnu = -0.5\nS = 12\n[accuracy]\ntol = 1e-8\nN = 128\n" \
+    "[friction fr]\nfrom = -1\nto = 3\n[figure fr]\ndata = fr\n"                      \
+    "[speeds table]\n[figure speeds]\ndata = table\n"                                 \
+    "[period period]\nnu = 0,-0.5\nmu = 0.1:100:9\n[figure period]\ndata = period\n"  \
+    "[profile profiles]\nn = 1,2,3\n[figure profiles]\ndata = profiles\n"             \
+    "[spacetime st]\ntmax = 10\ninit = oscillation:j=2,amp=0.3\nseed = 3\n"           \
+    "[figure st]\ndata = st\n"
+
+static char *read_whole(const char *dir, const char *name, size_t *size)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%.600s/%.500s", dir, name);
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    char *buf = NULL;
+    size_t n = 0, cap = 0;
+    for (;;) {
+        if (n == cap) {
+            cap = cap ? 2 * cap : 65536;
+            char *more = realloc(buf, cap);
+            CHECK(more);
+            buf = more;
+        }
+        size_t k = fread(buf + n, 1, cap - n, f);
+        n += k;
+        if (k == 0) break;
+    }
+    fclose(f);
+    *size = n;
+    return buf;
+}
+
+/* --jobs 3 writes the files --jobs 1 writes, byte for byte (the images
+ * too: gnuplot draws the same data the same way), one progress line per
+ * step, and each figure's line after the lines of all its data. */
+TEST(run_jobs_write_the_serial_files)
+{
+    char *dir = temp_dir();
+    char *path = write_scene(dir, JOBS_SCENE);
+    char outdir[512], serial[512];
+    snprintf(outdir, sizeof outdir, "%s/out", dir);
+    snprintf(serial, sizeof serial, "%s/serial", dir);
+    run_result *r = run_cli((char *[]){"run", "--jobs", "1", "--out", outdir, "--plots",
+                                       BKF_SOURCE_DIR "/plots", path, NULL});
+    CHECK_MSG(r->code == 0, "exit %d: %s\n%s", r->code, r->err, r->out);
+    free(r);
+    CHECK(rename(outdir, serial) == 0);
+    r = run_cli((char *[]){"run", "--jobs", "3", "--out", outdir, "--plots",
+                           BKF_SOURCE_DIR "/plots", path, NULL});
+    CHECK_MSG(r->code == 0, "exit %d: %s\n%s", r->code, r->err, r->out);
+    bkf_test_note("%s", r->out);
+
+    DIR *d = opendir(serial);
+    CHECK(d);
+    struct dirent *ent;
+    size_t files = 0;
+    while ((ent = readdir(d))) {
+        if (ent->d_name[0] == '.') continue;
+        size_t na = 0, nb = 0;
+        char *a = read_whole(serial, ent->d_name, &na), *b = read_whole(outdir, ent->d_name, &nb);
+        CHECK_MSG(a && b, "%s: missing from one run", ent->d_name);
+        CHECK_MSG(na == nb && memcmp(a, b, na) == 0, "%s differs (%zu and %zu bytes)",
+                  ent->d_name, na, nb);
+        free(a);
+        free(b);
+        files++;
+    }
+    closedir(d);
+    /* fr, table, period_1, period_2, profiles, st.dat, st_diag; 5 images */
+    CHECK_MSG(files == 12, "%zu files", files);
+    d = opendir(outdir);
+    CHECK(d);
+    size_t again = 0;
+    while ((ent = readdir(d))) again += ent->d_name[0] != '.';
+    closedir(d);
+    CHECK_MSG(again == files, "%zu files from --jobs 3, %zu from --jobs 1", again, files);
+
+    /* the lines: [K/11] once each; a figure's after its data's */
+    const char *at[12] = {0};
+    for (int k = 1; k <= 11; k++) {
+        char tag[32];
+        snprintf(tag, sizeof tag, "[%d/11] ", k);
+        at[k] = strstr(r->out, tag);
+        CHECK_MSG(at[k] && !strstr(at[k] + 1, tag), "step %d: not one line\n%s", k, r->out);
+    }
+    /* steps 1 fr, 2 table, 3-4 period, 5 profiles, 6 st; figures 7-11 in that order */
+    static const int first[] = {1, 2, 3, 5, 6}, last[] = {1, 2, 4, 5, 6};
+    for (int f = 0; f < 5; f++)
+        for (int k = first[f]; k <= last[f]; k++)
+            CHECK_MSG(at[k] && at[7 + f] && at[k] < at[7 + f], "figure %d before step %d\n%s",
+                      7 + f, k, r->out);
+    free(r);
+    remove_tree(serial);
+    remove_tree(outdir);
+    remove_tree(dir);
+    free(path);
+    free(dir);
+}
+
+TEST(run_jobs_checks_its_value)
+{
+    char *dir = temp_dir();
+    char *path = write_scene(dir, MODEL "[friction f]\n");
+    static const char *const bad[] = {"0", "-1", "1025", "two", ""};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        run_result *r = run_cli((char *[]){"run", "--jobs", (char *)bad[i], "--no-figures",
+                                           "--out", dir, path, NULL});
+        CHECK_MSG(r->code == 2 && strstr(r->err, "--jobs") && bkf_count_lines(r->err) == 1,
+                  "--jobs '%s': exit %d: %s", bad[i], r->code, r->err);
+        CHECK(file_size(dir, "f.tsv") < 0);
+        free(r);
+    }
     remove_tree(dir);
     free(path);
     free(dir);
