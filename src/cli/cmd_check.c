@@ -79,7 +79,7 @@ static void check_help(FILE *out)
         "                    of 0, or refused, with a warning)\n"
         "  sigma_max, sigma_max_err  the rightmost Re sigma but the translation, its error;\n"
         "                    nan when refused or when only a window's edge bounds it\n"
-        "  stable            1 when the run kept the front: the count never changed,\n"
+        "  kept              1 when the run kept the front: the count never changed,\n"
         "                    deviation_end <= 1e-2 and growth_verdict is not grows\n"
         "  verdict           conflicts (the run grows while the spectrum is stable, or\n"
         "                    decays while sigma_max is above growth_limit; a warning on\n"

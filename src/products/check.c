@@ -279,7 +279,7 @@ static const bkf_io_column columns[] = {
     {"spectral", BKF_IO_TEXT},
     {"sigma_max", BKF_IO_NUMBER},
     {"sigma_max_err", BKF_IO_NUMBER},
-    {"stable", BKF_IO_NUMBER},
+    {"kept", BKF_IO_NUMBER},
     {"verdict", BKF_IO_TEXT},
     {"decide_tmax", BKF_IO_NUMBER},
 };

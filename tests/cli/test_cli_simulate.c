@@ -238,7 +238,7 @@ TEST(cli_check_stable_front_agrees)
     double rel, stable, fs, fe, N;
     char verdict[32];
     CHECK(field(r.out, 0, "rel_err", &rel) && fabs(rel) < 1e-6);
-    CHECK(field(r.out, 0, "stable", &stable) && stable == 1);
+    CHECK(field(r.out, 0, "kept", &stable) && stable == 1);
     CHECK(field(r.out, 0, "fronts_start", &fs) && fs == 4);
     CHECK(field(r.out, 0, "fronts_end", &fe) && fe == 4);
     CHECK(field(r.out, 0, "N", &N) && N == 1024);
@@ -268,7 +268,7 @@ TEST(cli_check_exponential_and_explicit_agree)
     CHECK(strstr(b.out, "stepper rk8pd") && strstr(b.out, "frame: lab"));
     double va, vb, sa, sb, Na, Nb;
     CHECK(field(a.out, 0, "v_meas", &va) && field(b.out, 0, "v_meas", &vb));
-    CHECK(field(a.out, 0, "stable", &sa) && field(b.out, 0, "stable", &sb) && sa == 1 && sb == 1);
+    CHECK(field(a.out, 0, "kept", &sa) && field(b.out, 0, "kept", &sb) && sa == 1 && sb == 1);
     CHECK(field(a.out, 0, "N", &Na) && field(b.out, 0, "N", &Nb) && Na == Nb);
     CHECK_MSG(fabs(va - vb) < 1e-8 * vb, "v_meas %.15g (etdrk4) vs %.15g (rk8pd)", va, vb);
     bkf_test_note("n = 7 on N = %.0f: v_meas etdrk4 - rk8pd = %.2g relative", Na, (va - vb) / vb);
@@ -278,7 +278,7 @@ TEST(cli_check_exponential_and_explicit_agree)
     CHECK_MSG(c.code == 0, "exit %d: %s", c.code, c.err);
     CHECK(strstr(c.out, "stepper lawson8") && strstr(c.out, "frame: lab"));
     double vc, sc;
-    CHECK(field(c.out, 0, "v_meas", &vc) && field(c.out, 0, "stable", &sc) && sc == 1);
+    CHECK(field(c.out, 0, "v_meas", &vc) && field(c.out, 0, "kept", &sc) && sc == 1);
     CHECK_MSG(fabs(vc - vb) < 1e-8 * vb, "v_meas %.15g (lawson8) vs %.15g (rk8pd)", vc, vb);
     bkf_test_note("v_meas lawson8 - rk8pd = %.2g relative", (vc - vb) / vb);
     sim_free(&c);
@@ -295,7 +295,7 @@ TEST(cli_check_unstable_front_is_reported)
     CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
     double rel, stable, growth;
     char verdict[32];
-    CHECK(field(r.out, 0, "stable", &stable) && stable == 0);
+    CHECK(field(r.out, 0, "kept", &stable) && stable == 0);
     CHECK(field(r.out, 0, "growth", &growth) && growth > 0.02);
     CHECK(text_field(r.out, 0, "verdict", verdict, sizeof verdict) &&
           strcmp(verdict, "unstable") == 0);
@@ -320,7 +320,7 @@ TEST(cli_check_adapted_grid)
     char grid[32], verdict[32];
     CHECK(text_field(r.out, 0, "grid", grid, sizeof grid) && strcmp(grid, "mapped") == 0);
     CHECK(field(r.out, 0, "N", &N) && N == 12 * 768);
-    CHECK(field(r.out, 0, "stable", &stable) && stable == 1);
+    CHECK(field(r.out, 0, "kept", &stable) && stable == 1);
     CHECK(field(r.out, 0, "rel_err", &rel) && fabs(rel) < 1e-7);
     char spectral[16], growth[16];
     double sigma_max;
@@ -340,7 +340,7 @@ TEST(cli_check_adapted_grid)
     CHECK(text_field(a.out, 0, "grid", grid, sizeof grid) && strcmp(grid, "uniform") == 0);
     CHECK(text_field(b.out, 0, "grid", grid, sizeof grid) && strcmp(grid, "mapped") == 0);
     CHECK(field(a.out, 0, "v_meas", &va) && field(b.out, 0, "v_meas", &vb));
-    CHECK(field(a.out, 0, "stable", &sa) && field(b.out, 0, "stable", &sb) && sa == 1 && sb == 1);
+    CHECK(field(a.out, 0, "kept", &sa) && field(b.out, 0, "kept", &sb) && sa == 1 && sb == 1);
     CHECK_MSG(fabs(va - vb) < 1e-8 * vb, "v_meas %.15g (uniform) vs %.15g (mapped)", va, vb);
     bkf_test_note("n = 7: v_meas uniform - mapped = %.2g relative", (va - vb) / vb);
     sim_free(&a);
