@@ -142,6 +142,14 @@ char *bkf_cli_read_file(const char *path)
     return text;
 }
 
+void bkf_cli_write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    CHECK_MSG(f, "cannot write %s", path);
+    CHECK(fputs(text, f) >= 0);
+    CHECK(fclose(f) == 0);
+}
+
 static int open_out(const char *path)
 {
     int fd = path ? open(path, O_WRONLY | O_CREAT | O_TRUNC, 0644) : open("/dev/null", O_WRONLY);

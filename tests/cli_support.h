@@ -42,6 +42,9 @@ pid_t bkf_cli_spawn(const char *const *args, const bkf_cli_options *o, const cha
  * be opened (an output the run should not have left). */
 char *bkf_cli_read_file(const char *path);
 
+/* Writes text to path (a test's input file); fails the test if it cannot. */
+void bkf_cli_write_text(const char *path, const char *text);
+
 /* The number of newlines in s. */
 size_t bkf_count_lines(const char *s);
 

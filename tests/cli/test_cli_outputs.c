@@ -31,13 +31,7 @@
 #endif
 #define PLOTS BKF_SOURCE_DIR "/plots"
 
-static void write_text(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    CHECK(f);
-    fputs(text, f);
-    CHECK(fclose(f) == 0);
-}
+#define write_text bkf_cli_write_text
 
 static void make_dir(char *templ)
 {

@@ -31,13 +31,7 @@ static int remove_one(const char *path, const struct stat *st, int flag, struct 
     return remove(path);
 }
 
-static void write_text(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    CHECK_MSG(f, "cannot write %s", path);
-    CHECK(fputs(text, f) >= 0);
-    CHECK(fclose(f) == 0);
-}
+#define write_text bkf_cli_write_text
 
 /* plots/NAME.gp copied into dir with the probe after each plot command (a
  * line starting "plot", through its continuation lines); a plot that
