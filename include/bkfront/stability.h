@@ -48,6 +48,13 @@ typedef struct {
     double nu_step;         /* step in nu, (0, 0.5]; default 0.01 */
     double S_tol;           /* bracket width ending an S solve, [1e-8, 1]; default 1e-3 */
     size_t S_samples;       /* S scan's steps for the first crossing, [2, 1000]; default 12 */
+    double seed_step;       /* diagram: spacing in nu of the columns scanned in S whose
+                               crossings are followed (bkf_stabmap_trace), (0, 2]; default
+                               0.1 (the ends are always columns) */
+    int scan;               /* diagram: the grid scan instead (every nu of nu_step scanned
+                               in S, crossings joined by nearness: the table before
+                               2026-11-29) */
+    size_t threads;         /* diagram: OpenMP threads, 0: every core (OpenMP's default) */
 } bkf_stability_spec;
 
 /* Diagram: n at most (every n costs one scan and its boundaries). */
@@ -56,7 +63,8 @@ typedef struct {
 bkf_stability_spec bkf_stability_spec_default(void);
 
 /* The keys: gamma, c, nu, S, n, root, tol, per-kappa, line, kappa-count,
- * boundary, diagram, to, S-to, nu-step, S-tol, S-samples. */
+ * boundary, diagram, to, S-to, nu-step, S-tol, S-samples, seed-step, scan,
+ * threads. */
 extern const bkf_option bkf_stability_options[];
 extern const size_t bkf_stability_noptions;
 
@@ -73,8 +81,10 @@ int bkf_stability_check(const bkf_stability_spec *spec, const char *prefix, bkf_
  * "results".  Line: rows kappa, re, im, err, and the largest re among them
  * with its kappa as results.  Boundary: rows nu, S, S_err, sigma,
  * sigma_err, slope, v, mu, stable_above, results end, points, evaluations.
- * Diagram: rows curve, kind (existence, stability, long_wave,
- * period_doubling, other), n, m, nu, S, S_err, above (docs/cli/stability.md).
+ * Diagram: rows curve, kind (existence, stability, state, long_wave,
+ * period_doubling, other), n, m, nu, S, S_err, above, nu_err
+ * (docs/cli/stability.md); the stability curves followed from a seed grid
+ * (bkf_stabmap_trace), or with scan every grid column's crossings.
  * On failure the stream holds a partial table
  * and the caller discards it. */
 int bkf_stability_write(const bkf_stability_spec *spec, FILE *out, bkf_io_format format,

@@ -9,11 +9,14 @@
  * - A stability boundary of n: a curve S(nu) on which sigma_max (the
  *   rightmost Re sigma of the ring spectrum but the translation,
  *   trainspec.h) of the root continued from the previous point changes
- *   sign.  Natural-parameter continuation in nu: the predictor is the
- *   secant through the last two points, the corrector brackets sigma_max = 0
- *   in S around the prediction and closes the bracket by the Illinois
- *   method.  The S error of a point is the larger of the final bracket's
- *   half-width and sigma_max's error divided by |d sigma_max / dS|.
+ *   sign.  bkf_stabmap_trace follows it by pseudo-arclength continuation
+ *   in (nu, S), through folds in nu (the diagram's curves);
+ *   bkf_stabmap_follow by natural-parameter continuation in nu: the
+ *   predictor is the secant through the last two points, the corrector
+ *   brackets sigma_max = 0 in S around the prediction and closes the
+ *   bracket by the Illinois method (`--boundary`).  The S error of a point
+ *   is the larger of the final bracket's half-width and sigma_max's error
+ *   divided by |d sigma_max / dS|.
  * - The global oscillation on the ring: the allowed wavenumbers are
  *   q = 2 pi m / S, so an unstable band c q in (p_a, p_b) of its Floquet
  *   dispersion at nu (floquet.h) makes the ring unstable for S in
@@ -35,8 +38,9 @@ extern "C" {
 typedef struct {
     double tol;      /* absolute accuracy of each sigma (trainspec), default 1e-6 */
     double S_tol;    /* bracket width at which an S solve stops, default 1e-3 */
-    double nu_step;  /* continuation step in nu, default 0.01 */
+    double nu_step;  /* continuation step in nu, default 0.01 (trace: the largest) */
     size_t max_points; /* points of one boundary at most; default 1000 */
+    double S_step;   /* trace: the largest step in S between points, default 0.5 */
 } bkf_stabmap_options;
 
 bkf_stabmap_options bkf_stabmap_options_default(void);
@@ -49,10 +53,14 @@ typedef enum {
                                     crossing met it) */
     BKF_STABMAP_END_NO_ROOT = 2, /* the train has no root of the speed condition there */
     BKF_STABMAP_END_REFUSED = 3, /* trainspec refused sigma (BKF_ETOL, BKF_EBUDGET) */
-    BKF_STABMAP_END_POINTS = 4   /* max_points reached */
+    BKF_STABMAP_END_POINTS = 4,  /* max_points reached */
+    BKF_STABMAP_END_WINDOW = 5,  /* trace: the curve left the window in S */
+    BKF_STABMAP_END_STALLED = 6  /* trace: the continuation's step fell below its
+                                    minimum (a corner where the rightmost eigenvalue
+                                    changes, or sigma too rough to correct on) */
 } bkf_stabmap_end;
 
-/* "reached", "fold", "no_root", "refused", "max_points". */
+/* "reached", "fold", "no_root", "refused", "max_points", "window", "stalled". */
 const char *bkf_stabmap_end_name(bkf_stabmap_end end);
 
 typedef struct {
@@ -62,9 +70,14 @@ typedef struct {
                                 sigma_err of 0; NaN where the spectrum nearest 0
                                 was only its window's edge (sigma_bound) */
     double sigma_bound;      /* that edge (every eigenvalue left of it), else NaN */
-    double slope;            /* d sigma_max / dS across the final bracket */
+    double slope;            /* d sigma_max / dS across the final bracket (trace: the
+                                secant estimate the continuation corrects with) */
     int stable_above;        /* stable just above S (sigma_max < 0 there) */
     size_t evaluations;      /* spectra computed for this point */
+    double nu_err;           /* trace: the error in nu, (|sigma| + sigma_err) / |d sigma_max /
+                                d nu| (the curve crosses S = const within it); 0 where nu
+                                was held (scan, locate, follow) */
+    double nu_slope;         /* trace: d sigma_max / d nu, else NaN */
 } bkf_stabmap_point;
 
 typedef int (*bkf_stabmap_visit)(const bkf_stabmap_point *point, void *data);
@@ -104,6 +117,33 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
                        const bkf_stabmap_point *first, double nu_to,
                        const bkf_stabmap_options *options, bkf_stabmap_visit visit, void *data,
                        bkf_stabmap_report *report, bkf_error *err);
+
+/* The window a traced curve stays in: nu in [nu_lo, nu_hi] (the run lands
+ * on these), S in [S_lo, S_hi] (the first point outside ends it, reported). */
+typedef struct {
+    double nu_lo, nu_hi, S_lo, S_hi;
+} bkf_stabmap_window;
+
+/* The boundary through `first` (a point of bkf_stabmap_scan), followed by
+ * pseudo-arclength continuation in (nu, S) (continuation.h: unknowns
+ * (nu, S), equation sigma_max(nu, S) = 0, the root continued by v ~ S), in
+ * the direction of nu's sign `direction` (+1, -1), through folds in nu, to
+ * the window's edge.  The gradient of sigma_max is d sigma / dS of `first`'s
+ * bracket and one difference in nu at the start, then updated by Broyden's
+ * rank-one secant from every spectrum: a point costs about two spectra
+ * (the predictor's correction and the new point).  Steps are at most
+ * options->nu_step in nu and options->S_step in S; Newton stops when
+ * its step in S is below about options->S_tol.  Every point is a computed
+ * sigma_max (never an interpolation), its S_err = (|sigma| + sigma_err) /
+ * |d sigma / dS| and nu_err likewise.  visit gets every point, the first
+ * included (nonzero stops: end reached).  The end is an answer: BKF_OK with
+ * report->end (reached: nu's edge; window: S left [S_lo, S_hi], the point
+ * outside reported; no_root, refused: the spectrum's refusal, note says
+ * where and why; stalled; max_points). */
+int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabmap_point *first,
+                      int direction, const bkf_stabmap_window *window,
+                      const bkf_stabmap_options *options, bkf_stabmap_visit visit, void *data,
+                      bkf_stabmap_report *report, bkf_error *err);
 
 /* The existence boundary S = n c gamma g_inf(nu) at params->nu (c > 0);
  * *attained 1 when g dips below k (a fold: the root at S exists), 0 when

@@ -29,6 +29,7 @@ static void stability_help(FILE *out)
         "                         [--format tsv|json] [--out FILE]\n"
         "       bkfront stability --boundary | --diagram [--gamma G] [--c C] [--nu V] [--S L]\n"
         "                         --n N --to V2 --S-to L2 [--nu-step H] [--S-tol E]\n"
+        "                         [--S-samples K] [--seed-step H2 | --scan] [--threads K]\n"
         "\n"
         "The spectral stability of the train of n fronts at root I of the speed\n"
         "condition (bkfront speeds --n N). In the frame xi = x + v t the train is\n"
@@ -45,7 +46,9 @@ static void stability_help(FILE *out)
         "stability (sigma_max = 0) in nu from V to V2; --diagram tabulates for\n"
         "n = 1..N where each train exists and where it is stable in the (nu, S)\n"
         "plane, nu from V to V2, S in [L, L2], with the global oscillation's\n"
-        "thresholds (docs/cli/stability.md).\n"
+        "thresholds: the curves sigma_max = 0 followed by pseudo-arclength\n"
+        "continuation in (nu, S) from the crossings of seed columns scanned in S\n"
+        "(--scan: every nu of the grid scanned instead; docs/cli/stability.md).\n"
         "\n"
         "options:\n");
     cli_options_help(out, g, 2);

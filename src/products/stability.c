@@ -3,6 +3,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "bkfront/fronts.h"
 #include "bkfront/stabmap.h"
@@ -21,7 +24,7 @@ static const bkf_io_column boundary_columns[] = {
 static const bkf_io_column diagram_columns[] = {
     {"curve", BKF_IO_NUMBER}, {"kind", BKF_IO_TEXT},  {"n", BKF_IO_NUMBER},
     {"m", BKF_IO_NUMBER},     {"nu", BKF_IO_NUMBER},  {"S", BKF_IO_NUMBER},
-    {"S_err", BKF_IO_NUMBER}, {"above", BKF_IO_NUMBER}};
+    {"S_err", BKF_IO_NUMBER}, {"above", BKF_IO_NUMBER}, {"nu_err", BKF_IO_NUMBER}};
 #define NRING (sizeof ring_columns / sizeof ring_columns[0])
 #define NLINE (sizeof line_columns / sizeof line_columns[0])
 #define NBOUNDARY (sizeof boundary_columns / sizeof boundary_columns[0])
@@ -87,6 +90,17 @@ const bkf_option bkf_stability_options[] = {
      .min = 2, .max = 1000, .form = "K", .shown_default = "12",
      .help = "steps of the scan in S for the first crossings, in\n"
              "[2, 1000]"},
+    {.name = "seed-step", .type = BKF_OPT_DOUBLE, .offset = FIELD(seed_step),
+     .flags = BKF_OPT_MIN | BKF_OPT_MIN_OPEN | BKF_OPT_MAX, .min = 0, .max = 2, .form = "H2",
+     .shown_default = "0.1",
+     .help = "with --diagram: spacing in nu of the seed columns,\n"
+             "scanned in S, whose crossings are followed, in (0, 2]"},
+    {.name = "scan", .type = BKF_OPT_SWITCH, .offset = FIELD(scan),
+     .help = "with --diagram: the grid scan instead of following:\n"
+             "every nu of --nu-step scanned in S"},
+    {.name = "threads", .type = BKF_OPT_COUNT, .offset = FIELD(threads), .flags = BOUNDED,
+     .min = 0, .max = 4096, .form = "K", .shown_default = "0",
+     .help = "with --diagram: threads, 0 every core"},
 };
 const size_t bkf_stability_noptions = sizeof bkf_stability_options / sizeof bkf_stability_options[0];
 
@@ -108,6 +122,9 @@ bkf_stability_spec bkf_stability_spec_default(void)
     s.nu_step = m.nu_step;
     s.S_tol = m.S_tol;
     s.S_samples = 12;
+    s.seed_step = 0.1;
+    s.scan = 0;
+    s.threads = 0;
     return s;
 }
 
@@ -135,6 +152,9 @@ static int check_across(const bkf_stability_spec *spec, const char *p, bkf_error
     if (across && spec->line)
         return bkf_error_set(err, BKF_EINPUT, "%sline: %sline is the spectrum of one train; "
                              "not with %s%s", p, p, p, spec->boundary ? "boundary" : "diagram");
+    if (!spec->diagram && (spec->scan || spec->seed_step != 0.1 || spec->threads))
+        return bkf_error_set(err, BKF_EINPUT, "%s%s: only with %sdiagram", p,
+                             spec->scan ? "scan" : spec->threads ? "threads" : "seed-step", p);
     if (!across) {
         if (!isnan(spec->to) || !isnan(spec->S_to))
             return bkf_error_set(err, BKF_EINPUT, "%s%s: only with %sboundary or %sdiagram", p,
@@ -162,6 +182,12 @@ static int check_across(const bkf_stability_spec *spec, const char *p, bkf_error
     if (spec->S_samples < 2 || spec->S_samples > 1000)
         return bkf_error_set(err, BKF_EINPUT, "%sS-samples: S-samples = %zu is not in [2, 1000]",
                              p, spec->S_samples);
+    if (!(spec->seed_step > 0 && spec->seed_step <= 2))
+        return bkf_error_set(err, BKF_EINPUT, "%sseed-step: seed-step = %s is not in (0, 2]", p,
+                             bkf_format_number(spec->seed_step, a, sizeof a));
+    if (spec->threads > 4096)
+        return bkf_error_set(err, BKF_EINPUT, "%sthreads: threads = %zu is not in [0, 4096]", p,
+                             spec->threads);
     if (spec->diagram && spec->n > BKF_STABILITY_DIAGRAM_N_MAX)
         return bkf_error_set(err, BKF_EINPUT,
                              "%sn: n = %zu: the diagram takes n = 1..N, N at most %u", p,
@@ -477,7 +503,7 @@ static int write_boundary(const bkf_stability_spec *spec, FILE *out, bkf_io_form
 typedef struct {
     size_t curve, n, m, seq;
     const char *kind;
-    double nu, S, S_err;
+    double nu, S, S_err, nu_err;
     int above;
 } diagram_row;
 
@@ -485,10 +511,12 @@ typedef struct {
     diagram_row *r;
     size_t n, cap, curves;
     int failed;
+    char **notes; /* comments on the curves' ends */
+    size_t nnotes;
 } diagram_sink;
 
 static int add_row(diagram_sink *k, const char *kind, size_t n, size_t m, double nu, double S,
-                   double S_err, int above)
+                   double S_err, double nu_err, int above)
 {
     if (k->n == k->cap) {
         size_t cap = k->cap ? 2 * k->cap : 256;
@@ -497,7 +525,7 @@ static int add_row(diagram_sink *k, const char *kind, size_t n, size_t m, double
         k->r = g;
         k->cap = cap;
     }
-    k->r[k->n] = (diagram_row){k->curves, n, m, k->n, kind, nu, S, S_err, above};
+    k->r[k->n] = (diagram_row){k->curves, n, m, k->n, kind, nu, S, S_err, nu_err, above};
     k->n++;
     return 0;
 }
@@ -511,29 +539,15 @@ typedef struct {
     size_t count;
 } nu_bands;
 
-static int diagram_curves(const bkf_stability_spec *spec, const double *nus, size_t nnu,
-                          diagram_sink *k, size_t *spectra, bkf_error *err)
+/* --scan: every crossing in S at every nu (a boundary may appear anywhere
+ * along nu), joined into curves by nearness in S. */
+static int scan_stability(const bkf_stability_spec *spec, const double *nus, size_t nnu,
+                          const double *g, diagram_sink *k, size_t *spectra, bkf_error *err)
 {
     bkf_model_params params = params_of(spec);
     bkf_stabmap_options o = stabmap_options_of(spec);
-    double *g = calloc(nnu, sizeof *g);
-    nu_bands *b = calloc(nnu, sizeof *b);
-    int s = g && b ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    /* existence: S = n c gamma g_inf(nu), one speeds solve per nu for every n */
-    for (size_t i = 0; !s && i < nnu; i++) {
-        bkf_model_params p = params;
-        p.nu = nus[i];
-        int attained;
-        s = bkf_stabmap_existence(&p, 1, &g[i], &attained, err);
-    }
-    for (size_t n = 1; !s && n <= spec->n; n++) {
-        k->curves++;
-        for (size_t i = 0; i < nnu; i++)
-            if (add_row(k, "existence", n, 0, nus[i], (double)n * g[i], 0, 1)) break;
-    }
-    /* stability: every crossing in S at every nu (a boundary may appear
-     * anywhere along nu), joined into curves by nearness in S */
     double gap = 1.5 * (spec->S_to - spec->S) / (double)spec->S_samples;
+    int s = BKF_OK;
     for (size_t n = 1; !s && n <= spec->n && !k->failed; n++) {
         size_t first_curve = k->curves + 1;
         double last_S[64];
@@ -564,7 +578,7 @@ static int diagram_curves(const bkf_stability_spec *spec, const double *nus, siz
                 if (!t && fabs(sg) > sge) {
                     size_t curves = k->curves;
                     k->curves = 0;
-                    add_row(k, "state", n, 0, nus[i], q.S, 0, sg < 0);
+                    add_row(k, "state", n, 0, nus[i], q.S, 0, 0, sg < 0);
                     k->curves = curves;
                 }
             }
@@ -583,16 +597,362 @@ static int diagram_curves(const bkf_stability_spec *spec, const double *nus, siz
                 last_above[c] = pts[j].stable_above;
                 last_i[c] = i;
                 k->curves = first_curve + c;
-                add_row(k, "stability", n, 0, pts[j].nu, pts[j].S, pts[j].S_err,
+                add_row(k, "stability", n, 0, pts[j].nu, pts[j].S, pts[j].S_err, 0,
                         pts[j].stable_above);
             }
         }
         k->curves = first_curve + open - 1;
     }
+    return s;
+}
+
+/* ------------------------------------------- diagram: the followed curves */
+
+/* A seed column's crossings at most (as the scan's rows). */
+#define SEED_MAX 16
+
+typedef struct {
+    point_sink pts;            /* in order along the curve */
+    bkf_stabmap_report end[2]; /* how each end came about: the first row's, the last's */
+} traced_curve;
+
+/* The work of one n: its seed crossings, its curves, its spectra. */
+typedef struct {
+    size_t n;
+    traced_curve *c;
+    size_t count;
+    size_t spectra;
+    int status;
+    bkf_error err;
+} n_work;
+
+/* One seed column's scan in S of one n. */
+typedef struct {
+    size_t n, col;
+    bkf_stabmap_point pts[SEED_MAX];
+    size_t count, spectra;
+    int status;
+    bkf_error err;
+} seed_task;
+
+/* Column i's bottom: the window's, or just above the existence boundary
+ * (where the root's spectrum is the sonic limit's, refused). */
+static double column_lo(const bkf_stability_spec *spec, size_t n, double g)
+{
+    return fmax(spec->S, 1.05 * (double)n * g);
+}
+
+/* The S of each crossing of curve c with the vertical nu = x, into S[]
+ * (at most max), with the side that is stable above. */
+static size_t curve_crossings(const traced_curve *c, double x, double *S, int *above, size_t max)
+{
+    size_t m = 0;
+    const bkf_stabmap_point *p = c->pts.p;
+    if (c->pts.n == 1 && p[0].nu == x && m < max) {
+        S[m] = p[0].S;
+        above[m++] = p[0].stable_above;
+    }
+    for (size_t i = 0; i + 1 < c->pts.n && m < max; i++) {
+        double a = p[i].nu, b = p[i + 1].nu;
+        /* half-open, so a vertex on x counts once */
+        if (!((a <= x && x < b) || (b < x && x <= a) || (i + 2 == c->pts.n && b == x))) continue;
+        double t = b == a ? 0 : (x - a) / (b - a);
+        S[m] = p[i].S + t * (p[i + 1].S - p[i].S);
+        above[m++] = t < 0.5 ? p[i].stable_above : p[i + 1].stable_above;
+    }
+    return m;
+}
+
+static int on_a_curve(const n_work *w, const bkf_stabmap_point *pt, double gap)
+{
+    double S[SEED_MAX];
+    int above[SEED_MAX];
+    for (size_t c = 0; c < w->count; c++) {
+        size_t m = curve_crossings(&w->c[c], pt->nu, S, above, SEED_MAX);
+        for (size_t j = 0; j < m; j++)
+            if (fabs(S[j] - pt->S) < gap && above[j] == pt->stable_above) return 1;
+    }
+    return 0;
+}
+
+/* The curve through seed point `pt`: traced both ways in nu, the way
+ * towards lower nu reversed in front. */
+static int trace_both_ways(const bkf_stability_spec *spec, const bkf_model_params *params,
+                           size_t n, const bkf_stabmap_point *pt, const bkf_stabmap_window *win,
+                           const bkf_stabmap_options *o, traced_curve *c, size_t *spectra,
+                           bkf_error *err)
+{
+    (void)spec;
+    point_sink half[2] = {{0}, {0}};
+    int s = BKF_OK;
+    for (int d = 0; !s && d < 2; d++) {
+        s = bkf_stabmap_trace(params, n, pt, d ? 1 : -1, win, o, collect, &half[d], &c->end[d],
+                              err);
+        if (!s && half[d].n < c->end[d].points) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        if (!s) *spectra += c->end[d].evaluations;
+    }
+    if (!s) {
+        /* Each half starts at the seed as its run corrected it; a half that
+         * stood on the window's edge has only the seed as the scan closed it
+         * (S to the seed's S-tol): the other half's start replaces it. */
+        size_t skip0 = half[0].n == 1 && half[1].n > 1, skip1 = !skip0 && half[0].n >= 1;
+        size_t n0 = half[0].n - skip0, n1 = half[1].n - (half[1].n ? skip1 : 0);
+        size_t total = n0 + n1;
+        c->pts.p = malloc((total ? total : 1) * sizeof *c->pts.p);
+        if (!c->pts.p) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        for (size_t i = 0; !s && i < n0; i++) c->pts.p[i] = half[0].p[half[0].n - 1 - i];
+        for (size_t i = 0; !s && i < n1; i++) c->pts.p[n0 + i] = half[1].p[half[1].n - n1 + i];
+        c->pts.n = c->pts.cap = s ? 0 : total;
+    }
+    free(half[0].p);
+    free(half[1].p);
+    return s;
+}
+
+/* Every crossing of n's seed columns that no curve found so far passes,
+ * followed. */
+static void follow_n(const bkf_stability_spec *spec, const seed_task *seeds, size_t ncol,
+                     const bkf_stabmap_window *win, n_work *w)
+{
+    bkf_model_params params = params_of(spec);
+    bkf_stabmap_options o = stabmap_options_of(spec);
+    o.S_step = (spec->S_to - spec->S) / (double)spec->S_samples;
+    double gap = 1.5 * o.S_step;
+    for (size_t k = 0; !w->status && k < ncol; k++) {
+        const seed_task *t = &seeds[k];
+        for (size_t j = 0; !w->status && j < t->count; j++) {
+            if (on_a_curve(w, &t->pts[j], gap)) continue;
+            traced_curve *g = realloc(w->c, (w->count + 1) * sizeof *g);
+            if (!g) {
+                w->status = bkf_error_set(&w->err, BKF_ENOMEM, "out of memory");
+                break;
+            }
+            w->c = g;
+            memset(&w->c[w->count], 0, sizeof *w->c);
+            w->status = trace_both_ways(spec, &params, w->n, &t->pts[j], win, &o,
+                                        &w->c[w->count], &w->spectra, &w->err);
+            if (!w->status) w->count++;
+        }
+    }
+}
+
+/* A run of grid columns where n exists and no curve crosses: one sign
+ * throughout (no curve has a point between its columns either), so one
+ * spectrum, at its middle column's middle S, gives its state. */
+typedef struct {
+    size_t n, first, last, mid;
+    double S;
+    int status, stable; /* stable: 1, 0, or -1 (undecided) */
+} state_run;
+
+static int curves_between(const n_work *w, double a, double b)
+{
+    double lo = fmin(a, b), hi = fmax(a, b);
+    for (size_t c = 0; c < w->count; c++)
+        for (size_t i = 0; i < w->c[c].pts.n; i++)
+            if (w->c[c].pts.p[i].nu > lo && w->c[c].pts.p[i].nu < hi) return 1;
+    return 0;
+}
+
+static int follow_stability(const bkf_stability_spec *spec, const double *nus, size_t nnu,
+                            const double *g, diagram_sink *k, size_t *spectra, bkf_error *err)
+{
+    bkf_model_params params = params_of(spec);
+    bkf_stabmap_options o = stabmap_options_of(spec);
+    /* A seed needs S only to within its curve's continuation, which
+     * corrects it: its bracket is closed to a tenth of a scan step. */
+    bkf_stabmap_options seed_o = o;
+    seed_o.S_tol = fmax(o.S_tol, 0.1 * (spec->S_to - spec->S) / (double)spec->S_samples);
+    size_t N = spec->n;
+    /* seed columns: grid columns about seed_step apart, both ends included */
+    size_t ncol = (size_t)ceil(fabs(nus[nnu - 1] - nus[0]) / spec->seed_step - 1e-9) + 1;
+    if (ncol > nnu) ncol = nnu;
+    if (ncol < 2 && nnu > 1) ncol = 2;
+    size_t *col = malloc(ncol * sizeof *col);
+    seed_task *seeds = calloc(N * ncol, sizeof *seeds);
+    n_work *w = calloc(N, sizeof *w);
+    state_run *runs = NULL;
+    size_t nruns = 0;
+    int s = col && seeds && w ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    int threads = 1;
+#ifdef _OPENMP
+    threads = spec->threads ? (int)spec->threads : omp_get_max_threads();
+#endif
+    (void)threads;
+    for (size_t c = 0; !s && c < ncol; c++)
+        col[c] = ncol == 1 ? 0 : (size_t)llround((double)c * (double)(nnu - 1) / (double)(ncol - 1));
+    /* 1. the seed grid: each column scanned in S, its sign changes closed */
+    size_t ntask = s ? 0 : N * ncol;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (size_t i = 0; i < ntask; i++) {
+        seed_task *t = &seeds[i];
+        t->n = i / ncol + 1;
+        t->col = col[i % ncol];
+        bkf_model_params p = params;
+        p.nu = nus[t->col];
+        double lo = column_lo(spec, t->n, g[t->col]);
+        if (!(lo < spec->S_to)) continue;
+        size_t samples = (size_t)ceil((double)spec->S_samples * (spec->S_to - lo) /
+                                      (spec->S_to - spec->S));
+        if (samples < 2) samples = 2;
+        t->status = bkf_stabmap_scan(&p, t->n, lo, spec->S_to, samples, &seed_o, t->pts, SEED_MAX,
+                                     &t->count, &t->err);
+        t->spectra = samples + 1;
+        for (size_t j = 0; j < t->count; j++) t->spectra += t->pts[j].evaluations - 2;
+    }
+    for (size_t i = 0; !s && i < ntask; i++) {
+        if (seeds[i].status) s = bkf_error_set(err, seeds[i].status, "%s", seeds[i].err.message);
+        *spectra += seeds[i].spectra;
+    }
+    /* 2. the curves through the seeds, each n on its own */
+    bkf_stabmap_window win = {fmin(nus[0], nus[nnu - 1]), fmax(nus[0], nus[nnu - 1]), spec->S,
+                              spec->S_to};
+    size_t nn = s ? 0 : N;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (size_t i = 0; i < nn; i++) {
+        w[i].n = i + 1;
+        follow_n(spec, seeds + i * ncol, ncol, &win, &w[i]);
+    }
+    for (size_t i = 0; !s && i < nn; i++) {
+        if (w[i].status) s = bkf_error_set(err, w[i].status, "%s", w[i].err.message);
+        *spectra += w[i].spectra;
+    }
+    /* 3. the columns without a crossing, in runs */
+    for (size_t i = 0; !s && i < N; i++) {
+        size_t n = i + 1;
+        state_run cur = {0};
+        int open = 0;
+        for (size_t j = 0; j <= nnu; j++) {
+            int free_col = 0;
+            if (j < nnu && column_lo(spec, n, g[j]) < spec->S_to) {
+                double S[SEED_MAX];
+                int above[SEED_MAX];
+                size_t m = 0;
+                for (size_t c = 0; c < w[i].count && !m; c++)
+                    m = curve_crossings(&w[i].c[c], nus[j], S, above, SEED_MAX);
+                free_col = m == 0;
+            }
+            if (open && (!free_col || curves_between(&w[i], nus[cur.last], nus[j]))) {
+                state_run *r = realloc(runs, (nruns + 1) * sizeof *r);
+                if (!r) {
+                    s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+                    break;
+                }
+                runs = r;
+                cur.mid = (cur.first + cur.last) / 2;
+                cur.S = 0.5 * (column_lo(spec, n, g[cur.mid]) + spec->S_to);
+                runs[nruns++] = cur;
+                open = 0;
+            }
+            if (free_col && !open) {
+                cur = (state_run){n, j, j, j, 0, 0, -1};
+                open = 1;
+            } else if (free_col) {
+                cur.last = j;
+            }
+        }
+    }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (size_t r = 0; r < (s ? 0 : nruns); r++) {
+        bkf_model_params q = params;
+        q.nu = nus[runs[r].mid];
+        q.S = runs[r].S;
+        double sg, sge, v, mu;
+        bkf_error e;
+        runs[r].status = bkf_stabmap_sigma(&q, runs[r].n, 0, o.tol, &sg, &sge, &v, &mu, &e);
+        /* a refused or undecided sigma leaves the run without a state */
+        if (!runs[r].status && fabs(sg) > sge) runs[r].stable = sg < 0;
+    }
+    for (size_t r = 0; !s && r < nruns; r++) {
+        if (runs[r].status == BKF_ENOMEM) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        (*spectra)++;
+    }
+    /* the rows: curves by n, then the states (curve 0) */
+    for (size_t i = 0; !s && i < nn; i++)
+        for (size_t c = 0; c < w[i].count; c++) {
+            traced_curve *tc = &w[i].c[c];
+            k->curves++;
+            for (size_t j = 0; j < tc->pts.n; j++) {
+                const bkf_stabmap_point *q = &tc->pts.p[j];
+                add_row(k, "stability", w[i].n, 0, q->nu, q->S, q->S_err, q->nu_err,
+                        q->stable_above);
+            }
+            char *note = malloc(700);
+            char **notes = realloc(k->notes, (k->nnotes + 1) * sizeof *notes);
+            if (notes) k->notes = notes;
+            if (!note || !notes) {
+                free(note);
+                k->failed = 1;
+                break;
+            }
+            const bkf_stabmap_point *a = &tc->pts.p[0], *b = &tc->pts.p[tc->pts.n - 1];
+            snprintf(note, 700,
+                     "curve %zu (n %zu): %zu points, %zu spectra; ends at nu %.6g, S %.6g: %s%s%.250s"
+                     "; at nu %.6g, S %.6g: %s%s%.250s",
+                     k->curves, w[i].n, tc->pts.n, tc->end[0].evaluations + tc->end[1].evaluations,
+                     a->nu, a->S, bkf_stabmap_end_name(tc->end[0].end),
+                     tc->end[0].note[0] ? ", " : "", tc->end[0].note, b->nu, b->S,
+                     bkf_stabmap_end_name(tc->end[1].end), tc->end[1].note[0] ? ", " : "",
+                     tc->end[1].note);
+            k->notes[k->nnotes++] = note;
+        }
+    for (size_t r = 0; !s && r < nruns; r++) {
+        if (runs[r].stable < 0) continue;
+        size_t curves = k->curves;
+        k->curves = 0;
+        add_row(k, "state", runs[r].n, 0, nus[runs[r].mid], runs[r].S, 0, 0, runs[r].stable);
+        k->curves = curves;
+    }
+    for (size_t i = 0; w && i < N; i++) {
+        for (size_t c = 0; c < w[i].count; c++) free(w[i].c[c].pts.p);
+        free(w[i].c);
+    }
+    free(w);
+    free(seeds);
+    free(col);
+    free(runs);
+    return s;
+}
+
+static int diagram_curves(const bkf_stability_spec *spec, const double *nus, size_t nnu,
+                          diagram_sink *k, size_t *spectra, bkf_error *err)
+{
+    bkf_model_params params = params_of(spec);
+    double *g = calloc(nnu, sizeof *g);
+    nu_bands *b = calloc(nnu, sizeof *b);
+    int s = g && b ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    /* existence: S = n c gamma g_inf(nu), one speeds solve per nu for every n */
+    for (size_t i = 0; !s && i < nnu; i++) {
+        bkf_model_params p = params;
+        p.nu = nus[i];
+        int attained;
+        s = bkf_stabmap_existence(&p, 1, &g[i], &attained, err);
+    }
+    for (size_t n = 1; !s && n <= spec->n; n++) {
+        k->curves++;
+        for (size_t i = 0; i < nnu; i++)
+            if (add_row(k, "existence", n, 0, nus[i], (double)n * g[i], 0, 0, 1)) break;
+    }
+    if (!s && !k->failed)
+        s = spec->scan ? scan_stability(spec, nus, nnu, g, k, spectra, err)
+                       : follow_stability(spec, nus, nnu, g, k, spectra, err);
     /* the oscillation: its unstable bands per nu, then one curve per edge */
+    int threads = 1;
+#ifdef _OPENMP
+    threads = spec->threads ? (int)spec->threads : omp_get_max_threads();
+#endif
+    (void)threads;
+    int *bs = s ? NULL : calloc(nnu, sizeof *bs);
+    bkf_error *be = s ? NULL : calloc(nnu, sizeof *be);
+    if (!s && (!bs || !be)) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (size_t i = 0; i < (s ? 0 : nnu); i++)
+        bs[i] = bkf_stabmap_bands(spec->gamma, spec->c, nus[i], 6, 120, 1e-7, b[i].lo, b[i].hi,
+                                  b[i].kind, DIAGRAM_BANDS, &b[i].count, &be[i]);
     for (size_t i = 0; !s && i < nnu; i++)
-        s = bkf_stabmap_bands(spec->gamma, spec->c, nus[i], 6, 120, 1e-7, b[i].lo, b[i].hi,
-                              b[i].kind, DIAGRAM_BANDS, &b[i].count, err);
+        if (bs[i]) s = bkf_error_set(err, bs[i], "%s", be[i].message);
+    free(bs);
+    free(be);
     double two_pi_c = 6.283185307179586477 * spec->c;
     /* long wave: unstable for S > 2 pi c / p_b (m = 1 is in the band first) */
     if (!s) {
@@ -602,7 +962,7 @@ static int diagram_curves(const bkf_stability_spec *spec, const double *nus, siz
             int here = 0;
             for (size_t j = 0; j < b[i].count; j++)
                 if (b[i].lo[j] == 0) {
-                    add_row(k, "long_wave", 0, 1, nus[i], two_pi_c / b[i].hi[j], 0, 0);
+                    add_row(k, "long_wave", 0, 1, nus[i], two_pi_c / b[i].hi[j], 0, 0, 0);
                     here = 1;
                 }
             /* a nu without the band ends the curve: the next piece is another */
@@ -623,7 +983,7 @@ static int diagram_curves(const bkf_stability_spec *spec, const double *nus, siz
                     if (two_pi_c * (double)m / b[i].hi[j] > spec->S_to) continue;
                     any = 1;
                     add_row(k, b[i].kind[j] ? "period_doubling" : "other", 0, m, nus[i], S, 0,
-                            edge);
+                            0, edge);
                 }
         }
         if (!any) {
@@ -680,15 +1040,27 @@ static int write_diagram(const bkf_stability_spec *spec, FILE *out, bkf_io_forma
         s = bkf_io_table_commentf(
             table, err,
             "kinds: existence (S = n c gamma g_inf(nu): trains exist above), stability "
-            "(sigma_max = 0; above 1: stable above), state (curve 0: a nu where n has no "
-            "crossing in S, its spectrum at S; above 1: stable there), long_wave and "
+            "(sigma_max = 0; above 1: stable above; S_err, nu_err: the point's error at fixed "
+            "nu, at fixed S), state (curve 0: a nu where n has no crossing in S, its spectrum "
+            "at S, which holds for the run of such columns around it that no curve enters; "
+            "above 1: stable there), long_wave and "
             "period_doubling (the oscillation's mode q = 2 pi m / S at a band edge; above 1: "
             "stable above)");
-    if (!s)
+    if (!s && spec->scan)
         s = bkf_io_table_commentf(table, err,
                                   "work: %zu spectra (a scan in S of %zu steps per n and nu, "
                                   "each crossing closed to S-tol)",
                                   spectra, spec->S_samples);
+    if (!s && !spec->scan)
+        s = bkf_io_table_commentf(
+            table, err,
+            "work: %zu spectra (seed columns about %.6g apart in nu, each scanned in S in %zu "
+            "steps; every crossing no curve passes followed by pseudo-arclength continuation in "
+            "(nu, S), steps at most %.6g in nu and %.6g in S; one spectrum per run of columns "
+            "no curve crosses: the state rows)",
+            spectra, spec->seed_step, spec->S_samples, spec->nu_step,
+            (spec->S_to - spec->S) / (double)spec->S_samples);
+    for (size_t i = 0; !s && i < k.nnotes; i++) s = bkf_io_table_commentf(table, err, "%s", k.notes[i]);
     if (!s) s = number_result(table, "curves", (double)k.curves, err);
     if (!s) s = number_result(table, "spectra", (double)spectra, err);
     if (!s) s = bkf_product_table_command(table, prov, err);
@@ -697,12 +1069,15 @@ static int write_diagram(const bkf_stability_spec *spec, FILE *out, bkf_io_forma
         bkf_io_value v[NDIAGRAM] = {{(double)r->curve, NULL}, {0, r->kind},
                                     {(double)r->n, NULL},     {(double)r->m, NULL},
                                     {r->nu, NULL},            {r->S, NULL},
-                                    {r->S_err, NULL},         {r->above, NULL}};
+                                    {r->S_err, NULL},         {r->above, NULL},
+                                    {r->nu_err, NULL}};
         s = bkf_io_table_row(table, v, err);
     }
     if (!s) s = bkf_io_table_finish(table, err);
     bkf_io_table_free(table);
     free(k.r);
+    for (size_t i = 0; i < k.nnotes; i++) free(k.notes[i]);
+    free(k.notes);
     return s;
 }
 

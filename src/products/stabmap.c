@@ -5,19 +5,21 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bkfront/continuation.h"
 #include "bkfront/floquet.h"
 #include "bkfront/speeds.h"
 #include "bkfront/trainspec.h"
 
 bkf_stabmap_options bkf_stabmap_options_default(void)
 {
-    bkf_stabmap_options o = {1e-6, 1e-3, 0.01, 1000};
+    bkf_stabmap_options o = {1e-6, 1e-3, 0.01, 1000, 0.5};
     return o;
 }
 
 const char *bkf_stabmap_end_name(bkf_stabmap_end end)
 {
-    static const char *const names[] = {"reached", "fold", "no_root", "refused", "max_points"};
+    static const char *const names[] = {"reached", "fold",   "no_root", "refused",
+                                         "max_points", "window", "stalled"};
     return (unsigned)end < sizeof names / sizeof names[0] ? names[end] : "?";
 }
 
@@ -139,6 +141,7 @@ static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_sta
     pt->sigma_bound = best.bound;
     pt->slope = slope;
     pt->stable_above = slope < 0;
+    pt->nu_slope = NAN;
     return BKF_OK;
 }
 
@@ -278,6 +281,266 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
     }
     if (report) *report = rep;
     return BKF_OK;
+}
+
+/* ------------------------------------------------------------------ trace */
+
+/* Spectra kept for reuse: the driver evaluates the start twice (its
+ * correction, its tangent), and each accepted point is the last spectrum. */
+#define TRACE_CACHE 4
+/* Halvings of the arclength step before a curve is given up as stalled:
+ * each costs a spectrum or two. */
+#define TRACE_STEP_MIN (1.0 / 64)
+
+typedef struct {
+    double nu, S;
+    sample s;
+} trace_eval;
+
+typedef struct {
+    sigma_fn fn;
+    double scale[2];
+    double grad[2];        /* d sigma_max / d(nu, S), Broyden-updated */
+    trace_eval cache[TRACE_CACHE], last;
+    size_t cached, next;
+    int have_last;
+    int failed;            /* the last refusal's end kind, or -1 */
+    bkf_error why;
+    double S_lo, S_hi;
+    bkf_stabmap_visit visit;
+    void *data;
+    bkf_stabmap_report rep;
+    size_t max_points, at_last_point;
+} trace_ctx;
+
+static const trace_eval *trace_cached(const trace_ctx *t, double nu, double S)
+{
+    for (size_t i = 0; i < t->cached; i++)
+        if (t->cache[i].nu == nu && t->cache[i].S == S) return &t->cache[i];
+    return NULL;
+}
+
+/* Broyden's rank-one secant update in the scaled coordinates, from the
+ * previous spectrum to this one, where the change is above the noise
+ * (sigma_err): steps along the curve turn the gradient normal to it,
+ * Newton's steps across it correct its length. */
+static void trace_broyden(trace_ctx *t, const trace_eval *e)
+{
+    if (t->have_last) {
+        double w[2] = {(e->nu - t->last.nu) / t->scale[0], (e->S - t->last.S) / t->scale[1]};
+        double G[2] = {t->grad[0] * t->scale[0], t->grad[1] * t->scale[1]};
+        double ww = w[0] * w[0] + w[1] * w[1], df = e->s.f - t->last.s.f;
+        double pred = G[0] * w[0] + G[1] * w[1], noise = e->s.err + t->last.s.err;
+        int bounded = isfinite(e->s.bound) || isfinite(t->last.s.bound);
+        if (ww > 1e-16 && !bounded && noise < 0.05 * fmax(fabs(df), fabs(pred))) {
+            for (int i = 0; i < 2; i++) G[i] += (df - pred) * w[i] / ww;
+            t->grad[0] = G[0] / t->scale[0];
+            t->grad[1] = G[1] / t->scale[1];
+        }
+    }
+    t->last = *e;
+    t->have_last = 1;
+}
+
+/* sigma_max at (nu, S) into *out (cached, the gradient updated); BKF_OK, a
+ * refusal's status (t->failed says which), or another failure. */
+static int trace_eval_at(trace_ctx *t, double nu, double S, trace_eval *out, bkf_error *err)
+{
+    const trace_eval *hit = trace_cached(t, nu, S);
+    if (hit) {
+        *out = *hit;
+        return BKF_OK;
+    }
+    out->nu = nu;
+    out->S = S;
+    t->fn.p.nu = nu;
+    int s = eval_at(&t->fn, S, &out->s, err);
+    if (s) {
+        t->failed = end_of(s);
+        if (t->failed >= 0) {
+            snprintf(t->why.message, sizeof t->why.message, "at nu %.6g, S %.6g: %.200s", nu, S,
+                     err ? err->message : "");
+            t->why.status = s;
+        }
+        return s;
+    }
+    t->failed = -1;
+    /* the root followed: the next v is predicted from this one */
+    t->fn.v_ref = out->s.v;
+    t->fn.S_ref = S;
+    t->cache[t->next] = *out;
+    t->next = (t->next + 1) % TRACE_CACHE;
+    if (t->cached < TRACE_CACHE) t->cached++;
+    trace_broyden(t, out);
+    return BKF_OK;
+}
+
+static int trace_residual(const double *u, double *g, double *jac, void *data, bkf_error *err)
+{
+    trace_ctx *t = data;
+    if (!(fabs(u[0]) < 1) || !(u[1] > 0))
+        return bkf_error_set(err, BKF_ENUMERIC, "nu %.6g, S %.6g: outside the model's range",
+                             u[0], u[1]);
+    trace_eval e;
+    int s = trace_eval_at(t, u[0], u[1], &e, err);
+    /* no root: the predictor may have stepped past the existence
+     * boundary; a shorter step is tried (the run stalls if the curve ends
+     * there).  A refusal ends the curve at once. */
+    if (s == BKF_EINPUT) return BKF_ENUMERIC;
+    if (s) return s;
+    g[0] = e.s.f;
+    if (jac) {
+        jac[0] = t->grad[0];
+        jac[1] = t->grad[1];
+    }
+    return BKF_OK;
+}
+
+static int trace_accept(const double *u, const double *tangent, int is_fold, void *data)
+{
+    (void)tangent;
+    (void)is_fold;
+    trace_ctx *t = data;
+    trace_eval e;
+    bkf_error err;
+    /* the driver's last evaluation was its tangent's, at u */
+    if (trace_eval_at(t, u[0], u[1], &e, &err)) {
+        t->rep.end = t->failed >= 0 ? (bkf_stabmap_end)t->failed : BKF_STABMAP_END_STALLED;
+        snprintf(t->rep.note, sizeof t->rep.note, "%.250s",
+                 t->failed >= 0 ? t->why.message : err.message);
+        return 1;
+    }
+    bkf_stabmap_point pt = {0};
+    pt.nu = u[0];
+    pt.S = u[1];
+    double miss = fabs(e.s.f) + e.s.err;
+    pt.S_err = miss / fabs(t->grad[1]);
+    pt.nu_err = miss / fabs(t->grad[0]);
+    pt.v = e.s.v;
+    pt.mu = e.s.mu;
+    int bounded = isfinite(e.s.bound);
+    pt.sigma = bounded ? NAN : e.s.f;
+    pt.sigma_err = bounded ? NAN : e.s.err;
+    pt.sigma_bound = e.s.bound;
+    pt.slope = t->grad[1];
+    pt.nu_slope = t->grad[0];
+    pt.stable_above = t->grad[1] < 0;
+    pt.evaluations = t->fn.evaluations - t->at_last_point;
+    t->at_last_point = t->fn.evaluations;
+    t->rep.points++;
+    t->rep.nu_end = pt.nu;
+    if (t->visit && t->visit(&pt, t->data)) return 1;
+    if (pt.S < t->S_lo || pt.S > t->S_hi) {
+        t->rep.end = BKF_STABMAP_END_WINDOW;
+        snprintf(t->rep.note, sizeof t->rep.note, "left S in [%.6g, %.6g] at nu %.6g, S %.6g",
+                 t->S_lo, t->S_hi, pt.nu, pt.S);
+        return 1;
+    }
+    if (t->rep.points >= t->max_points) {
+        t->rep.end = BKF_STABMAP_END_POINTS;
+        return 1;
+    }
+    return 0;
+}
+
+int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabmap_point *first,
+                      int direction, const bkf_stabmap_window *window,
+                      const bkf_stabmap_options *options, bkf_stabmap_visit visit, void *data,
+                      bkf_stabmap_report *report, bkf_error *err)
+{
+    bkf_stabmap_options o = options ? *options : bkf_stabmap_options_default();
+    if (report) *report = (bkf_stabmap_report){0};
+    if (!params || !first || !window || (direction != 1 && direction != -1))
+        return bkf_error_set(err, BKF_EINPUT, "trace: params, first, window and direction +-1");
+    const bkf_stabmap_window *w = window;
+    if (!(w->nu_lo < w->nu_hi) || !(w->nu_lo > -1) || !(w->nu_hi < 1) || !(w->S_lo < w->S_hi) ||
+        !(w->S_lo > 0) || !isfinite(w->S_hi))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "trace: window nu_lo < nu_hi in (-1, 1), 0 < S_lo < S_hi finite");
+    if (!(first->nu >= w->nu_lo && first->nu <= w->nu_hi) || !(first->S > 0))
+        return bkf_error_set(err, BKF_EINPUT, "trace: first point nu %.6g outside [%.6g, %.6g]",
+                             first->nu, w->nu_lo, w->nu_hi);
+    if (!(o.nu_step > 0) || !(o.S_step > 0) || !(o.S_tol > 0) || o.max_points < 1)
+        return bkf_error_set(err, BKF_EINPUT, "trace: nu_step, S_step, S_tol > 0, max_points >= 1");
+    trace_ctx t;
+    memset(&t, 0, sizeof t);
+    t.fn = (sigma_fn){*params, n, o.tol, first->v, first->S, 0};
+    t.scale[0] = o.nu_step;
+    t.scale[1] = o.S_step;
+    t.failed = -1;
+    t.S_lo = w->S_lo;
+    t.S_hi = w->S_hi;
+    t.visit = visit;
+    t.data = data;
+    t.max_points = o.max_points;
+    t.rep.end = BKF_STABMAP_END_REACHED;
+    t.rep.nu_end = first->nu;
+    int s = BKF_OK;
+    /* Already on the edge it would leave by: nothing to follow. */
+    if ((direction > 0 && first->nu >= w->nu_hi) || (direction < 0 && first->nu <= w->nu_lo)) {
+        t.rep.points = 1;
+        if (visit) visit(first, data);
+        goto done;
+    }
+    /* The start's gradient: d sigma / dS from its bracket, d sigma / d nu
+     * from a difference along the way it goes. */
+    trace_eval e0, e1;
+    double h = 0.25 * o.nu_step * direction;
+    if (first->nu + h > w->nu_hi || first->nu + h < w->nu_lo) h = -h;
+    bkf_error e;
+    s = trace_eval_at(&t, first->nu, first->S, &e0, &e);
+    if (!s) s = trace_eval_at(&t, first->nu + h, first->S, &e1, &e);
+    if (s) goto failed;
+    t.grad[0] = (e1.s.f - e0.s.f) / h;
+    t.grad[1] = isfinite(first->slope) && first->slope != 0 ? first->slope : NAN;
+    if (!isfinite(t.grad[1])) {
+        trace_eval e2;
+        double hS = 0.25 * o.S_step;
+        s = trace_eval_at(&t, first->nu, first->S + hS, &e2, &e);
+        if (s) goto failed;
+        t.grad[1] = (e2.s.f - e0.s.f) / hS;
+    }
+    t.last = e0; /* the driver's first evaluation is at the start */
+    bkf_cont_options co = bkf_cont_options_default(1);
+    co.scale = t.scale;
+    co.step_initial = 0.5;
+    co.step_max = 1;
+    co.step_min = TRACE_STEP_MIN;
+    /* Newton's step judged against max(|u_i|, scale_i): S to within S_tol,
+     * nu to within the same distance in the scaled norm (a steep curve's S
+     * at fixed nu is then known to S_err, which says how well). */
+    double nu_mag = fmax(fmax(fabs(w->nu_lo), fabs(w->nu_hi)), o.nu_step);
+    co.newton_tol = fmin(o.S_tol / fmax(w->S_hi, o.S_step), o.S_tol * o.nu_step / (o.S_step * nu_mag));
+    co.newton_max_iter = 5;
+    co.max_points = o.max_points + 1;
+    co.stop_index = 0;
+    co.stop_min = w->nu_lo;
+    co.stop_max = w->nu_hi;
+    double u0[2] = {first->nu, first->S};
+    bkf_cont_report cr;
+    s = bkf_cont_run(trace_residual, trace_accept, &t, u0, 0, direction, &co, &cr, &e);
+    if (!s) {
+        if (cr.reached_bound) t.rep.end = BKF_STABMAP_END_REACHED;
+        goto done;
+    }
+failed:
+    if (s == BKF_ENUMERIC) {
+        t.rep.end = t.failed == BKF_STABMAP_END_NO_ROOT ? BKF_STABMAP_END_NO_ROOT
+                                                          : BKF_STABMAP_END_STALLED;
+        snprintf(t.rep.note, sizeof t.rep.note, "%.250s",
+                 t.failed == BKF_STABMAP_END_NO_ROOT ? t.why.message : e.message);
+        s = BKF_OK;
+    } else if (end_of(s) >= 0) {
+        t.rep.end = (bkf_stabmap_end)end_of(s);
+        snprintf(t.rep.note, sizeof t.rep.note, "%.250s", t.why.message);
+        s = BKF_OK;
+    } else {
+        bkf_error_set(err, s, "%s", e.message);
+    }
+done:
+    t.rep.evaluations = t.fn.evaluations;
+    if (report) *report = t.rep;
+    return s;
 }
 
 int bkf_stabmap_existence(const bkf_model_params *params, size_t n, double *S, int *attained,

@@ -280,6 +280,14 @@ TEST(cli_stability_rejects_bad_input)
     bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--boundary", "--to", "-0.9", "--S-to",
                       "24", "--nu-step", "0"),
               "stability", "--nu-step", "--nu-step 0");
+    bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--scan"), "stability", "--scan",
+              "--scan without --diagram");
+    bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--boundary", "--to", "-0.9", "--S-to",
+                      "24", "--seed-step", "0.05"),
+              "stability", "--seed-step", "--seed-step with --boundary");
+    bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--diagram", "--to", "-0.9", "--S-to",
+                      "24", "--seed-step", "3"),
+              "stability", "--seed-step", "--seed-step 3");
     bad_input(BKF_CLI("speeds", PAPER, "--stability-tol", "1e-5"), "speeds", "--stability-tol",
               "--stability-tol without --stability");
     bad_input(BKF_CLI("speeds", PAPER, "--stability", "--stability-tol", "1"), "speeds",

@@ -295,6 +295,21 @@ static int keep_points(const bkf_stabmap_point *pt, void *data)
     return 0;
 }
 
+typedef struct {
+    bkf_stabmap_point *p;
+    size_t n;
+} point_list;
+
+static int keep_all(const bkf_stabmap_point *pt, void *data)
+{
+    point_list *l = data;
+    bkf_stabmap_point *g = realloc(l->p, (l->n + 1) * sizeof *g);
+    if (!g) return 1;
+    l->p = g;
+    l->p[l->n++] = *pt;
+    return 0;
+}
+
 TEST(stabmap_boundary_point_recomputed)
 {
     bkf_error e;
@@ -313,6 +328,53 @@ TEST(stabmap_boundary_point_recomputed)
     CHECK(rep.points >= 3);
     CHECK(fabs(last.nu + 0.94) < 1e-12 || rep.end != BKF_STABMAP_END_REACHED);
     check_crossing(&p, &last);
+}
+
+/* The boundary followed by pseudo-arclength continuation in (nu, S): every
+ * point where direct spectra (bkf_stabmap_sigma, the fastest root: not the
+ * trace's continued one) on either side in S have opposite signs, the side
+ * given by stable_above, within the S_err the point claims; the last point
+ * likewise in nu (at fixed S, by the sign of d sigma / d nu) within its
+ * nu_err, and on the window's edge exactly. */
+TEST(stabmap_trace_points_straddle_the_sign_change)
+{
+    bkf_error e;
+    bkf_model_params p = bkf_model_params_paper();
+    bkf_stabmap_options o = bkf_stabmap_options_default();
+    o.nu_step = 0.004;
+    o.S_step = 0.5;
+    bkf_stabmap_point pt;
+    int found;
+    CHECK_STATUS(bkf_stabmap_locate(&p, 4, 18, 26, 4, &o, &pt, &found, &e), BKF_OK);
+    CHECK(found);
+    bkf_stabmap_window w = {-0.965, -0.955, 2, 40};
+    point_list pts = {0};
+    bkf_stabmap_report rep;
+    CHECK_STATUS(bkf_stabmap_trace(&p, 4, &pt, 1, &w, &o, keep_all, &pts, &rep, &e), BKF_OK);
+    CHECK_MSG(rep.end == BKF_STABMAP_END_REACHED, "end %s: %s", bkf_stabmap_end_name(rep.end),
+              rep.note);
+    CHECK(pts.n == rep.points && pts.n >= 3);
+    CHECK(pts.n > 0 && pts.p[pts.n - 1].nu == -0.955);
+    for (size_t i = 0; i < pts.n; i++) {
+        CHECK(pts.p[i].S_err > 0 && pts.p[i].S_err < 0.05);
+        CHECK(i == 0 || pts.p[i].nu > pts.p[i - 1].nu);
+        check_crossing(&p, &pts.p[i]);
+    }
+    bkf_stabmap_point *last = &pts.p[pts.n - 1];
+    bkf_model_params q = p;
+    q.S = last->S;
+    double h = fmax(10 * last->nu_err, 1e-3), sig[2], err, v, mu;
+    for (int k = 0; k < 2; k++) {
+        q.nu = last->nu + (k ? h : -h);
+        CHECK_STATUS(bkf_stabmap_sigma(&q, 4, 0, 1e-6, &sig[k], &err, &v, &mu, &e), BKF_OK);
+        CHECK(fabs(sig[k]) > err);
+    }
+    CHECK(last->nu_slope > 0 ? sig[1] > 0 && sig[0] < 0 : sig[1] < 0 && sig[0] > 0);
+    free(pts.p);
+    /* bad input: a window that does not hold the point */
+    w.nu_lo = -0.95;
+    w.nu_hi = -0.94;
+    CHECK_STATUS(bkf_stabmap_trace(&p, 4, &pt, 1, &w, &o, keep_all, &pts, &rep, &e), BKF_EINPUT);
 }
 
 /* The existence boundary S = n c gamma g_inf(nu) against the speed solver:
