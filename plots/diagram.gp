@@ -2,7 +2,8 @@
 # one panel per n, filled where the train is stable (green), exists but is
 # unstable (red: the rest of where it exists), exists with stability unknown (hatched: no crossing and
 # no verdict at that nu), and does not exist (grey, below its existence
-# boundary); the stability boundaries drawn as curves through their points.
+# boundary); the stability boundaries drawn as the curves the command
+# followed (lines through their points, each a computed spectrum).
 # A last panel shows the global oscillation: unstable (violet) above its
 # long-wave threshold and inside each period-doubling tongue.  The regions
 # are polygons that diagram.awk makes from the table's rows; the ranges are
@@ -72,7 +73,7 @@ do for [n = 1:nmax] {
          f using 'nu':(exists_at(n)) with lines lw 2 lc rgb '#333333', \
          for [i = 1:ncurves] f using 'nu': \
            (is('stability') && column('n') == n && column('curve') == i ? column('S') : NaN) \
-           with linespoints lw 2.5 pt 7 ps 0.6 lc rgb '#1a1a1a'
+           with lines lw 2.5 lc rgb '#1a1a1a'
 }
 set title 'global oscillation'
 if (nosc == 0) {
@@ -99,7 +100,7 @@ plot NaN with filledcurves fs solid 1.0 lc rgb c_stable title 'train stable', \
      NaN with filledcurves fs solid 1.0 lc rgb c_unstable title 'train unstable', \
      NaN with filledcurves fs pattern 4 lc rgb '#777777' title 'train, stability unknown', \
      NaN with filledcurves fs solid 1.0 lc rgb c_none title 'no train (below existence)', \
-     NaN with linespoints lw 2.5 pt 7 ps 0.6 lc rgb '#1a1a1a' title 'stability boundary', \
+     NaN with lines lw 2.5 lc rgb '#1a1a1a' title 'stability boundary', \
      NaN with filledcurves fs solid 1.0 lc rgb c_osc title 'oscillation unstable', \
      NaN with lines lw 2 dt 2 lc rgb '#000000' title 'long-wave threshold'
 unset multiplot

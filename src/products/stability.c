@@ -760,9 +760,9 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
     bkf_model_params params = params_of(spec);
     bkf_stabmap_options o = stabmap_options_of(spec);
     /* A seed needs S only to within its curve's continuation, which
-     * corrects it: its bracket is closed to a tenth of a scan step. */
+     * corrects it: its bracket is closed to 3% of a scan step. */
     bkf_stabmap_options seed_o = o;
-    seed_o.S_tol = fmax(o.S_tol, 0.1 * (spec->S_to - spec->S) / (double)spec->S_samples);
+    seed_o.S_tol = fmax(o.S_tol, 0.03 * (spec->S_to - spec->S) / (double)spec->S_samples);
     size_t N = spec->n;
     /* seed columns: grid columns about seed_step apart, both ends included */
     size_t ncol = (size_t)ceil(fabs(nus[nnu - 1] - nus[0]) / spec->seed_step - 1e-9) + 1;

@@ -95,9 +95,13 @@ static int sign_of(double f) { return f > 0 ? 1 : -1; }
 
 /* Closes the bracket [a, b] (f of opposite signs) by the Illinois method:
  * regula falsi whose retained end's value is halved when it is kept twice,
- * so the bracket shrinks on both sides. */
+ * so the bracket shrinks on both sides.  *jump 1: the closed bracket's ends
+ * are different roots (v apart by more than the root moves over its width,
+ * v ~ S): sigma_max jumps there, where a faster root is born in a fold of
+ * the speed condition (n = 6 at gamma 2, c 0.3, nu -0.98, S 19.73: v 0.362
+ * to 0.481, sigma_max -8e-4 to +), and changes sign without a zero. */
 static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_stabmap_point *pt,
-                         bkf_error *err)
+                         int *jump, bkf_error *err)
 {
     int kept = 0;
     double fa = a.f, fb = b.f;
@@ -124,6 +128,8 @@ static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_sta
             kept = 1;
         }
     }
+    double w = fabs(b.S - a.S), v = fmax(a.v, b.v);
+    *jump = fabs(best.f) > best.err && fabs(a.v - b.v) > 1e-3 * v + 4 * v * w / fmin(a.S, b.S);
     double slope = (b.f - a.f) / (b.S - a.S);
     double S = fabs(b.S - a.S) > S_tol ? best.S : (a.S * b.f - b.S * a.f) / (b.f - a.f);
     *pt = (bkf_stabmap_point){0};
@@ -178,9 +184,11 @@ int bkf_stabmap_scan(const bkf_model_params *params, size_t n, double S_from, do
             size_t before = fn.evaluations;
             fn.v_ref = cur.v;
             fn.S_ref = cur.S;
-            int st = close_bracket(&fn, prev, cur, o.S_tol, &points[*count], &e);
+            int jump = 0;
+            int st = close_bracket(&fn, prev, cur, o.S_tol, &points[*count], &jump, &e);
             if (st && end_of(st) < 0) return bkf_error_set(err, st, "%s", e.message);
-            if (!st) {
+            /* a jump of sigma_max is no crossing */
+            if (!st && !jump) {
                 /* the scan's two samples and the solve's */
                 points[*count].evaluations = fn.evaluations - before + 2;
                 (*count)++;
@@ -263,8 +271,16 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
         }
         bkf_stabmap_point next;
         fn.evaluations = 0;
-        s = close_bracket(&fn, a, b, o.S_tol, &next, err);
+        int jump = 0;
+        s = close_bracket(&fn, a, b, o.S_tol, &next, &jump, err);
         rep.evaluations += fn.evaluations;
+        if (!s && jump) {
+            rep.end = BKF_STABMAP_END_FOLD;
+            snprintf(rep.note, sizeof rep.note,
+                     "at nu %.6g: sigma_max jumps at S %.6g, no zero: the root continued ends "
+                     "there (v %.6g, another root beyond)", nu, next.S, cur.v);
+            break;
+        }
         if (s) {
             int end = end_of(s);
             if (end < 0) return s;
@@ -383,10 +399,11 @@ static int trace_residual(const double *u, double *g, double *jac, void *data, b
                              u[0], u[1]);
     trace_eval e;
     int s = trace_eval_at(t, u[0], u[1], &e, err);
-    /* no root: the predictor may have stepped past the existence
-     * boundary; a shorter step is tried (the run stalls if the curve ends
-     * there).  A refusal ends the curve at once. */
-    if (s == BKF_EINPUT) return BKF_ENUMERIC;
+    /* No root, or a refused spectrum, at a trial point (a predictor past
+     * the existence boundary, a Newton iterate off the curve): a shorter
+     * step is tried; when the step can shrink no more the curve ends there,
+     * with this reason. */
+    if (s == BKF_EINPUT || end_of(s) >= 0) return BKF_ENUMERIC;
     if (s) return s;
     g[0] = e.s.f;
     if (jac) {
@@ -525,10 +542,9 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
     }
 failed:
     if (s == BKF_ENUMERIC) {
-        t.rep.end = t.failed == BKF_STABMAP_END_NO_ROOT ? BKF_STABMAP_END_NO_ROOT
-                                                          : BKF_STABMAP_END_STALLED;
+        t.rep.end = t.failed >= 0 ? (bkf_stabmap_end)t.failed : BKF_STABMAP_END_STALLED;
         snprintf(t.rep.note, sizeof t.rep.note, "%.250s",
-                 t.failed == BKF_STABMAP_END_NO_ROOT ? t.why.message : e.message);
+                 t.failed >= 0 ? t.why.message : e.message);
         s = BKF_OK;
     } else if (end_of(s) >= 0) {
         t.rep.end = (bkf_stabmap_end)end_of(s);
