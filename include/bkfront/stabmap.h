@@ -104,7 +104,11 @@ int bkf_stabmap_locate(const bkf_model_params *params, size_t n, double S_from, 
 
 /* Every sign change of sigma_max of train n in S in [S_from, S_to] at
  * params->nu, the same scan closed at each (at most max, in order of S);
- * samples where n has no root or sigma is refused are gaps. */
+ * samples where n has no root or sigma is refused are gaps.  The samples
+ * take the fastest root: where a faster root is born (a fold of the speed
+ * condition) sigma_max may jump across 0 without a zero; a closed bracket
+ * whose ends are different roots is such a jump, no crossing, and is left
+ * out. */
 int bkf_stabmap_scan(const bkf_model_params *params, size_t n, double S_from, double S_to,
                      size_t samples, const bkf_stabmap_options *options, bkf_stabmap_point *points,
                      size_t max, size_t *count, bkf_error *err);

@@ -520,7 +520,10 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
     t.last = e0; /* the driver's first evaluation is at the start */
     bkf_cont_options co = bkf_cont_options_default(1);
     co.scale = t.scale;
-    co.step_initial = 0.5;
+    /* the largest step from the start: the driver grows a step only
+     * after corrections of two iterations, which a secant gradient rarely
+     * gives, and shrinks it on failure */
+    co.step_initial = 1;
     co.step_max = 1;
     co.step_min = TRACE_STEP_MIN;
     /* Newton's step judged against max(|u_i|, scale_i): S to within S_tol,

@@ -377,6 +377,104 @@ TEST(stabmap_trace_points_straddle_the_sign_change)
     CHECK_STATUS(bkf_stabmap_trace(&p, 4, &pt, 1, &w, &o, keep_all, &pts, &rep, &e), BKF_EINPUT);
 }
 
+/* The diagram's rows of one kind and n: curve, nu, S, above. */
+typedef struct {
+    size_t curve[256];
+    double nu[256], S[256];
+    int above[256];
+    size_t count;
+} diagram_rows;
+
+static void rows_of(const char *tsv, const char *kind, int n, diagram_rows *r)
+{
+    char k[32];
+    double x;
+    r->count = 0;
+    for (int i = 0; bkf_tsv_cell(tsv, i, "kind", NULL, k, sizeof k) && r->count < 256; i++) {
+        CHECK(bkf_tsv_cell(tsv, i, "n", &x, NULL, 0));
+        if (strcmp(k, kind) != 0 || (int)x != n) continue;
+        size_t j = r->count++;
+        double c, a;
+        CHECK(bkf_tsv_cell(tsv, i, "curve", &c, NULL, 0) && bkf_tsv_cell(tsv, i, "nu", &r->nu[j], NULL, 0) &&
+              bkf_tsv_cell(tsv, i, "S", &r->S[j], NULL, 0) && bkf_tsv_cell(tsv, i, "above", &a, NULL, 0));
+        r->curve[j] = (size_t)c;
+        r->above[j] = a != 0;
+    }
+}
+
+/* Whether a followed curve (consecutive rows of one curve) crosses the
+ * column nu = x within dS of S, with the same stable side. */
+static int followed_crosses(const diagram_rows *f, double x, double S, int above, double dS)
+{
+    for (size_t i = 0; i + 1 < f->count; i++) {
+        if (f->curve[i] != f->curve[i + 1]) continue;
+        double a = f->nu[i], b = f->nu[i + 1];
+        if (!((a <= x && x <= b) || (b <= x && x <= a))) continue;
+        double t = a == b ? 0 : (x - a) / (b - a), Sx = f->S[i] + t * (f->S[i + 1] - f->S[i]);
+        if (fabs(Sx - S) <= dS && f->above[i] == above) return 1;
+    }
+    return 0;
+}
+
+/* The followed diagram against the grid scan (--scan: every column of the
+ * grid scanned in S and each sign change closed there, no continuation)
+ * at the paper's gamma 2, c 0.3: every crossing the scan finds is on a
+ * followed curve of the same n and stable side within one scan step in S,
+ * and every followed curve that crosses a grid column inside the window
+ * is a crossing the scan finds there within a step. */
+TEST(stabmap_diagram_followed_curves_are_the_scans_crossings)
+{
+    bkf_stability_spec s = paper_spec(2);
+    s.diagram = 1;
+    s.nu = -0.98;
+    s.to = -0.92;
+    s.nu_step = 0.02;
+    s.S = 2;
+    s.S_to = 16;
+    s.S_samples = 7;
+    s.tol = 1e-5;
+    s.S_tol = 0.01;
+    char *followed = library_output(write_stability, &s, BKF_IO_TSV);
+    s.scan = 1;
+    char *scanned = library_output(write_stability, &s, BKF_IO_TSV);
+    CHECK(followed && scanned);
+    double step = (s.S_to - s.S) / (double)s.S_samples;
+    size_t matched = 0;
+    for (int n = 1; followed && scanned && n <= 2; n++) {
+        diagram_rows f, g;
+        rows_of(followed, "stability", n, &f);
+        rows_of(scanned, "stability", n, &g);
+        CHECK(f.count >= 2);
+        for (size_t i = 0; i < g.count; i++) {
+            CHECK_MSG(followed_crosses(&f, g.nu[i], g.S[i], g.above[i], step),
+                      "n %d: the scan's crossing at nu %.4f, S %.4f is on no followed curve", n,
+                      g.nu[i], g.S[i]);
+            matched++;
+        }
+        for (int k = 0; k <= 3; k++) {
+            double x = s.nu + 0.02 * k;
+            for (size_t i = 0; i + 1 < f.count; i++) {
+                if (f.curve[i] != f.curve[i + 1]) continue;
+                double a = f.nu[i], b = f.nu[i + 1];
+                if (!((a <= x && x < b) || (b < x && x <= a))) continue;
+                double Sx = f.S[i] + (x - a) / (b - a) * (f.S[i + 1] - f.S[i]);
+                if (!(Sx > s.S + step && Sx < s.S_to - step)) continue;
+                int found = 0;
+                for (size_t j = 0; j < g.count; j++)
+                    if (fabs(g.nu[j] - x) < 1e-9 && fabs(g.S[j] - Sx) <= step &&
+                        g.above[j] == f.above[i])
+                        found = 1;
+                CHECK_MSG(found, "n %d: the followed curve at nu %.4f, S %.4f: no scan crossing",
+                          n, x, Sx);
+            }
+        }
+    }
+    CHECK(matched >= 3);
+    bkf_test_note("%zu crossings of the scan on the followed curves", matched);
+    free(followed);
+    free(scanned);
+}
+
 /* The existence boundary S = n c gamma g_inf(nu) against the speed solver:
  * no root of n just below it, a root just above; at gamma 2 g does not dip
  * below k, so it is n k(nu) c gamma in closed form. */
