@@ -377,6 +377,42 @@ TEST(stabmap_trace_points_straddle_the_sign_change)
     CHECK_STATUS(bkf_stabmap_trace(&p, 4, &pt, 1, &w, &o, keep_all, &pts, &rep, &e), BKF_EINPUT);
 }
 
+/* Where a faster root of n is born in a fold of the speed condition, the
+ * fastest root's sigma_max jumps across 0 without a zero: n = 1 at nu -0.98
+ * has one root at S 3.2 and three at 3.35 (bkf_speeds_find, the fold
+ * itself), sigma_max of the fastest root is negative at 2.8 and positive at
+ * 3.8, and the scan must report no crossing between (before the fix: one
+ * at S 3.2885 with sigma_max -0.035, drawn as the paper diagram's n = 1
+ * boundary). */
+TEST(stabmap_scan_skips_a_jump_to_a_faster_root)
+{
+    bkf_error e;
+    bkf_model_params p = bkf_model_params_paper();
+    p.nu = -0.98;
+    bkf_speeds_options so = bkf_speeds_options_default();
+    so.n_from = so.n_to = 1;
+    const double S[2] = {3.2, 3.35};
+    const size_t roots[2] = {1, 3};
+    for (int k = 0; k < 2; k++) {
+        bkf_speeds_table t;
+        p.S = S[k];
+        CHECK_STATUS(bkf_speeds_find(&p, &so, &t, &e), BKF_OK);
+        CHECK_MSG(t.count == roots[k], "S %g: %zu roots", S[k], t.count);
+        bkf_speeds_table_free(&t);
+    }
+    double sig[2], err, v, mu;
+    for (int k = 0; k < 2; k++) {
+        p.S = k ? 3.8 : 2.8;
+        CHECK_STATUS(bkf_stabmap_sigma(&p, 1, 0, 1e-6, &sig[k], &err, &v, &mu, &e), BKF_OK);
+    }
+    CHECK(sig[0] < -err && sig[1] > err);
+    bkf_stabmap_options o = bkf_stabmap_options_default();
+    bkf_stabmap_point pts[4];
+    size_t count = 9;
+    CHECK_STATUS(bkf_stabmap_scan(&p, 1, 2.8, 3.8, 2, &o, pts, 4, &count, &e), BKF_OK);
+    CHECK_MSG(count == 0, "a crossing at S %.6g, sigma_max %.3g", pts[0].S, pts[0].sigma);
+}
+
 /* The diagram's rows of one kind and n: curve, nu, S, above. */
 typedef struct {
     size_t curve[256];
@@ -418,7 +454,8 @@ static int followed_crosses(const diagram_rows *f, double x, double S, int above
 
 /* The followed diagram against the grid scan (--scan: every column of the
  * grid scanned in S and each sign change closed there, no continuation)
- * at the paper's gamma 2, c 0.3: every crossing the scan finds is on a
+ * at the paper's gamma 2, c 0.3, n = 1, 2 (n = 2's boundary from S 4.6 at
+ * nu -0.98 to 7.2 at -0.92): every crossing the scan finds is on a
  * followed curve of the same n and stable side within one scan step in S,
  * and every followed curve that crosses a grid column inside the window
  * is a crossing the scan finds there within a step. */
@@ -430,8 +467,8 @@ TEST(stabmap_diagram_followed_curves_are_the_scans_crossings)
     s.to = -0.92;
     s.nu_step = 0.02;
     s.S = 2;
-    s.S_to = 16;
-    s.S_samples = 7;
+    s.S_to = 12;
+    s.S_samples = 6;
     s.tol = 1e-5;
     s.S_tol = 0.01;
     char *followed = library_output(write_stability, &s, BKF_IO_TSV);
@@ -444,7 +481,9 @@ TEST(stabmap_diagram_followed_curves_are_the_scans_crossings)
         diagram_rows f, g;
         rows_of(followed, "stability", n, &f);
         rows_of(scanned, "stability", n, &g);
-        CHECK(f.count >= 2);
+        /* n = 1 has none here: the old scan's boundary at nu -0.98, S 3.29
+         * was a jump to a faster root born in a fold (v 0.357 to 0.499) */
+        CHECK(n == 1 || f.count >= 2);
         for (size_t i = 0; i < g.count; i++) {
             CHECK_MSG(followed_crosses(&f, g.nu[i], g.S[i], g.above[i], step),
                       "n %d: the scan's crossing at nu %.4f, S %.4f is on no followed curve", n,
