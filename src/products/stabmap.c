@@ -327,6 +327,7 @@ typedef struct {
     void *data;
     bkf_stabmap_report rep;
     size_t max_points, at_last_point;
+    double newton_tol;     /* the driver's */
 } trace_ctx;
 
 static const trace_eval *trace_cached(const trace_ctx *t, double nu, double S)
@@ -391,12 +392,34 @@ static int trace_eval_at(trace_ctx *t, double nu, double S, trace_eval *out, bkf
     return BKF_OK;
 }
 
+/* u is the last spectrum's point moved by a Newton step the driver judged
+ * converged: the driver asks there only for the tangent (the Jacobian),
+ * and the point reported is the last spectrum's, whose distance to the
+ * zero its S_err and nu_err give. */
+static int converged_from_last(const trace_ctx *t, const double *u)
+{
+    if (!t->have_last || trace_cached(t, u[0], u[1])) return 0;
+    const double last[2] = {t->last.nu, t->last.S};
+    for (int i = 0; i < 2; i++)
+        if (fabs(u[i] - last[i]) > t->newton_tol * fmax(fabs(u[i]), t->scale[i])) return 0;
+    return 1;
+}
+
 static int trace_residual(const double *u, double *g, double *jac, void *data, bkf_error *err)
 {
     trace_ctx *t = data;
     if (!(fabs(u[0]) < 1) || !(u[1] > 0))
         return bkf_error_set(err, BKF_ENUMERIC, "nu %.6g, S %.6g: outside the model's range",
                              u[0], u[1]);
+    if (converged_from_last(t, u)) {
+        /* the linear model, no spectrum: the driver uses only the Jacobian */
+        g[0] = t->last.s.f + t->grad[0] * (u[0] - t->last.nu) + t->grad[1] * (u[1] - t->last.S);
+        if (jac) {
+            jac[0] = t->grad[0];
+            jac[1] = t->grad[1];
+        }
+        return BKF_OK;
+    }
     trace_eval e;
     int s = trace_eval_at(t, u[0], u[1], &e, err);
     /* No root, or a refused spectrum, at a trial point (a predictor past
@@ -420,16 +443,18 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
     trace_ctx *t = data;
     trace_eval e;
     bkf_error err;
-    /* the driver's last evaluation was its tangent's, at u */
-    if (trace_eval_at(t, u[0], u[1], &e, &err)) {
+    /* the point is the last spectrum, within Newton's tolerance of u */
+    if (converged_from_last(t, u))
+        e = t->last;
+    else if (trace_eval_at(t, u[0], u[1], &e, &err)) {
         t->rep.end = t->failed >= 0 ? (bkf_stabmap_end)t->failed : BKF_STABMAP_END_STALLED;
         snprintf(t->rep.note, sizeof t->rep.note, "%.250s",
                  t->failed >= 0 ? t->why.message : err.message);
         return 1;
     }
     bkf_stabmap_point pt = {0};
-    pt.nu = u[0];
-    pt.S = u[1];
+    pt.nu = e.nu;
+    pt.S = e.S;
     double miss = fabs(e.s.f) + e.s.err;
     pt.S_err = miss / fabs(t->grad[1]);
     pt.nu_err = miss / fabs(t->grad[0]);
@@ -531,6 +556,7 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
      * at fixed nu is then known to S_err, which says how well). */
     double nu_mag = fmax(fmax(fabs(w->nu_lo), fabs(w->nu_hi)), o.nu_step);
     co.newton_tol = fmin(o.S_tol / fmax(w->S_hi, o.S_step), o.S_tol * o.nu_step / (o.S_step * nu_mag));
+    t.newton_tol = co.newton_tol;
     co.newton_max_iter = 5;
     co.max_points = o.max_points + 1;
     co.stop_index = 0;
