@@ -896,6 +896,46 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
                      tc->end[1].note);
             k->notes[k->nnotes++] = note;
         }
+    /* A run's state against its neighbour column's crossings: where the
+     * side of that column's top (or bottom) interval differs from the run's
+     * state and no curve has a point between them, a boundary lies there
+     * that crossed no seed column; it is said, not guessed. */
+    for (size_t r = 0; !s && r < nruns; r++) {
+        const state_run *q = &runs[r];
+        const n_work *wn = &w[q->n - 1];
+        for (int side = 0; q->stable >= 0 && side < 2 && !k->failed; side++) {
+            if (side ? q->last + 1 >= nnu : q->first == 0) continue;
+            size_t j = side ? q->last + 1 : q->first - 1, edge = side ? q->last : q->first;
+            double S[SEED_MAX];
+            int above[SEED_MAX];
+            size_t m = 0;
+            for (size_t c = 0; c < wn->count && !m; c++)
+                m = curve_crossings(&wn->c[c], nus[j], S, above, SEED_MAX);
+            if (!m || curves_between(wn, nus[edge], nus[j])) continue;
+            size_t top = 0, bottom = 0;
+            for (size_t i = 1; i < m; i++) {
+                if (S[i] > S[top]) top = i;
+                if (S[i] < S[bottom]) bottom = i;
+            }
+            /* above a crossing its `above` side, below it the other */
+            if (above[top] == q->stable && (!above[bottom]) == q->stable) continue;
+            char *note = malloc(300);
+            char **notes = realloc(k->notes, (k->nnotes + 1) * sizeof *notes);
+            if (notes) k->notes = notes;
+            if (!note || !notes) {
+                free(note);
+                k->failed = 1;
+                break;
+            }
+            snprintf(note, 300,
+                     "n %zu: between nu %.6g and %.6g a stability boundary crossed no seed "
+                     "column and is not followed (the spectrum at nu %.6g, S %.6g is %s; the "
+                     "curves at nu %.6g say otherwise there)",
+                     q->n, nus[edge], nus[j], nus[q->mid], q->S,
+                     q->stable ? "stable" : "unstable", nus[j]);
+            k->notes[k->nnotes++] = note;
+        }
+    }
     for (size_t r = 0; !s && r < nruns; r++) {
         if (runs[r].stable < 0) continue;
         size_t curves = k->curves;
