@@ -122,8 +122,8 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
                        const bkf_stabmap_options *options, bkf_stabmap_visit visit, void *data,
                        bkf_stabmap_report *report, bkf_error *err);
 
-/* The window a traced curve stays in: nu in [nu_lo, nu_hi] (the run lands
- * on these), S in [S_lo, S_hi] (the first point outside ends it, reported). */
+/* The window a traced curve stays in: nu in [nu_lo, nu_hi] and S in
+ * [S_lo, S_hi], the curve's last point on the edge it leaves by. */
 typedef struct {
     double nu_lo, nu_hi, S_lo, S_hi;
 } bkf_stabmap_window;
@@ -141,8 +141,9 @@ typedef struct {
  * sigma_max (never an interpolation), its S_err = (|sigma| + sigma_err) /
  * |d sigma / dS| and nu_err likewise.  visit gets every point, the first
  * included (nonzero stops: end reached).  The end is an answer: BKF_OK with
- * report->end (reached: nu's edge; window: S left [S_lo, S_hi], the point
- * outside reported; no_root, refused: the spectrum's refusal, note says
+ * report->end (reached: nu's edge; window: S left [S_lo, S_hi], the last
+ * point its crossing of the edge, located by the Illinois method in nu on
+ * S = S_lo or S_hi, when the edge shows the sign change; no_root, refused: the spectrum's refusal, note says
  * where and why; stalled; max_points). */
 int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabmap_point *first,
                       int direction, const bkf_stabmap_window *window,

@@ -317,9 +317,9 @@ typedef struct {
     sigma_fn fn;
     double scale[2];
     double grad[2];        /* d sigma_max / d(nu, S), Broyden-updated */
-    trace_eval cache[TRACE_CACHE], last;
+    trace_eval cache[TRACE_CACHE], last, prev; /* prev: the last point inside */
     size_t cached, next;
-    int have_last;
+    int have_last, have_prev;
     int failed;            /* the last refusal's end kind, or -1 */
     bkf_error why;
     double S_lo, S_hi;
@@ -436,6 +436,65 @@ static int trace_residual(const double *u, double *g, double *jac, void *data, b
     return BKF_OK;
 }
 
+static bkf_stabmap_point trace_point(trace_ctx *t, const trace_eval *e)
+{
+    bkf_stabmap_point pt = {0};
+    pt.nu = e->nu;
+    pt.S = e->S;
+    double miss = fabs(e->s.f) + e->s.err;
+    pt.S_err = miss / fabs(t->grad[1]);
+    pt.nu_err = miss / fabs(t->grad[0]);
+    pt.v = e->s.v;
+    pt.mu = e->s.mu;
+    int bounded = isfinite(e->s.bound);
+    pt.sigma = bounded ? NAN : e->s.f;
+    pt.sigma_err = bounded ? NAN : e->s.err;
+    pt.sigma_bound = e->s.bound;
+    pt.slope = t->grad[1];
+    pt.nu_slope = t->grad[0];
+    pt.stable_above = t->grad[1] < 0;
+    pt.evaluations = t->fn.evaluations - t->at_last_point;
+    t->at_last_point = t->fn.evaluations;
+    return pt;
+}
+
+/* The curve left the window in S between the last point inside and e:
+ * its crossing of the edge S = Sb, by the Illinois method in nu between
+ * the two points' nu (a computed spectrum, as every point), into *out;
+ * 0 when the edge shows no sign change between them or a spectrum fails. */
+static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *out)
+{
+    trace_eval a, b;
+    bkf_error err;
+    if (trace_eval_at(t, t->prev.nu, Sb, &a, &err) || trace_eval_at(t, e->nu, Sb, &b, &err))
+        return 0;
+    if ((a.s.f > 0) == (b.s.f > 0)) return 0;
+    double fa = a.s.f, fb = b.s.f, tol = t->newton_tol * fmax(fabs(e->nu), t->scale[0]);
+    trace_eval best = fabs(a.s.f) < fabs(b.s.f) ? a : b;
+    int kept = 0;
+    for (int it = 0; it < 30 && fabs(b.nu - a.nu) > tol && fabs(best.s.f) > best.s.err; it++) {
+        double nu = (a.nu * fb - b.nu * fa) / (fb - fa), lo = fmin(a.nu, b.nu),
+               hi = fmax(a.nu, b.nu);
+        if (!(nu > lo + 0.02 * (hi - lo) && nu < hi - 0.02 * (hi - lo))) nu = 0.5 * (lo + hi);
+        trace_eval m;
+        if (trace_eval_at(t, nu, Sb, &m, &err)) return 0;
+        if (fabs(m.s.f) < fabs(best.s.f)) best = m;
+        if ((m.s.f > 0) == (a.s.f > 0)) {
+            a = m;
+            fa = m.s.f;
+            if (kept == -1) fb *= 0.5;
+            kept = -1;
+        } else {
+            b = m;
+            fb = m.s.f;
+            if (kept == 1) fa *= 0.5;
+            kept = 1;
+        }
+    }
+    *out = best;
+    return 1;
+}
+
 static int trace_accept(const double *u, const double *tangent, int is_fold, void *data)
 {
     (void)tangent;
@@ -452,32 +511,29 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
                  t->failed >= 0 ? t->why.message : err.message);
         return 1;
     }
-    bkf_stabmap_point pt = {0};
-    pt.nu = e.nu;
-    pt.S = e.S;
-    double miss = fabs(e.s.f) + e.s.err;
-    pt.S_err = miss / fabs(t->grad[1]);
-    pt.nu_err = miss / fabs(t->grad[0]);
-    pt.v = e.s.v;
-    pt.mu = e.s.mu;
-    int bounded = isfinite(e.s.bound);
-    pt.sigma = bounded ? NAN : e.s.f;
-    pt.sigma_err = bounded ? NAN : e.s.err;
-    pt.sigma_bound = e.s.bound;
-    pt.slope = t->grad[1];
-    pt.nu_slope = t->grad[0];
-    pt.stable_above = t->grad[1] < 0;
-    pt.evaluations = t->fn.evaluations - t->at_last_point;
-    t->at_last_point = t->fn.evaluations;
+    if (e.S < t->S_lo || e.S > t->S_hi) {
+        /* the point outside is not drawn; the crossing of the edge is */
+        double Sb = e.S > t->S_hi ? t->S_hi : t->S_lo;
+        trace_eval edge;
+        int landed = t->have_prev && trace_land(t, &e, Sb, &edge);
+        t->rep.end = BKF_STABMAP_END_WINDOW;
+        snprintf(t->rep.note, sizeof t->rep.note,
+                 "left S in [%.6g, %.6g] towards nu %.6g, S %.6g%s", t->S_lo, t->S_hi, e.nu, e.S,
+                 landed ? "; its crossing of the edge computed" : "; the edge not located");
+        if (landed) {
+            bkf_stabmap_point pt = trace_point(t, &edge);
+            t->rep.points++;
+            t->rep.nu_end = pt.nu;
+            if (t->visit) t->visit(&pt, t->data);
+        }
+        return 1;
+    }
+    bkf_stabmap_point pt = trace_point(t, &e);
+    t->prev = e;
+    t->have_prev = 1;
     t->rep.points++;
     t->rep.nu_end = pt.nu;
     if (t->visit && t->visit(&pt, t->data)) return 1;
-    if (pt.S < t->S_lo || pt.S > t->S_hi) {
-        t->rep.end = BKF_STABMAP_END_WINDOW;
-        snprintf(t->rep.note, sizeof t->rep.note, "left S in [%.6g, %.6g] at nu %.6g, S %.6g",
-                 t->S_lo, t->S_hi, pt.nu, pt.S);
-        return 1;
-    }
     if (t->rep.points >= t->max_points) {
         t->rep.end = BKF_STABMAP_END_POINTS;
         return 1;
