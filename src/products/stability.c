@@ -737,12 +737,15 @@ static void follow_n(const bkf_stability_spec *spec, const seed_task *seeds, siz
 }
 
 /* A run of grid columns where n exists and no curve crosses: one sign
- * throughout (no curve has a point between its columns either), so one
- * spectrum, at its middle column's middle S, gives its state. */
+ * throughout (no curve has a point between its columns either) if every
+ * boundary was found: the spectra at its middle column's middle S and at
+ * its two end columns give its state when they agree. */
 typedef struct {
     size_t n, first, last, mid;
     double S;
     int status, stable; /* stable: 1, 0, or -1 (undecided) */
+    int split;          /* its ends' spectra disagree */
+    size_t spectra;
 } state_run;
 
 static int curves_between(const n_work *w, double a, double b)
@@ -845,7 +848,7 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
                 open = 0;
             }
             if (free_col && !open) {
-                cur = (state_run){n, j, j, j, 0, 0, -1};
+                cur = (state_run){n, j, j, j, 0, 0, -1, 0, 0};
                 open = 1;
             } else if (free_col) {
                 cur.last = j;
@@ -857,15 +860,47 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
         bkf_model_params q = params;
         q.nu = nus[runs[r].mid];
         q.S = runs[r].S;
-        double sg, sge, v, mu;
-        bkf_error e;
-        runs[r].status = bkf_stabmap_sigma(&q, runs[r].n, 0, o.tol, &sg, &sge, &v, &mu, &e);
-        /* a refused or undecided sigma leaves the run without a state */
-        if (!runs[r].status && fabs(sg) > sge) runs[r].stable = sg < 0;
+        /* the run's middle and both ends: a boundary that crossed no seed
+         * column shows as ends that disagree, and the run gets no state */
+        const size_t at[3] = {runs[r].mid, runs[r].first, runs[r].last};
+        int verdict[3] = {-1, -1, -1};
+        for (int k = 0; k < 3 && !runs[r].status; k++) {
+            if (k && at[k] == runs[r].mid) {
+                verdict[k] = verdict[0];
+                continue;
+            }
+            double sg, sge, v, mu;
+            bkf_error e;
+            q.nu = nus[at[k]];
+            runs[r].status = bkf_stabmap_sigma(&q, runs[r].n, 0, o.tol, &sg, &sge, &v, &mu, &e);
+            runs[r].spectra++;
+            /* a refused or undecided sigma leaves the run without a state */
+            if (!runs[r].status && fabs(sg) > sge) verdict[k] = sg < 0;
+        }
+        runs[r].split = verdict[0] >= 0 && verdict[1] >= 0 && verdict[2] >= 0 &&
+                        (verdict[1] != verdict[0] || verdict[2] != verdict[0]);
+        if (!runs[r].status && !runs[r].split && verdict[1] == verdict[0] &&
+            verdict[2] == verdict[0])
+            runs[r].stable = verdict[0];
     }
     for (size_t r = 0; !s && r < nruns; r++) {
         if (runs[r].status == BKF_ENOMEM) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        (*spectra)++;
+        *spectra += runs[r].spectra;
+        if (!runs[r].split || k->failed) continue;
+        char *note = malloc(300);
+        char **notes = realloc(k->notes, (k->nnotes + 1) * sizeof *notes);
+        if (notes) k->notes = notes;
+        if (!note || !notes) {
+            free(note);
+            k->failed = 1;
+            continue;
+        }
+        snprintf(note, 300,
+                 "n %zu: between nu %.6g and %.6g (S %.6g) the spectra change sign with no "
+                 "followed curve between: a stability boundary crossed no seed column and is not "
+                 "followed; no state there",
+                 runs[r].n, nus[runs[r].first], nus[runs[r].last], runs[r].S);
+        k->notes[k->nnotes++] = note;
     }
     /* the rows: curves by n, then the states (curve 0) */
     for (size_t i = 0; !s && i < nn; i++)
@@ -1082,7 +1117,8 @@ static int write_diagram(const bkf_stability_spec *spec, FILE *out, bkf_io_forma
             "kinds: existence (S = n c gamma g_inf(nu): trains exist above), stability "
             "(sigma_max = 0; above 1: stable above; S_err, nu_err: the point's error at fixed "
             "nu, at fixed S), state (curve 0: a nu where n has no crossing in S, its spectrum "
-            "at S, which holds for the run of such columns around it that no curve enters; "
+            "at S, which holds for the run of such columns around it that no curve enters, its "
+            "ends' spectra the same; "
             "above 1: stable there), long_wave and "
             "period_doubling (the oscillation's mode q = 2 pi m / S at a band edge; above 1: "
             "stable above)");
