@@ -284,23 +284,27 @@ static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
 
 /* ---------------------------------------------------------- monodromy */
 
-/* The Radau IIA step i at sigma as e[0..3] (row-major) times exp(return
- * value): the growth of the step kept out of e.  It is taken
- * in p = exp(-sigma z / s) u, where the solution that survives varies
- * slowly (see mesh_needs), and turned into u's basis:
- *     (u, u') = exp(k z) K (p, p'),  K = [[1, 0], [k, 1]],  k = sigma / s.
- * With V the stages of p', the stages of p are p0 + h A V, so the six
- * stage equations reduce to three:
- *     (I - h A diag(ap) - h^2 A diag(bp) A) V = p0' + h p0 A bp. */
-static double radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4])
+/* The Radau IIA step i at sigma in p = exp(-sigma z / s) u, where the
+ * solution that survives varies slowly (see mesh_needs): (p, p') after the
+ * step = e (p, p') before it, e[0..3] row-major, and de = de/dsigma when de
+ * is not NULL.  With V the stages of p', the stages of p are p0 + h A V, so
+ * the six stage equations reduce to three:
+ *     G V = (I - h A diag(ap) - h^2 A diag(bp) A) V = p0' + h p0 A bp.
+ * The monodromy is taken in p's basis: u's is exp(k T) K P K^-1 with
+ * K = [[1, 0], [k, 1]], k = sigma / s, the same multipliers times exp(k T),
+ * which the eigenvalue condition divides out again (monodromy), so neither
+ * K nor exp(k h) (a complex exponential per step) is ever formed. */
+static void radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
+                       double complex de[4])
 {
     double h = m->h[i];
-    double complex k = sigma / x->s, G[3][3], r[3][2];
+    double complex k = sigma / x->s, G[3][3], r[3][4];
     /* ap = a - 2 k, bp = b0 - sigma^2 - gamma sigma phi: G = G0 + 2 k h A
      * + h^2 sigma^2 A^2 + h^2 gamma sigma M (mesh_fill made G0 and M) */
     double complex c1 = 2.0 * k * h, c2 = h * h * sigma * sigma, c3 = h * h * x->gamma * sigma;
     double complex s2 = sigma * sigma, gs = x->gamma * sigma;
     const double *g0 = m->g0 + 9 * i, *mm = m->m + 9 * i;
+    int nrhs = de ? 4 : 2;
     for (int q = 0; q < 3; q++) {
         for (int j = 0; j < 3; j++)
             G[q][j] = g0[3 * q + j] + c1 * RADAU_A[q][j] + c2 * RADAU_A2[q][j] + c3 * mm[3 * q + j];
@@ -308,47 +312,78 @@ static double radau_step(const ctx *x, const mesh *m, size_t i, double complex s
         r[q][0] = h * (m->ab0[3 * i + q] - s2 * RADAU_C[q] - gs * m->aphi[3 * i + q]);
         r[q][1] = 1.0;
     }
-    /* Gaussian elimination with partial pivoting */
+    /* LU with partial pivoting, kept for the derivative's solve */
+    int perm[3] = {0, 1, 2};
+    double complex inv[3];
     for (int c = 0; c < 3; c++) {
         int piv = c;
         for (int q = c + 1; q < 3; q++)
             if (fabs(creal(G[q][c])) + fabs(cimag(G[q][c])) > fabs(creal(G[piv][c])) + fabs(cimag(G[piv][c])))
                 piv = q;
-        if (piv != c)
+        if (piv != c) {
             for (int j = 0; j < 3; j++) {
                 double complex t = G[c][j];
                 G[c][j] = G[piv][j], G[piv][j] = t;
-                if (j < 2) t = r[c][j], r[c][j] = r[piv][j], r[piv][j] = t;
             }
+            for (int j = 0; j < 2; j++) {
+                double complex t = r[c][j];
+                r[c][j] = r[piv][j], r[piv][j] = t;
+            }
+            int t = perm[c];
+            perm[c] = perm[piv], perm[piv] = t;
+        }
+        inv[c] = 1.0 / G[c][c];
         for (int q = c + 1; q < 3; q++) {
-            double complex l = G[q][c] / G[c][c];
-            for (int j = c; j < 3; j++) G[q][j] -= l * G[c][j];
+            double complex l = G[q][c] * inv[c];
+            G[q][c] = l;
+            for (int j = c + 1; j < 3; j++) G[q][j] -= l * G[c][j];
             r[q][0] -= l * r[c][0], r[q][1] -= l * r[c][1];
         }
     }
-    double complex V[3][2];
+    double complex V[3][4];
     for (int q = 2; q >= 0; q--)
         for (int rhs = 0; rhs < 2; rhs++) {
             double complex sum = r[q][rhs];
             for (int j = q + 1; j < 3; j++) sum -= G[q][j] * V[j][rhs];
-            V[q][rhs] = sum / G[q][q];
+            V[q][rhs] = sum * inv[q];
         }
-    /* p's step matrix: p1 = p0 + h sum A_3j V_j, p1' = V_3 */
-    double complex pe[4];
-    for (int rhs = 0; rhs < 2; rhs++) {
+    if (de) {
+        /* G dV = dr - dG V: dG = 2 h / s A + 2 h^2 sigma A^2 + h^2 gamma M,
+         * dr0 = -h (2 sigma c + gamma A phi), dr1 = 0 */
+        double complex d2 = 2.0 * h * h * sigma;
+        double d1 = 2.0 * h / x->s, d3 = h * h * x->gamma;
+        double complex b[3][2];
+        for (int q = 0; q < 3; q++) {
+            double complex dr0 = -h * (2.0 * sigma * RADAU_C[q] + x->gamma * m->aphi[3 * i + q]);
+            for (int rhs = 0; rhs < 2; rhs++) {
+                double complex sum = rhs == 0 ? dr0 : 0.0;
+                for (int j = 0; j < 3; j++)
+                    sum -= (d1 * RADAU_A[q][j] + d2 * RADAU_A2[q][j] + d3 * mm[3 * q + j]) * V[j][rhs];
+                b[q][rhs] = sum;
+            }
+        }
+        for (int q = 0; q < 3; q++) {
+            r[q][2] = b[perm[q]][0];
+            r[q][3] = b[perm[q]][1];
+        }
+        for (int c = 0; c < 3; c++)
+            for (int q = c + 1; q < 3; q++) r[q][2] -= G[q][c] * r[c][2], r[q][3] -= G[q][c] * r[c][3];
+        for (int q = 2; q >= 0; q--)
+            for (int rhs = 2; rhs < 4; rhs++) {
+                double complex sum = r[q][rhs];
+                for (int j = q + 1; j < 3; j++) sum -= G[q][j] * V[j][rhs];
+                V[q][rhs] = sum * inv[q];
+            }
+    }
+    /* p1 = p0 + h sum A_3j V_j, p1' = V_3 */
+    for (int rhs = 0; rhs < nrhs; rhs++) {
         double complex sum = 0;
         for (int j = 0; j < 3; j++) sum += RADAU_A[2][j] * V[j][rhs];
-        pe[rhs] = (rhs == 0) + h * sum;
-        pe[2 + rhs] = V[2][rhs];
+        double complex *out = rhs < 2 ? e : de;
+        int col = rhs & 1;
+        out[col] = (rhs == 0) + h * sum;
+        out[2 + col] = V[2][rhs];
     }
-    /* u's step matrix exp(k h) K P K^-1, the modulus of exp(k h) returned */
-    double complex d0 = pe[0] - k * pe[1], d2 = pe[2] - k * pe[3];
-    double complex ph = cexp(I * cimag(k * h));
-    e[0] = ph * d0;
-    e[1] = ph * pe[1];
-    e[2] = ph * (k * d0 + d2);
-    e[3] = ph * (k * pe[1] + pe[3]);
-    return creal(k * h);
 }
 
 /* Keeps the entries of v (count of them) near 1 in modulus, the factor
@@ -369,71 +404,87 @@ static void rescale(double complex *v, size_t count, double *scale)
     *scale += e2 * M_LN2;
 }
 
-/* The monodromy over mesh m at sigma: p[0..3] (row-major) times exp(*scale). */
-static void monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double complex p[4], double *scale)
+/* 2x2 products, row-major: out = a b */
+static void mul2(const double complex a[4], const double complex b[4], double complex out[4])
 {
+    double complex o0 = a[0] * b[0] + a[1] * b[2], o1 = a[0] * b[1] + a[1] * b[3];
+    double complex o2 = a[2] * b[0] + a[3] * b[2], o3 = a[2] * b[1] + a[3] * b[3];
+    out[0] = o0, out[1] = o1, out[2] = o2, out[3] = o3;
+}
+
+/* The monodromy of p over mesh m at sigma: p[0..3] (row-major) times
+ * exp(*scale), and its derivative in sigma into dp (same scale) when dp is
+ * not NULL (a pass with the derivative costs about two without: it counts
+ * twice in the work). */
+static void monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double complex p[4], double complex *dp,
+                             double *scale)
+{
+    double cost = (dp ? 2.0 : 1.0) * (double)m->steps;
     x->evaluations++;
     p[0] = 1, p[1] = 0, p[2] = 0, p[3] = 1;
+    if (dp) dp[0] = dp[1] = dp[2] = dp[3] = 0;
     *scale = 0.0;
     if (!x->stop && x->cancel && *x->cancel) x->stop = BKF_ECANCELED;
-    if (!x->stop && x->work + (double)m->steps > x->max_work) x->stop = BKF_EBUDGET;
+    if (!x->stop && x->work + cost > x->max_work) x->stop = BKF_EBUDGET;
     if (x->stop) {
         /* every caller's search then fails at once; the entry point reports why */
         *scale = NAN;
         return;
     }
-    x->work += (double)m->steps;
+    x->work += cost;
     for (size_t i = 0; i < m->steps; i++) {
-        double complex e[4];
-        *scale += radau_step(x, m, i, sigma, e);
-        double complex q0 = e[0] * p[0] + e[1] * p[2], q1 = e[0] * p[1] + e[1] * p[3];
-        double complex q2 = e[2] * p[0] + e[3] * p[2], q3 = e[2] * p[1] + e[3] * p[3];
-        p[0] = q0, p[1] = q1, p[2] = q2, p[3] = q3;
-        /* a step's factor, its growth taken out into lg, is O(1): every
-         * eighth step is often enough to stay far from overflow */
-        if ((i & 7) == 7 || i + 1 == m->steps) rescale(p, 4, scale);
+        double complex e[4], de[4];
+        radau_step(x, m, i, sigma, e, dp ? de : NULL);
+        if (dp) {
+            double complex t1[4], t2[4];
+            mul2(de, p, t1);
+            mul2(e, dp, t2);
+            for (int q = 0; q < 4; q++) dp[q] = t1[q] + t2[q];
+        }
+        mul2(e, p, p);
+        /* a step's factor is O(1) in p's basis (the growth exp(k h) is
+         * u's): every eighth step is often enough to stay far from overflow */
+        if ((i & 7) == 7 || i + 1 == m->steps) {
+            if (dp) {
+                double complex both[8] = {p[0], p[1], p[2], p[3], dp[0], dp[1], dp[2], dp[3]};
+                rescale(both, 8, scale);
+                for (int q = 0; q < 4; q++) p[q] = both[q], dp[q] = both[4 + q];
+            } else {
+                rescale(p, 4, scale);
+            }
+        }
     }
 }
 
-/* ln of the two multipliers of psi's perturbation over one period at sigma:
- * w[0] the larger in modulus, w[1] the smaller.  The product is kept scaled
- * (its log in `scale`) so that neither stiff decay nor growth over- or
- * underflows; the smaller multiplier comes from det M = exp(trace_sum),
- * free of cancellation. */
-static void monodromy(ctx *x, const mesh *m, double complex sigma, double complex w[2])
+/* ln of the two multipliers of psi's perturbation over one period at sigma,
+ * divided by exp(sigma T / s): w[0] the larger in modulus, w[1] the
+ * smaller, and their derivatives in sigma into dw (NULL: not wanted).  The
+ * product is kept scaled (its log in `scale`) so that neither stiff decay
+ * nor growth over- or underflows; the smaller multiplier comes from
+ * det M = exp(trace_sum), free of cancellation.  In p's basis (radau_step)
+ * the larger is exp(sigma T / s) times P's larger eigenvalue, so w[0] is
+ * ln of that eigenvalue itself, and w[1] = trace_sum - w[0] - 2 sigma T / s. */
+static void monodromy(ctx *x, const mesh *m, double complex sigma, double complex w[2], double complex *dw)
 {
-    double complex p[4];
+    double complex p[4], dp[4];
     double scale;
-    monodromy_matrix(x, m, sigma, p, &scale);
+    monodromy_matrix(x, m, sigma, p, dw ? dp : NULL, &scale);
     double complex half = 0.5 * (p[0] + p[3]), det = p[0] * p[3] - p[1] * p[2];
     double complex root = csqrt(half * half - det);
     double complex big = cabs(half + root) >= cabs(half - root) ? half + root : half - root;
     double complex shift = sigma * x->T / x->s;
-    double complex lb = scale + clog(big);
-    w[0] = lb - shift;
-    w[1] = m->trace_sum - lb - shift;
+    w[0] = scale + clog(big);
+    w[1] = m->trace_sum - w[0] - 2.0 * shift;
+    if (!dw) return;
+    /* big^2 - tr big + det = 0: d big (2 big - tr) = d tr big - d det */
+    double complex dtr = dp[0] + dp[3], ddet = dp[0] * p[3] + p[0] * dp[3] - dp[1] * p[2] - p[1] * dp[2];
+    dw[0] = (dtr * big - ddet) / ((2.0 * big - (p[0] + p[3])) * big);
+    dw[1] = -dw[0] - 2.0 * x->T / x->s;
 }
 
 static double wrap(double phase)
 {
     return phase - 2.0 * M_PI * floor(phase / (2.0 * M_PI) + 0.5);
-}
-
-/* w and dw/dsigma of one family at sigma (central differences; the phase
- * differences wrapped, w being ln of a multiplier). */
-static void family_eval(ctx *x, const mesh *m, int fam, double complex sigma, double complex *w,
-                        double complex *dw)
-{
-    double complex w0[2], wp[2], wm[2];
-    monodromy(x, m, sigma, w0);
-    *w = w0[fam];
-    if (!dw) return;
-    double h = 1e-5 * fmax(1.0, cabs(sigma));
-    monodromy(x, m, sigma + h, wp);
-    monodromy(x, m, sigma - h, wm);
-    double complex diff = wp[fam] - wm[fam];
-    diff = creal(diff) + I * wrap(cimag(diff));
-    *dw = diff / (2.0 * h);
 }
 
 /* ------------------------------------------------------ curve tracing */
@@ -460,13 +511,13 @@ static int height_at(ctx *x, const mesh *m, window *win, double y, const double 
 {
     double complex w[2];
     for (int grow = 0;; grow++) {
-        monodromy(x, m, win->a_hi + I * y, w);
+        monodromy(x, m, win->a_hi + I * y, w, NULL);
         if (creal(w[0]) < 0.0) break;
         if (grow > 40) return BKF_ENUMERIC;
         win->a_hi *= 2.0;
     }
     double f_hi[2] = {creal(w[0]), creal(w[1])};
-    monodromy(x, m, win->a_lo + I * y, w);
+    monodromy(x, m, win->a_lo + I * y, w, NULL);
     double tol_a = 1e-3 * x->tol;
     for (int f = 0; f < FAMILIES; f++) {
         curve_point *p = &pt[f];
@@ -480,7 +531,7 @@ static int height_at(ctx *x, const mesh *m, window *win, double y, const double 
             for (int k = 0; k < 2; k++, d *= 8.0) {
                 double complex wg[2];
                 double t = fmin(fmax(g, lo + 0.5 * tol_a), hi - 0.5 * tol_a);
-                monodromy(x, m, t + I * y, wg);
+                monodromy(x, m, t + I * y, wg, NULL);
                 double ft = creal(wg[f]);
                 if (ft >= 0.0) {
                     lo = t, flo = ft;
@@ -497,7 +548,7 @@ static int height_at(ctx *x, const mesh *m, window *win, double y, const double 
             double t = (lo * fhi - hi * flo) / (fhi - flo);
             if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
             double complex wt[2];
-            monodromy(x, m, t + I * y, wt);
+            monodromy(x, m, t + I * y, wt, NULL);
             double ft = creal(wt[f]);
             if (fabs(ft) < 1e-3 * tol_a) {
                 lo = hi = t;
@@ -514,13 +565,13 @@ static int height_at(ctx *x, const mesh *m, window *win, double y, const double 
             }
         }
         double a = 0.5 * (lo + hi);
-        double complex wv, dw;
-        family_eval(x, m, f, a + I * y, &wv, &dw);
+        double complex wv[2], dw[2];
+        monodromy(x, m, a + I * y, wv, dw);
         p->found = 1;
         p->a = a;
-        p->phase = cimag(wv);
+        p->phase = cimag(wv[f]);
         /* along Re w = 0: da/dy = Im w' / Re w', dphase/dy = |w'|^2 / Re w' */
-        double re = creal(dw), im = cimag(dw);
+        double re = creal(dw[f]), im = cimag(dw[f]);
         if (re == 0.0) return BKF_ENUMERIC;
         p->slope = im / re;
         p->rate = (re * re + im * im) / re;
@@ -697,16 +748,14 @@ static int polish(ctx *x, const mesh *m, double theta, double complex *sigma, do
     double complex s = *sigma;
     *last_step = INFINITY;
     for (int it = 0; it < NEWTON_MAX; it++) {
-        double complex w0[2];
-        monodromy(x, m, s, w0);
+        double complex w0[2], dw[2];
+        monodromy(x, m, s, w0, dw);
         int fam = 0;
         double complex r[2];
         for (int f = 0; f < FAMILIES; f++) r[f] = creal(w0[f]) + I * wrap(cimag(w0[f]) - theta);
         if (cabs(r[1]) < cabs(r[0])) fam = 1;
-        double complex w, dw;
-        family_eval(x, m, fam, s, &w, &dw);
-        if (dw == 0) return BKF_ENUMERIC;
-        double complex step = r[fam] / dw;
+        if (dw[fam] == 0 || !isfinite(creal(dw[fam])) || !isfinite(cimag(dw[fam]))) return BKF_ENUMERIC;
+        double complex step = r[fam] / dw[fam];
         if (cabs(step) > 0.5) step *= 0.5 / cabs(step);
         s -= step;
         *last_step = cabs(step);
@@ -952,99 +1001,139 @@ static int hill_candidates(ctx *x, size_t classes, const window *win, candidates
     return rc;
 }
 
-/* Spectrum in `classes` phase classes: per class the `keep` rightmost
- * eigenvalues, polished on the fine mesh with error estimates.  The
- * candidates come from the traced curves and from Hill's method where it
- * is cheap; where the trace cannot close its window, Hill's band alone
- * serves if it vouches for its rightmost (hill_stage.complete). */
-static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
-                    window *win, double *y_max, size_t *curve_points, size_t *hill_modes, bkf_error *err)
+/* The error estimate of sigma polished to sf on the fine mesh (last Newton
+ * step step_f) from sc on the coarse one. */
+static double estimate(double complex sc, double complex sf, double step_f)
+{
+    return cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
+}
+
+/* The candidates of every class: Hill's where it is cheap, the traced
+ * curves', and where the trace cannot close its window, Hill's band alone
+ * if it vouches for its rightmost (*fallback set; trace_err says why the
+ * trace failed). */
+static int gather(ctx *x, size_t classes, window *win, candidates *cs, hill_stage *hs, double *y_max,
+                  size_t *curve_points, int *fallback, bkf_error *trace_err, bkf_error *err)
 {
     curve heights = {0};
-    candidates cs = {0};
-    bkf_trainspec_eigenvalue *eig = NULL;
-    size_t n_eig = 0;
-    hill_stage hs;
-    /* how many are polished per class does not depend on how many are
-     * reported: the rightmost must not depend on per_kappa */
-    size_t polish_n = (keep > 3 ? keep : 3) + 2;
-    int rc = hill_candidates(x, classes, win, &cs, &hs, err);
-    *hill_modes = hs.modes;
+    int rc = hill_candidates(x, classes, win, cs, hs, err);
     double max_work = x->max_work;
     /* where Hill has answered the trace is the cross-check: it may spend a
      * fifth of the budget, the rest polishes */
-    if (rc == BKF_OK && hs.modes) x->max_work = x->work + HILL_TRACE_SHARE * (max_work - x->work);
+    if (rc == BKF_OK && hs->modes) x->max_work = x->work + HILL_TRACE_SHARE * (max_work - x->work);
     double a_hi = win->a_hi;
-    bkf_error trace_err = {0};
-    if (rc == BKF_OK) rc = trace_all(x, win, &heights, y_max, &trace_err);
+    if (rc == BKF_OK) rc = trace_all(x, win, &heights, y_max, trace_err);
     x->max_work = max_work;
-    int fallback = 0;
-    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs.modes && hs.complete) {
+    *fallback = 0;
+    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes && hs->complete) {
         /* the band |Im| <= y_trust, as Hill saw it */
-        fallback = 1;
+        *fallback = 1;
         x->stop = 0;
         heights.count = 0;
-        *y_max = hs.y_trust;
+        *y_max = hs->y_trust;
         win->a_hi = a_hi;
         x->substeps = SUBSTEPS_START;
-        rc = meshes_for(x, hs.y_trust, win, err);
+        rc = meshes_for(x, hs->y_trust, win, err);
     } else if (rc != BKF_OK) {
-        if (err) *err = trace_err;
+        if (err) *err = *trace_err;
     }
     if (rc == BKF_OK) *curve_points += heights.count;
     for (int f = 0; f < FAMILIES && rc == BKF_OK; f++)
-        if (collect(&heights, f, classes, &cs) != BKF_OK) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    if (rc == BKF_OK) {
-        qsort(cs.items, cs.count, sizeof *cs.items, by_a_desc);
-        eig = calloc(2 * (classes + 2) * (polish_n + HILL_PER_CLASS + 1), sizeof *eig);
-        if (!eig) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
-    /* polish the best few of each class; mirrored classes (j > classes/2)
-     * come out of their partners by conjugation */
-    for (size_t i = 0; i < cs.count && rc == BKF_OK;) {
-        size_t cls = cs.items[i].cls, taken = 0, start_n = n_eig;
-        for (; i < cs.count && cs.items[i].cls == cls; i++) {
+        if (collect(&heights, f, classes, cs) != BKF_OK) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    free(heights.h);
+    return rc;
+}
+
+/* The best few candidates of each class polished on both meshes into eig
+ * (*n_eig of them), duplicates dropped; mirrored classes (j > classes/2)
+ * come out of their partners by conjugation later.  How many are polished
+ * per class does not depend on how many are reported: the rightmost must
+ * not depend on per_kappa. */
+static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *cs, bkf_trainspec_eigenvalue *eig,
+                              size_t *n_eig)
+{
+    size_t polish_n = (keep > 3 ? keep : 3) + 2;
+    qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
+    for (size_t i = 0; i < cs->count;) {
+        size_t cls = cs->items[i].cls, taken = 0, start_n = *n_eig;
+        for (; i < cs->count && cs->items[i].cls == cls; i++) {
             /* Hill's candidates are few and accurate: every one is polished,
              * whatever the traced ones, whose interpolated a can rank a far
              * eigenvalue before a near one, have taken */
-            if ((taken >= polish_n && cs.items[i].fam >= 0) || 2 * cls > classes) continue;
-            candidate cd = cs.items[i];
+            if ((taken >= polish_n && cs->items[i].fam >= 0) || 2 * cls > classes) continue;
+            candidate cd = cs->items[i];
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
             double complex sc = cd.a + I * cd.y, sf;
             double step_c, step_f;
             if (polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
             sf = sc;
             if (polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
-            double e = cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
+            double e = estimate(sc, sf, step_f);
             int dup = 0;
-            for (size_t k = start_n; k < n_eig; k++)
+            for (size_t k = start_n; k < *n_eig; k++)
                 if (cabs((eig[k].re + I * eig[k].im) - sf) < 10.0 * fmax(e, x->tol)) dup = 1;
             if (dup) continue;
-            eig[n_eig++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), e, cls, 0.0, 0};
+            eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), e, cls, 0.0, 0};
             taken++;
         }
     }
-    /* The translation mode, polished from 0: the gauge.  Where the traced
-     * curves missed it the meshes are too coarse. */
-    if (rc == BKF_OK) {
-        size_t k = 0;
-        while (k < n_eig && !(eig[k].j == 0 && hypot(eig[k].re, eig[k].im) < 10.0 * x->tol)) k++;
-        if (k == n_eig) {
-            double complex sc = 0.0, sf;
-            double step_c, step_f = INFINITY;
-            int ok = polish(x, &x->coarse, 0.0, &sc, &step_c) == BKF_OK;
-            sf = sc;
-            ok = ok && polish(x, &x->fine, 0.0, &sf, &step_f) == BKF_OK;
-            eig[n_eig++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf),
-                                                      ok ? cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR : INFINITY,
-                                                      0, 0.0, 0};
-        }
-        eig[k].translation = 1;
+}
+
+/* The translation mode, polished from 0 where the candidates missed it:
+ * the gauge.  Where the traced curves missed it the meshes are too coarse. */
+static void translation(ctx *x, bkf_trainspec_eigenvalue *eig, size_t *n_eig)
+{
+    size_t k = 0;
+    while (k < *n_eig && !(eig[k].j == 0 && hypot(eig[k].re, eig[k].im) < 10.0 * x->tol)) k++;
+    if (k == *n_eig) {
+        double complex sc = 0.0, sf;
+        double step_c, step_f = INFINITY;
+        int ok = polish(x, &x->coarse, 0.0, &sc, &step_c) == BKF_OK;
+        sf = sc;
+        ok = ok && polish(x, &x->fine, 0.0, &sf, &step_f) == BKF_OK;
+        eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), ok ? estimate(sc, sf, step_f) : INFINITY,
+                                                     0, 0.0, 0};
     }
-    /* the mesh refined until every estimate meets tol and the translation
-     * mode sits at 0 within it: only the polishing is redone, from the
-     * values in hand */
-    for (int r = 0; rc == BKF_OK; r++) {
+    eig[k].translation = 1;
+}
+
+/* Does eigenvalue k still need a finer mesh: its estimate above tol, or
+ * (the translation) its distance from 0. */
+static int unsettled(const ctx *x, const bkf_trainspec_eigenvalue *e)
+{
+    return e->err > x->tol || (e->translation && hypot(e->re, e->im) > x->tol);
+}
+
+/* Eigenvalues that the cut to `keep` per class will drop whatever their
+ * errors (keep + 2 others of their class lie right of them beyond both
+ * errors: room for a conjugate pair at the cut) are dropped before the
+ * refinement, which would otherwise refine the mesh for them alone. */
+static void drop_hidden(bkf_trainspec_eigenvalue *eig, size_t *n_eig, size_t keep)
+{
+    size_t w = 0;
+    for (size_t i = 0; i < *n_eig; i++) {
+        size_t right = 0;
+        for (size_t k = 0; k < *n_eig; k++)
+            right += k != i && eig[k].j == eig[i].j && !eig[k].translation &&
+                     eig[k].re - eig[k].err > eig[i].re + eig[i].err;
+        if (eig[i].translation || right < keep + 2) eig[w++] = eig[i];
+    }
+    *n_eig = w;
+}
+
+/* The mesh refined until every estimate meets tol and the translation
+ * mode sits at 0 within it.  Each refinement halves every step: the new
+ * coarse mesh is the old fine one, on which the values in hand were
+ * polished, so only the fine polish is redone, and only for the
+ * eigenvalues whose estimate is still above tol (the others keep theirs). */
+static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, size_t n_eig, bkf_error *err)
+{
+    /* per eigenvalue, the substeps of the fine mesh its value was polished on */
+    size_t *on = malloc((n_eig ? n_eig : 1) * sizeof *on);
+    if (!on) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    for (size_t k = 0; k < n_eig; k++) on[k] = 2 * x->substeps;
+    int rc = BKF_OK;
+    for (int r = 0;; r++) {
         double worst = 0.0;
         for (size_t k = 0; k < n_eig; k++) {
             worst = fmax(worst, eig[k].err);
@@ -1059,61 +1148,102 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
             break;
         }
         x->substeps *= 2;
-        if ((rc = mesh_build(x, x->substeps, &x->coarse, err)) != BKF_OK) break;
+        mesh t = x->coarse;
+        x->coarse = x->fine;
+        x->fine = t;
         if ((rc = mesh_build(x, 2 * x->substeps, &x->fine, err)) != BKF_OK) break;
         for (size_t k = 0; k < n_eig; k++) {
+            if (!unsettled(x, &eig[k])) continue;
             double theta = 2.0 * M_PI * (double)eig[k].j / (double)classes;
-            double complex sc = eig[k].translation ? 0.0 : eig[k].re + I * eig[k].im, sf;
-            double step_c, step_f;
-            if (polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
+            double complex sc = eig[k].re + I * eig[k].im, sf;
+            double step_c = 0.0, step_f;
+            if (on[k] != x->substeps && polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
             sf = sc;
             if (polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
             eig[k].re = creal(sf);
             eig[k].im = cimag(sf);
-            eig[k].err = cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
+            eig[k].err = estimate(sc, sf, step_f);
+            on[k] = 2 * x->substeps;
         }
+    }
+    free(on);
+    return rc;
+}
+
+/* The conjugates of the classes 0 < j < classes/2 as the classes
+ * classes - j, all sorted, and `keep` per class kept. */
+static void mirror_and_cut(size_t classes, size_t keep, bkf_trainspec_eigenvalue *eig, size_t *count)
+{
+    size_t n_eig = *count;
+    for (size_t k = 0, polished = n_eig; k < polished; k++)
+        if (eig[k].j > 0 && 2 * eig[k].j < classes) {
+            eig[n_eig] = eig[k];
+            eig[n_eig].j = classes - eig[k].j;
+            eig[n_eig++].im = -eig[k].im;
+        }
+    qsort(eig, n_eig, sizeof *eig, eig_desc);
+    size_t w = 0;
+    for (size_t i = 0; i < n_eig; i++) {
+        size_t same = 0;
+        /* the translation is reported besides the `keep`, never instead of one
+         * (with keep 1 it took class 0's only place: issue 31's window edge
+         * -0.203 printed for sigma_max -4.08e-4) */
+        for (size_t k = 0; k < w; k++) same += eig[k].j == eig[i].j && !eig[k].translation;
+        /* a conjugate pair (j = 0 or n/2) is never split by the cut */
+        int partner = w > 0 && eig[w - 1].j == eig[i].j &&
+                      fabs(eig[w - 1].re - eig[i].re) <= eig[w - 1].err + eig[i].err &&
+                      fabs(eig[w - 1].im + eig[i].im) <= eig[w - 1].err + eig[i].err && eig[i].im != 0.0;
+        if (same < keep || eig[i].translation || partner) eig[w++] = eig[i];
+    }
+    *count = w;
+}
+
+/* Hill's band alone: its rightmost eigenvalue must be one the meshes
+ * confirm, else the band's candidates were not converged. */
+static int confirm_band(const hill_stage *hs, const bkf_trainspec_eigenvalue *eig, size_t n_eig,
+                        const bkf_error *trace_err, bkf_error *err)
+{
+    double complex top = NAN;
+    for (size_t k = 0; k < n_eig; k++)
+        if (!eig[k].translation && !(creal(top) >= eig[k].re)) top = eig[k].re + I * eig[k].im;
+    double miss = INFINITY;
+    for (size_t k = 0; k < hs->count; k++) miss = fmin(miss, cabs(hs->at[k] - conj(top)));
+    for (size_t k = 0; k < hs->count; k++) miss = fmin(miss, cabs(hs->at[k] - top));
+    if (isfinite(creal(top)) && !(miss <= HILL_AGREE * (1.0 + cabs(top))))
+        return bkf_error_set(err, BKF_ETOL,
+                             "spectrum: the curves could not be traced (%s); Hill's method at %zu modes and "
+                             "the Radau meshes disagree on the rightmost eigenvalue by %.3g",
+                             trace_err->message, hs->modes, miss);
+    return BKF_OK;
+}
+
+/* Spectrum in `classes` phase classes: per class the `keep` rightmost
+ * eigenvalues, polished on the fine mesh with error estimates. */
+static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
+                    window *win, double *y_max, size_t *curve_points, size_t *hill_modes, bkf_error *err)
+{
+    candidates cs = {0};
+    hill_stage hs;
+    bkf_error trace_err = {0};
+    int fallback = 0;
+    size_t n_eig = 0;
+    bkf_trainspec_eigenvalue *eig = NULL;
+    int rc = gather(x, classes, win, &cs, &hs, y_max, curve_points, &fallback, &trace_err, err);
+    *hill_modes = hs.modes;
+    size_t polish_n = (keep > 3 ? keep : 3) + 2;
+    if (rc == BKF_OK) {
+        eig = calloc(2 * (classes + 2) * (polish_n + HILL_PER_CLASS + 1), sizeof *eig);
+        if (!eig) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     if (rc == BKF_OK) {
-        for (size_t k = 0, polished = n_eig; k < polished; k++)
-            if (eig[k].j > 0 && 2 * eig[k].j < classes) {
-                eig[n_eig] = eig[k];
-                eig[n_eig].j = classes - eig[k].j;
-                eig[n_eig++].im = -eig[k].im;
-            }
-        qsort(eig, n_eig, sizeof *eig, eig_desc);
-        /* keep `keep` per class */
-        size_t w = 0;
-        for (size_t i = 0; i < n_eig; i++) {
-            size_t same = 0;
-            /* the translation is reported besides the `keep`, never instead of one
-             * (with keep 1 it took class 0's only place: issue 31's window edge
-             * -0.203 printed for sigma_max -4.08e-4) */
-            for (size_t k = 0; k < w; k++) same += eig[k].j == eig[i].j && !eig[k].translation;
-            /* a conjugate pair (j = 0 or n/2) is never split by the cut */
-            int partner = w > 0 && eig[w - 1].j == eig[i].j &&
-                          fabs(eig[w - 1].re - eig[i].re) <= eig[w - 1].err + eig[i].err &&
-                          fabs(eig[w - 1].im + eig[i].im) <= eig[w - 1].err + eig[i].err && eig[i].im != 0.0;
-            if (same < keep || eig[i].translation || partner) eig[w++] = eig[i];
-        }
-        n_eig = w;
+        polish_candidates(x, classes, keep, &cs, eig, &n_eig);
+        translation(x, eig, &n_eig);
+        drop_hidden(eig, &n_eig, keep);
+        rc = refine(x, classes, eig, n_eig, err);
     }
-    if (rc == BKF_OK && fallback) {
-        /* Hill's band alone: its rightmost eigenvalue must be one the
-         * meshes confirm, else the band's candidates were not converged */
-        double complex top = NAN;
-        for (size_t k = 0; k < n_eig; k++)
-            if (!eig[k].translation && !(creal(top) >= eig[k].re)) top = eig[k].re + I * eig[k].im;
-        double miss = INFINITY;
-        for (size_t k = 0; k < hs.count; k++) miss = fmin(miss, cabs(hs.at[k] - conj(top)));
-        for (size_t k = 0; k < hs.count; k++) miss = fmin(miss, cabs(hs.at[k] - top));
-        if (isfinite(creal(top)) && !(miss <= HILL_AGREE * (1.0 + cabs(top))))
-            rc = bkf_error_set(err, BKF_ETOL,
-                               "spectrum: the curves could not be traced (%s); Hill's method at %zu modes and "
-                               "the Radau meshes disagree on the rightmost eigenvalue by %.3g",
-                               trace_err.message, hs.modes, miss);
-    }
+    if (rc == BKF_OK) mirror_and_cut(classes, keep, eig, &n_eig);
+    if (rc == BKF_OK && fallback) rc = confirm_band(&hs, eig, n_eig, &trace_err, err);
     free(hs.at);
-    free(heights.h);
     free(cs.items);
     if (rc != BKF_OK) {
         free(eig);
@@ -1357,8 +1487,9 @@ static int by_r(const void *pa, const void *pb)
     return (a->r > b->r) - (a->r < b->r);
 }
 
-/* u, u' from the multiplier's eigenvector through the period, recorded at
- * the samples (sorted by r): mesh steps and samples merged into one walk. */
+/* p, p' (radau_step's basis) from the multiplier's eigenvector through the
+ * period, recorded at the samples (sorted by r) into u, du times
+ * exp(scale_at): mesh steps and samples merged into one walk. */
 static int mode_walk(ctx *x, double complex sigma, const double complex y0[2], const mode_sample *smp, size_t N,
                      double complex *u, double complex *du, double *scale_at, bkf_error *err)
 {
@@ -1394,7 +1525,7 @@ static int mode_walk(ctx *x, double complex sigma, const double complex y0[2], c
             }
             if (k + 1 == count) break;
             double complex e[4];
-            scale += radau_step(x, &walk, k, sigma, e);
+            radau_step(x, &walk, k, sigma, e, NULL);
             double complex y1 = e[0] * y[0] + e[1] * y[1], y2 = e[2] * y[0] + e[3] * y[1];
             y[0] = y1, y[1] = y2;
             rescale(y, 2, &scale);
@@ -1427,10 +1558,11 @@ int bkf_trainspec_mode(const bkf_model_params *p, const bkf_trainspec_train *t, 
         rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     double theta = 2.0 * M_PI * (double)j / (double)t->n;
     if (rc == BKF_OK) {
-        /* the eigenvector of the multiplier exp(sigma T / s + i theta) */
-        double complex m[4], want = sigma * x.T / x.s + I * theta;
+        /* the eigenvector of the multiplier exp(sigma T / s + i theta): in
+         * p's basis (radau_step) the eigenvalue exp(i theta) */
+        double complex m[4], want = I * theta;
         double scale;
-        monodromy_matrix(&x, &x.fine, sigma, m, &scale);
+        monodromy_matrix(&x, &x.fine, sigma, m, NULL, &scale);
         double complex half = 0.5 * (m[0] + m[3]), root = csqrt(half * half - (m[0] * m[3] - m[1] * m[2]));
         double complex lam[2] = {half + root, half - root};
         double miss[2];
@@ -1453,19 +1585,20 @@ int bkf_trainspec_mode(const bkf_model_params *p, const bkf_trainspec_train *t, 
         if (rc == BKF_OK) rc = bkf_cycle_profile_sample(x.cycle, r, N, f, fp, err);
     }
     if (rc == BKF_OK) {
-        /* p = exp(-sigma r / s) u times the Bloch factor of the period it
-         * lies in; magnitudes relative to the largest, then normalised */
+        /* p (walked in its own basis, radau_step) times the Bloch factor of
+         * the period it lies in; magnitudes relative to the largest, then
+         * normalised */
         double top = -INFINITY;
         for (size_t i = 0; i < N; i++) {
             double size = fmax(cabs(u[i]), cabs(du[i]));
-            if (size > 0) top = fmax(top, scale_at[i] - creal(sigma) * r[i] / x.s + log(size));
+            if (size > 0) top = fmax(top, scale_at[i] + log(size));
         }
         double pmax = 0.0;
         double complex *pv = u, *qv = du; /* overwritten in place */
         for (size_t i = 0; i < N; i++) {
-            double complex factor = cexp(scale_at[i] - top - sigma * r[i] / x.s + I * smp[i].cycle * theta);
+            double complex factor = cexp(scale_at[i] - top + I * smp[i].cycle * theta);
             double complex pi = factor * u[i];
-            double complex dpi = factor * (du[i] - sigma * u[i] / x.s) / (x.v * x.s);
+            double complex dpi = factor * du[i] / (x.v * x.s);
             pv[i] = pi;
             qv[i] = (sigma * pi + x.v * dpi) / x.gamma + bkf_model_friction_slope(f[i]) * pi;
             pmax = fmax(pmax, cabs(pi));
