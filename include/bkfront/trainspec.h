@@ -43,6 +43,11 @@
 extern "C" {
 #endif
 
+/* The range of tol: below 1e-8 the profile's own error (the cycle solved
+ * to 1e-12, up to 2e-9 per unit |sigma|) would outgrow it. */
+#define BKF_TRAINSPEC_TOL_MIN 1e-8
+#define BKF_TRAINSPEC_TOL_MAX 1e-2
+
 typedef struct {
     double tol;        /* absolute accuracy asked of each sigma, [1e-8, 1e-2]; default 1e-6 */
     size_t per_kappa;  /* leading eigenvalues reported per Bloch number, [1, 50]; default 3

@@ -15,12 +15,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define TOL_MIN 1e-8
+#define TOL_MIN BKF_TRAINSPEC_TOL_MIN
 /* The profile comes from a cycle solved to 1e-12: its share of an
  * eigenvalue's error, per unit |sigma| (at least 1), measured by the
  * nu -> -nu symmetry (whose two cycles differ) at below 1e-9. */
 #define PROFILE_ERROR 2e-9
-#define TOL_MAX 1e-2
+#define TOL_MAX BKF_TRAINSPEC_TOL_MAX
 #define PER_KAPPA_MAX 50
 /* Mesh multiplier (substeps) of the first pass. */
 #define SUBSTEPS_START 1
@@ -923,7 +923,8 @@ static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *er
  * rightmost pair at Im 18.03 to its neighbour at 17.13) or cannot close
  * the window at all (the curves stay right of a_lo up to |Im| 1e4 when the
  * cycle's multiplier is near 1, mu < 1).  Its converged eigenvalues (M and
- * 2M modes agree, bkf_hill_leading) are candidates: each is polished on
+ * M + M/4 modes agree, bkf_hill_leading_pair: a quarter of the work of
+ * comparing with 2M, the check the band alone needs) are candidates: each is polished on
  * the Radau meshes, whose error estimate is the one reported, so Hill's
  * truncation never reaches a result.  The truncation's artefacts do not
  * converge (they move with M, at any height: 0.185 + 1.86i at M 24, mu 4).
@@ -934,7 +935,7 @@ static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *er
 #define HILL_MODES_MAX 64
 /* sum over classes of (the finer matrix's size)^3: about 1.5 s of zgeev */
 #define HILL_WORK 1.5e8
-/* Hill's eigenvalues agree at M and 2M modes this well (absolute) to be
+/* Hill's eigenvalues agree at M and the finer truncation this well (absolute) to be
  * candidates; the polish takes them from there */
 #define HILL_CONVERGED 1e-5
 /* Hill's converged eigenvalues polished, per class, at most (the rightmost first). */
@@ -955,8 +956,11 @@ typedef struct {
 } hill_stage;
 
 /* Candidates from Hill's method for the classes 0..classes/2 (their
- * conjugates come from the mirror, as for the traced curves). */
-static int hill_candidates(ctx *x, size_t classes, const window *win, candidates *cs, hill_stage *h,
+ * conjugates come from the mirror, as for the traced curves), converged
+ * between M and M + M/4 modes (as candidates beside the traced curves:
+ * the polish is their test) or, with `vouch`, between M and 2M (where
+ * Hill's band alone must answer, hill_stage.complete). */
+static int hill_candidates(ctx *x, size_t classes, const window *win, int vouch, candidates *cs, hill_stage *h,
                            bkf_error *err)
 {
     memset(h, 0, sizeof *h);
@@ -981,8 +985,9 @@ static int hill_candidates(ctx *x, size_t classes, const window *win, candidates
         double theta = 2.0 * M_PI * (double)cls / (double)classes;
         /* one more at class 0: the translation is among them */
         size_t k = HILL_PER_CLASS + (cls == 0);
-        rc = bkf_hill_leading(x->cycle, x->gamma, theta, M, HILL_CONVERGED, k, ev, NULL, &found,
-                              &unresolved, err);
+        size_t fine = vouch ? 2 * M : M + (M / 4 > 4 ? M / 4 : 4);
+        rc = bkf_hill_leading_pair(x->cycle, x->gamma, theta, M, fine, HILL_CONVERGED, k, ev, NULL, &found,
+                                   &unresolved, err);
         if (rc != BKF_OK) break;
         if (unresolved > 0 || found == 0) h->complete = 0;
         for (size_t i = 0; i < found; i++) {
@@ -1016,7 +1021,7 @@ static int gather(ctx *x, size_t classes, window *win, candidates *cs, hill_stag
                   size_t *curve_points, int *fallback, bkf_error *trace_err, bkf_error *err)
 {
     curve heights = {0};
-    int rc = hill_candidates(x, classes, win, cs, hs, err);
+    int rc = hill_candidates(x, classes, win, 0, cs, hs, err);
     double max_work = x->max_work;
     /* where Hill has answered the trace is the cross-check: it may spend a
      * fifth of the budget, the rest polishes */
@@ -1025,6 +1030,13 @@ static int gather(ctx *x, size_t classes, window *win, candidates *cs, hill_stag
     if (rc == BKF_OK) rc = trace_all(x, win, &heights, y_max, trace_err);
     x->max_work = max_work;
     *fallback = 0;
+    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes) {
+        /* Hill's band alone, if it vouches for its rightmost at M and 2M */
+        cs->count = 0;
+        free(hs->at);
+        int hrc = hill_candidates(x, classes, win, 1, cs, hs, err);
+        if (hrc != BKF_OK) return hrc;
+    }
     if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes && hs->complete) {
         /* the band |Im| <= y_trust, as Hill saw it */
         *fallback = 1;
