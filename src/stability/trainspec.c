@@ -15,88 +15,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define TOL_MIN BKF_TRAINSPEC_TOL_MIN
-/* The profile comes from a cycle solved to 1e-12: its share of an
- * eigenvalue's error, per unit |sigma| (at least 1), measured by the
- * nu -> -nu symmetry (whose two cycles differ) at below 1e-9. */
-#define PROFILE_ERROR 2e-9
-#define TOL_MAX BKF_TRAINSPEC_TOL_MAX
-#define PER_KAPPA_MAX 50
-/* Mesh multiplier (substeps) of the first pass. */
-#define SUBSTEPS_START 1
-#define MESH_MAX_STEPS 100000
-#define MESH_MIN_STEPS 16
-/* Heights sampled per family on the first pass, and the finest interval as
- * a fraction of the window. */
-#define CURVE_START 48
-#define CURVE_MIN_FRACTION (1.0 / 65536.0)
-#define Y_MAX_LIMIT 1e4
-#define NEWTON_MAX 30
-#define MESH_REFINEMENTS 4
-#define RESOLVE_TURN 0.5
-/* The window reaches this far left of the axis, per unit gamma (or to
- * r_inf / 2 if that is nearer). */
-#define WINDOW_DEPTH 0.05
-/* The edges of a curve (where it leaves the window) are located to this
- * fraction of the window's height; phase and bends to CURVE_MIN_FRACTION. */
-#define EDGE_FRACTION (1.0 / 1024.0)
-#define MAX_WORK_DEFAULT 2.5e7
-/* A long (stiff) step is used where the fast solution decays by at least
- * this many e-foldings per step over the whole window's Re sigma. */
-#define STIFF_MIN 1.0
-/* Through the fronts the coefficients change faster than the local rates
- * tell: a step spans at most this change of the profile f (measured: at
- * mu 47 it cuts the error of a 1400-step mesh from 1.6e-4 to 2e-7). */
-#define PROFILE_TURN 0.03
-/* The cycle's own mesh (adapted to the cycle at tol 1e-12) knows where the
- * coefficients change fast better than the rates do: each of its steps
- * takes at least this share of a step. */
-#define NODE_SHARE 0.5
-/* The fine mesh halves every step of the coarse one and the Radau step is
- * fifth order: the fine value's error is the difference / 31 once the
- * meshes converge (measured ratios 27-32 at mu 4 to 47, 19 on the first,
- * unconverged pair at mu 47); dividing by 8
- * keeps a margin of 4. */
-#define RICHARDSON 8.0
-
-enum { FAMILIES = 2 };
-
-/* Coefficients at the three Radau IIA points of every step,
- * u'' = a u' + (b0 + beta sigma (sigma + gamma phi)) u. */
-typedef struct {
-    size_t steps;
-    double *h, *a, *b0, *phi; /* h per step; a, b0, phi: STRIDE per step */
-    /* per step, the parts of the stage matrix G and of A bp that do not
-     * depend on sigma (see radau_step): G0, M = A diag(phi) A (9 each),
-     * A b0 and A phi (3 each) */
-    double *g0, *m, *ab0, *aphi;
-    double trace_sum;         /* the steps' quadratures of the trace: ln det M */
-} mesh;
-
-enum { STRIDE = 3 };
-
-typedef struct {
-    double gamma, c, nu, mu, v, s, beta, T, log_m, S, L;
-    size_t n;
-    double tol;
-    bkf_cycle *cycle;
-    double *nodes; /* cycle mesh 0..T */
-    size_t node_count;
-    size_t substeps;
-    double sigma_reach; /* largest |sigma| the meshes must resolve */
-    double re_floor;    /* smallest Re sigma the meshes must serve (Radau steps
-                           need the fast solution to decay there) */
-    double *need;       /* per cycle step: the steps it needs at sigma_reach (see mesh_needs) */
-    mesh coarse, fine;
-    size_t evaluations;
-    double work, max_work;               /* steps taken, and allowed */
-    const volatile sig_atomic_t *cancel;
-    int stop;                            /* BKF_EBUDGET or BKF_ECANCELED once either is hit */
-} ctx;
+#include "trainspec_internal.h"
 
 /* ------------------------------------------------------------- meshes */
 
-static void mesh_free(mesh *m)
+void trainspec_mesh_free(mesh *m)
 {
     free(m->h);
     free(m->g0);
@@ -123,7 +46,7 @@ static void mesh_free(mesh *m)
  * the one the spectrum is made of, varies at |bp / ap| only.  There the
  * L-stable Radau step, which damps the fast solution as the flow does,
  * needs to resolve the slow one alone: steps O(mu) times longer. */
-static int mesh_needs(ctx *x, double reach, bkf_error *err)
+int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err)
 {
     if (x->need && reach == x->sigma_reach) return BKF_OK;
     size_t n = x->node_count;
@@ -180,9 +103,9 @@ static const double RADAU_A2[3][3] = {
 
 /* A mesh on the step boundaries bounds[0..steps] (ascending in [0, T]):
  * the coefficients at each step's Radau points. */
-static int mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf_error *err)
+int trainspec_mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf_error *err)
 {
-    mesh_free(m);
+    trainspec_mesh_free(m);
     m->steps = steps;
     size_t cap = steps ? steps : 1;
     m->h = malloc(cap * sizeof *m->h);
@@ -237,14 +160,14 @@ done:
     free(z);
     free(f);
     free(fp);
-    if (rc != BKF_OK) mesh_free(m);
+    if (rc != BKF_OK) trainspec_mesh_free(m);
     return rc;
 }
 
 /* The step boundaries of a mesh of `substeps` times the steps the cycle
  * steps need (mesh_needs), spread evenly in the cumulative need, so that
  * doubling substeps halves every step: *bounds (steps + 1 values). */
-static int mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, bkf_error *err)
+int trainspec_mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, bkf_error *err)
 {
     double total = 0.0;
     for (size_t i = 0; i + 1 < x->node_count; i++) total += x->need[i];
@@ -272,12 +195,12 @@ static int mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, 
     return BKF_OK;
 }
 
-static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
+int trainspec_mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
 {
     double *bounds = NULL;
     size_t steps = 0;
-    int rc = mesh_bounds(x, substeps, &bounds, &steps, err);
-    if (rc == BKF_OK) rc = mesh_fill(x, bounds, steps, m, err);
+    int rc = trainspec_mesh_bounds(x, substeps, &bounds, &steps, err);
+    if (rc == BKF_OK) rc = trainspec_mesh_fill(x, bounds, steps, m, err);
     free(bounds);
     return rc;
 }
@@ -294,7 +217,7 @@ static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
  * K = [[1, 0], [k, 1]], k = sigma / s, the same multipliers times exp(k T),
  * which the eigenvalue condition divides out again (monodromy), so neither
  * K nor exp(k h) (a complex exponential per step) is ever formed. */
-static void radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
+void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
                        double complex de[4])
 {
     double h = m->h[i];
@@ -388,7 +311,7 @@ static void radau_step(const ctx *x, const mesh *m, size_t i, double complex sig
 
 /* Keeps the entries of v (count of them) near 1 in modulus, the factor
  * moved into *scale (a log). */
-static void rescale(double complex *v, size_t count, double *scale)
+void trainspec_rescale(double complex *v, size_t count, double *scale)
 {
     /* the largest component: a norm within sqrt 2 of the modulus, and no hypot */
     double big = 0.0;
@@ -416,7 +339,7 @@ static void mul2(const double complex a[4], const double complex b[4], double co
  * exp(*scale), and its derivative in sigma into dp (same scale) when dp is
  * not NULL (a pass with the derivative costs about two without: it counts
  * twice in the work). */
-static void monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double complex p[4], double complex *dp,
+void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double complex p[4], double complex *dp,
                              double *scale)
 {
     double cost = (dp ? 2.0 : 1.0) * (double)m->steps;
@@ -434,7 +357,7 @@ static void monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double
     x->work += cost;
     for (size_t i = 0; i < m->steps; i++) {
         double complex e[4], de[4];
-        radau_step(x, m, i, sigma, e, dp ? de : NULL);
+        trainspec_radau_step(x, m, i, sigma, e, dp ? de : NULL);
         if (dp) {
             double complex t1[4], t2[4];
             mul2(de, p, t1);
@@ -447,10 +370,10 @@ static void monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double
         if ((i & 7) == 7 || i + 1 == m->steps) {
             if (dp) {
                 double complex both[8] = {p[0], p[1], p[2], p[3], dp[0], dp[1], dp[2], dp[3]};
-                rescale(both, 8, scale);
+                trainspec_rescale(both, 8, scale);
                 for (int q = 0; q < 4; q++) p[q] = both[q], dp[q] = both[4 + q];
             } else {
-                rescale(p, 4, scale);
+                trainspec_rescale(p, 4, scale);
             }
         }
     }
@@ -468,7 +391,7 @@ static void monodromy(ctx *x, const mesh *m, double complex sigma, double comple
 {
     double complex p[4], dp[4];
     double scale;
-    monodromy_matrix(x, m, sigma, p, dw ? dp : NULL, &scale);
+    trainspec_monodromy_matrix(x, m, sigma, p, dw ? dp : NULL, &scale);
     double complex half = 0.5 * (p[0] + p[3]), det = p[0] * p[3] - p[1] * p[2];
     double complex root = csqrt(half * half - det);
     double complex big = cabs(half + root) >= cabs(half - root) ? half + root : half - root;
@@ -482,7 +405,7 @@ static void monodromy(ctx *x, const mesh *m, double complex sigma, double comple
     dw[1] = -dw[0] - 2.0 * x->T / x->s;
 }
 
-static double wrap(double phase)
+double trainspec_wrap(double phase)
 {
     return phase - 2.0 * M_PI * floor(phase / (2.0 * M_PI) + 0.5);
 }
@@ -518,7 +441,11 @@ static int height_at(ctx *x, const mesh *m, window *win, double y, const double 
     }
     double f_hi[2] = {creal(w[0]), creal(w[1])};
     monodromy(x, m, win->a_lo + I * y, w, NULL);
-    double tol_a = 1e-3 * x->tol;
+    /* the curves only propose candidates (polished on the meshes, their
+     * value and error the polish's) and tell where they leave the window:
+     * a to 1e-6 is plenty for both, and 1e-3 tol cost two or three more
+     * monodromies per family and height */
+    double tol_a = fmax(1e-3 * x->tol, TRACE_TOL);
     for (int f = 0; f < FAMILIES; f++) {
         curve_point *p = &pt[f];
         p->y = y;
@@ -614,7 +541,7 @@ static int needs_split(const ctx *x, const curve_point *p, const curve_point *q,
     if (p->found != q->found) return dy > min_dy * (EDGE_FRACTION / CURVE_MIN_FRACTION);
     if (!p->found) return 0;
     double est = 0.5 * (p->rate + q->rate) * dy;
-    double darg = wrap(q->phase - p->phase);
+    double darg = trainspec_wrap(q->phase - p->phase);
     double turns = nearbyint((est - darg) / (2.0 * M_PI));
     if (fabs(est - (darg + 2.0 * M_PI * turns)) > 0.3) return 1;
     if (fabs(q->slope - p->slope) * dy > fmax(0.05 * fabs(p->a) + 1e-3, 100.0 * x->tol)) return 1;
@@ -704,7 +631,7 @@ static int collect(curve *c, int fam, size_t classes, candidates *out)
         if (i > 0 && c->h[i - 1].fam[fam].found) {
             const curve_point *q = &c->h[i - 1].fam[fam];
             double est = 0.5 * (p->rate + q->rate) * (p->y - q->y);
-            double darg = wrap(p->phase - q->phase);
+            double darg = trainspec_wrap(p->phase - q->phase);
             psi += darg + 2.0 * M_PI * nearbyint((est - darg) / (2.0 * M_PI));
         } else {
             psi = p->phase;
@@ -743,7 +670,7 @@ static int collect(curve *c, int fam, size_t classes, candidates *out)
 
 /* Newton on w(sigma) = i theta (mod 2 pi i), over whichever family fits
  * best, on mesh m. */
-static int polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step)
+int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step)
 {
     double complex s = *sigma;
     *last_step = INFINITY;
@@ -752,7 +679,7 @@ static int polish(ctx *x, const mesh *m, double theta, double complex *sigma, do
         monodromy(x, m, s, w0, dw);
         int fam = 0;
         double complex r[2];
-        for (int f = 0; f < FAMILIES; f++) r[f] = creal(w0[f]) + I * wrap(cimag(w0[f]) - theta);
+        for (int f = 0; f < FAMILIES; f++) r[f] = creal(w0[f]) + I * trainspec_wrap(cimag(w0[f]) - theta);
         if (cabs(r[1]) < cabs(r[0])) fam = 1;
         if (dw[fam] == 0 || !isfinite(creal(dw[fam])) || !isfinite(cimag(dw[fam]))) return BKF_ENUMERIC;
         double complex step = r[fam] / dw[fam];
@@ -822,16 +749,16 @@ int bkf_trainspec_check(const bkf_model_params *p, const bkf_trainspec_train *t,
     return BKF_OK;
 }
 
-static void ctx_free(ctx *x)
+void trainspec_ctx_free(ctx *x)
 {
-    mesh_free(&x->coarse);
-    mesh_free(&x->fine);
+    trainspec_mesh_free(&x->coarse);
+    trainspec_mesh_free(&x->fine);
     bkf_cycle_free(x->cycle);
     free(x->nodes);
     free(x->need);
 }
 
-static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, double tol,
+int trainspec_ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, double tol,
                     const bkf_trainspec_options *o, bkf_error *err)
 {
     memset(x, 0, sizeof *x);
@@ -880,9 +807,9 @@ static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train
  * mesh_needs). */
 static int meshes_for(ctx *x, double B, const window *win, bkf_error *err)
 {
-    int rc = mesh_needs(x, hypot(B, win->a_hi), err);
-    if (rc == BKF_OK) rc = mesh_build(x, x->substeps, &x->coarse, err);
-    return rc != BKF_OK ? rc : mesh_build(x, 2 * x->substeps, &x->fine, err);
+    int rc = trainspec_mesh_needs(x, hypot(B, win->a_hi), err);
+    if (rc == BKF_OK) rc = trainspec_mesh_build(x, x->substeps, &x->coarse, err);
+    return rc != BKF_OK ? rc : trainspec_mesh_build(x, 2 * x->substeps, &x->fine, err);
 }
 
 /* Trace both families over [0, B], B grown until the curves stay left of
@@ -1077,9 +1004,9 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
             double complex sc = cd.a + I * cd.y, sf;
             double step_c, step_f;
-            if (polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
+            if (trainspec_polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
             sf = sc;
-            if (polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
+            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
             double e = estimate(sc, sf, step_f);
             int dup = 0;
             for (size_t k = start_n; k < *n_eig; k++)
@@ -1100,9 +1027,9 @@ static void translation(ctx *x, bkf_trainspec_eigenvalue *eig, size_t *n_eig)
     if (k == *n_eig) {
         double complex sc = 0.0, sf;
         double step_c, step_f = INFINITY;
-        int ok = polish(x, &x->coarse, 0.0, &sc, &step_c) == BKF_OK;
+        int ok = trainspec_polish(x, &x->coarse, 0.0, &sc, &step_c) == BKF_OK;
         sf = sc;
-        ok = ok && polish(x, &x->fine, 0.0, &sf, &step_f) == BKF_OK;
+        ok = ok && trainspec_polish(x, &x->fine, 0.0, &sf, &step_f) == BKF_OK;
         eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), ok ? estimate(sc, sf, step_f) : INFINITY,
                                                      0, 0.0, 0};
     }
@@ -1117,9 +1044,11 @@ static int unsettled(const ctx *x, const bkf_trainspec_eigenvalue *e)
 }
 
 /* Eigenvalues that the cut to `keep` per class will drop whatever their
- * errors (keep + 2 others of their class lie right of them beyond both
- * errors: room for a conjugate pair at the cut) are dropped before the
- * refinement, which would otherwise refine the mesh for them alone. */
+ * errors are dropped before the refinement, which would otherwise refine
+ * the mesh for them alone: those with keep + 1 others of their class right
+ * of them beyond both errors (the cut keeps one beyond `keep` only as the
+ * conjugate of the keep-th, and one further would be that one's conjugate,
+ * the keep-th's own value: a duplicate). */
 static void drop_hidden(bkf_trainspec_eigenvalue *eig, size_t *n_eig, size_t keep)
 {
     size_t w = 0;
@@ -1128,7 +1057,7 @@ static void drop_hidden(bkf_trainspec_eigenvalue *eig, size_t *n_eig, size_t kee
         for (size_t k = 0; k < *n_eig; k++)
             right += k != i && eig[k].j == eig[i].j && !eig[k].translation &&
                      eig[k].re - eig[k].err > eig[i].re + eig[i].err;
-        if (eig[i].translation || right < keep + 2) eig[w++] = eig[i];
+        if (eig[i].translation || right < keep + 1) eig[w++] = eig[i];
     }
     *n_eig = w;
 }
@@ -1163,15 +1092,15 @@ static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, size_t 
         mesh t = x->coarse;
         x->coarse = x->fine;
         x->fine = t;
-        if ((rc = mesh_build(x, 2 * x->substeps, &x->fine, err)) != BKF_OK) break;
+        if ((rc = trainspec_mesh_build(x, 2 * x->substeps, &x->fine, err)) != BKF_OK) break;
         for (size_t k = 0; k < n_eig; k++) {
             if (!unsettled(x, &eig[k])) continue;
             double theta = 2.0 * M_PI * (double)eig[k].j / (double)classes;
             double complex sc = eig[k].re + I * eig[k].im, sf;
             double step_c = 0.0, step_f;
-            if (on[k] != x->substeps && polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
+            if (on[k] != x->substeps && trainspec_polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
             sf = sc;
-            if (polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
+            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
             eig[k].re = creal(sf);
             eig[k].im = cimag(sf);
             eig[k].err = estimate(sc, sf, step_f);
@@ -1267,7 +1196,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
 }
 
 /* The reason a search was cut short, over whatever failure it produced. */
-static int stopped(const ctx *x, int rc, bkf_error *err)
+int trainspec_stopped(const ctx *x, int rc, bkf_error *err)
 {
     if (x->stop == BKF_ECANCELED) return bkf_error_set(err, BKF_ECANCELED, "spectrum: canceled");
     if (x->stop == BKF_EBUDGET)
@@ -1302,12 +1231,12 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
     if (rc != BKF_OK) return rc;
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     ctx x;
-    rc = ctx_init(&x, p, t, o.tol, &o, err);
+    rc = trainspec_ctx_init(&x, p, t, o.tol, &o, err);
     window win = initial_window(&x, &r->r_inf);
     if (rc == BKF_OK)
         rc = spectrum(&x, t->n, o.per_kappa, &r->eigenvalues, &r->count, &win, &r->y_max,
                       &r->curve_points, &r->hill_modes, err);
-    rc = stopped(&x, rc, err);
+    rc = trainspec_stopped(&x, rc, err);
     if (rc == BKF_OK) {
         r->params = *p;
         r->n = t->n;
@@ -1346,7 +1275,7 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
         r->evaluations = x.evaluations;
         r->work = x.work;
     }
-    ctx_free(&x);
+    trainspec_ctx_free(&x);
     bkf_gsl_handler_pop(handler);
     if (rc != BKF_OK) bkf_trainspec_result_free(r);
     return rc;
@@ -1397,14 +1326,14 @@ int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
     if (!out) return bkf_error_set(err, BKF_EINPUT, "out is NULL");
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     ctx x;
-    rc = ctx_init(&x, p, t, o.tol, &o, err);
+    rc = trainspec_ctx_init(&x, p, t, o.tol, &o, err);
     double r_inf, y_max;
     size_t points = 0, n_eig = 0;
     window win = initial_window(&x, &r_inf);
     bkf_trainspec_eigenvalue *eig = NULL;
     size_t hill_modes = 0;
     if (rc == BKF_OK) rc = spectrum(&x, count, 1, &eig, &n_eig, &win, &y_max, &points, &hill_modes, err);
-    rc = stopped(&x, rc, err);
+    rc = trainspec_stopped(&x, rc, err);
     if (rc == BKF_OK) {
         double L = x.L;
         for (size_t i = 0; i < count; i++)
@@ -1421,219 +1350,7 @@ int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
         }
     }
     free(eig);
-    ctx_free(&x);
-    bkf_gsl_handler_pop(handler);
-    return rc;
-}
-
-/* ------------------------------------------------- single eigenvalues */
-
-#define SUBSTEPS_MAX 4096
-#define MODE_SUBSTEPS 8
-
-/* The context and its fine mesh (substeps) resolving |sigma| ~ |sigma0|,
- * and sigma polished on it from sigma0 in class j. */
-static int one_eigenvalue(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, size_t j,
-                          double complex *sigma, size_t substeps, bkf_error *err)
-{
-    int rc = ctx_init(x, p, t, TOL_MIN, NULL, err);
-    x->re_floor = fmin(x->re_floor, creal(*sigma) - WINDOW_DEPTH * x->gamma);
-    if (rc == BKF_OK) rc = mesh_needs(x, 2.0 * cabs(*sigma) + 1.0, err);
-    if (rc == BKF_OK) rc = mesh_build(x, substeps, &x->fine, err);
-    if (rc != BKF_OK) return rc;
-    double step;
-    double complex s = *sigma;
-    int prc = polish(x, &x->fine, 2.0 * M_PI * (double)j / (double)t->n, &s, &step);
-    if (x->stop) return stopped(x, prc, err);
-    if (prc != BKF_OK)
-        return bkf_error_set(err, BKF_ENUMERIC,
-                             "no eigenvalue of class j = %zu converged from sigma = %.6g%+.6gi (last Newton "
-                             "step %.3g)",
-                             j, creal(*sigma), cimag(*sigma), step);
-    *sigma = s;
-    return BKF_OK;
-}
-
-static int check_one(const bkf_model_params *p, const bkf_trainspec_train *t, size_t j, double re0, double im0,
-                     bkf_error *err)
-{
-    int rc = bkf_trainspec_check(p, t, NULL, err);
-    if (rc != BKF_OK) return rc;
-    if (j >= t->n) return bkf_error_set(err, BKF_EINPUT, "j must be in [0, n - 1] = [0, %zu]", t->n - 1);
-    if (!isfinite(re0) || !isfinite(im0)) return bkf_error_set(err, BKF_EINPUT, "sigma must be finite");
-    return BKF_OK;
-}
-
-int bkf_trainspec_eigenvalue_at(const bkf_model_params *p, const bkf_trainspec_train *t, size_t j, double re0,
-                                double im0, size_t substeps, double *re, double *im, size_t *mesh_steps,
-                                bkf_error *err)
-{
-    int rc = check_one(p, t, j, re0, im0, err);
-    if (rc != BKF_OK) return rc;
-    if (substeps < 1 || substeps > SUBSTEPS_MAX)
-        return bkf_error_set(err, BKF_EINPUT, "substeps must be in [1, %d]", SUBSTEPS_MAX);
-    if (!re || !im) return bkf_error_set(err, BKF_EINPUT, "re and im are required");
-    bkf_gsl_handler *handler = bkf_gsl_handler_push();
-    ctx x;
-    double complex s = re0 + I * im0;
-    rc = one_eigenvalue(&x, p, t, j, &s, substeps, err);
-    if (rc == BKF_OK) {
-        *re = creal(s);
-        *im = cimag(s);
-        if (mesh_steps) *mesh_steps = x.fine.steps;
-    }
-    ctx_free(&x);
-    bkf_gsl_handler_pop(handler);
-    return rc;
-}
-
-typedef struct {
-    double r;     /* z within the period, [0, T] */
-    double cycle; /* which period (0 .. n-1): its Bloch factor is exp(i cycle theta) */
-    size_t at;    /* index of the sample on the ring */
-} mode_sample;
-
-static int by_r(const void *pa, const void *pb)
-{
-    const mode_sample *a = pa, *b = pb;
-    return (a->r > b->r) - (a->r < b->r);
-}
-
-/* p, p' (radau_step's basis) from the multiplier's eigenvector through the
- * period, recorded at the samples (sorted by r) into u, du times
- * exp(scale_at): mesh steps and samples merged into one walk. */
-static int mode_walk(ctx *x, double complex sigma, const double complex y0[2], const mode_sample *smp, size_t N,
-                     double complex *u, double complex *du, double *scale_at, bkf_error *err)
-{
-    double *bounds = NULL, *merged = NULL;
-    size_t steps = 0;
-    size_t *slot = malloc(N * sizeof *slot);
-    mesh walk = {0};
-    int rc = slot ? mesh_bounds(x, MODE_SUBSTEPS, &bounds, &steps, err) : bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    if (rc == BKF_OK && !(merged = malloc((steps + 1 + N) * sizeof *merged)))
-        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    size_t count = 0;
-    if (rc == BKF_OK) {
-        size_t a = 0, b = 0;
-        while (a <= steps || b < N) {
-            if (b < N && (a > steps || smp[b].r <= bounds[a])) {
-                slot[b++] = count;
-                merged[count++] = smp[b - 1].r;
-            } else {
-                merged[count++] = bounds[a++];
-            }
-        }
-        rc = mesh_fill(x, merged, count - 1, &walk, err);
-    }
-    if (rc == BKF_OK) {
-        double complex y[2] = {y0[0], y0[1]};
-        double scale = 0.0;
-        size_t next = 0;
-        for (size_t k = 0; k < count; k++) {
-            while (next < N && slot[next] == k) {
-                u[next] = y[0];
-                du[next] = y[1];
-                scale_at[next++] = scale;
-            }
-            if (k + 1 == count) break;
-            double complex e[4];
-            radau_step(x, &walk, k, sigma, e, NULL);
-            double complex y1 = e[0] * y[0] + e[1] * y[1], y2 = e[2] * y[0] + e[3] * y[1];
-            y[0] = y1, y[1] = y2;
-            rescale(y, 2, &scale);
-        }
-    }
-    mesh_free(&walk);
-    free(bounds);
-    free(merged);
-    free(slot);
-    return rc;
-}
-
-int bkf_trainspec_mode(const bkf_model_params *p, const bkf_trainspec_train *t, size_t j, double *re, double *im,
-                       size_t N, double *p_re, double *p_im, double *q_re, double *q_im, bkf_error *err)
-{
-    if (!re || !im) return bkf_error_set(err, BKF_EINPUT, "re and im are required");
-    int rc = check_one(p, t, j, *re, *im, err);
-    if (rc != BKF_OK) return rc;
-    if (N < 2 || N > 1u << 24) return bkf_error_set(err, BKF_EINPUT, "N must be in [2, %u]", 1u << 24);
-    if (!p_re) return bkf_error_set(err, BKF_EINPUT, "p_re is required");
-    bkf_gsl_handler *handler = bkf_gsl_handler_push();
-    ctx x;
-    double complex sigma = *re + I * *im;
-    mode_sample *smp = malloc(N * sizeof *smp);
-    double complex *u = malloc(N * sizeof *u), *du = malloc(N * sizeof *du);
-    double *scale_at = malloc(N * sizeof *scale_at), *r = malloc(N * sizeof *r), *f = malloc(N * sizeof *f),
-           *fp = malloc(N * sizeof *fp);
-    rc = one_eigenvalue(&x, p, t, j, &sigma, MODE_SUBSTEPS, err);
-    if (rc == BKF_OK && (!smp || !u || !du || !scale_at || !r || !f || !fp))
-        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    double theta = 2.0 * M_PI * (double)j / (double)t->n;
-    if (rc == BKF_OK) {
-        /* the eigenvector of the multiplier exp(sigma T / s + i theta): in
-         * p's basis (radau_step) the eigenvalue exp(i theta) */
-        double complex m[4], want = I * theta;
-        double scale;
-        monodromy_matrix(&x, &x.fine, sigma, m, NULL, &scale);
-        double complex half = 0.5 * (m[0] + m[3]), root = csqrt(half * half - (m[0] * m[3] - m[1] * m[2]));
-        double complex lam[2] = {half + root, half - root};
-        double miss[2];
-        for (int k = 0; k < 2; k++) {
-            double complex w = clog(lam[k]) + scale - want;
-            miss[k] = hypot(creal(w), wrap(cimag(w)));
-        }
-        double complex l = miss[0] <= miss[1] ? lam[0] : lam[1];
-        double complex ya[2] = {m[1], l - m[0]}, yb[2] = {l - m[3], m[2]};
-        const double complex *y0 = cabs(ya[0]) + cabs(ya[1]) >= cabs(yb[0]) + cabs(yb[1]) ? ya : yb;
-        double period = x.T, S = x.S, vs = x.v * x.s;
-        for (size_t i = 0; i < N; i++) {
-            double z = (double)i * S / (double)N / vs;
-            double cyc = fmin(floor(z / period), (double)(t->n - 1));
-            smp[i] = (mode_sample){fmin(fmax(z - cyc * period, 0.0), period), cyc, i};
-        }
-        qsort(smp, N, sizeof *smp, by_r);
-        for (size_t i = 0; i < N; i++) r[i] = smp[i].r;
-        rc = mode_walk(&x, sigma, y0, smp, N, u, du, scale_at, err);
-        if (rc == BKF_OK) rc = bkf_cycle_profile_sample(x.cycle, r, N, f, fp, err);
-    }
-    if (rc == BKF_OK) {
-        /* p (walked in its own basis, radau_step) times the Bloch factor of
-         * the period it lies in; magnitudes relative to the largest, then
-         * normalised */
-        double top = -INFINITY;
-        for (size_t i = 0; i < N; i++) {
-            double size = fmax(cabs(u[i]), cabs(du[i]));
-            if (size > 0) top = fmax(top, scale_at[i] + log(size));
-        }
-        double pmax = 0.0;
-        double complex *pv = u, *qv = du; /* overwritten in place */
-        for (size_t i = 0; i < N; i++) {
-            double complex factor = cexp(scale_at[i] - top + I * smp[i].cycle * theta);
-            double complex pi = factor * u[i];
-            double complex dpi = factor * du[i] / (x.v * x.s);
-            pv[i] = pi;
-            qv[i] = (sigma * pi + x.v * dpi) / x.gamma + bkf_model_friction_slope(f[i]) * pi;
-            pmax = fmax(pmax, cabs(pi));
-        }
-        if (!(pmax > 0) || !isfinite(pmax)) rc = bkf_error_set(err, BKF_ENUMERIC, "the eigenfunction vanished");
-        for (size_t i = 0; i < N && rc == BKF_OK; i++) {
-            size_t at = smp[i].at;
-            p_re[at] = creal(pv[i]) / pmax;
-            if (p_im) p_im[at] = cimag(pv[i]) / pmax;
-            if (q_re) q_re[at] = creal(qv[i]) / pmax;
-            if (q_im) q_im[at] = cimag(qv[i]) / pmax;
-        }
-        *re = creal(sigma);
-        *im = cimag(sigma);
-    }
-    free(smp);
-    free(u);
-    free(du);
-    free(scale_at);
-    free(r);
-    free(f);
-    free(fp);
-    ctx_free(&x);
+    trainspec_ctx_free(&x);
     bkf_gsl_handler_pop(handler);
     return rc;
 }
