@@ -948,21 +948,25 @@ static int gather(ctx *x, size_t classes, window *win, candidates *cs, hill_stag
                   size_t *curve_points, int *fallback, bkf_error *trace_err, bkf_error *err)
 {
     curve heights = {0};
+    *fallback = 0;
     int rc = hill_candidates(x, classes, win, 0, cs, hs, err);
+    if (rc != BKF_OK) return rc;
     double max_work = x->max_work;
     /* where Hill has answered the trace is the cross-check: it may spend a
      * fifth of the budget, the rest polishes */
-    if (rc == BKF_OK && hs->modes) x->max_work = x->work + HILL_TRACE_SHARE * (max_work - x->work);
+    if (hs->modes) x->max_work = x->work + HILL_TRACE_SHARE * (max_work - x->work);
     double a_hi = win->a_hi;
-    if (rc == BKF_OK) rc = trace_all(x, win, &heights, y_max, trace_err);
+    rc = trace_all(x, win, &heights, y_max, trace_err);
     x->max_work = max_work;
-    *fallback = 0;
     if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes) {
         /* Hill's band alone, if it vouches for its rightmost at M and 2M */
         cs->count = 0;
         free(hs->at);
         int hrc = hill_candidates(x, classes, win, 1, cs, hs, err);
-        if (hrc != BKF_OK) return hrc;
+        if (hrc != BKF_OK) {
+            free(heights.h);
+            return hrc;
+        }
     }
     if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes && hs->complete) {
         /* the band |Im| <= y_trust, as Hill saw it */
