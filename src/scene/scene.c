@@ -497,23 +497,6 @@ static int check_scene(parse_state *st)
                  p->name, missing);
         free(items);
         if (missing) return 0;
-        if (p->kind == BKF_SCENE_BRANCH) {
-            if (!scene_entry_value(p->entries, p->nentries, "param"))
-                return fail(st, p->line, "[branch %s]: give param = S, nu, gamma or c", p->name);
-            if (!scene_entry_value(p->entries, p->nentries, "to"))
-                return fail(st, p->line, "[branch %s]: give to = the end value of the parameter",
-                            p->name);
-        }
-        if (p->kind == BKF_SCENE_THRESHOLD) {
-            int along = scene_entry_value(p->entries, p->nentries, "along") != NULL;
-            int from = scene_entry_value(p->entries, p->nentries, "from") != NULL;
-            int to = scene_entry_value(p->entries, p->nentries, "to") != NULL;
-            if (along != from || along != to)
-                return fail(st, p->line, "[threshold %s]: along, from and to go together", p->name);
-        }
-        if (p->kind == BKF_SCENE_SPEEDS && scene_entry_value(p->entries, p->nentries, "n") &&
-            scene_entry_value(p->entries, p->nentries, "nmax"))
-            return fail(st, entry_line(p, "nmax"), "[speeds %s]: give n or nmax, not both", p->name);
     }
     return 1;
 }

@@ -111,8 +111,12 @@ TEST(scene_errors_name_the_file_and_line)
     parse_bad(MODEL "[speeds a]\n[figure f]\ntitle = x\n", 7, "give data = NAME");
     parse_bad(MODEL "[speeds a]\n[figure f]\ndata = b\n", 8, "no product named 'b'");
     parse_bad("gamma = 2\n[model]\n", 1, "before any [section]");
-    parse_bad(MODEL "[branch b]\nto = 30\n", 6, "give param");
-    parse_bad(MODEL "[speeds]\nn = 3\nnmax = 4\n", 8, "n or nmax, not both");
+    /* (the products' own checks: param before from, which names it) */
+    parse_bad(MODEL "[branch b]\nto = 30\n", 6, "[branch b]: param is required (one of S, nu");
+    parse_bad(MODEL "[branch b]\nparam = S\n", 6, "[branch b]: to is required");
+    parse_bad(MODEL "[threshold t]\nalong = c\nto = 1\n", 6, "from is required with along");
+    parse_bad(MODEL "[threshold t]\nfrom = 0.1\nto = 1\n", 7, "from: only with along");
+    parse_bad(MODEL "[speeds]\nn = 3\nnmax = 4\n", 7, "n, nmax: give one of them");
     parse_bad(MODEL "[speeds]\nthis line has no equals sign\n", 7, "not a section header");
     parse_bad(MODEL "[speeds two words]\n", 6, "[KIND] or [KIND NAME]");
     parse_bad(MODEL "[accuracy]\ntol = 1\n[speeds]\n", 7, "tol: 1 is outside");
@@ -334,6 +338,51 @@ TEST(scene_run_reports_each_step_after_its_data)
             unlink(path);
         }
     closedir(d);
+    rmdir(dir);
+}
+
+/* Several jobs start the longest expected steps first (the products'
+ * cost hints, catalog.h), whatever their place in the plan: two
+ * simulations planned after three quick friction tables take both jobs
+ * at once, so theirs are the first two reports (planned order would give
+ * the frictions first); one job keeps the plan's order. */
+TEST(scene_run_starts_the_longest_steps_first)
+{
+    char dir[] = "/tmp/bkfront-cost-XXXXXX";
+    CHECK(mkdtemp(dir));
+    bkf_scene *sc = parse_ok(MODEL "[friction f1]\n[friction f2]\nto = 3\n[friction f3]\nto = 2\n"
+                                   "[spacetime a]\ntmax = 20\nN = 128\nframes = 10\n"
+                                   "[spacetime b]\ntmax = 20\nN = 128\nframes = 10\nnu = -0.9\n");
+    bkf_scene_plan plan;
+    bkf_error e = {0};
+    bkf_scene_plan_options po = {.outdir = dir, .formats = 1, .figures = 0};
+    CHECK_STATUS(bkf_scene_make_plan(sc, &po, &plan, &e), BKF_OK);
+    CHECK(plan.nsteps == 5);
+    int status[8];
+    for (unsigned jobs = 1; jobs <= 2; jobs++) {
+        report_log log = {0};
+        bkf_scene_run_options ro = {.jobs = jobs, .step_done = log_report, .data = &log};
+        CHECK_STATUS(bkf_scene_run(sc, &plan, &ro, status, &e), BKF_OK);
+        CHECK(log.n == 5);
+        if (jobs == 1)
+            for (size_t k = 0; k < 5; k++) CHECK_MSG(log.order[k] == k, "report %zu: step %zu", k,
+                                                     log.order[k] + 1);
+        else
+            CHECK_MSG(log.order[0] >= 3 && log.order[1] >= 3,
+                      "first reports: steps %zu, %zu, not the simulations 4, 5",
+                      log.order[0] + 1, log.order[1] + 1);
+    }
+    bkf_scene_plan_free(&plan);
+    bkf_scene_free(sc);
+    DIR *d = opendir(dir);
+    CHECK(d);
+    char path[512];
+    for (struct dirent *ent; d && (ent = readdir(d));)
+        if (ent->d_name[0] != '.') {
+            snprintf(path, sizeof path, "%s/%s", dir, ent->d_name);
+            unlink(path);
+        }
+    if (d) closedir(d);
     rmdir(dir);
 }
 
