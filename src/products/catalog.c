@@ -282,8 +282,8 @@ static double simulation_cost(const bkf_simulate_spec *sp)
     return 2.0 * (sp->tmax / 50.0) * (N * log2(N)) / (512.0 * 9.0);
 }
 
-/* A spectrum of a train of n fronts: ~0.3 s per front at tol 1e-6. */
-static double spectrum_cost(size_t n) { return 0.3 * (double)(n ? n : 1); }
+/* A spectrum of a train of n fronts: ~0.1 s per front at tol 1e-6. */
+static double spectrum_cost(size_t n) { return 0.1 * (double)(n ? n : 1); }
 
 static double period_cost(const void *spec)
 {
