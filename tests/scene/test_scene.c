@@ -258,6 +258,27 @@ TEST(plan_refuses_an_output_folder_figures_cannot_list)
 
 /* ------------------------------------------------------------------- run */
 
+static void remove_tree(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (d) {
+        struct dirent *ent;
+        while ((ent = readdir(d))) {
+            if (ent->d_name[0] == '.') continue;
+            char path[1024];
+            snprintf(path, sizeof path, "%s/%s", dir, ent->d_name);
+            struct stat st;
+            if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
+                remove_tree(path);
+            else
+                unlink(path);
+        }
+        closedir(d);
+    }
+    rmdir(dir);
+}
+
+
 /* bkf_scene_run, as a library caller sees it: the reports come one at a
  * time, one per step, each figure's after every step of its data; a flag
  * raised before the run leaves every step unrun and unreported. */
@@ -332,17 +353,7 @@ TEST(scene_run_reports_each_step_after_its_data)
 
     bkf_scene_plan_free(&plan);
     bkf_scene_free(sc);
-    DIR *d = opendir(dir);
-    CHECK(d);
-    struct dirent *ent;
-    char path[512];
-    while ((ent = readdir(d)))
-        if (ent->d_name[0] != '.') {
-            snprintf(path, sizeof path, "%s/%s", dir, ent->d_name);
-            unlink(path);
-        }
-    closedir(d);
-    rmdir(dir);
+    remove_tree(dir);
 }
 
 /* Several jobs start the longest expected steps first (the products'
@@ -379,16 +390,7 @@ TEST(scene_run_starts_the_longest_steps_first)
     }
     bkf_scene_plan_free(&plan);
     bkf_scene_free(sc);
-    DIR *d = opendir(dir);
-    CHECK(d);
-    char path[512];
-    for (struct dirent *ent; d && (ent = readdir(d));)
-        if (ent->d_name[0] != '.') {
-            snprintf(path, sizeof path, "%s/%s", dir, ent->d_name);
-            unlink(path);
-        }
-    if (d) closedir(d);
-    rmdir(dir);
+    remove_tree(dir);
 }
 
 #ifdef BKF_CLI_PATH
@@ -445,26 +447,6 @@ static int starts_with_bytes(const char *dir, const char *name, const char *magi
     size_t k = fread(buf, 1, n, f);
     fclose(f);
     return k == n && memcmp(buf, magic, n) == 0;
-}
-
-static void remove_tree(const char *dir)
-{
-    DIR *d = opendir(dir);
-    if (d) {
-        struct dirent *ent;
-        while ((ent = readdir(d))) {
-            if (ent->d_name[0] == '.') continue;
-            char path[1024];
-            snprintf(path, sizeof path, "%s/%s", dir, ent->d_name);
-            struct stat st;
-            if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
-                remove_tree(path);
-            else
-                unlink(path);
-        }
-        closedir(d);
-    }
-    rmdir(dir);
 }
 
 /* The friction table against the closed forms, read back from the file. */
