@@ -3,7 +3,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include "scene_internal.h"
 
-#include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -117,25 +116,6 @@ static size_t next_step(run_queue *q)
     return n;
 }
 
-/* A step's expected work: its product's hint (catalog.h) on the step's
- * spec, a second without one; a figure none (it waits for its data, then
- * takes about a second of gnuplot). */
-static double step_cost(const bkf_scene_step *step)
-{
-    if (step->kind == BKF_SCENE_STEP_FIGURE || !step->entry) return 0.0;
-    if (!step->entry->cost) return 1.0;
-    bkf_error e;
-    void *spec = bkf_catalog_spec_new(step->entry, &e);
-    if (!spec) return 1.0;
-    double cost = 1.0;
-    /* (outputs not applied: the spec is only read, no file is touched) */
-    if (!scene_apply_args(step->entry, step->args, step->nargs, spec, 0, NULL, &e) &&
-        !step->entry->check(spec, "", &e))
-        cost = step->entry->cost(spec);
-    bkf_catalog_spec_free(step->entry, spec);
-    return isfinite(cost) && cost >= 0 ? cost : 1.0;
-}
-
 typedef struct {
     double cost;
     size_t step;
@@ -160,7 +140,7 @@ static int start_order(const bkf_scene_plan *plan, size_t jobs, size_t *order)
     if (jobs < 2 || n < 2) return 1;
     costed_step *c = malloc(n * sizeof *c);
     if (!c) return 0;
-    for (size_t i = 0; i < n; i++) c[i] = (costed_step){step_cost(&plan->steps[i]), i};
+    for (size_t i = 0; i < n; i++) c[i] = (costed_step){bkf_scene_step_cost(&plan->steps[i]), i};
     qsort(c, n, sizeof *c, by_cost);
     for (size_t i = 0; i < n; i++) order[i] = c[i].step;
     free(c);

@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "scene_internal.h"
 
+#include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -496,6 +497,22 @@ void bkf_scene_argv_free(char **argv)
     if (!argv) return;
     for (char **p = argv; *p; p++) free(*p);
     free(argv);
+}
+
+double bkf_scene_step_cost(const bkf_scene_step *step)
+{
+    if (!step || step->kind == BKF_SCENE_STEP_FIGURE || !step->entry) return 0.0;
+    if (!step->entry->cost) return 1.0;
+    bkf_error e;
+    void *spec = bkf_catalog_spec_new(step->entry, &e);
+    if (!spec) return 1.0;
+    double cost = 1.0;
+    /* (outputs not applied: the spec is only read, no file is touched) */
+    if (!scene_apply_args(step->entry, step->args, step->nargs, spec, 0, NULL, &e) &&
+        !step->entry->check(spec, "", &e))
+        cost = step->entry->cost(spec);
+    bkf_catalog_spec_free(step->entry, spec);
+    return isfinite(cost) && cost >= 0 ? cost : 1.0;
 }
 
 char *bkf_scene_step_command(const bkf_scene_step *step)

@@ -5,6 +5,7 @@
 #include "harness.h"
 
 #include <dirent.h>
+#include <math.h>
 #include <pthread.h>
 #include <fcntl.h>
 #include <stdint.h>
@@ -354,6 +355,40 @@ TEST(scene_run_reports_each_step_after_its_data)
     bkf_scene_plan_free(&plan);
     bkf_scene_free(sc);
     remove_tree(dir);
+}
+
+/* The cost hints against the paper scene's measured serial run
+ * (docs/benchmarks.md, `make run` with one and two jobs: the diagram 252
+ * s, the two branches 118 s and 80 s, every other step under 10 s): the
+ * diagram is the step expected longest, the branches next, each other
+ * product step under both branches; a figure costs nothing. */
+TEST(scene_step_costs_rank_the_paper_scene_as_measured)
+{
+    bkf_scene *s = NULL;
+    bkf_error e = {0};
+    CHECK_STATUS(bkf_scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
+    bkf_scene_plan plan;
+    bkf_scene_plan_options po = {.outdir = "out", .formats = 1, .figures = 1};
+    CHECK_STATUS(bkf_scene_make_plan(s, &po, &plan, &e), BKF_OK);
+    double diagram = -1, branch_min = INFINITY, other_max = 0;
+    for (size_t i = 0; i < plan.nsteps; i++) {
+        const bkf_scene_step *st = &plan.steps[i];
+        const bkf_scene_product *p = &s->products[st->users[0]];
+        double c = bkf_scene_step_cost(st);
+        CHECK_MSG(isfinite(c) && c >= 0, "step %zu: cost %g", i + 1, c);
+        if (st->kind == BKF_SCENE_STEP_FIGURE)
+            CHECK_MSG(c == 0, "figure %s: cost %g", p->name, c);
+        else if (strcmp(p->name, "diagram") == 0)
+            diagram = c;
+        else if (p->kind == BKF_SCENE_BRANCH)
+            branch_min = fmin(branch_min, c);
+        else
+            other_max = fmax(other_max, c);
+    }
+    CHECK_MSG(diagram > branch_min && branch_min > other_max,
+              "diagram %g, branches from %g, the rest up to %g", diagram, branch_min, other_max);
+    bkf_scene_plan_free(&plan);
+    bkf_scene_free(s);
 }
 
 /* Several jobs start the longest expected steps first (the products'
