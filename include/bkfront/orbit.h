@@ -114,7 +114,10 @@ typedef struct {
     int dealias;
     double filter;
     int newton_max_iter;      /* KINSOL's Newton iterations; default 40 */
-    int krylov_max;           /* SPGMR's Krylov dimension; default 40 */
+    int krylov_max;           /* SPGMR's Krylov dimension; default 200: a travelling
+                                 train's monodromy has tens of multipliers near the
+                                 unit circle, which restarted GMRES of 40 did not
+                                 get past (it stops early where the orbit contracts) */
     int grid_check;           /* 1 (default): the second N on the continuum; 0: skipped,
                                  err_grid NaN and err without it (the result says so
                                  by the NaN; a caller that skips it owns the grid) */

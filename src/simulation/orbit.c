@@ -61,7 +61,7 @@ bkf_orbit_options bkf_orbit_options_default(void)
     o.dealias = po.dealias;
     o.filter = po.filter;
     o.newton_max_iter = 40;
-    o.krylov_max = 40;
+    o.krylov_max = 200;
     o.grid_check = 1;
     return o;
 }

@@ -15,6 +15,7 @@
 #include "bkfront/floquet.h"
 #include "bkfront/orbit.h"
 #include "bkfront/pde.h"
+#include "bkfront/speeds.h"
 #include "pde_support.h"
 
 /* The global oscillation's state (psi = nu rising) as a guess, its period
@@ -240,4 +241,48 @@ TEST(orbit_period_converges_in_tol)
         bkf_orbit_free(ob);
     }
     uniform_free(&g);
+}
+
+/* (c) A travelling train as an orbit periodic up to a shift: the fastest
+ * n = 1 train of the speeds solver (an independent route: the speed
+ * condition on the travelling-wave ODE) seeded on the grid, the period held
+ * (a relative equilibrium), the shift solved: -s/T is the train's speed.
+ * The period is 1.05 of the train's period at a fixed point, so that s is
+ * not a whole wavelength (where R_s is the identity).  The grid (N 64) holds
+ * the profile to a few 1e-3, s and T far better; the bound is the total
+ * estimate over T. */
+TEST(orbit_travelling_train_has_the_speeds_root)
+{
+    bkf_model_params p = {2, 0.3, -0.9, 20, 64, BKF_MODEL_CONTINUUM};
+    bkf_speeds_options so = bkf_speeds_options_default();
+    so.n_from = so.n_to = 1;
+    so.tol = 1e-12;
+    bkf_speeds_table tb;
+    bkf_error e;
+    CHECK_STATUS(bkf_speeds_find(&p, &so, &tb, &e), BKF_OK);
+    CHECK(tb.count >= 1);
+    const bkf_speeds_root *rt = &tb.roots[0];
+    bkf_pde *m = alloc_pde(&p, NULL);
+    bkf_pde_wave w = {1, rt->v, rt->mu, -1, 0.0, 1, 1e-12};
+    CHECK_STATUS(bkf_pde_init_front(m, &w, NULL, NULL, &e), BKF_OK);
+    bkf_orbit_options o = bkf_orbit_options_default();
+    o.tol = 1e-2;
+    o.shift_mode = BKF_ORBIT_SHIFT_FREE;
+    bkf_orbit *ob = orbit_make(&p, &o);
+    double T = 1.05 * rt->period_fixed;
+    bkf_orbit_guess g = {bkf_pde_psi(m), bkf_pde_eta(m), T, -1.001 * rt->v * T};
+    bkf_orbit_result r;
+    CHECK_STATUS(bkf_orbit_solve(ob, &g, &r, &e), BKF_OK);
+    CHECK(r.symmetry == BKF_ORBIT_SYM_TRAVELLING && r.period_held && !r.shift_held);
+    double v = -r.shift / r.period;
+    CHECK_MSG(fabs(v - rt->v) <= r.err / r.period + rt->v_err, "v %.12g root %.12g err %.3g", v,
+              rt->v, r.err);
+    /* the shift alone, against the second grid, is far better than the state */
+    CHECK(fabs(r.shift2 - r.shift) < 1e-3 * r.err + 1e-6);
+    bkf_test_note("v = -s/T %.12g vs root %.12g (diff %.2g); estimate %.2g (grid %.2g, s on the "
+                  "second grid moved %.2g); %zu Jv",
+                  v, rt->v, v - rt->v, r.err, r.err_grid, r.shift2 - r.shift, r.jv_products);
+    bkf_orbit_free(ob);
+    bkf_pde_free(m);
+    bkf_speeds_table_free(&tb);
 }
