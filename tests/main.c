@@ -85,6 +85,7 @@ static const struct {
     {"extremes_period_matrix", 10.0},
     {"cli_check_adapted_grid_error_covers_the_grid_thin_fronts", 13.0},
     {"orbit_travelling_train_has_the_speeds_root", 12.0},
+    {"orbit_pacemaker_at_fig4b_and_its_departure_rate", 10.0},
     {"cli_check_adapted_grid", 6.1},
     {"orbit_uniform_multipliers_match_floquet_by_sector", 3.4},
     {"extremes_speeds_matrix", 4.0},

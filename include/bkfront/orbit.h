@@ -219,7 +219,10 @@ typedef struct {
     int sector;               /* -1 (default): every sector; else the one j */
     double arnoldi_tol;       /* ARPACK's relative tolerance; default 1e-10 */
     int max_restarts;         /* ARPACK's maxiter; default 300 */
-    double grid_tail;         /* tail above which an eigenvector is a grid mode; default 1e-2 */
+    double grid_tail;         /* tail above which an eigenvector is a grid mode; default
+                                 0.1: grid modes' content sits at the cutoff (tails 0.3-0.7
+                                 at N 64 on the pacemaker), a physical eigenvector's
+                                 tail is near its orbit's own (1e-2 at N 128 there) */
 } bkf_orbit_mult_options;
 
 bkf_orbit_mult_options bkf_orbit_mult_options_default(void);

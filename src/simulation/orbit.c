@@ -68,7 +68,7 @@ bkf_orbit_options bkf_orbit_options_default(void)
 
 bkf_orbit_mult_options bkf_orbit_mult_options_default(void)
 {
-    bkf_orbit_mult_options o = {10, -1, 1e-10, 300, 1e-2};
+    bkf_orbit_mult_options o = {10, -1, 1e-10, 300, 0.1};
     return o;
 }
 
