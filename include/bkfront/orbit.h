@@ -87,6 +87,11 @@ extern "C" {
 #define BKF_ORBIT_TOL_MIN 1e-12
 #define BKF_ORBIT_TOL_MAX 1e-2
 
+/* On the continuum a non-uniform state always gets the space phase
+ * condition and s as its unknown (with s held, space translation leaves the
+ * plain problem singular): NONE and FIXED then only say where s starts (0,
+ * or the guess's), and the result's shift where it ended (0 within the
+ * error for a plain, e.g. reflection-symmetric, orbit). */
 typedef enum {
     BKF_ORBIT_SHIFT_NONE = 0,  /* Phi_T(u0) = u0 */
     BKF_ORBIT_SHIFT_FIXED = 1, /* Phi_T(u0) = R_s u0 with s the guess's (on the chain
