@@ -356,6 +356,7 @@ TEST(orbit_pacemaker_at_fig4b_and_its_departure_rate)
     bkf_orbit_guess gs = {bkf_pde_psi(g.pde), bkf_pde_eta(g.pde), 2 * g.T, 0.0};
     bkf_orbit_result r;
     CHECK_STATUS(bkf_orbit_solve(ob, &gs, &r, &e), BKF_OK);
+    double T64 = r.period;
     bkf_model_params p = p64;
     p.N = 128;
     double u96[2 * 128];
@@ -372,10 +373,15 @@ TEST(orbit_pacemaker_at_fig4b_and_its_departure_rate)
     CHECK_MSG(fabs(r.shift) <= r.err, "shift %.3g err %.3g", r.shift, r.err);
     CHECK_MSG(fabs(r.period - 2 * g.T) > 10 * r.err, "T %.12g vs 2 T_osc %.12g", r.period,
               2 * g.T);
+    /* (e) in N: the period moves ten times less from N 128 to the second
+     * grid (192) than from 64 to 128 */
+    CHECK_MSG(fabs(r.period2 - r.period) < 0.2 * fabs(r.period - T64) && r.N2 == 192,
+              "T %.12g, %.12g, %.12g at N 64, 128, %zu", T64, r.period, r.period2, r.N2);
     bkf_orbit_spectrum sp;
     CHECK_STATUS(bkf_orbit_multipliers(ob, NULL, &sp, &e), BKF_OK);
     CHECK(sp.trivial_found == 2);
-    CHECK_MSG(sp.verdict == BKF_ORBIT_UNSTABLE, "%s: %s (largest %.6g +- %.2g)", bkf_orbit_verdict_name(sp.verdict), sp.reason, sp.largest_abs, sp.largest_err);
+    CHECK_MSG(sp.verdict == BKF_ORBIT_UNSTABLE, "%s: %s (largest %.6g +- %.2g)",
+              bkf_orbit_verdict_name(sp.verdict), sp.reason, sp.largest_abs, sp.largest_err);
     /* seeded simulation: orbit + noise 1e-5 (the simulation's own error per
      * period is ~1e-8, the noise's part along the unstable eigenvector far
      * smaller than the noise), strobed at k T */
@@ -387,15 +393,17 @@ TEST(orbit_pacemaker_at_fig4b_and_its_departure_rate)
                  BKF_OK);
     CHECK(st.n == 31);
     /* The rate over periods 24..30, when the unstable mode has overtaken
-     * the others (the complex pair of |m| 1.03 beats with it until ~20) (the band-limited noise, modes up to S/2, barely touches
+     * the others (the complex pair of |m| 1.03 beats with it until ~20;
+     * the band-limited noise, modes up to S/2, barely touches
      * it: 8% of its content is above N/3). */
     double rate = pow(st.d[30] / st.d[24], 1.0 / 6.0);
     CHECK_MSG(fabs(rate - sp.largest_abs) <= 0.05 * sp.largest_abs,
               "departure per period %.4f vs largest multiplier %.4f", rate, sp.largest_abs);
-    bkf_test_note("pacemaker at nu -0.94, N 128: T %.9g = %.6f T_osc (estimate %.2g, grid %.2g), "
+    bkf_test_note("pacemaker at nu -0.94: T %.9g, %.9g, %.9g at N 64, 128, 192; at 128 %.6f T_osc "
+                  "(estimate %.2g, grid %.2g), "
                   "amplitude %.4f, shift %.2g; largest |m| %.6f +- %.2g (%s); a seeded run "
                   "departs by %.4f per period (change %.2g -> %.2g over periods 24..30)",
-                  r.period, r.period / g.T, r.err, r.err_grid, r.amplitude, r.shift,
+                  T64, r.period, r.period2, r.period / g.T, r.err, r.err_grid, r.amplitude, r.shift,
                   sp.largest_abs, sp.largest_err, bkf_orbit_verdict_name(sp.verdict), rate,
                   st.d[24], st.d[30]);
     bkf_pde_free(m);
