@@ -410,3 +410,43 @@ TEST(orbit_pacemaker_at_fig4b_and_its_departure_rate)
     bkf_orbit_free(ob);
     uniform_free(&g);
 }
+
+static int stop_at_arnoldi(const char *stage, double fraction, void *data)
+{
+    (void)fraction;
+    int *calls = data;
+    (*calls)++;
+    return strcmp(stage, "arnoldi") == 0;
+}
+
+/* The hooks: a raised cancel flag stops the solve at its first flow, a
+ * progress callback that returns nonzero stops the multipliers, both with
+ * BKF_ECANCELED; the stages reported before are Newton's. */
+TEST(orbit_cancel_and_progress_stop_the_work)
+{
+    bkf_model_params p = {2, 0.3, -0.92, 20, 16, BKF_MODEL_CONTINUUM};
+    uniform_guess g;
+    uniform_make(&g, &p);
+    volatile sig_atomic_t flag = 1;
+    bkf_orbit_options o = bkf_orbit_options_default();
+    o.cancel = &flag;
+    bkf_orbit *ob = orbit_make(&p, &o);
+    bkf_orbit_guess gs = {bkf_pde_psi(g.pde), bkf_pde_eta(g.pde), g.T, 0.0};
+    bkf_error e;
+    CHECK_STATUS(bkf_orbit_solve(ob, &gs, NULL, &e), BKF_ECANCELED);
+    CHECK(bkf_orbit_psi(ob) == NULL);
+    bkf_orbit_free(ob);
+    int calls = 0;
+    o = bkf_orbit_options_default();
+    o.progress = stop_at_arnoldi;
+    o.progress_data = &calls;
+    ob = orbit_make(&p, &o);
+    CHECK_STATUS(bkf_orbit_solve(ob, &gs, NULL, &e), BKF_OK);
+    int before = calls;
+    CHECK(before >= 1);
+    bkf_orbit_spectrum sp;
+    CHECK_STATUS(bkf_orbit_multipliers(ob, NULL, &sp, &e), BKF_ECANCELED);
+    CHECK(calls == before + 1);
+    bkf_orbit_free(ob);
+    uniform_free(&g);
+}
