@@ -46,6 +46,7 @@ void bench_stability_tol(void);
 void bench_chain(void);
 void bench_colloc(void);
 void bench_start(void);
+void bench_orbit(void);
 
 int main(int argc, char **argv)
 {
@@ -60,5 +61,6 @@ int main(int argc, char **argv)
     if (!only || strcmp(only, "chain") == 0) bench_chain();
     if (!only || strcmp(only, "colloc") == 0) bench_colloc();
     if (!only || strcmp(only, "start") == 0) bench_start();
+    if (!only || strcmp(only, "orbit") == 0) bench_orbit();
     return 0;
 }
