@@ -34,6 +34,7 @@
 #include "bkfront/fronts.h"
 #include "bkfront/stability.h"
 #include "bkfront/stabmap.h"
+#include "bkfront/orbits.h"
 #include "bkfront/oscillation.h"
 #include "bkfront/init.h"
 #include "bkfront/seed.h"
