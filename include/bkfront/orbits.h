@@ -183,6 +183,14 @@ typedef struct {
                                 nearest `at` (NaN: the last row with a result) */
     const char *spacetime;   /* file: psi(x, t) of that orbit over two periods */
     const char *multipliers; /* file: its multipliers */
+    /* Item 6 of issue 34: a regime table of bkfront sweep (its columns point,
+     * gamma, c, nu, S, regime) read, and per row at this branch's gamma, c, S
+     * the solutions known there written to `coexistence`: the global
+     * oscillation's stability on the ring (floquet, every allowed mode with
+     * c q <= 6), the orbits of the branch at that nu and how many are stable,
+     * and whether the simulated regime is one of the stable states. */
+    const char *regimes;
+    const char *coexistence;
     /* not keys: */
     int (*progress)(double fraction, void *data);
     void *progress_data;

@@ -7,6 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <gsl/gsl_math.h>
+
+#include "bkfront/floquet.h"
 #include "bkfront/pde.h"
 
 #include "product_internal.h"
@@ -90,13 +93,22 @@ const bkf_option bkf_orbits_spec_options[] = {
      .help = "amplitude of cos(q_j x) in psi at the first orbit, in\n(0, 0.5]"},
     {.name = "at", .type = BKF_OPT_DOUBLE, .offset = FIELD(at), .form = "P",
      .shown_default = "the last orbit",
-     .help = "the files' orbit: the row whose parameter is nearest P"},
+     .help = "the orbit of --spacetime and --multipliers: the row whose\n"
+             "parameter is nearest P"},
     {.name = "spacetime", .type = BKF_OPT_TEXT, .offset = FIELD(spacetime),
      .flags = BKF_OPT_PATH, .form = "FILE",
      .help = "psi(x, t) of that orbit over two periods (gnuplot\n"
              "nonuniform matrix, as bkfront simulate's)"},
     {.name = "multipliers", .type = BKF_OPT_TEXT, .offset = FIELD(multipliers),
      .flags = BKF_OPT_PATH, .form = "FILE", .help = "its Floquet multipliers (TSV)"},
+    {.name = "regimes", .type = BKF_OPT_TEXT, .offset = FIELD(regimes), .form = "FILE",
+     .help = "a table of bkfront sweep (product regime): its rows at\n"
+             "this gamma, c, S set beside the solutions known there"},
+    {.name = "coexistence", .type = BKF_OPT_TEXT, .offset = FIELD(coexistence),
+     .flags = BKF_OPT_PATH, .form = "FILE",
+     .help = "with --regimes: per row, the oscillation's and the\n"
+             "branch's stable states at its nu, and whether the regime\n"
+             "simulated is one of them (TSV)"},
 };
 const size_t bkf_orbits_spec_noptions =
     sizeof bkf_orbits_spec_options / sizeof bkf_orbits_spec_options[0];
@@ -150,11 +162,15 @@ int bkf_orbits_check(const bkf_orbits_spec *sp, const char *prefix, bkf_error *e
         return bkf_error_set(err, BKF_EINPUT, "%sfrom, %sto: S must stay in (0, 1e4]", p, p);
     if (sp->model == 0 && sp->N % 2)
         return bkf_error_set(err, BKF_EINPUT, "%sN: the continuum's N must be even", p);
+    if (!sp->regimes != !sp->coexistence)
+        return bkf_error_set(err, BKF_EINPUT, "%s%s: give %sregimes and %scoexistence together",
+                             p, sp->regimes ? "regimes" : "coexistence", p, p);
+    if (sp->no_stability && sp->coexistence)
+        return bkf_error_set(err, BKF_EINPUT, "%scoexistence: not with %sno-stability", p, p);
+    if (sp->along != BKF_ORBITS_NU && sp->coexistence)
+        return bkf_error_set(err, BKF_EINPUT, "%scoexistence: only along nu", p);
     if (sp->no_stability && sp->multipliers)
         return bkf_error_set(err, BKF_EINPUT, "%smultipliers: not with %sno-stability", p, p);
-    if (!isnan(sp->at) && !sp->spacetime && !sp->multipliers)
-        return bkf_error_set(err, BKF_EINPUT, "%sat: give %sspacetime or %smultipliers too", p,
-                             p, p);
     return BKF_OK;
 }
 
@@ -190,6 +206,144 @@ bkf_orbits_options bkf_orbits_options_of(const bkf_orbits_spec *sp)
     return o;
 }
 
+/* ------------------------------------------------- regimes and solutions */
+
+#define REGIME_ROWS_MAX 1000000u
+#define REGIME_LINE_MAX 65536
+
+typedef struct {
+    double point, nu;
+    char regime[40];
+    int match;                /* at the branch's gamma, c, S */
+    int osc;                  /* the oscillation: 1 stable, 0 unstable, -1 undecided */
+    size_t orbits, stable, undecided;
+} regime_row;
+
+typedef struct {
+    regime_row *rows;
+    size_t count;
+} regime_set;
+
+/* The field `col` of a tab-separated line (0-based), in place: NUL-ended
+ * copy into buf. */
+static int field_of(const char *line, int col, char *buf, size_t size)
+{
+    for (int i = 0; i < col; i++) {
+        line = strchr(line, '\t');
+        if (!line) return 0;
+        line++;
+    }
+    size_t n = strcspn(line, "\t\r\n");
+    if (n >= size) return 0;
+    memcpy(buf, line, n);
+    buf[n] = '\0';
+    return 1;
+}
+
+static int read_regimes(const char *path, const bkf_model_params *m, regime_set *set,
+                        bkf_error *err)
+{
+    char shown[96];
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return bkf_error_set(err, BKF_EINPUT, "regimes: cannot open %s",
+                             bkf_io_shown(path, shown, sizeof shown));
+    static const char *const names[] = {"point", "gamma", "c", "nu", "S", "regime"};
+    int col[6] = {-1, -1, -1, -1, -1, -1};
+    char *line = malloc(REGIME_LINE_MAX);
+    int s = line ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    int header = 0;
+    size_t lineno = 0, cap = 0;
+    while (!s && fgets(line, REGIME_LINE_MAX, f)) {
+        lineno++;
+        if (!strchr(line, '\n') && !feof(f)) {
+            s = bkf_error_set(err, BKF_EINPUT, "regimes: line %zu is too long", lineno);
+            break;
+        }
+        if (line[0] == '#' || line[0] == '\n') continue;
+        if (!header) {
+            char name[64];
+            for (int c = 0; field_of(line, c, name, sizeof name); c++)
+                for (int k = 0; k < 6; k++)
+                    if (strcmp(name, names[k]) == 0) col[k] = c;
+            for (int k = 0; k < 6 && !s; k++)
+                if (col[k] < 0)
+                    s = bkf_error_set(err, BKF_EINPUT,
+                                      "regimes: %s has no column %s (a table of bkfront sweep "
+                                      "--product regime)",
+                                      bkf_io_shown(path, shown, sizeof shown), names[k]);
+            header = 1;
+            continue;
+        }
+        if (set->count == REGIME_ROWS_MAX) {
+            s = bkf_error_set(err, BKF_EINPUT, "regimes: more than %u rows", REGIME_ROWS_MAX);
+            break;
+        }
+        if (set->count == cap) {
+            size_t nc = cap ? 2 * cap : 64;
+            regime_row *r = realloc(set->rows, nc * sizeof *r);
+            if (!r) {
+                s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+                break;
+            }
+            set->rows = r;
+            cap = nc;
+        }
+        regime_row *r = &set->rows[set->count];
+        memset(r, 0, sizeof *r);
+        double v[5];
+        char buf[64];
+        for (int k = 0; k < 5 && !s; k++) {
+            char *end;
+            if (!field_of(line, col[k], buf, sizeof buf) || (v[k] = strtod(buf, &end), *end))
+                s = bkf_error_set(err, BKF_EINPUT, "regimes: line %zu: %s is not a number",
+                                  lineno, names[k]);
+        }
+        if (!s && !field_of(line, col[5], r->regime, sizeof r->regime))
+            s = bkf_error_set(err, BKF_EINPUT, "regimes: line %zu: no regime", lineno);
+        if (s) break;
+        r->point = v[0];
+        r->nu = v[3];
+        r->osc = -1;
+        /* the same model: the table's numbers are %.17g of the same doubles */
+        r->match = fabs(v[1] - m->gamma) <= 1e-12 * m->gamma && fabs(v[2] - m->c) <= 1e-12 * m->c &&
+                   fabs(v[4] - m->S) <= 1e-12 * m->S;
+        set->count++;
+    }
+    if (!s && ferror(f)) s = bkf_error_set(err, BKF_EIO, "regimes: reading failed");
+    if (!s && !header)
+        s = bkf_error_set(err, BKF_EINPUT, "regimes: %s has no table",
+                          bkf_io_shown(path, shown, sizeof shown));
+    free(line);
+    fclose(f);
+    return s;
+}
+
+/* The global oscillation on the ring at nu: every allowed mode j >= 1 with
+ * c q_j <= 6 (floquet's scan range), stable when each lambda is below 0 by
+ * more than its error. */
+static int oscillation_on_ring(const bkf_model_params *m, double nu, size_t N, double tol,
+                               int *verdict, bkf_error *err)
+{
+    bkf_floquet *fl = bkf_floquet_alloc();
+    if (!fl) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    bkf_floquet_options fo = bkf_floquet_options_default();
+    fo.tol = fmax(tol * 1e-2, 1e-12);
+    int s = bkf_floquet_set(fl, m->gamma, m->c, nu, &fo, err);
+    int stable = 1, unstable = 0;
+    for (size_t j = 1; !s && m->c * 2.0 * M_PI * (double)j / m->S <= 6.0; j++) {
+        if (m->kind == BKF_MODEL_CHAIN && 2 * j > N) break;
+        bkf_floquet_point pt;
+        s = bkf_floquet_eval(fl, orbits_q_effective(m, j, N), &pt, err);
+        if (s) break;
+        if (pt.lambda > pt.lambda_err) unstable = 1;
+        if (!(pt.lambda < -pt.lambda_err)) stable = 0;
+    }
+    bkf_floquet_free(fl);
+    *verdict = unstable ? 0 : stable ? 1 : -1;
+    return s;
+}
+
 /* ------------------------------------------------------------ the table */
 
 /* The orbit the files show: copied from its row (the branch keeps none). */
@@ -213,7 +367,44 @@ typedef struct {
     int status;
     bkf_error err;
     kept_orbit keep;
+    regime_set regimes;
+    int have_prev;            /* the previous row, for the branch's segments */
+    double prev_nu;
+    int prev_verdict;         /* bkf_orbit_verdict, or -1: the bifurcation (neutral) */
+    double nu_lo, nu_hi;      /* the nu the branch covered */
 } writer;
+
+/* The segment from the previous row to this one: every regime row's nu on
+ * it has one more orbit, stable when both ends are (the bifurcation's end
+ * counts as the other's). */
+static void count_segment(writer *w, const bkf_orbits_point *pt)
+{
+    double nu = pt->model.nu;
+    int v = pt->has_spectrum ? (int)pt->verdict : (int)BKF_ORBIT_UNDECIDED;
+    if (pt->is_start) v = -1;
+    if (!w->have_prev) {
+        w->nu_lo = w->nu_hi = nu;
+    } else if (!isnan(pt->period)) {
+        w->nu_lo = fmin(w->nu_lo, nu);
+        w->nu_hi = fmax(w->nu_hi, nu);
+        int a = w->prev_verdict < 0 ? v : w->prev_verdict, b = v;
+        double lo = fmin(w->prev_nu, nu), hi = fmax(w->prev_nu, nu);
+        for (size_t i = 0; i < w->regimes.count; i++) {
+            regime_row *r = &w->regimes.rows[i];
+            /* half-open, so that a row on a shared end counts once */
+            int on = w->prev_nu < nu ? (r->nu > lo && r->nu <= hi) : (r->nu >= lo && r->nu < hi);
+            if (!r->match || !on) continue;
+            r->orbits++;
+            if (a == BKF_ORBIT_STABLE && b == BKF_ORBIT_STABLE) r->stable++;
+            else if (!(a == BKF_ORBIT_UNSTABLE && b == BKF_ORBIT_UNSTABLE)) r->undecided++;
+        }
+    }
+    if (!isnan(pt->period)) {
+        w->have_prev = 1;
+        w->prev_nu = nu;
+        w->prev_verdict = v;
+    }
+}
 
 static int head(writer *w, const bkf_orbits_point *pt)
 {
@@ -343,6 +534,7 @@ static int visit_row(const bkf_orbits_point *pt, void *data)
         {0, pt->status}};
     if (!s) s = bkf_io_table_row(w->t, row, &w->err);
     if (!s && (w->spec->spacetime || w->spec->multipliers)) s = keep_orbit(w, pt);
+    if (!s && w->regimes.rows) count_segment(w, pt);
     if (s) {
         w->status = s;
         return 1;
@@ -433,6 +625,79 @@ static int write_multipliers(const writer *w, bkf_error *err)
     return s;
 }
 
+static const bkf_io_column coexist_columns[] = {
+    {"point", BKF_IO_NUMBER},     {"nu", BKF_IO_NUMBER},      {"regime", BKF_IO_TEXT},
+    {"oscillation", BKF_IO_TEXT}, {"orbits", BKF_IO_NUMBER},  {"stable_orbits", BKF_IO_NUMBER},
+    {"undecided_orbits", BKF_IO_NUMBER}, {"expected", BKF_IO_TEXT},
+    {"consistent", BKF_IO_TEXT}};
+#define NCOEXIST (sizeof coexist_columns / sizeof coexist_columns[0])
+
+static int is_regime(const char *r, const char *name) { return strcmp(r, name) == 0; }
+
+static int write_coexistence(writer *w, size_t N, bkf_error *err)
+{
+    bkf_io_atomic *file = bkf_io_atomic_open(w->spec->coexistence, err);
+    if (!file) return err ? err->status : BKF_EIO;
+    bkf_io_table *t = NULL;
+    int s = bkf_product_table_open(
+        bkf_io_atomic_stream(file), BKF_IO_TSV, coexist_columns, NCOEXIST,
+        "orbit: the simulated regimes beside the stable solutions known at their nu", w->prov,
+        &t, err);
+    if (!s)
+        s = bkf_io_table_commentf(
+            t, err,
+            "the branch covered nu in [%.10g, %.10g]; oscillation: floquet on the ring (every "
+            "allowed mode with c q <= 6); orbits: the branch's orbits at that nu (stable: both "
+            "neighbouring rows stable); expected: hysteresis (the oscillation and a pacemaker "
+            "orbit both stable), global_oscillation, period_doubled_pacemakers, neither (no "
+            "stable state known here: fronts, irregular, or another branch's), undecided; "
+            "outside: beyond the branch",
+            w->nu_lo, w->nu_hi);
+    for (size_t i = 0; !s && i < w->regimes.count; i++) {
+        regime_row *r = &w->regimes.rows[i];
+        if (!r->match) continue;
+        s = oscillation_on_ring(&w->o->model, r->nu, N, w->o->tol, &r->osc, err);
+        if (s) break;
+        int outside = !(r->nu >= w->nu_lo && r->nu <= w->nu_hi);
+        int osc = r->osc == 1, pm = !outside && r->stable > 0;
+        const char *expected = outside                       ? "outside"
+                               : osc && pm                   ? "hysteresis"
+                               : osc                         ? "global_oscillation"
+                               : pm                          ? "period_doubled_pacemakers"
+                               : r->undecided || r->osc < 0  ? "undecided"
+                                                             : "neither";
+        const char *consistent;
+        int known = is_regime(r->regime, "global_oscillation") ||
+                    is_regime(r->regime, "period_doubled_pacemakers");
+        if (outside || is_regime(r->regime, "transient") || is_regime(r->regime, "none") ||
+            is_regime(expected, "undecided"))
+            consistent = "undecided";
+        else if (is_regime(expected, "neither"))
+            consistent = known ? "no" : "yes";
+        else if (is_regime(expected, "hysteresis"))
+            consistent = known ? "yes" : "no";
+        else
+            consistent = is_regime(r->regime, expected) ? "yes" : "no";
+        const char *osc_text = r->osc == 1 ? "stable" : r->osc == 0 ? "unstable" : "undecided";
+        bkf_io_value row[NCOEXIST] = {
+            {r->point, NULL},
+            {r->nu, NULL},
+            {0, r->regime},
+            {0, osc_text},
+            {outside ? NAN : (double)r->orbits, NULL},
+            {outside ? NAN : (double)r->stable, NULL},
+            {outside ? NAN : (double)r->undecided, NULL},
+            {0, expected},
+            {0, consistent}};
+        s = bkf_io_table_row(t, row, err);
+    }
+    if (!s) s = bkf_io_table_finish(t, err);
+    bkf_io_table_free(t);
+    if (s) bkf_io_atomic_abort(file);
+    else s = bkf_io_atomic_commit(file, err);
+    return s;
+}
+
 int bkf_orbits_write(const bkf_orbits_spec *spec, FILE *out, bkf_io_format format,
                      const bkf_provenance *prov, bkf_error *err)
 {
@@ -444,11 +709,21 @@ int bkf_orbits_write(const bkf_orbits_spec *spec, FILE *out, bkf_io_format forma
     w.spec = spec;
     w.o = &o;
     w.prov = prov;
+    if (spec->regimes) {
+        s = read_regimes(spec->regimes, &o.model, &w.regimes, err);
+        if (s) {
+            free(w.regimes.rows);
+            return s;
+        }
+    }
     s = bkf_product_table_open(out, format, columns, NCOLUMNS,
                                "orbit: the branch of period-doubled orbits of the PDE born at "
                                "the period doubling of the global oscillation",
                                prov, &w.t, err);
-    if (s) return s;
+    if (s) {
+        free(w.regimes.rows);
+        return s;
+    }
     bkf_orbits_report rep;
     s = bkf_orbits_branch(&o, visit_row, &w, &rep, err);
     if (w.status) {
@@ -461,6 +736,8 @@ int bkf_orbits_write(const bkf_orbits_spec *spec, FILE *out, bkf_io_format forma
                           "spacetime, multipliers: no row has a solved orbit to write");
     if (!s && spec->spacetime) s = write_spacetime(&w, err);
     if (!s && spec->multipliers) s = write_multipliers(&w, err);
+    if (!s && spec->coexistence) s = write_coexistence(&w, rep.N, err);
+    free(w.regimes.rows);
     bkf_io_table_free(w.t);
     free(w.keep.psi);
     free(w.keep.eta);

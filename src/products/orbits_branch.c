@@ -55,7 +55,7 @@ void orbits_param_set(bkf_model_params *m, bkf_orbits_param p, double v)
 
 /* The wavenumber floquet must see for mode j: the chain's Laplacian has
  * the eigenvalue -(2/h sin(q h/2))^2 where the continuum's has -q^2. */
-static double q_effective(const bkf_model_params *m, size_t j, size_t N)
+double orbits_q_effective(const bkf_model_params *m, size_t j, size_t N)
 {
     double q = 2.0 * M_PI * (double)j / m->S;
     if (m->kind != BKF_MODEL_CHAIN) return q;
@@ -84,7 +84,7 @@ static int pd_eval(pd_ctx *c, double p, double *lambda)
     bkf_floquet_options fo = bkf_floquet_options_default();
     fo.tol = fmax(c->tol * 1e-2, 1e-12);
     int s = bkf_floquet_set(c->fl, m.gamma, m.c, m.nu, &fo, &c->err);
-    if (!s) s = bkf_floquet_eval(c->fl, q_effective(&m, c->j, c->N), &c->point, &c->err);
+    if (!s) s = bkf_floquet_eval(c->fl, orbits_q_effective(&m, c->j, c->N), &c->point, &c->err);
     c->status = s;
     if (s) return s;
     *lambda = c->point.lambda;
@@ -207,7 +207,7 @@ int bkf_orbits_pd_find(const bkf_orbits_options *o, bkf_orbits_pd *pd, bkf_error
                 pd->p_err = (hi - lo) + fabs(c.point.lambda_err / slope);
                 pd->j = j;
                 pd->q = 2.0 * M_PI * (double)j / at.S;
-                pd->q_eff = q_effective(&at, j, c.N);
+                pd->q_eff = orbits_q_effective(&at, j, c.N);
                 const bkf_cycle_result *cy = bkf_floquet_cycle(c.fl);
                 pd->period = cy->period;
                 pd->period_err = cy->period_err;
