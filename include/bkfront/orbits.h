@@ -62,7 +62,7 @@ typedef enum {
 const char *bkf_orbits_param_name(bkf_orbits_param p);
 
 /* The points per cell of the continuum when N is not given. */
-#define BKF_ORBITS_CELL_POINTS 16
+#define BKF_ORBITS_CELL_POINTS 32
 #define BKF_ORBITS_POINTS_MAX 100000u
 
 typedef struct {

@@ -54,7 +54,7 @@ const bkf_option bkf_orbits_spec_options[] = {
      .form = "M", .shown_default = "continuum",
      .help = "continuum (pseudo-spectral) or chain (blocks, h = S/N)"},
     {.name = "N", .type = BKF_OPT_COUNT, .offset = FIELD(N), .flags = BOUNDED, .min = 8,
-     .max = 65536, .form = "N", .shown_default = "16 j (continuum), S (chain)",
+     .max = 65536, .form = "N", .shown_default = "32 j (continuum), S (chain)",
      .help = "grid points or blocks on the ring, in [8, 65536]; the\n"
              "continuum's a multiple of 2 j"},
     {.name = "j", .type = BKF_OPT_COUNT, .offset = FIELD(j), .flags = BOUNDED, .min = 1,

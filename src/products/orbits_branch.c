@@ -15,11 +15,12 @@
 #include "bkfront/floquet.h"
 #include "bkfront/pde.h"
 
-/* The flow of the continuation: tight, so that central differences of it
- * with steps 1e-5 are good to about 1e-7 (the adaptive step's choices make
- * the flow rough at the level of its tolerance). */
+/* The flow of the continuation: tight, so that forward differences of it
+ * with steps 1e-6 are good to about 1e-6 (the adaptive step's choices make
+ * the flow rough at the level of its tolerance), enough for Newton to gain
+ * six digits an iteration. */
 #define FLOW_TOL 1e-12
-#define FD_STEP 1e-5
+#define FD_STEP 1e-6
 /* The Jacobian is reused while the unknowns stay this close (scaled) to
  * where it was formed: Newton's last iterations and the tangent that
  * follows them need no new one. */
@@ -241,6 +242,8 @@ typedef struct {
     bkf_model_params base;  /* the cell's model but for p */
     size_t m, Nc, K, kc;    /* cells, points per cell, last coefficient, critical one */
     size_t n;               /* equations: 2 (K + 1) + 1 */
+    int half;               /* the half-period symmetry is used (one cell per mode
+                               wavelength, an even number of points in it) */
     double *cosm;           /* cos(2 pi k i / Nc), (K + 1) x Nc */
     double *psi, *eta, *g0, *g1, *ucache, *jcache;
     int have_jac;
@@ -307,7 +310,15 @@ static int ensure_pde(cont_ctx *c, double p, bkf_error *err)
     return c->pde ? BKF_OK : (err ? err->status : BKF_ENOMEM);
 }
 
-/* Phi_P of the cell state u (coefficients), as coefficients into out. */
+/* Phi_{P/2} of the cell state u (coefficients), as coefficients into out.
+ * The branch keeps the symmetry it is born with: half a period on, the
+ * pattern is the same shifted by half a cell, u(x, t + P/2) = u(x + L/2, t)
+ * (at the switch the critical mode, cos(q_j x) with multiplier -1, changes
+ * sign over T ~ P/2, and a shift by L/2 changes the sign of every odd
+ * coefficient, nothing else).  The continuation solves on that subspace at
+ * half the cost; the polish and the multipliers take the whole period and
+ * the whole state, so a branch that breaks the symmetry shows there (a
+ * multiplier through +1 of a mode it does not hold). */
 static int flow(cont_ctx *c, const double *u, double *out, bkf_error *err)
 {
     size_t K1 = c->K + 1;
@@ -324,7 +335,8 @@ static int flow(cont_ctx *c, const double *u, double *out, bkf_error *err)
     to_grid(c, u, c->psi);
     to_grid(c, u + K1, c->eta);
     s = bkf_pde_set_state(c->pde, c->psi, c->eta, 0.0, err);
-    if (!s) s = bkf_pde_run(c->pde, P, P, NULL, NULL, NULL, NULL, err);
+    double t = c->half ? P / 2 : P;
+    if (!s) s = bkf_pde_run(c->pde, t, t, NULL, NULL, NULL, NULL, err);
     c->flows++;
     if (s) return s == BKF_ECANCELED ? s : BKF_ENUMERIC;
     to_coeff(c, bkf_pde_psi(c->pde), out);
@@ -337,7 +349,8 @@ static int residual_only(cont_ctx *c, const double *u, double *g, bkf_error *err
     size_t K1 = c->K + 1;
     int s = flow(c, u, g, err);
     if (s) return s;
-    for (size_t i = 0; i < 2 * K1; i++) g[i] -= u[i];
+    /* the half-cell shift: odd coefficients change sign */
+    for (size_t i = 0; i < 2 * K1; i++) g[i] -= c->half && (i % K1) % 2 ? -u[i] : u[i];
     double nu = c->o->along == BKF_ORBITS_NU ? u[2 * K1 + 1] : c->base.nu;
     g[2 * K1] = u[0] - nu;
     return BKF_OK;
@@ -362,19 +375,15 @@ static int residual(const double *u, double *g, double *jac, void *data, bkf_err
     double *uh = c->ucache; /* rebuilt below */
     memcpy(uh, u, N * sizeof *uh);
     for (size_t j = 0; j < N; j++) {
-        double h = FD_STEP * fmax(fabs(u[j]), c->scale[j]);
+        double h = FD_STEP * fmax(fabs(u[j]), 1.0);
         uh[j] = u[j] + h;
         s = residual_only(c, uh, c->g0, err);
-        if (!s) {
-            uh[j] = u[j] - h;
-            s = residual_only(c, uh, c->g1, err);
-        }
         uh[j] = u[j];
         if (s) {
             c->have_jac = 0;
             return s;
         }
-        for (size_t i = 0; i < n; i++) jac[i * N + j] = (c->g0[i] - c->g1[i]) / (2 * h);
+        for (size_t i = 0; i < n; i++) jac[i * N + j] = (c->g0[i] - g[i]) / h;
     }
     memcpy(c->jcache, jac, n * N * sizeof *jac);
     c->have_jac = 1;
@@ -495,6 +504,16 @@ static int accept(const double *u, const double *tangent, int is_fold, void *dat
     if (c->skip_next && !is_fold) {
         c->skip_next = 0;
         return 0;
+    }
+    /* no pattern left: the corrector found the global oscillation */
+    double pattern = 0;
+    for (size_t k = 1; k < K1; k++) pattern = fmax(pattern, fabs(u[k]));
+    if (pattern < 1e-3 * c->o->switch_amplitude) {
+        c->stop_status = bkf_error_set(&c->stop_err, BKF_ENUMERIC,
+                                       "the continuation fell back onto the global oscillation "
+                                       "at %s = %.10g (a step too long near a fold?)",
+                                       bkf_orbits_param_name(c->o->along), u[2 * K1 + 1]);
+        return 1;
     }
     if (c->o->cancel && *c->o->cancel) return 1;
     if (is_fold) c->rep->folds++;
@@ -683,6 +702,7 @@ int bkf_orbits_branch(const bkf_orbits_options *o, bkf_orbits_visit visit, void 
     c.K = c.Nc / 2;
     c.kc = pd->j / m;
     c.n = 2 * (c.K + 1) + 1;
+    c.half = c.kc == 1 && c.Nc % 2 == 0;
     c.base = pd->model;
     c.base.N = c.Nc;
     c.base.S = pd->model.S / (double)m;
@@ -721,8 +741,12 @@ int bkf_orbits_branch(const bkf_orbits_options *o, bkf_orbits_visit visit, void 
     for (size_t k = 0; k < K1; k++)
         for (size_t i = 0; i < c.Nc; i++)
             c.cosm[k * c.Nc + i] = cos(2.0 * M_PI * (double)((k * i) % c.Nc) / (double)c.Nc);
-    for (size_t i = 0; i < 2 * K1; i++) c.scale[i] = 1.0;
-    c.scale[2 * K1] = 1.0;
+    /* The scales weigh the pattern (every coefficient k >= 1) as heavily as
+     * nu: the uniform oscillation, a solution at every nu too, is then
+     * many steps away from any point of the branch, so the corrector does
+     * not fall back onto it near a fold. */
+    for (size_t i = 0; i < 2 * K1; i++) c.scale[i] = i % K1 ? 0.01 : 0.1;
+    c.scale[2 * K1] = 0.1;
     c.scale[2 * K1 + 1] = o->along == BKF_ORBITS_NU ? 0.01 : 0.01 * fabs(pd->p);
 
     /* row 0: the oscillation where it doubles; its period-2T orbit */
@@ -777,6 +801,10 @@ int bkf_orbits_branch(const bkf_orbits_options *o, bkf_orbits_visit visit, void 
         memcpy(u0, c.last_u, Nu * sizeof *u0);
         co.step_initial = fmin(o->step, 0.05);
         co.step_max = o->step;
+        /* every point is solved again to tol by module orbit: the branch
+         * needs only to pass close enough for that (and the steps grow
+         * only when Newton takes two iterations) */
+        co.newton_tol = 1e-7;
         co.max_points = o->max_points - SWITCH_POINTS + 1;
         co.stop_index = (int)(2 * K1 + 1);
         co.stop_min = fmin(o->from, o->to);
