@@ -86,6 +86,9 @@ static int pd_eval(pd_ctx *c, double p, double *lambda)
     fo.tol = fmax(c->tol * 1e-2, 1e-12);
     int s = bkf_floquet_set(c->fl, m.gamma, m.c, m.nu, &fo, &c->err);
     if (!s) s = bkf_floquet_eval(c->fl, orbits_q_effective(&m, c->j, c->N), &c->point, &c->err);
+    /* far from the root only lambda's sign counts: an estimate above tol
+     * that cannot change it will do */
+    if (s == BKF_ETOL && fabs(c->point.lambda) > 10 * c->point.lambda_err) s = BKF_OK;
     c->status = s;
     if (s) return s;
     *lambda = c->point.lambda;
@@ -100,7 +103,8 @@ static double pd_fn(double p, void *data)
     return c->status == BKF_OK ? l : NAN;
 }
 
-/* The mode nearest q_c of floquet's threshold at the start. */
+/* The mode nearest q_c of floquet's threshold at the start (the chain's
+ * by its effective wavenumber). */
 static int auto_mode(const bkf_model_params *m, double tol, size_t *j, bkf_error *err)
 {
     bkf_floquet_options fo = bkf_floquet_options_default();
@@ -115,6 +119,14 @@ static int auto_mode(const bkf_model_params *m, double tol, size_t *j, bkf_error
                              m->gamma, m->c, bkf_floquet_boundary_name(th.kind));
     double jj = floor(th.q * m->S / (2.0 * M_PI) + 0.5);
     *j = jj < 1 ? 1 : (size_t)jj;
+    if (m->kind == BKF_MODEL_CHAIN) {
+        size_t N = orbits_default_N(m, 1), best = 1;
+        for (size_t k = 1; 2 * k <= N; k++)
+            if (fabs(orbits_q_effective(m, k, N) - th.q) <
+                fabs(orbits_q_effective(m, best, N) - th.q))
+                best = k;
+        *j = best;
+    }
     return BKF_OK;
 }
 
@@ -141,6 +153,7 @@ int bkf_orbits_pd_find(const bkf_orbits_options *o, bkf_orbits_pd *pd, bkf_error
     double step = o->along == BKF_ORBITS_NU ? 0.005 : 0.02 * fabs(o->from);
     double a = o->from, la = NAN;
     s = pd_eval(&c, a, &la);
+    if (s && err) *err = c.err;
     if (!s && !(la < 0))
         s = bkf_error_set(err, BKF_ENUMERIC,
                           "from: the global oscillation's mode j = %zu is not stable at %s = %g "
@@ -152,7 +165,10 @@ int bkf_orbits_pd_find(const bkf_orbits_options *o, bkf_orbits_pd *pd, bkf_error
         b = a + dir * step;
         if ((dir > 0 && b > o->to) || (dir < 0 && b < o->to)) b = o->to;
         s = pd_eval(&c, b, &lb);
-        if (s) break;
+        if (s) {
+            if (err) *err = c.err;
+            break;
+        }
         if (lb > 0) {
             if (c.point.m1_re < 0 && c.point.kind == BKF_FLOQUET_REAL_NEGATIVE) found = 1;
             else
