@@ -33,8 +33,10 @@ PKG_LIBS   = $(shell pkg-config --libs $(PKGS))
 # OpenMP: bkf_sweep_run runs a sweep's points in threads (libgomp, part of gcc).
 override CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -Iinclude $(PKG_CFLAGS) $(SANITIZE) -fopenmp
 override LDFLAGS += $(SANITIZE) -fopenmp
-# SUNDIALS (CVODE for the comoving simulation) ships no pkg-config file.
-SUNDIALS_LIBS := -lsundials_cvodes -lsundials_sunlinsolband -lsundials_sunmatrixband \
+# SUNDIALS (CVODE for the comoving simulation, KINSOL with SPGMR for the
+# periodic orbits) ships no pkg-config file.
+SUNDIALS_LIBS := -lsundials_cvodes -lsundials_kinsol -lsundials_sunlinsolband \
+                 -lsundials_sunlinsolspgmr -lsundials_sunmatrixband \
                  -lsundials_nvecserial
 # HDF5's dimension scales (H5DS) are in its high-level library, which
 # hdf5-serial.pc does not list; its -L is that of hdf5-serial.  Only the
