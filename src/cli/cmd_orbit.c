@@ -29,6 +29,7 @@ static void orbit_help(FILE *out)
         "       bkfront orbit --along gamma|c|S --nu V --from A --to B [...]\n"
         "   common: [--step H] [--no-stability] [--k K] [--switch-amplitude A]\n"
         "           [--at P] [--spacetime FILE] [--multipliers FILE]\n"
+        "           [--regimes SWEEP --coexistence FILE]\n"
         "           [--no-progress] [--format tsv|json] [--out FILE]\n"
         "\n"
         "The period-doubled pacemakers of the paper's Fig. 4(b) as exact solutions: the\n"
