@@ -42,9 +42,10 @@
  * The error estimate, each piece in the result, their sum against tol:
  *  - residual: the remaining Newton correction (KINSOL's last step, in the
  *    max-norm of the unknowns), and the residual's max-norm;
- *  - flow: the change of (u0, T, s) from one more Newton step with the flow
- *    integrated at flow tolerance / 10 (how far the solution moves when the
- *    time integration is made ten times more accurate), plus the tangent
+ *  - flow: twice the change of (u0, T, s) from one more Newton step with
+ *    the flow integrated at flow tolerance / 10 (how far the solution moves
+ *    when the time integration is made ten times more accurate; twice,
+ *    since rk8pd's global error at tol/10 is only 7-8 times smaller), plus the tangent
  *    flow's share: its relative accuracy (one Jacobian-vector product at
  *    the two tolerances) times the last correction;
  *  - grid (continuum): the change of T, s and of the state (spectrally
@@ -64,7 +65,7 @@
  * verdict.  An eigenvector whose content sits in the top third of the grid's
  * wavenumbers (its spectral tail, as bkf_pde_spectral_tail, above
  * grid_tail) is classified a grid mode: if the verdict would rest on one it
- * is undecided.  Each multiplier's error: the residual |A v - m v|/|v| of its
+ * is undecided.  Each multiplier's error: twice the residual |A v - m v|/|v| of its
  * Ritz pair with A's flow integrated ten times more accurately (Arnoldi's
  * and the flow's error at once), plus the orbit's own error estimate
  * result.err (a first-order guess: a change e of the orbit moves the

@@ -45,6 +45,7 @@ void bench_trainspec(void);
 void bench_chain(void);
 void bench_colloc(void);
 void bench_start(void);
+void bench_orbit(void);
 
 int main(int argc, char **argv)
 {
@@ -58,5 +59,6 @@ int main(int argc, char **argv)
     if (!only || strcmp(only, "chain") == 0) bench_chain();
     if (!only || strcmp(only, "colloc") == 0) bench_colloc();
     if (!only || strcmp(only, "start") == 0) bench_start();
+    if (!only || strcmp(only, "orbit") == 0) bench_orbit();
     return 0;
 }
