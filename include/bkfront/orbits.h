@@ -84,7 +84,7 @@ typedef struct {
 } bkf_orbits_options;
 
 /* The paper's model, along nu from -0.90 to -0.999, 50 points, tol 1e-8,
- * step 0.5, stability on, k 6, switch amplitude 0.02. */
+ * step 0.5, stability on, k 2, switch amplitude 0.02. */
 bkf_orbits_options bkf_orbits_options_default(void);
 
 /* The period-doubling point of the global oscillation for mode j. */

@@ -85,8 +85,9 @@ const bkf_option bkf_orbits_spec_options[] = {
     {.name = "no-stability", .type = BKF_OPT_SWITCH, .offset = FIELD(no_stability),
      .help = "skip the multipliers (verdict none)"},
     {.name = "k", .type = BKF_OPT_COUNT, .offset = FIELD(k), .flags = BOUNDED, .min = 1,
-     .max = 100, .form = "K", .shown_default = "6",
-     .help = "multipliers per Bloch sector, in [1, 100]"},
+     .max = 100, .form = "K", .shown_default = "2",
+     .help = "multipliers per Bloch sector, in [1, 100] (the largest of\n"
+             "each decide; more cost little: Arnoldi's basis holds k + 20)"},
     {.name = "switch-amplitude", .type = BKF_OPT_DOUBLE, .offset = FIELD(switch_amplitude),
      .flags = BOUNDED | BKF_OPT_MIN_OPEN, .min = 0, .max = 0.5, .form = "A",
      .shown_default = "0.02",
@@ -123,7 +124,7 @@ bkf_orbits_spec bkf_orbits_spec_default(void)
     s.max_points = 50;
     s.tol = 1e-8;
     s.step = 0.5;
-    s.k = 6;
+    s.k = 2;
     s.switch_amplitude = 0.02;
     return s;
 }

@@ -653,7 +653,7 @@ bkf_orbits_options bkf_orbits_options_default(void)
     o.tol = 1e-8;
     o.step = 0.5;
     o.stability = 1;
-    o.k = 6;
+    o.k = 2;
     o.switch_amplitude = 0.02;
     return o;
 }
