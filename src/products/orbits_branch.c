@@ -650,7 +650,7 @@ bkf_orbits_options bkf_orbits_options_default(void)
     o.from = -0.90;
     o.to = -0.999;
     o.max_points = 50;
-    o.tol = 1e-8;
+    o.tol = 1e-6;
     o.step = 0.5;
     o.stability = 1;
     o.k = 2;
