@@ -82,8 +82,9 @@ static int pd_eval(pd_ctx *c, double p, double *lambda)
 {
     bkf_model_params m = c->model;
     orbits_param_set(&m, c->along, p);
+    /* floquet's default accuracy whatever tol: the root is cheap, and the
+     * branch's start is checked against it */
     bkf_floquet_options fo = bkf_floquet_options_default();
-    fo.tol = fmax(c->tol * 1e-2, 1e-12);
     int s = bkf_floquet_set(c->fl, m.gamma, m.c, m.nu, &fo, &c->err);
     if (!s) s = bkf_floquet_eval(c->fl, orbits_q_effective(&m, c->j, c->N), &c->point, &c->err);
     /* far from the root only lambda's sign counts: an estimate above tol
@@ -192,7 +193,7 @@ int bkf_orbits_pd_find(const bkf_orbits_options *o, bkf_orbits_pd *pd, bkf_error
         gsl_root_fsolver *r = gsl_root_fsolver_alloc(gsl_root_fsolver_brent);
         gsl_function F = {pd_fn, &c};
         double lo = fmin(a, b), hi = fmax(a, b);
-        double ptol = fmax(o->tol * 1e-2, 1e-13) * fmax(1.0, fabs(o->from));
+        double ptol = 1e-12 * fmax(1.0, fabs(o->from));
         if (!r) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
         else if (gsl_root_fsolver_set(r, &F, lo, hi) != GSL_SUCCESS)
             s = c.status ? (*err = c.err, c.status)
