@@ -83,7 +83,7 @@ typedef struct {
     const volatile sig_atomic_t *cancel;
 } bkf_orbits_options;
 
-/* The paper's model, along nu from -0.90 to -0.999, 50 points, tol 1e-6,
+/* The paper's model, along nu from -0.90 to -0.999, 50 points, tol 1e-3,
  * step 0.5, stability on, k 2, switch amplitude 0.02. */
 bkf_orbits_options bkf_orbits_options_default(void);
 

@@ -74,7 +74,7 @@ const bkf_option bkf_orbits_spec_options[] = {
      .min = 4, .max = BKF_ORBITS_POINTS_MAX, .form = "M", .shown_default = "50",
      .help = "points of the branch (folds not counted), in [4, 100000]"},
     {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = FIELD(tol), .flags = BOUNDED,
-     .min = BKF_ORBIT_TOL_MIN, .max = BKF_ORBIT_TOL_MAX, .form = "E", .shown_default = "1e-6",
+     .min = BKF_ORBIT_TOL_MIN, .max = BKF_ORBIT_TOL_MAX, .form = "E", .shown_default = "1e-3",
      .help = "absolute accuracy asked of each orbit's period, shift and\n"
              "state, in [1e-12, 0.01]; a point that misses it is refused"},
     {.name = "step", .type = BKF_OPT_DOUBLE, .offset = FIELD(step),
@@ -122,7 +122,7 @@ bkf_orbits_spec bkf_orbits_spec_default(void)
     s.from = s.to = s.at = NAN;
     s.along = BKF_ORBITS_NU;
     s.max_points = 50;
-    s.tol = 1e-6;
+    s.tol = 1e-3;
     s.step = 0.5;
     s.k = 2;
     s.switch_amplitude = 0.02;

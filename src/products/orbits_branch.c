@@ -651,7 +651,7 @@ bkf_orbits_options bkf_orbits_options_default(void)
     o.from = -0.90;
     o.to = -0.999;
     o.max_points = 50;
-    o.tol = 1e-6;
+    o.tol = 1e-3;
     o.step = 0.5;
     o.stability = 1;
     o.k = 2;
