@@ -87,6 +87,11 @@ extern "C" {
 #define BKF_ORBIT_TOL_MIN 1e-12
 #define BKF_ORBIT_TOL_MAX 1e-2
 
+/* On the continuum a non-uniform state always gets the space phase
+ * condition and s as its unknown (with s held, space translation leaves the
+ * plain problem singular): NONE and FIXED then only say where s starts (0,
+ * or the guess's), and the result's shift where it ended (0 within the
+ * error for a plain, e.g. reflection-symmetric, orbit). */
 typedef enum {
     BKF_ORBIT_SHIFT_NONE = 0,  /* Phi_T(u0) = u0 */
     BKF_ORBIT_SHIFT_FIXED = 1, /* Phi_T(u0) = R_s u0 with s the guess's (on the chain
@@ -114,7 +119,10 @@ typedef struct {
     int dealias;
     double filter;
     int newton_max_iter;      /* KINSOL's Newton iterations; default 40 */
-    int krylov_max;           /* SPGMR's Krylov dimension; default 40 */
+    int krylov_max;           /* SPGMR's Krylov dimension; default 200: a travelling
+                                 train's monodromy has tens of multipliers near the
+                                 unit circle, which restarted GMRES of 40 did not
+                                 get past (it stops early where the orbit contracts) */
     int grid_check;           /* 1 (default): the second N on the continuum; 0: skipped,
                                  err_grid NaN and err without it (the result says so
                                  by the NaN; a caller that skips it owns the grid) */
@@ -216,7 +224,10 @@ typedef struct {
     int sector;               /* -1 (default): every sector; else the one j */
     double arnoldi_tol;       /* ARPACK's relative tolerance; default 1e-10 */
     int max_restarts;         /* ARPACK's maxiter; default 300 */
-    double grid_tail;         /* tail above which an eigenvector is a grid mode; default 1e-2 */
+    double grid_tail;         /* tail above which an eigenvector is a grid mode; default
+                                 0.1: grid modes' content sits at the cutoff (tails 0.3-0.7
+                                 at N 64 on the pacemaker), a physical eigenvector's
+                                 tail is near its orbit's own (1e-2 at N 128 there) */
 } bkf_orbit_mult_options;
 
 bkf_orbit_mult_options bkf_orbit_mult_options_default(void);

@@ -61,14 +61,14 @@ bkf_orbit_options bkf_orbit_options_default(void)
     o.dealias = po.dealias;
     o.filter = po.filter;
     o.newton_max_iter = 40;
-    o.krylov_max = 40;
+    o.krylov_max = 200;
     o.grid_check = 1;
     return o;
 }
 
 bkf_orbit_mult_options bkf_orbit_mult_options_default(void)
 {
-    bkf_orbit_mult_options o = {10, -1, 1e-10, 300, 1e-2};
+    bkf_orbit_mult_options o = {10, -1, 1e-10, 300, 0.1};
     return o;
 }
 

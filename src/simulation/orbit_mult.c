@@ -422,7 +422,8 @@ int orbit_mult_run(bkf_orbit *ob, const bkf_orbit_mult_options *o, bkf_orbit_spe
     else if (big + big_err < 1.0)
         sp->verdict = BKF_ORBIT_STABLE;
     else
-        snprintf(sp->reason, sizeof sp->reason, "the largest |m| = %.9g is within its error %.3g of 1",
+        snprintf(sp->reason, sizeof sp->reason,
+                 "the largest |m| = %.9g is within its error %.3g of 1",
                  big, big_err);
     s = BKF_OK;
 done:

@@ -15,6 +15,7 @@
 #include "bkfront/floquet.h"
 #include "bkfront/orbit.h"
 #include "bkfront/pde.h"
+#include "bkfront/speeds.h"
 #include "pde_support.h"
 
 /* The global oscillation's state (psi = nu rising) as a guess, its period
@@ -239,5 +240,213 @@ TEST(orbit_period_converges_in_tol)
         bkf_test_note("tol %g: error %.2g, estimate %.2g", tols[k], actual, r.err);
         bkf_orbit_free(ob);
     }
+    uniform_free(&g);
+}
+
+/* (c) A travelling train as an orbit periodic up to a shift: the fastest
+ * n = 1 train of the speeds solver (an independent route: the speed
+ * condition on the travelling-wave ODE) seeded on the grid, the period held
+ * (a relative equilibrium), the shift solved: -s/T is the train's speed.
+ * The period is 1.05 of the train's period at a fixed point, so that s is
+ * not a whole wavelength (where R_s is the identity).  The grid (N 64) holds
+ * the profile to a few 1e-3, s and T far better; the bound is the total
+ * estimate over T. */
+TEST(orbit_travelling_train_has_the_speeds_root)
+{
+    bkf_model_params p = {2, 0.3, -0.9, 20, 64, BKF_MODEL_CONTINUUM};
+    bkf_speeds_options so = bkf_speeds_options_default();
+    so.n_from = so.n_to = 1;
+    so.tol = 1e-12;
+    bkf_speeds_table tb;
+    bkf_error e;
+    CHECK_STATUS(bkf_speeds_find(&p, &so, &tb, &e), BKF_OK);
+    CHECK(tb.count >= 1);
+    const bkf_speeds_root *rt = &tb.roots[0];
+    bkf_pde *m = alloc_pde(&p, NULL);
+    bkf_pde_wave w = {1, rt->v, rt->mu, -1, 0.0, 1, 1e-12};
+    CHECK_STATUS(bkf_pde_init_front(m, &w, NULL, NULL, &e), BKF_OK);
+    bkf_orbit_options o = bkf_orbit_options_default();
+    o.tol = 1e-2;
+    o.shift_mode = BKF_ORBIT_SHIFT_FREE;
+    bkf_orbit *ob = orbit_make(&p, &o);
+    double T = 1.05 * rt->period_fixed;
+    bkf_orbit_guess g = {bkf_pde_psi(m), bkf_pde_eta(m), T, -1.001 * rt->v * T};
+    bkf_orbit_result r;
+    CHECK_STATUS(bkf_orbit_solve(ob, &g, &r, &e), BKF_OK);
+    CHECK(r.symmetry == BKF_ORBIT_SYM_TRAVELLING && r.period_held && !r.shift_held);
+    double v = -r.shift / r.period;
+    CHECK_MSG(fabs(v - rt->v) <= r.err / r.period + rt->v_err, "v %.12g root %.12g err %.3g", v,
+              rt->v, r.err);
+    /* the shift alone, against the second grid, is far better than the state */
+    CHECK(fabs(r.shift2 - r.shift) < 1e-3 * r.err + 1e-6);
+    bkf_test_note("v = -s/T %.12g vs root %.12g (diff %.2g); estimate %.2g (grid %.2g, s on the "
+                  "second grid moved %.2g); %zu Jv",
+                  v, rt->v, v - rt->v, r.err, r.err_grid, r.shift2 - r.shift, r.jv_products);
+    bkf_orbit_free(ob);
+    bkf_pde_free(m);
+    bkf_speeds_table_free(&tb);
+}
+
+/* Trigonometric interpolation of a field of M points to N > M points (the
+ * Nyquist mode dropped), by direct sums: independent of the library's FFTs. */
+static void trig_interp(const double *in, size_t M, double *out, size_t N)
+{
+    for (size_t i = 0; i < N; i++) {
+        double x = 2 * M_PI * (double)i / (double)N, v = 0.0;
+        for (size_t k = 0; k < M / 2; k++) {
+            double a = 0.0, b = 0.0;
+            for (size_t j = 0; j < M; j++) {
+                double y = 2 * M_PI * (double)(k * j) / (double)M;
+                a += in[j] * cos(y);
+                b += in[j] * sin(y);
+            }
+            double w = (k == 0 ? 1.0 : 2.0) / (double)M;
+            v += w * (a * cos((double)k * x) + b * sin((double)k * x));
+        }
+        out[i] = v;
+    }
+}
+
+/* Strobe observer: the change max |psi(kT) - psi((k-1)T)| once a period.
+ * Consecutive strobes, not the distance from the orbit: the noise's part
+ * along the neutral directions (a shift in time or space) stays as an
+ * offset from the orbit for ever, but is the same at every strobe. */
+typedef struct {
+    size_t N;
+    double T, prev[128], d[32];
+    size_t n;
+} strobe;
+
+static int strobe_sample(const bkf_pde_sample *s, void *data)
+{
+    strobe *st = data;
+    double k = s->t / st->T;
+    if (fabs(k - nearbyint(k)) > 1e-6 || st->n >= 32) return 0;
+    double d = 0.0;
+    for (size_t i = 0; i < st->N; i++) {
+        d = fmax(d, fabs(s->psi[i] - st->prev[i]));
+        st->prev[i] = s->psi[i];
+    }
+    st->d[st->n++] = d;
+    return 0;
+}
+
+/* (f) The paper's Fig. 4(b) point, gamma 2, c 0.3, S 20, nu -0.94: the state
+ * a simulation reaches from the oscillation plus its mode 10 (near the
+ * period doubling's q_c) is close to a period-doubled pacemaker, which
+ * Newton makes exact: non-uniform, reflection-symmetric (s = 0 within its
+ * error), its period near but not at twice the oscillation's.  Its largest
+ * multiplier is checked by a simulation seeded with it plus noise: the
+ * change from one period to the next, strobed, grows by |m| per period
+ * (a third route: the plain time stepper, no tangent flow, no Arnoldi). */
+TEST(orbit_pacemaker_at_fig4b_and_its_departure_rate)
+{
+    bkf_model_params p64 = {2, 0.3, -0.94, 20, 64, BKF_MODEL_CONTINUUM};
+    bkf_error e;
+    uniform_guess g;
+    uniform_make(&g, &p64);
+    CHECK_STATUS(bkf_pde_init_oscillation(g.pde, 10, 0.05, &e), BKF_OK);
+    CHECK_STATUS(bkf_pde_run(g.pde, 300, 1.0, NULL, NULL, NULL, NULL, &e), BKF_OK);
+    /* N 64 finds the orbit (the simulation on 128 points wanders elsewhere
+     * in 300 time units); its grid error is 0.09, so it only seeds N 128 */
+    bkf_orbit_options o = bkf_orbit_options_default();
+    o.tol = 1e-3;
+    o.grid_check = 0;
+    bkf_orbit *ob = orbit_make(&p64, &o);
+    bkf_orbit_guess gs = {bkf_pde_psi(g.pde), bkf_pde_eta(g.pde), 2 * g.T, 0.0};
+    bkf_orbit_result r;
+    CHECK_STATUS(bkf_orbit_solve(ob, &gs, &r, &e), BKF_OK);
+    double T64 = r.period;
+    bkf_model_params p = p64;
+    p.N = 128;
+    double u96[2 * 128];
+    trig_interp(bkf_orbit_psi(ob), 64, u96, 128);
+    trig_interp(bkf_orbit_eta(ob), 64, u96 + 128, 128);
+    bkf_orbit_free(ob);
+    /* the state's grid error at N 128 is a few 1e-3 (the period's 1e-4) */
+    o.grid_check = 1;
+    o.tol = 1e-2;
+    ob = orbit_make(&p, &o);
+    bkf_orbit_guess g96 = {u96, u96 + 128, r.period, 0.0};
+    CHECK_MSG(bkf_orbit_solve(ob, &g96, &r, &e) == BKF_OK, "%s", e.message);
+    CHECK(r.symmetry == BKF_ORBIT_SYM_GENERIC && r.amplitude > 0.1);
+    CHECK_MSG(fabs(r.shift) <= r.err, "shift %.3g err %.3g", r.shift, r.err);
+    CHECK_MSG(fabs(r.period - 2 * g.T) > 10 * r.err, "T %.12g vs 2 T_osc %.12g", r.period,
+              2 * g.T);
+    /* (e) in N: the period moves ten times less from N 128 to the second
+     * grid (192) than from 64 to 128 */
+    CHECK_MSG(fabs(r.period2 - r.period) < 0.2 * fabs(r.period - T64) && r.N2 == 192,
+              "T %.12g, %.12g, %.12g at N 64, 128, %zu", T64, r.period, r.period2, r.N2);
+    bkf_orbit_spectrum sp;
+    CHECK_STATUS(bkf_orbit_multipliers(ob, NULL, &sp, &e), BKF_OK);
+    CHECK(sp.trivial_found == 2);
+    CHECK_MSG(sp.verdict == BKF_ORBIT_UNSTABLE, "%s: %s (largest %.6g +- %.2g)",
+              bkf_orbit_verdict_name(sp.verdict), sp.reason, sp.largest_abs, sp.largest_err);
+    /* seeded simulation: orbit + noise 1e-5 (the simulation's own error per
+     * period is ~1e-8, the noise's part along the unstable eigenvector far
+     * smaller than the noise), strobed at k T */
+    bkf_pde *m = alloc_pde(&p, NULL);
+    CHECK_STATUS(bkf_pde_set_state(m, bkf_orbit_psi(ob), bkf_orbit_eta(ob), 0.0, &e), BKF_OK);
+    CHECK_STATUS(bkf_pde_add_noise(m, 1e-5, 7, &e), BKF_OK);
+    strobe st = {p.N, r.period, {0}, {0}, 0};
+    CHECK_STATUS(bkf_pde_run(m, 30 * r.period, r.period, strobe_sample, &st, NULL, NULL, &e),
+                 BKF_OK);
+    CHECK(st.n == 31);
+    /* The rate over periods 24..30, when the unstable mode has overtaken
+     * the others (the complex pair of |m| 1.03 beats with it until ~20;
+     * the band-limited noise, modes up to S/2, barely touches
+     * it: 8% of its content is above N/3). */
+    double rate = pow(st.d[30] / st.d[24], 1.0 / 6.0);
+    CHECK_MSG(fabs(rate - sp.largest_abs) <= 0.05 * sp.largest_abs,
+              "departure per period %.4f vs largest multiplier %.4f", rate, sp.largest_abs);
+    bkf_test_note("pacemaker at nu -0.94: T %.9g, %.9g, %.9g at N 64, 128, 192; at 128 %.6f T_osc "
+                  "(estimate %.2g, grid %.2g), "
+                  "amplitude %.4f, shift %.2g; largest |m| %.6f +- %.2g (%s); a seeded run "
+                  "departs by %.4f per period (change %.2g -> %.2g over periods 24..30)",
+                  T64, r.period, r.period2, r.period / g.T, r.err, r.err_grid, r.amplitude, r.shift,
+                  sp.largest_abs, sp.largest_err, bkf_orbit_verdict_name(sp.verdict), rate,
+                  st.d[24], st.d[30]);
+    bkf_pde_free(m);
+    bkf_orbit_free(ob);
+    uniform_free(&g);
+}
+
+static int stop_at_arnoldi(const char *stage, double fraction, void *data)
+{
+    (void)fraction;
+    int *calls = data;
+    (*calls)++;
+    return strcmp(stage, "arnoldi") == 0;
+}
+
+/* The hooks: a raised cancel flag stops the solve at its first flow, a
+ * progress callback that returns nonzero stops the multipliers, both with
+ * BKF_ECANCELED; the stages reported before are Newton's. */
+TEST(orbit_cancel_and_progress_stop_the_work)
+{
+    bkf_model_params p = {2, 0.3, -0.92, 20, 16, BKF_MODEL_CONTINUUM};
+    uniform_guess g;
+    uniform_make(&g, &p);
+    volatile sig_atomic_t flag = 1;
+    bkf_orbit_options o = bkf_orbit_options_default();
+    o.cancel = &flag;
+    bkf_orbit *ob = orbit_make(&p, &o);
+    bkf_orbit_guess gs = {bkf_pde_psi(g.pde), bkf_pde_eta(g.pde), g.T, 0.0};
+    bkf_error e;
+    CHECK_STATUS(bkf_orbit_solve(ob, &gs, NULL, &e), BKF_ECANCELED);
+    CHECK(bkf_orbit_psi(ob) == NULL);
+    bkf_orbit_free(ob);
+    int calls = 0;
+    o = bkf_orbit_options_default();
+    o.progress = stop_at_arnoldi;
+    o.progress_data = &calls;
+    ob = orbit_make(&p, &o);
+    CHECK_STATUS(bkf_orbit_solve(ob, &gs, NULL, &e), BKF_OK);
+    int before = calls;
+    CHECK(before >= 1);
+    bkf_orbit_spectrum sp;
+    CHECK_STATUS(bkf_orbit_multipliers(ob, NULL, &sp, &e), BKF_ECANCELED);
+    CHECK(calls == before + 1);
+    bkf_orbit_free(ob);
     uniform_free(&g);
 }
