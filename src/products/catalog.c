@@ -273,10 +273,11 @@ static const bkf_catalog_kind floquet_kinds[] = {
     {"dispersion", {.keys = "+gamma +c q=0:6:241 ^S +nu ^tol"}, {0}},
     {"threshold", {.first = "threshold", .keys = "+gamma +c @along from to search ^tol"}, {0}}};
 /* The branch starts from the oscillation's period doubling in nu: a
- * [model]'s nu is not inherited (the branch varies it). */
+ * [model]'s nu is not inherited (the branch varies it), nor [accuracy]'s N
+ * (a simulation's grid; the orbit's is a multiple of 2 j, 32 j by default). */
 static const bkf_catalog_kind orbit_kinds[] = {
     {"orbit",
-     {.keys = "+gamma +c +S ^model!continuum ^N j from to max-points tol at",
+     {.keys = "+gamma +c +S ^model!continuum N j from to max-points tol at",
       .outputs = "out=.tsv spacetime=_spacetime.dat multipliers=_multipliers.tsv"},
      {0}}};
 /* A simulation's tol is its stepper's, not the accuracy asked of a result:

@@ -170,8 +170,6 @@ int bkf_orbits_check(const bkf_orbits_spec *sp, const char *prefix, bkf_error *e
         return bkf_error_set(err, BKF_EINPUT, "%scoexistence: not with %sno-stability", p, p);
     if (sp->along != BKF_ORBITS_NU && sp->coexistence)
         return bkf_error_set(err, BKF_EINPUT, "%scoexistence: only along nu", p);
-    if (sp->no_stability && sp->multipliers)
-        return bkf_error_set(err, BKF_EINPUT, "%smultipliers: not with %sno-stability", p, p);
     return BKF_OK;
 }
 

@@ -106,10 +106,11 @@ static double pd_fn(double p, void *data)
 
 /* The mode nearest q_c of floquet's threshold at the start (the chain's
  * by its effective wavenumber). */
-static int auto_mode(const bkf_model_params *m, double tol, size_t *j, bkf_error *err)
+static int auto_mode(const bkf_model_params *m, size_t *j, bkf_error *err)
 {
+    /* floquet's own accuracy, whatever tol: a loose one found another
+     * boundary first (gamma 3, c 0.8 at tol 1e-3) */
     bkf_floquet_options fo = bkf_floquet_options_default();
-    fo.tol = fmax(tol, 1e-10);
     bkf_floquet_threshold th;
     int s = bkf_floquet_threshold_find(m->gamma, m->c, -0.999, 0.999, &fo, &th, err);
     if (s) return s;
@@ -145,7 +146,7 @@ int bkf_orbits_pd_find(const bkf_orbits_options *o, bkf_orbits_pd *pd, bkf_error
     bkf_model_params m = o->model;
     orbits_param_set(&m, o->along, o->from);
     size_t j = o->j;
-    int s = j ? BKF_OK : auto_mode(&m, o->tol, &j, err);
+    int s = j ? BKF_OK : auto_mode(&m, &j, err);
     if (s) return s;
     pd_ctx c = {.fl = bkf_floquet_alloc(), .model = o->model, .along = o->along, .j = j,
                 .N = orbits_default_N(&o->model, j), .tol = o->tol};

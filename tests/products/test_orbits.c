@@ -83,8 +83,8 @@ TEST(products_orbits_cli_refuses_bad_input_in_one_line)
                              "--to", "to -1");
     bkf_cli_expect_bad_input(BKF_CLI("orbit", "--N", "145"), "orbit", "--N", "odd N");
     bkf_cli_expect_bad_input(BKF_CLI("orbit", "--N", "140"), "orbit", "N", "N not 18 k");
-    bkf_cli_expect_bad_input(BKF_CLI("orbit", "--no-stability", "--multipliers", "m.tsv"),
-                             "orbit", "--multipliers", "multipliers without stability");
+    bkf_cli_expect_bad_input(BKF_CLI("orbit", "--regimes", "sweep.tsv"), "orbit",
+                             "--coexistence", "regimes without coexistence");
 }
 
 static int write_orbits(const void *spec, FILE *out, bkf_io_format format,
