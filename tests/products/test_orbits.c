@@ -5,6 +5,7 @@
 #include "products_support.h"
 
 #include <math.h>
+#include <unistd.h>
 
 #include "bkfront/cycle.h"
 #include "bkfront/floquet.h"
@@ -124,4 +125,50 @@ TEST(products_orbits_tsv_json_and_library_agree)
     free(lib);
     free(tsv);
     free(json);
+}
+
+/* Item 6: a sweep's regime rows beside the solutions at their nu.  Between
+ * the period doubling (-0.935357) and the first orbits the branch has one
+ * orbit, unstable (subcritical: the test of that is its multiplier), while
+ * floquet's oscillation is stable above the doubling; below it the branch
+ * of a few points is not there ("outside"); a row of another gamma is not
+ * this branch's. */
+TEST(products_orbits_coexistence_sets_regimes_beside_the_solutions)
+{
+    char dir[] = "/tmp/bkf_orbits_coexist_XXXXXX";
+    CHECK(mkdtemp(dir));
+    char sweep[512], co[512];
+    snprintf(sweep, sizeof sweep, "%s/sweep.tsv", dir);
+    snprintf(co, sizeof co, "%s/co.tsv", dir);
+    bkf_cli_write_text(sweep, "# a hand-made regime table\n"
+                              "point\tgamma\tc\tnu\tS\tregime\n"
+                              "0\t2\t0.29999999999999999\t-0.93500000000000005\t20\tglobal_oscillation\n"
+                              "1\t2\t0.29999999999999999\t-0.93600000000000005\t20\tirregular\n"
+                              "2\t3\t0.29999999999999999\t-0.93500000000000005\t20\tglobal_oscillation\n");
+    bkf_cli_result r = BKF_CLI("orbit", "--max-points", "4", "--regimes", sweep, "--coexistence",
+                               co, "--no-progress");
+    CHECK_MSG(r.code == 0, "exit %d: %s", r.code, r.err);
+    bkf_cli_result_free(&r);
+    char *t = bkf_cli_read_file(co);
+    CHECK(t);
+    char *body = table_body(t);
+    CHECK(bkf_count_lines(body) == 1 + 2); /* gamma 3 is not this branch's */
+    free(body);
+    double orbits, stable;
+    char osc[32], expected[48], consistent[16];
+    CHECK(bkf_tsv_cell(t, 0, "oscillation", NULL, osc, sizeof osc));
+    CHECK(bkf_tsv_cell(t, 0, "orbits", &orbits, NULL, 0));
+    CHECK(bkf_tsv_cell(t, 0, "stable_orbits", &stable, NULL, 0));
+    CHECK(bkf_tsv_cell(t, 0, "expected", NULL, expected, sizeof expected));
+    CHECK(bkf_tsv_cell(t, 0, "consistent", NULL, consistent, sizeof consistent));
+    CHECK_MSG(strcmp(osc, "stable") == 0 && orbits == 1 && stable == 0, "%s", t);
+    CHECK_MSG(strcmp(expected, "global_oscillation") == 0 && strcmp(consistent, "yes") == 0,
+              "%s", t);
+    CHECK(bkf_tsv_cell(t, 1, "oscillation", NULL, osc, sizeof osc));
+    CHECK(bkf_tsv_cell(t, 1, "expected", NULL, expected, sizeof expected));
+    CHECK_MSG(strcmp(osc, "unstable") == 0 && strcmp(expected, "outside") == 0, "%s", t);
+    free(t);
+    remove(co);
+    remove(sweep);
+    rmdir(dir);
 }
