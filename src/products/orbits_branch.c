@@ -286,6 +286,7 @@ typedef struct {
     bkf_error stop_err;
     double *full_psi, *full_eta;
     double p0, span;        /* for progress */
+    char why[BKF_ERROR_LEN + 32]; /* a row's status when refused */
 } cont_ctx;
 
 static double weight(const cont_ctx *c, size_t k)
@@ -564,7 +565,6 @@ static int accept(const double *u, const double *tangent, int is_fold, void *dat
     oo.shift_mode = pt.model.kind == BKF_MODEL_CHAIN ? BKF_ORBIT_SHIFT_NONE : BKF_ORBIT_SHIFT_FREE;
     oo.cancel = c->o->cancel;
     bkf_error e = {0};
-    static char why[BKF_ERROR_LEN + 32];
     bkf_orbit *ob = bkf_orbit_alloc(&pt.model, &oo, &e);
     bkf_orbit_result res;
     bkf_orbit_spectrum sp;
@@ -610,14 +610,14 @@ static int accept(const double *u, const double *tangent, int is_fold, void *dat
                 pt.verdict = sp.verdict;
                 count_outside(&sp, &pt);
             } else {
-                snprintf(why, sizeof why, "multipliers: %s", e.message);
-                pt.status = why;
+                snprintf(c->why, sizeof c->why, "multipliers: %s", e.message);
+                pt.status = c->why;
             }
         }
     } else {
         c->rep->refused++;
-        snprintf(why, sizeof why, "%s", e.message);
-        pt.status = why;
+        snprintf(c->why, sizeof c->why, "%s", e.message);
+        pt.status = c->why;
     }
     int stop = emit(c, &pt);
     bkf_orbit_free(ob);
