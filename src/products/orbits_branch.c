@@ -789,28 +789,34 @@ int bkf_orbits_branch(const bkf_orbits_options *o, bkf_orbits_visit visit, void 
     pt0.events = BKF_ORBITS_EV_PERIOD_DOUBLING;
     int stop = emit(&c, &pt0);
 
-    /* the first leg: the critical mode's amplitude held */
-    double w = weight(&c, c.kc);
-    u0[0] = pd->psi0;
-    u0[K1] = pd->eta0;
-    u0[c.kc] += o->switch_amplitude * pd->v_psi / w;
-    u0[K1 + c.kc] += o->switch_amplitude * pd->v_eta / w;
-    u0[2 * K1] = 2 * pd->period;
-    u0[2 * K1 + 1] = pd->p;
+    /* the first leg: the critical mode's amplitude held.  Near |nu| = 1
+     * the cycle is small and the amplitude may be too large for the
+     * corrector (it left the active range at gamma 8, c 1.5, S 60): it is
+     * halved, at most three times, while the start alone fails. */
+    double w = weight(&c, c.kc), amp = o->switch_amplitude;
     int held = fabs(pd->v_psi) >= fabs(pd->v_eta) ? (int)c.kc : (int)(K1 + c.kc);
     bkf_cont_options co = bkf_cont_options_default(c.n);
-    co.scale = c.scale;
-    co.newton_tol = 1e-9;
-    co.newton_max_iter = 12;
-    co.step_initial = o->switch_amplitude / (2 * w);
-    co.step_max = o->switch_amplitude / w;
-    co.step_min = 1e-8;
-    co.max_points = SWITCH_POINTS;
     bkf_cont_report cr;
-    if (!stop) {
+    for (int attempt = 0; !stop && attempt < 4; attempt++, amp /= 2) {
+        memset(u0, 0, Nu * sizeof *u0);
+        u0[0] = pd->psi0;
+        u0[K1] = pd->eta0;
+        u0[c.kc] += amp * pd->v_psi / w;
+        u0[K1 + c.kc] += amp * pd->v_eta / w;
+        u0[2 * K1] = 2 * pd->period;
+        u0[2 * K1 + 1] = pd->p;
+        co = bkf_cont_options_default(c.n);
+        co.scale = c.scale;
+        co.newton_tol = 1e-9;
+        co.newton_max_iter = 12;
+        co.step_initial = amp / (2 * w);
+        co.step_max = amp / w;
+        co.step_min = 1e-8;
+        co.max_points = SWITCH_POINTS;
         c.stage = 1;
         s = bkf_cont_run(residual, accept, &c, u0, held, u0[held] > 0 ? 1 : -1, &co, &cr, err);
         stop = c.stop_status != 0;
+        if (s != BKF_ENUMERIC || rep->points > 0) break;
     }
     /* the second leg: along p, away from the oscillation */
     if (!s && !stop && c.have_last && rep->points == SWITCH_POINTS &&
