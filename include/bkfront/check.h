@@ -267,9 +267,10 @@ typedef struct {
     bkf_trainspec_verdict spectral;
     double sigma_max, sigma_max_err; /* NaN when refused or only bounded: a window's
                                         edge is not an eigenvalue */
-    double stable;          /* 1 count and shape kept (the run did not blow up, the count
+    double kept;            /* 1 count and shape kept (the run did not blow up, the count
                                never changed, deviation_end <= 1e-2, growth not grows),
-                               0 not, NaN not run */
+                               0 not, NaN not run; not a stability verdict (that is
+                               verdict): a kept front can be unstable by its spectrum */
     bkf_check_verdict verdict;
     /* Undecided only: the tmax of a run whose growth fit would resolve the
      * growth still in question (the spectrum's sigma_max + its error when it
@@ -286,7 +287,7 @@ typedef struct {
 } bkf_check_row;
 
 /* The verdict from the measured quantities and the spectrum, the one rule
- * of every grid.  The run kept the front (*stable, may be NULL, gets 1)
+ * of every grid.  The run kept the front (*kept, may be NULL, gets 1)
  * when it did not blow up, the count never changed and started at n,
  * deviation_end is finite and <= 1e-2, and the growth was not decided
  * "grows".  Then: conflicts when bkf_check_conflict; else unstable when the
@@ -300,7 +301,7 @@ typedef struct {
 bkf_check_verdict bkf_check_judge(size_t n, int blew_up, int count_constant, size_t fronts_start,
                                   double deviation_end, const bkf_check_growth *growth,
                                   bkf_trainspec_verdict spectral, double sigma_max, double rel_err,
-                                  double rel_tol, int *stable);
+                                  double rel_tol, int *kept);
 
 /* What the run is about to do, handed to the begin callback. */
 typedef struct {

@@ -355,7 +355,7 @@ static void list_n(const check_sink *k, int (*keep)(const bkf_check_row *), char
         }
 }
 
-static int row_stable(const bkf_check_row *r) { return r->stable == 1; }
+static int row_kept(const bkf_check_row *r) { return r->kept == 1; }
 static int row_disagrees(const bkf_check_row *r) { return r->verdict == BKF_CHECK_DISAGREES; }
 static int row_conflicts(const bkf_check_row *r) { return r->verdict == BKF_CHECK_CONFLICTS; }
 static int row_spectral_stable(const bkf_check_row *r)
@@ -422,9 +422,9 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
                     bkf_format_number(k->info.k, a, sizeof a), k->info.n_max, k->info.roots,
                     k->note[0] ? "; " : "", k->note);
     if (!s && prov && prov->command) s = bkf_io_table_commentf(t, err, "command: %s", prov->command);
-    size_t stable = 0, agree = 0, unresolved = 0, disagree = 0, conflict = 0, undecided = 0;
+    size_t kept = 0, agree = 0, unresolved = 0, disagree = 0, conflict = 0, undecided = 0;
     for (size_t i = 0; i < k->count; i++) {
-        stable += k->rows[i].stable == 1;
+        kept += k->rows[i].kept == 1;
         agree += k->rows[i].verdict == BKF_CHECK_AGREES;
         unresolved += k->rows[i].verdict == BKF_CHECK_UNRESOLVED;
         disagree += k->rows[i].verdict == BKF_CHECK_DISAGREES;
@@ -433,14 +433,14 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
     }
     if (!s) {
         char list[512], yes[512], no[512];
-        list_n(k, row_stable, list, sizeof list);
+        list_n(k, row_kept, list, sizeof list);
         list_n(k, row_spectral_stable, yes, sizeof yes);
         list_n(k, row_spectral_unstable, no, sizeof no);
         s = bkf_io_table_commentf(t, err,
                     "summary: %zu kept by the run (n = %s), %zu agree, %zu disagree, %zu "
                     "conflict, %zu undecided, %zu unresolved; spectrum stable n = %s, unstable "
                     "n = %s",
-                    stable, stable ? list : "none", agree, disagree, conflict, undecided,
+                    kept, kept ? list : "none", agree, disagree, conflict, undecided,
                     unresolved,
                     yes[0] ? yes : "none", no[0] ? no : "none");
     }
@@ -461,7 +461,7 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
             {.text = bkf_check_growth_name(r->growth.verdict)},
             {.text = bkf_trainspec_verdict_name(r->spectral)},
             {.number = r->sigma_max},          {.number = r->sigma_max_err},
-            {.number = r->stable},
+            {.number = r->kept},
             {.text = bkf_check_verdict_name(r->verdict)},
             {.number = r->decide_tmax},
         };

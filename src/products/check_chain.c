@@ -172,11 +172,11 @@ static int check_chain_wave(const check_ctx *c, const bkf_chainwave *w, bkf_chec
             row->fit_to = ob.t[last];
         }
         if (!s) {
-            int stable;
+            int kept;
             row->verdict = bkf_check_judge(n_seen, blew_up, constant, n_seen, row->deviation_end,
                                            &row->growth, row->spectral, row->sigma_max,
-                                           row->rel_err, o->rel_tol, &stable);
-            row->stable = stable;
+                                           row->rel_err, o->rel_tol, &kept);
+            row->kept = kept;
             if (blew_up) row->reason = BKF_EBLOWUP;
         }
     }

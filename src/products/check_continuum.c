@@ -164,11 +164,11 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
             row->fit_to = t_end;
         }
     }
-    int stable;
+    int kept;
     row->verdict = bkf_check_judge(row->n, blew_up, constant, first->fronts, row->deviation_end,
                                    &row->growth, row->spectral, row->sigma_max, row->rel_err,
-                                   o->rel_tol, &stable);
-    row->stable = stable;
+                                   o->rel_tol, &kept);
+    row->kept = kept;
     if (blew_up) row->reason = BKF_EBLOWUP;
     bkf_comoving_free(cm);
     return BKF_OK;
@@ -403,11 +403,11 @@ int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row
             row->fit_to = t_end;
         }
     }
-    int stable;
+    int kept;
     row->verdict = bkf_check_judge(n, blew_up, ms.count_constant, ms.fronts_start,
                                    ms.deviation_end, &row->growth, row->spectral, row->sigma_max,
-                                   row->rel_err, o->rel_tol, &stable);
-    row->stable = stable;
+                                   row->rel_err, o->rel_tol, &kept);
+    row->kept = kept;
     if (blew_up) row->reason = BKF_EBLOWUP;
 done:
     bloch_free(&bloch);

@@ -156,11 +156,11 @@ int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *o
 bkf_check_verdict bkf_check_judge(size_t n, int blew_up, int count_constant, size_t fronts_start,
                                   double deviation_end, const bkf_check_growth *growth,
                                   bkf_trainspec_verdict spectral, double sigma_max, double rel_err,
-                                  double rel_tol, int *stable)
+                                  double rel_tol, int *kept_out)
 {
     int kept = !blew_up && count_constant && fronts_start == n && isfinite(deviation_end) &&
                deviation_end <= 1e-2 && growth->verdict != BKF_CHECK_GROWTH_GROWS;
-    if (stable) *stable = kept;
+    if (kept_out) *kept_out = kept;
     if (bkf_check_conflict(growth, spectral, sigma_max)) return BKF_CHECK_CONFLICTS;
     if (!kept || spectral == BKF_TRAINSPEC_UNSTABLE) return BKF_CHECK_UNSTABLE;
     /* kept is not stable: a growth below the run's detection limit is
@@ -375,7 +375,7 @@ void check_row_init(bkf_check_row *row, size_t n, size_t root, const bkf_speeds_
     bkf_check_fit_growth(NULL, NULL, 0, 0, 0, &row->growth);
     row->spectral = BKF_TRAINSPEC_UNRESOLVED;
     row->sigma_max = row->sigma_max_err = NAN;
-    row->stable = NAN;
+    row->kept = NAN;
     row->decide_tmax = NAN;
     row->verdict = BKF_CHECK_UNRESOLVED;
     row->reason = BKF_OK;
