@@ -215,7 +215,8 @@ const bkf_option bkf_check_keys[] = {
              "unresolved and not simulated"},
     {.name = "tmax", .type = BKF_OPT_DOUBLE, .offset = OPT(tmax),
      .flags = BOUNDED | BKF_OPT_MIN_OPEN, .min = 0, .max = BKF_CHECK_TMAX_MAX, .form = "T",
-     .shown_default = "125", .help = "length of each run, in (0, 1e+06]"},
+     .shown_default = "125",
+     .help = "length of each run (with --runs auto the longest),\nin (0, 1e+06]"},
     {.name = "runs", .type = BKF_OPT_CHOICE, .offset = OPT(runs), .choices = runs_names,
      .form = "auto|full", .shown_default = "auto",
      .help = "auto: --tmax is the longest run; a run stops once the\n"
