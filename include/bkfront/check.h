@@ -297,7 +297,8 @@ typedef struct {
      * not their modulus).  growth is the fit with the largest rate, its
      * verdict grows when any fit grows, decays when every fit decays. */
     bkf_check_growth growth;
-    /* The spectrum of the same train (bkf_trainspec_root, tol 1e-6, the
+    /* The spectrum of the same train (bkf_trainspec_root, tol 1e-4, again at
+     * 1e-6 where that leaves the sign of sigma_max undecided; the
      * rightmost sigma per Bloch number): decided STABLE or UNSTABLE, or not
      * decided, UNRESOLVED: sigma_max within its error of 0, or refused (a
      * warning says why; also when the spectrum found no eigenvalue but the
