@@ -182,6 +182,8 @@ static bkf_check_row run_one(double gamma, double c, double nu, double S, size_t
     bkf_check_options o = bkf_check_options_default();
     o.n = n;
     o.tmax = tmax;
+    /* what a run of this length shows: every run to tmax */
+    o.runs = BKF_CHECK_RUNS_FULL;
     row_list l = {.count = 0};
     bkf_check_hooks h = {.row = keep_row, .data = &l};
     bkf_error err;
