@@ -123,15 +123,15 @@ int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
             int h = halt;
             for (; !h && next < R && slot[next].done; next++) {
                 check_slot *d = &slot[next];
+                for (size_t at = 0; hooks && hooks->warning && at < d->notes.used;
+                     at += strlen(d->notes.text + at) + 1)
+                    hooks->warning(d->notes.text + at, hooks->data);
                 if (d->status) {
                     s = d->status;
                     *err = d->err;
                     h = 1;
                     break;
                 }
-                for (size_t at = 0; hooks && hooks->warning && at < d->notes.used;
-                     at += strlen(d->notes.text + at) + 1)
-                    hooks->warning(d->notes.text + at, hooks->data);
                 if (hooks && hooks->row && hooks->row(&d->row, hooks->data)) h = visited = 1;
             }
 #pragma omp atomic write
