@@ -82,6 +82,8 @@ static const struct {
     {"extremes_floquet_matrix_gamma_to_30", 36.4},
     {"extremes_floquet_matrix_gamma_100_near_hopf", 28.3},
     {"audit_fixed_sample", 15.0},
+    {"check_auto_runs_keep_verdicts_and_speeds", 15.3},
+    {"check_threads_give_the_serial_rows", 3.6},
     {"extremes_period_matrix", 10.0},
     {"cli_check_adapted_grid_error_covers_the_grid_thin_fronts", 13.0},
     {"orbit_travelling_train_has_the_speeds_root", 12.0},

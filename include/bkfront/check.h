@@ -82,6 +82,14 @@ typedef enum {
     BKF_CHECK_FRAME_LAB = 1     /* the lab frame (uniform grid only; auto means uniform) */
 } bkf_check_frame;
 
+/* How long each root's run is (continuum only; the chain's runs are
+ * always full). */
+typedef enum {
+    BKF_CHECK_RUNS_AUTO = 0, /* each run stops once it has decided what any run up to tmax
+                                could: see bkf_check_options.runs */
+    BKF_CHECK_RUNS_FULL = 1  /* every run to tmax */
+} bkf_check_runs;
+
 typedef enum {
     BKF_CHECK_AGREES = 0,    /* stable (decided), |rel_err| <= rel_tol */
     BKF_CHECK_DISAGREES = 1, /* stable (decided), rel_err measured and beyond rel_tol */
@@ -169,7 +177,36 @@ typedef struct {
                              BDF's long steps do not damp a growing perturbation unseen) */
     size_t mapped_max_steps; /* adapted grid: step budget per root; default 20000 */
     double resolution;    /* spectral tail accepted as resolved, [1e-16, 1]; default 1e-5 */
+    /* BKF_CHECK_RUNS_AUTO (default): tmax is the longest run, and a run stops
+     * at the first of
+     *   - the front lost: the count changed (count, growth and speed fits
+     *     end there whatever follows, so the row is that of the full run
+     *     but for fronts_end, deviation_mid, deviation_end and t_end);
+     *   - from t = BKF_CHECK_AUTO_FIRST on, every BKF_CHECK_AUTO_EVERY, the
+     *     row judged on the run so far (no conflict) is settled:
+     *       spectrum decided stable: agrees, with |rel_err| + 3 v_meas_err /
+     *       v_pred <= rel_tol (the run only confirms the speed);
+     *       spectrum decided unstable: a speed measured, and the growth
+     *       decided grows, or sigma_max + its error below ln 2 / (tmax - t0),
+     *       t0 = min(10, tmax/4), which no fit within tmax resolves (the
+     *       run can neither see nor contradict it);
+     *     an unresolved spectrum runs to tmax.
+     * A row that disagrees or conflicts always has its whole run.  On the
+     * adapted grid the second run that measures the grid's error in the
+     * speed (v_meas_err) is made only for rows that agree or disagree (the
+     * only ones whose speed is judged); elsewhere v_meas_err is NaN.
+     * BKF_CHECK_RUNS_FULL: every run to tmax, v_meas_err always measured. */
+    bkf_check_runs runs;
+    size_t threads;       /* roots checked at once (OpenMP threads, each root's row the
+                             same as in a serial run), [0, 4096]; 0 (default): every core */
 } bkf_check_options;
+
+/* The auto runs' checkpoints (see bkf_check_options.runs): the first at
+ * t = 40, past the noise's response (t0 = 10) by three times its length, so
+ * that a growth fit there spans 30 time units. */
+#define BKF_CHECK_AUTO_FIRST 40.0
+#define BKF_CHECK_AUTO_EVERY 20.0
+#define BKF_CHECK_THREADS_MAX 4096
 
 /* Exactly the defaults of `bkfront check`. */
 bkf_check_options bkf_check_options_default(void);
@@ -245,8 +282,10 @@ typedef struct {
                                    a second run on 2/3 of the points) */
     double rel_err;         /* (v_meas - v_pred) / v_pred */
     double fit_from, fit_to;    /* the fit's time window */
-    double fronts_start, fronts_end; /* front counts at t = 0 and t = tmax */
-    double deviation_start, deviation_mid, deviation_end; /* at 0, tmax/2, tmax */
+    double t_end;           /* the run's end: tmax, or earlier when it blew up or (runs
+                               auto) stopped once settled; NaN not run */
+    double fronts_start, fronts_end; /* front counts at t = 0 and t = t_end */
+    double deviation_start, deviation_mid, deviation_end; /* at 0, t_end/2, t_end */
     /* The perturbation's growth rate (bkf_check_fit_growth) over the linear
      * part of the run: from t = min(10, tmax/4) while the count is n and the
      * deviation is <= max(1e-3, 10 perturb).  Fitted to the deviation and,
@@ -258,7 +297,8 @@ typedef struct {
      * not their modulus).  growth is the fit with the largest rate, its
      * verdict grows when any fit grows, decays when every fit decays. */
     bkf_check_growth growth;
-    /* The spectrum of the same train (bkf_trainspec_root, tol 1e-6, the
+    /* The spectrum of the same train (bkf_trainspec_root, tol 1e-4, again at
+     * 1e-6 where that leaves the sign of sigma_max undecided; the
      * rightmost sigma per Bloch number): decided STABLE or UNSTABLE, or not
      * decided, UNRESOLVED: sigma_max within its error of 0, or refused (a
      * warning says why; also when the spectrum found no eigenvalue but the
@@ -267,9 +307,10 @@ typedef struct {
     bkf_trainspec_verdict spectral;
     double sigma_max, sigma_max_err; /* NaN when refused or only bounded: a window's
                                         edge is not an eigenvalue */
-    double stable;          /* 1 count and shape kept (the run did not blow up, the count
+    double kept;            /* 1 count and shape kept (the run did not blow up, the count
                                never changed, deviation_end <= 1e-2, growth not grows),
-                               0 not, NaN not run */
+                               0 not, NaN not run; not a stability verdict (that is
+                               verdict): a kept front can be unstable by its spectrum */
     bkf_check_verdict verdict;
     /* Undecided only: the tmax of a run whose growth fit would resolve the
      * growth still in question (the spectrum's sigma_max + its error when it
@@ -286,7 +327,7 @@ typedef struct {
 } bkf_check_row;
 
 /* The verdict from the measured quantities and the spectrum, the one rule
- * of every grid.  The run kept the front (*stable, may be NULL, gets 1)
+ * of every grid.  The run kept the front (*kept, may be NULL, gets 1)
  * when it did not blow up, the count never changed and started at n,
  * deviation_end is finite and <= 1e-2, and the growth was not decided
  * "grows".  Then: conflicts when bkf_check_conflict; else unstable when the
@@ -300,7 +341,7 @@ typedef struct {
 bkf_check_verdict bkf_check_judge(size_t n, int blew_up, int count_constant, size_t fronts_start,
                                   double deviation_end, const bkf_check_growth *growth,
                                   bkf_trainspec_verdict spectral, double sigma_max, double rel_err,
-                                  double rel_tol, int *stable);
+                                  double rel_tol, int *kept);
 
 /* What the run is about to do, handed to the begin callback. */
 typedef struct {
@@ -317,13 +358,15 @@ typedef struct {
     /* Called once before the first root (may be NULL).  Nonzero stops the
      * check (BKF_OK, no rows). */
     int (*begin)(const bkf_check_info *info, void *data);
-    /* Called once per root, in bkf_speeds_find order, as soon as it is
-     * done (may be NULL).  Nonzero stops the check (BKF_OK). */
+    /* Called once per root, in bkf_speeds_find order, as soon as it and
+     * every root before it are done (may be NULL).  Nonzero stops the check
+     * (BKF_OK).  Every callback is called from one thread at a time. */
     int (*row)(const bkf_check_row *row, void *data);
     /* Fraction of the whole check done, in [0, 1], every few steps. */
     void (*progress)(double fraction, void *data);
     /* One line without a newline, e.g. "n = 10, root 1 reported unresolved:
-     * ..." (a root whose adapted grid cannot be set up). */
+     * ..." (a root whose adapted grid cannot be set up); a root's warnings
+     * come just before its row, in the order of a serial run. */
     void (*warning)(const char *message, void *data);
     void *data;             /* handed to each callback */
     /* When non-NULL and *cancel becomes nonzero (e.g. in a signal
@@ -353,7 +396,8 @@ typedef struct {
 bkf_check_spec bkf_check_spec_default(void);
 
 /* The keys, named as the flags: gamma, c, nu, S, model, n, N, N-max, tmax,
- * tol, filter, stepper, rel-tol, perturb, seed, frame, grid, points, resolution;
+ * runs, threads, tol, filter, stepper, rel-tol, perturb, seed, frame, grid,
+ * points, resolution;
  * scene keys only: mapped-tol, mapped-max-steps.  (Not bkf_check_options,
  * the name of the run's options.) */
 extern const bkf_option bkf_check_keys[];

@@ -289,8 +289,8 @@ static const bkf_catalog_kind simulate_kinds[] = {
      {0}}};
 static const bkf_catalog_kind check_kinds[] = {
     {"check",
-     {.keys = "+gamma +c +nu +S ^model!continuum n ^N tmax tol rel-tol seed stepper frame grid "
-              "points",
+     {.keys = "+gamma +c +nu +S ^model!continuum n ^N tmax runs threads tol rel-tol seed stepper "
+              "frame grid points",
       .last = "no-progress"},
      {0}}};
 /* With thresholds = G1,G2,...: the global oscillation's stability

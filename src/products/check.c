@@ -7,11 +7,48 @@
 
 #include <fftw3.h>
 #include <limits.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* One root whole: its spectrum, its run, the warning of a conflict; its
+ * warnings into c->notes. */
+static int check_one(const check_ctx *c, const bkf_speeds_table *tab, size_t i,
+                     bkf_check_row *row, bkf_error *err)
+{
+    size_t root = 1;
+    for (size_t k = i; k > 0 && tab->roots[k - 1].n == tab->roots[i].n; k--) root++;
+    check_row_init(row, tab->roots[i].n, root, &tab->roots[i]);
+    check_spectrum(c, &tab->roots[i], row);
+    int s = check_root(c, &tab->roots[i], row, err);
+    if (!s && row->verdict == BKF_CHECK_CONFLICTS) {
+        char a[32], b[32], d[32], f[32];
+        check_warn(c,
+                   "n = %zu, root %zu: the simulation's perturbation %s at %s +- %s per unit "
+                   "time, the spectrum says %s (sigma_max %s +- %s)",
+                   row->n, row->root, bkf_check_growth_name(row->growth.verdict),
+                   bkf_format_number(row->growth.rate, a, sizeof a),
+                   bkf_format_number(row->growth.rate_err, b, sizeof b),
+                   row->spectral == BKF_TRAINSPEC_STABLE ? "stable" : "unstable",
+                   bkf_format_number(row->sigma_max, d, sizeof d),
+                   bkf_format_number(row->sigma_max_err, f, sizeof f));
+    }
+    if (!s) check_explain_undecided(c, row);
+    return s;
+}
+
+/* A root's outcome, kept until every root before it is delivered. */
+typedef struct {
+    bkf_check_row row;
+    check_notes notes;
+    bkf_error err;
+    int status, done;
+} check_slot;
 
 int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
                   const bkf_check_hooks *hooks, bkf_error *err)
@@ -30,7 +67,8 @@ int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
         bkf_speeds_table_free(&tab);
         return bkf_error_set(err, s, "speeds: %s", e.message);
     }
-    check_ctx c = {model, o, hooks, check_uniform_tol(o), check_mapped_tol(o), 0, 0, tab.count};
+    check_ctx c = {model, o, hooks, check_uniform_tol(o), check_mapped_tol(o), 0, 0, tab.count,
+                   NULL, NULL};
     c.level = bkf_measure_front_level(model, NULL);
     bkf_check_info info = {tab.count, tab.k, tab.n_max, tab.note, c.tol, c.mapped_tol,
                            o->grid == BKF_CHECK_GRID_AUTO && o->N_max > BKF_CHECK_AUTO_UNIFORM_MAX
@@ -38,33 +76,74 @@ int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
                                : o->N_max};
     int stop = hooks && hooks->begin ? hooks->begin(&info, hooks->data) : 0;
     const volatile sig_atomic_t *cancel = check_cancel(&c);
-    for (size_t i = 0; !s && !stop && i < tab.count; i++) {
-        if (cancel && *cancel) {
-            s = bkf_error_set(err, BKF_ECANCELED, "canceled after %zu of %zu roots", i, tab.count);
-            break;
-        }
-        size_t root = 1;
-        for (size_t k = i; k > 0 && tab.roots[k - 1].n == tab.roots[i].n; k--) root++;
-        bkf_check_row row;
-        check_row_init(&row, tab.roots[i].n, root, &tab.roots[i]);
-        c.root_index = i;
-        check_spectrum(&c, &tab.roots[i], &row);
-        s = check_root(&c, &tab.roots[i], &row, err);
-        if (!s && row.verdict == BKF_CHECK_CONFLICTS) {
-            char a[32], b[32], d[32], f[32];
-            check_warn(&c,
-                       "n = %zu, root %zu: the simulation's perturbation %s at %s +- %s per unit "
-                       "time, the spectrum says %s (sigma_max %s +- %s)",
-                       row.n, row.root, bkf_check_growth_name(row.growth.verdict),
-                       bkf_format_number(row.growth.rate, a, sizeof a),
-                       bkf_format_number(row.growth.rate_err, b, sizeof b),
-                       row.spectral == BKF_TRAINSPEC_STABLE ? "stable" : "unstable",
-                       bkf_format_number(row.sigma_max, d, sizeof d),
-                       bkf_format_number(row.sigma_max_err, f, sizeof f));
-        }
-        if (!s) check_explain_undecided(&c, &row);
-        if (!s && hooks && hooks->row) stop = hooks->row(&row, hooks->data);
+    size_t R = tab.count;
+    check_slot *slot = calloc(R ? R : 1, sizeof *slot);
+    double *fraction = calloc(R ? R : 1, sizeof *fraction);
+    check_shared shared = {fraction, R};
+    if (!slot || !fraction) {
+        free(slot);
+        free(fraction);
+        bkf_speeds_table_free(&tab);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
+    /* The roots are independent: each runs in its own thread, and its row,
+     * warnings and any failure are delivered in root order once the roots
+     * before it are, so that the hooks see what a serial run shows (and,
+     * as there, nothing after a failure or a stop). */
+    size_t next = 0;  /* the first root not yet delivered */
+    int halt = stop;  /* a stop or a failure: no root starts */
+    int visited = 0;  /* the row visitor stopped the check */
+    int threads = 1;
+#ifdef _OPENMP
+    threads = o->threads ? (int)o->threads : omp_get_max_threads();
+#endif
+    (void)threads;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (size_t i = 0; i < R; i++) {
+        int skip;
+#pragma omp atomic read
+        skip = halt;
+        if (skip) continue;
+        check_slot *k = &slot[i];
+        check_ctx ci = c;
+        ci.root_index = i;
+        ci.shared = &shared;
+        ci.notes = &k->notes;
+        if (cancel && *cancel)
+            k->status = bkf_error_set(&k->err, BKF_ECANCELED, "canceled after %zu of %zu roots",
+                                      i, R);
+        else
+            k->status = check_one(&ci, &tab, i, &k->row, &k->err);
+        if (!k->status && k->notes.oom)
+            k->status = bkf_error_set(&k->err, BKF_ENOMEM, "out of memory");
+#pragma omp critical(bkf_check_hooks)
+        {
+            k->done = 1;
+            fraction[i] = 1;
+            int h = halt;
+            for (; !h && next < R && slot[next].done; next++) {
+                check_slot *d = &slot[next];
+                for (size_t at = 0; hooks && hooks->warning && at < d->notes.used;
+                     at += strlen(d->notes.text + at) + 1)
+                    hooks->warning(d->notes.text + at, hooks->data);
+                if (d->status) {
+                    s = d->status;
+                    *err = d->err;
+                    h = 1;
+                    break;
+                }
+                if (hooks && hooks->row && hooks->row(&d->row, hooks->data)) h = visited = 1;
+            }
+#pragma omp atomic write
+            halt = h;
+        }
+    }
+    /* a cancel that left roots unstarted past the last delivered one */
+    if (!s && !stop && !visited && next < R && cancel && *cancel)
+        s = bkf_error_set(err, BKF_ECANCELED, "canceled after %zu of %zu roots", next, R);
+    for (size_t i = 0; i < R; i++) free(slot[i].notes.text);
+    free(slot);
+    free(fraction);
     bkf_speeds_table_free(&tab);
     return s;
 }
@@ -81,6 +160,8 @@ _Static_assert(sizeof(bkf_check_grid) == sizeof(int), "bkf_check_grid is not int
 static const char *const frame_names[] = {"moving", "lab", NULL};
 static const char *const grid_names[] = {"auto", "uniform", "mapped", NULL};
 static const char *const model_names[] = {"continuum", "chain", NULL};
+static const char *const runs_names[] = {"auto", "full", NULL};
+_Static_assert(sizeof(bkf_check_runs) == sizeof(int), "bkf_check_runs is not int-sized");
 _Static_assert(sizeof(bkf_model_kind) == sizeof(int), "bkf_model_kind is not int-sized");
 
 /* The seed is an unsigned long: up to 19 digits always fit. */
@@ -134,7 +215,18 @@ const bkf_option bkf_check_keys[] = {
              "unresolved and not simulated"},
     {.name = "tmax", .type = BKF_OPT_DOUBLE, .offset = OPT(tmax),
      .flags = BOUNDED | BKF_OPT_MIN_OPEN, .min = 0, .max = BKF_CHECK_TMAX_MAX, .form = "T",
-     .shown_default = "125", .help = "length of each run, in (0, 1e+06]"},
+     .shown_default = "125",
+     .help = "length of each run (with --runs auto the longest),\nin (0, 1e+06]"},
+    {.name = "runs", .type = BKF_OPT_CHOICE, .offset = OPT(runs), .choices = runs_names,
+     .form = "auto|full", .shown_default = "auto",
+     .help = "auto: --tmax is the longest run; a run stops once the\n"
+             "front is lost, or once its row is settled (the spectrum\n"
+             "decided and the speed measured; docs/cli/check.md);\n"
+             "full: every run to --tmax"},
+    {.name = "threads", .type = BKF_OPT_COUNT, .offset = OPT(threads), .flags = BOUNDED,
+     .min = 1, .max = BKF_CHECK_THREADS_MAX, .form = "K", .shown_default = "every core",
+     .help = "roots checked at once, in [1, 4096]; the table is the\n"
+             "same with any number"},
     {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = OPT(tol), .flags = BOUNDED,
      .min = BKF_PDE_TOL_MIN, .max = BKF_PDE_TOL_MAX, .form = "E",
      .help = "local error tolerance, in [1e-13, 0.01]; default 1e-07\n"
@@ -267,6 +359,7 @@ static const bkf_io_column columns[] = {
     {"rel_err", BKF_IO_NUMBER},
     {"fit_from", BKF_IO_NUMBER},
     {"fit_to", BKF_IO_NUMBER},
+    {"t_end", BKF_IO_NUMBER},
     {"fronts_start", BKF_IO_NUMBER},
     {"fronts_end", BKF_IO_NUMBER},
     {"deviation_start", BKF_IO_NUMBER},
@@ -355,7 +448,7 @@ static void list_n(const check_sink *k, int (*keep)(const bkf_check_row *), char
         }
 }
 
-static int row_stable(const bkf_check_row *r) { return r->stable == 1; }
+static int row_kept(const bkf_check_row *r) { return r->kept == 1; }
 static int row_disagrees(const bkf_check_row *r) { return r->verdict == BKF_CHECK_DISAGREES; }
 static int row_conflicts(const bkf_check_row *r) { return r->verdict == BKF_CHECK_CONFLICTS; }
 static int row_spectral_stable(const bkf_check_row *r)
@@ -409,10 +502,13 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
                     o->frame == BKF_CHECK_FRAME_LAB ? "lab" : "moving with v_pred of each root");
     if (!s && !chain)
         s = bkf_io_table_commentf(t, err,
-                    "tmax %s, perturbation rms %s (seed %lu), agreement asked %s, grid %s: "
+                    "tmax %s (%s), perturbation rms %s (seed %lu), agreement asked %s, grid %s: "
                     "uniform %zu .. %zu (resolution %.0e, samples every %s), adapted %zu points "
                     "per wavelength (tol %.0e, samples every %g)",
-                    bkf_format_number(o->tmax, a, sizeof a), bkf_format_number(o->perturb, b, sizeof b), o->seed,
+                    bkf_format_number(o->tmax, a, sizeof a),
+                    o->runs == BKF_CHECK_RUNS_FULL ? "every run to it"
+                                                   : "the longest run: runs auto stop once settled",
+                    bkf_format_number(o->perturb, b, sizeof b), o->seed,
                     bkf_format_number(o->rel_tol, c, sizeof c), bkf_check_grid_name(o->grid), o->N,
                     k->info.N_cap, o->resolution,
                     bkf_format_number(check_sample_dt(BKF_CHECK_SAMPLE_DT, o->tmax), d, sizeof d),
@@ -422,9 +518,9 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
                     bkf_format_number(k->info.k, a, sizeof a), k->info.n_max, k->info.roots,
                     k->note[0] ? "; " : "", k->note);
     if (!s && prov && prov->command) s = bkf_io_table_commentf(t, err, "command: %s", prov->command);
-    size_t stable = 0, agree = 0, unresolved = 0, disagree = 0, conflict = 0, undecided = 0;
+    size_t kept = 0, agree = 0, unresolved = 0, disagree = 0, conflict = 0, undecided = 0;
     for (size_t i = 0; i < k->count; i++) {
-        stable += k->rows[i].stable == 1;
+        kept += k->rows[i].kept == 1;
         agree += k->rows[i].verdict == BKF_CHECK_AGREES;
         unresolved += k->rows[i].verdict == BKF_CHECK_UNRESOLVED;
         disagree += k->rows[i].verdict == BKF_CHECK_DISAGREES;
@@ -433,14 +529,14 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
     }
     if (!s) {
         char list[512], yes[512], no[512];
-        list_n(k, row_stable, list, sizeof list);
+        list_n(k, row_kept, list, sizeof list);
         list_n(k, row_spectral_stable, yes, sizeof yes);
         list_n(k, row_spectral_unstable, no, sizeof no);
         s = bkf_io_table_commentf(t, err,
                     "summary: %zu kept by the run (n = %s), %zu agree, %zu disagree, %zu "
                     "conflict, %zu undecided, %zu unresolved; spectrum stable n = %s, unstable "
                     "n = %s",
-                    stable, stable ? list : "none", agree, disagree, conflict, undecided,
+                    kept, kept ? list : "none", agree, disagree, conflict, undecided,
                     unresolved,
                     yes[0] ? yes : "none", no[0] ? no : "none");
     }
@@ -453,7 +549,8 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
             {.number = r->v_pred},             {.number = r->v_pred_err},
             {.number = r->v_meas},             {.number = r->v_meas_err},
             {.number = r->rel_err},            {.number = r->fit_from},
-            {.number = r->fit_to},             {.number = r->fronts_start},
+            {.number = r->fit_to},             {.number = r->t_end},
+            {.number = r->fronts_start},
             {.number = r->fronts_end},         {.number = r->deviation_start},
             {.number = r->deviation_mid},      {.number = r->deviation_end},
             {.number = r->growth.rate},        {.number = r->growth.rate_err},
@@ -461,7 +558,7 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
             {.text = bkf_check_growth_name(r->growth.verdict)},
             {.text = bkf_trainspec_verdict_name(r->spectral)},
             {.number = r->sigma_max},          {.number = r->sigma_max_err},
-            {.number = r->stable},
+            {.number = r->kept},
             {.text = bkf_check_verdict_name(r->verdict)},
             {.number = r->decide_tmax},
         };

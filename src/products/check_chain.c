@@ -138,6 +138,7 @@ static int check_chain_wave(const check_ctx *c, const bkf_chainwave *w, bkf_chec
     if (!s && ob.count) {
         int constant = 1;
         for (size_t r = 1; r < ob.count; r++) constant &= ob.fronts[r] == ob.fronts[0];
+        row->t_end = ob.t[ob.count - 1];
         row->fronts_start = (double)ob.fronts[0];
         row->fronts_end = (double)ob.fronts[ob.count - 1];
         row->deviation_start = ob.dev[0];
@@ -172,11 +173,11 @@ static int check_chain_wave(const check_ctx *c, const bkf_chainwave *w, bkf_chec
             row->fit_to = ob.t[last];
         }
         if (!s) {
-            int stable;
+            int kept;
             row->verdict = bkf_check_judge(n_seen, blew_up, constant, n_seen, row->deviation_end,
                                            &row->growth, row->spectral, row->sigma_max,
-                                           row->rel_err, o->rel_tol, &stable);
-            row->stable = stable;
+                                           row->rel_err, o->rel_tol, &kept);
+            row->kept = kept;
             if (blew_up) row->reason = BKF_EBLOWUP;
         }
     }
@@ -212,7 +213,7 @@ int check_chain_run(const bkf_model_params *model, const bkf_check_options *o,
         return bkf_error_set(err, s, "the chain's waves: %s", e.message);
     }
     check_ctx c = {model, o, hooks, o->tol ? o->tol : BKF_CHECK_CHAIN_RUN_TOL, NAN, 0, 0,
-                   tab.count};
+                   tab.count, NULL, NULL};
     bkf_check_info info = {tab.count, NAN, (long)(o->n ? o->n : model->N / 2), tab.note, c.tol,
                            NAN, model->N};
     int stop = hooks && hooks->begin ? hooks->begin(&info, hooks->data) : 0;

@@ -78,6 +78,83 @@ static double mapped_grid_error(const check_ctx *c, const bkf_speeds_root *sr, s
     return fabs(drift - coarse);
 }
 
+/* The row from the adapted grid's records so far: counts, deviations,
+ * growth, the speed (v_meas_err the fit's uncertainty alone) and the
+ * verdict. */
+static int mapped_row(const check_ctx *c, const bkf_speeds_root *sr, const bkf_comoving *cm,
+                      int blew_up, bkf_check_row *row, double *drift_out)
+{
+    const bkf_check_options *o = c->o;
+    size_t R = bkf_comoving_count(cm);
+    const bkf_comoving_record *first = bkf_comoving_record_at(cm, 0),
+                              *last = bkf_comoving_record_at(cm, R - 1), *mid = last;
+    int constant = 1;
+    for (size_t r = 0; r < R; r++) {
+        const bkf_comoving_record *rc = bkf_comoving_record_at(cm, r);
+        if (rc->fronts != first->fronts) constant = 0;
+        if (rc->t >= 0.5 * last->t && mid == last) mid = rc;
+    }
+    row->t_end = last->t;
+    row->fronts_start = (double)first->fronts;
+    row->fronts_end = (double)last->fronts;
+    row->deviation_start = first->deviation;
+    row->deviation_mid = mid->deviation;
+    row->deviation_end = last->deviation;
+    double t_lin;
+    if (check_fit_deviation(comoving_reader, cm, R, row->n, o, &row->growth, &t_lin))
+        return BKF_ENOMEM;
+    /* the relaxed wave's own deviation plateau counts as coherent */
+    size_t end = check_coherent_end(comoving_reader, cm, R, row->n, 1, check_speed_bound(o), o->tmax);
+    double t_end = bkf_comoving_record_at(cm, end)->t;
+    row->v_meas = row->v_meas_err = row->rel_err = row->fit_from = row->fit_to = NAN;
+    bkf_error e;
+    double drift, drift_err;
+    if (end >= FIT_MIN_RECORDS &&
+        bkf_comoving_fit_drift(cm, 0.5 * t_end, t_end, &drift, &drift_err, &e) == BKF_OK) {
+        /* the frame moves with the fronts towards -x at v_pred */
+        row->v_meas = sr->v - drift;
+        row->v_meas_err = drift_err;
+        *drift_out = drift;
+        row->rel_err = -drift / sr->v;
+        row->fit_from = 0.5 * t_end;
+        row->fit_to = t_end;
+    }
+    int kept;
+    row->verdict = bkf_check_judge(row->n, blew_up, constant, first->fronts, row->deviation_end,
+                                   &row->growth, row->spectral, row->sigma_max, row->rel_err,
+                                   o->rel_tol, &kept);
+    row->kept = kept;
+    return BKF_OK;
+}
+
+/* The adapted grid's run, watched after every record: an auto run stops
+ * once the front is lost or, at its checkpoints, once the row is settled
+ * (check_auto_settled). */
+typedef struct {
+    const check_ctx *c;
+    const bkf_speeds_root *sr;
+    const bkf_comoving *cm;
+    const bkf_check_row *row; /* the spectrum's part */
+    double next_check;
+    int status;               /* a failure of a checkpoint's fits */
+} mapped_watch;
+
+static int mapped_progress(double fraction, void *data)
+{
+    mapped_watch *w = data;
+    check_progress(fraction, (void *)w->c);
+    if (w->c->o->runs != BKF_CHECK_RUNS_AUTO) return 0;
+    size_t R = bkf_comoving_count(w->cm);
+    const bkf_comoving_record *last = bkf_comoving_record_at(w->cm, R - 1);
+    if (last->fronts != bkf_comoving_record_at(w->cm, 0)->fronts) return 1;
+    if (last->t < w->next_check || last->t >= w->c->o->tmax) return 0;
+    while (w->next_check <= last->t) w->next_check += BKF_CHECK_AUTO_EVERY;
+    bkf_check_row r = *w->row;
+    double drift;
+    if ((w->status = mapped_row(w->c, w->sr, w->cm, 0, &r, &drift))) return 1;
+    return check_auto_settled(w->c->o, &r);
+}
+
 /* One root on the adapted comoving grid. */
 static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row,
                              bkf_error *err)
@@ -101,9 +178,13 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     bkf_comoving_stats st;
     bkf_comoving_get_stats(cm, &st);
     row->tail = st.relax_change;
+    mapped_watch w = {c, sr, cm, row, BKF_CHECK_AUTO_FIRST, BKF_OK};
     int s = bkf_comoving_run(cm, o->tmax, check_sample_dt(BKF_CHECK_MAPPED_SAMPLE_DT, o->tmax),
-                             check_progress, (void *)c, &e);
-    bkf_comoving_get_stats(cm, &st);
+                             mapped_progress, &w, &e);
+    if (!s && w.status) {
+        bkf_comoving_free(cm);
+        return bkf_error_set(err, w.status, "out of memory");
+    }
     size_t R = bkf_comoving_count(cm);
     int blew_up = s == BKF_EBLOWUP && R >= 2;
     if (blew_up) s = BKF_OK; /* a blown-up front is a result (unstable) */
@@ -119,58 +200,34 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
         return bkf_error_set(err, s, "n = %zu, root %zu, adapted grid of %zu points: %s", row->n,
                              row->root, row->N, e.message);
     }
-    const bkf_comoving_record *first = bkf_comoving_record_at(cm, 0),
-                              *last = bkf_comoving_record_at(cm, R - 1), *mid = last;
-    int constant = 1;
-    for (size_t r = 0; r < R; r++) {
-        const bkf_comoving_record *rc = bkf_comoving_record_at(cm, r);
-        if (rc->fronts != first->fronts) constant = 0;
-        if (rc->t >= 0.5 * last->t && mid == last) mid = rc;
-    }
-    row->fronts_start = (double)first->fronts;
-    row->fronts_end = (double)last->fronts;
-    row->deviation_start = first->deviation;
-    row->deviation_mid = mid->deviation;
-    row->deviation_end = last->deviation;
-    double t_lin;
-    if (check_fit_deviation(comoving_reader, cm, R, row->n, o, &row->growth, &t_lin)) {
+    double drift = NAN;
+    if ((s = mapped_row(c, sr, cm, blew_up, row, &drift))) {
         bkf_comoving_free(cm);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        return bkf_error_set(err, s, "out of memory");
     }
-    /* the relaxed wave's own deviation plateau counts as coherent */
-    size_t end = check_coherent_end(comoving_reader, cm, R, row->n, 1, check_speed_bound(o), o->tmax);
-    double t_end = bkf_comoving_record_at(cm, end)->t;
-    if (end >= FIT_MIN_RECORDS) {
-        double drift, drift_err;
-        if (bkf_comoving_fit_drift(cm, 0.5 * t_end, t_end, &drift, &drift_err, &e) == BKF_OK) {
-            /* The fit's uncertainty is that of the simulated field; the
-             * grid's own error in the speed is added to it. */
-            int gs;
-            double grid_err = mapped_grid_error(c, sr, row->n, drift, 0.5 * t_end, t_end, &gs);
-            if (gs) {
-                bkf_comoving_free(cm);
-                return bkf_error_set(err, gs, "n = %zu, root %zu: %s", row->n, row->root,
-                                     gs == BKF_ENOMEM ? "out of memory" : "canceled");
-            }
-            if (isnan(grid_err))
-                check_warn(c, "n = %zu, root %zu: the run on %zu points per wavelength gives no "
-                           "speed to compare with: v_meas_err is unknown (nan)", row->n,
-                           row->root, 2 * o->points / 3);
-            /* the frame moves with the fronts towards -x at v_pred */
-            row->v_meas = sr->v - drift;
-            row->v_meas_err = drift_err + grid_err;
-            row->rel_err = -drift / sr->v;
-            row->fit_from = 0.5 * t_end;
-            row->fit_to = t_end;
-        }
-    }
-    int stable;
-    row->verdict = bkf_check_judge(row->n, blew_up, constant, first->fronts, row->deviation_end,
-                                   &row->growth, row->spectral, row->sigma_max, row->rel_err,
-                                   o->rel_tol, &stable);
-    row->stable = stable;
     if (blew_up) row->reason = BKF_EBLOWUP;
     bkf_comoving_free(cm);
+    if (!isfinite(row->v_meas)) return BKF_OK;
+    if (o->runs == BKF_CHECK_RUNS_AUTO && !check_speed_judged(row)) {
+        /* the grid's error matters only to a judged speed, and its second
+         * run can cost several times the first (n = 12 at the paper's
+         * parameters: 11 s against 2.7 s) */
+        row->v_meas_err = NAN;
+        return BKF_OK;
+    }
+    /* The fit's uncertainty is that of the simulated field; the grid's own
+     * error in the speed is added to it. */
+    int gs;
+    double grid_err = mapped_grid_error(c, sr, row->n, drift, row->fit_from,
+                                        row->fit_to, &gs);
+    if (gs)
+        return bkf_error_set(err, gs, "n = %zu, root %zu: %s", row->n, row->root,
+                             gs == BKF_ENOMEM ? "out of memory" : "canceled");
+    if (isnan(grid_err))
+        check_warn(c, "n = %zu, root %zu: the run on %zu points per wavelength gives no "
+                   "speed to compare with: v_meas_err is unknown (nan)", row->n,
+                   row->root, 2 * o->points / 3);
+    row->v_meas_err += grid_err;
     return BKF_OK;
 }
 
@@ -256,7 +313,61 @@ static int bloch_fit(const bloch_classes *b, double t_from, double t_to, bkf_che
     return BKF_OK;
 }
 
+/* The row from the uniform grid's records so far: counts, deviations,
+ * growth (deviation and Bloch classes), the speed and the verdict. */
+static int uniform_row(const check_ctx *c, const bkf_speeds_root *sr, const bkf_measure *meas,
+                       const bloch_classes *bloch, int blew_up, double frame_speed,
+                       bkf_check_row *row, bkf_error *err)
+{
+    const bkf_check_options *o = c->o;
+    size_t n = row->n;
+    bkf_measure_summary ms;
+    bkf_error e;
+    if (bkf_measure_summarize(meas, &ms, &e))
+        return bkf_error_set(err, BKF_ENUMERIC, "n = %zu: %s", n, e.message);
+    size_t R = bkf_measure_count(meas);
+    row->t_end = bkf_measure_record_at(meas, R - 1)->t;
+    row->fronts_start = (double)ms.fronts_start;
+    row->fronts_end = (double)ms.fronts_end;
+    row->deviation_start = ms.deviation_start;
+    row->deviation_mid = ms.deviation_mid;
+    row->deviation_end = ms.deviation_end;
+    double t_lin;
+    int s;
+    if ((s = check_fit_deviation(measure_reader, meas, R, n, o, &row->growth, &t_lin)) ||
+        (s = bloch_fit(bloch, check_transient_end(o->tmax), t_lin, &row->growth)))
+        return bkf_error_set(err, s, "out of memory");
+    size_t last = check_coherent_end(measure_reader, meas, R, n, 1, check_speed_bound(o), o->tmax);
+    double t_end = bkf_measure_record_at(meas, last)->t;
+    row->v_meas = row->v_meas_err = row->rel_err = row->fit_from = row->fit_to = NAN;
+    if (last >= FIT_MIN_RECORDS) {
+        double t_from = 0.5 * t_end;
+        double v, ve;
+        if (bkf_measure_fit_speed(meas, t_from, t_end, &v, &ve, NULL, &e) == BKF_OK) {
+            /* v is relative to the frame; towards -x in the lab: -(v + V) */
+            row->v_meas = -(v + frame_speed);
+            row->v_meas_err = ve;
+            row->rel_err = -(v + frame_speed + sr->v) / sr->v;
+            row->fit_from = t_from;
+            row->fit_to = t_end;
+        }
+    }
+    int kept;
+    row->verdict = bkf_check_judge(n, blew_up, ms.count_constant, ms.fronts_start,
+                                   ms.deviation_end, &row->growth, row->spectral, row->sigma_max,
+                                   row->rel_err, o->rel_tol, &kept);
+    row->kept = kept;
+    return BKF_OK;
+}
+
+/* The uniform grid's samples, measured; an auto run stops once the front
+ * is lost or, at its checkpoints, once the row is settled
+ * (check_auto_settled). */
 typedef struct {
+    const check_ctx *c;
+    const bkf_speeds_root *sr;
+    const bkf_check_row *row; /* the spectrum's part */
+    double frame_speed, next_check;
     bkf_measure *meas;
     bloch_classes *bloch;
     int status;
@@ -276,7 +387,18 @@ static int check_observe(const bkf_pde_sample *smp, void *data)
         ob->status = bkf_error_set(&ob->err, BKF_ENOMEM, "out of memory");
         return 1;
     }
-    return 0;
+    const bkf_check_options *o = ob->c->o;
+    if (o->runs != BKF_CHECK_RUNS_AUTO) return 0;
+    size_t R = bkf_measure_count(ob->meas);
+    if (bkf_measure_record_at(ob->meas, R - 1)->fronts != bkf_measure_record_at(ob->meas, 0)->fronts)
+        return 1;
+    if (smp->t < ob->next_check || smp->t >= o->tmax) return 0;
+    while (ob->next_check <= smp->t) ob->next_check += BKF_CHECK_AUTO_EVERY;
+    bkf_check_row r = *ob->row;
+    if ((ob->status = uniform_row(ob->c, ob->sr, ob->meas, ob->bloch, 0, ob->frame_speed, &r,
+                                  &ob->err)))
+        return 1;
+    return check_auto_settled(o, &r);
 }
 
 /* One root: the grid that resolves it, the perturbed run, its
@@ -353,7 +475,7 @@ int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row
         bkf_error_set(err, s, "out of memory");
         goto done;
     }
-    check_obs ob = {meas, &bloch, 0, {{0}, 0}};
+    check_obs ob = {c, sr, row, po.frame_speed, BKF_CHECK_AUTO_FIRST, meas, &bloch, 0, {{0}, 0}};
     s = bkf_pde_run(pde, o->tmax, check_sample_dt(BKF_CHECK_SAMPLE_DT, o->tmax), check_observe, &ob,
                     check_progress,
                     (void *)c, &e);
@@ -372,42 +494,7 @@ int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row
         bkf_error_set(err, s, "n = %zu, root %zu, N = %zu: %s", n, root, pp.N, e.message);
         goto done;
     }
-    bkf_measure_summary ms;
-    if ((s = bkf_measure_summarize(meas, &ms, &e))) {
-        bkf_error_set(err, BKF_ENUMERIC, "n = %zu: %s", n, e.message);
-        goto done;
-    }
-    row->fronts_start = (double)ms.fronts_start;
-    row->fronts_end = (double)ms.fronts_end;
-    row->deviation_start = ms.deviation_start;
-    row->deviation_mid = ms.deviation_mid;
-    row->deviation_end = ms.deviation_end;
-    double t_lin;
-    size_t R = bkf_measure_count(meas);
-    if ((s = check_fit_deviation(measure_reader, meas, R, n, o, &row->growth, &t_lin)) ||
-        (s = bloch_fit(&bloch, check_transient_end(o->tmax), t_lin, &row->growth))) {
-        bkf_error_set(err, s, "out of memory");
-        goto done;
-    }
-    size_t last = check_coherent_end(measure_reader, meas, R, n, 1, check_speed_bound(o), o->tmax);
-    double t_end = bkf_measure_record_at(meas, last)->t;
-    if (last >= FIT_MIN_RECORDS) {
-        double t_from = 0.5 * t_end;
-        double v, ve;
-        if (bkf_measure_fit_speed(meas, t_from, t_end, &v, &ve, NULL, &e) == BKF_OK) {
-            /* v is relative to the frame; towards -x in the lab: -(v + V) */
-            row->v_meas = -(v + po.frame_speed);
-            row->v_meas_err = ve;
-            row->rel_err = -(v + po.frame_speed + sr->v) / sr->v;
-            row->fit_from = t_from;
-            row->fit_to = t_end;
-        }
-    }
-    int stable;
-    row->verdict = bkf_check_judge(n, blew_up, ms.count_constant, ms.fronts_start,
-                                   ms.deviation_end, &row->growth, row->spectral, row->sigma_max,
-                                   row->rel_err, o->rel_tol, &stable);
-    row->stable = stable;
+    if ((s = uniform_row(c, sr, meas, &bloch, blew_up, po.frame_speed, row, err))) goto done;
     if (blew_up) row->reason = BKF_EBLOWUP;
 done:
     bloch_free(&bloch);
@@ -443,19 +530,33 @@ static void spectrum_of(const check_ctx *c, bkf_check_row *row, int status, cons
     row->sigma_max_err = sigma_max_err;
 }
 
-/* The spectrum of the root's train, at trainspec's default accuracy (1e-6
- * on sigma, far below any rate a run resolves); a refusal leaves the row's
- * spectrum unresolved, with a warning: the run still judges. */
+/* The spectrum of the root's train: first at tol 1e-4, which decides the
+ * sign of every sigma_max farther than that from 0 (the paper's twelve
+ * roots: all, at half the cost of 1e-6; the smallest |sigma_max| there is
+ * 1.4e-4, n = 6), and where it leaves the sign undecided again at
+ * trainspec's default accuracy (1e-6).  A refusal at 1e-4 is not retried:
+ * its causes (an estimate above tol on the finest mesh, the work budget)
+ * only grow with a tighter tol; nor is a window's edge (the window does not
+ * depend on tol).  Both rates are far below any a run resolves.  A refusal
+ * leaves the row's spectrum unresolved, with a warning: the run still
+ * judges. */
+#define CHECK_SPECTRUM_TOL_FIRST 1e-4
+
 void check_spectrum(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row)
 {
     bkf_model_params p = *c->model;
     p.kind = BKF_MODEL_CONTINUUM;
     bkf_trainspec_result res;
     bkf_error e;
-    int s = bkf_trainspec_root(&p, sr, bkf_trainspec_options_default().tol, 1, &res, &e);
+    double tol = CHECK_SPECTRUM_TOL_FIRST;
+    int s = bkf_trainspec_root(&p, sr, tol, 1, &res, &e);
     bkf_trainspec_shown shown = bkf_trainspec_shown_of(&res);
+    if (!s && res.verdict == BKF_TRAINSPEC_UNRESOLVED && !isfinite(shown.bound)) {
+        bkf_trainspec_result_free(&res);
+        s = bkf_trainspec_root(&p, sr, bkf_trainspec_options_default().tol, 1, &res, &e);
+        shown = bkf_trainspec_shown_of(&res);
+    }
     if (s) spectrum_of(c, row, s, e.message, BKF_TRAINSPEC_UNRESOLVED, NAN, NAN, NAN);
     else spectrum_of(c, row, s, "", res.verdict, shown.sigma_max, shown.sigma_max_err, shown.bound);
     bkf_trainspec_result_free(&res);
 }
-

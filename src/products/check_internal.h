@@ -19,13 +19,32 @@
 #include "bkfront/stability.h"
 #include "bkfront/fft.h"
 
-/* The whole run's state shared by the roots. */
+/* A root's warnings, held until its row is delivered (the roots run in
+ * threads; the lines come out in the order of a serial run): messages
+ * one after the other, each ending in '\0'. */
+typedef struct {
+    char *text;
+    size_t used, cap;
+    int oom;
+} check_notes;
+
+/* The progress of roots running at once: each root's own fraction, their
+ * mean the whole check's. */
+typedef struct {
+    double *fraction; /* per root */
+    size_t roots;
+} check_shared;
+
+/* The whole run's state shared by the roots, and the root's own (one copy
+ * per root). */
 typedef struct {
     const bkf_model_params *model;
     const bkf_check_options *o;
     const bkf_check_hooks *hooks;
     double tol, mapped_tol, level;
     size_t root_index, roots; /* progress: this root's share of the whole */
+    check_shared *shared;     /* NULL: progress straight to the hook */
+    check_notes *notes;       /* NULL: warnings straight to the hook */
 } check_ctx;
 
 typedef void (*record_reader)(size_t i, const void *data, double *t, size_t *fronts,
@@ -51,6 +70,8 @@ int check_fit_deviation(record_reader at, const void *data, size_t R, size_t n,
                         const bkf_check_options *o, bkf_check_growth *g, double *t_to);
 void check_row_init(bkf_check_row *row, size_t n, size_t root, const bkf_speeds_root *sr);
 void check_explain_undecided(const check_ctx *c, bkf_check_row *row);
+int check_auto_settled(const bkf_check_options *o, const bkf_check_row *row);
+int check_speed_judged(const bkf_check_row *row);
 
 /* check_continuum.c */
 int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row,

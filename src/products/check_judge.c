@@ -67,6 +67,8 @@ bkf_check_options bkf_check_options_default(void)
         .mapped_tol = 0,
         .mapped_max_steps = BKF_CHECK_MAPPED_MAX_STEPS,
         .resolution = BKF_CHECK_RESOLUTION_DEFAULT,
+        .runs = BKF_CHECK_RUNS_AUTO,
+        .threads = 0,
     };
 }
 
@@ -147,6 +149,11 @@ int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *o
         return bkf_error_set(err, BKF_EINPUT,
                              "mapped_tol: %g is outside [%g, %g] (0: the default)", o->mapped_tol,
                              BKF_PDE_TOL_MIN, BKF_PDE_TOL_MAX);
+    if ((unsigned)o->runs > BKF_CHECK_RUNS_FULL)
+        return bkf_error_set(err, BKF_EINPUT, "runs: %d is not a bkf_check_runs", (int)o->runs);
+    if (o->threads > BKF_CHECK_THREADS_MAX)
+        return bkf_error_set(err, BKF_EINPUT, "threads: %zu is outside [0, %d] (0: every core)",
+                             o->threads, BKF_CHECK_THREADS_MAX);
     if (!(o->resolution >= BKF_CHECK_RESOLUTION_MIN && o->resolution <= 1))
         return bkf_error_set(err, BKF_EINPUT, "resolution: %g is outside [%g, 1]", o->resolution,
                              BKF_CHECK_RESOLUTION_MIN);
@@ -156,11 +163,11 @@ int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *o
 bkf_check_verdict bkf_check_judge(size_t n, int blew_up, int count_constant, size_t fronts_start,
                                   double deviation_end, const bkf_check_growth *growth,
                                   bkf_trainspec_verdict spectral, double sigma_max, double rel_err,
-                                  double rel_tol, int *stable)
+                                  double rel_tol, int *kept_out)
 {
     int kept = !blew_up && count_constant && fronts_start == n && isfinite(deviation_end) &&
                deviation_end <= 1e-2 && growth->verdict != BKF_CHECK_GROWTH_GROWS;
-    if (stable) *stable = kept;
+    if (kept_out) *kept_out = kept;
     if (bkf_check_conflict(growth, spectral, sigma_max)) return BKF_CHECK_CONFLICTS;
     if (!kept || spectral == BKF_TRAINSPEC_UNSTABLE) return BKF_CHECK_UNSTABLE;
     /* kept is not stable: a growth below the run's detection limit is
@@ -280,8 +287,21 @@ double check_sample_dt(double base, double tmax) { return fmax(base, tmax / BKF_
 int check_progress(double fraction, void *data)
 {
     const check_ctx *c = data;
-    if (c->hooks && c->hooks->progress)
+    if (!c->hooks || !c->hooks->progress) return 0;
+    if (!c->shared) {
         c->hooks->progress(((double)c->root_index + fraction) / (double)c->roots, c->hooks->data);
+        return 0;
+    }
+    /* the roots in flight report in turn; each root's fraction only grows,
+     * so their mean does */
+#pragma omp critical(bkf_check_hooks)
+    {
+        check_shared *sh = c->shared;
+        sh->fraction[c->root_index] = fmax(sh->fraction[c->root_index], fmin(fraction, 1.0));
+        double sum = 0;
+        for (size_t i = 0; i < sh->roots; i++) sum += sh->fraction[i];
+        c->hooks->progress(sum / (double)sh->roots, c->hooks->data);
+    }
     return 0;
 }
 
@@ -298,7 +318,24 @@ void check_warn(const check_ctx *c, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(line, sizeof line, fmt, ap);
     va_end(ap);
-    c->hooks->warning(line, c->hooks->data);
+    check_notes *k = c->notes;
+    if (!k) {
+        c->hooks->warning(line, c->hooks->data);
+        return;
+    }
+    size_t len = strlen(line) + 1;
+    if (k->used + len > k->cap) {
+        size_t cap = 2 * (k->used + len);
+        char *t = realloc(k->text, cap);
+        if (!t) {
+            k->oom = 1;
+            return;
+        }
+        k->text = t;
+        k->cap = cap;
+    }
+    memcpy(k->text + k->used, line, len);
+    k->used += len;
 }
 
 /* The end of the coherent part of a run: the last record, from the start
@@ -370,12 +407,12 @@ void check_row_init(bkf_check_row *row, size_t n, size_t root, const bkf_speeds_
     row->v_pred_err = sr->v_err;
     row->v_meas = row->v_meas_err = row->rel_err = row->fit_from = row->fit_to = NAN;
     row->tail = NAN;
-    row->fronts_start = row->fronts_end = NAN;
+    row->t_end = row->fronts_start = row->fronts_end = NAN;
     row->deviation_start = row->deviation_mid = row->deviation_end = NAN;
     bkf_check_fit_growth(NULL, NULL, 0, 0, 0, &row->growth);
     row->spectral = BKF_TRAINSPEC_UNRESOLVED;
     row->sigma_max = row->sigma_max_err = NAN;
-    row->stable = NAN;
+    row->kept = NAN;
     row->decide_tmax = NAN;
     row->verdict = BKF_CHECK_UNRESOLVED;
     row->reason = BKF_OK;
@@ -424,3 +461,32 @@ void check_explain_undecided(const check_ctx *c, bkf_check_row *row)
                    g->limit, BKF_CHECK_TMAX_MAX, rate);
 }
 
+
+/* Whether a verdict judges the speed: only a front stable by the spectrum
+ * or by a decaying run has its speed compared with the prediction. */
+int check_speed_judged(const bkf_check_row *row)
+{
+    return row->verdict == BKF_CHECK_AGREES || row->verdict == BKF_CHECK_DISAGREES;
+}
+
+/* Whether an auto run may stop with the row judged on the run so far (see
+ * bkf_check_options.runs): nothing a longer run up to tmax could add would
+ * change the verdict.  A decided stable spectrum leaves the run only the
+ * speed to confirm, which is settled once it agrees by three times its
+ * uncertainty; a decided unstable one makes the verdict unstable whatever
+ * the run, which then adds a measured speed and a growth that either
+ * already has the spectrum's sign or is too slow for any fit within tmax
+ * (its detection limit is at least ln 2 / L) to decide either way, so to
+ * contradict.  Disagreements and conflicts, errors of the check, and an
+ * unresolved spectrum get the whole run. */
+int check_auto_settled(const bkf_check_options *o, const bkf_check_row *row)
+{
+    if (o->runs != BKF_CHECK_RUNS_AUTO || row->verdict == BKF_CHECK_CONFLICTS) return 0;
+    if (row->spectral == BKF_TRAINSPEC_STABLE)
+        return row->verdict == BKF_CHECK_AGREES &&
+               fabs(row->rel_err) + 3 * row->v_meas_err / row->v_pred <= o->rel_tol;
+    if (row->spectral != BKF_TRAINSPEC_UNSTABLE || !isfinite(row->rel_err)) return 0;
+    double L = o->tmax - check_transient_end(o->tmax);
+    return row->growth.verdict == BKF_CHECK_GROWTH_GROWS ||
+           row->sigma_max + row->sigma_max_err < log(2.0) / L;
+}

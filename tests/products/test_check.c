@@ -182,6 +182,8 @@ static bkf_check_row run_one(double gamma, double c, double nu, double S, size_t
     bkf_check_options o = bkf_check_options_default();
     o.n = n;
     o.tmax = tmax;
+    /* what a run of this length shows: every run to tmax */
+    o.runs = BKF_CHECK_RUNS_FULL;
     row_list l = {.count = 0};
     bkf_check_hooks h = {.row = keep_row, .data = &l};
     bkf_error err;
@@ -228,7 +230,7 @@ TEST(check_growth_weak_instability_is_undecided)
         CHECK_MSG(r.growth.verdict == BKF_CHECK_GROWTH_UNDECIDED, "tmax %g: %s", tmax[i],
                   bkf_check_growth_name(r.growth.verdict));
         CHECK(fabs(r.growth.rate) < r.growth.limit && r.sigma_max < r.growth.limit);
-        CHECK(r.stable == 1 && r.verdict == BKF_CHECK_UNSTABLE);
+        CHECK(r.kept == 1 && r.verdict == BKF_CHECK_UNSTABLE);
     }
 }
 
@@ -243,7 +245,7 @@ TEST(check_growth_paper_strong_and_weak)
     CHECK_MSG(r.growth.rate <= r.sigma_max + 2.5 * r.growth.rate_err &&
                   r.growth.rate > 0.8 * r.sigma_max,
               "growth %g +- %g, sigma_max %g", r.growth.rate, r.growth.rate_err, r.sigma_max);
-    CHECK(r.verdict == BKF_CHECK_UNSTABLE && r.stable == 0);
+    CHECK(r.verdict == BKF_CHECK_UNSTABLE && r.kept == 0);
     r = run_one(2, 0.3, -0.96, 20, 8, 125);
     CHECK(r.spectral == BKF_TRAINSPEC_UNSTABLE && r.sigma_max < r.growth.limit);
     CHECK(r.growth.verdict == BKF_CHECK_GROWTH_UNDECIDED && r.verdict == BKF_CHECK_UNSTABLE);
@@ -330,7 +332,7 @@ TEST(check_steep_stable_fronts_measure_their_speed)
         CHECK_MSG(isfinite(r.v_meas) && fabs(r.v_meas - r.v_pred) <= 1e-6 * r.v_pred,
                   "v_meas %g, v_pred %g", r.v_meas, r.v_pred);
         CHECK(r.fit_to == 125 && r.fit_from == 62.5);
-        CHECK(r.stable == 1 && r.verdict != BKF_CHECK_DISAGREES);
+        CHECK(r.kept == 1 && r.verdict != BKF_CHECK_DISAGREES);
     }
 }
 
