@@ -25,6 +25,7 @@ static const bkf_io_column diagram_columns[] = {
     {"curve", BKF_IO_NUMBER}, {"kind", BKF_IO_TEXT},  {"n", BKF_IO_NUMBER},
     {"m", BKF_IO_NUMBER},     {"nu", BKF_IO_NUMBER},  {"S", BKF_IO_NUMBER},
     {"S_err", BKF_IO_NUMBER}, {"above", BKF_IO_NUMBER}, {"nu_err", BKF_IO_NUMBER}};
+#define KAPPA_COUNT_DEFAULT 64
 #define NRING (sizeof ring_columns / sizeof ring_columns[0])
 #define NLINE (sizeof line_columns / sizeof line_columns[0])
 #define NBOUNDARY (sizeof boundary_columns / sizeof boundary_columns[0])
@@ -66,7 +67,7 @@ const bkf_option bkf_stability_options[] = {
              "rightmost sigma for kappa in [0, 2 pi/L), L = S/n"},
     {.name = "kappa-count", .type = BKF_OPT_COUNT, .offset = FIELD(kappa_count),
      .flags = BOUNDED, .min = 1, .max = BKF_STABILITY_KAPPA_MAX, .form = "M",
-     .shown_default = "64", .help = "with --line: M Bloch numbers kappa = (2 pi/L) i/M,\n"
+     .shown_default = BKF_TEXT_OF(KAPPA_COUNT_DEFAULT), .help = "with --line: M Bloch numbers kappa = (2 pi/L) i/M,\n"
                                      "i = 0..M-1, in [1, 100000]"},
     {.name = "boundary", .type = BKF_OPT_SWITCH, .offset = FIELD(boundary),
      .help = "the stability boundary of train n: the first sign change\n"
@@ -116,7 +117,7 @@ bkf_stability_spec bkf_stability_spec_default(void)
     s.tol = o.tol;
     s.per_kappa = o.per_kappa;
     s.line = 0;
-    s.kappa_count = 64;
+    s.kappa_count = KAPPA_COUNT_DEFAULT;
     s.to = s.S_to = NAN;
     bkf_stabmap_options m = bkf_stabmap_options_default();
     s.nu_step = m.nu_step;
@@ -152,6 +153,10 @@ static int check_across(const bkf_stability_spec *spec, const char *p, bkf_error
     if (across && spec->line)
         return bkf_error_set(err, BKF_EINPUT, "%sline: %sline is the spectrum of one train; "
                              "not with %s%s", p, p, p, spec->boundary ? "boundary" : "diagram");
+    /* a count the ring's spectrum would silently ignore (found by the
+     * independent audit of issue 31) */
+    if (!spec->line && spec->kappa_count != KAPPA_COUNT_DEFAULT)
+        return bkf_error_set(err, BKF_EINPUT, "%skappa-count: only with %sline", p, p);
     if (!spec->diagram && (spec->scan || spec->seed_step != 0.1 || spec->threads))
         return bkf_error_set(err, BKF_EINPUT, "%s%s: only with %sdiagram", p,
                              spec->scan ? "scan" : spec->threads ? "threads" : "seed-step", p);

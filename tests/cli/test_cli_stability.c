@@ -264,6 +264,9 @@ TEST(cli_stability_rejects_bad_input)
               "--per-kappa", "--per-kappa 51");
     bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--line", "--kappa-count", "0"),
               "stability", "--kappa-count", "--kappa-count 0");
+    /* the ring's spectrum ignored it, exit 0 (the independent audit of issue 31) */
+    bad_input(BKF_CLI("stability", PAPER, "--n", "1", "--kappa-count", "8"), "stability",
+              "--kappa-count", "--kappa-count without --line");
     bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--boundary", "--S-to", "24"), "stability",
               "--to", "--boundary without --to");
     bad_input(BKF_CLI("stability", PAPER, "--n", "4", "--boundary", "--to", "-0.9", "--S-to",
