@@ -115,6 +115,7 @@ static const struct {
 } bases[] = {
     {"spacetime", "tmax = 1\nN = 32\n"},
     {"sweep", "x = nu=-0.98:-0.9:2\ntmax = 1\nN = 32\n"},
+    {"orbit", "max-points = 4\n"},
 };
 
 static const char *base_of(const char *kind)
