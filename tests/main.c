@@ -16,6 +16,7 @@
 #include <signal.h>
 #include <stdarg.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -111,7 +112,7 @@ typedef struct {
     pid_t pid;
     int fd;          /* its captured output */
     int done, status;
-    double secs;
+    double secs, cpu;   /* wall; user + system CPU of the test and what it waited for */
     struct timespec start;
 } job;
 
@@ -130,6 +131,15 @@ static double since(const struct timespec *t0)
     struct timespec t1;
     clock_gettime(CLOCK_MONOTONIC, &t1);
     return (double)(t1.tv_sec - t0->tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0->tv_nsec);
+}
+
+/* User + system seconds of the reaped children and of what they reaped. */
+static double children_cpu(void)
+{
+    struct rusage ru;
+    if (getrusage(RUSAGE_CHILDREN, &ru) != 0) return 0.0;
+    return (double)(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+           1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
 }
 
 /* Interrupted (Ctrl-C): the running tests and what they started go too. */
@@ -178,7 +188,7 @@ static void report(job *j, int *passed, int *failed)
     int ok = WIFEXITED(j->status) && WEXITSTATUS(j->status) == 0;
     if (ok) {
         (*passed)++;
-        printf("ok   %-48s %7.2fs\n", j->test->name, j->secs);
+        printf("ok   %-48s %7.2fs %7.2fs cpu\n", j->test->name, j->secs, j->cpu);
     } else {
         (*failed)++;
         if (WIFSIGNALED(j->status))
@@ -233,6 +243,7 @@ int main(int argc, char **argv)
 
     int passed = 0, failed = 0;
     size_t started = 0, running = 0, reported = 0;
+    double cpu_reaped = children_cpu();
     while (reported < job_count) {
         while (running < max_jobs && started < job_count) {
             start(order[started++], time_limit);
@@ -249,6 +260,10 @@ int main(int argc, char **argv)
             job *j = &jobs[i];
             if (j->pid != pid || j->done) continue;
             j->secs = since(&j->start);
+            /* the children's total grows by this one's alone at its reaping */
+            double cpu = children_cpu();
+            j->cpu = cpu - cpu_reaped;
+            cpu_reaped = cpu;
             j->status = status;
             j->done = 1;
             running--;
