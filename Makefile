@@ -186,7 +186,7 @@ bench: deps
 	@$(call install_missing,$(BENCH_PACKAGES))
 	@$(MAKE) --no-print-directory bench-built
 
-bench-built: $(BENCH) $(CLI) $(SHLIB)
+bench-built: $(BENCH) $(CLI) $(SHLIB) $(TESTS)
 	BKFRONT_CLI=$(abspath $(CLI)) ./$(BENCH)
 	BKFRONT_LIBRARY=$(abspath $(BUILD)/$(SONAME)) PYTHONPATH=$(CURDIR)/python \
 	  $(PYTHON) tests/bench/bench_auto.py
@@ -194,6 +194,10 @@ bench-built: $(BENCH) $(CLI) $(SHLIB)
 	./$(CLI) bench --out plots/out/work_precision.tsv
 	tests/bench/bench_sweep.sh ./$(CLI)
 	for g in plots/work_precision_*.gp; do gnuplot $$g || exit 1; done
+	# last, on the quietest machine make bench gives: the table of timings
+	# the manual quotes (docs/timings.md), the suite timed as make test runs it
+	BKF_TIMINGS_SUITE="$(MAKE) --no-print-directory check-built" \
+	  tests/bench/timings.sh ./$(CLI) ./$(TESTS) docs/timings.md
 
 # The MPI build: build/mpi/bkfront, compiled with mpicc, whose `sweep` runs
 # a manager/worker farm under mpirun (src/cli/sweep_mpi.c); test-mpi
