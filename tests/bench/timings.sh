@@ -57,6 +57,8 @@ suite=${BKF_TIMINGS_SUITE:-tests/run_suites "$run_tests" /usr/bin/python3 tests/
 # shellcheck disable=SC2086
 row '`make test`' 'the whole suite after the build (C tests, then pytest), `BKF_TEST_JOBS` default' \
     $suite
+# BKF_TIMINGS_LOG=FILE keeps the suite's report (every test's wall and CPU)
+[ -n "${BKF_TIMINGS_LOG:-}" ] && cp "$dir/stdout" "$BKF_TIMINGS_LOG"
 # the slowest tests of that run (by wall: what the suite waits for), from the
 # runner's lines "ok NAME WALLs CPUs cpu"
 awk '$1 == "ok" && $5 == "cpu" { sub(/s$/, "", $3); sub(/s$/, "", $4); print $2, $3, $4 }' "$dir/stdout" |
