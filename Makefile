@@ -137,7 +137,8 @@ test: deps
 	@$(MAKE) --no-print-directory check-built
 
 # BKF_TEST_JOBS tests at once (default: the online CPUs), BKF_TEST_TIME_LIMIT
-# seconds each (default 240).
+# seconds each (default 240); each run's times, kept in $(BUILD)/test_times.tsv,
+# start the next run's slowest tests first.
 # The benchmarks and the fuzz targets are built (the fuzz targets only
 # compiled: linking them needs clang's libFuzzer, `make fuzz`) so that a
 # change that breaks them fails here, not months later.
@@ -150,6 +151,7 @@ PYTHON ?= /usr/bin/python3
 check-built: $(CLI) $(TESTS) $(BENCH) $(AUDIT) fuzz-syntax $(if $(SANITIZE),,$(SHLIB))
 	@BKFRONT_LIBRARY=$(abspath $(BUILD)/$(SONAME)) BKFRONT_CLI=$(abspath $(CLI)) \
 	  BKF_MAKE="$(MAKE)" BKF_BUILD=$(BUILD) PYTHONPATH=$(CURDIR)/python \
+	  BKF_TEST_TIMES=$(abspath $(BUILD))/test_times.tsv \
 	  tests/run_suites ./$(TESTS) $(if $(SANITIZE),,$(PYTHON) tests/python)
 
 fuzz-syntax:

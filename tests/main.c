@@ -98,8 +98,37 @@ static const struct {
     {"cli_bench_box_quick", 2.1},
 };
 
+/* The times of the last runs (BKF_TEST_TIMES, a file of "NAME\tSECONDS"
+ * lines that make test keeps in the build folder): where a test has one, it
+ * orders the start instead of the list above, which only a fresh build (the
+ * CI's clone) still needs. */
+static struct {
+    char name[128];
+    double secs;
+} learned[MAX_TESTS];
+static size_t learned_count;
+
+static void read_times(const char *path)
+{
+    FILE *f = path ? fopen(path, "r") : NULL;
+    if (!f) return;
+    char line[256];
+    while (learned_count < MAX_TESTS && fgets(line, sizeof line, f)) {
+        char *tab = strchr(line, '\t');
+        if (!tab || (size_t)(tab - line) >= sizeof learned[0].name) continue;
+        double secs = strtod(tab + 1, NULL);
+        if (!(secs >= 0.0)) continue;
+        memcpy(learned[learned_count].name, line, (size_t)(tab - line));
+        learned[learned_count].name[tab - line] = '\0';
+        learned[learned_count++].secs = secs;
+    }
+    fclose(f);
+}
+
 static double expected_secs(const char *name)
 {
+    for (size_t i = 0; i < learned_count; i++)
+        if (strcmp(learned[i].name, name) == 0) return learned[i].secs;
     for (size_t i = 0; i < sizeof known_slow / sizeof known_slow[0]; i++)
         if (strcmp(known_slow[i].name, name) == 0) return known_slow[i].secs;
     return 0.0;
@@ -205,6 +234,25 @@ static void report(job *j, int *passed, int *failed)
     fflush(stdout);
 }
 
+/* The learned times again, this run's wall seconds replacing theirs (a
+ * test not run keeps its old time); written beside and renamed, so that a
+ * run cut short leaves the old file. Only the start order depends on it. */
+static void write_times(const char *path)
+{
+    if (!path) return;
+    char tmp[4096];
+    if (snprintf(tmp, sizeof tmp, "%s.tmp.%ld", path, (long)getpid()) >= (int)sizeof tmp) return;
+    FILE *f = fopen(tmp, "w");
+    if (!f) return;
+    for (size_t i = 0; i < learned_count; i++) {
+        int ran = 0;
+        for (size_t k = 0; k < job_count && !ran; k++) ran = strcmp(jobs[k].test->name, learned[i].name) == 0;
+        if (!ran) fprintf(f, "%s\t%.2f\n", learned[i].name, learned[i].secs);
+    }
+    for (size_t k = 0; k < job_count; k++) fprintf(f, "%s\t%.2f\n", jobs[k].test->name, jobs[k].secs);
+    if (fclose(f) != 0 || rename(tmp, path) != 0) remove(tmp);
+}
+
 static unsigned env_unsigned(const char *name, unsigned fallback, unsigned long max)
 {
     const char *env = getenv(name);
@@ -223,6 +271,7 @@ int main(int argc, char **argv)
     long cpus = sysconf(_SC_NPROCESSORS_ONLN);
     unsigned max_jobs = env_unsigned("BKF_TEST_JOBS", cpus > 0 ? (unsigned)cpus : 1, 256);
 
+    read_times(getenv("BKF_TEST_TIMES"));
     qsort(tests, test_count, sizeof tests[0], compare_entries);
     jobs = calloc(test_count + 1, sizeof *jobs);
     job **order = calloc(test_count + 1, sizeof *order);
@@ -274,6 +323,7 @@ int main(int argc, char **argv)
         /* print as soon as everything before it in the sorted order is done */
         while (reported < job_count && jobs[reported].done) report(&jobs[reported++], &passed, &failed);
     }
+    write_times(getenv("BKF_TEST_TIMES"));
     free(order);
     free(jobs);
     printf("%d passed, %d failed\n", passed, failed);
