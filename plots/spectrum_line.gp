@@ -5,9 +5,9 @@ load plotdir.'/common.gp'
 set xlabel '{/Symbol k} L / 2{/Symbol p}'
 set ylabel 'max Re {/Symbol s}'
 set key top right
-set xzeroaxis lc rgb '#777777' dt 2
+set xzeroaxis lc rgb '#777777' dt 2 lw 1.5
 set title titled('Continuous spectrum on the line', word(files, 1), 'gamma c nu S')
 Sv = input(word(files, 1), 'S') ne '' ? real(input(word(files, 1), 'S')) : S
 # kappa in units of 2 pi / L, L = S/n
 plot for [i = 1:nfiles] word(files, i) using (column('kappa') * Sv / (2 * pi * word(values, i))):'re' \
-     with linespoints pt 7 ps 0.5 lw 2 title sprintf('n = %s', word(values, i))
+     with linespoints pt 7 ps 0.5 lw 2 lc rgb color(i) title sprintf('n = %s', word(values, i))

@@ -146,6 +146,10 @@ static int bd_matrix_set(bd_matrix *m, const flow_params *p, const double *s0, d
         m->kpx = -2.0 * h * p->mu * x * s0[IPX] - (along_mu ? h * p->mu * (x * x - 1.0) : 0.0);
         m->kpy = along_mu ? h * p->mu * p->b : 0.0;
         m->kqx = along_mu ? h * p->mu * p->b / (p->a * p->a) : 0.0;
+    } else {
+        /* unused without a sensitivity, but gcc -O1 -fsanitize=thread cannot
+         * see that p->sens is fixed across bd_midpoint and fails the build */
+        m->kpx = m->kpy = m->kqx = 0.0;
     }
     return 1;
 }
