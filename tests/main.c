@@ -80,8 +80,8 @@ static const struct {
     double secs;
 } known_slow[] = {
     {"extremes_floquet_matrix_gamma_100", 45.0},
-    {"extremes_floquet_matrix_gamma_to_30", 36.4},
     {"extremes_floquet_matrix_gamma_100_near_hopf", 38.1},
+    {"extremes_floquet_matrix_gamma_to_30", 36.4},
     {"cli_check_adapted_grid_error_covers_the_grid_thin_fronts", 13.0},
     {"check_sigma_max_is_an_eigenvalue_or_nan", 12.9},
     {"cli_check_memory_does_not_grow_with_tmax", 12.6},
