@@ -5,7 +5,7 @@
 # runs, after deps has installed what pkg-config needs.
 
 DEB_PACKAGES := gcc make pkg-config libgsl-dev libnlopt-dev libfftw3-dev \
-                libinih-dev libsundials-dev liblapacke-dev gnuplot-nox \
+                libinih-dev libsundials-dev liblapacke-dev libarpack2-dev gnuplot-nox \
                 python3-cffi python3-numpy python3-pytest libhdf5-dev python3-h5py \
                 python3-matplotlib groff-base
 # Only for `make valgrind` and `make fuzz` (libFuzzer ships with clang's
@@ -33,8 +33,10 @@ PKG_LIBS   = $(shell pkg-config --libs $(PKGS))
 # OpenMP: bkf_sweep_run runs a sweep's points in threads (libgomp, part of gcc).
 override CFLAGS += -std=c11 $(OPT) -g -Wall -Wextra -Werror -Iinclude $(PKG_CFLAGS) $(SANITIZE) -fopenmp
 override LDFLAGS += $(SANITIZE) -fopenmp
-# SUNDIALS (CVODE for the comoving simulation) ships no pkg-config file.
-SUNDIALS_LIBS := -lsundials_cvodes -lsundials_sunlinsolband -lsundials_sunmatrixband \
+# SUNDIALS (CVODE for the comoving simulation, KINSOL with SPGMR for the
+# periodic orbits) ships no pkg-config file.
+SUNDIALS_LIBS := -lsundials_cvodes -lsundials_kinsol -lsundials_sunlinsolband \
+                 -lsundials_sunlinsolspgmr -lsundials_sunmatrixband \
                  -lsundials_nvecserial
 # HDF5's dimension scales (H5DS) are in its high-level library, which
 # hdf5-serial.pc does not list; its -L is that of hdf5-serial.  Only the
@@ -47,7 +49,10 @@ hdf5_soname = $(shell for d in $(patsubst -L%,%,$(filter -L%,$(shell pkg-config 
   [ -e $$d/lib$(1).so ] && { readelf -d $$d/lib$(1).so | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p'; break; }; done)
 $(BUILD)/src/core/h5.o: override CFLAGS += -DBKF_HDF5_SONAME='"$(call hdf5_soname,hdf5)"' \
   -DBKF_HDF5_HL_SONAME='"$(call hdf5_soname,hdf5_hl)"'
-LDLIBS   += $(PKG_LIBS) $(SUNDIALS_LIBS) -lm
+# ARPACK (arpack-ng: Arnoldi for the periodic orbits' multipliers) ships a
+# pkg-config file only in some versions; its library name is stable.
+ARPACK_LIBS := -larpack
+LDLIBS   += $(PKG_LIBS) $(SUNDIALS_LIBS) $(ARPACK_LIBS) -lm
 
 # The library's layers, lowest first (CONTRIBUTING.md): a file may include
 # the headers of its own layer and of the layers before it, never after
@@ -324,7 +329,7 @@ $(INST)/bkfront.pc: src/bkfront.pc.in $(INST)/dirs include/bkfront/version.h
 	  -e 's|@RPATH@|$(PC_RPATH)|' \
 	  -e 's|@INCLUDEDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))|' \
 	  -e 's|@VERSION@|$(VERSION)|' -e 's|@REQUIRES@|$(PKGS)|' \
-	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) -lgomp -lm|' $< > $@
+	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) $(ARPACK_LIBS) -lgomp -lm|' $< > $@
 
 # The Python package finds the shared library by its path relative to the
 # package, so that a staged (DESTDIR) or moved tree still works.

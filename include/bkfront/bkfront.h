@@ -23,6 +23,7 @@
 #include "bkfront/pde.h"
 #include "bkfront/comoving.h"
 #include "bkfront/measure.h"
+#include "bkfront/orbit.h"
 #include "bkfront/bench.h"
 #include "bkfront/catalog.h"
 #include "bkfront/check.h"

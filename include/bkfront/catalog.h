@@ -96,6 +96,11 @@ typedef struct {
     void (*release)(void *spec);                           /* frees lists; not the spec */
     const bkf_catalog_kind *kinds;                         /* its scene kinds */
     size_t nkinds;
+    /* The expected work of writing `spec` (checked), in seconds of one core
+     * at the rates of docs/benchmarks.md: a rough guess from the spec's
+     * sizes, only to order a scene's steps when several run at once (the
+     * longest first, so that it does not start last).  NULL: a second. */
+    double (*cost)(const void *spec);
 } bkf_catalog_entry;
 
 size_t bkf_catalog_count(void);

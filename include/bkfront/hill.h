@@ -70,6 +70,19 @@ int bkf_hill_leading(bkf_cycle *cycle, double gamma, double theta, size_t modes,
                      size_t k, bkf_hill_eigenvalue *out, double *out_err, size_t *found,
                      size_t *unresolved, bkf_error *err);
 
+/* As bkf_hill_leading with the finer truncation at modes_fine modes
+ * (modes < modes_fine <= BKF_HILL_MODES_MAX) instead of 2 modes: a quarter
+ * more modes costs a quarter of the work of twice as many (the dense
+ * eigenproblem is cubic in the size).  The truncation's artefacts, tied to
+ * its largest frequency, still move between the two and are not matched;
+ * the distance bounds the finer one's error only where the error falls at
+ * least twofold between the two truncations (at 2 modes, where it falls by
+ * the square, it always does): a filter of candidates more than an error
+ * bound. */
+int bkf_hill_leading_pair(bkf_cycle *cycle, double gamma, double theta, size_t modes, size_t modes_fine,
+                          double tol, size_t k, bkf_hill_eigenvalue *out, double *out_err, size_t *found,
+                          size_t *unresolved, bkf_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -180,6 +180,12 @@ void bkf_scene_plan_free(bkf_scene_plan *plan);
  * figure is "gnuplot".  Caller frees; NULL when out of memory. */
 char *bkf_scene_step_command(const bkf_scene_step *step);
 
+/* The step's expected work in seconds of one core: its product's cost
+ * hint (catalog.h) on the step's settings, 1 for a product without one, 0
+ * for a figure (it waits for its data, then takes about a second).  A
+ * guess, which orders the steps of a run with several jobs. */
+double bkf_scene_step_cost(const bkf_scene_step *step);
+
 /* The step as an argv vector: argv[0] the product, then --KEY [VALUE] in
  * order, NULL-terminated (caller frees with bkf_scene_argv_free). */
 char **bkf_scene_step_argv(const bkf_scene_step *step, int *argc);

@@ -43,11 +43,17 @@
 extern "C" {
 #endif
 
+/* The range of tol: below 1e-8 the profile's own error (the cycle solved
+ * to 1e-12, up to 2e-9 per unit |sigma|) would outgrow it. */
+#define BKF_TRAINSPEC_TOL_MIN 1e-8
+#define BKF_TRAINSPEC_TOL_MAX 1e-2
+
 typedef struct {
     double tol;        /* absolute accuracy asked of each sigma, [1e-8, 1e-2]; default 1e-6 */
     size_t per_kappa;  /* leading eigenvalues reported per Bloch number, [1, 50]; default 3
                           (one more where the cut would split a conjugate pair) */
-    double max_work;   /* Radau steps in all, the work budget, [1e5, 1e12]; 0 (default):
+    double max_work;   /* Radau steps in all, the work budget (a step that also carries
+                          the sigma-derivative counts twice), [1e5, 1e12]; 0 (default):
                           2.5e7, about 2 s (the paper's n = 11, mu 14, takes 5e6, n = 12,
                           mu 47, 2e7); a
                           spectrum that needs more is refused (BKF_EBUDGET) */
@@ -100,7 +106,7 @@ typedef struct {
     double a_lo, y_max;              /* window searched: Re sigma > a_lo, |Im sigma| <= y_max */
     double r_inf;                    /* the line the spectrum approaches as |Im sigma| -> inf */
     size_t mesh_steps;               /* Radau steps per period (finer mesh) */
-    size_t evaluations;              /* monodromies computed */
+    size_t evaluations;              /* monodromies computed (with or without the derivative) */
     double work;                     /* Radau steps taken in all (see max_work) */
     size_t curve_points;             /* heights y sampled (0: Hill's band alone, see below) */
     size_t hill_modes;               /* Hill's method's Fourier modes -M..M whose eigenvalues were

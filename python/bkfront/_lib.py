@@ -82,6 +82,7 @@ typedef struct {
     void (*release)(void *spec);
     const void *kinds;
     size_t nkinds;
+    double (*cost)(const void *spec);
 } bkf_catalog_entry;
 size_t bkf_catalog_count(void);
 const bkf_catalog_entry *bkf_catalog_at(size_t i);

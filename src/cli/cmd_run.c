@@ -52,9 +52,10 @@ static void run_help(FILE *out)
         "                  a gnuplot script can run any shell command, so without\n"
         "                  this flag such a scene is refused; and let keys that\n"
         "                  name files (snapshots, fields) name them outside DIR\n"
-        "  --jobs N        computations run at once, 1 to 1024 (a figure waits for\n"
-        "                  its data); default the number of online CPUs; 1: one\n"
-        "                  after the other. The files are the same for every N\n"
+        "  --jobs N        computations run at once, 1 to 1024, the longest expected\n"
+        "                  first (a figure waits for its data); default the number\n"
+        "                  of online CPUs; 1: one after the other, in the plan's\n"
+        "                  order. The files are the same for every N\n"
         "\n"
         "Prints one line per computation as it ends, [K/TOTAL] its place in the\n"
         "plan, with the warnings it raised (an under-resolved simulation, refused\n"
@@ -280,80 +281,180 @@ static int parse_formats(const char *text, unsigned *formats, bkf_error *err)
     return BKF_OK;
 }
 
-static int run_run(int argc, char **argv, bkf_error *err)
+/* What the command line asks: the scene and the flags. */
+typedef struct {
+    const char *scene_path, *out, *plots;
+    int plan_only, no_figures, trust;
+    unsigned formats;
+    size_t jobs;
+} run_args;
+
+/* One positional argument, the scene; the rest are flags. */
+static int parse_run_args(int argc, char **argv, run_args *a, bkf_error *err)
 {
-    /* One positional argument, the scene; the rest are flags. */
+    *a = (run_args){0};
     char **flags_argv = calloc((size_t)argc + 1, sizeof *flags_argv);
     if (!flags_argv) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     static const char *const valued[] = {"--out", "--formats", "--plots", "--jobs", NULL};
-    const char *scene_path = NULL;
     int fargc = 0, s = BKF_OK;
     flags_argv[fargc++] = argv[0];
     for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (strncmp(a, "--", 2) == 0) {
+        const char *arg = argv[i];
+        if (strncmp(arg, "--", 2) == 0) {
             flags_argv[fargc++] = argv[i];
             int takes = 0;
             for (int k = 0; valued[k]; k++)
-                if (strcmp(a, valued[k]) == 0) takes = 1;
+                if (strcmp(arg, valued[k]) == 0) takes = 1;
             if (takes && i + 1 < argc) flags_argv[fargc++] = argv[++i];
-        } else if (!scene_path) {
-            scene_path = a;
+        } else if (!a->scene_path) {
+            a->scene_path = arg;
         } else {
             s = bkf_error_set(err, BKF_EINPUT, "'%s': give one scene file (the first was %s)",
-                              a, scene_path);
+                              arg, a->scene_path);
         }
     }
-    const char *out = NULL, *formats_text = NULL, *plots = NULL, *jobs_text = NULL;
-    int plan_only = 0, no_figures = 0, trust = 0;
+    const char *formats_text = NULL, *jobs_text = NULL;
     const cli_flag flags[] = {
-        {"--plan", NULL, NULL, &plan_only},
-        {"--no-figures", NULL, NULL, &no_figures},
-        {"--trust-scene", NULL, NULL, &trust},
-        {"--out", &out, "a folder", NULL},
+        {"--plan", NULL, NULL, &a->plan_only},
+        {"--no-figures", NULL, NULL, &a->no_figures},
+        {"--trust-scene", NULL, NULL, &a->trust},
+        {"--out", &a->out, "a folder", NULL},
         {"--formats", &formats_text, "png, pdf, svg or a list", NULL},
-        {"--plots", &plots, "a folder", NULL},
+        {"--plots", &a->plots, "a folder", NULL},
         {"--jobs", &jobs_text, "a count of computations at once", NULL},
     };
     if (!s) s = cli_parse_flags(flags, sizeof flags / sizeof flags[0], fargc, flags_argv, err);
     free(flags_argv);
     if (s) return s;
-    if (!scene_path) return bkf_error_set(err, BKF_EINPUT, "SCENE: give a scene file, e.g. fronts/paper.scene");
-    unsigned formats = 1;
-    if (formats_text && (s = parse_formats(formats_text, &formats, err))) return s;
+    if (!a->scene_path) return bkf_error_set(err, BKF_EINPUT, "SCENE: give a scene file, e.g. fronts/paper.scene");
+    a->formats = 1;
+    if (formats_text && (s = parse_formats(formats_text, &a->formats, err))) return s;
     /* Every online CPU by default: the steps are independent and each is
      * one thread (a sweep's own threads aside). */
-    size_t jobs = 1;
+    a->jobs = 1;
     long cpus = sysconf(_SC_NPROCESSORS_ONLN);
-    if (cpus > 1) jobs = cpus > 1024 ? 1024 : (size_t)cpus;
-    if (jobs_text && (s = cli_parse_count("--jobs", jobs_text, 1024, &jobs, err))) return s;
-    if (out && !*out) return bkf_error_set(err, BKF_EINPUT, "--out: the folder name is empty");
+    if (cpus > 1) a->jobs = cpus > 1024 ? 1024 : (size_t)cpus;
+    if (jobs_text && (s = cli_parse_count("--jobs", jobs_text, 1024, &a->jobs, err))) return s;
+    if (a->out && !*a->out) return bkf_error_set(err, BKF_EINPUT, "--out: the folder name is empty");
+    return BKF_OK;
+}
+
+/* Without --out: NAME beside the scene (DIR/NAME for DIR/NAME.scene). */
+static void default_outdir(const char *scene_path, const char *scene_dir, char *outdir,
+                           size_t size)
+{
+    const char *base = strrchr(scene_path, '/');
+    base = base ? base + 1 : scene_path;
+    size_t len = strcspn(base, ".");
+    snprintf(outdir, size, "%s%s%.*s", base == scene_path ? "" : scene_dir,
+             base == scene_path ? "" : "/", (int)(len ? len : strlen(base)), base);
+}
+
+/* The tables users most want to read, then where everything is. */
+static void print_summary(const bkf_scene *sc, const bkf_scene_plan *plan, const int *step_status,
+                          double total, const char *outdir)
+{
+    for (size_t i = 0; i < sc->nproducts; i++) {
+        if (sc->products[i].kind != BKF_SCENE_SPEEDS) continue;
+        const bkf_scene_product_plan *pp = &plan->products[i];
+        for (size_t k = 0; k < pp->nsteps; k++) {
+            const bkf_scene_step *st = &plan->steps[pp->steps[k]];
+            if (step_status[pp->steps[k]]) continue;
+            FILE *f = fopen(st->output, "r");
+            if (!f) continue;
+            printf("\n== [speeds %s] %s\n", sc->products[i].name, st->output);
+            char line[4096];
+            while (fgets(line, sizeof line, f)) fputs(line, stdout);
+            fclose(f);
+        }
+    }
+    size_t nfig = 0;
+    for (size_t i = 0; i < plan->nsteps; i++)
+        if (plan->steps[i].kind == BKF_SCENE_STEP_FIGURE && !step_status[i]) nfig++;
+    printf("\n%zu computation%s in %.2f s; %zu figure%s", plan->nsteps,
+           plan->nsteps == 1 ? "" : "s", total, nfig, nfig == 1 ? "" : "s");
+    if (nfig) printf(" in %s:", outdir);
+    printf("\n");
+    for (size_t i = 0; i < plan->nsteps; i++) {
+        const bkf_scene_step *st = &plan->steps[i];
+        if (st->kind != BKF_SCENE_STEP_FIGURE || step_status[i]) continue;
+        for (size_t k = 0; k < st->nargs; k++) printf("  %s\n", st->args[k].value);
+    }
+}
+
+/* The plan run into outdir (made if missing) and reported. */
+static int run_plan(const bkf_scene *sc, const bkf_scene_plan *plan, bkf_scene_run_options *ro,
+                    const run_context *rc, const char *outdir, bkf_error *err)
+{
+    int s = make_dirs(outdir, err);
+    if (s) return s;
+    int *step_status = calloc(plan->nsteps ? plan->nsteps : 1, sizeof *step_status);
+    if (!step_status) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    double t_all = now();
+    /* The first SIGINT or SIGTERM stops the whole run: the steps under way
+     * stop at their next check (their files are not replaced), the steps
+     * done keep their files, no later step starts.  A second one ends the
+     * process at once (temporaries removed). */
+    const volatile sig_atomic_t *cancel = cli_cancel_begin();
+    ro->hooks.cancel = cancel;
+    /* BKF_ECANCELED is told below, with the signal's name */
+    int run_status = bkf_scene_run(sc, plan, ro, step_status, err);
+    if (run_status == BKF_ENOMEM) {
+        cli_cancel_end();
+        free(step_status);
+        return run_status;
+    }
+    double total = now() - t_all;
+    int canceled = *cancel != 0;
+    cli_cancel_end();
+    if (canceled) {
+        const char *sig = cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT";
+        size_t nsteps = plan->nsteps, done = 0;
+        for (size_t i = 0; i < nsteps; i++) done += step_status[i] == BKF_OK;
+        printf("\ninterrupted (%s): %zu of %zu computations done, the rest not run\n", sig, done,
+               nsteps);
+        fflush(stdout);
+        free(step_status);
+        return bkf_error_set(err, BKF_ECANCELED,
+                             "interrupted (%s): %zu of %zu computations done; their files kept, "
+                             "none replaced by partial data", sig, done, nsteps);
+    }
+    print_summary(sc, plan, step_status, total, outdir);
+    int reported = report_status(err);
+    free(step_status);
+    if (rc->failed)
+        return bkf_error_set(err, rc->worst ? rc->worst : BKF_ENUMERIC,
+                             "%zu of the computations failed; first: %s", rc->failed,
+                             rc->first_failure);
+    return reported;
+}
+
+static int run_run(int argc, char **argv, bkf_error *err)
+{
+    run_args a;
+    int s = parse_run_args(argc, argv, &a, err);
+    if (s) return s;
 
     bkf_scene *sc = NULL;
-    if ((s = bkf_scene_parse_file(scene_path, &sc, err))) return s;
+    if ((s = bkf_scene_parse_file(a.scene_path, &sc, err))) return s;
 
-    if (!trust && !no_figures && (s = check_trust(sc, err))) {
+    if (!a.trust && !a.no_figures && (s = check_trust(sc, err))) {
         bkf_scene_free(sc);
         return s;
     }
 
     char scene_dir[2048], outdir[4096], plots_dir[4096];
-    dir_of(scene_path, scene_dir, sizeof scene_dir);
-    if (out)
-        snprintf(outdir, sizeof outdir, "%s", out);
-    else {
-        const char *base = strrchr(scene_path, '/');
-        base = base ? base + 1 : scene_path;
-        size_t len = strcspn(base, ".");
-        snprintf(outdir, sizeof outdir, "%s%s%.*s", base == scene_path ? "" : scene_dir,
-                 base == scene_path ? "" : "/", (int)(len ? len : strlen(base)), base);
-    }
+    dir_of(a.scene_path, scene_dir, sizeof scene_dir);
+    if (a.out)
+        snprintf(outdir, sizeof outdir, "%s", a.out);
+    else
+        default_outdir(a.scene_path, scene_dir, outdir, sizeof outdir);
     /* Never the scene's own folder: a scene from elsewhere does not choose
      * the scripts by what lies beside it. */
     const char *env_plots = getenv("BKFRONT_PLOTS");
     snprintf(plots_dir, sizeof plots_dir, "%s",
-             plots ? plots : env_plots && *env_plots ? env_plots : BKF_PLOTS_DIR);
-    if (!no_figures && !plan_only && !is_dir(plots_dir)) {
+             a.plots ? a.plots : env_plots && *env_plots ? env_plots : BKF_PLOTS_DIR);
+    if (!a.no_figures && !a.plan_only && !is_dir(plots_dir)) {
         bkf_scene_free(sc);
         return bkf_error_set(err, BKF_EINPUT,
                              "--plots: %s is not a folder of gnuplot scripts (give --plots DIR, "
@@ -368,106 +469,27 @@ static int run_run(int argc, char **argv, bkf_error *err)
                                 .hooks = {.temp_file = guard_temp, .data = &rc},
                                 .temp_file = guard_temp,
                                 .data = &rc,
-                                .jobs = (unsigned)jobs,
+                                .jobs = (unsigned)a.jobs,
                                 .step_done = step_done};
 
     bkf_scene_plan plan;
-    bkf_scene_plan_options po = {.outdir = outdir, .formats = formats, .figures = !no_figures,
-                                 .trust = trust};
+    bkf_scene_plan_options po = {.outdir = outdir, .formats = a.formats,
+                                 .figures = !a.no_figures, .trust = a.trust};
     if ((s = bkf_scene_make_plan(sc, &po, &plan, err))) {
         bkf_scene_free(sc);
         return s;
     }
     rc.sc = sc;
     rc.plan = &plan;
-    if (plan_only) {
+    if (a.plan_only) {
         print_plan(sc, &plan, stdout);
-        bkf_scene_plan_free(&plan);
-        bkf_scene_free(sc);
-        return report_status(err);
+        s = report_status(err);
+    } else {
+        s = run_plan(sc, &plan, &ro, &rc, outdir, err);
     }
-    if ((s = make_dirs(outdir, err))) {
-        bkf_scene_plan_free(&plan);
-        bkf_scene_free(sc);
-        return s;
-    }
-
-    int *step_status = calloc(plan.nsteps ? plan.nsteps : 1, sizeof *step_status);
-    if (!step_status) {
-        bkf_scene_plan_free(&plan);
-        bkf_scene_free(sc);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
-    double t_all = now();
-    /* The first SIGINT or SIGTERM stops the whole run: the steps under way
-     * stop at their next check (their files are not replaced), the steps
-     * done keep their files, no later step starts.  A second one ends the
-     * process at once (temporaries removed). */
-    const volatile sig_atomic_t *cancel = cli_cancel_begin();
-    ro.hooks.cancel = cancel;
-    /* BKF_ECANCELED is told below, with the signal's name */
-    int run_status = bkf_scene_run(sc, &plan, &ro, step_status, err);
-    if (run_status == BKF_ENOMEM) {
-        cli_cancel_end();
-        free(step_status);
-        bkf_scene_plan_free(&plan);
-        bkf_scene_free(sc);
-        return run_status;
-    }
-    double total = now() - t_all;
-    int canceled = *cancel != 0;
-    cli_cancel_end();
-    if (canceled) {
-        const char *sig = cli_cancel_signal() == SIGTERM ? "SIGTERM" : "SIGINT";
-        size_t nsteps = plan.nsteps, done = 0;
-        for (size_t i = 0; i < nsteps; i++) done += step_status[i] == BKF_OK;
-        printf("\ninterrupted (%s): %zu of %zu computations done, the rest not run\n", sig, done,
-               nsteps);
-        fflush(stdout);
-        free(step_status);
-        bkf_scene_plan_free(&plan);
-        bkf_scene_free(sc);
-        return bkf_error_set(err, BKF_ECANCELED,
-                             "interrupted (%s): %zu of %zu computations done; their files kept, "
-                             "none replaced by partial data", sig, done, nsteps);
-    }
-
-    /* The tables users most want to read, then where everything is. */
-    for (size_t i = 0; i < sc->nproducts; i++) {
-        if (sc->products[i].kind != BKF_SCENE_SPEEDS) continue;
-        const bkf_scene_product_plan *pp = &plan.products[i];
-        for (size_t k = 0; k < pp->nsteps; k++) {
-            const bkf_scene_step *st = &plan.steps[pp->steps[k]];
-            if (step_status[pp->steps[k]]) continue;
-            FILE *f = fopen(st->output, "r");
-            if (!f) continue;
-            printf("\n== [speeds %s] %s\n", sc->products[i].name, st->output);
-            char line[4096];
-            while (fgets(line, sizeof line, f)) fputs(line, stdout);
-            fclose(f);
-        }
-    }
-    size_t nfig = 0;
-    for (size_t i = 0; i < plan.nsteps; i++)
-        if (plan.steps[i].kind == BKF_SCENE_STEP_FIGURE && !step_status[i]) nfig++;
-    printf("\n%zu computation%s in %.2f s; %zu figure%s", plan.nsteps,
-           plan.nsteps == 1 ? "" : "s", total, nfig, nfig == 1 ? "" : "s");
-    if (nfig) printf(" in %s:", outdir);
-    printf("\n");
-    for (size_t i = 0; i < plan.nsteps; i++) {
-        const bkf_scene_step *st = &plan.steps[i];
-        if (st->kind != BKF_SCENE_STEP_FIGURE || step_status[i]) continue;
-        for (size_t k = 0; k < st->nargs; k++) printf("  %s\n", st->args[k].value);
-    }
-    int reported = report_status(err);
-    free(step_status);
     bkf_scene_plan_free(&plan);
     bkf_scene_free(sc);
-    if (rc.failed)
-        return bkf_error_set(err, rc.worst ? rc.worst : BKF_ENUMERIC,
-                             "%zu of the computations failed; first: %s", rc.failed,
-                             rc.first_failure);
-    return reported;
+    return s;
 }
 
 const cli_command cli_cmd_run = {"run", "compute a scene file's products and figures (docs/scenes.md)",

@@ -20,7 +20,8 @@
 
 /* The keys a product requires (BKF_OPT_REQUIRED) have been given: the
  * command line's parser says so for flags; here for every other caller.
- * A required number is NaN until given, a list empty, a text NULL. */
+ * A required number is NaN until given, a list empty, a text NULL, a
+ * choice -1. */
 static int required_given(const bkf_option *table, size_t n, const void *spec,
                           const char *prefix, bkf_error *err)
 {
@@ -34,6 +35,7 @@ static int required_given(const bkf_option *table, size_t n, const void *spec,
         case BKF_OPT_DOUBLE_LIST:
         case BKF_OPT_COUNT_LIST: missing = ((const bkf_list *)field)->count == 0; break;
         case BKF_OPT_TEXT: missing = *(const char *const *)field == NULL; break;
+        case BKF_OPT_CHOICE: missing = *(const int *)field < 0; break;
         default: break;
         }
         if (missing) {
@@ -218,7 +220,8 @@ static void check_release(void *spec)
 
 #define ENTRY(name, T, summary) \
     {#name, summary, NULL, NULL, sizeof(T), name##_options, name##_init, name##_check, \
-     name##_write, name##_release, name##_kinds, sizeof name##_kinds / sizeof name##_kinds[0]}
+     name##_write, name##_release, name##_kinds, sizeof name##_kinds / sizeof name##_kinds[0], \
+     name##_cost}
 
 /* The scene kinds (bkf_catalog_kind): the keys in the order of the step's
  * command line, the scene's defaults, the files. */
@@ -264,6 +267,100 @@ static const bkf_catalog_kind sweep_kinds[] = {
 static const bkf_catalog_kind friction_kinds[] = {
     {"friction", {.keys = "from=-1 to=4 points=601"}, {0}}};
 static const bkf_catalog_kind bench_kinds[] = {{"bench", {.keys = "product quick"}, {0}}};
+
+/* The products' expected work (catalog.h's cost), in seconds of one core:
+ * rates measured on the paper scene's steps (docs/benchmarks.md), scaled
+ * by what grows with the spec.  Only their order matters: they decide
+ * which of a scene's steps start first when several run at once. */
+static double list_count(const bkf_list *l) { return l->count ? (double)l->count : 1.0; }
+
+/* A simulation: N log N per unit of time, N 512 for 50 time units ~ 2 s. */
+static double simulation_cost(const bkf_simulate_spec *sp)
+{
+    double N = sp->model.N ? (double)sp->model.N : sp->chain ? sp->model.S : BKF_SIMULATE_N_DEFAULT;
+    if (!(N >= 2)) N = BKF_SIMULATE_N_DEFAULT;
+    return 2.0 * (sp->tmax / 50.0) * (N * log2(N)) / (512.0 * 9.0);
+}
+
+/* A spectrum of a train of n fronts: ~0.1 s per front at tol 1e-6. */
+static double spectrum_cost(size_t n) { return 0.1 * (double)(n ? n : 1); }
+
+static double period_cost(const void *spec)
+{
+    const bkf_period_spec *sp = spec;
+    if (sp->along >= 0) return 1.0;
+    return 0.005 * list_count(&sp->mu) * list_count(&sp->nu);
+}
+static double speeds_cost(const void *spec)
+{
+    const bkf_fronts_spec *sp = spec;
+    double rows = sp->n ? 1.0 : sp->nmax ? (double)sp->nmax : 10.0;
+    double cost = 0.02 * rows;
+    if (sp->model == 1) cost *= 0.1 * (double)(sp->N ? sp->N : (size_t)fmax(sp->S, 2.0));
+    if (sp->stability) cost += rows * spectrum_cost(sp->n ? sp->n : 5);
+    return cost;
+}
+/* A branch: ~100 points, each with its spectrum when asked. */
+static double branch_cost(const void *spec)
+{
+    const bkf_fronts_branch_spec *sp = spec;
+    return 0.3 + (sp->stability ? 100.0 * spectrum_cost(sp->n) : 0.0);
+}
+/* The diagram and the boundary: a spectrum per S sample and bracket step,
+ * per n and nu. */
+static double stability_cost(const void *spec)
+{
+    const bkf_stability_spec *sp = spec;
+    if (sp->diagram || sp->boundary) {
+        double step = sp->nu_step > 0 ? sp->nu_step : 0.01;
+        double nus = floor(fabs(sp->to - sp->nu) / step) + 1.0;
+        double brackets = (double)sp->S_samples + log2(fmax(sp->S_to - sp->S, 1.0) / sp->S_tol);
+        double per = 0.0;
+        for (size_t n = sp->diagram ? 1 : sp->n; n <= sp->n; n++) per += spectrum_cost(n);
+        return nus * brackets * per;
+    }
+    return spectrum_cost(sp->n) * (sp->line ? (double)sp->kappa_count / 16.0 : 1.0);
+}
+static double asymptotics_cost(const void *spec)
+{
+    (void)spec;
+    return 1.0;
+}
+static double profile_cost(const void *spec)
+{
+    const bkf_profile_spec *sp = spec;
+    return 0.1 * list_count(&sp->n);
+}
+static double floquet_cost(const void *spec)
+{
+    const bkf_oscillation_spec *sp = spec;
+    if (sp->threshold && sp->along >= 0) return 10.0;
+    if (sp->threshold || sp->diagram) return 2.0;
+    return 0.0015 * list_count(&sp->q);
+}
+static double simulate_cost(const void *spec) { return simulation_cost(spec); }
+/* Every root's run at up to two grids. */
+static double check_cost(const void *spec)
+{
+    const bkf_check_spec *sp = spec;
+    double roots = sp->options.n ? 1.0 : 6.0;
+    return roots * 2.0 * (sp->options.tmax / 50.0);
+}
+static double sweep_cost(const void *spec)
+{
+    const bkf_sweep_spec *sp = spec;
+    return (double)bkf_sweep_count(sp) * simulation_cost(&sp->sim);
+}
+static double friction_cost(const void *spec)
+{
+    (void)spec;
+    return 0.05;
+}
+static double bench_cost(const void *spec)
+{
+    const bkf_bench_spec *sp = spec;
+    return sp->quick ? 30.0 : 300.0;
+}
 
 static const bkf_catalog_entry entries[] = {
     ENTRY(period, bkf_period_spec,

@@ -714,15 +714,23 @@ static int close_file(const bkf_simulate_spec *sp, bkf_io_atomic *file, int keep
     return s;
 }
 
-static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic *st_file,
-                          bkf_io_atomic *sn_file, bkf_error *err)
+/* How a run ended, for its table. */
+typedef struct {
+    bkf_pde_front_info fi;
+    double period_ref;
+    bkf_measure_summary ms;
+    int have_summary, canceled;
+    char unresolved[256];  /* the grid's warning, or "" */
+    char interrupted[160]; /* why the run stopped early, or "" */
+} run_end;
+
+/* The records the run keeps until its end (r's) and the clean seed. */
+static int alloc_records(run *r, unsigned fields, double **clean, bkf_error *err)
 {
     const bkf_simulate_spec *sp = r->spec;
     size_t N = r->model.N;
-    bkf_error e;
-    double *clean = malloc(N * sizeof *clean);
+    *clean = malloc(N * sizeof **clean);
     r->diag = malloc((sp->frames + 1) * NCOLUMNS * sizeof *r->diag);
-    unsigned fields = sp->spacetime_fields ? sp->spacetime_fields : BKF_SIMULATE_PSI;
     if (sp->spacetime && (fields & BKF_SIMULATE_PSI))
         r->field = malloc((sp->frames + 1) * N * sizeof *r->field);
     if (sp->spacetime && (fields & BKF_SIMULATE_ETA))
@@ -732,45 +740,111 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
         r->snap = malloc((r->snapshots + 1) * (2 * N + 1) * sizeof *r->snap);
         r->snap_frame = malloc(r->snapshots * sizeof *r->snap_frame);
     }
-    int s = BKF_OK;
-    bkf_io_table *t = NULL;
-    if (!clean || !r->diag || ((fields & BKF_SIMULATE_PSI) && sp->spacetime && !r->field) ||
+    if (!*clean || !r->diag || ((fields & BKF_SIMULATE_PSI) && sp->spacetime && !r->field) ||
         ((fields & BKF_SIMULATE_ETA) && sp->spacetime && !r->field_eta) ||
-        (sp->snapshots && (!r->snap || !r->snap_frame))) {
-        s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        goto done;
-    }
+        (sp->snapshots && (!r->snap || !r->snap_frame)))
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     if (sp->snapshots)
         for (size_t k = 0; k < r->snapshots; k++)
             r->snap_frame[k] = bkf_init_snapshot_frame(k, r->snapshots, sp->frames);
-    bkf_pde_front_info fi;
-    memset(&fi, 0, sizeof fi);
-    if ((s = bkf_seed_init(r->pde, &r->init, &fi, clean, &e))) {
+    return BKF_OK;
+}
+
+/* check's test of a seeded wave on a spectral grid: Fourier content
+ * above N/3 beyond its threshold means the fronts are thinner than the
+ * grid can carry, and the run shows the grid, not the model (gamma 20,
+ * c 0.05, nu 0.9, S 100, n 5: N 1024 breaks up, N 8192 propagates). */
+static void warn_unresolved(const run *r, const double *clean, run_end *end)
+{
+    const bkf_simulate_spec *sp = r->spec;
+    if (r->init.kind != BKF_INIT_FRONT || r->model.kind != BKF_MODEL_CONTINUUM) return;
+    double tail = bkf_pde_spectral_tail(r->pde, clean);
+    if (tail > BKF_CHECK_RESOLUTION_DEFAULT) {
+        snprintf(end->unresolved, sizeof end->unresolved,
+                 "warning: N = %zu does not resolve the seeded fronts (spectral tail %.2g "
+                 "above N/3, over check's %.0e): raise N, as bkfront check does",
+                 r->model.N, tail, BKF_CHECK_RESOLUTION_DEFAULT);
+        if (sp->warn) sp->warn(end->unresolved, sp->data);
+    }
+}
+
+/* The snapshots end with the state where the run stopped, so that
+ * --init file:SNAPSHOTS continues from there. */
+static void keep_stopped_state(run *r)
+{
+    size_t N = r->model.N;
+    if (r->snap &&
+        (r->snap_next == 0 || r->snap[(r->snap_next - 1) * (2 * N + 1)] < bkf_pde_time(r->pde))) {
+        double *sn = r->snap + r->snap_next * (2 * N + 1);
+        sn[0] = bkf_pde_time(r->pde);
+        memcpy(sn + 1, bkf_pde_psi(r->pde), N * sizeof *sn);
+        memcpy(sn + 1 + N, bkf_pde_eta(r->pde), N * sizeof *sn);
+        r->snap_next++;
+    }
+}
+
+/* The frames' table to `out`, then the spacetime and snapshot files. */
+static int write_run_table(const run *r, const run_end *end, FILE *out, bkf_io_format format,
+                           unsigned fields, bkf_io_atomic *st_file, bkf_io_atomic *sn_file,
+                           bkf_error *err)
+{
+    const bkf_simulate_spec *sp = r->spec;
+    const char *interrupted = end->canceled ? end->interrupted : NULL;
+    bkf_io_table *t = bkf_io_table_alloc(out, format, columns, NCOLUMNS, err);
+    if (!t) return BKF_ENOMEM;
+    int s = BKF_OK;
+    /* an interruption is the first thing a reader sees, before the title */
+    if (end->canceled) s = bkf_io_table_comment(t, end->interrupted, err);
+    if (!s)
+        s = bkf_io_table_commentf(t, err, "%s simulate: direct simulation of the elastic excitable medium",
+                     program(r));
+    if (!s && end->unresolved[0]) s = bkf_io_table_comment(t, end->unresolved, err);
+    if (!s && end->have_summary)
+        s = write_summary(t, r, &end->ms, &end->fi, end->period_ref, err);
+    if (!s && sp->spacetime)
+        s = bkf_io_table_commentf(t, err, "spacetime: %s (%s)", sp->spacetime,
+                     spacetime_kind(sp) == SPACETIME_BINARY ? "binary matrix, float32"
+                     : spacetime_kind(sp) == SPACETIME_HDF5
+                         ? (fields == BKF_SIMULATE_PSI   ? "hdf5, psi[t, x] float32"
+                            : fields == BKF_SIMULATE_ETA ? "hdf5, eta[t, x] float32"
+                                                         : "hdf5, psi[t, x] and eta[t, x] float32")
+                         : "text nonuniform matrix");
+    for (size_t f = 0; !s && f < r->frame_index; f++) {
+        bkf_io_value v[NCOLUMNS];
+        for (size_t k = 0; k < NCOLUMNS; k++) v[k].number = r->diag[f * NCOLUMNS + k];
+        s = bkf_io_table_row(t, v, err);
+    }
+    if (!s) s = bkf_io_table_finish(t, err);
+    if (!s && st_file) s = write_spacetime_file(r, interrupted, st_file, err);
+    if (!s && sn_file) s = write_snapshots(r, interrupted, bkf_io_atomic_stream(sn_file), err);
+    if (!s && end->canceled) s = bkf_error_set(err, BKF_ECANCELED, "%s", end->interrupted);
+    bkf_io_table_free(t);
+    return s;
+}
+
+static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic *st_file,
+                          bkf_io_atomic *sn_file, bkf_error *err)
+{
+    const bkf_simulate_spec *sp = r->spec;
+    size_t N = r->model.N;
+    bkf_error e;
+    double *clean = NULL;
+    unsigned fields = sp->spacetime_fields ? sp->spacetime_fields : BKF_SIMULATE_PSI;
+    run_end end;
+    memset(&end, 0, sizeof end);
+    int s = alloc_records(r, fields, &clean, err);
+    if (s) goto done;
+    if ((s = bkf_seed_init(r->pde, &r->init, &end.fi, clean, &e))) {
         bkf_error_set(err, s, "--init %s: %s", sp->init ? sp->init : "uniform", e.message);
         goto done;
     }
-    /* check's test of a seeded wave on a spectral grid: Fourier content
-     * above N/3 beyond its threshold means the fronts are thinner than the
-     * grid can carry, and the run shows the grid, not the model (gamma 20,
-     * c 0.05, nu 0.9, S 100, n 5: N 1024 breaks up, N 8192 propagates). */
-    char unresolved[256] = "";
-    if (r->init.kind == BKF_INIT_FRONT && r->model.kind == BKF_MODEL_CONTINUUM) {
-        double tail = bkf_pde_spectral_tail(r->pde, clean);
-        if (tail > BKF_CHECK_RESOLUTION_DEFAULT) {
-            snprintf(unresolved, sizeof unresolved,
-                     "warning: N = %zu does not resolve the seeded fronts (spectral tail %.2g "
-                     "above N/3, over check's %.0e): raise N, as bkfront check does",
-                     N, tail, BKF_CHECK_RESOLUTION_DEFAULT);
-            if (sp->warn) sp->warn(unresolved, sp->data);
-        }
-    }
-    double period_ref;
-    r->level = bkf_measure_front_level(&r->model, &period_ref);
+    warn_unresolved(r, clean, &end);
+    r->level = bkf_measure_front_level(&r->model, &end.period_ref);
     if (!isnan(sp->level)) r->level = sp->level;
     bkf_measure_params mp = bkf_measure_params_default();
     mp.model = r->model;
     mp.level = r->level;
-    mp.period_ref = period_ref;
+    mp.period_ref = end.period_ref;
     mp.reference = r->init.kind == BKF_INIT_FRONT ? clean : NULL;
     /* the run ends at t0 + tmax: the measurements keep only the window */
     double t0 = bkf_pde_time(r->pde);
@@ -792,83 +866,42 @@ static int run_simulation(run *r, FILE *out, bkf_io_format format, bkf_io_atomic
     }
     /* Stopped through the cancel flag: the frames recorded so far are
      * complete rows; they are written, marked. */
-    int canceled = s == BKF_ECANCELED;
-    if (s && !canceled) {
+    end.canceled = s == BKF_ECANCELED;
+    if (s && !end.canceled) {
         bkf_error_set(err, s, "%s", e.message);
         goto done;
     }
-    char interrupted[160] = "";
-    if (canceled)
-        snprintf(interrupted, sizeof interrupted,
+    if (end.canceled) {
+        snprintf(end.interrupted, sizeof end.interrupted,
                  "interrupted (%s) at t = %.9g of %.9g: %zu complete frames kept",
                  sp->cancel_reason ? sp->cancel_reason(sp->data) : "canceled",
                  bkf_pde_time(r->pde), t0 + sp->tmax, r->frame_index);
-    /* The snapshots end with the state where the run stopped, so that
-     * --init file:SNAPSHOTS continues from there. */
-    if (canceled && r->snap &&
-        (r->snap_next == 0 || r->snap[(r->snap_next - 1) * (2 * N + 1)] < bkf_pde_time(r->pde))) {
-        double *sn = r->snap + r->snap_next * (2 * N + 1);
-        sn[0] = bkf_pde_time(r->pde);
-        memcpy(sn + 1, bkf_pde_psi(r->pde), N * sizeof *sn);
-        memcpy(sn + 1 + N, bkf_pde_eta(r->pde), N * sizeof *sn);
-        r->snap_next++;
+        keep_stopped_state(r);
     }
-    bkf_measure_summary ms;
-    int have_summary = 0;
-    if ((s = bkf_measure_summarize(r->meas, &ms, &e))) {
-        if (!canceled) {
+    if ((s = bkf_measure_summarize(r->meas, &end.ms, &e))) {
+        if (!end.canceled) {
             bkf_error_set(err, BKF_ENUMERIC, "measurements: %s", e.message);
             goto done;
         }
     } else {
-        have_summary = 1;
-        name_regime(&r->model, &ms);
+        end.have_summary = 1;
+        name_regime(&r->model, &end.ms);
     }
     if (r->outcome) {
-        if (canceled) {
-            s = bkf_error_set(err, BKF_ECANCELED, "%s", interrupted);
+        if (end.canceled) {
+            s = bkf_error_set(err, BKF_ECANCELED, "%s", end.interrupted);
             goto done;
         }
         /* a sweep's field: the file bkf_simulate_write would write */
         if (st_file && (s = write_spacetime_file(r, NULL, st_file, err))) goto done;
         const bkf_pde_stats *st = bkf_pde_get_stats(r->pde);
-        *r->outcome = (bkf_simulate_outcome){ms, period_ref, bkf_pde_time(r->pde), st->steps,
-                                             st->rejected, N};
+        *r->outcome = (bkf_simulate_outcome){end.ms, end.period_ref, bkf_pde_time(r->pde),
+                                             st->steps, st->rejected, N};
         s = BKF_OK;
         goto done;
     }
-    t = bkf_io_table_alloc(out, format, columns, NCOLUMNS, err);
-    if (!t) {
-        s = BKF_ENOMEM;
-        goto done;
-    }
-    /* an interruption is the first thing a reader sees, before the title */
-    if (canceled) s = bkf_io_table_comment(t, interrupted, err);
-    if (!s)
-        s = bkf_io_table_commentf(t, err, "%s simulate: direct simulation of the elastic excitable medium",
-                     program(r));
-    if (!s && unresolved[0]) s = bkf_io_table_comment(t, unresolved, err);
-    if (!s && have_summary) s = write_summary(t, r, &ms, &fi, period_ref, err);
-    if (!s && sp->spacetime)
-        s = bkf_io_table_commentf(t, err, "spacetime: %s (%s)", sp->spacetime,
-                     spacetime_kind(sp) == SPACETIME_BINARY ? "binary matrix, float32"
-                     : spacetime_kind(sp) == SPACETIME_HDF5
-                         ? (fields == BKF_SIMULATE_PSI   ? "hdf5, psi[t, x] float32"
-                            : fields == BKF_SIMULATE_ETA ? "hdf5, eta[t, x] float32"
-                                                         : "hdf5, psi[t, x] and eta[t, x] float32")
-                         : "text nonuniform matrix");
-    for (size_t f = 0; !s && f < r->frame_index; f++) {
-        bkf_io_value v[NCOLUMNS];
-        for (size_t k = 0; k < NCOLUMNS; k++) v[k].number = r->diag[f * NCOLUMNS + k];
-        s = bkf_io_table_row(t, v, err);
-    }
-    if (!s) s = bkf_io_table_finish(t, err);
-    if (!s && st_file) s = write_spacetime_file(r, canceled ? interrupted : NULL, st_file, err);
-    if (!s && sn_file)
-        s = write_snapshots(r, canceled ? interrupted : NULL, bkf_io_atomic_stream(sn_file), err);
-    if (!s && canceled) s = bkf_error_set(err, BKF_ECANCELED, "%s", interrupted);
+    s = write_run_table(r, &end, out, format, fields, st_file, sn_file, err);
 done:
-    bkf_io_table_free(t);
     free(clean);
     return s;
 }

@@ -28,8 +28,8 @@ static const bkf_io_column diagram_columns[] = {
 #define NDIAGRAM (sizeof diagram_columns / sizeof diagram_columns[0])
 
 /* trainspec's ranges (trainspec.h), repeated in the table for the messages. */
-#define TOL_MIN 1e-10
-#define TOL_MAX 1e-2
+#define TOL_MIN BKF_TRAINSPEC_TOL_MIN
+#define TOL_MAX BKF_TRAINSPEC_TOL_MAX
 #define PER_KAPPA_MAX 50
 
 #define BOUNDED (BKF_OPT_MIN | BKF_OPT_MAX)
@@ -53,7 +53,7 @@ const bkf_option bkf_stability_options[] = {
              "bkfront speeds)"},
     {.name = "tol", .type = BKF_OPT_DOUBLE, .offset = FIELD(tol), .flags = BOUNDED,
      .min = TOL_MIN, .max = TOL_MAX, .form = "E", .shown_default = "1e-6",
-     .help = "absolute accuracy asked of each sigma, in [1e-10, 0.01]"},
+     .help = "absolute accuracy asked of each sigma, in [1e-08, 0.01]"},
     {.name = "per-kappa", .type = BKF_OPT_COUNT, .offset = FIELD(per_kappa), .flags = BOUNDED,
      .min = 1, .max = PER_KAPPA_MAX, .form = "K", .shown_default = "3",
      .help = "eigenvalues reported per Bloch number (the rightmost K),\n"
@@ -186,7 +186,7 @@ int bkf_stability_check(const bkf_stability_spec *spec, const char *prefix, bkf_
         return bkf_error_set(err, BKF_EINPUT, "%sroot: root = %zu is not in [1, 1000000]", p,
                              spec->root);
     if (!(spec->tol >= TOL_MIN && spec->tol <= TOL_MAX))
-        return bkf_error_set(err, BKF_EINPUT, "%stol: tol = %s is not in [1e-10, 0.01]", p,
+        return bkf_error_set(err, BKF_EINPUT, "%stol: tol = %s is not in [1e-08, 0.01]", p,
                              bkf_format_number(spec->tol, a, sizeof a));
     if (spec->per_kappa < 1 || spec->per_kappa > PER_KAPPA_MAX)
         return bkf_error_set(err, BKF_EINPUT, "%sper-kappa: per-kappa = %zu is not in [1, 50]", p,

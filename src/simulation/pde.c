@@ -279,6 +279,38 @@ static int rhs(double t, const double y[], double dydt[], void *params)
     return GSL_SUCCESS;
 }
 
+int pde_rhs_eval(bkf_pde *m, const double *y, double *dydt)
+{
+    return rhs(0.0, y, dydt, m) == GSL_SUCCESS ? BKF_OK : BKF_EBLOWUP;
+}
+
+/* The linearisation of rhs's field part, term by term (see rhs): psi_t =
+ * gamma (eta - phi(psi)) - F psi, eta_t = (nu - psi + c^2 L psi)/gamma, the
+ * 2/3 rule's projection where rhs applies it.  No moving frame (its
+ * advection would need operators_frame; no caller uses one). */
+int pde_tangent(bkf_pde *m, const double *y, const double *v, double *out)
+{
+    if (m->dsymbol) return BKF_EINPUT;
+    size_t N = m->N;
+    const double *psi = y, *dpsi = v, *deta = v + N;
+    double *opsi = out, *oeta = out + N;
+    double g = m->p.gamma, ig = 1.0 / g, c2 = m->p.c * m->p.c;
+    /* oeta holds L dpsi and opsi F dpsi for a moment, as in rhs */
+    operators(m, dpsi, oeta, m->fsymbol ? opsi : NULL);
+    for (size_t i = 0; i < N; i++) {
+        double x = psi[i], fx = m->fsymbol ? opsi[i] : 0.0;
+        opsi[i] = g * (deta[i] - (x * x - 1.0) * dpsi[i]) - fx;
+        oeta[i] = (c2 * oeta[i] - dpsi[i]) * ig;
+    }
+    if (m->o.dealias) {
+        project(m, opsi);
+        project(m, oeta);
+    }
+    for (size_t i = 0; i < 2 * N; i++)
+        if (!isfinite(out[i])) return BKF_EBLOWUP;
+    return BKF_OK;
+}
+
 /* --------------------------------------------------------- object life */
 
 void bkf_pde_free(bkf_pde *m)

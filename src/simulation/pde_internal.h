@@ -69,6 +69,17 @@ static inline int bkf_pde_emit(bkf_pde *m, bkf_pde_observer observer, void *data
     return observer(&s, data);
 }
 
+/* The right-hand side bkf_pde_run integrates (every stepper but the
+ * exponential ones), for the periodic-orbit solver (orbit*.c), which
+ * integrates it with the tangent flow alongside: y and dydt hold 2N + 2
+ * values (psi, eta, then the quadratures Q and D's rates).  BKF_EBLOWUP
+ * where the state is not finite or beyond the bound. */
+int pde_rhs_eval(bkf_pde *m, const double *y, double *dydt);
+/* Its Jacobian applied to v (2N values, the field part): out = J(y) v,
+ * with the filter and the 2/3 rule as the right-hand side has them.
+ * BKF_EINPUT in a moving frame (not linearised), BKF_EBLOWUP if not finite. */
+int pde_tangent(bkf_pde *m, const double *y, const double *v, double *out);
+
 /* Exponential integrator (src/pde_etd.c). */
 bkf_pde_etd *bkf_pde_etd_alloc(bkf_pde *m);
 void bkf_pde_etd_free(bkf_pde_etd *etd);

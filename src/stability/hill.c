@@ -138,22 +138,24 @@ int bkf_hill_spectrum(bkf_cycle *cycle, double gamma, double theta, size_t modes
     return rc;
 }
 
-int bkf_hill_leading(bkf_cycle *cycle, double gamma, double theta, size_t modes, double tol,
-                     size_t k, bkf_hill_eigenvalue *out, double *out_err, size_t *found,
-                     size_t *unresolved, bkf_error *err)
+int bkf_hill_leading_pair(bkf_cycle *cycle, double gamma, double theta, size_t modes, size_t modes_fine,
+                          double tol, size_t k, bkf_hill_eigenvalue *out, double *out_err, size_t *found,
+                          size_t *unresolved, bkf_error *err)
 {
     if (found) *found = 0;
     if (unresolved) *unresolved = 0;
-    int rc = check_inputs(cycle, gamma, theta, modes, BKF_HILL_MODES_MAX / 2, err);
+    int rc = check_inputs(cycle, gamma, theta, modes, BKF_HILL_MODES_MAX, err);
     if (rc != BKF_OK) return rc;
+    if (!(modes_fine > modes && modes_fine <= BKF_HILL_MODES_MAX))
+        return bkf_error_set(err, BKF_EINPUT, "modes_fine must be in [modes + 1, %d]", BKF_HILL_MODES_MAX);
     if (!(tol > 0 && isfinite(tol))) return bkf_error_set(err, BKF_EINPUT, "tol must be positive and finite");
     if (k < 1) return bkf_error_set(err, BKF_EINPUT, "k must be at least 1");
     if (!out || !found) return bkf_error_set(err, BKF_EINPUT, "out and found must not be NULL");
-    size_t n1 = 2 * (2 * modes + 1), n2 = 2 * (4 * modes + 1);
+    size_t n1 = 2 * (2 * modes + 1), n2 = 2 * (2 * modes_fine + 1);
     bkf_hill_eigenvalue *coarse = malloc(sizeof *coarse * n1), *fine = malloc(sizeof *fine * n2);
     if (!coarse || !fine) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     if (rc == BKF_OK) rc = spectrum_body(cycle, gamma, theta, modes, coarse, err);
-    if (rc == BKF_OK) rc = spectrum_body(cycle, gamma, theta, 2 * modes, fine, err);
+    if (rc == BKF_OK) rc = spectrum_body(cycle, gamma, theta, modes_fine, fine, err);
     size_t got = 0, skipped = 0, skipped_above = 0;
     for (size_t i = 0; rc == BKF_OK && i < n2 && got < k; i++) {
         double best = INFINITY;
@@ -175,4 +177,16 @@ int bkf_hill_leading(bkf_cycle *cycle, double gamma, double theta, size_t modes,
     free(coarse);
     free(fine);
     return rc;
+}
+
+int bkf_hill_leading(bkf_cycle *cycle, double gamma, double theta, size_t modes, double tol,
+                     size_t k, bkf_hill_eigenvalue *out, double *out_err, size_t *found,
+                     size_t *unresolved, bkf_error *err)
+{
+    if (found) *found = 0;
+    if (unresolved) *unresolved = 0;
+    int rc = check_inputs(cycle, gamma, theta, modes, BKF_HILL_MODES_MAX / 2, err);
+    if (rc != BKF_OK) return rc;
+    return bkf_hill_leading_pair(cycle, gamma, theta, modes, 2 * modes, tol, k, out, out_err, found,
+                                 unresolved, err);
 }

@@ -15,88 +15,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define TOL_MIN 1e-8
-/* The profile comes from a cycle solved to 1e-12: its share of an
- * eigenvalue's error, per unit |sigma| (at least 1), measured by the
- * nu -> -nu symmetry (whose two cycles differ) at below 1e-9. */
-#define PROFILE_ERROR 2e-9
-#define TOL_MAX 1e-2
-#define PER_KAPPA_MAX 50
-/* Mesh multiplier (substeps) of the first pass. */
-#define SUBSTEPS_START 1
-#define MESH_MAX_STEPS 100000
-#define MESH_MIN_STEPS 16
-/* Heights sampled per family on the first pass, and the finest interval as
- * a fraction of the window. */
-#define CURVE_START 48
-#define CURVE_MIN_FRACTION (1.0 / 65536.0)
-#define Y_MAX_LIMIT 1e4
-#define NEWTON_MAX 30
-#define MESH_REFINEMENTS 4
-#define RESOLVE_TURN 0.5
-/* The window reaches this far left of the axis, per unit gamma (or to
- * r_inf / 2 if that is nearer). */
-#define WINDOW_DEPTH 0.05
-/* The edges of a curve (where it leaves the window) are located to this
- * fraction of the window's height; phase and bends to CURVE_MIN_FRACTION. */
-#define EDGE_FRACTION (1.0 / 1024.0)
-#define MAX_WORK_DEFAULT 2.5e7
-/* A long (stiff) step is used where the fast solution decays by at least
- * this many e-foldings per step over the whole window's Re sigma. */
-#define STIFF_MIN 1.0
-/* Through the fronts the coefficients change faster than the local rates
- * tell: a step spans at most this change of the profile f (measured: at
- * mu 47 it cuts the error of a 1400-step mesh from 1.6e-4 to 2e-7). */
-#define PROFILE_TURN 0.03
-/* The cycle's own mesh (adapted to the cycle at tol 1e-12) knows where the
- * coefficients change fast better than the rates do: each of its steps
- * takes at least this share of a step. */
-#define NODE_SHARE 0.5
-/* The fine mesh halves every step of the coarse one and the Radau step is
- * fifth order: the fine value's error is the difference / 31 once the
- * meshes converge (measured ratios 27-32 at mu 4 to 47, 19 on the first,
- * unconverged pair at mu 47); dividing by 8
- * keeps a margin of 4. */
-#define RICHARDSON 8.0
-
-enum { FAMILIES = 2 };
-
-/* Coefficients at the three Radau IIA points of every step,
- * u'' = a u' + (b0 + beta sigma (sigma + gamma phi)) u. */
-typedef struct {
-    size_t steps;
-    double *h, *a, *b0, *phi; /* h per step; a, b0, phi: STRIDE per step */
-    /* per step, the parts of the stage matrix G and of A bp that do not
-     * depend on sigma (see radau_step): G0, M = A diag(phi) A (9 each),
-     * A b0 and A phi (3 each) */
-    double *g0, *m, *ab0, *aphi;
-    double trace_sum;         /* the steps' quadratures of the trace: ln det M */
-} mesh;
-
-enum { STRIDE = 3 };
-
-typedef struct {
-    double gamma, c, nu, mu, v, s, beta, T, log_m, S, L;
-    size_t n;
-    double tol;
-    bkf_cycle *cycle;
-    double *nodes; /* cycle mesh 0..T */
-    size_t node_count;
-    size_t substeps;
-    double sigma_reach; /* largest |sigma| the meshes must resolve */
-    double re_floor;    /* smallest Re sigma the meshes must serve (Radau steps
-                           need the fast solution to decay there) */
-    double *need;       /* per cycle step: the steps it needs at sigma_reach (see mesh_needs) */
-    mesh coarse, fine;
-    size_t evaluations;
-    double work, max_work;               /* steps taken, and allowed */
-    const volatile sig_atomic_t *cancel;
-    int stop;                            /* BKF_EBUDGET or BKF_ECANCELED once either is hit */
-} ctx;
+#include "trainspec_internal.h"
 
 /* ------------------------------------------------------------- meshes */
 
-static void mesh_free(mesh *m)
+void trainspec_mesh_free(mesh *m)
 {
     free(m->h);
     free(m->g0);
@@ -123,7 +46,7 @@ static void mesh_free(mesh *m)
  * the one the spectrum is made of, varies at |bp / ap| only.  There the
  * L-stable Radau step, which damps the fast solution as the flow does,
  * needs to resolve the slow one alone: steps O(mu) times longer. */
-static int mesh_needs(ctx *x, double reach, bkf_error *err)
+int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err)
 {
     if (x->need && reach == x->sigma_reach) return BKF_OK;
     size_t n = x->node_count;
@@ -180,9 +103,9 @@ static const double RADAU_A2[3][3] = {
 
 /* A mesh on the step boundaries bounds[0..steps] (ascending in [0, T]):
  * the coefficients at each step's Radau points. */
-static int mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf_error *err)
+int trainspec_mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf_error *err)
 {
-    mesh_free(m);
+    trainspec_mesh_free(m);
     m->steps = steps;
     size_t cap = steps ? steps : 1;
     m->h = malloc(cap * sizeof *m->h);
@@ -237,14 +160,14 @@ done:
     free(z);
     free(f);
     free(fp);
-    if (rc != BKF_OK) mesh_free(m);
+    if (rc != BKF_OK) trainspec_mesh_free(m);
     return rc;
 }
 
 /* The step boundaries of a mesh of `substeps` times the steps the cycle
  * steps need (mesh_needs), spread evenly in the cumulative need, so that
  * doubling substeps halves every step: *bounds (steps + 1 values). */
-static int mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, bkf_error *err)
+int trainspec_mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, bkf_error *err)
 {
     double total = 0.0;
     for (size_t i = 0; i + 1 < x->node_count; i++) total += x->need[i];
@@ -272,35 +195,39 @@ static int mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, 
     return BKF_OK;
 }
 
-static int mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
+int trainspec_mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
 {
     double *bounds = NULL;
     size_t steps = 0;
-    int rc = mesh_bounds(x, substeps, &bounds, &steps, err);
-    if (rc == BKF_OK) rc = mesh_fill(x, bounds, steps, m, err);
+    int rc = trainspec_mesh_bounds(x, substeps, &bounds, &steps, err);
+    if (rc == BKF_OK) rc = trainspec_mesh_fill(x, bounds, steps, m, err);
     free(bounds);
     return rc;
 }
 
 /* ---------------------------------------------------------- monodromy */
 
-/* The Radau IIA step i at sigma as e[0..3] (row-major) times exp(return
- * value): the growth of the step kept out of e.  It is taken
- * in p = exp(-sigma z / s) u, where the solution that survives varies
- * slowly (see mesh_needs), and turned into u's basis:
- *     (u, u') = exp(k z) K (p, p'),  K = [[1, 0], [k, 1]],  k = sigma / s.
- * With V the stages of p', the stages of p are p0 + h A V, so the six
- * stage equations reduce to three:
- *     (I - h A diag(ap) - h^2 A diag(bp) A) V = p0' + h p0 A bp. */
-static double radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4])
+/* The Radau IIA step i at sigma in p = exp(-sigma z / s) u, where the
+ * solution that survives varies slowly (see mesh_needs): (p, p') after the
+ * step = e (p, p') before it, e[0..3] row-major, and de = de/dsigma when de
+ * is not NULL.  With V the stages of p', the stages of p are p0 + h A V, so
+ * the six stage equations reduce to three:
+ *     G V = (I - h A diag(ap) - h^2 A diag(bp) A) V = p0' + h p0 A bp.
+ * The monodromy is taken in p's basis: u's is exp(k T) K P K^-1 with
+ * K = [[1, 0], [k, 1]], k = sigma / s, the same multipliers times exp(k T),
+ * which the eigenvalue condition divides out again (monodromy), so neither
+ * K nor exp(k h) (a complex exponential per step) is ever formed. */
+void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
+                       double complex de[4])
 {
     double h = m->h[i];
-    double complex k = sigma / x->s, G[3][3], r[3][2];
+    double complex k = sigma / x->s, G[3][3], r[3][4];
     /* ap = a - 2 k, bp = b0 - sigma^2 - gamma sigma phi: G = G0 + 2 k h A
      * + h^2 sigma^2 A^2 + h^2 gamma sigma M (mesh_fill made G0 and M) */
     double complex c1 = 2.0 * k * h, c2 = h * h * sigma * sigma, c3 = h * h * x->gamma * sigma;
     double complex s2 = sigma * sigma, gs = x->gamma * sigma;
     const double *g0 = m->g0 + 9 * i, *mm = m->m + 9 * i;
+    int nrhs = de ? 4 : 2;
     for (int q = 0; q < 3; q++) {
         for (int j = 0; j < 3; j++)
             G[q][j] = g0[3 * q + j] + c1 * RADAU_A[q][j] + c2 * RADAU_A2[q][j] + c3 * mm[3 * q + j];
@@ -308,52 +235,83 @@ static double radau_step(const ctx *x, const mesh *m, size_t i, double complex s
         r[q][0] = h * (m->ab0[3 * i + q] - s2 * RADAU_C[q] - gs * m->aphi[3 * i + q]);
         r[q][1] = 1.0;
     }
-    /* Gaussian elimination with partial pivoting */
+    /* LU with partial pivoting, kept for the derivative's solve */
+    int perm[3] = {0, 1, 2};
+    double complex inv[3];
     for (int c = 0; c < 3; c++) {
         int piv = c;
         for (int q = c + 1; q < 3; q++)
             if (fabs(creal(G[q][c])) + fabs(cimag(G[q][c])) > fabs(creal(G[piv][c])) + fabs(cimag(G[piv][c])))
                 piv = q;
-        if (piv != c)
+        if (piv != c) {
             for (int j = 0; j < 3; j++) {
                 double complex t = G[c][j];
                 G[c][j] = G[piv][j], G[piv][j] = t;
-                if (j < 2) t = r[c][j], r[c][j] = r[piv][j], r[piv][j] = t;
             }
+            for (int j = 0; j < 2; j++) {
+                double complex t = r[c][j];
+                r[c][j] = r[piv][j], r[piv][j] = t;
+            }
+            int t = perm[c];
+            perm[c] = perm[piv], perm[piv] = t;
+        }
+        inv[c] = 1.0 / G[c][c];
         for (int q = c + 1; q < 3; q++) {
-            double complex l = G[q][c] / G[c][c];
-            for (int j = c; j < 3; j++) G[q][j] -= l * G[c][j];
+            double complex l = G[q][c] * inv[c];
+            G[q][c] = l;
+            for (int j = c + 1; j < 3; j++) G[q][j] -= l * G[c][j];
             r[q][0] -= l * r[c][0], r[q][1] -= l * r[c][1];
         }
     }
-    double complex V[3][2];
+    double complex V[3][4];
     for (int q = 2; q >= 0; q--)
         for (int rhs = 0; rhs < 2; rhs++) {
             double complex sum = r[q][rhs];
             for (int j = q + 1; j < 3; j++) sum -= G[q][j] * V[j][rhs];
-            V[q][rhs] = sum / G[q][q];
+            V[q][rhs] = sum * inv[q];
         }
-    /* p's step matrix: p1 = p0 + h sum A_3j V_j, p1' = V_3 */
-    double complex pe[4];
-    for (int rhs = 0; rhs < 2; rhs++) {
+    if (de) {
+        /* G dV = dr - dG V: dG = 2 h / s A + 2 h^2 sigma A^2 + h^2 gamma M,
+         * dr0 = -h (2 sigma c + gamma A phi), dr1 = 0 */
+        double complex d2 = 2.0 * h * h * sigma;
+        double d1 = 2.0 * h / x->s, d3 = h * h * x->gamma;
+        double complex b[3][2];
+        for (int q = 0; q < 3; q++) {
+            double complex dr0 = -h * (2.0 * sigma * RADAU_C[q] + x->gamma * m->aphi[3 * i + q]);
+            for (int rhs = 0; rhs < 2; rhs++) {
+                double complex sum = rhs == 0 ? dr0 : 0.0;
+                for (int j = 0; j < 3; j++)
+                    sum -= (d1 * RADAU_A[q][j] + d2 * RADAU_A2[q][j] + d3 * mm[3 * q + j]) * V[j][rhs];
+                b[q][rhs] = sum;
+            }
+        }
+        for (int q = 0; q < 3; q++) {
+            r[q][2] = b[perm[q]][0];
+            r[q][3] = b[perm[q]][1];
+        }
+        for (int c = 0; c < 3; c++)
+            for (int q = c + 1; q < 3; q++) r[q][2] -= G[q][c] * r[c][2], r[q][3] -= G[q][c] * r[c][3];
+        for (int q = 2; q >= 0; q--)
+            for (int rhs = 2; rhs < 4; rhs++) {
+                double complex sum = r[q][rhs];
+                for (int j = q + 1; j < 3; j++) sum -= G[q][j] * V[j][rhs];
+                V[q][rhs] = sum * inv[q];
+            }
+    }
+    /* p1 = p0 + h sum A_3j V_j, p1' = V_3 */
+    for (int rhs = 0; rhs < nrhs; rhs++) {
         double complex sum = 0;
         for (int j = 0; j < 3; j++) sum += RADAU_A[2][j] * V[j][rhs];
-        pe[rhs] = (rhs == 0) + h * sum;
-        pe[2 + rhs] = V[2][rhs];
+        double complex *out = rhs < 2 ? e : de;
+        int col = rhs & 1;
+        out[col] = (rhs == 0) + h * sum;
+        out[2 + col] = V[2][rhs];
     }
-    /* u's step matrix exp(k h) K P K^-1, the modulus of exp(k h) returned */
-    double complex d0 = pe[0] - k * pe[1], d2 = pe[2] - k * pe[3];
-    double complex ph = cexp(I * cimag(k * h));
-    e[0] = ph * d0;
-    e[1] = ph * pe[1];
-    e[2] = ph * (k * d0 + d2);
-    e[3] = ph * (k * pe[1] + pe[3]);
-    return creal(k * h);
 }
 
 /* Keeps the entries of v (count of them) near 1 in modulus, the factor
  * moved into *scale (a log). */
-static void rescale(double complex *v, size_t count, double *scale)
+void trainspec_rescale(double complex *v, size_t count, double *scale)
 {
     /* the largest component: a norm within sqrt 2 of the modulus, and no hypot */
     double big = 0.0;
@@ -369,71 +327,87 @@ static void rescale(double complex *v, size_t count, double *scale)
     *scale += e2 * M_LN2;
 }
 
-/* The monodromy over mesh m at sigma: p[0..3] (row-major) times exp(*scale). */
-static void monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double complex p[4], double *scale)
+/* 2x2 products, row-major: out = a b */
+static void mul2(const double complex a[4], const double complex b[4], double complex out[4])
 {
+    double complex o0 = a[0] * b[0] + a[1] * b[2], o1 = a[0] * b[1] + a[1] * b[3];
+    double complex o2 = a[2] * b[0] + a[3] * b[2], o3 = a[2] * b[1] + a[3] * b[3];
+    out[0] = o0, out[1] = o1, out[2] = o2, out[3] = o3;
+}
+
+/* The monodromy of p over mesh m at sigma: p[0..3] (row-major) times
+ * exp(*scale), and its derivative in sigma into dp (same scale) when dp is
+ * not NULL (a pass with the derivative costs about two without: it counts
+ * twice in the work). */
+void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double complex p[4], double complex *dp,
+                             double *scale)
+{
+    double cost = (dp ? 2.0 : 1.0) * (double)m->steps;
     x->evaluations++;
     p[0] = 1, p[1] = 0, p[2] = 0, p[3] = 1;
+    if (dp) dp[0] = dp[1] = dp[2] = dp[3] = 0;
     *scale = 0.0;
     if (!x->stop && x->cancel && *x->cancel) x->stop = BKF_ECANCELED;
-    if (!x->stop && x->work + (double)m->steps > x->max_work) x->stop = BKF_EBUDGET;
+    if (!x->stop && x->work + cost > x->max_work) x->stop = BKF_EBUDGET;
     if (x->stop) {
         /* every caller's search then fails at once; the entry point reports why */
         *scale = NAN;
         return;
     }
-    x->work += (double)m->steps;
+    x->work += cost;
     for (size_t i = 0; i < m->steps; i++) {
-        double complex e[4];
-        *scale += radau_step(x, m, i, sigma, e);
-        double complex q0 = e[0] * p[0] + e[1] * p[2], q1 = e[0] * p[1] + e[1] * p[3];
-        double complex q2 = e[2] * p[0] + e[3] * p[2], q3 = e[2] * p[1] + e[3] * p[3];
-        p[0] = q0, p[1] = q1, p[2] = q2, p[3] = q3;
-        /* a step's factor, its growth taken out into lg, is O(1): every
-         * eighth step is often enough to stay far from overflow */
-        if ((i & 7) == 7 || i + 1 == m->steps) rescale(p, 4, scale);
+        double complex e[4], de[4];
+        trainspec_radau_step(x, m, i, sigma, e, dp ? de : NULL);
+        if (dp) {
+            double complex t1[4], t2[4];
+            mul2(de, p, t1);
+            mul2(e, dp, t2);
+            for (int q = 0; q < 4; q++) dp[q] = t1[q] + t2[q];
+        }
+        mul2(e, p, p);
+        /* a step's factor is O(1) in p's basis (the growth exp(k h) is
+         * u's): every eighth step is often enough to stay far from overflow */
+        if ((i & 7) == 7 || i + 1 == m->steps) {
+            if (dp) {
+                double complex both[8] = {p[0], p[1], p[2], p[3], dp[0], dp[1], dp[2], dp[3]};
+                trainspec_rescale(both, 8, scale);
+                for (int q = 0; q < 4; q++) p[q] = both[q], dp[q] = both[4 + q];
+            } else {
+                trainspec_rescale(p, 4, scale);
+            }
+        }
     }
 }
 
-/* ln of the two multipliers of psi's perturbation over one period at sigma:
- * w[0] the larger in modulus, w[1] the smaller.  The product is kept scaled
- * (its log in `scale`) so that neither stiff decay nor growth over- or
- * underflows; the smaller multiplier comes from det M = exp(trace_sum),
- * free of cancellation. */
-static void monodromy(ctx *x, const mesh *m, double complex sigma, double complex w[2])
+/* ln of the two multipliers of psi's perturbation over one period at sigma,
+ * divided by exp(sigma T / s): w[0] the larger in modulus, w[1] the
+ * smaller, and their derivatives in sigma into dw (NULL: not wanted).  The
+ * product is kept scaled (its log in `scale`) so that neither stiff decay
+ * nor growth over- or underflows; the smaller multiplier comes from
+ * det M = exp(trace_sum), free of cancellation.  In p's basis (radau_step)
+ * the larger is exp(sigma T / s) times P's larger eigenvalue, so w[0] is
+ * ln of that eigenvalue itself, and w[1] = trace_sum - w[0] - 2 sigma T / s. */
+static void monodromy(ctx *x, const mesh *m, double complex sigma, double complex w[2], double complex *dw)
 {
-    double complex p[4];
+    double complex p[4], dp[4];
     double scale;
-    monodromy_matrix(x, m, sigma, p, &scale);
+    trainspec_monodromy_matrix(x, m, sigma, p, dw ? dp : NULL, &scale);
     double complex half = 0.5 * (p[0] + p[3]), det = p[0] * p[3] - p[1] * p[2];
     double complex root = csqrt(half * half - det);
     double complex big = cabs(half + root) >= cabs(half - root) ? half + root : half - root;
     double complex shift = sigma * x->T / x->s;
-    double complex lb = scale + clog(big);
-    w[0] = lb - shift;
-    w[1] = m->trace_sum - lb - shift;
+    w[0] = scale + clog(big);
+    w[1] = m->trace_sum - w[0] - 2.0 * shift;
+    if (!dw) return;
+    /* big^2 - tr big + det = 0: d big (2 big - tr) = d tr big - d det */
+    double complex dtr = dp[0] + dp[3], ddet = dp[0] * p[3] + p[0] * dp[3] - dp[1] * p[2] - p[1] * dp[2];
+    dw[0] = (dtr * big - ddet) / ((2.0 * big - (p[0] + p[3])) * big);
+    dw[1] = -dw[0] - 2.0 * x->T / x->s;
 }
 
-static double wrap(double phase)
+double trainspec_wrap(double phase)
 {
     return phase - 2.0 * M_PI * floor(phase / (2.0 * M_PI) + 0.5);
-}
-
-/* w and dw/dsigma of one family at sigma (central differences; the phase
- * differences wrapped, w being ln of a multiplier). */
-static void family_eval(ctx *x, const mesh *m, int fam, double complex sigma, double complex *w,
-                        double complex *dw)
-{
-    double complex w0[2], wp[2], wm[2];
-    monodromy(x, m, sigma, w0);
-    *w = w0[fam];
-    if (!dw) return;
-    double h = 1e-5 * fmax(1.0, cabs(sigma));
-    monodromy(x, m, sigma + h, wp);
-    monodromy(x, m, sigma - h, wm);
-    double complex diff = wp[fam] - wm[fam];
-    diff = creal(diff) + I * wrap(cimag(diff));
-    *dw = diff / (2.0 * h);
 }
 
 /* ------------------------------------------------------ curve tracing */
@@ -460,14 +434,18 @@ static int height_at(ctx *x, const mesh *m, window *win, double y, const double 
 {
     double complex w[2];
     for (int grow = 0;; grow++) {
-        monodromy(x, m, win->a_hi + I * y, w);
+        monodromy(x, m, win->a_hi + I * y, w, NULL);
         if (creal(w[0]) < 0.0) break;
         if (grow > 40) return BKF_ENUMERIC;
         win->a_hi *= 2.0;
     }
     double f_hi[2] = {creal(w[0]), creal(w[1])};
-    monodromy(x, m, win->a_lo + I * y, w);
-    double tol_a = 1e-3 * x->tol;
+    monodromy(x, m, win->a_lo + I * y, w, NULL);
+    /* the curves only propose candidates (polished on the meshes, their
+     * value and error the polish's) and tell where they leave the window:
+     * a to 1e-6 is plenty for both, and 1e-3 tol cost two or three more
+     * monodromies per family and height */
+    double tol_a = fmax(1e-3 * x->tol, TRACE_TOL);
     for (int f = 0; f < FAMILIES; f++) {
         curve_point *p = &pt[f];
         p->y = y;
@@ -480,7 +458,7 @@ static int height_at(ctx *x, const mesh *m, window *win, double y, const double 
             for (int k = 0; k < 2; k++, d *= 8.0) {
                 double complex wg[2];
                 double t = fmin(fmax(g, lo + 0.5 * tol_a), hi - 0.5 * tol_a);
-                monodromy(x, m, t + I * y, wg);
+                monodromy(x, m, t + I * y, wg, NULL);
                 double ft = creal(wg[f]);
                 if (ft >= 0.0) {
                     lo = t, flo = ft;
@@ -497,7 +475,7 @@ static int height_at(ctx *x, const mesh *m, window *win, double y, const double 
             double t = (lo * fhi - hi * flo) / (fhi - flo);
             if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
             double complex wt[2];
-            monodromy(x, m, t + I * y, wt);
+            monodromy(x, m, t + I * y, wt, NULL);
             double ft = creal(wt[f]);
             if (fabs(ft) < 1e-3 * tol_a) {
                 lo = hi = t;
@@ -514,13 +492,13 @@ static int height_at(ctx *x, const mesh *m, window *win, double y, const double 
             }
         }
         double a = 0.5 * (lo + hi);
-        double complex wv, dw;
-        family_eval(x, m, f, a + I * y, &wv, &dw);
+        double complex wv[2], dw[2];
+        monodromy(x, m, a + I * y, wv, dw);
         p->found = 1;
         p->a = a;
-        p->phase = cimag(wv);
+        p->phase = cimag(wv[f]);
         /* along Re w = 0: da/dy = Im w' / Re w', dphase/dy = |w'|^2 / Re w' */
-        double re = creal(dw), im = cimag(dw);
+        double re = creal(dw[f]), im = cimag(dw[f]);
         if (re == 0.0) return BKF_ENUMERIC;
         p->slope = im / re;
         p->rate = (re * re + im * im) / re;
@@ -563,7 +541,7 @@ static int needs_split(const ctx *x, const curve_point *p, const curve_point *q,
     if (p->found != q->found) return dy > min_dy * (EDGE_FRACTION / CURVE_MIN_FRACTION);
     if (!p->found) return 0;
     double est = 0.5 * (p->rate + q->rate) * dy;
-    double darg = wrap(q->phase - p->phase);
+    double darg = trainspec_wrap(q->phase - p->phase);
     double turns = nearbyint((est - darg) / (2.0 * M_PI));
     if (fabs(est - (darg + 2.0 * M_PI * turns)) > 0.3) return 1;
     if (fabs(q->slope - p->slope) * dy > fmax(0.05 * fabs(p->a) + 1e-3, 100.0 * x->tol)) return 1;
@@ -653,7 +631,7 @@ static int collect(curve *c, int fam, size_t classes, candidates *out)
         if (i > 0 && c->h[i - 1].fam[fam].found) {
             const curve_point *q = &c->h[i - 1].fam[fam];
             double est = 0.5 * (p->rate + q->rate) * (p->y - q->y);
-            double darg = wrap(p->phase - q->phase);
+            double darg = trainspec_wrap(p->phase - q->phase);
             psi += darg + 2.0 * M_PI * nearbyint((est - darg) / (2.0 * M_PI));
         } else {
             psi = p->phase;
@@ -692,21 +670,19 @@ static int collect(curve *c, int fam, size_t classes, candidates *out)
 
 /* Newton on w(sigma) = i theta (mod 2 pi i), over whichever family fits
  * best, on mesh m. */
-static int polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step)
+int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step)
 {
     double complex s = *sigma;
     *last_step = INFINITY;
     for (int it = 0; it < NEWTON_MAX; it++) {
-        double complex w0[2];
-        monodromy(x, m, s, w0);
+        double complex w0[2], dw[2];
+        monodromy(x, m, s, w0, dw);
         int fam = 0;
         double complex r[2];
-        for (int f = 0; f < FAMILIES; f++) r[f] = creal(w0[f]) + I * wrap(cimag(w0[f]) - theta);
+        for (int f = 0; f < FAMILIES; f++) r[f] = creal(w0[f]) + I * trainspec_wrap(cimag(w0[f]) - theta);
         if (cabs(r[1]) < cabs(r[0])) fam = 1;
-        double complex w, dw;
-        family_eval(x, m, fam, s, &w, &dw);
-        if (dw == 0) return BKF_ENUMERIC;
-        double complex step = r[fam] / dw;
+        if (dw[fam] == 0 || !isfinite(creal(dw[fam])) || !isfinite(cimag(dw[fam]))) return BKF_ENUMERIC;
+        double complex step = r[fam] / dw[fam];
         if (cabs(step) > 0.5) step *= 0.5 / cabs(step);
         s -= step;
         *last_step = cabs(step);
@@ -773,16 +749,16 @@ int bkf_trainspec_check(const bkf_model_params *p, const bkf_trainspec_train *t,
     return BKF_OK;
 }
 
-static void ctx_free(ctx *x)
+void trainspec_ctx_free(ctx *x)
 {
-    mesh_free(&x->coarse);
-    mesh_free(&x->fine);
+    trainspec_mesh_free(&x->coarse);
+    trainspec_mesh_free(&x->fine);
     bkf_cycle_free(x->cycle);
     free(x->nodes);
     free(x->need);
 }
 
-static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, double tol,
+int trainspec_ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, double tol,
                     const bkf_trainspec_options *o, bkf_error *err)
 {
     memset(x, 0, sizeof *x);
@@ -831,9 +807,9 @@ static int ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train
  * mesh_needs). */
 static int meshes_for(ctx *x, double B, const window *win, bkf_error *err)
 {
-    int rc = mesh_needs(x, hypot(B, win->a_hi), err);
-    if (rc == BKF_OK) rc = mesh_build(x, x->substeps, &x->coarse, err);
-    return rc != BKF_OK ? rc : mesh_build(x, 2 * x->substeps, &x->fine, err);
+    int rc = trainspec_mesh_needs(x, hypot(B, win->a_hi), err);
+    if (rc == BKF_OK) rc = trainspec_mesh_build(x, x->substeps, &x->coarse, err);
+    return rc != BKF_OK ? rc : trainspec_mesh_build(x, 2 * x->substeps, &x->fine, err);
 }
 
 /* Trace both families over [0, B], B grown until the curves stay left of
@@ -874,7 +850,8 @@ static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *er
  * rightmost pair at Im 18.03 to its neighbour at 17.13) or cannot close
  * the window at all (the curves stay right of a_lo up to |Im| 1e4 when the
  * cycle's multiplier is near 1, mu < 1).  Its converged eigenvalues (M and
- * 2M modes agree, bkf_hill_leading) are candidates: each is polished on
+ * M + M/4 modes agree, bkf_hill_leading_pair: a quarter of the work of
+ * comparing with 2M, the check the band alone needs) are candidates: each is polished on
  * the Radau meshes, whose error estimate is the one reported, so Hill's
  * truncation never reaches a result.  The truncation's artefacts do not
  * converge (they move with M, at any height: 0.185 + 1.86i at M 24, mu 4).
@@ -885,7 +862,7 @@ static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *er
 #define HILL_MODES_MAX 64
 /* sum over classes of (the finer matrix's size)^3: about 1.5 s of zgeev */
 #define HILL_WORK 1.5e8
-/* Hill's eigenvalues agree at M and 2M modes this well (absolute) to be
+/* Hill's eigenvalues agree at M and the finer truncation this well (absolute) to be
  * candidates; the polish takes them from there */
 #define HILL_CONVERGED 1e-5
 /* Hill's converged eigenvalues polished, per class, at most (the rightmost first). */
@@ -906,8 +883,11 @@ typedef struct {
 } hill_stage;
 
 /* Candidates from Hill's method for the classes 0..classes/2 (their
- * conjugates come from the mirror, as for the traced curves). */
-static int hill_candidates(ctx *x, size_t classes, const window *win, candidates *cs, hill_stage *h,
+ * conjugates come from the mirror, as for the traced curves), converged
+ * between M and M + M/4 modes (as candidates beside the traced curves:
+ * the polish is their test) or, with `vouch`, between M and 2M (where
+ * Hill's band alone must answer, hill_stage.complete). */
+static int hill_candidates(ctx *x, size_t classes, const window *win, int vouch, candidates *cs, hill_stage *h,
                            bkf_error *err)
 {
     memset(h, 0, sizeof *h);
@@ -932,8 +912,9 @@ static int hill_candidates(ctx *x, size_t classes, const window *win, candidates
         double theta = 2.0 * M_PI * (double)cls / (double)classes;
         /* one more at class 0: the translation is among them */
         size_t k = HILL_PER_CLASS + (cls == 0);
-        rc = bkf_hill_leading(x->cycle, x->gamma, theta, M, HILL_CONVERGED, k, ev, NULL, &found,
-                              &unresolved, err);
+        size_t fine = vouch ? 2 * M : M + (M / 4 > 4 ? M / 4 : 4);
+        rc = bkf_hill_leading_pair(x->cycle, x->gamma, theta, M, fine, HILL_CONVERGED, k, ev, NULL, &found,
+                                   &unresolved, err);
         if (rc != BKF_OK) break;
         if (unresolved > 0 || found == 0) h->complete = 0;
         for (size_t i = 0; i < found; i++) {
@@ -952,99 +933,152 @@ static int hill_candidates(ctx *x, size_t classes, const window *win, candidates
     return rc;
 }
 
-/* Spectrum in `classes` phase classes: per class the `keep` rightmost
- * eigenvalues, polished on the fine mesh with error estimates.  The
- * candidates come from the traced curves and from Hill's method where it
- * is cheap; where the trace cannot close its window, Hill's band alone
- * serves if it vouches for its rightmost (hill_stage.complete). */
-static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
-                    window *win, double *y_max, size_t *curve_points, size_t *hill_modes, bkf_error *err)
+/* The error estimate of sigma polished to sf on the fine mesh (last Newton
+ * step step_f) from sc on the coarse one. */
+static double estimate(double complex sc, double complex sf, double step_f)
+{
+    return cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
+}
+
+/* The candidates of every class: Hill's where it is cheap, the traced
+ * curves', and where the trace cannot close its window, Hill's band alone
+ * if it vouches for its rightmost (*fallback set; trace_err says why the
+ * trace failed). */
+static int gather(ctx *x, size_t classes, window *win, candidates *cs, hill_stage *hs, double *y_max,
+                  size_t *curve_points, int *fallback, bkf_error *trace_err, bkf_error *err)
 {
     curve heights = {0};
-    candidates cs = {0};
-    bkf_trainspec_eigenvalue *eig = NULL;
-    size_t n_eig = 0;
-    hill_stage hs;
-    /* how many are polished per class does not depend on how many are
-     * reported: the rightmost must not depend on per_kappa */
-    size_t polish_n = (keep > 3 ? keep : 3) + 2;
-    int rc = hill_candidates(x, classes, win, &cs, &hs, err);
-    *hill_modes = hs.modes;
+    *fallback = 0;
+    int rc = hill_candidates(x, classes, win, 0, cs, hs, err);
+    if (rc != BKF_OK) return rc;
     double max_work = x->max_work;
     /* where Hill has answered the trace is the cross-check: it may spend a
      * fifth of the budget, the rest polishes */
-    if (rc == BKF_OK && hs.modes) x->max_work = x->work + HILL_TRACE_SHARE * (max_work - x->work);
+    if (hs->modes) x->max_work = x->work + HILL_TRACE_SHARE * (max_work - x->work);
     double a_hi = win->a_hi;
-    bkf_error trace_err = {0};
-    if (rc == BKF_OK) rc = trace_all(x, win, &heights, y_max, &trace_err);
+    rc = trace_all(x, win, &heights, y_max, trace_err);
     x->max_work = max_work;
-    int fallback = 0;
-    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs.modes && hs.complete) {
+    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes) {
+        /* Hill's band alone, if it vouches for its rightmost at M and 2M */
+        cs->count = 0;
+        free(hs->at);
+        int hrc = hill_candidates(x, classes, win, 1, cs, hs, err);
+        if (hrc != BKF_OK) {
+            free(heights.h);
+            return hrc;
+        }
+    }
+    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes && hs->complete) {
         /* the band |Im| <= y_trust, as Hill saw it */
-        fallback = 1;
+        *fallback = 1;
         x->stop = 0;
         heights.count = 0;
-        *y_max = hs.y_trust;
+        *y_max = hs->y_trust;
         win->a_hi = a_hi;
         x->substeps = SUBSTEPS_START;
-        rc = meshes_for(x, hs.y_trust, win, err);
+        rc = meshes_for(x, hs->y_trust, win, err);
     } else if (rc != BKF_OK) {
-        if (err) *err = trace_err;
+        if (err) *err = *trace_err;
     }
     if (rc == BKF_OK) *curve_points += heights.count;
     for (int f = 0; f < FAMILIES && rc == BKF_OK; f++)
-        if (collect(&heights, f, classes, &cs) != BKF_OK) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    if (rc == BKF_OK) {
-        qsort(cs.items, cs.count, sizeof *cs.items, by_a_desc);
-        eig = calloc(2 * (classes + 2) * (polish_n + HILL_PER_CLASS + 1), sizeof *eig);
-        if (!eig) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
-    /* polish the best few of each class; mirrored classes (j > classes/2)
-     * come out of their partners by conjugation */
-    for (size_t i = 0; i < cs.count && rc == BKF_OK;) {
-        size_t cls = cs.items[i].cls, taken = 0, start_n = n_eig;
-        for (; i < cs.count && cs.items[i].cls == cls; i++) {
+        if (collect(&heights, f, classes, cs) != BKF_OK) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    free(heights.h);
+    return rc;
+}
+
+/* The best few candidates of each class polished on both meshes into eig
+ * (*n_eig of them), duplicates dropped; mirrored classes (j > classes/2)
+ * come out of their partners by conjugation later.  How many are polished
+ * per class does not depend on how many are reported: the rightmost must
+ * not depend on per_kappa. */
+static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *cs, bkf_trainspec_eigenvalue *eig,
+                              size_t *n_eig)
+{
+    size_t polish_n = (keep > 3 ? keep : 3) + 2;
+    qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
+    for (size_t i = 0; i < cs->count;) {
+        size_t cls = cs->items[i].cls, taken = 0, start_n = *n_eig;
+        for (; i < cs->count && cs->items[i].cls == cls; i++) {
             /* Hill's candidates are few and accurate: every one is polished,
              * whatever the traced ones, whose interpolated a can rank a far
              * eigenvalue before a near one, have taken */
-            if ((taken >= polish_n && cs.items[i].fam >= 0) || 2 * cls > classes) continue;
-            candidate cd = cs.items[i];
+            if ((taken >= polish_n && cs->items[i].fam >= 0) || 2 * cls > classes) continue;
+            candidate cd = cs->items[i];
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
             double complex sc = cd.a + I * cd.y, sf;
             double step_c, step_f;
-            if (polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
+            if (trainspec_polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
             sf = sc;
-            if (polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
-            double e = cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
+            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
+            double e = estimate(sc, sf, step_f);
             int dup = 0;
-            for (size_t k = start_n; k < n_eig; k++)
+            for (size_t k = start_n; k < *n_eig; k++)
                 if (cabs((eig[k].re + I * eig[k].im) - sf) < 10.0 * fmax(e, x->tol)) dup = 1;
             if (dup) continue;
-            eig[n_eig++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), e, cls, 0.0, 0};
+            eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), e, cls, 0.0, 0};
             taken++;
         }
     }
-    /* The translation mode, polished from 0: the gauge.  Where the traced
-     * curves missed it the meshes are too coarse. */
-    if (rc == BKF_OK) {
-        size_t k = 0;
-        while (k < n_eig && !(eig[k].j == 0 && hypot(eig[k].re, eig[k].im) < 10.0 * x->tol)) k++;
-        if (k == n_eig) {
-            double complex sc = 0.0, sf;
-            double step_c, step_f = INFINITY;
-            int ok = polish(x, &x->coarse, 0.0, &sc, &step_c) == BKF_OK;
-            sf = sc;
-            ok = ok && polish(x, &x->fine, 0.0, &sf, &step_f) == BKF_OK;
-            eig[n_eig++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf),
-                                                      ok ? cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR : INFINITY,
-                                                      0, 0.0, 0};
-        }
-        eig[k].translation = 1;
+}
+
+/* The translation mode, polished from 0 where the candidates missed it:
+ * the gauge.  Where the traced curves missed it the meshes are too coarse. */
+static void translation(ctx *x, bkf_trainspec_eigenvalue *eig, size_t *n_eig)
+{
+    size_t k = 0;
+    while (k < *n_eig && !(eig[k].j == 0 && hypot(eig[k].re, eig[k].im) < 10.0 * x->tol)) k++;
+    if (k == *n_eig) {
+        double complex sc = 0.0, sf;
+        double step_c, step_f = INFINITY;
+        int ok = trainspec_polish(x, &x->coarse, 0.0, &sc, &step_c) == BKF_OK;
+        sf = sc;
+        ok = ok && trainspec_polish(x, &x->fine, 0.0, &sf, &step_f) == BKF_OK;
+        eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), ok ? estimate(sc, sf, step_f) : INFINITY,
+                                                     0, 0.0, 0};
     }
-    /* the mesh refined until every estimate meets tol and the translation
-     * mode sits at 0 within it: only the polishing is redone, from the
-     * values in hand */
-    for (int r = 0; rc == BKF_OK; r++) {
+    eig[k].translation = 1;
+}
+
+/* Does eigenvalue k still need a finer mesh: its estimate above tol, or
+ * (the translation) its distance from 0. */
+static int unsettled(const ctx *x, const bkf_trainspec_eigenvalue *e)
+{
+    return e->err > x->tol || (e->translation && hypot(e->re, e->im) > x->tol);
+}
+
+/* Eigenvalues that the cut to `keep` per class will drop whatever their
+ * errors are dropped before the refinement, which would otherwise refine
+ * the mesh for them alone: those with keep + 1 others of their class right
+ * of them beyond both errors (the cut keeps one beyond `keep` only as the
+ * conjugate of the keep-th, and one further would be that one's conjugate,
+ * the keep-th's own value: a duplicate). */
+static void drop_hidden(bkf_trainspec_eigenvalue *eig, size_t *n_eig, size_t keep)
+{
+    size_t w = 0;
+    for (size_t i = 0; i < *n_eig; i++) {
+        size_t right = 0;
+        for (size_t k = 0; k < *n_eig; k++)
+            right += k != i && eig[k].j == eig[i].j && !eig[k].translation &&
+                     eig[k].re - eig[k].err > eig[i].re + eig[i].err;
+        if (eig[i].translation || right < keep + 1) eig[w++] = eig[i];
+    }
+    *n_eig = w;
+}
+
+/* The mesh refined until every estimate meets tol and the translation
+ * mode sits at 0 within it.  Each refinement halves every step: the new
+ * coarse mesh is the old fine one, on which the values in hand were
+ * polished, so only the fine polish is redone, and only for the
+ * eigenvalues whose estimate is still above tol (the others keep theirs). */
+static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, size_t n_eig, bkf_error *err)
+{
+    /* per eigenvalue, the substeps of the fine mesh its value was polished on */
+    size_t *on = malloc((n_eig ? n_eig : 1) * sizeof *on);
+    if (!on) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    for (size_t k = 0; k < n_eig; k++) on[k] = 2 * x->substeps;
+    int rc = BKF_OK;
+    for (int r = 0;; r++) {
         double worst = 0.0;
         for (size_t k = 0; k < n_eig; k++) {
             worst = fmax(worst, eig[k].err);
@@ -1059,61 +1093,102 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
             break;
         }
         x->substeps *= 2;
-        if ((rc = mesh_build(x, x->substeps, &x->coarse, err)) != BKF_OK) break;
-        if ((rc = mesh_build(x, 2 * x->substeps, &x->fine, err)) != BKF_OK) break;
+        mesh t = x->coarse;
+        x->coarse = x->fine;
+        x->fine = t;
+        if ((rc = trainspec_mesh_build(x, 2 * x->substeps, &x->fine, err)) != BKF_OK) break;
         for (size_t k = 0; k < n_eig; k++) {
+            if (!unsettled(x, &eig[k])) continue;
             double theta = 2.0 * M_PI * (double)eig[k].j / (double)classes;
-            double complex sc = eig[k].translation ? 0.0 : eig[k].re + I * eig[k].im, sf;
-            double step_c, step_f;
-            if (polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
+            double complex sc = eig[k].re + I * eig[k].im, sf;
+            double step_c = 0.0, step_f;
+            if (on[k] != x->substeps && trainspec_polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
             sf = sc;
-            if (polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
+            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
             eig[k].re = creal(sf);
             eig[k].im = cimag(sf);
-            eig[k].err = cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
+            eig[k].err = estimate(sc, sf, step_f);
+            on[k] = 2 * x->substeps;
         }
+    }
+    free(on);
+    return rc;
+}
+
+/* The conjugates of the classes 0 < j < classes/2 as the classes
+ * classes - j, all sorted, and `keep` per class kept. */
+static void mirror_and_cut(size_t classes, size_t keep, bkf_trainspec_eigenvalue *eig, size_t *count)
+{
+    size_t n_eig = *count;
+    for (size_t k = 0, polished = n_eig; k < polished; k++)
+        if (eig[k].j > 0 && 2 * eig[k].j < classes) {
+            eig[n_eig] = eig[k];
+            eig[n_eig].j = classes - eig[k].j;
+            eig[n_eig++].im = -eig[k].im;
+        }
+    qsort(eig, n_eig, sizeof *eig, eig_desc);
+    size_t w = 0;
+    for (size_t i = 0; i < n_eig; i++) {
+        size_t same = 0;
+        /* the translation is reported besides the `keep`, never instead of one
+         * (with keep 1 it took class 0's only place: issue 31's window edge
+         * -0.203 printed for sigma_max -4.08e-4) */
+        for (size_t k = 0; k < w; k++) same += eig[k].j == eig[i].j && !eig[k].translation;
+        /* a conjugate pair (j = 0 or n/2) is never split by the cut */
+        int partner = w > 0 && eig[w - 1].j == eig[i].j &&
+                      fabs(eig[w - 1].re - eig[i].re) <= eig[w - 1].err + eig[i].err &&
+                      fabs(eig[w - 1].im + eig[i].im) <= eig[w - 1].err + eig[i].err && eig[i].im != 0.0;
+        if (same < keep || eig[i].translation || partner) eig[w++] = eig[i];
+    }
+    *count = w;
+}
+
+/* Hill's band alone: its rightmost eigenvalue must be one the meshes
+ * confirm, else the band's candidates were not converged. */
+static int confirm_band(const hill_stage *hs, const bkf_trainspec_eigenvalue *eig, size_t n_eig,
+                        const bkf_error *trace_err, bkf_error *err)
+{
+    double complex top = NAN;
+    for (size_t k = 0; k < n_eig; k++)
+        if (!eig[k].translation && !(creal(top) >= eig[k].re)) top = eig[k].re + I * eig[k].im;
+    double miss = INFINITY;
+    for (size_t k = 0; k < hs->count; k++) miss = fmin(miss, cabs(hs->at[k] - conj(top)));
+    for (size_t k = 0; k < hs->count; k++) miss = fmin(miss, cabs(hs->at[k] - top));
+    if (isfinite(creal(top)) && !(miss <= HILL_AGREE * (1.0 + cabs(top))))
+        return bkf_error_set(err, BKF_ETOL,
+                             "spectrum: the curves could not be traced (%s); Hill's method at %zu modes and "
+                             "the Radau meshes disagree on the rightmost eigenvalue by %.3g",
+                             trace_err->message, hs->modes, miss);
+    return BKF_OK;
+}
+
+/* Spectrum in `classes` phase classes: per class the `keep` rightmost
+ * eigenvalues, polished on the fine mesh with error estimates. */
+static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
+                    window *win, double *y_max, size_t *curve_points, size_t *hill_modes, bkf_error *err)
+{
+    candidates cs = {0};
+    hill_stage hs;
+    bkf_error trace_err = {0};
+    int fallback = 0;
+    size_t n_eig = 0;
+    bkf_trainspec_eigenvalue *eig = NULL;
+    int rc = gather(x, classes, win, &cs, &hs, y_max, curve_points, &fallback, &trace_err, err);
+    *hill_modes = hs.modes;
+    size_t polish_n = (keep > 3 ? keep : 3) + 2;
+    if (rc == BKF_OK) {
+        eig = calloc(2 * (classes + 2) * (polish_n + HILL_PER_CLASS + 1), sizeof *eig);
+        if (!eig) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     if (rc == BKF_OK) {
-        for (size_t k = 0, polished = n_eig; k < polished; k++)
-            if (eig[k].j > 0 && 2 * eig[k].j < classes) {
-                eig[n_eig] = eig[k];
-                eig[n_eig].j = classes - eig[k].j;
-                eig[n_eig++].im = -eig[k].im;
-            }
-        qsort(eig, n_eig, sizeof *eig, eig_desc);
-        /* keep `keep` per class */
-        size_t w = 0;
-        for (size_t i = 0; i < n_eig; i++) {
-            size_t same = 0;
-            /* the translation is reported besides the `keep`, never instead of one
-             * (with keep 1 it took class 0's only place: issue 31's window edge
-             * -0.203 printed for sigma_max -4.08e-4) */
-            for (size_t k = 0; k < w; k++) same += eig[k].j == eig[i].j && !eig[k].translation;
-            /* a conjugate pair (j = 0 or n/2) is never split by the cut */
-            int partner = w > 0 && eig[w - 1].j == eig[i].j &&
-                          fabs(eig[w - 1].re - eig[i].re) <= eig[w - 1].err + eig[i].err &&
-                          fabs(eig[w - 1].im + eig[i].im) <= eig[w - 1].err + eig[i].err && eig[i].im != 0.0;
-            if (same < keep || eig[i].translation || partner) eig[w++] = eig[i];
-        }
-        n_eig = w;
+        polish_candidates(x, classes, keep, &cs, eig, &n_eig);
+        translation(x, eig, &n_eig);
+        drop_hidden(eig, &n_eig, keep);
+        rc = refine(x, classes, eig, n_eig, err);
     }
-    if (rc == BKF_OK && fallback) {
-        /* Hill's band alone: its rightmost eigenvalue must be one the
-         * meshes confirm, else the band's candidates were not converged */
-        double complex top = NAN;
-        for (size_t k = 0; k < n_eig; k++)
-            if (!eig[k].translation && !(creal(top) >= eig[k].re)) top = eig[k].re + I * eig[k].im;
-        double miss = INFINITY;
-        for (size_t k = 0; k < hs.count; k++) miss = fmin(miss, cabs(hs.at[k] - conj(top)));
-        for (size_t k = 0; k < hs.count; k++) miss = fmin(miss, cabs(hs.at[k] - top));
-        if (isfinite(creal(top)) && !(miss <= HILL_AGREE * (1.0 + cabs(top))))
-            rc = bkf_error_set(err, BKF_ETOL,
-                               "spectrum: the curves could not be traced (%s); Hill's method at %zu modes and "
-                               "the Radau meshes disagree on the rightmost eigenvalue by %.3g",
-                               trace_err.message, hs.modes, miss);
-    }
+    if (rc == BKF_OK) mirror_and_cut(classes, keep, eig, &n_eig);
+    if (rc == BKF_OK && fallback) rc = confirm_band(&hs, eig, n_eig, &trace_err, err);
     free(hs.at);
-    free(heights.h);
     free(cs.items);
     if (rc != BKF_OK) {
         free(eig);
@@ -1125,7 +1200,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
 }
 
 /* The reason a search was cut short, over whatever failure it produced. */
-static int stopped(const ctx *x, int rc, bkf_error *err)
+int trainspec_stopped(const ctx *x, int rc, bkf_error *err)
 {
     if (x->stop == BKF_ECANCELED) return bkf_error_set(err, BKF_ECANCELED, "spectrum: canceled");
     if (x->stop == BKF_EBUDGET)
@@ -1160,12 +1235,12 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
     if (rc != BKF_OK) return rc;
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     ctx x;
-    rc = ctx_init(&x, p, t, o.tol, &o, err);
+    rc = trainspec_ctx_init(&x, p, t, o.tol, &o, err);
     window win = initial_window(&x, &r->r_inf);
     if (rc == BKF_OK)
         rc = spectrum(&x, t->n, o.per_kappa, &r->eigenvalues, &r->count, &win, &r->y_max,
                       &r->curve_points, &r->hill_modes, err);
-    rc = stopped(&x, rc, err);
+    rc = trainspec_stopped(&x, rc, err);
     if (rc == BKF_OK) {
         r->params = *p;
         r->n = t->n;
@@ -1204,7 +1279,7 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
         r->evaluations = x.evaluations;
         r->work = x.work;
     }
-    ctx_free(&x);
+    trainspec_ctx_free(&x);
     bkf_gsl_handler_pop(handler);
     if (rc != BKF_OK) bkf_trainspec_result_free(r);
     return rc;
@@ -1255,14 +1330,14 @@ int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
     if (!out) return bkf_error_set(err, BKF_EINPUT, "out is NULL");
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     ctx x;
-    rc = ctx_init(&x, p, t, o.tol, &o, err);
+    rc = trainspec_ctx_init(&x, p, t, o.tol, &o, err);
     double r_inf, y_max;
     size_t points = 0, n_eig = 0;
     window win = initial_window(&x, &r_inf);
     bkf_trainspec_eigenvalue *eig = NULL;
     size_t hill_modes = 0;
     if (rc == BKF_OK) rc = spectrum(&x, count, 1, &eig, &n_eig, &win, &y_max, &points, &hill_modes, err);
-    rc = stopped(&x, rc, err);
+    rc = trainspec_stopped(&x, rc, err);
     if (rc == BKF_OK) {
         double L = x.L;
         for (size_t i = 0; i < count; i++)
@@ -1279,216 +1354,7 @@ int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
         }
     }
     free(eig);
-    ctx_free(&x);
-    bkf_gsl_handler_pop(handler);
-    return rc;
-}
-
-/* ------------------------------------------------- single eigenvalues */
-
-#define SUBSTEPS_MAX 4096
-#define MODE_SUBSTEPS 8
-
-/* The context and its fine mesh (substeps) resolving |sigma| ~ |sigma0|,
- * and sigma polished on it from sigma0 in class j. */
-static int one_eigenvalue(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, size_t j,
-                          double complex *sigma, size_t substeps, bkf_error *err)
-{
-    int rc = ctx_init(x, p, t, TOL_MIN, NULL, err);
-    x->re_floor = fmin(x->re_floor, creal(*sigma) - WINDOW_DEPTH * x->gamma);
-    if (rc == BKF_OK) rc = mesh_needs(x, 2.0 * cabs(*sigma) + 1.0, err);
-    if (rc == BKF_OK) rc = mesh_build(x, substeps, &x->fine, err);
-    if (rc != BKF_OK) return rc;
-    double step;
-    double complex s = *sigma;
-    int prc = polish(x, &x->fine, 2.0 * M_PI * (double)j / (double)t->n, &s, &step);
-    if (x->stop) return stopped(x, prc, err);
-    if (prc != BKF_OK)
-        return bkf_error_set(err, BKF_ENUMERIC,
-                             "no eigenvalue of class j = %zu converged from sigma = %.6g%+.6gi (last Newton "
-                             "step %.3g)",
-                             j, creal(*sigma), cimag(*sigma), step);
-    *sigma = s;
-    return BKF_OK;
-}
-
-static int check_one(const bkf_model_params *p, const bkf_trainspec_train *t, size_t j, double re0, double im0,
-                     bkf_error *err)
-{
-    int rc = bkf_trainspec_check(p, t, NULL, err);
-    if (rc != BKF_OK) return rc;
-    if (j >= t->n) return bkf_error_set(err, BKF_EINPUT, "j must be in [0, n - 1] = [0, %zu]", t->n - 1);
-    if (!isfinite(re0) || !isfinite(im0)) return bkf_error_set(err, BKF_EINPUT, "sigma must be finite");
-    return BKF_OK;
-}
-
-int bkf_trainspec_eigenvalue_at(const bkf_model_params *p, const bkf_trainspec_train *t, size_t j, double re0,
-                                double im0, size_t substeps, double *re, double *im, size_t *mesh_steps,
-                                bkf_error *err)
-{
-    int rc = check_one(p, t, j, re0, im0, err);
-    if (rc != BKF_OK) return rc;
-    if (substeps < 1 || substeps > SUBSTEPS_MAX)
-        return bkf_error_set(err, BKF_EINPUT, "substeps must be in [1, %d]", SUBSTEPS_MAX);
-    if (!re || !im) return bkf_error_set(err, BKF_EINPUT, "re and im are required");
-    bkf_gsl_handler *handler = bkf_gsl_handler_push();
-    ctx x;
-    double complex s = re0 + I * im0;
-    rc = one_eigenvalue(&x, p, t, j, &s, substeps, err);
-    if (rc == BKF_OK) {
-        *re = creal(s);
-        *im = cimag(s);
-        if (mesh_steps) *mesh_steps = x.fine.steps;
-    }
-    ctx_free(&x);
-    bkf_gsl_handler_pop(handler);
-    return rc;
-}
-
-typedef struct {
-    double r;     /* z within the period, [0, T] */
-    double cycle; /* which period (0 .. n-1): its Bloch factor is exp(i cycle theta) */
-    size_t at;    /* index of the sample on the ring */
-} mode_sample;
-
-static int by_r(const void *pa, const void *pb)
-{
-    const mode_sample *a = pa, *b = pb;
-    return (a->r > b->r) - (a->r < b->r);
-}
-
-/* u, u' from the multiplier's eigenvector through the period, recorded at
- * the samples (sorted by r): mesh steps and samples merged into one walk. */
-static int mode_walk(ctx *x, double complex sigma, const double complex y0[2], const mode_sample *smp, size_t N,
-                     double complex *u, double complex *du, double *scale_at, bkf_error *err)
-{
-    double *bounds = NULL, *merged = NULL;
-    size_t steps = 0;
-    size_t *slot = malloc(N * sizeof *slot);
-    mesh walk = {0};
-    int rc = slot ? mesh_bounds(x, MODE_SUBSTEPS, &bounds, &steps, err) : bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    if (rc == BKF_OK && !(merged = malloc((steps + 1 + N) * sizeof *merged)))
-        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    size_t count = 0;
-    if (rc == BKF_OK) {
-        size_t a = 0, b = 0;
-        while (a <= steps || b < N) {
-            if (b < N && (a > steps || smp[b].r <= bounds[a])) {
-                slot[b++] = count;
-                merged[count++] = smp[b - 1].r;
-            } else {
-                merged[count++] = bounds[a++];
-            }
-        }
-        rc = mesh_fill(x, merged, count - 1, &walk, err);
-    }
-    if (rc == BKF_OK) {
-        double complex y[2] = {y0[0], y0[1]};
-        double scale = 0.0;
-        size_t next = 0;
-        for (size_t k = 0; k < count; k++) {
-            while (next < N && slot[next] == k) {
-                u[next] = y[0];
-                du[next] = y[1];
-                scale_at[next++] = scale;
-            }
-            if (k + 1 == count) break;
-            double complex e[4];
-            scale += radau_step(x, &walk, k, sigma, e);
-            double complex y1 = e[0] * y[0] + e[1] * y[1], y2 = e[2] * y[0] + e[3] * y[1];
-            y[0] = y1, y[1] = y2;
-            rescale(y, 2, &scale);
-        }
-    }
-    mesh_free(&walk);
-    free(bounds);
-    free(merged);
-    free(slot);
-    return rc;
-}
-
-int bkf_trainspec_mode(const bkf_model_params *p, const bkf_trainspec_train *t, size_t j, double *re, double *im,
-                       size_t N, double *p_re, double *p_im, double *q_re, double *q_im, bkf_error *err)
-{
-    if (!re || !im) return bkf_error_set(err, BKF_EINPUT, "re and im are required");
-    int rc = check_one(p, t, j, *re, *im, err);
-    if (rc != BKF_OK) return rc;
-    if (N < 2 || N > 1u << 24) return bkf_error_set(err, BKF_EINPUT, "N must be in [2, %u]", 1u << 24);
-    if (!p_re) return bkf_error_set(err, BKF_EINPUT, "p_re is required");
-    bkf_gsl_handler *handler = bkf_gsl_handler_push();
-    ctx x;
-    double complex sigma = *re + I * *im;
-    mode_sample *smp = malloc(N * sizeof *smp);
-    double complex *u = malloc(N * sizeof *u), *du = malloc(N * sizeof *du);
-    double *scale_at = malloc(N * sizeof *scale_at), *r = malloc(N * sizeof *r), *f = malloc(N * sizeof *f),
-           *fp = malloc(N * sizeof *fp);
-    rc = one_eigenvalue(&x, p, t, j, &sigma, MODE_SUBSTEPS, err);
-    if (rc == BKF_OK && (!smp || !u || !du || !scale_at || !r || !f || !fp))
-        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    double theta = 2.0 * M_PI * (double)j / (double)t->n;
-    if (rc == BKF_OK) {
-        /* the eigenvector of the multiplier exp(sigma T / s + i theta) */
-        double complex m[4], want = sigma * x.T / x.s + I * theta;
-        double scale;
-        monodromy_matrix(&x, &x.fine, sigma, m, &scale);
-        double complex half = 0.5 * (m[0] + m[3]), root = csqrt(half * half - (m[0] * m[3] - m[1] * m[2]));
-        double complex lam[2] = {half + root, half - root};
-        double miss[2];
-        for (int k = 0; k < 2; k++) {
-            double complex w = clog(lam[k]) + scale - want;
-            miss[k] = hypot(creal(w), wrap(cimag(w)));
-        }
-        double complex l = miss[0] <= miss[1] ? lam[0] : lam[1];
-        double complex ya[2] = {m[1], l - m[0]}, yb[2] = {l - m[3], m[2]};
-        const double complex *y0 = cabs(ya[0]) + cabs(ya[1]) >= cabs(yb[0]) + cabs(yb[1]) ? ya : yb;
-        double period = x.T, S = x.S, vs = x.v * x.s;
-        for (size_t i = 0; i < N; i++) {
-            double z = (double)i * S / (double)N / vs;
-            double cyc = fmin(floor(z / period), (double)(t->n - 1));
-            smp[i] = (mode_sample){fmin(fmax(z - cyc * period, 0.0), period), cyc, i};
-        }
-        qsort(smp, N, sizeof *smp, by_r);
-        for (size_t i = 0; i < N; i++) r[i] = smp[i].r;
-        rc = mode_walk(&x, sigma, y0, smp, N, u, du, scale_at, err);
-        if (rc == BKF_OK) rc = bkf_cycle_profile_sample(x.cycle, r, N, f, fp, err);
-    }
-    if (rc == BKF_OK) {
-        /* p = exp(-sigma r / s) u times the Bloch factor of the period it
-         * lies in; magnitudes relative to the largest, then normalised */
-        double top = -INFINITY;
-        for (size_t i = 0; i < N; i++) {
-            double size = fmax(cabs(u[i]), cabs(du[i]));
-            if (size > 0) top = fmax(top, scale_at[i] - creal(sigma) * r[i] / x.s + log(size));
-        }
-        double pmax = 0.0;
-        double complex *pv = u, *qv = du; /* overwritten in place */
-        for (size_t i = 0; i < N; i++) {
-            double complex factor = cexp(scale_at[i] - top - sigma * r[i] / x.s + I * smp[i].cycle * theta);
-            double complex pi = factor * u[i];
-            double complex dpi = factor * (du[i] - sigma * u[i] / x.s) / (x.v * x.s);
-            pv[i] = pi;
-            qv[i] = (sigma * pi + x.v * dpi) / x.gamma + bkf_model_friction_slope(f[i]) * pi;
-            pmax = fmax(pmax, cabs(pi));
-        }
-        if (!(pmax > 0) || !isfinite(pmax)) rc = bkf_error_set(err, BKF_ENUMERIC, "the eigenfunction vanished");
-        for (size_t i = 0; i < N && rc == BKF_OK; i++) {
-            size_t at = smp[i].at;
-            p_re[at] = creal(pv[i]) / pmax;
-            if (p_im) p_im[at] = cimag(pv[i]) / pmax;
-            if (q_re) q_re[at] = creal(qv[i]) / pmax;
-            if (q_im) q_im[at] = cimag(qv[i]) / pmax;
-        }
-        *re = creal(sigma);
-        *im = cimag(sigma);
-    }
-    free(smp);
-    free(u);
-    free(du);
-    free(scale_at);
-    free(r);
-    free(f);
-    free(fp);
-    ctx_free(&x);
+    trainspec_ctx_free(&x);
     bkf_gsl_handler_pop(handler);
     return rc;
 }

@@ -32,6 +32,192 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* What the stages of one shooting solve share: the flow, the stepper, the
+ * section point y0 and its scale, the integrators and the two converged
+ * solves a (looser) and b (tighter) whose difference is the estimate. */
+typedef struct {
+    bkf_cycle *c;
+    flow_params *p;
+    const bkf_cycle_options *opt;
+    bkf_stepper_kind kind;
+    double mu, nu;
+    double y0, y_scale, q_goal, cond_floor;
+    double tol_int, tol_loose, tol_floor;
+    integrator coarse, fine, finer, aux;
+    size_t iterations;
+    converged a, b;
+} shoot_state;
+
+static int shoot_no_memory(bkf_error *err)
+{
+    return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+}
+
+/* The coarse solve, a, at tol_loose.  In the canard region an error made
+ * on the repelling slow branch grows like exp(mu x the time spent there)
+ * before the orbit jumps: at mu 3.65, nu 0.99 the returns at the coarse
+ * tolerance 1.4e-6 were 3e-3 off, P looked decreasing and Newton cycled
+ * for 60 steps.  Such noise shows as brackets that invert; the coarse
+ * solve then tightens its tolerance. */
+static int shoot_coarse(shoot_state *S, bkf_error *err)
+{
+    if (cycle_integrator_init(&S->coarse, S->p, S->kind, 0, S->tol_loose) != BKF_OK ||
+        cycle_integrator_init(&S->aux, S->p, S->kind, 1, S->tol_loose) != BKF_OK)
+        return shoot_no_memory(err);
+    int rc;
+    for (double y_start = S->y0;;) {
+        rc = cycle_newton_at(S->c, &S->coarse, &S->aux, &S->y0, 1e-3, 1e-4 * S->y_scale, S->y_scale,
+                             0.0, 0, 1, &S->iterations, &S->a, err);
+        if (rc == BKF_OK || !S->coarse.noisy || S->tol_loose <= S->tol_int) break;
+        S->tol_loose = fmax(S->tol_int, 1e-2 * S->tol_loose);
+        size_t coarse_steps = S->coarse.steps, aux_steps = S->aux.steps;
+        cycle_integrator_free(&S->coarse);
+        cycle_integrator_free(&S->aux);
+        if (cycle_integrator_init(&S->coarse, S->p, S->kind, 0, S->tol_loose) != BKF_OK ||
+            cycle_integrator_init(&S->aux, S->p, S->kind, 1, S->tol_loose) != BKF_OK)
+            return shoot_no_memory(err);
+        S->coarse.steps = coarse_steps;
+        S->aux.steps = aux_steps;
+        S->y0 = y_start;
+    }
+    return rc;
+}
+
+/* Fast path for loose tolerances: when the coarse solve is within a
+ * factor FAST_SPAN of the integration tolerance asked, it serves as the
+ * looser of the two solves of the error estimate, and one Newton solve
+ * at tol_b (usually a single shot from the converged coarse point) is
+ * all the extra work.  Its estimate |T_a - T_b| is of the coarse error,
+ * a larger one than the classic pair gives; if it does not meet tol,
+ * the classic pair (shoot_pair) runs: *stored 0.
+ *
+ * tol_b is only a factor TOL_RATIO below the coarse tolerance, not the
+ * tol/10 the classic pair would use: the achieved error is far below the
+ * local tolerance (1e-3 of it for rk8pd, ~1e-2 for bsimp, measured), so
+ * at tol 1e-6 the answer needs no 1e-7 shot; the estimate stays the
+ * coarse solve's, which bounds b's.  Not for rk8pd near its stability
+ * limit (mu > EXPLICIT_MU_MAX/3): there its steps are set by stability, not by
+ * the tolerance, two tolerances a factor 10 apart take nearly the same
+ * steps and their difference missed the error (mu 30, nu 0: true/estimated
+ * 14 with a factor 10); there the pair is a factor 100 apart, which makes
+ * the tighter solve's steps tolerance-limited again. */
+static int shoot_fast(shoot_state *S, int *stored, bkf_error *err)
+{
+    const bkf_cycle_options *opt = S->opt;
+    *stored = 0;
+    if (!(S->tol_loose <= 1.01 * FAST_SPAN * S->tol_int)) return BKF_OK;
+    int step_set_by_tol = S->kind != BKF_STEPPER_EXPLICIT || S->mu <= EXPLICIT_MU_MAX / 3.0;
+    double tol_b = S->tol_loose / (step_set_by_tol ? TOL_RATIO : TOL_RATIO * TOL_RATIO);
+    /* (not where the estimate's floor alone would refuse it: at tol
+     * 1e-6 the fast pair was solved and thrown away, bd2x2 at mu
+     * 30-1e4 took twice as long as at 1e-8) */
+    if (!(tol_b >= S->tol_floor &&
+          ACCEPT_MARGIN * cycle_error_per_tol(S->kind) * tol_b / cycle_size(S->nu) <= opt->tol))
+        return BKF_OK;
+    size_t aux_steps = S->aux.steps;
+    cycle_integrator_free(&S->aux);
+    if (cycle_integrator_init(&S->fine, S->p, S->kind, 0, tol_b) != BKF_OK ||
+        cycle_integrator_init(&S->aux, S->p, S->kind, 1, tol_b) != BKF_OK)
+        return shoot_no_memory(err);
+    tighten_turn(&S->fine);
+    S->aux.steps = aux_steps;
+    int rc = cycle_newton_at(S->c, &S->fine, &S->aux, &S->y0, 0.1 * sqrt(opt->tol),
+                             0.1 * opt->tol * S->y_scale, S->y_scale, S->q_goal, 1, 0,
+                             &S->iterations, &S->b, err);
+    if (rc != BKF_OK) return rc;
+    double period_err = cycle_period_error(&S->a, &S->b, S->p, S->kind, S->cond_floor);
+    if (ACCEPT_MARGIN * period_err > opt->tol * S->b.period) {
+        /* The coarse Newton stops at loose goals (t_goal 1e-3), so
+         * |T_a - T_b| can be its iteration error rather than its
+         * integration error (mu 10, nu 0.9999; mu 1e3, nu -0.999 at
+         * tol 1e-6: 2-3e-6).  One coarse shot from b's converged
+         * point leaves only the latter, for one shot instead of the
+         * classic pair's two or more. */
+        converged a2;
+        double y_b = S->y0;
+        rc = cycle_newton_at(S->c, &S->coarse, &S->aux, &y_b, 0.1 * sqrt(opt->tol),
+                             0.1 * opt->tol * S->y_scale, S->y_scale, S->q_goal, 0, 0,
+                             &S->iterations, &a2, err);
+        if (rc != BKF_OK) return rc;
+        double err2 = cycle_period_error(&a2, &S->b, S->p, S->kind, S->cond_floor);
+        if (ACCEPT_MARGIN * err2 <= opt->tol * S->b.period) {
+            S->a = a2;
+            period_err = err2;
+        }
+    }
+    if (ACCEPT_MARGIN * period_err <= opt->tol * S->b.period) {
+        cycle_store_result(S->c, &S->a, &S->b, period_err, S->y0, S->kind, tol_b, &S->coarse,
+                           &S->fine, &S->finer, &S->aux, S->iterations);
+        *stored = 1;
+        return BKF_OK;
+    }
+    cycle_integrator_free(&S->fine);
+    return BKF_OK;
+}
+
+/* The classic pair: a at tol_int, b at tol_int / TOL_RATIO, tightened
+ * until their difference meets tol or the floor is reached.
+ *
+ * Every T solved at or below the looser tolerance of the pair in hand
+ * is a sample of the answer at that accuracy: at the tolerance floor the
+ * retries repeat the same pair from another start, and accepting the
+ * first pair that happens to agree ("retry until lucky") reported
+ * 2e-14 at mu 10, nu 0.9999, tol 1e-14 against a true 2e-13.  The
+ * spread of all such samples is part of the estimate. */
+static int shoot_pair(shoot_state *S, bkf_error *err)
+{
+    const bkf_cycle_options *opt = S->opt;
+    struct {
+        double tol, period;
+    } seen[8];
+    size_t n_seen = 0;
+    int rc = BKF_OK;
+    for (int attempt = 0; attempt < 4; attempt++) {
+        cycle_integrator_free(&S->fine);
+        cycle_integrator_free(&S->finer);
+        size_t aux_steps = S->aux.steps;
+        cycle_integrator_free(&S->aux);
+        if (cycle_integrator_init(&S->fine, S->p, S->kind, 0, S->tol_int) != BKF_OK ||
+            cycle_integrator_init(&S->finer, S->p, S->kind, 0, S->tol_int / TOL_RATIO) != BKF_OK ||
+            cycle_integrator_init(&S->aux, S->p, S->kind, 1, S->tol_int / TOL_RATIO) != BKF_OK)
+            return shoot_no_memory(err);
+        S->aux.steps = aux_steps;
+        rc = cycle_newton_at(S->c, &S->fine, &S->aux, &S->y0, 0.1 * sqrt(opt->tol),
+                             opt->tol * S->y_scale, S->y_scale, S->q_goal, 0, 0, &S->iterations,
+                             &S->a, err);
+        if (rc != BKF_OK) return rc;
+        rc = cycle_newton_at(S->c, &S->finer, &S->aux, &S->y0, 0.1 * sqrt(opt->tol),
+                             0.1 * opt->tol * S->y_scale, S->y_scale, S->q_goal, 1, 0,
+                             &S->iterations, &S->b, err);
+        if (rc != BKF_OK) return rc;
+        const converged *a = &S->a, *b = &S->b;
+        double period_err = cycle_period_error(a, b, S->p, S->kind, S->cond_floor);
+        seen[n_seen].tol = a->tol;
+        seen[n_seen++].period = a->period;
+        seen[n_seen].tol = b->tol;
+        seen[n_seen++].period = b->period;
+        for (size_t i = 0; i < n_seen; i++)
+            if (seen[i].tol <= a->tol * (1.0 + 1e-9))
+                period_err = fmax(period_err, fabs(seen[i].period - b->period));
+        period_err = cycle_capped_floor(period_err, &S->fine, b->period);
+        if (ACCEPT_MARGIN * period_err <= opt->tol * b->period || attempt == 3 ||
+            /* (tol_floor * TOL_RATIO / TOL_RATIO may round above tol_floor) */
+            S->tol_int / TOL_RATIO <= S->tol_floor * (1.0 + 1e-9)) {
+            if (ACCEPT_MARGIN * period_err > opt->tol * b->period)
+                return bkf_error_set(err, BKF_ETOL,
+                                     "cycle at mu = %.15g, nu = %.15g: estimated relative error %.2g of T, "
+                                     "times the safety factor %g, exceeds tol = %g",
+                                     S->mu, S->nu, period_err / b->period, ACCEPT_MARGIN, opt->tol);
+            cycle_store_result(S->c, a, b, period_err, S->y0, S->kind, S->tol_int / TOL_RATIO,
+                               &S->coarse, &S->fine, &S->finer, &S->aux, S->iterations);
+            return BKF_OK;
+        }
+        S->tol_int = fmax(S->tol_int * fmax(0.01, 0.3 * opt->tol * b->period / (ACCEPT_MARGIN * period_err)),
+                          S->tol_floor * TOL_RATIO);
+    }
+    return rc;
+}
+
 static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_options *options,
                             bkf_error *err)
 {
@@ -70,11 +256,12 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
     int warm_shot = opt.warm_start && c->have_solution && strcmp(c->result.stepper, "colloc") != 0;
     double slope = c->warm_slope > 0 ? c->warm_slope : warm_shot ? warm_slope : cycle_guess_slope(mu, nu);
     c->warm_slope = 0.0;
-    double y0 = cycle_section_y_of_slope(p, slope);
-    double y_scale = fmax(fabs(y0), 1e-3);
+    shoot_state S = {.c = c, .p = p, .opt = &opt, .kind = kind, .mu = mu, .nu = nu};
+    S.y0 = cycle_section_y_of_slope(p, slope);
+    S.y_scale = fmax(fabs(S.y0), 1e-3);
 
-    double tol_int = cycle_pair_tol(opt.tol, nu, kind);
-    const double tol_floor = tol_floor_of(kind);
+    S.tol_int = cycle_pair_tol(opt.tol, nu, kind);
+    S.tol_floor = tol_floor_of(kind);
     /* bd2x2's coarse stage lands y0 on the cycle for the tight solves,
      * whose first shot then needs no confirming one if its step is below
      * sqrt(q_goal) (see newton_at): at local tol 1e-5 the landing was
@@ -83,167 +270,23 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
      * the canard at mu 3.65 the tighter landing changed which relaxed branch
      * points were accepted, and one's estimate flattered by 5.) */
     double land_tol = kind == BKF_STEPPER_EXTRAPOLATION ? fmin(0.1 * sqrt(opt.tol), 1e-5) : 1e-5;
-    double tol_loose = fmax(tol_int, land_tol * fmin(1.0, sqrt(1.0 - nu * nu)));
-    integrator coarse = {0}, fine = {0}, finer = {0}, aux = {0};
-    size_t iterations = 0;
-    converged a, b;
-    rc = BKF_ENOMEM;
-    if (cycle_integrator_init(&coarse, p, kind, 0, tol_loose) != BKF_OK ||
-        cycle_integrator_init(&aux, p, kind, 1, tol_loose) != BKF_OK)
-        goto fail_mem;
-
+    S.tol_loose = fmax(S.tol_int, land_tol * fmin(1.0, sqrt(1.0 - nu * nu)));
     /* a Newton step whose square (relative, amplified by 1/(1 - P')) is
      * below q_goal needs no confirming shot: the first-order correction
      * leaves an error of that order */
-    double q_goal = 1e-2 * opt.tol;
-    /* In the canard region an error made on the repelling slow branch grows
-     * like exp(mu x the time spent there) before the orbit jumps: at mu 3.65,
-     * nu 0.99 the returns at the coarse tolerance 1.4e-6 were 3e-3 off, P
-     * looked decreasing and Newton cycled for 60 steps.  Such noise shows as
-     * brackets that invert; the coarse solve then tightens its tolerance. */
-    for (double y_start = y0;;) {
-        rc = cycle_newton_at(c, &coarse, &aux, &y0, 1e-3, 1e-4 * y_scale, y_scale, 0.0, 0, 1, &iterations, &a,
-                             err);
-        if (rc == BKF_OK || !coarse.noisy || tol_loose <= tol_int) break;
-        tol_loose = fmax(tol_int, 1e-2 * tol_loose);
-        size_t coarse_steps = coarse.steps, aux_steps = aux.steps;
-        cycle_integrator_free(&coarse);
-        cycle_integrator_free(&aux);
-        if (cycle_integrator_init(&coarse, p, kind, 0, tol_loose) != BKF_OK ||
-            cycle_integrator_init(&aux, p, kind, 1, tol_loose) != BKF_OK)
-            goto fail_mem;
-        coarse.steps = coarse_steps;
-        aux.steps = aux_steps;
-        y0 = y_start;
-    }
-    if (rc != BKF_OK) goto done;
-    double cond_floor;
-    rc = cycle_conditioning_floor(p, kind, tol_int, y0, &cond_floor, &coarse.steps, err);
-    if (rc != BKF_OK) goto done;
-    /* Fast path for loose tolerances: when the coarse solve is within a
-     * factor FAST_SPAN of the integration tolerance asked, it serves as the
-     * looser of the two solves of the error estimate, and one Newton solve
-     * at tol_b (usually a single shot from the converged coarse point) is
-     * all the extra work.  Its estimate |T_a - T_b| is of the coarse error,
-     * a larger one than the classic pair gives; if it does not meet tol,
-     * the classic pair below runs.
-     *
-     * tol_b is only a factor TOL_RATIO below the coarse tolerance, not the
-     * tol/10 the classic pair would use: the achieved error is far below the
-     * local tolerance (1e-3 of it for rk8pd, ~1e-2 for bsimp, measured), so
-     * at tol 1e-6 the answer needs no 1e-7 shot; the estimate stays the
-     * coarse solve's, which bounds b's.  Not for rk8pd near its stability
-     * limit (mu > EXPLICIT_MU_MAX/3): there its steps are set by stability, not by
-     * the tolerance, two tolerances a factor 10 apart take nearly the same
-     * steps and their difference missed the error (mu 30, nu 0: true/estimated
-     * 14 with a factor 10); there the pair is a factor 100 apart, which makes
-     * the tighter solve's steps tolerance-limited again. */
-    if (tol_loose <= 1.01 * FAST_SPAN * tol_int) {
-        int step_set_by_tol = kind != BKF_STEPPER_EXPLICIT || mu <= EXPLICIT_MU_MAX / 3.0;
-        double tol_b = tol_loose / (step_set_by_tol ? TOL_RATIO : TOL_RATIO * TOL_RATIO);
-        /* (not where the estimate's floor alone would refuse it: at tol
-         * 1e-6 the fast pair was solved and thrown away, bd2x2 at mu
-         * 30-1e4 took twice as long as at 1e-8) */
-        if (tol_b >= tol_floor && ACCEPT_MARGIN * cycle_error_per_tol(kind) * tol_b / cycle_size(nu) <= opt.tol) {
-            size_t aux_steps = aux.steps;
-            cycle_integrator_free(&aux);
-            if (cycle_integrator_init(&fine, p, kind, 0, tol_b) != BKF_OK ||
-                cycle_integrator_init(&aux, p, kind, 1, tol_b) != BKF_OK)
-                goto fail_mem;
-            tighten_turn(&fine);
-            aux.steps = aux_steps;
-            rc = cycle_newton_at(c, &fine, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, y_scale, q_goal, 1,
-                                 0, &iterations, &b, err);
-            if (rc != BKF_OK) goto done;
-            double period_err = cycle_period_error(&a, &b, p, kind, cond_floor);
-            if (ACCEPT_MARGIN * period_err > opt.tol * b.period) {
-                /* The coarse Newton stops at loose goals (t_goal 1e-3), so
-                 * |T_a - T_b| can be its iteration error rather than its
-                 * integration error (mu 10, nu 0.9999; mu 1e3, nu -0.999 at
-                 * tol 1e-6: 2-3e-6).  One coarse shot from b's converged
-                 * point leaves only the latter, for one shot instead of the
-                 * classic pair's two or more. */
-                converged a2;
-                double y_b = y0;
-                rc = cycle_newton_at(c, &coarse, &aux, &y_b, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale,
-                                     y_scale, q_goal, 0, 0, &iterations, &a2, err);
-                if (rc != BKF_OK) goto done;
-                double err2 = cycle_period_error(&a2, &b, p, kind, cond_floor);
-                if (ACCEPT_MARGIN * err2 <= opt.tol * b.period) {
-                    a = a2;
-                    period_err = err2;
-                }
-            }
-            if (ACCEPT_MARGIN * period_err <= opt.tol * b.period) {
-                cycle_store_result(c, &a, &b, period_err, y0, kind, tol_b, &coarse, &fine, &finer, &aux,
-                                   iterations);
-                rc = BKF_OK;
-                goto done;
-            }
-            cycle_integrator_free(&fine);
-        }
-    }
-    /* Every T solved at or below the looser tolerance of the pair in hand
-     * is a sample of the answer at that accuracy: at the tolerance floor the
-     * retries repeat the same pair from another start, and accepting the
-     * first pair that happens to agree ("retry until lucky") reported
-     * 2e-14 at mu 10, nu 0.9999, tol 1e-14 against a true 2e-13.  The
-     * spread of all such samples is part of the estimate. */
-    struct {
-        double tol, period;
-    } seen[8];
-    size_t n_seen = 0;
-    for (int attempt = 0; attempt < 4; attempt++) {
-        cycle_integrator_free(&fine);
-        cycle_integrator_free(&finer);
-        size_t aux_steps = aux.steps;
-        cycle_integrator_free(&aux);
-        if (cycle_integrator_init(&fine, p, kind, 0, tol_int) != BKF_OK ||
-            cycle_integrator_init(&finer, p, kind, 0, tol_int / TOL_RATIO) != BKF_OK ||
-            cycle_integrator_init(&aux, p, kind, 1, tol_int / TOL_RATIO) != BKF_OK)
-            goto fail_mem;
-        aux.steps = aux_steps;
-        rc = cycle_newton_at(c, &fine, &aux, &y0, 0.1 * sqrt(opt.tol), opt.tol * y_scale, y_scale, q_goal, 0, 0,
-                             &iterations, &a, err);
-        if (rc != BKF_OK) goto done;
-        rc = cycle_newton_at(c, &finer, &aux, &y0, 0.1 * sqrt(opt.tol), 0.1 * opt.tol * y_scale, y_scale, q_goal, 1, 0,
-                             &iterations, &b, err);
-        if (rc != BKF_OK) goto done;
-        double period_err = cycle_period_error(&a, &b, p, kind, cond_floor);
-        seen[n_seen].tol = a.tol;
-        seen[n_seen++].period = a.period;
-        seen[n_seen].tol = b.tol;
-        seen[n_seen++].period = b.period;
-        for (size_t i = 0; i < n_seen; i++)
-            if (seen[i].tol <= a.tol * (1.0 + 1e-9))
-                period_err = fmax(period_err, fabs(seen[i].period - b.period));
-        period_err = cycle_capped_floor(period_err, &fine, b.period);
-        if (ACCEPT_MARGIN * period_err <= opt.tol * b.period || attempt == 3 ||
-            /* (tol_floor * TOL_RATIO / TOL_RATIO may round above tol_floor) */
-            tol_int / TOL_RATIO <= tol_floor * (1.0 + 1e-9)) {
-            if (ACCEPT_MARGIN * period_err > opt.tol * b.period) {
-                rc = bkf_error_set(err, BKF_ETOL,
-                                   "cycle at mu = %.15g, nu = %.15g: estimated relative error %.2g of T, "
-                                   "times the safety factor %g, exceeds tol = %g",
-                                   mu, nu, period_err / b.period, ACCEPT_MARGIN, opt.tol);
-                goto done;
-            }
-            cycle_store_result(c, &a, &b, period_err, y0, kind, tol_int / TOL_RATIO, &coarse, &fine,
-                               &finer, &aux, iterations);
-            rc = BKF_OK;
-            goto done;
-        }
-        tol_int = fmax(tol_int * fmax(0.01, 0.3 * opt.tol * b.period / (ACCEPT_MARGIN * period_err)),
-                       tol_floor * TOL_RATIO);
-    }
-    goto done;
-fail_mem:
-    rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-done:
-    cycle_integrator_free(&coarse);
-    cycle_integrator_free(&fine);
-    cycle_integrator_free(&finer);
-    cycle_integrator_free(&aux);
+    S.q_goal = 1e-2 * opt.tol;
+
+    int stored = 0;
+    rc = shoot_coarse(&S, err);
+    if (rc == BKF_OK)
+        rc = cycle_conditioning_floor(p, kind, S.tol_int, S.y0, &S.cond_floor, &S.coarse.steps,
+                                      err);
+    if (rc == BKF_OK) rc = shoot_fast(&S, &stored, err);
+    if (rc == BKF_OK && !stored) rc = shoot_pair(&S, err);
+    cycle_integrator_free(&S.coarse);
+    cycle_integrator_free(&S.fine);
+    cycle_integrator_free(&S.finer);
+    cycle_integrator_free(&S.aux);
     if (rc != BKF_OK) {
         /* keep the previous solution usable: restore its flow */
         if (c->have_solution) c->flow = previous;

@@ -42,9 +42,11 @@ void bench_speeds(void);
 void bench_pde(void);
 void bench_pde_cost(void);
 void bench_trainspec(void);
+void bench_stability_tol(void);
 void bench_chain(void);
 void bench_colloc(void);
 void bench_start(void);
+void bench_orbit(void);
 
 int main(int argc, char **argv)
 {
@@ -55,8 +57,10 @@ int main(int argc, char **argv)
     if (!only || strcmp(only, "pde") == 0) bench_pde();
     if (!only || strcmp(only, "pde-cost") == 0) bench_pde_cost();
     if (!only || strcmp(only, "trainspec") == 0) bench_trainspec();
+    if (!only || strcmp(only, "stability-tol") == 0) bench_stability_tol();
     if (!only || strcmp(only, "chain") == 0) bench_chain();
     if (!only || strcmp(only, "colloc") == 0) bench_colloc();
     if (!only || strcmp(only, "start") == 0) bench_start();
+    if (!only || strcmp(only, "orbit") == 0) bench_orbit();
     return 0;
 }

@@ -284,6 +284,11 @@ TEST(cli_stability_rejects_bad_input)
               "--stability-tol without --stability");
     bad_input(BKF_CLI("speeds", PAPER, "--stability", "--stability-tol", "1"), "speeds",
               "--stability-tol", "--stability-tol 1");
+    /* the spectrum's own floor (the profile's error): 1e-9 was accepted and
+     * then refused by the library as "tol must be in [1e-08, 0.01]" */
+    bad_input(BKF_CLI("speeds", PAPER, "--stability", "--stability-tol", "1e-9"), "speeds",
+              "--stability-tol", "--stability-tol 1e-9");
+    bad_input(BKF_CLI("stability", PAPER, "--n", "2", "--tol", "1e-9"), "stability", "--tol", "--tol 1e-9");
     bad_input(BKF_CLI("speeds", "--gamma", "2", "--c", "0", "--nu", "-0.96", "--S", "20",
                       "--stability"),
               "speeds", "--stability", "--stability with c 0");

@@ -111,6 +111,17 @@ TEST(catalog_required_keys_are_named)
     CHECK_MSG(strstr(err.message, "mu is required") == err.message, "%s", err.message);
     CHECK(err.status == BKF_EINPUT);
     bkf_catalog_spec_free(e, spec);
+
+    /* a required choice (branch's param, -1 until given) is named too, not
+     * the first number after it */
+    e = bkf_catalog_find("branch");
+    spec = bkf_catalog_spec_new(e, &err);
+    static const char *const kv[] = {"gamma", "2", "c", "0.3", "nu", "-0.96", NULL};
+    for (size_t i = 0; kv[i]; i += 2) CHECK_STATUS(bkf_catalog_apply(e, spec, kv[i], kv[i + 1], "", &err), BKF_OK);
+    CHECK_STATUS(e->check(spec, "", &err), BKF_EINPUT);
+    CHECK_MSG(strstr(err.message, "param is required (one of S, nu, gamma, c, h)") == err.message,
+              "%s", err.message);
+    bkf_catalog_spec_free(e, spec);
 }
 
 /* The hooks' cancel flag stops period between points, on a grid and along a

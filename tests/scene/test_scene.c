@@ -5,6 +5,7 @@
 #include "harness.h"
 
 #include <dirent.h>
+#include <math.h>
 #include <pthread.h>
 #include <fcntl.h>
 #include <stdint.h>
@@ -111,8 +112,12 @@ TEST(scene_errors_name_the_file_and_line)
     parse_bad(MODEL "[speeds a]\n[figure f]\ntitle = x\n", 7, "give data = NAME");
     parse_bad(MODEL "[speeds a]\n[figure f]\ndata = b\n", 8, "no product named 'b'");
     parse_bad("gamma = 2\n[model]\n", 1, "before any [section]");
-    parse_bad(MODEL "[branch b]\nto = 30\n", 6, "give param");
-    parse_bad(MODEL "[speeds]\nn = 3\nnmax = 4\n", 8, "n or nmax, not both");
+    /* (the products' own checks: param before from, which names it) */
+    parse_bad(MODEL "[branch b]\nto = 30\n", 6, "[branch b]: param is required (one of S, nu");
+    parse_bad(MODEL "[branch b]\nparam = S\n", 6, "[branch b]: to is required");
+    parse_bad(MODEL "[threshold t]\nalong = c\nto = 1\n", 6, "from is required with along");
+    parse_bad(MODEL "[threshold t]\nfrom = 0.1\nto = 1\n", 7, "from: only with along");
+    parse_bad(MODEL "[speeds]\nn = 3\nnmax = 4\n", 7, "n, nmax: give one of them");
     parse_bad(MODEL "[speeds]\nthis line has no equals sign\n", 7, "not a section header");
     parse_bad(MODEL "[speeds two words]\n", 6, "[KIND] or [KIND NAME]");
     parse_bad(MODEL "[accuracy]\ntol = 1\n[speeds]\n", 7, "tol: 1 is outside");
@@ -254,11 +259,33 @@ TEST(plan_refuses_an_output_folder_figures_cannot_list)
 
 /* ------------------------------------------------------------------- run */
 
+static void remove_tree(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (d) {
+        struct dirent *ent;
+        while ((ent = readdir(d))) {
+            if (ent->d_name[0] == '.') continue;
+            char path[1024];
+            snprintf(path, sizeof path, "%s/%s", dir, ent->d_name);
+            struct stat st;
+            if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
+                remove_tree(path);
+            else
+                unlink(path);
+        }
+        closedir(d);
+    }
+    rmdir(dir);
+}
+
+
 /* bkf_scene_run, as a library caller sees it: the reports come one at a
  * time, one per step, each figure's after every step of its data; a flag
  * raised before the run leaves every step unrun and unreported. */
 typedef struct {
     size_t order[32];
+    double start[32]; /* by step: when it started, the report's time less its seconds */
     size_t n;
     int inside;     /* a report under way: two at once would see it set */
     int overlapped;
@@ -269,6 +296,9 @@ static void log_report(const bkf_scene_step_report *r, void *data)
     report_log *log = data;
     if (log->inside++) log->overlapped = 1;
     if (log->n < 32) log->order[log->n] = r->step;
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    if (r->step < 32) log->start[r->step] = (double)now.tv_sec + 1e-9 * (double)now.tv_nsec - r->seconds;
     log->n++;
     struct timespec nap = {0, 2000000}; /* long enough for another to come in */
     nanosleep(&nap, NULL);
@@ -324,17 +354,78 @@ TEST(scene_run_reports_each_step_after_its_data)
 
     bkf_scene_plan_free(&plan);
     bkf_scene_free(sc);
-    DIR *d = opendir(dir);
-    CHECK(d);
-    struct dirent *ent;
-    char path[512];
-    while ((ent = readdir(d)))
-        if (ent->d_name[0] != '.') {
-            snprintf(path, sizeof path, "%s/%s", dir, ent->d_name);
-            unlink(path);
-        }
-    closedir(d);
-    rmdir(dir);
+    remove_tree(dir);
+}
+
+/* The cost hints against the paper scene's measured serial run
+ * (docs/benchmarks.md, `make run` with one and two jobs: the diagram 252
+ * s, the two branches 118 s and 80 s, every other step under 10 s): the
+ * diagram is the step expected longest, the branches next, each other
+ * product step under both branches; a figure costs nothing. */
+TEST(scene_step_costs_rank_the_paper_scene_as_measured)
+{
+    bkf_scene *s = NULL;
+    bkf_error e = {0};
+    CHECK_STATUS(bkf_scene_parse_file(BKF_SOURCE_DIR "/fronts/paper.scene", &s, &e), BKF_OK);
+    bkf_scene_plan plan;
+    bkf_scene_plan_options po = {.outdir = "out", .formats = 1, .figures = 1};
+    CHECK_STATUS(bkf_scene_make_plan(s, &po, &plan, &e), BKF_OK);
+    double diagram = -1, branch_min = INFINITY, other_max = 0;
+    for (size_t i = 0; i < plan.nsteps; i++) {
+        const bkf_scene_step *st = &plan.steps[i];
+        const bkf_scene_product *p = &s->products[st->users[0]];
+        double c = bkf_scene_step_cost(st);
+        CHECK_MSG(isfinite(c) && c >= 0, "step %zu: cost %g", i + 1, c);
+        if (st->kind == BKF_SCENE_STEP_FIGURE)
+            CHECK_MSG(c == 0, "figure %s: cost %g", p->name, c);
+        else if (strcmp(p->name, "diagram") == 0)
+            diagram = c;
+        else if (p->kind == BKF_SCENE_BRANCH)
+            branch_min = fmin(branch_min, c);
+        else
+            other_max = fmax(other_max, c);
+    }
+    CHECK_MSG(diagram > branch_min && branch_min > other_max,
+              "diagram %g, branches from %g, the rest up to %g", diagram, branch_min, other_max);
+    bkf_scene_plan_free(&plan);
+    bkf_scene_free(s);
+}
+
+/* Several jobs start the longest expected steps first (the products'
+ * cost hints, catalog.h), whatever their place in the plan: two
+ * simulations planned after three quick friction tables take both jobs
+ * at once, and the frictions start only once one has ended (in the plan's
+ * order two frictions would start first); one job keeps the plan's order. */
+TEST(scene_run_starts_the_longest_steps_first)
+{
+    char dir[] = "/tmp/bkfront-cost-XXXXXX";
+    CHECK(mkdtemp(dir));
+    bkf_scene *sc = parse_ok(MODEL "[friction f1]\n[friction f2]\nto = 3\n[friction f3]\nto = 2\n"
+                                   "[spacetime a]\ntmax = 20\nN = 128\nframes = 10\n"
+                                   "[spacetime b]\ntmax = 20\nN = 128\nframes = 10\nnu = -0.9\n");
+    bkf_scene_plan plan;
+    bkf_error e = {0};
+    bkf_scene_plan_options po = {.outdir = dir, .formats = 1, .figures = 0};
+    CHECK_STATUS(bkf_scene_make_plan(sc, &po, &plan, &e), BKF_OK);
+    CHECK(plan.nsteps == 5);
+    int status[8];
+    for (unsigned jobs = 1; jobs <= 2; jobs++) {
+        report_log log = {0};
+        bkf_scene_run_options ro = {.jobs = jobs, .step_done = log_report, .data = &log};
+        CHECK_STATUS(bkf_scene_run(sc, &plan, &ro, status, &e), BKF_OK);
+        CHECK(log.n == 5);
+        if (jobs == 1)
+            for (size_t k = 0; k < 5; k++) CHECK_MSG(log.order[k] == k, "report %zu: step %zu", k,
+                                                     log.order[k] + 1);
+        else
+            for (size_t f = 0; f < 3; f++)
+                CHECK_MSG(log.start[f] > log.start[3] && log.start[f] > log.start[4],
+                          "friction %zu started %.3f s after simulation 4, %.3f s after 5",
+                          f + 1, log.start[f] - log.start[3], log.start[f] - log.start[4]);
+    }
+    bkf_scene_plan_free(&plan);
+    bkf_scene_free(sc);
+    remove_tree(dir);
 }
 
 #ifdef BKF_CLI_PATH
@@ -391,26 +482,6 @@ static int starts_with_bytes(const char *dir, const char *name, const char *magi
     size_t k = fread(buf, 1, n, f);
     fclose(f);
     return k == n && memcmp(buf, magic, n) == 0;
-}
-
-static void remove_tree(const char *dir)
-{
-    DIR *d = opendir(dir);
-    if (d) {
-        struct dirent *ent;
-        while ((ent = readdir(d))) {
-            if (ent->d_name[0] == '.') continue;
-            char path[1024];
-            snprintf(path, sizeof path, "%s/%s", dir, ent->d_name);
-            struct stat st;
-            if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
-                remove_tree(path);
-            else
-                unlink(path);
-        }
-        closedir(d);
-    }
-    rmdir(dir);
 }
 
 /* The friction table against the closed forms, read back from the file. */

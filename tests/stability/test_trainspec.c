@@ -5,6 +5,8 @@
  * tolerance contract: every reported error covers the distance to Hill. */
 #include "harness.h"
 
+#include "audit/audit.h"
+
 #include "bkfront/hill.h"
 #include "bkfront/speeds.h"
 #include "bkfront/trainspec.h"
@@ -337,5 +339,102 @@ TEST(trainspec_line_at_kappa_0_is_the_rings_j_0)
     for (size_t i = 0; i < r.count; i++)
         if (r.eigenvalues[i].j == 1 && r.eigenvalues[i].re > best) best = r.eigenvalues[i].re, err = r.eigenvalues[i].err;
     CHECK(fabs(line[2].re - best) <= err + line[2].err);
+    bkf_trainspec_result_free(&r);
+}
+
+/* Issue 33: the fast path (the sigma-derivative in the monodromy's pass,
+ * the refinement that reuses the old fine mesh, Hill's candidates at M and
+ * M + M/4) on random sets of the documented domain (the audit's draws),
+ * against two references it does not use: Hill's method at 32 and 64
+ * modes (every class converged, nothing unresolved right of the rightmost),
+ * and the same eigenvalue polished by Newton on a mesh of 16 times the
+ * steps (bkf_trainspec_eigenvalue_at), which the reported error must cover. */
+TEST(trainspec_fast_path_matches_hill_and_a_finer_mesh_on_random_sets)
+{
+    size_t compared = 0;
+    for (size_t i = 0; i < 40 && compared < 5; i++) {
+        audit_set s = audit_draw(3301, i);
+        bkf_model_params p = {s.gamma, s.c, s.nu, s.S, 0, BKF_MODEL_CONTINUUM};
+        bkf_speeds_options so = bkf_speeds_options_default();
+        so.n_from = 1, so.n_to = 3;
+        bkf_speeds_table t;
+        bkf_error e;
+        if (bkf_speeds_find(&p, &so, &t, &e) != BKF_OK) continue;
+        /* one root per set, the thinnest where Hill converges at 32 modes */
+        size_t best = t.count;
+        for (size_t k = 0; k < t.count; k++)
+            if (t.roots[k].mu <= 4.0 && (best == t.count || t.roots[k].mu > t.roots[best].mu)) best = k;
+        for (size_t k = best; k < t.count && k == best; k++) {
+            const bkf_speeds_root *root = &t.roots[k];
+            bkf_trainspec_result r;
+            if (bkf_trainspec_root(&p, root, 1e-6, 1, &r, &e) != BKF_OK) {
+                bkf_test_note("set %zu n %zu mu %.4g: refused (%s)", i, root->n, root->mu, e.message);
+                continue;
+            }
+            bkf_cycle *cy = profile_of(p, root->v);
+            double hmax = -INFINITY, hmax_err = 0, hmax_im = 0;
+            int vouched = 1;
+            for (size_t j = 0; 2 * j <= root->n && vouched; j++) {
+                bkf_hill_eigenvalue h[4];
+                double herr[4];
+                size_t found = 0, unresolved = 0;
+                CHECK(bkf_hill_leading(cy, p.gamma, TWO_PI * (double)j / (double)root->n, 32, 1e-7, 4, h, herr,
+                                       &found, &unresolved, &e) == BKF_OK);
+                vouched = found >= 2 && unresolved == 0;
+                for (size_t m = 0; m < found; m++) {
+                    if (j == 0 && hypot(h[m].re, h[m].im) < 1e-6) continue;
+                    if (h[m].re > hmax) hmax = h[m].re, hmax_err = herr[m], hmax_im = h[m].im;
+                    break;
+                }
+            }
+            bkf_cycle_free(cy);
+            if (!vouched) {
+                bkf_test_note("set %zu n %zu mu %.4g: Hill at 32/64 modes does not vouch", i, root->n, root->mu);
+                bkf_trainspec_result_free(&r);
+                continue;
+            }
+            if (r.sigma_is_bound) {
+                CHECK_MSG(hmax < r.sigma_max, "set %zu: Hill's %.10g right of the bound %.10g", i, hmax, r.sigma_max);
+            } else {
+                CHECK_MSG(fabs(r.sigma_max - hmax) <= r.sigma_max_err + hmax_err + 1e-9,
+                          "set %zu n %zu: sigma_max %.10g (err %.2g) against Hill's %.10g (err %.2g)", i, root->n,
+                          r.sigma_max, r.sigma_max_err, hmax, hmax_err);
+                CHECK(fabs(fabs(r.sigma_max_im) - fabs(hmax_im)) <= r.sigma_max_err + hmax_err + 1e-9);
+                bkf_trainspec_train tr = {root->n, root->v};
+                size_t j = (size_t)lround(r.kappa_max * p.S / TWO_PI) % root->n;
+                double re, im;
+                CHECK_MSG(bkf_trainspec_eigenvalue_at(&p, &tr, j, r.sigma_max, r.sigma_max_im, 16, &re, &im, NULL,
+                                                      &e) == BKF_OK,
+                          "%s", e.message);
+                CHECK_MSG(hypot(re - r.sigma_max, im - r.sigma_max_im) <= r.sigma_max_err,
+                          "set %zu n %zu: %.12g%+.12gi on 16 times the steps, %.12g%+.12gi (err %.2g) reported", i,
+                          root->n, re, im, r.sigma_max, r.sigma_max_im, r.sigma_max_err);
+            }
+            bkf_test_note("set %zu (%s) gamma %.4g c %.4g nu %.4g S %.4g n %zu mu %.4g: sigma_max %.10g (err %.2g), "
+                          "Hill %.10g (err %.2g)",
+                          i, s.kind, s.gamma, s.c, s.nu, s.S, root->n, root->mu, r.sigma_max, r.sigma_max_err, hmax,
+                          hmax_err);
+            bkf_trainspec_result_free(&r);
+            compared++;
+        }
+        bkf_speeds_table_free(&t);
+    }
+    CHECK_MSG(compared == 5, "only %zu sets compared", compared);
+}
+
+/* Issue 33: the paper's thinnest train (n = 12, mu 47) at tol 1e-6, in
+ * Radau steps (work: a pass with the sigma-derivative counts twice) and
+ * monodromies, the measure of time that load does not blur.  Before the
+ * derivative joined the monodromy's pass and the refinement reused its
+ * meshes it took 1.38e7 steps and 2358 monodromies; the value itself is
+ * held to Hill-independent references by the tests above. */
+TEST(trainspec_thinnest_paper_train_within_its_work)
+{
+    bkf_model_params p = paper();
+    bkf_trainspec_result r = ring(p, 12, root_v(p, 12), 1e-6);
+    bkf_test_note("n 12: work %.4g Radau steps, %zu monodromies, sigma_max %.10g (err %.2g)", r.work, r.evaluations,
+                  r.sigma_max, r.sigma_max_err);
+    CHECK_MSG(r.work < 1e7 && r.evaluations < 1200, "work %.4g, %zu monodromies", r.work, r.evaluations);
+    CHECK(r.sigma_max > 0.002295 && r.sigma_max < 0.0022952);
     bkf_trainspec_result_free(&r);
 }

@@ -1,0 +1,432 @@
+/* Floquet multipliers of a solved orbit: Arnoldi (ARPACK's dnaupd/dneupd,
+ * reverse communication) on the monodromy's action
+ * v -> R_s^{-1} DPhi_T(u0) v on the full domain, one Bloch sector at a
+ * time.  The trivial eigenvectors f(u0) and d_x u0 are known: their
+ * multipliers are measured on their span (W^T A W) and the span is
+ * projected out of the operator in sector 0, A (I - W W^T), which keeps
+ * every other multiplier exactly (W spans an invariant subspace of A) and
+ * leaves none of them to be mistaken for a trivial one. */
+#include "orbit_internal.h"
+
+#include <arpack/arpack.h>
+#include <gsl/gsl_math.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Multipliers below this in modulus are the projections' null space (or
+ * too small to matter for stability), not reported. */
+#define MULT_FLOOR 1e-10
+
+typedef struct {
+    bkf_orbit *ob;
+    orbit_flow *fl;
+    size_t N, n, m, Nc;       /* n = 2N */
+    double T, s, tol;
+    const double *u;
+    double *w[2];             /* orthonormal trivial directions */
+    size_t ntriv;
+    double *tmp, *tmp2;
+    int sector;               /* the sector projected on, -1: none */
+    size_t matvecs;
+    bkf_error err;
+} mult_op;
+
+static double dot(const double *a, const double *b, size_t n)
+{
+    double s = 0.0;
+    for (size_t i = 0; i < n; i++) s += a[i] * b[i];
+    return s;
+}
+
+/* The real sector {j, m - j}: v's part that the cell shift multiplies by
+ * exp(+-2 pi i j/m), in place. */
+static void project_sector(mult_op *op, double *v)
+{
+    size_t m = op->m, Nc = op->Nc, N = op->N;
+    if (m == 1 || op->sector < 0) return;
+    int j = op->sector;
+    double c = (j == 0 || 2 * (size_t)j == m) ? 1.0 : 2.0;
+    for (int f = 0; f < 2; f++) {
+        double *x = v + (size_t)f * N;
+        for (size_t i = 0; i < Nc; i++) {
+            for (size_t l = 0; l < m; l++) {
+                double a = 0.0;
+                for (size_t l2 = 0; l2 < m; l2++)
+                    a += cos(2.0 * M_PI * (double)j * (double)((l2 + m - l) % m) / (double)m) *
+                         x[i + l2 * Nc];
+                op->tmp2[l] = c * a / (double)m;
+            }
+            for (size_t l = 0; l < m; l++) x[i + l * Nc] = op->tmp2[l];
+        }
+    }
+}
+
+/* y = R_s^{-1} DPhi_T x at flow tolerance tol. */
+static int monodromy(mult_op *op, const double *x, double *y, double tol)
+{
+    int s = orbit_flow_run(op->fl, op->u, x, op->T, tol, NULL, y, NULL, &op->err);
+    if (s) return s;
+    orbit_flow_shift(op->fl, y, -op->s, y, NULL);
+    op->matvecs++;
+    return BKF_OK;
+}
+
+/* The operator Arnoldi sees: P A (I - W W^T) P in sector 0, P A P else. */
+static int apply(mult_op *op, const double *x, double *y, double tol)
+{
+    size_t n = op->n;
+    memcpy(op->tmp, x, n * sizeof *x);
+    project_sector(op, op->tmp);
+    if (op->sector <= 0)
+        for (size_t k = 0; k < op->ntriv; k++) {
+            double a = dot(op->w[k], op->tmp, n);
+            for (size_t i = 0; i < n; i++) op->tmp[i] -= a * op->w[k][i];
+        }
+    int s = monodromy(op, op->tmp, y, tol);
+    if (s) return s;
+    project_sector(op, y);
+    return BKF_OK;
+}
+
+static int push(bkf_orbit *ob, const bkf_orbit_multiplier *mu)
+{
+    if (ob->nmult == ob->capmult) {
+        size_t cap = ob->capmult ? 2 * ob->capmult : 32;
+        bkf_orbit_multiplier *p = realloc(ob->mult, cap * sizeof *p);
+        if (!p) return BKF_ENOMEM;
+        ob->mult = p;
+        ob->capmult = cap;
+    }
+    ob->mult[ob->nmult++] = *mu;
+    return BKF_OK;
+}
+
+/* The grid-scale content of an eigenvector: the larger tail of its two
+ * fields (and of the real and imaginary parts). */
+static double tail_of(mult_op *op, const double *zr, const double *zi)
+{
+    bkf_pde *pde = op->fl->pde;
+    double t = 0.0;
+    for (int f = 0; f < 2; f++) {
+        t = fmax(t, bkf_pde_spectral_tail(pde, zr + (size_t)f * op->N));
+        if (zi) t = fmax(t, bkf_pde_spectral_tail(pde, zi + (size_t)f * op->N));
+    }
+    return t;
+}
+
+/* The trivial multipliers: the eigenvalues of W^T A W (one or two), each
+ * with the residual |A W - W (W^T A W)| as its error. */
+static int trivial(mult_op *op, bkf_orbit_spectrum *sp, double orbit_err, bkf_error *err)
+{
+    size_t n = op->n, k = op->ntriv;
+    double M[2][2] = {{0, 0}, {0, 0}}, res = 0.0;
+    double *Aw[2];
+    double *buf = malloc(2 * n * sizeof *buf);
+    if (!buf) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    Aw[0] = buf;
+    Aw[1] = buf + n;
+    for (size_t a = 0; a < k; a++) {
+        int s = monodromy(op, op->w[a], Aw[a], op->tol);
+        if (s) {
+            free(buf);
+            return bkf_error_set(err, s, "%s", op->err.message);
+        }
+        for (size_t b = 0; b < k; b++) M[b][a] = dot(op->w[b], Aw[a], n);
+    }
+    for (size_t a = 0; a < k; a++) {
+        double r = 0.0;
+        for (size_t i = 0; i < n; i++) {
+            double v = Aw[a][i];
+            for (size_t b = 0; b < k; b++) v -= op->w[b][i] * M[b][a];
+            r += v * v;
+        }
+        res = fmax(res, sqrt(r));
+    }
+    free(buf);
+    double lam[2][2]; /* re, im */
+    if (k == 1) {
+        lam[0][0] = M[0][0];
+        lam[0][1] = 0.0;
+    } else {
+        double tr = M[0][0] + M[1][1], det = M[0][0] * M[1][1] - M[0][1] * M[1][0];
+        double disc = tr * tr / 4 - det;
+        double sq = sqrt(fabs(disc));
+        lam[0][0] = tr / 2 + (disc >= 0 ? sq : 0);
+        lam[1][0] = tr / 2 - (disc >= 0 ? sq : 0);
+        lam[0][1] = disc >= 0 ? 0 : sq;
+        lam[1][1] = disc >= 0 ? 0 : -sq;
+    }
+    sp->trivial_found = 0;
+    sp->trivial_dev = 0.0;
+    for (size_t a = 0; a < k; a++) {
+        bkf_orbit_multiplier mu;
+        memset(&mu, 0, sizeof mu);
+        mu.re = lam[a][0];
+        mu.im = lam[a][1];
+        mu.abs = hypot(mu.re, mu.im);
+        mu.err = res + orbit_err;
+        mu.kind = a == 0 ? BKF_ORBIT_MULT_TRIVIAL_TIME : BKF_ORBIT_MULT_TRIVIAL_SPACE;
+        mu.alignment = 1.0;
+        double dev = hypot(mu.re - 1.0, mu.im);
+        sp->trivial_dev = fmax(sp->trivial_dev, dev);
+        /* found: 1 within its error, and the span invariant to that error */
+        if (dev <= fmax(10.0 * mu.err, 1e-6)) sp->trivial_found++;
+        if (push(op->ob, &mu)) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    return BKF_OK;
+}
+
+static int by_sector_then_abs(const void *a, const void *b)
+{
+    const bkf_orbit_multiplier *x = a, *y = b;
+    if (x->sector != y->sector) return x->sector < y->sector ? -1 : 1;
+    if (x->kind != y->kind) {
+        int tx = x->kind == BKF_ORBIT_MULT_TRIVIAL_TIME || x->kind == BKF_ORBIT_MULT_TRIVIAL_SPACE;
+        int ty = y->kind == BKF_ORBIT_MULT_TRIVIAL_TIME || y->kind == BKF_ORBIT_MULT_TRIVIAL_SPACE;
+        if (tx != ty) return tx ? -1 : 1;
+    }
+    return x->abs > y->abs ? -1 : x->abs < y->abs ? 1 : 0;
+}
+
+/* One sector's k leading multipliers. */
+static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_err,
+                   double tangent_rel, size_t *nconv_out, size_t *nev_out, bkf_error *err)
+{
+    a_int n = (a_int)op->n;
+    a_int nev = (a_int)o->k;
+    if (nev > n - 2) nev = n - 2;
+    a_int ncv = 2 * nev + 1 > nev + 20 ? 2 * nev + 1 : nev + 20;
+    if (ncv > n) ncv = n;
+    a_int lworkl = 3 * ncv * ncv + 6 * ncv;
+    double *resid = malloc((size_t)n * sizeof *resid);
+    double *V = malloc((size_t)n * (size_t)ncv * sizeof *V);
+    double *workd = malloc(3 * (size_t)n * sizeof *workd);
+    double *workl = malloc((size_t)lworkl * sizeof *workl);
+    double *dr = malloc((size_t)(nev + 1) * sizeof *dr);
+    double *di = malloc((size_t)(nev + 1) * sizeof *di);
+    double *Z = malloc((size_t)n * (size_t)(nev + 1) * sizeof *Z);
+    double *workev = malloc(3 * (size_t)ncv * sizeof *workev);
+    a_int *select = calloc((size_t)ncv, sizeof *select);
+    double *Az = malloc(2 * (size_t)n * sizeof *Az);
+    int s = BKF_OK;
+    if (!resid || !V || !workd || !workl || !dr || !di || !Z || !workev || !select || !Az) {
+        s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        goto done;
+    }
+    /* a fixed pseudo-random start (reproducible), in the sector */
+    unsigned long long st = 0x9E3779B97F4A7C15ULL + (unsigned long long)op->sector;
+    for (a_int i = 0; i < n; i++) {
+        st = st * 6364136223846793005ULL + 1442695040888963407ULL;
+        resid[i] = (double)(st >> 11) / 9007199254740992.0 - 0.5;
+    }
+    project_sector(op, resid);
+    a_int iparam[11] = {0}, ipntr[14] = {0};
+    iparam[0] = 1;
+    iparam[2] = o->max_restarts;
+    iparam[6] = 1;
+    a_int ido = 0, info = 1;
+    for (;;) {
+        dnaupd_c(&ido, "I", n, "LM", nev, o->arnoldi_tol, resid, ncv, V, n, iparam, ipntr, workd,
+                 workl, lworkl, &info);
+        if (ido != -1 && ido != 1) break;
+        if ((s = apply(op, workd + ipntr[0] - 1, workd + ipntr[1] - 1, op->tol))) {
+            bkf_error_set(err, s, "%s", op->err.message);
+            goto done;
+        }
+        if (op->ob->o.progress &&
+            op->ob->o.progress("arnoldi", fmin(1.0, (double)op->matvecs / (double)(4 * ncv)),
+                               op->ob->o.progress_data)) {
+            s = bkf_error_set(err, BKF_ECANCELED, "canceled during Arnoldi");
+            goto done;
+        }
+    }
+    if (info < 0 || (info != 0 && info != 1)) {
+        s = bkf_error_set(err, BKF_ENUMERIC, "ARPACK dnaupd failed (info %d) in sector %d",
+                          (int)info, op->sector);
+        goto done;
+    }
+    a_int nconv = iparam[4];
+    *nev_out = (size_t)nev;
+    *nconv_out = (size_t)nconv;
+    if (nconv < 1) {
+        s = bkf_error_set(err, BKF_ENUMERIC,
+                          "ARPACK converged no multiplier in sector %d after %d restarts",
+                          op->sector, o->max_restarts);
+        goto done;
+    }
+    a_int info2 = 0;
+    dneupd_c(1, "A", select, dr, di, Z, n, 0.0, 0.0, workev, "I", n, "LM", nev, o->arnoldi_tol,
+             resid, ncv, V, n, iparam, ipntr, workd, workl, lworkl, &info2);
+    if (info2 != 0) {
+        s = bkf_error_set(err, BKF_ENUMERIC, "ARPACK dneupd failed (info %d) in sector %d",
+                          (int)info2, op->sector);
+        goto done;
+    }
+    nconv = iparam[4];
+    *nconv_out = (size_t)nconv;
+    for (a_int k = 0; k < nconv; k++) {
+        double re = dr[k], im = di[k];
+        int pair = im != 0.0;
+        if (pair && im < 0) continue; /* its conjugate carries the vector */
+        const double *zr = Z + (size_t)k * (size_t)n;
+        const double *zi = pair && k + 1 < nconv ? Z + (size_t)(k + 1) * (size_t)n : NULL;
+        if (pair && !zi) continue;
+        double mag = hypot(re, im);
+        if (!(mag >= MULT_FLOOR)) continue;
+        /* the Ritz pair's residual with the flow ten times more accurate */
+        double r2 = 0.0, z2 = dot(zr, zr, op->n) + (zi ? dot(zi, zi, op->n) : 0.0);
+        if ((s = apply(op, zr, Az, 0.1 * op->tol)) ||
+            (zi && (s = apply(op, zi, Az + op->n, 0.1 * op->tol)))) {
+            bkf_error_set(err, s, "%s", op->err.message);
+            goto done;
+        }
+        for (size_t i = 0; i < op->n; i++) {
+            double a = Az[i] - (re * zr[i] - (zi ? im * zi[i] : 0.0));
+            r2 += a * a;
+            if (zi) {
+                double b = Az[op->n + i] - (im * zr[i] + re * zi[i]);
+                r2 += b * b;
+            }
+        }
+        bkf_orbit_multiplier mu;
+        memset(&mu, 0, sizeof mu);
+        mu.re = re;
+        mu.im = fabs(im);
+        mu.abs = mag;
+        /* twice the residual, as the orbit's flow share (orbit.c) */
+        mu.err = 2.0 * sqrt(r2 / z2) + tangent_rel * mag + orbit_err;
+        mu.sector = op->sector < 0 ? 0 : (size_t)op->sector;
+        mu.tail = tail_of(op, zr, zi);
+        mu.kind = mu.tail > o->grid_tail ? BKF_ORBIT_MULT_GRID : BKF_ORBIT_MULT_PHYSICAL;
+        double al = 0.0, nz = sqrt(dot(zr, zr, op->n));
+        for (size_t t = 0; t < op->ntriv; t++) al = fmax(al, fabs(dot(op->w[t], zr, op->n)) / nz);
+        mu.alignment = al;
+        if (push(op->ob, &mu)) {
+            s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            goto done;
+        }
+        if (pair) {
+            mu.im = -mu.im;
+            if (push(op->ob, &mu)) {
+                s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+                goto done;
+            }
+        }
+    }
+done:
+    free(resid);
+    free(V);
+    free(workd);
+    free(workl);
+    free(dr);
+    free(di);
+    free(Z);
+    free(workev);
+    free(select);
+    free(Az);
+    return s;
+}
+
+int orbit_mult_run(bkf_orbit *ob, const bkf_orbit_mult_options *o, bkf_orbit_spectrum *sp,
+                   bkf_error *err)
+{
+    memset(sp, 0, sizeof *sp);
+    sp->verdict = BKF_ORBIT_UNDECIDED;
+    ob->nmult = 0;
+    if (!ob->full) {
+        bkf_error e;
+        if (!(ob->full = orbit_flow_alloc(&ob->model, &ob->o, &e)))
+            return bkf_error_set(err, e.status, "%s", e.message);
+    }
+    const bkf_orbit_result *r = &ob->result;
+    mult_op op;
+    memset(&op, 0, sizeof op);
+    op.ob = ob;
+    op.fl = ob->full;
+    op.N = ob->model.N;
+    op.n = 2 * op.N;
+    op.m = ob->cells;
+    op.Nc = ob->Nc;
+    op.T = r->period;
+    op.s = r->shift;
+    op.tol = ob->o.flow_tol;
+    op.u = ob->psi; /* psi then eta, contiguous */
+    op.sector = -1;
+    size_t n = op.n;
+    double *mem = malloc((4 * n + op.m) * sizeof *mem);
+    if (!mem) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    op.w[0] = mem;
+    op.w[1] = mem + n;
+    op.tmp = mem + 2 * n;
+    op.tmp2 = mem + 3 * n; /* m values for the sector sums, then scratch */
+    int s = orbit_flow_rhs(op.fl, op.u, op.w[0], err);
+    if (s) goto done;
+    double nf = sqrt(dot(op.w[0], op.w[0], n));
+    for (size_t i = 0; i < n; i++) op.w[0][i] /= nf;
+    op.ntriv = 1;
+    if (ob->model.kind == BKF_MODEL_CONTINUUM && r->symmetry == BKF_ORBIT_SYM_GENERIC) {
+        orbit_flow_dx(op.fl, op.u, op.w[1]);
+        double a = dot(op.w[0], op.w[1], n);
+        for (size_t i = 0; i < n; i++) op.w[1][i] -= a * op.w[0][i];
+        double nd = sqrt(dot(op.w[1], op.w[1], n));
+        for (size_t i = 0; i < n; i++) op.w[1][i] /= nd;
+        op.ntriv = 2;
+    }
+    sp->trivial_expected = op.ntriv;
+    double orbit_err = r->err;
+    if ((s = trivial(&op, sp, orbit_err, err))) goto done;
+    int j0 = o->sector < 0 ? 0 : o->sector, j1 = o->sector < 0 ? (int)(op.m / 2) : o->sector;
+    size_t short_of = 0;
+    for (int j = j0; j <= j1; j++) {
+        op.sector = op.m == 1 ? -1 : j;
+        if (op.m == 1) op.sector = -1;
+        size_t nconv = 0, nev = 0;
+        if ((s = arnoldi(&op, o, orbit_err, r->tangent_rel, &nconv, &nev, err))) goto done;
+        if (nconv < nev) short_of += nev - nconv;
+    }
+    qsort(ob->mult, ob->nmult, sizeof *ob->mult, by_sector_then_abs);
+    sp->m = ob->mult;
+    sp->count = ob->nmult;
+    sp->matvecs = op.matvecs;
+    /* the verdict: the largest physical multiplier against 1 */
+    double big = -1.0, big_err = 0.0, grid_big = -1.0;
+    size_t at = 0;
+    for (size_t i = 0; i < ob->nmult; i++) {
+        const bkf_orbit_multiplier *mu = &ob->mult[i];
+        if (mu->kind == BKF_ORBIT_MULT_PHYSICAL && mu->abs > big) {
+            big = mu->abs;
+            big_err = mu->err;
+            at = i;
+        }
+        if (mu->kind == BKF_ORBIT_MULT_GRID) grid_big = fmax(grid_big, mu->abs + mu->err);
+    }
+    sp->largest_abs = big >= 0 ? big : NAN;
+    sp->largest_err = big >= 0 ? big_err : NAN;
+    sp->largest_index = at;
+    if (sp->trivial_found < sp->trivial_expected)
+        snprintf(sp->reason, sizeof sp->reason,
+                 "a trivial multiplier is not 1 within its error (max |m - 1| %.3g)",
+                 sp->trivial_dev);
+    else if (short_of)
+        snprintf(sp->reason, sizeof sp->reason,
+                 "Arnoldi converged %zu fewer multipliers than asked", short_of);
+    else if (big < 0)
+        snprintf(sp->reason, sizeof sp->reason, "no physical multiplier found");
+    else if (grid_big >= 1.0 && grid_big >= big - big_err)
+        snprintf(sp->reason, sizeof sp->reason,
+                 "a grid-scale multiplier reaches %.6g: refine N or dealias", grid_big);
+    else if (big - big_err > 1.0)
+        sp->verdict = BKF_ORBIT_UNSTABLE;
+    else if (big + big_err < 1.0)
+        sp->verdict = BKF_ORBIT_STABLE;
+    else
+        snprintf(sp->reason, sizeof sp->reason,
+                 "the largest |m| = %.9g is within its error %.3g of 1",
+                 big, big_err);
+    s = BKF_OK;
+done:
+    free(mem);
+    return s;
+}

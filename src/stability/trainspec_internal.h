@@ -1,0 +1,124 @@
+/* Internal to the spectra of front trains (src/stability/trainspec.c, the
+ * ring and the line; trainspec_mode.c, single eigenvalues and their
+ * eigenfunctions): the context, the Radau meshes and the pieces both use.
+ * Not installed, not part of the API. */
+#ifndef BKFRONT_TRAINSPEC_INTERNAL_H
+#define BKFRONT_TRAINSPEC_INTERNAL_H
+
+#include <complex.h>
+#include <signal.h>
+#include <stddef.h>
+
+#include "bkfront/cycle.h"
+#include "bkfront/trainspec.h"
+
+#define TOL_MIN BKF_TRAINSPEC_TOL_MIN
+/* The profile comes from a cycle solved to 1e-12: its share of an
+ * eigenvalue's error, per unit |sigma| (at least 1), measured by the
+ * nu -> -nu symmetry (whose two cycles differ) at below 1e-9. */
+#define PROFILE_ERROR 2e-9
+#define TOL_MAX BKF_TRAINSPEC_TOL_MAX
+#define PER_KAPPA_MAX 50
+/* Mesh multiplier (substeps) of the first pass. */
+#define SUBSTEPS_START 1
+#define MESH_MAX_STEPS 100000
+#define MESH_MIN_STEPS 16
+/* Heights sampled per family on the first pass, and the finest interval as
+ * a fraction of the window. */
+#define CURVE_START 48
+#define CURVE_MIN_FRACTION (1.0 / 65536.0)
+/* The traced curves' a is located to this (absolute, see height_at). */
+#define TRACE_TOL 1e-6
+#define Y_MAX_LIMIT 1e4
+#define NEWTON_MAX 30
+#define MESH_REFINEMENTS 4
+#define RESOLVE_TURN 0.5
+/* The window reaches this far left of the axis, per unit gamma (or to
+ * r_inf / 2 if that is nearer). */
+#define WINDOW_DEPTH 0.05
+/* The edges of a curve (where it leaves the window) are located to this
+ * fraction of the window's height; phase and bends to CURVE_MIN_FRACTION. */
+#define EDGE_FRACTION (1.0 / 1024.0)
+#define MAX_WORK_DEFAULT 2.5e7
+/* A long (stiff) step is used where the fast solution decays by at least
+ * this many e-foldings per step over the whole window's Re sigma. */
+#define STIFF_MIN 1.0
+/* Through the fronts the coefficients change faster than the local rates
+ * tell: a step spans at most this change of the profile f (measured: at
+ * mu 47 it cuts the error of a 1400-step mesh from 1.6e-4 to 2e-7). */
+#define PROFILE_TURN 0.03
+/* The cycle's own mesh (adapted to the cycle at tol 1e-12) knows where the
+ * coefficients change fast better than the rates do: each of its steps
+ * takes at least this share of a step. */
+#define NODE_SHARE 0.5
+/* The fine mesh halves every step of the coarse one and the Radau step is
+ * fifth order: the fine value's error is the difference / 31 once the
+ * meshes converge (measured ratios 27-32 at mu 4 to 47, 19 on the first,
+ * unconverged pair at mu 47); dividing by 8
+ * keeps a margin of 4. */
+#define RICHARDSON 8.0
+
+enum { FAMILIES = 2 };
+
+/* Coefficients at the three Radau IIA points of every step,
+ * u'' = a u' + (b0 + beta sigma (sigma + gamma phi)) u. */
+typedef struct {
+    size_t steps;
+    double *h, *a, *b0, *phi; /* h per step; a, b0, phi: STRIDE per step */
+    /* per step, the parts of the stage matrix G and of A bp that do not
+     * depend on sigma (see radau_step): G0, M = A diag(phi) A (9 each),
+     * A b0 and A phi (3 each) */
+    double *g0, *m, *ab0, *aphi;
+    double trace_sum;         /* the steps' quadratures of the trace: ln det M */
+} mesh;
+
+enum { STRIDE = 3 };
+
+typedef struct {
+    double gamma, c, nu, mu, v, s, beta, T, log_m, S, L;
+    size_t n;
+    double tol;
+    bkf_cycle *cycle;
+    double *nodes; /* cycle mesh 0..T */
+    size_t node_count;
+    size_t substeps;
+    double sigma_reach; /* largest |sigma| the meshes must resolve */
+    double re_floor;    /* smallest Re sigma the meshes must serve (Radau steps
+                           need the fast solution to decay there) */
+    double *need;       /* per cycle step: the steps it needs at sigma_reach (see mesh_needs) */
+    mesh coarse, fine;
+    size_t evaluations;
+    double work, max_work;               /* steps taken, and allowed */
+    const volatile sig_atomic_t *cancel;
+    int stop;                            /* BKF_EBUDGET or BKF_ECANCELED once either is hit */
+} ctx;
+
+/* The context of one train: its cycle, solved to 1e-12, the cycle's mesh,
+ * the budget and the two Radau meshes (coarse, fine). */
+int trainspec_ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, double tol,
+                       const bkf_trainspec_options *o, bkf_error *err);
+void trainspec_ctx_free(ctx *x);
+/* The steps each cycle step needs for |sigma| up to reach (x->need). */
+int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err);
+/* The step boundaries of a mesh of `substeps` times the steps needed. */
+int trainspec_mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, bkf_error *err);
+/* A mesh on the boundaries bounds[0..steps]: the coefficients at each step's Radau points. */
+int trainspec_mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf_error *err);
+int trainspec_mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err);
+void trainspec_mesh_free(mesh *m);
+/* The Radau IIA step i at sigma in p's basis, and its sigma-derivative when de is not NULL. */
+void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
+                          double complex de[4]);
+/* Keeps v's entries near 1 in modulus, the factor's log into *scale. */
+void trainspec_rescale(double complex *v, size_t count, double *scale);
+/* The monodromy of p over mesh m at sigma (times exp(*scale)), its derivative into dp when not NULL. */
+void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double complex p[4],
+                                double complex *dp, double *scale);
+/* phase wrapped into [-pi, pi) */
+double trainspec_wrap(double phase);
+/* Newton on the multiplier exp(i theta) over mesh m from *sigma. */
+int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step);
+/* The reason a search was cut short (budget, cancel), over rc. */
+int trainspec_stopped(const ctx *x, int rc, bkf_error *err);
+
+#endif
