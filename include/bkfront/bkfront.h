@@ -35,6 +35,7 @@
 #include "bkfront/fronts.h"
 #include "bkfront/stability.h"
 #include "bkfront/stabmap.h"
+#include "bkfront/orbits.h"
 #include "bkfront/oscillation.h"
 #include "bkfront/init.h"
 #include "bkfront/seed.h"

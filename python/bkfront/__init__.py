@@ -29,7 +29,7 @@ import numpy as np
 from ._lib import ffi, lib, libc
 from . import _lib
 
-__all__ = ["period", "speeds", "branch", "floquet", "simulate", "check", "stability",
+__all__ = ["period", "speeds", "branch", "floquet", "orbit", "simulate", "check", "stability",
            "product", "products", "options", "version", "Table",
            "Error", "InputError", "NumericalError", "ToleranceError", "BudgetError",
            "BlowupError", "Cancelled"]
@@ -411,6 +411,15 @@ def floquet(gamma, c, **keys):
     dispersion relations (``nu=..., q=...``), the threshold
     (``threshold=True``) or the stability diagram (``diagram=True``)."""
     return product("floquet", gamma=gamma, c=c, **keys)
+
+
+def orbit(**keys):
+    """The branch of period-doubled orbits (``bkfront orbit``): from the global
+    oscillation's period doubling of the ring's mode j, one row per orbit
+    (kind, nu, period, period_err, amplitude, verdict, the largest multiplier,
+    events), e.g. ``orbit(gamma=2, c=0.3, S=20, max_points=20)``; the
+    results ``p_pd``, ``p_pd_err``, ``j``, ``T_pd`` are the switch's point."""
+    return product("orbit", **keys)
 
 
 def check(**keys):

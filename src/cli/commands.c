@@ -7,6 +7,7 @@
 extern const cli_command cli_cmd_period;
 extern const cli_command cli_cmd_asymptotics;
 extern const cli_command cli_cmd_floquet;
+extern const cli_command cli_cmd_orbit;
 extern const cli_command cli_cmd_speeds;
 extern const cli_command cli_cmd_branch;
 extern const cli_command cli_cmd_stability;
@@ -26,6 +27,7 @@ static const cli_command *const commands[] = {
     &cli_cmd_stability,
     &cli_cmd_profile,
     &cli_cmd_floquet,
+    &cli_cmd_orbit,
     &cli_cmd_friction,
     &cli_cmd_simulate,
     &cli_cmd_check,

@@ -11,6 +11,7 @@
 #include "bkfront/check.h"
 #include "bkfront/friction.h"
 #include "bkfront/fronts.h"
+#include "bkfront/orbits.h"
 #include "bkfront/oscillation.h"
 #include "bkfront/period.h"
 #include "bkfront/profile.h"
@@ -118,6 +119,33 @@ static int floquet_write(const void *spec, FILE *out, bkf_io_format format,
         s.warn_data = hooks->data;
     }
     return bkf_oscillation_write(&s, out, format, prov, err);
+}
+
+/* ------------------------------------------------------------- orbit */
+
+static const bkf_option *orbit_options(size_t *count)
+{
+    *count = bkf_orbits_spec_noptions;
+    return bkf_orbits_spec_options;
+}
+static void orbit_init(void *spec) { *(bkf_orbits_spec *)spec = bkf_orbits_spec_default(); }
+static int orbit_check(const void *spec, const char *prefix, bkf_error *err)
+{
+    return bkf_orbits_check(spec, prefix, err);
+}
+static void orbit_release(void *spec) { (void)spec; }
+/* The hooks' progress and cancel flag drive the branch. */
+static int orbit_write(const void *spec, FILE *out, bkf_io_format format,
+                       const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
+                       bkf_error *err)
+{
+    bkf_orbits_spec s = *(const bkf_orbits_spec *)spec;
+    if (hooks) {
+        s.progress = hooks->progress;
+        s.progress_data = hooks->data;
+        s.cancel = hooks->cancel;
+    }
+    return bkf_orbits_write(&s, out, format, prov, err);
 }
 
 ADAPTERS(simulate, bkf_simulate_spec, bkf_simulate, release_nothing)
@@ -244,6 +272,14 @@ static const bkf_catalog_kind profile_kinds[] = {
 static const bkf_catalog_kind floquet_kinds[] = {
     {"dispersion", {.keys = "+gamma +c q=0:6:241 ^S +nu ^tol"}, {0}},
     {"threshold", {.first = "threshold", .keys = "+gamma +c @along from to search ^tol"}, {0}}};
+/* The branch starts from the oscillation's period doubling in nu: a
+ * [model]'s nu is not inherited (the branch varies it), nor [accuracy]'s N
+ * (a simulation's grid; the orbit's is a multiple of 2 j, 32 j by default). */
+static const bkf_catalog_kind orbit_kinds[] = {
+    {"orbit",
+     {.keys = "+gamma +c +S ^model!continuum N j from to max-points tol at",
+      .outputs = "out=.tsv spacetime=_spacetime.dat multipliers=_multipliers.tsv"},
+     {0}}};
 /* A simulation's tol is its stepper's, not the accuracy asked of a result:
  * not inherited. */
 static const bkf_catalog_kind simulate_kinds[] = {
@@ -338,6 +374,14 @@ static double floquet_cost(const void *spec)
     if (sp->threshold || sp->diagram) return 2.0;
     return 0.0015 * list_count(&sp->q);
 }
+/* per point: the continuation, the polish and, unless skipped, the
+ * multipliers (3.7 s of CPU a point at the paper's parameters, 0.4 s
+ * without them) */
+static double orbit_cost(const void *spec)
+{
+    const bkf_orbits_spec *sp = spec;
+    return (double)sp->max_points * (sp->no_stability ? 0.4 : 3.7);
+}
 static double simulate_cost(const void *spec) { return simulation_cost(spec); }
 /* Every root's run at up to two grids. */
 static double check_cost(const void *spec)
@@ -376,6 +420,9 @@ static const bkf_catalog_entry entries[] = {
           "front profiles f(z), f'(z) and their place x along the system"),
     ENTRY(floquet, bkf_oscillation_spec,
           "Floquet stability of the global oscillation: dispersion, threshold, diagram"),
+    ENTRY(orbit, bkf_orbits_spec,
+          "period-doubled pacemakers as exact orbits: their branch from the oscillation, folds, "
+          "stability"),
     ENTRY(simulate, bkf_simulate_spec,
           "direct simulation (continuum or chain) with measurements, spacetime field, snapshots"),
     ENTRY(check, bkf_check_spec, "the predicted front speeds against direct simulation"),

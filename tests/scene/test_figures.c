@@ -195,7 +195,10 @@ static const struct {
      "[stability diag]\ndiagram = yes\nn = 2\nnu = -0.99\nto = -0.95\nnu-step = 0.04\n"
      "S = 2\nS-to = 40\nS-samples = 2\ntol = 1e-4\nS-tol = 0.5\n[figure diag]\ndata = diag\n"
      "[sweep sw]\nx = nu=-0.99:-0.95:2\ny = gamma=5:6:2\ntmax = 2\nN = 64\n"
-     "thresholds = 6\nsearch = -0.999:-0.8\n[figure sw]\ndata = sw\n"},
+     "thresholds = 6\nsearch = -0.999:-0.8\n[figure sw]\ndata = sw\n"
+     /* the orbits' own model: at gamma 6, c 0.1 the mode of q_c is j = 46 */
+     "[orbit orb]\ngamma = 2.5\nc = 0.6\nS = 15\nmax-points = 5\nno-stability = yes\n"
+     "[figure orb]\ndata = orb\n"},
     {"gamma 0.7, c 0.8, nu 0.4, S 15",
      "[model]\ngamma = 0.7\nc = 0.8\nnu = 0.4\nS = 15\n" FAR_BODY
      "[period per]\nnu = 0.4,0.9\nmu = 0.1:1e4:7\n[figure per]\ndata = per\n"
@@ -205,7 +208,10 @@ static const struct {
      "[stability diag]\ndiagram = yes\nn = 2\nnu = 0.3\nto = 0.5\nnu-step = 0.2\n"
      "S = 2\nS-to = 15\nS-samples = 2\ntol = 1e-4\nS-tol = 0.5\n[figure diag]\ndata = diag\n"
      "[sweep sw]\nx = nu=0.3:0.5:2\ny = gamma=0.6:0.8:2\ntmax = 2\nN = 64\n"
-     "thresholds = 0.7\n[figure sw]\ndata = sw\n"},
+     "thresholds = 0.7\n[figure sw]\ndata = sw\n"
+     /* gamma 0.7 has no period doubling */
+     "[orbit orb]\ngamma = 3\nc = 0.8\nS = 15\nmax-points = 5\nno-stability = yes\n"
+     "[figure orb]\ndata = orb\n"},
 };
 
 /* Every script a scene draws with (plots/KIND.gp but common.gp, logtics.gp
@@ -213,7 +219,7 @@ static const struct {
 static const char *const scripts[] = {
     "friction", "speeds",        "spacetime", "dispersion", "period",     "validity",
     "profile",  "spectrum",      "branch",    "threshold",  "diagram",    "spectrum_line",
-    "check",    "chain_speeds",  "sweep_map",
+    "check",    "chain_speeds",  "sweep_map", "orbit",
 };
 
 /* A script that is neither drawn by the test nor one of the exceptions

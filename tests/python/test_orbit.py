@@ -1,0 +1,34 @@
+"""bkfront.orbit: the same table as the CLI, and its switch point where
+floquet puts the multiplier at -1."""
+import math
+
+import bkfront
+from conftest import tsv
+
+ARGS = dict(max_points=4, no_stability=True)
+
+
+def test_orbit_equals_the_cli(cli):
+    t = bkfront.orbit(**ARGS)
+    cols, rows = tsv(cli("orbit", "--max-points", 4, "--no-stability").stdout)
+    assert list(t.columns) == cols
+    assert len(t) == len(rows) >= 5
+    for i, r in enumerate(rows):
+        for c in ("nu", "period", "amplitude", "mode_amp"):
+            a, b = t[c][i], float(r[c])
+            assert (math.isnan(a) and math.isnan(b)) or a == b, (c, i, a, b)
+        assert t["kind"][i] == r["kind"]
+    assert t.results["j"] == 9
+
+
+def test_orbit_starts_where_floquet_has_minus_one():
+    t = bkfront.orbit(**ARGS)
+    nu, j = t.results["p_pd"], int(t.results["j"])
+    q = 2 * math.pi * j / 20
+    d = bkfront.floquet(2, 0.3, nu=nu, q=[q])
+    # floquet's dispersion, an independent call, puts mode j on the unit circle at -1
+    assert abs(d["lambda"][0]) < 1e-8
+    assert abs(d["m1_re"][0] + 1) < 1e-8
+    # below the continuum's threshold q_c (the ring's mode is not q_c)
+    th = bkfront.floquet(2, 0.3, threshold=True)
+    assert nu < th["nu_pd"][0] < nu + 1e-3
