@@ -142,7 +142,8 @@ test: deps
 	@$(MAKE) --no-print-directory check-built
 
 # BKF_TEST_JOBS tests at once (default: the online CPUs), BKF_TEST_TIME_LIMIT
-# seconds each (default 240).
+# seconds each (default 240); each run's times, kept in $(BUILD)/test_times.tsv,
+# start the next run's slowest tests first.
 # The benchmarks and the fuzz targets are built (the fuzz targets only
 # compiled: linking them needs clang's libFuzzer, `make fuzz`) so that a
 # change that breaks them fails here, not months later.
@@ -155,6 +156,7 @@ PYTHON ?= /usr/bin/python3
 check-built: $(CLI) $(TESTS) $(BENCH) $(AUDIT) fuzz-syntax $(if $(SANITIZE),,$(SHLIB))
 	@BKFRONT_LIBRARY=$(abspath $(BUILD)/$(SONAME)) BKFRONT_CLI=$(abspath $(CLI)) \
 	  BKF_MAKE="$(MAKE)" BKF_BUILD=$(BUILD) PYTHONPATH=$(CURDIR)/python \
+	  BKF_TEST_TIMES=$(abspath $(BUILD))/test_times.tsv \
 	  tests/run_suites ./$(TESTS) $(if $(SANITIZE),,$(PYTHON) tests/python)
 
 fuzz-syntax:
@@ -191,7 +193,7 @@ bench: deps
 	@$(call install_missing,$(BENCH_PACKAGES))
 	@$(MAKE) --no-print-directory bench-built
 
-bench-built: $(BENCH) $(CLI) $(SHLIB)
+bench-built: $(BENCH) $(CLI) $(SHLIB) $(TESTS)
 	BKFRONT_CLI=$(abspath $(CLI)) ./$(BENCH)
 	BKFRONT_LIBRARY=$(abspath $(BUILD)/$(SONAME)) PYTHONPATH=$(CURDIR)/python \
 	  $(PYTHON) tests/bench/bench_auto.py
@@ -199,6 +201,10 @@ bench-built: $(BENCH) $(CLI) $(SHLIB)
 	./$(CLI) bench --out plots/out/work_precision.tsv
 	tests/bench/bench_sweep.sh ./$(CLI)
 	for g in plots/work_precision_*.gp; do gnuplot $$g || exit 1; done
+	# last, on the quietest machine make bench gives: the table of timings
+	# the manual quotes (docs/timings.md), the suite timed as make test runs it
+	BKF_TIMINGS_SUITE="$(MAKE) --no-print-directory check-built" \
+	  tests/bench/timings.sh ./$(CLI) ./$(TESTS) docs/timings.md
 
 # The MPI build: build/mpi/bkfront, compiled with mpicc, whose `sweep` runs
 # a manager/worker farm under mpirun (src/cli/sweep_mpi.c); test-mpi

@@ -49,15 +49,14 @@ const bkf_option bkf_approx_options[] = {
              "-1/3, and T/(2 pi) - 1 = s mu^2 + s4 mu^4 at small mu;\n"
              "rows compare the fitted coefficients with the derived\n"
              "A* = a1 C(nu), p* = -1/3, B* = L(nu) = -2/(3 (1 - nu^2)),\n"
-             "s* = s2(nu). About 1 s per nu"},
+             "s* = s2(nu)"},
     {.name = "map", .type = BKF_OPT_SWITCH, .offset = offsetof(bkf_approx_spec, map),
      .help = "mode: for each formula, threshold eps and nu, the\n"
              "boundary mu of the region where |T_formula - T|/T <= eps:\n"
              "for the large-mu formulas the smallest mu_min from which\n"
              "it holds at every point up to 1e4, for the small-mu one\n"
              "the largest mu_max up to which it holds from 1e-3 (scan\n"
-             "at 8 points per decade, crossing bisected to 2%).\n"
-             "About 2 s per nu"},
+             "at 8 points per decade, crossing bisected to 2%)"},
     {.name = "grid", .type = BKF_OPT_SWITCH, .offset = offsetof(bkf_approx_spec, grid),
      .help = "mode: T and the three relative errors on a (mu, nu) grid,\n"
              "mu fastest"},

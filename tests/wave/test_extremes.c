@@ -622,6 +622,33 @@ static double log_product(const bkf_floquet_point *p)
 /* The Floquet matrix over gammas x nus (one part of the box: the parts run
  * in parallel), with at most max_refused refusals and max_unverified points
  * nothing independent can check. */
+/* The reference's answers by c q: both tolerances of the matrix ask the
+ * same c q of it, and an evaluation depends on the set and q alone, so the
+ * second asks the first's answer (the reference at c q 100 and gamma 100
+ * costs seconds). */
+typedef struct {
+    double cq[16];
+    int rc[16];
+    bkf_floquet_point pt[16];
+    size_t n;
+} ref_memo;
+
+static int ref_eval(ref_memo *m, bkf_floquet *ref, double cq, bkf_floquet_point *p, bkf_error *e)
+{
+    for (size_t i = 0; i < m->n; i++)
+        if (m->cq[i] == cq) {
+            *p = m->pt[i];
+            return m->rc[i];
+        }
+    int rc = bkf_floquet_eval(ref, cq, p, e);
+    if (m->n < 16) {
+        m->cq[m->n] = cq;
+        m->rc[m->n] = rc;
+        m->pt[m->n++] = *p;
+    }
+    return rc;
+}
+
 static void floquet_matrix(const double *gammas, size_t n_gammas, const double *nus, size_t n_nus,
                            size_t max_refused, size_t max_unverified)
 {
@@ -662,6 +689,7 @@ static void floquet_matrix(const double *gammas, size_t n_gammas, const double *
             CHECK(ref);
             int ref_ok = bkf_floquet_set(ref, gamma, 1.0, nu, &ro, &e) == BKF_OK;
             if (!ref_ok) bkf_test_note("floquet gamma %g nu %g: no reference (%s)", gamma, nu, e.message);
+            ref_memo refs = {.n = 0};
             double t_ref = (double)(clock() - c0) / CLOCKS_PER_SEC;
             for (size_t k = 0; k < sizeof cs / sizeof cs[0]; k++)
                 for (size_t l = 0; l < sizeof tols / sizeof tols[0]; l++) {
@@ -698,7 +726,7 @@ static void floquet_matrix(const double *gammas, size_t n_gammas, const double *
                              * attempt and its estimate still serve if that
                              * estimate is below tol */
                             bkf_floquet_point r;
-                            int rrc = bkf_floquet_eval(ref, cq, &r, &e);
+                            int rrc = ref_eval(&refs, ref, cq, &r, &e);
                             if (rrc == BKF_OK || rrc == BKF_ETOL) {
                                 lref = r.lambda;
                                 unc = r.lambda_err;
