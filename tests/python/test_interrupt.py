@@ -26,6 +26,7 @@ PRODUCTS = {
     "check": dict(n=4, tmax=10, N=128),
     "friction": dict(points=3000),
     "bench": dict(product="pde", quick=True),
+    "orbit": dict(max_points=4, no_stability=True),
 }
 
 CALLS = 50
