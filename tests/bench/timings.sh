@@ -62,7 +62,7 @@ row '`make test`' 'the whole suite after the build (C tests, then pytest), `BKF_
 # the slowest tests of that run (by wall: what the suite waits for), from the
 # runner's lines "ok NAME WALLs CPUs cpu"
 awk '$1 == "ok" && $5 == "cpu" { sub(/s$/, "", $3); sub(/s$/, "", $4); print $2, $3, $4 }' "$dir/stdout" |
-    sort -k2,2 -gr | head -n "$slowest" |
+    sort -k2,2 -gr | awk -v n="$slowest" 'NR <= n' |
     awk '{ printf "| `%s` | a test of that run (`build/run_tests %s`) | %.1f s | %.1f s |\n", $1, $1, $2, $3 }' >>"$rows"
 load_end=$(load)
 
