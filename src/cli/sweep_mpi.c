@@ -155,12 +155,17 @@ static void compute(farm *f)
 
 /* Rank 0's main thread: waits for a message without spinning a core that
  * a compute thread could use (a blocking receive polls in OpenMPI); 1 ms
- * is far below a point's run. */
-static void probe(MPI_Status *st)
+ * is far below a point's run.  0 once the sweep is canceled: mpirun
+ * SIGKILLs the job a second after its SIGTERM, and waiting for the other
+ * ranks' last messages (a loaded machine can take longer than that) would
+ * lose rank 0's own "interrupted" line; their points in flight are not in
+ * the table and --resume computes them again. */
+static int probe(const farm *f, MPI_Status *st)
 {
     for (int flag = 0;;) {
+        if (f->sp->cancel && *f->sp->cancel) return 0;
         MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, st);
-        if (flag) return;
+        if (flag) return 1;
         nanosleep(&(struct timespec){0, 1000000}, NULL);
     }
 }
@@ -175,7 +180,11 @@ static void manage(farm *f)
     char *buf = NULL;
     while (unannounced > 0 || running > 0) {
         MPI_Status st;
-        probe(&st);
+        size_t i;
+        if (!probe(f, &st)) {
+            claim(f, &i); /* claims nothing now: records the cancellation */
+            break;
+        }
         int len;
         MPI_Get_count(&st, MPI_CHAR, &len);
         char *g = realloc(buf, (size_t)len + 1);
@@ -197,7 +206,6 @@ static void manage(farm *f)
             snprintf(e.message, sizeof e.message, "%s", text);
             deliver(f, 0, NULL, &e);
         }
-        size_t i;
         if (claim(f, &i)) {
             uint64_t w = i;
             MPI_Send(&w, 1, MPI_UINT64_T, st.MPI_SOURCE, TAG_WORK, MPI_COMM_WORLD);
@@ -222,6 +230,8 @@ static void serve(const bkf_sweep_spec *sp)
         uint64_t i;
         MPI_Status st;
         const char *out = msg ? msg : ready;
+        /* stopped by a signal: rank 0 no longer listens (see probe) */
+        if (sp->cancel && *sp->cancel) break;
 #pragma omp critical(bkf_sweep_mpi)
         {
             MPI_Send(out, (int)strlen(out), MPI_CHAR, 0, tag, MPI_COMM_WORLD);
@@ -229,7 +239,7 @@ static void serve(const bkf_sweep_spec *sp)
         }
         free(msg);
         msg = NULL;
-        if (st.MPI_TAG == TAG_STOP) return;
+        if (st.MPI_TAG == TAG_STOP) break;
         bkf_error e = {0};
         if ((msg = bkf_sweep_row(sp, (size_t)i, &e))) {
             tag = TAG_ROW;
@@ -241,6 +251,7 @@ static void serve(const bkf_sweep_spec *sp)
         /* out of memory for the message itself: the failure without text */
         if (!msg) snprintf(ready, sizeof ready, "%d out of memory", BKF_ENOMEM);
     }
+    free(msg);
 }
 
 int sweep_mpi_farm(const bkf_sweep_spec *sp, bkf_sweep_table *table, progress_bar *bar,
