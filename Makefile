@@ -18,7 +18,11 @@ FUZZ_PACKAGES     := clang libclang-rt-dev
 # collocation, whose equation files gfortran compiles; scipy's Radau), so
 # that `make test` needs none of them.
 BENCH_PACKAGES    := auto-07p gfortran python3-scipy
-PKGS         := gsl nlopt fftw3 inih lapacke
+PKGS         := gsl nlopt fftw3 inih
+# LAPACKE and ARPACK are compiled against but not linked: src/core/lazylib.c
+# loads them at the first eigenvalue call (with liblapack, libblas and
+# libgfortran they were over half of every process's start).
+LAZY_PKGS    := lapacke
 # HDF5 is compiled against but not linked: src/core/h5.c loads it at the
 # first HDF5 write (its dependency tree was most of every process's start).
 H5_PKG       := hdf5-serial
@@ -26,7 +30,7 @@ H5_PKG       := hdf5-serial
 CC       ?= cc
 OPT      ?= -O2
 BUILD    ?= build
-PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) $(H5_PKG))
+PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) $(LAZY_PKGS) $(H5_PKG))
 PKG_LIBS   = $(shell pkg-config --libs $(PKGS))
 # SANITIZE carries instrumentation flags (make sanitize); CFLAGS from the
 # command line add to, never replace, the project's own.
@@ -42,17 +46,19 @@ SUNDIALS_LIBS := -lsundials_cvodes -lsundials_kinsol -lsundials_sunlinsolband \
 # hdf5-serial.pc does not list; its -L is that of hdf5-serial.  Only the
 # tests link them (to read back what the CLI wrote).
 HDF5_LIBS = -lhdf5_hl $(shell pkg-config --libs $(H5_PKG))
-# The sonames h5.c loads: those of the libraries beside the headers it is
-# compiled with (readelf reads them off the development symlinks).
-hdf5_soname = $(shell for d in $(patsubst -L%,%,$(filter -L%,$(shell pkg-config --libs-only-L $(H5_PKG)))) \
+# The sonames h5.c and lazylib.c load: those of the libraries beside the
+# headers they are compiled with (readelf reads them off the development symlinks).
+lib_soname = $(shell for d in $(patsubst -L%,%,$(filter -L%,$(shell pkg-config --libs-only-L $(H5_PKG)))) \
   $(dir $(shell $(CC) -print-file-name=lib$(1).so)); do \
   [ -e $$d/lib$(1).so ] && { readelf -d $$d/lib$(1).so | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p'; break; }; done)
-$(BUILD)/src/core/h5.o: override CFLAGS += -DBKF_HDF5_SONAME='"$(call hdf5_soname,hdf5)"' \
-  -DBKF_HDF5_HL_SONAME='"$(call hdf5_soname,hdf5_hl)"'
+$(BUILD)/src/core/h5.o: override CFLAGS += -DBKF_HDF5_SONAME='"$(call lib_soname,hdf5)"' \
+  -DBKF_HDF5_HL_SONAME='"$(call lib_soname,hdf5_hl)"'
 # ARPACK (arpack-ng: Arnoldi for the periodic orbits' multipliers) ships a
-# pkg-config file only in some versions; its library name is stable.
-ARPACK_LIBS := -larpack
-LDLIBS   += $(PKG_LIBS) $(SUNDIALS_LIBS) $(ARPACK_LIBS) -lm
+# pkg-config file only in some versions; its library name is stable.  Both
+# sonames are read off lib*.so, which liblapacke-dev and libarpack2-dev ship.
+$(BUILD)/src/core/lazylib.o: override CFLAGS += -DBKF_LAPACKE_SONAME='"$(call lib_soname,lapacke)"' \
+  -DBKF_ARPACK_SONAME='"$(call lib_soname,arpack)"'
+LDLIBS   += $(PKG_LIBS) $(SUNDIALS_LIBS) -lm
 
 # The library's layers, lowest first (CONTRIBUTING.md): a file may include
 # the headers of its own layer and of the layers before it, never after
@@ -329,7 +335,7 @@ $(INST)/bkfront.pc: src/bkfront.pc.in $(INST)/dirs include/bkfront/version.h
 	  -e 's|@RPATH@|$(PC_RPATH)|' \
 	  -e 's|@INCLUDEDIR@|$(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))|' \
 	  -e 's|@VERSION@|$(VERSION)|' -e 's|@REQUIRES@|$(PKGS)|' \
-	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) $(ARPACK_LIBS) -lgomp -lm|' $< > $@
+	  -e 's|@LIBS_PRIVATE@|$(SUNDIALS_LIBS) -lgomp -lm|' $< > $@
 
 # The Python package finds the shared library by its path relative to the
 # package, so that a staged (DESTDIR) or moved tree still works.
@@ -396,7 +402,8 @@ $(AUDIT): $(BUILD)/tests/audit/audit_main.o $(BUILD)/tests/audit/audit.o $(LIB)
 $(BUILD)/src/stability/trainspec.o: override CFLAGS += -fcx-limited-range
 $(BUILD)/tests/%.o: override CFLAGS += -Itests -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' \
   -DBKF_EXAMPLES_DIR='"$(abspath $(BUILD)/examples)"' -DBKF_SOURCE_DIR='"$(CURDIR)"' \
-  -DBKF_HDF5_SONAME='"$(call hdf5_soname,hdf5)"'
+  -DBKF_HDF5_SONAME='"$(call lib_soname,hdf5)"' -DBKF_LAPACKE_SONAME='"$(call lib_soname,lapacke)"' \
+  -DBKF_ARPACK_SONAME='"$(call lib_soname,arpack)"'
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)

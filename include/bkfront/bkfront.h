@@ -10,6 +10,7 @@
 #include "bkfront/model.h"
 #include "bkfront/io.h"
 #include "bkfront/h5.h"
+#include "bkfront/lazylib.h"
 #include "bkfront/asymptotics.h"
 #include "bkfront/continuation.h"
 #include "bkfront/cycle.h"

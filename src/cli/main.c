@@ -6,6 +6,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "args.h"
 #include "commands.h"
+#include "bkfront/lazylib.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -130,8 +131,12 @@ int main(int argc, char **argv)
     bkf_error err = {0};
     int status = cmd->run(sub_argc, sub_argv, &err);
     if (status != BKF_OK) {
-        fprintf(stderr, CLI_PROGRAM " %s: %s\n", cmd->name,
-                err.message[0] ? err.message : "failed");
+        /* a lazily loaded library that did not load is the cause the
+         * library's message (a failed zgeev, ARPACK call) cannot name */
+        const char *lazy = bkf_lazy_failure();
+        fprintf(stderr, CLI_PROGRAM " %s: %s%s%s%s\n", cmd->name,
+                err.message[0] ? err.message : "failed", lazy ? " (" : "", lazy ? lazy : "",
+                lazy ? ")" : "");
     }
     return cli_exit_code(status);
 }

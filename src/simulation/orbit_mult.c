@@ -7,6 +7,7 @@
  * every other multiplier exactly (W spans an invariant subspace of A) and
  * leaves none of them to be mistaken for a trivial one. */
 #include "orbit_internal.h"
+#include "bkfront/lazylib.h"
 
 #include <arpack/arpack.h>
 #include <gsl/gsl_math.h>
@@ -241,6 +242,10 @@ static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_er
             s = bkf_error_set(err, BKF_ECANCELED, "canceled during Arnoldi");
             goto done;
         }
+    }
+    if (info == BKF_LAZY_NOT_LOADED) {
+        s = bkf_error_set(err, BKF_EIO, "multipliers need ARPACK: %s", bkf_lazy_failure());
+        goto done;
     }
     if (info < 0 || (info != 0 && info != 1)) {
         s = bkf_error_set(err, BKF_ENUMERIC, "ARPACK dnaupd failed (info %d) in sector %d",

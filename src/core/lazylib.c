@@ -1,0 +1,136 @@
+/* LAPACK (through LAPACKE) and ARPACK, loaded at their first call.
+ *
+ * Linked, liblapacke and libarpack bring liblapack, libblas, libtmglib,
+ * libgfortran and libquadmath into every bkfront process: 2 of its 3.7 ms
+ * of start (perf stat, task-clock), for `--version` as for a spectrum.
+ * Only the Hill matrices' zgeev (stability/hill.c) and the orbits'
+ * Arnoldi (simulation/orbit_mult.c) call them, so the library defines the
+ * three functions it calls under their own names: each loads its library
+ * once (dlopen, thread-safe) and calls the real one.  The callers are the
+ * same code as when linked.  The names stay inside libbkfront.so (its
+ * version script exports bkf_* only), so a program that links LAPACK
+ * itself keeps its own.
+ *
+ * Where a library does not load, the call fails as the callers already
+ * handle a failed call: zgeev's info and ARPACK's info are set to
+ * BKF_LAZY_NOT_LOADED, and bkf_lazy_failure() says which library did not
+ * load and why. */
+#define _POSIX_C_SOURCE 200809L
+#include "bkfront/lazylib.h"
+
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <arpack/arpack.h>
+#include <lapacke.h>
+
+#ifndef BKF_LAPACKE_SONAME
+#error "BKF_LAPACKE_SONAME (the soname of liblapacke, e.g. liblapacke.so.3) is set by the Makefile"
+#endif
+#ifndef BKF_ARPACK_SONAME
+#error "BKF_ARPACK_SONAME (the soname of libarpack, e.g. libarpack.so.2) is set by the Makefile"
+#endif
+
+static struct {
+    __typeof__(LAPACKE_zgeev) *zgeev;
+    __typeof__(dnaupd_c) *dnaupd;
+    __typeof__(dneupd_c) *dneupd;
+} real;
+
+/* The first failure's reason, written once under the pthread_once of the
+ * load that failed, read after it. */
+static char failure[320];
+static pthread_mutex_t failure_lock = PTHREAD_MUTEX_INITIALIZER;
+
+static void note_failure(const char *soname, const char *package)
+{
+    const char *why = dlerror();
+    pthread_mutex_lock(&failure_lock);
+    if (!failure[0])
+        snprintf(failure, sizeof failure, "%s does not load: %s (Debian: apt-get install %s)",
+                 soname, why ? why : "unknown reason", package);
+    pthread_mutex_unlock(&failure_lock);
+}
+
+/* Loads `soname` and its symbols into `out[]`; NULLs (and the failure
+ * noted) if the library or any symbol is missing.  A failed library is not
+ * closed: it may have run constructors. */
+static void load(const char *soname, const char *package, const char *const *names,
+                 void **out, size_t count)
+{
+    void *lib = dlopen(soname, RTLD_NOW | RTLD_LOCAL);
+    size_t i = 0;
+    for (; lib && i < count; i++)
+        if (!(out[i] = dlsym(lib, names[i]))) break;
+    if (lib && i == count) return;
+    note_failure(soname, package);
+    for (i = 0; i < count; i++) out[i] = NULL;
+}
+
+static pthread_once_t lapacke_once = PTHREAD_ONCE_INIT, arpack_once = PTHREAD_ONCE_INIT;
+
+static void load_lapacke(void)
+{
+    static const char *const names[] = {"LAPACKE_zgeev"};
+    void *p[1];
+    load(BKF_LAPACKE_SONAME, "liblapacke", names, p, 1);
+    real.zgeev = (__typeof__(real.zgeev))p[0];
+}
+
+static void load_arpack(void)
+{
+    static const char *const names[] = {"dnaupd_c", "dneupd_c"};
+    void *p[2];
+    load(BKF_ARPACK_SONAME, "libarpack2", names, p, 2);
+    real.dnaupd = (__typeof__(real.dnaupd))p[0];
+    real.dneupd = (__typeof__(real.dneupd))p[1];
+}
+
+const char *bkf_lazy_failure(void)
+{
+    pthread_mutex_lock(&failure_lock);
+    const char *s = failure[0] ? failure : NULL;
+    pthread_mutex_unlock(&failure_lock);
+    return s;
+}
+
+lapack_int LAPACKE_zgeev(int matrix_layout, char jobvl, char jobvr, lapack_int n,
+                         lapack_complex_double *a, lapack_int lda, lapack_complex_double *w,
+                         lapack_complex_double *vl, lapack_int ldvl, lapack_complex_double *vr,
+                         lapack_int ldvr)
+{
+    pthread_once(&lapacke_once, load_lapacke);
+    if (!real.zgeev) return BKF_LAZY_NOT_LOADED;
+    return real.zgeev(matrix_layout, jobvl, jobvr, n, a, lda, w, vl, ldvl, vr, ldvr);
+}
+
+void dnaupd_c(a_int *ido, char const *bmat, a_int n, char const *which, a_int nev, double tol,
+              double *resid, a_int ncv, double *v, a_int ldv, a_int *iparam, a_int *ipntr,
+              double *workd, double *workl, a_int lworkl, a_int *info)
+{
+    pthread_once(&arpack_once, load_arpack);
+    if (!real.dnaupd) {
+        *info = BKF_LAZY_NOT_LOADED;
+        *ido = 99; /* ARPACK's "done": the caller's loop ends and reads info */
+        return;
+    }
+    real.dnaupd(ido, bmat, n, which, nev, tol, resid, ncv, v, ldv, iparam, ipntr, workd, workl,
+                lworkl, info);
+}
+
+void dneupd_c(a_int rvec, char const *howmny, a_int const *select, double *dr, double *di,
+              double *z, a_int ldz, double sigmar, double sigmai, double *workev,
+              char const *bmat, a_int n, char const *which, a_int nev, double tol, double *resid,
+              a_int ncv, double *v, a_int ldv, a_int *iparam, a_int *ipntr, double *workd,
+              double *workl, a_int lworkl, a_int *info)
+{
+    pthread_once(&arpack_once, load_arpack);
+    if (!real.dneupd) {
+        *info = BKF_LAZY_NOT_LOADED;
+        return;
+    }
+    real.dneupd(rvec, howmny, select, dr, di, z, ldz, sigmar, sigmai, workev, bmat, n, which, nev,
+                tol, resid, ncv, v, ldv, iparam, ipntr, workd, workl, lworkl, info);
+}
