@@ -26,9 +26,20 @@ const char *bkf_stabmap_end_name(bkf_stabmap_end end)
 /* bkf_stabmap_sigma, and in *bound the window's edge when sigma is only
  * that bound (bkf_trainspec_shown_of), else NaN: brackets use the bound's
  * sign, the point printed does not show it as sigma. */
-static int sigma_and_bound(const bkf_model_params *params, size_t n, double v_near, double tol,
-                           double *sigma, double *sigma_err, double *v, double *mu,
-                           double *bound, bkf_error *err)
+/* One sigma_max at S. */
+typedef struct {
+    double S, f, err, v, mu, bound;
+    /* the rightmost eigenvalue but the translation: its Bloch class and
+     * Im sigma (have_mode 0: the spectrum had none, sigma was a bound) */
+    size_t j;
+    double im;
+    int have_mode;
+    int tracked; /* f is that one eigenvalue continued (trace_tracked), no full spectrum */
+} sample;
+
+/* The root of n at params nearest v_near (v_near <= 0: the fastest). */
+static int root_near(const bkf_model_params *params, size_t n, double v_near,
+                     bkf_speeds_root *root, bkf_error *err)
 {
     bkf_speeds_options o = bkf_speeds_options_default();
     o.n_from = o.n_to = n;
@@ -37,33 +48,87 @@ static int sigma_and_bound(const bkf_model_params *params, size_t n, double v_ne
     if (!s && t.count == 0)
         s = bkf_error_set(err, BKF_EINPUT, "n: n = %zu has no root at nu %.6g, S %.6g", n,
                           params->nu, params->S);
-    if (s) {
-        bkf_speeds_table_free(&t);
-        return s;
+    if (!s) {
+        size_t best = 0;
+        for (size_t i = 1; v_near > 0 && i < t.count; i++)
+            if (fabs(t.roots[i].v - v_near) < fabs(t.roots[best].v - v_near)) best = i;
+        *root = t.roots[best];
     }
-    size_t best = 0;
-    for (size_t i = 1; v_near > 0 && i < t.count; i++)
-        if (fabs(t.roots[i].v - v_near) < fabs(t.roots[best].v - v_near)) best = i;
-    bkf_speeds_root root = t.roots[best];
     bkf_speeds_table_free(&t);
+    return s;
+}
+
+/* sigma_max of the root nearest v_near into *out (S, f, err, v, mu, bound,
+ * the rightmost's class). */
+static int spectrum_sample(const bkf_model_params *params, size_t n, double v_near, double tol,
+                           sample *out, bkf_error *err)
+{
+    bkf_speeds_root root;
+    int s = root_near(params, n, v_near, &root, err);
+    if (s) return s;
     bkf_trainspec_result r;
     s = bkf_trainspec_root(params, &root, tol, 1, &r, err);
     if (!s) {
-        *sigma = r.sigma_max;
-        *sigma_err = r.sigma_max_err;
-        *v = root.v;
-        *mu = root.mu;
-        *bound = bkf_trainspec_shown_of(&r).bound;
+        *out = (sample){.S = params->S, .f = r.sigma_max, .err = r.sigma_max_err, .v = root.v,
+                        .mu = root.mu, .bound = bkf_trainspec_shown_of(&r).bound};
+        for (size_t i = 0; i < r.count && !r.sigma_is_bound; i++) {
+            const bkf_trainspec_eigenvalue *ev = &r.eigenvalues[i];
+            if (ev->translation || (out->have_mode && ev->re <= r.eigenvalues[out->j].re))
+                continue;
+            out->have_mode = 1;
+            out->j = i; /* the index for now, the class below */
+        }
+        if (out->have_mode) {
+            out->im = r.eigenvalues[out->j].im;
+            out->j = r.eigenvalues[out->j].j;
+        }
     }
     bkf_trainspec_result_free(&r);
     return s;
 }
 
+/* Meshes of a tracked eigenvalue: `substeps` TRACK_SUBSTEPS and twice
+ * that (the second halves every step of the first); its error is their
+ * difference / 8, as the ring spectrum's (fifth-order steps: the ratio is
+ * 31 once converged). */
+#define TRACK_SUBSTEPS 1
+
+/* One eigenvalue of class `from`->j continued from `from` (re = f, im) to
+ * the root of n at params nearest v_near (v_near <= 0: the fastest), by
+ * Newton on that class alone (bkf_trainspec_eigenvalue_at: about 1/20 of a
+ * ring spectrum), into *out (tracked 1: f is that eigenvalue, not
+ * sigma_max, which is at least f).  A failure (Newton, the root) means
+ * only that the ring spectrum is needed. */
+static int tracked_sample(const bkf_model_params *params, size_t n, double v_near,
+                          const sample *from, sample *out, bkf_error *err)
+{
+    bkf_speeds_root root;
+    int s = root_near(params, n, v_near, &root, err);
+    if (s) return s;
+    bkf_trainspec_train train = {n, root.v};
+    double re[2], im[2];
+    for (int k = 0; !s && k < 2; k++)
+        s = bkf_trainspec_eigenvalue_at(params, &train, from->j, from->f, from->im,
+                                        (size_t)TRACK_SUBSTEPS << k, &re[k], &im[k], NULL, err);
+    if (s) return s;
+    *out = (sample){.S = params->S, .f = re[1], .err = fabs(re[1] - re[0]) / 8, .v = root.v,
+                    .mu = root.mu, .bound = NAN, .j = from->j, .im = im[1], .have_mode = 1,
+                    .tracked = 1};
+    return BKF_OK;
+}
+
 int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near, double tol,
                       double *sigma, double *sigma_err, double *v, double *mu, bkf_error *err)
 {
-    double bound;
-    return sigma_and_bound(params, n, v_near, tol, sigma, sigma_err, v, mu, &bound, err);
+    sample x;
+    int s = spectrum_sample(params, n, v_near, tol, &x, err);
+    if (!s) {
+        *sigma = x.f;
+        *sigma_err = x.err;
+        *v = x.v;
+        *mu = x.mu;
+    }
+    return s;
 }
 
 /* sigma_max along S at fixed nu, the root continued by v ~ S (v = S/(n T)
@@ -76,19 +141,13 @@ typedef struct {
     size_t evaluations;
 } sigma_fn;
 
-typedef struct {
-    double S, f, err, v, mu, bound;
-} sample;
-
 static int eval_at(sigma_fn *fn, double S, sample *out, bkf_error *err)
 {
     bkf_model_params p = fn->p;
     p.S = S;
     double v_near = fn->v_ref > 0 ? fn->v_ref * S / fn->S_ref : 0;
     fn->evaluations++;
-    out->S = S;
-    return sigma_and_bound(&p, fn->n, v_near, fn->tol, &out->f, &out->err, &out->v, &out->mu,
-                           &out->bound, err);
+    return spectrum_sample(&p, fn->n, v_near, fn->tol, out, err);
 }
 
 static int sign_of(double f) { return f > 0 ? 1 : -1; }
@@ -105,7 +164,9 @@ static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_sta
 {
     int kept = 0;
     double fa = a.f, fb = b.f;
-    sample best = fabs(a.f) < fabs(b.f) ? a : b;
+    /* an end that is one eigenvalue (tracked, positive) steers, but the
+     * point is a ring spectrum */
+    sample best = b.tracked || (!a.tracked && fabs(a.f) < fabs(b.f)) ? a : b;
     for (int it = 0; it < 60 && fabs(b.S - a.S) > S_tol; it++) {
         /* sigma within its error of 0: the sign there means nothing */
         if (fabs(best.f) <= best.err) break;
@@ -174,7 +235,18 @@ int bkf_stabmap_scan(const bkf_model_params *params, size_t n, double S_from, do
         double S = S_from + (S_to - S_from) * (double)i / (double)samples;
         bkf_error e;
         fn.v_ref = 0;
-        int s = eval_at(&fn, S, &cur, &e);
+        /* Only the sign of sigma_max matters away from a crossing, and one
+         * eigenvalue right of 0 (beyond its error and tol) proves it
+         * positive: the previous sample's rightmost, continued here, saves
+         * the ring spectrum where the train is unstable.  A negative one
+         * proves nothing (another may be right of it): the spectrum. */
+        int s = 1;
+        if (have && prev.have_mode) {
+            bkf_model_params q = *params;
+            q.S = S;
+            s = tracked_sample(&q, n, 0, &prev, &cur, &e) || !(cur.f - 4 * cur.err > o.tol);
+        }
+        if (s) s = eval_at(&fn, S, &cur, &e);
         if (s && end_of(s) < 0) return bkf_error_set(err, s, "%s", e.message);
         if (s) {  /* no root or refused here: a gap in the scan */
             have = 0;
@@ -315,6 +387,10 @@ typedef struct {
 
 typedef struct {
     sigma_fn fn;
+    /* The eigenvalue tracked (tracked_sample): the last spectrum's
+     * rightmost, continued to each trial point (mode.have_mode 0: none) */
+    sample mode;
+    size_t tracked;        /* evaluations by the tracked eigenvalue alone */
     double scale[2];
     double grad[2];        /* d sigma_max / d(nu, S), Broyden-updated */
     trace_eval cache[TRACE_CACHE], last, prev; /* prev: the last point inside */
@@ -328,13 +404,20 @@ typedef struct {
     bkf_stabmap_report rep;
     size_t max_points, at_last_point;
     double newton_tol;     /* the driver's */
+    double land_tol;       /* an edge crossing's, relative in nu */
 } trace_ctx;
 
-static const trace_eval *trace_cached(const trace_ctx *t, double nu, double S)
+/* A cached evaluation at (nu, S), a ring spectrum's first; with `full`,
+ * only a ring spectrum's. */
+static const trace_eval *trace_cached(const trace_ctx *t, double nu, double S, int full)
 {
+    const trace_eval *hit = NULL;
     for (size_t i = 0; i < t->cached; i++)
-        if (t->cache[i].nu == nu && t->cache[i].S == S) return &t->cache[i];
-    return NULL;
+        if (t->cache[i].nu == nu && t->cache[i].S == S) {
+            if (!t->cache[i].s.tracked) return &t->cache[i];
+            if (!full) hit = &t->cache[i];
+        }
+    return hit;
 }
 
 /* Broyden's rank-one secant update in the scaled coordinates, from the
@@ -360,10 +443,49 @@ static void trace_broyden(trace_ctx *t, const trace_eval *e)
 }
 
 /* sigma_max at (nu, S) into *out (cached, the gradient updated); BKF_OK, a
- * refusal's status (t->failed says which), or another failure. */
-static int trace_eval_at(trace_ctx *t, double nu, double S, trace_eval *out, bkf_error *err)
+ * refusal's status (t->failed says which), or another failure.
+ * TRACE_TRACKED: the tracked eigenvalue alone where it can be continued
+ * (the start's differences).  TRACE_STEER (the driver's predictor and
+ * corrections, whose values only steer Newton): likewise, but a ring
+ * spectrum where Newton would stop, so that the point accepted is one and
+ * a change of the rightmost eigenvalue (another class overtaking the one
+ * tracked: n = 4 near nu -0.959, S 23.4, j = 1 past j = 0) corrects
+ * Newton on.  TRACE_FULL: the ring spectrum. */
+/* A value computed at e: cached, the gradient updated, the root and the
+ * eigenvalue followed from it. */
+static void trace_keep(trace_ctx *t, const trace_eval *e)
 {
-    const trace_eval *hit = trace_cached(t, nu, S);
+    t->failed = -1;
+    t->fn.v_ref = e->s.v;
+    t->fn.S_ref = e->S;
+    t->mode = e->s;
+    t->cache[t->next] = *e;
+    t->next = (t->next + 1) % TRACE_CACHE;
+    if (t->cached < TRACE_CACHE) t->cached++;
+    trace_broyden(t, e);
+}
+
+enum { TRACE_TRACKED = 0, TRACE_FULL = 1, TRACE_STEER = 2 };
+
+/* Newton's next step from the value f at u, on the gradient's model, is
+ * within its tolerance (the driver's test, per component against
+ * max(|u_i|, scale_i)): the driver will accept the point u, which must be
+ * a ring spectrum. */
+static int near_converged(const trace_ctx *t, const double *u, double f)
+{
+    double G[2] = {t->grad[0] * t->scale[0], t->grad[1] * t->scale[1]};
+    double GG = G[0] * G[0] + G[1] * G[1];
+    if (!(GG > 0) || !isfinite(GG)) return 1;
+    for (int i = 0; i < 2; i++)
+        if (fabs(f * G[i] / GG) * t->scale[i] > t->newton_tol * fmax(fabs(u[i]), t->scale[i]))
+            return 0;
+    return 1;
+}
+
+static int trace_eval_at(trace_ctx *t, double nu, double S, int full, trace_eval *out,
+                         bkf_error *err)
+{
+    const trace_eval *hit = trace_cached(t, nu, S, full == TRACE_FULL);
     if (hit) {
         *out = *hit;
         return BKF_OK;
@@ -371,6 +493,18 @@ static int trace_eval_at(trace_ctx *t, double nu, double S, trace_eval *out, bkf
     out->nu = nu;
     out->S = S;
     t->fn.p.nu = nu;
+    if (full != TRACE_FULL && t->mode.have_mode) {
+        bkf_error e;
+        bkf_model_params p = t->fn.p;
+        p.S = S;
+        const double u[2] = {nu, S};
+        if (!tracked_sample(&p, t->fn.n, t->fn.v_ref * S / t->fn.S_ref, &t->mode, &out->s, &e)) {
+            t->tracked++;
+            trace_keep(t, out);
+            /* the gradient as the driver will take it, updated by this value */
+            if (full == TRACE_TRACKED || !near_converged(t, u, out->s.f)) return BKF_OK;
+        }
+    }
     int s = eval_at(&t->fn, S, &out->s, err);
     if (s) {
         t->failed = end_of(s);
@@ -381,14 +515,7 @@ static int trace_eval_at(trace_ctx *t, double nu, double S, trace_eval *out, bkf
         }
         return s;
     }
-    t->failed = -1;
-    /* the root followed: the next v is predicted from this one */
-    t->fn.v_ref = out->s.v;
-    t->fn.S_ref = S;
-    t->cache[t->next] = *out;
-    t->next = (t->next + 1) % TRACE_CACHE;
-    if (t->cached < TRACE_CACHE) t->cached++;
-    trace_broyden(t, out);
+    trace_keep(t, out);
     return BKF_OK;
 }
 
@@ -398,7 +525,7 @@ static int trace_eval_at(trace_ctx *t, double nu, double S, trace_eval *out, bkf
  * zero its S_err and nu_err give. */
 static int converged_from_last(const trace_ctx *t, const double *u)
 {
-    if (!t->have_last || trace_cached(t, u[0], u[1])) return 0;
+    if (!t->have_last || trace_cached(t, u[0], u[1], 0)) return 0;
     const double last[2] = {t->last.nu, t->last.S};
     for (int i = 0; i < 2; i++)
         if (fabs(u[i] - last[i]) > t->newton_tol * fmax(fabs(u[i]), t->scale[i])) return 0;
@@ -421,7 +548,7 @@ static int trace_residual(const double *u, double *g, double *jac, void *data, b
         return BKF_OK;
     }
     trace_eval e;
-    int s = trace_eval_at(t, u[0], u[1], &e, err);
+    int s = trace_eval_at(t, u[0], u[1], TRACE_STEER, &e, err);
     /* No root, or a refused spectrum, at a trial point (a predictor past
      * the existence boundary, a Newton iterate off the curve): a shorter
      * step is tried; when the step can shrink no more the curve ends there,
@@ -466,10 +593,11 @@ static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *
 {
     trace_eval a, b;
     bkf_error err;
-    if (trace_eval_at(t, t->prev.nu, Sb, &a, &err) || trace_eval_at(t, e->nu, Sb, &b, &err))
+    if (trace_eval_at(t, t->prev.nu, Sb, TRACE_FULL, &a, &err) ||
+        trace_eval_at(t, e->nu, Sb, TRACE_FULL, &b, &err))
         return 0;
     if ((a.s.f > 0) == (b.s.f > 0)) return 0;
-    double fa = a.s.f, fb = b.s.f, tol = t->newton_tol * fmax(fabs(e->nu), t->scale[0]);
+    double fa = a.s.f, fb = b.s.f, tol = t->land_tol * fmax(fabs(e->nu), t->scale[0]);
     trace_eval best = fabs(a.s.f) < fabs(b.s.f) ? a : b;
     int kept = 0;
     for (int it = 0; it < 30 && fabs(b.nu - a.nu) > tol && fabs(best.s.f) > best.s.err; it++) {
@@ -477,7 +605,7 @@ static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *
                hi = fmax(a.nu, b.nu);
         if (!(nu > lo + 0.02 * (hi - lo) && nu < hi - 0.02 * (hi - lo))) nu = 0.5 * (lo + hi);
         trace_eval m;
-        if (trace_eval_at(t, nu, Sb, &m, &err)) return 0;
+        if (trace_eval_at(t, nu, Sb, TRACE_FULL, &m, &err)) return 0;
         if (fabs(m.s.f) < fabs(best.s.f)) best = m;
         if ((m.s.f > 0) == (a.s.f > 0)) {
             a = m;
@@ -502,10 +630,15 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
     trace_ctx *t = data;
     trace_eval e;
     bkf_error err;
-    /* the point is the last spectrum, within Newton's tolerance of u */
+    /* the point is the last spectrum, within Newton's tolerance of u (a
+     * ring spectrum there if the last was the tracked eigenvalue alone) */
+    int s = BKF_OK;
     if (converged_from_last(t, u))
         e = t->last;
-    else if (trace_eval_at(t, u[0], u[1], &e, &err)) {
+    else
+        s = trace_eval_at(t, u[0], u[1], TRACE_FULL, &e, &err);
+    if (!s && e.s.tracked) s = trace_eval_at(t, e.nu, e.S, TRACE_FULL, &e, &err);
+    if (s) {
         t->rep.end = t->failed >= 0 ? (bkf_stabmap_end)t->failed : BKF_STABMAP_END_STALLED;
         snprintf(t->rep.note, sizeof t->rep.note, "%.250s",
                  t->failed >= 0 ? t->why.message : err.message);
@@ -586,15 +719,15 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
     double h = 0.25 * o.nu_step * direction;
     if (first->nu + h > w->nu_hi || first->nu + h < w->nu_lo) h = -h;
     bkf_error e;
-    s = trace_eval_at(&t, first->nu, first->S, &e0, &e);
-    if (!s) s = trace_eval_at(&t, first->nu + h, first->S, &e1, &e);
+    s = trace_eval_at(&t, first->nu, first->S, TRACE_FULL, &e0, &e);
+    if (!s) s = trace_eval_at(&t, first->nu + h, first->S, TRACE_TRACKED, &e1, &e);
     if (s) goto failed;
     t.grad[0] = (e1.s.f - e0.s.f) / h;
     t.grad[1] = isfinite(first->slope) && first->slope != 0 ? first->slope : NAN;
     if (!isfinite(t.grad[1])) {
         trace_eval e2;
         double hS = 0.25 * o.S_step;
-        s = trace_eval_at(&t, first->nu, first->S + hS, &e2, &e);
+        s = trace_eval_at(&t, first->nu, first->S + hS, TRACE_TRACKED, &e2, &e);
         if (s) goto failed;
         t.grad[1] = (e2.s.f - e0.s.f) / hS;
     }
@@ -611,9 +744,14 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
      * nu to within the same distance in the scaled norm (a steep curve's S
      * at fixed nu is then known to S_err, which says how well). */
     double nu_mag = fmax(fmax(fabs(w->nu_lo), fabs(w->nu_hi)), o.nu_step);
-    co.newton_tol = fmin(o.S_tol / fmax(w->S_hi, o.S_step), o.S_tol * o.nu_step / (o.S_step * nu_mag));
+    t.land_tol = fmin(o.S_tol / fmax(w->S_hi, o.S_step), o.S_tol * o.nu_step / (o.S_step * nu_mag));
+    /* Newton's iterates are the tracked eigenvalue, about 1/20 of a ring
+     * spectrum each: iterated 8 times closer than that, the one ring
+     * spectrum where they stop is nearer the curve than a last spectrum
+     * within the tolerance itself (what the points were before) */
+    co.newton_tol = t.land_tol / 8;
     t.newton_tol = co.newton_tol;
-    co.newton_max_iter = 5;
+    co.newton_max_iter = 8;
     co.max_points = o.max_points + 1;
     co.stop_index = 0;
     co.stop_min = w->nu_lo;
