@@ -108,7 +108,12 @@ int bkf_stabmap_locate(const bkf_model_params *params, size_t n, double S_from, 
  * take the fastest root: where a faster root is born (a fold of the speed
  * condition) sigma_max may jump across 0 without a zero; a closed bracket
  * whose ends are different roots is such a jump, no crossing, and is left
- * out. */
+ * out.  A sample needs only sigma_max's sign: where the previous sample's
+ * rightmost eigenvalue, continued, is right of 0 beyond tol and its error,
+ * no ring spectrum is computed; a bracket is closed on the eigenvalue right
+ * of 0 at its positive end, then checked by one ring spectrum (closed on
+ * ring spectra where another eigenvalue overtook it).  Each point is a ring
+ * spectrum. */
 int bkf_stabmap_scan(const bkf_model_params *params, size_t n, double S_from, double S_to,
                      size_t samples, const bkf_stabmap_options *options, bkf_stabmap_point *points,
                      size_t max, size_t *count, bkf_error *err);
@@ -134,10 +139,13 @@ typedef struct {
  * the direction of nu's sign `direction` (+1, -1), through folds in nu, to
  * the window's edge.  The gradient of sigma_max is d sigma / dS of `first`'s
  * bracket and one difference in nu at the start, then updated by Broyden's
- * rank-one secant from every spectrum: a point costs about two spectra
- * (the predictor's correction and the new point).  Steps are at most
+ * rank-one secant from every value.  The predictor and Newton's
+ * corrections take the last spectrum's rightmost eigenvalue continued
+ * (bkf_trainspec_eigenvalue_at, about 1/20 of a ring spectrum), the ring
+ * spectrum only where Newton stops: a point costs about one spectrum
+ * (report->evaluations counts ring spectra).  Steps are at most
  * options->nu_step in nu and options->S_step in S; Newton stops when
- * its step in S is below about options->S_tol.  Every point is a computed
+ * its step in S is below about options->S_tol / 8.  Every point is a computed
  * sigma_max (never an interpolation), its S_err = (|sigma| + sigma_err) /
  * |d sigma / dS| and nu_err likewise.  visit gets every point, the first
  * included (nonzero stops: end reached).  The end is an answer: BKF_OK with

@@ -159,35 +159,83 @@ static int sign_of(double f) { return f > 0 ? 1 : -1; }
  * v ~ S): sigma_max jumps there, where a faster root is born in a fold of
  * the speed condition (n = 6 at gamma 2, c 0.3, nu -0.98, S 19.73: v 0.362
  * to 0.481, sigma_max -8e-4 to +), and changes sign without a zero. */
-static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_stabmap_point *pt,
-                         int *jump, bkf_error *err)
+/* Illinois iterations on the bracket [*a, *b] until it is S_tol wide or
+ * the best value is within its error of 0 (*best: the smallest |f|; with
+ * `track`, the eigenvalue `track` continued from sample to sample instead
+ * of ring spectra, which fails where it cannot be continued). */
+static int illinois(sigma_fn *fn, sample *a, sample *b, double S_tol, sample *best,
+                    const sample *track, bkf_error *err)
 {
     int kept = 0;
-    double fa = a.f, fb = b.f;
-    /* an end that is one eigenvalue (tracked, positive) steers, but the
-     * point is a ring spectrum */
-    sample best = b.tracked || (!a.tracked && fabs(a.f) < fabs(b.f)) ? a : b;
-    for (int it = 0; it < 60 && fabs(b.S - a.S) > S_tol; it++) {
+    double fa = a->f, fb = b->f;
+    sample from = track ? *track : (sample){0};
+    for (int it = 0; it < 60 && fabs(b->S - a->S) > S_tol; it++) {
         /* sigma within its error of 0: the sign there means nothing */
-        if (fabs(best.f) <= best.err) break;
-        double S = (a.S * fb - b.S * fa) / (fb - fa);
-        double lo = fmin(a.S, b.S), hi = fmax(a.S, b.S), w = hi - lo;
+        if (fabs(best->f) <= best->err) break;
+        double S = (a->S * fb - b->S * fa) / (fb - fa);
+        double lo = fmin(a->S, b->S), hi = fmax(a->S, b->S), w = hi - lo;
         if (!(S > lo + 0.02 * w && S < hi - 0.02 * w)) S = 0.5 * (lo + hi);
         sample m;
-        int s = eval_at(fn, S, &m, err);
+        int s;
+        if (track) {
+            bkf_model_params p = fn->p;
+            p.S = S;
+            s = tracked_sample(&p, fn->n, fn->v_ref > 0 ? fn->v_ref * S / fn->S_ref : 0, &from,
+                               &m, err);
+            from = m;
+        } else {
+            s = eval_at(fn, S, &m, err);
+        }
         if (s) return s;
-        if (fabs(m.f) < fabs(best.f)) best = m;
-        if (sign_of(m.f) == sign_of(a.f)) {
-            a = m;
+        if (fabs(m.f) < fabs(best->f)) *best = m;
+        if (sign_of(m.f) == sign_of(a->f)) {
+            *a = m;
             fa = m.f;
             if (kept == -1) fb *= 0.5;
             kept = -1;
         } else {
-            b = m;
+            *b = m;
             fb = m.f;
             if (kept == 1) fa *= 0.5;
             kept = 1;
         }
+    }
+    return BKF_OK;
+}
+
+static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_stabmap_point *pt,
+                         int *jump, bkf_error *err)
+{
+    /* The eigenvalue right of 0 at the positive end, continued across the
+     * bracket and closed on (about 1/20 of a ring spectrum a step), then
+     * one ring spectrum where it stops: where that spectrum's sigma_max is
+     * the eigenvalue's (no other one right of it beyond tol), the zero is
+     * sigma_max's; else (another eigenvalue overtook it in the bracket) the
+     * bracket is closed on ring spectra from the start. */
+    const sample *pos = a.f > 0 ? &a : &b;
+    sample best;
+    int closed = 0;
+    if (pos->have_mode) {
+        sample ta = a, tb = b, full;
+        bkf_error e;
+        best = *pos;
+        if (!illinois(fn, &ta, &tb, S_tol, &best, pos, &e)) {
+            int s = eval_at(fn, best.S, &full, err);
+            if (s) return s;
+            if (fabs(full.f - best.f) <= fn->tol + 4 * (full.err + best.err)) {
+                a = ta;
+                b = tb;
+                best = full;
+                closed = 1;
+            }
+        }
+    }
+    if (!closed) {
+        /* an end that is one eigenvalue (tracked, positive) steers, but
+         * the point is a ring spectrum */
+        best = b.tracked || (!a.tracked && fabs(a.f) < fabs(b.f)) ? a : b;
+        int s = illinois(fn, &a, &b, S_tol, &best, NULL, err);
+        if (s) return s;
     }
     double w = fabs(b.S - a.S), v = fmax(a.v, b.v);
     *jump = fabs(best.f) > best.err && fabs(a.v - b.v) > 1e-3 * v + 4 * v * w / fmin(a.S, b.S);
