@@ -28,47 +28,6 @@ TEST(cli_start_loads_no_hdf5)
     bkf_cli_result_free(&r);
 }
 
-/* An unloadable HDF5 (an empty file under its soname, found first through
- * LD_LIBRARY_PATH): every other command runs, and an HDF5 spacetime fails
- * with exit 1, one line naming the library, and no file. */
-TEST(cli_hdf5_missing_fails_only_the_hdf5_write)
-{
-    char dir[] = "/tmp/bkf_noh5_XXXXXX";
-    CHECK(mkdtemp(dir) != NULL);
-    char fake[128], env[160];
-    snprintf(fake, sizeof fake, "%s/%s", dir, BKF_HDF5_SONAME);
-    FILE *f = fopen(fake, "w");
-    CHECK(f != NULL);
-    fclose(f);
-    snprintf(env, sizeof env, "LD_LIBRARY_PATH=%s", dir);
-    bkf_cli_options o = {.dir = dir, .env = (const char *const[]){env, NULL}};
-    bkf_cli_result r = bkf_cli_run(BKF_CLI_ARGS("--version"), &o);
-    CHECK_MSG(r.code == 0 && strncmp(r.out, "bkfront ", 8) == 0, "--version: %d %s", r.code,
-              r.err);
-    bkf_cli_result_free(&r);
-    r = bkf_cli_run(BKF_CLI_ARGS("simulate", "--N", "64", "--S", "16", "--tmax", "1",
-                                 "--frames", "2", "--no-progress", "--spacetime", "st.h5",
-                                 "--out", "diag.tsv"), &o);
-    CHECK_MSG(r.code == 1, "exit %d, stderr %s", r.code, r.err);
-    CHECK_MSG(strstr(r.err, "HDF5 output needs the HDF5 library") && strstr(r.err, BKF_HDF5_SONAME)
-              && bkf_count_lines(r.err) == 1, "stderr: %s", r.err);
-    char path[160];
-    snprintf(path, sizeof path, "%s/st.h5", dir);
-    CHECK_MSG(access(path, F_OK) != 0, "st.h5 was written");
-    snprintf(path, sizeof path, "%s/diag.tsv", dir);
-    CHECK_MSG(access(path, F_OK) != 0, "diag.tsv was written by a failed run");
-    /* the text format needs no HDF5 */
-    bkf_cli_result_free(&r);
-    r = bkf_cli_run(BKF_CLI_ARGS("simulate", "--N", "64", "--S", "16", "--tmax", "1",
-                                 "--frames", "2", "--no-progress", "--spacetime", "st.dat",
-                                 "--out", "diag.tsv"), &o);
-    CHECK_MSG(r.code == 0, "text spacetime: exit %d, %s", r.code, r.err);
-    bkf_cli_result_free(&r);
-    char cmd[200];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-    CHECK(system(cmd) == 0);
-}
-
 /* An empty file under `soname` in a new folder, and LD_LIBRARY_PATH=that
  * folder in `env`: the loader finds it first and refuses it. */
 static void unloadable(char *dir, const char *soname, char *env, size_t env_size)
@@ -89,6 +48,46 @@ static void remove_dir(const char *dir)
     CHECK(system(cmd) == 0);
 }
 
+/* `bkfront --version` runs as `o` says (it needs none of the lazily
+ * loaded libraries). */
+static void version_runs(const bkf_cli_options *o)
+{
+    bkf_cli_result r = bkf_cli_run(BKF_CLI_ARGS("--version"), o);
+    CHECK_MSG(r.code == 0 && strncmp(r.out, "bkfront ", 8) == 0, "--version: %d %s", r.code,
+              r.err);
+    bkf_cli_result_free(&r);
+}
+
+/* An unloadable HDF5 (an empty file under its soname, found first through
+ * LD_LIBRARY_PATH): every other command runs, and an HDF5 spacetime fails
+ * with exit 1, one line naming the library, and no file. */
+TEST(cli_hdf5_missing_fails_only_the_hdf5_write)
+{
+    char dir[] = "/tmp/bkf_noh5_XXXXXX", env[160];
+    unloadable(dir, BKF_HDF5_SONAME, env, sizeof env);
+    bkf_cli_options o = {.dir = dir, .env = (const char *const[]){env, NULL}};
+    version_runs(&o);
+    bkf_cli_result r = bkf_cli_run(BKF_CLI_ARGS("simulate", "--N", "64", "--S", "16", "--tmax", "1",
+                                 "--frames", "2", "--no-progress", "--spacetime", "st.h5",
+                                 "--out", "diag.tsv"), &o);
+    CHECK_MSG(r.code == 1, "exit %d, stderr %s", r.code, r.err);
+    CHECK_MSG(strstr(r.err, "HDF5 output needs the HDF5 library") && strstr(r.err, BKF_HDF5_SONAME)
+              && bkf_count_lines(r.err) == 1, "stderr: %s", r.err);
+    char path[160];
+    snprintf(path, sizeof path, "%s/st.h5", dir);
+    CHECK_MSG(access(path, F_OK) != 0, "st.h5 was written");
+    snprintf(path, sizeof path, "%s/diag.tsv", dir);
+    CHECK_MSG(access(path, F_OK) != 0, "diag.tsv was written by a failed run");
+    /* the text format needs no HDF5 */
+    bkf_cli_result_free(&r);
+    r = bkf_cli_run(BKF_CLI_ARGS("simulate", "--N", "64", "--S", "16", "--tmax", "1",
+                                 "--frames", "2", "--no-progress", "--spacetime", "st.dat",
+                                 "--out", "diag.tsv"), &o);
+    CHECK_MSG(r.code == 0, "text spacetime: exit %d, %s", r.code, r.err);
+    bkf_cli_result_free(&r);
+    remove_dir(dir);
+}
+
 /* An unloadable LAPACKE: --version runs; a spectrum that needs Hill's
  * matrices (gamma 0.5: small mu) fails with exit 1 and one line that names
  * the library, no output. */
@@ -97,11 +96,8 @@ TEST(cli_lapacke_missing_fails_only_what_needs_it)
     char dir[] = "/tmp/bkf_nolapacke_XXXXXX", env[160];
     unloadable(dir, BKF_LAPACKE_SONAME, env, sizeof env);
     bkf_cli_options o = {.dir = dir, .env = (const char *const[]){env, NULL}};
-    bkf_cli_result r = bkf_cli_run(BKF_CLI_ARGS("--version"), &o);
-    CHECK_MSG(r.code == 0 && strncmp(r.out, "bkfront ", 8) == 0, "--version: %d %s", r.code,
-              r.err);
-    bkf_cli_result_free(&r);
-    r = bkf_cli_run(BKF_CLI_ARGS("stability", "--n", "2", "--gamma", "0.5", "--tol", "1e-3",
+    version_runs(&o);
+    bkf_cli_result r = bkf_cli_run(BKF_CLI_ARGS("stability", "--n", "2", "--gamma", "0.5", "--tol", "1e-3",
                                  "--out", "spec.tsv"), &o);
     CHECK_MSG(r.code == 1, "exit %d, stderr %s", r.code, r.err);
     CHECK_MSG(strstr(r.err, BKF_LAPACKE_SONAME " does not load") &&
