@@ -420,3 +420,198 @@ TEST(layers_circle_checker_catches_circles)
     CHECK(circles("t", u, texts, 2, 0) == 0);
     units_free(u, texts, 2);
 }
+
+/* ------------------------------------------------------------ long functions */
+
+/* No function in src/ is over MAX_FUNCTION_LINES lines (from the line of
+ * its name to its closing brace) unless listed here with the reason: a long
+ * function mixes concerns a reader must hold at once (issue 35).  An entry
+ * whose function is no longer long fails too, so the list only shrinks. */
+#define MAX_FUNCTION_LINES 150
+
+static const struct {
+    const char *file; /* below src/ */
+    const char *function;
+    const char *reason;
+} long_functions[] = {
+    {"wave/speeds.c", "speeds_find_body", "being split on branch rootrows"},
+    {"products/orbits_branch.c", "bkf_orbits_branch", "being split on branch orbitgoals"},
+    /* 151 lines; its last part, the slope of the error estimate, would
+     * read well as a function of its own */
+    {"wave/speeds_polish.c", "speeds_polish", "to split: its tail (the estimate's slope)"},
+};
+#define NLONG (sizeof long_functions / sizeof long_functions[0])
+
+/* The text without comments, strings and preprocessor lines (a macro's
+ * braces are no function's), newlines kept so line numbers hold. */
+static char *code_without_directives(const char *text)
+{
+    char *c = code_of(text);
+    if (!c) return NULL;
+    for (char *p = c; *p; p++) {
+        if (p != c && p[-1] != '\n') continue;
+        char *q = p;
+        while (*q == ' ' || *q == '\t') q++;
+        if (*q != '#') continue;
+        /* the directive and its continuation lines */
+        for (; *p; p++) {
+            if (*p == '\n') {
+                if (p > c && p[-1] == '\\') continue;
+                break;
+            }
+            if (*p != '\\' || p[1] != '\n') *p = ' ';
+        }
+        if (!*p) break;
+    }
+    return c;
+}
+
+typedef void (*long_visit)(const char *name, size_t lines, void *data);
+
+/* Every function body in `text` (a C file): a '{' at file scope whose
+ * previous token is ')' opens one; its name is the identifier before the
+ * matching '('.  visit() gets each function over `limit` lines.  Returns
+ * the number of functions found, or -1 when the braces do not balance. */
+static long long_functions_of(const char *text, size_t limit, long_visit visit, void *data)
+{
+    char *code = code_without_directives(text);
+    if (!code) return -1;
+    long found = 0;
+    int depth = 0;
+    const char *open = NULL;
+    char name[128] = "";
+    size_t name_line = 0, line = 1;
+    for (const char *p = code; *p; p++) {
+        if (*p == '\n') line++;
+        if (*p == '{') {
+            if (depth++ > 0) continue;
+            const char *b = p;
+            while (b > code && (b[-1] == ' ' || b[-1] == '\t' || b[-1] == '\n')) b--;
+            if (b == code || b[-1] != ')') continue;
+            /* back over the parameter list to its '(' */
+            int paren = 0;
+            const char *q = b - 1;
+            for (; q >= code; q--) {
+                if (*q == ')') paren++;
+                else if (*q == '(' && --paren == 0) break;
+            }
+            if (q < code) continue;
+            while (q > code && (q[-1] == ' ' || q[-1] == '\t' || q[-1] == '\n')) q--;
+            const char *e = q;
+            while (q > code && ident_char(q[-1])) q--;
+            if (q == e) continue;
+            snprintf(name, sizeof name, "%.*s", (int)(e - q), q);
+            name_line = line;
+            for (const char *r = q; r < p; r++) name_line -= *r == '\n';
+            open = p;
+        } else if (*p == '}') {
+            if (--depth < 0) break;
+            if (depth == 0 && open) {
+                size_t lines = line - name_line + 1;
+                found++;
+                if (lines > limit) visit(name, lines, data);
+                open = NULL;
+            }
+        }
+    }
+    free(code);
+    return depth == 0 ? found : -1;
+}
+
+typedef struct {
+    const char *file; /* below src/ */
+    int bad;
+    int seen[NLONG];
+} long_scan;
+
+static void long_seen(const char *name, size_t lines, void *data)
+{
+    long_scan *s = data;
+    for (size_t i = 0; i < NLONG; i++)
+        if (strcmp(long_functions[i].file, s->file) == 0 &&
+            strcmp(long_functions[i].function, name) == 0) {
+            s->seen[i] = 1;
+            return;
+        }
+    s->bad++;
+    bkf_test_note("src/%s: %s is %zu lines (at most %d; split it by concern, or list it in "
+                  "tests/core/test_layers.c with the reason)",
+                  s->file, name, lines, MAX_FUNCTION_LINES);
+}
+
+static void count_long(const char *name, size_t lines, void *data)
+{
+    (void)name;
+    (void)lines;
+    (*(int *)data)++;
+}
+
+TEST(layers_no_function_is_over_150_lines)
+{
+    long_scan scan = {0};
+    long functions = 0;
+    for (size_t l = 0; l < NLAYERS; l++) {
+        char dir[1024];
+        snprintf(dir, sizeof dir, "%s/src/%s", BKF_SOURCE_DIR, layers[l].name);
+        DIR *d = opendir(dir);
+        CHECK_MSG(d, "cannot open %s", dir);
+        if (!d) continue;
+        for (struct dirent *e; (e = readdir(d)) != NULL;) {
+            size_t len = strlen(e->d_name);
+            if (len < 3 || e->d_name[0] == '.') continue;
+            if (strcmp(e->d_name + len - 2, ".c") != 0 && strcmp(e->d_name + len - 2, ".h") != 0)
+                continue;
+            char path[1400], file[400];
+            snprintf(path, sizeof path, "%.1023s/%.255s", dir, e->d_name);
+            snprintf(file, sizeof file, "%s/%.255s", layers[l].name, e->d_name);
+            char *text = slurp(path);
+            CHECK_MSG(text, "cannot read %s", path);
+            if (!text) continue;
+            scan.file = file;
+            long got = long_functions_of(text, MAX_FUNCTION_LINES, long_seen, &scan);
+            CHECK_MSG(got >= 0, "%s: the braces do not balance (the scan is lost)", path);
+            functions += got > 0 ? got : 0;
+            free(text);
+        }
+        closedir(d);
+    }
+    CHECK_MSG(functions > 1000, "only %ld functions found: wrong source folder?", functions);
+    for (size_t i = 0; i < NLONG; i++)
+        CHECK_MSG(scan.seen[i], "src/%s: %s is listed as long (%s) but is not: take it off the list",
+                  long_functions[i].file, long_functions[i].function, long_functions[i].reason);
+    CHECK_MSG(scan.bad == 0, "%d functions over %d lines (listed above)", scan.bad,
+              MAX_FUNCTION_LINES);
+}
+
+TEST(layers_function_length_checker_catches_long_ones)
+{
+    /* planted: a 200-line function (name to closing brace) after a short one whose strings,
+     * character literals, comments and a macro hold stray braces */
+    size_t cap = 1 << 14, len = 0;
+    char *text = malloc(cap);
+    CHECK(text);
+    if (!text) return;
+    len += (size_t)snprintf(text + len, cap - len,
+                            "#define OPEN {\n"
+                            "static const char *s = \"}}{\";\n"
+                            "int small(int x)\n{\n    char c = '}'; /* { */\n"
+                            "    // }\n    return x + (c == '{');\n}\n"
+                            "struct t { int a; };\n"
+                            "static const int table[] = {1, 2};\n"
+                            "static int\nplanted(int x,\n        int y)\n{\n");
+    for (int i = 0; i < 195; i++)
+        len += (size_t)snprintf(text + len, cap - len, "    x += y * %d; /* } */\n", i);
+    snprintf(text + len, cap - len, "    return x;\n}\n");
+    int n_long = 0;
+    CHECK(long_functions_of(text, MAX_FUNCTION_LINES, count_long, &n_long) == 2);
+    CHECK(n_long == 1);
+    /* its length: from the name's line (not the type's) to the brace */
+    n_long = 0;
+    long_functions_of(text, 200, count_long, &n_long);
+    CHECK(n_long == 0);
+    long_functions_of(text, 199, count_long, &n_long);
+    CHECK(n_long == 1);
+    /* a brace too many is a lost scan, not a pass */
+    CHECK(long_functions_of("int f(void)\n{\n}\n}\n", 150, count_long, &n_long) == -1);
+    free(text);
+}
