@@ -1,6 +1,7 @@
 /* What the product modules share in writing a table: the title comment
  * opened by the provenance's program, and its command after the product's
- * own comments (bkf_provenance, options.h). */
+ * own comments (bkf_provenance, options.h); and the threads of their
+ * parallel loops. */
 #ifndef BKFRONT_PRODUCT_INTERNAL_H
 #define BKFRONT_PRODUCT_INTERNAL_H
 
@@ -11,6 +12,21 @@
 #include "bkfront/model.h"
 #include "bkfront/options.h"
 #include "bkfront/status.h"
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+/* The threads a product's `threads` option asks for: 0 is every core
+ * (OpenMP's default); 1 without OpenMP. */
+static inline int bkf_product_threads(size_t asked)
+{
+#ifdef _OPENMP
+    return asked ? (int)asked : omp_get_max_threads();
+#else
+    (void)asked;
+    return 1;
+#endif
+}
 
 /* *table with "PROGRAM TITLE" written (PROGRAM "libbkfront" without one;
  * TITLE alone without a provenance); NULL on failure. */

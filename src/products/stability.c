@@ -5,9 +5,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include "bkfront/fronts.h"
 #include "bkfront/stabmap.h"
@@ -1048,10 +1045,7 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
     state_run *runs = NULL;
     size_t nruns = 0;
     int s = col && seeds && w ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    int threads = 1;
-#ifdef _OPENMP
-    threads = spec->threads ? (int)spec->threads : omp_get_max_threads();
-#endif
+    int threads = bkf_product_threads(spec->threads);
     for (size_t c = 0; !s && c < ncol; c++)
         col[c] = ncol == 1 ? 0 : (size_t)llround((double)c * (double)(nnu - 1) / (double)(ncol - 1));
     if (!s) s = scan_seeds(spec, nus, g, col, ncol, seeds, threads, spectra, err);
@@ -1105,10 +1099,7 @@ static int diagram_curves(const bkf_stability_spec *spec, const double *nus, siz
         s = spec->scan ? scan_stability(spec, nus, nnu, g, k, spectra, err)
                        : follow_stability(spec, nus, nnu, g, k, spectra, err);
     /* the oscillation: its unstable bands per nu, then one curve per edge */
-    int threads = 1;
-#ifdef _OPENMP
-    threads = spec->threads ? (int)spec->threads : omp_get_max_threads();
-#endif
+    int threads = bkf_product_threads(spec->threads);
     (void)threads;
     int *bs = s ? NULL : calloc(nnu, sizeof *bs);
     bkf_error *be = s ? NULL : calloc(nnu, sizeof *be);

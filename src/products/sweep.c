@@ -13,15 +13,14 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include "bkfront/fronts.h"
 #include "bkfront/io.h"
 #include "bkfront/measure.h"
 #include "bkfront/oscillation.h"
 #include "bkfront/version.h"
+
+#include "product_internal.h"
 
 /* Seeds pass through a list of doubles: exact up to 2^53. */
 #define SEED_MAX 9007199254740992.0
@@ -824,10 +823,7 @@ int bkf_sweep_run(const bkf_sweep_spec *sp, const unsigned char *done, bkf_sweep
     /* Dynamic: run times vary by orders of magnitude near thresholds; a
      * point is handed out when a thread is free, and its row depends on
      * the point alone. */
-    int nthreads = 1;
-#ifdef _OPENMP
-    nthreads = sp->threads ? (int)sp->threads : omp_get_max_threads();
-#endif
+    int nthreads = bkf_product_threads(sp->threads);
     (void)nthreads;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads)
     for (size_t k = 0; k < ntodo; k++) {
