@@ -611,9 +611,24 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
     return t.s;
 }
 
-/* The row's text, or NULL and err (out of memory). */
-static char *row_done(text *t, bkf_error *err)
+/* A row's start, its key, for a point whose product ended with status s
+ * (e its error); 1 and err when s is no numerical failure: such a failure
+ * stops the sweep, where a numerical one is a row with that status. */
+static int row_begin(text *t, size_t i, const bkf_simulate_spec *sim, int s, const bkf_error *e,
+                     bkf_error *err)
 {
+    if (s && !bkf_status_is_numerical(s)) {
+        bkf_error_set(err, s, "point %zu: %s", i, e->message);
+        return 1;
+    }
+    add_key(t, i, sim);
+    return 0;
+}
+
+/* The row's text ended by its status s, or NULL and err (out of memory). */
+static char *row_done(text *t, int s, bkf_error *err)
+{
+    addf(t, "\t%s\n", s ? bkf_status_name(s) : "ok");
     if (t->failed) {
         free(t->s);
         bkf_error_set(err, BKF_ENOMEM, "out of memory");
@@ -648,12 +663,8 @@ static char *speeds_row(const bkf_simulate_spec *sim, size_t i, bkf_error *err)
     int *stable = NULL;
     bkf_error e;
     int s = bkf_fronts_find(&f, &tab, &stable, &e);
-    if (s && !bkf_status_is_numerical(s)) {
-        bkf_error_set(err, s, "point %zu: %s", i, e.message);
-        return NULL;
-    }
     text t = {0};
-    add_key(&t, i, sim);
+    if (row_begin(&t, i, sim, s, &e, err)) return NULL;
     if (s) {
         addf(&t, "\tnan\tnan\t-\tnan\t-\t-");
     } else {
@@ -672,8 +683,7 @@ static char *speeds_row(const bkf_simulate_spec *sim, size_t i, bkf_error *err)
         bkf_speeds_table_free(&tab);
         free(stable);
     }
-    addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
-    return row_done(&t, err);
+    return row_done(&t, s, err);
 }
 
 /* The lowest boundary of each kind over the diagram. */
@@ -703,12 +713,8 @@ static char *threshold_row(const bkf_simulate_spec *sim, size_t i, bkf_error *er
     if (!s) s = bkf_floquet_diagram(o.gamma, o.c, o.search_lo, o.search_hi, &fo, lowest_of_kind,
                                     &low, &e);
     bkf_oscillation_spec_free(&o);
-    if (s && !bkf_status_is_numerical(s)) {
-        bkf_error_set(err, s, "point %zu: %s", i, e.message);
-        return NULL;
-    }
     text t = {0};
-    add_key(&t, i, sim);
+    if (row_begin(&t, i, sim, s, &e, err)) return NULL;
     if (s) {
         addf(&t, "\tnan\tnan\tnone\tnan\tnan\tnan\tnan");
     } else {
@@ -720,8 +726,7 @@ static char *threshold_row(const bkf_simulate_spec *sim, size_t i, bkf_error *er
         add_number(&t, low.pd);
         add_number(&t, low.lw);
     }
-    addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
-    return row_done(&t, err);
+    return row_done(&t, s, err);
 }
 
 static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error *err)
@@ -758,12 +763,8 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
         }
     }
     free(field);
-    if (s && !bkf_status_is_numerical(s)) {
-        bkf_error_set(err, s, "point %zu: %s", i, e.message);
-        return NULL;
-    }
     text t = {0};
-    add_key(&t, i, &sim);
+    if (row_begin(&t, i, &sim, s, &e, err)) return NULL;
     if (s) {
         addf(&t, "\t%zu\tnone", sim.model.N);
         for (size_t k = NKEYCOLS + 2; k < NCOLS - 1; k++) addf(&t, "\tnan");
@@ -787,8 +788,7 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
         addf(&t, "\t%zu", o.steps);
         if (sp->tmax_budget > 0) addf(&t, "\t%s", settled);
     }
-    addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
-    return row_done(&t, err);
+    return row_done(&t, s, err);
 }
 
 char *bkf_sweep_row(const bkf_sweep_spec *sp, size_t index, bkf_error *err)
