@@ -37,6 +37,12 @@ int bkf_product_table_open(FILE *out, bkf_io_format format, const bkf_io_column 
 /* "command: COMMAND" when the provenance has one. */
 int bkf_product_table_command(bkf_io_table *table, const bkf_provenance *prov, bkf_error *err);
 
+/* A table written into an atomic file (either may be NULL), closed on
+ * status s: finished and the file committed when s is BKF_OK, else the
+ * file removed, never left half written.  The status it ends with. */
+int bkf_product_table_file_close(bkf_io_table *table, bkf_io_atomic *file, int s,
+                                 bkf_error *err);
+
 /* The model's keys as the tables of the cycle-based products write them,
  * each defaulting to the paper's value (bkf_model_paper_where_unset:
  * a spec keeps NaN for "not given"); c's range differs between products. */

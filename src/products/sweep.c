@@ -1311,12 +1311,7 @@ int bkf_sweep_table_json(const char *path, bkf_error *err)
         if (!s) s = bkf_io_table_row(out, v, err);
         free(block);
     }
-    if (!s) s = bkf_io_table_finish(out, err);
-    bkf_io_table_free(out);
-    if (f) {
-        if (s) bkf_io_atomic_abort(f);
-        else s = bkf_io_atomic_commit(f, err);
-    }
+    s = bkf_product_table_file_close(out, f, s, err);
     free(name_block);
     free(cols);
     free(fields);
