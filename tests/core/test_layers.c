@@ -615,3 +615,199 @@ TEST(layers_function_length_checker_catches_long_ones)
     CHECK(long_functions_of("int f(void)\n{\n}\n}\n", 150, count_long, &n_long) == -1);
     free(text);
 }
+
+/* ------------------------------------------------------------ the map */
+
+/* CONTRIBUTING.md's map of the source follows the tree: every file it names
+ * exists, and every file of src/LAYER/ is in that layer's row of the table
+ * (by its name in backticks, a module as an item of the row's list, a
+ * command as `cmd_NAME.c`, a header with its source file). */
+
+/* A name the "adding a product" recipe makes up: `bkfront trains`, X.c,
+ * cmd_NAME.c, src/<layer>/. */
+static int made_up(const char *tok)
+{
+    if (strchr(tok, '<') || strstr(tok, "NAME")) return 1;
+    const char *base = strrchr(tok, '/') ? strrchr(tok, '/') + 1 : tok;
+    if (base[0] == 'X' && (base[1] == '.' || base[1] == '_')) return 1;
+    for (const char *p = tok; (p = strstr(p, "trains")) != NULL; p++)
+        if (strncmp(p, "trainspec", 9) != 0) return 1;
+    return 0;
+}
+
+static int exists(const char *rel)
+{
+    char path[1400];
+    struct stat st;
+    snprintf(path, sizeof path, "%s/%.1300s", BKF_SOURCE_DIR, rel);
+    return stat(path, &st) == 0;
+}
+
+static int has_suffix(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), m = strlen(suffix);
+    return n >= m && strcmp(s + n - m, suffix) == 0;
+}
+
+/* Whether a file named in backticks (a path, or a bare name of src/ or of
+ * include/bkfront/) exists; 1 for what is no file name. */
+static int named_file_exists(const char *tok)
+{
+    int file = has_suffix(tok, ".c") || has_suffix(tok, ".h") || has_suffix(tok, ".awk") ||
+               has_suffix(tok, ".md") || has_suffix(tok, ".gp") || has_suffix(tok, ".sh");
+    int path = strncmp(tok, "src/", 4) == 0 || strncmp(tok, "include/", 8) == 0 ||
+               strncmp(tok, "tests/", 6) == 0 || strncmp(tok, "docs/", 5) == 0 ||
+               strncmp(tok, "plots/", 6) == 0;
+    if ((!file && !path) || made_up(tok)) return 1;
+    char rel[600];
+    if (path) return exists(tok);
+    if (strncmp(tok, "bkfront/", 8) == 0) {
+        snprintf(rel, sizeof rel, "include/%s", tok);
+        return exists(rel);
+    }
+    if (strchr(tok, '/')) return exists(tok);
+    snprintf(rel, sizeof rel, "include/bkfront/%s", tok);
+    if (exists(rel)) return 1;
+    for (size_t l = 0; l < NLAYERS; l++) {
+        snprintf(rel, sizeof rel, "src/%s/%s", layers[l].name, tok);
+        if (exists(rel)) return 1;
+    }
+    return 0;
+}
+
+/* Whether `row` lists `module` as an item: after "| ", ", " or "; ",
+ * before ',', ';', " (" or " |". */
+static int lists_module(const char *row, const char *module)
+{
+    size_t n = strlen(module);
+    for (const char *p = row; (p = strstr(p, module)) != NULL; p++) {
+        if (p - row < 2 || p[-1] != ' ' || (p[-2] != '|' && p[-2] != ',' && p[-2] != ';'))
+            continue;
+        const char *e = p + n;
+        if (*e == ',' || *e == ';' || (e[0] == ' ' && (e[1] == '(' || e[1] == '|'))) return 1;
+    }
+    return 0;
+}
+
+/* Whether the layer's row of the map names file `name` of its folder. */
+static int row_names(const char *row, const char *name)
+{
+    char tok[300];
+    snprintf(tok, sizeof tok, "`%s`", name);
+    if (strstr(row, tok)) return 1;
+    if (strncmp(name, "cmd_", 4) == 0 && has_suffix(name, ".c") && strstr(row, "`cmd_NAME.c`"))
+        return 1;
+    char stem[256];
+    snprintf(stem, sizeof stem, "%s", name);
+    char *dot = strrchr(stem, '.');
+    if (dot) *dot = '\0';
+    if (has_suffix(name, ".h")) { /* a header goes with its source file */
+        if (has_suffix(stem, "_internal")) stem[strlen(stem) - 9] = '\0';
+        char c[300];
+        snprintf(c, sizeof c, "%s.c", stem);
+        return row_names(row, c);
+    }
+    return has_suffix(name, ".c") && lists_module(row, stem);
+}
+
+/* The problems of the map in `text` (CONTRIBUTING.md), each noted when
+ * `report`; `tree` names each layer's files: tree[l] "a.c b.h ..." or NULL
+ * to read the folders. */
+static int map_problems(const char *text, const char *const *tree, int report)
+{
+    int bad = 0;
+    for (const char *p = text; (p = strchr(p, '`')) != NULL; p++) {
+        const char *e = strchr(p + 1, '`');
+        if (!e) break;
+        char tok[300];
+        if (e - p - 1 > 0 && e - p - 1 < (long)sizeof tok && !memchr(p + 1, ' ', (size_t)(e - p - 1))) {
+            snprintf(tok, sizeof tok, "%.*s", (int)(e - p - 1), p + 1);
+            if (!named_file_exists(tok)) {
+                bad++;
+                if (report) bkf_test_note("CONTRIBUTING.md names `%s`: no such file", tok);
+            }
+        }
+        p = e;
+    }
+    for (size_t l = 0; l < NLAYERS; l++) {
+        char head[96];
+        snprintf(head, sizeof head, "\n| %s | `src/%s/` |", layers[l].name, layers[l].name);
+        const char *row = strstr(text, head);
+        if (!row) {
+            bad++;
+            if (report) bkf_test_note("CONTRIBUTING.md: no row for layer %s", layers[l].name);
+            continue;
+        }
+        const char *end = strchr(row + 1, '\n');
+        char *line = strndup(row, end ? (size_t)(end - row) : strlen(row));
+        if (!line) return bad + 1;
+        /* the modules' cell alone: "may use" names layers, not files */
+        char *last = strrchr(line, '|');
+        if (last) *last = '\0';
+        if ((last = strrchr(line, '|')) != NULL) last[1] = '\0';
+        char names[8192] = "";
+        if (tree) {
+            snprintf(names, sizeof names, "%s", tree[l] ? tree[l] : "");
+        } else {
+            char dir[1024];
+            snprintf(dir, sizeof dir, "%s/src/%s", BKF_SOURCE_DIR, layers[l].name);
+            DIR *d = opendir(dir);
+            for (struct dirent *de; d && (de = readdir(d)) != NULL;)
+                if (de->d_name[0] != '.' && strlen(names) + strlen(de->d_name) + 2 < sizeof names) {
+                    strcat(names, de->d_name);
+                    strcat(names, " ");
+                }
+            if (d) closedir(d);
+        }
+        for (char *save = NULL, *f = strtok_r(names, " ", &save); f; f = strtok_r(NULL, " ", &save))
+            if (!row_names(line, f)) {
+                bad++;
+                if (report)
+                    bkf_test_note("CONTRIBUTING.md: src/%s/%s is not in the map's %s row",
+                                  layers[l].name, f, layers[l].name);
+            }
+        free(line);
+    }
+    return bad;
+}
+
+TEST(layers_docs_contributing_map_is_the_tree)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/CONTRIBUTING.md", BKF_SOURCE_DIR);
+    char *text = slurp(path);
+    CHECK_MSG(text, "cannot read %s", path);
+    if (!text) return;
+    int bad = map_problems(text, NULL, 1);
+    CHECK_MSG(bad == 0, "CONTRIBUTING.md's map is not the tree (%d problems, listed above)", bad);
+    free(text);
+}
+
+TEST(layers_docs_map_checker_catches_strays)
+{
+    /* planted: a map naming a file that is not there, and a tree with a
+     * file the map does not name; the made-up names of the recipe pass */
+    const char *rows = "\n| core | `src/core/` | status, model (`io.c` io) | C, plot |"
+                       "\n| wave | `src/wave/` | cycle (`cycle_flow.c` the flow) | core |"
+                       "\n| stability | `src/stability/` | hill | core |"
+                       "\n| simulation | `src/simulation/` | pde | core |"
+                       "\n| products | `src/products/` | period | core |"
+                       "\n| scene | `src/scene/` | plot | core |"
+                       "\n| cli | `src/cli/` | one `cmd_NAME.c` per subcommand | lib |\n"
+                       "Say `bkfront trains`: `src/products/trains.c`, `X_<concern>.c`.\n";
+    const char *tree[NLAYERS] = {"status.c model.c io.c", "cycle.c cycle_internal.h cycle_flow.c",
+                                 "hill.c", "pde.c", "period.c", "plot.c", "cmd_run.c"};
+    CHECK(map_problems(rows, tree, 0) == 0);
+    /* a piece the row does not name, a module only in prose or in the
+     * "may use" cell */
+    const char *more[NLAYERS] = {"status.c model.c io.c h5.c plot.c", "cycle.c cycle_shoot.c",
+                                 "hill.c", "pde.c", "period.c", "plot.c", "cmd_run.c main.c"};
+    CHECK(map_problems(rows, more, 0) == 4);
+    /* a named file that is not in the tree */
+    char *stale = malloc(strlen(rows) + 64);
+    CHECK(stale);
+    if (!stale) return;
+    snprintf(stale, strlen(rows) + 64, "%s and `src/core/removed_long_ago.c`\n", rows);
+    CHECK(map_problems(stale, tree, 0) == 1);
+    free(stale);
+}
