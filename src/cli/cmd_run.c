@@ -18,6 +18,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bkfront/plot.h"
 #include "bkfront/scene.h"
 
 /* The gnuplot scripts' folder when neither --plots nor BKFRONT_PLOTS names
@@ -264,23 +265,6 @@ static void print_plan(const bkf_scene *sc, const bkf_scene_plan *plan, FILE *ou
     }
 }
 
-static int parse_formats(const char *text, unsigned *formats, bkf_error *err)
-{
-    char buf[256];
-    snprintf(buf, sizeof buf, "%s", text);
-    *formats = 0;
-    char *save = NULL;
-    for (char *t = strtok_r(buf, ",", &save); t; t = strtok_r(NULL, ",", &save)) {
-        static const char *const names[] = {"png", "pdf", "svg", NULL};
-        int k;
-        int s = cli_parse_choice("--formats", t, names, &k, err);
-        if (s) return s;
-        *formats |= 1u << k;
-    }
-    if (!*formats) return bkf_error_set(err, BKF_EINPUT, "--formats: give png, pdf or svg");
-    return BKF_OK;
-}
-
 /* What the command line asks: the scene and the flags. */
 typedef struct {
     const char *scene_path, *out, *plots;
@@ -328,7 +312,8 @@ static int parse_run_args(int argc, char **argv, run_args *a, bkf_error *err)
     if (s) return s;
     if (!a->scene_path) return bkf_error_set(err, BKF_EINPUT, "SCENE: give a scene file, e.g. fronts/paper.scene");
     a->formats = 1;
-    if (formats_text && (s = parse_formats(formats_text, &a->formats, err))) return s;
+    if (formats_text && (s = bkf_plot_parse_formats(formats_text, "--", "formats", &a->formats, err)))
+        return s;
     /* Every online CPU by default: the steps are independent and each is
      * one thread (a sweep's own threads aside). */
     a->jobs = 1;

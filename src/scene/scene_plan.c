@@ -381,12 +381,8 @@ static int plan_figure(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
     }
     unsigned formats = 0;
     const char *v = scene_own_value(p, "formats");
-    if (v) {
-        formats |= strstr(v, "png") ? 1u : 0u;
-        formats |= strstr(v, "pdf") ? 2u : 0u;
-        formats |= strstr(v, "svg") ? 4u : 0u;
-    } else
-        formats = o->formats ? o->formats : 1u;
+    if (!v || bkf_plot_parse_formats(v, "", "formats", &formats, NULL) != BKF_OK)
+        formats = o->formats ? o->formats : 1u; /* a value is checked when parsed */
     arg_list b = {0};
     int ok = 1;
     char *first = NULL;
