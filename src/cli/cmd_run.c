@@ -132,23 +132,6 @@ static int is_dir(const char *path)
     return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
-/* A figure's `script =` runs a file the scene names, and gnuplot's system()
- * and shell escapes run anything: only with --trust-scene. */
-static int check_trust(const bkf_scene *sc, bkf_error *err)
-{
-    for (size_t i = 0; i < sc->nproducts; i++) {
-        const bkf_scene_product *p = &sc->products[i];
-        if (p->kind != BKF_SCENE_FIGURE) continue;
-        for (size_t k = 0; k < p->nentries; k++)
-            if (strcmp(p->entries[k].key, "script") == 0)
-                return bkf_error_set(err, BKF_EINPUT,
-                                     "%s:%d: script = %s: a scene's own gnuplot script can run "
-                                     "shell commands; give --trust-scene to run it",
-                                     sc->path, p->entries[k].line, p->entries[k].value);
-    }
-    return BKF_OK;
-}
-
 /* The temporaries being written (each step's table and the data files a
  * product writes itself, e.g. simulate's spacetime and snapshots), each
  * guarded by the signal cleanup until it is committed or removed.  The
@@ -422,11 +405,6 @@ static int run_run(int argc, char **argv, bkf_error *err)
 
     bkf_scene *sc = NULL;
     if ((s = bkf_scene_parse_file(a.scene_path, &sc, err))) return s;
-
-    if (!a.trust && !a.no_figures && (s = check_trust(sc, err))) {
-        bkf_scene_free(sc);
-        return s;
-    }
 
     char scene_dir[2048], outdir[4096], plots_dir[4096];
     dir_of(a.scene_path, scene_dir, sizeof scene_dir);
