@@ -31,15 +31,22 @@ int cli_run_product(const char *name, int argc, char **argv, bkf_error *err)
     return s;
 }
 
-void cli_product_help(const char *name, FILE *out)
+void cli_product_options_help(const char *name, FILE *out)
 {
     const bkf_catalog_entry *entry = bkf_catalog_find(name);
     if (!entry) return;
     size_t n;
     const bkf_option *table = entry->options(&n);
     cli_options g[2] = {{table, n, NULL}, {cli_output_options, cli_output_noptions, NULL}};
-    fprintf(out, "usage: bkfront %s [options]\n\n%s.\n\noptions:\n", entry->name, entry->summary);
     cli_options_help(out, g, 2);
+}
+
+void cli_product_help(const char *name, FILE *out)
+{
+    const bkf_catalog_entry *entry = bkf_catalog_find(name);
+    if (!entry) return;
+    fprintf(out, "usage: bkfront %s [options]\n\n%s.\n\noptions:\n", entry->name, entry->summary);
+    cli_product_options_help(name, out);
     fprintf(out, "\nOutput is all or nothing: on any failure nothing is written.\n"
                  "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
 }

@@ -15,5 +15,8 @@ const cli_command *cli_find_command(const char *name);
  * output flags, its check, its table written all or nothing. */
 int cli_run_product(const char *name, int argc, char **argv, bkf_error *err);
 void cli_product_help(const char *name, FILE *out);
+/* The options part of its help: its keys, then the output flags (a command
+ * with a help text of its own, cmd_period.c). */
+void cli_product_options_help(const char *name, FILE *out);
 
 #endif
