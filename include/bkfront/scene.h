@@ -257,6 +257,11 @@ int bkf_scene_run_step(const bkf_scene *s, const bkf_scene_plan *plan, size_t i,
 int bkf_scene_run(const bkf_scene *s, const bkf_scene_plan *plan,
                   const bkf_scene_run_options *options, int *status, bkf_error *err);
 
+/* The status of a run as a whole from its n steps' status[]: BKF_OK when
+ * every step succeeded, else the gravest failure (out of memory, then a
+ * cancellation, then bad input, then the first other one). */
+int bkf_scene_run_status(const int *status, size_t n);
+
 #ifdef __cplusplus
 }
 #endif

@@ -72,19 +72,6 @@ static void run_help(FILE *out)
         "This bkfront's gnuplot scripts: " BKF_PLOTS_DIR "\n");
 }
 
-/* Which failure a scene reports when several steps fail: memory first, then
- * a cancellation, then bad input, then the rest (all exit 1). */
-static int severity(int status)
-{
-    switch (status) {
-    case BKF_OK: return 0;
-    case BKF_ENOMEM: return 4;
-    case BKF_ECANCELED: return 3;
-    case BKF_EINPUT: return 2;
-    default: return 1;
-    }
-}
-
 static double now(void)
 {
     struct timespec ts;
@@ -144,7 +131,6 @@ typedef struct {
     const bkf_scene *sc;
     const bkf_scene_plan *plan;
     size_t failed;
-    int worst;
     char first_failure[BKF_ERROR_LEN];
 } run_context;
 
@@ -199,7 +185,6 @@ static void step_done(const bkf_scene_step_report *r, void *data)
         if (!rc->first_failure[0])
             snprintf(rc->first_failure, sizeof rc->first_failure, "%s:%d [%s %s]: %.200s",
                      sc->path, p->line, bkf_scene_kind_name(p->kind), p->name, why);
-        if (severity(r->status) > severity(rc->worst)) rc->worst = r->status;
     } else if (r->gnuplot_warning[0]) {
         printf("        gnuplot: %s\n", r->gnuplot_warning);
     }
@@ -389,9 +374,10 @@ static int run_plan(const bkf_scene *sc, const bkf_scene_plan *plan, bkf_scene_r
     }
     print_summary(sc, plan, step_status, total, outdir);
     int reported = report_status(err);
+    int worst = bkf_scene_run_status(step_status, plan->nsteps);
     free(step_status);
     if (rc->failed)
-        return bkf_error_set(err, rc->worst ? rc->worst : BKF_ENUMERIC,
+        return bkf_error_set(err, worst,
                              "%zu of the computations failed; first: %s", rc->failed,
                              rc->first_failure);
     return reported;
