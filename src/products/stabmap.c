@@ -567,16 +567,21 @@ static int trace_eval_at(trace_ctx *t, double nu, double S, int full, trace_eval
     return BKF_OK;
 }
 
-/* u is the last spectrum's point moved by a Newton step the driver judged
- * converged: the driver asks there only for the tangent (the Jacobian),
- * and the point reported is the last spectrum's, whose distance to the
- * zero its S_err and nu_err give. */
+/* u is the last spectrum's point moved by a Newton step within the
+ * tolerance: the driver asks there only for the tangent (the Jacobian), or
+ * goes on on the linear model, and the point reported is the last
+ * spectrum's, whose distance to the zero its S_err and nu_err give.  After
+ * a ring spectrum that tolerance is land_tol, what Newton's was before the
+ * tracked eigenvalue: where the eigenvalue cannot be continued (its Newton
+ * fails) and every value is a ring spectrum, the 8 times tighter driver
+ * must not cost more of them than before. */
 static int converged_from_last(const trace_ctx *t, const double *u)
 {
     if (!t->have_last || trace_cached(t, u[0], u[1], 0)) return 0;
     const double last[2] = {t->last.nu, t->last.S};
+    double tol = t->last.s.tracked ? t->newton_tol : t->land_tol;
     for (int i = 0; i < 2; i++)
-        if (fabs(u[i] - last[i]) > t->newton_tol * fmax(fabs(u[i]), t->scale[i])) return 0;
+        if (fabs(u[i] - last[i]) > tol * fmax(fabs(u[i]), t->scale[i])) return 0;
     return 1;
 }
 
