@@ -97,7 +97,18 @@ WRITER(profile, bkf_profile_spec, bkf_profile_write)
 ADAPTERS(asymptotics, bkf_approx_spec, bkf_approx, approx_free)
 WRITER(asymptotics, bkf_approx_spec, bkf_approx_write)
 ADAPTERS(speeds, bkf_fronts_spec, bkf_fronts, release_nothing)
-WRITER(speeds, bkf_fronts_spec, bkf_fronts_write)
+/* Refused roots go to the hooks' warning. */
+static int speeds_write(const void *spec, FILE *out, bkf_io_format format,
+                        const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
+                        bkf_error *err)
+{
+    bkf_fronts_spec s = *(const bkf_fronts_spec *)spec;
+    if (hooks && hooks->warn) {
+        s.warn = hooks->warn;
+        s.warn_data = hooks->data;
+    }
+    return bkf_fronts_write(&s, out, format, prov, err);
+}
 ADAPTERS(branch, bkf_fronts_branch_spec, bkf_fronts_branch, release_nothing)
 WRITER(branch, bkf_fronts_branch_spec, bkf_fronts_branch_write)
 ADAPTERS(stability, bkf_stability_spec, bkf_stability, release_nothing)

@@ -104,11 +104,15 @@ typedef struct {
     double n, s, T, T_err, D, slope;
     unsigned flags;
     const char *model;
+    int status;                  /* BKF_OK, or the root is refused (flag BKF_SPEEDS_REFUSED) */
+    double tol_met;              /* refused: the looser tol it was had to, else NaN */
+    char why[BKF_ERROR_LEN];     /* refused: the row's refusal */
 } found_root;
 
-/* A root not polished to tol is tried at this many times tol, to tell a
- * tol beyond what T gives there (refused) from no T at all (unresolved). */
-#define LOOSE_FACTOR 100.0
+/* A root not polished to tol is tried at these many times tol, to tell a
+ * tol beyond what T gives there (a refused row, saying the tol it has) from
+ * no T at all (unresolved).  The first that succeeds is the one said. */
+#define LOOSE_FACTORS {10.0, 100.0}
 
 /* speeds_search.c */
 int speeds_period_refused(int rc, const bkf_error *e, double nu, bkf_error *err);

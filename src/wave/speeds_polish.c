@@ -203,8 +203,8 @@ static int formula_root(const grid *g, double n, double r0, double width, bkf_as
     double slope = (DF(s + h) - DF(s - h)) / (2.0 * h);
 #undef DF
     double T = bkf_asym_period(f, mu, nu);
-    *out = (found_root){n, s, T, bound * T, log(T) - s - ell, slope, 0,
-                        f == BKF_ASYM_LEADING ? "leading" : "asymptotic"};
+    *out = (found_root){.n = n, .s = s, .T = T, .T_err = bound * T, .D = log(T) - s - ell,
+                        .slope = slope, .model = f == BKF_ASYM_LEADING ? "leading" : "asymptotic"};
     return 1;
 }
 
@@ -367,7 +367,8 @@ int speeds_polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
         if ((sl > 0) == (slope0 > 0) && fabs(sl) < fabs(slope)) slope = sl;
     }
     if (isfinite(slope0) && fabs(slope0) < fabs(slope)) slope = slope0;
-    *out = (found_root){n, best->s, best->T, best->T_err, best->D, slope, 0, best->model};
+    *out = (found_root){.n = n, .s = best->s, .T = best->T, .T_err = best->T_err, .D = best->D,
+                        .slope = slope, .model = best->model};
     return BKF_OK;
 }
 
@@ -391,7 +392,8 @@ void speeds_asymptotic_root(const grid *g, double n, found_root *out)
     double h = 1e-6;
     double slope = (log(bkf_asym_period_large(mu_of_s(g->p.gamma, s + h), g->p.nu)) -
                     log(bkf_asym_period_large(mu_of_s(g->p.gamma, s - h), g->p.nu))) / (2 * h) - 1.0;
-    *out = (found_root){n, s, T, rem + last->T_err * last->mu / mu, log(T) - s - ell, slope,
-                        BKF_SPEEDS_ASYMPTOTIC, "asymptotic"};
+    *out = (found_root){.n = n, .s = s, .T = T, .T_err = rem + last->T_err * last->mu / mu,
+                        .D = log(T) - s - ell, .slope = slope, .flags = BKF_SPEEDS_ASYMPTOTIC,
+                        .model = "asymptotic"};
 }
 
