@@ -104,7 +104,7 @@ const bkf_option bkf_fronts_options[] = {
              "takes a formula wherever its verified error bound meets the\n"
              "tolerance the root needs (about tol, 0.1..10 tol), else\n"
              "shooting; asymptotic or leading: the formula at every root,\n"
-             "exit 1 where its bound exceeds that; shooting: never a formula\n"
+             "a refused row where its bound exceeds that; shooting: never a formula\n"
              "(except beyond the grid's cap, flag asymptotic)"},
     {.name = "stability", .type = BKF_OPT_SWITCH, .offset = offsetof(bkf_fronts_spec, stability),
      .help = "add each root's spectral stability (its ring spectrum, as\n"

@@ -403,6 +403,23 @@ TEST(cli_speeds_refused_row_keeps_the_table_exit_3)
     char want[64];
     snprintf(want, sizeof want, "\"refused\": %d}", refused);
     CHECK_MSG(strstr(j.out, want) && strstr(j.out, "\"v\": null"), "no %s in the results", want);
+    /* --stability: no spectrum for the refused root, its neighbours' stand */
+    run_result st = RUN("speeds", "--gamma", "0.567489", "--c", "0.432606", "--nu", "0.989398",
+                        "--S", "59.5575", "--n", "54", "--stability");
+    CHECK_MSG(st.code == 3 && rows(st.out) == 3, "exit %d: %s", st.code, st.err);
+    for (int i = 0; i < rows(st.out); i++) {
+        char flags[64], stable[32];
+        double sigma;
+        CHECK(field(st.out, i, "flags", NULL, flags, sizeof flags) &&
+              field(st.out, i, "stable", NULL, stable, sizeof stable) &&
+              field(st.out, i, "sigma_max", &sigma, NULL, 0));
+        if (strstr(flags, "refused"))
+            CHECK_MSG(strcmp(stable, "refused") == 0 && isnan(sigma), "row %d: %s %g", i, stable, sigma);
+        else
+            CHECK_MSG((strcmp(stable, "yes") == 0 || strcmp(stable, "no") == 0) && isfinite(sigma),
+                      "row %d: %s %g", i, stable, sigma);
+    }
     run_free(&r);
     run_free(&j);
+    run_free(&st);
 }
