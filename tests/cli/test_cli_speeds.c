@@ -423,3 +423,28 @@ TEST(cli_speeds_refused_row_keeps_the_table_exit_3)
     run_free(&j);
     run_free(&st);
 }
+
+/* A product that takes one root as its input refuses a refused one with
+ * its reason (exit 1, nothing written), never a train at v = nan; the
+ * other roots of that n stay usable. */
+TEST(cli_refused_root_is_refused_by_its_consumers)
+{
+    run_result st = RUN("stability", "--gamma", "0.567489", "--c", "0.432606", "--nu", "0.989398",
+                        "--S", "59.5575", "--n", "54", "--root", "2");
+    CHECK_MSG(st.code == 1 && st.out[0] == '\0' && bkf_count_lines(st.err) == 1 &&
+                  strstr(st.err, "n = 54: the root near mu = 3.55") &&
+                  strstr(st.err, "cannot be polished to tol 1e-10"),
+              "exit %d: %s", st.code, st.err);
+    run_result br = RUN("branch", "--param", "S", "--from", "59.5575", "--to", "59", "--gamma",
+                        "0.567489", "--c", "0.432606", "--nu", "0.989398", "--n", "54", "--root",
+                        "2", "--max-points", "2");
+    CHECK_MSG(br.code == 1 && br.out[0] == '\0' && strstr(br.err, "cannot be polished"),
+              "exit %d: %s", br.code, br.err);
+    run_result ok = RUN("branch", "--param", "S", "--from", "59.5575", "--to", "59", "--gamma",
+                        "0.567489", "--c", "0.432606", "--nu", "0.989398", "--n", "54", "--root",
+                        "1", "--max-points", "2");
+    CHECK_MSG(ok.code == 0 && rows(ok.out) >= 2, "exit %d: %s", ok.code, ok.err);
+    run_free(&st);
+    run_free(&br);
+    run_free(&ok);
+}
