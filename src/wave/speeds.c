@@ -468,8 +468,9 @@ static int find_search(const bkf_model_params *p, const bkf_speeds_options *o,
     if (!rc && !fs) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     if (!rc) rc = search_levels(&sr, o, t, err);
     if (!rc && sr.n_last >= sr.n_from) {
+        rc = speeds_resolve_levels(&sr, err);
         /* the last sample's precise solve, as the table's (the tail's roots) */
-        if (sr.asym_mu0 > 0) rc = speeds_upgrade(g, g->count - 1, err);
+        if (!rc && sr.asym_mu0 > 0) rc = speeds_upgrade(g, g->count - 1, err);
         if (!rc) rc = collect_bracketed(&sr, fs, &found, err);
         if (!rc && sr.asym_mu0 > 0) rc = collect_tail(&sr, &found, err);
         if (!rc) rc = table_rows(p, &found, t, err);

@@ -109,10 +109,13 @@ typedef struct {
     char why[BKF_ERROR_LEN];     /* refused: the row's refusal */
 } found_root;
 
-/* A root not polished to tol is tried at these many times tol, to tell a
- * tol beyond what T gives there (a refused row, saying the tol it has) from
- * no T at all (unresolved).  The first that succeeds is the one said. */
-#define LOOSE_FACTORS {10.0, 100.0}
+/* A root not polished to tol is tried at these many times tol (at most
+ * BKF_TOL_MAX), to tell a tol beyond what T gives there (a refused row,
+ * saying the tol it has) from no T at all (unresolved).  The first that
+ * succeeds is the one said.  At tol 1e-12 the root next to the canard at
+ * gamma 0.567489, c 0.432606, nu 0.989398, S 59.5575 (n = 54) is had to
+ * 1e-9 only: with 10 and 100 alone it was a place left unresolved. */
+#define LOOSE_FACTORS {10.0, 100.0, 1e3, 1e4}
 
 /* speeds_search.c */
 int speeds_period_refused(int rc, const bkf_error *e, double nu, bkf_error *err);

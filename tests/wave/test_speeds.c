@@ -777,7 +777,7 @@ static void check_refused_row(const bkf_model_params *p, const bkf_speeds_root *
               r->n, r->status, r->flags);
     CHECK_MSG(strstr(r->refusal, "cannot be polished to tol") && strstr(r->refusal, "near mu = "),
               "n %zu: refusal '%s'", r->n, r->refusal);
-    CHECK_MSG(r->tol_met > tol && r->tol_met <= 100.0 * tol, "n %zu: tol met %g at tol %g", r->n,
+    CHECK_MSG(r->tol_met > tol && r->tol_met <= 1e4 * tol, "n %zu: tol met %g at tol %g", r->n,
               r->tol_met, tol);
     CHECK(isnan(r->v) && isnan(r->mu) && isnan(r->T) && isnan(r->v_err) && isnan(r->residual));
     CHECK(r->model == NULL && r->wavelength == p->S / (double)r->n);
