@@ -113,7 +113,7 @@ typedef struct {
  * BKF_TOL_MAX), to tell a tol beyond what T gives there (a refused row,
  * saying the tol it has) from no T at all (unresolved).  The first that
  * succeeds is the one said.  At tol 1e-12 the root next to the canard at
- * gamma 0.567489, c 0.432606, nu 0.989398, S 59.5575 (n = 54) is had to
+ * gamma 0.567489, c 0.432606, nu 0.989398, S 59.5575 (n = 50) is had to
  * 1e-9 only: with 10 and 100 alone it was a place left unresolved. */
 #define LOOSE_FACTORS {10.0, 100.0, 1e3, 1e4}
 

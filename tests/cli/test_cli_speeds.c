@@ -368,7 +368,7 @@ TEST(cli_speeds_refusal_near_nu_minus_1_says_what_to_try)
 }
 
 /* R1 of issue 31's independent audit: one root that cannot be had to
- * --tol (n = 54 next to the canard here, had to 1e-9 only) refused the
+ * --tol (n = 50 next to the canard here, had to 1e-9 only) refused the
  * whole table, exit 1, nothing written.  Now the table is written with that
  * root a row flagged refused (v, mu nan, no model), its reason in a comment,
  * every other row standing, and exit 3 with one line on stderr: a script
@@ -405,7 +405,7 @@ TEST(cli_speeds_refused_row_keeps_the_table_exit_3)
     CHECK_MSG(strstr(j.out, want) && strstr(j.out, "\"v\": null"), "no %s in the results", want);
     /* --stability: no spectrum for the refused root, its neighbours' stand */
     run_result st = RUN("speeds", "--gamma", "0.567489", "--c", "0.432606", "--nu", "0.989398",
-                        "--S", "59.5575", "--n", "54", "--stability");
+                        "--S", "59.5575", "--n", "50", "--stability");
     CHECK_MSG(st.code == 3 && rows(st.out) == 3, "exit %d: %s", st.code, st.err);
     for (int i = 0; i < rows(st.out); i++) {
         char flags[64], stable[32];
@@ -430,18 +430,18 @@ TEST(cli_speeds_refused_row_keeps_the_table_exit_3)
 TEST(cli_refused_root_is_refused_by_its_consumers)
 {
     run_result st = RUN("stability", "--gamma", "0.567489", "--c", "0.432606", "--nu", "0.989398",
-                        "--S", "59.5575", "--n", "54", "--root", "2");
+                        "--S", "59.5575", "--n", "50", "--root", "2");
     CHECK_MSG(st.code == 1 && st.out[0] == '\0' && bkf_count_lines(st.err) == 1 &&
-                  strstr(st.err, "n = 54: the root near mu = 3.55") &&
+                  strstr(st.err, "n = 50: the root near mu = 3.55") &&
                   strstr(st.err, "cannot be polished to tol 1e-10"),
               "exit %d: %s", st.code, st.err);
     run_result br = RUN("branch", "--param", "S", "--from", "59.5575", "--to", "59", "--gamma",
-                        "0.567489", "--c", "0.432606", "--nu", "0.989398", "--n", "54", "--root",
+                        "0.567489", "--c", "0.432606", "--nu", "0.989398", "--n", "50", "--root",
                         "2", "--max-points", "2");
     CHECK_MSG(br.code == 1 && br.out[0] == '\0' && strstr(br.err, "cannot be polished"),
               "exit %d: %s", br.code, br.err);
     run_result ok = RUN("branch", "--param", "S", "--from", "59.5575", "--to", "59", "--gamma",
-                        "0.567489", "--c", "0.432606", "--nu", "0.989398", "--n", "54", "--root",
+                        "0.567489", "--c", "0.432606", "--nu", "0.989398", "--n", "50", "--root",
                         "1", "--max-points", "2");
     CHECK_MSG(ok.code == 0 && rows(ok.out) >= 2, "exit %d: %s", ok.code, ok.err);
     run_free(&st);
