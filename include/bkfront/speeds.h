@@ -96,8 +96,9 @@ typedef struct {
     int status;             /* BKF_OK, or BKF_ETOL: refused (the root is had at a looser
                                tol, or the formula asked for does not meet this one) */
     double tol_met;         /* refused: the looser tolerance on v it was polished to
-                               (10, 100, 1e3 or 1e4 times tol, at most 0.1); NaN when
-                               none was tried (a formula asked for) */
+                               (10 or 100 times tol, at most 0.1; also 1e3 or 1e4 times
+                               while at most 1e-6); NaN when none was tried (a formula
+                               asked for) */
     char refusal[BKF_ERROR_LEN]; /* refused: one line, where and why; else empty */
 } bkf_speeds_root;
 

@@ -313,7 +313,7 @@ static void refuse_root(search *sr, gsl_root_fsolver *fs, double n, size_t i, co
     int lrc = BKF_ENUMERIC;
     for (size_t k = 0; lrc && k < sizeof factors / sizeof factors[0]; k++) {
         double looser = fmin(factors[k] * tol, BKF_TOL_MAX);
-        if (!(looser > g->tol)) break;
+        if (!(looser > g->tol) || (k >= LOOSE_NEAR && looser > LOOSE_FAR_MAX)) break;
         bkf_error le = {0};
         g->tol = looser;
         g->mu_last[1] = 0;
