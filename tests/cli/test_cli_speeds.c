@@ -397,12 +397,11 @@ TEST(cli_speeds_refused_row_keeps_the_table_exit_3)
         }
     }
     CHECK_MSG(refused >= 1 && good >= 100, "%d refused, %d good", refused, good);
+    /* JSON (n = 50 alone, cheaper): the count in "results", v null */
     run_result j = RUN("speeds", "--gamma", "0.567489", "--c", "0.432606", "--nu", "0.989398",
-                       "--S", "59.5575", "--format", "json");
+                       "--S", "59.5575", "--n", "50", "--format", "json");
     CHECK_MSG(j.code == 3 && bkf_test_json_valid(j.out), "exit %d: %s", j.code, j.err);
-    char want[64];
-    snprintf(want, sizeof want, "\"refused\": %d}", refused);
-    CHECK_MSG(strstr(j.out, want) && strstr(j.out, "\"v\": null"), "no %s in the results", want);
+    CHECK_MSG(strstr(j.out, "\"refused\": 1}") && strstr(j.out, "\"v\": null"), "%s", j.out);
     /* --stability: no spectrum for the refused root, its neighbours' stand */
     run_result st = RUN("speeds", "--gamma", "0.567489", "--c", "0.432606", "--nu", "0.989398",
                         "--S", "59.5575", "--n", "50", "--stability");
