@@ -66,8 +66,8 @@
  * wavenumbers (its spectral tail, as bkf_pde_spectral_tail, above
  * grid_tail) is classified a grid mode: if the verdict would rest on one it
  * is undecided.  Each multiplier's error: twice the residual |A v - m v|/|v| of its
- * Ritz pair with A's flow integrated ten times more accurately (Arnoldi's
- * and the flow's error at once), plus the orbit's own error estimate
+ * Ritz pair with A's flow integrated ten times more accurately than Arnoldi's
+ * (Arnoldi's and the flow's error at once), plus the orbit's own error estimate
  * result.err (a first-order guess: a change e of the orbit moves the
  * monodromy by O(e)).
  *
@@ -222,12 +222,21 @@ const char *bkf_orbit_verdict_name(bkf_orbit_verdict verdict);
 typedef struct {
     size_t k;                 /* physical multipliers asked per sector, >= 1; default 10 */
     int sector;               /* -1 (default): every sector; else the one j */
-    double arnoldi_tol;       /* ARPACK's relative tolerance; default 1e-10 */
+    double arnoldi_tol;       /* ARPACK's relative tolerance; 0 (default): the orbit's
+                                 tol / 100 in [1e-12, 1e-6] (the multipliers' error
+                                 carries the orbit's own, so a tighter Arnoldi only
+                                 costs restarts: 1e-10 at tol 1e-3 was 83 tangent
+                                 flows a branch point where 1e-5 takes 67) */
     int max_restarts;         /* ARPACK's maxiter; default 300 */
     double grid_tail;         /* tail above which an eigenvector is a grid mode; default
                                  0.1: grid modes' content sits at the cutoff (tails 0.3-0.7
                                  at N 64 on the pacemaker), a physical eigenvector's
                                  tail is near its orbit's own (1e-2 at N 128 there) */
+    double flow_tol;          /* the tangent flow's tolerance; 0 (default): the orbit's
+                                 tol / 10 in [1e-13, 1e-6], the accuracy the orbit was
+                                 asked for rather than its own flow's tol / 100 (each
+                                 multiplier's error is measured with this flow ten
+                                 times tighter, so the looser flow shows in it) */
 } bkf_orbit_mult_options;
 
 bkf_orbit_mult_options bkf_orbit_mult_options_default(void);
