@@ -127,6 +127,7 @@ void bkf_orbit_free(bkf_orbit *ob)
     orbit_flow_free(ob->full);
     free(ob->psi);
     free(ob->ucell);
+    free(ob->ucell2);
     free(ob->mult);
     free(ob);
 }
@@ -320,6 +321,15 @@ static int solve_body(bkf_orbit *ob, const bkf_orbit_guess *g, bkf_orbit_result 
         memset(&job, 0, sizeof job);
         if (!s) s = solve_on(ob, fl2, &job, x2, "grid", NULL, err);
         orbit_newton_release(&job);
+        if (!s) {
+            double *keep = realloc(ob->ucell2, 2 * Nc2 * sizeof *keep);
+            if (!keep) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            else {
+                memcpy(keep, x2, 2 * Nc2 * sizeof *keep);
+                ob->ucell2 = keep;
+                ob->Nc2 = Nc2;
+            }
+        }
         if (!s) {
             r.N2 = Nc2 * m;
             r.period2 = x2[2 * Nc2];

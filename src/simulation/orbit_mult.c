@@ -30,6 +30,7 @@ typedef struct {
     double *tmp, *tmp2;
     int sector;               /* the sector projected on, -1: none */
     size_t matvecs;
+    double *mem;
     bkf_error err;
 } mult_op;
 
@@ -333,6 +334,89 @@ done:
     return s;
 }
 
+/* The operator about the state u (2N values on fl's full domain) of period
+ * T and shift sh, with its trivial directions f(u) and, for a generic
+ * continuum orbit, d_x u. */
+static int op_init(mult_op *op, bkf_orbit *ob, orbit_flow *fl, const double *u, double T,
+                   double sh, size_t Nc, double tol, bkf_error *err)
+{
+    memset(op, 0, sizeof *op);
+    op->ob = ob;
+    op->fl = fl;
+    op->N = fl->N;
+    op->n = 2 * op->N;
+    op->m = ob->cells;
+    op->Nc = Nc;
+    op->T = T;
+    op->s = sh;
+    op->tol = tol;
+    op->u = u;
+    op->sector = -1;
+    size_t n = op->n;
+    op->mem = malloc((4 * n + op->m) * sizeof *op->mem);
+    if (!op->mem) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    op->w[0] = op->mem;
+    op->w[1] = op->mem + n;
+    op->tmp = op->mem + 2 * n;
+    op->tmp2 = op->mem + 3 * n; /* m values for the sector sums, then scratch */
+    int s = orbit_flow_rhs(fl, u, op->w[0], err);
+    if (s) return s;
+    double nf = sqrt(dot(op->w[0], op->w[0], n));
+    for (size_t i = 0; i < n; i++) op->w[0][i] /= nf;
+    op->ntriv = 1;
+    if (ob->model.kind == BKF_MODEL_CONTINUUM && ob->result.symmetry == BKF_ORBIT_SYM_GENERIC) {
+        orbit_flow_dx(fl, u, op->w[1]);
+        double a = dot(op->w[0], op->w[1], n);
+        for (size_t i = 0; i < n; i++) op->w[1][i] -= a * op->w[0][i];
+        double nd = sqrt(dot(op->w[1], op->w[1], n));
+        for (size_t i = 0; i < n; i++) op->w[1][i] /= nd;
+        op->ntriv = 2;
+    }
+    return BKF_OK;
+}
+
+/* The largest physical |m| of one sector about the orbit on its second
+ * grid (NaN if Arnoldi finds none there). */
+static int second_grid(bkf_orbit *ob, const bkf_orbit_mult_options *o, int sector,
+                       double *largest, size_t *matvecs, bkf_error *err)
+{
+    const bkf_orbit_result *r = &ob->result;
+    size_t m = ob->cells, Nc2 = ob->Nc2, N2 = m * Nc2;
+    bkf_model_params m2 = ob->model;
+    m2.N = N2;
+    *largest = NAN;
+    orbit_flow *fl = orbit_flow_alloc(&m2, &ob->o, err);
+    double *u = malloc(2 * N2 * sizeof *u);
+    mult_op op;
+    memset(&op, 0, sizeof op);
+    int s = fl && u ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (!s) {
+        for (size_t l = 0; l < m; l++) {
+            memcpy(u + l * Nc2, ob->ucell2, Nc2 * sizeof *u);
+            memcpy(u + N2 + l * Nc2, ob->ucell2 + Nc2, Nc2 * sizeof *u);
+        }
+        s = op_init(&op, ob, fl, u, r->period2, r->shift2, Nc2, o->flow_tol, err);
+    }
+    if (!s) {
+        op.sector = m == 1 ? -1 : sector;
+        /* two, so that a grid mode on top leaves the physical one found */
+        bkf_orbit_mult_options po = *o;
+        po.k = 2;
+        size_t n0 = ob->nmult, nconv = 0, nev = 0;
+        s = arnoldi(&op, &po, 0.0, 0.0, &nconv, &nev, err);
+        for (size_t i = n0; !s && i < ob->nmult; i++)
+            if (ob->mult[i].kind == BKF_ORBIT_MULT_PHYSICAL &&
+                !(ob->mult[i].abs <= *largest))
+                *largest = ob->mult[i].abs;
+        ob->nmult = n0;
+    }
+    *matvecs += op.matvecs;
+    free(op.mem);
+    free(u);
+    orbit_flow_free(fl);
+    return s;
+}
+
 int orbit_mult_run(bkf_orbit *ob, const bkf_orbit_mult_options *o, bkf_orbit_spectrum *sp,
                    bkf_error *err)
 {
@@ -346,38 +430,9 @@ int orbit_mult_run(bkf_orbit *ob, const bkf_orbit_mult_options *o, bkf_orbit_spe
     }
     const bkf_orbit_result *r = &ob->result;
     mult_op op;
-    memset(&op, 0, sizeof op);
-    op.ob = ob;
-    op.fl = ob->full;
-    op.N = ob->model.N;
-    op.n = 2 * op.N;
-    op.m = ob->cells;
-    op.Nc = ob->Nc;
-    op.T = r->period;
-    op.s = r->shift;
-    op.tol = o->flow_tol;
-    op.u = ob->psi; /* psi then eta, contiguous */
-    op.sector = -1;
-    size_t n = op.n;
-    double *mem = malloc((4 * n + op.m) * sizeof *mem);
-    if (!mem) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    op.w[0] = mem;
-    op.w[1] = mem + n;
-    op.tmp = mem + 2 * n;
-    op.tmp2 = mem + 3 * n; /* m values for the sector sums, then scratch */
-    int s = orbit_flow_rhs(op.fl, op.u, op.w[0], err);
+    int s = op_init(&op, ob, ob->full, ob->psi /* psi then eta, contiguous */, r->period,
+                    r->shift, ob->Nc, o->flow_tol, err);
     if (s) goto done;
-    double nf = sqrt(dot(op.w[0], op.w[0], n));
-    for (size_t i = 0; i < n; i++) op.w[0][i] /= nf;
-    op.ntriv = 1;
-    if (ob->model.kind == BKF_MODEL_CONTINUUM && r->symmetry == BKF_ORBIT_SYM_GENERIC) {
-        orbit_flow_dx(op.fl, op.u, op.w[1]);
-        double a = dot(op.w[0], op.w[1], n);
-        for (size_t i = 0; i < n; i++) op.w[1][i] -= a * op.w[0][i];
-        double nd = sqrt(dot(op.w[1], op.w[1], n));
-        for (size_t i = 0; i < n; i++) op.w[1][i] /= nd;
-        op.ntriv = 2;
-    }
     sp->trivial_expected = op.ntriv;
     double orbit_err = r->err;
     if ((s = trivial(&op, sp, orbit_err, err))) goto done;
@@ -385,7 +440,6 @@ int orbit_mult_run(bkf_orbit *ob, const bkf_orbit_mult_options *o, bkf_orbit_spe
     size_t short_of = 0;
     for (int j = j0; j <= j1; j++) {
         op.sector = op.m == 1 ? -1 : j;
-        if (op.m == 1) op.sector = -1;
         size_t nconv = 0, nev = 0;
         if ((s = arnoldi(&op, o, orbit_err, r->tangent_rel, &nconv, &nev, err))) goto done;
         if (nconv < nev) short_of += nev - nconv;
@@ -393,19 +447,29 @@ int orbit_mult_run(bkf_orbit *ob, const bkf_orbit_mult_options *o, bkf_orbit_spe
     qsort(ob->mult, ob->nmult, sizeof *ob->mult, by_sector_then_abs);
     sp->m = ob->mult;
     sp->count = ob->nmult;
-    sp->matvecs = op.matvecs;
-    /* the verdict: the largest physical multiplier against 1 */
-    double big = -1.0, big_err = 0.0, grid_big = -1.0;
+    /* the largest physical multiplier, then its sector on the second grid */
+    double big = -1.0;
     size_t at = 0;
-    for (size_t i = 0; i < ob->nmult; i++) {
-        const bkf_orbit_multiplier *mu = &ob->mult[i];
-        if (mu->kind == BKF_ORBIT_MULT_PHYSICAL && mu->abs > big) {
-            big = mu->abs;
-            big_err = mu->err;
+    for (size_t i = 0; i < ob->nmult; i++)
+        if (ob->mult[i].kind == BKF_ORBIT_MULT_PHYSICAL && ob->mult[i].abs > big) {
+            big = ob->mult[i].abs;
             at = i;
         }
-        if (mu->kind == BKF_ORBIT_MULT_GRID) grid_big = fmax(grid_big, mu->abs + mu->err);
+    sp->grid_dev = ob->model.kind == BKF_MODEL_CHAIN ? 0.0 : NAN;
+    if (big >= 0 && r->N2 > 0 && ob->ucell2) {
+        double big2;
+        if ((s = second_grid(ob, o, (int)ob->mult[at].sector, &big2, &op.matvecs, err)))
+            goto done;
+        sp->grid_dev = fabs(big2 - big); /* NaN when N2 found none */
+        for (size_t i = 0; i < ob->nmult && isfinite(sp->grid_dev); i++)
+            ob->mult[i].err += sp->grid_dev;
     }
+    sp->matvecs = op.matvecs;
+    /* the verdict: the largest physical multiplier against 1 */
+    double big_err = big >= 0 ? ob->mult[at].err : 0.0, grid_big = -1.0;
+    for (size_t i = 0; i < ob->nmult; i++)
+        if (ob->mult[i].kind == BKF_ORBIT_MULT_GRID)
+            grid_big = fmax(grid_big, ob->mult[i].abs + ob->mult[i].err);
     sp->largest_abs = big >= 0 ? big : NAN;
     sp->largest_err = big >= 0 ? big_err : NAN;
     sp->largest_index = at;
@@ -418,6 +482,10 @@ int orbit_mult_run(bkf_orbit *ob, const bkf_orbit_mult_options *o, bkf_orbit_spe
                  "Arnoldi converged %zu fewer multipliers than asked", short_of);
     else if (big < 0)
         snprintf(sp->reason, sizeof sp->reason, "no physical multiplier found");
+    else if (r->N2 > 0 && !isfinite(sp->grid_dev))
+        snprintf(sp->reason, sizeof sp->reason,
+                 "the largest multiplier's sector has no physical one on the second grid N %zu",
+                 r->N2);
     else if (grid_big >= 1.0 && grid_big >= big - big_err)
         snprintf(sp->reason, sizeof sp->reason,
                  "a grid-scale multiplier reaches %.6g: refine N or dealias", grid_big);
@@ -431,6 +499,6 @@ int orbit_mult_run(bkf_orbit *ob, const bkf_orbit_mult_options *o, bkf_orbit_spe
                  big, big_err);
     s = BKF_OK;
 done:
-    free(mem);
+    free(op.mem);
     return s;
 }
