@@ -242,6 +242,11 @@ typedef struct {
                                  asked for rather than its own flow's tol / 100 (each
                                  multiplier's error is measured with this flow ten
                                  times tighter, so the looser flow shows in it) */
+    const struct bkf_orbit *warm_start; /* NULL (default), or an orbit of the same grid
+                                 and cells whose last multipliers start Arnoldi here
+                                 (their eigenvectors, sector by sector): the previous
+                                 point of a branch.  Only the work changes, not what
+                                 converges: ARPACK's test is the same */
 } bkf_orbit_mult_options;
 
 bkf_orbit_mult_options bkf_orbit_mult_options_default(void);

@@ -285,6 +285,8 @@ typedef struct {
     int stop_status;        /* a failure of the visit's own work (polish: out of memory) */
     bkf_error stop_err;
     double *full_psi, *full_eta;
+    bkf_orbit *prev_ob;     /* the last point with multipliers: the next one's Arnoldi
+                               starts from its eigenvectors */
     double p0, span;        /* for progress */
     char why[BKF_ERROR_LEN + 32]; /* a row's status when refused */
 } cont_ctx;
@@ -597,6 +599,7 @@ static int accept(const double *u, const double *tangent, int is_fold, void *dat
         if (c->o->stability) {
             bkf_orbit_mult_options mo = bkf_orbit_mult_options_default();
             mo.k = c->o->k;
+            mo.warm_start = c->prev_ob;
             int sm = bkf_orbit_multipliers(ob, &mo, &sp, &e);
             if (sm == BKF_ENOMEM || sm == BKF_ECANCELED) {
                 c->stop_status = sm;
@@ -605,6 +608,8 @@ static int accept(const double *u, const double *tangent, int is_fold, void *dat
                 return 1;
             }
             if (sm == BKF_OK) {
+                bkf_orbit_free(c->prev_ob);
+                c->prev_ob = ob; /* freed with the context or the next such point */
                 pt.has_spectrum = 1;
                 pt.spectrum = &sp;
                 pt.verdict = sp.verdict;
@@ -620,7 +625,7 @@ static int accept(const double *u, const double *tangent, int is_fold, void *dat
         pt.status = c->why;
     }
     int stop = emit(c, &pt);
-    bkf_orbit_free(ob);
+    if (ob != c->prev_ob) bkf_orbit_free(ob);
     return stop;
 }
 
@@ -639,6 +644,7 @@ static void orbits_ctx_free(cont_ctx *c)
     free(c->full_psi);
     free(c->full_eta);
     bkf_pde_free(c->pde);
+    bkf_orbit_free(c->prev_ob);
 }
 
 bkf_orbits_options bkf_orbits_options_default(void)

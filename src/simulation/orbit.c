@@ -68,7 +68,7 @@ bkf_orbit_options bkf_orbit_options_default(void)
 
 bkf_orbit_mult_options bkf_orbit_mult_options_default(void)
 {
-    bkf_orbit_mult_options o = {10, -1, 0.0, 300, 0.1, 0.0};
+    bkf_orbit_mult_options o = {10, -1, 0.0, 300, 0.1, 0.0, NULL};
     return o;
 }
 
@@ -128,6 +128,7 @@ void bkf_orbit_free(bkf_orbit *ob)
     free(ob->psi);
     free(ob->ucell);
     free(ob->ucell2);
+    free(ob->warm);
     free(ob->mult);
     free(ob);
 }

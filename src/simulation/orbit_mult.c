@@ -30,6 +30,10 @@ typedef struct {
     double *tmp, *tmp2;
     int sector;               /* the sector projected on, -1: none */
     size_t matvecs;
+    const double *start;      /* Arnoldi's start (n values), NULL: pseudo-random */
+    double *startbuf;         /* n values for it */
+    double *save;             /* the converged Ritz vectors' sum goes here, or NULL */
+    int probe;                /* no Ritz residuals (only the value is wanted) */
     double *mem;
     bkf_error err;
 } mult_op;
@@ -202,7 +206,7 @@ static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_er
      * 2 nev + 6 converges in one or two restarts on these monodromies
      * (fast-decaying spectra), where nev + 20 paid 20 flows up front per
      * sector (k 2: 23 flows a sector against 12 to 14; k 10: 57 against 52) */
-    a_int ncv = 2 * nev + 6;
+    a_int ncv = 2 * nev + (op->start ? 2 : 6);
     if (ncv > n) ncv = n;
     a_int lworkl = 3 * ncv * ncv + 6 * ncv;
     double *resid = malloc((size_t)n * sizeof *resid);
@@ -220,11 +224,15 @@ static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_er
         s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
         goto done;
     }
-    /* a fixed pseudo-random start (reproducible), in the sector */
+    /* a given start, or a fixed pseudo-random one (reproducible), in the
+     * sector */
     unsigned long long st = 0x9E3779B97F4A7C15ULL + (unsigned long long)op->sector;
     for (a_int i = 0; i < n; i++) {
         st = st * 6364136223846793005ULL + 1442695040888963407ULL;
         resid[i] = (double)(st >> 11) / 9007199254740992.0 - 0.5;
+        /* a trace of the random one: a start inside an invariant subspace
+         * would stop the Krylov space short of the k asked */
+        if (op->start) resid[i] = op->start[i] + 1e-3 * resid[i];
     }
     project_sector(op, resid);
     a_int iparam[11] = {0}, ipntr[14] = {0};
@@ -271,6 +279,14 @@ static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_er
     }
     nconv = iparam[4];
     *nconv_out = (size_t)nconv;
+    if (op->save) {
+        memset(op->save, 0, (size_t)n * sizeof *op->save);
+        for (a_int k = 0; k < nconv; k++) {
+            const double *z = Z + (size_t)k * (size_t)n;
+            double nz = sqrt(dot(z, z, op->n));
+            for (size_t i = 0; nz > 0 && i < op->n; i++) op->save[i] += z[i] / nz;
+        }
+    }
     for (a_int k = 0; k < nconv; k++) {
         double re = dr[k], im = di[k];
         int pair = im != 0.0;
@@ -282,12 +298,12 @@ static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_er
         if (!(mag >= MULT_FLOOR)) continue;
         /* the Ritz pair's residual with the flow ten times more accurate */
         double r2 = 0.0, z2 = dot(zr, zr, op->n) + (zi ? dot(zi, zi, op->n) : 0.0);
-        if ((s = apply(op, zr, Az, 0.1 * op->tol)) ||
-            (zi && (s = apply(op, zi, Az + op->n, 0.1 * op->tol)))) {
+        if (!op->probe && ((s = apply(op, zr, Az, 0.1 * op->tol)) ||
+                           (zi && (s = apply(op, zi, Az + op->n, 0.1 * op->tol))))) {
             bkf_error_set(err, s, "%s", op->err.message);
             goto done;
         }
-        for (size_t i = 0; i < op->n; i++) {
+        for (size_t i = 0; !op->probe && i < op->n; i++) {
             double a = Az[i] - (re * zr[i] - (zi ? im * zi[i] : 0.0));
             r2 += a * a;
             if (zi) {
@@ -353,12 +369,13 @@ static int op_init(mult_op *op, bkf_orbit *ob, orbit_flow *fl, const double *u, 
     op->u = u;
     op->sector = -1;
     size_t n = op->n;
-    op->mem = malloc((4 * n + op->m) * sizeof *op->mem);
+    op->mem = malloc((5 * n + op->m) * sizeof *op->mem);
     if (!op->mem) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     op->w[0] = op->mem;
     op->w[1] = op->mem + n;
     op->tmp = op->mem + 2 * n;
-    op->tmp2 = op->mem + 3 * n; /* m values for the sector sums, then scratch */
+    op->startbuf = op->mem + 3 * n;
+    op->tmp2 = op->mem + 4 * n; /* m values for the sector sums, then scratch */
     int s = orbit_flow_rhs(fl, u, op->w[0], err);
     if (s) return s;
     double nf = sqrt(dot(op->w[0], op->w[0], n));
@@ -399,7 +416,15 @@ static int second_grid(bkf_orbit *ob, const bkf_orbit_mult_options *o, int secto
     }
     if (!s) {
         op.sector = m == 1 ? -1 : sector;
-        /* two, so that a grid mode on top leaves the physical one found */
+        op.probe = 1;
+        /* started from the sector's eigenvectors on the first grid, so that
+         * one converges in the first basis; two, so that a grid mode on
+         * top leaves the physical one found */
+        size_t js = m == 1 ? 0 : (size_t)sector;
+        if (ob->warm && js < ob->warm_sectors &&
+            orbit_flow_resample(fl, ob->warm + js * 2 * ob->model.N, ob->model.N, op.startbuf,
+                                err) == BKF_OK)
+            op.start = op.startbuf;
         bkf_orbit_mult_options po = *o;
         po.k = 2;
         size_t n0 = ob->nmult, nconv = 0, nev = 0;
@@ -437,13 +462,33 @@ int orbit_mult_run(bkf_orbit *ob, const bkf_orbit_mult_options *o, bkf_orbit_spe
     double orbit_err = r->err;
     if ((s = trivial(&op, sp, orbit_err, err))) goto done;
     int j0 = o->sector < 0 ? 0 : o->sector, j1 = o->sector < 0 ? (int)(op.m / 2) : o->sector;
-    size_t short_of = 0;
+    size_t short_of = 0, nsec = op.m / 2 + 1, n = op.n;
+    if (!ob->warm) {
+        if (!(ob->warm = malloc(nsec * n * sizeof *ob->warm))) {
+            s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            goto done;
+        }
+        ob->warm_sectors = 0;
+    }
+    const bkf_orbit *ws = o->warm_start;
+    int warm = ws && ws->warm && ws->model.N == ob->model.N && ws->cells == ob->cells &&
+               ws->model.kind == ob->model.kind;
     for (int j = j0; j <= j1; j++) {
         op.sector = op.m == 1 ? -1 : j;
+        op.start = NULL;
+        if (warm && (size_t)j < ws->warm_sectors) {
+            memcpy(op.startbuf, ws->warm + (size_t)j * n, n * sizeof *op.startbuf);
+            op.start = op.startbuf;
+        }
+        op.save = ob->warm + (size_t)j * n;
         size_t nconv = 0, nev = 0;
         if ((s = arnoldi(&op, o, orbit_err, r->tangent_rel, &nconv, &nev, err))) goto done;
         if (nconv < nev) short_of += nev - nconv;
     }
+    op.save = NULL;
+    op.start = NULL;
+    /* sectors not computed this call hold nothing to start from */
+    ob->warm_sectors = j0 == 0 && j1 == (int)(nsec - 1) ? nsec : 0;
     qsort(ob->mult, ob->nmult, sizeof *ob->mult, by_sector_then_abs);
     sp->m = ob->mult;
     sp->count = ob->nmult;
