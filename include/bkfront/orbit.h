@@ -66,8 +66,10 @@
  * wavenumbers (its spectral tail, as bkf_pde_spectral_tail, above
  * grid_tail) is classified a grid mode: if the verdict would rest on one it
  * is undecided.  Each multiplier's error: twice the residual |A v - m v|/|v| of its
- * Ritz pair with A's flow integrated ten times more accurately than Arnoldi's
- * (Arnoldi's and the flow's error at once), plus the orbit's own error estimate
+ * Ritz pair (ARPACK's estimate from the Arnoldi relation), plus the flow's
+ * share, twice |A x - A' x|/|x| with A' the monodromy with its flow ten times
+ * more accurate and x the largest multiplier's sector's Ritz vectors summed
+ * (measured once a call), plus the orbit's own error estimate
  * result.err (a first-order guess: a change e of the orbit moves the
  * monodromy by O(e)), plus the grid's share: the change of the largest
  * physical |m| when its sector is computed again about the orbit on the
@@ -263,6 +265,7 @@ typedef struct {
                                  free shift on the continuum, 0 for a uniform state's space) */
     size_t trivial_expected;
     double trivial_dev;       /* max |m - 1| over the trivial ones found */
+    double flow_dev;          /* the flow's share of every err (see above) */
     double grid_dev;          /* the largest physical |m|'s change on the orbit's second
                                  grid (N2, its sector only), added to every multiplier's
                                  err; 0 for the chain, NaN when the orbit skipped its

@@ -32,6 +32,8 @@ typedef struct {
     size_t matvecs;
     const double *start;      /* Arnoldi's start (n values), NULL: pseudo-random */
     double *startbuf;         /* n values for it */
+    double *top, top_abs;     /* the largest physical multiplier's eigenvector (real part) */
+    int top_sector;
     double *save;             /* the converged Ritz vectors' sum goes here, or NULL */
     int probe;                /* no Ritz residuals (only the value is wanted) */
     double *mem;
@@ -218,21 +220,23 @@ static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_er
     double *Z = malloc((size_t)n * (size_t)(nev + 1) * sizeof *Z);
     double *workev = malloc(3 * (size_t)ncv * sizeof *workev);
     a_int *select = calloc((size_t)ncv, sizeof *select);
-    double *Az = malloc(2 * (size_t)n * sizeof *Az);
+    double *ritz = malloc(3 * (size_t)ncv * sizeof *ritz);
     int s = BKF_OK;
-    if (!resid || !V || !workd || !workl || !dr || !di || !Z || !workev || !select || !Az) {
+    if (!resid || !V || !workd || !workl || !dr || !di || !Z || !workev || !select || !ritz) {
         s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
         goto done;
     }
     /* a given start, or a fixed pseudo-random one (reproducible), in the
      * sector */
     unsigned long long st = 0x9E3779B97F4A7C15ULL + (unsigned long long)op->sector;
+    double big = 0.0;
+    for (a_int i = 0; op->start && i < n; i++) big = fmax(big, fabs(op->start[i]));
     for (a_int i = 0; i < n; i++) {
         st = st * 6364136223846793005ULL + 1442695040888963407ULL;
         resid[i] = (double)(st >> 11) / 9007199254740992.0 - 0.5;
         /* a trace of the random one: a start inside an invariant subspace
          * would stop the Krylov space short of the k asked */
-        if (op->start) resid[i] = op->start[i] + 1e-3 * resid[i];
+        if (op->start) resid[i] = op->start[i] + 1e-8 * big * resid[i];
     }
     project_sector(op, resid);
     a_int iparam[11] = {0}, ipntr[14] = {0};
@@ -260,6 +264,12 @@ static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_er
                           (int)info, op->sector);
         goto done;
     }
+    /* H's Ritz values and their estimates |f| |e_k^T y|, the residual of
+     * each unit Ritz vector in the operator Arnoldi saw (dneupd reuses
+     * workl) */
+    memcpy(ritz, workl + ipntr[5] - 1, (size_t)ncv * sizeof *ritz);
+    memcpy(ritz + ncv, workl + ipntr[6] - 1, (size_t)ncv * sizeof *ritz);
+    memcpy(ritz + 2 * ncv, workl + ipntr[7] - 1, (size_t)ncv * sizeof *ritz);
     a_int nconv = iparam[4];
     *nev_out = (size_t)nev;
     *nconv_out = (size_t)nconv;
@@ -296,19 +306,14 @@ static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_er
         if (pair && !zi) continue;
         double mag = hypot(re, im);
         if (!(mag >= MULT_FLOOR)) continue;
-        /* the Ritz pair's residual with the flow ten times more accurate */
-        double r2 = 0.0, z2 = dot(zr, zr, op->n) + (zi ? dot(zi, zi, op->n) : 0.0);
-        if (!op->probe && ((s = apply(op, zr, Az, 0.1 * op->tol)) ||
-                           (zi && (s = apply(op, zi, Az + op->n, 0.1 * op->tol))))) {
-            bkf_error_set(err, s, "%s", op->err.message);
-            goto done;
-        }
-        for (size_t i = 0; !op->probe && i < op->n; i++) {
-            double a = Az[i] - (re * zr[i] - (zi ? im * zi[i] : 0.0));
-            r2 += a * a;
-            if (zi) {
-                double b = Az[op->n + i] - (im * zr[i] + re * zi[i]);
-                r2 += b * b;
+        /* its residual: H's estimate for it, or where no Ritz value of H
+         * matches, what ARPACK's convergence test guarantees */
+        double res = o->arnoldi_tol * mag, best = INFINITY;
+        for (a_int q = 0; q < ncv; q++) {
+            double d = hypot(ritz[q] - re, fabs(ritz[ncv + q]) - fabs(im));
+            if (d < best && d <= 1e-8 * fmax(1.0, mag)) {
+                best = d;
+                res = ritz[2 * ncv + q];
             }
         }
         bkf_orbit_multiplier mu;
@@ -316,14 +321,20 @@ static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_er
         mu.re = re;
         mu.im = fabs(im);
         mu.abs = mag;
-        /* twice the residual, as the orbit's flow share (orbit.c) */
-        mu.err = 2.0 * sqrt(r2 / z2) + tangent_rel * mag + orbit_err;
+        /* twice the residual, as the orbit's flow share (orbit.c); the
+         * flow's own share is added by the caller, measured once */
+        mu.err = 2.0 * res + tangent_rel * mag + orbit_err;
         mu.sector = op->sector < 0 ? 0 : (size_t)op->sector;
         mu.tail = tail_of(op, zr, zi);
         mu.kind = mu.tail > o->grid_tail ? BKF_ORBIT_MULT_GRID : BKF_ORBIT_MULT_PHYSICAL;
         double al = 0.0, nz = sqrt(dot(zr, zr, op->n));
         for (size_t t = 0; t < op->ntriv; t++) al = fmax(al, fabs(dot(op->w[t], zr, op->n)) / nz);
         mu.alignment = al;
+        if (!op->probe && mu.kind == BKF_ORBIT_MULT_PHYSICAL && mag > op->top_abs) {
+            op->top_abs = mag;
+            op->top_sector = op->sector;
+            memcpy(op->top, zr, op->n * sizeof *zr);
+        }
         if (push(op->ob, &mu)) {
             s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
             goto done;
@@ -346,7 +357,7 @@ done:
     free(Z);
     free(workev);
     free(select);
-    free(Az);
+    free(ritz);
     return s;
 }
 
@@ -369,13 +380,15 @@ static int op_init(mult_op *op, bkf_orbit *ob, orbit_flow *fl, const double *u, 
     op->u = u;
     op->sector = -1;
     size_t n = op->n;
-    op->mem = malloc((5 * n + op->m) * sizeof *op->mem);
+    op->mem = malloc((6 * n + op->m) * sizeof *op->mem);
     if (!op->mem) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     op->w[0] = op->mem;
     op->w[1] = op->mem + n;
     op->tmp = op->mem + 2 * n;
     op->startbuf = op->mem + 3 * n;
-    op->tmp2 = op->mem + 4 * n; /* m values for the sector sums, then scratch */
+    op->top = op->mem + 4 * n;
+    op->top_abs = -1.0;
+    op->tmp2 = op->mem + 5 * n; /* m values for the sector sums, then scratch */
     int s = orbit_flow_rhs(fl, u, op->w[0], err);
     if (s) return s;
     double nf = sqrt(dot(op->w[0], op->w[0], n));
@@ -395,7 +408,7 @@ static int op_init(mult_op *op, bkf_orbit *ob, orbit_flow *fl, const double *u, 
 /* The largest physical |m| of one sector about the orbit on its second
  * grid (NaN if Arnoldi finds none there). */
 static int second_grid(bkf_orbit *ob, const bkf_orbit_mult_options *o, int sector,
-                       double *largest, size_t *matvecs, bkf_error *err)
+                       const double *start, double *largest, size_t *matvecs, bkf_error *err)
 {
     const bkf_orbit_result *r = &ob->result;
     size_t m = ob->cells, Nc2 = ob->Nc2, N2 = m * Nc2;
@@ -417,16 +430,13 @@ static int second_grid(bkf_orbit *ob, const bkf_orbit_mult_options *o, int secto
     if (!s) {
         op.sector = m == 1 ? -1 : sector;
         op.probe = 1;
-        /* started from the sector's eigenvectors on the first grid, so that
-         * one converges in the first basis; two, so that a grid mode on
-         * top leaves the physical one found */
-        size_t js = m == 1 ? 0 : (size_t)sector;
-        if (ob->warm && js < ob->warm_sectors &&
-            orbit_flow_resample(fl, ob->warm + js * 2 * ob->model.N, ob->model.N, op.startbuf,
-                                err) == BKF_OK)
-            op.start = op.startbuf;
+        /* one, started from its eigenvector on the first grid: it
+         * converges in the first basis (if a grid mode led on the finer
+         * grid the verdict would say so, undecided) */
+        if ((s = orbit_flow_resample(fl, start, ob->model.N, op.startbuf, err))) goto out;
+        op.start = op.startbuf;
         bkf_orbit_mult_options po = *o;
-        po.k = 2;
+        po.k = 1;
         size_t n0 = ob->nmult, nconv = 0, nev = 0;
         s = arnoldi(&op, &po, 0.0, 0.0, &nconv, &nev, err);
         for (size_t i = n0; !s && i < ob->nmult; i++)
@@ -435,6 +445,7 @@ static int second_grid(bkf_orbit *ob, const bkf_orbit_mult_options *o, int secto
                 *largest = ob->mult[i].abs;
         ob->nmult = n0;
     }
+out:
     *matvecs += op.matvecs;
     free(op.mem);
     free(u);
@@ -500,10 +511,34 @@ int orbit_mult_run(bkf_orbit *ob, const bkf_orbit_mult_options *o, bkf_orbit_spe
             big = ob->mult[i].abs;
             at = i;
         }
+    /* The flow's share of every multiplier: twice the change of A x when
+     * the tangent flow is made ten times more accurate, x the largest
+     * physical multiplier's eigenvector (per unit |x|; not a grid mode's,
+     * whose flow is far less accurate and which no verdict rests on): one
+     * pair of flows where a residual per Ritz pair took one flow each. */
+    if (big >= 0 && op.top_abs >= 0) {
+        size_t n = op.n;
+        double *x = op.top, *y1 = op.startbuf, *y2 = malloc(n * sizeof *y2);
+        if (!y2) {
+            s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            goto done;
+        }
+        op.sector = op.top_sector;
+        double d = 0.0, nx = sqrt(dot(x, x, n));
+        if ((s = apply(&op, x, y1, op.tol)) || (s = apply(&op, x, y2, 0.1 * op.tol))) {
+            free(y2);
+            bkf_error_set(err, s, "%s", op.err.message);
+            goto done;
+        }
+        for (size_t i = 0; i < n; i++) d += (y1[i] - y2[i]) * (y1[i] - y2[i]);
+        free(y2);
+        sp->flow_dev = nx > 0 ? 2.0 * sqrt(d) / nx : 0.0;
+        for (size_t i = 0; i < ob->nmult; i++) ob->mult[i].err += sp->flow_dev;
+    }
     sp->grid_dev = ob->model.kind == BKF_MODEL_CHAIN ? 0.0 : NAN;
     if (big >= 0 && r->N2 > 0 && ob->ucell2) {
         double big2;
-        if ((s = second_grid(ob, o, (int)ob->mult[at].sector, &big2, &op.matvecs, err)))
+        if ((s = second_grid(ob, o, op.top_sector, op.top, &big2, &op.matvecs, err)))
             goto done;
         sp->grid_dev = fabs(big2 - big); /* NaN when N2 found none */
         for (size_t i = 0; i < ob->nmult && isfinite(sp->grid_dev); i++)
