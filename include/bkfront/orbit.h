@@ -240,10 +240,10 @@ typedef struct {
                                  at N 64 on the pacemaker), a physical eigenvector's
                                  tail is near its orbit's own (1e-2 at N 128 there) */
     double flow_tol;          /* the tangent flow's tolerance; 0 (default): the orbit's
-                                 tol / 10 in [1e-13, 1e-6], the accuracy the orbit was
-                                 asked for rather than its own flow's tol / 100 (each
-                                 multiplier's error is measured with this flow ten
-                                 times tighter, so the looser flow shows in it) */
+                                 tol in [1e-13, 1e-6], the accuracy the orbit was asked
+                                 for rather than its own flow's tol / 100 (the flow's
+                                 share of the errors is measured with this flow ten
+                                 times tighter, so the looser flow shows in them) */
     const struct bkf_orbit *warm_start; /* NULL (default), or an orbit of the same grid
                                  and cells whose last multipliers start Arnoldi here
                                  (their eigenvectors, sector by sector): the previous

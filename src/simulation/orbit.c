@@ -397,7 +397,7 @@ int bkf_orbit_multipliers(bkf_orbit *ob, const bkf_orbit_mult_options *options,
                              "flow_tol = %g is outside [%g, 1e-4] (0: from tol)", o.flow_tol,
                              BKF_PDE_TOL_MIN);
     if (o.arnoldi_tol == 0) o.arnoldi_tol = fmin(1e-6, fmax(1e-12, 0.01 * ob->o.tol));
-    if (o.flow_tol == 0) o.flow_tol = fmin(1e-6, fmax(1e-13, 0.1 * ob->o.tol));
+    if (o.flow_tol == 0) o.flow_tol = fmin(1e-6, fmax(1e-13, ob->o.tol));
     if (o.max_restarts < 1 || o.max_restarts > 100000)
         return bkf_error_set(err, BKF_EINPUT, "max_restarts = %d is outside [1, 100000]",
                              o.max_restarts);
