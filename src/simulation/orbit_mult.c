@@ -197,6 +197,51 @@ static int by_sector_then_abs(const void *a, const void *b)
     return x->abs > y->abs ? -1 : x->abs < y->abs ? 1 : 0;
 }
 
+/* One Ritz pair (re, im; vector zr + i zi, zi NULL for a real one) as a
+ * multiplier (and its conjugate), classified; ritz holds H's ncv Ritz
+ * values (re, then im) and their estimates. */
+static int record(mult_op *op, const bkf_orbit_mult_options *o, double re, double im,
+                  const double *zr, const double *zi, const double *ritz, size_t ncv,
+                  double orbit_err, double tangent_rel)
+{
+    double mag = hypot(re, im);
+    /* its residual: H's estimate for it, or where no Ritz value of H
+     * matches, what ARPACK's convergence test guarantees */
+    double res = o->arnoldi_tol * mag, best = INFINITY;
+    for (size_t q = 0; q < ncv; q++) {
+        double d = hypot(ritz[q] - re, fabs(ritz[ncv + q]) - fabs(im));
+        if (d < best && d <= 1e-8 * fmax(1.0, mag)) {
+            best = d;
+            res = ritz[2 * ncv + q];
+        }
+    }
+    bkf_orbit_multiplier mu;
+    memset(&mu, 0, sizeof mu);
+    mu.re = re;
+    mu.im = fabs(im);
+    mu.abs = mag;
+    /* twice the residual, as the orbit's flow share (orbit.c); the flow's
+     * own share is added by the caller, measured once */
+    mu.err = 2.0 * res + tangent_rel * mag + orbit_err;
+    mu.sector = op->sector < 0 ? 0 : (size_t)op->sector;
+    mu.tail = tail_of(op, zr, zi);
+    mu.kind = mu.tail > o->grid_tail ? BKF_ORBIT_MULT_GRID : BKF_ORBIT_MULT_PHYSICAL;
+    double al = 0.0, nz = sqrt(dot(zr, zr, op->n));
+    for (size_t t = 0; t < op->ntriv; t++) al = fmax(al, fabs(dot(op->w[t], zr, op->n)) / nz);
+    mu.alignment = al;
+    if (!op->probe && mu.kind == BKF_ORBIT_MULT_PHYSICAL && mag > op->top_abs) {
+        op->top_abs = mag;
+        op->top_sector = op->sector;
+        memcpy(op->top, zr, op->n * sizeof *zr);
+    }
+    if (push(op->ob, &mu)) return BKF_ENOMEM;
+    if (im != 0.0) {
+        mu.im = -mu.im;
+        if (push(op->ob, &mu)) return BKF_ENOMEM;
+    }
+    return BKF_OK;
+}
+
 /* One sector's k leading multipliers. */
 static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_err,
                    double tangent_rel, size_t *nconv_out, size_t *nev_out, bkf_error *err)
@@ -304,47 +349,10 @@ static int arnoldi(mult_op *op, const bkf_orbit_mult_options *o, double orbit_er
         const double *zr = Z + (size_t)k * (size_t)n;
         const double *zi = pair && k + 1 < nconv ? Z + (size_t)(k + 1) * (size_t)n : NULL;
         if (pair && !zi) continue;
-        double mag = hypot(re, im);
-        if (!(mag >= MULT_FLOOR)) continue;
-        /* its residual: H's estimate for it, or where no Ritz value of H
-         * matches, what ARPACK's convergence test guarantees */
-        double res = o->arnoldi_tol * mag, best = INFINITY;
-        for (a_int q = 0; q < ncv; q++) {
-            double d = hypot(ritz[q] - re, fabs(ritz[ncv + q]) - fabs(im));
-            if (d < best && d <= 1e-8 * fmax(1.0, mag)) {
-                best = d;
-                res = ritz[2 * ncv + q];
-            }
-        }
-        bkf_orbit_multiplier mu;
-        memset(&mu, 0, sizeof mu);
-        mu.re = re;
-        mu.im = fabs(im);
-        mu.abs = mag;
-        /* twice the residual, as the orbit's flow share (orbit.c); the
-         * flow's own share is added by the caller, measured once */
-        mu.err = 2.0 * res + tangent_rel * mag + orbit_err;
-        mu.sector = op->sector < 0 ? 0 : (size_t)op->sector;
-        mu.tail = tail_of(op, zr, zi);
-        mu.kind = mu.tail > o->grid_tail ? BKF_ORBIT_MULT_GRID : BKF_ORBIT_MULT_PHYSICAL;
-        double al = 0.0, nz = sqrt(dot(zr, zr, op->n));
-        for (size_t t = 0; t < op->ntriv; t++) al = fmax(al, fabs(dot(op->w[t], zr, op->n)) / nz);
-        mu.alignment = al;
-        if (!op->probe && mu.kind == BKF_ORBIT_MULT_PHYSICAL && mag > op->top_abs) {
-            op->top_abs = mag;
-            op->top_sector = op->sector;
-            memcpy(op->top, zr, op->n * sizeof *zr);
-        }
-        if (push(op->ob, &mu)) {
+        if (!(hypot(re, im) >= MULT_FLOOR)) continue;
+        if (record(op, o, re, im, zr, zi, ritz, (size_t)ncv, orbit_err, tangent_rel)) {
             s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
             goto done;
-        }
-        if (pair) {
-            mu.im = -mu.im;
-            if (push(op->ob, &mu)) {
-                s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-                goto done;
-            }
         }
     }
 done:
