@@ -465,7 +465,6 @@ static const struct {
     const char *reason;
 } long_functions[] = {
     {"wave/speeds.c", "speeds_find_body", "being split on branch rootrows"},
-    {"products/orbits_branch.c", "bkf_orbits_branch", "being split on branch orbitgoals"},
     /* 151 lines; its last part, the slope of the error estimate, would
      * read well as a function of its own */
     {"wave/speeds_polish.c", "speeds_polish", "to split: its tail (the estimate's slope)"},
