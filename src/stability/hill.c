@@ -138,6 +138,35 @@ int bkf_hill_spectrum(bkf_cycle *cycle, double gamma, double theta, size_t modes
     return rc;
 }
 
+int bkf_hill_converged(const bkf_hill_eigenvalue *coarse, size_t n_coarse, const bkf_hill_eigenvalue *fine,
+                       size_t n_fine, double tol, size_t k, bkf_hill_eigenvalue *out, double *out_err,
+                       size_t *found, size_t *unresolved, bkf_error *err)
+{
+    if (found) *found = 0;
+    if (unresolved) *unresolved = 0;
+    if (!coarse || !fine || !out || !found)
+        return bkf_error_set(err, BKF_EINPUT, "coarse, fine, out and found must not be NULL");
+    if (!(tol > 0 && isfinite(tol))) return bkf_error_set(err, BKF_EINPUT, "tol must be positive and finite");
+    if (k < 1) return bkf_error_set(err, BKF_EINPUT, "k must be at least 1");
+    size_t got = 0, skipped = 0, skipped_above = 0;
+    for (size_t i = 0; i < n_fine && got < k; i++) {
+        double best = INFINITY;
+        for (size_t j = 0; j < n_coarse; j++)
+            best = fmin(best, hypot(fine[i].re - coarse[j].re, fine[i].im - coarse[j].im));
+        if (!(best <= tol)) {
+            skipped++;
+            continue;
+        }
+        out[got] = fine[i];
+        if (out_err) out_err[got] = best;
+        got++;
+        skipped_above = skipped;
+    }
+    *found = got;
+    if (unresolved) *unresolved = got ? skipped_above : skipped;
+    return BKF_OK;
+}
+
 int bkf_hill_leading_pair(bkf_cycle *cycle, double gamma, double theta, size_t modes, size_t modes_fine,
                           double tol, size_t k, bkf_hill_eigenvalue *out, double *out_err, size_t *found,
                           size_t *unresolved, bkf_error *err)
@@ -156,24 +185,7 @@ int bkf_hill_leading_pair(bkf_cycle *cycle, double gamma, double theta, size_t m
     if (!coarse || !fine) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     if (rc == BKF_OK) rc = spectrum_body(cycle, gamma, theta, modes, coarse, err);
     if (rc == BKF_OK) rc = spectrum_body(cycle, gamma, theta, modes_fine, fine, err);
-    size_t got = 0, skipped = 0, skipped_above = 0;
-    for (size_t i = 0; rc == BKF_OK && i < n2 && got < k; i++) {
-        double best = INFINITY;
-        for (size_t j = 0; j < n1; j++)
-            best = fmin(best, hypot(fine[i].re - coarse[j].re, fine[i].im - coarse[j].im));
-        if (!(best <= tol)) {
-            skipped++;
-            continue;
-        }
-        out[got] = fine[i];
-        if (out_err) out_err[got] = best;
-        got++;
-        skipped_above = skipped;
-    }
-    if (rc == BKF_OK) {
-        *found = got;
-        if (unresolved) *unresolved = got ? skipped_above : skipped;
-    }
+    if (rc == BKF_OK) rc = bkf_hill_converged(coarse, n1, fine, n2, tol, k, out, out_err, found, unresolved, err);
     free(coarse);
     free(fine);
     return rc;

@@ -850,18 +850,21 @@ static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *er
  * rightmost pair at Im 18.03 to its neighbour at 17.13) or cannot close
  * the window at all (the curves stay right of a_lo up to |Im| 1e4 when the
  * cycle's multiplier is near 1, mu < 1).  Its converged eigenvalues (M and
- * M + M/4 modes agree, bkf_hill_leading_pair: a quarter of the work of
- * comparing with 2M, the check the band alone needs) are candidates: each is polished on
- * the Radau meshes, whose error estimate is the one reported, so Hill's
+ * M + M/4 modes agree, bkf_hill_converged) are candidates: each is polished
+ * on the Radau meshes, whose error estimate is the one reported, so Hill's
  * truncation never reaches a result.  The truncation's artefacts do not
  * converge (they move with M, at any height: 0.185 + 1.86i at M 24, mu 4).
  * Used where the profile is smooth enough for few modes (mu <= HILL_MU_MAX)
- * and the dense eigenproblems are cheap (HILL_WORK). */
+ * and the dense eigenproblems are cheap (HILL_WORK; HILL_GROW_WORK where
+ * the curves could not answer and M grows). */
 #define HILL_MU_MAX 6.0
 #define HILL_MODES_MIN 16
 #define HILL_MODES_MAX 64
-/* sum over classes of (the finer matrix's size)^3: about 1.5 s of zgeev */
+/* the matrices' sizes cubed, summed over the classes, of the first round
+ * (about 1.3 s of zgeev) and of all rounds where M grows (about 9 s: issue
+ * 31's n = 1 at mu 4.9, refused for the trace's budget, converges at M 96) */
 #define HILL_WORK 1.5e8
+#define HILL_GROW_WORK 1e9
 /* Hill's eigenvalues agree at M and the finer truncation this well (absolute) to be
  * candidates; the polish takes them from there */
 #define HILL_CONVERGED 1e-5
@@ -872,64 +875,164 @@ static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *er
 #define HILL_AGREE 1e-3
 /* the share of the work budget the trace may spend where Hill answered */
 #define HILL_TRACE_SHARE 0.2
+/* Hill's band stands alone only where the spectrum leaves it: in the
+ * upper quarter of the band every eigenvalue lies left of the rightmost by
+ * at least this share of the way to the window's edge a_lo (the traced
+ * curves assume the same past their window's height, where they have left
+ * it).  The band is the heights where M and the finer truncation agree to
+ * HILL_BAND_TOL, plenty to place an eigenvalue left of that line: it
+ * reaches higher than the candidates' HILL_CONVERGED (issue 31's n = 1 at
+ * mu 4.9: 55 against 46 at M 120). */
+#define HILL_DESCENT 0.05
+#define HILL_BAND_TOL 1e-3
 
 typedef struct {
     size_t modes;        /* M, 0 when Hill was not used */
-    double y_trust;      /* the largest |Im sigma| among its candidates */
+    size_t modes_fine;   /* the finer truncation compared with M */
+    double y_trust;      /* the band's height: the largest |Im sigma| converged */
     int complete;        /* in every class, no unconverged eigenvalue lies right of the
-                            converged ones: Hill vouches for the rightmost */
+                            converged ones: Hill vouches for the rightmost of its band */
+    int descended;       /* the spectrum leaves the band (HILL_DESCENT) */
     double complex *at;  /* candidates pushed (for the agreement check) */
     size_t count;
+    size_t thetas;       /* classes 0..classes/2 */
+    bkf_hill_eigenvalue *fine;  /* per class, the spectrum at modes_fine (the next round's coarse) */
+    bkf_hill_eigenvalue *conv;  /* scratch: one class's converged eigenvalues */
+    double work;         /* sizes cubed solved so far */
 } hill_stage;
 
-/* Candidates from Hill's method for the classes 0..classes/2 (their
- * conjugates come from the mirror, as for the traced curves), converged
- * between M and M + M/4 modes (as candidates beside the traced curves:
- * the polish is their test) or, with `vouch`, between M and 2M (where
- * Hill's band alone must answer, hill_stage.complete). */
-static int hill_candidates(ctx *x, size_t classes, const window *win, int vouch, candidates *cs, hill_stage *h,
+static void hill_stage_free(hill_stage *h)
+{
+    free(h->at);
+    free(h->fine);
+    free(h->conv);
+}
+
+static size_t hill_size(size_t M)
+{
+    return 2 * (2 * M + 1);
+}
+
+/* The finer truncation compared with M: a quarter more modes, a quarter of
+ * the work of twice as many (the dense eigenproblem is cubic in the size);
+ * the truncation's artefacts, tied to its top frequency, still move. */
+static size_t finer(size_t M)
+{
+    return M + (M / 4 > 4 ? M / 4 : 4);
+}
+
+static double hill_cost(size_t M)
+{
+    return pow((double)hill_size(M), 3.0);
+}
+
+/* One round of Hill's method: for the classes 0..classes/2 (their
+ * conjugates come from the mirror, as for the traced curves), the
+ * truncations at M and Mf compared (M's from the last round where it was
+ * that round's finer one), the converged eigenvalues right of a_lo pushed
+ * as candidates (HILL_PER_CLASS per class, the rightmost first), and
+ * whether the band vouches for its rightmost (complete, descended). */
+static int hill_round(ctx *x, size_t classes, const window *win, size_t M, size_t Mf, candidates *cs,
+                      hill_stage *h, bkf_error *err)
+{
+    size_t n1 = hill_size(M), n2 = hill_size(Mf);
+    int reuse = h->fine && h->modes_fine == M;
+    bkf_hill_eigenvalue *coarse = malloc(n1 * sizeof *coarse);
+    bkf_hill_eigenvalue *fine = malloc(h->thetas * n2 * sizeof *fine);
+    /* every class's converged eigenvalues, for the band's height and descent */
+    bkf_hill_eigenvalue *conv = realloc(h->conv, h->thetas * n2 * sizeof *conv);
+    if (conv) h->conv = conv;
+    if (!coarse || !fine || !conv) {
+        free(coarse);
+        free(fine);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    }
+    cs->count = 0;
+    h->count = 0;
+    h->modes = M;
+    h->complete = 1;
+    double top = -INFINITY;
+    size_t n_conv = 0;
+    int rc = BKF_OK;
+    for (size_t cls = 0; cls < h->thetas && rc == BKF_OK; cls++) {
+        double theta = 2.0 * M_PI * (double)cls / (double)classes;
+        size_t got = 0, found = 0, unresolved = 0;
+        bkf_hill_eigenvalue *f = fine + cls * n2, *c = conv + n_conv;
+        if (reuse) memcpy(coarse, h->fine + cls * n1, n1 * sizeof *coarse);
+        else if ((rc = bkf_hill_spectrum(x->cycle, x->gamma, theta, M, coarse, &got, err)) != BKF_OK) break;
+        if ((rc = bkf_hill_spectrum(x->cycle, x->gamma, theta, Mf, f, &got, err)) != BKF_OK) break;
+        h->work += (reuse ? 0.0 : hill_cost(M)) + hill_cost(Mf);
+        /* one more at class 0: the translation is among them */
+        size_t k = HILL_PER_CLASS + (cls == 0);
+        rc = bkf_hill_converged(coarse, n1, f, n2, HILL_CONVERGED, k, c, NULL, &found, &unresolved, err);
+        if (rc != BKF_OK) break;
+        if (unresolved > 0 || found == 0) h->complete = 0;
+        for (size_t i = 0; i < found; i++) {
+            double re = c[i].re, im = c[i].im;
+            if ((cls == 0 && hypot(re, im) < 1e-6) || re < win->a_lo) continue;
+            top = fmax(top, re);
+            if (cand_push(cs, (candidate){re, im, cls, -1, 0}) != BKF_OK) {
+                rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+                break;
+            }
+            if (h->count < h->thetas * HILL_PER_CLASS) h->at[h->count++] = re + I * im;
+        }
+        if (rc == BKF_OK)
+            rc = bkf_hill_converged(coarse, n1, f, n2, HILL_BAND_TOL, n2, c, NULL, &found, NULL, err);
+        n_conv += rc == BKF_OK ? found : 0;
+    }
+    if (rc == BKF_OK) {
+        free(h->fine);
+        h->fine = fine;
+        fine = NULL;
+        h->modes_fine = Mf;
+        h->y_trust = 0.0;
+        for (size_t i = 0; i < n_conv; i++) h->y_trust = fmax(h->y_trust, fabs(conv[i].im));
+        double upper = -INFINITY;
+        for (size_t i = 0; i < n_conv; i++)
+            if (fabs(conv[i].im) >= 0.75 * h->y_trust) upper = fmax(upper, conv[i].re);
+        double edge = isfinite(top) ? top - HILL_DESCENT * (top - win->a_lo) : win->a_lo;
+        h->descended = upper < edge - HILL_BAND_TOL;
+    }
+    free(coarse);
+    free(fine);
+    return rc;
+}
+
+/* Hill's first round, at M modes reaching the height where the trace
+ * starts (within [HILL_MODES_MIN, HILL_MODES_MAX] and HILL_WORK), and
+ * finer(M). */
+static int hill_candidates(ctx *x, size_t classes, const window *win, candidates *cs, hill_stage *h,
                            bkf_error *err)
 {
     memset(h, 0, sizeof *h);
     if (x->mu > HILL_MU_MAX) return BKF_OK;
-    size_t thetas = classes / 2 + 1;
+    h->thetas = classes / 2 + 1;
     /* modes to |Im sigma| ~ the band the trace starts with, beyond which the
      * spectrum is in its asymptotic regime (trace_all): mode m sits near
      * |Im sigma| = 2 pi m / (T s) */
     double band = fmax(2.0, x->gamma * x->v / x->c);
     double want = ceil(band * x->T * x->s / (2.0 * M_PI));
     size_t M = (size_t)fmin(fmax(want, HILL_MODES_MIN), HILL_MODES_MAX);
-    while (M > HILL_MODES_MIN && (double)thetas * pow(8.0 * (double)M + 2.0, 3.0) > HILL_WORK) M = M * 3 / 4;
-    if ((double)thetas * pow(8.0 * (double)M + 2.0, 3.0) > HILL_WORK) return BKF_OK;
-    h->at = malloc(thetas * HILL_PER_CLASS * sizeof *h->at);
+    double th = (double)h->thetas;
+    while (M > HILL_MODES_MIN && th * (hill_cost(M) + hill_cost(finer(M))) > HILL_WORK) M = M * 3 / 4;
+    if (th * (hill_cost(M) + hill_cost(finer(M))) > HILL_WORK) return BKF_OK;
+    h->at = malloc(h->thetas * HILL_PER_CLASS * sizeof *h->at);
     if (!h->at) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    h->modes = M;
-    h->complete = 1;
+    return hill_round(x, classes, win, M, finer(M), cs, h, err);
+}
+
+/* Where the curves could not answer: M grown by a quarter (the last finer
+ * truncation the next coarse one) until the band vouches for its rightmost
+ * or the next round would pass HILL_GROW_WORK. */
+static int hill_grow(ctx *x, size_t classes, const window *win, candidates *cs, hill_stage *h, bkf_error *err)
+{
     int rc = BKF_OK;
-    for (size_t cls = 0; cls < thetas && rc == BKF_OK; cls++) {
-        bkf_hill_eigenvalue ev[HILL_PER_CLASS + 1];
-        size_t found = 0, unresolved = 0;
-        double theta = 2.0 * M_PI * (double)cls / (double)classes;
-        /* one more at class 0: the translation is among them */
-        size_t k = HILL_PER_CLASS + (cls == 0);
-        size_t fine = vouch ? 2 * M : M + (M / 4 > 4 ? M / 4 : 4);
-        rc = bkf_hill_leading_pair(x->cycle, x->gamma, theta, M, fine, HILL_CONVERGED, k, ev, NULL, &found,
-                                   &unresolved, err);
-        if (rc != BKF_OK) break;
-        if (unresolved > 0 || found == 0) h->complete = 0;
-        for (size_t i = 0; i < found; i++) {
-            double re = ev[i].re, im = ev[i].im;
-            if ((cls == 0 && hypot(re, im) < 1e-6) || re < win->a_lo) continue;
-            if (cand_push(cs, (candidate){re, im, cls, -1, 0}) != BKF_OK) {
-                rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-                break;
-            }
-            if (h->count < thetas * HILL_PER_CLASS) h->at[h->count++] = re + I * im;
-            h->y_trust = fmax(h->y_trust, fabs(im));
-        }
+    while (rc == BKF_OK && !(h->complete && h->descended)) {
+        size_t M = h->modes_fine, Mf = finer(M);
+        if (Mf > BKF_HILL_MODES_MAX || h->work + (double)h->thetas * hill_cost(Mf) > HILL_GROW_WORK) break;
+        rc = hill_round(x, classes, win, M, Mf, cs, h, err);
     }
-    /* the band Hill resolved reaches to its modes' frequency */
-    h->y_trust = fmax(h->y_trust, 2.0 * M_PI * (double)M / (x->T * x->s));
     return rc;
 }
 
@@ -940,43 +1043,52 @@ static double estimate(double complex sc, double complex sf, double step_f)
     return cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
 }
 
-/* The candidates of every class: Hill's where it is cheap, the traced
- * curves', and where the trace cannot close its window, Hill's band alone
- * if it vouches for its rightmost (*fallback set; trace_err says why the
- * trace failed). */
-static int gather(ctx *x, size_t classes, window *win, candidates *cs, hill_stage *hs, double *y_max,
+/* Hill's band alone: the meshes for its height, no curves. */
+static int band_alone(ctx *x, const hill_stage *hs, window *win, double a_hi, double *y_max, int *fallback,
+                      bkf_error *err)
+{
+    *fallback = 1;
+    x->stop = 0;
+    *y_max = hs->y_trust;
+    win->a_hi = a_hi;
+    x->substeps = SUBSTEPS_START;
+    return meshes_for(x, hs->y_trust, win, err);
+}
+
+/* The candidates of every class: Hill's where it is cheap; where Hill's
+ * first round vouches for its band (and no more than HILL_PER_CLASS - 1
+ * are asked per class), Hill's band alone; else the traced curves', and
+ * where the trace cannot close its window, Hill's band alone, M grown
+ * until it vouches (*fallback set; trace_err says why the trace failed). */
+static int gather(ctx *x, size_t classes, size_t keep, window *win, candidates *cs, hill_stage *hs, double *y_max,
                   size_t *curve_points, int *fallback, bkf_error *trace_err, bkf_error *err)
 {
     curve heights = {0};
     *fallback = 0;
-    int rc = hill_candidates(x, classes, win, 0, cs, hs, err);
+    int rc = hill_candidates(x, classes, win, cs, hs, err);
     if (rc != BKF_OK) return rc;
+    double a_hi = win->a_hi;
+    if (hs->modes && hs->complete && hs->descended && keep < HILL_PER_CLASS) {
+        bkf_error_set(trace_err, BKF_OK, "not traced: Hill's band vouched for its rightmost");
+        return band_alone(x, hs, win, a_hi, y_max, fallback, err);
+    }
     double max_work = x->max_work;
     /* where Hill has answered the trace is the cross-check: it may spend a
      * fifth of the budget, the rest polishes */
     if (hs->modes) x->max_work = x->work + HILL_TRACE_SHARE * (max_work - x->work);
-    double a_hi = win->a_hi;
     rc = trace_all(x, win, &heights, y_max, trace_err);
     x->max_work = max_work;
     if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes) {
-        /* Hill's band alone, if it vouches for its rightmost at M and 2M */
-        cs->count = 0;
-        free(hs->at);
-        int hrc = hill_candidates(x, classes, win, 1, cs, hs, err);
+        int hrc = hill_grow(x, classes, win, cs, hs, err);
         if (hrc != BKF_OK) {
             free(heights.h);
             return hrc;
         }
     }
-    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes && hs->complete) {
-        /* the band |Im| <= y_trust, as Hill saw it */
-        *fallback = 1;
-        x->stop = 0;
+    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes && hs->complete &&
+        hs->descended) {
         heights.count = 0;
-        *y_max = hs->y_trust;
-        win->a_hi = a_hi;
-        x->substeps = SUBSTEPS_START;
-        rc = meshes_for(x, hs->y_trust, win, err);
+        rc = band_alone(x, hs, win, a_hi, y_max, fallback, err);
     } else if (rc != BKF_OK) {
         if (err) *err = *trace_err;
     }
@@ -1156,9 +1268,9 @@ static int confirm_band(const hill_stage *hs, const bkf_trainspec_eigenvalue *ei
     for (size_t k = 0; k < hs->count; k++) miss = fmin(miss, cabs(hs->at[k] - top));
     if (isfinite(creal(top)) && !(miss <= HILL_AGREE * (1.0 + cabs(top))))
         return bkf_error_set(err, BKF_ETOL,
-                             "spectrum: the curves could not be traced (%s); Hill's method at %zu modes and "
-                             "the Radau meshes disagree on the rightmost eigenvalue by %.3g",
-                             trace_err->message, hs->modes, miss);
+                             "spectrum: Hill's method at %zu modes and the Radau meshes disagree on the "
+                             "rightmost eigenvalue by %.3g (%s)",
+                             hs->modes, miss, trace_err->message);
     return BKF_OK;
 }
 
@@ -1173,7 +1285,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     int fallback = 0;
     size_t n_eig = 0;
     bkf_trainspec_eigenvalue *eig = NULL;
-    int rc = gather(x, classes, win, &cs, &hs, y_max, curve_points, &fallback, &trace_err, err);
+    int rc = gather(x, classes, keep, win, &cs, &hs, y_max, curve_points, &fallback, &trace_err, err);
     *hill_modes = hs.modes;
     size_t polish_n = (keep > 3 ? keep : 3) + 2;
     if (rc == BKF_OK) {
@@ -1188,7 +1300,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     }
     if (rc == BKF_OK) mirror_and_cut(classes, keep, eig, &n_eig);
     if (rc == BKF_OK && fallback) rc = confirm_band(&hs, eig, n_eig, &trace_err, err);
-    free(hs.at);
+    hill_stage_free(&hs);
     free(cs.items);
     if (rc != BKF_OK) {
         free(eig);

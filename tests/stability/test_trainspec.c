@@ -317,6 +317,36 @@ TEST(trainspec_rightmost_beside_the_translation_and_where_curves_fail)
     rightmost_is_hills(u, 32, 1e-7, 5.4e-3, 5.5e-3);
 }
 
+/* Issue 31, audit defect R2: n = 1 at mu 4.9 (gamma 4.89746, c 0.112987,
+ * nu -0.140938, S 42.5571) was refused ("needs more than 2.5e+07 Radau
+ * steps": some 300 eigenvalues per family below the curves' height 160)
+ * while Hill's method converges at M 96-160 (sigma_max +0.0283857 + 24.485i
+ * from an independent Hill code at M 160): the Hill stage stopped at 64
+ * modes.  Now M grows until the band vouches for its rightmost.  A budget
+ * of 2e6 steps makes the trace give up sooner (the default spends 5e6 on
+ * it first, the same answer); refused on main at either. */
+TEST(trainspec_hill_grows_where_the_curves_run_out_mu_4_9)
+{
+    bkf_model_params p = {4.89746, 0.112987, -0.140938, 42.5571, 0, BKF_MODEL_CONTINUUM};
+    bkf_trainspec_train t = {1, root_v(p, 1)};
+    bkf_trainspec_options o = bkf_trainspec_options_default();
+    o.max_work = 2e6;
+    o.per_kappa = 1;
+    bkf_trainspec_result r;
+    bkf_error e;
+    int rc = bkf_trainspec_ring(&p, &t, &o, &r, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    if (rc != BKF_OK) return;
+    bkf_test_note("mu %.4g: sigma_max %.10g%+.8gi (err %.2g), Hill at %zu modes, work %.3g", r.mu, r.sigma_max,
+                  r.sigma_max_im, r.sigma_max_err, r.hill_modes, r.work);
+    CHECK(r.hill_modes > 64 && r.curve_points == 0);
+    /* the independent value, given to 6 digits */
+    CHECK_MSG(fabs(r.sigma_max - 0.0283857) <= r.sigma_max_err + 5e-8, "sigma_max %.10g", r.sigma_max);
+    CHECK_MSG(fabs(fabs(r.sigma_max_im) - 24.485) <= r.sigma_max_err + 5e-4, "Im %.10g", r.sigma_max_im);
+    CHECK(r.sigma_max_err <= o.tol && r.verdict == BKF_TRAINSPEC_UNSTABLE);
+    bkf_trainspec_result_free(&r);
+}
+
 /* Issue 31, defect 5: the line at kappa 0 is the ring's class j = 0 (its
  * rightmost, translation included: 0.0697 at the paper's n = 2, where the
  * line printed the translation 8.8e-11). */
