@@ -322,15 +322,13 @@ TEST(trainspec_rightmost_beside_the_translation_and_where_curves_fail)
  * steps": some 300 eigenvalues per family below the curves' height 160)
  * while Hill's method converges at M 96-160 (sigma_max +0.0283857 + 24.485i
  * from an independent Hill code at M 160): the Hill stage stopped at 64
- * modes.  Now M grows until the band vouches for its rightmost.  A budget
- * of 2e6 steps makes the trace give up sooner (the default spends 5e6 on
- * it first, the same answer); refused on main at either. */
+ * modes.  Now M grows until the band vouches for its rightmost (to 125
+ * modes against 156). */
 TEST(trainspec_hill_grows_where_the_curves_run_out_mu_4_9)
 {
     bkf_model_params p = {4.89746, 0.112987, -0.140938, 42.5571, 0, BKF_MODEL_CONTINUUM};
     bkf_trainspec_train t = {1, root_v(p, 1)};
     bkf_trainspec_options o = bkf_trainspec_options_default();
-    o.max_work = 2e6;
     o.per_kappa = 1;
     bkf_trainspec_result r;
     bkf_error e;
