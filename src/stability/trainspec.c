@@ -669,14 +669,33 @@ static int collect(curve *c, int fam, size_t classes, candidates *out)
 /* ------------------------------------------------------------- polishing */
 
 /* Newton on w(sigma) = i theta (mod 2 pi i), over whichever family fits
- * best, on mesh m. */
-int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step)
+ * best, on mesh m.  With deriv (NULL: not wanted) holding both families'
+ * derivatives from a polish of the same eigenvalue on a coarser mesh, the
+ * steps take those instead of a pass with the derivative (which costs two
+ * without it): the derivatives of two meshes differ by the meshes' error,
+ * so the iteration contracts by about that much per step and stops on the
+ * same small step as Newton's; where it does not settle within CHORD_MAX
+ * steps, Newton takes over.  The derivatives last computed go back into
+ * deriv. */
+#define CHORD_MAX 4
+int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step,
+                     double complex deriv[2])
 {
     double complex s = *sigma;
     *last_step = INFINITY;
-    for (int it = 0; it < NEWTON_MAX; it++) {
+    int chord = deriv && deriv[0] != 0 && deriv[1] != 0 && isfinite(creal(deriv[0])) &&
+                isfinite(cimag(deriv[0])) && isfinite(creal(deriv[1])) && isfinite(cimag(deriv[1]));
+    for (int it = 0, chords = 0; it < NEWTON_MAX; it++) {
         double complex w0[2], dw[2];
-        monodromy(x, m, s, w0, dw);
+        int use_chord = chord && chords < CHORD_MAX;
+        if (use_chord) {
+            monodromy(x, m, s, w0, NULL);
+            dw[0] = deriv[0], dw[1] = deriv[1];
+            chords++;
+        } else {
+            monodromy(x, m, s, w0, dw);
+            if (deriv) deriv[0] = dw[0], deriv[1] = dw[1];
+        }
         int fam = 0;
         double complex r[2];
         for (int f = 0; f < FAMILIES; f++) r[f] = creal(w0[f]) + I * trainspec_wrap(cimag(w0[f]) - theta);
@@ -1030,7 +1049,9 @@ static int hill_grow(ctx *x, size_t classes, const window *win, candidates *cs, 
     int rc = BKF_OK;
     while (rc == BKF_OK && !(h->complete && h->descended)) {
         size_t M = h->modes_fine, Mf = finer(M);
-        if (Mf > BKF_HILL_MODES_MAX || h->work + (double)h->thetas * hill_cost(Mf) > HILL_GROW_WORK) break;
+        /* a smaller work budget than the default bounds Hill's growth alike */
+        double limit = HILL_GROW_WORK * fmin(1.0, x->max_work / MAX_WORK_DEFAULT);
+        if (Mf > BKF_HILL_MODES_MAX || h->work + (double)h->thetas * hill_cost(Mf) > limit) break;
         rc = hill_round(x, classes, win, M, Mf, cs, h, err);
     }
     return rc;
@@ -1099,13 +1120,20 @@ static int gather(ctx *x, size_t classes, size_t keep, window *win, candidates *
     return rc;
 }
 
+/* Per polished eigenvalue, both families' sigma-derivatives at its last
+ * polish (trainspec_polish): the next, finer mesh's polish steps with them. */
+typedef struct {
+    double complex d[2];
+    double complex coarse; /* its value on the coarse mesh (polish_candidates) */
+} derivs;
+
 /* The best few candidates of each class polished on both meshes into eig
  * (*n_eig of them), duplicates dropped; mirrored classes (j > classes/2)
  * come out of their partners by conjugation later.  How many are polished
  * per class does not depend on how many are reported: the rightmost must
  * not depend on per_kappa. */
 static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *cs, bkf_trainspec_eigenvalue *eig,
-                              size_t *n_eig)
+                              derivs *dv, size_t *n_eig)
 {
     size_t polish_n = (keep > 3 ? keep : 3) + 2;
     qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
@@ -1118,16 +1146,23 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
             if ((taken >= polish_n && cs->items[i].fam >= 0) || 2 * cls > classes) continue;
             candidate cd = cs->items[i];
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
-            double complex sc = cd.a + I * cd.y, sf;
+            double complex sc = cd.a + I * cd.y, sf, d[2] = {NAN, NAN};
             double step_c, step_f;
-            if (trainspec_polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
+            if (trainspec_polish(x, &x->coarse, theta, &sc, &step_c, d) != BKF_OK) continue;
+            /* one eigenvalue reached again on the same mesh: the same value to
+             * Newton's last step, no fine polish needed to tell */
+            int seen = 0;
+            for (size_t k = start_n; k < *n_eig; k++)
+                if (cabs(dv[k].coarse - sc) < 10.0 * x->tol) seen = 1;
+            if (seen) continue;
             sf = sc;
-            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
+            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f, d) != BKF_OK) continue;
             double e = estimate(sc, sf, step_f);
             int dup = 0;
             for (size_t k = start_n; k < *n_eig; k++)
                 if (cabs((eig[k].re + I * eig[k].im) - sf) < 10.0 * fmax(e, x->tol)) dup = 1;
             if (dup) continue;
+            dv[*n_eig].d[0] = d[0], dv[*n_eig].d[1] = d[1], dv[*n_eig].coarse = sc;
             eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), e, cls, 0.0, 0};
             taken++;
         }
@@ -1136,16 +1171,17 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
 
 /* The translation mode, polished from 0 where the candidates missed it:
  * the gauge.  Where the traced curves missed it the meshes are too coarse. */
-static void translation(ctx *x, bkf_trainspec_eigenvalue *eig, size_t *n_eig)
+static void translation(ctx *x, bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig)
 {
     size_t k = 0;
     while (k < *n_eig && !(eig[k].j == 0 && hypot(eig[k].re, eig[k].im) < 10.0 * x->tol)) k++;
     if (k == *n_eig) {
-        double complex sc = 0.0, sf;
+        double complex sc = 0.0, sf, *d = dv[*n_eig].d;
         double step_c, step_f = INFINITY;
-        int ok = trainspec_polish(x, &x->coarse, 0.0, &sc, &step_c) == BKF_OK;
+        d[0] = d[1] = NAN;
+        int ok = trainspec_polish(x, &x->coarse, 0.0, &sc, &step_c, d) == BKF_OK;
         sf = sc;
-        ok = ok && trainspec_polish(x, &x->fine, 0.0, &sf, &step_f) == BKF_OK;
+        ok = ok && trainspec_polish(x, &x->fine, 0.0, &sf, &step_f, d) == BKF_OK;
         eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), ok ? estimate(sc, sf, step_f) : INFINITY,
                                                      0, 0.0, 0};
     }
@@ -1165,7 +1201,7 @@ static int unsettled(const ctx *x, const bkf_trainspec_eigenvalue *e)
  * of them beyond both errors (the cut keeps one beyond `keep` only as the
  * conjugate of the keep-th, and one further would be that one's conjugate,
  * the keep-th's own value: a duplicate). */
-static void drop_hidden(bkf_trainspec_eigenvalue *eig, size_t *n_eig, size_t keep)
+static void drop_hidden(bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig, size_t keep)
 {
     size_t w = 0;
     for (size_t i = 0; i < *n_eig; i++) {
@@ -1173,7 +1209,7 @@ static void drop_hidden(bkf_trainspec_eigenvalue *eig, size_t *n_eig, size_t kee
         for (size_t k = 0; k < *n_eig; k++)
             right += k != i && eig[k].j == eig[i].j && !eig[k].translation &&
                      eig[k].re - eig[k].err > eig[i].re + eig[i].err;
-        if (eig[i].translation || right < keep + 1) eig[w++] = eig[i];
+        if (eig[i].translation || right < keep + 1) dv[w] = dv[i], eig[w++] = eig[i];
     }
     *n_eig = w;
 }
@@ -1183,7 +1219,7 @@ static void drop_hidden(bkf_trainspec_eigenvalue *eig, size_t *n_eig, size_t kee
  * coarse mesh is the old fine one, on which the values in hand were
  * polished, so only the fine polish is redone, and only for the
  * eigenvalues whose estimate is still above tol (the others keep theirs). */
-static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, size_t n_eig, bkf_error *err)
+static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, derivs *dv, size_t n_eig, bkf_error *err)
 {
     /* per eigenvalue, the substeps of the fine mesh its value was polished on */
     size_t *on = malloc((n_eig ? n_eig : 1) * sizeof *on);
@@ -1214,9 +1250,10 @@ static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, size_t 
             double theta = 2.0 * M_PI * (double)eig[k].j / (double)classes;
             double complex sc = eig[k].re + I * eig[k].im, sf;
             double step_c = 0.0, step_f;
-            if (on[k] != x->substeps && trainspec_polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
+            if (on[k] != x->substeps && trainspec_polish(x, &x->coarse, theta, &sc, &step_c, dv[k].d) != BKF_OK)
+                continue;
             sf = sc;
-            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
+            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f, dv[k].d) != BKF_OK) continue;
             eig[k].re = creal(sf);
             eig[k].im = cimag(sf);
             eig[k].err = estimate(sc, sf, step_f);
@@ -1285,23 +1322,26 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     int fallback = 0;
     size_t n_eig = 0;
     bkf_trainspec_eigenvalue *eig = NULL;
+    derivs *dv = NULL;
     int rc = gather(x, classes, keep, win, &cs, &hs, y_max, curve_points, &fallback, &trace_err, err);
     *hill_modes = hs.modes;
     size_t polish_n = (keep > 3 ? keep : 3) + 2;
     if (rc == BKF_OK) {
         eig = calloc(2 * (classes + 2) * (polish_n + HILL_PER_CLASS + 1), sizeof *eig);
-        if (!eig) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        dv = calloc(2 * (classes + 2) * (polish_n + HILL_PER_CLASS + 1), sizeof *dv);
+        if (!eig || !dv) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     if (rc == BKF_OK) {
-        polish_candidates(x, classes, keep, &cs, eig, &n_eig);
-        translation(x, eig, &n_eig);
-        drop_hidden(eig, &n_eig, keep);
-        rc = refine(x, classes, eig, n_eig, err);
+        polish_candidates(x, classes, keep, &cs, eig, dv, &n_eig);
+        translation(x, eig, dv, &n_eig);
+        drop_hidden(eig, dv, &n_eig, keep);
+        rc = refine(x, classes, eig, dv, n_eig, err);
     }
     if (rc == BKF_OK) mirror_and_cut(classes, keep, eig, &n_eig);
     if (rc == BKF_OK && fallback) rc = confirm_band(&hs, eig, n_eig, &trace_err, err);
     hill_stage_free(&hs);
     free(cs.items);
+    free(dv);
     if (rc != BKF_OK) {
         free(eig);
         return rc;

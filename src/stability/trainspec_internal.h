@@ -116,8 +116,11 @@ void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, dou
                                 double complex *dp, double *scale);
 /* phase wrapped into [-pi, pi) */
 double trainspec_wrap(double phase);
-/* Newton on the multiplier exp(i theta) over mesh m from *sigma. */
-int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step);
+/* Newton on the multiplier exp(i theta) over mesh m from *sigma; deriv (may
+ * be NULL): both families' sigma-derivatives from a coarser mesh's polish,
+ * used in place of a pass with the derivative, and the last computed ones. */
+int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step,
+                     double complex deriv[2]);
 /* The reason a search was cut short (budget, cancel), over rc. */
 int trainspec_stopped(const ctx *x, int rc, bkf_error *err);
 
