@@ -1120,6 +1120,47 @@ static int gather(ctx *x, size_t classes, size_t keep, window *win, candidates *
     return rc;
 }
 
+/* A class polishes at most this many times polish_n of the curves'
+ * candidates (the rightmost first): the rest lie left of those and are
+ * reached only where many of them fail or repeat one eigenvalue. */
+#define POLISH_TRIES 2
+/* The polish meshes resolve |sigma| up to this factor times the largest of
+ * the candidates it may polish (plus POLISH_REACH_MIN): Newton's path from a
+ * candidate stays near it. */
+#define POLISH_MARGIN 1.25
+#define POLISH_REACH_MIN 0.05
+
+/* Does the polish try candidate c, the tried-th of its class's curve
+ * candidates (Hill's are all tried, see polish_candidates)? */
+static int polish_tries(const candidate *c, size_t classes, size_t polish_n, size_t *tried)
+{
+    if (2 * c->cls > classes) return 0;
+    return c->fam < 0 || (*tried)++ < POLISH_TRIES * polish_n;
+}
+
+/* The meshes of the polish, for the |sigma| of the candidates it may polish
+ * rather than for the window's height: the window reaches |sigma| 2.8 at the
+ * paper's n = 12 (mu 47) where its eigenvalues sit below 0.13, and a mesh
+ * for the window's reach has about twice the steps.  Each value's error is
+ * still its own pair of meshes' (estimate), so a candidate the meshes
+ * resolve less well shows it in its estimate and the refinement. */
+static int meshes_for_polish(ctx *x, size_t classes, size_t polish_n, candidates *cs, bkf_error *err)
+{
+    qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
+    double reach = 0.0;
+    for (size_t i = 0; i < cs->count;) {
+        size_t cls = cs->items[i].cls, tried = 0;
+        for (; i < cs->count && cs->items[i].cls == cls; i++)
+            if (polish_tries(&cs->items[i], classes, polish_n, &tried))
+                reach = fmax(reach, hypot(cs->items[i].a, cs->items[i].y));
+    }
+    reach = POLISH_MARGIN * reach + POLISH_REACH_MIN;
+    if (!(reach < x->sigma_reach)) return BKF_OK;
+    int rc = trainspec_mesh_needs(x, reach, err);
+    if (rc == BKF_OK) rc = trainspec_mesh_build(x, x->substeps, &x->coarse, err);
+    return rc != BKF_OK ? rc : trainspec_mesh_build(x, 2 * x->substeps, &x->fine, err);
+}
+
 /* Per polished eigenvalue, both families' sigma-derivatives at its last
  * polish (trainspec_polish): the next, finer mesh's polish steps with them. */
 typedef struct {
@@ -1138,12 +1179,13 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
     size_t polish_n = (keep > 3 ? keep : 3) + 2;
     qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
     for (size_t i = 0; i < cs->count;) {
-        size_t cls = cs->items[i].cls, taken = 0, start_n = *n_eig;
+        size_t cls = cs->items[i].cls, taken = 0, tried = 0, start_n = *n_eig;
         for (; i < cs->count && cs->items[i].cls == cls; i++) {
             /* Hill's candidates are few and accurate: every one is polished,
              * whatever the traced ones, whose interpolated a can rank a far
              * eigenvalue before a near one, have taken */
-            if ((taken >= polish_n && cs->items[i].fam >= 0) || 2 * cls > classes) continue;
+            if ((taken >= polish_n && cs->items[i].fam >= 0) || !polish_tries(&cs->items[i], classes, polish_n, &tried))
+                continue;
             candidate cd = cs->items[i];
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
             double complex sc = cd.a + I * cd.y, sf, d[2] = {NAN, NAN};
@@ -1331,6 +1373,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
         dv = calloc(2 * (classes + 2) * (polish_n + HILL_PER_CLASS + 1), sizeof *dv);
         if (!eig || !dv) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
+    if (rc == BKF_OK) rc = meshes_for_polish(x, classes, polish_n, &cs, err);
     if (rc == BKF_OK) {
         polish_candidates(x, classes, keep, &cs, eig, dv, &n_eig);
         translation(x, eig, dv, &n_eig);
