@@ -454,7 +454,9 @@ TEST(trainspec_fast_path_matches_hill_and_a_finer_mesh_on_random_sets)
  * Radau steps (work: a pass with the sigma-derivative counts twice) and
  * monodromies, the measure of time that load does not blur.  Before the
  * derivative joined the monodromy's pass and the refinement reused its
- * meshes it took 1.38e7 steps and 2358 monodromies; the value itself is
+ * meshes it took 1.38e7 steps and 2358 monodromies; before the polish
+ * stepped with the coarse derivative on meshes for the candidates' |sigma|
+ * (not the window's 2.8), 4.36e6 steps; now 1.79e6.  The value itself is
  * held to Hill-independent references by the tests above. */
 TEST(trainspec_thinnest_paper_train_within_its_work)
 {
@@ -462,7 +464,7 @@ TEST(trainspec_thinnest_paper_train_within_its_work)
     bkf_trainspec_result r = ring(p, 12, root_v(p, 12), 1e-6);
     bkf_test_note("n 12: work %.4g Radau steps, %zu monodromies, sigma_max %.10g (err %.2g)", r.work, r.evaluations,
                   r.sigma_max, r.sigma_max_err);
-    CHECK_MSG(r.work < 1e7 && r.evaluations < 1200, "work %.4g, %zu monodromies", r.work, r.evaluations);
+    CHECK_MSG(r.work < 2.5e6 && r.evaluations < 1200, "work %.4g, %zu monodromies", r.work, r.evaluations);
     CHECK(r.sigma_max > 0.002295 && r.sigma_max < 0.0022952);
     bkf_trainspec_result_free(&r);
 }
