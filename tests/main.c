@@ -320,6 +320,9 @@ int main(int argc, char **argv)
     unsigned max_jobs = env_unsigned("BKF_TEST_JOBS", cpus > 0 ? (unsigned)cpus : 1, 256);
 
     read_times(getenv("BKF_TEST_TIMES"));
+    /* no times of its own yet (the sanitized build's first run): another
+     * build's times order it better than the list above */
+    if (learned_count == 0) read_times(getenv("BKF_TEST_TIMES_SEED"));
     qsort(tests, test_count, sizeof tests[0], compare_entries);
     jobs = calloc(test_count + 1, sizeof *jobs);
     job **order = calloc(test_count + 1, sizeof *order);
