@@ -1289,6 +1289,10 @@ int bkf_trainspec_root(const bkf_model_params *params, const bkf_speeds_root *ro
                        size_t per_kappa, bkf_trainspec_result *result, bkf_error *err)
 {
     if (!root) return bkf_error_set(err, BKF_EINPUT, "root is NULL");
+    if (root->status != BKF_OK) {
+        if (result) memset(result, 0, sizeof *result);
+        return bkf_speeds_root_status(root, err);
+    }
     bkf_trainspec_train train = {root->n, root->v};
     bkf_trainspec_options o = bkf_trainspec_options_default();
     o.tol = tol;
