@@ -48,12 +48,9 @@ static int root_near(const bkf_model_params *params, size_t n, double v_near,
     if (!s && t.count == 0)
         s = bkf_error_set(err, BKF_EINPUT, "n: n = %zu has no root at nu %.6g, S %.6g", n,
                           params->nu, params->S);
-    if (!s) {
-        size_t best = 0;
-        for (size_t i = 1; v_near > 0 && i < t.count; i++)
-            if (fabs(t.roots[i].v - v_near) < fabs(t.roots[best].v - v_near)) best = i;
-        *root = t.roots[best];
-    }
+    size_t best = 0;
+    if (!s) s = bkf_speeds_nearest(&t, v_near, &best, err);
+    if (!s) *root = t.roots[best];
     bkf_speeds_table_free(&t);
     return s;
 }
