@@ -3,16 +3,16 @@
  * Linked, liblapacke and libarpack bring liblapack, libblas, libtmglib,
  * libgfortran and libquadmath into every bkfront process: 2 of its 3.7 ms
  * of start (perf stat, task-clock), for `--version` as for a spectrum.
- * Only the Hill matrices' zgeev (stability/hill.c) and the orbits'
- * Arnoldi (simulation/orbit_mult.c) call them, so the library defines the
- * three functions it calls under their own names: each loads its library
+ * Only the Hill matrices' zgeev and dgeev (stability/hill.c) and the
+ * orbits' Arnoldi (simulation/orbit_mult.c) call them, so the library
+ * defines the four functions it calls under their own names: each loads its library
  * once (dlopen, thread-safe) and calls the real one.  The callers are the
  * same code as when linked.  The names stay inside libbkfront.so (its
  * version script exports bkf_* only), so a program that links LAPACK
  * itself keeps its own.
  *
  * Where a library does not load, the call fails as the callers already
- * handle a failed call: zgeev's info and ARPACK's info are set to
+ * handle a failed call: zgeev's and dgeev's info and ARPACK's info are set to
  * BKF_LAZY_NOT_LOADED, and bkf_lazy_failure() says which library did not
  * load and why. */
 #define _POSIX_C_SOURCE 200809L
@@ -35,6 +35,7 @@
 
 static struct {
     __typeof__(LAPACKE_zgeev) *zgeev;
+    __typeof__(LAPACKE_dgeev) *dgeev;
     __typeof__(dnaupd_c) *dnaupd;
     __typeof__(dneupd_c) *dneupd;
 } real;
@@ -73,10 +74,11 @@ static pthread_once_t lapacke_once = PTHREAD_ONCE_INIT, arpack_once = PTHREAD_ON
 
 static void load_lapacke(void)
 {
-    static const char *const names[] = {"LAPACKE_zgeev"};
-    void *p[1];
-    load(BKF_LAPACKE_SONAME, "liblapacke", names, p, 1);
+    static const char *const names[] = {"LAPACKE_zgeev", "LAPACKE_dgeev"};
+    void *p[2];
+    load(BKF_LAPACKE_SONAME, "liblapacke", names, p, 2);
     real.zgeev = (__typeof__(real.zgeev))p[0];
+    real.dgeev = (__typeof__(real.dgeev))p[1];
 }
 
 static void load_arpack(void)
@@ -104,6 +106,15 @@ lapack_int LAPACKE_zgeev(int matrix_layout, char jobvl, char jobvr, lapack_int n
     pthread_once(&lapacke_once, load_lapacke);
     if (!real.zgeev) return BKF_LAZY_NOT_LOADED;
     return real.zgeev(matrix_layout, jobvl, jobvr, n, a, lda, w, vl, ldvl, vr, ldvr);
+}
+
+lapack_int LAPACKE_dgeev(int matrix_layout, char jobvl, char jobvr, lapack_int n, double *a,
+                         lapack_int lda, double *wr, double *wi, double *vl, lapack_int ldvl,
+                         double *vr, lapack_int ldvr)
+{
+    pthread_once(&lapacke_once, load_lapacke);
+    if (!real.dgeev) return BKF_LAZY_NOT_LOADED;
+    return real.dgeev(matrix_layout, jobvl, jobvr, n, a, lda, wr, wi, vl, ldvl, vr, ldvr);
 }
 
 void dnaupd_c(a_int *ido, char const *bmat, a_int n, char const *which, a_int nev, double tol,
