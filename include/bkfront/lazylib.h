@@ -1,5 +1,5 @@
 /* Libraries loaded at their first use, not at every process's start
- * (src/core/lazylib.c: LAPACKE's zgeev and ARPACK's dnaupd/dneupd; HDF5 is
+ * (src/core/lazylib.c: LAPACKE's zgeev and dgeev and ARPACK's dnaupd/dneupd; HDF5 is
  * loaded by h5.c).  A call whose library does not load fails as a failed
  * call of that library does, with the info below. */
 #ifndef BKFRONT_LAZYLIB_H
