@@ -55,12 +55,15 @@ typedef enum {
     BKF_STABMAP_END_REFUSED = 3, /* trainspec refused sigma (BKF_ETOL, BKF_EBUDGET) */
     BKF_STABMAP_END_POINTS = 4,  /* max_points reached */
     BKF_STABMAP_END_WINDOW = 5,  /* trace: the curve left the window in S */
-    BKF_STABMAP_END_STALLED = 6  /* trace: the continuation's step fell below its
+    BKF_STABMAP_END_STALLED = 6, /* trace: the continuation's step fell below its
                                     minimum (a corner where the rightmost eigenvalue
                                     changes, or sigma too rough to correct on) */
+    BKF_STABMAP_END_CLOSED = 7   /* trace: back within a step of its first point
+                                    after leaving it: a closed curve, followed once */
 } bkf_stabmap_end;
 
-/* "reached", "fold", "no_root", "refused", "max_points", "window", "stalled". */
+/* "reached", "fold", "no_root", "refused", "max_points", "window", "stalled",
+ * "closed". */
 const char *bkf_stabmap_end_name(bkf_stabmap_end end);
 
 typedef struct {

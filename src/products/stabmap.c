@@ -19,7 +19,7 @@ bkf_stabmap_options bkf_stabmap_options_default(void)
 const char *bkf_stabmap_end_name(bkf_stabmap_end end)
 {
     static const char *const names[] = {"reached", "fold",   "no_root", "refused",
-                                         "max_points", "window", "stalled"};
+                                         "max_points", "window", "stalled", "closed"};
     return (unsigned)end < sizeof names / sizeof names[0] ? names[end] : "?";
 }
 
@@ -448,6 +448,8 @@ typedef struct {
     void *data;
     bkf_stabmap_report rep;
     size_t max_points, at_last_point;
+    double first[2];       /* the curve's first point, and whether it got */
+    int left;              /* more than 1.5 steps away from it since */
     double newton_tol;     /* the driver's */
     double land_tol;       /* an edge crossing's, relative in nu */
 } trace_ctx;
@@ -717,6 +719,17 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
     t->rep.points++;
     t->rep.nu_end = pt.nu;
     if (t->visit && t->visit(&pt, t->data)) return 1;
+    /* A closed curve (a level set has no other way back) would be followed
+     * round and round to max_points: once back within a step (steps are
+     * at most 1 in the scaled norm), it ends. */
+    double d0 = hypot((e.nu - t->first[0]) / t->scale[0], (e.S - t->first[1]) / t->scale[1]);
+    if (d0 > 1.5) t->left = 1;
+    if (t->left && d0 < 1) {
+        t->rep.end = BKF_STABMAP_END_CLOSED;
+        snprintf(t->rep.note, sizeof t->rep.note,
+                 "closed: back at nu %.6g, S %.6g, within a step of its first point", e.nu, e.S);
+        return 1;
+    }
     if (t->rep.points >= t->max_points) {
         t->rep.end = BKF_STABMAP_END_POINTS;
         return 1;
@@ -754,6 +767,8 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
     t.visit = visit;
     t.data = data;
     t.max_points = o.max_points;
+    t.first[0] = first->nu;
+    t.first[1] = first->S;
     t.rep.end = BKF_STABMAP_END_REACHED;
     t.rep.nu_end = first->nu;
     int s = BKF_OK;
