@@ -43,6 +43,8 @@ static bkf_comoving_params mapped_params(const check_ctx *c, const bkf_speeds_ro
     cp.cancel = check_cancel(c);
     cp.max_steps = o->mapped_max_steps;
     cp.level = c->level;
+    /* the fewest points that resolve the wave (the uniform grid's rule) */
+    cp.resolution = o->resolution;
     return cp;
 }
 
@@ -56,11 +58,13 @@ static bkf_comoving_params mapped_params(const check_ctx *c, const bkf_speeds_ro
  * there).  A difference taken with a finer grid would not (0.8 times).
  * NaN when the coarser run cannot give a drift over that window. */
 static double mapped_grid_error(const check_ctx *c, const bkf_speeds_root *sr, size_t n,
-                                double drift, double t_from, double t_to, int *status)
+                                size_t run_points, double drift, double t_from, double t_to,
+                                int *status)
 {
-    size_t points = 2 * c->o->points / 3;
+    size_t points = 2 * run_points / 3;
     if (points < BKF_CHECK_POINTS_MIN) points = BKF_CHECK_POINTS_MIN;
     bkf_comoving_params cp = mapped_params(c, sr, n, points);
+    cp.resolution = 0; /* exactly 2/3 of the run's points */
     bkf_error e;
     bkf_comoving *cm = bkf_comoving_alloc(&cp, &e);
     *status = BKF_OK;
@@ -218,7 +222,8 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     /* The fit's uncertainty is that of the simulated field; the grid's own
      * error in the speed is added to it. */
     int gs;
-    double grid_err = mapped_grid_error(c, sr, row->n, drift, row->fit_from,
+    size_t points = row->N / row->n;
+    double grid_err = mapped_grid_error(c, sr, row->n, points, drift, row->fit_from,
                                         row->fit_to, &gs);
     if (gs)
         return bkf_error_set(err, gs, "n = %zu, root %zu: %s", row->n, row->root,
@@ -226,7 +231,7 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     if (isnan(grid_err))
         check_warn(c, "n = %zu, root %zu: the run on %zu points per wavelength gives no "
                    "speed to compare with: v_meas_err is unknown (nan)", row->n,
-                   row->root, 2 * o->points / 3);
+                   row->root, 2 * points / 3);
     row->v_meas_err += grid_err;
     return BKF_OK;
 }
