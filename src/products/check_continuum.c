@@ -156,7 +156,7 @@ static int mapped_progress(double fraction, void *data)
     bkf_check_row r = *w->row;
     double drift;
     if ((w->status = mapped_row(w->c, w->sr, w->cm, 0, &r, &drift))) return 1;
-    return check_auto_settled(w->c->o, &r);
+    return check_auto_settled(w->c->o, &r, last->t);
 }
 
 /* One root on the adapted comoving grid. */
@@ -182,7 +182,7 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     bkf_comoving_stats st;
     bkf_comoving_get_stats(cm, &st);
     row->tail = st.relax_change;
-    mapped_watch w = {c, sr, cm, row, BKF_CHECK_AUTO_FIRST, BKF_OK};
+    mapped_watch w = {c, sr, cm, row, BKF_CHECK_AUTO_UNSTABLE_FIRST, BKF_OK};
     int s = bkf_comoving_run(cm, o->tmax, check_sample_dt(BKF_CHECK_MAPPED_SAMPLE_DT, o->tmax),
                              mapped_progress, &w, &e);
     if (!s && w.status) {
@@ -403,7 +403,7 @@ static int check_observe(const bkf_pde_sample *smp, void *data)
     if ((ob->status = uniform_row(ob->c, ob->sr, ob->meas, ob->bloch, 0, ob->frame_speed, &r,
                                   &ob->err)))
         return 1;
-    return check_auto_settled(o, &r);
+    return check_auto_settled(o, &r, smp->t);
 }
 
 /* One root: the grid that resolves it, the perturbed run, its
@@ -480,7 +480,8 @@ int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row
         bkf_error_set(err, s, "out of memory");
         goto done;
     }
-    check_obs ob = {c, sr, row, po.frame_speed, BKF_CHECK_AUTO_FIRST, meas, &bloch, 0, {{0}, 0}};
+    check_obs ob = {c, sr, row, po.frame_speed, BKF_CHECK_AUTO_UNSTABLE_FIRST, meas, &bloch, 0,
+                    {{0}, 0}};
     s = bkf_pde_run(pde, o->tmax, check_sample_dt(BKF_CHECK_SAMPLE_DT, o->tmax), check_observe, &ob,
                     check_progress,
                     (void *)c, &e);
