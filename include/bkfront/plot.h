@@ -35,6 +35,13 @@ typedef enum { BKF_PLOT_PNG = 0, BKF_PLOT_PDF = 1, BKF_PLOT_SVG = 2 } bkf_plot_f
 /* "png", "pdf", "svg" (also the file extensions); NULL outside the enum. */
 const char *bkf_plot_format_name(bkf_plot_format format);
 
+/* A list of formats as a user gives it ("png,pdf", commas or spaces
+ * between) into *formats, bit 1 << format for each (a scene's `formats =`,
+ * bkfront run --formats).  BKF_EINPUT for an unknown name or an empty list,
+ * the message naming PREFIX NAME ("--" "formats"). */
+int bkf_plot_parse_formats(const char *text, const char *prefix, const char *name,
+                           unsigned *formats, bkf_error *err);
+
 typedef struct bkf_plot_job bkf_plot_job;
 
 /* A job for `script` (a path; it must be readable).  NULL with err filled

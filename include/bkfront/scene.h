@@ -27,7 +27,8 @@
  * A key naming a file the product writes (BKF_OPT_PATH: simulate's
  * snapshots, a sweep's fields) names it inside the output folder; the plan
  * refuses anything else, "FILE:LINE: [KIND NAME]: KEY: ...", unless the
- * caller trusts the scene (bkf_scene_plan_options.trust).
+ * caller trusts the scene (bkf_scene_plan_options.trust); so it does a
+ * figure's own `script =`, which gnuplot may turn into shell commands.
  *
  * The keys of each kind are in docs/scenes.md.  A key of a kind whose
  * product is in the catalogue (catalog.h) is checked at parse time by that
@@ -167,8 +168,9 @@ typedef struct {
                                  1 pdf, 2 svg; 0: png */
     int figures;              /* 0: leave figures out of the plan */
     int trust;                /* 1: a key naming a file (simulate's snapshots, a
-                                 sweep's fields) may name it outside outdir;
-                                 0: such a scene is refused with the key's line */
+                                 sweep's fields) may name it outside outdir, and a
+                                 figure may run its own script =; 0: such a scene
+                                 is refused with the key's line */
 } bkf_scene_plan_options;
 
 int bkf_scene_make_plan(const bkf_scene *s, const bkf_scene_plan_options *options,
@@ -254,6 +256,11 @@ int bkf_scene_run_step(const bkf_scene *s, const bkf_scene_plan *plan, size_t i,
  * BKF_ENOMEM. */
 int bkf_scene_run(const bkf_scene *s, const bkf_scene_plan *plan,
                   const bkf_scene_run_options *options, int *status, bkf_error *err);
+
+/* The status of a run as a whole from its n steps' status[]: BKF_OK when
+ * every step succeeded, else the gravest failure (out of memory, then a
+ * cancellation, then bad input, then the first other one). */
+int bkf_scene_run_status(const int *status, size_t n);
 
 #ifdef __cplusplus
 }

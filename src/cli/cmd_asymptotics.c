@@ -2,26 +2,13 @@
  *
  * As in `bkfront period`, every input is checked before the first solve and
  * the table is built in memory and written only when all of it succeeded. */
-#include "args.h"
+#include "commands.h"
 
 #include "bkfront/approx.h"
 #include "bkfront/asymfit.h"
 
-typedef struct {
-    bkf_approx_spec spec;
-    cli_output_spec output;
-} asymptotics_args;
-
-static void groups_of(asymptotics_args *a, cli_options g[2])
-{
-    g[0] = (cli_options){bkf_approx_options, bkf_approx_noptions, a ? &a->spec : NULL};
-    g[1] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
-}
-
 static void asymptotics_help(FILE *out)
 {
-    cli_options g[2];
-    groups_of(NULL, g);
     fprintf(out,
         "usage: bkfront asymptotics --fit --nu LIST [--mu A:B:N] [--small-mu A:B:N]\n"
         "       bkfront asymptotics --map [--nu LIST] [--eps LIST]\n"
@@ -38,7 +25,7 @@ static void asymptotics_help(FILE *out)
         "\n"
         "options:\n",
         BKF_ASYMFIT_TOL, BKF_ASYMFIT_TOL_FALLBACK);
-    cli_options_help(out, g, 2);
+    cli_product_options_help("asymptotics", out);
     fprintf(out,
         "\n"
         "columns, --fit:\n"
@@ -71,22 +58,9 @@ static void asymptotics_help(FILE *out)
         "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
 }
 
-static int write_asymptotics(const void *spec, FILE *out, bkf_io_format format,
-                             const bkf_provenance *prov, bkf_error *err)
-{
-    return bkf_approx_write(spec, out, format, prov, err);
-}
-
 static int asymptotics_run(int argc, char **argv, bkf_error *err)
 {
-    asymptotics_args a = {bkf_approx_spec_default(), {0}};
-    cli_options g[2];
-    groups_of(&a, g);
-    int s = cli_parse_options(g, 2, argc, argv, NULL, err);
-    if (!s) s = bkf_approx_check(&a.spec, "--", err);
-    if (!s) s = cli_write_table(&a.output, argc, argv, write_asymptotics, &a.spec, err);
-    bkf_approx_spec_free(&a.spec);
-    return s;
+    return cli_run_product("asymptotics", argc, argv, err);
 }
 
 const cli_command cli_cmd_asymptotics = {

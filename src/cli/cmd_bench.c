@@ -1,24 +1,11 @@
 /* bkfront bench: the library's work-precision measurements (bench.h) as a
  * table. */
-#include "args.h"
+#include "commands.h"
 
 #include "bkfront/bench.h"
 
-typedef struct {
-    bkf_bench_spec spec;
-    cli_output_spec output;
-} bench_args;
-
-static void groups_of(bench_args *a, cli_options g[2])
-{
-    g[0] = (cli_options){bkf_bench_options, bkf_bench_noptions, a ? &a->spec : NULL};
-    g[1] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
-}
-
 static void bench_help(FILE *out)
 {
-    cli_options g[2];
-    groups_of(NULL, g);
     fprintf(out,
         "usage: bkfront bench [--product period|speeds|pde|all|box] [--quick]\n"
         "                     [--format tsv|json] [--out FILE]\n"
@@ -43,7 +30,7 @@ static void bench_help(FILE *out)
         "          the ratio per point (min, median, max) and in aggregate; method\n"
         "          column: method(model that answered). Not part of all.\n"
         "options:\n");
-    cli_options_help(out, g, 2);
+    cli_product_options_help("bench", out);
     fprintf(out,
         "columns: product, case, method, tol, N (pde; NaN otherwise), error (relative,\n"
         "  achieved), estimate (the method's own relative error estimate or bound),\n"
@@ -53,21 +40,9 @@ static void bench_help(FILE *out)
         "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
 }
 
-static int write_bench(const void *spec, FILE *out, bkf_io_format format,
-                       const bkf_provenance *prov, bkf_error *err)
-{
-    return bkf_bench_write(spec, out, format, prov, err);
-}
-
 static int bench_run(int argc, char **argv, bkf_error *err)
 {
-    bench_args a = {bkf_bench_spec_default(), {0}};
-    cli_options g[2];
-    groups_of(&a, g);
-    int s = cli_parse_options(g, 2, argc, argv, NULL, err);
-    if (!s) s = bkf_bench_check(&a.spec, "--", err);
-    if (!s) s = cli_write_table(&a.output, argc, argv, write_bench, &a.spec, err);
-    return s;
+    return cli_run_product("bench", argc, argv, err);
 }
 
 const cli_command cli_cmd_bench = {

@@ -7,25 +7,12 @@
  *
  * Every input is checked before the first solve, and the table is built in
  * memory and written only when everything succeeded. */
-#include "args.h"
+#include "commands.h"
 
 #include "bkfront/oscillation.h"
 
-typedef struct {
-    bkf_oscillation_spec spec;
-    cli_output_spec output;
-} floquet_args;
-
-static void groups_of(floquet_args *a, cli_options g[2])
-{
-    g[0] = (cli_options){bkf_oscillation_options, bkf_oscillation_noptions, a ? &a->spec : NULL};
-    g[1] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
-}
-
 static void floquet_help(FILE *out)
 {
-    cli_options g[2];
-    groups_of(NULL, g);
     fprintf(out,
         "usage: bkfront floquet [--gamma G] [--c C] [--nu V] --q LIST [--S S]\n"
         "       bkfront floquet --threshold [--gamma G] [--c C] [--search A:B]\n"
@@ -45,7 +32,7 @@ static void floquet_help(FILE *out)
         "and --diagram scan nu instead.\n"
         "\n"
         "options:\n");
-    cli_options_help(out, g, 2);
+    cli_product_options_help("floquet", out);
     fprintf(out,
         "\n"
         "dispersion columns:\n"
@@ -86,23 +73,10 @@ static void warn_stderr(const char *message, void *data)
     fprintf(stderr, CLI_PROGRAM " floquet: warning: %s\n", message);
 }
 
-static int write_floquet(const void *spec, FILE *out, bkf_io_format format,
-                         const bkf_provenance *prov, bkf_error *err)
-{
-    return bkf_oscillation_write(spec, out, format, prov, err);
-}
-
 static int floquet_run(int argc, char **argv, bkf_error *err)
 {
-    floquet_args a = {bkf_oscillation_spec_default(), {0}};
-    a.spec.warn = warn_stderr;
-    cli_options g[2];
-    groups_of(&a, g);
-    int s = cli_parse_options(g, 2, argc, argv, NULL, err);
-    if (!s) s = bkf_oscillation_check(&a.spec, "--", err);
-    if (!s) s = cli_write_table(&a.output, argc, argv, write_floquet, &a.spec, err);
-    bkf_oscillation_spec_free(&a.spec);
-    return s;
+    const bkf_catalog_hooks hooks = {.warn = warn_stderr};
+    return cli_run_product_hooks("floquet", &hooks, argc, argv, err);
 }
 
 const cli_command cli_cmd_floquet = {

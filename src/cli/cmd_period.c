@@ -3,25 +3,12 @@
  * Every input is checked before the first solve, and the table is built in
  * memory and written only when every point succeeded, so a failed run leaves
  * stdout (or the --out file) untouched. */
-#include "args.h"
+#include "commands.h"
 
 #include "bkfront/period.h"
 
-typedef struct {
-    bkf_period_spec spec;
-    cli_output_spec output;
-} period_args;
-
-static void groups_of(period_args *a, cli_options g[2])
-{
-    g[0] = (cli_options){bkf_period_options, bkf_period_noptions, a ? &a->spec : NULL};
-    g[1] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
-}
-
 static void period_help(FILE *out)
 {
-    cli_options g[2];
-    groups_of(NULL, g);
     fprintf(out,
         "usage: bkfront period --mu LIST --nu LIST [--tol E] [--log] [--continue mu|nu]\n"
         "                      [--method auto|asymptotic|leading|shooting]\n"
@@ -33,7 +20,7 @@ static void period_help(FILE *out)
         "the asymptotic approximations.\n"
         "\n"
         "options:\n");
-    cli_options_help(out, g, 2);
+    cli_product_options_help("period", out);
     fprintf(out,
         "\n"
         "columns:\n"
@@ -61,22 +48,9 @@ static void period_help(FILE *out)
         "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
 }
 
-static int write_period(const void *spec, FILE *out, bkf_io_format format,
-                        const bkf_provenance *prov, bkf_error *err)
-{
-    return bkf_period_write(spec, out, format, prov, err);
-}
-
 static int period_run(int argc, char **argv, bkf_error *err)
 {
-    period_args a = {bkf_period_spec_default(), {0}};
-    cli_options g[2];
-    groups_of(&a, g);
-    int s = cli_parse_options(g, 2, argc, argv, NULL, err);
-    if (!s) s = bkf_period_check(&a.spec, "--", err);
-    if (!s) s = cli_write_table(&a.output, argc, argv, write_period, &a.spec, err);
-    bkf_period_spec_free(&a.spec);
-    return s;
+    return cli_run_product("period", argc, argv, err);
 }
 
 const cli_command cli_cmd_period = {

@@ -18,6 +18,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bkfront/plot.h"
 #include "bkfront/scene.h"
 
 /* The gnuplot scripts' folder when neither --plots nor BKFRONT_PLOTS names
@@ -71,19 +72,6 @@ static void run_help(FILE *out)
         "This bkfront's gnuplot scripts: " BKF_PLOTS_DIR "\n");
 }
 
-/* Which failure a scene reports when several steps fail: memory first, then
- * a cancellation, then bad input, then the rest (all exit 1). */
-static int severity(int status)
-{
-    switch (status) {
-    case BKF_OK: return 0;
-    case BKF_ENOMEM: return 4;
-    case BKF_ECANCELED: return 3;
-    case BKF_EINPUT: return 2;
-    default: return 1;
-    }
-}
-
 static double now(void)
 {
     struct timespec ts;
@@ -131,23 +119,6 @@ static int is_dir(const char *path)
     return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
-/* A figure's `script =` runs a file the scene names, and gnuplot's system()
- * and shell escapes run anything: only with --trust-scene. */
-static int check_trust(const bkf_scene *sc, bkf_error *err)
-{
-    for (size_t i = 0; i < sc->nproducts; i++) {
-        const bkf_scene_product *p = &sc->products[i];
-        if (p->kind != BKF_SCENE_FIGURE) continue;
-        for (size_t k = 0; k < p->nentries; k++)
-            if (strcmp(p->entries[k].key, "script") == 0)
-                return bkf_error_set(err, BKF_EINPUT,
-                                     "%s:%d: script = %s: a scene's own gnuplot script can run "
-                                     "shell commands; give --trust-scene to run it",
-                                     sc->path, p->entries[k].line, p->entries[k].value);
-    }
-    return BKF_OK;
-}
-
 /* The temporaries being written (each step's table and the data files a
  * product writes itself, e.g. simulate's spacetime and snapshots), each
  * guarded by the signal cleanup until it is committed or removed.  The
@@ -160,7 +131,6 @@ typedef struct {
     const bkf_scene *sc;
     const bkf_scene_plan *plan;
     size_t failed;
-    int worst;
     char first_failure[BKF_ERROR_LEN];
 } run_context;
 
@@ -215,7 +185,6 @@ static void step_done(const bkf_scene_step_report *r, void *data)
         if (!rc->first_failure[0])
             snprintf(rc->first_failure, sizeof rc->first_failure, "%s:%d [%s %s]: %.200s",
                      sc->path, p->line, bkf_scene_kind_name(p->kind), p->name, why);
-        if (severity(r->status) > severity(rc->worst)) rc->worst = r->status;
     } else if (r->gnuplot_warning[0]) {
         printf("        gnuplot: %s\n", r->gnuplot_warning);
     }
@@ -262,23 +231,6 @@ static void print_plan(const bkf_scene *sc, const bkf_scene_plan *plan, FILE *ou
             free(cmd);
         }
     }
-}
-
-static int parse_formats(const char *text, unsigned *formats, bkf_error *err)
-{
-    char buf[256];
-    snprintf(buf, sizeof buf, "%s", text);
-    *formats = 0;
-    char *save = NULL;
-    for (char *t = strtok_r(buf, ",", &save); t; t = strtok_r(NULL, ",", &save)) {
-        static const char *const names[] = {"png", "pdf", "svg", NULL};
-        int k;
-        int s = cli_parse_choice("--formats", t, names, &k, err);
-        if (s) return s;
-        *formats |= 1u << k;
-    }
-    if (!*formats) return bkf_error_set(err, BKF_EINPUT, "--formats: give png, pdf or svg");
-    return BKF_OK;
 }
 
 /* What the command line asks: the scene and the flags. */
@@ -328,7 +280,8 @@ static int parse_run_args(int argc, char **argv, run_args *a, bkf_error *err)
     if (s) return s;
     if (!a->scene_path) return bkf_error_set(err, BKF_EINPUT, "SCENE: give a scene file, e.g. fronts/paper.scene");
     a->formats = 1;
-    if (formats_text && (s = parse_formats(formats_text, &a->formats, err))) return s;
+    if (formats_text && (s = bkf_plot_parse_formats(formats_text, "--", "formats", &a->formats, err)))
+        return s;
     /* Every online CPU by default: the steps are independent and each is
      * one thread (a sweep's own threads aside). */
     a->jobs = 1;
@@ -421,9 +374,10 @@ static int run_plan(const bkf_scene *sc, const bkf_scene_plan *plan, bkf_scene_r
     }
     print_summary(sc, plan, step_status, total, outdir);
     int reported = report_status(err);
+    int worst = bkf_scene_run_status(step_status, plan->nsteps);
     free(step_status);
     if (rc->failed)
-        return bkf_error_set(err, rc->worst ? rc->worst : BKF_ENUMERIC,
+        return bkf_error_set(err, worst,
                              "%zu of the computations failed; first: %s", rc->failed,
                              rc->first_failure);
     return reported;
@@ -437,11 +391,6 @@ static int run_run(int argc, char **argv, bkf_error *err)
 
     bkf_scene *sc = NULL;
     if ((s = bkf_scene_parse_file(a.scene_path, &sc, err))) return s;
-
-    if (!a.trust && !a.no_figures && (s = check_trust(sc, err))) {
-        bkf_scene_free(sc);
-        return s;
-    }
 
     char scene_dir[2048], outdir[4096], plots_dir[4096];
     dir_of(a.scene_path, scene_dir, sizeof scene_dir);

@@ -6,7 +6,7 @@
  * Every input is checked before the first solve, and the table is built in
  * memory and written only when the whole computation succeeded, so a failed
  * run leaves stdout (or the --out file) untouched. */
-#include "args.h"
+#include "commands.h"
 
 #include "bkfront/fronts.h"
 
@@ -42,33 +42,8 @@
     "  kappa_max      its Bloch number 2 pi j / S\n"                                \
     "  kind           real, or complex (a conjugate pair)\n"
 
-typedef struct {
-    bkf_fronts_spec spec;
-    cli_output_spec output;
-} speeds_args;
-
-typedef struct {
-    bkf_fronts_branch_spec spec;
-    cli_output_spec output;
-} branch_args;
-
-static void speeds_groups(speeds_args *a, cli_options g[2])
-{
-    g[0] = (cli_options){bkf_fronts_options, bkf_fronts_noptions, a ? &a->spec : NULL};
-    g[1] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
-}
-
-static void branch_groups(branch_args *a, cli_options g[2])
-{
-    g[0] = (cli_options){bkf_fronts_branch_options, bkf_fronts_branch_noptions,
-                         a ? &a->spec : NULL};
-    g[1] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
-}
-
 static void speeds_help(FILE *out)
 {
-    cli_options g[2];
-    speeds_groups(NULL, g);
     fprintf(out,
         "usage: bkfront speeds [--gamma G] [--c C] [--nu V] [--S L] [--n N | --nmax N]\n"
         "                      [--tol E] [--method auto|asymptotic|leading|shooting]\n"
@@ -87,7 +62,7 @@ static void speeds_help(FILE *out)
         "\n"
         "options:\n",
         BKF_SPEEDS_ROWS_C0);
-    cli_options_help(out, g, 2);
+    cli_product_options_help("speeds", out);
     fprintf(out,
         "\n"
         "columns:\n" COLUMNS_HELP
@@ -118,8 +93,6 @@ static void speeds_help(FILE *out)
 
 static void branch_help(FILE *out)
 {
-    cli_options g[2];
-    branch_groups(NULL, g);
     fprintf(out,
         "usage: bkfront branch --param S|nu|gamma|c|h --from A --to B [--n N] [--root I]\n"
         "                      [--gamma G] [--c C] [--nu V] [--S L]  (not the --param one)\n"
@@ -145,7 +118,7 @@ static void branch_help(FILE *out)
         "points the parameter where it is 0 is located (a row of type stability).\n"
         "\n"
         "options:\n");
-    cli_options_help(out, g, 2);
+    cli_product_options_help("branch", out);
     fprintf(out,
         "\n"
         "columns:\n"
@@ -159,38 +132,14 @@ static void branch_help(FILE *out)
         "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
 }
 
-static int write_speeds(const void *spec, FILE *out, bkf_io_format format,
-                        const bkf_provenance *prov, bkf_error *err)
-{
-    return bkf_fronts_write(spec, out, format, prov, err);
-}
-
-static int write_branch(const void *spec, FILE *out, bkf_io_format format,
-                        const bkf_provenance *prov, bkf_error *err)
-{
-    return bkf_fronts_branch_write(spec, out, format, prov, err);
-}
-
 static int speeds_run(int argc, char **argv, bkf_error *err)
 {
-    speeds_args a = {bkf_fronts_spec_default(), {0}};
-    cli_options g[2];
-    speeds_groups(&a, g);
-    int s = cli_parse_options(g, 2, argc, argv, NULL, err);
-    if (!s) s = bkf_fronts_check(&a.spec, "--", err);
-    if (!s) s = cli_write_table(&a.output, argc, argv, write_speeds, &a.spec, err);
-    return s;
+    return cli_run_product("speeds", argc, argv, err);
 }
 
 static int branch_run(int argc, char **argv, bkf_error *err)
 {
-    branch_args a = {bkf_fronts_branch_spec_default(), {0}};
-    cli_options g[2];
-    branch_groups(&a, g);
-    int s = cli_parse_options(g, 2, argc, argv, NULL, err);
-    if (!s) s = bkf_fronts_branch_check(&a.spec, "--", err);
-    if (!s) s = cli_write_table(&a.output, argc, argv, write_branch, &a.spec, err);
-    return s;
+    return cli_run_product("branch", argc, argv, err);
 }
 
 const cli_command cli_cmd_speeds = {

@@ -4,25 +4,12 @@
  *
  * Every input is checked before the first solve, and the table is built in
  * memory and written only when everything succeeded. */
-#include "args.h"
+#include "commands.h"
 
 #include "bkfront/stability.h"
 
-typedef struct {
-    bkf_stability_spec spec;
-    cli_output_spec output;
-} stability_args;
-
-static void groups_of(stability_args *a, cli_options g[2])
-{
-    g[0] = (cli_options){bkf_stability_options, bkf_stability_noptions, a ? &a->spec : NULL};
-    g[1] = (cli_options){cli_output_options, cli_output_noptions, a ? &a->output : NULL};
-}
-
 static void stability_help(FILE *out)
 {
-    cli_options g[2];
-    groups_of(NULL, g);
     fprintf(out,
         "usage: bkfront stability [--gamma G] [--c C] [--nu V] [--S L] --n N [--root I]\n"
         "                         [--tol E] [--per-kappa K] [--line [--kappa-count M]]\n"
@@ -51,7 +38,7 @@ static void stability_help(FILE *out)
         "(--scan: every nu of the grid scanned instead; docs/cli/stability.md).\n"
         "\n"
         "options:\n");
-    cli_options_help(out, g, 2);
+    cli_product_options_help("stability", out);
     fprintf(out,
         "\n"
         "ring columns:\n"
@@ -76,21 +63,9 @@ static void stability_help(FILE *out)
         "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
 }
 
-static int write_stability(const void *spec, FILE *out, bkf_io_format format,
-                           const bkf_provenance *prov, bkf_error *err)
-{
-    return bkf_stability_write(spec, out, format, prov, err);
-}
-
 static int stability_run(int argc, char **argv, bkf_error *err)
 {
-    stability_args a = {bkf_stability_spec_default(), {0}};
-    cli_options g[2];
-    groups_of(&a, g);
-    int s = cli_parse_options(g, 2, argc, argv, NULL, err);
-    if (!s) s = bkf_stability_check(&a.spec, "--", err);
-    if (!s) s = cli_write_table(&a.output, argc, argv, write_stability, &a.spec, err);
-    return s;
+    return cli_run_product("stability", argc, argv, err);
 }
 
 const cli_command cli_cmd_stability = {

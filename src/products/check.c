@@ -4,12 +4,10 @@
 #include "bkfront/check.h"
 
 #include "check_internal.h"
+#include "product_internal.h"
 
 #include <fftw3.h>
 #include <limits.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -93,10 +91,7 @@ int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
     size_t next = 0;  /* the first root not yet delivered */
     int halt = stop;  /* a stop or a failure: no root starts */
     int visited = 0;  /* the row visitor stopped the check */
-    int threads = 1;
-#ifdef _OPENMP
-    threads = o->threads ? (int)o->threads : omp_get_max_threads();
-#endif
+    int threads = bkf_product_threads(o->threads);
     (void)threads;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
     for (size_t i = 0; i < R; i++) {

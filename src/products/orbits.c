@@ -617,11 +617,7 @@ static int write_multipliers(const writer *w, bkf_error *err)
                                    {m->tail, NULL},           {m->alignment, NULL}};
         s = bkf_io_table_row(t, row, err);
     }
-    if (!s) s = bkf_io_table_finish(t, err);
-    bkf_io_table_free(t);
-    if (s) bkf_io_atomic_abort(file);
-    else s = bkf_io_atomic_commit(file, err);
-    return s;
+    return bkf_product_table_file_close(t, file, s, err);
 }
 
 static const bkf_io_column coexist_columns[] = {
@@ -690,11 +686,7 @@ static int write_coexistence(writer *w, size_t N, bkf_error *err)
             {0, consistent}};
         s = bkf_io_table_row(t, row, err);
     }
-    if (!s) s = bkf_io_table_finish(t, err);
-    bkf_io_table_free(t);
-    if (s) bkf_io_atomic_abort(file);
-    else s = bkf_io_atomic_commit(file, err);
-    return s;
+    return bkf_product_table_file_close(t, file, s, err);
 }
 
 int bkf_orbits_write(const bkf_orbits_spec *spec, FILE *out, bkf_io_format format,

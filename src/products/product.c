@@ -38,6 +38,18 @@ int bkf_product_table_open(FILE *out, bkf_io_format format, const bkf_io_column 
     return BKF_OK;
 }
 
+int bkf_product_table_file_close(bkf_io_table *table, bkf_io_atomic *file, int s,
+                                 bkf_error *err)
+{
+    if (!s) s = bkf_io_table_finish(table, err);
+    bkf_io_table_free(table);
+    if (file) {
+        if (s) bkf_io_atomic_abort(file);
+        else s = bkf_io_atomic_commit(file, err);
+    }
+    return s;
+}
+
 int bkf_product_table_command(bkf_io_table *table, const bkf_provenance *prov, bkf_error *err)
 {
     if (!prov || !prov->command) return BKF_OK;

@@ -1,6 +1,7 @@
 /* What the product modules share in writing a table: the title comment
  * opened by the provenance's program, and its command after the product's
- * own comments (bkf_provenance, options.h). */
+ * own comments (bkf_provenance, options.h); and the threads of their
+ * parallel loops. */
 #ifndef BKFRONT_PRODUCT_INTERNAL_H
 #define BKFRONT_PRODUCT_INTERNAL_H
 
@@ -11,6 +12,21 @@
 #include "bkfront/model.h"
 #include "bkfront/options.h"
 #include "bkfront/status.h"
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+/* The threads a product's `threads` option asks for: 0 is every core
+ * (OpenMP's default); 1 without OpenMP. */
+static inline int bkf_product_threads(size_t asked)
+{
+#ifdef _OPENMP
+    return asked ? (int)asked : omp_get_max_threads();
+#else
+    (void)asked;
+    return 1;
+#endif
+}
 
 /* *table with "PROGRAM TITLE" written (PROGRAM "libbkfront" without one;
  * TITLE alone without a provenance); NULL on failure. */
@@ -20,6 +36,12 @@ int bkf_product_table_open(FILE *out, bkf_io_format format, const bkf_io_column 
 
 /* "command: COMMAND" when the provenance has one. */
 int bkf_product_table_command(bkf_io_table *table, const bkf_provenance *prov, bkf_error *err);
+
+/* A table written into an atomic file (either may be NULL), closed on
+ * status s: finished and the file committed when s is BKF_OK, else the
+ * file removed, never left half written.  The status it ends with. */
+int bkf_product_table_file_close(bkf_io_table *table, bkf_io_atomic *file, int s,
+                                 bkf_error *err);
 
 /* The model's keys as the tables of the cycle-based products write them,
  * each defaulting to the paper's value (bkf_model_paper_where_unset:

@@ -1,11 +1,10 @@
 #include "bkfront/stability.h"
 
 #include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include "bkfront/fronts.h"
 #include "bkfront/stabmap.h"
@@ -535,6 +534,34 @@ static int add_row(diagram_sink *k, const char *kind, size_t n, size_t m, double
     return 0;
 }
 
+/* A note on the diagram (printf-style, as long as it needs); a failed
+ * allocation fails the sink.  Returns nonzero on failure. */
+static int add_note(diagram_sink *k, const char *fmt, ...)
+#if defined(__GNUC__) || defined(__clang__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+static int add_note(diagram_sink *k, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int len = vsnprintf(NULL, 0, fmt, ap);
+    va_end(ap);
+    char *note = len < 0 ? NULL : malloc((size_t)len + 1);
+    char **notes = realloc(k->notes, (k->nnotes + 1) * sizeof *notes);
+    if (notes) k->notes = notes;
+    if (!note || !notes) {
+        free(note);
+        return k->failed = 1;
+    }
+    va_start(ap, fmt);
+    vsnprintf(note, (size_t)len + 1, fmt, ap);
+    va_end(ap);
+    k->notes[k->nnotes++] = note;
+    return 0;
+}
+
 /* The oscillation's bands at one nu (a few suffice: period doubling and
  * long wave are the ones seen). */
 #define DIAGRAM_BANDS 4
@@ -762,35 +789,29 @@ static int curves_between(const n_work *w, double a, double b)
     return 0;
 }
 
-static int follow_stability(const bkf_stability_spec *spec, const double *nus, size_t nnu,
-                            const double *g, diagram_sink *k, size_t *spectra, bkf_error *err)
+/* The seed columns' number: grid columns about seed_step apart, both ends
+ * included. */
+static size_t seed_column_count(const bkf_stability_spec *spec, const double *nus, size_t nnu)
 {
-    bkf_model_params params = params_of(spec);
-    bkf_stabmap_options o = stabmap_options_of(spec);
-    /* A seed needs S only to within its curve's continuation, which
-     * corrects it: its bracket is closed to 3% of a scan step. */
-    bkf_stabmap_options seed_o = o;
-    seed_o.S_tol = fmax(o.S_tol, 0.03 * (spec->S_to - spec->S) / (double)spec->S_samples);
-    size_t N = spec->n;
-    /* seed columns: grid columns about seed_step apart, both ends included */
     size_t ncol = (size_t)ceil(fabs(nus[nnu - 1] - nus[0]) / spec->seed_step - 1e-9) + 1;
     if (ncol > nnu) ncol = nnu;
     if (ncol < 2 && nnu > 1) ncol = 2;
-    size_t *col = malloc(ncol * sizeof *col);
-    seed_task *seeds = calloc(N * ncol, sizeof *seeds);
-    n_work *w = calloc(N, sizeof *w);
-    state_run *runs = NULL;
-    size_t nruns = 0;
-    int s = col && seeds && w ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    int threads = 1;
-#ifdef _OPENMP
-    threads = spec->threads ? (int)spec->threads : omp_get_max_threads();
-#endif
+    return ncol;
+}
+
+/* 1. The seed grid: each of every n's seed columns scanned in S, its sign
+ * changes closed.  seeds[] holds n * ncol tasks, n's columns together. */
+static int scan_seeds(const bkf_stability_spec *spec, const double *nus, const double *g,
+                      const size_t *col, size_t ncol, seed_task *seeds, int threads,
+                      size_t *spectra, bkf_error *err)
+{
     (void)threads;
-    for (size_t c = 0; !s && c < ncol; c++)
-        col[c] = ncol == 1 ? 0 : (size_t)llround((double)c * (double)(nnu - 1) / (double)(ncol - 1));
-    /* 1. the seed grid: each column scanned in S, its sign changes closed */
-    size_t ntask = s ? 0 : N * ncol;
+    bkf_model_params params = params_of(spec);
+    /* A seed needs S only to within its curve's continuation, which
+     * corrects it: its bracket is closed to 3% of a scan step. */
+    bkf_stabmap_options seed_o = stabmap_options_of(spec);
+    seed_o.S_tol = fmax(seed_o.S_tol, 0.03 * (spec->S_to - spec->S) / (double)spec->S_samples);
+    size_t ntask = spec->n * ncol;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
     for (size_t i = 0; i < ntask; i++) {
         seed_task *t = &seeds[i];
@@ -808,25 +829,54 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
         t->spectra = samples + 1;
         for (size_t j = 0; j < t->count; j++) t->spectra += t->pts[j].evaluations - 2;
     }
+    int s = BKF_OK;
     for (size_t i = 0; !s && i < ntask; i++) {
         if (seeds[i].status) s = bkf_error_set(err, seeds[i].status, "%s", seeds[i].err.message);
         *spectra += seeds[i].spectra;
     }
-    /* 2. the curves through the seeds, each n on its own */
+    return s;
+}
+
+/* 2. The curves through the seeds, each n on its own (w[n - 1]). */
+static int follow_seeds(const bkf_stability_spec *spec, const double *nus, size_t nnu,
+                        const seed_task *seeds, size_t ncol, n_work *w, int threads,
+                        size_t *spectra, bkf_error *err)
+{
+    (void)threads;
     bkf_stabmap_window win = {fmin(nus[0], nus[nnu - 1]), fmax(nus[0], nus[nnu - 1]), spec->S,
                               spec->S_to};
-    size_t nn = s ? 0 : N;
+    size_t nn = spec->n;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
     for (size_t i = 0; i < nn; i++) {
         w[i].n = i + 1;
         follow_n(spec, seeds + i * ncol, ncol, &win, &w[i]);
     }
+    int s = BKF_OK;
     for (size_t i = 0; !s && i < nn; i++) {
         if (w[i].status) s = bkf_error_set(err, w[i].status, "%s", w[i].err.message);
         *spectra += w[i].spectra;
     }
-    /* 3. the columns without a crossing, in runs */
-    for (size_t i = 0; !s && i < N; i++) {
+    return s;
+}
+
+/* The crossings at nu of the first of wn's curves that has any (into S[]
+ * and above[], SEED_MAX at most): their number. */
+static size_t crossings_at(const n_work *wn, double nu, double *S, int *above)
+{
+    size_t m = 0;
+    for (size_t c = 0; c < wn->count && !m; c++)
+        m = curve_crossings(&wn->c[c], nu, S, above, SEED_MAX);
+    return m;
+}
+
+/* 3. The runs of grid columns where n exists and no curve crosses,
+ * appended to runs[] (each with its middle column and S, no state yet). */
+static int free_runs(const bkf_stability_spec *spec, const double *nus, size_t nnu,
+                     const double *g, const n_work *w, state_run **runs, size_t *nruns,
+                     bkf_error *err)
+{
+    int s = BKF_OK;
+    for (size_t i = 0; !s && i < spec->n; i++) {
         size_t n = i + 1;
         state_run cur = {0};
         int open = 0;
@@ -835,21 +885,18 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
             if (j < nnu && column_lo(spec, n, g[j]) < spec->S_to) {
                 double S[SEED_MAX];
                 int above[SEED_MAX];
-                size_t m = 0;
-                for (size_t c = 0; c < w[i].count && !m; c++)
-                    m = curve_crossings(&w[i].c[c], nus[j], S, above, SEED_MAX);
-                free_col = m == 0;
+                free_col = crossings_at(&w[i], nus[j], S, above) == 0;
             }
             if (open && (!free_col || curves_between(&w[i], nus[cur.last], nus[j]))) {
-                state_run *r = realloc(runs, (nruns + 1) * sizeof *r);
+                state_run *r = realloc(*runs, (*nruns + 1) * sizeof *r);
                 if (!r) {
                     s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
                     break;
                 }
-                runs = r;
+                *runs = r;
                 cur.mid = (cur.first + cur.last) / 2;
                 cur.S = 0.5 * (column_lo(spec, n, g[cur.mid]) + spec->S_to);
-                runs[nruns++] = cur;
+                (*runs)[(*nruns)++] = cur;
                 open = 0;
             }
             if (free_col && !open) {
@@ -860,87 +907,91 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
             }
         }
     }
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-    for (size_t r = 0; r < (s ? 0 : nruns); r++) {
-        bkf_model_params q = params;
-        q.nu = nus[runs[r].mid];
-        q.S = runs[r].S;
-        /* the run's middle and both ends: a boundary that crossed no seed
-         * column shows as ends that disagree, and the run gets no state */
-        const size_t at[3] = {runs[r].mid, runs[r].first, runs[r].last};
-        int verdict[3] = {-1, -1, -1};
-        for (int k = 0; k < 3 && !runs[r].status; k++) {
-            if (k && at[k] == runs[r].mid) {
-                verdict[k] = verdict[0];
-                continue;
-            }
-            double sg, sge, v, mu;
-            bkf_error e;
-            q.nu = nus[at[k]];
-            runs[r].status = bkf_stabmap_sigma(&q, runs[r].n, 0, o.tol, &sg, &sge, &v, &mu, &e);
-            runs[r].spectra++;
-            /* a refused or undecided sigma leaves the run without a state */
-            if (!runs[r].status && fabs(sg) > sge) verdict[k] = sg < 0;
+    return s;
+}
+
+/* A run's state: the spectra at its middle and both ends, at its S.  A
+ * boundary that crossed no seed column shows as ends that disagree (split),
+ * and the run gets no state; so does a refused or undecided sigma. */
+static void decide_run(const bkf_model_params *params, const double *nus, double tol,
+                       state_run *run)
+{
+    bkf_model_params q = *params;
+    q.nu = nus[run->mid];
+    q.S = run->S;
+    const size_t at[3] = {run->mid, run->first, run->last};
+    int verdict[3] = {-1, -1, -1};
+    for (int k = 0; k < 3 && !run->status; k++) {
+        if (k && at[k] == run->mid) {
+            verdict[k] = verdict[0];
+            continue;
         }
-        runs[r].split = verdict[0] >= 0 && verdict[1] >= 0 && verdict[2] >= 0 &&
-                        (verdict[1] != verdict[0] || verdict[2] != verdict[0]);
-        if (!runs[r].status && !runs[r].split && verdict[1] == verdict[0] &&
-            verdict[2] == verdict[0])
-            runs[r].stable = verdict[0];
+        double sg, sge, v, mu;
+        bkf_error e;
+        q.nu = nus[at[k]];
+        run->status = bkf_stabmap_sigma(&q, run->n, 0, tol, &sg, &sge, &v, &mu, &e);
+        run->spectra++;
+        if (!run->status && fabs(sg) > sge) verdict[k] = sg < 0;
     }
+    run->split = verdict[0] >= 0 && verdict[1] >= 0 && verdict[2] >= 0 &&
+                 (verdict[1] != verdict[0] || verdict[2] != verdict[0]);
+    if (!run->status && !run->split && verdict[1] == verdict[0] && verdict[2] == verdict[0])
+        run->stable = verdict[0];
+}
+
+/* The runs' spectra counted; a split run said in a note (its state is not
+ * guessed). */
+static int note_split_runs(const double *nus, const state_run *runs, size_t nruns,
+                           diagram_sink *k, size_t *spectra, bkf_error *err)
+{
+    int s = BKF_OK;
     for (size_t r = 0; !s && r < nruns; r++) {
         if (runs[r].status == BKF_ENOMEM) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
         *spectra += runs[r].spectra;
         if (!runs[r].split || k->failed) continue;
-        char *note = malloc(300);
-        char **notes = realloc(k->notes, (k->nnotes + 1) * sizeof *notes);
-        if (notes) k->notes = notes;
-        if (!note || !notes) {
-            free(note);
-            k->failed = 1;
-            continue;
-        }
-        snprintf(note, 300,
+        add_note(k,
                  "n %zu: between nu %.6g and %.6g (S %.6g) the spectra change sign with no "
                  "followed curve between: a stability boundary crossed no seed column and is not "
                  "followed; no state there",
                  runs[r].n, nus[runs[r].first], nus[runs[r].last], runs[r].S);
-        k->notes[k->nnotes++] = note;
     }
-    /* the rows: curves by n, then the states (curve 0) */
-    for (size_t i = 0; !s && i < nn; i++)
+    return s;
+}
+
+/* The rows of the followed curves, by n, each with a note on how its two
+ * ends came about. */
+static void emit_curves(const n_work *w, size_t nn, diagram_sink *k)
+{
+    for (size_t i = 0; i < nn; i++)
         for (size_t c = 0; c < w[i].count; c++) {
-            traced_curve *tc = &w[i].c[c];
+            const traced_curve *tc = &w[i].c[c];
             k->curves++;
             for (size_t j = 0; j < tc->pts.n; j++) {
                 const bkf_stabmap_point *q = &tc->pts.p[j];
                 add_row(k, "stability", w[i].n, 0, q->nu, q->S, q->S_err, q->nu_err,
                         q->stable_above);
             }
-            char *note = malloc(700);
-            char **notes = realloc(k->notes, (k->nnotes + 1) * sizeof *notes);
-            if (notes) k->notes = notes;
-            if (!note || !notes) {
-                free(note);
-                k->failed = 1;
-                break;
-            }
             const bkf_stabmap_point *a = &tc->pts.p[0], *b = &tc->pts.p[tc->pts.n - 1];
-            snprintf(note, 700,
-                     "curve %zu (n %zu): %zu points, %zu spectra; ends at nu %.6g, S %.6g: %s%s%.250s"
-                     "; at nu %.6g, S %.6g: %s%s%.250s",
-                     k->curves, w[i].n, tc->pts.n, tc->end[0].evaluations + tc->end[1].evaluations,
-                     a->nu, a->S, bkf_stabmap_end_name(tc->end[0].end),
-                     tc->end[0].note[0] ? ", " : "", tc->end[0].note, b->nu, b->S,
-                     bkf_stabmap_end_name(tc->end[1].end), tc->end[1].note[0] ? ", " : "",
-                     tc->end[1].note);
-            k->notes[k->nnotes++] = note;
+            if (add_note(k,
+                         "curve %zu (n %zu): %zu points, %zu spectra; ends at nu %.6g, S %.6g: "
+                         "%s%s%.250s; at nu %.6g, S %.6g: %s%s%.250s",
+                         k->curves, w[i].n, tc->pts.n,
+                         tc->end[0].evaluations + tc->end[1].evaluations, a->nu, a->S,
+                         bkf_stabmap_end_name(tc->end[0].end), tc->end[0].note[0] ? ", " : "",
+                         tc->end[0].note, b->nu, b->S, bkf_stabmap_end_name(tc->end[1].end),
+                         tc->end[1].note[0] ? ", " : "", tc->end[1].note))
+                break;
         }
-    /* A run's state against its neighbour column's crossings: where the
-     * side of that column's top (or bottom) interval differs from the run's
-     * state and no curve has a point between them, a boundary lies there
-     * that crossed no seed column; it is said, not guessed. */
-    for (size_t r = 0; !s && r < nruns; r++) {
+}
+
+/* A run's state against its neighbour column's crossings: where the side
+ * of that column's top (or bottom) interval differs from the run's state
+ * and no curve has a point between them, a boundary lies there that
+ * crossed no seed column; it is said, not guessed. */
+static void note_unfollowed_boundaries(const double *nus, size_t nnu, const state_run *runs,
+                                       size_t nruns, const n_work *w, diagram_sink *k)
+{
+    for (size_t r = 0; r < nruns; r++) {
         const state_run *q = &runs[r];
         const n_work *wn = &w[q->n - 1];
         for (int side = 0; q->stable >= 0 && side < 2 && !k->failed; side++) {
@@ -948,9 +999,7 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
             size_t j = side ? q->last + 1 : q->first - 1, edge = side ? q->last : q->first;
             double S[SEED_MAX];
             int above[SEED_MAX];
-            size_t m = 0;
-            for (size_t c = 0; c < wn->count && !m; c++)
-                m = curve_crossings(&wn->c[c], nus[j], S, above, SEED_MAX);
+            size_t m = crossings_at(wn, nus[j], S, above);
             if (!m || curves_between(wn, nus[edge], nus[j])) continue;
             size_t top = 0, bottom = 0;
             for (size_t i = 1; i < m; i++) {
@@ -959,29 +1008,62 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
             }
             /* above a crossing its `above` side, below it the other */
             if (above[top] == q->stable && (!above[bottom]) == q->stable) continue;
-            char *note = malloc(300);
-            char **notes = realloc(k->notes, (k->nnotes + 1) * sizeof *notes);
-            if (notes) k->notes = notes;
-            if (!note || !notes) {
-                free(note);
-                k->failed = 1;
+            if (add_note(k,
+                         "n %zu: between nu %.6g and %.6g a stability boundary crossed no seed "
+                         "column and is not followed (the spectrum at nu %.6g, S %.6g is %s; the "
+                         "curves at nu %.6g say otherwise there)",
+                         q->n, nus[edge], nus[j], nus[q->mid], q->S,
+                         q->stable ? "stable" : "unstable", nus[j]))
                 break;
-            }
-            snprintf(note, 300,
-                     "n %zu: between nu %.6g and %.6g a stability boundary crossed no seed "
-                     "column and is not followed (the spectrum at nu %.6g, S %.6g is %s; the "
-                     "curves at nu %.6g say otherwise there)",
-                     q->n, nus[edge], nus[j], nus[q->mid], q->S,
-                     q->stable ? "stable" : "unstable", nus[j]);
-            k->notes[k->nnotes++] = note;
         }
     }
-    for (size_t r = 0; !s && r < nruns; r++) {
+}
+
+/* The decided runs' states, as rows of curve 0. */
+static void emit_states(const double *nus, const state_run *runs, size_t nruns, diagram_sink *k)
+{
+    for (size_t r = 0; r < nruns; r++) {
         if (runs[r].stable < 0) continue;
         size_t curves = k->curves;
         k->curves = 0;
         add_row(k, "state", runs[r].n, 0, nus[runs[r].mid], runs[r].S, 0, 0, runs[r].stable);
         k->curves = curves;
+    }
+}
+
+/* The stability boundaries followed from seeds: a coarse grid of seed
+ * columns scanned in S, a curve continued through every crossing no curve
+ * passes yet, and the columns between curves given a state of their own. */
+static int follow_stability(const bkf_stability_spec *spec, const double *nus, size_t nnu,
+                            const double *g, diagram_sink *k, size_t *spectra, bkf_error *err)
+{
+    size_t N = spec->n;
+    size_t ncol = seed_column_count(spec, nus, nnu);
+    size_t *col = malloc(ncol * sizeof *col);
+    seed_task *seeds = calloc(N * ncol, sizeof *seeds);
+    n_work *w = calloc(N, sizeof *w);
+    state_run *runs = NULL;
+    size_t nruns = 0;
+    int s = col && seeds && w ? BKF_OK : bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    int threads = bkf_product_threads(spec->threads);
+    for (size_t c = 0; !s && c < ncol; c++)
+        col[c] = ncol == 1 ? 0 : (size_t)llround((double)c * (double)(nnu - 1) / (double)(ncol - 1));
+    if (!s) s = scan_seeds(spec, nus, g, col, ncol, seeds, threads, spectra, err);
+    if (!s) s = follow_seeds(spec, nus, nnu, seeds, ncol, w, threads, spectra, err);
+    if (!s) s = free_runs(spec, nus, nnu, g, w, &runs, &nruns, err);
+    if (!s) {
+        bkf_model_params params = params_of(spec);
+        double tol = stabmap_options_of(spec).tol;
+        (void)threads;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+        for (size_t r = 0; r < nruns; r++) decide_run(&params, nus, tol, &runs[r]);
+        s = note_split_runs(nus, runs, nruns, k, spectra, err);
+    }
+    if (!s) {
+        /* the rows: curves by n, then the states (curve 0) */
+        emit_curves(w, N, k);
+        note_unfollowed_boundaries(nus, nnu, runs, nruns, w, k);
+        emit_states(nus, runs, nruns, k);
     }
     for (size_t i = 0; w && i < N; i++) {
         for (size_t c = 0; c < w[i].count; c++) free(w[i].c[c].pts.p);
@@ -1017,10 +1099,7 @@ static int diagram_curves(const bkf_stability_spec *spec, const double *nus, siz
         s = spec->scan ? scan_stability(spec, nus, nnu, g, k, spectra, err)
                        : follow_stability(spec, nus, nnu, g, k, spectra, err);
     /* the oscillation: its unstable bands per nu, then one curve per edge */
-    int threads = 1;
-#ifdef _OPENMP
-    threads = spec->threads ? (int)spec->threads : omp_get_max_threads();
-#endif
+    int threads = bkf_product_threads(spec->threads);
     (void)threads;
     int *bs = s ? NULL : calloc(nnu, sizeof *bs);
     bkf_error *be = s ? NULL : calloc(nnu, sizeof *be);

@@ -13,15 +13,14 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include "bkfront/fronts.h"
 #include "bkfront/io.h"
 #include "bkfront/measure.h"
 #include "bkfront/oscillation.h"
 #include "bkfront/version.h"
+
+#include "product_internal.h"
 
 /* Seeds pass through a list of doubles: exact up to 2^53. */
 #define SEED_MAX 9007199254740992.0
@@ -612,9 +611,24 @@ char *bkf_sweep_header(const bkf_sweep_spec *sp, bkf_error *err)
     return t.s;
 }
 
-/* The row's text, or NULL and err (out of memory). */
-static char *row_done(text *t, bkf_error *err)
+/* A row's start, its key, for a point whose product ended with status s
+ * (e its error); 1 and err when s is no numerical failure: such a failure
+ * stops the sweep, where a numerical one is a row with that status. */
+static int row_begin(text *t, size_t i, const bkf_simulate_spec *sim, int s, const bkf_error *e,
+                     bkf_error *err)
 {
+    if (s && !bkf_status_is_numerical(s)) {
+        bkf_error_set(err, s, "point %zu: %s", i, e->message);
+        return 1;
+    }
+    add_key(t, i, sim);
+    return 0;
+}
+
+/* The row's text ended by its status s, or NULL and err (out of memory). */
+static char *row_done(text *t, int s, bkf_error *err)
+{
+    addf(t, "\t%s\n", s ? bkf_status_name(s) : "ok");
     if (t->failed) {
         free(t->s);
         bkf_error_set(err, BKF_ENOMEM, "out of memory");
@@ -649,12 +663,8 @@ static char *speeds_row(const bkf_simulate_spec *sim, size_t i, bkf_error *err)
     int *stable = NULL;
     bkf_error e;
     int s = bkf_fronts_find(&f, &tab, &stable, &e);
-    if (s && !bkf_status_is_numerical(s)) {
-        bkf_error_set(err, s, "point %zu: %s", i, e.message);
-        return NULL;
-    }
     text t = {0};
-    add_key(&t, i, sim);
+    if (row_begin(&t, i, sim, s, &e, err)) return NULL;
     if (s) {
         addf(&t, "\tnan\tnan\t-\tnan\t-\t-");
     } else {
@@ -673,8 +683,7 @@ static char *speeds_row(const bkf_simulate_spec *sim, size_t i, bkf_error *err)
         bkf_speeds_table_free(&tab);
         free(stable);
     }
-    addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
-    return row_done(&t, err);
+    return row_done(&t, s, err);
 }
 
 /* The lowest boundary of each kind over the diagram. */
@@ -704,12 +713,8 @@ static char *threshold_row(const bkf_simulate_spec *sim, size_t i, bkf_error *er
     if (!s) s = bkf_floquet_diagram(o.gamma, o.c, o.search_lo, o.search_hi, &fo, lowest_of_kind,
                                     &low, &e);
     bkf_oscillation_spec_free(&o);
-    if (s && !bkf_status_is_numerical(s)) {
-        bkf_error_set(err, s, "point %zu: %s", i, e.message);
-        return NULL;
-    }
     text t = {0};
-    add_key(&t, i, sim);
+    if (row_begin(&t, i, sim, s, &e, err)) return NULL;
     if (s) {
         addf(&t, "\tnan\tnan\tnone\tnan\tnan\tnan\tnan");
     } else {
@@ -721,8 +726,7 @@ static char *threshold_row(const bkf_simulate_spec *sim, size_t i, bkf_error *er
         add_number(&t, low.pd);
         add_number(&t, low.lw);
     }
-    addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
-    return row_done(&t, err);
+    return row_done(&t, s, err);
 }
 
 static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error *err)
@@ -759,12 +763,8 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
         }
     }
     free(field);
-    if (s && !bkf_status_is_numerical(s)) {
-        bkf_error_set(err, s, "point %zu: %s", i, e.message);
-        return NULL;
-    }
     text t = {0};
-    add_key(&t, i, &sim);
+    if (row_begin(&t, i, &sim, s, &e, err)) return NULL;
     if (s) {
         addf(&t, "\t%zu\tnone", sim.model.N);
         for (size_t k = NKEYCOLS + 2; k < NCOLS - 1; k++) addf(&t, "\tnan");
@@ -788,8 +788,7 @@ static char *row_of(const bkf_sweep_spec *sp, const plan *p, size_t i, bkf_error
         addf(&t, "\t%zu", o.steps);
         if (sp->tmax_budget > 0) addf(&t, "\t%s", settled);
     }
-    addf(&t, "\t%s\n", s ? bkf_status_name(s) : "ok");
-    return row_done(&t, err);
+    return row_done(&t, s, err);
 }
 
 char *bkf_sweep_row(const bkf_sweep_spec *sp, size_t index, bkf_error *err)
@@ -824,10 +823,7 @@ int bkf_sweep_run(const bkf_sweep_spec *sp, const unsigned char *done, bkf_sweep
     /* Dynamic: run times vary by orders of magnitude near thresholds; a
      * point is handed out when a thread is free, and its row depends on
      * the point alone. */
-    int nthreads = 1;
-#ifdef _OPENMP
-    nthreads = sp->threads ? (int)sp->threads : omp_get_max_threads();
-#endif
+    int nthreads = bkf_product_threads(sp->threads);
     (void)nthreads;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads)
     for (size_t k = 0; k < ntodo; k++) {
@@ -1315,12 +1311,7 @@ int bkf_sweep_table_json(const char *path, bkf_error *err)
         if (!s) s = bkf_io_table_row(out, v, err);
         free(block);
     }
-    if (!s) s = bkf_io_table_finish(out, err);
-    bkf_io_table_free(out);
-    if (f) {
-        if (s) bkf_io_atomic_abort(f);
-        else s = bkf_io_atomic_commit(f, err);
-    }
+    s = bkf_product_table_file_close(out, f, s, err);
     free(name_block);
     free(cols);
     free(fields);

@@ -4,6 +4,7 @@
 #include "bkfront/plot.h"
 
 #include "bkfront/io.h"
+#include "bkfront/options.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -22,6 +23,31 @@ static const char *const format_names[BKF_PLOT_NFORMATS] = {"png", "pdf", "svg"}
 const char *bkf_plot_format_name(bkf_plot_format format)
 {
     return (unsigned)format < BKF_PLOT_NFORMATS ? format_names[format] : NULL;
+}
+
+int bkf_plot_parse_formats(const char *text, const char *prefix, const char *name,
+                           unsigned *formats, bkf_error *err)
+{
+    static const char *const choices[] = {"png", "pdf", "svg", NULL};
+    if (!prefix) prefix = "";
+    if (!name) name = "formats";
+    unsigned bits = 0;
+    for (const char *p = text ? text : ""; *p;) {
+        size_t len = strcspn(p, ", ");
+        if (len) {
+            char *word = strndup(p, len);
+            if (!word) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            int i, s = bkf_option_parse_choice(word, choices, prefix, name, &i, err);
+            free(word);
+            if (s) return s;
+            bits |= 1u << i;
+        }
+        p += len;
+        if (*p) p++;
+    }
+    if (!bits) return bkf_error_set(err, BKF_EINPUT, "%s%s: give png, pdf or svg", prefix, name);
+    if (formats) *formats = bits;
+    return BKF_OK;
 }
 
 struct bkf_plot_job {

@@ -101,20 +101,8 @@ static int check_value(const key_spec *spec, const char *v, bkf_error *err)
     }
     case V_PIXELS:
         return bkf_option_parse_count(v, 1, BKF_PLOT_PIXELS_MAX, "", k, &n, err);
-    case V_FORMATS: {
-        char buf[BKF_SCENE_VALUE_LEN];
-        snprintf(buf, sizeof buf, "%s", v);
-        char *save = NULL;
-        int any = 0;
-        for (char *t = strtok_r(buf, ", ", &save); t; t = strtok_r(NULL, ", ", &save)) {
-            static const char *const f[] = {"png", "pdf", "svg", NULL};
-            int i;
-            if ((s = bkf_option_parse_choice(t, f, "", k, &i, err))) return s;
-            any = 1;
-        }
-        if (!any) return bkf_error_set(err, BKF_EINPUT, "formats: give png, pdf or svg");
-        return BKF_OK;
-    }
+    case V_FORMATS:
+        return bkf_plot_parse_formats(v, "", k, NULL, err);
     case V_TEXT:
         if (!*v) return bkf_error_set(err, BKF_EINPUT, "%s: the value is empty", k);
         for (const unsigned char *p = (const unsigned char *)v; *p; p++)

@@ -209,6 +209,26 @@ static void *run_worker_loop(void *arg)
     return NULL;
 }
 
+/* Which failure a run reports when several steps fail. */
+static int severity(int status)
+{
+    switch (status) {
+    case BKF_OK: return 0;
+    case BKF_ENOMEM: return 4;
+    case BKF_ECANCELED: return 3;
+    case BKF_EINPUT: return 2;
+    default: return 1;
+    }
+}
+
+int bkf_scene_run_status(const int *status, size_t n)
+{
+    int worst = BKF_OK;
+    for (size_t i = 0; status && i < n; i++)
+        if (severity(status[i]) > severity(worst)) worst = status[i];
+    return worst;
+}
+
 int bkf_scene_run(const bkf_scene *s, const bkf_scene_plan *plan,
                   const bkf_scene_run_options *options, int *status, bkf_error *err)
 {

@@ -381,12 +381,8 @@ static int plan_figure(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
     }
     unsigned formats = 0;
     const char *v = scene_own_value(p, "formats");
-    if (v) {
-        formats |= strstr(v, "png") ? 1u : 0u;
-        formats |= strstr(v, "pdf") ? 2u : 0u;
-        formats |= strstr(v, "svg") ? 4u : 0u;
-    } else
-        formats = o->formats ? o->formats : 1u;
+    if (!v || bkf_plot_parse_formats(v, "", "formats", &formats, NULL) != BKF_OK)
+        formats = o->formats ? o->formats : 1u; /* a value is checked when parsed */
     arg_list b = {0};
     int ok = 1;
     char *first = NULL;
@@ -429,12 +425,33 @@ static int plan_product(bkf_scene_plan *plan, const bkf_scene *s, size_t index,
     return st;
 }
 
+/* A figure's `script =` runs a file the scene names, and gnuplot's system()
+ * and shell escapes run anything: only in a trusted scene's plan. */
+static int untrusted_script(const bkf_scene *s, bkf_error *err)
+{
+    for (size_t i = 0; i < s->nproducts; i++) {
+        const bkf_scene_product *p = &s->products[i];
+        if (p->kind != BKF_SCENE_FIGURE) continue;
+        for (size_t k = 0; k < p->nentries; k++)
+            if (strcmp(p->entries[k].key, "script") == 0)
+                return bkf_error_set(err, BKF_EINPUT,
+                                     "%s:%d: script = %s: a scene's own gnuplot script can run "
+                                     "shell commands; give --trust-scene to run it",
+                                     s->path, p->entries[k].line, p->entries[k].value);
+    }
+    return BKF_OK;
+}
+
 int bkf_scene_make_plan(const bkf_scene *s, const bkf_scene_plan_options *o,
                         bkf_scene_plan *plan, bkf_error *err)
 {
     *plan = (bkf_scene_plan){0};
     if (!o || !o->outdir || !*o->outdir)
         return bkf_error_set(err, BKF_EINPUT, "plan: no output folder");
+    if (o->figures && !o->trust) {
+        int st = untrusted_script(s, err);
+        if (st) return st;
+    }
     if (strpbrk(o->outdir, " \t\n'\""))
         return bkf_error_set(err, BKF_EINPUT,
                              "--out: '%s' holds a space or a quote, which the figure scripts "
