@@ -330,7 +330,9 @@ typedef struct {
     double decide_tmax;
     int reason;             /* a bkf_status: BKF_OK for a run to the end; unstable:
                                BKF_EBLOWUP when the run blew up; unresolved: BKF_ETOL (not
-                               resolved within N_max), BKF_EBUDGET (the adapted grid's step
+                               resolved within N_max, or the root's speed refused by
+                               bkf_speeds_find: v_pred NaN, not run, a warning says
+                               why), BKF_EBUDGET (the adapted grid's step
                                budget ran out), or the status of the adapted grid's failed
                                set-up (BKF_EINPUT, BKF_ENUMERIC; a warning says which) */
 } bkf_check_row;

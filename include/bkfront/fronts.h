@@ -40,6 +40,12 @@ typedef struct {
                                rotating waves (module chainwave) */
     size_t N;               /* chain only: blocks, [2, 400]; 0 (default): S, which must
                                then be a whole number */
+    /* Refused roots (bkf_speeds_root.status, flag refused) are rows with NaN
+     * numbers and a comment each; when the table has any, it is written and
+     * one line is reported here once: "K of M roots refused, the first
+     * n = N: WHY".  NULL: not reported.  Not a key. */
+    void (*warn)(const char *message, void *data);
+    void *warn_data;
 } bkf_fronts_spec;
 
 bkf_fronts_spec bkf_fronts_spec_default(void);
@@ -64,10 +70,14 @@ const bkf_io_column *bkf_fronts_columns(size_t *count);
 void bkf_fronts_root_values(const bkf_speeds_root *root, bkf_io_value *values);
 
 /* Every root (bkf_speeds_find) as a table to `out`; with stability, five
- * more columns from each root's ring spectrum: stable (yes, no, unresolved),
- * sigma_max, sigma_max_err, kappa_max, kind (real, complex).  A root whose
- * spectrum fails (BKF_ETOL, BKF_EBUDGET) is unresolved with NaN numbers and
- * a comment saying why; the table is still written.  Comments: the
+ * more columns from each root's ring spectrum: stable (yes, no, unresolved,
+ * refused), sigma_max, sigma_max_err, kappa_max, kind (real, complex).  A
+ * root whose spectrum fails (BKF_ETOL, BKF_EBUDGET) is unresolved with NaN
+ * numbers and a comment saying why; the table is still written.  A refused
+ * root (flags refused) is a row with NaN numbers but n, wavelength and
+ * v_asym, model empty, stable refused (no spectrum without a root), a
+ * comment "refused: n = N, root I: WHY", and spec->warn is told; the count
+ * is the result "refused".  Comments: the
  * parameters, the range of n (n_max, n_bound = S/(k c gamma), k(nu), the
  * infimum of T/sqrt(mu^2 - gamma^2)), the work, the note; in JSON the same
  * key results are the fields of "results": n_max and n_bound (null when
@@ -80,7 +90,8 @@ int bkf_fronts_write(const bkf_fronts_spec *spec, FILE *out, bkf_io_format forma
  * only): every root into *table (free it with bkf_speeds_table_free) and,
  * with spec->stability, its verdict into (*stable)[i] (malloc'ed, NULL
  * without stability): 1 yes, 0 no, -1 unresolved (the table's stable
- * column, a spectrum refused with BKF_ETOL or BKF_EBUDGET included). */
+ * column, a spectrum refused with BKF_ETOL or BKF_EBUDGET and a refused
+ * root included). */
 int bkf_fronts_find(const bkf_fronts_spec *spec, bkf_speeds_table *table, int **stable,
                     bkf_error *err);
 

@@ -83,6 +83,14 @@ int bkf_hill_leading_pair(bkf_cycle *cycle, double gamma, double theta, size_t m
                           double tol, size_t k, bkf_hill_eigenvalue *out, double *out_err, size_t *found,
                           size_t *unresolved, bkf_error *err);
 
+/* The matching behind bkf_hill_leading_pair, on two spectra already solved
+ * (as bkf_hill_spectrum sorts them: coarse at fewer modes, fine at more),
+ * so that a caller that grows M reuses the finer truncation as the next
+ * coarse one: out, out_err, *found and *unresolved as there. */
+int bkf_hill_converged(const bkf_hill_eigenvalue *coarse, size_t n_coarse, const bkf_hill_eigenvalue *fine,
+                       size_t n_fine, double tol, size_t k, bkf_hill_eigenvalue *out, double *out_err,
+                       size_t *found, size_t *unresolved, bkf_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -66,10 +66,17 @@
  * wavenumbers (its spectral tail, as bkf_pde_spectral_tail, above
  * grid_tail) is classified a grid mode: if the verdict would rest on one it
  * is undecided.  Each multiplier's error: twice the residual |A v - m v|/|v| of its
- * Ritz pair with A's flow integrated ten times more accurately (Arnoldi's
- * and the flow's error at once), plus the orbit's own error estimate
+ * Ritz pair (ARPACK's estimate from the Arnoldi relation), plus the flow's
+ * share, twice |A x - A' x|/|x| with A' the monodromy with its flow ten times
+ * more accurate and x the largest multiplier's sector's Ritz vectors summed
+ * (measured once a call), plus the orbit's own error estimate
  * result.err (a first-order guess: a change e of the orbit moves the
- * monodromy by O(e)).
+ * monodromy by O(e)), plus the grid's share: the change of the largest
+ * physical |m| when its sector is computed again about the orbit on the
+ * second grid N2 (the orbit's error bounds the monodromy's change only to
+ * first order, and the grid moved the multipliers ten times more than it
+ * moved the orbit: 0.41990 +- 5e-4 at N 64 against 0.42487 at N 128 on the
+ * stable pacemaker).
  *
  * The library never prints and never exits. */
 #ifndef BKFRONT_ORBIT_H
@@ -222,12 +229,26 @@ const char *bkf_orbit_verdict_name(bkf_orbit_verdict verdict);
 typedef struct {
     size_t k;                 /* physical multipliers asked per sector, >= 1; default 10 */
     int sector;               /* -1 (default): every sector; else the one j */
-    double arnoldi_tol;       /* ARPACK's relative tolerance; default 1e-10 */
+    double arnoldi_tol;       /* ARPACK's relative tolerance; 0 (default): the orbit's
+                                 tol / 100 in [1e-12, 1e-6] (the multipliers' error
+                                 carries the orbit's own, so a tighter Arnoldi only
+                                 costs restarts: 1e-10 at tol 1e-3 was 83 tangent
+                                 flows a branch point where 1e-5 takes 67) */
     int max_restarts;         /* ARPACK's maxiter; default 300 */
     double grid_tail;         /* tail above which an eigenvector is a grid mode; default
                                  0.1: grid modes' content sits at the cutoff (tails 0.3-0.7
                                  at N 64 on the pacemaker), a physical eigenvector's
                                  tail is near its orbit's own (1e-2 at N 128 there) */
+    double flow_tol;          /* the tangent flow's tolerance; 0 (default): the orbit's
+                                 tol in [1e-13, 1e-6], the accuracy the orbit was asked
+                                 for rather than its own flow's tol / 100 (the flow's
+                                 share of the errors is measured with this flow ten
+                                 times tighter, so the looser flow shows in them) */
+    const struct bkf_orbit *warm_start; /* NULL (default), or an orbit of the same grid
+                                 and cells whose last multipliers start Arnoldi here
+                                 (their eigenvectors, sector by sector): the previous
+                                 point of a branch.  Only the work changes, not what
+                                 converges: ARPACK's test is the same */
 } bkf_orbit_mult_options;
 
 bkf_orbit_mult_options bkf_orbit_mult_options_default(void);
@@ -244,6 +265,11 @@ typedef struct {
                                  free shift on the continuum, 0 for a uniform state's space) */
     size_t trivial_expected;
     double trivial_dev;       /* max |m - 1| over the trivial ones found */
+    double flow_dev;          /* the flow's share of every err (see above) */
+    double grid_dev;          /* the largest physical |m|'s change on the orbit's second
+                                 grid (N2, its sector only), added to every multiplier's
+                                 err; 0 for the chain, NaN when the orbit skipped its
+                                 grid check */
     char reason[160];         /* why undecided, else empty */
     size_t matvecs;           /* tangent flows over a period */
 } bkf_orbit_spectrum;

@@ -63,6 +63,9 @@ bkf_speeds_options bkf_speeds_options_default(void);
 #define BKF_SPEEDS_ASYMPTOTIC 2u   /* mu beyond 1e5 (or 2 gamma), where the grid ends:
                                       T from the large-mu expansion, T_err from its
                                       next order fitted at the grid's end */
+#define BKF_SPEEDS_REFUSED 4u      /* the root is bracketed (it exists) but v cannot be
+                                      had to tol there: status and refusal say why,
+                                      its numbers are NaN (see bkf_speeds_root) */
 
 typedef struct {
     size_t n;
@@ -81,8 +84,28 @@ typedef struct {
                                negative where v_n decreases with n, zero at a fold */
     unsigned flags;
     const char *model;      /* what gave T: "shooting", "asymptotic" (corrected
-                               large-mu or small-mu formula) or "leading" (k mu) */
+                               large-mu or small-mu formula) or "leading" (k mu);
+                               NULL for a refused root */
+    /* A refused root (flag BKF_SPEEDS_REFUSED): a root is bracketed in the
+     * search but cannot be polished to tol (the period is not computable that
+     * tightly there, or the formula asked for does not meet what the root
+     * needs).  It keeps its place in the order (by the looser root, when one
+     * was had) so that root numbers do not shift; n, wavelength and v_asym are
+     * set, every other number is NaN: a position that is not a result is not
+     * given as one (refusal names where it lies). */
+    int status;             /* BKF_OK, or BKF_ETOL: refused (the root is had at a looser
+                               tol, or the formula asked for does not meet this one) */
+    double tol_met;         /* refused: the looser tolerance on v it was polished to
+                               (10 or 100 times tol, at most 0.1; also 1e3 or 1e4 times
+                               while at most 1e-6); NaN when none was tried (a formula
+                               asked for) */
+    char refusal[BKF_ERROR_LEN]; /* refused: one line, where and why; else empty */
 } bkf_speeds_root;
+
+/* BKF_OK for a root that is a result; for a refused one its status, with err
+ * "n = N: " and its refusal.  Every caller that takes one root of a table as
+ * its input asks this first. */
+int bkf_speeds_root_status(const bkf_speeds_root *root, bkf_error *err);
 
 #define BKF_SPEEDS_NOTE_LEN 512
 
@@ -97,6 +120,7 @@ typedef struct {
                                 (c > 0; NaN when c = 0) */
     int dips_below_k;        /* g dips below k: n_max may exceed n_bound */
     int truncated;           /* n_to = 0 and n_max beyond n_from + BKF_SPEEDS_MAX_ROWS - 1 */
+    size_t refused;          /* rows refused (flag BKF_SPEEDS_REFUSED); the first in note */
     size_t unresolved;       /* places left unresolved, where a root or a pair
                                 could be missing: a pair not excluded at the
                                 finest cell, or T not computable (inside a
@@ -118,13 +142,21 @@ int bkf_speeds_check(const bkf_model_params *params, const bkf_speeds_options *o
 
 /* Every root for n in the options' range.  *table is overwritten (free it
  * with bkf_speeds_table_free, also after a failure).  BKF_OK with count = 0
- * and a note when no n in the range has a root.  BKF_EBUDGET when the
- * bracketing grid or the polishing of a root needs more samples of T than
- * the search allows, BKF_ETOL when a formula asked for does not meet the
- * tolerance a root needs. */
+ * and a note when no n in the range has a root.  A root that is bracketed
+ * but cannot be had to tol (its period not computable that tightly, its
+ * polishing out of solves, or a formula asked for whose bound does not meet
+ * what the root needs) is a refused row (status, refusal), counted in
+ * refused; the other rows stand and the call returns BKF_OK.  BKF_EBUDGET
+ * when the bracketing grid needs more samples of T than the search allows. */
 int bkf_speeds_find(const bkf_model_params *params, const bkf_speeds_options *options,
                     bkf_speeds_table *table, bkf_error *err);
 void bkf_speeds_table_free(bkf_speeds_table *table);
+
+/* The index of the root of `table` whose v is nearest `v` (v <= 0 or NaN:
+ * the first root) into *index.  BKF_ENUMERIC when the table has no root;
+ * when one of its roots is refused, which is nearest cannot be told: that
+ * root's refusal (bkf_speeds_root_status). */
+int bkf_speeds_nearest(const bkf_speeds_table *table, double v, size_t *index, bkf_error *err);
 
 /* ------------------------------------------------------------ branches */
 

@@ -130,7 +130,8 @@ void bkf_trainspec_result_free(bkf_trainspec_result *result);
  * takes (`bkfront stability`, `speeds --stability`, `branch --stability`,
  * `check`, the stability map): bkf_trainspec_ring on the train
  * n = root->n, v = root->v at tol and per_kappa, the other options their
- * defaults.  Its sigma_max does not depend on per_kappa. */
+ * defaults.  Its sigma_max does not depend on per_kappa.  A refused root
+ * (bkf_speeds_root.status) has no spectrum: its refusal, result empty. */
 int bkf_trainspec_root(const bkf_model_params *params, const bkf_speeds_root *root, double tol,
                        size_t per_kappa, bkf_trainspec_result *result, bkf_error *err);
 

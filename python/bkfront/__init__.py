@@ -395,7 +395,10 @@ def product(name, **keys):
 def speeds(gamma, c, nu, S, **keys):
     """Every allowed front speed (``bkfront speeds``): columns n, v, mu, T,
     T_err, ..., v_err, model, residual, slope, flags; ``stability=True`` adds
-    each root's ring-spectrum verdict."""
+    each root's ring-spectrum verdict.  A root that cannot be had to ``tol``
+    stays a row with "refused" in its flags and NaN numbers (``results``
+    counts them as "refused", the comments say why), and a RuntimeWarning
+    says so: the CLI's exit status 3."""
     return product("speeds", gamma=gamma, c=c, nu=nu, S=S, **keys)
 
 

@@ -151,10 +151,15 @@ const volatile sig_atomic_t *cli_cancel_begin(void);
 void cli_cancel_end(void);
 int cli_cancel_signal(void);
 
-/* The exit code for a status: 0 ok, 2 bad input, 128 + the signal for a run
- * canceled by one (130 for SIGINT, as a shell reports Ctrl-C; 130 also when
- * no signal is known), 1 for every other failure (numerical, a refused
- * tolerance, a spent budget, a blow-up, memory, I/O). */
+/* Not a library status: the table is written whole, but some of its rows
+ * are refused (each says why); exit 3, so that a script tells a partial
+ * table from a whole one (0) and from no table (1). */
+#define CLI_PARTIAL 1000
+
+/* The exit code for a status: 0 ok, 2 bad input, 3 CLI_PARTIAL, 128 + the
+ * signal for a run canceled by one (130 for SIGINT, as a shell reports
+ * Ctrl-C; 130 also when no signal is known), 1 for every other failure
+ * (numerical, a refused tolerance, a spent budget, a blow-up, memory, I/O). */
 int cli_exit_code(int status);
 
 /* An in-memory stream to build the whole output in.  Unlike glibc's

@@ -29,12 +29,13 @@
     "                 s = ln sqrt(mu^2 - gamma^2): < 0 on the usual branch, > 0 on\n"  \
     "                 the middle one between two folds, 0 at a fold (0 for c = 0)\n"  \
     "  flags          near-tangent (another root of this n is close: a fold is\n"    \
-    "                 near, v_err is large), asymptotic (mu > 1e6: T from the\n"       \
-    "                 large-mu expansion)\n"
+    "                 near, v_err is large), asymptotic (mu > 1e5: T from the\n"       \
+    "                 large-mu expansion), refused (not had to --tol: numbers nan)\n"
 
 #define STABILITY_HELP                                                                 \
     "  stable         yes, no, or unresolved (sigma_max within its error of 0,\n"   \
-    "                 or the spectrum failed: a comment says why, numbers nan)\n"   \
+    "                 or the spectrum failed: a comment says why, numbers nan);\n"  \
+    "                 refused for a refused root (no spectrum without a root)\n"   \
     "  sigma_max      the rightmost Re sigma but the translation's 0; nan when the\n" \
     "                 window held nothing else (a comment: every eigenvalue left\n"  \
     "                 of its edge)\n"                                                \
@@ -86,9 +87,13 @@ static void speeds_help(FILE *out)
         "  trivial_err    |m - 1| of the trivial multiplier: the accuracy gauge\n"
         "\n"
         "No front at all (S too small) is an empty table with the reason in a\n"
-        "comment, exit status 0. Output is all or nothing: on any failure nothing is\n"
-        "written.\n"
-        "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
+        "comment, exit status 0. A root that is bracketed but cannot be had to --tol\n"
+        "is a row with flag refused: its numbers nan but n, wavelength and v_asym,\n"
+        "model empty, stable refused, a comment 'refused: n = N, root I: WHY'; the\n"
+        "other rows stand, the table is written and the exit status is 3 (a line on\n"
+        "stderr counts the refused rows and gives the first one's reason). Output is\n"
+        "all or nothing: on any failure nothing is written.\n"
+        "exit status: 0 ok, 1 numerical failure, 2 bad input, 3 some rows refused\n");
 }
 
 static void branch_help(FILE *out)
@@ -132,9 +137,25 @@ static void branch_help(FILE *out)
         "exit status: 0 ok, 1 numerical failure, 2 bad input\n");
 }
 
+/* The line the table reports when it has refused rows. */
+static void keep_refusal(const char *message, void *data)
+{
+    bkf_error *partial = data;
+    snprintf(partial->message, sizeof partial->message, "%s", message);
+    partial->status = CLI_PARTIAL;
+}
+
 static int speeds_run(int argc, char **argv, bkf_error *err)
 {
-    return cli_run_product("speeds", argc, argv, err);
+    bkf_error partial = {0};
+    const bkf_catalog_hooks hooks = {.warn = keep_refusal, .data = &partial};
+    int s = cli_run_product_hooks("speeds", &hooks, argc, argv, err);
+    /* written whole, some rows refused: said, and told by the exit status */
+    if (!s && partial.status) {
+        *err = partial;
+        return CLI_PARTIAL;
+    }
+    return s;
 }
 
 static int branch_run(int argc, char **argv, bkf_error *err)

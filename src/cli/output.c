@@ -116,6 +116,7 @@ int cli_exit_code(int status)
     switch (status) {
     case BKF_OK: return 0;
     case BKF_EINPUT: return 2;
+    case CLI_PARTIAL: return 3;
     case BKF_ECANCELED: return 128 + (cli_cancel_signal() ? cli_cancel_signal() : SIGINT);
     default: return 1;
     }

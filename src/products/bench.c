@@ -295,18 +295,20 @@ static int bench_speeds(bench_ctx *b, bkf_error *err)
     bkf_speeds_table ref = {0};
     o.tol = 1e-13;
     int s = bkf_speeds_find(&p, &o, &ref, err);
-    /* a reference with a root left unresolved (T refused at 1e-13) is no reference */
-    if (s || ref.unresolved) {
+    /* a reference with a root refused or left unresolved (T refused at
+     * 1e-13) is no reference */
+    if (s || ref.unresolved || ref.refused) {
         bkf_speeds_table_free(&ref);
         o.tol = 1e-12;
         if ((s = bkf_speeds_find(&p, &o, &ref, err))) {
             bkf_speeds_table_free(&ref);
             return s;
         }
-        if (ref.unresolved) {
+        if (ref.unresolved || ref.refused) {
+            size_t bad = ref.unresolved + ref.refused;
             bkf_speeds_table_free(&ref);
             return bkf_error_set(err, BKF_ETOL, "bench: the reference speeds table at tol 1e-12 left %zu "
-                                 "place(s) unresolved", ref.unresolved);
+                                 "root(s) refused or place(s) unresolved", bad);
         }
     }
     const double tols_full[] = {1e-4, 1e-6, 1e-8, 1e-10, 1e-12};
@@ -327,7 +329,7 @@ static int bench_speeds(bench_ctx *b, bkf_error *err)
             reps++;
             dt = cpu_now() - t0;
         } while (rc == BKF_OK && dt < 0.1 && reps < 50);
-        if (rc != BKF_OK || t.count != ref.count) {
+        if (rc != BKF_OK || t.count != ref.count || t.refused) {
             s = emit(b, "speeds", "paper", "speeds", tols[q], NAN, NAN, NAN, NAN, NAN, "refused",
                      err);
         } else {

@@ -76,6 +76,21 @@ static int required_given(const bkf_option *table, size_t n, const void *spec,
         return WRITE((const T *)spec, out, format, prov, err);                           \
     }
 
+/* A writer whose spec reports its refused rows through a warn callback
+ * (fields warn, warn_data): to the hooks' warning. */
+#define WARN_WRITER(name, T, WRITE)                                                      \
+    static int name##_write(const void *spec, FILE *out, bkf_io_format format,          \
+                            const bkf_provenance *prov, const bkf_catalog_hooks *hooks,  \
+                            bkf_error *err)                                              \
+    {                                                                                    \
+        T s_ = *(const T *)spec;                                                         \
+        if (hooks && hooks->warn) {                                                      \
+            s_.warn = hooks->warn;                                                       \
+            s_.warn_data = hooks->data;                                                  \
+        }                                                                                \
+        return WRITE(&s_, out, format, prov, err);                                       \
+    }
+
 static void release_nothing(void *spec) { (void)spec; }
 static void period_free(void *spec) { bkf_period_spec_free(spec); }
 static void profile_free(void *spec) { bkf_profile_spec_free(spec); }
@@ -97,7 +112,7 @@ WRITER(profile, bkf_profile_spec, bkf_profile_write)
 ADAPTERS(asymptotics, bkf_approx_spec, bkf_approx, approx_free)
 WRITER(asymptotics, bkf_approx_spec, bkf_approx_write)
 ADAPTERS(speeds, bkf_fronts_spec, bkf_fronts, release_nothing)
-WRITER(speeds, bkf_fronts_spec, bkf_fronts_write)
+WARN_WRITER(speeds, bkf_fronts_spec, bkf_fronts_write) /* refused roots */
 ADAPTERS(branch, bkf_fronts_branch_spec, bkf_fronts_branch, release_nothing)
 WRITER(branch, bkf_fronts_branch_spec, bkf_fronts_branch_write)
 ADAPTERS(stability, bkf_stability_spec, bkf_stability, release_nothing)
@@ -107,19 +122,7 @@ WRITER(friction, bkf_friction_spec, bkf_friction_table)
 ADAPTERS(bench, bkf_bench_spec, bkf_bench, release_nothing)
 WRITER(bench, bkf_bench_spec, bkf_bench_write)
 ADAPTERS(floquet, bkf_oscillation_spec, bkf_oscillation, oscillation_free)
-
-/* Refused dispersion rows go to the hooks' warning. */
-static int floquet_write(const void *spec, FILE *out, bkf_io_format format,
-                         const bkf_provenance *prov, const bkf_catalog_hooks *hooks,
-                         bkf_error *err)
-{
-    bkf_oscillation_spec s = *(const bkf_oscillation_spec *)spec;
-    if (hooks && hooks->warn) {
-        s.warn = hooks->warn;
-        s.warn_data = hooks->data;
-    }
-    return bkf_oscillation_write(&s, out, format, prov, err);
-}
+WARN_WRITER(floquet, bkf_oscillation_spec, bkf_oscillation_write) /* refused dispersion rows */
 
 /* ------------------------------------------------------------- orbit */
 

@@ -22,6 +22,13 @@ static int check_one(const check_ctx *c, const bkf_speeds_table *tab, size_t i,
     size_t root = 1;
     for (size_t k = i; k > 0 && tab->roots[k - 1].n == tab->roots[i].n; k--) root++;
     check_row_init(row, tab->roots[i].n, root, &tab->roots[i]);
+    if (tab->roots[i].status != BKF_OK) {
+        /* no speed to seed and compare: neither run nor spectrum */
+        row->reason = tab->roots[i].status;
+        check_warn(c, "n = %zu, root %zu: unresolved: its speed is refused: %s", row->n,
+                   row->root, tab->roots[i].refusal);
+        return BKF_OK;
+    }
     check_spectrum(c, &tab->roots[i], row);
     int s = check_root(c, &tab->roots[i], row, err);
     if (!s && row->verdict == BKF_CHECK_CONFLICTS) {

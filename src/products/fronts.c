@@ -104,7 +104,7 @@ const bkf_option bkf_fronts_options[] = {
              "takes a formula wherever its verified error bound meets the\n"
              "tolerance the root needs (about tol, 0.1..10 tol), else\n"
              "shooting; asymptotic or leading: the formula at every root,\n"
-             "exit 1 where its bound exceeds that; shooting: never a formula\n"
+             "a refused row where its bound exceeds that; shooting: never a formula\n"
              "(except beyond the grid's cap, flag asymptotic)"},
     {.name = "stability", .type = BKF_OPT_SWITCH, .offset = offsetof(bkf_fronts_spec, stability),
      .help = "add each root's spectral stability (its ring spectrum, as\n"
@@ -261,11 +261,12 @@ const bkf_io_column *bkf_fronts_columns(size_t *count)
 
 static const char *flag_text(unsigned flags)
 {
-    if ((flags & BKF_SPEEDS_NEAR_TANGENT) && (flags & BKF_SPEEDS_ASYMPTOTIC))
-        return "near-tangent,asymptotic";
-    if (flags & BKF_SPEEDS_NEAR_TANGENT) return "near-tangent";
-    if (flags & BKF_SPEEDS_ASYMPTOTIC) return "asymptotic";
-    return "";
+    /* indexed by the flags' bits: near-tangent 1, asymptotic 2, refused 4 */
+    static const char *const text[8] = {
+        "", "near-tangent", "asymptotic", "near-tangent,asymptotic",
+        "refused", "near-tangent,refused", "asymptotic,refused",
+        "near-tangent,asymptotic,refused"};
+    return text[flags & (BKF_SPEEDS_NEAR_TANGENT | BKF_SPEEDS_ASYMPTOTIC | BKF_SPEEDS_REFUSED)];
 }
 
 void bkf_fronts_root_values(const bkf_speeds_root *r, bkf_io_value *v)
@@ -282,7 +283,7 @@ void bkf_fronts_root_values(const bkf_speeds_root *r, bkf_io_value *v)
     v[8].number = r->v_asym;
     v[9].number = r->deviation;
     v[10].number = r->v_err;
-    v[11].text = r->model ? r->model : "shooting";
+    v[11].text = r->status != BKF_OK ? NULL : r->model ? r->model : "shooting";
     v[12].number = r->residual;
     v[13].number = r->slope;
     v[14].text = flag_text(r->flags);
@@ -331,10 +332,12 @@ static double verdict_tol(double stability_tol)
 }
 
 /* A root whose spectrum does not meet the tolerance within the budget is
- * unresolved (r->why says why); any other failure is the table's. */
+ * unresolved (r->why says why); any other failure is the table's.  A
+ * refused root has no spectrum: r->why is its refusal. */
 static int verdict_find(const bkf_model_params *p, const bkf_speeds_root *root, double tol,
                         root_verdict *r, bkf_error *err)
 {
+    if (bkf_speeds_root_status(root, &r->why)) return BKF_OK;
     /* per_kappa 1: the rows show sigma_max alone, which does not depend on
      * it, and fewer eigenvalues to refine cost less (the paper's n = 12:
      * 0.8 s for 1.1 s at 3) */
@@ -352,11 +355,13 @@ static int verdict_resolved(const root_verdict *r)
 /* The stable, sigma_max, sigma_max_err, kappa_max and kind cells; a
  * sigma_max that is only the window's bound is nan (bkf_trainspec_shown_of),
  * its verdict kept. */
-static void verdict_values(const root_verdict *r, bkf_io_value *v)
+static void verdict_values(const bkf_speeds_root *root, const root_verdict *r, bkf_io_value *v)
 {
     int ok = verdict_resolved(r);
     bkf_trainspec_shown x = bkf_trainspec_shown_of(&r->spectrum);
-    v[0].text = ok ? bkf_trainspec_verdict_name(r->spectrum.verdict) : "unresolved";
+    v[0].text = ok                       ? bkf_trainspec_verdict_name(r->spectrum.verdict)
+                : root->status != BKF_OK ? "refused"
+                                         : "unresolved";
     v[1].number = ok ? x.sigma_max : NAN;
     v[2].number = ok ? x.sigma_max_err : NAN;
     v[3].number = ok ? x.kappa_max : NAN;
@@ -413,6 +418,7 @@ static int spectra_comments(bkf_io_table *table, const bkf_speeds_table *t, cons
         root = i > 0 && t->roots[i - 1].n == t->roots[i].n ? root + 1 : 1;
         char note[200];
         double bound = verdict_bound(&r->verdicts[i]);
+        if (t->roots[i].status != BKF_OK) continue; /* its own comment says why */
         if (!verdict_resolved(&r->verdicts[i]))
             s = bkf_io_table_commentf(table, err, "stability of n %zu, root %zu unresolved: %s",
                                       t->roots[i].n, root, r->verdicts[i].why.message);
@@ -422,6 +428,36 @@ static int spectra_comments(bkf_io_table *table, const bkf_speeds_table *t, cons
                                       bkf_trainspec_bound_note(bound, note, sizeof note));
     }
     return s;
+}
+
+/* Each refused root's comment: where it lies and why v cannot be had to
+ * tol there (its row's numbers are NaN). */
+static int refused_comments(bkf_io_table *table, const bkf_speeds_table *t, bkf_error *err)
+{
+    int s = number_result(table, "refused", (double)t->refused, err);
+    for (size_t i = 0, root = 1; !s && i < t->count; i++) {
+        root = i > 0 && t->roots[i - 1].n == t->roots[i].n ? root + 1 : 1;
+        if (t->roots[i].status != BKF_OK)
+            s = bkf_io_table_commentf(table, err, "refused: n = %zu, root %zu: %s",
+                                      t->roots[i].n, root, t->roots[i].refusal);
+    }
+    return s;
+}
+
+/* The one line a caller is told when rows were refused. */
+static void warn_refused(const bkf_fronts_spec *spec, const bkf_speeds_table *t)
+{
+    if (!t->refused || !spec->warn) return;
+    for (size_t i = 0; i < t->count; i++) {
+        if (t->roots[i].status == BKF_OK) continue;
+        /* one line that fits a bkf_error (its prefix under 60 characters):
+         * the table's comments have each whole */
+        char line[BKF_ERROR_LEN + 100];
+        snprintf(line, sizeof line, "%zu of %zu roots refused, the first n = %zu: %.260s",
+                 t->refused, t->count, t->roots[i].n, t->roots[i].refusal);
+        spec->warn(line, spec->warn_data);
+        return;
+    }
 }
 
 static int write_speeds(const bkf_model_params *p, const bkf_speeds_options *o,
@@ -456,12 +492,13 @@ static int write_speeds(const bkf_model_params *p, const bkf_speeds_options *o,
         snprintf(line, sizeof line, "note: %s", t->note);
         s = bkf_io_table_comment(table, line, err);
     }
+    if (!s) s = refused_comments(table, t, err);
     if (!s && spectra) s = spectra_comments(table, t, spectra, err);
     if (!s) s = bkf_product_table_command(table, prov, err);
     for (size_t i = 0; !s && i < t->count; i++) {
         bkf_io_value v[NSTABILITY];
         bkf_fronts_root_values(&t->roots[i], v);
-        if (spectra) verdict_values(&spectra->verdicts[i], v + NSPEEDS);
+        if (spectra) verdict_values(&t->roots[i], &spectra->verdicts[i], v + NSPEEDS);
         s = bkf_io_table_row(table, v, err);
     }
     if (!s) s = bkf_io_table_finish(table, err);
@@ -578,6 +615,7 @@ int bkf_fronts_write(const bkf_fronts_spec *spec, FILE *out, bkf_io_format forma
     if (!s)
         s = write_speeds(&params, &options, &t, spec->stability ? &spectra : NULL, out, format,
                          prov, err);
+    if (!s) warn_refused(spec, &t);
     root_spectra_free(&spectra, t.count);
     bkf_speeds_table_free(&t);
     return s;
@@ -926,11 +964,9 @@ static double crossing_sigma(double x, void *data)
     o.n_from = o.n_to = c->spec->n;
     bkf_speeds_table t;
     int s = bkf_speeds_find(&p, &o, &t, &c->why);
-    if (!s && t.count == 0) s = bkf_error_set(&c->why, BKF_ENUMERIC, "no root of this n there");
+    size_t best = 0;
+    if (!s) s = bkf_speeds_nearest(&t, chord, &best, &c->why);
     if (!s) {
-        size_t best = 0;
-        for (size_t i = 1; i < t.count; i++)
-            if (fabs(t.roots[i].v - chord) < fabs(t.roots[best].v - chord)) best = i;
         bkf_trainspec_result_free(&c->at.verdict.spectrum);
         memset(&c->at, 0, sizeof c->at);
         c->at.point.params = p;
@@ -1225,7 +1261,7 @@ static int write_branch(const bkf_fronts_branch_spec *spec, const branch_sink *s
         v[3].number = pt->params.c;
         v[4].number = pt->params.nu;
         bkf_fronts_root_values(&pt->root, v + NPARAM);
-        if (bv) verdict_values(&sink->rows[i].verdict, v + NBRANCH);
+        if (bv) verdict_values(&pt->root, &sink->rows[i].verdict, v + NBRANCH);
         s = bkf_io_table_row(table, v, err);
     }
     if (!s) s = bkf_io_table_finish(table, err);

@@ -87,7 +87,7 @@ const bkf_option bkf_orbits_spec_options[] = {
     {.name = "k", .type = BKF_OPT_COUNT, .offset = FIELD(k), .flags = BOUNDED, .min = 1,
      .max = 100, .form = "K", .shown_default = "2",
      .help = "multipliers per Bloch sector, in [1, 100] (the largest of\n"
-             "each decide; more cost little: Arnoldi's basis holds k + 20)"},
+             "each decide; each costs two flows a sector: the basis is 2k + 6)"},
     {.name = "switch-amplitude", .type = BKF_OPT_DOUBLE, .offset = FIELD(switch_amplitude),
      .flags = BOUNDED | BKF_OPT_MIN_OPEN, .min = 0, .max = 0.5, .form = "A",
      .shown_default = "0.02",

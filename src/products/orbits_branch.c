@@ -285,6 +285,8 @@ typedef struct {
     int stop_status;        /* a failure of the visit's own work (polish: out of memory) */
     bkf_error stop_err;
     double *full_psi, *full_eta;
+    bkf_orbit *prev_ob;     /* the last point with multipliers: the next one's Arnoldi
+                               starts from its eigenvectors */
     double p0, span;        /* for progress */
     char why[BKF_ERROR_LEN + 32]; /* a row's status when refused */
 } cont_ctx;
@@ -597,6 +599,7 @@ static int accept(const double *u, const double *tangent, int is_fold, void *dat
         if (c->o->stability) {
             bkf_orbit_mult_options mo = bkf_orbit_mult_options_default();
             mo.k = c->o->k;
+            mo.warm_start = c->prev_ob;
             int sm = bkf_orbit_multipliers(ob, &mo, &sp, &e);
             if (sm == BKF_ENOMEM || sm == BKF_ECANCELED) {
                 c->stop_status = sm;
@@ -605,6 +608,8 @@ static int accept(const double *u, const double *tangent, int is_fold, void *dat
                 return 1;
             }
             if (sm == BKF_OK) {
+                bkf_orbit_free(c->prev_ob);
+                c->prev_ob = ob; /* freed with the context or the next such point */
                 pt.has_spectrum = 1;
                 pt.spectrum = &sp;
                 pt.verdict = sp.verdict;
@@ -620,7 +625,7 @@ static int accept(const double *u, const double *tangent, int is_fold, void *dat
         pt.status = c->why;
     }
     int stop = emit(c, &pt);
-    bkf_orbit_free(ob);
+    if (ob != c->prev_ob) bkf_orbit_free(ob);
     return stop;
 }
 
@@ -639,6 +644,7 @@ static void orbits_ctx_free(cont_ctx *c)
     free(c->full_psi);
     free(c->full_eta);
     bkf_pde_free(c->pde);
+    bkf_orbit_free(c->prev_ob);
 }
 
 bkf_orbits_options bkf_orbits_options_default(void)
@@ -689,17 +695,11 @@ static int check_options(const bkf_orbits_options *o, bkf_error *err)
     return BKF_OK;
 }
 
-int bkf_orbits_branch(const bkf_orbits_options *o, bkf_orbits_visit visit, void *data,
-                      bkf_orbits_report *report, bkf_error *err)
+/* The grid of the branch: N on the whole ring and m cells (j on the
+ * continuum, whose cell needs an even number of points). */
+static int branch_grid(const bkf_orbits_options *o, const bkf_orbits_pd *pd, size_t *N_out,
+                       size_t *m_out, bkf_error *err)
 {
-    bkf_orbits_report rep_local;
-    bkf_orbits_report *rep = report ? report : &rep_local;
-    memset(rep, 0, sizeof *rep);
-    int s = check_options(o, err);
-    if (s) return s;
-    s = bkf_orbits_pd_find(o, &rep->pd, err);
-    if (s) return s;
-    const bkf_orbits_pd *pd = &rep->pd;
     size_t N = orbits_default_N(&o->model, pd->j), m;
     if (o->model.kind == BKF_MODEL_CHAIN) {
         m = N % pd->j == 0 ? pd->j : 1;
@@ -712,62 +712,67 @@ int bkf_orbits_branch(const bkf_orbits_options *o, bkf_orbits_visit visit, void 
                                  2 * pd->j, pd->j);
         m = pd->j;
     }
-    cont_ctx c;
-    memset(&c, 0, sizeof c);
-    c.o = o;
-    c.m = m;
-    c.Nc = N / m;
-    c.K = c.Nc / 2;
-    c.kc = pd->j / m;
-    c.n = 2 * (c.K + 1) + 1;
-    c.half = c.kc == 1 && c.Nc % 2 == 0;
-    c.base = pd->model;
-    c.base.N = c.Nc;
-    c.base.S = pd->model.S / (double)m;
-    c.visit = visit;
-    c.data = data;
-    c.rep = rep;
-    c.p0 = pd->p;
-    c.span = fmax(fabs(o->to - pd->p), fabs(o->from - pd->p));
-    rep->cells = m;
-    rep->N = N;
-    rep->cell_points = c.Nc;
-    size_t Nu = c.n + 1, K1 = c.K + 1;
-    if (c.kc > c.K || c.Nc < BKF_PDE_N_MIN)
+    if (N / m < BKF_PDE_N_MIN || pd->j / m > N / m / 2)
         return bkf_error_set(err, BKF_EINPUT,
                              "N: %zu points per cell cannot hold mode j = %zu (at least %d)",
-                             c.Nc, pd->j, BKF_PDE_N_MIN);
-    c.cosm = malloc(K1 * c.Nc * sizeof *c.cosm);
-    c.psi = malloc(c.Nc * sizeof *c.psi);
-    c.eta = malloc(c.Nc * sizeof *c.eta);
-    c.g0 = malloc(c.n * sizeof *c.g0);
-    c.g1 = malloc(c.n * sizeof *c.g1);
-    c.ucache = malloc(Nu * sizeof *c.ucache);
-    c.jcache = malloc(c.n * Nu * sizeof *c.jcache);
-    c.scale = malloc(Nu * sizeof *c.scale);
-    c.last_u = malloc(Nu * sizeof *c.last_u);
-    c.last_t = malloc(Nu * sizeof *c.last_t);
-    c.full_psi = malloc(N * sizeof *c.full_psi);
-    c.full_eta = malloc(N * sizeof *c.full_eta);
-    double *u0 = calloc(Nu, sizeof *u0);
-    if (!c.cosm || !c.psi || !c.eta || !c.g0 || !c.g1 || !c.ucache || !c.jcache || !c.scale ||
-        !c.last_u || !c.last_t || !c.full_psi || !c.full_eta || !u0) {
-        free(u0);
-        orbits_ctx_free(&c);
+                             N / m, pd->j, BKF_PDE_N_MIN);
+    *N_out = N;
+    *m_out = m;
+    return BKF_OK;
+}
+
+/* The context's geometry, buffers, cosine table and scales. */
+static int ctx_init(cont_ctx *c, const bkf_orbits_options *o, bkf_orbits_report *rep, size_t N,
+                    size_t m, bkf_error *err)
+{
+    const bkf_orbits_pd *pd = &rep->pd;
+    memset(c, 0, sizeof *c);
+    c->o = o;
+    c->m = m;
+    c->Nc = N / m;
+    c->K = c->Nc / 2;
+    c->kc = pd->j / m;
+    c->n = 2 * (c->K + 1) + 1;
+    c->half = c->kc == 1 && c->Nc % 2 == 0;
+    c->base = pd->model;
+    c->base.N = c->Nc;
+    c->base.S = pd->model.S / (double)m;
+    c->rep = rep;
+    c->p0 = pd->p;
+    c->span = fmax(fabs(o->to - pd->p), fabs(o->from - pd->p));
+    size_t Nu = c->n + 1, K1 = c->K + 1;
+    c->cosm = malloc(K1 * c->Nc * sizeof *c->cosm);
+    c->psi = malloc(c->Nc * sizeof *c->psi);
+    c->eta = malloc(c->Nc * sizeof *c->eta);
+    c->g0 = malloc(c->n * sizeof *c->g0);
+    c->g1 = malloc(c->n * sizeof *c->g1);
+    c->ucache = malloc(Nu * sizeof *c->ucache);
+    c->jcache = malloc(c->n * Nu * sizeof *c->jcache);
+    c->scale = malloc(Nu * sizeof *c->scale);
+    c->last_u = malloc(Nu * sizeof *c->last_u);
+    c->last_t = malloc(Nu * sizeof *c->last_t);
+    c->full_psi = malloc(N * sizeof *c->full_psi);
+    c->full_eta = malloc(N * sizeof *c->full_eta);
+    if (!c->cosm || !c->psi || !c->eta || !c->g0 || !c->g1 || !c->ucache || !c->jcache ||
+        !c->scale || !c->last_u || !c->last_t || !c->full_psi || !c->full_eta)
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
     for (size_t k = 0; k < K1; k++)
-        for (size_t i = 0; i < c.Nc; i++)
-            c.cosm[k * c.Nc + i] = cos(2.0 * M_PI * (double)((k * i) % c.Nc) / (double)c.Nc);
+        for (size_t i = 0; i < c->Nc; i++)
+            c->cosm[k * c->Nc + i] = cos(2.0 * M_PI * (double)((k * i) % c->Nc) / (double)c->Nc);
     /* The scales weigh the pattern (every coefficient k >= 1) as heavily as
      * nu: the uniform oscillation, a solution at every nu too, is then
      * many steps away from any point of the branch, so the corrector does
      * not fall back onto it near a fold. */
-    for (size_t i = 0; i < 2 * K1; i++) c.scale[i] = i % K1 ? 0.01 : 0.1;
-    c.scale[2 * K1] = 0.1;
-    c.scale[2 * K1 + 1] = o->along == BKF_ORBITS_NU ? 0.01 : 0.01 * fabs(pd->p);
+    for (size_t i = 0; i < 2 * K1; i++) c->scale[i] = i % K1 ? 0.01 : 0.1;
+    c->scale[2 * K1] = 0.1;
+    c->scale[2 * K1 + 1] = o->along == BKF_ORBITS_NU ? 0.01 : 0.01 * fabs(pd->p);
+    return BKF_OK;
+}
 
-    /* row 0: the oscillation where it doubles; its period-2T orbit */
+/* Row 0: the oscillation where it doubles; its period-2T orbit. */
+static int emit_start(cont_ctx *c, size_t N)
+{
+    const bkf_orbits_pd *pd = &c->rep->pd;
     bkf_orbits_point pt0;
     memset(&pt0, 0, sizeof pt0);
     pt0.is_start = 1;
@@ -787,57 +792,97 @@ int bkf_orbits_branch(const bkf_orbits_options *o, bkf_orbits_visit visit, void 
     pt0.m_im = 0;
     pt0.m_err = pd->lambda_err;
     pt0.events = BKF_ORBITS_EV_PERIOD_DOUBLING;
-    int stop = emit(&c, &pt0);
+    return emit(c, &pt0);
+}
 
-    /* the first leg: the critical mode's amplitude held.  Near |nu| = 1
-     * the cycle is small and the amplitude may be too large for the
-     * corrector (it left the active range at gamma 8, c 1.5, S 60): it is
-     * halved, at most three times, while the start alone fails. */
-    double w = weight(&c, c.kc), amp = o->switch_amplitude;
-    int held = fabs(pd->v_psi) >= fabs(pd->v_eta) ? (int)c.kc : (int)(K1 + c.kc);
-    bkf_cont_options co = bkf_cont_options_default(c.n);
+/* The first leg: the critical mode's amplitude held.  Near |nu| = 1 the
+ * cycle is small and the amplitude may be too large for the corrector (it
+ * left the active range at gamma 8, c 1.5, S 60): it is halved, at most
+ * three times, while the start alone fails. */
+static int first_leg(cont_ctx *c, double *u0, bkf_cont_options *co, bkf_error *err)
+{
+    const bkf_orbits_pd *pd = &c->rep->pd;
+    size_t Nu = c->n + 1, K1 = c->K + 1;
+    double w = weight(c, c->kc), amp = c->o->switch_amplitude;
+    int held = fabs(pd->v_psi) >= fabs(pd->v_eta) ? (int)c->kc : (int)(K1 + c->kc);
     bkf_cont_report cr;
-    for (int attempt = 0; !stop && attempt < 4; attempt++, amp /= 2) {
+    int s = BKF_OK;
+    for (int attempt = 0; attempt < 4; attempt++, amp /= 2) {
         memset(u0, 0, Nu * sizeof *u0);
         u0[0] = pd->psi0;
         u0[K1] = pd->eta0;
-        u0[c.kc] += amp * pd->v_psi / w;
-        u0[K1 + c.kc] += amp * pd->v_eta / w;
+        u0[c->kc] += amp * pd->v_psi / w;
+        u0[K1 + c->kc] += amp * pd->v_eta / w;
         u0[2 * K1] = 2 * pd->period;
         u0[2 * K1 + 1] = pd->p;
-        co = bkf_cont_options_default(c.n);
-        co.scale = c.scale;
-        co.newton_tol = 1e-9;
-        co.newton_max_iter = 12;
-        co.step_initial = amp / (2 * w);
-        co.step_max = amp / w;
-        co.step_min = 1e-8;
-        co.max_points = SWITCH_POINTS;
-        c.stage = 1;
-        s = bkf_cont_run(residual, accept, &c, u0, held, u0[held] > 0 ? 1 : -1, &co, &cr, err);
-        stop = c.stop_status != 0;
-        if (s != BKF_ENUMERIC || rep->points > 0) break;
+        *co = bkf_cont_options_default(c->n);
+        co->scale = c->scale;
+        co->newton_tol = 1e-9;
+        co->newton_max_iter = 12;
+        co->step_initial = amp / (2 * w);
+        co->step_max = amp / w;
+        co->step_min = 1e-8;
+        co->max_points = SWITCH_POINTS;
+        c->stage = 1;
+        s = bkf_cont_run(residual, accept, c, u0, held, u0[held] > 0 ? 1 : -1, co, &cr, err);
+        if (c->stop_status || s != BKF_ENUMERIC || c->rep->points > 0) break;
     }
-    /* the second leg: along p, away from the oscillation */
-    if (!s && !stop && c.have_last && rep->points == SWITCH_POINTS &&
-        c.last_t[2 * K1 + 1] != 0) {
-        int dir = c.last_t[2 * K1 + 1] > 0 ? 1 : -1;
-        memcpy(u0, c.last_u, Nu * sizeof *u0);
-        co.step_initial = fmin(o->step, 0.05);
-        co.step_max = o->step;
-        /* every point is solved again to tol by module orbit: the branch
-         * needs only to pass close enough for that (and the steps grow
-         * only when Newton takes two iterations) */
-        co.newton_tol = 1e-7;
-        co.max_points = o->max_points - SWITCH_POINTS + 1;
-        co.stop_index = (int)(2 * K1 + 1);
-        co.stop_min = fmin(o->from, o->to);
-        co.stop_max = fmax(o->from, o->to);
-        c.skip_next = 1;
-        c.stage = 2;
-        s = bkf_cont_run(residual, accept, &c, u0, (int)(2 * K1 + 1), dir, &co, &cr, err);
-        rep->reached_bound = cr.reached_bound;
-    }
+    return s;
+}
+
+/* The second leg: along p, away from the oscillation, from the first
+ * leg's last point. */
+static int second_leg(cont_ctx *c, double *u0, bkf_cont_options *co, bkf_error *err)
+{
+    const bkf_orbits_options *o = c->o;
+    size_t Nu = c->n + 1, K1 = c->K + 1;
+    if (!c->have_last || c->rep->points != SWITCH_POINTS || c->last_t[2 * K1 + 1] == 0)
+        return BKF_OK;
+    int dir = c->last_t[2 * K1 + 1] > 0 ? 1 : -1;
+    memcpy(u0, c->last_u, Nu * sizeof *u0);
+    co->step_initial = fmin(o->step, 0.05);
+    co->step_max = o->step;
+    /* every point is solved again to tol by module orbit: the branch needs
+     * only to pass close enough for that (and the steps grow only when
+     * Newton takes two iterations) */
+    co->newton_tol = 1e-7;
+    co->max_points = o->max_points - SWITCH_POINTS + 1;
+    co->stop_index = (int)(2 * K1 + 1);
+    co->stop_min = fmin(o->from, o->to);
+    co->stop_max = fmax(o->from, o->to);
+    c->skip_next = 1;
+    c->stage = 2;
+    bkf_cont_report cr;
+    int s = bkf_cont_run(residual, accept, c, u0, (int)(2 * K1 + 1), dir, co, &cr, err);
+    c->rep->reached_bound = cr.reached_bound;
+    return s;
+}
+
+int bkf_orbits_branch(const bkf_orbits_options *o, bkf_orbits_visit visit, void *data,
+                      bkf_orbits_report *report, bkf_error *err)
+{
+    bkf_orbits_report rep_local;
+    bkf_orbits_report *rep = report ? report : &rep_local;
+    memset(rep, 0, sizeof *rep);
+    size_t N = 0, m = 1;
+    int s = check_options(o, err);
+    if (!s) s = bkf_orbits_pd_find(o, &rep->pd, err);
+    if (!s) s = branch_grid(o, &rep->pd, &N, &m, err);
+    if (s) return s;
+    rep->cells = m;
+    rep->N = N;
+    rep->cell_points = N / m;
+    cont_ctx c;
+    double *u0 = NULL;
+    s = ctx_init(&c, o, rep, N, m, err);
+    if (!s && !(u0 = calloc(c.n + 1, sizeof *u0)))
+        s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    c.visit = visit;
+    c.data = data;
+    bkf_cont_options co;
+    int stop = s ? 1 : emit_start(&c, N);
+    if (!stop) s = first_leg(&c, u0, &co, err);
+    if (!s && !c.stop_status) s = second_leg(&c, u0, &co, err);
     if (c.stop_status) {
         s = c.stop_status;
         if (err) *err = c.stop_err;

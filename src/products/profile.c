@@ -184,6 +184,7 @@ int bkf_profile_write(const bkf_profile_spec *p, FILE *out, bkf_io_format format
                                   seen, seen == 1 ? "" : "s", want_root, speeds.n_max);
                 break;
             }
+            if ((s = bkf_speeds_root_status(root, err))) break;
             if (!isfinite(root->mu)) {
                 s = bkf_error_set(err, BKF_ENUMERIC, "n = %zu: the root is at the sonic limit", n);
                 break;

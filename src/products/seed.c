@@ -118,6 +118,8 @@ int bkf_seed_front(bkf_pde *pde, const bkf_pde_front_spec *spec, bkf_pde_front_i
     bkf_speeds_root root = tab.roots[sp.root - 1];
     size_t roots_for_n = tab.count;
     bkf_speeds_table_free(&tab);
+    if ((s = bkf_speeds_root_status(&root, &e)))
+        return bkf_error_set(err, s, "speeds, root %zu: %s", sp.root, e.message);
     if (root.flags & BKF_SPEEDS_ASYMPTOTIC)
         return bkf_error_set(err, BKF_EINPUT,
                              "n = %zu: mu = %.15g is beyond the cycle engine's range; the front "

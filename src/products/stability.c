@@ -255,6 +255,7 @@ static int find_root(const bkf_stability_spec *spec, bkf_model_params *params,
                           spec->root, spec->n, t.count, t.count == 1 ? "" : "s");
     }
     if (!s) *root = t.roots[spec->root - 1];
+    if (!s) s = bkf_speeds_root_status(root, err);
     bkf_speeds_table_free(&t);
     return s;
 }

@@ -37,13 +37,12 @@ static int sigma_and_bound(const bkf_model_params *params, size_t n, double v_ne
     if (!s && t.count == 0)
         s = bkf_error_set(err, BKF_EINPUT, "n: n = %zu has no root at nu %.6g, S %.6g", n,
                           params->nu, params->S);
+    size_t best = 0;
+    if (!s) s = bkf_speeds_nearest(&t, v_near, &best, err);
     if (s) {
         bkf_speeds_table_free(&t);
         return s;
     }
-    size_t best = 0;
-    for (size_t i = 1; v_near > 0 && i < t.count; i++)
-        if (fabs(t.roots[i].v - v_near) < fabs(t.roots[best].v - v_near)) best = i;
     bkf_speeds_root root = t.roots[best];
     bkf_speeds_table_free(&t);
     bkf_trainspec_result r;

@@ -68,7 +68,7 @@ bkf_orbit_options bkf_orbit_options_default(void)
 
 bkf_orbit_mult_options bkf_orbit_mult_options_default(void)
 {
-    bkf_orbit_mult_options o = {10, -1, 1e-10, 300, 0.1};
+    bkf_orbit_mult_options o = {10, -1, 0.0, 300, 0.1, 0.0, NULL};
     return o;
 }
 
@@ -127,6 +127,8 @@ void bkf_orbit_free(bkf_orbit *ob)
     orbit_flow_free(ob->full);
     free(ob->psi);
     free(ob->ucell);
+    free(ob->ucell2);
+    free(ob->warm);
     free(ob->mult);
     free(ob);
 }
@@ -321,6 +323,15 @@ static int solve_body(bkf_orbit *ob, const bkf_orbit_guess *g, bkf_orbit_result 
         if (!s) s = solve_on(ob, fl2, &job, x2, "grid", NULL, err);
         orbit_newton_release(&job);
         if (!s) {
+            double *keep = realloc(ob->ucell2, 2 * Nc2 * sizeof *keep);
+            if (!keep) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            else {
+                memcpy(keep, x2, 2 * Nc2 * sizeof *keep);
+                ob->ucell2 = keep;
+                ob->Nc2 = Nc2;
+            }
+        }
+        if (!s) {
             r.N2 = Nc2 * m;
             r.period2 = x2[2 * Nc2];
             r.shift2 = x2[2 * Nc2 + 1];
@@ -377,9 +388,16 @@ int bkf_orbit_multipliers(bkf_orbit *ob, const bkf_orbit_mult_options *options,
     if (o.sector < -1 || o.sector > (int)(ob->cells / 2))
         return bkf_error_set(err, BKF_EINPUT, "sector = %d is outside [-1, %zu] (-1: every one)",
                              o.sector, ob->cells / 2);
-    if (!(o.arnoldi_tol >= 1e-14 && o.arnoldi_tol <= 1e-2))
-        return bkf_error_set(err, BKF_EINPUT, "arnoldi_tol = %g is outside [1e-14, 1e-2]",
+    if (o.arnoldi_tol != 0 && !(o.arnoldi_tol >= 1e-14 && o.arnoldi_tol <= 1e-2))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "arnoldi_tol = %g is outside [1e-14, 1e-2] (0: from tol)",
                              o.arnoldi_tol);
+    if (o.flow_tol != 0 && !(o.flow_tol >= BKF_PDE_TOL_MIN && o.flow_tol <= 1e-4))
+        return bkf_error_set(err, BKF_EINPUT,
+                             "flow_tol = %g is outside [%g, 1e-4] (0: from tol)", o.flow_tol,
+                             BKF_PDE_TOL_MIN);
+    if (o.arnoldi_tol == 0) o.arnoldi_tol = fmin(1e-6, fmax(1e-12, 0.01 * ob->o.tol));
+    if (o.flow_tol == 0) o.flow_tol = fmin(1e-6, fmax(1e-13, ob->o.tol));
     if (o.max_restarts < 1 || o.max_restarts > 100000)
         return bkf_error_set(err, BKF_EINPUT, "max_restarts = %d is outside [1, 100000]",
                              o.max_restarts);

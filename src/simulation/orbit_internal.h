@@ -79,6 +79,13 @@ struct bkf_orbit {
     bkf_orbit_result result;
     double *psi, *eta;        /* full domain, N each */
     double *ucell;            /* the cell's solution, 2 Nc */
+    double *ucell2;           /* the second grid's (2 Nc2; the multipliers' grid term),
+                                 valid while result.N2 > 0 */
+    size_t Nc2;
+    /* per sector (floor(m/2) + 1 of them), the sum of the last call's
+     * Ritz vectors (2N values each): the next call's starts */
+    double *warm;
+    size_t warm_sectors;
     /* the multipliers' storage */
     bkf_orbit_multiplier *mult;
     size_t nmult, capmult;

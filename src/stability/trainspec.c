@@ -421,10 +421,6 @@ typedef struct {
     double rate;       /* d phase / dy along the curve */
 } curve_point;
 
-typedef struct {
-    double a_lo, a_hi;
-} window;
-
 /* Both families' rightmost a in [a_lo, a_hi] where Re w(a + i y) = 0, by
  * the Illinois variant of regula falsi, started from the predictions
  * guess[f] when given (NAN otherwise).  Re w decreases in a: the
@@ -592,31 +588,6 @@ static int trace(ctx *x, window *win, double y0, double y1, double y_scale, curv
 
 /* ------------------------------------------------------------ candidates */
 
-typedef struct {
-    double a, y;   /* interpolated sigma */
-    size_t cls;    /* phase class: the multiplier's phase is 2 pi cls / classes */
-    int fam;
-    int conj;      /* mirrored from y > 0 */
-} candidate;
-
-typedef struct {
-    candidate *items;
-    size_t count, cap;
-} candidates;
-
-static int cand_push(candidates *cs, candidate c)
-{
-    if (cs->count == cs->cap) {
-        size_t cap = cs->cap ? 2 * cs->cap : 1024;
-        candidate *g = realloc(cs->items, cap * sizeof *g);
-        if (!g) return BKF_ENOMEM;
-        cs->items = g;
-        cs->cap = cap;
-    }
-    cs->items[cs->count++] = c;
-    return BKF_OK;
-}
-
 /* Every point of the traced curve where the multiplier's phase is a multiple
  * of 2 pi / classes, with its mirror image below the real axis. */
 static int collect(curve *c, int fam, size_t classes, candidates *out)
@@ -639,7 +610,7 @@ static int collect(curve *c, int fam, size_t classes, candidates *out)
             double l = psi / step;
             if (p->y == 0.0 && fabs(l - nearbyint(l)) < 1e-6) {
                 long cls = ((long)nearbyint(l) % (long)classes + (long)classes) % (long)classes;
-                if (cand_push(out, (candidate){p->a, 0.0, (size_t)cls, fam, 0}) != BKF_OK) return BKF_ENOMEM;
+                if (trainspec_cand_push(out, (candidate){p->a, 0.0, (size_t)cls, fam, 0}) != BKF_OK) return BKF_ENOMEM;
             }
         }
         p->phase = psi; /* unwrapped from here on */
@@ -656,10 +627,10 @@ static int collect(curve *c, int fam, size_t classes, candidates *out)
             double a = h00 * q->a + h10 * dy * q->slope + h01 * p->a + h11 * dy * p->slope;
             double y = q->y + t * dy;
             long cls = ((long)l % (long)classes + (long)classes) % (long)classes;
-            if (cand_push(out, (candidate){a, y, (size_t)cls, fam, 0}) != BKF_OK) return BKF_ENOMEM;
+            if (trainspec_cand_push(out, (candidate){a, y, (size_t)cls, fam, 0}) != BKF_OK) return BKF_ENOMEM;
             if (y > 0.0) {
                 size_t mirror = (size_t)((classes - (size_t)cls) % classes);
-                if (cand_push(out, (candidate){a, -y, mirror, fam, 1}) != BKF_OK) return BKF_ENOMEM;
+                if (trainspec_cand_push(out, (candidate){a, -y, mirror, fam, 1}) != BKF_OK) return BKF_ENOMEM;
             }
         }
     }
@@ -669,14 +640,33 @@ static int collect(curve *c, int fam, size_t classes, candidates *out)
 /* ------------------------------------------------------------- polishing */
 
 /* Newton on w(sigma) = i theta (mod 2 pi i), over whichever family fits
- * best, on mesh m. */
-int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step)
+ * best, on mesh m.  With deriv (NULL: not wanted) holding both families'
+ * derivatives from a polish of the same eigenvalue on a coarser mesh, the
+ * steps take those instead of a pass with the derivative (which costs two
+ * without it): the derivatives of two meshes differ by the meshes' error,
+ * so the iteration contracts by about that much per step and stops on the
+ * same small step as Newton's; where it does not settle within CHORD_MAX
+ * steps, Newton takes over.  The derivatives last computed go back into
+ * deriv. */
+#define CHORD_MAX 4
+int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step,
+                     double complex deriv[2])
 {
     double complex s = *sigma;
     *last_step = INFINITY;
-    for (int it = 0; it < NEWTON_MAX; it++) {
+    int chord = deriv && deriv[0] != 0 && deriv[1] != 0 && isfinite(creal(deriv[0])) &&
+                isfinite(cimag(deriv[0])) && isfinite(creal(deriv[1])) && isfinite(cimag(deriv[1]));
+    for (int it = 0, chords = 0; it < NEWTON_MAX; it++) {
         double complex w0[2], dw[2];
-        monodromy(x, m, s, w0, dw);
+        int use_chord = chord && chords < CHORD_MAX;
+        if (use_chord) {
+            monodromy(x, m, s, w0, NULL);
+            dw[0] = deriv[0], dw[1] = deriv[1];
+            chords++;
+        } else {
+            monodromy(x, m, s, w0, dw);
+            if (deriv) deriv[0] = dw[0], deriv[1] = dw[1];
+        }
         int fam = 0;
         double complex r[2];
         for (int f = 0; f < FAMILIES; f++) r[f] = creal(w0[f]) + I * trainspec_wrap(cimag(w0[f]) - theta);
@@ -842,96 +832,7 @@ static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *er
     return BKF_OK;
 }
 
-/* ------------------------------------------------- Hill's candidates */
-
-/* Hill's method (hill.h) sees every eigenvalue of a band of frequencies at
- * once, where the traced curves can step over one (two eigenvalues of one
- * class closer than the phase resolves; issue 31: n = 1 at mu 1.2 lost its
- * rightmost pair at Im 18.03 to its neighbour at 17.13) or cannot close
- * the window at all (the curves stay right of a_lo up to |Im| 1e4 when the
- * cycle's multiplier is near 1, mu < 1).  Its converged eigenvalues (M and
- * M + M/4 modes agree, bkf_hill_leading_pair: a quarter of the work of
- * comparing with 2M, the check the band alone needs) are candidates: each is polished on
- * the Radau meshes, whose error estimate is the one reported, so Hill's
- * truncation never reaches a result.  The truncation's artefacts do not
- * converge (they move with M, at any height: 0.185 + 1.86i at M 24, mu 4).
- * Used where the profile is smooth enough for few modes (mu <= HILL_MU_MAX)
- * and the dense eigenproblems are cheap (HILL_WORK). */
-#define HILL_MU_MAX 6.0
-#define HILL_MODES_MIN 16
-#define HILL_MODES_MAX 64
-/* sum over classes of (the finer matrix's size)^3: about 1.5 s of zgeev */
-#define HILL_WORK 1.5e8
-/* Hill's eigenvalues agree at M and the finer truncation this well (absolute) to be
- * candidates; the polish takes them from there */
-#define HILL_CONVERGED 1e-5
-/* Hill's converged eigenvalues polished, per class, at most (the rightmost first). */
-#define HILL_PER_CLASS 6
-/* Hill's value and the polished one agree this well (relative to 1 +
- * |sigma|) where Hill's band stands alone */
-#define HILL_AGREE 1e-3
-/* the share of the work budget the trace may spend where Hill answered */
-#define HILL_TRACE_SHARE 0.2
-
-typedef struct {
-    size_t modes;        /* M, 0 when Hill was not used */
-    double y_trust;      /* the largest |Im sigma| among its candidates */
-    int complete;        /* in every class, no unconverged eigenvalue lies right of the
-                            converged ones: Hill vouches for the rightmost */
-    double complex *at;  /* candidates pushed (for the agreement check) */
-    size_t count;
-} hill_stage;
-
-/* Candidates from Hill's method for the classes 0..classes/2 (their
- * conjugates come from the mirror, as for the traced curves), converged
- * between M and M + M/4 modes (as candidates beside the traced curves:
- * the polish is their test) or, with `vouch`, between M and 2M (where
- * Hill's band alone must answer, hill_stage.complete). */
-static int hill_candidates(ctx *x, size_t classes, const window *win, int vouch, candidates *cs, hill_stage *h,
-                           bkf_error *err)
-{
-    memset(h, 0, sizeof *h);
-    if (x->mu > HILL_MU_MAX) return BKF_OK;
-    size_t thetas = classes / 2 + 1;
-    /* modes to |Im sigma| ~ the band the trace starts with, beyond which the
-     * spectrum is in its asymptotic regime (trace_all): mode m sits near
-     * |Im sigma| = 2 pi m / (T s) */
-    double band = fmax(2.0, x->gamma * x->v / x->c);
-    double want = ceil(band * x->T * x->s / (2.0 * M_PI));
-    size_t M = (size_t)fmin(fmax(want, HILL_MODES_MIN), HILL_MODES_MAX);
-    while (M > HILL_MODES_MIN && (double)thetas * pow(8.0 * (double)M + 2.0, 3.0) > HILL_WORK) M = M * 3 / 4;
-    if ((double)thetas * pow(8.0 * (double)M + 2.0, 3.0) > HILL_WORK) return BKF_OK;
-    h->at = malloc(thetas * HILL_PER_CLASS * sizeof *h->at);
-    if (!h->at) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    h->modes = M;
-    h->complete = 1;
-    int rc = BKF_OK;
-    for (size_t cls = 0; cls < thetas && rc == BKF_OK; cls++) {
-        bkf_hill_eigenvalue ev[HILL_PER_CLASS + 1];
-        size_t found = 0, unresolved = 0;
-        double theta = 2.0 * M_PI * (double)cls / (double)classes;
-        /* one more at class 0: the translation is among them */
-        size_t k = HILL_PER_CLASS + (cls == 0);
-        size_t fine = vouch ? 2 * M : M + (M / 4 > 4 ? M / 4 : 4);
-        rc = bkf_hill_leading_pair(x->cycle, x->gamma, theta, M, fine, HILL_CONVERGED, k, ev, NULL, &found,
-                                   &unresolved, err);
-        if (rc != BKF_OK) break;
-        if (unresolved > 0 || found == 0) h->complete = 0;
-        for (size_t i = 0; i < found; i++) {
-            double re = ev[i].re, im = ev[i].im;
-            if ((cls == 0 && hypot(re, im) < 1e-6) || re < win->a_lo) continue;
-            if (cand_push(cs, (candidate){re, im, cls, -1, 0}) != BKF_OK) {
-                rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-                break;
-            }
-            if (h->count < thetas * HILL_PER_CLASS) h->at[h->count++] = re + I * im;
-            h->y_trust = fmax(h->y_trust, fabs(im));
-        }
-    }
-    /* the band Hill resolved reaches to its modes' frequency */
-    h->y_trust = fmax(h->y_trust, 2.0 * M_PI * (double)M / (x->T * x->s));
-    return rc;
-}
+/* ------------------------------------------------- Hill's stage (trainspec_hill.c) */
 
 /* The error estimate of sigma polished to sf on the fine mesh (last Newton
  * step step_f) from sc on the coarse one. */
@@ -940,43 +841,52 @@ static double estimate(double complex sc, double complex sf, double step_f)
     return cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
 }
 
-/* The candidates of every class: Hill's where it is cheap, the traced
- * curves', and where the trace cannot close its window, Hill's band alone
- * if it vouches for its rightmost (*fallback set; trace_err says why the
- * trace failed). */
-static int gather(ctx *x, size_t classes, window *win, candidates *cs, hill_stage *hs, double *y_max,
+/* Hill's band alone: the meshes for its height, no curves. */
+static int band_alone(ctx *x, const hill_stage *hs, window *win, double a_hi, double *y_max, int *fallback,
+                      bkf_error *err)
+{
+    *fallback = 1;
+    x->stop = 0;
+    *y_max = hs->y_trust;
+    win->a_hi = a_hi;
+    x->substeps = SUBSTEPS_START;
+    return meshes_for(x, hs->y_trust, win, err);
+}
+
+/* The candidates of every class: Hill's where it is cheap; where Hill's
+ * first round vouches for its band (and no more than HILL_PER_CLASS - 1
+ * are asked per class), Hill's band alone; else the traced curves', and
+ * where the trace cannot close its window, Hill's band alone, M grown
+ * until it vouches (*fallback set; trace_err says why the trace failed). */
+static int gather(ctx *x, size_t classes, size_t keep, window *win, candidates *cs, hill_stage *hs, double *y_max,
                   size_t *curve_points, int *fallback, bkf_error *trace_err, bkf_error *err)
 {
     curve heights = {0};
     *fallback = 0;
-    int rc = hill_candidates(x, classes, win, 0, cs, hs, err);
+    int rc = trainspec_hill_candidates(x, classes, win, cs, hs, err);
     if (rc != BKF_OK) return rc;
+    double a_hi = win->a_hi;
+    if (hs->modes && hs->complete && hs->descended && keep < HILL_PER_CLASS) {
+        bkf_error_set(trace_err, BKF_OK, "not traced: Hill's band vouched for its rightmost");
+        return band_alone(x, hs, win, a_hi, y_max, fallback, err);
+    }
     double max_work = x->max_work;
     /* where Hill has answered the trace is the cross-check: it may spend a
      * fifth of the budget, the rest polishes */
     if (hs->modes) x->max_work = x->work + HILL_TRACE_SHARE * (max_work - x->work);
-    double a_hi = win->a_hi;
     rc = trace_all(x, win, &heights, y_max, trace_err);
     x->max_work = max_work;
     if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes) {
-        /* Hill's band alone, if it vouches for its rightmost at M and 2M */
-        cs->count = 0;
-        free(hs->at);
-        int hrc = hill_candidates(x, classes, win, 1, cs, hs, err);
+        int hrc = trainspec_hill_grow(x, classes, win, cs, hs, err);
         if (hrc != BKF_OK) {
             free(heights.h);
             return hrc;
         }
     }
-    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes && hs->complete) {
-        /* the band |Im| <= y_trust, as Hill saw it */
-        *fallback = 1;
-        x->stop = 0;
+    if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes && hs->complete &&
+        hs->descended) {
         heights.count = 0;
-        *y_max = hs->y_trust;
-        win->a_hi = a_hi;
-        x->substeps = SUBSTEPS_START;
-        rc = meshes_for(x, hs->y_trust, win, err);
+        rc = band_alone(x, hs, win, a_hi, y_max, fallback, err);
     } else if (rc != BKF_OK) {
         if (err) *err = *trace_err;
     }
@@ -987,35 +897,91 @@ static int gather(ctx *x, size_t classes, window *win, candidates *cs, hill_stag
     return rc;
 }
 
+/* A class polishes at most this many times polish_n of the curves'
+ * candidates (the rightmost first): the rest lie left of those and are
+ * reached only where many of them fail or repeat one eigenvalue. */
+#define POLISH_TRIES 2
+/* The polish meshes resolve |sigma| up to this factor times the largest of
+ * the candidates it may polish (plus POLISH_REACH_MIN): Newton's path from a
+ * candidate stays near it. */
+#define POLISH_MARGIN 1.25
+#define POLISH_REACH_MIN 0.05
+
+/* Does the polish try candidate c, the tried-th of its class's curve
+ * candidates (Hill's are all tried, see polish_candidates)? */
+static int polish_tries(const candidate *c, size_t classes, size_t polish_n, size_t *tried)
+{
+    if (2 * c->cls > classes) return 0;
+    return c->fam < 0 || (*tried)++ < POLISH_TRIES * polish_n;
+}
+
+/* The meshes of the polish, for the |sigma| of the candidates it may polish
+ * rather than for the window's height: the window reaches |sigma| 2.8 at the
+ * paper's n = 12 (mu 47) where its eigenvalues sit below 0.13, and a mesh
+ * for the window's reach has about twice the steps.  Each value's error is
+ * still its own pair of meshes' (estimate), so a candidate the meshes
+ * resolve less well shows it in its estimate and the refinement. */
+static int meshes_for_polish(ctx *x, size_t classes, size_t polish_n, candidates *cs, bkf_error *err)
+{
+    qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
+    double reach = 0.0;
+    for (size_t i = 0; i < cs->count;) {
+        size_t cls = cs->items[i].cls, tried = 0;
+        for (; i < cs->count && cs->items[i].cls == cls; i++)
+            if (polish_tries(&cs->items[i], classes, polish_n, &tried))
+                reach = fmax(reach, hypot(cs->items[i].a, cs->items[i].y));
+    }
+    reach = POLISH_MARGIN * reach + POLISH_REACH_MIN;
+    if (!(reach < x->sigma_reach)) return BKF_OK;
+    int rc = trainspec_mesh_needs(x, reach, err);
+    if (rc == BKF_OK) rc = trainspec_mesh_build(x, x->substeps, &x->coarse, err);
+    return rc != BKF_OK ? rc : trainspec_mesh_build(x, 2 * x->substeps, &x->fine, err);
+}
+
+/* Per polished eigenvalue, both families' sigma-derivatives at its last
+ * polish (trainspec_polish): the next, finer mesh's polish steps with them. */
+typedef struct {
+    double complex d[2];
+    double complex coarse; /* its value on the coarse mesh (polish_candidates) */
+} derivs;
+
 /* The best few candidates of each class polished on both meshes into eig
  * (*n_eig of them), duplicates dropped; mirrored classes (j > classes/2)
  * come out of their partners by conjugation later.  How many are polished
  * per class does not depend on how many are reported: the rightmost must
  * not depend on per_kappa. */
 static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *cs, bkf_trainspec_eigenvalue *eig,
-                              size_t *n_eig)
+                              derivs *dv, size_t *n_eig)
 {
     size_t polish_n = (keep > 3 ? keep : 3) + 2;
     qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
     for (size_t i = 0; i < cs->count;) {
-        size_t cls = cs->items[i].cls, taken = 0, start_n = *n_eig;
+        size_t cls = cs->items[i].cls, taken = 0, tried = 0, start_n = *n_eig;
         for (; i < cs->count && cs->items[i].cls == cls; i++) {
             /* Hill's candidates are few and accurate: every one is polished,
              * whatever the traced ones, whose interpolated a can rank a far
              * eigenvalue before a near one, have taken */
-            if ((taken >= polish_n && cs->items[i].fam >= 0) || 2 * cls > classes) continue;
+            if ((taken >= polish_n && cs->items[i].fam >= 0) || !polish_tries(&cs->items[i], classes, polish_n, &tried))
+                continue;
             candidate cd = cs->items[i];
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
-            double complex sc = cd.a + I * cd.y, sf;
+            double complex sc = cd.a + I * cd.y, sf, d[2] = {NAN, NAN};
             double step_c, step_f;
-            if (trainspec_polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
+            if (trainspec_polish(x, &x->coarse, theta, &sc, &step_c, d) != BKF_OK) continue;
+            /* one eigenvalue reached again on the same mesh: the same value to
+             * Newton's last step, no fine polish needed to tell */
+            int seen = 0;
+            for (size_t k = start_n; k < *n_eig; k++)
+                if (cabs(dv[k].coarse - sc) < 10.0 * x->tol) seen = 1;
+            if (seen) continue;
             sf = sc;
-            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
+            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f, d) != BKF_OK) continue;
             double e = estimate(sc, sf, step_f);
             int dup = 0;
             for (size_t k = start_n; k < *n_eig; k++)
                 if (cabs((eig[k].re + I * eig[k].im) - sf) < 10.0 * fmax(e, x->tol)) dup = 1;
             if (dup) continue;
+            dv[*n_eig].d[0] = d[0], dv[*n_eig].d[1] = d[1], dv[*n_eig].coarse = sc;
             eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), e, cls, 0.0, 0};
             taken++;
         }
@@ -1024,16 +990,17 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
 
 /* The translation mode, polished from 0 where the candidates missed it:
  * the gauge.  Where the traced curves missed it the meshes are too coarse. */
-static void translation(ctx *x, bkf_trainspec_eigenvalue *eig, size_t *n_eig)
+static void translation(ctx *x, bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig)
 {
     size_t k = 0;
     while (k < *n_eig && !(eig[k].j == 0 && hypot(eig[k].re, eig[k].im) < 10.0 * x->tol)) k++;
     if (k == *n_eig) {
-        double complex sc = 0.0, sf;
+        double complex sc = 0.0, sf, *d = dv[*n_eig].d;
         double step_c, step_f = INFINITY;
-        int ok = trainspec_polish(x, &x->coarse, 0.0, &sc, &step_c) == BKF_OK;
+        d[0] = d[1] = NAN;
+        int ok = trainspec_polish(x, &x->coarse, 0.0, &sc, &step_c, d) == BKF_OK;
         sf = sc;
-        ok = ok && trainspec_polish(x, &x->fine, 0.0, &sf, &step_f) == BKF_OK;
+        ok = ok && trainspec_polish(x, &x->fine, 0.0, &sf, &step_f, d) == BKF_OK;
         eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), ok ? estimate(sc, sf, step_f) : INFINITY,
                                                      0, 0.0, 0};
     }
@@ -1053,7 +1020,7 @@ static int unsettled(const ctx *x, const bkf_trainspec_eigenvalue *e)
  * of them beyond both errors (the cut keeps one beyond `keep` only as the
  * conjugate of the keep-th, and one further would be that one's conjugate,
  * the keep-th's own value: a duplicate). */
-static void drop_hidden(bkf_trainspec_eigenvalue *eig, size_t *n_eig, size_t keep)
+static void drop_hidden(bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig, size_t keep)
 {
     size_t w = 0;
     for (size_t i = 0; i < *n_eig; i++) {
@@ -1061,7 +1028,7 @@ static void drop_hidden(bkf_trainspec_eigenvalue *eig, size_t *n_eig, size_t kee
         for (size_t k = 0; k < *n_eig; k++)
             right += k != i && eig[k].j == eig[i].j && !eig[k].translation &&
                      eig[k].re - eig[k].err > eig[i].re + eig[i].err;
-        if (eig[i].translation || right < keep + 1) eig[w++] = eig[i];
+        if (eig[i].translation || right < keep + 1) dv[w] = dv[i], eig[w++] = eig[i];
     }
     *n_eig = w;
 }
@@ -1071,7 +1038,7 @@ static void drop_hidden(bkf_trainspec_eigenvalue *eig, size_t *n_eig, size_t kee
  * coarse mesh is the old fine one, on which the values in hand were
  * polished, so only the fine polish is redone, and only for the
  * eigenvalues whose estimate is still above tol (the others keep theirs). */
-static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, size_t n_eig, bkf_error *err)
+static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, derivs *dv, size_t n_eig, bkf_error *err)
 {
     /* per eigenvalue, the substeps of the fine mesh its value was polished on */
     size_t *on = malloc((n_eig ? n_eig : 1) * sizeof *on);
@@ -1102,9 +1069,10 @@ static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, size_t 
             double theta = 2.0 * M_PI * (double)eig[k].j / (double)classes;
             double complex sc = eig[k].re + I * eig[k].im, sf;
             double step_c = 0.0, step_f;
-            if (on[k] != x->substeps && trainspec_polish(x, &x->coarse, theta, &sc, &step_c) != BKF_OK) continue;
+            if (on[k] != x->substeps && trainspec_polish(x, &x->coarse, theta, &sc, &step_c, dv[k].d) != BKF_OK)
+                continue;
             sf = sc;
-            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f) != BKF_OK) continue;
+            if (trainspec_polish(x, &x->fine, theta, &sf, &step_f, dv[k].d) != BKF_OK) continue;
             eig[k].re = creal(sf);
             eig[k].im = cimag(sf);
             eig[k].err = estimate(sc, sf, step_f);
@@ -1156,9 +1124,9 @@ static int confirm_band(const hill_stage *hs, const bkf_trainspec_eigenvalue *ei
     for (size_t k = 0; k < hs->count; k++) miss = fmin(miss, cabs(hs->at[k] - top));
     if (isfinite(creal(top)) && !(miss <= HILL_AGREE * (1.0 + cabs(top))))
         return bkf_error_set(err, BKF_ETOL,
-                             "spectrum: the curves could not be traced (%s); Hill's method at %zu modes and "
-                             "the Radau meshes disagree on the rightmost eigenvalue by %.3g",
-                             trace_err->message, hs->modes, miss);
+                             "spectrum: Hill's method at %zu modes and the Radau meshes disagree on the "
+                             "rightmost eigenvalue by %.3g (%s)",
+                             hs->modes, miss, trace_err->message);
     return BKF_OK;
 }
 
@@ -1173,23 +1141,27 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     int fallback = 0;
     size_t n_eig = 0;
     bkf_trainspec_eigenvalue *eig = NULL;
-    int rc = gather(x, classes, win, &cs, &hs, y_max, curve_points, &fallback, &trace_err, err);
+    derivs *dv = NULL;
+    int rc = gather(x, classes, keep, win, &cs, &hs, y_max, curve_points, &fallback, &trace_err, err);
     *hill_modes = hs.modes;
     size_t polish_n = (keep > 3 ? keep : 3) + 2;
     if (rc == BKF_OK) {
         eig = calloc(2 * (classes + 2) * (polish_n + HILL_PER_CLASS + 1), sizeof *eig);
-        if (!eig) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        dv = calloc(2 * (classes + 2) * (polish_n + HILL_PER_CLASS + 1), sizeof *dv);
+        if (!eig || !dv) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
+    if (rc == BKF_OK) rc = meshes_for_polish(x, classes, polish_n, &cs, err);
     if (rc == BKF_OK) {
-        polish_candidates(x, classes, keep, &cs, eig, &n_eig);
-        translation(x, eig, &n_eig);
-        drop_hidden(eig, &n_eig, keep);
-        rc = refine(x, classes, eig, n_eig, err);
+        polish_candidates(x, classes, keep, &cs, eig, dv, &n_eig);
+        translation(x, eig, dv, &n_eig);
+        drop_hidden(eig, dv, &n_eig, keep);
+        rc = refine(x, classes, eig, dv, n_eig, err);
     }
     if (rc == BKF_OK) mirror_and_cut(classes, keep, eig, &n_eig);
     if (rc == BKF_OK && fallback) rc = confirm_band(&hs, eig, n_eig, &trace_err, err);
-    free(hs.at);
+    trainspec_hill_stage_free(&hs);
     free(cs.items);
+    free(dv);
     if (rc != BKF_OK) {
         free(eig);
         return rc;
@@ -1289,6 +1261,10 @@ int bkf_trainspec_root(const bkf_model_params *params, const bkf_speeds_root *ro
                        size_t per_kappa, bkf_trainspec_result *result, bkf_error *err)
 {
     if (!root) return bkf_error_set(err, BKF_EINPUT, "root is NULL");
+    if (root->status != BKF_OK) {
+        if (result) memset(result, 0, sizeof *result);
+        return bkf_speeds_root_status(root, err);
+    }
     bkf_trainspec_train train = {root->n, root->v};
     bkf_trainspec_options o = bkf_trainspec_options_default();
     o.tol = tol;

@@ -8,8 +8,10 @@
 #include <complex.h>
 #include <signal.h>
 #include <stddef.h>
+#include <stdlib.h>
 
 #include "bkfront/cycle.h"
+#include "bkfront/hill.h"
 #include "bkfront/trainspec.h"
 
 #define TOL_MIN BKF_TRAINSPEC_TOL_MIN
@@ -116,9 +118,76 @@ void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, dou
                                 double complex *dp, double *scale);
 /* phase wrapped into [-pi, pi) */
 double trainspec_wrap(double phase);
-/* Newton on the multiplier exp(i theta) over mesh m from *sigma. */
-int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step);
+/* Newton on the multiplier exp(i theta) over mesh m from *sigma; deriv (may
+ * be NULL): both families' sigma-derivatives from a coarser mesh's polish,
+ * used in place of a pass with the derivative, and the last computed ones. */
+int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma, double *last_step,
+                     double complex deriv[2]);
 /* The reason a search was cut short (budget, cancel), over rc. */
 int trainspec_stopped(const ctx *x, int rc, bkf_error *err);
+
+/* The window searched: Re sigma in [a_lo, a_hi]. */
+typedef struct {
+    double a_lo, a_hi;
+} window;
+
+/* Candidates for eigenvalues, from the traced curves and from Hill's method. */
+typedef struct {
+    double a, y;   /* interpolated sigma */
+    size_t cls;    /* phase class: the multiplier's phase is 2 pi cls / classes */
+    int fam;
+    int conj;      /* mirrored from y > 0 */
+} candidate;
+
+typedef struct {
+    candidate *items;
+    size_t count, cap;
+} candidates;
+
+/* Appends c (BKF_ENOMEM when out of memory). */
+static inline int trainspec_cand_push(candidates *cs, candidate c)
+{
+    if (cs->count == cs->cap) {
+        size_t cap = cs->cap ? 2 * cs->cap : 1024;
+        candidate *g = realloc(cs->items, cap * sizeof *g);
+        if (!g) return BKF_ENOMEM;
+        cs->items = g;
+        cs->cap = cap;
+    }
+    cs->items[cs->count++] = c;
+    return BKF_OK;
+}
+
+/* Hill's stage (trainspec_hill.c). */
+/* Hill's converged eigenvalues polished, per class, at most (the rightmost first). */
+#define HILL_PER_CLASS 6
+/* Hill's value and the polished one agree this well (relative to 1 +
+ * |sigma|) where Hill's band stands alone */
+#define HILL_AGREE 1e-3
+/* the share of the work budget the trace may spend where Hill answered */
+#define HILL_TRACE_SHARE 0.2
+
+typedef struct {
+    size_t modes;        /* M, 0 when Hill was not used */
+    size_t modes_fine;   /* the finer truncation compared with M */
+    double y_trust;      /* the band's height: the largest |Im sigma| converged */
+    int complete;        /* in every class, no unconverged eigenvalue lies right of the
+                            converged ones: Hill vouches for the rightmost of its band */
+    int descended;       /* the spectrum leaves the band (HILL_DESCENT) */
+    double complex *at;  /* candidates pushed (for the agreement check) */
+    size_t count;
+    size_t thetas;       /* classes 0..classes/2 */
+    bkf_hill_eigenvalue *fine;  /* per class, the spectrum at modes_fine (the next round's coarse) */
+    bkf_hill_eigenvalue *conv;  /* scratch: every class's converged eigenvalues */
+    double work;         /* sizes cubed solved so far */
+} hill_stage;
+
+/* Hill's first round (mu <= HILL_MU_MAX and within HILL_WORK; h->modes 0
+ * otherwise): its converged eigenvalues right of a_lo into cs. */
+int trainspec_hill_candidates(ctx *x, size_t classes, const window *win, candidates *cs, hill_stage *h,
+                              bkf_error *err);
+/* M grown until the band vouches for its rightmost or the cost is spent. */
+int trainspec_hill_grow(ctx *x, size_t classes, const window *win, candidates *cs, hill_stage *h, bkf_error *err);
+void trainspec_hill_stage_free(hill_stage *h);
 
 #endif

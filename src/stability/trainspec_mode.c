@@ -27,7 +27,7 @@ static int one_eigenvalue(ctx *x, const bkf_model_params *p, const bkf_trainspec
     if (rc != BKF_OK) return rc;
     double step;
     double complex s = *sigma;
-    int prc = trainspec_polish(x, &x->fine, 2.0 * M_PI * (double)j / (double)t->n, &s, &step);
+    int prc = trainspec_polish(x, &x->fine, 2.0 * M_PI * (double)j / (double)t->n, &s, &step, NULL);
     if (x->stop) return trainspec_stopped(x, prc, err);
     if (prc != BKF_OK)
         return bkf_error_set(err, BKF_ENUMERIC,

@@ -827,6 +827,7 @@ int bkf_chainwave_from_continuum(const bkf_model_params *p, size_t n, size_t roo
         s = bkf_error_set(err, BKF_EINPUT, "root = %zu is outside [1, %zu] (the continuum's "
                           "roots for n = %zu)", root_index, tab.count, n);
     double v = 0, mu = 0;
+    if (!s) s = bkf_speeds_root_status(&tab.roots[root_index - 1], err);
     if (!s) {
         v = tab.roots[root_index - 1].v;
         mu = tab.roots[root_index - 1].mu;

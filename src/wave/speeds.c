@@ -90,11 +90,22 @@ void speeds_fill_row(const bkf_model_params *p, double k, const found_root *f,
     double n = f->n;
     memset(row, 0, sizeof *row);
     row->n = (size_t)n;
-    row->T = f->T;
-    row->T_err = f->T_err;
     row->wavelength = p->S / n;
     row->v_asym = p->S / (n * k * p->gamma);
     row->flags = f->flags;
+    row->tol_met = NAN;
+    if (f->status != BKF_OK) {
+        /* where the looser root lies is in the refusal's text, not in v */
+        row->status = f->status;
+        row->flags |= BKF_SPEEDS_REFUSED;
+        row->tol_met = f->tol_met;
+        snprintf(row->refusal, sizeof row->refusal, "%s", f->why);
+        row->v = row->mu = row->T = row->T_err = row->v_over_c = NAN;
+        row->period_fixed = row->deviation = row->v_err = row->residual = row->slope = NAN;
+        return;
+    }
+    row->T = f->T;
+    row->T_err = f->T_err;
     row->slope = f->slope;
     row->model = f->model;
     double uT = f->T_err / f->T;
@@ -118,6 +129,27 @@ void speeds_fill_row(const bkf_model_params *p, double k, const found_root *f,
         row->v_err = row->v * (uT + 4.0 * DBL_EPSILON);
     }
     row->deviation = (row->v - row->v_asym) / row->v;
+}
+
+int bkf_speeds_root_status(const bkf_speeds_root *root, bkf_error *err)
+{
+    if (!root) return bkf_error_set(err, BKF_EINPUT, "root is NULL");
+    if (root->status == BKF_OK) return BKF_OK;
+    return bkf_error_set(err, root->status, "n = %zu: %s", root->n, root->refusal);
+}
+
+int bkf_speeds_nearest(const bkf_speeds_table *t, double v, size_t *index, bkf_error *err)
+{
+    if (!t || !index) return bkf_error_set(err, BKF_EINPUT, "table or index is NULL");
+    if (t->count == 0) return bkf_error_set(err, BKF_ENUMERIC, "no root");
+    size_t best = 0;
+    for (size_t i = 0; i < t->count; i++) {
+        int rc = bkf_speeds_root_status(&t->roots[i], err);
+        if (rc) return rc;
+        if (v > 0 && fabs(t->roots[i].v - v) < fabs(t->roots[best].v - v)) best = i;
+    }
+    *index = best;
+    return BKF_OK;
 }
 
 static int push_root(bkf_speeds_table *t, size_t *cap, const bkf_speeds_root *r, bkf_error *err)
@@ -173,13 +205,288 @@ static int find_c0(const bkf_model_params *p, const bkf_speeds_options *o, bkf_s
     t->g_inf = NAN;
     size_t last = o->n_to ? o->n_to : o->n_from + BKF_SPEEDS_ROWS_C0 - 1, cap = 0;
     for (size_t n = o->n_from; n <= last; n++) {
-        found_root f = {(double)n, 0, r.period, r.period_err, 0, 0, 0, r.model};
+        found_root f = {.n = (double)n, .T = r.period, .T_err = r.period_err, .model = r.model};
         bkf_speeds_root row;
         speeds_fill_row(p, t->k, &f, &row);
         if ((rc = push_root(t, &cap, &row, err))) return rc;
     }
     append_note(t, "c = 0: every n has the front v = S/(n T(gamma)), mu = gamma");
     return BKF_OK;
+}
+
+/* The roots found so far, in the order of the cells. */
+typedef struct {
+    found_root *x;
+    size_t count, cap;
+} found_list;
+
+/* A new slot at the end of f, or NULL (out of memory). */
+static found_root *found_next(found_list *f)
+{
+    if (f->count == f->cap) {
+        size_t nc = f->cap ? 2 * f->cap : 16;
+        found_root *x = realloc(f->x, nc * sizeof *x);
+        if (!x) return NULL;
+        f->x = x;
+        f->cap = nc;
+    }
+    return &f->x[f->count];
+}
+
+/* The grid's model and constants for p and o (its solvers allocated). */
+static int search_init(search *sr, const bkf_model_params *p, const bkf_speeds_options *o,
+                       double k, bkf_error *err)
+{
+    memset(sr, 0, sizeof *sr);
+    grid *g = &sr->g;
+    g->p = *p;
+    g->tol = o->tol;
+    g->tol_coarse = fmax(o->tol, COARSE_TOL);
+    g->method = o->method;
+    g->k = k;
+    g->lnk = log(k);
+    g->knee = bkf_asym_knee_coefficient(p->nu);
+    g->logc = bkf_asym_log_coefficient(p->nu);
+    g->lnA = log(p->S) - log(p->c) - log(p->gamma);
+    g->coarse = bkf_cycle_alloc();
+    g->precise = bkf_cycle_alloc();
+    if (!g->coarse || !g->precise) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    return BKF_OK;
+}
+
+/* The grid, its certificate and n_max; the levels asked for (sr->n_from,
+ * n_last) and the table's range of n. */
+static int search_levels(search *sr, const bkf_speeds_options *o, bkf_speeds_table *t,
+                         bkf_error *err)
+{
+    grid *g = &sr->g;
+    double T_gamma, T_gamma_err;
+    int rc = speeds_solve_T(g, g->p.gamma, 0, &T_gamma, &T_gamma_err, err);
+    if (rc) return rc;
+    sr->n_from = (double)o->n_from;
+    double n_star = ceil(exp(g->lnA - g->lnk)) - 1.0; /* levels strictly above k */
+    double n_req_last = o->n_to ? (double)o->n_to : sr->n_from + BKF_SPEEDS_MAX_ROWS - 1;
+    /* The grid, its refinement and its precise samples are those of the
+     * whole table (levels 1 .. BKF_SPEEDS_MAX_ROWS, or the last requested
+     * if beyond), so a root does not depend on which rows were asked for:
+     * speeds --n 4 gave 0.48545916040133913 where the table gave
+     * 0.48545916040196629 (issue 36). */
+    double grid_last = fmax(n_req_last, (double)BKF_SPEEDS_MAX_ROWS);
+    double n_target = fmin(grid_last, n_star);
+    if (n_target < 1) n_target = 0;
+    if ((rc = speeds_first_sample(sr, log(T_gamma), T_gamma_err / T_gamma + 8.0 * DBL_EPSILON,
+                                  fmax(level(g, 1.0), g->lnk), err)))
+        return rc;
+    if ((rc = speeds_build_grid(sr, n_target, err))) return rc;
+    if ((rc = speeds_find_n_max(sr, err))) return rc;
+    t->n_max = (long)sr->n_max;
+    t->dips_below_k = sr->dips;
+    t->g_inf = sr->dips ? exp(sr->g_inf_ln) : t->k;
+    sr->n_last = fmin(n_req_last, sr->n_max);
+    sr->grid_last = fmin(grid_last, sr->n_max);
+    if (!o->n_to && sr->n_max > n_req_last) t->truncated = 1;
+    return BKF_OK;
+}
+
+/* A root of level n bracketed in cell i that speeds_polish could not have
+ * to tol (its failure in pe).  Had at a looser tolerance, the root exists
+ * and the tol asked is beyond what T gives there: a refused row that says
+ * the tol it has (issue 31: a table refused whole for one such root lost
+ * every other row; before that, at tol 1e-14 the paper's table kept 4 of
+ * its 12 rows, exit 0).  A formula asked for that does not meet what the
+ * root needs is refused as it stands.  Not had at all (inside a canard
+ * explosion T jumps across the level): *refused stays 0 and the place is
+ * reported as unresolved. */
+static void refuse_root(search *sr, gsl_root_fsolver *fs, double n, size_t i, const bkf_error *pe,
+                        found_root *out, int *refused)
+{
+    grid *g = &sr->g;
+    *refused = 0;
+    if (g->formula_refused && g->method != BKF_METHOD_AUTO) {
+        *out = (found_root){.n = n, .s = g->x[i].s, .status = BKF_ETOL, .tol_met = NAN};
+        snprintf(out->why, sizeof out->why, "%s", pe->message);
+        *refused = 1;
+        return;
+    }
+    const double factors[] = LOOSE_FACTORS, tol = g->tol;
+    found_root loose;
+    int lrc = BKF_ENUMERIC;
+    for (size_t k = 0; lrc && k < sizeof factors / sizeof factors[0]; k++) {
+        double looser = fmin(factors[k] * tol, BKF_TOL_MAX);
+        if (!(looser > g->tol) || (k >= LOOSE_NEAR && looser > LOOSE_FAR_MAX)) break;
+        bkf_error le = {0};
+        g->tol = looser;
+        g->mu_last[1] = 0;
+        lrc = speeds_polish(g, fs, n, i, &loose, &le);
+    }
+    double met = g->tol;
+    g->tol = tol;
+    if (lrc != BKF_OK) {
+        speeds_note_unresolved(sr, n, g->x[i].mu, "root not polished (T failed)");
+        return;
+    }
+    double mu = mu_of_s(g->p.gamma, loose.s);
+    *out = (found_root){.n = n, .s = loose.s, .status = BKF_ETOL, .tol_met = met};
+    snprintf(out->why, sizeof out->why,
+             "the root near mu = %.6g (v = %.6g) cannot be polished to tol %g, only to %g (%.180s)",
+             mu, g->p.c / sqrt(1.0 - pow(g->p.gamma / mu, 2)), tol, met, pe->message);
+    *refused = 1;
+}
+
+/* Every root bracketed between two samples of the grid, polished (or a
+ * refused row), cell by cell so that precise solves warm-start. */
+static int collect_bracketed(search *sr, gsl_root_fsolver *fs, found_list *f, bkf_error *err)
+{
+    grid *g = &sr->g;
+    for (size_t i = 0; i + 1 < g->count; i++) {
+        cell_info c = speeds_classify(g, i);
+        double first, last;
+        speeds_levels_in(g, c.lo, c.hi, sr->n_from, sr->n_last, &first, &last);
+        for (double n = first; n <= last; n++) {
+            double ell = level(g, n);
+            int da = lng(&g->x[i]) - ell > 0, db = lng(&g->x[i + 1]) - ell > 0;
+            if (da == db) {
+                if (c.shape == CELL_UNKNOWN) speeds_note_unresolved(sr, n, g->x[i].mu, NULL);
+                continue;
+            }
+            found_root *out = found_next(f);
+            if (!out) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            bkf_error pe = {0};
+            /* each root's precise solves start cold: warm from the root
+             * polished before, its value would depend on the rows asked */
+            g->mu_last[1] = 0;
+            int rc = speeds_polish(g, fs, n, i, out, &pe);
+            if (bkf_status_is_numerical(rc)) {
+                int refused;
+                refuse_root(sr, fs, n, i, &pe, out, &refused);
+                if (!refused) continue;
+            } else if (rc) {
+                *err = pe;
+                return rc;
+            }
+            if (c.shape == CELL_UNKNOWN) out->flags |= BKF_SPEEDS_NEAR_TANGENT;
+            f->count++;
+        }
+    }
+    return BKF_OK;
+}
+
+/* The levels whose root lies beyond the last sample, at the grid's cap:
+ * from the large-mu expansion. */
+static int collect_tail(search *sr, found_list *f, bkf_error *err)
+{
+    grid *g = &sr->g;
+    int rc = speeds_upgrade(g, g->count - 1, err);
+    if (rc) return rc;
+    const sample *last = &g->x[g->count - 1];
+    double first, lastn;
+    speeds_levels_in(g, g->lnk, lng(last), sr->n_from, sr->n_last, &first, &lastn);
+    for (double n = first; n <= lastn; n++) {
+        if (!(level(g, n) > g->lnk && level(g, n) < lng(last))) continue;
+        found_root *out = found_next(f);
+        if (!out) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        speeds_asymptotic_root(g, n, out);
+        f->count++;
+    }
+    return BKF_OK;
+}
+
+/* The rows of the roots found, in order, with the folds' flags; the
+ * refused ones counted in the note. */
+static int table_rows(const bkf_model_params *p, found_list *f, bkf_speeds_table *t,
+                      bkf_error *err)
+{
+    found_root *found = f->x;
+    size_t nfound = f->count, cap = 0;
+    qsort(found, nfound, sizeof *found, compare_found);
+    /* two roots of one n close together sit near a fold */
+    for (size_t j = 0; j + 1 < nfound; j++)
+        if (found[j].n == found[j + 1].n && found[j + 1].s - found[j].s < 0.05) {
+            found[j].flags |= BKF_SPEEDS_NEAR_TANGENT;
+            found[j + 1].flags |= BKF_SPEEDS_NEAR_TANGENT;
+        }
+    size_t first = 0;
+    for (size_t j = 0; j < nfound; j++) {
+        bkf_speeds_root row;
+        speeds_fill_row(p, t->k, &found[j], &row);
+        int rc = push_root(t, &cap, &row, err);
+        if (rc) return rc;
+        if (row.status != BKF_OK && t->refused++ == 0) first = row.n;
+    }
+    if (t->refused) {
+        char line[160];
+        snprintf(line, sizeof line, "%zu root(s) refused, not had to tol (flag refused, "
+                 "numbers NaN; the first: n = %zu)", t->refused, first);
+        append_note(t, line);
+    }
+    return BKF_OK;
+}
+
+/* The note's lines on the range of n and what was left unresolved. */
+static void table_notes(const search *sr, const bkf_model_params *p,
+                        const bkf_speeds_options *o, bkf_speeds_table *t)
+{
+    char line[400];
+    if (t->n_max == 0) {
+        if (sr->dips)
+            snprintf(line, sizeof line,
+                     "no front: S/(c gamma) = %.6g is at most the minimum %.6g of "
+                     "T(mu)/sqrt(mu^2 - gamma^2) over mu > gamma (n = 1 needs more)",
+                     exp(sr->g.lnA), t->g_inf);
+        else
+            snprintf(line, sizeof line,
+                     "no front: S = %.6g <= k(nu) c gamma = %.6g (n fronts need "
+                     "S > n k(nu) c gamma)", p->S, t->k * p->c * p->gamma);
+        append_note(t, line);
+    } else if (t->count == 0 && sr->n_from > sr->n_max) {
+        snprintf(line, sizeof line, "no front with n >= %zu: n_max = %ld", o->n_from, t->n_max);
+        append_note(t, line);
+    }
+    if (t->truncated) {
+        snprintf(line, sizeof line, "rows for n <= %.0f only of n_max = %ld", sr->n_last,
+                 t->n_max);
+        append_note(t, line);
+    }
+    if (sr->unresolved) {
+        snprintf(line, sizeof line,
+                 "%zu place(s) left unresolved, where a root or a pair of roots could be "
+                 "missing (first: %s)", sr->unresolved, sr->unresolved_text);
+        append_note(t, line);
+    }
+    t->unresolved = sr->unresolved;
+}
+
+/* The search for c > 0: the grid, then the roots of the levels asked. */
+static int find_search(const bkf_model_params *p, const bkf_speeds_options *o,
+                       bkf_speeds_table *t, bkf_error *err)
+{
+    search sr;
+    found_list found = {0};
+    grid *g = &sr.g;
+    gsl_root_fsolver *fs = gsl_root_fsolver_alloc(gsl_root_fsolver_brent);
+    int rc = search_init(&sr, p, o, t->k, err);
+    if (!rc && !fs) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+    if (!rc) rc = search_levels(&sr, o, t, err);
+    if (!rc && sr.n_last >= sr.n_from) {
+        rc = speeds_resolve_levels(&sr, err);
+        /* the last sample's precise solve, as the table's (the tail's roots) */
+        if (!rc && sr.asym_mu0 > 0) rc = speeds_upgrade(g, g->count - 1, err);
+        if (!rc) rc = collect_bracketed(&sr, fs, &found, err);
+        if (!rc && sr.asym_mu0 > 0) rc = collect_tail(&sr, &found, err);
+        if (!rc) rc = table_rows(p, &found, t, err);
+    }
+    if (!rc) table_notes(&sr, p, o, t);
+    t->samples = g->count;
+    t->coarse_solves = g->coarse_solves;
+    t->precise_solves = g->precise_solves;
+    t->formula_answers = g->formula_answers;
+    t->mu_grid_max = g->mu_max_sampled;
+    free(found.x);
+    free(g->x);
+    bkf_cycle_free(g->coarse);
+    bkf_cycle_free(g->precise);
+    if (fs) gsl_root_fsolver_free(fs);
+    return rc;
 }
 
 static int speeds_find_body(const bkf_model_params *p, const bkf_speeds_options *options,
@@ -193,197 +500,7 @@ static int speeds_find_body(const bkf_model_params *p, const bkf_speeds_options 
     t->k = bkf_asym_k(p->nu);
     t->n_bound = p->c > 0 ? p->S / (t->k * p->c * p->gamma) : INFINITY;
     if (p->c == 0) return find_c0(p, &o, t, err);
-
-    search sr;
-    memset(&sr, 0, sizeof sr);
-    grid *g = &sr.g;
-    g->p = *p;
-    g->tol = o.tol;
-    g->tol_coarse = fmax(o.tol, COARSE_TOL);
-    g->method = o.method;
-    g->k = t->k;
-    g->lnk = log(t->k);
-    g->knee = bkf_asym_knee_coefficient(p->nu);
-    g->logc = bkf_asym_log_coefficient(p->nu);
-    g->lnA = log(p->S) - log(p->c) - log(p->gamma);
-    g->coarse = bkf_cycle_alloc();
-    g->precise = bkf_cycle_alloc();
-    found_root *found = NULL;
-    size_t nfound = 0, found_cap = 0, rows_cap = 0;
-    gsl_root_fsolver *fs = gsl_root_fsolver_alloc(gsl_root_fsolver_brent);
-    if (!g->coarse || !g->precise || !fs) {
-        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        goto done;
-    }
-
-    double T_gamma, T_gamma_err;
-    if ((rc = speeds_solve_T(g, p->gamma, 0, &T_gamma, &T_gamma_err, err))) goto done;
-    sr.n_from = (double)o.n_from;
-    double n_star = ceil(exp(g->lnA - g->lnk)) - 1.0; /* levels strictly above k */
-    double n_req_last = o.n_to ? (double)o.n_to : sr.n_from + BKF_SPEEDS_MAX_ROWS - 1;
-    /* The grid, its refinement and its precise samples are those of the
-     * whole table (levels 1 .. BKF_SPEEDS_MAX_ROWS, or the last requested
-     * if beyond), so a root does not depend on which rows were asked for:
-     * speeds --n 4 gave 0.48545916040133913 where the table gave
-     * 0.48545916040196629 (issue 36). */
-    double grid_last = fmax(n_req_last, (double)BKF_SPEEDS_MAX_ROWS);
-    double n_target = fmin(grid_last, n_star);
-    if (n_target < 1) n_target = 0;
-    if ((rc = speeds_first_sample(&sr, log(T_gamma), T_gamma_err / T_gamma + 8.0 * DBL_EPSILON,
-                           fmax(level(g, 1.0), g->lnk), err)))
-        goto done;
-    if ((rc = speeds_build_grid(&sr, n_target, err))) goto done;
-    if ((rc = speeds_find_n_max(&sr, err))) goto done;
-
-    t->n_max = (long)sr.n_max;
-    t->dips_below_k = sr.dips;
-    t->g_inf = sr.dips ? exp(sr.g_inf_ln) : t->k;
-    sr.n_last = fmin(n_req_last, sr.n_max);
-    sr.grid_last = fmin(grid_last, sr.n_max);
-    if (!o.n_to && sr.n_max > n_req_last) t->truncated = 1;
-
-    if (sr.n_last >= sr.n_from) {
-        if ((rc = speeds_resolve_levels(&sr, err))) goto done;
-        /* the last sample's precise solve, as the table's (the tail's roots) */
-        if (sr.asym_mu0 > 0 && (rc = speeds_upgrade(g, g->count - 1, err))) goto done;
-        /* brackets, cell by cell so that precise solves warm-start */
-        for (size_t i = 0; i + 1 < g->count; i++) {
-            cell_info c = speeds_classify(g, i);
-            double first, last;
-            speeds_levels_in(g, c.lo, c.hi, sr.n_from, sr.n_last, &first, &last);
-            for (double n = first; n <= last; n++) {
-                double ell = level(g, n);
-                int da = lng(&g->x[i]) - ell > 0, db = lng(&g->x[i + 1]) - ell > 0;
-                if (da == db) {
-                    if (c.shape == CELL_UNKNOWN) speeds_note_unresolved(&sr, n, g->x[i].mu, NULL);
-                    continue;
-                }
-                if (nfound == found_cap) {
-                    size_t nc = found_cap ? 2 * found_cap : 16;
-                    found_root *x = realloc(found, nc * sizeof *x);
-                    if (!x) {
-                        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-                        goto done;
-                    }
-                    found = x;
-                    found_cap = nc;
-                }
-                bkf_error pe = {0};
-                /* each root's precise solves start cold: warm from the root
-                 * polished before, its value would depend on the rows asked */
-                g->mu_last[1] = 0;
-                rc = speeds_polish(g, fs, n, i, &found[nfound], &pe);
-                if (bkf_status_is_numerical(rc) && !(g->formula_refused && g->method != BKF_METHOD_AUTO)) {
-                    /* Had at a looser tolerance, the root exists and the tol
-                     * asked is beyond what T gives there: refused, never left
-                     * out of a table that succeeds (issue 31: at tol 1e-14 the
-                     * paper's table kept 4 of its 12 rows, exit 0).  Not had
-                     * at all (inside a canard explosion T jumps across the
-                     * level): reported as unresolved, the other rows stand. */
-                    double tol = g->tol;
-                    found_root loose;
-                    bkf_error le = {0};
-                    g->tol = fmin(LOOSE_FACTOR * tol, BKF_TOL_MAX);
-                    g->mu_last[1] = 0;
-                    int lrc = g->tol > tol ? speeds_polish(g, fs, n, i, &loose, &le) : rc;
-                    g->tol = tol;
-                    if (lrc == BKF_OK) {
-                        rc = bkf_error_set(err, BKF_ETOL,
-                                           "n = %.0f: the root near mu = %.6g (v = %.6g) cannot be polished "
-                                           "to tol %g, only to %g (%s)",
-                                           n, mu_of_s(g->p.gamma, loose.s),
-                                           g->p.c / sqrt(1.0 - pow(g->p.gamma / mu_of_s(g->p.gamma, loose.s), 2)),
-                                           tol, fmin(LOOSE_FACTOR * tol, BKF_TOL_MAX), pe.message);
-                        goto done;
-                    }
-                    speeds_note_unresolved(&sr, n, g->x[i].mu, "root not polished (T failed)");
-                    rc = BKF_OK;
-                    continue;
-                }
-                if (rc) {
-                    *err = pe;
-                    goto done;
-                }
-                if (c.shape == CELL_UNKNOWN) found[nfound].flags |= BKF_SPEEDS_NEAR_TANGENT;
-                nfound++;
-            }
-        }
-        /* levels whose root lies beyond the last sample, at the grid's cap */
-        if (sr.asym_mu0 > 0) {
-            if ((rc = speeds_upgrade(g, g->count - 1, err))) goto done;
-            const sample *last = &g->x[g->count - 1];
-            double first, lastn;
-            speeds_levels_in(g, g->lnk, lng(last), sr.n_from, sr.n_last, &first, &lastn);
-            for (double n = first; n <= lastn; n++) {
-                if (!(level(g, n) > g->lnk && level(g, n) < lng(last))) continue;
-                if (nfound == found_cap) {
-                    size_t nc = found_cap ? 2 * found_cap : 16;
-                    found_root *x = realloc(found, nc * sizeof *x);
-                    if (!x) {
-                        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-                        goto done;
-                    }
-                    found = x;
-                    found_cap = nc;
-                }
-                speeds_asymptotic_root(g, n, &found[nfound++]);
-            }
-        }
-        qsort(found, nfound, sizeof *found, compare_found);
-        /* two roots of one n close together sit near a fold */
-        for (size_t j = 0; j + 1 < nfound; j++)
-            if (found[j].n == found[j + 1].n && found[j + 1].s - found[j].s < 0.05) {
-                found[j].flags |= BKF_SPEEDS_NEAR_TANGENT;
-                found[j + 1].flags |= BKF_SPEEDS_NEAR_TANGENT;
-            }
-        for (size_t j = 0; j < nfound; j++) {
-            bkf_speeds_root row;
-            speeds_fill_row(p, t->k, &found[j], &row);
-            if ((rc = push_root(t, &rows_cap, &row, err))) goto done;
-        }
-    }
-
-    char line[400];
-    if (t->n_max == 0) {
-        if (sr.dips)
-            snprintf(line, sizeof line,
-                     "no front: S/(c gamma) = %.6g is at most the minimum %.6g of "
-                     "T(mu)/sqrt(mu^2 - gamma^2) over mu > gamma (n = 1 needs more)",
-                     exp(g->lnA), t->g_inf);
-        else
-            snprintf(line, sizeof line,
-                     "no front: S = %.6g <= k(nu) c gamma = %.6g (n fronts need "
-                     "S > n k(nu) c gamma)", p->S, t->k * p->c * p->gamma);
-        append_note(t, line);
-    } else if (t->count == 0 && sr.n_from > sr.n_max) {
-        snprintf(line, sizeof line, "no front with n >= %zu: n_max = %ld", o.n_from, t->n_max);
-        append_note(t, line);
-    }
-    if (t->truncated) {
-        snprintf(line, sizeof line, "rows for n <= %.0f only of n_max = %ld", sr.n_last,
-                 t->n_max);
-        append_note(t, line);
-    }
-    if (sr.unresolved) {
-        snprintf(line, sizeof line,
-                 "%zu place(s) left unresolved, where a root or a pair of roots could be "
-                 "missing (first: %s)", sr.unresolved, sr.unresolved_text);
-        append_note(t, line);
-    }
-    t->unresolved = sr.unresolved;
-    rc = BKF_OK;
-done:
-    t->samples = g->count;
-    t->coarse_solves = g->coarse_solves;
-    t->precise_solves = g->precise_solves;
-    t->formula_answers = g->formula_answers;
-    t->mu_grid_max = g->mu_max_sampled;
-    free(found);
-    free(g->x);
-    bkf_cycle_free(g->coarse);
-    bkf_cycle_free(g->precise);
-    if (fs) gsl_root_fsolver_free(fs);
-    return rc;
+    return find_search(p, &o, t, err);
 }
 
 int bkf_speeds_find(const bkf_model_params *p, const bkf_speeds_options *options,

@@ -200,7 +200,7 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
             return 1;
         }
     }
-    found_root f = {b->n, u[0], 0, 0, 0, 0, 0, "shooting"};
+    found_root f = {.n = b->n, .s = u[0], .model = "shooting"};
     if (b->have_last && b->last_u[0] == u[0] && b->last_u[1] == u[1]) {
         f.T = b->last_T;
         f.T_err = b->last_T_err;
@@ -313,7 +313,9 @@ static int speeds_branch_body(const bkf_model_params *start, size_t n, size_t ro
                              root_index, n, param_name(along), from, count);
     }
     double mu0 = t.roots[root_index - 1].mu;
+    rc = bkf_speeds_root_status(&t.roots[root_index - 1], err);
     bkf_speeds_table_free(&t);
+    if (rc) return rc;
 
     branch_ctx b;
     memset(&b, 0, sizeof b);

@@ -104,11 +104,25 @@ typedef struct {
     double n, s, T, T_err, D, slope;
     unsigned flags;
     const char *model;
+    int status;                  /* BKF_OK, or the root is refused (flag BKF_SPEEDS_REFUSED) */
+    double tol_met;              /* refused: the looser tol it was had to, else NaN */
+    char why[BKF_ERROR_LEN];     /* refused: the row's refusal */
 } found_root;
 
-/* A root not polished to tol is tried at this many times tol, to tell a
- * tol beyond what T gives there (refused) from no T at all (unresolved). */
-#define LOOSE_FACTOR 100.0
+/* A root not polished to tol is tried at these many times tol (at most
+ * BKF_TOL_MAX), to tell a tol beyond what T gives there (a refused row,
+ * saying the tol it has) from no T at all (unresolved).  The first that
+ * succeeds is the one said.  Beyond 100 tol only while the looser tol is
+ * at most LOOSE_FAR_MAX: where the cycle solver's own floor (about 1e-9 of
+ * T next to a canard) is what stops a tight tol.  At tol 1e-12 the root
+ * next to the canard at gamma 0.567489, c 0.432606, nu 0.989398,
+ * S 59.5575 (n = 50) is had to 1e-9 only: with 10 and 100 alone it was a
+ * place left unresolved.  A loose tol is not widened that far: at tol 1e-4
+ * a level across a canard's jump (nu -0.9999, mu 35.366) "met" at 0.1 is
+ * no root. */
+#define LOOSE_FACTORS {10.0, 100.0, 1e3, 1e4}
+#define LOOSE_NEAR 2
+#define LOOSE_FAR_MAX 1e-6
 
 /* speeds_search.c */
 int speeds_period_refused(int rc, const bkf_error *e, double nu, bkf_error *err);

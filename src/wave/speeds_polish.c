@@ -203,9 +203,33 @@ static int formula_root(const grid *g, double n, double r0, double width, bkf_as
     double slope = (DF(s + h) - DF(s - h)) / (2.0 * h);
 #undef DF
     double T = bkf_asym_period(f, mu, nu);
-    *out = (found_root){n, s, T, bound * T, log(T) - s - ell, slope, 0,
-                        f == BKF_ASYM_LEADING ? "leading" : "asymptotic"};
+    *out = (found_root){.n = n, .s = s, .T = T, .T_err = bound * T, .D = log(T) - s - ell,
+                        .slope = slope, .model = f == BKF_ASYM_LEADING ? "leading" : "asymptotic"};
     return 1;
+}
+
+/* The slope for the error estimate: the flattest of the interpolated slope
+ * at the root (slope0), the secant from the best point to the farthest one
+ * and the secants from the best point that stand above the noise of T (ten
+ * times the two solves' estimates).  D curves across a cell where T nears
+ * k mu: at mu 1409 (gamma 1, c 1, nu -0.5) d ln T/ds - 1 is -3.9e-4 at the
+ * root, the far secant alone -0.026, and v_err came out 6 times too small. */
+static double estimate_slope(const polish_ctx *pc, const peval *best, double slope0)
+{
+    const peval *far = NULL;
+    for (size_t j = 0; j < pc->nev; j++)
+        if (!far || fabs(pc->ev[j].s - best->s) > fabs(far->s - best->s)) far = &pc->ev[j];
+    double slope = far->s != best->s ? (far->D - best->D) / (far->s - best->s) : slope0;
+    if (!(slope < 0 || slope > 0) || (slope > 0) != (slope0 > 0)) slope = slope0;
+    for (size_t j = 0; j < pc->nev; j++) {
+        const peval *e = &pc->ev[j];
+        double noise = 10.0 * (e->T_err / e->T + best->T_err / best->T);
+        if (e->s == best->s || !(fabs(e->D - best->D) > noise)) continue;
+        double sl = (e->D - best->D) / (e->s - best->s);
+        if ((sl > 0) == (slope0 > 0) && fabs(sl) < fabs(slope)) slope = sl;
+    }
+    if (isfinite(slope0) && fabs(slope0) < fabs(slope)) slope = slope0;
+    return slope;
 }
 
 /* The root of level n in cell i: a precise solve at the interpolated
@@ -324,7 +348,7 @@ int speeds_polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
             if (xu - xl <= 4.0 * DBL_EPSILON * fmax(fabs(xl), fabs(xu)) + DBL_MIN) break;
         }
     }
-    const peval *best = best_eval(&pc), *far = NULL;
+    const peval *best = best_eval(&pc);
     double lo, hi;
     if (fabs(best->D) > target && bracket_of(&pc, &lo, &hi)) {
         /* Brent closed on a jump of T: inside a canard explosion (nu
@@ -348,26 +372,9 @@ int speeds_polish(grid *g, gsl_root_fsolver *fs, double n, size_t i, found_root 
                                  "explosion): no computed T meets it",
                                  n, mu_of_s(g->p.gamma, lo));
     }
-    /* the slope for the error estimate: the flattest of the interpolated
-     * slope at the root, the secant from the best point to the farthest
-     * one and the secants from the best point that stand above the noise
-     * of T (ten times the two solves' estimates).  D curves across a cell
-     * where T nears k mu: at mu 1409 (gamma 1, c 1, nu -0.5) d ln T/ds - 1
-     * is -3.9e-4 at the root, the far secant alone -0.026, and v_err came
-     * out 6 times too small. */
-    for (size_t j = 0; j < pc.nev; j++)
-        if (!far || fabs(pc.ev[j].s - best->s) > fabs(far->s - best->s)) far = &pc.ev[j];
-    double slope = far->s != best->s ? (far->D - best->D) / (far->s - best->s) : slope0;
-    if (!(slope < 0 || slope > 0) || (slope > 0) != (slope0 > 0)) slope = slope0;
-    for (size_t j = 0; j < pc.nev; j++) {
-        const peval *e = &pc.ev[j];
-        double noise = 10.0 * (e->T_err / e->T + best->T_err / best->T);
-        if (e->s == best->s || !(fabs(e->D - best->D) > noise)) continue;
-        double sl = (e->D - best->D) / (e->s - best->s);
-        if ((sl > 0) == (slope0 > 0) && fabs(sl) < fabs(slope)) slope = sl;
-    }
-    if (isfinite(slope0) && fabs(slope0) < fabs(slope)) slope = slope0;
-    *out = (found_root){n, best->s, best->T, best->T_err, best->D, slope, 0, best->model};
+    double slope = estimate_slope(&pc, best, slope0);
+    *out = (found_root){.n = n, .s = best->s, .T = best->T, .T_err = best->T_err, .D = best->D,
+                        .slope = slope, .model = best->model};
     return BKF_OK;
 }
 
@@ -391,7 +398,8 @@ void speeds_asymptotic_root(const grid *g, double n, found_root *out)
     double h = 1e-6;
     double slope = (log(bkf_asym_period_large(mu_of_s(g->p.gamma, s + h), g->p.nu)) -
                     log(bkf_asym_period_large(mu_of_s(g->p.gamma, s - h), g->p.nu))) / (2 * h) - 1.0;
-    *out = (found_root){n, s, T, rem + last->T_err * last->mu / mu, log(T) - s - ell, slope,
-                        BKF_SPEEDS_ASYMPTOTIC, "asymptotic"};
+    *out = (found_root){.n = n, .s = s, .T = T, .T_err = rem + last->T_err * last->mu / mu,
+                        .D = log(T) - s - ell, .slope = slope, .flags = BKF_SPEEDS_ASYMPTOTIC,
+                        .model = "asymptotic"};
 }
 

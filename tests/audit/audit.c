@@ -298,6 +298,10 @@ static void audit_root(ctx *x, const bkf_speeds_root *rt, double tol)
 {
     char repro[300];
     snprintf(repro, sizeof repro, "bkfront speeds %s --n %zu --tol %g", x->model, rt->n, tol);
+    if (rt->status != BKF_OK) {
+        add_row(x, "speeds", AUDIT_REFUSAL, repro, "n %zu refused: %s", rt->n, rt->refusal);
+        return;
+    }
     if (!isfinite(rt->v) || !isfinite(rt->mu) || !isfinite(rt->T) || !isfinite(rt->T_err) || !isfinite(rt->v_err)) {
         add_row(x, "speeds", AUDIT_DEFECT, repro, "n %zu: v %g mu %g T %g T_err %g v_err %g: a row not finite",
                 rt->n, rt->v, rt->mu, rt->T, rt->T_err, rt->v_err);
@@ -355,26 +359,33 @@ static void audit_scan(ctx *x, const bkf_speeds_table *t)
     bkf_cycle_free(cy);
     char repro[300];
     snprintf(repro, sizeof repro, "bkfront speeds %s --tol 1e-10", x->model);
-    size_t lost = 0, found = 0;
+    size_t lost = 0, found = 0, refused_n = 0;
     char first[200] = "";
     for (size_t n = 1; n <= x->opt->n_max; n++) {
         for (int i = 0; i + 1 < SCAN_POINTS; i++) {
             double a = (double)n * h[i] - 1.0, b = (double)n * h[i + 1] - 1.0;
             if (!isfinite(a) || !isfinite(b) || (a > 0) == (b > 0)) continue;
             found++;
-            int matched = 0;
-            for (size_t k = 0; k < t->count; k++)
+            int matched = 0, flagged = 0;
+            for (size_t k = 0; k < t->count; k++) {
                 if (t->roots[k].n == n && t->roots[k].mu >= mu[i] * (1 - 1e-9) && t->roots[k].mu <= mu[i + 1] * (1 + 1e-9))
                     matched = 1;
+                /* a refused row of this n has no mu to match: it is there, flagged */
+                flagged |= t->roots[k].n == n && t->roots[k].status != BKF_OK;
+            }
             if (!matched) {
                 if (!lost)
                     snprintf(first, sizeof first, "n %zu: n T v s / S - 1 changes sign over mu [%.6g, %.6g]", n,
                              mu[i], mu[i + 1]);
                 lost++;
+                refused_n += flagged;
             }
         }
     }
-    if (lost && t->unresolved)
+    if (lost && lost == refused_n)
+        add_row(x, "speeds-scan", AUDIT_REFUSAL, repro, "%zu of %zu scanned roots not matched, each n with a "
+                "refused row: %s", lost, found, t->note);
+    else if (lost && t->unresolved)
         add_row(x, "speeds-scan", AUDIT_REFUSAL, repro, "%zu of %zu scanned roots missing, flagged unresolved: %s",
                 lost, found, t->note);
     else
@@ -407,6 +418,9 @@ static void audit_tight(ctx *x, const bkf_speeds_table *loose)
     if (lost && t.unresolved)
         add_row(x, "speeds-tight", AUDIT_REFUSAL, repro, "%zu roots of tol 1e-10 not at tol %g, flagged: %s", lost,
                 tol, t.note);
+    else if (!lost && t.refused)
+        add_row(x, "speeds-tight", AUDIT_REFUSAL, repro, "%zu of %zu rows refused at tol %g, none lost: %s",
+                t.refused, t.count, tol, t.note);
     else
         add_row(x, "speeds-tight", lost ? AUDIT_DEFECT : AUDIT_OK, repro,
                 "%zu rows at tol %g, %zu at 1e-10; %zu lost silently (first n %zu)", t.count, tol, loose->count, lost,
@@ -484,6 +498,11 @@ static void audit_spectrum(ctx *x, const bkf_speeds_root *rt, size_t root_index,
 {
     char repro[300];
     snprintf(repro, sizeof repro, "bkfront stability %s --n %zu --root %zu", x->model, rt->n, root_index);
+    if (rt->status != BKF_OK) {
+        *hill_out = (hill_answer){0, NAN, NAN, NAN};
+        add_row(x, "stability", AUDIT_REFUSAL, repro, "n %zu: its speed refused: %s", rt->n, rt->refusal);
+        return;
+    }
     hill_answer h = hill_rightmost(&x->p, rt);
     *hill_out = h;
     stage("hill");
@@ -584,7 +603,7 @@ static void audit_check(ctx *x, const bkf_speeds_table *t, const hill_answer *hi
                 if (t->roots[k].n != r->n) continue;
                 size_t idx = 0;
                 for (size_t m = 0; m <= k; m++) idx += t->roots[m].n == r->n;
-                if (idx == r->root) h = hill_rightmost(&x->p, &t->roots[k]);
+                if (idx == r->root && t->roots[k].status == BKF_OK) h = hill_rightmost(&x->p, &t->roots[k]);
             }
         }
         int hill_unstable = h.decided && h.re > AUDIT_HONESTY * h.err && h.re > 1e-9;

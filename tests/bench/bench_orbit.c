@@ -1,14 +1,19 @@
 /* Benchmark of the periodic-orbit solver: CPU seconds (one core) of the
  * global oscillation as an orbit at the paper's parameters (gamma 2, c 0.3,
  * nu -0.96, S 20) to tol 1e-8, and of its ten leading multipliers, at two
- * grids.  Goals (issue 34): the orbit under 10 s, ten multipliers under 5 s. */
+ * grids; then the branch of period-doubled orbits of `bkfront orbit` at its
+ * defaults (50 points with their multipliers).  Goals (issue 34): the orbit
+ * under 10 s, ten multipliers under 5 s, the branch under 2 minutes. */
 #define _POSIX_C_SOURCE 200809L
 #include "bkfront/orbit.h"
+#include "bkfront/orbits.h"
 #include "bkfront/pde.h"
 #include "bkfront/floquet.h"
 #include "bench_util.h"
 
+#include <math.h>
 #include <stdio.h>
+#include <string.h>
 #include <time.h>
 
 void bench_orbit(void);
@@ -20,13 +25,52 @@ static double cpu_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+typedef struct {
+    size_t rows, stable, unstable, undecided, refused, matvecs;
+    double largest_err;
+} branch_tally;
+
+static int tally(const bkf_orbits_point *pt, void *data)
+{
+    branch_tally *t = data;
+    if (pt->is_start) return 0;
+    t->rows++;
+    if (strcmp(pt->status, "ok") != 0) t->refused++;
+    else if (pt->verdict == BKF_ORBIT_STABLE) t->stable++;
+    else if (pt->verdict == BKF_ORBIT_UNSTABLE) t->unstable++;
+    else t->undecided++;
+    if (pt->spectrum) t->matvecs += pt->spectrum->matvecs;
+    return 0;
+}
+
+static void bench_branch(void)
+{
+    printf("## orbit: the branch of period-doubled orbits at `bkfront orbit`'s defaults "
+           "(paper's parameters, j = 9, N 288, tol 1e-3, 50 points, k 2 per sector), "
+           "CPU seconds (one core)\n\n");
+    bkf_orbits_options o = bkf_orbits_options_default();
+    branch_tally t;
+    memset(&t, 0, sizeof t);
+    bkf_orbits_report rep;
+    bkf_error e = {0};
+    double t0 = cpu_seconds();
+    int s = bkf_orbits_branch(&o, tally, &t, &rep, &e);
+    double t1 = cpu_seconds();
+    printf("| rows | folds | stable / unstable / undecided / refused | monodromy products | "
+           "CPU | per row | status |\n|---:|---:|---|---:|---:|---:|---|\n");
+    printf("| %zu | %zu | %zu / %zu / %zu / %zu | %zu | %.1f s | %.2f s | %s |\n\n", t.rows,
+           rep.folds, t.stable, t.unstable, t.undecided, t.refused, t.matvecs, t1 - t0,
+           t.rows ? (t1 - t0) / (double)t.rows : 0.0, s ? e.message : "ok");
+    fflush(stdout);
+}
+
 void bench_orbit(void)
 {
     printf("## orbit: the global oscillation as a periodic orbit, paper's parameters, "
            "tol 1e-8, CPU seconds (one core)\n\n");
     printf("| N | orbit | estimate | Newton / Jv | 10 multipliers | monodromy products | "
-           "largest |m| |\n");
-    printf("|---:|---:|---:|---:|---:|---:|---:|\n");
+           "largest |m| | their largest error |\n");
+    printf("|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     const size_t Ns[] = {128, 512};
     for (size_t k = 0; k < 2; k++) {
         bkf_model_params p = {2, 0.3, -0.96, 20, Ns[k], BKF_MODEL_CONTINUUM};
@@ -49,11 +93,13 @@ void bench_orbit(void)
             bkf_orbit_spectrum sp;
             int s2 = s ? s : bkf_orbit_multipliers(ob, NULL, &sp, &e);
             double t2 = cpu_seconds();
+            double merr = 0.0;
+            for (size_t i = 0; !s && !s2 && i < sp.count; i++) merr = fmax(merr, sp.m[i].err);
             if (s || s2) printf("| %zu | failed: %s |\n", Ns[k], e.message);
             else
-                printf("| %zu | %.2f s | %.1e | %zu / %zu | %.2f s | %zu | %.6f |\n", Ns[k],
-                       t1 - t0, r.err, r.newton_iterations, r.jv_products, t2 - t1, sp.matvecs,
-                       sp.largest_abs);
+                printf("| %zu | %.2f s | %.1e | %zu / %zu | %.2f s | %zu | %.6f | %.1e |\n",
+                       Ns[k], t1 - t0, r.err, r.newton_iterations, r.jv_products, t2 - t1,
+                       sp.matvecs, sp.largest_abs, merr);
         }
         fflush(stdout);
         bkf_orbit_free(ob);
@@ -61,4 +107,5 @@ void bench_orbit(void)
         bkf_floquet_free(fq);
     }
     printf("\n");
+    bench_branch();
 }

@@ -263,7 +263,8 @@ TEST(cli_branch_rejects_bad_input)
 /* --method auto at loose tol and large mu: the roots come from a formula
  * (no solve at the roots' tolerance) and agree with shooting's roots within
  * the stated v_err; a formula asked for where its bound exceeds what the
- * root needs exits 1; a bad value exits 2 naming the flag and the values. */
+ * root needs makes refused rows, exit 3; a bad value exits 2 naming the
+ * flag and the values. */
 TEST(cli_speeds_method)
 {
     run_result a = RUN("speeds", "--gamma", "300", "--c", "0.3", "--nu", "0", "--S", "2000",
@@ -287,7 +288,8 @@ TEST(cli_speeds_method)
     }
     run_result r = RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20",
                        "--tol", "1e-2", "--method", "asymptotic");
-    CHECK_MSG(r.code == 1 && r.out[0] == '\0' && strstr(r.err, "error bound") != NULL,
+    CHECK_MSG(r.code == 3 && rows(r.out) == 12 && strstr(r.err, "11 of 12 roots refused") &&
+                  strstr(r.err, "error bound") != NULL,
               "exit %d: %s", r.code, r.err);
     run_result b = RUN("speeds", "--gamma", "2", "--c", "0.3", "--nu", "-0.96", "--S", "20",
                        "--method", "fast");
@@ -363,4 +365,85 @@ TEST(cli_speeds_refusal_near_nu_minus_1_says_what_to_try)
     CHECK_MSG(mentions == 1, "the place is said %d times: %s", mentions, r.err);
     CHECK_MSG(strstr(r.err, "|nu| <= 0.9999") && strstr(r.err, "looser tol"), "no hint: %s", r.err);
     bkf_cli_result_free(&r);
+}
+
+/* R1 of issue 31's independent audit: one root that cannot be had to
+ * --tol (n = 50 next to the canard here, had to 1e-9 only) refused the
+ * whole table, exit 1, nothing written.  Now the table is written with that
+ * root a row flagged refused (v, mu nan, no model), its reason in a comment,
+ * every other row standing, and exit 3 with one line on stderr: a script
+ * tells the partial table from a whole one (0) and from none (1). */
+TEST(cli_speeds_refused_row_keeps_the_table_exit_3)
+{
+    run_result r = RUN("speeds", "--gamma", "0.567489", "--c", "0.432606", "--nu", "0.989398",
+                       "--S", "59.5575");
+    CHECK_MSG(r.code == 3 && bkf_count_lines(r.err) == 1 && strstr(r.err, "roots refused") &&
+                  strstr(r.err, "cannot be polished to tol 1e-10"),
+              "exit %d: %s", r.code, r.err);
+    CHECK(strstr(r.out, speeds_header) != NULL && strstr(r.out, "\n# refused: n = "));
+    int refused = 0, good = 0;
+    for (int i = 0; i < rows(r.out); i++) {
+        char flags[64], model[32];
+        double v, n;
+        CHECK(field(r.out, i, "flags", NULL, flags, sizeof flags) &&
+              field(r.out, i, "model", NULL, model, sizeof model) && field(r.out, i, "v", &v, NULL, 0) &&
+              field(r.out, i, "n", &n, NULL, 0));
+        if (strstr(flags, "refused")) {
+            CHECK_MSG(isnan(v) && model[0] == '\0', "row %d: v %g, model '%s'", i, v, model);
+            refused++;
+        } else {
+            CHECK_MSG(v > 0.432606 && strcmp(model, "shooting") == 0, "row %d: v %g", i, v);
+            good++;
+        }
+    }
+    CHECK_MSG(refused >= 1 && good >= 100, "%d refused, %d good", refused, good);
+    /* JSON (n = 50 alone, cheaper): the count in "results", v null */
+    run_result j = RUN("speeds", "--gamma", "0.567489", "--c", "0.432606", "--nu", "0.989398",
+                       "--S", "59.5575", "--n", "50", "--format", "json");
+    CHECK_MSG(j.code == 3 && bkf_test_json_valid(j.out), "exit %d: %s", j.code, j.err);
+    CHECK_MSG(strstr(j.out, "\"refused\": 1}") && strstr(j.out, "\"v\": null"), "%s", j.out);
+    /* --stability: no spectrum for the refused root, its neighbours' stand */
+    run_result st = RUN("speeds", "--gamma", "0.567489", "--c", "0.432606", "--nu", "0.989398",
+                        "--S", "59.5575", "--n", "50", "--stability");
+    CHECK_MSG(st.code == 3 && rows(st.out) == 3, "exit %d: %s", st.code, st.err);
+    for (int i = 0; i < rows(st.out); i++) {
+        char flags[64], stable[32];
+        double sigma;
+        CHECK(field(st.out, i, "flags", NULL, flags, sizeof flags) &&
+              field(st.out, i, "stable", NULL, stable, sizeof stable) &&
+              field(st.out, i, "sigma_max", &sigma, NULL, 0));
+        if (strstr(flags, "refused"))
+            CHECK_MSG(strcmp(stable, "refused") == 0 && isnan(sigma), "row %d: %s %g", i, stable, sigma);
+        else
+            CHECK_MSG((strcmp(stable, "yes") == 0 || strcmp(stable, "no") == 0) && isfinite(sigma),
+                      "row %d: %s %g", i, stable, sigma);
+    }
+    run_free(&r);
+    run_free(&j);
+    run_free(&st);
+}
+
+/* A product that takes one root as its input refuses a refused one with
+ * its reason (exit 1, nothing written), never a train at v = nan; the
+ * other roots of that n stay usable. */
+TEST(cli_refused_root_is_refused_by_its_consumers)
+{
+    run_result st = RUN("stability", "--gamma", "0.567489", "--c", "0.432606", "--nu", "0.989398",
+                        "--S", "59.5575", "--n", "50", "--root", "2");
+    CHECK_MSG(st.code == 1 && st.out[0] == '\0' && bkf_count_lines(st.err) == 1 &&
+                  strstr(st.err, "n = 50: the root near mu = 3.55") &&
+                  strstr(st.err, "cannot be polished to tol 1e-10"),
+              "exit %d: %s", st.code, st.err);
+    run_result br = RUN("branch", "--param", "S", "--from", "59.5575", "--to", "59", "--gamma",
+                        "0.567489", "--c", "0.432606", "--nu", "0.989398", "--n", "50", "--root",
+                        "2", "--max-points", "2");
+    CHECK_MSG(br.code == 1 && br.out[0] == '\0' && strstr(br.err, "cannot be polished"),
+              "exit %d: %s", br.code, br.err);
+    run_result ok = RUN("branch", "--param", "S", "--from", "59.5575", "--to", "59", "--gamma",
+                        "0.567489", "--c", "0.432606", "--nu", "0.989398", "--n", "50", "--root",
+                        "1", "--max-points", "2");
+    CHECK_MSG(ok.code == 0 && rows(ok.out) >= 2, "exit %d: %s", ok.code, ok.err);
+    run_free(&st);
+    run_free(&br);
+    run_free(&ok);
 }

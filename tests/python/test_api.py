@@ -82,6 +82,23 @@ def test_speeds_satisfy_the_speed_condition_and_the_paper():
     assert round(float(v[n == 6][0]), 4) == 0.3750
 
 
+def test_speeds_refused_rows_stay_rows_with_a_warning():
+    # issue 31, R1: one root near the canard cannot be had to tol 1e-10;
+    # the table keeps it as a row flagged refused (v nan), every other row
+    # stands (a root of the condition), and a RuntimeWarning says why
+    gamma, c, nu, S = 0.567489, 0.432606, 0.989398, 59.5575
+    with pytest.warns(RuntimeWarning, match="roots refused"):
+        t = bkfront.speeds(gamma, c, nu, S)
+    refused = np.char.find(t["flags"], "refused") >= 0
+    assert t.results["refused"] == refused.sum() >= 1
+    assert np.all(np.isnan(t["v"][refused])) and np.all(t["model"][refused] == "")
+    good = ~refused & (t["n"] <= 20)
+    v, n = t["v"][good], t["n"][good]
+    root = np.sqrt(1 - c**2 / v**2)
+    T = bkfront.period(gamma / root, nu)
+    assert len(v) == 20 and np.all(np.abs(n * T * v * root / S - 1) < 1e-8)
+
+
 def test_floquet_threshold_is_the_period_doubling(cli):
     t = bkfront.floquet(2, 0.3, threshold=True)
     cols, rows = tsv(cli("floquet", "--gamma", 2, "--c", 0.3, "--threshold").stdout)

@@ -317,6 +317,34 @@ TEST(trainspec_rightmost_beside_the_translation_and_where_curves_fail)
     rightmost_is_hills(u, 32, 1e-7, 5.4e-3, 5.5e-3);
 }
 
+/* Issue 31, audit defect R2: n = 1 at mu 4.9 (gamma 4.89746, c 0.112987,
+ * nu -0.140938, S 42.5571) was refused ("needs more than 2.5e+07 Radau
+ * steps": some 300 eigenvalues per family below the curves' height 160)
+ * while Hill's method converges at M 96-160 (sigma_max +0.0283857 + 24.485i
+ * from an independent Hill code at M 160): the Hill stage stopped at 64
+ * modes.  Now M grows until the band vouches for its rightmost (to 125
+ * modes against 156). */
+TEST(trainspec_hill_grows_where_the_curves_run_out_mu_4_9)
+{
+    bkf_model_params p = {4.89746, 0.112987, -0.140938, 42.5571, 0, BKF_MODEL_CONTINUUM};
+    bkf_trainspec_train t = {1, root_v(p, 1)};
+    bkf_trainspec_options o = bkf_trainspec_options_default();
+    o.per_kappa = 1;
+    bkf_trainspec_result r;
+    bkf_error e;
+    int rc = bkf_trainspec_ring(&p, &t, &o, &r, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    if (rc != BKF_OK) return;
+    bkf_test_note("mu %.4g: sigma_max %.10g%+.8gi (err %.2g), Hill at %zu modes, work %.3g", r.mu, r.sigma_max,
+                  r.sigma_max_im, r.sigma_max_err, r.hill_modes, r.work);
+    CHECK(r.hill_modes > 64 && r.curve_points == 0);
+    /* the independent value, given to 6 digits */
+    CHECK_MSG(fabs(r.sigma_max - 0.0283857) <= r.sigma_max_err + 5e-8, "sigma_max %.10g", r.sigma_max);
+    CHECK_MSG(fabs(fabs(r.sigma_max_im) - 24.485) <= r.sigma_max_err + 5e-4, "Im %.10g", r.sigma_max_im);
+    CHECK(r.sigma_max_err <= o.tol && r.verdict == BKF_TRAINSPEC_UNSTABLE);
+    bkf_trainspec_result_free(&r);
+}
+
 /* Issue 31, defect 5: the line at kappa 0 is the ring's class j = 0 (its
  * rightmost, translation included: 0.0697 at the paper's n = 2, where the
  * line printed the translation 8.8e-11). */
@@ -426,7 +454,9 @@ TEST(trainspec_fast_path_matches_hill_and_a_finer_mesh_on_random_sets)
  * Radau steps (work: a pass with the sigma-derivative counts twice) and
  * monodromies, the measure of time that load does not blur.  Before the
  * derivative joined the monodromy's pass and the refinement reused its
- * meshes it took 1.38e7 steps and 2358 monodromies; the value itself is
+ * meshes it took 1.38e7 steps and 2358 monodromies; before the polish
+ * stepped with the coarse derivative on meshes for the candidates' |sigma|
+ * (not the window's 2.8), 4.36e6 steps; now 1.79e6.  The value itself is
  * held to Hill-independent references by the tests above. */
 TEST(trainspec_thinnest_paper_train_within_its_work)
 {
@@ -434,7 +464,7 @@ TEST(trainspec_thinnest_paper_train_within_its_work)
     bkf_trainspec_result r = ring(p, 12, root_v(p, 12), 1e-6);
     bkf_test_note("n 12: work %.4g Radau steps, %zu monodromies, sigma_max %.10g (err %.2g)", r.work, r.evaluations,
                   r.sigma_max, r.sigma_max_err);
-    CHECK_MSG(r.work < 1e7 && r.evaluations < 1200, "work %.4g, %zu monodromies", r.work, r.evaluations);
+    CHECK_MSG(r.work < 2.5e6 && r.evaluations < 1200, "work %.4g, %zu monodromies", r.work, r.evaluations);
     CHECK(r.sigma_max > 0.002295 && r.sigma_max < 0.0022952);
     bkf_trainspec_result_free(&r);
 }
