@@ -582,6 +582,59 @@ static bkf_comoving *relaxed_wavelength(const bkf_comoving_params *params, bkf_e
     return NULL; /* not reached: the last rung returns */
 }
 
+/* The grid's arrays; nonzero when one is missing (the caller's failure path frees
+ * those that were had). */
+static int alloc_arrays(bkf_comoving *m)
+{
+    size_t M = m->M, mm = m->m;
+    m->xi = malloc(M * sizeof *m->xi);
+    m->gp = malloc(M * sizeof *m->gp);
+    m->gpp = malloc(M * sizeof *m->gpp);
+    m->inv_gp = malloc(M * sizeof *m->inv_gp);
+    m->damping = malloc(M * sizeof *m->damping);
+    m->zref = malloc(mm * sizeof *m->zref);
+    m->f0 = malloc(mm * sizeof *m->f0);
+    m->f1 = malloc(mm * sizeof *m->f1);
+    m->slot = malloc(M * sizeof *m->slot);
+    m->ub = malloc((M + 2 * R) * sizeof *m->ub);
+    m->eb = malloc((M + 2 * R) * sizeof *m->eb);
+    m->scratch = malloc(M * sizeof *m->scratch);
+    m->ref = malloc(M * sizeof *m->ref);
+    m->xun = malloc((M + 2 * R) * sizeof *m->xun);
+    m->refg = malloc((M + 2 * R) * sizeof *m->refg);
+    m->gpg = malloc((M + 2 * R) * sizeof *m->gpg);
+    m->cross = malloc(M * sizeof *m->cross);
+    m->xc = malloc(M * sizeof *m->xc);
+    return !m->xi || !m->gp || !m->gpp || !m->inv_gp || !m->damping || !m->zref || !m->f0 || !m->f1 ||
+        !m->slot || !m->ub || !m->eb || !m->scratch || !m->ref || !m->xun || !m->refg || !m->gpg ||
+        !m->cross || !m->xc;
+}
+
+/* The first wavelength's grid copied to all n (every wavelength alike), its
+ * unwrapped points, the per-point factors and the banded order. */
+static void replicate_wavelength(bkf_comoving *m)
+{
+    size_t M = m->M, mm = m->m;
+    for (size_t i = 0; i < m->p.n; i++)
+        for (size_t j = 0; j < mm; j++) {
+            size_t k = i * mm + j;
+            m->xi[k] = (double)i * m->lambda + m->xi[j];
+            m->gp[k] = m->gp[j];
+            m->gpp[k] = m->gpp[j];
+        }
+    for (size_t j = 0; j < M + 2 * R; j++) {
+        long i = (long)j - R, q = i < 0 ? -1 : (i >= (long)M ? 1 : 0);
+        m->xun[j] = m->xi[i - q * (long)M] + (double)q * m->p.model.S;
+    }
+    for (size_t j = 0; j < M; j++) {
+        m->inv_gp[j] = 1.0 / m->gp[j];
+        m->damping[j] = DAMPING * (m->p.v + m->p.model.c) / (m->gp[j] * m->h) / 256.0;
+    }
+    /* banded order: 0, M-1, 1, M-2, ... */
+    for (size_t j = 0; j < M; j++) m->slot[j] = j < (M + 1) / 2 ? 2 * j : 2 * (M - 1 - j) + 1;
+
+}
+
 static bkf_comoving *comoving_alloc_body(const bkf_comoving_params *params,
                                          const bkf_comoving *relaxed, bkf_error *err)
 {
@@ -615,27 +668,7 @@ static bkf_comoving *comoving_alloc_body(const bkf_comoving_params *params,
     m->h = m->p.model.S / (double)m->M;
     m->lambda = m->p.model.S / (double)m->p.n;
     size_t M = m->M, mm = m->m;
-    m->xi = malloc(M * sizeof *m->xi);
-    m->gp = malloc(M * sizeof *m->gp);
-    m->gpp = malloc(M * sizeof *m->gpp);
-    m->inv_gp = malloc(M * sizeof *m->inv_gp);
-    m->damping = malloc(M * sizeof *m->damping);
-    m->zref = malloc(mm * sizeof *m->zref);
-    m->f0 = malloc(mm * sizeof *m->f0);
-    m->f1 = malloc(mm * sizeof *m->f1);
-    m->slot = malloc(M * sizeof *m->slot);
-    m->ub = malloc((M + 2 * R) * sizeof *m->ub);
-    m->eb = malloc((M + 2 * R) * sizeof *m->eb);
-    m->scratch = malloc(M * sizeof *m->scratch);
-    m->ref = malloc(M * sizeof *m->ref);
-    m->xun = malloc((M + 2 * R) * sizeof *m->xun);
-    m->refg = malloc((M + 2 * R) * sizeof *m->refg);
-    m->gpg = malloc((M + 2 * R) * sizeof *m->gpg);
-    m->cross = malloc(M * sizeof *m->cross);
-    m->xc = malloc(M * sizeof *m->xc);
-    if (!m->xi || !m->gp || !m->gpp || !m->inv_gp || !m->damping || !m->zref || !m->f0 || !m->f1 ||
-        !m->slot || !m->ub || !m->eb || !m->scratch || !m->ref || !m->xun || !m->refg || !m->gpg ||
-        !m->cross || !m->xc) {
+    if (alloc_arrays(m)) {
         bkf_error_set(err, BKF_ENOMEM, "out of memory");
         goto fail;
     }
@@ -661,24 +694,7 @@ static bkf_comoving *comoving_alloc_body(const bkf_comoving_params *params,
     bkf_cycle_free(cycle);
     if (s) goto fail;
 
-    /* every wavelength alike */
-    for (size_t i = 0; i < m->p.n; i++)
-        for (size_t j = 0; j < mm; j++) {
-            size_t k = i * mm + j;
-            m->xi[k] = (double)i * m->lambda + m->xi[j];
-            m->gp[k] = m->gp[j];
-            m->gpp[k] = m->gpp[j];
-        }
-    for (size_t j = 0; j < M + 2 * R; j++) {
-        long i = (long)j - R, q = i < 0 ? -1 : (i >= (long)M ? 1 : 0);
-        m->xun[j] = m->xi[i - q * (long)M] + (double)q * m->p.model.S;
-    }
-    for (size_t j = 0; j < M; j++) {
-        m->inv_gp[j] = 1.0 / m->gp[j];
-        m->damping[j] = DAMPING * (m->p.v + m->p.model.c) / (m->gp[j] * m->h) / 256.0;
-    }
-    /* banded order: 0, M-1, 1, M-2, ... */
-    for (size_t j = 0; j < M; j++) m->slot[j] = j < (M + 1) / 2 ? 2 * j : 2 * (M - 1 - j) + 1;
+    replicate_wavelength(m);
 
     if (SUNContext_Create(NULL, &m->ctx)) {
         bkf_error_set(err, BKF_ENOMEM, "SUNDIALS context: out of memory");
