@@ -182,8 +182,12 @@ typedef struct {
      *   - the front lost: the count changed (count, growth and speed fits
      *     end there whatever follows, so the row is that of the full run
      *     but for fronts_end, deviation_mid, deviation_end and t_end);
-     *   - from t = BKF_CHECK_AUTO_FIRST on, every BKF_CHECK_AUTO_EVERY, the
-     *     row judged on the run so far (no conflict) is settled:
+     *   - at t = BKF_CHECK_AUTO_UNSTABLE_FIRST (only a row whose spectrum
+     *     is decided unstable by a growth no fit within tmax resolves, with
+     *     a speed measured and its growth undecided: its verdict is
+     *     unstable whatever the run), then from t = BKF_CHECK_AUTO_FIRST on,
+     *     every BKF_CHECK_AUTO_EVERY, the row judged on the run so far (no
+     *     conflict) is settled:
      *       spectrum decided stable: agrees, with |rel_err| + 3 v_meas_err /
      *       v_pred <= rel_tol (the run only confirms the speed);
      *       spectrum decided unstable: a speed measured, and the growth
@@ -203,8 +207,13 @@ typedef struct {
 
 /* The auto runs' checkpoints (see bkf_check_options.runs): the first at
  * t = 40, past the noise's response (t0 = 10) by three times its length, so
- * that a growth fit there spans 30 time units. */
+ * that a growth fit there spans 30 time units.  A row whose spectrum is
+ * decided unstable by a growth no fit within tmax resolves has its verdict
+ * (unstable) whatever the run, which adds only a speed: that row settles
+ * already at t = 20 when its growth fit there decides nothing (its speed
+ * fitted over [10, 20]; the paper's n = 7..11: half the run). */
 #define BKF_CHECK_AUTO_FIRST 40.0
+#define BKF_CHECK_AUTO_UNSTABLE_FIRST 20.0
 #define BKF_CHECK_AUTO_EVERY 20.0
 #define BKF_CHECK_THREADS_MAX 4096
 

@@ -269,10 +269,14 @@ const bkf_option bkf_check_keys[] = {
              "CVODE in time; docs/cli/check.md)"},
     {.name = "points", .type = BKF_OPT_COUNT, .offset = OPT(points), .flags = BOUNDED,
      .min = BKF_CHECK_POINTS_MIN, .max = BKF_CHECK_POINTS_MAX, .form = "M",
-     .shown_default = "768", .help = "adapted grid: points per wavelength,\nin [32, 1048576]"},
+     .shown_default = "768",
+     .help = "adapted grid: the most points per wavelength, in\n"
+             "[32, 1048576]; fewer (M/3, M/2, 2M/3) where they resolve\n"
+             "the wave (--resolution)"},
     {.name = "resolution", .type = BKF_OPT_DOUBLE, .offset = OPT(resolution), .flags = BOUNDED,
      .min = BKF_CHECK_RESOLUTION_MIN, .max = 1, .form = "R", .shown_default = "1e-05",
-     .help = "the spectral tail accepted as resolved,\nin [1e-16, 1]"},
+     .help = "the spectral tail accepted as resolved (adapted grid:\n"
+             "the grid's wave that far from the continuum's),\nin [1e-16, 1]"},
     {.name = "mapped-tol", .type = BKF_OPT_DOUBLE, .offset = OPT(mapped_tol),
      .flags = BOUNDED, .min = BKF_PDE_TOL_MIN, .max = BKF_PDE_TOL_MAX,
      .form = "E",

@@ -43,6 +43,8 @@ static bkf_comoving_params mapped_params(const check_ctx *c, const bkf_speeds_ro
     cp.cancel = check_cancel(c);
     cp.max_steps = o->mapped_max_steps;
     cp.level = c->level;
+    /* the fewest points that resolve the wave (the uniform grid's rule) */
+    cp.resolution = o->resolution;
     return cp;
 }
 
@@ -56,11 +58,13 @@ static bkf_comoving_params mapped_params(const check_ctx *c, const bkf_speeds_ro
  * there).  A difference taken with a finer grid would not (0.8 times).
  * NaN when the coarser run cannot give a drift over that window. */
 static double mapped_grid_error(const check_ctx *c, const bkf_speeds_root *sr, size_t n,
-                                double drift, double t_from, double t_to, int *status)
+                                size_t run_points, double drift, double t_from, double t_to,
+                                int *status)
 {
-    size_t points = 2 * c->o->points / 3;
+    size_t points = 2 * run_points / 3;
     if (points < BKF_CHECK_POINTS_MIN) points = BKF_CHECK_POINTS_MIN;
     bkf_comoving_params cp = mapped_params(c, sr, n, points);
+    cp.resolution = 0; /* exactly 2/3 of the run's points */
     bkf_error e;
     bkf_comoving *cm = bkf_comoving_alloc(&cp, &e);
     *status = BKF_OK;
@@ -152,7 +156,7 @@ static int mapped_progress(double fraction, void *data)
     bkf_check_row r = *w->row;
     double drift;
     if ((w->status = mapped_row(w->c, w->sr, w->cm, 0, &r, &drift))) return 1;
-    return check_auto_settled(w->c->o, &r);
+    return check_auto_settled(w->c->o, &r, last->t);
 }
 
 /* One root on the adapted comoving grid. */
@@ -178,7 +182,7 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     bkf_comoving_stats st;
     bkf_comoving_get_stats(cm, &st);
     row->tail = st.relax_change;
-    mapped_watch w = {c, sr, cm, row, BKF_CHECK_AUTO_FIRST, BKF_OK};
+    mapped_watch w = {c, sr, cm, row, BKF_CHECK_AUTO_UNSTABLE_FIRST, BKF_OK};
     int s = bkf_comoving_run(cm, o->tmax, check_sample_dt(BKF_CHECK_MAPPED_SAMPLE_DT, o->tmax),
                              mapped_progress, &w, &e);
     if (!s && w.status) {
@@ -218,7 +222,8 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     /* The fit's uncertainty is that of the simulated field; the grid's own
      * error in the speed is added to it. */
     int gs;
-    double grid_err = mapped_grid_error(c, sr, row->n, drift, row->fit_from,
+    size_t points = row->N / row->n;
+    double grid_err = mapped_grid_error(c, sr, row->n, points, drift, row->fit_from,
                                         row->fit_to, &gs);
     if (gs)
         return bkf_error_set(err, gs, "n = %zu, root %zu: %s", row->n, row->root,
@@ -226,7 +231,7 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     if (isnan(grid_err))
         check_warn(c, "n = %zu, root %zu: the run on %zu points per wavelength gives no "
                    "speed to compare with: v_meas_err is unknown (nan)", row->n,
-                   row->root, 2 * o->points / 3);
+                   row->root, 2 * points / 3);
     row->v_meas_err += grid_err;
     return BKF_OK;
 }
@@ -398,7 +403,7 @@ static int check_observe(const bkf_pde_sample *smp, void *data)
     if ((ob->status = uniform_row(ob->c, ob->sr, ob->meas, ob->bloch, 0, ob->frame_speed, &r,
                                   &ob->err)))
         return 1;
-    return check_auto_settled(o, &r);
+    return check_auto_settled(o, &r, smp->t);
 }
 
 /* One root: the grid that resolves it, the perturbed run, its
@@ -475,7 +480,8 @@ int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row
         bkf_error_set(err, s, "out of memory");
         goto done;
     }
-    check_obs ob = {c, sr, row, po.frame_speed, BKF_CHECK_AUTO_FIRST, meas, &bloch, 0, {{0}, 0}};
+    check_obs ob = {c, sr, row, po.frame_speed, BKF_CHECK_AUTO_UNSTABLE_FIRST, meas, &bloch, 0,
+                    {{0}, 0}};
     s = bkf_pde_run(pde, o->tmax, check_sample_dt(BKF_CHECK_SAMPLE_DT, o->tmax), check_observe, &ob,
                     check_progress,
                     (void *)c, &e);

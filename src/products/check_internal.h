@@ -70,7 +70,7 @@ int check_fit_deviation(record_reader at, const void *data, size_t R, size_t n,
                         const bkf_check_options *o, bkf_check_growth *g, double *t_to);
 void check_row_init(bkf_check_row *row, size_t n, size_t root, const bkf_speeds_root *sr);
 void check_explain_undecided(const check_ctx *c, bkf_check_row *row);
-int check_auto_settled(const bkf_check_options *o, const bkf_check_row *row);
+int check_auto_settled(const bkf_check_options *o, const bkf_check_row *row, double t);
 int check_speed_judged(const bkf_check_row *row);
 
 /* check_continuum.c */

@@ -477,16 +477,29 @@ int check_speed_judged(const bkf_check_row *row)
  * the run, which then adds a measured speed and a growth that either
  * already has the spectrum's sign or is too slow for any fit within tmax
  * (its detection limit is at least ln 2 / L) to decide either way, so to
- * contradict.  Disagreements and conflicts, errors of the check, and an
- * unresolved spectrum get the whole run. */
-int check_auto_settled(const bkf_check_options *o, const bkf_check_row *row)
+ * contradict; the latter (the verdict unstable whatever the run) may settle
+ * at BKF_CHECK_AUTO_UNSTABLE_FIRST already, when its short fit decides
+ * nothing, every other row from BKF_CHECK_AUTO_FIRST on.  Disagreements and
+ * conflicts, errors of the check, and an unresolved spectrum get the whole
+ * run. */
+int check_auto_settled(const bkf_check_options *o, const bkf_check_row *row, double t)
 {
     if (o->runs != BKF_CHECK_RUNS_AUTO || row->verdict == BKF_CHECK_CONFLICTS) return 0;
+    double L = o->tmax - check_transient_end(o->tmax);
+    /* Before the first checkpoint only a row whose verdict no run can change
+     * and whose short fit claims nothing: the spectrum unstable by a growth
+     * no fit within tmax resolves, and the run's growth undecided (over
+     * [10, 20] the noise's slow response can still read as growth: the
+     * paper's n = 12 "grows" there, sigma_max 0.0023, undecided by t = 40).
+     * A stable spectrum's run still watches for a growth against it. */
+    if (t < BKF_CHECK_AUTO_FIRST)
+        return row->spectral == BKF_TRAINSPEC_UNSTABLE && isfinite(row->rel_err) &&
+               row->growth.verdict == BKF_CHECK_GROWTH_UNDECIDED &&
+               row->sigma_max + row->sigma_max_err < log(2.0) / L;
     if (row->spectral == BKF_TRAINSPEC_STABLE)
         return row->verdict == BKF_CHECK_AGREES &&
                fabs(row->rel_err) + 3 * row->v_meas_err / row->v_pred <= o->rel_tol;
     if (row->spectral != BKF_TRAINSPEC_UNSTABLE || !isfinite(row->rel_err)) return 0;
-    double L = o->tmax - check_transient_end(o->tmax);
     return row->growth.verdict == BKF_CHECK_GROWTH_GROWS ||
            row->sigma_max + row->sigma_max_err < log(2.0) / L;
 }
