@@ -923,7 +923,8 @@ static int polish_tries(const candidate *c, size_t classes, size_t polish_n, siz
  * resolve less well shows it in its estimate and the refinement. */
 static int meshes_for_polish(ctx *x, size_t classes, size_t polish_n, candidates *cs, bkf_error *err)
 {
-    qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
+    /* no candidate (items may then be NULL, which qsort may not take) */
+    if (cs->count) qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
     double reach = 0.0;
     for (size_t i = 0; i < cs->count;) {
         size_t cls = cs->items[i].cls, tried = 0;
@@ -954,7 +955,7 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
                               derivs *dv, size_t *n_eig)
 {
     size_t polish_n = (keep > 3 ? keep : 3) + 2;
-    qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
+    if (cs->count) qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
     for (size_t i = 0; i < cs->count;) {
         size_t cls = cs->items[i].cls, taken = 0, tried = 0, start_n = *n_eig;
         for (; i < cs->count && cs->items[i].cls == cls; i++) {
