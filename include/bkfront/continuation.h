@@ -45,6 +45,16 @@ typedef struct {
      * Folds are located to about the same accuracy. */
     double newton_tol;
     int newton_max_iter;      /* per corrector */
+    /* The step grows 1.5 times after a corrector of at most grow_iterations
+     * Newton iterations, is kept after up to 2 more, halved after more: a
+     * tight newton_tol that always needs 3 (a quasi-Newton Jacobian) keeps
+     * small steps small unless it is raised.  Default 2, in [1, newton_max_iter]. */
+    int grow_iterations;
+    /* Nonzero (default): a turn of u[dir_index] between two points is
+     * located (Illinois on the tangent, up to 100 corrections) and passed
+     * to accept as a fold; 0: passed by, as any other point (a caller
+     * whose residual is too rough to locate it, or that needs no folds). */
+    int locate_folds;
     size_t max_points;        /* regular points, the start included */
     const double *scale;      /* n + 1 positive scales for the norm, or NULL */
     int jacobian_fd;          /* nonzero: ignore jac, use finite differences */
@@ -56,7 +66,7 @@ typedef struct {
 } bkf_cont_options;
 
 /* step_initial 0.05, step_min 1e-10, step_max 0.5, newton_tol 1e-10,
- * newton_max_iter 8, max_points 10000, scale NULL, jacobian_fd 0,
+ * newton_max_iter 8, grow_iterations 2, locate_folds 1, max_points 10000, scale NULL, jacobian_fd 0,
  * stop_index -1 (stop_min -inf, stop_max +inf). */
 bkf_cont_options bkf_cont_options_default(size_t n);
 

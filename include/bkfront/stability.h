@@ -19,6 +19,7 @@
 #include "bkfront/model.h"
 #include "bkfront/options.h"
 #include "bkfront/speeds.h"
+#include "bkfront/stabmap.h"
 #include "bkfront/status.h"
 #include "bkfront/trainspec.h"
 
@@ -55,6 +56,11 @@ typedef struct {
                                in S, crossings joined by nearness: the table before
                                2026-11-29) */
     size_t threads;         /* diagram: OpenMP threads, 0: every core (OpenMP's default) */
+    /* boundary, diagram: every ring spectrum computed is one call of this
+     * (NULL, the default: bkf_trainspec_root; stabmap.h), called from
+     * several threads at once with the diagram's threads */
+    bkf_stabmap_spectrum_fn spectrum;
+    void *spectrum_data;
 } bkf_stability_spec;
 
 /* Diagram: n at most (every n costs one scan and its boundaries). */

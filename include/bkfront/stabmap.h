@@ -30,10 +30,19 @@
 #include <stddef.h>
 #include "bkfront/model.h"
 #include "bkfront/status.h"
+#include "bkfront/trainspec.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* The ring spectrum of a root, as bkf_trainspec_root (per_kappa 1): every
+ * ring spectrum the map computes is one call, which a caller may count or
+ * wrap (a test's independent count of the work). */
+typedef int (*bkf_stabmap_spectrum_fn)(const bkf_model_params *params,
+                                       const bkf_speeds_root *root, double tol,
+                                       bkf_trainspec_result *result, bkf_error *err,
+                                       void *data);
 
 typedef struct {
     double tol;      /* absolute accuracy of each sigma (trainspec), default 1e-6 */
@@ -41,6 +50,8 @@ typedef struct {
     double nu_step;  /* continuation step in nu, default 0.01 (trace: the largest) */
     size_t max_points; /* points of one boundary at most; default 1000 */
     double S_step;   /* trace: the largest step in S between points, default 0.5 */
+    bkf_stabmap_spectrum_fn spectrum; /* NULL (default): bkf_trainspec_root */
+    void *spectrum_data;              /* its last argument */
 } bkf_stabmap_options;
 
 bkf_stabmap_options bkf_stabmap_options_default(void);
@@ -86,17 +97,21 @@ typedef struct {
 typedef int (*bkf_stabmap_visit)(const bkf_stabmap_point *point, void *data);
 
 typedef struct {
-    size_t points, evaluations;
+    size_t points, evaluations; /* evaluations: ring spectra computed (a refused one too) */
+    size_t tracked;          /* eigenvalues continued alone (bkf_trainspec_eigenvalue_at on
+                                two meshes, about 1/20 of a ring spectrum each) */
     bkf_stabmap_end end;
     double nu_end;           /* the last nu tried */
     char note[256];          /* why it ended, one line */
 } bkf_stabmap_report;
 
-/* sigma_max of train n at (params->nu, params->S): the root whose v is
- * nearest v_near (v_near <= 0: the fastest root).  BKF_EINPUT when n has
- * no root there. */
-int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near, double tol,
-                      double *sigma, double *sigma_err, double *v, double *mu, bkf_error *err);
+/* sigma_max of train n at (params->nu, params->S) at options->tol (NULL:
+ * the defaults): the root whose v is nearest v_near (v_near <= 0: the
+ * fastest root).  BKF_EINPUT when n has no root there.  *spectra (may be
+ * NULL) is incremented when a ring spectrum was computed (refused or not). */
+int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near,
+                      const bkf_stabmap_options *options, double *sigma, double *sigma_err,
+                      double *v, double *mu, size_t *spectra, bkf_error *err);
 
 /* The first sign change of sigma_max of train n in S, from S_from towards
  * S_to (scanned on `samples` even steps, then closed), at params->nu.
@@ -116,10 +131,12 @@ int bkf_stabmap_locate(const bkf_model_params *params, size_t n, double S_from, 
  * no ring spectrum is computed; a bracket is closed on the eigenvalue right
  * of 0 at its positive end, then checked by one ring spectrum (closed on
  * ring spectra where another eigenvalue overtook it).  Each point is a ring
- * spectrum. */
+ * spectrum (its evaluations: the bracket's ring spectra).  *report (may be
+ * NULL) gets the scan's work: points = *count, evaluations the ring spectra,
+ * tracked the eigenvalues continued alone. */
 int bkf_stabmap_scan(const bkf_model_params *params, size_t n, double S_from, double S_to,
                      size_t samples, const bkf_stabmap_options *options, bkf_stabmap_point *points,
-                     size_t max, size_t *count, bkf_error *err);
+                     size_t max, size_t *count, bkf_stabmap_report *report, bkf_error *err);
 
 /* The boundary through `first` (a point of bkf_stabmap_locate, its params
  * gamma and c), followed in nu to nu_to; visit gets every point, the first

@@ -352,6 +352,10 @@ static int validate(bkf_cont_residual residual, bkf_cont_accept accept,
     if (o->newton_max_iter < 1)
         return bkf_error_set(err, BKF_EINPUT, "newton_max_iter = %d must be >= 1",
                              o->newton_max_iter);
+    if (o->grow_iterations < 1 || o->grow_iterations > o->newton_max_iter)
+        return bkf_error_set(err, BKF_EINPUT,
+                             "grow_iterations = %d must be in [1, newton_max_iter = %d]",
+                             o->grow_iterations, o->newton_max_iter);
     if (o->max_points < 1)
         return bkf_error_set(err, BKF_EINPUT, "max_points = %zu must be >= 1",
                              o->max_points);
@@ -388,6 +392,8 @@ bkf_cont_options bkf_cont_options_default(size_t n)
     o.step_max = 0.5;
     o.newton_tol = 1e-10;
     o.newton_max_iter = 8;
+    o.grow_iterations = 2;
+    o.locate_folds = 1;
     o.max_points = 10000;
     o.scale = NULL;
     o.jacobian_fd = 0;
@@ -575,7 +581,7 @@ static int cont_run_body(bkf_cont_residual residual, bkf_cont_accept accept, voi
         }
         if (st != BKF_OK) goto done;
 
-        if (positive(v.t[dir]) != positive(v.tn[dir])) {
+        if (o->locate_folds && positive(v.t[dir]) != positive(v.tn[dir])) {
             st = locate_fold(&ws, v.u, v.t, v.row, proj, v.tn[dir], dir, v.uf, v.tf, err);
             if (st == BKF_ENUMERIC) {
                 st = bkf_error_set(err, BKF_ENUMERIC,
@@ -601,9 +607,9 @@ static int cont_run_body(bkf_cont_residual residual, bkf_cont_accept accept, voi
             rep.reached_bound = 1;
             break;
         }
-        if (iterations <= 2)
+        if (iterations <= o->grow_iterations)
             h = fmin(1.5 * h, o->step_max);
-        else if (iterations > 4)
+        else if (iterations > o->grow_iterations + 2)
             h = fmax(0.5 * h, o->step_min);
     }
     st = BKF_OK;

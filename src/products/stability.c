@@ -402,6 +402,8 @@ static bkf_stabmap_options stabmap_options_of(const bkf_stability_spec *spec)
     o.tol = spec->tol;
     o.S_tol = spec->S_tol;
     o.nu_step = spec->nu_step;
+    o.spectrum = spec->spectrum;
+    o.spectrum_data = spec->spectrum_data;
     return o;
 }
 
@@ -520,6 +522,18 @@ typedef struct {
     size_t nnotes;
 } diagram_sink;
 
+/* What the diagram computed: ring spectra (a refused one too) and
+ * eigenvalues continued alone (about 1/20 of a ring spectrum each). */
+typedef struct {
+    size_t spectra, tracked;
+} diagram_work;
+
+static void work_add(diagram_work *w, const bkf_stabmap_report *r)
+{
+    w->spectra += r->evaluations;
+    w->tracked += r->tracked;
+}
+
 static int add_row(diagram_sink *k, const char *kind, size_t n, size_t m, double nu, double S,
                    double S_err, double nu_err, int above)
 {
@@ -575,7 +589,7 @@ typedef struct {
 /* --scan: every crossing in S at every nu (a boundary may appear anywhere
  * along nu), joined into curves by nearness in S. */
 static int scan_stability(const bkf_stability_spec *spec, const double *nus, size_t nnu,
-                          const double *g, diagram_sink *k, size_t *spectra, bkf_error *err)
+                          const double *g, diagram_sink *k, diagram_work *work, bkf_error *err)
 {
     bkf_model_params params = params_of(spec);
     bkf_stabmap_options o = stabmap_options_of(spec);
@@ -595,8 +609,10 @@ static int scan_stability(const bkf_stability_spec *spec, const double *nus, siz
             size_t count;
             size_t samples = (size_t)ceil((double)spec->S_samples * (spec->S_to - lo) /
                                           (spec->S_to - spec->S));
+            bkf_stabmap_report rep;
             s = bkf_stabmap_scan(&p, n, lo, spec->S_to, samples < 2 ? 2 : samples, &o, pts, 16,
-                                 &count, err);
+                                 &count, &rep, err);
+            work_add(work, &rep);
             /* no crossing: the whole column is stable or unstable, and one
              * spectrum says which (a phase diagram fills it); a refused or
              * undecided sigma leaves the column without a row */
@@ -605,9 +621,8 @@ static int scan_stability(const bkf_stability_spec *spec, const double *nus, siz
                 q.S = 0.5 * (lo + spec->S_to);
                 double sg, sge, v, mu;
                 bkf_error e;
-                int t = bkf_stabmap_sigma(&q, n, 0, o.tol, &sg, &sge, &v, &mu, &e);
+                int t = bkf_stabmap_sigma(&q, n, 0, &o, &sg, &sge, &v, &mu, &work->spectra, &e);
                 if (t == BKF_ENOMEM) s = bkf_error_set(err, t, "%s", e.message);
-                if (!t) (*spectra)++;
                 if (!t && fabs(sg) > sge) {
                     size_t curves = k->curves;
                     k->curves = 0;
@@ -616,7 +631,6 @@ static int scan_stability(const bkf_stability_spec *spec, const double *nus, siz
                 }
             }
             for (size_t j = 0; !s && j < count; j++) {
-                *spectra += pts[j].evaluations;
                 size_t c = open;
                 for (size_t q = 0; q < open; q++)
                     if (last_i[q] + 1 == i && last_above[q] == pts[j].stable_above &&
@@ -654,7 +668,7 @@ typedef struct {
     size_t n;
     traced_curve *c;
     size_t count;
-    size_t spectra;
+    diagram_work work;
     int status;
     bkf_error err;
 } n_work;
@@ -663,7 +677,8 @@ typedef struct {
 typedef struct {
     size_t n, col;
     bkf_stabmap_point pts[SEED_MAX];
-    size_t count, spectra;
+    size_t count;
+    diagram_work work;
     int status;
     bkf_error err;
 } seed_task;
@@ -712,7 +727,7 @@ static int on_a_curve(const n_work *w, const bkf_stabmap_point *pt, double gap)
  * towards lower nu reversed in front. */
 static int trace_both_ways(const bkf_stability_spec *spec, const bkf_model_params *params,
                            size_t n, const bkf_stabmap_point *pt, const bkf_stabmap_window *win,
-                           const bkf_stabmap_options *o, traced_curve *c, size_t *spectra,
+                           const bkf_stabmap_options *o, traced_curve *c, diagram_work *work,
                            bkf_error *err)
 {
     (void)spec;
@@ -722,7 +737,7 @@ static int trace_both_ways(const bkf_stability_spec *spec, const bkf_model_param
         s = bkf_stabmap_trace(params, n, pt, d ? 1 : -1, win, o, collect, &half[d], &c->end[d],
                               err);
         if (!s && half[d].n < c->end[d].points) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        if (!s) *spectra += c->end[d].evaluations;
+        if (!s) work_add(work, &c->end[d]);
     }
     if (!s) {
         /* Each half starts at the seed as its run corrected it; a half that
@@ -742,6 +757,19 @@ static int trace_both_ways(const bkf_stability_spec *spec, const bkf_model_param
     return s;
 }
 
+/* The work cap of a followed curve, each way from its seed: steps are at
+ * most nu_step in nu and a scan step in S (1 in the scaled norm), so a
+ * curve monotone in both crosses the window in (nu extent / nu_step + S
+ * extent / S step) full steps; twice that allows steps of half on average
+ * or one turn.  A curve that needs more (steps shrunk at a corner of
+ * sigma_max, a curve winding) is cut there and said to be cut. */
+static size_t trace_cap(const bkf_stability_spec *spec, const bkf_stabmap_window *win)
+{
+    double steps = ceil((win->nu_hi - win->nu_lo) / spec->nu_step - 1e-9) +
+                   (double)spec->S_samples;
+    return 2 * (size_t)steps + 2;
+}
+
 /* Every crossing of n's seed columns that no curve found so far passes,
  * followed. */
 static void follow_n(const bkf_stability_spec *spec, const seed_task *seeds, size_t ncol,
@@ -750,6 +778,7 @@ static void follow_n(const bkf_stability_spec *spec, const seed_task *seeds, siz
     bkf_model_params params = params_of(spec);
     bkf_stabmap_options o = stabmap_options_of(spec);
     o.S_step = (spec->S_to - spec->S) / (double)spec->S_samples;
+    o.max_points = trace_cap(spec, win);
     double gap = 1.5 * o.S_step;
     for (size_t k = 0; !w->status && k < ncol; k++) {
         const seed_task *t = &seeds[k];
@@ -763,7 +792,7 @@ static void follow_n(const bkf_stability_spec *spec, const seed_task *seeds, siz
             w->c = g;
             memset(&w->c[w->count], 0, sizeof *w->c);
             w->status = trace_both_ways(spec, &params, w->n, &t->pts[j], win, &o,
-                                        &w->c[w->count], &w->spectra, &w->err);
+                                        &w->c[w->count], &w->work, &w->err);
             if (!w->status) w->count++;
         }
     }
@@ -778,7 +807,7 @@ typedef struct {
     double S;
     int status, stable; /* stable: 1, 0, or -1 (undecided) */
     int split;          /* its ends' spectra disagree */
-    size_t spectra;
+    size_t spectra;     /* ring spectra computed */
 } state_run;
 
 static int curves_between(const n_work *w, double a, double b)
@@ -804,7 +833,7 @@ static size_t seed_column_count(const bkf_stability_spec *spec, const double *nu
  * changes closed.  seeds[] holds n * ncol tasks, n's columns together. */
 static int scan_seeds(const bkf_stability_spec *spec, const double *nus, const double *g,
                       const size_t *col, size_t ncol, seed_task *seeds, int threads,
-                      size_t *spectra, bkf_error *err)
+                      diagram_work *work, bkf_error *err)
 {
     (void)threads;
     bkf_model_params params = params_of(spec);
@@ -825,15 +854,16 @@ static int scan_seeds(const bkf_stability_spec *spec, const double *nus, const d
         size_t samples = (size_t)ceil((double)spec->S_samples * (spec->S_to - lo) /
                                       (spec->S_to - spec->S));
         if (samples < 2) samples = 2;
+        bkf_stabmap_report rep;
         t->status = bkf_stabmap_scan(&p, t->n, lo, spec->S_to, samples, &seed_o, t->pts, SEED_MAX,
-                                     &t->count, &t->err);
-        t->spectra = samples + 1;
-        for (size_t j = 0; j < t->count; j++) t->spectra += t->pts[j].evaluations - 2;
+                                     &t->count, &rep, &t->err);
+        work_add(&t->work, &rep);
     }
     int s = BKF_OK;
     for (size_t i = 0; !s && i < ntask; i++) {
         if (seeds[i].status) s = bkf_error_set(err, seeds[i].status, "%s", seeds[i].err.message);
-        *spectra += seeds[i].spectra;
+        work->spectra += seeds[i].work.spectra;
+        work->tracked += seeds[i].work.tracked;
     }
     return s;
 }
@@ -841,7 +871,7 @@ static int scan_seeds(const bkf_stability_spec *spec, const double *nus, const d
 /* 2. The curves through the seeds, each n on its own (w[n - 1]). */
 static int follow_seeds(const bkf_stability_spec *spec, const double *nus, size_t nnu,
                         const seed_task *seeds, size_t ncol, n_work *w, int threads,
-                        size_t *spectra, bkf_error *err)
+                        diagram_work *work, bkf_error *err)
 {
     (void)threads;
     bkf_stabmap_window win = {fmin(nus[0], nus[nnu - 1]), fmax(nus[0], nus[nnu - 1]), spec->S,
@@ -855,7 +885,8 @@ static int follow_seeds(const bkf_stability_spec *spec, const double *nus, size_
     int s = BKF_OK;
     for (size_t i = 0; !s && i < nn; i++) {
         if (w[i].status) s = bkf_error_set(err, w[i].status, "%s", w[i].err.message);
-        *spectra += w[i].spectra;
+        work->spectra += w[i].work.spectra;
+        work->tracked += w[i].work.tracked;
     }
     return s;
 }
@@ -914,8 +945,8 @@ static int free_runs(const bkf_stability_spec *spec, const double *nus, size_t n
 /* A run's state: the spectra at its middle and both ends, at its S.  A
  * boundary that crossed no seed column shows as ends that disagree (split),
  * and the run gets no state; so does a refused or undecided sigma. */
-static void decide_run(const bkf_model_params *params, const double *nus, double tol,
-                       state_run *run)
+static void decide_run(const bkf_model_params *params, const double *nus,
+                       const bkf_stabmap_options *o, state_run *run)
 {
     bkf_model_params q = *params;
     q.nu = nus[run->mid];
@@ -930,8 +961,7 @@ static void decide_run(const bkf_model_params *params, const double *nus, double
         double sg, sge, v, mu;
         bkf_error e;
         q.nu = nus[at[k]];
-        run->status = bkf_stabmap_sigma(&q, run->n, 0, tol, &sg, &sge, &v, &mu, &e);
-        run->spectra++;
+        run->status = bkf_stabmap_sigma(&q, run->n, 0, o, &sg, &sge, &v, &mu, &run->spectra, &e);
         if (!run->status && fabs(sg) > sge) verdict[k] = sg < 0;
     }
     run->split = verdict[0] >= 0 && verdict[1] >= 0 && verdict[2] >= 0 &&
@@ -943,12 +973,12 @@ static void decide_run(const bkf_model_params *params, const double *nus, double
 /* The runs' spectra counted; a split run said in a note (its state is not
  * guessed). */
 static int note_split_runs(const double *nus, const state_run *runs, size_t nruns,
-                           diagram_sink *k, size_t *spectra, bkf_error *err)
+                           diagram_sink *k, diagram_work *work, bkf_error *err)
 {
     int s = BKF_OK;
     for (size_t r = 0; !s && r < nruns; r++) {
         if (runs[r].status == BKF_ENOMEM) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        *spectra += runs[r].spectra;
+        work->spectra += runs[r].spectra;
         if (!runs[r].split || k->failed) continue;
         add_note(k,
                  "n %zu: between nu %.6g and %.6g (S %.6g) the spectra change sign with no "
@@ -1020,11 +1050,29 @@ static void note_unfollowed_boundaries(const double *nus, size_t nnu, const stat
     }
 }
 
-/* The decided runs' states, as rows of curve 0. */
-static void emit_states(const double *nus, const state_run *runs, size_t nruns, diagram_sink *k)
+static int has_cut_curve(const n_work *w)
 {
+    for (size_t c = 0; c < w->count; c++)
+        if (w->c[c].end[0].end == BKF_STABMAP_END_POINTS ||
+            w->c[c].end[1].end == BKF_STABMAP_END_POINTS)
+            return 1;
+    return 0;
+}
+
+/* The decided runs' states, as rows of curve 0; none for an n with a cut
+ * curve: where its rest goes is not known, so no column away from the
+ * drawn points has a state (the figure hatches them). */
+static void emit_states(const double *nus, const state_run *runs, size_t nruns, const n_work *w,
+                        size_t nn, diagram_sink *k)
+{
+    for (size_t i = 0; i < nn && !k->failed; i++)
+        if (has_cut_curve(&w[i]))
+            add_note(k,
+                     "n %zu: a curve cut at its work cap (max_points): the rest not followed, "
+                     "no state rows for n %zu (undecided away from the curves)",
+                     w[i].n, w[i].n);
     for (size_t r = 0; r < nruns; r++) {
-        if (runs[r].stable < 0) continue;
+        if (runs[r].stable < 0 || has_cut_curve(&w[runs[r].n - 1])) continue;
         size_t curves = k->curves;
         k->curves = 0;
         add_row(k, "state", runs[r].n, 0, nus[runs[r].mid], runs[r].S, 0, 0, runs[r].stable);
@@ -1036,7 +1084,7 @@ static void emit_states(const double *nus, const state_run *runs, size_t nruns, 
  * columns scanned in S, a curve continued through every crossing no curve
  * passes yet, and the columns between curves given a state of their own. */
 static int follow_stability(const bkf_stability_spec *spec, const double *nus, size_t nnu,
-                            const double *g, diagram_sink *k, size_t *spectra, bkf_error *err)
+                            const double *g, diagram_sink *k, diagram_work *work, bkf_error *err)
 {
     size_t N = spec->n;
     size_t ncol = seed_column_count(spec, nus, nnu);
@@ -1049,22 +1097,22 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
     int threads = bkf_product_threads(spec->threads);
     for (size_t c = 0; !s && c < ncol; c++)
         col[c] = ncol == 1 ? 0 : (size_t)llround((double)c * (double)(nnu - 1) / (double)(ncol - 1));
-    if (!s) s = scan_seeds(spec, nus, g, col, ncol, seeds, threads, spectra, err);
-    if (!s) s = follow_seeds(spec, nus, nnu, seeds, ncol, w, threads, spectra, err);
+    if (!s) s = scan_seeds(spec, nus, g, col, ncol, seeds, threads, work, err);
+    if (!s) s = follow_seeds(spec, nus, nnu, seeds, ncol, w, threads, work, err);
     if (!s) s = free_runs(spec, nus, nnu, g, w, &runs, &nruns, err);
     if (!s) {
         bkf_model_params params = params_of(spec);
-        double tol = stabmap_options_of(spec).tol;
+        bkf_stabmap_options o = stabmap_options_of(spec);
         (void)threads;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-        for (size_t r = 0; r < nruns; r++) decide_run(&params, nus, tol, &runs[r]);
-        s = note_split_runs(nus, runs, nruns, k, spectra, err);
+        for (size_t r = 0; r < nruns; r++) decide_run(&params, nus, &o, &runs[r]);
+        s = note_split_runs(nus, runs, nruns, k, work, err);
     }
     if (!s) {
         /* the rows: curves by n, then the states (curve 0) */
         emit_curves(w, N, k);
         note_unfollowed_boundaries(nus, nnu, runs, nruns, w, k);
-        emit_states(nus, runs, nruns, k);
+        emit_states(nus, runs, nruns, w, N, k);
     }
     for (size_t i = 0; w && i < N; i++) {
         for (size_t c = 0; c < w[i].count; c++) free(w[i].c[c].pts.p);
@@ -1078,7 +1126,7 @@ static int follow_stability(const bkf_stability_spec *spec, const double *nus, s
 }
 
 static int diagram_curves(const bkf_stability_spec *spec, const double *nus, size_t nnu,
-                          diagram_sink *k, size_t *spectra, bkf_error *err)
+                          diagram_sink *k, diagram_work *work, bkf_error *err)
 {
     bkf_model_params params = params_of(spec);
     double *g = calloc(nnu, sizeof *g);
@@ -1097,8 +1145,8 @@ static int diagram_curves(const bkf_stability_spec *spec, const double *nus, siz
             if (add_row(k, "existence", n, 0, nus[i], (double)n * g[i], 0, 0, 1)) break;
     }
     if (!s && !k->failed)
-        s = spec->scan ? scan_stability(spec, nus, nnu, g, k, spectra, err)
-                       : follow_stability(spec, nus, nnu, g, k, spectra, err);
+        s = spec->scan ? scan_stability(spec, nus, nnu, g, k, work, err)
+                       : follow_stability(spec, nus, nnu, g, k, work, err);
     /* the oscillation: its unstable bands per nu, then one curve per edge */
     int threads = bkf_product_threads(spec->threads);
     (void)threads;
@@ -1175,8 +1223,8 @@ static int write_diagram(const bkf_stability_spec *spec, FILE *out, bkf_io_forma
     for (size_t i = 0; i < nnu; i++) nus[i] = spec->nu + dir * (double)i * spec->nu_step;
     if (fabs(nus[nnu - 1] - spec->to) > 1e-9 * spec->nu_step) nus[nnu++] = spec->to;
     diagram_sink k = {0};
-    size_t spectra = 0;
-    int s = diagram_curves(spec, nus, nnu, &k, &spectra, err);
+    diagram_work work = {0, 0};
+    int s = diagram_curves(spec, nus, nnu, &k, &work, err);
     free(nus);
     if (!s) qsort(k.r, k.n, sizeof *k.r, by_curve);
     bkf_io_table *table = NULL;
@@ -1209,21 +1257,24 @@ static int write_diagram(const bkf_stability_spec *spec, FILE *out, bkf_io_forma
             "stable above)");
     if (!s && spec->scan)
         s = bkf_io_table_commentf(table, err,
-                                  "work: %zu spectra (a scan in S of %zu steps per n and nu, "
-                                  "each crossing closed to S-tol)",
-                                  spectra, spec->S_samples);
+                                  "work: %zu spectra and %zu eigenvalues continued alone (a "
+                                  "scan in S of %zu steps per n and nu, each crossing closed to "
+                                  "S-tol)",
+                                  work.spectra, work.tracked, spec->S_samples);
     if (!s && !spec->scan)
         s = bkf_io_table_commentf(
             table, err,
-            "work: %zu spectra (seed columns about %.6g apart in nu, each scanned in S in %zu "
+            "work: %zu ring spectra and %zu eigenvalues continued alone (each about 1/20 of a "
+            "spectrum; seed columns about %.6g apart in nu, each scanned in S in %zu "
             "steps; every crossing no curve passes followed by pseudo-arclength continuation in "
-            "(nu, S), steps at most %.6g in nu and %.6g in S; one spectrum per run of columns "
+            "(nu, S), steps at most %.6g in nu and %.6g in S; three spectra per run of columns "
             "no curve crosses: the state rows)",
-            spectra, spec->seed_step, spec->S_samples, spec->nu_step,
+            work.spectra, work.tracked, spec->seed_step, spec->S_samples, spec->nu_step,
             (spec->S_to - spec->S) / (double)spec->S_samples);
     for (size_t i = 0; !s && i < k.nnotes; i++) s = bkf_io_table_commentf(table, err, "%s", k.notes[i]);
     if (!s) s = number_result(table, "curves", (double)k.curves, err);
-    if (!s) s = number_result(table, "spectra", (double)spectra, err);
+    if (!s) s = number_result(table, "spectra", (double)work.spectra, err);
+    if (!s) s = number_result(table, "tracked", (double)work.tracked, err);
     if (!s) s = bkf_product_table_command(table, prov, err);
     for (size_t i = 0; !s && i < k.n; i++) {
         const diagram_row *r = &k.r[i];

@@ -12,7 +12,7 @@
 
 bkf_stabmap_options bkf_stabmap_options_default(void)
 {
-    bkf_stabmap_options o = {1e-6, 1e-3, 0.01, 1000, 0.5};
+    bkf_stabmap_options o = {1e-6, 1e-3, 0.01, 1000, 0.5, NULL, NULL};
     return o;
 }
 
@@ -55,16 +55,46 @@ static int root_near(const bkf_model_params *params, size_t n, double v_near,
     return s;
 }
 
+/* sigma_max along S at fixed nu, the root continued by v ~ S (v = S/(n T)
+ * at slowly varying T); every ring spectrum and tracked eigenvalue of the
+ * map is computed through one and counted there. */
+typedef struct {
+    bkf_model_params p;
+    size_t n;
+    double tol;
+    double v_ref, S_ref;   /* the root followed; v_ref 0: the fastest */
+    bkf_stabmap_spectrum_fn spectrum;
+    void *spectrum_data;
+    size_t spectra;        /* ring spectra computed (a refused one too) */
+    size_t tracked;        /* eigenvalues continued alone (tracked_sample) */
+} sigma_fn;
+
+static sigma_fn sigma_fn_of(const bkf_model_params *params, size_t n,
+                            const bkf_stabmap_options *o, double v_ref, double S_ref)
+{
+    sigma_fn fn = {*params, n, o->tol, v_ref, S_ref, o->spectrum, o->spectrum_data, 0, 0};
+    return fn;
+}
+
+static int trainspec_root(const bkf_model_params *params, const bkf_speeds_root *root,
+                          double tol, bkf_trainspec_result *result, bkf_error *err, void *data)
+{
+    (void)data;
+    return bkf_trainspec_root(params, root, tol, 1, result, err);
+}
+
 /* sigma_max of the root nearest v_near into *out (S, f, err, v, mu, bound,
  * the rightmost's class). */
-static int spectrum_sample(const bkf_model_params *params, size_t n, double v_near, double tol,
+static int spectrum_sample(sigma_fn *fn, const bkf_model_params *params, double v_near,
                            sample *out, bkf_error *err)
 {
     bkf_speeds_root root;
-    int s = root_near(params, n, v_near, &root, err);
+    int s = root_near(params, fn->n, v_near, &root, err);
     if (s) return s;
     bkf_trainspec_result r;
-    s = bkf_trainspec_root(params, &root, tol, 1, &r, err);
+    bkf_stabmap_spectrum_fn spectrum = fn->spectrum ? fn->spectrum : trainspec_root;
+    s = spectrum(params, &root, fn->tol, &r, err, fn->spectrum_data);
+    fn->spectra++;
     if (!s) {
         *out = (sample){.S = params->S, .f = r.sigma_max, .err = r.sigma_max_err, .v = root.v,
                         .mu = root.mu, .bound = bkf_trainspec_shown_of(&r).bound};
@@ -96,14 +126,15 @@ static int spectrum_sample(const bkf_model_params *params, size_t n, double v_ne
  * ring spectrum), into *out (tracked 1: f is that eigenvalue, not
  * sigma_max, which is at least f).  A failure (Newton, the root) means
  * only that the ring spectrum is needed. */
-static int tracked_sample(const bkf_model_params *params, size_t n, double v_near,
+static int tracked_sample(sigma_fn *fn, const bkf_model_params *params, double v_near,
                           const sample *from, sample *out, bkf_error *err)
 {
     bkf_speeds_root root;
-    int s = root_near(params, n, v_near, &root, err);
+    int s = root_near(params, fn->n, v_near, &root, err);
     if (s) return s;
-    bkf_trainspec_train train = {n, root.v};
+    bkf_trainspec_train train = {fn->n, root.v};
     double re[2], im[2];
+    fn->tracked++;
     for (int k = 0; !s && k < 2; k++)
         s = bkf_trainspec_eigenvalue_at(params, &train, from->j, from->f, from->im,
                                         (size_t)TRACK_SUBSTEPS << k, &re[k], &im[k], NULL, err);
@@ -114,11 +145,15 @@ static int tracked_sample(const bkf_model_params *params, size_t n, double v_nea
     return BKF_OK;
 }
 
-int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near, double tol,
-                      double *sigma, double *sigma_err, double *v, double *mu, bkf_error *err)
+int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near,
+                      const bkf_stabmap_options *options, double *sigma, double *sigma_err,
+                      double *v, double *mu, size_t *spectra, bkf_error *err)
 {
+    bkf_stabmap_options o = options ? *options : bkf_stabmap_options_default();
+    sigma_fn fn = sigma_fn_of(params, n, &o, 0, 1);
     sample x;
-    int s = spectrum_sample(params, n, v_near, tol, &x, err);
+    int s = spectrum_sample(&fn, params, v_near, &x, err);
+    if (spectra) *spectra += fn.spectra;
     if (!s) {
         *sigma = x.f;
         *sigma_err = x.err;
@@ -128,23 +163,22 @@ int bkf_stabmap_sigma(const bkf_model_params *params, size_t n, double v_near, d
     return s;
 }
 
-/* sigma_max along S at fixed nu, the root continued by v ~ S (v = S/(n T)
- * at slowly varying T). */
-typedef struct {
-    bkf_model_params p;
-    size_t n;
-    double tol;
-    double v_ref, S_ref;   /* the root followed; v_ref 0: the fastest */
-    size_t evaluations;
-} sigma_fn;
-
+/* sigma_max at S (fn's nu), the root continued from (v_ref, S_ref). */
 static int eval_at(sigma_fn *fn, double S, sample *out, bkf_error *err)
 {
     bkf_model_params p = fn->p;
     p.S = S;
     double v_near = fn->v_ref > 0 ? fn->v_ref * S / fn->S_ref : 0;
-    fn->evaluations++;
-    return spectrum_sample(&p, fn->n, v_near, fn->tol, out, err);
+    return spectrum_sample(fn, &p, v_near, out, err);
+}
+
+/* The eigenvalue `from` continued to S (fn's nu), the root likewise. */
+static int tracked_at(sigma_fn *fn, double S, const sample *from, sample *out, bkf_error *err)
+{
+    bkf_model_params p = fn->p;
+    p.S = S;
+    double v_near = fn->v_ref > 0 ? fn->v_ref * S / fn->S_ref : 0;
+    return tracked_sample(fn, &p, v_near, from, out, err);
 }
 
 static int sign_of(double f) { return f > 0 ? 1 : -1; }
@@ -175,10 +209,7 @@ static int illinois(sigma_fn *fn, sample *a, sample *b, double S_tol, sample *be
         sample m;
         int s;
         if (track) {
-            bkf_model_params p = fn->p;
-            p.S = S;
-            s = tracked_sample(&p, fn->n, fn->v_ref > 0 ? fn->v_ref * S / fn->S_ref : 0, &from,
-                               &m, err);
+            s = tracked_at(fn, S, &from, &m, err);
             from = m;
         } else {
             s = eval_at(fn, S, &m, err);
@@ -266,16 +297,17 @@ static int end_of(int status)
 
 int bkf_stabmap_scan(const bkf_model_params *params, size_t n, double S_from, double S_to,
                      size_t samples, const bkf_stabmap_options *options, bkf_stabmap_point *points,
-                     size_t max, size_t *count, bkf_error *err)
+                     size_t max, size_t *count, bkf_stabmap_report *report, bkf_error *err)
 {
     bkf_stabmap_options o = options ? *options : bkf_stabmap_options_default();
     *count = 0;
+    if (report) *report = (bkf_stabmap_report){0};
     if (samples < 1 || !(S_from > 0) || !(S_to > 0) || !isfinite(S_from) || !isfinite(S_to))
         return bkf_error_set(err, BKF_EINPUT, "scan: S_from, S_to > 0 and samples >= 1");
-    sigma_fn fn = {*params, n, o.tol, 0, 1, 0};
+    sigma_fn fn = sigma_fn_of(params, n, &o, 0, 1);
     sample prev = {0};
-    int have = 0;
-    for (size_t i = 0; i <= samples && *count < max; i++) {
+    int have = 0, status = BKF_OK;
+    for (size_t i = 0; !status && i <= samples && *count < max; i++) {
         sample cur;
         double S = S_from + (S_to - S_from) * (double)i / (double)samples;
         bkf_error e;
@@ -286,35 +318,40 @@ int bkf_stabmap_scan(const bkf_model_params *params, size_t n, double S_from, do
          * the ring spectrum where the train is unstable.  A negative one
          * proves nothing (another may be right of it): the spectrum. */
         int s = 1;
-        if (have && prev.have_mode) {
-            bkf_model_params q = *params;
-            q.S = S;
-            s = tracked_sample(&q, n, 0, &prev, &cur, &e) || !(cur.f - 4 * cur.err > o.tol);
-        }
+        if (have && prev.have_mode)
+            s = tracked_at(&fn, S, &prev, &cur, &e) || !(cur.f - 4 * cur.err > o.tol);
         if (s) s = eval_at(&fn, S, &cur, &e);
-        if (s && end_of(s) < 0) return bkf_error_set(err, s, "%s", e.message);
+        if (s && end_of(s) < 0) {
+            status = bkf_error_set(err, s, "%s", e.message);
+            break;
+        }
         if (s) {  /* no root or refused here: a gap in the scan */
             have = 0;
             continue;
         }
         if (have && sign_of(cur.f) != sign_of(prev.f)) {
-            size_t before = fn.evaluations;
+            size_t before = fn.spectra;
             fn.v_ref = cur.v;
             fn.S_ref = cur.S;
             int jump = 0;
             int st = close_bracket(&fn, prev, cur, o.S_tol, &points[*count], &jump, &e);
-            if (st && end_of(st) < 0) return bkf_error_set(err, st, "%s", e.message);
+            if (st && end_of(st) < 0) status = bkf_error_set(err, st, "%s", e.message);
             /* a jump of sigma_max is no crossing */
             if (!st && !jump) {
-                /* the scan's two samples and the solve's */
-                points[*count].evaluations = fn.evaluations - before + 2;
+                /* the bracket's ring spectra (its ends are the scan's) */
+                points[*count].evaluations = fn.spectra - before;
                 (*count)++;
             }
         }
         prev = cur;
         have = 1;
     }
-    return BKF_OK;
+    if (report) {
+        report->points = *count;
+        report->evaluations = fn.spectra;
+        report->tracked = fn.tracked;
+    }
+    return status;
 }
 
 int bkf_stabmap_locate(const bkf_model_params *params, size_t n, double S_from, double S_to,
@@ -322,7 +359,8 @@ int bkf_stabmap_locate(const bkf_model_params *params, size_t n, double S_from, 
                        bkf_stabmap_point *point, int *found, bkf_error *err)
 {
     size_t count;
-    int s = bkf_stabmap_scan(params, n, S_from, S_to, samples, options, point, 1, &count, err);
+    int s = bkf_stabmap_scan(params, n, S_from, S_to, samples, options, point, 1, &count, NULL,
+                             err);
     *found = !s && count == 1;
     return s;
 }
@@ -354,7 +392,7 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
         if (dir * (nu - nu_to) > 0) nu = nu_to;
         rep.nu_end = nu;
         double Sp = two ? cur.S + (cur.S - old.S) / (cur.nu - old.nu) * (nu - cur.nu) : cur.S;
-        sigma_fn fn = {*params, n, o.tol, cur.v, cur.S, 0};
+        sigma_fn fn = sigma_fn_of(params, n, &o, cur.v, cur.S);
         fn.p.nu = nu;
         sample a, b;
         bkf_error e;
@@ -367,7 +405,10 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
             s = eval_at(&fn, above ? Sp - delta : Sp + delta, &b, &e);
             if (!s && sign_of(b.f) != sign_of(a.f)) bracketed = 1;
         }
-        rep.evaluations += fn.evaluations;
+        if (s || !bracketed) {
+            rep.evaluations += fn.spectra;
+            rep.tracked += fn.tracked;
+        }
         if (s) {
             int end = end_of(s);
             if (end < 0) return bkf_error_set(err, s, "%s", e.message);
@@ -387,10 +428,10 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
             break;
         }
         bkf_stabmap_point next;
-        fn.evaluations = 0;
         int jump = 0;
         s = close_bracket(&fn, a, b, o.S_tol, &next, &jump, err);
-        rep.evaluations += fn.evaluations;
+        rep.evaluations += fn.spectra;
+        rep.tracked += fn.tracked;
         if (!s && jump) {
             rep.end = BKF_STABMAP_END_FOLD;
             snprintf(rep.note, sizeof rep.note,
@@ -405,7 +446,7 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
             snprintf(rep.note, sizeof rep.note, "at nu %.6g: %.200s", nu, err ? err->message : "");
             break;
         }
-        next.evaluations = fn.evaluations + (size_t)2;
+        next.evaluations = fn.spectra; /* the bracket's search and its closing */
         old = cur;
         cur = next;
         two = 1;
@@ -435,7 +476,6 @@ typedef struct {
     /* The eigenvalue tracked (tracked_sample): the last spectrum's
      * rightmost, continued to each trial point (mode.have_mode 0: none) */
     sample mode;
-    size_t tracked;        /* evaluations by the tracked eigenvalue alone */
     double scale[2];
     double grad[2];        /* d sigma_max / d(nu, S), Broyden-updated */
     trace_eval cache[TRACE_CACHE], last, prev; /* prev: the last point inside */
@@ -542,11 +582,8 @@ static int trace_eval_at(trace_ctx *t, double nu, double S, int full, trace_eval
     t->fn.p.nu = nu;
     if (full != TRACE_FULL && t->mode.have_mode) {
         bkf_error e;
-        bkf_model_params p = t->fn.p;
-        p.S = S;
         const double u[2] = {nu, S};
-        if (!tracked_sample(&p, t->fn.n, t->fn.v_ref * S / t->fn.S_ref, &t->mode, &out->s, &e)) {
-            t->tracked++;
+        if (!tracked_at(&t->fn, S, &t->mode, &out->s, &e)) {
             trace_keep(t, out);
             /* the gradient as the driver will take it, updated by this value */
             if (full == TRACE_TRACKED || !near_converged(t, u, out->s.f)) return BKF_OK;
@@ -632,8 +669,8 @@ static bkf_stabmap_point trace_point(trace_ctx *t, const trace_eval *e)
     pt.slope = t->grad[1];
     pt.nu_slope = t->grad[0];
     pt.stable_above = t->grad[1] < 0;
-    pt.evaluations = t->fn.evaluations - t->at_last_point;
-    t->at_last_point = t->fn.evaluations;
+    pt.evaluations = t->fn.spectra - t->at_last_point;
+    t->at_last_point = t->fn.spectra;
     return pt;
 }
 
@@ -732,6 +769,9 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
     }
     if (t->rep.points >= t->max_points) {
         t->rep.end = BKF_STABMAP_END_POINTS;
+        snprintf(t->rep.note, sizeof t->rep.note,
+                 "cut at %zu points (max_points): the rest of the curve not followed",
+                 t->rep.points);
         return 1;
     }
     return 0;
@@ -758,7 +798,7 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
         return bkf_error_set(err, BKF_EINPUT, "trace: nu_step, S_step, S_tol > 0, max_points >= 1");
     trace_ctx t;
     memset(&t, 0, sizeof t);
-    t.fn = (sigma_fn){*params, n, o.tol, first->v, first->S, 0};
+    t.fn = sigma_fn_of(params, n, &o, first->v, first->S);
     t.scale[0] = o.nu_step;
     t.scale[1] = o.S_step;
     t.failed = -1;
@@ -817,6 +857,17 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
     co.newton_tol = t.land_tol / 8;
     t.newton_tol = co.newton_tol;
     co.newton_max_iter = 8;
+    /* Newton to newton_tol takes three values from a predictor (two
+     * tracked eigenvalues, the ring spectrum where it stops): at the
+     * driver's default (grow after two) a step once halved at a corner
+     * never grew back (n = 3 at gamma 4, c 0.15, nu -0.987: steps of 0.03,
+     * 118 points where 11 reach the window's top) */
+    co.grow_iterations = 3;
+    /* A turn in nu needs no point of its own (the points on either side
+     * draw it), and its location, to newton_tol on the tangent, fails on a
+     * sigma_max whose rightmost class changes along the curve: up to 100
+     * corrections a turn, each a spectrum (n = 3 above, nu -0.984, S 21) */
+    co.locate_folds = 0;
     co.max_points = o.max_points + 1;
     co.stop_index = 0;
     co.stop_min = w->nu_lo;
@@ -842,7 +893,8 @@ failed:
         bkf_error_set(err, s, "%s", e.message);
     }
 done:
-    t.rep.evaluations = t.fn.evaluations;
+    t.rep.evaluations = t.fn.spectra;
+    t.rep.tracked = t.fn.tracked;
     if (report) *report = t.rep;
     return s;
 }
