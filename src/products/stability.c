@@ -854,8 +854,14 @@ static int scan_seeds(const bkf_stability_spec *spec, const double *nus, const d
         size_t samples = (size_t)ceil((double)spec->S_samples * (spec->S_to - lo) /
                                       (spec->S_to - spec->S));
         if (samples < 2) samples = 2;
+        /* Scanned down from S_to: the samples are the same, but the column's
+         * bottom, 1.05 times the existence boundary (mu near 27 at gamma 2),
+         * is reached from above, where it is mostly unstable and proven so
+         * by the eigenvalue continued from the sample above (a few ms)
+         * instead of its ring spectrum (about 1 s there, the first sample of
+         * an upward scan: 12 of the paper scene's 19 s of seed scans). */
         bkf_stabmap_report rep;
-        t->status = bkf_stabmap_scan(&p, t->n, lo, spec->S_to, samples, &seed_o, t->pts, SEED_MAX,
+        t->status = bkf_stabmap_scan(&p, t->n, spec->S_to, lo, samples, &seed_o, t->pts, SEED_MAX,
                                      &t->count, &rep, &t->err);
         work_add(&t->work, &rep);
     }

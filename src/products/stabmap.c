@@ -194,6 +194,14 @@ static int sign_of(double f) { return f > 0 ? 1 : -1; }
  * the best value is within its error of 0 (*best: the smallest |f|; with
  * `track`, the eigenvalue `track` continued from sample to sample instead
  * of ring spectra, which fails where it cannot be continued). */
+/* The two samples are different roots: v apart by more than the root moves
+ * between them (v ~ S), beyond 1e-3 v. */
+static int roots_apart(const sample *a, const sample *b)
+{
+    double w = fabs(b->S - a->S), v = fmax(a->v, b->v);
+    return fabs(a->v - b->v) > 1e-3 * v + 4 * v * w / fmin(a->S, b->S);
+}
+
 static int illinois(sigma_fn *fn, sample *a, sample *b, double S_tol, sample *best,
                     const sample *track, bkf_error *err)
 {
@@ -203,6 +211,9 @@ static int illinois(sigma_fn *fn, sample *a, sample *b, double S_tol, sample *be
     for (int it = 0; it < 60 && fabs(b->S - a->S) > S_tol; it++) {
         /* sigma within its error of 0: the sign there means nothing */
         if (fabs(best->f) <= best->err) break;
+        /* on ring spectra, ends on two roots are a jump (close_bracket),
+         * whatever the width: closing it on would cost 8 to 16 spectra */
+        if (!track && roots_apart(a, b)) break;
         double S = (a->S * fb - b->S * fa) / (fb - fa);
         double lo = fmin(a->S, b->S), hi = fmax(a->S, b->S), w = hi - lo;
         if (!(S > lo + 0.02 * w && S < hi - 0.02 * w)) S = 0.5 * (lo + hi);
@@ -265,8 +276,7 @@ static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_sta
         int s = illinois(fn, &a, &b, S_tol, &best, NULL, err);
         if (s) return s;
     }
-    double w = fabs(b.S - a.S), v = fmax(a.v, b.v);
-    *jump = fabs(best.f) > best.err && fabs(a.v - b.v) > 1e-3 * v + 4 * v * w / fmin(a.S, b.S);
+    *jump = fabs(best.f) > best.err && roots_apart(&a, &b);
     double slope = (b.f - a.f) / (b.S - a.S);
     double S = fabs(b.S - a.S) > S_tol ? best.S : (a.S * b.f - b.S * a.f) / (b.f - a.f);
     *pt = (bkf_stabmap_point){0};
