@@ -865,10 +865,11 @@ static void floquet_matrix(const floquet_set_point *sets, size_t n_sets, size_t 
 }
 
 /* The box gamma {1e-2, 0.3, 2, 30, 1e2} x nu {0, -0.9, -0.99, 0.9999}
- * less two sets, in three parts of similar cost (about 37 s of CPU each).
- * Below gamma 30 a set costs 0.3 s, so all 12 stay; at gamma 30 and 100
- * a set costs 13-38 s (the product's retries before its refusals, and the
- * test's power iteration at 1e-11 over 12 periods for a complex pair), and
+ * less two sets, in three parts (19, 21 and 14 s of CPU; 37 s each before
+ * the product's hopeless log-column retries were cut and a complex pair's
+ * power iteration was first run at 1e-8).  Below gamma 30 a set costs 0.3
+ * s, so all 12 stay; at gamma 30 and 100 a set costs 4-14 s (the product's
+ * retries before its refusals, the test's power iteration), and
  * nu -0.9 and -0.99 show the same things there: at gamma 30 a complex pair
  * at c q 100 (L/2) and the other stepper undecided at tol 1e-8, at gamma
  * 100 real multipliers at c q 100 (-13527, -15144) and tol 1e-8 refused at
