@@ -11,6 +11,7 @@
 #include "bkfront/cycle.h"
 #include "bkfront/trainspec.h"
 
+#include "fronts_internal.h"
 #include "product_internal.h"
 
 #define ROOT_COLUMNS                                                                   \
@@ -877,6 +878,7 @@ typedef struct {
     int stability_change;
     root_verdict verdict; /* with stability */
     int skipped;          /* no spectrum tried: mu beyond one that outgrew the budget */
+    int tracked;          /* the verdict from eigenvalues followed, no ring spectrum */
 } branch_row;
 
 typedef struct {
@@ -948,6 +950,29 @@ typedef struct {
     size_t spectra;
 } crossing_search;
 
+/* The train at x: the root of n there nearest the chord between the two
+ * ends' v. */
+static int root_on_chord(double x, void *data, bkf_model_params *p, bkf_speeds_root *root,
+                         bkf_error *err)
+{
+    crossing_search *c = data;
+    bkf_speeds_param along = (bkf_speeds_param)c->spec->along;
+    double x0 = row_param(c->ends[0], along), x1 = row_param(c->ends[1], along);
+    double v0 = c->ends[0]->point.root.v, v1 = c->ends[1]->point.root.v;
+    double chord = v0 + (v1 - v0) * (x - x0) / (x1 - x0);
+    *p = branch_params(c->spec, x);
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.tol = c->spec->tol;
+    o.n_from = o.n_to = c->spec->n;
+    bkf_speeds_table t;
+    int s = bkf_speeds_find(p, &o, &t, err);
+    size_t best = 0;
+    if (!s) s = bkf_speeds_nearest(&t, chord, &best, err);
+    if (!s) *root = t.roots[best];
+    bkf_speeds_table_free(&t);
+    return s;
+}
+
 static double crossing_sigma(double x, void *data)
 {
     crossing_search *c = data;
@@ -955,28 +980,19 @@ static double crossing_sigma(double x, void *data)
     for (int k = 0; k < 2; k++)
         if (x == row_param(c->ends[k], along)) return c->ends[k]->verdict.spectrum.sigma_max;
     if (c->status) return NAN;
-    double x0 = row_param(c->ends[0], along), x1 = row_param(c->ends[1], along);
-    double v0 = c->ends[0]->point.root.v, v1 = c->ends[1]->point.root.v;
-    double chord = v0 + (v1 - v0) * (x - x0) / (x1 - x0);
-    bkf_model_params p = branch_params(c->spec, x);
-    bkf_speeds_options o = bkf_speeds_options_default();
-    o.tol = c->spec->tol;
-    o.n_from = o.n_to = c->spec->n;
-    bkf_speeds_table t;
-    int s = bkf_speeds_find(&p, &o, &t, &c->why);
-    size_t best = 0;
-    if (!s) s = bkf_speeds_nearest(&t, chord, &best, &c->why);
+    bkf_model_params p;
+    bkf_speeds_root root;
+    int s = root_on_chord(x, c, &p, &root, &c->why);
     if (!s) {
         bkf_trainspec_result_free(&c->at.verdict.spectrum);
         memset(&c->at, 0, sizeof c->at);
         c->at.point.params = p;
-        c->at.point.root = t.roots[best];
+        c->at.point.root = root;
         c->at.point.kind = BKF_SPEEDS_POINT;
         c->at.stability_change = 1;
         s = bkf_trainspec_root(&p, &c->at.point.root, c->tol, 1, &c->at.verdict.spectrum, &c->why);
         c->spectra++;
     }
-    bkf_speeds_table_free(&t);
     c->status = s;
     c->at.verdict.why.status = s;
     c->x_at = s ? NAN : x;
@@ -1034,6 +1050,54 @@ static int locate_crossing(const bkf_fronts_branch_spec *spec, double tol, const
     return BKF_OK;
 }
 
+/* The change between rows a and b located on the one eigenvalue that
+ * crosses: the rightmost of the ring spectrum on the stable side (every
+ * verdict but unstable is a ring spectrum's), followed across the interval
+ * (fronts_track_crossing), then one ring spectrum at the zero found, which
+ * must agree (|sigma_max| <= tol: the crossing eigenvalue is the
+ * rightmost there).  BKF_ENUMERIC where any step fails: the caller then
+ * searches on ring spectra (locate_crossing). */
+static int locate_tracked(const bkf_fronts_branch_spec *spec, double tol, const branch_row *a,
+                          const branch_row *b, branch_row *out, size_t *spectra,
+                          size_t *followed, bkf_error *err)
+{
+    bkf_speeds_param along = (bkf_speeds_param)spec->along;
+    const branch_row *from = a->verdict.spectrum.sigma_max < 0 ? a : b, *to = from == a ? b : a;
+    const bkf_trainspec_result *r = &from->verdict.spectrum;
+    if (from->tracked || r->sigma_is_bound) return BKF_ENUMERIC;
+    const bkf_trainspec_eigenvalue *start = NULL;
+    for (size_t i = 0; i < r->count; i++)
+        if (!r->eigenvalues[i].translation && (!start || r->eigenvalues[i].re > start->re))
+            start = &r->eigenvalues[i];
+    if (!start) return BKF_ENUMERIC;
+    crossing_search c;
+    memset(&c, 0, sizeof c);
+    c.spec = spec;
+    c.ends[0] = a;
+    c.ends[1] = b;
+    double x;
+    bkf_model_params p;
+    bkf_speeds_root root;
+    bkf_error e;
+    int s = fronts_track_crossing(row_param(from, along), row_param(to, along), start, spec->n,
+                                  tol, root_on_chord, &c, &x, &p, &root, followed, &e);
+    if (s == BKF_ENOMEM) return bkf_error_set(err, s, "out of memory");
+    if (s) return BKF_ENUMERIC;
+    memset(out, 0, sizeof *out);
+    out->point.params = p;
+    out->point.root = root;
+    out->point.kind = BKF_SPEEDS_POINT;
+    out->stability_change = 1;
+    ++*spectra;
+    s = verdict_find(&p, &root, tol, &out->verdict, err);
+    if (s) return s;
+    if (verdict_resolved(&out->verdict) && !out->verdict.spectrum.sigma_is_bound &&
+        fabs(out->verdict.spectrum.sigma_max) <= tol)
+        return BKF_OK;
+    bkf_trainspec_result_free(&out->verdict.spectrum);
+    return BKF_ENUMERIC;
+}
+
 /* A change of stability that could not be located, between two points. */
 typedef struct {
     double from, to;
@@ -1044,19 +1108,47 @@ typedef struct {
     double tol;
     missed_change *missed; /* at most one per pair of points */
     size_t nmissed, located, spectra;
+    size_t tracked;    /* points whose verdict the followed eigenvalues gave */
+    size_t redone;     /* followed points recomputed as ring spectra (a check failed) */
+    size_t followed;   /* eigenvalues followed in the crossings' searches */
 } branch_verdicts;
 
-/* Each row's verdict, then the changes of stability between consecutive
- * resolved points (sigma_max of opposite signs) as rows of their own. */
-static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sink,
-                            branch_verdicts *bv, bkf_error *err)
+/* A ring spectrum is taken at least every TRACK_EVERY points and wherever
+ * mu has grown TRACK_MU_REACH-fold since the last: each is a check of the
+ * eigenvalues followed (and the budget's test, as before, at large mu). */
+#define TRACK_EVERY 8
+#define TRACK_MU_REACH 2.0
+
+/* The ring spectrum's sigma_max at a point followed to: another eigenvalue
+ * than those followed lies right of them (or theirs is not in the
+ * spectrum: one landed on another eigenvalue). */
+static int check_fails(const bkf_trainspec_result *ring, const bkf_trainspec_result *followed,
+                       double tol)
 {
-    bkf_speeds_param along = (bkf_speeds_param)spec->along;
+    if (!isfinite(followed->sigma_max)) return 0;
+    if (ring->sigma_is_bound) return followed->sigma_max > ring->sigma_max;
+    return fabs(ring->sigma_max - followed->sigma_max) >
+           ring->sigma_max_err + followed->sigma_max_err + tol;
+}
+
+/* Each row's verdict: a ring spectrum, or where the eigenvalues followed
+ * from the last one prove the train unstable (fronts_track_point), theirs.
+ * A fold (the translation's partner passes 0 there), a point the followed
+ * eigenvalues do not prove unstable (a stable train needs the whole
+ * spectrum), and every TRACK_EVERY-th point or TRACK_MU_REACH-fold mu get
+ * a ring spectrum; where it shows the followed ones were overtaken, the
+ * points followed since the last ring spectrum are redone as ring spectra. */
+static int branch_verdicts_find(branch_sink *sink,
+                                branch_verdicts *bv, bkf_error *err)
+{
     /* The mesh a spectrum needs grows with mu (thinner fronts): past a mu
      * whose spectrum outgrew the budget the next ones would too, each after
      * seconds of trying, as the branch runs to the sonic limit. */
-    double refused_mu = INFINITY;
-    for (size_t i = 0; i < sink->count; i++) {
+    double refused_mu = INFINITY, mu_ring = NAN;
+    size_t last_ring = 0, since = 0;
+    fronts_track_set set = {0};
+    int s = BKF_OK;
+    for (size_t i = 0; i < sink->count && !s; i++) {
         branch_row *r = &sink->rows[i];
         if (r->point.kind == BKF_SPEEDS_SONIC) {
             bkf_error_set(&r->verdict.why, BKF_EINPUT,
@@ -1070,11 +1162,59 @@ static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sin
                           "(thinner fronts need a finer mesh)", refused_mu);
             continue;
         }
+        bkf_trainspec_result f;
+        int decided = 0;
+        s = fronts_track_point(&r->point.params, &r->point.root, bv->tol, &set, &f, &decided, err);
+        if (s) break;
+        int ring = r->point.kind == BKF_SPEEDS_FOLD || !decided || since + 1 >= TRACK_EVERY ||
+                   !(r->point.root.mu <= TRACK_MU_REACH * mu_ring);
+        if (!ring) {
+            r->verdict.spectrum = f;
+            r->verdict.why.status = BKF_OK;
+            r->tracked = 1;
+            bv->tracked++;
+            since++;
+            continue;
+        }
         bv->spectra++;
-        int s = verdict_find(&r->point.params, &r->point.root, bv->tol, &r->verdict, err);
-        if (s) return s;
+        s = verdict_find(&r->point.params, &r->point.root, bv->tol, &r->verdict, err);
+        int redo = !s && since && verdict_resolved(&r->verdict) &&
+                   check_fails(&r->verdict.spectrum, &f, bv->tol);
+        bkf_trainspec_result_free(&f);
+        for (size_t k = last_ring + 1; redo && !s && k < i; k++) {
+            branch_row *q = &sink->rows[k];
+            if (!q->tracked) continue;
+            bkf_trainspec_result_free(&q->verdict.spectrum);
+            memset(&q->verdict, 0, sizeof q->verdict);
+            q->tracked = 0;
+            bv->tracked--;
+            bv->redone++;
+            bv->spectra++;
+            s = verdict_find(&q->point.params, &q->point.root, bv->tol, &q->verdict, err);
+        }
+        if (s) break;
         if (r->verdict.why.status == BKF_EBUDGET) refused_mu = r->point.root.mu;
+        set.count = 0;
+        since = 0;
+        if (verdict_resolved(&r->verdict)) {
+            if (fronts_track_seed(&set, &r->verdict.spectrum))
+                s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            mu_ring = r->point.root.mu;
+            last_ring = i;
+        }
     }
+    fronts_track_set_free(&set);
+    return s;
+}
+
+/* Each row's verdict, then the changes of stability between consecutive
+ * resolved points (sigma_max of opposite signs) as rows of their own. */
+static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sink,
+                            branch_verdicts *bv, bkf_error *err)
+{
+    bkf_speeds_param along = (bkf_speeds_param)spec->along;
+    int s = branch_verdicts_find(sink, bv, err);
+    if (s) return s;
     /* room for a change between every two points: moving rows cannot fail */
     size_t cap = 2 * sink->count + 1;
     branch_row *rows = malloc(cap * sizeof *rows);
@@ -1084,7 +1224,6 @@ static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sin
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     size_t count = 0;
-    int s = BKF_OK;
     for (size_t i = 0; i < sink->count; i++) {
         rows[count++] = sink->rows[i];
         if (s || i + 1 == sink->count) continue;
@@ -1093,7 +1232,11 @@ static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sin
             !(a->verdict.spectrum.sigma_max * b->verdict.spectrum.sigma_max < 0))
             continue;
         bkf_error why;
-        int f = locate_crossing(spec, bv->tol, a, b, &rows[count], &why, &bv->spectra);
+        int f = locate_tracked(spec, bv->tol, a, b, &rows[count], &bv->spectra, &bv->followed, err);
+        if (f == BKF_ENUMERIC)
+            f = locate_crossing(spec, bv->tol, a, b, &rows[count], &why, &bv->spectra);
+        else if (f)
+            why = *err;
         if (f == BKF_ENOMEM) {
             s = bkf_error_set(err, f, "out of memory");
         } else if (f) {
@@ -1368,7 +1511,7 @@ int bkf_fronts_branch_write(const bkf_fronts_branch_spec *spec, FILE *out, bkf_i
     s = bkf_speeds_branch(&start, spec->n, spec->root, (bkf_speeds_param)spec->along, spec->to,
                           &o, spec->max_points, collect_point, &sink, &rep, err);
     if (!s && sink.status) s = bkf_error_set(err, sink.status, "out of memory");
-    branch_verdicts bv = {verdict_tol(spec->stability_tol), NULL, 0, 0, 0};
+    branch_verdicts bv = {.tol = verdict_tol(spec->stability_tol)};
     if (!s && spec->stability) s = branch_stability(spec, &sink, &bv, err);
     if (!s) s = write_branch(spec, &sink, &rep, spec->stability ? &bv : NULL, out, format, prov, err);
     free(bv.missed);
