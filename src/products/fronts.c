@@ -1119,16 +1119,30 @@ typedef struct {
 #define TRACK_EVERY 8
 #define TRACK_MU_REACH 2.0
 
-/* The ring spectrum's sigma_max at a point followed to: another eigenvalue
- * than those followed lies right of them (or theirs is not in the
- * spectrum: one landed on another eigenvalue). */
-static int check_fails(const bkf_trainspec_result *ring, const bkf_trainspec_result *followed,
-                       double tol)
+/* The check at a ring spectrum after followed points: its rightmost must
+ * be the rightmost followed to the point before (same class up to the
+ * conjugate, within the step that one made from its own last value, three
+ * times over, plus tol), else another eigenvalue than those followed
+ * overtook them on the way (or Newton landed on another one). */
+static int check_fails(const bkf_trainspec_result *ring, const bkf_trainspec_eigenvalue *last,
+                       double moved, double tol)
 {
-    if (!isfinite(followed->sigma_max)) return 0;
-    if (ring->sigma_is_bound) return followed->sigma_max > ring->sigma_max;
-    return fabs(ring->sigma_max - followed->sigma_max) >
-           ring->sigma_max_err + followed->sigma_max_err + tol;
+    if (ring->sigma_is_bound) return 1;
+    long n = (long)ring->n, j = lround(ring->kappa_max * ring->params.S / (2 * M_PI));
+    int same = j % n == (long)last->j % n;
+    int conj = (j + (long)last->j) % n == 0;
+    double d = fmin(same ? hypot(ring->sigma_max - last->re, ring->sigma_max_im - last->im) : INFINITY,
+                    conj ? hypot(ring->sigma_max - last->re, ring->sigma_max_im + last->im) : INFINITY);
+    return !(d <= 3 * moved + ring->sigma_max_err + last->err + tol);
+}
+
+/* The rightmost of a set, and how far it moved from the set before. */
+static const bkf_trainspec_eigenvalue *set_rightmost(const fronts_track_set *set)
+{
+    const bkf_trainspec_eigenvalue *b = NULL;
+    for (size_t i = 0; i < set->count; i++)
+        if (!b || set->e[i].re > b->re) b = &set->e[i];
+    return b;
 }
 
 /* Each row's verdict: a ring spectrum, or where the eigenvalues followed
@@ -1144,7 +1158,7 @@ static int branch_verdicts_find(branch_sink *sink,
     /* The mesh a spectrum needs grows with mu (thinner fronts): past a mu
      * whose spectrum outgrew the budget the next ones would too, each after
      * seconds of trying, as the branch runs to the sonic limit. */
-    double refused_mu = INFINITY, mu_ring = NAN;
+    double refused_mu = INFINITY, mu_ring = NAN, moved = INFINITY;
     size_t last_ring = 0, since = 0;
     fronts_track_set set = {0};
     int s = BKF_OK;
@@ -1162,25 +1176,36 @@ static int branch_verdicts_find(branch_sink *sink,
                           "(thinner fronts need a finer mesh)", refused_mu);
             continue;
         }
-        bkf_trainspec_result f;
-        int decided = 0;
-        s = fronts_track_point(&r->point.params, &r->point.root, bv->tol, &set, &f, &decided, err);
-        if (s) break;
-        int ring = r->point.kind == BKF_SPEEDS_FOLD || !decided || since + 1 >= TRACK_EVERY ||
+        /* a fold (the translation's partner passes 0 there), every
+         * TRACK_EVERY-th point and a TRACK_MU_REACH-fold mu take a ring
+         * spectrum whatever the eigenvalues followed would say */
+        int ring = r->point.kind == BKF_SPEEDS_FOLD || set.count == 0 || since + 1 >= TRACK_EVERY ||
                    !(r->point.root.mu <= TRACK_MU_REACH * mu_ring);
+        bkf_trainspec_eigenvalue last = {0};
+        const bkf_trainspec_eigenvalue *lb = set_rightmost(&set);
+        if (lb) last = *lb;
         if (!ring) {
-            r->verdict.spectrum = f;
-            r->verdict.why.status = BKF_OK;
-            r->tracked = 1;
-            bv->tracked++;
-            since++;
-            continue;
+            bkf_trainspec_result f;
+            int decided = 0;
+            s = fronts_track_point(&r->point.params, &r->point.root, bv->tol, &set, &f, &decided,
+                                   err);
+            if (s) break;
+            if (decided) {
+                const bkf_trainspec_eigenvalue *nb = set_rightmost(&set);
+                moved = lb && nb ? hypot(nb->re - last.re, nb->im - last.im) : INFINITY;
+                r->verdict.spectrum = f;
+                r->verdict.why.status = BKF_OK;
+                r->tracked = 1;
+                bv->tracked++;
+                since++;
+                continue;
+            }
+            bkf_trainspec_result_free(&f);
         }
         bv->spectra++;
         s = verdict_find(&r->point.params, &r->point.root, bv->tol, &r->verdict, err);
-        int redo = !s && since && verdict_resolved(&r->verdict) &&
-                   check_fails(&r->verdict.spectrum, &f, bv->tol);
-        bkf_trainspec_result_free(&f);
+        int redo = !s && since && lb && verdict_resolved(&r->verdict) &&
+                   check_fails(&r->verdict.spectrum, &last, moved, bv->tol);
         for (size_t k = last_ring + 1; redo && !s && k < i; k++) {
             branch_row *q = &sink->rows[k];
             if (!q->tracked) continue;
@@ -1201,6 +1226,7 @@ static int branch_verdicts_find(branch_sink *sink,
                 s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
             mu_ring = r->point.root.mu;
             last_ring = i;
+            moved = INFINITY;
         }
     }
     fronts_track_set_free(&set);

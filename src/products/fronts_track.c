@@ -5,6 +5,7 @@
  * located on the one eigenvalue that crosses. */
 #include "fronts_internal.h"
 
+#include <complex.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -35,8 +36,18 @@ int fronts_track_seed(fronts_track_set *set, const bkf_trainspec_result *r)
     set->count = 0;
     if (r->sigma_is_bound) return BKF_OK;
     if (set_reserve(set, r->count)) return BKF_ENOMEM;
-    for (size_t i = 0; i < r->count; i++)
-        if (!r->eigenvalues[i].translation) set->e[set->count++] = r->eigenvalues[i];
+    for (size_t i = 0; i < r->count; i++) {
+        const bkf_trainspec_eigenvalue *e = &r->eigenvalues[i];
+        /* sigma of class j and its conjugate of class n - j are one
+         * eigenvalue followed twice: the first (lower j, the one the ring's
+         * sigma_max names) is kept */
+        int twin = e->translation;
+        for (size_t k = 0; k < set->count && !twin; k++)
+            twin = (set->e[k].j + e->j) % r->n == 0 &&
+                   cabs((set->e[k].re - I * set->e[k].im) - (e->re + I * e->im)) <=
+                       set->e[k].err + e->err;
+        if (!twin) set->e[set->count++] = *e;
+    }
     return BKF_OK;
 }
 
