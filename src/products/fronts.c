@@ -336,13 +336,13 @@ static double verdict_tol(double stability_tol)
  * unresolved (r->why says why); any other failure is the table's.  A
  * refused root has no spectrum: r->why is its refusal. */
 static int verdict_find(const bkf_model_params *p, const bkf_speeds_root *root, double tol,
-                        root_verdict *r, bkf_error *err)
+                        size_t per_kappa, root_verdict *r, bkf_error *err)
 {
     if (bkf_speeds_root_status(root, &r->why)) return BKF_OK;
     /* per_kappa 1: the rows show sigma_max alone, which does not depend on
      * it, and fewer eigenvalues to refine cost less (the paper's n = 12:
-     * 0.8 s for 1.1 s at 3) */
-    int s = bkf_trainspec_root(p, root, tol, 1, &r->spectrum, &r->why);
+     * 0.8 s for 1.1 s at 3); a branch's ring spectra 2 (TRACK_PER_KAPPA) */
+    int s = bkf_trainspec_root(p, root, tol, per_kappa, &r->spectrum, &r->why);
     r->why.status = s;
     if (s && s != BKF_ETOL && s != BKF_EBUDGET) return bkf_error_set(err, s, "%s", r->why.message);
     return BKF_OK;
@@ -406,7 +406,7 @@ static int find_spectra(const bkf_model_params *p, const bkf_speeds_table *t, do
     if (!r->verdicts) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     int s = BKF_OK;
     for (size_t i = 0; !s && i < t->count; i++)
-        s = verdict_find(p, &t->roots[i], r->tol, &r->verdicts[i], err);
+        s = verdict_find(p, &t->roots[i], r->tol, 1, &r->verdicts[i], err);
     return s;
 }
 
@@ -1089,7 +1089,7 @@ static int locate_tracked(const bkf_fronts_branch_spec *spec, double tol, const 
     out->point.kind = BKF_SPEEDS_POINT;
     out->stability_change = 1;
     ++*spectra;
-    s = verdict_find(&p, &root, tol, &out->verdict, err);
+    s = verdict_find(&p, &root, tol, 1, &out->verdict, err);
     if (s) return s;
     if (verdict_resolved(&out->verdict) && !out->verdict.spectrum.sigma_is_bound &&
         fabs(out->verdict.spectrum.sigma_max) <= tol)
@@ -1118,16 +1118,28 @@ typedef struct {
  * eigenvalues followed (and the budget's test, as before, at large mu). */
 #define TRACK_EVERY 8
 #define TRACK_MU_REACH 2.0
+/* The ring spectra along a branch report two eigenvalues per Bloch class
+ * and half plane, and both are followed: the second of a class overtaking
+ * its first (gamma 4, c 0.15, nu -0.7, n = 2 near S 27.4, j = 0) is then
+ * seen. */
+#define TRACK_PER_KAPPA 8
 
-/* The check at a ring spectrum after followed points: its rightmost must
- * be the rightmost followed to the point before (same class up to the
- * conjugate, within the step that one made from its own last value, three
- * times over, plus tol), else another eigenvalue than those followed
+/* The check at a ring spectrum after followed points.  Where the set was
+ * followed to this point too (every one of them), the ring's rightmost
+ * must be theirs (within both errors plus tol); else it must be the
+ * rightmost followed to the point before (same class up to the conjugate,
+ * within three times the step that one made from its own last value, plus
+ * the errors and tol).  A failure: another eigenvalue than those followed
  * overtook them on the way (or Newton landed on another one). */
-static int check_fails(const bkf_trainspec_result *ring, const bkf_trainspec_eigenvalue *last,
-                       double moved, double tol)
+static int check_fails(const bkf_trainspec_result *ring, const bkf_trainspec_result *here,
+                       const bkf_trainspec_eigenvalue *last, double moved, double tol)
 {
     if (ring->sigma_is_bound) return 1;
+    int all = here->count > 0;
+    for (size_t i = 0; i < here->count; i++) all = all && isfinite(here->eigenvalues[i].re);
+    if (all)
+        return !(fabs(ring->sigma_max - here->sigma_max) <=
+                 ring->sigma_max_err + here->sigma_max_err + tol);
     long n = (long)ring->n, j = lround(ring->kappa_max * ring->params.S / (2 * M_PI));
     int same = j % n == (long)last->j % n;
     int conj = (j + (long)last->j) % n == 0;
@@ -1184,8 +1196,9 @@ static int branch_verdicts_find(branch_sink *sink,
         bkf_trainspec_eigenvalue last = {0};
         const bkf_trainspec_eigenvalue *lb = set_rightmost(&set);
         if (lb) last = *lb;
+        bkf_trainspec_result f;
+        memset(&f, 0, sizeof f);
         if (!ring) {
-            bkf_trainspec_result f;
             int decided = 0;
             s = fronts_track_point(&r->point.params, &r->point.root, bv->tol, &set, &f, &decided,
                                    err);
@@ -1200,12 +1213,12 @@ static int branch_verdicts_find(branch_sink *sink,
                 since++;
                 continue;
             }
-            bkf_trainspec_result_free(&f);
         }
         bv->spectra++;
-        s = verdict_find(&r->point.params, &r->point.root, bv->tol, &r->verdict, err);
+        s = verdict_find(&r->point.params, &r->point.root, bv->tol, TRACK_PER_KAPPA, &r->verdict, err);
         int redo = !s && since && lb && verdict_resolved(&r->verdict) &&
-                   check_fails(&r->verdict.spectrum, &last, moved, bv->tol);
+                   check_fails(&r->verdict.spectrum, &f, &last, moved, bv->tol);
+        bkf_trainspec_result_free(&f);
         for (size_t k = last_ring + 1; redo && !s && k < i; k++) {
             branch_row *q = &sink->rows[k];
             if (!q->tracked) continue;
@@ -1215,14 +1228,14 @@ static int branch_verdicts_find(branch_sink *sink,
             bv->tracked--;
             bv->redone++;
             bv->spectra++;
-            s = verdict_find(&q->point.params, &q->point.root, bv->tol, &q->verdict, err);
+            s = verdict_find(&q->point.params, &q->point.root, bv->tol, TRACK_PER_KAPPA, &q->verdict, err);
         }
         if (s) break;
         if (r->verdict.why.status == BKF_EBUDGET) refused_mu = r->point.root.mu;
         set.count = 0;
         since = 0;
         if (verdict_resolved(&r->verdict)) {
-            if (fronts_track_seed(&set, &r->verdict.spectrum))
+            if (fronts_track_seed(&set, &r->verdict.spectrum, bv->tol))
                 s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
             mu_ring = r->point.root.mu;
             last_ring = i;
@@ -1323,8 +1336,10 @@ static int branch_verdict_comments(bkf_io_table *table, bkf_speeds_param along,
         s = bkf_io_table_commentf(table, err,
                                   "stability along the branch: %zu change(s) located (rows of "
                                   "type stability, sigma_max = 0 to the tolerance), %zu not; "
-                                  "%zu spectra",
-                                  bv->located, bv->nmissed, bv->spectra);
+                                  "%zu spectra; %zu point(s) followed (unstable by the "
+                                  "eigenvalues of the last spectrum continued there, sigma_max "
+                                  "the rightmost of them), %zu redone as spectra",
+                                  bv->located, bv->nmissed, bv->spectra, bv->tracked, bv->redone);
     for (size_t i = 0; !s && i < sink->count; i++) {
         const branch_row *r = &sink->rows[i];
         double x = row_param(r, along);

@@ -10,26 +10,30 @@
 #include "bkfront/speeds.h"
 #include "bkfront/trainspec.h"
 
-/* The eigenvalues followed along a branch: the last ring spectrum's (every
- * one it reports but the translation: per Bloch class its rightmost in
- * each half plane), then their values at each point followed. */
+/* The eigenvalues followed along a branch: the last ring spectrum's near
+ * its rightmost, then their values at each point followed. */
 typedef struct {
     bkf_trainspec_eigenvalue *e;
     size_t count, cap;
+    size_t lead; /* the rightmost of them */
 } fronts_track_set;
 
-/* The set from a ring spectrum (empty when its window held nothing but the
- * translation). */
-int fronts_track_seed(fronts_track_set *set, const bkf_trainspec_result *r);
+/* The set from a ring spectrum: of the eigenvalues it reports (but the
+ * translation, and one of each conjugate pair of classes j and n - j),
+ * those right of sigma_max - |sigma_max| / 2 - 10 tol, the rightmost 16
+ * at most; empty when its window held nothing but the translation. */
+int fronts_track_seed(fronts_track_set *set, const bkf_trainspec_result *r, double tol);
 void fronts_track_set_free(fronts_track_set *set);
 
 /* The set followed to the train of `root` (bkf_trainspec_track at tol) as
  * a result in *out (free it with bkf_trainspec_result_free): eigenvalues
  * the followed ones, sigma_max the rightmost of them with its error, Bloch
  * number and kind, verdict unstable.  *decided is 1 when every one was
- * followed and the rightmost lies right of 0 by more than 4 errors plus
- * tol: then the train is unstable, whatever was not followed, and the set
- * takes the new values.  Otherwise *out still holds what was followed
+ * followed, the rightmost is the one that was the rightmost before (the
+ * lead did not pass to another: the maximum moving along a band of
+ * eigenvalues leaves the set, so the caller takes a ring spectrum) and
+ * lies right of 0 by more than 4 errors plus tol: then the train is
+ * unstable, whatever was not followed, and the set takes the new values.  Otherwise *out still holds what was followed
  * (sigma_max -inf when nothing was).  Only failures other than Newton's
  * are returned. */
 int fronts_track_point(const bkf_model_params *p, const bkf_speeds_root *root, double tol,

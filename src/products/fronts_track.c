@@ -31,23 +31,47 @@ static int set_reserve(fronts_track_set *set, size_t count)
     return BKF_OK;
 }
 
-int fronts_track_seed(fronts_track_set *set, const bkf_trainspec_result *r)
+/* Of a ring spectrum's eigenvalues, those within |sigma_max| / TRACK_BAND
+ * (plus 10 tol) of its rightmost are followed, TRACK_MAX at most: in a band
+ * of eigenvalues of nearly one real part (gamma 4, c 0.15, nu -0.7, n = 2:
+ * Re 0.0090-0.0091 at Im 3.0-4.0 in both classes) the rightmost moves from
+ * one to the next as the parameter changes. */
+#define TRACK_BAND 1.0
+#define TRACK_MAX 16
+
+static int by_re_desc(const void *pa, const void *pb)
+{
+    const bkf_trainspec_eigenvalue *a = pa, *b = pb;
+    return (a->re < b->re) - (a->re > b->re);
+}
+
+int fronts_track_seed(fronts_track_set *set, const bkf_trainspec_result *r, double tol)
 {
     set->count = 0;
+    set->lead = 0;
     if (r->sigma_is_bound) return BKF_OK;
     if (set_reserve(set, r->count)) return BKF_ENOMEM;
+    double floor = r->sigma_max - fabs(r->sigma_max) / TRACK_BAND - 10 * tol;
     for (size_t i = 0; i < r->count; i++) {
         const bkf_trainspec_eigenvalue *e = &r->eigenvalues[i];
         /* sigma of class j and its conjugate of class n - j are one
          * eigenvalue followed twice: the first (lower j, the one the ring's
          * sigma_max names) is kept */
-        int twin = e->translation;
+        int twin = e->translation || e->re < floor;
         for (size_t k = 0; k < set->count && !twin; k++)
             twin = (set->e[k].j + e->j) % r->n == 0 &&
                    cabs((set->e[k].re - I * set->e[k].im) - (e->re + I * e->im)) <=
                        set->e[k].err + e->err;
         if (!twin) set->e[set->count++] = *e;
     }
+    /* stable: equal real parts keep the ring's order, whose first names sigma_max */
+    for (size_t i = 1; i < set->count; i++)
+        for (size_t k = i; k > 0 && by_re_desc(&set->e[k - 1], &set->e[k]) > 0; k--) {
+            bkf_trainspec_eigenvalue t = set->e[k];
+            set->e[k] = set->e[k - 1];
+            set->e[k - 1] = t;
+        }
+    if (set->count > TRACK_MAX) set->count = TRACK_MAX;
     return BKF_OK;
 }
 
@@ -82,8 +106,10 @@ int fronts_track_point(const bkf_model_params *p, const bkf_speeds_root *root, d
     out->mu = root->mu;
     out->eigenvalues = to;
     out->count = s ? 0 : set->count;
+    size_t lead = 0;
     for (size_t i = 0; i < out->count; i++) {
         if (!isfinite(to[i].re) || to[i].re <= out->sigma_max) continue;
+        lead = i;
         out->sigma_max = to[i].re;
         out->sigma_max_im = to[i].im;
         out->sigma_max_err = to[i].err;
@@ -91,7 +117,8 @@ int fronts_track_point(const bkf_model_params *p, const bkf_speeds_root *root, d
     }
     out->complex_pair = fabs(out->sigma_max_im) > out->sigma_max_err;
     out->verdict = BKF_TRAINSPEC_UNSTABLE;
-    if (followed == set->count && out->sigma_max - TRACK_MARGIN * out->sigma_max_err > tol) {
+    if (followed == set->count && lead == set->lead &&
+        out->sigma_max - TRACK_MARGIN * out->sigma_max_err > tol) {
         *decided = 1;
         memcpy(set->e, to, set->count * sizeof *to);
     }
