@@ -1,12 +1,16 @@
 /* Internal to the fronts products (src/products/fronts.c, the tables;
  * fronts_track.c, the eigenvalues a branch's verdicts follow from point to
- * point).  Not installed, not part of the API. */
+ * point; fronts_chain.c, the chain's branch).  Not installed, not part of
+ * the API. */
 #ifndef BKFRONT_FRONTS_INTERNAL_H
 #define BKFRONT_FRONTS_INTERNAL_H
 
 #include <stddef.h>
 
+#include <stdio.h>
+
 #include "bkfront/fronts.h"
+#include "bkfront/io.h"
 #include "bkfront/speeds.h"
 #include "bkfront/trainspec.h"
 
@@ -56,5 +60,18 @@ int fronts_track_crossing(double xa, double xb, const bkf_trainspec_eigenvalue *
                           double tol, fronts_root_at root_at, void *data, double *x,
                           bkf_model_params *p, bkf_speeds_root *root, size_t *evaluations,
                           bkf_error *err);
+
+/* bkf_fronts_branch_spec's along for h, the chain's spacing (S = N h). */
+#define ALONG_H 4
+
+/* The chain's model at the branch's start (the continued parameter at
+ * `from`) and its blocks; messages name the keys with p. */
+int fronts_chain_branch_model(const bkf_fronts_branch_spec *spec, const char *p,
+                              bkf_model_params *m, bkf_error *err);
+
+/* The chain's branch (bkf_chainwave_branch) as a table; name: the
+ * continued parameter's. */
+int fronts_chain_branch_write(const bkf_fronts_branch_spec *spec, const char *name, FILE *out,
+                              bkf_io_format format, const bkf_provenance *prov, bkf_error *err);
 
 #endif
