@@ -13,8 +13,6 @@
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_roots.h>
 
-#include "bkfront/options.h"
-
 /* A followed eigenvalue proves instability when right of 0 by this many of
  * its error estimates plus tol (stabmap's test on a continued eigenvalue). */
 #define TRACK_MARGIN 4.0

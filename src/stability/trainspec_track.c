@@ -1,9 +1,7 @@
 /* Eigenvalues of a train followed from a nearby one (see trainspec.h,
  * bkf_trainspec_track): Newton on each one's Bloch class alone, on meshes
  * refined until the asked tol, one context (one cycle) for them all. */
-#include "bkfront/trainspec.h"
 
-#include "bkfront/options.h"
 #include "trainspec_internal.h"
 
 #include <gsl/gsl_math.h>
