@@ -832,14 +832,17 @@ int trainspec_ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_tr
     return BKF_OK;
 }
 
-/* The meshes for a window up to height B: a step turns the fastest
+/* The coarse mesh for a window up to height B: a step turns the fastest
  * solution, u ~ exp(+-sqrt(beta) sigma z), by at most RESOLVE_TURN (see
- * mesh_needs). */
+ * mesh_needs).  The fine one only the polish uses: meshes_for_polish
+ * builds it, once the trace has settled the window (each build samples
+ * the profile at three points a step, a third of a trace pass's cost at
+ * mu 2). */
 static int meshes_for(ctx *x, double B, const window *win, bkf_error *err)
 {
+    trainspec_mesh_free(&x->fine);
     int rc = trainspec_mesh_needs(x, hypot(B, win->a_hi), err);
-    if (rc == BKF_OK) rc = trainspec_mesh_build(x, x->substeps, &x->coarse, err);
-    return rc != BKF_OK ? rc : trainspec_mesh_build(x, 2 * x->substeps, &x->fine, err);
+    return rc != BKF_OK ? rc : trainspec_mesh_build(x, x->substeps, &x->coarse, err);
 }
 
 /* Trace both families over [0, B], B grown until the curves stay left of
@@ -973,9 +976,11 @@ static int meshes_for_polish(ctx *x, size_t classes, size_t polish_n, candidates
                 reach = fmax(reach, hypot(cs->items[i].a, cs->items[i].y));
     }
     reach = POLISH_MARGIN * reach + POLISH_REACH_MIN;
-    if (!(reach < x->sigma_reach)) return BKF_OK;
-    int rc = trainspec_mesh_needs(x, reach, err);
-    if (rc == BKF_OK) rc = trainspec_mesh_build(x, x->substeps, &x->coarse, err);
+    int rc = BKF_OK;
+    if (reach < x->sigma_reach) {
+        rc = trainspec_mesh_needs(x, reach, err);
+        if (rc == BKF_OK) rc = trainspec_mesh_build(x, x->substeps, &x->coarse, err);
+    }
     return rc != BKF_OK ? rc : trainspec_mesh_build(x, 2 * x->substeps, &x->fine, err);
 }
 
