@@ -63,7 +63,6 @@ int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err)
         rate[i] = 0.5 * a + sqrt(0.25 * a * a + b);
         slow[i] = b_fixed + reach * (reach + x->gamma * fabs(phi[i])); /* bounds |bp| */
     }
-    x->stiff = 0;
     for (size_t i = 0; rc == BKF_OK && i + 1 < n; i++) {
         double len = x->nodes[i + 1] - x->nodes[i];
         double plain = len * fmax(rate[i], rate[i + 1]) / RESOLVE_TURN;
@@ -71,7 +70,6 @@ int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err)
         double stiff = decay > 0.0 ? len * fmax(slow[i], slow[i + 1]) / decay / RESOLVE_TURN : INFINITY;
         /* stiff steps, of length len / stiff, must damp the fast solution */
         int use_stiff = stiff < plain && decay * len >= STIFF_MIN * fmax(stiff, 1.0);
-        x->stiff |= use_stiff;
         need[i] = fmax(fmax(use_stiff ? stiff : plain, fabs(f[i + 1] - f[i]) / PROFILE_TURN), NODE_SHARE);
     }
     x->sigma_reach = reach;
@@ -169,11 +167,11 @@ done:
 /* The step boundaries of a mesh of `substeps` times the steps the cycle
  * steps need (mesh_needs), spread evenly in the cumulative need, so that
  * doubling substeps halves every step: *bounds (steps + 1 values). */
-int trainspec_mesh_bounds(ctx *x, double substeps, double **bounds, size_t *steps, bkf_error *err)
+int trainspec_mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, bkf_error *err)
 {
     double total = 0.0;
     for (size_t i = 0; i + 1 < x->node_count; i++) total += x->need[i];
-    double count = ceil(fmax(ceil(total), MESH_MIN_STEPS) * substeps);
+    double count = fmax(ceil(total), MESH_MIN_STEPS) * (double)substeps;
     if (count > MESH_MAX_STEPS)
         return bkf_error_set(err, BKF_EBUDGET, "the spectrum needs more than %d steps per period (mu = %.15g)",
                              MESH_MAX_STEPS, x->mu);
@@ -197,7 +195,7 @@ int trainspec_mesh_bounds(ctx *x, double substeps, double **bounds, size_t *step
     return BKF_OK;
 }
 
-int trainspec_mesh_build(ctx *x, double substeps, mesh *m, bkf_error *err)
+int trainspec_mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
 {
     double *bounds = NULL;
     size_t steps = 0;
@@ -617,7 +615,7 @@ static int trace(ctx *x, window *win, double y0, double y1, double y_scale, curv
         double y = y0 + (y1 - y0) * i / CURVE_START, guess[FAMILIES];
         predict(c->count ? &c->h[c->count - 1] : NULL, NULL, y, guess);
         height h;
-        int rc = height_at(x, x->stiff ? &x->coarse : &x->tracer, win, y, guess, h.fam);
+        int rc = height_at(x, &x->coarse, win, y, guess, h.fam);
         if (rc != BKF_OK) return rc;
         if (curve_insert(c, c->count, &h) != BKF_OK) return BKF_ENOMEM;
     }
@@ -632,7 +630,7 @@ static int trace(ctx *x, window *win, double y0, double y1, double y_scale, curv
         double y = 0.5 * (c->h[i].fam[0].y + c->h[i + 1].fam[0].y), guess[FAMILIES];
         predict(&c->h[i], &c->h[i + 1], y, guess);
         height mid;
-        int rc = height_at(x, x->stiff ? &x->coarse : &x->tracer, win, y, guess, mid.fam);
+        int rc = height_at(x, &x->coarse, win, y, guess, mid.fam);
         if (rc != BKF_OK) return rc;
         if (curve_insert(c, i + 1, &mid) != BKF_OK) return BKF_ENOMEM;
     }
@@ -796,7 +794,6 @@ void trainspec_ctx_free(ctx *x)
 {
     trainspec_mesh_free(&x->coarse);
     trainspec_mesh_free(&x->fine);
-    trainspec_mesh_free(&x->tracer);
     bkf_cycle_free(x->cycle);
     free(x->nodes);
     free(x->need);
@@ -856,8 +853,7 @@ static int meshes_for(ctx *x, double B, const window *win, bkf_error *err)
 {
     trainspec_mesh_free(&x->fine);
     int rc = trainspec_mesh_needs(x, hypot(B, win->a_hi), err);
-    if (rc == BKF_OK) rc = trainspec_mesh_build(x, x->substeps, &x->coarse, err);
-    return rc != BKF_OK || x->stiff ? rc : trainspec_mesh_build(x, TRACE_SUBSTEPS * (double)x->substeps, &x->tracer, err);
+    return rc != BKF_OK ? rc : trainspec_mesh_build(x, x->substeps, &x->coarse, err);
 }
 
 /* Trace both families over [0, B], B grown until the curves stay left of

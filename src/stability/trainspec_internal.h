@@ -33,15 +33,6 @@
 #define TRACE_TOL 1e-6
 /* Newton steps per family and height before the bracketing takes over. */
 #define TRACE_NEWTON_MAX 3
-/* The traced curves' mesh, where no step is stiff, has this share of the
- * coarse mesh's steps: the curves only propose candidates, each polished
- * on the meshes (the error is theirs), and tell where the spectrum leaves
- * the window.  Steps twice as long err 32 times more, which moved no
- * candidate further from its eigenvalue than on the coarse mesh in 10309
- * polishes at mu 0.56-25 (paper table, ten random sets); where steps are
- * stiff (the L-stable long step on the slow branches, mu >~ 30) it moved
- * them by up to 0.037 (mu 58), and the coarse mesh traces. */
-#define TRACE_SUBSTEPS 0.5
 /* The smaller multiplier's curve is left out of a height where its bound
  * lies this far below modulus 1 (in ln |multiplier|; see height_at). */
 #define FAMILY_MARGIN 0.05
@@ -103,8 +94,6 @@ typedef struct {
                            need the fast solution to decay there) */
     double *need;       /* per cycle step: the steps it needs at sigma_reach (see mesh_needs) */
     mesh coarse, fine;
-    mesh tracer;        /* the traced curves' mesh where no step is stiff (TRACE_SUBSTEPS) */
-    int stiff;          /* the meshes take stiff steps somewhere (mesh_needs) */
     size_t evaluations;
     double work, max_work;               /* steps taken, and allowed */
     const volatile sig_atomic_t *cancel;
@@ -119,10 +108,10 @@ void trainspec_ctx_free(ctx *x);
 /* The steps each cycle step needs for |sigma| up to reach (x->need). */
 int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err);
 /* The step boundaries of a mesh of `substeps` times the steps needed. */
-int trainspec_mesh_bounds(ctx *x, double substeps, double **bounds, size_t *steps, bkf_error *err);
+int trainspec_mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, bkf_error *err);
 /* A mesh on the boundaries bounds[0..steps]: the coefficients at each step's Radau points. */
 int trainspec_mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf_error *err);
-int trainspec_mesh_build(ctx *x, double substeps, mesh *m, bkf_error *err);
+int trainspec_mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err);
 void trainspec_mesh_free(mesh *m);
 /* The Radau IIA step i at sigma in p's basis, and its sigma-derivative when de is not NULL. */
 void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
