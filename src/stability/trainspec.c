@@ -469,17 +469,6 @@ static int height_at(ctx *x, const mesh *m, window *win, double y, const double 
                      height_newton(x, m, win, y, guess[f], f, tol_a, &pt[f]);
         all &= settled[f];
     }
-    /* The smaller multiplier has at most half the log-modulus of the product,
-     * ln |det P| = trace_sum - 2 a T / s (Liouville, see monodromy): right of
-     * a_lo it stays below modulus 1 wherever that bound is, by a margin far
-     * beyond the meshes' error, negative (always, the cycle being stable:
-     * the bound is (r_inf - a) T / s and a_lo > r_inf), and its curve needs
-     * no pass at a_lo. */
-    if (!settled[1] && 0.5 * (m->trace_sum - 2.0 * win->a_lo * x->T / x->s) < -FAMILY_MARGIN) {
-        pt[1] = (curve_point){.y = y, .found = 0};
-        settled[1] = 1;
-        all = settled[0];
-    }
     if (all) return BKF_OK;
     double complex w[2], wh[2] = {0};
     monodromy(x, m, win->a_lo + I * y, w, NULL);

@@ -33,9 +33,6 @@
 #define TRACE_TOL 1e-6
 /* Newton steps per family and height before the bracketing takes over. */
 #define TRACE_NEWTON_MAX 3
-/* The smaller multiplier's curve is left out of a height where its bound
- * lies this far below modulus 1 (in ln |multiplier|; see height_at). */
-#define FAMILY_MARGIN 0.05
 #define Y_MAX_LIMIT 1e4
 #define NEWTON_MAX 30
 #define MESH_REFINEMENTS 4
