@@ -157,6 +157,42 @@ TEST(cont_circle_passes_fold_at_top)
     free(r);
 }
 
+/* locate_folds 0: the top of the circle is passed as any point (no fold
+ * visited, none counted: the run goes on round to the bottom, x > 0 of
+ * the top's points); grow_iterations 1 against 4: the steps stay shorter,
+ * so more points reach the same arc (lambda back to 0 on the right). */
+TEST(cont_circle_without_fold_search_and_step_growth)
+{
+    size_t points[2];
+    for (int k = 0; k < 2; k++) {
+        record *r = new_record(2);
+        bkf_cont_options o = bkf_cont_options_default(1);
+        o.locate_folds = 0;
+        o.grow_iterations = k ? 4 : 1;
+        o.max_points = MAX_RECORD;
+        o.stop_index = 1;
+        o.stop_min = -0.5;
+        o.stop_max = 2;
+        bkf_cont_report rep;
+        double u0[2] = {-1.0, 0.0};
+        CHECK_STATUS(bkf_cont_run(circle, record_point, r, u0, 1, +1, &o, &rep, NULL), BKF_OK);
+        CHECK(rep.folds == 0 && rep.reached_bound);
+        for (size_t i = 0; i < r->count; i++) CHECK(!r->is_fold[i]);
+        /* round the top to lambda -0.5 on the right */
+        CHECK(r->u[r->count - 1][0] > 0.8 && fabs(r->u[r->count - 1][1] + 0.5) < 1e-9);
+        points[k] = rep.points;
+        free(r);
+    }
+    CHECK_MSG(points[1] < points[0], "%zu points growing after 4 iterations, %zu after 1",
+              points[1], points[0]);
+    bkf_cont_options o = bkf_cont_options_default(1);
+    o.grow_iterations = 0;
+    double u0[2] = {-1.0, 0.0};
+    record *r = new_record(2);
+    CHECK_STATUS(bkf_cont_run(circle, record_point, r, u0, 1, +1, &o, NULL, NULL), BKF_EINPUT);
+    free(r);
+}
+
 TEST(cont_circle_direction_minus_finds_bottom_fold)
 {
     record *r = new_record(2);
