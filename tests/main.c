@@ -86,7 +86,7 @@ static const struct {
     {"stabmap_boundary_point_recomputed", 22.1},
     {"audit_fixed_sample_set_1", 15.7},
     {"cli_check_adapted_grid", 18.5},
-    {"stabmap_diagram_followed_curves_are_the_scans_crossings", 15.8},
+    {"stabmap_diagram_followed_curves_are_the_scans_crossings", 4.8},
     {"speeds_canard_jump_rows_honest_or_unresolved", 16.2},
     {"cycle_engine_bd2x2_meets_tol_against_taylor", 5.7},
     {"trainspec_sim_paper", 13.7},
