@@ -1,6 +1,7 @@
 """`stability --line` against Hill at the same Bloch numbers kappa = (2 pi/L) i/M (my hill.py with
 fractional j = kappa S / (2 pi)); the rightmost converged eigenvalue per kappa (translation excluded
-at kappa = 0, which is the issue-31 item-5 trap)."""
+at kappa = 0, which is the issue-31 item-5 trap; where every other eigenvalue is left of 0, the
+rightmost at kappa = 0 is the translation's 0, and summarize.py accepts 0 within bkfront's error)."""
 import json, sys, subprocess, os, numpy as np
 from hill import spectrum
 BK = os.path.join(os.path.dirname(os.path.abspath(__file__)), "bk/build/bkfront")
