@@ -113,6 +113,8 @@ const char *bkf_lazy_failure(void)
     return s;
 }
 
+/* The stand-ins: written under the real names, defined as bkf_LAPACKE_zgeev,
+ * bkf_LAPACKE_dgeev, bkf_dnaupd_c and bkf_dneupd_c (lazylib.h's macros). */
 lapack_int LAPACKE_zgeev(int matrix_layout, char jobvl, char jobvr, lapack_int n,
                          lapack_complex_double *a, lapack_int lda, lapack_complex_double *w,
                          lapack_complex_double *vl, lapack_int ldvl, lapack_complex_double *vr,
