@@ -885,6 +885,13 @@ static bkf_comoving *comoving_alloc_body(const bkf_comoving_params *params,
     bkf_cycle_options co = bkf_cycle_options_default();
     co.tol = m->p.cycle_tol;
     int s = bkf_cycle_solve(cycle, m->mu, m->p.model.nu, &co, &e);
+    if (s && co.tol < 1e-10) {
+        /* as bkf_pde_init_front: a cycle that cannot be had to 1e-12 (near
+         * nu = 1, mu 3.6: 1.3e-11 of T) is still a seed and a grid far
+         * finer than the run resolves */
+        co.tol = 1e-10;
+        s = bkf_cycle_solve(cycle, m->mu, m->p.model.nu, &co, &e);
+    }
     if (s) bkf_error_set(err, s, "cycle at mu = %.15g: %s", m->mu, e.message);
     if (!s) {
         const bkf_cycle_result *cr = bkf_cycle_get(cycle);

@@ -2,7 +2,8 @@
  * (issue 17 item 7): at the two reproductions of the attack the measured
  * speed missed the prediction by 11 and 10 times v_meas_err (the fit's
  * uncertainty alone).  The reference is v_pred, the speeds solver's root
- * (its error below 1e-14 here), which the simulation does not share. */
+ * (its error 2e-11 here, at the check's speeds tol 1e-9: a thousandth of
+ * the miss), which the simulation does not share. */
 #define _POSIX_C_SOURCE 200809L
 #include "harness.h"
 
@@ -25,7 +26,8 @@ static void check_covers(const char *words)
     CHECK(bkf_tsv_cell(out, 0, "v_meas", &v_meas, NULL, 0));
     CHECK(bkf_tsv_cell(out, 0, "v_meas_err", &v_meas_err, NULL, 0));
     double miss = fabs(v_meas - v_pred);
-    CHECK_MSG(v_pred_err < 1e-12, "v_pred_err %.3g", v_pred_err);
+    CHECK_MSG(v_pred_err < 0.01 * miss, "v_pred_err %.3g against |v_meas - v_pred| %.3g",
+              v_pred_err, miss);
     CHECK_MSG(miss + v_pred_err <= v_meas_err, "|v_meas - v_pred| = %.3g > v_meas_err %.3g",
               miss, v_meas_err);
     CHECK_MSG(v_meas_err <= 30 * miss, "v_meas_err %.3g is %.0f times |v_meas - v_pred| %.3g",
@@ -37,10 +39,15 @@ static void check_covers(const char *words)
 
 /* Both rows are unstable by their spectra (n = 20 here: sigma_max 0.0067),
  * whose speed an auto run does not judge, nor so measure the grid's error
- * of: --runs full measures it for every row. */
+ * of: --runs full measures it for every row.  tmax 20 (fit over [10, 20]):
+ * miss 3.1e-8, v_meas_err 2.5e-7; without the grid's error (planted) 8.0e-9,
+ * below the miss, so the test fails; at tmax 125 3.9e-8 against 1.9e-7
+ * (3.5e-9 without), three times the CPU (the early steps, the noise's
+ * response, are most of either). */
 TEST(cli_check_adapted_grid_error_covers_the_grid_thin_fronts)
 {
-    check_covers("check --gamma 5 --c 0.2 --nu -0.9 --S 50 --n 20 --runs full --no-progress");
+    check_covers("check --gamma 5 --c 0.2 --nu -0.9 --S 50 --n 20 --tmax 20 --runs full "
+                 "--no-progress");
 }
 
 /* The second reproduction costs about 190 s of CPU (two runs of 17664 and
