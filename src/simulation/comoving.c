@@ -394,12 +394,6 @@ static void newton_tables(bkf_comoving *m)
     }
 }
 
-/* A[j][k] of the reduced system (see above). */
-static double newton_a(const bkf_comoving *m, size_t j, int k, double gamma)
-{
-    return (k == 0 ? 1.0 + gamma * m->dphi[j] : 0.0) - gamma * m->adv[j * STENCIL_W + (size_t)(k + R)];
-}
-
 /* K for gamma at the state Y, factored; nonzero when singular.  K's rows
  * and columns are in the order of slot, dphi by point. */
 static int newton_setup(bkf_comoving *m, const double *Y, double gamma)
@@ -409,17 +403,23 @@ static int newton_setup(bkf_comoving *m, const double *Y, double gamma)
     for (size_t j = 0; j < M; j++) m->dphi[j] = g * bkf_model_friction_slope(Y[2 * m->slot[j]]);
     SUNMatZero(m->K);
     for (size_t j = 0; j < M; j++) {
-        sunindextype row = (sunindextype)m->slot[j];
+        /* row j of K by offset d = k + l in -2R .. 2R, then into the band */
+        double rowk[2 * STENCIL_W - 1] = {0};
         const unsigned *nb = m->nbs + j * STENCIL_W;
         const double *adv = m->adv + j * STENCIL_W, *lap = m->lap + j * STENCIL_W;
         for (int k = -R; k <= R; k++) {
-            /* point j + k, found through its slot's point */
             size_t jk = m->point[nb[k + R]];
             double cjk = (k == 0 ? 1.0 : 0.0) - gamma * adv[k + R];
-            SM_ELEMENT_B(m->K, row, (sunindextype)nb[k + R]) -= gamma * gamma * g * lap[k + R];
-            const unsigned *nb2 = m->nbs + jk * STENCIL_W;
-            for (int l = -R; l <= R; l++)
-                SM_ELEMENT_B(m->K, row, (sunindextype)nb2[l + R]) += cjk * newton_a(m, jk, l, gamma);
+            const double *advk = m->adv + jk * STENCIL_W;
+            rowk[k + 2 * R] -= gamma * gamma * g * lap[k + R];
+            for (int l = 0; l < STENCIL_W; l++) rowk[k + l + R] -= cjk * gamma * advk[l];
+            rowk[k + 2 * R] += cjk * (1.0 + gamma * m->dphi[jk]);
+        }
+        sunindextype row = (sunindextype)m->slot[j];
+        for (int d = -2 * R; d <= 2 * R; d++) {
+            long jd = (long)j + d;
+            jd += jd < 0 ? (long)M : (jd >= (long)M ? -(long)M : 0);
+            SM_ELEMENT_B(m->K, row, (sunindextype)m->slot[jd]) = rowk[d + 2 * R];
         }
     }
     m->kgamma = gamma;
