@@ -367,10 +367,11 @@ static void cv_errors(int code, const char *module, const char *function, char *
  * whole system was 68% of a run (n = 12 at the paper's parameters), and
  * its cost goes as unknowns x bandwidth^2 (factor) and unknowns x
  * bandwidth (solve).  x_eta's division by gamma g loses at most
- * eps |b| / (gamma g) (gamma >= 1e-6 or so in practice), far below what a
- * Newton correction needs; CVODE's GMRES takes this solve as its
- * preconditioner, so even a stale one (an older gamma or state) only costs
- * Krylov iterations, never accuracy. */
+ * eps |b| / (gamma g), far below what a Newton correction needs; and the
+ * iteration is CVODE's modified Newton, whose convergence test accepts no
+ * step on a poor correction: a factor of an older gamma or state (CVODE
+ * sets it up anew only every 20 steps, on a gamma change beyond 30% or on
+ * a failed convergence) costs iterations, never accuracy. */
 #define STENCIL_W (2 * R + 1)
 static const double E8C[R + 1] = {70.0, -56.0, 28.0, -8.0, 1.0};
 
