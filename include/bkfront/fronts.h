@@ -150,7 +150,12 @@ const bkf_io_column *bkf_fronts_branch_columns(size_t *count);
  * stability: the parameter where sigma_max = 0 to stability_tol (Brent on
  * the parameter; the root there is re-solved, the one nearest the chord's
  * v), its Bloch number and kind (complex: an oscillatory crossing), also
- * listed in a comment.  A crossing that cannot be located is a comment. */
+ * listed in a comment.  A crossing that cannot be located is a comment.
+ * Between ring spectra a point's verdict may come from the last one's
+ * eigenvalues followed there (bkf_trainspec_track) where they prove it
+ * unstable (sigma_max then the rightmost of them), and a crossing is first
+ * located on the eigenvalue that crosses, confirmed by one ring spectrum
+ * (docs/cli/branch.md says what is checked where). */
 int bkf_fronts_branch_write(const bkf_fronts_branch_spec *spec, FILE *out, bkf_io_format format,
                             const bkf_provenance *provenance, bkf_error *err);
 

@@ -180,6 +180,24 @@ int bkf_trainspec_eigenvalue_at(const bkf_model_params *params, const bkf_trains
                                 size_t j, double re0, double im0, size_t substeps, double *re,
                                 double *im, size_t *mesh_steps, bkf_error *err);
 
+/* Eigenvalues followed to a nearby train: each from[i] (its class j < n and
+ * sigma; a ring spectrum's eigenvalue of a train a continuation step away,
+ * or a prediction from two) polished by Newton on its class alone, on
+ * meshes of 1, 2, 4, ... substeps (one context, one cycle and one mesh
+ * ladder for them all, the mesh the largest |sigma| needs) until the
+ * difference of the last two / 8 (fifth order) plus the last Newton step
+ * and the profile's share, the ring spectrum's estimate, meets tol
+ * ([1e-8, 1e-2]): to[i] (err that estimate, kappa = 2 pi j / S,
+ * translation copied), or re, im and err NaN where Newton did not converge
+ * or tol was not met by 16 substeps.  *followed (may be NULL) counts the
+ * others.  Newton may land on another eigenvalue of the class than the one
+ * meant (a step too long, eigenvalues close): the caller judges that, and
+ * knows nothing of the eigenvalues not followed (BKF_EBUDGET past the
+ * default work budget). */
+int bkf_trainspec_track(const bkf_model_params *params, const bkf_trainspec_train *train, double tol,
+                        size_t count, const bkf_trainspec_eigenvalue *from, bkf_trainspec_eigenvalue *to,
+                        size_t *followed, bkf_error *err);
+
 /* The eigenfunction of the eigenvalue near sigma = (*re, *im) of class j:
  * sigma is first polished as by bkf_trainspec_eigenvalue_at at 8 substeps
  * (the value used goes back into *re, *im), then the perturbations p of psi

@@ -11,6 +11,7 @@
 #include "bkfront/cycle.h"
 #include "bkfront/trainspec.h"
 
+#include "fronts_internal.h"
 #include "product_internal.h"
 
 #define ROOT_COLUMNS                                                                   \
@@ -57,7 +58,6 @@ _Static_assert(sizeof chain_columns / sizeof chain_columns[0] ==
 static const char *const model_names[] = {"continuum", "chain", NULL};
 /* S, nu, gamma, c in bkf_speeds_param order; h the chain's alone */
 static const char *const param_names[] = {"S", "nu", "gamma", "c", "h", NULL};
-#define ALONG_H 4
 static const char *const method_names[] = {"auto", "asymptotic", "leading", "shooting", NULL};
 static const bkf_cycle_method method_kinds[] = {BKF_METHOD_AUTO, BKF_METHOD_ASYMPTOTIC,
                                                 BKF_METHOD_LEADING, BKF_METHOD_SHOOTING};
@@ -335,13 +335,13 @@ static double verdict_tol(double stability_tol)
  * unresolved (r->why says why); any other failure is the table's.  A
  * refused root has no spectrum: r->why is its refusal. */
 static int verdict_find(const bkf_model_params *p, const bkf_speeds_root *root, double tol,
-                        root_verdict *r, bkf_error *err)
+                        size_t per_kappa, root_verdict *r, bkf_error *err)
 {
     if (bkf_speeds_root_status(root, &r->why)) return BKF_OK;
     /* per_kappa 1: the rows show sigma_max alone, which does not depend on
      * it, and fewer eigenvalues to refine cost less (the paper's n = 12:
-     * 0.8 s for 1.1 s at 3) */
-    int s = bkf_trainspec_root(p, root, tol, 1, &r->spectrum, &r->why);
+     * 0.8 s for 1.1 s at 3); a branch's ring spectra 2 (TRACK_PER_KAPPA) */
+    int s = bkf_trainspec_root(p, root, tol, per_kappa, &r->spectrum, &r->why);
     r->why.status = s;
     if (s && s != BKF_ETOL && s != BKF_EBUDGET) return bkf_error_set(err, s, "%s", r->why.message);
     return BKF_OK;
@@ -405,7 +405,7 @@ static int find_spectra(const bkf_model_params *p, const bkf_speeds_table *t, do
     if (!r->verdicts) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     int s = BKF_OK;
     for (size_t i = 0; !s && i < t->count; i++)
-        s = verdict_find(p, &t->roots[i], r->tol, &r->verdicts[i], err);
+        s = verdict_find(p, &t->roots[i], r->tol, 1, &r->verdicts[i], err);
     return s;
 }
 
@@ -746,36 +746,6 @@ static int check_end(const bkf_fronts_branch_spec *spec, const char *p, const ch
     return BKF_OK;
 }
 
-static const bkf_chainwave_param chain_params[] = {BKF_CHAINWAVE_PARAM_S, BKF_CHAINWAVE_PARAM_NU,
-                                                   BKF_CHAINWAVE_PARAM_GAMMA, BKF_CHAINWAVE_PARAM_C,
-                                                   BKF_CHAINWAVE_PARAM_H};
-
-/* The chain's model at the branch's start (the continued parameter at
- * `from`) and its blocks. */
-static int chain_branch_model(const bkf_fronts_branch_spec *spec, const char *p,
-                              bkf_model_params *m, bkf_error *err)
-{
-    double S = spec->along == BKF_SPEEDS_ALONG_S || spec->along == ALONG_H ? NAN : spec->S;
-    size_t N = spec->N;
-    if (!N && !(S >= BKF_CHAINWAVE_N_MIN && S <= BKF_CHAINWAVE_N_MAX && S == floor(S)))
-        return bkf_error_set(err, BKF_EINPUT, "%sN: the number of blocks, in [%d, %d], is "
-                             "needed (S is not a whole number there, or it is continued)", p,
-                             BKF_CHAINWAVE_N_MIN, BKF_CHAINWAVE_N_MAX);
-    if (!N) N = (size_t)S;
-    *m = model_of(spec->gamma, spec->c, spec->nu, spec->S);
-    m->kind = BKF_MODEL_CHAIN;
-    m->N = N;
-    double x = spec->from;
-    switch (spec->along) {
-    case BKF_SPEEDS_ALONG_S: m->S = x; break;
-    case BKF_SPEEDS_ALONG_NU: m->nu = x; break;
-    case BKF_SPEEDS_ALONG_GAMMA: m->gamma = x; break;
-    case BKF_SPEEDS_ALONG_C: m->c = x; break;
-    default: m->S = x * (double)N; break;
-    }
-    return BKF_OK;
-}
-
 static int chain_branch_check(const bkf_fronts_branch_spec *spec, const char *p, bkf_error *err)
 {
     if (spec->along < 0 || spec->along > ALONG_H)
@@ -803,7 +773,7 @@ static int chain_branch_check(const bkf_fronts_branch_spec *spec, const char *p,
         return bkf_error_set(err, BKF_EINPUT, "%stol: %g is outside [%g, %g] for the chain", p,
                              spec->tol, BKF_CHAINWAVE_TOL_MIN, BKF_CHAINWAVE_TOL_MAX);
     bkf_model_params m;
-    int s = chain_branch_model(spec, p, &m, err);
+    int s = fronts_chain_branch_model(spec, p, &m, err);
     if (s) return s;
     bkf_chainwave_options o = bkf_chainwave_options_default();
     o.tol = spec->tol;
@@ -812,7 +782,7 @@ static int chain_branch_check(const bkf_fronts_branch_spec *spec, const char *p,
     for (int end = 0; end < 2; end++) {
         bkf_fronts_branch_spec q = *spec;
         q.from = end ? spec->to : spec->from;
-        chain_branch_model(&q, p, &m, err);
+        fronts_chain_branch_model(&q, p, &m, err);
         if (bkf_chainwave_check(&m, spec->n, &o, &e))
             return bkf_error_set(err, BKF_EINPUT, "%s%s (%s = %g): %s", p, end ? "to" : "from",
                                  name, q.from, e.message);
@@ -877,6 +847,7 @@ typedef struct {
     int stability_change;
     root_verdict verdict; /* with stability */
     int skipped;          /* no spectrum tried: mu beyond one that outgrew the budget */
+    int tracked;          /* the verdict from eigenvalues followed, no ring spectrum */
 } branch_row;
 
 typedef struct {
@@ -948,6 +919,29 @@ typedef struct {
     size_t spectra;
 } crossing_search;
 
+/* The train at x: the root of n there nearest the chord between the two
+ * ends' v. */
+static int root_on_chord(double x, void *data, bkf_model_params *p, bkf_speeds_root *root,
+                         bkf_error *err)
+{
+    crossing_search *c = data;
+    bkf_speeds_param along = (bkf_speeds_param)c->spec->along;
+    double x0 = row_param(c->ends[0], along), x1 = row_param(c->ends[1], along);
+    double v0 = c->ends[0]->point.root.v, v1 = c->ends[1]->point.root.v;
+    double chord = v0 + (v1 - v0) * (x - x0) / (x1 - x0);
+    *p = branch_params(c->spec, x);
+    bkf_speeds_options o = bkf_speeds_options_default();
+    o.tol = c->spec->tol;
+    o.n_from = o.n_to = c->spec->n;
+    bkf_speeds_table t;
+    int s = bkf_speeds_find(p, &o, &t, err);
+    size_t best = 0;
+    if (!s) s = bkf_speeds_nearest(&t, chord, &best, err);
+    if (!s) *root = t.roots[best];
+    bkf_speeds_table_free(&t);
+    return s;
+}
+
 static double crossing_sigma(double x, void *data)
 {
     crossing_search *c = data;
@@ -955,28 +949,19 @@ static double crossing_sigma(double x, void *data)
     for (int k = 0; k < 2; k++)
         if (x == row_param(c->ends[k], along)) return c->ends[k]->verdict.spectrum.sigma_max;
     if (c->status) return NAN;
-    double x0 = row_param(c->ends[0], along), x1 = row_param(c->ends[1], along);
-    double v0 = c->ends[0]->point.root.v, v1 = c->ends[1]->point.root.v;
-    double chord = v0 + (v1 - v0) * (x - x0) / (x1 - x0);
-    bkf_model_params p = branch_params(c->spec, x);
-    bkf_speeds_options o = bkf_speeds_options_default();
-    o.tol = c->spec->tol;
-    o.n_from = o.n_to = c->spec->n;
-    bkf_speeds_table t;
-    int s = bkf_speeds_find(&p, &o, &t, &c->why);
-    size_t best = 0;
-    if (!s) s = bkf_speeds_nearest(&t, chord, &best, &c->why);
+    bkf_model_params p;
+    bkf_speeds_root root;
+    int s = root_on_chord(x, c, &p, &root, &c->why);
     if (!s) {
         bkf_trainspec_result_free(&c->at.verdict.spectrum);
         memset(&c->at, 0, sizeof c->at);
         c->at.point.params = p;
-        c->at.point.root = t.roots[best];
+        c->at.point.root = root;
         c->at.point.kind = BKF_SPEEDS_POINT;
         c->at.stability_change = 1;
         s = bkf_trainspec_root(&p, &c->at.point.root, c->tol, 1, &c->at.verdict.spectrum, &c->why);
         c->spectra++;
     }
-    bkf_speeds_table_free(&t);
     c->status = s;
     c->at.verdict.why.status = s;
     c->x_at = s ? NAN : x;
@@ -1034,6 +1019,54 @@ static int locate_crossing(const bkf_fronts_branch_spec *spec, double tol, const
     return BKF_OK;
 }
 
+/* The change between rows a and b located on the one eigenvalue that
+ * crosses: the rightmost of the ring spectrum on the stable side (every
+ * verdict but unstable is a ring spectrum's), followed across the interval
+ * (fronts_track_crossing), then one ring spectrum at the zero found, which
+ * must agree (|sigma_max| <= tol: the crossing eigenvalue is the
+ * rightmost there).  BKF_ENUMERIC where any step fails: the caller then
+ * searches on ring spectra (locate_crossing). */
+static int locate_tracked(const bkf_fronts_branch_spec *spec, double tol, const branch_row *a,
+                          const branch_row *b, branch_row *out, size_t *spectra,
+                          size_t *followed, bkf_error *err)
+{
+    bkf_speeds_param along = (bkf_speeds_param)spec->along;
+    const branch_row *from = a->verdict.spectrum.sigma_max < 0 ? a : b, *to = from == a ? b : a;
+    const bkf_trainspec_result *r = &from->verdict.spectrum;
+    if (from->tracked || r->sigma_is_bound) return BKF_ENUMERIC;
+    const bkf_trainspec_eigenvalue *start = NULL;
+    for (size_t i = 0; i < r->count; i++)
+        if (!r->eigenvalues[i].translation && (!start || r->eigenvalues[i].re > start->re))
+            start = &r->eigenvalues[i];
+    if (!start) return BKF_ENUMERIC;
+    crossing_search c;
+    memset(&c, 0, sizeof c);
+    c.spec = spec;
+    c.ends[0] = a;
+    c.ends[1] = b;
+    double x;
+    bkf_model_params p;
+    bkf_speeds_root root;
+    bkf_error e;
+    int s = fronts_track_crossing(row_param(from, along), row_param(to, along), start, spec->n,
+                                  tol, root_on_chord, &c, &x, &p, &root, followed, &e);
+    if (s == BKF_ENOMEM) return bkf_error_set(err, s, "out of memory");
+    if (s) return BKF_ENUMERIC;
+    memset(out, 0, sizeof *out);
+    out->point.params = p;
+    out->point.root = root;
+    out->point.kind = BKF_SPEEDS_POINT;
+    out->stability_change = 1;
+    ++*spectra;
+    s = verdict_find(&p, &root, tol, 1, &out->verdict, err);
+    if (s) return s;
+    if (verdict_resolved(&out->verdict) && !out->verdict.spectrum.sigma_is_bound &&
+        fabs(out->verdict.spectrum.sigma_max) <= tol)
+        return BKF_OK;
+    bkf_trainspec_result_free(&out->verdict.spectrum);
+    return BKF_ENUMERIC;
+}
+
 /* A change of stability that could not be located, between two points. */
 typedef struct {
     double from, to;
@@ -1044,19 +1077,82 @@ typedef struct {
     double tol;
     missed_change *missed; /* at most one per pair of points */
     size_t nmissed, located, spectra;
+    size_t tracked;    /* points whose verdict the followed eigenvalues gave */
+    size_t redone;     /* followed points recomputed as ring spectra (a check failed) */
+    size_t followed;   /* eigenvalues followed in the crossings' searches */
 } branch_verdicts;
 
-/* Each row's verdict, then the changes of stability between consecutive
- * resolved points (sigma_max of opposite signs) as rows of their own. */
-static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sink,
-                            branch_verdicts *bv, bkf_error *err)
+/* A ring spectrum is taken at least every TRACK_EVERY points and wherever
+ * mu has grown TRACK_MU_REACH-fold since the last: each is a check of the
+ * eigenvalues followed (and the budget's test, as before, at large mu). */
+#define TRACK_EVERY 8
+#define TRACK_MU_REACH 2.0
+/* Past mu 100 the cycle's profile is sampled by the stiff stepper
+ * (cycle_shoot.c), and building a mesh costs about 15 times more a step
+ * than at mu 99: the eigenvalues followed then cost nearly a ring spectrum
+ * (n = 6 at gamma 1.5, mu 121: 5.1 s against 6.9 s) and save nothing, so
+ * every point there takes its ring spectrum, with its check and the work
+ * budget's refusal as before. */
+#define TRACK_MU_MAX 100.0
+/* The ring spectra along a branch report two eigenvalues per Bloch class
+ * and half plane, and both are followed: the second of a class overtaking
+ * its first (gamma 4, c 0.15, nu -0.7, n = 2 near S 27.4, j = 0) is then
+ * seen. */
+#define TRACK_PER_KAPPA 8
+
+/* The check at a ring spectrum after followed points.  Where the set was
+ * followed to this point too (every one of them), the ring's rightmost
+ * must be theirs (within both errors plus tol); else it must be the
+ * rightmost followed to the point before (same class up to the conjugate,
+ * within three times the step that one made from its own last value, plus
+ * the errors and tol).  A failure: another eigenvalue than those followed
+ * overtook them on the way (or Newton landed on another one). */
+static int check_fails(const bkf_trainspec_result *ring, const bkf_trainspec_result *here,
+                       const bkf_trainspec_eigenvalue *last, double moved, double tol)
 {
-    bkf_speeds_param along = (bkf_speeds_param)spec->along;
+    if (ring->sigma_is_bound) return 1;
+    int all = here->count > 0;
+    for (size_t i = 0; i < here->count; i++) all = all && isfinite(here->eigenvalues[i].re);
+    if (all)
+        return !(fabs(ring->sigma_max - here->sigma_max) <=
+                 ring->sigma_max_err + here->sigma_max_err + tol);
+    long n = (long)ring->n, j = lround(ring->kappa_max * ring->params.S / (2 * M_PI));
+    int same = j % n == (long)last->j % n;
+    int conj = (j + (long)last->j) % n == 0;
+    double d = fmin(same ? hypot(ring->sigma_max - last->re, ring->sigma_max_im - last->im) : INFINITY,
+                    conj ? hypot(ring->sigma_max - last->re, ring->sigma_max_im + last->im) : INFINITY);
+    return !(d <= 3 * moved + ring->sigma_max_err + last->err + tol);
+}
+
+/* The rightmost of a set, and how far it moved from the set before. */
+static const bkf_trainspec_eigenvalue *set_rightmost(const fronts_track_set *set)
+{
+    const bkf_trainspec_eigenvalue *b = NULL;
+    for (size_t i = 0; i < set->count; i++)
+        if (!b || set->e[i].re > b->re) b = &set->e[i];
+    return b;
+}
+
+/* Each row's verdict: a ring spectrum, or where the eigenvalues followed
+ * from the last one prove the train unstable (fronts_track_point), theirs.
+ * A fold (the translation's partner passes 0 there), a point the followed
+ * eigenvalues do not prove unstable (a stable train needs the whole
+ * spectrum) or whose rightmost is another than before, every
+ * TRACK_EVERY-th point, a TRACK_MU_REACH-fold mu and mu past TRACK_MU_MAX
+ * get a ring spectrum; where it shows the followed ones were overtaken,
+ * the points followed since the last ring spectrum are redone as ring
+ * spectra. */
+static int branch_verdicts_find(branch_sink *sink,
+                                branch_verdicts *bv, bkf_error *err)
+{
     /* The mesh a spectrum needs grows with mu (thinner fronts): past a mu
      * whose spectrum outgrew the budget the next ones would too, each after
      * seconds of trying, as the branch runs to the sonic limit. */
-    double refused_mu = INFINITY;
-    for (size_t i = 0; i < sink->count; i++) {
+    double refused_mu = INFINITY, mu_ring = NAN, moved = INFINITY;
+    size_t last_ring = 0, since = 0;
+    fronts_track_set set = {0};
+    int s = BKF_OK;
+    for (size_t i = 0; i < sink->count && !s; i++) {
         branch_row *r = &sink->rows[i];
         if (r->point.kind == BKF_SPEEDS_SONIC) {
             bkf_error_set(&r->verdict.why, BKF_EINPUT,
@@ -1070,11 +1166,74 @@ static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sin
                           "(thinner fronts need a finer mesh)", refused_mu);
             continue;
         }
+        /* a fold (the translation's partner passes 0 there), every
+         * TRACK_EVERY-th point, a TRACK_MU_REACH-fold mu and mu past
+         * TRACK_MU_MAX take a ring spectrum whatever the eigenvalues
+         * followed would say */
+        int ring = r->point.kind == BKF_SPEEDS_FOLD || set.count == 0 || since + 1 >= TRACK_EVERY ||
+                   !(r->point.root.mu <= TRACK_MU_REACH * mu_ring) ||
+                   !(r->point.root.mu <= TRACK_MU_MAX);
+        bkf_trainspec_eigenvalue last = {0};
+        const bkf_trainspec_eigenvalue *lb = set_rightmost(&set);
+        if (lb) last = *lb;
+        bkf_trainspec_result f;
+        memset(&f, 0, sizeof f);
+        if (!ring) {
+            int decided = 0;
+            s = fronts_track_point(&r->point.params, &r->point.root, bv->tol, &set, &f, &decided,
+                                   err);
+            if (s) break;
+            if (decided) {
+                const bkf_trainspec_eigenvalue *nb = set_rightmost(&set);
+                moved = lb && nb ? hypot(nb->re - last.re, nb->im - last.im) : INFINITY;
+                r->verdict.spectrum = f;
+                r->verdict.why.status = BKF_OK;
+                r->tracked = 1;
+                bv->tracked++;
+                since++;
+                continue;
+            }
+        }
         bv->spectra++;
-        int s = verdict_find(&r->point.params, &r->point.root, bv->tol, &r->verdict, err);
-        if (s) return s;
+        s = verdict_find(&r->point.params, &r->point.root, bv->tol, TRACK_PER_KAPPA, &r->verdict, err);
+        int redo = !s && since && lb && verdict_resolved(&r->verdict) &&
+                   check_fails(&r->verdict.spectrum, &f, &last, moved, bv->tol);
+        bkf_trainspec_result_free(&f);
+        for (size_t k = last_ring + 1; redo && !s && k < i; k++) {
+            branch_row *q = &sink->rows[k];
+            if (!q->tracked) continue;
+            bkf_trainspec_result_free(&q->verdict.spectrum);
+            memset(&q->verdict, 0, sizeof q->verdict);
+            q->tracked = 0;
+            bv->tracked--;
+            bv->redone++;
+            bv->spectra++;
+            s = verdict_find(&q->point.params, &q->point.root, bv->tol, TRACK_PER_KAPPA, &q->verdict, err);
+        }
+        if (s) break;
         if (r->verdict.why.status == BKF_EBUDGET) refused_mu = r->point.root.mu;
+        set.count = 0;
+        since = 0;
+        if (verdict_resolved(&r->verdict)) {
+            if (fronts_track_seed(&set, &r->verdict.spectrum, bv->tol))
+                s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+            mu_ring = r->point.root.mu;
+            last_ring = i;
+            moved = INFINITY;
+        }
     }
+    fronts_track_set_free(&set);
+    return s;
+}
+
+/* Each row's verdict, then the changes of stability between consecutive
+ * resolved points (sigma_max of opposite signs) as rows of their own. */
+static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sink,
+                            branch_verdicts *bv, bkf_error *err)
+{
+    bkf_speeds_param along = (bkf_speeds_param)spec->along;
+    int s = branch_verdicts_find(sink, bv, err);
+    if (s) return s;
     /* room for a change between every two points: moving rows cannot fail */
     size_t cap = 2 * sink->count + 1;
     branch_row *rows = malloc(cap * sizeof *rows);
@@ -1084,7 +1243,6 @@ static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sin
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
     size_t count = 0;
-    int s = BKF_OK;
     for (size_t i = 0; i < sink->count; i++) {
         rows[count++] = sink->rows[i];
         if (s || i + 1 == sink->count) continue;
@@ -1093,7 +1251,11 @@ static int branch_stability(const bkf_fronts_branch_spec *spec, branch_sink *sin
             !(a->verdict.spectrum.sigma_max * b->verdict.spectrum.sigma_max < 0))
             continue;
         bkf_error why;
-        int f = locate_crossing(spec, bv->tol, a, b, &rows[count], &why, &bv->spectra);
+        int f = locate_tracked(spec, bv->tol, a, b, &rows[count], &bv->spectra, &bv->followed, err);
+        if (f == BKF_ENUMERIC)
+            f = locate_crossing(spec, bv->tol, a, b, &rows[count], &why, &bv->spectra);
+        else if (f)
+            why = *err;
         if (f == BKF_ENOMEM) {
             s = bkf_error_set(err, f, "out of memory");
         } else if (f) {
@@ -1154,8 +1316,10 @@ static int branch_verdict_comments(bkf_io_table *table, bkf_speeds_param along,
         s = bkf_io_table_commentf(table, err,
                                   "stability along the branch: %zu change(s) located (rows of "
                                   "type stability, sigma_max = 0 to the tolerance), %zu not; "
-                                  "%zu spectra",
-                                  bv->located, bv->nmissed, bv->spectra);
+                                  "%zu spectra; %zu point(s) followed (unstable by the "
+                                  "eigenvalues of the last spectrum continued there, sigma_max "
+                                  "the rightmost of them), %zu redone as spectra",
+                                  bv->located, bv->nmissed, bv->spectra, bv->tracked, bv->redone);
     for (size_t i = 0; !s && i < sink->count; i++) {
         const branch_row *r = &sink->rows[i];
         double x = row_param(r, along);
@@ -1269,89 +1433,6 @@ static int write_branch(const bkf_fronts_branch_spec *spec, const branch_sink *s
     return s;
 }
 
-static const bkf_io_column chain_branch_columns[] = {
-    {"point", BKF_IO_TEXT}, {"value", BKF_IO_NUMBER}, {"S", BKF_IO_NUMBER},
-    {"h", BKF_IO_NUMBER}, {"gamma", BKF_IO_NUMBER}, {"c", BKF_IO_NUMBER},
-    {"nu", BKF_IO_NUMBER}, {"K", BKF_IO_NUMBER}, {"n", BKF_IO_NUMBER},
-    {"v", BKF_IO_NUMBER}, {"P", BKF_IO_NUMBER}, {"tau", BKF_IO_NUMBER},
-    {"stable", BKF_IO_TEXT}, {"mult_abs", BKF_IO_NUMBER}, {"sigma_max", BKF_IO_NUMBER},
-    {"trivial_err", BKF_IO_NUMBER}};
-#define NCHAIN_BRANCH (sizeof chain_branch_columns / sizeof chain_branch_columns[0])
-
-typedef struct {
-    bkf_chainwave_branch_point *points;
-    size_t count, cap, max_points, regular;
-    int oom;
-} chain_branch_sink;
-
-static int chain_branch_keep(const bkf_chainwave_branch_point *pt, void *data)
-{
-    chain_branch_sink *k = data;
-    if (k->count == k->cap) {
-        size_t cap = k->cap ? 2 * k->cap : 64;
-        bkf_chainwave_branch_point *np = realloc(k->points, cap * sizeof *np);
-        if (!np) return k->oom = 1;
-        k->points = np;
-        k->cap = cap;
-    }
-    k->points[k->count++] = *pt;
-    k->regular += !pt->is_fold;
-    return k->max_points && k->regular >= k->max_points;
-}
-
-static int write_chain_branch(const bkf_fronts_branch_spec *spec, FILE *out,
-                              bkf_io_format format, const bkf_provenance *prov, bkf_error *err)
-{
-    bkf_model_params m;
-    int s = chain_branch_model(spec, "", &m, err);
-    if (s) return s;
-    bkf_chainwave_options o = bkf_chainwave_options_default();
-    o.tol = spec->tol;
-    o.stability = spec->stability;
-    const char *name = param_names[spec->along];
-    chain_branch_sink k = {NULL, 0, 0, spec->max_points, 0, 0};
-    bkf_chainwave_branch_report rep;
-    s = bkf_chainwave_branch(&m, spec->n, spec->root, chain_params[spec->along], spec->from,
-                             spec->to, &o, chain_branch_keep, &k, &rep, err);
-    if (!s && k.oom) s = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    bkf_io_table *t = NULL;
-    char title[160];
-    snprintf(title, sizeof title, "branch --model chain: one rotating wave of the chain "
-             "followed along %s (pseudo-arclength, through folds)", name);
-    if (!s)
-        s = bkf_product_table_open(out, format, chain_branch_columns, NCHAIN_BRANCH, title, prov,
-                                   &t, err);
-    char a[32], b[32], c[32], d[32];
-    if (!s)
-        s = bkf_io_table_commentf(t, err, "wave %zu of n = %zu on N = %zu blocks, %s from %.17g "
-                    "to %.17g; start: gamma %s, c %s, nu %s, S %s (h = S/N, K = c^2/h^2); tol %g",
-                    spec->root, spec->n, m.N, name, spec->from, spec->to,
-                    bkf_format_number(m.gamma, a, sizeof a), bkf_format_number(m.c, b, sizeof b),
-                    bkf_format_number(m.nu, c, sizeof c), bkf_format_number(m.S, d, sizeof d),
-                    o.tol);
-    if (!s)
-        s = bkf_io_table_commentf(t, err, "%zu points, %zu folds; %s%s", rep.points, rep.folds,
-                    rep.reached ? "reached the end" : rep.pinned ? "pinning: " : "ended: ",
-                    rep.reached ? "" : rep.note[0] ? rep.note : "stopped at max-points");
-    if (!s) s = bkf_product_table_command(t, prov, err);
-    for (size_t i = 0; !s && i < k.count; i++) {
-        const bkf_chainwave_branch_point *pt = &k.points[i];
-        bkf_io_value v[NCHAIN_BRANCH];
-        double num[NCHAIN_BRANCH] = {0,     pt->value, pt->S, pt->h,  pt->gamma,
-                                     pt->c, pt->nu,    pt->K, (double)spec->n, pt->v,
-                                     pt->P, pt->tau,   0,     pt->mult_abs, pt->sigma_max,
-                                     pt->trivial_err};
-        for (size_t j = 0; j < NCHAIN_BRANCH; j++) v[j].number = num[j];
-        v[0].text = pt->is_fold ? "fold" : "point";
-        v[12].text = bkf_chainwave_verdict_name(pt->verdict);
-        s = bkf_io_table_row(t, v, err);
-    }
-    if (!s) s = bkf_io_table_finish(t, err);
-    bkf_io_table_free(t);
-    free(k.points);
-    return s;
-}
-
 int bkf_fronts_branch_write(const bkf_fronts_branch_spec *spec, FILE *out, bkf_io_format format,
                             const bkf_provenance *prov, bkf_error *err)
 {
@@ -1359,7 +1440,8 @@ int bkf_fronts_branch_write(const bkf_fronts_branch_spec *spec, FILE *out, bkf_i
     if (s) return s;
     bkf_fronts_branch_spec resolved = branch_resolved(spec);
     spec = &resolved;
-    if (spec->model == 1) return write_chain_branch(spec, out, format, prov, err);
+    if (spec->model == 1)
+        return fronts_chain_branch_write(spec, param_names[spec->along], out, format, prov, err);
     bkf_speeds_options o = bkf_speeds_options_default();
     o.tol = spec->tol;
     bkf_model_params start = branch_params(spec, spec->from);
@@ -1368,7 +1450,7 @@ int bkf_fronts_branch_write(const bkf_fronts_branch_spec *spec, FILE *out, bkf_i
     s = bkf_speeds_branch(&start, spec->n, spec->root, (bkf_speeds_param)spec->along, spec->to,
                           &o, spec->max_points, collect_point, &sink, &rep, err);
     if (!s && sink.status) s = bkf_error_set(err, sink.status, "out of memory");
-    branch_verdicts bv = {verdict_tol(spec->stability_tol), NULL, 0, 0, 0};
+    branch_verdicts bv = {.tol = verdict_tol(spec->stability_tol)};
     if (!s && spec->stability) s = branch_stability(spec, &sink, &bv, err);
     if (!s) s = write_branch(spec, &sink, &rep, spec->stability ? &bv : NULL, out, format, prov, err);
     free(bv.missed);

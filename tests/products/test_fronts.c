@@ -336,3 +336,67 @@ TEST(products_branch_stability_columns_and_sonic_end)
     CHECK_STATUS(bkf_fronts_branch_check(&b, "", &e), BKF_EINPUT);
     CHECK_MSG(strstr(e.message, "only with stability"), "%s", e.message);
 }
+
+/* Where a branch's verdicts come from eigenvalues followed between ring
+ * spectra (fronts_track.c), every point's verdict, sigma_max and Bloch
+ * number are those of the point's own ring spectrum, a second route: on
+ * the paper's n = 3 through its change of stability and on three sets away
+ * from the paper (mu 0.9 and 1.3, where the rightmost passes to j = 0 from
+ * below, and an extreme, gamma 0.3, c 0.05, nu -0.99, mu 0.3), and each
+ * change of sign has its row. */
+TEST(products_branch_followed_verdicts_are_the_ring_spectra)
+{
+    static const struct {
+        double gamma, c, nu, from, to;
+        size_t n;
+    } sets[] = {{2, 0.3, -0.96, 18, 16, 3},
+                {0.8, 0.6, 0.5, 20, 40, 3},
+                {1.2, 1.1, 0.3, 40, 25, 2},
+                {0.3, 0.05, -0.99, 10, 20, 2}};
+    const double tol = 1e-6;
+    for (size_t k = 0; k < sizeof sets / sizeof sets[0]; k++) {
+        bkf_fronts_branch_spec b = paper_branch(sets[k].n, sets[k].from, sets[k].to);
+        b.gamma = sets[k].gamma;
+        b.c = sets[k].c;
+        b.nu = sets[k].nu;
+        b.stability = 1;
+        b.max_points = 8;
+        char *tsv = library_output(write_branch, &b, BKF_IO_TSV);
+        CHECK_MSG(strstr(tsv, "point(s) followed"), "set %zu: no point followed", k);
+        int rows = 0, changes = 0, signs = 0;
+        double last = NAN;
+        char type[32], stable[32];
+        for (int i = 0; bkf_tsv_cell(tsv, i, "point", NULL, type, sizeof type); i++, rows++) {
+            if (strcmp(type, "stability") == 0) {
+                changes++;
+                continue;
+            }
+            double S, v, sigma, kappa;
+            CHECK(bkf_tsv_cell(tsv, i, "S", &S, NULL, 0) && bkf_tsv_cell(tsv, i, "v", &v, NULL, 0));
+            CHECK(bkf_tsv_cell(tsv, i, "stable", NULL, stable, sizeof stable));
+            CHECK(bkf_tsv_cell(tsv, i, "sigma_max", &sigma, NULL, 0) &&
+                  bkf_tsv_cell(tsv, i, "kappa_max", &kappa, NULL, 0));
+            bkf_model_params p = {b.gamma, b.c, b.nu, S, 0, BKF_MODEL_CONTINUUM};
+            bkf_trainspec_train t = {b.n, v};
+            bkf_trainspec_options o = bkf_trainspec_options_default();
+            o.tol = tol;
+            o.per_kappa = 1;
+            bkf_trainspec_result r;
+            bkf_error e;
+            CHECK_STATUS(bkf_trainspec_ring(&p, &t, &o, &r, &e), BKF_OK);
+            CHECK_MSG(strcmp(stable, bkf_trainspec_verdict_name(r.verdict)) == 0,
+                      "set %zu, S %.17g: table %s, ring %s", k, S, stable,
+                      bkf_trainspec_verdict_name(r.verdict));
+            CHECK_MSG(fabs(sigma - r.sigma_max) <= 2 * tol && fabs(kappa - r.kappa_max) < 1e-12,
+                      "set %zu, S %.17g: sigma_max %.10g at kappa %g, the ring's %.10g at %g", k, S,
+                      sigma, kappa, r.sigma_max, r.kappa_max);
+            signs += isfinite(last) && last * r.sigma_max < 0;
+            last = r.sigma_max;
+            bkf_trainspec_result_free(&r);
+        }
+        CHECK_MSG(changes == signs, "set %zu: %d rows of type stability, %d changes of sign", k,
+                  changes, signs);
+        CHECK(rows >= 8);
+        free(tsv);
+    }
+}
