@@ -79,16 +79,16 @@ static const struct {
     const char *name;
     double secs;
 } known_slow[] = {
-    {"extremes_floquet_matrix_gamma_100", 35.5},
-    {"extremes_floquet_matrix_gamma_100_near_hopf", 38.1},
-    {"extremes_floquet_matrix_gamma_to_30", 37.3},
+    {"extremes_floquet_matrix_gamma_100", 20.7},
+    {"extremes_floquet_matrix_gamma_100_near_hopf", 14.2},
+    {"extremes_floquet_matrix_gamma_to_30", 18.9},
     {"cli_check_adapted_grid_error_covers_the_grid_thin_fronts", 25.6},
     {"stabmap_boundary_point_recomputed", 22.1},
     {"audit_fixed_sample_set_1", 15.7},
     {"cli_check_adapted_grid", 18.5},
     {"stabmap_diagram_followed_curves_are_the_scans_crossings", 15.8},
     {"speeds_canard_jump_rows_honest_or_unresolved", 16.2},
-    {"cycle_engine_bd2x2_meets_tol_against_taylor", 15.2},
+    {"cycle_engine_bd2x2_meets_tol_against_taylor", 5.7},
     {"trainspec_sim_paper", 13.7},
     {"floquet_keeps_its_cycle_when_a_tighter_one_is_refused", 15.5},
     {"cli_sweep_sigterm_keeps_finished_rows_and_resume_completes", 13.7},

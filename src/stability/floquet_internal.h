@@ -37,6 +37,7 @@ enum { DIM_PLAIN = 7, DIM_DK = 11 };
 #define CYCLE_TOL_MIN 1e-13
 #define RETRY_WORK 30.0
 #define RETRY_STEPS_MIN 50000.0
+#define LOG_RETRY_GROWTH 10.0
 
 typedef struct {
     double gamma, nu, K;
@@ -78,6 +79,7 @@ struct bkf_floquet {
     double tol_floor;         /* tightest coarse tolerance worth a retry */
     double tol_retry;         /* tolerance of the retry slots */
     size_t retry_nmax;        /* step budget of one retry integration */
+    size_t log_fine_steps;    /* steps of this wavenumber's last finer log integration (0: none) */
     bkf_cycle_options cycle_opt; /* of the cycle solved last */
     unsigned cycle_gen;          /* counts the cycles solved */
     /* The finer integration of the last eval_trace: a retry 10 times

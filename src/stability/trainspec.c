@@ -421,33 +421,73 @@ typedef struct {
     double rate;       /* d phase / dy along the curve */
 } curve_point;
 
-/* Both families' rightmost a in [a_lo, a_hi] where Re w(a + i y) = 0, by
- * the Illinois variant of regula falsi, started from the predictions
- * guess[f] when given (NAN otherwise).  Re w decreases in a: the
+/* Newton on Re w[f](a + i y) = 0 in a from the prediction g (the last
+ * height's point continued along its slope): one pass with the derivative
+ * per step, where the bracketing below takes about six passes per height.
+ * The point is taken once a step is at most sqrt(tol_a) (quadratic
+ * convergence: the error after it is of order tol_a), its phase, slope and
+ * rate from the derivative at the step's start (first order in the step).
+ * 0 when Newton does not settle inside the window, or Re w does not fall
+ * with a there: the bracketing decides. */
+static int height_newton(ctx *x, const mesh *m, const window *win, double y, double g, int f, double tol_a,
+                         curve_point *p)
+{
+    double a = g;
+    for (int it = 0; it < TRACE_NEWTON_MAX; it++) {
+        double complex w[2], dw[2];
+        monodromy(x, m, a + I * y, w, dw);
+        double re = creal(dw[f]), im = cimag(dw[f]);
+        if (!(re < 0.0) || !isfinite(creal(w[f])) || !isfinite(cimag(w[f]))) return 0;
+        double step = -creal(w[f]) / re, next = a + step;
+        if (!(next > win->a_lo && next < win->a_hi)) return 0;
+        if (fabs(step) <= sqrt(tol_a)) {
+            *p = (curve_point){.y = y, .found = 1, .a = next, .phase = cimag(w[f]) + im * step,
+                               .slope = im / re, .rate = (re * re + im * im) / re};
+            return 1;
+        }
+        a = next;
+    }
+    return 0;
+}
+
+/* Both families' rightmost a in [a_lo, a_hi] where Re w(a + i y) = 0: by
+ * Newton from the predictions guess[f] where given (NAN otherwise) and it
+ * settles, else by the Illinois variant of regula falsi, the bracket
+ * shrunk around the prediction first.  Re w decreases in a: the
  * multipliers shrink to the right. */
 static int height_at(ctx *x, const mesh *m, window *win, double y, const double guess[FAMILIES],
                      curve_point pt[FAMILIES])
 {
-    double complex w[2];
-    for (int grow = 0;; grow++) {
-        monodromy(x, m, win->a_hi + I * y, w, NULL);
-        if (creal(w[0]) < 0.0) break;
-        if (grow > 40) return BKF_ENUMERIC;
-        win->a_hi *= 2.0;
-    }
-    double f_hi[2] = {creal(w[0]), creal(w[1])};
-    monodromy(x, m, win->a_lo + I * y, w, NULL);
     /* the curves only propose candidates (polished on the meshes, their
      * value and error the polish's) and tell where they leave the window:
      * a to 1e-6 is plenty for both, and 1e-3 tol cost two or three more
      * monodromies per family and height */
     double tol_a = fmax(1e-3 * x->tol, TRACE_TOL);
+    int settled[FAMILIES], all = 1;
     for (int f = 0; f < FAMILIES; f++) {
+        settled[f] = isfinite(guess[f]) && guess[f] > win->a_lo && guess[f] < win->a_hi &&
+                     height_newton(x, m, win, y, guess[f], f, tol_a, &pt[f]);
+        all &= settled[f];
+    }
+    if (all) return BKF_OK;
+    double complex w[2], wh[2] = {0};
+    monodromy(x, m, win->a_lo + I * y, w, NULL);
+    int inside = 0;
+    for (int f = 0; f < FAMILIES; f++) inside |= !settled[f] && creal(w[f]) >= 0.0;
+    /* the bracket's right end, only where a family still needs one */
+    for (int grow = 0; inside; grow++) {
+        monodromy(x, m, win->a_hi + I * y, wh, NULL);
+        if (creal(wh[0]) < 0.0) break;
+        if (grow > 40) return BKF_ENUMERIC;
+        win->a_hi *= 2.0;
+    }
+    for (int f = 0; f < FAMILIES; f++) {
+        if (settled[f]) continue;
         curve_point *p = &pt[f];
         p->y = y;
         p->found = 0;
-        double lo = win->a_lo, hi = win->a_hi, flo = creal(w[f]), fhi = f_hi[f];
-        if (flo < 0.0) continue;
+        if (creal(w[f]) < 0.0) continue;
+        double lo = win->a_lo, hi = win->a_hi, flo = creal(w[f]), fhi = creal(wh[f]);
         /* shrink the bracket around the prediction */
         if (isfinite(guess[f]) && guess[f] > lo && guess[f] < hi) {
             double g = guess[f], d = fmax(1e-3, 100.0 * tol_a);
@@ -792,14 +832,17 @@ int trainspec_ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_tr
     return BKF_OK;
 }
 
-/* The meshes for a window up to height B: a step turns the fastest
+/* The coarse mesh for a window up to height B: a step turns the fastest
  * solution, u ~ exp(+-sqrt(beta) sigma z), by at most RESOLVE_TURN (see
- * mesh_needs). */
+ * mesh_needs).  The fine one only the polish uses: meshes_for_polish
+ * builds it, once the trace has settled the window (each build samples
+ * the profile at three points a step, a third of a trace pass's cost at
+ * mu 2). */
 static int meshes_for(ctx *x, double B, const window *win, bkf_error *err)
 {
+    trainspec_mesh_free(&x->fine);
     int rc = trainspec_mesh_needs(x, hypot(B, win->a_hi), err);
-    if (rc == BKF_OK) rc = trainspec_mesh_build(x, x->substeps, &x->coarse, err);
-    return rc != BKF_OK ? rc : trainspec_mesh_build(x, 2 * x->substeps, &x->fine, err);
+    return rc != BKF_OK ? rc : trainspec_mesh_build(x, x->substeps, &x->coarse, err);
 }
 
 /* Trace both families over [0, B], B grown until the curves stay left of
@@ -933,11 +976,25 @@ static int meshes_for_polish(ctx *x, size_t classes, size_t polish_n, candidates
                 reach = fmax(reach, hypot(cs->items[i].a, cs->items[i].y));
     }
     reach = POLISH_MARGIN * reach + POLISH_REACH_MIN;
-    if (!(reach < x->sigma_reach)) return BKF_OK;
-    int rc = trainspec_mesh_needs(x, reach, err);
-    if (rc == BKF_OK) rc = trainspec_mesh_build(x, x->substeps, &x->coarse, err);
+    int rc = BKF_OK;
+    if (reach < x->sigma_reach) {
+        rc = trainspec_mesh_needs(x, reach, err);
+        if (rc == BKF_OK) rc = trainspec_mesh_build(x, x->substeps, &x->coarse, err);
+    }
     return rc != BKF_OK ? rc : trainspec_mesh_build(x, 2 * x->substeps, &x->fine, err);
 }
+
+/* A candidate further left of its class's keep-th polished value than
+ * this (relative to that value, and absolute) is not polished: the
+ * candidates' distance from their coarse values was at most 0.05 |Re| +
+ * 2.2e-3 (1.1 times it) in 17587 polishes on the paper's table and ten
+ * random sets (mu 0.56-462), a quarter of this. */
+#define POLISH_SKIP_REL 0.2
+#define POLISH_SKIP_ABS 0.01
+/* ... and a coarse value further left of it than this many times the
+ * largest coarse-fine difference of the spectrum's polishes so far
+ * (plus 10 tol) is not polished on the fine mesh. */
+#define POLISH_SKIP_COARSE 8.0
 
 /* Per polished eigenvalue, both families' sigma-derivatives at its last
  * polish (trainspec_polish): the next, finer mesh's polish steps with them. */
@@ -946,15 +1003,43 @@ typedef struct {
     double complex coarse; /* its value on the coarse mesh (polish_candidates) */
 } derivs;
 
+/* The keep-th largest Re sigma of eig[from..to) (-inf while fewer), the
+ * translation aside: the cut reports it besides the keep, never instead of
+ * one (counted, it let class 0's rightmost -3.3e-4 be skipped as left of
+ * the translation's 1.5e-10). */
+static double kth_re(const ctx *x, const bkf_trainspec_eigenvalue *eig, size_t from, size_t to, size_t keep)
+{
+    double top[PER_KAPPA_MAX + 1];
+    size_t n = 0;
+    for (size_t k = from; k < to; k++) {
+        if (eig[k].j == 0 && hypot(eig[k].re, eig[k].im) < 10.0 * x->tol) continue;
+        size_t at = n < keep ? n++ : keep;
+        while (at > 0 && top[at - 1] < eig[k].re) {
+            if (at < keep) top[at] = top[at - 1];
+            at--;
+        }
+        if (at < keep) top[at] = eig[k].re;
+    }
+    return n == keep ? top[keep - 1] : -INFINITY;
+}
+
 /* The best few candidates of each class polished on both meshes into eig
  * (*n_eig of them), duplicates dropped; mirrored classes (j > classes/2)
  * come out of their partners by conjugation later.  How many are polished
  * per class does not depend on how many are reported: the rightmost must
- * not depend on per_kappa. */
+ * not depend on per_kappa.  Once a class has keep values, a candidate
+ * that lies left of the keep-th by more than a candidate's distance from
+ * its eigenvalue (POLISH_SKIP_*) is not polished, and a coarse value left
+ * of it by more than the coarse mesh's error (8 times the largest
+ * coarse-fine difference seen, POLISH_SKIP_COARSE) not on the fine mesh:
+ * the cut to keep per class would drop either whatever its value, and
+ * those polishes were most of the polish (paper table: 5 per class polished
+ * for 1 reported). */
 static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *cs, bkf_trainspec_eigenvalue *eig,
                               derivs *dv, size_t *n_eig)
 {
     size_t polish_n = (keep > 3 ? keep : 3) + 2;
+    double coarse_err = 0.0;
     if (cs->count) qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
     for (size_t i = 0; i < cs->count;) {
         size_t cls = cs->items[i].cls, taken = 0, tried = 0, start_n = *n_eig;
@@ -965,6 +1050,8 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
             if ((taken >= polish_n && cs->items[i].fam >= 0) || !polish_tries(&cs->items[i], classes, polish_n, &tried))
                 continue;
             candidate cd = cs->items[i];
+            double kth = kth_re(x, eig, start_n, *n_eig, keep);
+            if (cd.a < kth - (POLISH_SKIP_REL * fabs(kth) + POLISH_SKIP_ABS)) continue;
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
             double complex sc = cd.a + I * cd.y, sf, d[2] = {NAN, NAN};
             double step_c, step_f;
@@ -975,8 +1062,10 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
             for (size_t k = start_n; k < *n_eig; k++)
                 if (cabs(dv[k].coarse - sc) < 10.0 * x->tol) seen = 1;
             if (seen) continue;
+            if (creal(sc) < kth - (POLISH_SKIP_COARSE * coarse_err + 10.0 * x->tol)) continue;
             sf = sc;
             if (trainspec_polish(x, &x->fine, theta, &sf, &step_f, d) != BKF_OK) continue;
+            coarse_err = fmax(coarse_err, cabs(sf - sc));
             double e = estimate(sc, sf, step_f);
             int dup = 0;
             for (size_t k = start_n; k < *n_eig; k++)

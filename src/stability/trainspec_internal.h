@@ -31,6 +31,8 @@
 #define CURVE_MIN_FRACTION (1.0 / 65536.0)
 /* The traced curves' a is located to this (absolute, see height_at). */
 #define TRACE_TOL 1e-6
+/* Newton steps per family and height before the bracketing takes over. */
+#define TRACE_NEWTON_MAX 3
 #define Y_MAX_LIMIT 1e4
 #define NEWTON_MAX 30
 #define MESH_REFINEMENTS 4

@@ -107,10 +107,14 @@ static int taylor_turn(taylor_flow *q, long double g0, long double *period, long
 }
 
 /* T by the secant method on P(g0) - g0 from the guess g0 (any slope near
- * the cycle's; the fixed point does not depend on it).  Returns NAN when
- * the iteration fails. */
+ * the cycle's; the fixed point does not depend on it); the fixed point in
+ * *g_fixed if not NULL.  Returns NAN when the iteration fails.  The
+ * iteration stops when a step is below 1e-19 of g0, or below 1e-14 and no
+ * longer half the one before: then it only moves g0 about in the rounding
+ * of P (mu 300, nu -0.96: steps of 1e-18 for 60 turns, 10 s, where 4 turns
+ * settle it). */
 static long double taylor_period_eps(long double mu, long double nu, long double g_guess,
-                                     long double eps, long *steps)
+                                     long double eps, long *steps, long double *g_fixed)
 {
     taylor_flow q = {mu, nu, eps, 0};
     long double a = g_guess, b = g_guess * (1.0L + 1e-6L), Ta, Tb, Pa, Pb;
@@ -120,24 +124,30 @@ static long double taylor_period_eps(long double mu, long double nu, long double
         if (hb == ha) break;
         long double c = b - hb * (b - a) / (hb - ha);
         if (!(c > 0)) c = 0.5L * b;
+        long double last_step = fabsl(b - a);
         a = b;
         ha = hb;
         Ta = Tb;
         b = c;
         if (taylor_turn(&q, b, &Tb, &Pb)) return NAN;
         hb = Pb - b;
-        if (fabsl(b - a) <= 1e-19L * fabsl(b)) break;
+        long double step = fabsl(b - a);
+        if (step <= 1e-19L * fabsl(b) || (step <= 1e-14L * fabsl(b) && step > 0.5L * last_step)) break;
     }
     if (steps) *steps = q.steps;
+    if (g_fixed) *g_fixed = b;
     return Tb;
 }
 
 /* T to about 1e-17 relative; *unc is the change between two truncation
- * levels (plus a rounding allowance), the reference's own uncertainty. */
+ * levels (plus a rounding allowance), the reference's own uncertainty.
+ * The finer level starts from the coarser one's fixed point: the same
+ * answer (the fixed point does not depend on the guess) in fewer turns. */
 static double taylor_period(double mu, double nu, double g_guess, double *unc)
 {
-    long double t1 = taylor_period_eps(mu, nu, g_guess, 1e-18L, NULL);
-    long double t2 = taylor_period_eps(mu, nu, g_guess, 1e-21L, NULL);
+    long double g1 = g_guess;
+    long double t1 = taylor_period_eps(mu, nu, g_guess, 1e-18L, NULL, &g1);
+    long double t2 = taylor_period_eps(mu, nu, isfinite(t1) ? g1 : g_guess, 1e-21L, NULL, NULL);
     *unc = (double)fabsl(t1 - t2) + 1e-17 * (double)t2;
     return (double)t2;
 }
