@@ -424,11 +424,10 @@ int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row
     /* The seeded fronts move towards -x at v_pred: in that frame the wave is
      * a steady state and the steps grow to the stability cap. */
     po.frame_speed = o->frame == BKF_CHECK_FRAME_LAB ? 0.0 : -sr->v;
-    bkf_pde_front_spec fs = bkf_pde_front_spec_default();
-    fs.n = n;
-    fs.root = root;
-    fs.noise = o->perturb;
-    fs.seed = o->seed;
+    /* the table's own root, not a second speeds solve (bkf_seed_front's,
+     * at its own tol, could refuse or renumber what the table gave) */
+    bkf_pde_wave wave = {n, sr->v, sr->mu, -1, o->perturb, o->seed,
+                         bkf_pde_front_spec_default().tol};
     bkf_error e;
     bkf_pde *pde = NULL;
     double *clean = NULL;
@@ -459,7 +458,7 @@ int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row
             s = pde ? bkf_error_set(err, BKF_ENOMEM, "out of memory") : BKF_ENOMEM;
             goto done;
         }
-        if ((s = bkf_seed_front(pde, &fs, &fi, clean, &e))) {
+        if ((s = bkf_pde_init_front(pde, &wave, &fi, clean, &e))) {
             bkf_error_set(err, s, "n = %zu, root %zu: %s", n, root, e.message);
             goto done;
         }
