@@ -280,6 +280,9 @@ $(LIB): $(LIB_OBJ)
 # shared library; calls inside the library stay direct (no interposition).
 # (The marker rebuilds objects compiled before this rule existed.)
 $(LIB_OBJ): override CFLAGS += -fPIC -fno-semantic-interposition
+# The library's own sources call LAPACKE and ARPACK under bkf_ symbols
+# (include/bkfront/lazylib.h): no clash beside the real static libraries.
+$(LIB_OBJ): override CFLAGS += -DBKF_LIBRARY_SOURCE
 $(LIB_OBJ): $(BUILD)/.pic
 $(BUILD)/.pic:
 	@mkdir -p $(BUILD) && touch $@
@@ -409,7 +412,8 @@ $(BUILD)/src/stability/trainspec.o: override CFLAGS += -fcx-limited-range
 $(BUILD)/tests/%.o: override CFLAGS += -Itests -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' \
   -DBKF_EXAMPLES_DIR='"$(abspath $(BUILD)/examples)"' -DBKF_SOURCE_DIR='"$(CURDIR)"' \
   -DBKF_HDF5_SONAME='"$(call lib_soname,hdf5)"' -DBKF_LAPACKE_SONAME='"$(call lib_soname,lapacke)"' \
-  -DBKF_ARPACK_SONAME='"$(call lib_soname,arpack)"'
+  -DBKF_ARPACK_SONAME='"$(call lib_soname,arpack)"' -DBKF_LIBRARY_ARCHIVE='"$(abspath $(LIB))"' \
+  -DBKF_TEST_LDFLAGS='"$(LDFLAGS)"' -DBKF_TEST_LDLIBS='"$(LDLIBS)"'
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)

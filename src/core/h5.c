@@ -1,6 +1,7 @@
 /* HDF5 fields on a grid (h5.h). */
 #define _POSIX_C_SOURCE 200809L
 #include "bkfront/h5.h"
+#include "lazylib_internal.h"
 
 #include <errno.h>
 #include <pthread.h>
@@ -9,7 +10,6 @@
 #include <string.h>
 #include <sys/types.h>
 
-#include <dlfcn.h>
 #include <hdf5.h>
 #include <hdf5_hl.h>
 
@@ -227,20 +227,10 @@ static pthread_mutex_t h5_lock = PTHREAD_MUTEX_INITIALIZER;
 static int build_image(const bkf_h5_grid *g, void **image_out, ssize_t *size_out,
                        bkf_error *err);
 
-/* The library's symbol `name` from `lib`, or NULL with the message set. */
-static void *symbol(void *lib, const char *soname, const char *name, int *status,
-                    bkf_error *err)
-{
-    void *p = dlsym(lib, name);
-    if (!p && !*status)
-        *status = bkf_error_set(err, BKF_EIO, "HDF5 output: %s has no symbol %s (an HDF5 "
-                                "other than the %d.%d.%d bkfront was built with)", soname, name,
-                                H5_VERS_MAJOR, H5_VERS_MINOR, H5_VERS_RELEASE);
-    return p;
-}
-
-/* Loads HDF5 once per process (under h5_lock): BKF_OK, or BKF_EIO with
- * what is missing, said again at every later call. */
+/* Loads HDF5 once per process (under h5_lock; bkf_lazy_open): BKF_OK, or
+ * BKF_EIO with what is missing, said again at every later call.  The
+ * predefined types' ids are variables of the library, read once H5open has
+ * set them. */
 static int load_hdf5(bkf_error *err)
 {
     static int loaded; /* 0: not tried, 1: loaded, else the failure's status */
@@ -250,32 +240,35 @@ static int load_hdf5(bkf_error *err)
         if (err) *err = failure;
         return loaded;
     }
-    int s = BKF_OK;
-    void *lib = dlopen(BKF_HDF5_SONAME, RTLD_NOW | RTLD_LOCAL);
-    void *hl = lib ? dlopen(BKF_HDF5_HL_SONAME, RTLD_NOW | RTLD_LOCAL) : NULL;
-    if (!hl) {
-        s = bkf_error_set(&failure, BKF_EIO, "HDF5 output needs the HDF5 library, which does "
-                          "not load: %s (Debian: apt-get install libhdf5-dev)", dlerror());
+#define H5_NAME(f) #f,
+    static const char *const names[] = {H5_FUNCTIONS(H5_NAME) H5_IDS(H5_NAME)};
+    static const char *const hl_names[] = {H5_HL_FUNCTIONS(H5_NAME)};
+    enum { NNAMES = sizeof names / sizeof *names, NHL = sizeof hl_names / sizeof *hl_names };
+    void *p[NNAMES], *hl[NHL];
+    bkf_error e;
+    int s = bkf_lazy_open(BKF_HDF5_SONAME, "libhdf5-dev", names, p, NNAMES, &e);
+    if (!s) s = bkf_lazy_open(BKF_HDF5_HL_SONAME, "libhdf5-dev", hl_names, hl, NHL, &e);
+    if (s) {
+        s = bkf_error_set(&failure, s, "HDF5 output needs the HDF5 library bkfront was built "
+                          "with (%d.%d.%d): %s", H5_VERS_MAJOR, H5_VERS_MINOR, H5_VERS_RELEASE,
+                          e.message);
     } else {
-#define H5_LOAD(f) h5.f = (__typeof__(f) *)symbol(lib, BKF_HDF5_SONAME, #f, &s, &failure);
-#define H5_LOAD_HL(f) h5.f = (__typeof__(f) *)symbol(hl, BKF_HDF5_HL_SONAME, #f, &s, &failure);
-        H5_FUNCTIONS(H5_LOAD)
-        H5_HL_FUNCTIONS(H5_LOAD_HL)
+        size_t i = 0, k = 0;
+#define H5_SET(f) h5.f = (__typeof__(f) *)p[i++];
+#define H5_SET_HL(f) h5.f = (__typeof__(f) *)hl[k++];
+        H5_FUNCTIONS(H5_SET)
+        H5_HL_FUNCTIONS(H5_SET_HL)
         unsigned major = 0, minor = 0, release = 0;
-        if (!s && (h5.H5open() < 0 || h5.H5get_libversion(&major, &minor, &release) < 0))
+        if (h5.H5open() < 0 || h5.H5get_libversion(&major, &minor, &release) < 0)
             s = bkf_error_set(&failure, BKF_EIO, "HDF5 output: the HDF5 library does not start");
         /* HDF5 changes its ABI between minor versions */
         if (!s && (major != H5_VERS_MAJOR || minor != H5_VERS_MINOR))
             s = bkf_error_set(&failure, BKF_EIO, "HDF5 output: %s is HDF5 %u.%u.%u, bkfront was "
                               "built with %d.%d.%d", BKF_HDF5_SONAME, major, minor, release,
                               H5_VERS_MAJOR, H5_VERS_MINOR, H5_VERS_RELEASE);
-        hid_t *id;
-#define H5_LOAD_ID(v)                                                                        \
-        if ((id = symbol(lib, BKF_HDF5_SONAME, #v, &s, &failure))) h5.v = *id;
-        if (!s) { H5_IDS(H5_LOAD_ID) }
+#define H5_SET_ID(v) h5.v = *(const hid_t *)p[i++];
+        if (!s) { H5_IDS(H5_SET_ID) }
     }
-    /* A failed load keeps its libraries: HDF5 may have registered exit
-     * handlers, and dlclose would leave them pointing nowhere. */
     loaded = s ? s : 1;
     if (s && err) *err = failure;
     return s;

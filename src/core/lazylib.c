@@ -5,11 +5,11 @@
  * of start (perf stat, task-clock), for `--version` as for a spectrum.
  * Only the Hill matrices' zgeev and dgeev (stability/hill.c) and the
  * orbits' Arnoldi (simulation/orbit_mult.c) call them, so the library
- * defines the four functions it calls under their own names: each loads its library
- * once (dlopen, thread-safe) and calls the real one.  The callers are the
- * same code as when linked.  The names stay inside libbkfront.so (its
- * version script exports bkf_* only), so a program that links LAPACK
- * itself keeps its own.
+ * defines the four functions it calls: each loads its library once
+ * (bkf_lazy_open under pthread_once) and calls the real one.  The callers
+ * are the same code as when linked: lazylib.h renames their calls to the
+ * bkf_ symbols defined here, so that neither libbkfront.a beside the real
+ * liblapacke.a nor libbkfront.so defines LAPACK's or ARPACK's names.
  *
  * Where a library does not load, the call fails as the callers already
  * handle a failed call: zgeev's and dgeev's info and ARPACK's info are set to
@@ -17,21 +17,50 @@
  * load and why. */
 #define _POSIX_C_SOURCE 200809L
 #include "bkfront/lazylib.h"
+#include "lazylib_internal.h"
 
 #include <dlfcn.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <string.h>
 
+/* The renamed declarations (lazylib.h), hidden: libbkfront.so exports bkf_
+ * names, and these are LAPACK's and ARPACK's, not the library's. */
+#pragma GCC visibility push(hidden)
 #include <arpack/arpack.h>
 #include <lapacke.h>
+#pragma GCC visibility pop
 
+#ifndef BKF_LIBRARY_SOURCE
+#error "lazylib.c is compiled with BKF_LIBRARY_SOURCE (the Makefile sets it for src/): its functions must be the bkf_ names"
+#endif
 #ifndef BKF_LAPACKE_SONAME
 #error "BKF_LAPACKE_SONAME (the soname of liblapacke, e.g. liblapacke.so.3) is set by the Makefile"
 #endif
 #ifndef BKF_ARPACK_SONAME
 #error "BKF_ARPACK_SONAME (the soname of libarpack, e.g. libarpack.so.2) is set by the Makefile"
 #endif
+
+int bkf_lazy_open(const char *soname, const char *package, const char *const *names, void **out,
+                  size_t count, bkf_error *err)
+{
+    for (size_t i = 0; i < count; i++) out[i] = NULL;
+    void *lib = dlopen(soname, RTLD_NOW | RTLD_LOCAL);
+    if (!lib) {
+        const char *why = dlerror();
+        return bkf_error_set(err, BKF_EIO, "%s does not load: %s (Debian: apt-get install %s)",
+                             soname, why ? why : "unknown reason", package);
+    }
+    for (size_t i = 0; i < count; i++) {
+        (void)dlerror();
+        if (!(out[i] = dlsym(lib, names[i]))) {
+            for (size_t k = 0; k < i; k++) out[k] = NULL;
+            return bkf_error_set(err, BKF_EIO, "%s has no symbol %s (Debian: apt-get install %s)",
+                                 soname, names[i], package);
+        }
+    }
+    return BKF_OK;
+}
 
 static struct {
     __typeof__(LAPACKE_zgeev) *zgeev;
@@ -42,32 +71,18 @@ static struct {
 
 /* The first failure's reason, written once under the pthread_once of the
  * load that failed, read after it. */
-static char failure[320];
+static char failure[BKF_ERROR_LEN];
 static pthread_mutex_t failure_lock = PTHREAD_MUTEX_INITIALIZER;
 
-static void note_failure(const char *soname, const char *package)
-{
-    const char *why = dlerror();
-    pthread_mutex_lock(&failure_lock);
-    if (!failure[0])
-        snprintf(failure, sizeof failure, "%s does not load: %s (Debian: apt-get install %s)",
-                 soname, why ? why : "unknown reason", package);
-    pthread_mutex_unlock(&failure_lock);
-}
-
-/* Loads `soname` and its symbols into `out[]`; NULLs (and the failure
- * noted) if the library or any symbol is missing.  A failed library is not
- * closed: it may have run constructors. */
+/* Loads `soname`'s symbols into `out[]`, or NULLs and the failure noted. */
 static void load(const char *soname, const char *package, const char *const *names,
                  void **out, size_t count)
 {
-    void *lib = dlopen(soname, RTLD_NOW | RTLD_LOCAL);
-    size_t i = 0;
-    for (; lib && i < count; i++)
-        if (!(out[i] = dlsym(lib, names[i]))) break;
-    if (lib && i == count) return;
-    note_failure(soname, package);
-    for (i = 0; i < count; i++) out[i] = NULL;
+    bkf_error e;
+    if (!bkf_lazy_open(soname, package, names, out, count, &e)) return;
+    pthread_mutex_lock(&failure_lock);
+    if (!failure[0]) snprintf(failure, sizeof failure, "%s", e.message);
+    pthread_mutex_unlock(&failure_lock);
 }
 
 static pthread_once_t lapacke_once = PTHREAD_ONCE_INIT, arpack_once = PTHREAD_ONCE_INIT;
@@ -98,6 +113,8 @@ const char *bkf_lazy_failure(void)
     return s;
 }
 
+/* The stand-ins: written under the real names, defined as bkf_LAPACKE_zgeev,
+ * bkf_LAPACKE_dgeev, bkf_dnaupd_c and bkf_dneupd_c (lazylib.h's macros). */
 lapack_int LAPACKE_zgeev(int matrix_layout, char jobvl, char jobvr, lapack_int n,
                          lapack_complex_double *a, lapack_int lda, lapack_complex_double *w,
                          lapack_complex_double *vl, lapack_int ldvl, lapack_complex_double *vr,

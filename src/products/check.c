@@ -63,7 +63,7 @@ int bkf_check_run(const bkf_model_params *model, const bkf_check_options *o,
     if (model->kind == BKF_MODEL_CHAIN) return check_chain_run(model, o, hooks, err);
     bkf_model_params sp = {model->gamma, model->c, model->nu, model->S, 0, BKF_MODEL_CONTINUUM};
     bkf_speeds_options so = bkf_speeds_options_default();
-    so.tol = 1e-12;
+    so.tol = check_speeds_tol(o);
     if (o->n) so.n_from = so.n_to = o->n;
     bkf_speeds_table tab;
     memset(&tab, 0, sizeof tab);
@@ -520,8 +520,9 @@ static int write_table(const check_sink *k, const bkf_model_params *m,
                     bkf_format_number(check_sample_dt(BKF_CHECK_SAMPLE_DT, o->tmax), d, sizeof d),
                     o->points, k->info.mapped_tol, check_sample_dt(BKF_CHECK_MAPPED_SAMPLE_DT, o->tmax));
     if (!s && !chain)
-        s = bkf_io_table_commentf(t, err, "speeds: k(nu) %s, n_max %ld, %zu roots%s%s",
-                    bkf_format_number(k->info.k, a, sizeof a), k->info.n_max, k->info.roots,
+        s = bkf_io_table_commentf(t, err, "speeds: tol %.0e, k(nu) %s, n_max %ld, %zu roots%s%s",
+                    check_speeds_tol(o), bkf_format_number(k->info.k, a, sizeof a),
+                    k->info.n_max, k->info.roots,
                     k->note[0] ? "; " : "", k->note);
     if (!s && prov && prov->command) s = bkf_io_table_commentf(t, err, "command: %s", prov->command);
     size_t kept = 0, agree = 0, unresolved = 0, disagree = 0, conflict = 0, undecided = 0;

@@ -424,11 +424,10 @@ int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row
     /* The seeded fronts move towards -x at v_pred: in that frame the wave is
      * a steady state and the steps grow to the stability cap. */
     po.frame_speed = o->frame == BKF_CHECK_FRAME_LAB ? 0.0 : -sr->v;
-    bkf_pde_front_spec fs = bkf_pde_front_spec_default();
-    fs.n = n;
-    fs.root = root;
-    fs.noise = o->perturb;
-    fs.seed = o->seed;
+    /* the table's own root, not a second speeds solve (bkf_seed_front's,
+     * at its own tol, could refuse or renumber what the table gave) */
+    bkf_pde_wave wave = {n, sr->v, sr->mu, -1, o->perturb, o->seed,
+                         bkf_pde_front_spec_default().tol};
     bkf_error e;
     bkf_pde *pde = NULL;
     double *clean = NULL;
@@ -459,7 +458,7 @@ int check_root(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row
             s = pde ? bkf_error_set(err, BKF_ENOMEM, "out of memory") : BKF_ENOMEM;
             goto done;
         }
-        if ((s = bkf_seed_front(pde, &fs, &fi, clean, &e))) {
+        if ((s = bkf_pde_init_front(pde, &wave, &fi, clean, &e))) {
             bkf_error_set(err, s, "n = %zu, root %zu: %s", n, root, e.message);
             goto done;
         }
@@ -513,10 +512,10 @@ done:
 /* The spectrum's answer as the verdict reads it: decided stable, decided
  * unstable, or not decided (UNRESOLVED) with a reason.  A sigma_max that
  * is only the window's edge (window_edge finite, bkf_trainspec_shown_of)
- * is no eigenvalue, so not printed; nor trusted here, as the other products
- * trust it: the bound was once wrong (gamma 4.06339, c 0.276186,
- * nu 0.959575, S 27.1676, n 1: edge -0.203, Hill's method -4.08e-4), and
- * check's run judges anyway. */
+ * is no eigenvalue, so not printed; its verdict is read as `stability` and
+ * `speeds --stability` read it (one spectrum per train, issue 31): stable
+ * when the edge is left of 0 (every eigenvalue but the translation lies
+ * left of it), with the bound in a note. */
 static void spectrum_of(const check_ctx *c, bkf_check_row *row, int status, const char *why,
                         bkf_trainspec_verdict verdict, double sigma_max, double sigma_max_err,
                         double window_edge)
@@ -527,8 +526,14 @@ static void spectrum_of(const check_ctx *c, bkf_check_row *row, int status, cons
     }
     if (isfinite(window_edge)) {
         char note[200];
-        check_warn(c, "n = %zu, root %zu: spectrum not trusted: %s", row->n, row->root,
-                   bkf_trainspec_bound_note(window_edge, note, sizeof note));
+        bkf_trainspec_bound_note(window_edge, note, sizeof note);
+        if (verdict != BKF_TRAINSPEC_STABLE) {
+            check_warn(c, "n = %zu, root %zu: spectrum not decided: %s", row->n, row->root, note);
+            return;
+        }
+        check_warn(c, "n = %zu, root %zu: spectrum stable, %s", row->n, row->root, note);
+        row->spectral = BKF_TRAINSPEC_STABLE;
+        row->sigma_max = row->sigma_max_err = NAN;
         return;
     }
     row->spectral = verdict;

@@ -56,6 +56,7 @@ typedef void (*record_reader)(size_t i, const void *data, double *t, size_t *fro
 /* check_judge.c */
 double check_uniform_tol(const bkf_check_options *o);
 double check_mapped_tol(const bkf_check_options *o);
+double check_speeds_tol(const bkf_check_options *o);
 void check_growth_merge(bkf_check_growth *into, const bkf_check_growth *g, int first);
 double check_sample_dt(double base, double tmax);
 int check_progress(double fraction, void *data);

@@ -9,6 +9,7 @@
  * aliased coefficients (|k| >= 2M + 2) are far below the truncation error,
  * which is set by |k| ~ M. */
 #include "bkfront/hill.h"
+#include "bkfront/lazylib.h" /* before lapacke.h: zgeev, dgeev are lazylib.c's */
 
 #include <complex.h>
 #include <lapacke.h>

@@ -354,6 +354,24 @@ TEST(check_sigma_max_is_an_eigenvalue_or_nan)
     CHECK(isnan(r.sigma_max) == isnan(r.sigma_max_err));
 }
 
+/* The independent audit's set 23 (seed 20261130): the ring finds no
+ * eigenvalue but the translation right of its window's edge (-0.0149), so
+ * `stability` says stable with sigma_max nan; the check read the same bound
+ * as "not trusted" and left its spectrum unresolved (one spectrum per
+ * train, two readings). Hill's method decides the sign independently. */
+TEST(check_reads_a_window_edge_bound_as_stability_does)
+{
+    const double g = 0.768122, c = 0.993809, nu = 0.969221, S = 5.0;
+    bkf_check_row r = run_one(g, c, nu, S, 1, 40);
+    double err, sigma = hill_sigma_max(g, nu, mu_of(g, c, r.v_pred), 48, 1e-7, &err);
+    bkf_test_note("Hill: sigma_max %.6g +- %.2g; check: spectral %d, sigma_max %g", sigma, err,
+                  (int)r.spectral, r.sigma_max);
+    CHECK(isfinite(sigma) && sigma + err < 0);
+    CHECK_MSG(r.spectral == BKF_TRAINSPEC_STABLE, "spectral %d, not stable", (int)r.spectral);
+    CHECK(isnan(r.sigma_max) || r.sigma_max < 0);
+    CHECK(r.verdict == BKF_CHECK_AGREES);
+}
+
 static int count_begin(const bkf_check_info *info, void *data)
 {
     (void)info;
