@@ -1056,25 +1056,33 @@ static void note_unfollowed_boundaries(const double *nus, size_t nnu, const stat
     }
 }
 
+/* A curve that ends where the continuation could not go on (its work cap,
+ * or a step fallen below its minimum): the boundary goes on unseen.  A
+ * stall at a turn in nu (gamma 1, c 0.6, n 3, nu -0.891, S 11.09) left the
+ * turn's upper half, back to nu -0.95 at S 11.44, undrawn, and the states
+ * then called the columns stable above the lower half all the way up. */
+static int ends_unseen(bkf_stabmap_end e)
+{
+    return e == BKF_STABMAP_END_POINTS || e == BKF_STABMAP_END_STALLED;
+}
+
 static int has_cut_curve(const n_work *w)
 {
     for (size_t c = 0; c < w->count; c++)
-        if (w->c[c].end[0].end == BKF_STABMAP_END_POINTS ||
-            w->c[c].end[1].end == BKF_STABMAP_END_POINTS)
-            return 1;
+        if (ends_unseen(w->c[c].end[0].end) || ends_unseen(w->c[c].end[1].end)) return 1;
     return 0;
 }
 
 /* The decided runs' states, as rows of curve 0; none for an n with a cut
- * curve: where its rest goes is not known, so no column away from the
- * drawn points has a state (the figure hatches them). */
+ * or stalled curve: where its rest goes is not known, so no column away
+ * from the drawn points has a state (the figure hatches them). */
 static void emit_states(const double *nus, const state_run *runs, size_t nruns, const n_work *w,
                         size_t nn, diagram_sink *k)
 {
     for (size_t i = 0; i < nn && !k->failed; i++)
         if (has_cut_curve(&w[i]))
             add_note(k,
-                     "n %zu: a curve cut at its work cap (max_points): the rest not followed, "
+                     "n %zu: a curve cut at its work cap (max_points) or stalled: the rest not followed, "
                      "no state rows for n %zu (undecided away from the curves)",
                      w[i].n, w[i].n);
     for (size_t r = 0; r < nruns; r++) {

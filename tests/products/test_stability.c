@@ -654,6 +654,53 @@ TEST(stabmap_diagram_followed_curves_are_the_scans_crossings)
     free(scanned);
 }
 
+/* A curve that stalls (or is cut at its work cap) leaves the rest of its
+ * boundary unseen: its n gets no state rows, as the columns' states would
+ * otherwise carry the drawn half's side past where the unseen half turns.
+ * At gamma 1, c 0.6, n = 3 turns in nu near -0.89 (S 8.85 at nu -0.95 up
+ * to the turn, back to nu -0.95 at S 11.44: the scan at nu -0.95 and a
+ * continuation through the turn both find the two crossings); the trace
+ * stalled at the turn and the states said the columns stable above the
+ * lower half up to the window's top. */
+TEST(stabmap_diagram_no_states_for_an_n_whose_curve_stalled)
+{
+    bkf_stability_spec s = bkf_stability_spec_default();
+    s.diagram = 1;
+    s.gamma = 1;
+    s.c = 0.6;
+    s.n = 3;
+    s.nu = -0.95;
+    s.to = -0.87;
+    s.S = 8;
+    s.S_to = 14;
+    s.S_samples = 6;
+    s.threads = 1;
+    char *tsv = library_output(write_stability, &s, BKF_IO_TSV);
+    CHECK(tsv);
+    if (!tsv) return;
+    int unseen[4] = {0}, curves_of_3 = 0;
+    for (const char *line = tsv; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
+        size_t curve;
+        int n;
+        if (sscanf(line, "# curve %zu (n %d)", &curve, &n) != 2 || n < 1 || n > 3) continue;
+        const char *end = strchr(line, '\n');
+        size_t len = end ? (size_t)(end - line) : strlen(line);
+        char text[1024];
+        snprintf(text, sizeof text, "%.*s", (int)(len < sizeof text - 1 ? len : sizeof text - 1), line);
+        if (strstr(text, ": stalled") || strstr(text, ": max_points")) unseen[n] = 1;
+        if (n == 3) curves_of_3++;
+    }
+    CHECK(curves_of_3 >= 1);
+    for (int n = 1; n <= 3; n++) {
+        diagram_rows st;
+        rows_of(tsv, "state", n, &st);
+        bkf_test_note("n %d: %s, %zu state rows", n, unseen[n] ? "a curve ends unseen" : "curves end seen",
+                      st.count);
+        if (unseen[n]) CHECK_MSG(st.count == 0, "n %d: a curve stalled, yet %zu state rows", n, st.count);
+    }
+    free(tsv);
+}
+
 /* The existence boundary S = n c gamma g_inf(nu) against the speed solver:
  * no root of n just below it, a root just above; at gamma 2 g does not dip
  * below k, so it is n k(nu) c gamma in closed form. */
