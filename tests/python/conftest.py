@@ -29,3 +29,13 @@ def tsv(text):
     lines = [l for l in text.splitlines() if l and not l.startswith("#")]
     header = lines[0].split("\t")
     return header, [dict(zip(header, l.split("\t"))) for l in lines[1:]]
+
+
+def sigint_default():
+    """preexec_fn for a child Python that must take Ctrl-C: a suite started
+    as a background job of a non-interactive shell inherits SIGINT ignored,
+    and Python installs its KeyboardInterrupt handler only over the default
+    disposition (the interrupt tests then failed under `make bench`'s
+    timings run, launched with &)."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import bkfront
-from conftest import tsv
+from conftest import sigint_default, tsv
 
 # T(1, 0) of the van der Pol oscillator, published to 29 digits.
 T_1_0 = 6.6632868593231301896996820305
@@ -177,7 +177,7 @@ def test_ctrl_c_cancels_a_long_call():
             "    print('interrupted after %.1f s' % (time.time() - t), flush=True)\n"
             "    sys.exit(3)\n")
     p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True,
-                         env=dict(os.environ))
+                         env=dict(os.environ), preexec_fn=sigint_default)
     assert p.stdout.readline().strip() == "go"
     time.sleep(1.5)
     t0 = time.time()

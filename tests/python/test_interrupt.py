@@ -12,6 +12,8 @@ import sys
 
 import pytest
 
+from conftest import sigint_default
+
 # Small inputs, each a product's usual shape (sweep is TSV only: not
 # reachable from Python, see docs/python.md).
 PRODUCTS = {
@@ -91,7 +93,7 @@ def keyword_json(keys):
 def test_interrupted_calls_never_crash(name):
     p = subprocess.run([sys.executable, "-c", SCRIPT, name, keyword_json(PRODUCTS[name]),
                         str(CALLS)], capture_output=True, text=True, timeout=300,
-                       env=dict(os.environ))
+                       env=dict(os.environ), preexec_fn=sigint_default)
     assert p.returncode == 0, "exit %d after interrupts: %s" % (p.returncode, p.stderr[-2000:])
     r = json.loads(p.stdout.strip().splitlines()[-1])
     print(name, r)
@@ -144,7 +146,8 @@ def test_the_issue_reproducer_stops_at_once_and_never_crashes():
     # issue 32: a million-point period, its 8 MB mu list freed under the
     # library after Ctrl-C, segfaulted in 1 of 2-6 runs
     p = subprocess.run([sys.executable, "-c", REPRODUCER, str(CALLS)], capture_output=True,
-                       text=True, timeout=300, env=dict(os.environ))
+                       text=True, timeout=300, env=dict(os.environ),
+                       preexec_fn=sigint_default)
     assert p.returncode == 0, "exit %d: %s" % (p.returncode, p.stderr[-2000:])
     interrupted, error = p.stdout.split()
     assert int(interrupted) == CALLS and float(error) < 1e-11
