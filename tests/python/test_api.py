@@ -178,11 +178,16 @@ def test_ctrl_c_cancels_a_long_call():
             "    sys.exit(3)\n")
     p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True,
                          env=dict(os.environ), preexec_fn=sigint_default)
-    assert p.stdout.readline().strip() == "go"
-    time.sleep(1.5)
-    t0 = time.time()
-    p.send_signal(signal.SIGINT)
-    out, _ = p.communicate(timeout=30)
+    try:
+        assert p.stdout.readline().strip() == "go"
+        time.sleep(1.5)
+        t0 = time.time()
+        p.send_signal(signal.SIGINT)
+        out, _ = p.communicate(timeout=30)
+    finally:  # a child that missed the signal would run its 1e5 time units on
+        if p.poll() is None:
+            p.kill()
+            p.wait()
     assert p.returncode == 3, out
     assert time.time() - t0 < 5
 
