@@ -879,11 +879,6 @@ static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *er
 
 /* The error estimate of sigma polished to sf on the fine mesh (last Newton
  * step step_f) from sc on the coarse one. */
-static double estimate(double complex sc, double complex sf, double step_f)
-{
-    return cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
-}
-
 /* Hill's band alone: the meshes for its height, no curves. */
 static int band_alone(ctx *x, const hill_stage *hs, window *win, double a_hi, double *y_max, int *fallback,
                       bkf_error *err)
@@ -1066,7 +1061,7 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
             sf = sc;
             if (trainspec_polish(x, &x->fine, theta, &sf, &step_f, d) != BKF_OK) continue;
             coarse_err = fmax(coarse_err, cabs(sf - sc));
-            double e = estimate(sc, sf, step_f);
+            double e = trainspec_estimate(sc, sf, step_f);
             int dup = 0;
             for (size_t k = start_n; k < *n_eig; k++)
                 if (cabs((eig[k].re + I * eig[k].im) - sf) < 10.0 * fmax(e, x->tol)) dup = 1;
@@ -1091,7 +1086,7 @@ static void translation(ctx *x, bkf_trainspec_eigenvalue *eig, derivs *dv, size_
         int ok = trainspec_polish(x, &x->coarse, 0.0, &sc, &step_c, d) == BKF_OK;
         sf = sc;
         ok = ok && trainspec_polish(x, &x->fine, 0.0, &sf, &step_f, d) == BKF_OK;
-        eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), ok ? estimate(sc, sf, step_f) : INFINITY,
+        eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), ok ? trainspec_estimate(sc, sf, step_f) : INFINITY,
                                                      0, 0.0, 0};
     }
     eig[k].translation = 1;
@@ -1165,7 +1160,7 @@ static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, derivs 
             if (trainspec_polish(x, &x->fine, theta, &sf, &step_f, dv[k].d) != BKF_OK) continue;
             eig[k].re = creal(sf);
             eig[k].im = cimag(sf);
-            eig[k].err = estimate(sc, sf, step_f);
+            eig[k].err = trainspec_estimate(sc, sf, step_f);
             on[k] = 2 * x->substeps;
         }
     }

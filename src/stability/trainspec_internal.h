@@ -6,6 +6,7 @@
 #define BKFRONT_TRAINSPEC_INTERNAL_H
 
 #include <complex.h>
+#include <math.h>
 #include <signal.h>
 #include <stddef.h>
 #include <stdlib.h>
@@ -61,6 +62,14 @@
  * unconverged pair at mu 47); dividing by 8
  * keeps a margin of 4. */
 #define RICHARDSON 8.0
+
+/* An eigenvalue's error from its values on a coarse and a fine mesh (sc,
+ * sf), the fine Newton step and the profile's own error: one formula for
+ * the ring spectrum and the followed eigenvalues, so both report alike. */
+static inline double trainspec_estimate(double complex sc, double complex sf, double step_f)
+{
+    return cabs(sf - sc) / RICHARDSON + step_f + PROFILE_ERROR * fmax(1.0, cabs(sf));
+}
 
 enum { FAMILIES = 2 };
 

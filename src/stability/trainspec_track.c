@@ -53,7 +53,7 @@ static int track_one(ctx *x, ladder *l, size_t j, double complex *sigma, double 
         double complex fine = coarse;
         rc = trainspec_polish(x, m, theta, &fine, &step, deriv);
         if (rc != BKF_OK) break;
-        double e = cabs(fine - coarse) / RICHARDSON + step + PROFILE_ERROR * fmax(1.0, cabs(fine));
+        double e = trainspec_estimate(coarse, fine, step);
         coarse = fine;
         if (e <= x->tol) {
             *sigma = fine;
