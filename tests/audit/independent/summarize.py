@@ -1,9 +1,15 @@
-"""Table OK / defect / refusal per product from results/*.json."""
-import json, glob, math
+"""Table OK / defect / refusal per product from results/*.json.
+
+usage: summarize.py [FIRST LAST]   only the sets FIRST..LAST (part 2: `summarize.py 24 31` for the
+speeds/period audit of sets 24-31; the results/stab2_*.json of audit_stab2.py are always read)."""
+import json, glob, math, sys
+
+SETS = range(int(sys.argv[1]), int(sys.argv[2]) + 1) if len(sys.argv) > 2 else range(0, 10 ** 6)
 
 tab = {k: {"OK": 0, "defect": 0, "refusal": 0, "skip": 0} for k in
        ("period", "speeds-root", "speeds-count", "speeds-finite", "speeds--stability", "stability", "check",
-        "speeds--stability table", "stability --line", "bad input")}
+        "speeds--stability table", "stability --line", "bad input", "stability mu>6 (magnus)",
+        "speeds--stability mu>6 (magnus)")}
 rows_total = rows_refused = 0
 defects = []
 arb = json.load(open("arbitration.json"))
@@ -15,6 +21,8 @@ def arbitrated(i, product, mu):
 for fn in sorted(glob.glob("results/speeds_*.json")):
     o = json.load(open(fn))
     i = o["idx"]
+    if i not in SETS:
+        continue
     if "speeds_rc" in o and o["speeds_rc"] not in (0, 3):
         tab["speeds-root"]["refusal"] += 1
         defects.append((i, "speeds exit", o["speeds_rc"], o.get("speeds_stderr")))
@@ -81,6 +89,8 @@ def verdict_of(sig, err):
 for fn in sorted(glob.glob("results/stab_*.json") + glob.glob("results/stabL_*.json")):
     o = json.load(open(fn))
     i = o["idx"]
+    if i not in SETS:
+        continue
     for r in o["roots"]:
         h = r.get("hill", {})
         hs = h.get("sigma_max")
@@ -145,6 +155,34 @@ for fn in sorted(glob.glob("results/full_*.json")):
             defects.append((o["idx"], "table", r))
         else:
             tab["speeds--stability table"]["skip"] += 1
+# part 2: stability and speeds --stability at mu > 6 against the Magnus monodromy (audit_stab2.py)
+for fn in sorted(glob.glob("results/stab2_*.json")):
+    r = json.load(open(fn))
+    i = r["idx"]
+    st = r.get("st")
+    if st is None:
+        tab["stability mu>6 (magnus)"]["refusal"] += 1
+        defects.append((i, "stability failed", r["n"], r.get("stab_err")))
+    elif st.get("sigma_max") is None and st.get("sigma_bound") is None:
+        tab["stability mu>6 (magnus)"]["refusal"] += 1
+        defects.append((i, "stability refused", r["n"], r.get("st_comments")))
+    else:
+        ok = r["rightmost_ok"] and r["verdict_ok"] and r.get("newton_ok", True)
+        a = arbitrated(i, "stability", st["mu"])
+        if not ok and a:
+            ok = a["verdict"] == "OK"
+            defects.append((i, "stability arbitrated " + a["verdict"], r["n"], a["why"][:100]))
+        tab["stability mu>6 (magnus)"]["OK" if ok else "defect"] += 1
+        if not ok:
+            defects.append((i, "stability", r["n"], r["root"], st, r.get("newton"), r.get("boxes")))
+    ss = r.get("ss")
+    if ss is None:
+        tab["speeds--stability mu>6 (magnus)"]["refusal"] += 1
+    else:
+        ok = r["ss_same"] and r["rightmost_ok"] and r["verdict_ok"] and r.get("newton_ok", True)
+        tab["speeds--stability mu>6 (magnus)"]["OK" if ok else "defect"] += 1
+        if not ok:
+            defects.append((i, "speeds --stability", r["n"], r["root"], ss, st))
 import os
 if os.path.exists("results/line.json"):
     for r in json.load(open("results/line.json")):
