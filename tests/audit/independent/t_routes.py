@@ -5,7 +5,7 @@
    dense eigenvalues of 2(2M+1) matrices at M ~ 300-450 and 1.4 M).
 usage: t_routes.py results/stab2_IDX_n_root.json ...
 """
-import json, sys, time
+import json, sys, time, os
 import numpy as np
 from monodromy import Train
 
@@ -15,14 +15,13 @@ for fn in sys.argv[1:]:
     sig, j = complex(s["sigma_re"], s["sigma_im"]), s["j"]
     tr = Train(st["gamma"], st["c"], st["nu"], st["S"], r["n"], r["st"]["v"], r["st"]["mu"])
     out = {"file": fn, "magnus": [sig.real, sig.imag], "magnus_err": s["err"]}
-    for rtol in (1e-10, 1e-11):
+    for rtol in [float(x) for x in os.environ.get("RTOLS", "1e-10,1e-11").split(",")]:
         t0 = time.time()
         h = 1e-5
         d0 = tr.D(sig, j, rtol)
         dd = (tr.D(sig + h, j, rtol) - tr.D(sig - h, j, rtol)) / (2 * h)
         out["radau_%g" % rtol] = {"offset": abs(d0 / dd), "steps": tr.last_steps, "time": time.time() - t0}
         print(fn, rtol, out["radau_%g" % rtol], flush=True)
-    import os
     if os.environ.get("HILL") == "1":
         from hill import spectrum
         t0 = time.time()
