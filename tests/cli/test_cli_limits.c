@@ -251,21 +251,25 @@ TEST(cli_run_report_to_a_full_stdout_fails)
     rmdir(dir);
 }
 
+/* The peak resident size of one run of the CLI (it must exit 0). */
+static long peak_kb(const char *const *args)
+{
+    pid_t pid = bkf_cli_spawn(args, NULL, NULL, NULL);
+    CHECK(pid > 0);
+    int st;
+    struct rusage ru;
+    CHECK(wait4(pid, &st, 0, &ru) == pid);
+    CHECK_MSG(WIFEXITED(st) && WEXITSTATUS(st) == 0, "bkfront %s: child status %d", args[0], st);
+    return ru.ru_maxrss;
+}
+
 /* check's memory does not grow with tmax either (issue 32 item 10: `check
  * --n 4` took 15.8 MB at tmax 2e3, 42.6 MB at 4e4; about 160 bytes kept
  * per sample of 0.25).  At most 4096 samples a run now: tmax 1e4 (4e4
  * samples before, 6 MB and more) peaks within 3 MB of tmax 1e3. */
 static long check_peak_kb(const char *tmax)
 {
-    pid_t pid = bkf_cli_spawn(BKF_CLI_ARGS("check", "--n", "4", "--tmax", tmax, "--no-progress",
-                                           "--out", "/dev/null"),
-                              NULL, NULL, NULL);
-    CHECK(pid > 0);
-    int st;
-    struct rusage ru;
-    CHECK(wait4(pid, &st, 0, &ru) == pid);
-    CHECK_MSG(WIFEXITED(st) && WEXITSTATUS(st) == 0, "tmax %s: child status %d", tmax, st);
-    return ru.ru_maxrss;
+    return peak_kb(BKF_CLI_ARGS("check", "--n", "4", "--tmax", tmax, "--no-progress", "--out", "/dev/null"));
 }
 
 TEST(cli_check_memory_does_not_grow_with_tmax)
@@ -289,19 +293,13 @@ static long simulate_peak_kb(const char *dir, const char *tmax, const char *wind
 {
     char diag[300];
     snprintf(diag, sizeof diag, "%s/diag.tsv", dir);
-    pid_t pid = bkf_cli_spawn(BKF_CLI_ARGS("simulate", "--N", "8", "--tmax", tmax, "--frames", "1",
-                                           "--no-progress", "--out", diag),
-                              NULL, NULL, NULL);
-    CHECK(pid > 0);
-    int st;
-    struct rusage ru;
-    CHECK(wait4(pid, &st, 0, &ru) == pid);
-    CHECK_MSG(WIFEXITED(st) && WEXITSTATUS(st) == 0, "tmax %s: child status %d", tmax, st);
+    long kb = peak_kb(BKF_CLI_ARGS("simulate", "--N", "8", "--tmax", tmax, "--frames", "1",
+                                   "--no-progress", "--out", diag));
     char *t = bkf_cli_read_file(diag);
     CHECK_MSG(t && strstr(t, "# regime: ") && strstr(t, window), "tmax %s: %s", tmax, t ? t : "");
     free(t);
     unlink(diag);
-    return ru.ru_maxrss;
+    return kb;
 }
 
 TEST(cli_simulate_memory_does_not_grow_with_tmax)
