@@ -475,6 +475,12 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
 /* Halvings of the arclength step before a curve is given up as stalled:
  * each costs a spectrum or two. */
 #define TRACE_STEP_MIN (1.0 / 64)
+/* After a stall: restarts at most, each from a step of TRACE_RETRY_STEP
+ * (scaled; the full step is 1). */
+#define TRACE_RETRIES 3
+#define TRACE_RETRY_STEP 0.25
+/* A closed curve's chord passes its first point within this (scaled). */
+#define TRACE_CLOSE 0.25
 
 typedef struct {
     double nu, S;
@@ -502,6 +508,8 @@ typedef struct {
     int left;              /* more than 1.5 steps away from it since */
     double newton_tol;     /* the driver's */
     double land_tol;       /* an edge crossing's, relative in nu */
+    double tangent[2];     /* the last point's unit tangent (scaled), as the driver gave it */
+    int skip_start;        /* a restart: the driver's first point is the last one kept */
 } trace_ctx;
 
 /* A cached evaluation at (nu, S), a ring spectrum's first; with `full`,
@@ -722,11 +730,28 @@ static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *
     return 1;
 }
 
+/* The scaled distance of the curve's first point from the chord a-b. */
+static double chord_distance(const trace_ctx *t, const trace_eval *a, const trace_eval *b)
+{
+    double d[2] = {(b->nu - a->nu) / t->scale[0], (b->S - a->S) / t->scale[1]};
+    double f[2] = {(t->first[0] - a->nu) / t->scale[0], (t->first[1] - a->S) / t->scale[1]};
+    double dd = d[0] * d[0] + d[1] * d[1], x = dd > 0 ? (f[0] * d[0] + f[1] * d[1]) / dd : 0;
+    x = fmin(fmax(x, 0), 1);
+    return hypot(f[0] - x * d[0], f[1] - x * d[1]);
+}
+
 static int trace_accept(const double *u, const double *tangent, int is_fold, void *data)
 {
-    (void)tangent;
     (void)is_fold;
     trace_ctx *t = data;
+    t->tangent[0] = tangent[0];
+    t->tangent[1] = tangent[1];
+    /* a restart's start is the point kept last (the driver corrected it
+     * with nu held, within its tolerance): not drawn twice */
+    if (t->skip_start) {
+        t->skip_start = 0;
+        return 0;
+    }
     trace_eval e;
     bkf_error err;
     /* the point is the last spectrum, within Newton's tolerance of u (a
@@ -760,21 +785,25 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
         }
         return 1;
     }
+    /* A closed curve (a level set has no other way back) would be followed
+     * round and round to max_points: once its chord from the last point
+     * passes the first point (within TRACE_CLOSE, the chord's sagitta and
+     * more), it ends.  Within a step of the first point was not enough:
+     * at gamma 1, c 0.6, n 3 the turn's upper half comes back to nu -0.95
+     * at S 11.44, 0.9 steps above the lower half's first point. */
+    double d0 = hypot((e.nu - t->first[0]) / t->scale[0], (e.S - t->first[1]) / t->scale[1]);
+    int closed = t->left && t->have_prev && chord_distance(t, &t->prev, &e) < TRACE_CLOSE;
+    if (d0 > 1.5) t->left = 1;
     bkf_stabmap_point pt = trace_point(t, &e);
     t->prev = e;
     t->have_prev = 1;
     t->rep.points++;
     t->rep.nu_end = pt.nu;
     if (t->visit && t->visit(&pt, t->data)) return 1;
-    /* A closed curve (a level set has no other way back) would be followed
-     * round and round to max_points: once back within a step (steps are
-     * at most 1 in the scaled norm), it ends. */
-    double d0 = hypot((e.nu - t->first[0]) / t->scale[0], (e.S - t->first[1]) / t->scale[1]);
-    if (d0 > 1.5) t->left = 1;
-    if (t->left && d0 < 1) {
+    if (closed) {
         t->rep.end = BKF_STABMAP_END_CLOSED;
         snprintf(t->rep.note, sizeof t->rep.note,
-                 "closed: back at nu %.6g, S %.6g, within a step of its first point", e.nu, e.S);
+                 "closed: back at nu %.6g, S %.6g, past its first point", e.nu, e.S);
         return 1;
     }
     if (t->rep.points >= t->max_points) {
@@ -884,7 +913,29 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
     co.stop_max = w->nu_hi;
     double u0[2] = {first->nu, first->S};
     bkf_cont_report cr;
-    s = bkf_cont_run(trace_residual, trace_accept, &t, u0, 0, direction, &co, &cr, &e);
+    int along = 0; /* the component whose sign is the way: nu, or S on a restart */
+    for (int retries = 0;; retries++) {
+        s = bkf_cont_run(trace_residual, trace_accept, &t, u0, along, direction, &co, &cr, &e);
+        if (!(s == BKF_ENUMERIC && t.failed < 0 && t.have_prev && retries < TRACE_RETRIES))
+            break;
+        /* A stall: on from the last point kept, the way its tangent went,
+         * with small steps that grow back.  At a corner of the curve (the
+         * rightmost eigenvalue changes class) the tangent turns further than
+         * the driver takes in one step however short; from a restart the
+         * secant gradient turns over a few short steps (gamma 1, c 0.6,
+         * n 3 at its turn in nu near -0.89, S 11.3: stalled after 6 points,
+         * the turn's upper half not drawn). */
+        co.step_initial = TRACE_RETRY_STEP;
+        co.step_min = TRACE_STEP_MIN / 16;
+        u0[0] = t.prev.nu;
+        u0[1] = t.prev.S;
+        /* the way is the tangent's larger component's sign (a restart at a
+         * turn in nu, where the tangent's nu is near 0, took the sign of
+         * its nu and went back down the curve) */
+        along = fabs(t.tangent[1]) > fabs(t.tangent[0]);
+        direction = t.tangent[along] < 0 ? -1 : 1;
+        t.skip_start = 1;
+    }
     if (!s) {
         if (cr.reached_bound) t.rep.end = BKF_STABMAP_END_REACHED;
         goto done;
