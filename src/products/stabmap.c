@@ -37,23 +37,8 @@ typedef struct {
     int tracked; /* f is that one eigenvalue continued (trace_tracked), no full spectrum */
 } sample;
 
-/* The root of n at params nearest v_near (v_near <= 0: the fastest). */
-static int root_near(const bkf_model_params *params, size_t n, double v_near,
-                     bkf_speeds_root *root, bkf_error *err)
-{
-    bkf_speeds_options o = bkf_speeds_options_default();
-    o.n_from = o.n_to = n;
-    bkf_speeds_table t;
-    int s = bkf_speeds_find(params, &o, &t, err);
-    if (!s && t.count == 0)
-        s = bkf_error_set(err, BKF_EINPUT, "n: n = %zu has no root at nu %.6g, S %.6g", n,
-                          params->nu, params->S);
-    size_t best = 0;
-    if (!s) s = bkf_speeds_nearest(&t, v_near, &best, err);
-    if (!s) *root = t.roots[best];
-    bkf_speeds_table_free(&t);
-    return s;
-}
+/* Roots of one speeds table kept (a table has one to three here). */
+#define ROOT_MEMO 4
 
 /* sigma_max along S at fixed nu, the root continued by v ~ S (v = S/(n T)
  * at slowly varying T); every ring spectrum and tracked eigenvalue of the
@@ -67,13 +52,53 @@ typedef struct {
     void *spectrum_data;
     size_t spectra;        /* ring spectra computed (a refused one too) */
     size_t tracked;        /* eigenvalues continued alone (tracked_sample) */
+    /* The last point's roots of n: a point is asked for twice (a tracked
+     * eigenvalue that proves nothing, then the ring spectrum there), and a
+     * speeds table costs 4 to 25 ms, more than the tracked eigenvalue. */
+    int memo_have;
+    double memo_nu, memo_S;
+    size_t memo_count;
+    bkf_speeds_root memo[ROOT_MEMO];
 } sigma_fn;
 
 static sigma_fn sigma_fn_of(const bkf_model_params *params, size_t n,
                             const bkf_stabmap_options *o, double v_ref, double S_ref)
 {
-    sigma_fn fn = {*params, n, o->tol, v_ref, S_ref, o->spectrum, o->spectrum_data, 0, 0};
+    sigma_fn fn = {.p = *params, .n = n, .tol = o->tol, .v_ref = v_ref, .S_ref = S_ref,
+                   .spectrum = o->spectrum, .spectrum_data = o->spectrum_data};
     return fn;
+}
+
+/* The root of fn's n at params nearest v_near (v_near <= 0: the fastest). */
+static int root_near(sigma_fn *fn, const bkf_model_params *params, double v_near,
+                     bkf_speeds_root *root, bkf_error *err)
+{
+    bkf_speeds_table t = {0};
+    int memo = fn->memo_have && fn->memo_nu == params->nu && fn->memo_S == params->S;
+    int s = BKF_OK;
+    if (memo) {
+        t.roots = fn->memo;
+        t.count = fn->memo_count;
+    } else {
+        bkf_speeds_options o = bkf_speeds_options_default();
+        o.n_from = o.n_to = fn->n;
+        s = bkf_speeds_find(params, &o, &t, err);
+        fn->memo_have = !s && t.count <= ROOT_MEMO;
+        if (fn->memo_have) {
+            fn->memo_nu = params->nu;
+            fn->memo_S = params->S;
+            fn->memo_count = t.count;
+            if (t.count) memcpy(fn->memo, t.roots, t.count * sizeof *t.roots);
+        }
+    }
+    if (!s && t.count == 0)
+        s = bkf_error_set(err, BKF_EINPUT, "n: n = %zu has no root at nu %.6g, S %.6g", fn->n,
+                          params->nu, params->S);
+    size_t best = 0;
+    if (!s) s = bkf_speeds_nearest(&t, v_near, &best, err);
+    if (!s) *root = t.roots[best];
+    if (!memo) bkf_speeds_table_free(&t);
+    return s;
 }
 
 static int trainspec_root(const bkf_model_params *params, const bkf_speeds_root *root,
@@ -89,7 +114,7 @@ static int spectrum_sample(sigma_fn *fn, const bkf_model_params *params, double 
                            sample *out, bkf_error *err)
 {
     bkf_speeds_root root;
-    int s = root_near(params, fn->n, v_near, &root, err);
+    int s = root_near(fn, params, v_near, &root, err);
     if (s) return s;
     bkf_trainspec_result r;
     bkf_stabmap_spectrum_fn spectrum = fn->spectrum ? fn->spectrum : trainspec_root;
@@ -130,7 +155,7 @@ static int tracked_sample(sigma_fn *fn, const bkf_model_params *params, double v
                           const sample *from, sample *out, bkf_error *err)
 {
     bkf_speeds_root root;
-    int s = root_near(params, fn->n, v_near, &root, err);
+    int s = root_near(fn, params, v_near, &root, err);
     if (s) return s;
     bkf_trainspec_train train = {fn->n, root.v};
     double re[2], im[2];
