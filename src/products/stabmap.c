@@ -139,17 +139,12 @@ static int spectrum_sample(sigma_fn *fn, const bkf_model_params *params, double 
     return s;
 }
 
-/* Meshes of a tracked eigenvalue: `substeps` TRACK_SUBSTEPS and twice
- * that (the second halves every step of the first); its error is their
- * difference / 8, as the ring spectrum's (fifth-order steps: the ratio is
- * 31 once converged). */
-#define TRACK_SUBSTEPS 1
-
 /* One eigenvalue of class `from`->j continued from `from` (re = f, im) to
  * the root of n at params nearest v_near (v_near <= 0: the fastest), by
- * Newton on that class alone (bkf_trainspec_eigenvalue_at: about 1/20 of a
- * ring spectrum), into *out (tracked 1: f is that eigenvalue, not
- * sigma_max, which is at least f).  A failure (Newton, the root) means
+ * Newton on that class alone (bkf_trainspec_track: one cycle, meshes of 1,
+ * 2, ... substeps until their difference meets tol; about 1/20 of a ring
+ * spectrum), into *out (tracked 1: f is that eigenvalue, not sigma_max,
+ * which is at least f).  A failure (Newton, the root, tol not met) means
  * only that the ring spectrum is needed. */
 static int tracked_sample(sigma_fn *fn, const bkf_model_params *params, double v_near,
                           const sample *from, sample *out, bkf_error *err)
@@ -158,15 +153,14 @@ static int tracked_sample(sigma_fn *fn, const bkf_model_params *params, double v
     int s = root_near(fn, params, v_near, &root, err);
     if (s) return s;
     bkf_trainspec_train train = {fn->n, root.v};
-    double re[2], im[2];
+    bkf_trainspec_eigenvalue a = {.re = from->f, .im = from->im, .j = from->j}, b;
+    size_t followed = 0;
     fn->tracked++;
-    for (int k = 0; !s && k < 2; k++)
-        s = bkf_trainspec_eigenvalue_at(params, &train, from->j, from->f, from->im,
-                                        (size_t)TRACK_SUBSTEPS << k, &re[k], &im[k], NULL, err);
+    s = bkf_trainspec_track(params, &train, fn->tol, 1, &a, &b, &followed, err);
     if (s) return s;
-    *out = (sample){.S = params->S, .f = re[1], .err = fabs(re[1] - re[0]) / 8, .v = root.v,
-                    .mu = root.mu, .bound = NAN, .j = from->j, .im = im[1], .have_mode = 1,
-                    .tracked = 1};
+    if (!followed) return bkf_error_set(err, BKF_ENUMERIC, "not followed");
+    *out = (sample){.S = params->S, .f = b.re, .err = b.err, .v = root.v, .mu = root.mu,
+                    .bound = NAN, .j = from->j, .im = b.im, .have_mode = 1, .tracked = 1};
     return BKF_OK;
 }
 
