@@ -230,9 +230,10 @@ static int illinois(sigma_fn *fn, sample *a, sample *b, double S_tol, sample *be
     for (int it = 0; it < 60 && fabs(b->S - a->S) > S_tol; it++) {
         /* sigma within its error of 0: the sign there means nothing */
         if (fabs(best->f) <= best->err) break;
-        /* on ring spectra, ends on two roots are a jump (close_bracket),
-         * whatever the width: closing it on would cost 8 to 16 spectra */
-        if (!track && roots_apart(a, b)) break;
+        /* ends on two roots are a jump (close_bracket), whatever the
+         * width: closing it on would cost 8 to 16 spectra, and an
+         * eigenvalue continued from one root to the other means nothing */
+        if (roots_apart(a, b)) break;
         double S = (a->S * fb - b->S * fa) / (fb - fa);
         double lo = fmin(a->S, b->S), hi = fmax(a->S, b->S), w = hi - lo;
         if (!(S > lo + 0.02 * w && S < hi - 0.02 * w)) S = 0.5 * (lo + hi);
@@ -277,7 +278,23 @@ static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_sta
         sample ta = a, tb = b, full;
         bkf_error e;
         best = *pos;
-        if (!illinois(fn, &ta, &tb, S_tol, &best, pos, &e)) {
+        if (!illinois(fn, &ta, &tb, S_tol, &best, pos, &e) && roots_apart(&ta, &tb)) {
+            /* The eigenvalue was continued across a jump to another root
+             * (the bracket closed on it): the ring spectra at its two ends
+             * say whether sigma_max jumps across 0 there (no crossing),
+             * 2 spectra where closing the bracket on ring spectra from the
+             * start took 5 to 11 (the paper scene's seeds at nu -0.98). */
+            sample fa, fb;
+            int s = eval_at(fn, ta.S, &fa, err);
+            if (!s) s = eval_at(fn, tb.S, &fb, err);
+            if (s) return s;
+            if (sign_of(fa.f) != sign_of(fb.f)) {
+                a = fa;
+                b = fb;
+                best = fabs(fa.f) < fabs(fb.f) ? fa : fb;
+                closed = 1;
+            }
+        } else if (fabs(tb.S - ta.S) <= S_tol || fabs(best.f) <= best.err) {
             int s = eval_at(fn, best.S, &full, err);
             if (s) return s;
             if (fabs(full.f - best.f) <= fn->tol + 4 * (full.err + best.err)) {
@@ -497,6 +514,8 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
 /* After a stall: restarts at most, each from a step of TRACE_RETRY_STEP
  * (scaled; the full step is 1). */
 #define TRACE_RETRIES 3
+/* Turns in nu that each add half the work cap. */
+#define TRACE_TURNS 2
 #define TRACE_RETRY_STEP 0.25
 /* A closed curve's chord passes its first point within this (scaled). */
 #define TRACE_CLOSE 0.25
@@ -529,6 +548,7 @@ typedef struct {
     double land_tol;       /* an edge crossing's, relative in nu */
     double tangent[2];     /* the last point's unit tangent (scaled), as the driver gave it */
     int skip_start;        /* a restart: the driver's first point is the last one kept */
+    size_t cap, turns;     /* max_points as asked, and the turns in nu that added to it */
 } trace_ctx;
 
 /* A cached evaluation at (nu, S), a ring spectrum's first; with `full`,
@@ -763,6 +783,15 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
 {
     (void)is_fold;
     trace_ctx *t = data;
+    /* Past a turn in nu the curve crosses the nu range again, which the
+     * work cap (twice a curve monotone in both) did not allow for: each
+     * turn adds half of it, TRACE_TURNS at most (gamma 1, c 0.6, n 3: 8
+     * points up to its turn near nu -0.89, 23 back to nu -0.95 over the
+     * turn's high curvature, the cap 30). */
+    if (t->have_prev && tangent[0] * t->tangent[0] < 0 && t->turns < TRACE_TURNS) {
+        t->turns++;
+        t->max_points += (t->cap + 1) / 2;
+    }
     t->tangent[0] = tangent[0];
     t->tangent[1] = tangent[1];
     /* a restart's start is the point kept last (the driver corrected it
@@ -864,7 +893,7 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
     t.S_hi = w->S_hi;
     t.visit = visit;
     t.data = data;
-    t.max_points = o.max_points;
+    t.max_points = t.cap = o.max_points;
     t.first[0] = first->nu;
     t.first[1] = first->S;
     t.rep.end = BKF_STABMAP_END_REACHED;
@@ -926,7 +955,8 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
      * sigma_max whose rightmost class changes along the curve: up to 100
      * corrections a turn, each a spectrum (n = 3 above, nu -0.984, S 21) */
     co.locate_folds = 0;
-    co.max_points = o.max_points + 1;
+    /* the cap is trace_accept's (it grows at turns in nu) */
+    co.max_points = (TRACE_TURNS + 2) * o.max_points + 1;
     co.stop_index = 0;
     co.stop_min = w->nu_lo;
     co.stop_max = w->nu_hi;
@@ -938,7 +968,7 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
         if (!(s == BKF_ENUMERIC && t.failed < 0 && t.have_prev && retries < TRACE_RETRIES))
             break;
         /* A stall: on from the last point kept, the way its tangent went,
-         * with small steps that grow back.  At a corner of the curve (the
+         * with short steps that grow back.  At a corner of the curve (the
          * rightmost eigenvalue changes class) the tangent turns further than
          * the driver takes in one step however short; from a restart the
          * secant gradient turns over a few short steps (gamma 1, c 0.6,
