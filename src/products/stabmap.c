@@ -731,16 +731,16 @@ static bkf_stabmap_point trace_point(trace_ctx *t, const trace_eval *e)
     return pt;
 }
 
-/* The curve left the window in S between the last point inside and e:
- * its crossing of the edge S = Sb, by the Illinois method in nu between
- * the two points' nu (a computed spectrum, as every point), into *out;
- * 0 when the edge shows no sign change between them or a spectrum fails. */
-static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *out)
+/* The curve's crossing of the edge S = Sb between the last point inside
+ * and e, by the Illinois method in nu on values of kind `how`
+ * (trace_eval_at), into *out; 0 when the edge shows no sign change between
+ * them or a value fails. */
+static int land_on(trace_ctx *t, const trace_eval *e, double Sb, int how, trace_eval *out)
 {
     trace_eval a, b;
     bkf_error err;
-    if (trace_eval_at(t, t->prev.nu, Sb, TRACE_FULL, &a, &err) ||
-        trace_eval_at(t, e->nu, Sb, TRACE_FULL, &b, &err))
+    if (trace_eval_at(t, t->prev.nu, Sb, how, &a, &err) ||
+        trace_eval_at(t, e->nu, Sb, how, &b, &err))
         return 0;
     if ((a.s.f > 0) == (b.s.f > 0)) return 0;
     double fa = a.s.f, fb = b.s.f, tol = t->land_tol * fmax(fabs(e->nu), t->scale[0]);
@@ -751,7 +751,7 @@ static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *
                hi = fmax(a.nu, b.nu);
         if (!(nu > lo + 0.02 * (hi - lo) && nu < hi - 0.02 * (hi - lo))) nu = 0.5 * (lo + hi);
         trace_eval m;
-        if (trace_eval_at(t, nu, Sb, TRACE_FULL, &m, &err)) return 0;
+        if (trace_eval_at(t, nu, Sb, how, &m, &err)) return 0;
         if (fabs(m.s.f) < fabs(best.s.f)) best = m;
         if ((m.s.f > 0) == (a.s.f > 0)) {
             a = m;
@@ -767,6 +767,31 @@ static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *
     }
     *out = best;
     return 1;
+}
+
+/* The curve left the window in S between the last point inside and e:
+ * its crossing of the edge S = Sb (a computed spectrum, as every point),
+ * into *out; 0 when the edge shows no sign change between them or a
+ * spectrum fails.  Located on the rightmost eigenvalue continued, then one
+ * ring spectrum there, which must agree with it to tol (no other
+ * eigenvalue right of it); else on ring spectra (5 to 8 of them: most of
+ * the paper scene's curves' spectra beyond one a point). */
+static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *out)
+{
+    trace_eval m, full;
+    bkf_error err;
+    if (t->mode.have_mode && land_on(t, e, Sb, TRACE_TRACKED, &m)) {
+        if (!m.s.tracked) {
+            *out = m;
+            return 1;
+        }
+        if (!trace_eval_at(t, m.nu, m.S, TRACE_FULL, &full, &err) &&
+            fabs(full.s.f - m.s.f) <= t->fn.tol + 4 * (full.s.err + m.s.err)) {
+            *out = full;
+            return 1;
+        }
+    }
+    return land_on(t, e, Sb, TRACE_FULL, out);
 }
 
 /* The scaled distance of the curve's first point from the chord a-b. */
