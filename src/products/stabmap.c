@@ -52,6 +52,7 @@ typedef struct {
     void *spectrum_data;
     size_t spectra;        /* ring spectra computed (a refused one too) */
     size_t tracked;        /* eigenvalues continued alone (tracked_sample) */
+    double fastest_S, fastest_v; /* a scan down in S: the last sample's fastest root */
     /* The last point's roots of n: a point is asked for twice (a tracked
      * eigenvalue that proves nothing, then the ring spectrum there), and a
      * speeds table costs 4 to 25 ms, more than the tracked eigenvalue. */
@@ -81,6 +82,20 @@ static int root_near(sigma_fn *fn, const bkf_model_params *params, double v_near
      * the table's nearest */
     if (!memo && v_near > 0 && !bkf_speeds_near(params, fn->n, v_near, NULL, root, NULL))
         return BKF_OK;
+    /* The fastest root one step down in S from a fastest root (fastest_S,
+     * fastest_v): going down, the level S / (n c gamma) falls and the first
+     * crossing of g moves on to larger s, none born before it (g stays
+     * above the old level there); the root continued is the fastest while
+     * it exists and has moved as a root does (v ~ S: roots_apart's rule),
+     * else (a fold: it and its pair are gone) the table says which is. */
+    if (!memo && !(v_near > 0) && fn->fastest_v > 0 && params->S < fn->fastest_S &&
+        params->nu == fn->p.nu) {
+        double pred = fn->fastest_v * params->S / fn->fastest_S;
+        double w = fn->fastest_S - params->S;
+        if (!bkf_speeds_near(params, fn->n, pred, NULL, root, NULL) &&
+            fabs(root->v - pred) <= 1e-3 * pred + 4 * pred * w / params->S)
+            return BKF_OK;
+    }
     int s = BKF_OK;
     if (memo) {
         t.roots = fn->memo;
@@ -364,6 +379,8 @@ int bkf_stabmap_scan(const bkf_model_params *params, size_t n, double S_from, do
         double S = S_from + (S_to - S_from) * (double)i / (double)samples;
         bkf_error e;
         fn.v_ref = 0;
+        fn.fastest_S = have && S < prev.S ? prev.S : 0;
+        fn.fastest_v = have && S < prev.S ? prev.v : 0;
         /* Only the sign of sigma_max matters away from a crossing, and one
          * eigenvalue right of 0 (beyond its error and tol) proves it
          * positive: the previous sample's rightmost, continued here, saves

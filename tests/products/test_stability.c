@@ -419,6 +419,12 @@ TEST(stabmap_scan_skips_a_jump_to_a_faster_root)
     size_t count = 9;
     CHECK_STATUS(bkf_stabmap_scan(&p, 1, 2.8, 3.8, 2, &o, pts, 4, &count, NULL, &e), BKF_OK);
     CHECK_MSG(count == 0, "a crossing at S %.6g, sigma_max %.3g", pts[0].S, pts[0].sigma);
+    /* down in S (as the diagram's seed columns), where each sample's
+     * fastest root is the one above continued while it exists: past the
+     * fold it is gone, and the table's fastest is the slow root */
+    count = 9;
+    CHECK_STATUS(bkf_stabmap_scan(&p, 1, 3.8, 2.8, 2, &o, pts, 4, &count, NULL, &e), BKF_OK);
+    CHECK_MSG(count == 0, "down: a crossing at S %.6g, sigma_max %.3g", pts[0].S, pts[0].sigma);
 }
 
 /* A planted sigma_max (stabmap.h's spectrum hook): A (1 - x^2 - y^2), x =
