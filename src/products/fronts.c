@@ -1084,14 +1084,14 @@ typedef struct {
 
 /* A ring spectrum is taken at least every TRACK_EVERY points and wherever
  * mu has grown TRACK_MU_REACH-fold since the last: each is a check of the
- * eigenvalues followed (and the budget's test, as before, at large mu). */
-#define TRACK_EVERY 8
-#define TRACK_MU_REACH 2.0
-/* No bound on mu: past mu 100 following pays as below it, now that the
+ * eigenvalues followed (and the budget's test, as before, at large mu).
+ * No bound on mu: past mu 100 following pays as below it, now that the
  * Radau meshes' profile is sampled by rk8pd there too (cycle.c; with bsimp
  * a mesh cost 15 times what it did at mu 99 and every point past mu 100
  * took its ring spectrum).  n = 6 at gamma 1.5, mu 120.8: the followed
  * eigenvalues 0.43 s against the ring spectrum's 1.7 s, agreeing to 5e-9. */
+#define TRACK_EVERY 8
+#define TRACK_MU_REACH 2.0
 /* The ring spectra along a branch report two eigenvalues per Bloch class
  * and half plane, and both are followed: the second of a class overtaking
  * its first (gamma 4, c 0.15, nu -0.7, n = 2 near S 27.4, j = 0) is then

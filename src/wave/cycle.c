@@ -423,7 +423,10 @@ int bkf_cycle_estimate(bkf_cycle *c, double mu, double nu, const bkf_cycle_optio
  * 0.045 s; at mu 150 on 3000 points, 20 a unit of mu, 0.082 s against
  * 0.025; at mu 1000 on 65536 points, 0.62 s against 1.86 s).  From this
  * many points a unit of mu rk8pd samples them, its stability-limited steps
- * then no more than the points themselves cost bsimp. */
+ * then no more than the points themselves cost bsimp (its values within
+ * 1e-10 of bsimp's single points at mu 120.8, the profile's within 1e-12
+ * of 16 times denser samples at mu 120.8 and 1000, 3.4e-11 at mu 300,
+ * nu 0.9). */
 #define PROFILE_DENSE_PER_MU 20.0
 
 /* One integrator for all the points, each continued from the previous one
