@@ -37,7 +37,8 @@ void trainspec_mesh_free(mesh *m)
  * is not stiff a step spans at most RESOLVE_TURN e-foldings or radians of
  * the fastest local solution, the roots of lambda^2 = a lambda + b; where
  * it is stiff, RESOLVE_TURN of the slow solution only.  Either way at most
- * PROFILE_TURN of the profile's change.
+ * PROFILE_TURN of the profile's change.  The fastest local solution is
+ * p's (the basis the steps are taken in, see below), not u's.
  *
  * Stiff cycle steps:  In p = exp(-sigma z / s) u (the perturbation of psi
  * itself) the system is p'' = ap p' + bp p with ap = -mu phi - 2 sigma / s,
@@ -60,7 +61,14 @@ int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err)
         phi[i] = f[i] * f[i] - 1.0;
         double a = x->mu * fabs(phi[i]), b_fixed = fabs(1.0 + 2.0 * x->mu * f[i] * fp[i]);
         double b = b_fixed + x->beta * reach * (reach + x->gamma * fabs(phi[i]));
-        rate[i] = 0.5 * a + sqrt(0.25 * a * a + b);
+        /* the steps are taken in p = exp(-sigma z / s) u: p's rates are u's
+         * plus |sigma| / s.  With u's alone (sqrt(beta) |sigma| at large
+         * |sigma|) a train with c / v = 0.085 (mu 3.01, nu -0.986) had 2.7
+         * radians of p per step at the window's top: the damped larger
+         * multiplier put the smaller one's curve right of a_lo, where
+         * Liouville forbids it, up to |Im sigma| 1e4, and the spectrum was
+         * refused (issue 31) */
+        rate[i] = 0.5 * a + sqrt(0.25 * a * a + b) + reach / x->s;
         slow[i] = b_fixed + reach * (reach + x->gamma * fabs(phi[i])); /* bounds |bp| */
     }
     for (size_t i = 0; rc == BKF_OK && i + 1 < n; i++) {
