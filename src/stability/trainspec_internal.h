@@ -127,6 +127,9 @@ void trainspec_rescale(double complex *v, size_t count, double *scale);
 /* The monodromy of p over mesh m at sigma (times exp(*scale)), its derivative into dp when not NULL. */
 void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double complex p[4],
                                 double complex *dp, double *scale);
+/* Both multipliers' logs w at sigma over mesh m (w[0] the larger), and
+ * their sigma-derivatives into dw when not NULL. */
+void trainspec_monodromy(ctx *x, const mesh *m, double complex sigma, double complex w[2], double complex *dw);
 /* phase wrapped into [-pi, pi) */
 double trainspec_wrap(double phase);
 /* Newton on the multiplier exp(i theta) over mesh m from *sigma; deriv (may
@@ -168,6 +171,15 @@ static inline int trainspec_cand_push(candidates *cs, candidate c)
     cs->items[cs->count++] = c;
     return BKF_OK;
 }
+
+/* The traced curves (trainspec_curves.c). */
+/* The coarse mesh for a window up to height B (the fine one is dropped). */
+int trainspec_meshes_for(ctx *x, double B, const window *win, bkf_error *err);
+/* Both families traced over [0, B], B grown until the curves leave the
+ * window in its upper quarter; their candidates into cs, the heights
+ * sampled added to *points, the window's height into *y_max. */
+int trainspec_curves(ctx *x, size_t classes, window *win, candidates *cs, double *y_max, size_t *points,
+                     bkf_error *err);
 
 /* Hill's stage (trainspec_hill.c). */
 /* Hill's converged eigenvalues polished, per class, at most (the rightmost first). */
