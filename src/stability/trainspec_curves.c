@@ -3,8 +3,6 @@
  * multiplier has modulus 1, and the points where its phase is a multiple
  * of 2 pi / classes, the curves' candidates (docs/numerics.md, "Finding
  * every eigenvalue in the window"). */
-#include "bkfront/trainspec.h"
-
 #include <gsl/gsl_math.h>
 
 #include <complex.h>
