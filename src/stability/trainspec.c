@@ -275,12 +275,6 @@ static int meshes_for_polish(ctx *x, size_t classes, size_t polish_n, candidates
  * (plus 10 tol) is not polished on the fine mesh. */
 #define POLISH_SKIP_COARSE 8.0
 
-/* Per polished eigenvalue, both families' sigma-derivatives at its last
- * polish (trainspec_polish): the next, finer mesh's polish steps with them. */
-typedef struct {
-    double complex d[2];
-    double complex coarse; /* its value on the coarse mesh (polish_candidates) */
-} derivs;
 
 /* The keep-th largest Re sigma of eig[from..to) (-inf while fewer), the
  * translation aside: the cut reports it besides the keep, never instead of
@@ -499,6 +493,42 @@ static int confirm_band(const hill_stage *hs, const bkf_trainspec_eigenvalue *ei
     return BKF_OK;
 }
 
+/* The rightmost polished value of class cls but the translation (re -inf
+ * when none), and its error. */
+static double class_top(const bkf_trainspec_eigenvalue *eig, size_t n_eig, size_t cls, double *err)
+{
+    double top = -INFINITY;
+    *err = 0.0;
+    for (size_t k = 0; k < n_eig; k++)
+        if (eig[k].j == cls && !eig[k].translation && eig[k].re > top) top = eig[k].re, *err = eig[k].err;
+    return top;
+}
+
+int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, const candidates *cs,
+                            bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig, bkf_error *err)
+{
+    for (size_t i = 0; i < cs->count; i++) {
+        const candidate *c = &cs->items[i];
+        double top_err, top = class_top(eig, *n_eig, c->cls, &top_err);
+        if (c->fam >= 0 || 2 * c->cls > classes || !(c->a > top + top_err + HILL_CONVERGED)) continue;
+        double theta = 2.0 * M_PI * (double)c->cls / (double)classes;
+        double complex h = c->a + I * c->y, sc = h, sf, d[2] = {NAN, NAN};
+        double step_c, step_f = INFINITY;
+        int ok = trainspec_polish(x, &x->coarse, theta, &sc, &step_c, d) == BKF_OK;
+        sf = sc;
+        ok = ok && trainspec_polish(x, &x->fine, theta, &sf, &step_f, d) == BKF_OK;
+        if (!ok || !(cabs(sf - h) <= HILL_AGREE * (1.0 + cabs(h))))
+            return bkf_error_set(err, BKF_ETOL,
+                                 "spectrum: Hill's method at %zu modes finds %.6g%+.6gi (Bloch class %zu) right "
+                                 "of the rightmost the meshes found, %.6g, and the meshes do not confirm it",
+                                 modes, c->a, c->y, c->cls, top);
+        dv[*n_eig].d[0] = d[0], dv[*n_eig].d[1] = d[1], dv[*n_eig].coarse = sc;
+        eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), trainspec_estimate(sc, sf, step_f), c->cls,
+                                                     0.0, 0};
+    }
+    return BKF_OK;
+}
+
 /* Spectrum in `classes` phase classes: per class the `keep` rightmost
  * eigenvalues, polished on the fine mesh with error estimates. */
 static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
@@ -522,6 +552,9 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     if (rc == BKF_OK) rc = meshes_for_polish(x, classes, polish_n, &cs, err);
     if (rc == BKF_OK) {
         polish_candidates(x, classes, keep, &cs, eig, dv, &n_eig);
+        if (hs.modes) rc = trainspec_hill_validate(x, classes, hs.modes, &cs, eig, dv, &n_eig, err);
+    }
+    if (rc == BKF_OK) {
         translation(x, eig, dv, &n_eig);
         drop_hidden(eig, dv, &n_eig, keep);
         rc = refine(x, classes, eig, dv, n_eig, err);
@@ -552,7 +585,7 @@ int trainspec_stopped(const ctx *x, int rc, bkf_error *err)
     return rc;
 }
 
-static window initial_window(const ctx *x, double *r_inf)
+window trainspec_initial_window(const ctx *x, double *r_inf)
 {
     *r_inf = x->s * x->log_m / (2.0 * x->T);
     return (window){.a_lo = fmax(0.5 * *r_inf, -WINDOW_DEPTH * x->gamma), .a_hi = fmax(1.0, x->gamma)};
@@ -577,7 +610,7 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     ctx x;
     rc = trainspec_ctx_init(&x, p, t, o.tol, &o, err);
-    window win = initial_window(&x, &r->r_inf);
+    window win = trainspec_initial_window(&x, &r->r_inf);
     if (rc == BKF_OK)
         rc = spectrum(&x, t->n, o.per_kappa, &r->eigenvalues, &r->count, &win, &r->y_max,
                       &r->curve_points, &r->hill_modes, err);
@@ -678,7 +711,7 @@ int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
     rc = trainspec_ctx_init(&x, p, t, o.tol, &o, err);
     double r_inf, y_max;
     size_t points = 0, n_eig = 0;
-    window win = initial_window(&x, &r_inf);
+    window win = trainspec_initial_window(&x, &r_inf);
     bkf_trainspec_eigenvalue *eig = NULL;
     size_t hill_modes = 0;
     if (rc == BKF_OK) rc = spectrum(&x, count, 1, &eig, &n_eig, &win, &y_max, &points, &hill_modes, err);

@@ -172,6 +172,17 @@ static inline int trainspec_cand_push(candidates *cs, candidate c)
     return BKF_OK;
 }
 
+/* The window of a train (Re sigma > a_lo, a_hi its first right end) and
+ * the spectrum's asymptote r_inf. */
+window trainspec_initial_window(const ctx *x, double *r_inf);
+
+/* Per polished eigenvalue, both families' sigma-derivatives at its last
+ * polish (trainspec_polish): the next, finer mesh's polish steps with them. */
+typedef struct {
+    double complex d[2];
+    double complex coarse; /* its value on the coarse mesh (polish_candidates) */
+} derivs;
+
 /* The traced curves (trainspec_curves.c). */
 /* The coarse mesh for a window up to height B (the fine one is dropped). */
 int trainspec_meshes_for(ctx *x, double B, const window *win, bkf_error *err);
@@ -184,6 +195,9 @@ int trainspec_curves(ctx *x, size_t classes, window *win, candidates *cs, double
 /* Hill's stage (trainspec_hill.c). */
 /* Hill's converged eigenvalues polished, per class, at most (the rightmost first). */
 #define HILL_PER_CLASS 6
+/* Hill's eigenvalues agree at M and the finer truncation this well
+ * (absolute) to be candidates; the polish takes them from there */
+#define HILL_CONVERGED 1e-5
 /* Hill's value and the polished one agree this well (relative to 1 +
  * |sigma|) where Hill's band stands alone */
 #define HILL_AGREE 1e-3
@@ -212,5 +226,16 @@ int trainspec_hill_candidates(ctx *x, size_t classes, const window *win, candida
 /* M grown until the band vouches for its rightmost or the cost is spent. */
 int trainspec_hill_grow(ctx *x, size_t classes, const window *win, candidates *cs, hill_stage *h, bkf_error *err);
 void trainspec_hill_stage_free(hill_stage *h);
+/* Hill's candidates (cs's with fam < 0, from `modes` modes) validate the
+ * polished eigenvalues eig[0..*n_eig) (trainspec.c): where one lies right
+ * of its class's rightmost beyond that one's error and Hill's agreement
+ * HILL_CONVERGED, the meshes polish it (coarse, then fine: eig's meshes)
+ * and it is taken if it stays within HILL_AGREE of Hill's value, else the
+ * spectrum is refused (BKF_ETOL).  The traced curves can step over an
+ * eigenvalue (two of one class closer than the sampled phase tells):
+ * where Hill has converged, the rightmost never rests on them alone.
+ * eig and dv must hold one more entry per Hill candidate. */
+int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, const candidates *cs,
+                            bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig, bkf_error *err);
 
 #endif
