@@ -126,6 +126,7 @@ void trainspec_ctx_free(ctx *x)
     bkf_cycle_free(x->cycle);
     free(x->nodes);
     free(x->need);
+    free(x->stiff);
 }
 
 int trainspec_ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, double tol,

@@ -78,6 +78,7 @@ enum { FAMILIES = 2 };
 typedef struct {
     size_t steps;
     double *h, *a, *b0, *phi; /* h per step; a, b0, phi: STRIDE per step */
+    unsigned char *pstep;     /* per step: taken in p's basis (stiff), else in u's */
     /* per step, the parts of the stage matrix G and of A bp that do not
      * depend on sigma (see radau_step): G0, M = A diag(phi) A (9 each),
      * A b0 and A phi (3 each) */
@@ -99,6 +100,7 @@ typedef struct {
     double re_floor;    /* smallest Re sigma the meshes must serve (Radau steps
                            need the fast solution to decay there) */
     double *need;       /* per cycle step: the steps it needs at sigma_reach (see mesh_needs) */
+    unsigned char *stiff; /* per cycle step: stiff, its steps taken in p's basis (mesh_needs) */
     mesh coarse, fine;
     size_t evaluations;
     double work, max_work;               /* steps taken, and allowed */

@@ -24,6 +24,7 @@ void trainspec_mesh_free(mesh *m)
     free(m->a);
     free(m->b0);
     free(m->phi);
+    free(m->pstep);
     memset(m, 0, sizeof *m);
 }
 
@@ -42,6 +43,24 @@ void trainspec_mesh_free(mesh *m)
  * the one the spectrum is made of, varies at |bp / ap| only.  There the
  * L-stable Radau step, which damps the fast solution as the flow does,
  * needs to resolve the slow one alone: steps O(mu) times longer. */
+/* Every run of stiff (or of non-stiff) cycle steps gets a whole number
+ * of steps, at least MESH_MIN_STEPS in all: the meshes' steps, spread
+ * evenly in the cumulative need (mesh_bounds), then never straddle a
+ * change of basis, at any number of substeps. */
+static void whole_runs(ctx *x)
+{
+    size_t n = x->node_count - 1;
+    double total = 0.0;
+    for (size_t i = 0; i < n; i++) total += x->need[i];
+    double grow = total < MESH_MIN_STEPS ? MESH_MIN_STEPS / total : 1.0;
+    for (size_t r0 = 0, r1; r0 < n; r0 = r1) {
+        double sum = 0.0;
+        for (r1 = r0; r1 < n && x->stiff[r1] == x->stiff[r0]; r1++) sum += grow * x->need[r1];
+        double scale = grow * ceil(sum - 1e-9) / sum;
+        for (size_t i = r0; i < r1; i++) x->need[i] *= scale;
+    }
+}
+
 int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err)
 {
     if (x->need && reach == x->sigma_reach) return BKF_OK;
@@ -50,20 +69,16 @@ int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err)
     double *phi = malloc(n * sizeof *phi), *rate = malloc(n * sizeof *rate);
     double *need = realloc(x->need, n * sizeof *need);
     if (need) x->need = need;
-    int rc = !f || !fp || !slow || !phi || !rate || !need ? bkf_error_set(err, BKF_ENOMEM, "out of memory")
+    unsigned char *stiff = realloc(x->stiff, n);
+    if (stiff) x->stiff = stiff;
+    int rc = !f || !fp || !slow || !phi || !rate || !need || !stiff ? bkf_error_set(err, BKF_ENOMEM, "out of memory")
                                                           : bkf_cycle_profile_sample(x->cycle, x->nodes, n, f, fp, err);
     for (size_t i = 0; rc == BKF_OK && i < n; i++) {
         phi[i] = f[i] * f[i] - 1.0;
         double a = x->mu * fabs(phi[i]), b_fixed = fabs(1.0 + 2.0 * x->mu * f[i] * fp[i]);
         double b = b_fixed + x->beta * reach * (reach + x->gamma * fabs(phi[i]));
-        /* the steps are taken in p = exp(-sigma z / s) u: p's rates are u's
-         * plus |sigma| / s.  With u's alone (sqrt(beta) |sigma| at large
-         * |sigma|) a train with c / v = 0.085 (mu 3.01, nu -0.986) had 2.7
-         * radians of p per step at the window's top: the damped larger
-         * multiplier put the smaller one's curve right of a_lo, where
-         * Liouville forbids it, up to |Im sigma| 1e4, and the spectrum was
-         * refused (issue 31) */
-        rate[i] = 0.5 * a + sqrt(0.25 * a * a + b) + reach / x->s;
+        /* u's rates: the steps that are not stiff are taken in u's basis */
+        rate[i] = 0.5 * a + sqrt(0.25 * a * a + b);
         slow[i] = b_fixed + reach * (reach + x->gamma * fabs(phi[i])); /* bounds |bp| */
     }
     for (size_t i = 0; rc == BKF_OK && i + 1 < n; i++) {
@@ -74,7 +89,9 @@ int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err)
         /* stiff steps, of length len / stiff, must damp the fast solution */
         int use_stiff = stiff < plain && decay * len >= STIFF_MIN * fmax(stiff, 1.0);
         need[i] = fmax(fmax(use_stiff ? stiff : plain, fabs(f[i + 1] - f[i]) / PROFILE_TURN), NODE_SHARE);
+        x->stiff[i] = (unsigned char)use_stiff;
     }
+    if (rc == BKF_OK) whole_runs(x);
     x->sigma_reach = reach;
     free(f);
     free(fp);
@@ -115,6 +132,7 @@ int trainspec_mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf
     m->a = malloc(STRIDE * cap * sizeof *m->a);
     m->b0 = malloc(STRIDE * cap * sizeof *m->b0);
     m->phi = malloc(STRIDE * cap * sizeof *m->phi);
+    m->pstep = malloc(cap);
     m->g0 = malloc(9 * cap * sizeof *m->g0);
     m->m = malloc(9 * cap * sizeof *m->m);
     m->ab0 = malloc(3 * cap * sizeof *m->ab0);
@@ -122,13 +140,17 @@ int trainspec_mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf
     double *z = malloc(STRIDE * cap * sizeof *z), *f = malloc(STRIDE * cap * sizeof *f);
     double *fp = malloc(STRIDE * cap * sizeof *fp);
     int rc = BKF_OK;
-    if (!m->h || !m->a || !m->b0 || !m->phi || !m->g0 || !m->m || !m->ab0 || !m->aphi || !z || !f || !fp) {
+    if (!m->h || !m->a || !m->b0 || !m->phi || !m->pstep || !m->g0 || !m->m || !m->ab0 || !m->aphi || !z || !f || !fp) {
         rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
         goto done;
     }
-    for (size_t k = 0; k < steps; k++) {
-        double h = bounds[k + 1] - bounds[k];
+    for (size_t k = 0, i = 0; k < steps; k++) {
+        double h = bounds[k + 1] - bounds[k], mid = bounds[k] + 0.5 * h;
         m->h[k] = h;
+        /* the basis of the cycle step the step lies in (they never straddle
+         * a change, whole_runs) */
+        while (i + 2 < x->node_count && x->nodes[i + 1] <= mid) i++;
+        m->pstep[k] = x->stiff ? x->stiff[i] : 0;
         for (int q = 0; q < 3; q++) z[STRIDE * k + q] = fmin(bounds[k] + RADAU_C[q] * h, x->T);
     }
     rc = bkf_cycle_profile_sample(x->cycle, z, STRIDE * steps, f, fp, err);
@@ -174,7 +196,8 @@ int trainspec_mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *step
 {
     double total = 0.0;
     for (size_t i = 0; i + 1 < x->node_count; i++) total += x->need[i];
-    double count = fmax(ceil(total), MESH_MIN_STEPS) * (double)substeps;
+    /* whole_runs made total a whole number (up to rounding) */
+    double count = fmax(ceil(total - 1e-6), MESH_MIN_STEPS) * (double)substeps;
     if (count > MESH_MAX_STEPS)
         return bkf_error_set(err, BKF_EBUDGET, "the spectrum needs more than %d steps per period (mu = %.15g)",
                              MESH_MAX_STEPS, x->mu);
@@ -210,6 +233,25 @@ int trainspec_mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
 
 /* ---------------------------------------------------------- monodromy */
 
+/* A step's transfer of (u, u') into that of (p, p') but for the scalar
+ * exp(-k h): (u, u') = exp(k z) K (p, p'), K = [[1, 0], [k, 1]], so E_p =
+ * exp(-k h) K^-1 E_u K; K^-1 E_u K and its sigma-derivative (dk/dsigma =
+ * 1/s) when de is not NULL.  The scalars commute with every step: the
+ * monodromy takes them all at once (one complex exponential a pass). */
+static void conjugate_k(double complex e[4], double complex *de, double complex k, double s)
+{
+    double complex dk = 1.0 / s;
+    double complex t0 = e[0] + k * e[1], t2 = e[2] + k * e[3];
+    if (de) {
+        double complex dt0 = de[0] + k * de[1] + dk * e[1], dt2 = de[2] + k * de[3] + dk * e[3];
+        double complex d2 = dt2 - dk * t0 - k * dt0, d3 = de[3] - dk * e[1] - k * de[1];
+        de[0] = dt0, de[2] = d2, de[3] = d3;
+    }
+    e[3] = e[3] - k * e[1];
+    e[2] = t2 - k * t0;
+    e[0] = t0;
+}
+
 /* The Radau IIA step i at sigma in p = exp(-sigma z / s) u, where the
  * solution that survives varies slowly (see mesh_needs): (p, p') after the
  * step = e (p, p') before it, e[0..3] row-major, and de = de/dsigma when de
@@ -220,15 +262,19 @@ int trainspec_mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
  * K = [[1, 0], [k, 1]], k = sigma / s, the same multipliers times exp(k T),
  * which the eigenvalue condition divides out again (monodromy), so neither
  * K nor exp(k h) (a complex exponential per step) is ever formed. */
-void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
+static void radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
                        double complex de[4])
 {
     double h = m->h[i];
+    int pb = m->pstep[i];
+    /* p: ap = a - 2 k, bp = b0 - sigma^2 - gamma sigma phi: G = G0 + 2 k h A
+     * + h^2 sigma^2 A^2 + h^2 gamma sigma M (mesh_fill made G0 and M); u:
+     * a, b0 + beta sigma (sigma + gamma phi), the same with the sigma terms
+     * weighted -beta and no k */
+    double wq = pb ? 1.0 : -x->beta;
     double complex k = sigma / x->s, G[3][3], r[3][4];
-    /* ap = a - 2 k, bp = b0 - sigma^2 - gamma sigma phi: G = G0 + 2 k h A
-     * + h^2 sigma^2 A^2 + h^2 gamma sigma M (mesh_fill made G0 and M) */
-    double complex c1 = 2.0 * k * h, c2 = h * h * sigma * sigma, c3 = h * h * x->gamma * sigma;
-    double complex s2 = sigma * sigma, gs = x->gamma * sigma;
+    double complex c1 = pb ? 2.0 * k * h : 0.0, c2 = wq * h * h * sigma * sigma, c3 = wq * h * h * x->gamma * sigma;
+    double complex s2 = wq * sigma * sigma, gs = wq * x->gamma * sigma;
     const double *g0 = m->g0 + 9 * i, *mm = m->m + 9 * i;
     int nrhs = de ? 4 : 2;
     for (int q = 0; q < 3; q++) {
@@ -276,11 +322,11 @@ void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex 
     if (de) {
         /* G dV = dr - dG V: dG = 2 h / s A + 2 h^2 sigma A^2 + h^2 gamma M,
          * dr0 = -h (2 sigma c + gamma A phi), dr1 = 0 */
-        double complex d2 = 2.0 * h * h * sigma;
-        double d1 = 2.0 * h / x->s, d3 = h * h * x->gamma;
+        double complex d2 = wq * 2.0 * h * h * sigma;
+        double d1 = pb ? 2.0 * h / x->s : 0.0, d3 = wq * h * h * x->gamma;
         double complex b[3][2];
         for (int q = 0; q < 3; q++) {
-            double complex dr0 = -h * (2.0 * sigma * RADAU_C[q] + x->gamma * m->aphi[3 * i + q]);
+            double complex dr0 = -wq * h * (2.0 * sigma * RADAU_C[q] + x->gamma * m->aphi[3 * i + q]);
             for (int rhs = 0; rhs < 2; rhs++) {
                 double complex sum = rhs == 0 ? dr0 : 0.0;
                 for (int j = 0; j < 3; j++)
@@ -309,6 +355,20 @@ void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex 
         int col = rhs & 1;
         out[col] = (rhs == 0) + h * sum;
         out[2 + col] = V[2][rhs];
+    }
+    if (!pb) conjugate_k(e, de, k, x->s);
+}
+
+void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
+                          double complex de[4])
+{
+    radau_step(x, m, i, sigma, e, de);
+    if (m->pstep[i]) return;
+    double h = m->h[i];
+    double complex g = cexp(-sigma / x->s * h);
+    for (int j = 0; j < 4; j++) {
+        if (de) de[j] = g * (de[j] - h / x->s * e[j]);
+        e[j] *= g;
     }
 }
 
@@ -358,9 +418,11 @@ void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, dou
         return;
     }
     x->work += cost;
+    double hu = 0.0; /* the u steps' length: their scalars exp(-k h) all at once */
     for (size_t i = 0; i < m->steps; i++) {
         double complex e[4], de[4];
-        trainspec_radau_step(x, m, i, sigma, e, dp ? de : NULL);
+        radau_step(x, m, i, sigma, e, dp ? de : NULL);
+        if (!m->pstep[i]) hu += m->h[i];
         if (dp) {
             double complex t1[4], t2[4];
             mul2(de, p, t1);
@@ -369,7 +431,8 @@ void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, dou
         }
         mul2(e, p, p);
         /* a step's factor is O(1) in p's basis (the growth exp(k h) is
-         * u's): every eighth step is often enough to stay far from overflow */
+         * u's, and the u steps' is taken out: exp(sqrt(beta) |sigma| h) is
+         * left): every eighth step is often enough to stay far from overflow */
         if ((i & 7) == 7 || i + 1 == m->steps) {
             if (dp) {
                 double complex both[8] = {p[0], p[1], p[2], p[3], dp[0], dp[1], dp[2], dp[3]};
@@ -379,6 +442,15 @@ void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, dou
                 trainspec_rescale(p, 4, scale);
             }
         }
+    }
+    /* exp(-k hu): its modulus into the scale, its phase into p (and d/dsigma
+     * of it, -hu/s times it, into dp) */
+    double complex k = sigma / x->s;
+    double complex turn = cexp(-I * cimag(k) * hu);
+    *scale -= creal(k) * hu;
+    for (int q = 0; q < 4; q++) {
+        if (dp) dp[q] = turn * (dp[q] - hu / x->s * p[q]);
+        p[q] *= turn;
     }
 }
 
