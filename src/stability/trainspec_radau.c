@@ -236,8 +236,24 @@ int trainspec_mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
 /* A step's transfer of (u, u') into that of (p, p') but for the scalar
  * exp(-k h): (u, u') = exp(k z) K (p, p'), K = [[1, 0], [k, 1]], so E_p =
  * exp(-k h) K^-1 E_u K; K^-1 E_u K and its sigma-derivative (dk/dsigma =
- * 1/s) when de is not NULL.  The scalars commute with every step: the
- * monodromy takes them all at once (one complex exponential a pass). */
+ * 1/s) when de is not NULL (trainspec_radau_step; the monodromy changes
+ * basis once a run of u steps instead).  The scalars commute with every
+ * step: the monodromy takes them all at once (one complex exponential a
+ * pass). */
+/* a = [[1, 0], [c, 1]] a (K for c = k, K^-1 for c = -k), and da its
+ * sigma-derivative (dc = dc/dsigma) when not NULL: a transfer taken into
+ * u's basis before a run of u steps and back after it, so that the run's
+ * steps are not conjugated one by one. */
+static void change_basis(double complex a[4], double complex *da, double complex c, double dc)
+{
+    if (da) {
+        da[2] += dc * a[0] + c * da[0];
+        da[3] += dc * a[1] + c * da[1];
+    }
+    a[2] += c * a[0];
+    a[3] += c * a[1];
+}
+
 static void conjugate_k(double complex e[4], double complex *de, double complex k, double s)
 {
     double complex dk = 1.0 / s;
@@ -356,7 +372,6 @@ static void radau_step(const ctx *x, const mesh *m, size_t i, double complex sig
         out[col] = (rhs == 0) + h * sum;
         out[2 + col] = V[2][rhs];
     }
-    if (!pb) conjugate_k(e, de, k, x->s);
 }
 
 void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
@@ -364,6 +379,7 @@ void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex 
 {
     radau_step(x, m, i, sigma, e, de);
     if (m->pstep[i]) return;
+    conjugate_k(e, de, sigma / x->s, x->s);
     double h = m->h[i];
     double complex g = cexp(-sigma / x->s * h);
     for (int j = 0; j < 4; j++) {
@@ -419,10 +435,16 @@ void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, dou
     }
     x->work += cost;
     double hu = 0.0; /* the u steps' length: their scalars exp(-k h) all at once */
+    double complex k = sigma / x->s;
+    int in_u = 0;    /* p (and dp) hold u's transfer, K times p's, through a run of u steps */
     for (size_t i = 0; i < m->steps; i++) {
         double complex e[4], de[4];
         radau_step(x, m, i, sigma, e, dp ? de : NULL);
         if (!m->pstep[i]) hu += m->h[i];
+        if (in_u != !m->pstep[i]) {
+            change_basis(p, dp, in_u ? -k : k, in_u ? -1.0 / x->s : 1.0 / x->s);
+            in_u = !in_u;
+        }
         if (dp) {
             double complex t1[4], t2[4];
             mul2(de, p, t1);
@@ -443,9 +465,9 @@ void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, dou
             }
         }
     }
+    if (in_u) change_basis(p, dp, -k, -1.0 / x->s);
     /* exp(-k hu): its modulus into the scale, its phase into p (and d/dsigma
      * of it, -hu/s times it, into dp) */
-    double complex k = sigma / x->s;
     double complex turn = cexp(-I * cimag(k) * hu);
     *scale -= creal(k) * hu;
     for (int q = 0; q < 4; q++) {
