@@ -121,7 +121,8 @@ int trainspec_mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *step
 int trainspec_mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf_error *err);
 int trainspec_mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err);
 void trainspec_mesh_free(mesh *m);
-/* The Radau IIA step i at sigma in p's basis, and its sigma-derivative when de is not NULL. */
+/* The Radau IIA step i at sigma, turned into p's basis where it is taken
+ * in u's, and its sigma-derivative when de is not NULL. */
 void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
                           double complex de[4]);
 /* Keeps v's entries near 1 in modulus, the factor's log into *scale. */

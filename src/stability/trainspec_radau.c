@@ -33,8 +33,12 @@ void trainspec_mesh_free(mesh *m)
  * is not stiff a step spans at most RESOLVE_TURN e-foldings or radians of
  * the fastest local solution, the roots of lambda^2 = a lambda + b; where
  * it is stiff, RESOLVE_TURN of the slow solution only.  Either way at most
- * PROFILE_TURN of the profile's change.  The fastest local solution is
- * p's (the basis the steps are taken in, see below), not u's.
+ * PROFILE_TURN of the profile's change.  Steps that are not stiff are
+ * taken in u's basis (radau_step), whose rates these are: p's are |sigma|
+ * / s faster (issue 31: with p's steps on meshes for u's rates, c / v =
+ * 0.085, p turned 2.7 radians a step at the window's top, the damped
+ * monodromy kept a curve right of a_lo up to |Im sigma| 1e4 and the
+ * spectrum was refused).  Stiff steps are taken in p's basis.
  *
  * Stiff cycle steps:  In p = exp(-sigma z / s) u (the perturbation of psi
  * itself) the system is p'' = ap p' + bp p with ap = -mu phi - 2 sigma / s,
@@ -268,16 +272,20 @@ static void conjugate_k(double complex e[4], double complex *de, double complex 
     e[0] = t0;
 }
 
-/* The Radau IIA step i at sigma in p = exp(-sigma z / s) u, where the
- * solution that survives varies slowly (see mesh_needs): (p, p') after the
- * step = e (p, p') before it, e[0..3] row-major, and de = de/dsigma when de
- * is not NULL.  With V the stages of p', the stages of p are p0 + h A V, so
- * the six stage equations reduce to three:
+/* The Radau IIA step i at sigma in its own basis: p = exp(-sigma z / s) u
+ * on stiff steps (m->pstep), where the solution that survives the
+ * L-stable step varies slowly (see mesh_needs), u elsewhere, where p's
+ * solutions turn at |sigma| / s and u's at sqrt(beta) |sigma| only:
+ * (p, p') (or (u, u')) after the step = e times it before, e[0..3]
+ * row-major, and de = de/dsigma when de is not NULL.  With V the stages
+ * of p', the stages of p are p0 + h A V, so the six stage equations reduce
+ * to three:
  *     G V = (I - h A diag(ap) - h^2 A diag(bp) A) V = p0' + h p0 A bp.
- * The monodromy is taken in p's basis: u's is exp(k T) K P K^-1 with
+ * The monodromy is kept in p's basis: u's is exp(k T) K P K^-1 with
  * K = [[1, 0], [k, 1]], k = sigma / s, the same multipliers times exp(k T),
- * which the eigenvalue condition divides out again (monodromy), so neither
- * K nor exp(k h) (a complex exponential per step) is ever formed. */
+ * which the eigenvalue condition divides out again (monodromy); a run of u
+ * steps enters it through K and K^-1 and the scalars exp(-k h) (see
+ * conjugate_k). */
 static void radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
                        double complex de[4])
 {
