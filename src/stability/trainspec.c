@@ -416,6 +416,19 @@ static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, derivs 
             if (eig[k].translation) worst = fmax(worst, hypot(eig[k].re, eig[k].im));
         }
         if (worst <= x->tol) break;
+        /* the profile's share no mesh reduces: refused at once, saying so */
+        double floor = 0.0, at = 0.0;
+        for (size_t k = 0; k < n_eig; k++) {
+            double mod = hypot(eig[k].re, eig[k].im), share = PROFILE_ERROR * fmax(1.0, mod);
+            if (share > floor) floor = share, at = mod;
+        }
+        if (floor > x->tol) {
+            rc = bkf_error_set(err, BKF_ETOL,
+                               "spectrum: the profile's own error (%.2g per unit |sigma|, the cycle solved to "
+                               "1e-12) is %.3g at |sigma| %.4g, above tol %.3g",
+                               PROFILE_ERROR, floor, at, x->tol);
+            break;
+        }
         if (r == MESH_REFINEMENTS) {
             rc = bkf_error_set(err, BKF_ETOL,
                                "spectrum: an eigenvalue's estimated error %.3g exceeds tol %.3g at %zu "

@@ -358,6 +358,16 @@ TEST(trainspec_rightmost_of_a_train_near_nu_minus_1_mu_3)
     /* tol 1e-5: the truncations' top-frequency artefact (Re 0.45 at 48
      * modes, 0.40 at 100) stays unresolved right of the comb */
     rightmost_is_hills(p, 48, 1e-5, 0.30017, 0.30019);
+    /* at tol 1e-8 the profile's own share, 2e-9 |sigma| = 1.3e-8, is above
+     * tol whatever the mesh: refused at once, saying so (before: after
+     * four refinements, and on main after the whole budget) */
+    bkf_trainspec_train t = {1, root_v(p, 1)};
+    bkf_trainspec_options o = bkf_trainspec_options_default();
+    o.tol = 1e-8;
+    bkf_trainspec_result r;
+    bkf_error e = {0};
+    CHECK(bkf_trainspec_ring(&p, &t, &o, &r, &e) == BKF_ETOL);
+    CHECK_MSG(strstr(e.message, "profile's own error") != NULL, "%s", e.message);
 }
 
 /* Issue 31, defect 5: the line at kappa 0 is the ring's class j = 0 (its
