@@ -28,6 +28,24 @@ void trainspec_mesh_free(mesh *m)
     memset(m, 0, sizeof *m);
 }
 
+/* Every run of stiff (or of non-stiff) cycle steps gets a whole number
+ * of steps, at least MESH_MIN_STEPS in all: the meshes' steps, spread
+ * evenly in the cumulative need (mesh_bounds), then never straddle a
+ * change of basis, at any number of substeps. */
+static void whole_runs(ctx *x)
+{
+    size_t n = x->node_count - 1;
+    double total = 0.0;
+    for (size_t i = 0; i < n; i++) total += x->need[i];
+    double grow = total < MESH_MIN_STEPS ? MESH_MIN_STEPS / total : 1.0;
+    for (size_t r0 = 0, r1; r0 < n; r0 = r1) {
+        double sum = 0.0;
+        for (r1 = r0; r1 < n && x->stiff[r1] == x->stiff[r0]; r1++) sum += grow * x->need[r1];
+        double scale = grow * ceil(sum - 1e-9) / sum;
+        for (size_t i = r0; i < r1; i++) x->need[i] *= scale;
+    }
+}
+
 /* The steps each cycle step needs (a real number: the meshes spread them
  * evenly, see mesh_bounds) for |sigma| up to reach.  Where the cycle step
  * is not stiff a step spans at most RESOLVE_TURN e-foldings or radians of
@@ -47,24 +65,6 @@ void trainspec_mesh_free(mesh *m)
  * the one the spectrum is made of, varies at |bp / ap| only.  There the
  * L-stable Radau step, which damps the fast solution as the flow does,
  * needs to resolve the slow one alone: steps O(mu) times longer. */
-/* Every run of stiff (or of non-stiff) cycle steps gets a whole number
- * of steps, at least MESH_MIN_STEPS in all: the meshes' steps, spread
- * evenly in the cumulative need (mesh_bounds), then never straddle a
- * change of basis, at any number of substeps. */
-static void whole_runs(ctx *x)
-{
-    size_t n = x->node_count - 1;
-    double total = 0.0;
-    for (size_t i = 0; i < n; i++) total += x->need[i];
-    double grow = total < MESH_MIN_STEPS ? MESH_MIN_STEPS / total : 1.0;
-    for (size_t r0 = 0, r1; r0 < n; r0 = r1) {
-        double sum = 0.0;
-        for (r1 = r0; r1 < n && x->stiff[r1] == x->stiff[r0]; r1++) sum += grow * x->need[r1];
-        double scale = grow * ceil(sum - 1e-9) / sum;
-        for (size_t i = r0; i < r1; i++) x->need[i] *= scale;
-    }
-}
-
 int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err)
 {
     if (x->need && reach == x->sigma_reach) return BKF_OK;
