@@ -409,7 +409,7 @@ $(AUDIT): $(BUILD)/tests/audit/audit_main.o $(BUILD)/tests/audit/audit.o $(LIB)
 
 # The monodromy's complex products need no C99 Annex G infinity recovery
 # (its matrices are rescaled and finite); without it they run ~2x faster.
-$(BUILD)/src/stability/trainspec.o: override CFLAGS += -fcx-limited-range
+$(BUILD)/src/stability/trainspec_radau.o $(BUILD)/src/stability/trainspec.o: override CFLAGS += -fcx-limited-range
 $(BUILD)/tests/%.o: override CFLAGS += -Itests -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' \
   -DBKF_EXAMPLES_DIR='"$(abspath $(BUILD)/examples)"' -DBKF_SOURCE_DIR='"$(CURDIR)"' \
   -DBKF_HDF5_SONAME='"$(call lib_soname,hdf5)"' -DBKF_LAPACKE_SONAME='"$(call lib_soname,lapacke)"' \
