@@ -1416,7 +1416,8 @@ static int comoving_run_body(bkf_comoving *m, double t_end, double sample_dt, bk
             return bkf_error_set(err, BKF_EBUDGET, "more than %zu steps by t = %g",
                                  m->p.max_steps, (double)tret);
         }
-        if (s >= 0 && order_limited(m)) {
+        /* a failure (steps too small) after a reduction is retried too */
+        if (order_limited(m)) {
             if ((s = restart_at_order_2(m, at, err))) return s;
             t0 = m->t;
             steps0 = 0;
