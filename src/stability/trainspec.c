@@ -939,11 +939,6 @@ static int gather(ctx *x, size_t classes, size_t keep, window *win, candidates *
  * candidates (the rightmost first): the rest lie left of those and are
  * reached only where many of them fail or repeat one eigenvalue. */
 #define POLISH_TRIES 2
-/* The polish meshes resolve |sigma| up to this factor times the largest of
- * the candidates it may polish (plus POLISH_REACH_MIN): Newton's path from a
- * candidate stays near it. */
-#define POLISH_MARGIN 1.25
-#define POLISH_REACH_MIN 0.05
 
 /* Does the polish try candidate c, the tried-th of its class's curve
  * candidates (Hill's are all tried, see polish_candidates)? */

@@ -63,6 +63,13 @@
  * keeps a margin of 4. */
 #define RICHARDSON 8.0
 
+/* The polish meshes resolve |sigma| up to this factor times the largest of
+ * the candidates it may polish (plus POLISH_REACH_MIN): Newton's path from a
+ * candidate stays near it.  So do bkf_trainspec_track's, from the values it
+ * starts from. */
+#define POLISH_MARGIN 1.25
+#define POLISH_REACH_MIN 0.05
+
 /* An eigenvalue's error from its values on a coarse and a fine mesh (sc,
  * sf), the fine Newton step and the profile's own error: one formula for
  * the ring spectrum and the followed eigenvalues, so both report alike. */
