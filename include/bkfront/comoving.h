@@ -74,7 +74,7 @@
  * band's edge (gamma 0.5, c 0.75, nu -0.88, S 25.8, n = 21: 20000 steps
  * before t = 40).  Once CVODE's stability-limit detection counts an order
  * reduction, the run goes back to the start of that bkf_comoving_run call
- * and runs again, as do later calls, with BDF at order 2 (A-stable; 203
+ * and runs again, as do later calls, with BDF at order 2 (A-stable; 209
  * steps there); a run that never meets the limit is unchanged.
  * Keep tol well below the perturbation: at tol 1e-6 BDF's long steps damp a
  * slowly growing oscillatory perturbation of amplitude 1e-5 unseen (n = 3

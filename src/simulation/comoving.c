@@ -1336,7 +1336,7 @@ int bkf_comoving_fit_drift(const bkf_comoving *m, double t_from, double t_to, do
  * its unstable band grows at the integrator's hand, and the error control
  * then holds the steps at that band's edge (random draw 2 of issue 31,
  * gamma 0.5, n = 21: h from 0.018 to 0.0014 by t = 7, 20000 steps before
- * t = 40, 137 s; at order 2, 203 steps, 1.5 s).  CVODE's stability-limit
+ * t = 40, 137 s; at order 2, 209 steps, 1.4 s).  CVODE's stability-limit
  * detection sees it and lowers the order, but its order control raises it
  * again; held at 2 from there on, the run still follows the components
  * already amplified (3851 steps to t = 40).  So once a reduction is
