@@ -153,8 +153,9 @@ test: deps
 # The benchmarks and the fuzz targets are built (the fuzz targets only
 # compiled: linking them needs clang's libFuzzer, `make fuzz`) so that a
 # change that breaks them fails here, not months later.
-# After the C suite, and only outside the sanitizers (Python cannot load an
-# instrumented library): tests/python/ with pytest, the Python package over
+# Beside the C suite (tests/run_suites starts both), and only outside the
+# sanitizers (Python cannot load an instrumented library): tests/python/
+# with pytest, the Python package over
 # the shared library, compared with the CLI, and a staged `make install` that
 # an external program links through pkg-config.  tests/run_suites ends with
 # one line `N passed, N failed` summing both.
