@@ -153,8 +153,9 @@ test: deps
 # The benchmarks and the fuzz targets are built (the fuzz targets only
 # compiled: linking them needs clang's libFuzzer, `make fuzz`) so that a
 # change that breaks them fails here, not months later.
-# After the C suite, and only outside the sanitizers (Python cannot load an
-# instrumented library): tests/python/ with pytest, the Python package over
+# Beside the C suite (tests/run_suites starts both), and only outside the
+# sanitizers (Python cannot load an instrumented library): tests/python/
+# with pytest, the Python package over
 # the shared library, compared with the CLI, and a staged `make install` that
 # an external program links through pkg-config.  tests/run_suites ends with
 # one line `N passed, N failed` summing both.
@@ -408,7 +409,7 @@ $(AUDIT): $(BUILD)/tests/audit/audit_main.o $(BUILD)/tests/audit/audit.o $(LIB)
 
 # The monodromy's complex products need no C99 Annex G infinity recovery
 # (its matrices are rescaled and finite); without it they run ~2x faster.
-$(BUILD)/src/stability/trainspec.o: override CFLAGS += -fcx-limited-range
+$(BUILD)/src/stability/trainspec_radau.o $(BUILD)/src/stability/trainspec.o: override CFLAGS += -fcx-limited-range
 $(BUILD)/tests/%.o: override CFLAGS += -Itests -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' \
   -DBKF_EXAMPLES_DIR='"$(abspath $(BUILD)/examples)"' -DBKF_SOURCE_DIR='"$(CURDIR)"' \
   -DBKF_HDF5_SONAME='"$(call lib_soname,hdf5)"' -DBKF_LAPACKE_SONAME='"$(call lib_soname,lapacke)"' \

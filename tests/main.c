@@ -69,66 +69,72 @@ static int compare_entries(const void *a, const void *b)
     return c ? c : strcmp(x->name, y->name);
 }
 
-/* CPU seconds of the slowest tests (-O2, 2026-11-29; the ten slowest of
- * docs/timings.md re-measured after the extremes matrices and the diagram
- * test were made cheaper; the sanitized build at -O1 takes about 1.4 times
- * as long, in the same order); the ones not listed take under 2 s.  Only the
+/* CPU seconds of the slowest tests (-O2): docs/timings.md's run of
+ * 2026-11-29 (8dbb0c5, quiet machine), the tests made cheaper since at
+ * their new cost; the ones not listed take under 2.5 s.  The sanitized
+ * build at -O1 takes about 1.4 times as long, in the same order.  Only the
  * start order depends on it, and only until a run has written
- * BKF_TEST_TIMES (below): a stale entry costs wall time, never a result. */
+ * BKF_TEST_TIMES (below): a stale entry costs wall time, never a result.
+ * CI's fresh clone has no times, so this order is its order: with the
+ * list as it was (entries up to 25.6 s for tests that had come down to 6 s)
+ * the longest tests did not start first. */
 static const struct {
     const char *name;
     double secs;
 } known_slow[] = {
-    {"extremes_floquet_matrix_gamma_100", 20.7},
-    {"extremes_floquet_matrix_gamma_100_near_hopf", 14.2},
-    {"extremes_floquet_matrix_gamma_to_30", 18.9},
-    {"cli_check_adapted_grid_error_covers_the_grid_thin_fronts", 25.6},
-    {"stabmap_boundary_point_recomputed", 22.1},
-    {"audit_fixed_sample_set_1", 15.7},
-    {"cli_check_adapted_grid", 18.5},
-    {"stabmap_diagram_followed_curves_are_the_scans_crossings", 4.8},
-    {"speeds_canard_jump_rows_honest_or_unresolved", 16.2},
-    {"cycle_engine_bd2x2_meets_tol_against_taylor", 5.7},
-    {"trainspec_sim_paper", 13.7},
-    {"floquet_keeps_its_cycle_when_a_tighter_one_is_refused", 15.5},
-    {"cli_sweep_sigterm_keeps_finished_rows_and_resume_completes", 13.7},
-    {"check_sigma_max_is_an_eigenvalue_or_nan", 12.9},
-    {"cli_check_memory_does_not_grow_with_tmax", 12.6},
-    {"figures_keep_every_point_in_view_at_gamma_6_c_0_1", 12.5},
-    {"check_example_and_cli_verdicts_agree", 12.0},
-    {"check_auto_runs_keep_verdicts_and_speeds", 15.3},
-    {"check_threads_give_the_serial_rows", 3.6},
-    {"orbit_travelling_train_has_the_speeds_root", 12.0},
-    {"trainspec_rightmost_beside_the_translation_and_where_curves_fail", 10.9},
-    {"extremes_period_matrix", 12.8},
-    {"orbit_pacemaker_at_fig4b_and_its_departure_rate", 10.0},
-    {"products_branch_stability_change_is_where_sigma_max_vanishes", 9.4},
-    {"cli_sweep_threshold_product_is_floquet_threshold_at_each_point", 9.4},
-    {"hill_converges_exponentially_in_modes", 9.3},
+    {"extremes_floquet_matrix_gamma_100", 23.4},
+    {"extremes_floquet_matrix_gamma_to_30", 20.5},
+    {"speeds_canard_jump_rows_honest_or_unresolved", 18.3},
+    {"extremes_floquet_matrix_gamma_100_near_hopf", 15.4},
+    {"extremes_period_matrix", 14.6},
+    {"check_auto_runs_keep_verdicts_and_speeds", 13.6},
+    {"audit_fixed_sample_set_1", 13.2},
+    {"cli_sweep_threshold_product_is_floquet_threshold_at_each_point", 11.1},
+    {"cli_sweep_mpi_signals_and_kill_keep_rows_and_resume_completes", 10.5},
+    {"figures_keep_every_point_in_view_at_gamma_6_c_0_1", 10.0},
+    {"stabmap_boundary_point_recomputed", 9.1},
     {"cli_simulate_output_under_memory_limit", 8.6},
-    {"cli_sweep_speeds_product_is_speeds_stability_at_each_point", 8.4},
-    {"cli_simulate_memory_does_not_grow_with_tmax", 7.8},
-    {"cli_check_exponential_and_explicit_agree", 7.5},
-    {"cli_period_continue_stuck_in_the_canard_names_mu_and_nu", 6.9},
+    {"products_orbits_coexistence_sets_regimes_beside_the_solutions", 8.2},
+    {"trainspec_sim_paper", 7.4},
+    {"cli_period_continue_stuck_in_the_canard_names_mu_and_nu", 7.1},
+    {"cycle_branch_stuck_in_the_canard_fails_fast", 6.9},
     {"figures_keep_every_point_in_view_at_gamma_0_7_c_0_8", 6.8},
-    {"floquet_collocation_cycle_in_the_band_against_shooting", 5.1},
-    {"products_stability_ring_agrees_with_hills_method", 5.0},
-    {"diagram_state_rows_are_the_paper_verdicts", 5.0},
-    {"cli_branch_stability", 4.6},
-    {"extremes_speeds_matrix", 4.0},
-    {"lawson_steps_do_not_depend_on_N", 3.6},
-    {"orbit_uniform_multipliers_match_floquet_by_sector", 3.4},
-    {"check_growth_weak_instability_is_undecided", 3.4},
-    {"speeds_no_root_missed_against_dense_scan", 3.3},
-    {"floquet_error_estimates_hold", 3.2},
+    {"check_sigma_max_is_an_eigenvalue_or_nan", 6.8},
+    {"cli_sweep_mpi_farm_equals_serial", 6.4},
+    {"cli_check_adapted_grid_error_covers_the_grid_thin_fronts", 5.8},
+    {"cycle_engine_bd2x2_meets_tol_against_taylor", 5.4},
+    {"floquet_collocation_cycle_in_the_band_against_shooting", 5.4},
+    {"stabmap_diagram_followed_curves_are_the_scans_crossings", 5.0},
+    {"products_stability_ring_agrees_with_hills_method", 4.8},
+    {"chainwave_large_multiplier_tolerance_is_relative", 4.7},
+    {"chainwave_implicit_stepper", 4.5},
+    {"cli_sweep_sigterm_keeps_finished_rows_and_resume_completes", 4.0},
+    {"trainspec_rightmost_beside_the_translation_and_where_curves_fail", 4.0},
+    {"lawson_steps_do_not_depend_on_N", 4.0},
+    {"stabmap_trace_points_straddle_the_sign_change", 3.8},
+    {"extremes_speeds_matrix", 3.5},
+    {"orbit_stable_pacemaker_kept_by_simulation_sectors_and_grid", 3.5},
+    {"stabmap_diagram_no_states_for_an_n_whose_curve_stalled", 3.5},
+    {"trainspec_hill_grows_where_the_curves_run_out_mu_4_9", 3.4},
+    {"cli_speeds_refused_row_keeps_the_table_exit_3", 3.2},
+    {"products_threshold_and_diagram_library_rows_are_the_cli_rows", 3.1},
     {"cli_chain_branch_ends_on_the_table", 3.1},
-    {"asym_error_bounds_hold_over_the_box", 3.0},
-    {"floquet_estimates_never_optimistic_by_10", 3.0},
-    {"products_threshold_and_diagram_library_rows_are_the_cli_rows", 3.0},
-    {"comoving_unstable_wave_grows", 2.8},
+    {"cycle_tolerance_honoured_on_extremes", 3.0},
+    {"orbit_travelling_train_has_the_speeds_root", 3.0},
+    {"options_shortest_number_round_trips", 2.9},
+    {"cli_sweep_scene_gives_the_cli_table", 2.9},
+    {"trainspec_sim_other_parameters", 2.8},
+    {"products_orbits_tsv_json_and_library_agree", 2.8},
+    {"extremes_period_estimates_never_flatter", 2.8},
     {"cli_simulate_regimes_wait_for_their_evidence", 2.7},
-    {"asymfit_map_nu_0", 2.7},
-    {"cycle_tolerance_honoured_on_extremes", 2.3},
+    {"check_growth_weak_instability_is_undecided", 2.7},
+    {"trainspec_newton_curves_and_polish_cut_match_hill_per_class_on_random_sets", 2.7},
+    {"trainspec_agrees_with_hill_stable_n4", 2.7},
+    {"cli_sweep_speeds_product_is_speeds_stability_at_each_point", 2.6},
+    {"cycle_branch_nu_through_the_canard_at_mu_10_to_plus_0_999", 2.6},
+    {"cli_check_exponential_and_explicit_agree", 2.6},
+    {"trainspec_fast_path_matches_hill_and_a_finer_mesh_on_random_sets", 2.6},
+    {"trainspec_agrees_with_hill_unstable_n2", 2.5},
 };
 
 /* The times of the last runs (BKF_TEST_TIMES, a file of "NAME\tSECONDS"

@@ -158,6 +158,19 @@ void bkf_speeds_table_free(bkf_speeds_table *table);
  * root's refusal (bkf_speeds_root_status). */
 int bkf_speeds_nearest(const bkf_speeds_table *table, double v, size_t *index, bkf_error *err);
 
+/* The root of n near a speed v_guess (c > 0, v_guess > c): the speed
+ * condition solved by the secant method in s = ln sqrt(mu^2 - gamma^2) from
+ * v_guess, T shot at options->tol (NULL: the defaults; n_from, n_to unused),
+ * without the bracketing grid of bkf_speeds_find (a few solves of T instead
+ * of 16 to 60): for following a root that moves a little, as the stability
+ * map does.  BKF_ENUMERIC when the secant leaves v within 20% and ln mu
+ * within 0.5 of the guess's or does not converge (no root near: a fold passed, or v_guess far
+ * from a root; bkf_speeds_find then tells), with *root untouched; a root
+ * found is as bkf_speeds_find's row of it (v to options->tol), though which
+ * of two roots close together (near a fold) it is, is not checked. */
+int bkf_speeds_near(const bkf_model_params *params, size_t n, double v_guess,
+                    const bkf_speeds_options *options, bkf_speeds_root *root, bkf_error *err);
+
 /* ------------------------------------------------------------ branches */
 
 typedef enum {

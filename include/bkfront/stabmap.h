@@ -67,10 +67,13 @@ typedef enum {
     BKF_STABMAP_END_POINTS = 4,  /* max_points reached */
     BKF_STABMAP_END_WINDOW = 5,  /* trace: the curve left the window in S */
     BKF_STABMAP_END_STALLED = 6, /* trace: the continuation's step fell below its
-                                    minimum (a corner where the rightmost eigenvalue
-                                    changes, or sigma too rough to correct on) */
-    BKF_STABMAP_END_CLOSED = 7   /* trace: back within a step of its first point
-                                    after leaving it: a closed curve, followed once */
+                                    minimum, also after three restarts from the last
+                                    point with short steps (sigma too rough to
+                                    correct on; a corner where the rightmost
+                                    eigenvalue changes is passed by a restart) */
+    BKF_STABMAP_END_CLOSED = 7   /* trace: its chord passed within a quarter step of
+                                    its first point after leaving it: a closed curve,
+                                    followed once */
 } bkf_stabmap_end;
 
 /* "reached", "fold", "no_root", "refused", "max_points", "window", "stalled",
@@ -98,8 +101,8 @@ typedef int (*bkf_stabmap_visit)(const bkf_stabmap_point *point, void *data);
 
 typedef struct {
     size_t points, evaluations; /* evaluations: ring spectra computed (a refused one too) */
-    size_t tracked;          /* eigenvalues continued alone (bkf_trainspec_eigenvalue_at on
-                                two meshes, about 1/20 of a ring spectrum each) */
+    size_t tracked;          /* eigenvalues continued alone (bkf_trainspec_track,
+                                one cycle, about 1/20 of a ring spectrum each) */
     bkf_stabmap_end end;
     double nu_end;           /* the last nu tried */
     char note[256];          /* why it ended, one line */
@@ -161,7 +164,7 @@ typedef struct {
  * bracket and one difference in nu at the start, then updated by Broyden's
  * rank-one secant from every value.  The predictor and Newton's
  * corrections take the last spectrum's rightmost eigenvalue continued
- * (bkf_trainspec_eigenvalue_at, about 1/20 of a ring spectrum), the ring
+ * (bkf_trainspec_track, about 1/20 of a ring spectrum), the ring
  * spectrum only where Newton stops: a point costs about one spectrum
  * (report->evaluations counts ring spectra).  Steps are at most
  * options->nu_step in nu and options->S_step in S; Newton stops when
@@ -172,7 +175,8 @@ typedef struct {
  * report->end (reached: nu's edge; window: S left [S_lo, S_hi], the last
  * point its crossing of the edge, located by the Illinois method in nu on
  * S = S_lo or S_hi, when the edge shows the sign change; no_root, refused: the spectrum's refusal, note says
- * where and why; stalled; max_points). */
+ * where and why; stalled; max_points: options->max_points, grown by half at
+ * each of the curve's first two turns in nu). */
 int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabmap_point *first,
                       int direction, const bkf_stabmap_window *window,
                       const bkf_stabmap_options *options, bkf_stabmap_visit visit, void *data,

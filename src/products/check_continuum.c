@@ -193,7 +193,10 @@ static int check_root_mapped(const check_ctx *c, const bkf_speeds_root *sr, bkf_
     int blew_up = s == BKF_EBLOWUP && R >= 2;
     if (blew_up) s = BKF_OK; /* a blown-up front is a result (unstable) */
     if (s == BKF_EBUDGET) {
-        /* not a verdict: the run was too costly to finish */
+        /* not a verdict: the run was too costly to finish (said, as every
+         * unresolved row's reason is) */
+        check_warn(c, "n = %zu, root %zu reported unresolved: the adapted grid's run (%zu "
+                   "points) took %s (mapped-max-steps)", row->n, row->root, row->N, e.message);
         bkf_comoving_free(cm);
         row->verdict = BKF_CHECK_UNRESOLVED;
         row->reason = BKF_EBUDGET;

@@ -37,23 +37,8 @@ typedef struct {
     int tracked; /* f is that one eigenvalue continued (trace_tracked), no full spectrum */
 } sample;
 
-/* The root of n at params nearest v_near (v_near <= 0: the fastest). */
-static int root_near(const bkf_model_params *params, size_t n, double v_near,
-                     bkf_speeds_root *root, bkf_error *err)
-{
-    bkf_speeds_options o = bkf_speeds_options_default();
-    o.n_from = o.n_to = n;
-    bkf_speeds_table t;
-    int s = bkf_speeds_find(params, &o, &t, err);
-    if (!s && t.count == 0)
-        s = bkf_error_set(err, BKF_EINPUT, "n: n = %zu has no root at nu %.6g, S %.6g", n,
-                          params->nu, params->S);
-    size_t best = 0;
-    if (!s) s = bkf_speeds_nearest(&t, v_near, &best, err);
-    if (!s) *root = t.roots[best];
-    bkf_speeds_table_free(&t);
-    return s;
-}
+/* Roots of one speeds table kept (a table has one to three here). */
+#define ROOT_MEMO 4
 
 /* sigma_max along S at fixed nu, the root continued by v ~ S (v = S/(n T)
  * at slowly varying T); every ring spectrum and tracked eigenvalue of the
@@ -67,13 +52,74 @@ typedef struct {
     void *spectrum_data;
     size_t spectra;        /* ring spectra computed (a refused one too) */
     size_t tracked;        /* eigenvalues continued alone (tracked_sample) */
+    double fastest_S, fastest_v; /* a scan down in S: the last sample's fastest root */
+    /* The last point's roots of n: a point is asked for twice (a tracked
+     * eigenvalue that proves nothing, then the ring spectrum there), and a
+     * speeds table costs 4 to 25 ms, more than the tracked eigenvalue. */
+    int memo_have;
+    double memo_nu, memo_S;
+    size_t memo_count;
+    bkf_speeds_root memo[ROOT_MEMO];
 } sigma_fn;
 
 static sigma_fn sigma_fn_of(const bkf_model_params *params, size_t n,
                             const bkf_stabmap_options *o, double v_ref, double S_ref)
 {
-    sigma_fn fn = {*params, n, o->tol, v_ref, S_ref, o->spectrum, o->spectrum_data, 0, 0};
+    sigma_fn fn = {.p = *params, .n = n, .tol = o->tol, .v_ref = v_ref, .S_ref = S_ref,
+                   .spectrum = o->spectrum, .spectrum_data = o->spectrum_data};
     return fn;
+}
+
+/* The root of fn's n at params nearest v_near (v_near <= 0: the fastest). */
+static int root_near(sigma_fn *fn, const bkf_model_params *params, double v_near,
+                     bkf_speeds_root *root, bkf_error *err)
+{
+    bkf_speeds_table t = {0};
+    int memo = fn->memo_have && fn->memo_nu == params->nu && fn->memo_S == params->S;
+    /* A root continued (v_near predicted from a nearby one): the speed
+     * condition solved from v_near, a few shots of T (0.5 to 4.5 ms where
+     * the table costs 4 to 25 ms); where that finds none (a fold passed),
+     * the table's nearest */
+    if (!memo && v_near > 0 && !bkf_speeds_near(params, fn->n, v_near, NULL, root, NULL))
+        return BKF_OK;
+    /* The fastest root one step down in S from a fastest root (fastest_S,
+     * fastest_v): going down, the level S / (n c gamma) falls and the first
+     * crossing of g moves on to larger s, none born before it (g stays
+     * above the old level there); the root continued is the fastest while
+     * it exists and has moved as a root does (v ~ S: roots_apart's rule),
+     * else (a fold: it and its pair are gone) the table says which is. */
+    if (!memo && !(v_near > 0) && fn->fastest_v > 0 && params->S < fn->fastest_S &&
+        params->nu == fn->p.nu) {
+        double pred = fn->fastest_v * params->S / fn->fastest_S;
+        double w = fn->fastest_S - params->S;
+        if (!bkf_speeds_near(params, fn->n, pred, NULL, root, NULL) &&
+            fabs(root->v - pred) <= 1e-3 * pred + 4 * pred * w / params->S)
+            return BKF_OK;
+    }
+    int s = BKF_OK;
+    if (memo) {
+        t.roots = fn->memo;
+        t.count = fn->memo_count;
+    } else {
+        bkf_speeds_options o = bkf_speeds_options_default();
+        o.n_from = o.n_to = fn->n;
+        s = bkf_speeds_find(params, &o, &t, err);
+        fn->memo_have = !s && t.count <= ROOT_MEMO;
+        if (fn->memo_have) {
+            fn->memo_nu = params->nu;
+            fn->memo_S = params->S;
+            fn->memo_count = t.count;
+            if (t.count) memcpy(fn->memo, t.roots, t.count * sizeof *t.roots);
+        }
+    }
+    if (!s && t.count == 0)
+        s = bkf_error_set(err, BKF_EINPUT, "n: n = %zu has no root at nu %.6g, S %.6g", fn->n,
+                          params->nu, params->S);
+    size_t best = 0;
+    if (!s) s = bkf_speeds_nearest(&t, v_near, &best, err);
+    if (!s) *root = t.roots[best];
+    if (!memo) bkf_speeds_table_free(&t);
+    return s;
 }
 
 static int trainspec_root(const bkf_model_params *params, const bkf_speeds_root *root,
@@ -89,7 +135,7 @@ static int spectrum_sample(sigma_fn *fn, const bkf_model_params *params, double 
                            sample *out, bkf_error *err)
 {
     bkf_speeds_root root;
-    int s = root_near(params, fn->n, v_near, &root, err);
+    int s = root_near(fn, params, v_near, &root, err);
     if (s) return s;
     bkf_trainspec_result r;
     bkf_stabmap_spectrum_fn spectrum = fn->spectrum ? fn->spectrum : trainspec_root;
@@ -114,34 +160,28 @@ static int spectrum_sample(sigma_fn *fn, const bkf_model_params *params, double 
     return s;
 }
 
-/* Meshes of a tracked eigenvalue: `substeps` TRACK_SUBSTEPS and twice
- * that (the second halves every step of the first); its error is their
- * difference / 8, as the ring spectrum's (fifth-order steps: the ratio is
- * 31 once converged). */
-#define TRACK_SUBSTEPS 1
-
 /* One eigenvalue of class `from`->j continued from `from` (re = f, im) to
  * the root of n at params nearest v_near (v_near <= 0: the fastest), by
- * Newton on that class alone (bkf_trainspec_eigenvalue_at: about 1/20 of a
- * ring spectrum), into *out (tracked 1: f is that eigenvalue, not
- * sigma_max, which is at least f).  A failure (Newton, the root) means
+ * Newton on that class alone (bkf_trainspec_track: one cycle, meshes of 1,
+ * 2, ... substeps until their difference meets tol; about 1/20 of a ring
+ * spectrum), into *out (tracked 1: f is that eigenvalue, not sigma_max,
+ * which is at least f).  A failure (Newton, the root, tol not met) means
  * only that the ring spectrum is needed. */
 static int tracked_sample(sigma_fn *fn, const bkf_model_params *params, double v_near,
                           const sample *from, sample *out, bkf_error *err)
 {
     bkf_speeds_root root;
-    int s = root_near(params, fn->n, v_near, &root, err);
+    int s = root_near(fn, params, v_near, &root, err);
     if (s) return s;
     bkf_trainspec_train train = {fn->n, root.v};
-    double re[2], im[2];
+    bkf_trainspec_eigenvalue a = {.re = from->f, .im = from->im, .j = from->j}, b;
+    size_t followed = 0;
     fn->tracked++;
-    for (int k = 0; !s && k < 2; k++)
-        s = bkf_trainspec_eigenvalue_at(params, &train, from->j, from->f, from->im,
-                                        (size_t)TRACK_SUBSTEPS << k, &re[k], &im[k], NULL, err);
+    s = bkf_trainspec_track(params, &train, fn->tol, 1, &a, &b, &followed, err);
     if (s) return s;
-    *out = (sample){.S = params->S, .f = re[1], .err = fabs(re[1] - re[0]) / 8, .v = root.v,
-                    .mu = root.mu, .bound = NAN, .j = from->j, .im = im[1], .have_mode = 1,
-                    .tracked = 1};
+    if (!followed) return bkf_error_set(err, BKF_ENUMERIC, "not followed");
+    *out = (sample){.S = params->S, .f = b.re, .err = b.err, .v = root.v, .mu = root.mu,
+                    .bound = NAN, .j = from->j, .im = b.im, .have_mode = 1, .tracked = 1};
     return BKF_OK;
 }
 
@@ -211,9 +251,10 @@ static int illinois(sigma_fn *fn, sample *a, sample *b, double S_tol, sample *be
     for (int it = 0; it < 60 && fabs(b->S - a->S) > S_tol; it++) {
         /* sigma within its error of 0: the sign there means nothing */
         if (fabs(best->f) <= best->err) break;
-        /* on ring spectra, ends on two roots are a jump (close_bracket),
-         * whatever the width: closing it on would cost 8 to 16 spectra */
-        if (!track && roots_apart(a, b)) break;
+        /* ends on two roots are a jump (close_bracket), whatever the
+         * width: closing it on would cost 8 to 16 spectra, and an
+         * eigenvalue continued from one root to the other means nothing */
+        if (roots_apart(a, b)) break;
         double S = (a->S * fb - b->S * fa) / (fb - fa);
         double lo = fmin(a->S, b->S), hi = fmax(a->S, b->S), w = hi - lo;
         if (!(S > lo + 0.02 * w && S < hi - 0.02 * w)) S = 0.5 * (lo + hi);
@@ -258,7 +299,23 @@ static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_sta
         sample ta = a, tb = b, full;
         bkf_error e;
         best = *pos;
-        if (!illinois(fn, &ta, &tb, S_tol, &best, pos, &e)) {
+        if (!illinois(fn, &ta, &tb, S_tol, &best, pos, &e) && roots_apart(&ta, &tb)) {
+            /* The eigenvalue was continued across a jump to another root
+             * (the bracket closed on it): the ring spectra at its two ends
+             * say whether sigma_max jumps across 0 there (no crossing),
+             * 2 spectra where closing the bracket on ring spectra from the
+             * start took 5 to 11 (the paper scene's seeds at nu -0.98). */
+            sample fa, fb;
+            int s = eval_at(fn, ta.S, &fa, err);
+            if (!s) s = eval_at(fn, tb.S, &fb, err);
+            if (s) return s;
+            if (sign_of(fa.f) != sign_of(fb.f)) {
+                a = fa;
+                b = fb;
+                best = fabs(fa.f) < fabs(fb.f) ? fa : fb;
+                closed = 1;
+            }
+        } else if (fabs(tb.S - ta.S) <= S_tol || fabs(best.f) <= best.err) {
             int s = eval_at(fn, best.S, &full, err);
             if (s) return s;
             if (fabs(full.f - best.f) <= fn->tol + 4 * (full.err + best.err)) {
@@ -322,6 +379,8 @@ int bkf_stabmap_scan(const bkf_model_params *params, size_t n, double S_from, do
         double S = S_from + (S_to - S_from) * (double)i / (double)samples;
         bkf_error e;
         fn.v_ref = 0;
+        fn.fastest_S = have && S < prev.S ? prev.S : 0;
+        fn.fastest_v = have && S < prev.S ? prev.v : 0;
         /* Only the sign of sigma_max matters away from a crossing, and one
          * eigenvalue right of 0 (beyond its error and tol) proves it
          * positive: the previous sample's rightmost, continued here, saves
@@ -475,6 +534,14 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
 /* Halvings of the arclength step before a curve is given up as stalled:
  * each costs a spectrum or two. */
 #define TRACE_STEP_MIN (1.0 / 64)
+/* After a stall: restarts at most, each from a step of TRACE_RETRY_STEP
+ * (scaled; the full step is 1). */
+#define TRACE_RETRIES 3
+/* Turns in nu that each add half the work cap. */
+#define TRACE_TURNS 2
+#define TRACE_RETRY_STEP 0.25
+/* A closed curve's chord passes its first point within this (scaled). */
+#define TRACE_CLOSE 0.25
 
 typedef struct {
     double nu, S;
@@ -502,6 +569,9 @@ typedef struct {
     int left;              /* more than 1.5 steps away from it since */
     double newton_tol;     /* the driver's */
     double land_tol;       /* an edge crossing's, relative in nu */
+    double tangent[2];     /* the last point's unit tangent (scaled), as the driver gave it */
+    int skip_start;        /* a restart: the driver's first point is the last one kept */
+    size_t cap, turns;     /* max_points as asked, and the turns in nu that added to it */
 } trace_ctx;
 
 /* A cached evaluation at (nu, S), a ring spectrum's first; with `full`,
@@ -684,16 +754,16 @@ static bkf_stabmap_point trace_point(trace_ctx *t, const trace_eval *e)
     return pt;
 }
 
-/* The curve left the window in S between the last point inside and e:
- * its crossing of the edge S = Sb, by the Illinois method in nu between
- * the two points' nu (a computed spectrum, as every point), into *out;
- * 0 when the edge shows no sign change between them or a spectrum fails. */
-static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *out)
+/* The curve's crossing of the edge S = Sb between the last point inside
+ * and e, by the Illinois method in nu on values of kind `how`
+ * (trace_eval_at), into *out; 0 when the edge shows no sign change between
+ * them or a value fails. */
+static int land_on(trace_ctx *t, const trace_eval *e, double Sb, int how, trace_eval *out)
 {
     trace_eval a, b;
     bkf_error err;
-    if (trace_eval_at(t, t->prev.nu, Sb, TRACE_FULL, &a, &err) ||
-        trace_eval_at(t, e->nu, Sb, TRACE_FULL, &b, &err))
+    if (trace_eval_at(t, t->prev.nu, Sb, how, &a, &err) ||
+        trace_eval_at(t, e->nu, Sb, how, &b, &err))
         return 0;
     if ((a.s.f > 0) == (b.s.f > 0)) return 0;
     double fa = a.s.f, fb = b.s.f, tol = t->land_tol * fmax(fabs(e->nu), t->scale[0]);
@@ -704,7 +774,7 @@ static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *
                hi = fmax(a.nu, b.nu);
         if (!(nu > lo + 0.02 * (hi - lo) && nu < hi - 0.02 * (hi - lo))) nu = 0.5 * (lo + hi);
         trace_eval m;
-        if (trace_eval_at(t, nu, Sb, TRACE_FULL, &m, &err)) return 0;
+        if (trace_eval_at(t, nu, Sb, how, &m, &err)) return 0;
         if (fabs(m.s.f) < fabs(best.s.f)) best = m;
         if ((m.s.f > 0) == (a.s.f > 0)) {
             a = m;
@@ -722,11 +792,62 @@ static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *
     return 1;
 }
 
+/* The curve left the window in S between the last point inside and e:
+ * its crossing of the edge S = Sb (a computed spectrum, as every point),
+ * into *out; 0 when the edge shows no sign change between them or a
+ * spectrum fails.  Located on the rightmost eigenvalue continued, then one
+ * ring spectrum there, which must agree with it to tol (no other
+ * eigenvalue right of it); else on ring spectra (5 to 8 of them: most of
+ * the paper scene's curves' spectra beyond one a point). */
+static int trace_land(trace_ctx *t, const trace_eval *e, double Sb, trace_eval *out)
+{
+    trace_eval m, full;
+    bkf_error err;
+    if (t->mode.have_mode && land_on(t, e, Sb, TRACE_TRACKED, &m)) {
+        if (!m.s.tracked) {
+            *out = m;
+            return 1;
+        }
+        if (!trace_eval_at(t, m.nu, m.S, TRACE_FULL, &full, &err) &&
+            fabs(full.s.f - m.s.f) <= t->fn.tol + 4 * (full.s.err + m.s.err)) {
+            *out = full;
+            return 1;
+        }
+    }
+    return land_on(t, e, Sb, TRACE_FULL, out);
+}
+
+/* The scaled distance of the curve's first point from the chord a-b. */
+static double chord_distance(const trace_ctx *t, const trace_eval *a, const trace_eval *b)
+{
+    double d[2] = {(b->nu - a->nu) / t->scale[0], (b->S - a->S) / t->scale[1]};
+    double f[2] = {(t->first[0] - a->nu) / t->scale[0], (t->first[1] - a->S) / t->scale[1]};
+    double dd = d[0] * d[0] + d[1] * d[1], x = dd > 0 ? (f[0] * d[0] + f[1] * d[1]) / dd : 0;
+    x = fmin(fmax(x, 0), 1);
+    return hypot(f[0] - x * d[0], f[1] - x * d[1]);
+}
+
 static int trace_accept(const double *u, const double *tangent, int is_fold, void *data)
 {
-    (void)tangent;
     (void)is_fold;
     trace_ctx *t = data;
+    /* Past a turn in nu the curve crosses the nu range again, which the
+     * work cap (twice a curve monotone in both) did not allow for: each
+     * turn adds half of it, TRACE_TURNS at most (gamma 1, c 0.6, n 3: 8
+     * points up to its turn near nu -0.89, 23 back to nu -0.95 over the
+     * turn's high curvature, the cap 30). */
+    if (t->have_prev && tangent[0] * t->tangent[0] < 0 && t->turns < TRACE_TURNS) {
+        t->turns++;
+        t->max_points += (t->cap + 1) / 2;
+    }
+    t->tangent[0] = tangent[0];
+    t->tangent[1] = tangent[1];
+    /* a restart's start is the point kept last (the driver corrected it
+     * with nu held, within its tolerance): not drawn twice */
+    if (t->skip_start) {
+        t->skip_start = 0;
+        return 0;
+    }
     trace_eval e;
     bkf_error err;
     /* the point is the last spectrum, within Newton's tolerance of u (a
@@ -760,21 +881,25 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
         }
         return 1;
     }
+    /* A closed curve (a level set has no other way back) would be followed
+     * round and round to max_points: once its chord from the last point
+     * passes the first point (within TRACE_CLOSE, the chord's sagitta and
+     * more), it ends.  Within a step of the first point was not enough:
+     * at gamma 1, c 0.6, n 3 the turn's upper half comes back to nu -0.95
+     * at S 11.44, 0.9 steps above the lower half's first point. */
+    double d0 = hypot((e.nu - t->first[0]) / t->scale[0], (e.S - t->first[1]) / t->scale[1]);
+    int closed = t->left && t->have_prev && chord_distance(t, &t->prev, &e) < TRACE_CLOSE;
+    if (d0 > 1.5) t->left = 1;
     bkf_stabmap_point pt = trace_point(t, &e);
     t->prev = e;
     t->have_prev = 1;
     t->rep.points++;
     t->rep.nu_end = pt.nu;
     if (t->visit && t->visit(&pt, t->data)) return 1;
-    /* A closed curve (a level set has no other way back) would be followed
-     * round and round to max_points: once back within a step (steps are
-     * at most 1 in the scaled norm), it ends. */
-    double d0 = hypot((e.nu - t->first[0]) / t->scale[0], (e.S - t->first[1]) / t->scale[1]);
-    if (d0 > 1.5) t->left = 1;
-    if (t->left && d0 < 1) {
+    if (closed) {
         t->rep.end = BKF_STABMAP_END_CLOSED;
         snprintf(t->rep.note, sizeof t->rep.note,
-                 "closed: back at nu %.6g, S %.6g, within a step of its first point", e.nu, e.S);
+                 "closed: back at nu %.6g, S %.6g, past its first point", e.nu, e.S);
         return 1;
     }
     if (t->rep.points >= t->max_points) {
@@ -816,7 +941,7 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
     t.S_hi = w->S_hi;
     t.visit = visit;
     t.data = data;
-    t.max_points = o.max_points;
+    t.max_points = t.cap = o.max_points;
     t.first[0] = first->nu;
     t.first[1] = first->S;
     t.rep.end = BKF_STABMAP_END_REACHED;
@@ -878,13 +1003,36 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
      * sigma_max whose rightmost class changes along the curve: up to 100
      * corrections a turn, each a spectrum (n = 3 above, nu -0.984, S 21) */
     co.locate_folds = 0;
-    co.max_points = o.max_points + 1;
+    /* the cap is trace_accept's (it grows at turns in nu) */
+    co.max_points = (TRACE_TURNS + 2) * o.max_points + 1;
     co.stop_index = 0;
     co.stop_min = w->nu_lo;
     co.stop_max = w->nu_hi;
     double u0[2] = {first->nu, first->S};
     bkf_cont_report cr;
-    s = bkf_cont_run(trace_residual, trace_accept, &t, u0, 0, direction, &co, &cr, &e);
+    int along = 0; /* the component whose sign is the way: nu, or S on a restart */
+    for (int retries = 0;; retries++) {
+        s = bkf_cont_run(trace_residual, trace_accept, &t, u0, along, direction, &co, &cr, &e);
+        if (!(s == BKF_ENUMERIC && t.failed < 0 && t.have_prev && retries < TRACE_RETRIES))
+            break;
+        /* A stall: on from the last point kept, the way its tangent went,
+         * with short steps that grow back.  At a corner of the curve (the
+         * rightmost eigenvalue changes class) the tangent turns further than
+         * the driver takes in one step however short; from a restart the
+         * secant gradient turns over a few short steps (gamma 1, c 0.6,
+         * n 3 at its turn in nu near -0.89, S 11.3: stalled after 6 points,
+         * the turn's upper half not drawn). */
+        co.step_initial = TRACE_RETRY_STEP;
+        co.step_min = TRACE_STEP_MIN / 16;
+        u0[0] = t.prev.nu;
+        u0[1] = t.prev.S;
+        /* the way is the tangent's larger component's sign (a restart at a
+         * turn in nu, where the tangent's nu is near 0, took the sign of
+         * its nu and went back down the curve) */
+        along = fabs(t.tangent[1]) > fabs(t.tangent[0]);
+        direction = t.tangent[along] < 0 ? -1 : 1;
+        t.skip_start = 1;
+    }
     if (!s) {
         if (cr.reached_bound) t.rep.end = BKF_STABMAP_END_REACHED;
         goto done;

@@ -76,6 +76,8 @@ struct bkf_comoving {
     void *cv;
     double t;
     int blew_up, over_budget;
+    int order_capped;         /* BDF held at order 2 (comoving_run_body) */
+    size_t discarded_steps;   /* steps of runs restarted at order 2 */
     char cv_message[200];
 
     /* measurements */
@@ -1329,8 +1331,51 @@ int bkf_comoving_fit_drift(const bkf_comoving *m, double t_from, double t_to, do
 
 /* ---------------------------------------------------------------- run */
 
+/* BDF of order 3 to 5 is not A-stable: a mode near the imaginary axis
+ * (the fast waves at -v - c, weakly damped at small gamma) that falls in
+ * its unstable band grows at the integrator's hand, and the error control
+ * then holds the steps at that band's edge (random draw 2 of issue 31,
+ * gamma 0.5, n = 21: h from 0.018 to 0.0014 by t = 7, 20000 steps before
+ * t = 40, 137 s; at order 2, 209 steps, 1.4 s).  CVODE's stability-limit
+ * detection sees it and lowers the order, but its order control raises it
+ * again; held at 2 from there on, the run still follows the components
+ * already amplified (3851 steps to t = 40).  So once a reduction is
+ * counted the run goes back to where this call started and runs again at
+ * order 2 (A-stable), as do later calls on the object.  Runs whose order
+ * never meets the limit (the paper's n = 10..12) are those of before. */
+typedef struct {
+    N_Vector y0;   /* the state at the call's start */
+    double t0;
+    size_t count0; /* records then */
+    double *prev0; /* the fronts' last positions then */
+} run_start;
+
+static int order_limited(bkf_comoving *m)
+{
+    if (m->order_capped) return 0;
+    long reductions = 0;
+    return CVodeGetNumStabLimOrderReds(m->cv, &reductions) == CV_SUCCESS && reductions > 0;
+}
+
+/* Back to the call's start, BDF at order 2 from there. */
+static int restart_at_order_2(bkf_comoving *m, const run_start *at, bkf_error *err)
+{
+    long steps = 0;
+    CVodeGetNumSteps(m->cv, &steps);
+    m->discarded_steps += (size_t)steps;
+    N_VScale(1.0, at->y0, m->y);
+    m->t = at->t0;
+    m->count = at->count0;
+    if (at->prev0) memcpy(m->prev, at->prev0, m->n0 * sizeof *m->prev);
+    m->order_capped = 1;
+    if (CVodeReInit(m->cv, at->t0, m->y) || CVodeSetMaxOrd(m->cv, 2))
+        return bkf_error_set(err, BKF_ENUMERIC, "CVODE restart at order 2 failed: %s",
+                             m->cv_message);
+    return BKF_OK;
+}
+
 static int comoving_run_body(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_progress progress,
-                             void *progress_data, bkf_error *err)
+                             void *progress_data, run_start *at, bkf_error *err)
 {
     if (!m) return bkf_error_set(err, BKF_EINPUT, "simulation object is NULL");
     if (!(t_end > m->t) || !isfinite(t_end))
@@ -1338,9 +1383,20 @@ static int comoving_run_body(bkf_comoving *m, double t_end, double sample_dt, bk
                              m->t);
     if (!(sample_dt > 0) || !isfinite(sample_dt))
         return bkf_error_set(err, BKF_EINPUT, "sample_dt = %g must be > 0", sample_dt);
+    if (!m->order_capped) {
+        at->y0 = N_VClone(m->y);
+        at->prev0 = m->n0 ? malloc(m->n0 * sizeof *at->prev0) : NULL;
+        if (!at->y0 || (m->n0 && !at->prev0))
+            return bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        N_VScale(1.0, m->y, at->y0);
+        if (at->prev0) memcpy(at->prev0, m->prev, m->n0 * sizeof *at->prev0);
+        at->t0 = m->t;
+        at->count0 = m->count;
+    }
     double t0 = m->t;
     long steps0;
     CVodeGetNumSteps(m->cv, &steps0);
+    size_t discarded0 = m->discarded_steps;
     m->over_budget = 0;
     CVodeSetMaxNumSteps(m->cv, m->p.max_steps ? (long)m->p.max_steps + 1 : 1000000000L);
     for (size_t k = 1;; k++) {
@@ -1353,11 +1409,20 @@ static int comoving_run_body(bkf_comoving *m, double t_end, double sample_dt, bk
         int s = CVode(m->cv, tout, m->y, &tret, CV_NORMAL);
         long steps;
         CVodeGetNumSteps(m->cv, &steps);
-        if (m->p.max_steps &&
-            (s == CV_TOO_MUCH_WORK || (size_t)(steps - steps0) > m->p.max_steps)) {
+        /* the budget counts the steps a restart discarded */
+        size_t done = (size_t)(steps - steps0) + (m->discarded_steps - discarded0);
+        if (m->p.max_steps && (s == CV_TOO_MUCH_WORK || done > m->p.max_steps)) {
             m->over_budget = 1;
             return bkf_error_set(err, BKF_EBUDGET, "more than %zu steps by t = %g",
                                  m->p.max_steps, (double)tret);
+        }
+        /* a failure (steps too small) after a reduction is retried too */
+        if (order_limited(m)) {
+            if ((s = restart_at_order_2(m, at, err))) return s;
+            t0 = m->t;
+            steps0 = 0;
+            k = 0;
+            continue;
         }
         if (s < 0)
             return bkf_error_set(err, BKF_ENUMERIC, "CVODE failed at t = %g: %s", (double)tret,
@@ -1381,7 +1446,10 @@ int bkf_comoving_run(bkf_comoving *m, double t_end, double sample_dt, bkf_pde_pr
                      void *progress_data, bkf_error *err)
 {
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
-    int rc = comoving_run_body(m, t_end, sample_dt, progress, progress_data, err);
+    run_start at = {NULL, 0.0, 0, NULL};
+    int rc = comoving_run_body(m, t_end, sample_dt, progress, progress_data, &at, err);
+    if (at.y0) N_VDestroy(at.y0);
+    free(at.prev0);
     bkf_gsl_handler_pop(handler);
     return rc;
 }
@@ -1399,7 +1467,7 @@ void bkf_comoving_get_stats(const bkf_comoving *m, bkf_comoving_stats *st)
     CVodeGetNumNonlinSolvIters(m->cv, &d);
     CVodeGetNumErrTestFails(m->cv, &e);
     CVodeGetLastStep(m->cv, &h);
-    st->steps = (size_t)a;
+    st->steps = (size_t)a + m->discarded_steps;
     st->rhs_calls = (size_t)b;
     st->jacobians = (size_t)c;
     st->newton_iterations = (size_t)d;
@@ -1408,6 +1476,8 @@ void bkf_comoving_get_stats(const bkf_comoving *m, bkf_comoving_stats *st)
     st->relax_newton = m->relax_newton;
     st->blew_up = m->blew_up;
     st->over_budget = m->over_budget;
+    st->max_order = m->order_capped ? 2 : 5;
+    st->discarded_steps = m->discarded_steps;
     st->relax_change = m->relax_shift;
 }
 

@@ -17,666 +17,6 @@
 
 #include "trainspec_internal.h"
 
-/* ------------------------------------------------------------- meshes */
-
-void trainspec_mesh_free(mesh *m)
-{
-    free(m->h);
-    free(m->g0);
-    free(m->m);
-    free(m->ab0);
-    free(m->aphi);
-    free(m->a);
-    free(m->b0);
-    free(m->phi);
-    memset(m, 0, sizeof *m);
-}
-
-/* The steps each cycle step needs (a real number: the meshes spread them
- * evenly, see mesh_bounds) for |sigma| up to reach.  Where the cycle step
- * is not stiff a step spans at most RESOLVE_TURN e-foldings or radians of
- * the fastest local solution, the roots of lambda^2 = a lambda + b; where
- * it is stiff, RESOLVE_TURN of the slow solution only.  Either way at most
- * PROFILE_TURN of the profile's change.
- *
- * Stiff cycle steps:  In p = exp(-sigma z / s) u (the perturbation of psi
- * itself) the system is p'' = ap p' + bp p with ap = -mu phi - 2 sigma / s,
- * bp = b0 - sigma (sigma + gamma phi): on a slow branch (phi > 0) one
- * solution decays at Re ap <= -mu (phi + 2 re_floor / gamma) and the other,
- * the one the spectrum is made of, varies at |bp / ap| only.  There the
- * L-stable Radau step, which damps the fast solution as the flow does,
- * needs to resolve the slow one alone: steps O(mu) times longer. */
-int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err)
-{
-    if (x->need && reach == x->sigma_reach) return BKF_OK;
-    size_t n = x->node_count;
-    double *f = malloc(n * sizeof *f), *fp = malloc(n * sizeof *fp), *slow = malloc(n * sizeof *slow);
-    double *phi = malloc(n * sizeof *phi), *rate = malloc(n * sizeof *rate);
-    double *need = realloc(x->need, n * sizeof *need);
-    if (need) x->need = need;
-    int rc = !f || !fp || !slow || !phi || !rate || !need ? bkf_error_set(err, BKF_ENOMEM, "out of memory")
-                                                          : bkf_cycle_profile_sample(x->cycle, x->nodes, n, f, fp, err);
-    for (size_t i = 0; rc == BKF_OK && i < n; i++) {
-        phi[i] = f[i] * f[i] - 1.0;
-        double a = x->mu * fabs(phi[i]), b_fixed = fabs(1.0 + 2.0 * x->mu * f[i] * fp[i]);
-        double b = b_fixed + x->beta * reach * (reach + x->gamma * fabs(phi[i]));
-        rate[i] = 0.5 * a + sqrt(0.25 * a * a + b);
-        slow[i] = b_fixed + reach * (reach + x->gamma * fabs(phi[i])); /* bounds |bp| */
-    }
-    for (size_t i = 0; rc == BKF_OK && i + 1 < n; i++) {
-        double len = x->nodes[i + 1] - x->nodes[i];
-        double plain = len * fmax(rate[i], rate[i + 1]) / RESOLVE_TURN;
-        double decay = x->mu * (fmin(phi[i], phi[i + 1]) + 2.0 * x->re_floor / x->gamma);
-        double stiff = decay > 0.0 ? len * fmax(slow[i], slow[i + 1]) / decay / RESOLVE_TURN : INFINITY;
-        /* stiff steps, of length len / stiff, must damp the fast solution */
-        int use_stiff = stiff < plain && decay * len >= STIFF_MIN * fmax(stiff, 1.0);
-        need[i] = fmax(fmax(use_stiff ? stiff : plain, fabs(f[i + 1] - f[i]) / PROFILE_TURN), NODE_SHARE);
-    }
-    x->sigma_reach = reach;
-    free(f);
-    free(fp);
-    free(slow);
-    free(phi);
-    free(rate);
-    return rc;
-}
-
-/* The Radau IIA (three stages, order 5, L-stable) tableau. */
-#define SQ6 2.449489742783178098197284
-static const double RADAU_C[3] = {(4.0 - SQ6) / 10.0, (4.0 + SQ6) / 10.0, 1.0};
-#define RA11 ((88.0 - 7.0 * SQ6) / 360.0)
-#define RA12 ((296.0 - 169.0 * SQ6) / 1800.0)
-#define RA13 ((-2.0 + 3.0 * SQ6) / 225.0)
-#define RA21 ((296.0 + 169.0 * SQ6) / 1800.0)
-#define RA22 ((88.0 + 7.0 * SQ6) / 360.0)
-#define RA23 ((-2.0 - 3.0 * SQ6) / 225.0)
-#define RA31 ((16.0 - SQ6) / 36.0)
-#define RA32 ((16.0 + SQ6) / 36.0)
-#define RA33 (1.0 / 9.0)
-static const double RADAU_A[3][3] = {{RA11, RA12, RA13}, {RA21, RA22, RA23}, {RA31, RA32, RA33}};
-#define RA2(q1, q2, q3, j1, j2, j3) (q1 * j1 + q2 * j2 + q3 * j3)
-/* A^2 */
-static const double RADAU_A2[3][3] = {
-    {RA2(RA11, RA12, RA13, RA11, RA21, RA31), RA2(RA11, RA12, RA13, RA12, RA22, RA32), RA2(RA11, RA12, RA13, RA13, RA23, RA33)},
-    {RA2(RA21, RA22, RA23, RA11, RA21, RA31), RA2(RA21, RA22, RA23, RA12, RA22, RA32), RA2(RA21, RA22, RA23, RA13, RA23, RA33)},
-    {RA2(RA31, RA32, RA33, RA11, RA21, RA31), RA2(RA31, RA32, RA33, RA12, RA22, RA32), RA2(RA31, RA32, RA33, RA13, RA23, RA33)}};
-
-/* A mesh on the step boundaries bounds[0..steps] (ascending in [0, T]):
- * the coefficients at each step's Radau points. */
-int trainspec_mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf_error *err)
-{
-    trainspec_mesh_free(m);
-    m->steps = steps;
-    size_t cap = steps ? steps : 1;
-    m->h = malloc(cap * sizeof *m->h);
-    m->a = malloc(STRIDE * cap * sizeof *m->a);
-    m->b0 = malloc(STRIDE * cap * sizeof *m->b0);
-    m->phi = malloc(STRIDE * cap * sizeof *m->phi);
-    m->g0 = malloc(9 * cap * sizeof *m->g0);
-    m->m = malloc(9 * cap * sizeof *m->m);
-    m->ab0 = malloc(3 * cap * sizeof *m->ab0);
-    m->aphi = malloc(3 * cap * sizeof *m->aphi);
-    double *z = malloc(STRIDE * cap * sizeof *z), *f = malloc(STRIDE * cap * sizeof *f);
-    double *fp = malloc(STRIDE * cap * sizeof *fp);
-    int rc = BKF_OK;
-    if (!m->h || !m->a || !m->b0 || !m->phi || !m->g0 || !m->m || !m->ab0 || !m->aphi || !z || !f || !fp) {
-        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-        goto done;
-    }
-    for (size_t k = 0; k < steps; k++) {
-        double h = bounds[k + 1] - bounds[k];
-        m->h[k] = h;
-        for (int q = 0; q < 3; q++) z[STRIDE * k + q] = fmin(bounds[k] + RADAU_C[q] * h, x->T);
-    }
-    rc = bkf_cycle_profile_sample(x->cycle, z, STRIDE * steps, f, fp, err);
-    if (rc != BKF_OK) goto done;
-    m->trace_sum = 0.0;
-    for (size_t i = 0; i < STRIDE * steps; i++) {
-        m->phi[i] = f[i] * f[i] - 1.0;
-        m->a[i] = -x->mu * m->phi[i];
-        m->b0[i] = -(1.0 + 2.0 * x->mu * f[i] * fp[i]);
-    }
-    for (size_t i = 0; i < steps; i++) {
-        const double *a = m->a + STRIDE * i, *b0 = m->b0 + STRIDE * i, *phi = m->phi + STRIDE * i;
-        double h = m->h[i];
-        /* Radau quadrature (order 5) of the trace -mu phi */
-        m->trace_sum += h * (RADAU_A[2][0] * a[0] + RADAU_A[2][1] * a[1] + RADAU_A[2][2] * a[2]);
-        for (int q = 0; q < 3; q++) {
-            m->ab0[3 * i + q] = m->aphi[3 * i + q] = 0.0;
-            for (int j = 0; j < 3; j++) {
-                m->ab0[3 * i + q] += RADAU_A[q][j] * b0[j];
-                m->aphi[3 * i + q] += RADAU_A[q][j] * phi[j];
-                double ab = 0.0, ap = 0.0;
-                for (int l = 0; l < 3; l++) {
-                    ab += RADAU_A[q][l] * b0[l] * RADAU_A[l][j];
-                    ap += RADAU_A[q][l] * phi[l] * RADAU_A[l][j];
-                }
-                m->g0[9 * i + 3 * q + j] = (q == j) - h * RADAU_A[q][j] * a[j] - h * h * ab;
-                m->m[9 * i + 3 * q + j] = ap;
-            }
-        }
-    }
-done:
-    free(z);
-    free(f);
-    free(fp);
-    if (rc != BKF_OK) trainspec_mesh_free(m);
-    return rc;
-}
-
-/* The step boundaries of a mesh of `substeps` times the steps the cycle
- * steps need (mesh_needs), spread evenly in the cumulative need, so that
- * doubling substeps halves every step: *bounds (steps + 1 values). */
-int trainspec_mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *steps, bkf_error *err)
-{
-    double total = 0.0;
-    for (size_t i = 0; i + 1 < x->node_count; i++) total += x->need[i];
-    double count = fmax(ceil(total), MESH_MIN_STEPS) * (double)substeps;
-    if (count > MESH_MAX_STEPS)
-        return bkf_error_set(err, BKF_EBUDGET, "the spectrum needs more than %d steps per period (mu = %.15g)",
-                             MESH_MAX_STEPS, x->mu);
-    size_t k_max = (size_t)count;
-    double *b = malloc((k_max + 1) * sizeof *b);
-    if (!b) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    /* boundary k sits where the cumulative need reaches k total / k_max,
-     * linear within each cycle step */
-    double below = 0.0, per_step = total / count;
-    size_t i = 0;
-    b[0] = 0.0;
-    for (size_t k = 1; k < k_max; k++) {
-        double target = (double)k * per_step;
-        while (i + 2 < x->node_count && below + x->need[i] < target) below += x->need[i++];
-        double frac = x->need[i] > 0.0 ? fmin(1.0, (target - below) / x->need[i]) : 1.0;
-        b[k] = x->nodes[i] + frac * (x->nodes[i + 1] - x->nodes[i]);
-    }
-    b[k_max] = x->T;
-    *bounds = b;
-    *steps = k_max;
-    return BKF_OK;
-}
-
-int trainspec_mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err)
-{
-    double *bounds = NULL;
-    size_t steps = 0;
-    int rc = trainspec_mesh_bounds(x, substeps, &bounds, &steps, err);
-    if (rc == BKF_OK) rc = trainspec_mesh_fill(x, bounds, steps, m, err);
-    free(bounds);
-    return rc;
-}
-
-/* ---------------------------------------------------------- monodromy */
-
-/* The Radau IIA step i at sigma in p = exp(-sigma z / s) u, where the
- * solution that survives varies slowly (see mesh_needs): (p, p') after the
- * step = e (p, p') before it, e[0..3] row-major, and de = de/dsigma when de
- * is not NULL.  With V the stages of p', the stages of p are p0 + h A V, so
- * the six stage equations reduce to three:
- *     G V = (I - h A diag(ap) - h^2 A diag(bp) A) V = p0' + h p0 A bp.
- * The monodromy is taken in p's basis: u's is exp(k T) K P K^-1 with
- * K = [[1, 0], [k, 1]], k = sigma / s, the same multipliers times exp(k T),
- * which the eigenvalue condition divides out again (monodromy), so neither
- * K nor exp(k h) (a complex exponential per step) is ever formed. */
-void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
-                       double complex de[4])
-{
-    double h = m->h[i];
-    double complex k = sigma / x->s, G[3][3], r[3][4];
-    /* ap = a - 2 k, bp = b0 - sigma^2 - gamma sigma phi: G = G0 + 2 k h A
-     * + h^2 sigma^2 A^2 + h^2 gamma sigma M (mesh_fill made G0 and M) */
-    double complex c1 = 2.0 * k * h, c2 = h * h * sigma * sigma, c3 = h * h * x->gamma * sigma;
-    double complex s2 = sigma * sigma, gs = x->gamma * sigma;
-    const double *g0 = m->g0 + 9 * i, *mm = m->m + 9 * i;
-    int nrhs = de ? 4 : 2;
-    for (int q = 0; q < 3; q++) {
-        for (int j = 0; j < 3; j++)
-            G[q][j] = g0[3 * q + j] + c1 * RADAU_A[q][j] + c2 * RADAU_A2[q][j] + c3 * mm[3 * q + j];
-        /* right-hand sides for (p0, p0') = (1, 0) and (0, 1); A 1 = c */
-        r[q][0] = h * (m->ab0[3 * i + q] - s2 * RADAU_C[q] - gs * m->aphi[3 * i + q]);
-        r[q][1] = 1.0;
-    }
-    /* LU with partial pivoting, kept for the derivative's solve */
-    int perm[3] = {0, 1, 2};
-    double complex inv[3];
-    for (int c = 0; c < 3; c++) {
-        int piv = c;
-        for (int q = c + 1; q < 3; q++)
-            if (fabs(creal(G[q][c])) + fabs(cimag(G[q][c])) > fabs(creal(G[piv][c])) + fabs(cimag(G[piv][c])))
-                piv = q;
-        if (piv != c) {
-            for (int j = 0; j < 3; j++) {
-                double complex t = G[c][j];
-                G[c][j] = G[piv][j], G[piv][j] = t;
-            }
-            for (int j = 0; j < 2; j++) {
-                double complex t = r[c][j];
-                r[c][j] = r[piv][j], r[piv][j] = t;
-            }
-            int t = perm[c];
-            perm[c] = perm[piv], perm[piv] = t;
-        }
-        inv[c] = 1.0 / G[c][c];
-        for (int q = c + 1; q < 3; q++) {
-            double complex l = G[q][c] * inv[c];
-            G[q][c] = l;
-            for (int j = c + 1; j < 3; j++) G[q][j] -= l * G[c][j];
-            r[q][0] -= l * r[c][0], r[q][1] -= l * r[c][1];
-        }
-    }
-    double complex V[3][4];
-    for (int q = 2; q >= 0; q--)
-        for (int rhs = 0; rhs < 2; rhs++) {
-            double complex sum = r[q][rhs];
-            for (int j = q + 1; j < 3; j++) sum -= G[q][j] * V[j][rhs];
-            V[q][rhs] = sum * inv[q];
-        }
-    if (de) {
-        /* G dV = dr - dG V: dG = 2 h / s A + 2 h^2 sigma A^2 + h^2 gamma M,
-         * dr0 = -h (2 sigma c + gamma A phi), dr1 = 0 */
-        double complex d2 = 2.0 * h * h * sigma;
-        double d1 = 2.0 * h / x->s, d3 = h * h * x->gamma;
-        double complex b[3][2];
-        for (int q = 0; q < 3; q++) {
-            double complex dr0 = -h * (2.0 * sigma * RADAU_C[q] + x->gamma * m->aphi[3 * i + q]);
-            for (int rhs = 0; rhs < 2; rhs++) {
-                double complex sum = rhs == 0 ? dr0 : 0.0;
-                for (int j = 0; j < 3; j++)
-                    sum -= (d1 * RADAU_A[q][j] + d2 * RADAU_A2[q][j] + d3 * mm[3 * q + j]) * V[j][rhs];
-                b[q][rhs] = sum;
-            }
-        }
-        for (int q = 0; q < 3; q++) {
-            r[q][2] = b[perm[q]][0];
-            r[q][3] = b[perm[q]][1];
-        }
-        for (int c = 0; c < 3; c++)
-            for (int q = c + 1; q < 3; q++) r[q][2] -= G[q][c] * r[c][2], r[q][3] -= G[q][c] * r[c][3];
-        for (int q = 2; q >= 0; q--)
-            for (int rhs = 2; rhs < 4; rhs++) {
-                double complex sum = r[q][rhs];
-                for (int j = q + 1; j < 3; j++) sum -= G[q][j] * V[j][rhs];
-                V[q][rhs] = sum * inv[q];
-            }
-    }
-    /* p1 = p0 + h sum A_3j V_j, p1' = V_3 */
-    for (int rhs = 0; rhs < nrhs; rhs++) {
-        double complex sum = 0;
-        for (int j = 0; j < 3; j++) sum += RADAU_A[2][j] * V[j][rhs];
-        double complex *out = rhs < 2 ? e : de;
-        int col = rhs & 1;
-        out[col] = (rhs == 0) + h * sum;
-        out[2 + col] = V[2][rhs];
-    }
-}
-
-/* Keeps the entries of v (count of them) near 1 in modulus, the factor
- * moved into *scale (a log). */
-void trainspec_rescale(double complex *v, size_t count, double *scale)
-{
-    /* the largest component: a norm within sqrt 2 of the modulus, and no hypot */
-    double big = 0.0;
-    for (size_t i = 0; i < count; i++) {
-        double re = fabs(creal(v[i])), im = fabs(cimag(v[i]));
-        big = re > big ? re : big;
-        big = im > big ? im : big;
-    }
-    if (!(big > 0x1p200 || big < 0x1p-200) || big == 0.0) return;
-    int e2;
-    frexp(big, &e2);
-    for (size_t i = 0; i < count; i++) v[i] = ldexp(creal(v[i]), -e2) + I * ldexp(cimag(v[i]), -e2);
-    *scale += e2 * M_LN2;
-}
-
-/* 2x2 products, row-major: out = a b */
-static void mul2(const double complex a[4], const double complex b[4], double complex out[4])
-{
-    double complex o0 = a[0] * b[0] + a[1] * b[2], o1 = a[0] * b[1] + a[1] * b[3];
-    double complex o2 = a[2] * b[0] + a[3] * b[2], o3 = a[2] * b[1] + a[3] * b[3];
-    out[0] = o0, out[1] = o1, out[2] = o2, out[3] = o3;
-}
-
-/* The monodromy of p over mesh m at sigma: p[0..3] (row-major) times
- * exp(*scale), and its derivative in sigma into dp (same scale) when dp is
- * not NULL (a pass with the derivative costs about two without: it counts
- * twice in the work). */
-void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double complex p[4], double complex *dp,
-                             double *scale)
-{
-    double cost = (dp ? 2.0 : 1.0) * (double)m->steps;
-    x->evaluations++;
-    p[0] = 1, p[1] = 0, p[2] = 0, p[3] = 1;
-    if (dp) dp[0] = dp[1] = dp[2] = dp[3] = 0;
-    *scale = 0.0;
-    if (!x->stop && x->cancel && *x->cancel) x->stop = BKF_ECANCELED;
-    if (!x->stop && x->work + cost > x->max_work) x->stop = BKF_EBUDGET;
-    if (x->stop) {
-        /* every caller's search then fails at once; the entry point reports why */
-        *scale = NAN;
-        return;
-    }
-    x->work += cost;
-    for (size_t i = 0; i < m->steps; i++) {
-        double complex e[4], de[4];
-        trainspec_radau_step(x, m, i, sigma, e, dp ? de : NULL);
-        if (dp) {
-            double complex t1[4], t2[4];
-            mul2(de, p, t1);
-            mul2(e, dp, t2);
-            for (int q = 0; q < 4; q++) dp[q] = t1[q] + t2[q];
-        }
-        mul2(e, p, p);
-        /* a step's factor is O(1) in p's basis (the growth exp(k h) is
-         * u's): every eighth step is often enough to stay far from overflow */
-        if ((i & 7) == 7 || i + 1 == m->steps) {
-            if (dp) {
-                double complex both[8] = {p[0], p[1], p[2], p[3], dp[0], dp[1], dp[2], dp[3]};
-                trainspec_rescale(both, 8, scale);
-                for (int q = 0; q < 4; q++) p[q] = both[q], dp[q] = both[4 + q];
-            } else {
-                trainspec_rescale(p, 4, scale);
-            }
-        }
-    }
-}
-
-/* ln of the two multipliers of psi's perturbation over one period at sigma,
- * divided by exp(sigma T / s): w[0] the larger in modulus, w[1] the
- * smaller, and their derivatives in sigma into dw (NULL: not wanted).  The
- * product is kept scaled (its log in `scale`) so that neither stiff decay
- * nor growth over- or underflows; the smaller multiplier comes from
- * det M = exp(trace_sum), free of cancellation.  In p's basis (radau_step)
- * the larger is exp(sigma T / s) times P's larger eigenvalue, so w[0] is
- * ln of that eigenvalue itself, and w[1] = trace_sum - w[0] - 2 sigma T / s. */
-static void monodromy(ctx *x, const mesh *m, double complex sigma, double complex w[2], double complex *dw)
-{
-    double complex p[4], dp[4];
-    double scale;
-    trainspec_monodromy_matrix(x, m, sigma, p, dw ? dp : NULL, &scale);
-    double complex half = 0.5 * (p[0] + p[3]), det = p[0] * p[3] - p[1] * p[2];
-    double complex root = csqrt(half * half - det);
-    double complex big = cabs(half + root) >= cabs(half - root) ? half + root : half - root;
-    double complex shift = sigma * x->T / x->s;
-    w[0] = scale + clog(big);
-    w[1] = m->trace_sum - w[0] - 2.0 * shift;
-    if (!dw) return;
-    /* big^2 - tr big + det = 0: d big (2 big - tr) = d tr big - d det */
-    double complex dtr = dp[0] + dp[3], ddet = dp[0] * p[3] + p[0] * dp[3] - dp[1] * p[2] - p[1] * dp[2];
-    dw[0] = (dtr * big - ddet) / ((2.0 * big - (p[0] + p[3])) * big);
-    dw[1] = -dw[0] - 2.0 * x->T / x->s;
-}
-
-double trainspec_wrap(double phase)
-{
-    return phase - 2.0 * M_PI * floor(phase / (2.0 * M_PI) + 0.5);
-}
-
-/* ------------------------------------------------------ curve tracing */
-
-typedef struct {
-    double y;
-    int found;         /* the family's multiplier reaches modulus 1 right of a_lo */
-    double a;          /* Re sigma there */
-    double slope;      /* da/dy along the curve */
-    double phase;      /* arg of the multiplier (principal), then unwrapped */
-    double rate;       /* d phase / dy along the curve */
-} curve_point;
-
-/* Newton on Re w[f](a + i y) = 0 in a from the prediction g (the last
- * height's point continued along its slope): one pass with the derivative
- * per step, where the bracketing below takes about six passes per height.
- * The point is taken once a step is at most sqrt(tol_a) (quadratic
- * convergence: the error after it is of order tol_a), its phase, slope and
- * rate from the derivative at the step's start (first order in the step).
- * 0 when Newton does not settle inside the window, or Re w does not fall
- * with a there: the bracketing decides. */
-static int height_newton(ctx *x, const mesh *m, const window *win, double y, double g, int f, double tol_a,
-                         curve_point *p)
-{
-    double a = g;
-    for (int it = 0; it < TRACE_NEWTON_MAX; it++) {
-        double complex w[2], dw[2];
-        monodromy(x, m, a + I * y, w, dw);
-        double re = creal(dw[f]), im = cimag(dw[f]);
-        if (!(re < 0.0) || !isfinite(creal(w[f])) || !isfinite(cimag(w[f]))) return 0;
-        double step = -creal(w[f]) / re, next = a + step;
-        if (!(next > win->a_lo && next < win->a_hi)) return 0;
-        if (fabs(step) <= sqrt(tol_a)) {
-            *p = (curve_point){.y = y, .found = 1, .a = next, .phase = cimag(w[f]) + im * step,
-                               .slope = im / re, .rate = (re * re + im * im) / re};
-            return 1;
-        }
-        a = next;
-    }
-    return 0;
-}
-
-/* Both families' rightmost a in [a_lo, a_hi] where Re w(a + i y) = 0: by
- * Newton from the predictions guess[f] where given (NAN otherwise) and it
- * settles, else by the Illinois variant of regula falsi, the bracket
- * shrunk around the prediction first.  Re w decreases in a: the
- * multipliers shrink to the right. */
-static int height_at(ctx *x, const mesh *m, window *win, double y, const double guess[FAMILIES],
-                     curve_point pt[FAMILIES])
-{
-    /* the curves only propose candidates (polished on the meshes, their
-     * value and error the polish's) and tell where they leave the window:
-     * a to 1e-6 is plenty for both, and 1e-3 tol cost two or three more
-     * monodromies per family and height */
-    double tol_a = fmax(1e-3 * x->tol, TRACE_TOL);
-    int settled[FAMILIES], all = 1;
-    for (int f = 0; f < FAMILIES; f++) {
-        settled[f] = isfinite(guess[f]) && guess[f] > win->a_lo && guess[f] < win->a_hi &&
-                     height_newton(x, m, win, y, guess[f], f, tol_a, &pt[f]);
-        all &= settled[f];
-    }
-    if (all) return BKF_OK;
-    double complex w[2], wh[2] = {0};
-    monodromy(x, m, win->a_lo + I * y, w, NULL);
-    int inside = 0;
-    for (int f = 0; f < FAMILIES; f++) inside |= !settled[f] && creal(w[f]) >= 0.0;
-    /* the bracket's right end, only where a family still needs one */
-    for (int grow = 0; inside; grow++) {
-        monodromy(x, m, win->a_hi + I * y, wh, NULL);
-        if (creal(wh[0]) < 0.0) break;
-        if (grow > 40) return BKF_ENUMERIC;
-        win->a_hi *= 2.0;
-    }
-    for (int f = 0; f < FAMILIES; f++) {
-        if (settled[f]) continue;
-        curve_point *p = &pt[f];
-        p->y = y;
-        p->found = 0;
-        if (creal(w[f]) < 0.0) continue;
-        double lo = win->a_lo, hi = win->a_hi, flo = creal(w[f]), fhi = creal(wh[f]);
-        /* shrink the bracket around the prediction */
-        if (isfinite(guess[f]) && guess[f] > lo && guess[f] < hi) {
-            double g = guess[f], d = fmax(1e-3, 100.0 * tol_a);
-            for (int k = 0; k < 2; k++, d *= 8.0) {
-                double complex wg[2];
-                double t = fmin(fmax(g, lo + 0.5 * tol_a), hi - 0.5 * tol_a);
-                monodromy(x, m, t + I * y, wg, NULL);
-                double ft = creal(wg[f]);
-                if (ft >= 0.0) {
-                    lo = t, flo = ft;
-                    g = t + d;
-                } else {
-                    hi = t, fhi = ft;
-                    g = t - d;
-                }
-                if (!(g > lo && g < hi)) break;
-            }
-        }
-        int side = 0;
-        for (int it = 0; it < 200 && hi - lo > tol_a; it++) {
-            double t = (lo * fhi - hi * flo) / (fhi - flo);
-            if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
-            double complex wt[2];
-            monodromy(x, m, t + I * y, wt, NULL);
-            double ft = creal(wt[f]);
-            if (fabs(ft) < 1e-3 * tol_a) {
-                lo = hi = t;
-                break;
-            }
-            if (ft >= 0.0) {
-                lo = t, flo = ft;
-                if (side == -1) fhi *= 0.5;
-                side = -1;
-            } else {
-                hi = t, fhi = ft;
-                if (side == 1) flo *= 0.5;
-                side = 1;
-            }
-        }
-        double a = 0.5 * (lo + hi);
-        double complex wv[2], dw[2];
-        monodromy(x, m, a + I * y, wv, dw);
-        p->found = 1;
-        p->a = a;
-        p->phase = cimag(wv[f]);
-        /* along Re w = 0: da/dy = Im w' / Re w', dphase/dy = |w'|^2 / Re w' */
-        double re = creal(dw[f]), im = cimag(dw[f]);
-        if (re == 0.0) return BKF_ENUMERIC;
-        p->slope = im / re;
-        p->rate = (re * re + im * im) / re;
-    }
-    return BKF_OK;
-}
-
-/* One sampled height: both families. */
-typedef struct {
-    curve_point fam[FAMILIES];
-} height;
-
-typedef struct {
-    height *h;
-    size_t count, cap;
-} curve;
-
-static int curve_insert(curve *c, size_t at, const height *p)
-{
-    if (c->count == c->cap) {
-        size_t cap = c->cap ? 2 * c->cap : 256;
-        height *g = realloc(c->h, cap * sizeof *g);
-        if (!g) return BKF_ENOMEM;
-        c->h = g;
-        c->cap = cap;
-    }
-    memmove(&c->h[at + 1], &c->h[at], (c->count - at) * sizeof *c->h);
-    c->h[at] = *p;
-    c->count++;
-    return BKF_OK;
-}
-
-/* Does the interval between two samples need a sample in between: an edge
- * of the curve, a phase step the rates do not account for, or a bend the
- * linear interpolation of a misses. */
-static int needs_split(const ctx *x, const curve_point *p, const curve_point *q, double min_dy)
-{
-    double dy = q->y - p->y;
-    if (dy <= min_dy) return 0;
-    if (p->found != q->found) return dy > min_dy * (EDGE_FRACTION / CURVE_MIN_FRACTION);
-    if (!p->found) return 0;
-    double est = 0.5 * (p->rate + q->rate) * dy;
-    double darg = trainspec_wrap(q->phase - p->phase);
-    double turns = nearbyint((est - darg) / (2.0 * M_PI));
-    if (fabs(est - (darg + 2.0 * M_PI * turns)) > 0.3) return 1;
-    if (fabs(q->slope - p->slope) * dy > fmax(0.05 * fabs(p->a) + 1e-3, 100.0 * x->tol)) return 1;
-    return 0;
-}
-
-static void predict(const height *p, const height *q, double y, double guess[FAMILIES])
-{
-    for (int f = 0; f < FAMILIES; f++) {
-        guess[f] = NAN;
-        const curve_point *near = p && p->fam[f].found ? &p->fam[f] : q && q->fam[f].found ? &q->fam[f] : NULL;
-        if (near) guess[f] = near->a + near->slope * (y - near->y);
-    }
-}
-
-/* Trace both families over [y0, y1] into c (appending, y increasing),
- * refining where needs_split says so. */
-static int trace(ctx *x, window *win, double y0, double y1, double y_scale, curve *c)
-{
-    double min_dy = y_scale * CURVE_MIN_FRACTION;
-    size_t start = c->count;
-    for (int i = 0; i <= CURVE_START; i++) {
-        if (i == 0 && start > 0) continue; /* y0 is the previous pass's last point */
-        double y = y0 + (y1 - y0) * i / CURVE_START, guess[FAMILIES];
-        predict(c->count ? &c->h[c->count - 1] : NULL, NULL, y, guess);
-        height h;
-        int rc = height_at(x, &x->coarse, win, y, guess, h.fam);
-        if (rc != BKF_OK) return rc;
-        if (curve_insert(c, c->count, &h) != BKF_OK) return BKF_ENOMEM;
-    }
-    for (size_t i = start ? start - 1 : 0; i + 1 < c->count;) {
-        int split = 0;
-        for (int f = 0; f < FAMILIES; f++)
-            split |= needs_split(x, &c->h[i].fam[f], &c->h[i + 1].fam[f], min_dy);
-        if (!split) {
-            i++;
-            continue;
-        }
-        double y = 0.5 * (c->h[i].fam[0].y + c->h[i + 1].fam[0].y), guess[FAMILIES];
-        predict(&c->h[i], &c->h[i + 1], y, guess);
-        height mid;
-        int rc = height_at(x, &x->coarse, win, y, guess, mid.fam);
-        if (rc != BKF_OK) return rc;
-        if (curve_insert(c, i + 1, &mid) != BKF_OK) return BKF_ENOMEM;
-    }
-    return BKF_OK;
-}
-
-/* ------------------------------------------------------------ candidates */
-
-/* Every point of the traced curve where the multiplier's phase is a multiple
- * of 2 pi / classes, with its mirror image below the real axis. */
-static int collect(curve *c, int fam, size_t classes, candidates *out)
-{
-    if (c->count == 0) return BKF_OK;
-    double step = 2.0 * M_PI / (double)classes;
-    /* unwrap the phase with the rates */
-    double psi = 0.0;
-    for (size_t i = 0; i < c->count; i++) {
-        curve_point *p = &c->h[i].fam[fam];
-        if (!p->found) continue;
-        if (i > 0 && c->h[i - 1].fam[fam].found) {
-            const curve_point *q = &c->h[i - 1].fam[fam];
-            double est = 0.5 * (p->rate + q->rate) * (p->y - q->y);
-            double darg = trainspec_wrap(p->phase - q->phase);
-            psi += darg + 2.0 * M_PI * nearbyint((est - darg) / (2.0 * M_PI));
-        } else {
-            psi = p->phase;
-            /* a point alone on the real axis is a candidate itself */
-            double l = psi / step;
-            if (p->y == 0.0 && fabs(l - nearbyint(l)) < 1e-6) {
-                long cls = ((long)nearbyint(l) % (long)classes + (long)classes) % (long)classes;
-                if (trainspec_cand_push(out, (candidate){p->a, 0.0, (size_t)cls, fam, 0}) != BKF_OK) return BKF_ENOMEM;
-            }
-        }
-        p->phase = psi; /* unwrapped from here on */
-        if (i == 0 || !c->h[i - 1].fam[fam].found) continue;
-        const curve_point *q = &c->h[i - 1].fam[fam];
-        double lo = fmin(q->phase, p->phase), hi = fmax(q->phase, p->phase);
-        for (double l = floor(lo / step) + 1.0; l * step <= hi; l += 1.0) {
-            if (l * step == lo) continue;
-            double t = (l * step - q->phase) / (p->phase - q->phase);
-            double dy = p->y - q->y;
-            /* Hermite interpolation of a with the slopes */
-            double h00 = 2 * t * t * t - 3 * t * t + 1, h10 = t * t * t - 2 * t * t + t;
-            double h01 = -2 * t * t * t + 3 * t * t, h11 = t * t * t - t * t;
-            double a = h00 * q->a + h10 * dy * q->slope + h01 * p->a + h11 * dy * p->slope;
-            double y = q->y + t * dy;
-            long cls = ((long)l % (long)classes + (long)classes) % (long)classes;
-            if (trainspec_cand_push(out, (candidate){a, y, (size_t)cls, fam, 0}) != BKF_OK) return BKF_ENOMEM;
-            if (y > 0.0) {
-                size_t mirror = (size_t)((classes - (size_t)cls) % classes);
-                if (trainspec_cand_push(out, (candidate){a, -y, mirror, fam, 1}) != BKF_OK) return BKF_ENOMEM;
-            }
-        }
-    }
-    return BKF_OK;
-}
-
 /* ------------------------------------------------------------- polishing */
 
 /* Newton on w(sigma) = i theta (mod 2 pi i), over whichever family fits
@@ -700,11 +40,11 @@ int trainspec_polish(ctx *x, const mesh *m, double theta, double complex *sigma,
         double complex w0[2], dw[2];
         int use_chord = chord && chords < CHORD_MAX;
         if (use_chord) {
-            monodromy(x, m, s, w0, NULL);
+            trainspec_monodromy(x, m, s, w0, NULL);
             dw[0] = deriv[0], dw[1] = deriv[1];
             chords++;
         } else {
-            monodromy(x, m, s, w0, dw);
+            trainspec_monodromy(x, m, s, w0, dw);
             if (deriv) deriv[0] = dw[0], deriv[1] = dw[1];
         }
         int fam = 0;
@@ -786,6 +126,7 @@ void trainspec_ctx_free(ctx *x)
     bkf_cycle_free(x->cycle);
     free(x->nodes);
     free(x->need);
+    free(x->stiff);
 }
 
 int trainspec_ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_train *t, double tol,
@@ -832,53 +173,8 @@ int trainspec_ctx_init(ctx *x, const bkf_model_params *p, const bkf_trainspec_tr
     return BKF_OK;
 }
 
-/* The coarse mesh for a window up to height B: a step turns the fastest
- * solution, u ~ exp(+-sqrt(beta) sigma z), by at most RESOLVE_TURN (see
- * mesh_needs).  The fine one only the polish uses: meshes_for_polish
- * builds it, once the trace has settled the window (each build samples
- * the profile at three points a step, a third of a trace pass's cost at
- * mu 2). */
-static int meshes_for(ctx *x, double B, const window *win, bkf_error *err)
-{
-    trainspec_mesh_free(&x->fine);
-    int rc = trainspec_mesh_needs(x, hypot(B, win->a_hi), err);
-    return rc != BKF_OK ? rc : trainspec_mesh_build(x, x->substeps, &x->coarse, err);
-}
-
-/* Trace both families over [0, B], B grown until the curves stay left of
- * a_lo in its upper quarter. */
-static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *err)
-{
-    /* beyond |sigma| ~ gamma v / c the spectrum is in its asymptotic regime */
-    double B = fmax(2.0, x->gamma * x->v / x->c);
-    double y0 = 0.0;
-    for (;;) {
-        int mrc = meshes_for(x, B, win, err);
-        if (mrc != BKF_OK) return mrc;
-        int rc = trace(x, win, y0, B, B, c);
-        if (rc == BKF_ENOMEM) return bkf_error_set(err, rc, "out of memory");
-        if (rc != BKF_OK)
-            return bkf_error_set(err, rc, "spectrum: the multiplier curve could not be traced (mu = %.15g)", x->mu);
-        int above = 0;
-        for (int f = 0; f < FAMILIES; f++)
-            for (size_t i = 0; i < c->count; i++)
-                if (c->h[i].fam[f].found && c->h[i].fam[f].y > 0.75 * B) above = 1;
-        if (!above) break;
-        if (2.0 * B > Y_MAX_LIMIT)
-            return bkf_error_set(err, BKF_EBUDGET,
-                                 "spectrum: eigenvalues right of %.3g reach beyond |Im sigma| = %g", win->a_lo,
-                                 Y_MAX_LIMIT);
-        y0 = B;
-        B *= 2.0;
-    }
-    *y_max = B;
-    return BKF_OK;
-}
-
 /* ------------------------------------------------- Hill's stage (trainspec_hill.c) */
 
-/* The error estimate of sigma polished to sf on the fine mesh (last Newton
- * step step_f) from sc on the coarse one. */
 /* Hill's band alone: the meshes for its height, no curves. */
 static int band_alone(ctx *x, const hill_stage *hs, window *win, double a_hi, double *y_max, int *fallback,
                       bkf_error *err)
@@ -888,7 +184,7 @@ static int band_alone(ctx *x, const hill_stage *hs, window *win, double a_hi, do
     *y_max = hs->y_trust;
     win->a_hi = a_hi;
     x->substeps = SUBSTEPS_START;
-    return meshes_for(x, hs->y_trust, win, err);
+    return trainspec_meshes_for(x, hs->y_trust, win, err);
 }
 
 /* The candidates of every class: Hill's where it is cheap; where Hill's
@@ -899,7 +195,6 @@ static int band_alone(ctx *x, const hill_stage *hs, window *win, double a_hi, do
 static int gather(ctx *x, size_t classes, size_t keep, window *win, candidates *cs, hill_stage *hs, double *y_max,
                   size_t *curve_points, int *fallback, bkf_error *trace_err, bkf_error *err)
 {
-    curve heights = {0};
     *fallback = 0;
     int rc = trainspec_hill_candidates(x, classes, win, cs, hs, err);
     if (rc != BKF_OK) return rc;
@@ -912,26 +207,16 @@ static int gather(ctx *x, size_t classes, size_t keep, window *win, candidates *
     /* where Hill has answered the trace is the cross-check: it may spend a
      * fifth of the budget, the rest polishes */
     if (hs->modes) x->max_work = x->work + HILL_TRACE_SHARE * (max_work - x->work);
-    rc = trace_all(x, win, &heights, y_max, trace_err);
+    rc = trainspec_curves(x, classes, win, cs, y_max, curve_points, trace_err);
     x->max_work = max_work;
     if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes) {
         int hrc = trainspec_hill_grow(x, classes, win, cs, hs, err);
-        if (hrc != BKF_OK) {
-            free(heights.h);
-            return hrc;
-        }
+        if (hrc != BKF_OK) return hrc;
     }
     if (rc != BKF_OK && rc != BKF_ENOMEM && x->stop != BKF_ECANCELED && hs->modes && hs->complete &&
-        hs->descended) {
-        heights.count = 0;
-        rc = band_alone(x, hs, win, a_hi, y_max, fallback, err);
-    } else if (rc != BKF_OK) {
-        if (err) *err = *trace_err;
-    }
-    if (rc == BKF_OK) *curve_points += heights.count;
-    for (int f = 0; f < FAMILIES && rc == BKF_OK; f++)
-        if (collect(&heights, f, classes, cs) != BKF_OK) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    free(heights.h);
+        hs->descended)
+        return band_alone(x, hs, win, a_hi, y_max, fallback, err);
+    if (rc != BKF_OK && err) *err = *trace_err;
     return rc;
 }
 
@@ -939,11 +224,6 @@ static int gather(ctx *x, size_t classes, size_t keep, window *win, candidates *
  * candidates (the rightmost first): the rest lie left of those and are
  * reached only where many of them fail or repeat one eigenvalue. */
 #define POLISH_TRIES 2
-/* The polish meshes resolve |sigma| up to this factor times the largest of
- * the candidates it may polish (plus POLISH_REACH_MIN): Newton's path from a
- * candidate stays near it. */
-#define POLISH_MARGIN 1.25
-#define POLISH_REACH_MIN 0.05
 
 /* Does the polish try candidate c, the tried-th of its class's curve
  * candidates (Hill's are all tried, see polish_candidates)? */
@@ -991,12 +271,6 @@ static int meshes_for_polish(ctx *x, size_t classes, size_t polish_n, candidates
  * (plus 10 tol) is not polished on the fine mesh. */
 #define POLISH_SKIP_COARSE 8.0
 
-/* Per polished eigenvalue, both families' sigma-derivatives at its last
- * polish (trainspec_polish): the next, finer mesh's polish steps with them. */
-typedef struct {
-    double complex d[2];
-    double complex coarse; /* its value on the coarse mesh (polish_candidates) */
-} derivs;
 
 /* The keep-th largest Re sigma of eig[from..to) (-inf while fewer), the
  * translation aside: the cut reports it besides the keep, never instead of
@@ -1137,6 +411,19 @@ static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, derivs 
             if (eig[k].translation) worst = fmax(worst, hypot(eig[k].re, eig[k].im));
         }
         if (worst <= x->tol) break;
+        /* the profile's share no mesh reduces: refused at once, saying so */
+        double floor = 0.0, at = 0.0;
+        for (size_t k = 0; k < n_eig; k++) {
+            double mod = hypot(eig[k].re, eig[k].im), share = PROFILE_ERROR * fmax(1.0, mod);
+            if (share > floor) floor = share, at = mod;
+        }
+        if (floor > x->tol) {
+            rc = bkf_error_set(err, BKF_ETOL,
+                               "spectrum: the profile's own error (%.2g per unit |sigma|, the cycle solved to "
+                               "1e-12) is %.3g at |sigma| %.4g, above tol %.3g",
+                               PROFILE_ERROR, floor, at, x->tol);
+            break;
+        }
         if (r == MESH_REFINEMENTS) {
             rc = bkf_error_set(err, BKF_ETOL,
                                "spectrum: an eigenvalue's estimated error %.3g exceeds tol %.3g at %zu "
@@ -1215,6 +502,42 @@ static int confirm_band(const hill_stage *hs, const bkf_trainspec_eigenvalue *ei
     return BKF_OK;
 }
 
+/* The rightmost polished value of class cls but the translation (re -inf
+ * when none), and its error. */
+static double class_top(const bkf_trainspec_eigenvalue *eig, size_t n_eig, size_t cls, double *err)
+{
+    double top = -INFINITY;
+    *err = 0.0;
+    for (size_t k = 0; k < n_eig; k++)
+        if (eig[k].j == cls && !eig[k].translation && eig[k].re > top) top = eig[k].re, *err = eig[k].err;
+    return top;
+}
+
+int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, const candidates *cs,
+                            bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig, bkf_error *err)
+{
+    for (size_t i = 0; i < cs->count; i++) {
+        const candidate *c = &cs->items[i];
+        double top_err, top = class_top(eig, *n_eig, c->cls, &top_err);
+        if (c->fam >= 0 || 2 * c->cls > classes || !(c->a > top + top_err + HILL_CONVERGED)) continue;
+        double theta = 2.0 * M_PI * (double)c->cls / (double)classes;
+        double complex h = c->a + I * c->y, sc = h, sf, d[2] = {NAN, NAN};
+        double step_c, step_f = INFINITY;
+        int ok = trainspec_polish(x, &x->coarse, theta, &sc, &step_c, d) == BKF_OK;
+        sf = sc;
+        ok = ok && trainspec_polish(x, &x->fine, theta, &sf, &step_f, d) == BKF_OK;
+        if (!ok || !(cabs(sf - h) <= HILL_AGREE * (1.0 + cabs(h))))
+            return bkf_error_set(err, BKF_ETOL,
+                                 "spectrum: Hill's method at %zu modes finds %.6g%+.6gi (Bloch class %zu) right "
+                                 "of the rightmost the meshes found, %.6g, and the meshes do not confirm it",
+                                 modes, c->a, c->y, c->cls, top);
+        dv[*n_eig].d[0] = d[0], dv[*n_eig].d[1] = d[1], dv[*n_eig].coarse = sc;
+        eig[(*n_eig)++] = (bkf_trainspec_eigenvalue){creal(sf), cimag(sf), trainspec_estimate(sc, sf, step_f), c->cls,
+                                                     0.0, 0};
+    }
+    return BKF_OK;
+}
+
 /* Spectrum in `classes` phase classes: per class the `keep` rightmost
  * eigenvalues, polished on the fine mesh with error estimates. */
 static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
@@ -1238,6 +561,9 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     if (rc == BKF_OK) rc = meshes_for_polish(x, classes, polish_n, &cs, err);
     if (rc == BKF_OK) {
         polish_candidates(x, classes, keep, &cs, eig, dv, &n_eig);
+        if (hs.modes) rc = trainspec_hill_validate(x, classes, hs.modes, &cs, eig, dv, &n_eig, err);
+    }
+    if (rc == BKF_OK) {
         translation(x, eig, dv, &n_eig);
         drop_hidden(eig, dv, &n_eig, keep);
         rc = refine(x, classes, eig, dv, n_eig, err);
@@ -1268,7 +594,7 @@ int trainspec_stopped(const ctx *x, int rc, bkf_error *err)
     return rc;
 }
 
-static window initial_window(const ctx *x, double *r_inf)
+window trainspec_initial_window(const ctx *x, double *r_inf)
 {
     *r_inf = x->s * x->log_m / (2.0 * x->T);
     return (window){.a_lo = fmax(0.5 * *r_inf, -WINDOW_DEPTH * x->gamma), .a_hi = fmax(1.0, x->gamma)};
@@ -1293,7 +619,7 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     ctx x;
     rc = trainspec_ctx_init(&x, p, t, o.tol, &o, err);
-    window win = initial_window(&x, &r->r_inf);
+    window win = trainspec_initial_window(&x, &r->r_inf);
     if (rc == BKF_OK)
         rc = spectrum(&x, t->n, o.per_kappa, &r->eigenvalues, &r->count, &win, &r->y_max,
                       &r->curve_points, &r->hill_modes, err);
@@ -1394,7 +720,7 @@ int bkf_trainspec_line(const bkf_model_params *p, const bkf_trainspec_train *t,
     rc = trainspec_ctx_init(&x, p, t, o.tol, &o, err);
     double r_inf, y_max;
     size_t points = 0, n_eig = 0;
-    window win = initial_window(&x, &r_inf);
+    window win = trainspec_initial_window(&x, &r_inf);
     bkf_trainspec_eigenvalue *eig = NULL;
     size_t hill_modes = 0;
     if (rc == BKF_OK) rc = spectrum(&x, count, 1, &eig, &n_eig, &win, &y_max, &points, &hill_modes, err);

@@ -33,9 +33,6 @@
  * 31's n = 1 at mu 4.9, refused for the trace's budget, converges at M 96) */
 #define HILL_WORK 1.5e8
 #define HILL_GROW_WORK 1e9
-/* Hill's eigenvalues agree at M and the finer truncation this well (absolute) to be
- * candidates; the polish takes them from there */
-#define HILL_CONVERGED 1e-5
 /* Hill's band stands alone only where the spectrum leaves it: in the
  * upper quarter of the band every eigenvalue lies left of the rightmost by
  * at least this share of the way to the window's edge a_lo (the traced

@@ -63,6 +63,13 @@
  * keeps a margin of 4. */
 #define RICHARDSON 8.0
 
+/* The polish meshes resolve |sigma| up to this factor times the largest of
+ * the candidates it may polish (plus POLISH_REACH_MIN): Newton's path from a
+ * candidate stays near it.  So do bkf_trainspec_track's, from the values it
+ * starts from. */
+#define POLISH_MARGIN 1.25
+#define POLISH_REACH_MIN 0.05
+
 /* An eigenvalue's error from its values on a coarse and a fine mesh (sc,
  * sf), the fine Newton step and the profile's own error: one formula for
  * the ring spectrum and the followed eigenvalues, so both report alike. */
@@ -78,6 +85,7 @@ enum { FAMILIES = 2 };
 typedef struct {
     size_t steps;
     double *h, *a, *b0, *phi; /* h per step; a, b0, phi: STRIDE per step */
+    unsigned char *pstep;     /* per step: taken in p's basis (stiff), else in u's */
     /* per step, the parts of the stage matrix G and of A bp that do not
      * depend on sigma (see radau_step): G0, M = A diag(phi) A (9 each),
      * A b0 and A phi (3 each) */
@@ -99,6 +107,7 @@ typedef struct {
     double re_floor;    /* smallest Re sigma the meshes must serve (Radau steps
                            need the fast solution to decay there) */
     double *need;       /* per cycle step: the steps it needs at sigma_reach (see mesh_needs) */
+    unsigned char *stiff; /* per cycle step: stiff, its steps taken in p's basis (mesh_needs) */
     mesh coarse, fine;
     size_t evaluations;
     double work, max_work;               /* steps taken, and allowed */
@@ -119,7 +128,8 @@ int trainspec_mesh_bounds(ctx *x, size_t substeps, double **bounds, size_t *step
 int trainspec_mesh_fill(ctx *x, const double *bounds, size_t steps, mesh *m, bkf_error *err);
 int trainspec_mesh_build(ctx *x, size_t substeps, mesh *m, bkf_error *err);
 void trainspec_mesh_free(mesh *m);
-/* The Radau IIA step i at sigma in p's basis, and its sigma-derivative when de is not NULL. */
+/* The Radau IIA step i at sigma, turned into p's basis where it is taken
+ * in u's, and its sigma-derivative when de is not NULL. */
 void trainspec_radau_step(const ctx *x, const mesh *m, size_t i, double complex sigma, double complex e[4],
                           double complex de[4]);
 /* Keeps v's entries near 1 in modulus, the factor's log into *scale. */
@@ -127,6 +137,9 @@ void trainspec_rescale(double complex *v, size_t count, double *scale);
 /* The monodromy of p over mesh m at sigma (times exp(*scale)), its derivative into dp when not NULL. */
 void trainspec_monodromy_matrix(ctx *x, const mesh *m, double complex sigma, double complex p[4],
                                 double complex *dp, double *scale);
+/* Both multipliers' logs w at sigma over mesh m (w[0] the larger), and
+ * their sigma-derivatives into dw when not NULL. */
+void trainspec_monodromy(ctx *x, const mesh *m, double complex sigma, double complex w[2], double complex *dw);
 /* phase wrapped into [-pi, pi) */
 double trainspec_wrap(double phase);
 /* Newton on the multiplier exp(i theta) over mesh m from *sigma; deriv (may
@@ -169,9 +182,32 @@ static inline int trainspec_cand_push(candidates *cs, candidate c)
     return BKF_OK;
 }
 
+/* The window of a train (Re sigma > a_lo, a_hi its first right end) and
+ * the spectrum's asymptote r_inf. */
+window trainspec_initial_window(const ctx *x, double *r_inf);
+
+/* Per polished eigenvalue, both families' sigma-derivatives at its last
+ * polish (trainspec_polish): the next, finer mesh's polish steps with them. */
+typedef struct {
+    double complex d[2];
+    double complex coarse; /* its value on the coarse mesh (polish_candidates) */
+} derivs;
+
+/* The traced curves (trainspec_curves.c). */
+/* The coarse mesh for a window up to height B (the fine one is dropped). */
+int trainspec_meshes_for(ctx *x, double B, const window *win, bkf_error *err);
+/* Both families traced over [0, B], B grown until the curves leave the
+ * window in its upper quarter; their candidates into cs, the heights
+ * sampled added to *points, the window's height into *y_max. */
+int trainspec_curves(ctx *x, size_t classes, window *win, candidates *cs, double *y_max, size_t *points,
+                     bkf_error *err);
+
 /* Hill's stage (trainspec_hill.c). */
 /* Hill's converged eigenvalues polished, per class, at most (the rightmost first). */
 #define HILL_PER_CLASS 6
+/* Hill's eigenvalues agree at M and the finer truncation this well
+ * (absolute) to be candidates; the polish takes them from there */
+#define HILL_CONVERGED 1e-5
 /* Hill's value and the polished one agree this well (relative to 1 +
  * |sigma|) where Hill's band stands alone */
 #define HILL_AGREE 1e-3
@@ -200,5 +236,16 @@ int trainspec_hill_candidates(ctx *x, size_t classes, const window *win, candida
 /* M grown until the band vouches for its rightmost or the cost is spent. */
 int trainspec_hill_grow(ctx *x, size_t classes, const window *win, candidates *cs, hill_stage *h, bkf_error *err);
 void trainspec_hill_stage_free(hill_stage *h);
+/* Hill's candidates (cs's with fam < 0, from `modes` modes) validate the
+ * polished eigenvalues eig[0..*n_eig) (trainspec.c): where one lies right
+ * of its class's rightmost beyond that one's error and Hill's agreement
+ * HILL_CONVERGED, the meshes polish it (coarse, then fine: eig's meshes)
+ * and it is taken if it stays within HILL_AGREE of Hill's value, else the
+ * spectrum is refused (BKF_ETOL).  The traced curves can step over an
+ * eigenvalue (two of one class closer than the sampled phase tells):
+ * where Hill has converged, the rightmost never rests on them alone.
+ * eig and dv must hold one more entry per Hill candidate. */
+int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, const candidates *cs,
+                            bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig, bkf_error *err);
 
 #endif

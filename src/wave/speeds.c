@@ -512,3 +512,78 @@ int bkf_speeds_find(const bkf_model_params *p, const bkf_speeds_options *options
     return rc;
 }
 
+
+/* F(s) = ln T(mu(s)) - s - ell at s (the speed condition of level ell in
+ * log form), T shot to the grid's tol. */
+static int near_F(grid *g, double s, double ell, double *F, double *T, double *T_err,
+                  bkf_error *err)
+{
+    int rc = speeds_solve_T(g, mu_of_s(g->p.gamma, s), g->tol, T, T_err, err);
+    if (!rc) *F = log(*T) - s - ell;
+    return rc;
+}
+
+static int speeds_near_body(const bkf_model_params *p, size_t n, double v_guess,
+                            const bkf_speeds_options *options, bkf_speeds_root *root,
+                            bkf_error *err)
+{
+    bkf_speeds_options o = options ? *options : bkf_speeds_options_default();
+    o.n_from = o.n_to = n;
+    int rc = bkf_speeds_check(p, &o, err);
+    if (rc) return rc;
+    if (!root || n < 1 || !(p->c > 0) || !(v_guess > p->c) || !isfinite(v_guess))
+        return bkf_error_set(err, BKF_EINPUT, "near: root, n >= 1, c > 0 and v_guess > c");
+    search sr;
+    rc = search_init(&sr, p, &o, bkf_asym_k(p->nu), err);
+    grid *g = &sr.g;
+    double ell = level(g, (double)n);
+    /* v/c = hypot(1, gamma e^-s) */
+    double s0 = log(p->gamma) - 0.5 * log((v_guess / p->c - 1) * (v_guess / p->c + 1));
+    double a = s0, b = s0 + 1e-3, Fa = 0, Fb = 0, T = 0, T_err = 0;
+    if (!rc) rc = near_F(g, a, ell, &Fa, &T, &T_err, err);
+    if (!rc) rc = near_F(g, b, ell, &Fb, &T, &T_err, err);
+    int done = 0;
+    for (int it = 0; !rc && !done && it < 16; it++) {
+        if (!(Fb != Fa) || !isfinite(Fa) || !isfinite(Fb)) break;
+        double c = b - Fb * (b - a) / (Fb - Fa);
+        /* within 20% of the guess in v (v/c = hypot(1, gamma e^-s)) and 0.5
+         * in ln mu: a root near, no other */
+        if (!isfinite(c) || fabs(log(hypot(1.0, p->gamma * exp(-c)) * p->c / v_guess)) > 0.2 ||
+            fabs(log(mu_of_s(p->gamma, c) / mu_of_s(p->gamma, s0))) > 0.5)
+            break;
+        double Fc;
+        rc = near_F(g, c, ell, &Fc, &T, &T_err, err);
+        done = !rc && fabs(c - b) <= o.tol * fmax(1.0, fabs(c));
+        a = b;
+        Fa = Fb;
+        b = c;
+        Fb = Fc;
+    }
+    if (!rc && !done)
+        rc = bkf_error_set(err, BKF_ENUMERIC, "n = %zu: no root of the speed condition near v %.6g "
+                           "(the secant did not settle)", n, v_guess);
+    if (!rc) {
+        found_root f = {0};
+        f.n = (double)n;
+        f.s = b;
+        f.T = T;
+        f.T_err = T_err;
+        f.D = Fb;
+        f.slope = (Fb - Fa) / (b - a);
+        f.model = g->last_model;
+        speeds_fill_row(p, bkf_asym_k(p->nu), &f, root);
+    }
+    free(g->x);
+    bkf_cycle_free(g->coarse);
+    bkf_cycle_free(g->precise);
+    return rc;
+}
+
+int bkf_speeds_near(const bkf_model_params *p, size_t n, double v_guess,
+                    const bkf_speeds_options *options, bkf_speeds_root *root, bkf_error *err)
+{
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    int rc = speeds_near_body(p, n, v_guess, options, root, err);
+    bkf_gsl_handler_pop(handler);
+    return rc;
+}

@@ -351,13 +351,15 @@ static size_t children_of(pid_t parent, pid_t *pids, size_t max)
  * Each time the table holds only whole rows, each the serial run's row of
  * its point, and --resume under mpirun goes on from there; the last
  * resume gives the serial table, and its fields, byte for byte, with no
- * temporary left behind by the killed ranks. */
+ * temporary left behind by the killed ranks.  tmax 100 (0.25 s of CPU a
+ * point): the three stops take at most 6 of the 24 points plus what runs
+ * during a poll of 10 ms; at tmax 400 the test took 42 s of CPU. */
 TEST(cli_sweep_mpi_signals_and_kill_keep_rows_and_resume_completes)
 {
     if (!mpi_cli()) return;
     char dir[] = "/tmp/bkf_sweep_XXXXXX";
     CHECK(mkdtemp(dir));
-#define KILL_GRID "--x", "nu=-0.98:-0.82:6", "--seeds", "1:4:4", "--tmax", "400", "--N", "256", \
+#define KILL_GRID "--x", "nu=-0.98:-0.82:6", "--seeds", "1:4:4", "--tmax", "100", "--N", "256", \
                   "--init", "uniform:amp=0.01", "--frames", "50", "--no-progress"
 #define POINTS_KILL 24
     char *whole = path_in(dir, "whole.tsv"), *cut = path_in(dir, "cut.tsv");
@@ -369,7 +371,7 @@ TEST(cli_sweep_mpi_signals_and_kill_keep_rows_and_resume_completes)
     CHECK(serial && data_rows(serial) == POINTS_KILL);
     char args[2048];
     snprintf(args, sizeof args,
-             "--x nu=-0.98:-0.82:6 --seeds 1:4:4 --tmax 400 --N 256 --init uniform:amp=0.01 "
+             "--x nu=-0.98:-0.82:6 --seeds 1:4:4 --tmax 100 --N 256 --init uniform:amp=0.01 "
              "--frames 50 --no-progress --fields %s --resume --out %s",
              mf, cut);
     const int sigs[] = {SIGTERM, SIGINT, SIGKILL};
@@ -436,12 +438,14 @@ TEST(cli_sweep_mpi_signals_and_kill_keep_rows_and_resume_completes)
 }
 
 /* SIGTERM in the middle: exit 143, one line, every row on disk whole; the
- * resumed table is the uninterrupted one. */
+ * resumed table is the uninterrupted one.  The runs are short (tmax 50, 0.1
+ * s of CPU a point): what is checked is the signal's path, and 17 points
+ * are left when the first row is in (at tmax 150 the test took 16 s). */
 TEST(cli_sweep_sigterm_keeps_finished_rows_and_resume_completes)
 {
     char dir[] = "/tmp/bkf_sweep_XXXXXX";
     CHECK(mkdtemp(dir));
-#define LONG_GRID "--x", "nu=-0.98:-0.82:9", "--seeds", "1,2", "--tmax", "150", "--N", "256", \
+#define LONG_GRID "--x", "nu=-0.98:-0.82:9", "--seeds", "1,2", "--tmax", "50", "--N", "256", \
                   "--init", "uniform:amp=0.01", "--no-progress"
     char *whole = path_in(dir, "whole.tsv"), *cut = path_in(dir, "cut.tsv");
     char *err = path_in(dir, "err.txt");

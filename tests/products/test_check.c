@@ -258,6 +258,7 @@ typedef struct {
     bkf_check_row first;
     volatile sig_atomic_t *cancel; /* raised by the progress callback when set */
     int stop_after;                /* the row visitor returns nonzero at this row */
+    char said[512];                /* the last warning */
 } counter;
 
 /* ------------------------------------------- issue 31: away from the paper */
@@ -379,6 +380,12 @@ static int count_begin(const bkf_check_info *info, void *data)
     return 0;
 }
 
+static void keep_warning(const char *message, void *data)
+{
+    counter *c = data;
+    snprintf(c->said, sizeof c->said, "%s", message);
+}
+
 static int count_row(const bkf_check_row *row, void *data)
 {
     counter *c = data;
@@ -496,9 +503,15 @@ TEST(check_unresolved_reasons)
     o.grid = BKF_CHECK_GRID_MAPPED;
     o.mapped_max_steps = 3;
     c = (counter){0};
+    h.warning = keep_warning;
     CHECK_STATUS(bkf_check_run(&m, &o, &h, &err), BKF_OK);
     CHECK(c.rows == 1 && c.first.verdict == BKF_CHECK_UNRESOLVED);
     CHECK_MSG(c.first.reason == BKF_EBUDGET, "reason %d", c.first.reason);
+    /* said, not silent (draw 2 of issue 31, n = 21: unresolved after 137 s,
+     * nothing on stderr) */
+    CHECK_MSG(strstr(c.said, "n = 10, root 1 reported unresolved") &&
+                  strstr(c.said, "more than 3 steps") && strstr(c.said, "mapped-max-steps"),
+              "warning '%s'", c.said);
     /* n = 10 is resolved on half the points (its relaxed wave within
      * --resolution of the continuum's: comoving_resolution_picks_the_fewest_
      * resolving_points) */

@@ -419,6 +419,12 @@ TEST(stabmap_scan_skips_a_jump_to_a_faster_root)
     size_t count = 9;
     CHECK_STATUS(bkf_stabmap_scan(&p, 1, 2.8, 3.8, 2, &o, pts, 4, &count, NULL, &e), BKF_OK);
     CHECK_MSG(count == 0, "a crossing at S %.6g, sigma_max %.3g", pts[0].S, pts[0].sigma);
+    /* down in S (as the diagram's seed columns), where each sample's
+     * fastest root is the one above continued while it exists: past the
+     * fold it is gone, and the table's fastest is the slow root */
+    count = 9;
+    CHECK_STATUS(bkf_stabmap_scan(&p, 1, 3.8, 2.8, 2, &o, pts, 4, &count, NULL, &e), BKF_OK);
+    CHECK_MSG(count == 0, "down: a crossing at S %.6g, sigma_max %.3g", pts[0].S, pts[0].sigma);
 }
 
 /* A planted sigma_max (stabmap.h's spectrum hook): A (1 - x^2 - y^2), x =
@@ -491,6 +497,65 @@ TEST(stabmap_trace_ends_closed_on_its_first_point)
         CHECK(hypot((last->nu - first.nu) / 0.01, last->S - first.S) < 1);
         free(pts.p);
     }
+}
+
+/* A boundary that turns in nu at a corner of sigma_max: at gamma 1, c 0.6,
+ * the stable tongue of n = 3 (the root continued from S 8.85 at nu -0.95)
+ * is bounded below and above by two eigenvalues' zero sets that meet near
+ * nu -0.890, S 11.3, where the curve turns back in nu with a corner.
+ * Traced from the scan's crossing at nu -0.95, S 8.85, it goes through the
+ * corner and back to nu -0.95 on the upper half, stable below there: the
+ * spectra of the root it continued, computed directly at fixed S 0.05 on
+ * either side of its last point, have the signs its stable side says.
+ * (The fastest root there is another train above S 10.6, unstable: the scan
+ * drops that jump.)  Before, the trace stalled at the corner (6 points,
+ * `stalled`) and the upper half was not drawn. */
+TEST(stabmap_trace_passes_a_corner_at_a_turn_in_nu)
+{
+    bkf_error e;
+    bkf_model_params p = bkf_model_params_paper();
+    p.gamma = 1;
+    p.c = 0.6;
+    p.nu = -0.95;
+    bkf_stabmap_options o = bkf_stabmap_options_default();
+    o.tol = 1e-5;
+    o.S_step = 1;
+    o.max_points = 30; /* the diagram's cap for this window: 2 (8 + 6) + 2 */
+    bkf_stabmap_point x[4];
+    size_t count = 0;
+    CHECK_STATUS(bkf_stabmap_scan(&p, 3, 14, 8, 6, &o, x, 4, &count, NULL, &e), BKF_OK);
+    size_t lo = 0;
+    for (size_t i = 1; i < count; i++)
+        if (x[i].S < x[lo].S) lo = i;
+    CHECK_MSG(count >= 1 && x[lo].S > 8.8 && x[lo].S < 8.9 && x[lo].stable_above,
+              "%zu crossings, the lowest at S %.4f", count, count ? x[lo].S : NAN);
+    if (!count) return;
+    bkf_stabmap_window w = {-0.95, -0.87, 8, 14};
+    point_list pts = {0};
+    bkf_stabmap_report rep;
+    CHECK_STATUS(bkf_stabmap_trace(&p, 3, &x[lo], 1, &w, &o, keep_all, &pts, &rep, &e), BKF_OK);
+    CHECK_MSG(rep.end == BKF_STABMAP_END_REACHED, "end %s (%s) after %zu points",
+              bkf_stabmap_end_name(rep.end), rep.note, rep.points);
+    if (!pts.n) return;
+    const bkf_stabmap_point *last = &pts.p[pts.n - 1];
+    double turn = -1;
+    for (size_t i = 0; i < pts.n; i++) turn = fmax(turn, pts.p[i].nu);
+    bkf_test_note("%zu points, %zu ring spectra; turn at nu %.5f; back at nu %.6f, S %.5f",
+                  pts.n, rep.evaluations, turn, last->nu, last->S);
+    CHECK(turn > -0.9 && turn < -0.88);
+    CHECK(fabs(last->nu + 0.95) < 1e-9 && last->S > 11 && last->S < 12);
+    CHECK(pts.p[0].stable_above && !last->stable_above);
+    bkf_model_params q = p;
+    for (int side = -1; side <= 1; side += 2) {
+        double sig, err, v, mu;
+        q.S = last->S + 0.05 * side;
+        CHECK_STATUS(bkf_stabmap_sigma(&q, 3, last->v, &o, &sig, &err, &v, &mu, NULL, &e),
+                     BKF_OK);
+        CHECK_MSG(side < 0 ? sig < -err : sig > err, "S %.4f: sigma_max %.3g (err %.2g)", q.S,
+                  sig, err);
+        CHECK(fabs(v - last->v) < 0.01 * last->v);
+    }
+    free(pts.p);
 }
 
 /* The diagram's "work: N ring spectra and M eigenvalues ..." comment: N,
@@ -658,10 +723,11 @@ TEST(stabmap_diagram_followed_curves_are_the_scans_crossings)
  * boundary unseen: its n gets no state rows, as the columns' states would
  * otherwise carry the drawn half's side past where the unseen half turns.
  * At gamma 1, c 0.6, n = 3 turns in nu near -0.89 (S 8.85 at nu -0.95 up
- * to the turn, back to nu -0.95 at S 11.44: the scan at nu -0.95 and a
- * continuation through the turn both find the two crossings); the trace
- * stalled at the turn and the states said the columns stable above the
- * lower half up to the window's top. */
+ * to the turn, back to nu -0.95 at S 11.44); the trace stalled at the turn
+ * and the states said the columns stable above the lower half up to the
+ * window's top.  The trace now passes the turn (2026-11-29 fifth): both
+ * ends of n = 3's curve are seen, and its state rows are only on columns
+ * beyond the turn, which no curve crosses. */
 TEST(stabmap_diagram_no_states_for_an_n_whose_curve_stalled)
 {
     bkf_stability_spec s = bkf_stability_spec_default();
@@ -697,7 +763,10 @@ TEST(stabmap_diagram_no_states_for_an_n_whose_curve_stalled)
         bkf_test_note("n %d: %s, %zu state rows", n, unseen[n] ? "a curve ends unseen" : "curves end seen",
                       st.count);
         if (unseen[n]) CHECK_MSG(st.count == 0, "n %d: a curve stalled, yet %zu state rows", n, st.count);
+        for (size_t i = 0; n == 3 && i < st.count; i++)
+            CHECK_MSG(st.nu[i] > -0.89, "n 3: a state row at nu %.4f, inside the turn", st.nu[i]);
     }
+    CHECK_MSG(!unseen[3], "n 3's curve ends unseen (stalled or cut)");
     free(tsv);
 }
 

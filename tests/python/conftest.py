@@ -1,4 +1,4 @@
-"""Shared by the pytest suite (make test runs it after the C suite): where
+"""Shared by the pytest suite (make test runs it beside the C suite): where
 the build's CLI and the source tree are."""
 import os
 import subprocess

@@ -171,6 +171,63 @@ TEST(comoving_unstable_wave_grows)
     bkf_comoving_free(m);
 }
 
+/* Where BDF's order 3 to 5 meets its stability limit (weakly damped fast
+ * waves at small gamma: random draw 2 of issue 31, gamma 0.504908,
+ * c 0.749696, nu -0.884803, its n = 21 wavelength S/n = 25.7947/21, here
+ * three wavelengths), the run restarts at order 2: it costs a tenth of
+ * the steps (3941 to t = 20 without the restart, 344 with it, 164 of them
+ * discarded), keeps its
+ * records one per sample, and its fronts still move at the speeds
+ * solver's v. */
+TEST(comoving_order_limit_restarts_at_order_2)
+{
+    bkf_model_params sp = {0.504908, 0.749696, -0.884803, 3 * 25.7947 / 21, 0,
+                           BKF_MODEL_CONTINUUM};
+    bkf_speeds_options so = bkf_speeds_options_default();
+    so.tol = 1e-12;
+    so.n_from = so.n_to = 3;
+    bkf_speeds_table tab;
+    memset(&tab, 0, sizeof tab);
+    bkf_error e;
+    CHECK_STATUS(bkf_speeds_find(&sp, &so, &tab, &e), BKF_OK);
+    CHECK(tab.count == 1);
+    bkf_comoving_params p = bkf_comoving_params_default();
+    p.model = sp;
+    p.n = 3;
+    p.v = tab.roots[0].v;
+    p.points = 384;
+    p.noise = 1e-6;
+    bkf_speeds_table_free(&tab);
+    bkf_comoving *m = bkf_comoving_alloc(&p, &e);
+    CHECK_MSG(m != NULL, "%s", e.message);
+    CHECK_STATUS(bkf_comoving_run(m, 20, 0.5, NULL, NULL, &e), BKF_OK);
+    bkf_comoving_stats st;
+    bkf_comoving_get_stats(m, &st);
+    bkf_test_note("%zu steps, %zu of them discarded; order at most %d", st.steps,
+                  st.discarded_steps, st.max_order);
+    CHECK_MSG(st.max_order == 2 && st.discarded_steps > 0, "order %d, %zu discarded",
+              st.max_order, st.discarded_steps);
+    CHECK_MSG(st.steps < 700, "%zu steps", st.steps);
+    size_t R = bkf_comoving_count(m);
+    CHECK_MSG(R == 41, "%zu records", R);
+    for (size_t r = 0; r < R; r++) {
+        const bkf_comoving_record *rc = bkf_comoving_record_at(m, r);
+        CHECK_MSG(fabs(rc->t - 0.5 * (double)r) < 1e-12, "record %zu at t = %g", r, rc->t);
+        CHECK_MSG(rc->fronts == 3 && rc->deviation < 1e-4, "t = %g: %zu fronts, deviation %g",
+                  rc->t, rc->fronts, rc->deviation);
+    }
+    double drift, drift_err;
+    CHECK_STATUS(bkf_comoving_fit_drift(m, 10, 20, &drift, &drift_err, &e), BKF_OK);
+    CHECK_MSG(fabs(drift) < 1e-7 * p.v && fabs(drift) <= 3 * drift_err + 1e-9 * p.v,
+              "drift %g +- %g (v %g)", drift, drift_err, p.v);
+    /* a second call starts at order 2: nothing more to discard */
+    size_t discarded = st.discarded_steps;
+    CHECK_STATUS(bkf_comoving_run(m, 21, 0.5, NULL, NULL, &e), BKF_OK);
+    bkf_comoving_get_stats(m, &st);
+    CHECK(st.discarded_steps == discarded && bkf_comoving_count(m) == 43);
+    bkf_comoving_free(m);
+}
+
 /* name occurs in text as a word of its own (not "n" inside "points") */
 static int names_word(const char *text, const char *name)
 {

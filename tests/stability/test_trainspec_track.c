@@ -66,6 +66,47 @@ TEST(trainspec_track_lands_on_the_ring_spectrum_of_the_next_train)
     bkf_trainspec_result_free(&b);
 }
 
+/* Past mu 100, where the Radau meshes' profile was bsimp's and the branch
+ * took a ring spectrum at every point: the train of the paper scene's
+ * n = 6 branch (gamma 1.5) next to the sonic limit, one front of it (n = 1,
+ * L = S / 6, same v), followed from mu 98.9 to mu 120.8, lands on mu
+ * 120.8's own ring spectrum within both errors plus tol. */
+TEST(trainspec_track_past_mu_100_lands_on_the_ring_spectrum)
+{
+    const double tol = 1e-6;
+    bkf_trainspec_options o = bkf_trainspec_options_default();
+    o.tol = tol;
+    o.per_kappa = 2;
+    bkf_model_params pa = {.gamma = 1.5, .c = 0.3, .nu = -0.96, .S = 7.389490447651168 / 6}, pb = pa;
+    pb.S = 7.3742860006362232 / 6;
+    bkf_trainspec_train ta = {1, 0.30003450265150527}, tb = {1, 0.30002312827876482};
+    bkf_trainspec_result a, b;
+    bkf_error e;
+    CHECK_STATUS(bkf_trainspec_ring(&pa, &ta, &o, &a, &e), BKF_OK);
+    CHECK_STATUS(bkf_trainspec_ring(&pb, &tb, &o, &b, &e), BKF_OK);
+    CHECK(a.mu > 98 && a.mu < 100 && b.mu > 120 && b.mu < 122);
+    bkf_trainspec_eigenvalue from[8], to[8];
+    size_t count = 0, followed = 0;
+    for (size_t i = 0; i < a.count && count < 8; i++)
+        if (!a.eigenvalues[i].translation) from[count++] = a.eigenvalues[i];
+    CHECK(count >= 1);
+    CHECK_STATUS(bkf_trainspec_track(&pb, &tb, tol, count, from, to, &followed, &e), BKF_OK);
+    CHECK_MSG(followed == count, "%zu of %zu followed", followed, count);
+    for (size_t i = 0; i < count; i++) {
+        double best = INFINITY, err = 0;
+        for (size_t k = 0; k < b.count; k++) {
+            const bkf_trainspec_eigenvalue *x = &b.eigenvalues[k];
+            double d = hypot(x->re - to[i].re, x->im - to[i].im);
+            if (!x->translation && d < best) best = d, err = x->err;
+        }
+        CHECK_MSG(to[i].err <= tol, "error %.3g", to[i].err);
+        CHECK_MSG(best <= to[i].err + err + tol, "followed to %.10g%+.10gi, nearest of the ring %.3g away",
+                  to[i].re, to[i].im, best);
+    }
+    bkf_trainspec_result_free(&a);
+    bkf_trainspec_result_free(&b);
+}
+
 TEST(trainspec_track_refuses_bad_input)
 {
     bkf_model_params p = bkf_model_params_paper();

@@ -353,3 +353,34 @@ TEST(cycle_profile_sample_matches_single_points)
     free(mesh);
     bkf_cycle_free(cy);
 }
+
+/* Past mu 100 the profile's stepper is bsimp; points as dense as a
+ * spectrum's Radau mesh (24000 over a period at mu 120.8, the paper
+ * scene's n = 6 branch near the sonic limit) are sampled by rk8pd (27
+ * times faster there): they must agree with single points, each
+ * integrated by bsimp from its nearest node. */
+TEST(cycle_profile_sample_dense_stiff_matches_single_points)
+{
+    bkf_cycle *cy = bkf_cycle_alloc();
+    bkf_error e;
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = 1e-12;
+    o.stepper = BKF_STEPPER_IMPLICIT;
+    CHECK(bkf_cycle_solve(cy, 120.8, -0.96, &o, &e) == BKF_OK);
+    double T = bkf_cycle_get(cy)->period;
+    enum { N = 24000 };
+    double *z = malloc(N * sizeof *z), *f = malloc(N * sizeof *f), *fp = malloc(N * sizeof *fp);
+    for (int i = 0; i < N; i++) z[i] = T * (i + 0.5) / N;
+    CHECK(bkf_cycle_profile_sample(cy, z, N, f, fp, &e) == BKF_OK);
+    /* every 97th point, through the jumps (|f'| up to 132) and the slow branches */
+    for (int i = 0; i < N; i += 97) {
+        double f1, fp1;
+        CHECK(bkf_cycle_profile(cy, z[i], &f1, &fp1, &e) == BKF_OK);
+        CHECK_CLOSE(f[i], f1, 0, 1e-10);
+        CHECK_CLOSE(fp[i], fp1, 0, 1e-9 * (1.0 + fabs(fp1))); /* f' = y - mu F(f): mu times the state's */
+    }
+    free(z);
+    free(f);
+    free(fp);
+    bkf_cycle_free(cy);
+}

@@ -854,3 +854,69 @@ TEST(speeds_one_refused_root_keeps_the_others)
     bkf_test_note("%zu rows, %zu refused: %s", t.count, refused, t.note);
     bkf_speeds_table_free(&t);
 }
+
+/* A root followed by the secant from a nearby speed (bkf_speeds_near, no
+ * bracketing grid) is the bracketed table's root nearest that speed, on
+ * random sets of the documented domain (gamma 0.3-8, c 0.05-1.5,
+ * nu -0.99..0.99, S 5-60): every root of n = 1..3, started 2% off after S
+ * moved 2%, agrees with bkf_speeds_find's at the new S to within both v_err
+ * and 1e-9 v; a guess between no roots (v_guess far above the fastest) is
+ * BKF_ENUMERIC, and c = 0 or v_guess <= c bad input. */
+TEST(speeds_near_is_the_tables_nearest_root)
+{
+    unsigned long long x = 20261129;
+    size_t checked = 0;
+    for (int k = 0; k < 6; k++) {
+        double u[4];
+        for (int i = 0; i < 4; i++) {
+            x = x * 6364136223846793005ULL + 1442695040888963407ULL;
+            u[i] = (double)(x >> 11) / 9007199254740992.0;
+        }
+        bkf_model_params p = paper;
+        p.gamma = 0.3 + 7.7 * u[0];
+        p.c = 0.05 + 1.45 * u[1];
+        p.nu = -0.99 + 1.98 * u[2];
+        p.S = 5 + 55 * u[3];
+        for (size_t n = 1; n <= 3; n++) {
+            bkf_speeds_table t = find(p, 1e-10, n, n), t2;
+            bkf_model_params q = p;
+            q.S = 1.02 * p.S;
+            t2 = find(q, 1e-10, n, n);
+            for (size_t i = 0; i < t.count && t2.count; i++) {
+                if (t.roots[i].status != BKF_OK) continue;
+                double guess = 1.02 * t.roots[i].v;
+                size_t best = 0;
+                bkf_error e;
+                if (bkf_speeds_nearest(&t2, guess, &best, &e) != BKF_OK) continue;
+                const bkf_speeds_root *want = &t2.roots[best];
+                bkf_speeds_root r;
+                int rc = bkf_speeds_near(&q, n, guess, NULL, &r, &e);
+                /* a root whose neighbour is closer than the step (a fold
+                 * near) may go either way or none: not compared */
+                int alone = 1;
+                for (size_t j = 0; j < t2.count; j++)
+                    if (j != best && fabs(t2.roots[j].v - want->v) < 0.1 * want->v) alone = 0;
+                if (!alone) continue;
+                CHECK_MSG(rc == BKF_OK, "gamma %g c %g nu %g S %g n %zu: %s", q.gamma, q.c, q.nu,
+                          q.S, n, e.message);
+                if (rc) continue;
+                CHECK_MSG(fabs(r.v - want->v) <= r.v_err + want->v_err + 1e-9 * want->v,
+                          "gamma %g c %g nu %g S %g n %zu: near %.15g, table %.15g", q.gamma, q.c,
+                          q.nu, q.S, n, r.v, want->v);
+                CHECK(r.n == n && fabs(r.mu - want->mu) <= 1e-6 * want->mu);
+                checked++;
+            }
+            bkf_speeds_table_free(&t);
+            bkf_speeds_table_free(&t2);
+        }
+    }
+    bkf_test_note("%zu roots compared", checked);
+    CHECK(checked >= 6);
+    bkf_error e;
+    bkf_speeds_root r;
+    bkf_model_params q = paper;
+    CHECK_STATUS(bkf_speeds_near(&q, 4, 1000 * q.c, NULL, &r, &e), BKF_ENUMERIC);
+    CHECK_STATUS(bkf_speeds_near(&q, 4, 0.5 * q.c, NULL, &r, &e), BKF_EINPUT);
+    q.c = 0;
+    CHECK_STATUS(bkf_speeds_near(&q, 4, 1, NULL, &r, &e), BKF_EINPUT);
+}
