@@ -18,7 +18,7 @@ import json, sys, os, math, time, subprocess
 import numpy as np
 from magnus import MagnusTrain, winding
 
-BK = os.path.join(os.path.dirname(os.path.abspath(__file__)), "bk/build/bkfront")
+BK = os.environ.get("BK") or os.path.join(os.path.dirname(os.path.abspath(__file__)), "bk/build/bkfront")
 
 
 def run(args, timeout=900):
@@ -144,7 +144,8 @@ if __name__ == "__main__":
         r = audit(sets[idx], n, iroot, Ymax=Y)
         r["idx"], r["wall"] = idx, time.time() - t0
         os.makedirs("results", exist_ok=True)
-        json.dump(r, open("results/stab2_%02d_%d_%d.json" % (idx, n, iroot), "w"), indent=1, default=str)
+        json.dump(r, open("results/stab2_%02d_%d_%d%s.json" % (idx, n, iroot, os.environ.get("OUTTAG", "")), "w"), indent=1,
+                  default=str)
         print("set %d n %d root %d: %s st %s ss %s newton %s rightmost_ok %s verdict_ok %s ss_same %s %.0fs" % (
             idx, n, iroot, r.get("status"), r.get("st"), r.get("ss"), r.get("newton"), r.get("rightmost_ok"),
             r.get("verdict_ok"), r.get("ss_same"), r["wall"]), flush=True)
