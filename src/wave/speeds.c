@@ -254,6 +254,13 @@ static int search_init(search *sr, const bkf_model_params *p, const bkf_speeds_o
     return BKF_OK;
 }
 
+static void search_free(search *sr)
+{
+    free(sr->g.x);
+    bkf_cycle_free(sr->g.coarse);
+    bkf_cycle_free(sr->g.precise);
+}
+
 /* The grid, its certificate and n_max; the levels asked for (sr->n_from,
  * n_last) and the table's range of n. */
 static int search_levels(search *sr, const bkf_speeds_options *o, bkf_speeds_table *t,
@@ -482,9 +489,7 @@ static int find_search(const bkf_model_params *p, const bkf_speeds_options *o,
     t->formula_answers = g->formula_answers;
     t->mu_grid_max = g->mu_max_sampled;
     free(found.x);
-    free(g->x);
-    bkf_cycle_free(g->coarse);
-    bkf_cycle_free(g->precise);
+    search_free(&sr);
     if (fs) gsl_root_fsolver_free(fs);
     return rc;
 }
@@ -511,7 +516,6 @@ int bkf_speeds_find(const bkf_model_params *p, const bkf_speeds_options *options
     bkf_gsl_handler_pop(handler);
     return rc;
 }
-
 
 /* F(s) = ln T(mu(s)) - s - ell at s (the speed condition of level ell in
  * log form), T shot to the grid's tol. */
@@ -573,9 +577,7 @@ static int speeds_near_body(const bkf_model_params *p, size_t n, double v_guess,
         f.model = g->last_model;
         speeds_fill_row(p, bkf_asym_k(p->nu), &f, root);
     }
-    free(g->x);
-    bkf_cycle_free(g->coarse);
-    bkf_cycle_free(g->precise);
+    search_free(&sr);
     return rc;
 }
 
