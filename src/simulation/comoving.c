@@ -78,6 +78,7 @@ struct bkf_comoving {
     int blew_up, over_budget;
     int order_capped;         /* BDF held at order 2 (comoving_run_body) */
     size_t discarded_steps;   /* steps of runs restarted at order 2 */
+    size_t steps_reinit;      /* every step before the restart's CVodeReInit */
     char cv_message[200];
 
     /* measurements */
@@ -1357,12 +1358,15 @@ static int order_limited(bkf_comoving *m)
     return CVodeGetNumStabLimOrderReds(m->cv, &reductions) == CV_SUCCESS && reductions > 0;
 }
 
-/* Back to the call's start, BDF at order 2 from there. */
-static int restart_at_order_2(bkf_comoving *m, const run_start *at, bkf_error *err)
+/* Back to the call's start, BDF at order 2 from there.  CVodeReInit
+ * zeroes CVODE's step count: the steps of earlier calls are kept in
+ * steps_reinit (the stats' total), this call's in discarded_steps. */
+static int restart_at_order_2(bkf_comoving *m, const run_start *at, long call_steps0, bkf_error *err)
 {
     long steps = 0;
     CVodeGetNumSteps(m->cv, &steps);
-    m->discarded_steps += (size_t)steps;
+    m->discarded_steps += (size_t)(steps - call_steps0);
+    m->steps_reinit += (size_t)steps;
     N_VScale(1.0, at->y0, m->y);
     m->t = at->t0;
     m->count = at->count0;
@@ -1418,7 +1422,7 @@ static int comoving_run_body(bkf_comoving *m, double t_end, double sample_dt, bk
         }
         /* a failure (steps too small) after a reduction is retried too */
         if (order_limited(m)) {
-            if ((s = restart_at_order_2(m, at, err))) return s;
+            if ((s = restart_at_order_2(m, at, steps0, err))) return s;
             t0 = m->t;
             steps0 = 0;
             k = 0;
@@ -1467,7 +1471,7 @@ void bkf_comoving_get_stats(const bkf_comoving *m, bkf_comoving_stats *st)
     CVodeGetNumNonlinSolvIters(m->cv, &d);
     CVodeGetNumErrTestFails(m->cv, &e);
     CVodeGetLastStep(m->cv, &h);
-    st->steps = (size_t)a + m->discarded_steps;
+    st->steps = (size_t)a + m->steps_reinit;
     st->rhs_calls = (size_t)b;
     st->jacobians = (size_t)c;
     st->newton_iterations = (size_t)d;

@@ -226,6 +226,29 @@ TEST(comoving_order_limit_restarts_at_order_2)
     bkf_comoving_get_stats(m, &st);
     CHECK(st.discarded_steps == discarded && bkf_comoving_count(m) == 43);
     bkf_comoving_free(m);
+
+    /* the same run in two calls, the limit met in the second: the first
+     * call's steps made records that stay, so they are not discarded.  In
+     * CV_NORMAL mode CVODE steps past each output time and interpolates,
+     * so the split leaves its steps as they were: the second call discards
+     * exactly the single call's discarded steps less the first call's. */
+    m = bkf_comoving_alloc(&p, &e);
+    CHECK_MSG(m != NULL, "%s", e.message);
+    CHECK_STATUS(bkf_comoving_run(m, 1, 0.5, NULL, NULL, &e), BKF_OK);
+    bkf_comoving_stats s1;
+    bkf_comoving_get_stats(m, &s1);
+    CHECK_MSG(s1.max_order == 5 && s1.discarded_steps == 0, "order %d, %zu discarded by t = 1",
+              s1.max_order, s1.discarded_steps);
+    CHECK_STATUS(bkf_comoving_run(m, 20, 0.5, NULL, NULL, &e), BKF_OK);
+    bkf_comoving_stats s2;
+    bkf_comoving_get_stats(m, &s2);
+    bkf_test_note("split at t = 1: %zu steps there, %zu in all, %zu discarded (one call: %zu, %zu)",
+                  s1.steps, s2.steps, s2.discarded_steps, st.steps, discarded);
+    CHECK_MSG(s2.max_order == 2 && s2.discarded_steps > 0, "order %d", s2.max_order);
+    CHECK_MSG(s2.discarded_steps + s1.steps == discarded, "%zu discarded after %zu, one call %zu",
+              s2.discarded_steps, s1.steps, discarded);
+    CHECK(bkf_comoving_count(m) == 41);
+    bkf_comoving_free(m);
 }
 
 /* name occurs in text as a word of its own (not "n" inside "points") */
