@@ -272,6 +272,13 @@ static int meshes_for_polish(ctx *x, size_t classes, size_t polish_n, candidates
 #define POLISH_SKIP_COARSE 8.0
 
 
+/* The translation's eigenvalue (sigma = 0 in class 0), as the polish
+ * lands on it: flagged by translation(), left out of every rightmost. */
+static int near_translation(const ctx *x, size_t cls, double re, double im)
+{
+    return cls == 0 && hypot(re, im) < 10.0 * x->tol;
+}
+
 /* The keep-th largest Re sigma of eig[from..to) (-inf while fewer), the
  * translation aside: the cut reports it besides the keep, never instead of
  * one (counted, it let class 0's rightmost -3.3e-4 be skipped as left of
@@ -281,7 +288,7 @@ static double kth_re(const ctx *x, const bkf_trainspec_eigenvalue *eig, size_t f
     double top[PER_KAPPA_MAX + 1];
     size_t n = 0;
     for (size_t k = from; k < to; k++) {
-        if (eig[k].j == 0 && hypot(eig[k].re, eig[k].im) < 10.0 * x->tol) continue;
+        if (near_translation(x, eig[k].j, eig[k].re, eig[k].im)) continue;
         size_t at = n < keep ? n++ : keep;
         while (at > 0 && top[at - 1] < eig[k].re) {
             if (at < keep) top[at] = top[at - 1];
@@ -352,7 +359,7 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
 static void translation(ctx *x, bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig)
 {
     size_t k = 0;
-    while (k < *n_eig && !(eig[k].j == 0 && hypot(eig[k].re, eig[k].im) < 10.0 * x->tol)) k++;
+    while (k < *n_eig && !near_translation(x, eig[k].j, eig[k].re, eig[k].im)) k++;
     if (k == *n_eig) {
         double complex sc = 0.0, sf, *d = dv[*n_eig].d;
         double step_c, step_f = INFINITY;
@@ -504,12 +511,14 @@ static int confirm_band(const hill_stage *hs, const bkf_trainspec_eigenvalue *ei
 
 /* The rightmost polished value of class cls but the translation (re -inf
  * when none), and its error. */
-static double class_top(const bkf_trainspec_eigenvalue *eig, size_t n_eig, size_t cls, double *err)
+static double class_top(const ctx *x, const bkf_trainspec_eigenvalue *eig, size_t n_eig, size_t cls,
+                        double *err)
 {
     double top = -INFINITY;
     *err = 0.0;
     for (size_t k = 0; k < n_eig; k++)
-        if (eig[k].j == cls && !eig[k].translation && eig[k].re > top) top = eig[k].re, *err = eig[k].err;
+        if (eig[k].j == cls && !near_translation(x, cls, eig[k].re, eig[k].im) && eig[k].re > top)
+            top = eig[k].re, *err = eig[k].err;
     return top;
 }
 
@@ -518,8 +527,13 @@ int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, const candidat
 {
     for (size_t i = 0; i < cs->count; i++) {
         const candidate *c = &cs->items[i];
-        double top_err, top = class_top(eig, *n_eig, c->cls, &top_err);
-        if (c->fam >= 0 || 2 * c->cls > classes || !(c->a > top + top_err + HILL_CONVERGED)) continue;
+        double top_err, top = class_top(x, eig, *n_eig, c->cls, &top_err);
+        /* the translation itself (Hill's value of it within its own
+         * HILL_CONVERGED): translation() finds or polishes it */
+        int translation_mode = c->cls == 0 && hypot(c->a, c->y) < HILL_CONVERGED + 10.0 * x->tol;
+        if (c->fam >= 0 || 2 * c->cls > classes || translation_mode ||
+            !(c->a > top + top_err + HILL_CONVERGED))
+            continue;
         double theta = 2.0 * M_PI * (double)c->cls / (double)classes;
         double complex h = c->a + I * c->y, sc = h, sf, d[2] = {NAN, NAN};
         double step_c, step_f = INFINITY;

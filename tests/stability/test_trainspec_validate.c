@@ -6,7 +6,8 @@
  * mu 1.2 (the neighbour 0.0106571 + 17.13i, the rightmost 0.0108024 +
  * 18.03i stepped over), and the validation must take the rightmost from
  * Hill's candidates, as an independent Hill run (64 and 128 modes) gives
- * it; a Hill candidate the meshes do not confirm refuses the spectrum. */
+ * it; a Hill candidate the meshes do not confirm refuses the spectrum,
+ * also one left of the translation's sigma = 0. */
 #include "harness.h"
 
 #include "bkfront/hill.h"
@@ -96,6 +97,18 @@ TEST(trainspec_hill_validates_a_rightmost_the_curves_stepped_over)
     e.message[0] = 0;
     CHECK(trainspec_hill_validate(&x, 1, hs.modes, &one, eig, dv, &n_eig, &e) == BKF_ETOL);
     CHECK_MSG(strstr(e.message, "do not confirm") != NULL, "%s", e.message);
+
+    /* the translation (sigma 0, class 0) hides nothing: with it alone
+     * polished, a candidate left of 0 (a stable train's rightmost, here one
+     * the meshes do not confirm) is still checked, and refused */
+    eig[0] = polished(&x, 0.0, &dv[0]);
+    CHECK(hypot(eig[0].re, eig[0].im) < 1e-5);
+    candidate left = {-0.005, 17.5, 0, -1, 0};
+    candidates behind = {&left, 1, 1};
+    n_eig = 1;
+    e.message[0] = 0;
+    CHECK_MSG(trainspec_hill_validate(&x, 1, hs.modes, &behind, eig, dv, &n_eig, &e) == BKF_ETOL,
+              "a candidate left of the translation: %zu values, %s", n_eig, e.message);
 
     trainspec_hill_stage_free(&hs);
     free(cs.items);
