@@ -292,15 +292,82 @@ int trainspec_meshes_for(ctx *x, double B, const window *win, bkf_error *err)
     return rc != BKF_OK ? rc : trainspec_mesh_build(x, x->substeps, &x->coarse, err);
 }
 
+/* ------------------------------------------------------ the edge's noise */
+
+/* Left of some Re sigma < 0 the monodromy of a thin train (large mu) is
+ * rounding noise: on the slow branches near the knees, where phi = f^2 - 1
+ * is small, the solution the L-stable steps damp grows at -2 sigma / s -
+ * mu phi, and the product of the steps cancels e-foldings of it (n = 6 at
+ * gamma 1.5, mu 147.5, Im sigma 1: Re w changes by 1 between Re sigma
+ * -0.075 and -0.0750001, against 3e-7 off the first-order step at -0.05,
+ * 4e-9 at -0.045; at Im sigma 0 none).  The trace took that noise for a
+ * band of eigenvalues at Re -0.065 to -0.07 turning the phase 1000-2000
+ * rad per unit height, and spent the whole budget on it.  The noise of Re w
+ * at a + i y: its departure from the first-order step EDGE_PROBE_STEP to
+ * the right (the second-order term is below 1e-12 there). */
+#define EDGE_PROBE_STEP 1e-7
+/* ... at most this share of tol: an eigenvalue's error from it is this
+ * share of tol over |dw/dsigma| (>= 2 on the curves of that train) */
+#define EDGE_NOISE_SHARE 1e-2
+/* The raised edge keeps at least this share of the window's depth; past
+ * it the spectrum is refused: the curves near 0 would then leave the
+ * window between the trace's heights (at a_lo -0.001, the eigenvalues at
+ * Re 6e-4, Im 0.013 of that train were stepped over). */
+#define EDGE_KEEP 0.25
+/* Bisections of the edge between a noisy a_lo and 0. */
+#define EDGE_BISECTIONS 10
+
+static double edge_noise(ctx *x, double a, double y)
+{
+    double complex w[2], dw[2], w2[2];
+    trainspec_monodromy(x, &x->coarse, a + I * y, w, dw);
+    trainspec_monodromy(x, &x->coarse, a + EDGE_PROBE_STEP + I * y, w2, NULL);
+    double noise = 0.0;
+    for (int f = 0; f < FAMILIES; f++) noise = fmax(noise, cabs(w2[f] - w[f] - EDGE_PROBE_STEP * dw[f]));
+    return isfinite(noise) ? noise : INFINITY;
+}
+
+/* The window's left edge raised, where the monodromy is noise there at the
+ * heights y0 + (B - y0) / 4, / 2 and B, to the first Re sigma where it is
+ * not (bisected, the noise falls steeply to the right); BKF_ETOL where
+ * that is right of EDGE_KEEP of the window's first depth a_lo0. */
+static int raise_edge(ctx *x, window *win, double y0, double B, double a_lo0, bkf_error *err)
+{
+    double limit = EDGE_NOISE_SHARE * x->tol;
+    static const double at[] = {0.25, 0.5, 1.0};
+    for (size_t k = 0; k < sizeof at / sizeof at[0] && !x->stop; k++) {
+        double y = y0 + (B - y0) * at[k];
+        if (edge_noise(x, win->a_lo, y) <= limit) continue;
+        double lo = win->a_lo, hi = EDGE_KEEP * a_lo0;
+        if (!(edge_noise(x, hi, y) <= limit)) {
+            if (x->stop) break;
+            return bkf_error_set(err, BKF_ETOL,
+                                 "spectrum: the monodromy is rounding noise right of Re sigma = %.3g at "
+                                 "Im sigma %.3g (mu = %.15g: the damped solution grows through the knees "
+                                 "and cancels), the window's edge %.3g",
+                                 hi, y, x->mu, a_lo0);
+        }
+        for (int i = 0; i < EDGE_BISECTIONS && !x->stop; i++) {
+            double mid = 0.5 * (lo + hi);
+            if (edge_noise(x, mid, y) <= limit) hi = mid;
+            else lo = mid;
+        }
+        win->a_lo = hi;
+    }
+    return BKF_OK;
+}
+
 /* Trace both families over [0, B], B grown until the curves stay left of
- * a_lo in its upper quarter. */
+ * a_lo in its upper quarter; the edge raised right of the monodromy's noise
+ * first (raise_edge). */
 static int trace_all(ctx *x, window *win, curve *c, double *y_max, bkf_error *err)
 {
     /* beyond |sigma| ~ gamma v / c the spectrum is in its asymptotic regime */
     double B = fmax(2.0, x->gamma * x->v / x->c);
-    double y0 = 0.0;
+    double y0 = 0.0, a_lo0 = win->a_lo;
     for (;;) {
         int mrc = trainspec_meshes_for(x, B, win, err);
+        if (mrc == BKF_OK) mrc = raise_edge(x, win, y0, B, a_lo0, err);
         if (mrc != BKF_OK) return mrc;
         int rc = trace(x, win, y0, B, B, c);
         if (rc == BKF_ENOMEM) return bkf_error_set(err, rc, "out of memory");

@@ -493,3 +493,62 @@ TEST(trainspec_thinnest_paper_train_within_its_work)
     CHECK(r.sigma_max > 0.002295 && r.sigma_max < 0.0022952);
     bkf_trainspec_result_free(&r);
 }
+
+/* Issue 33: the paper scene's n = 6 branch (gamma 1.5) next to the sonic
+ * limit, mu 147.5, as two fronts on a third of the ring (classes 0 and 1
+ * are the six fronts' j = 0 and 3, where the rightmost is).  Left of Re
+ * sigma -0.045 the monodromy there is rounding noise away from the real
+ * axis; the trace took it for a band of eigenvalues at Re -0.065 to -0.07
+ * and the spectrum was refused after its whole budget (2.5e7 steps, 4 s).
+ * The window's edge now stops short of the noise: answered, and its
+ * rightmost is the one eigenvalue of class 1 solved alone on a mesh eight
+ * times finer than the ring's fine one (Newton, no trace, no window:
+ * fifth order, that mesh's error about 6e-9), within the ring's own error
+ * estimate. */
+TEST(trainspec_window_stops_short_of_the_monodromys_noise_mu_147)
+{
+    bkf_model_params p = {.gamma = 1.5, .c = 0.3, .nu = -0.96, .S = 7.3625476918440578 / 3};
+    bkf_trainspec_train t = {2, 0.30001550355444029};
+    bkf_trainspec_result r = ring(p, t.n, t.v, 1e-6);
+    bkf_test_note("mu %.5g: sigma_max %.10g%+.8gi (err %.2g), edge %.4g, work %.3g", r.mu, r.sigma_max,
+                  r.sigma_max_im, r.sigma_max_err, r.a_lo, r.work);
+    CHECK_MSG(r.a_lo > -0.075 && r.a_lo < 0.25 * -0.075, "edge %g", r.a_lo);
+    CHECK(r.verdict == BKF_TRAINSPEC_UNSTABLE && r.kappa_max > 0);
+    double re, im;
+    size_t steps;
+    bkf_error e;
+    int rc = bkf_trainspec_eigenvalue_at(&p, &t, 1, r.sigma_max, fabs(r.sigma_max_im), 16, &re, &im, &steps, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    bkf_test_note("alone at %zu steps (the ring's fine mesh %zu): %.10g%+.8gi", steps, r.mesh_steps, re, im);
+    CHECK(steps > 4 * r.mesh_steps);
+    CHECK_MSG(fabs(re - r.sigma_max) <= r.sigma_max_err && fabs(im - fabs(r.sigma_max_im)) <= r.sigma_max_err,
+              "ring %.10g%+.8gi, alone %.10g%+.8gi, err %.2g", r.sigma_max, r.sigma_max_im, re, im, r.sigma_max_err);
+    bkf_trainspec_result_free(&r);
+}
+
+/* Issue 31's refused train (n = 9, mu 95.3; gamma 2.88728, c 0.534797, nu
+ * 0.988453, S 40.572): refused after its whole budget for the same noise
+ * left of Re sigma -0.074 (the window's edge was -0.144).  Now answered,
+ * unstable by the pair at j = 3, 6 (Re 1.45e-4, Im -+0.0172), far beyond
+ * its error; that eigenvalue solved alone by Newton on its class (no trace,
+ * no window) on 1, 2, 4, 8 substeps converges at fifth order to within tol
+ * of the ring's (-7.7e-3, -2.3e-4, 1.30e-4, 1.447e-4: 8 substeps' own
+ * error about 6e-7). */
+TEST(trainspec_issue31_n9_mu_95_answered_past_the_noise)
+{
+    bkf_model_params p = {.gamma = 2.88728, .c = 0.534797, .nu = 0.988453, .S = 40.572};
+    bkf_trainspec_train t = {9, 0.53504276889998381};
+    bkf_trainspec_result r = ring(p, t.n, t.v, 1e-6);
+    bkf_test_note("mu %.5g: sigma_max %.10g%+.8gi (err %.2g) at j %ld, edge %.4g, work %.3g", r.mu, r.sigma_max,
+                  r.sigma_max_im, r.sigma_max_err, lround(r.kappa_max * p.S / TWO_PI), r.a_lo, r.work);
+    CHECK(r.verdict == BKF_TRAINSPEC_UNSTABLE && r.sigma_max > 100 * r.sigma_max_err);
+    long j = lround(r.kappa_max * p.S / TWO_PI);
+    CHECK(j == 3 || j == 6);
+    double re, im;
+    bkf_error e;
+    int rc = bkf_trainspec_eigenvalue_at(&p, &t, (size_t)j, r.sigma_max, r.sigma_max_im, 8, &re, &im, NULL, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    CHECK_MSG(fabs(re - r.sigma_max) <= 1e-6 && fabs(im - r.sigma_max_im) <= 1e-6, "ring %.10g%+.8gi, alone %.10g%+.8gi",
+              r.sigma_max, r.sigma_max_im, re, im);
+    bkf_trainspec_result_free(&r);
+}
