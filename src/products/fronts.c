@@ -1097,6 +1097,14 @@ typedef struct {
  * its first (gamma 4, c 0.15, nu -0.7, n = 2 near S 27.4, j = 0) is then
  * seen. */
 #define TRACK_PER_KAPPA 8
+/* Past a ring spectrum that took more than this many Radau steps (a
+ * quarter of its default budget, 2.5e7) the points of larger mu are not
+ * tried: the next ring spectrum, at twice the mu or more, costs many times
+ * as much, and its time outgrows its work (the meshes' building is not in
+ * it).  n = 6 at gamma 1.5 towards the sonic limit: 2.6e6 steps and 0.6 s
+ * at mu 66, 7.4e6 and 1.6 s at mu 147.5, 2.3e7 and 13 s at mu 328, then
+ * refused after 30 s at mu 401. */
+#define RING_WORK_LAST 6.25e6
 
 /* The check at a ring spectrum after followed points.  Where the set was
  * followed to this point too (every one of them), the ring's rightmost
@@ -1147,6 +1155,7 @@ static int branch_verdicts_find(branch_sink *sink,
      * whose spectrum outgrew the budget the next ones would too, each after
      * seconds of trying, as the branch runs to the sonic limit. */
     double refused_mu = INFINITY, mu_ring = NAN, moved = INFINITY;
+    bkf_error skip_why = {0};
     size_t last_ring = 0, since = 0;
     fronts_track_set set = {0};
     int s = BKF_OK;
@@ -1159,9 +1168,7 @@ static int branch_verdicts_find(branch_sink *sink,
         }
         if (r->point.root.mu >= refused_mu) {
             r->skipped = 1;
-            bkf_error_set(&r->verdict.why, BKF_EBUDGET,
-                          "not tried: mu beyond %.6g, where the spectrum outgrew its budget "
-                          "(thinner fronts need a finer mesh)", refused_mu);
+            r->verdict.why = skip_why;
             continue;
         }
         /* a fold (the translation's partner passes 0 there), every
@@ -1207,7 +1214,19 @@ static int branch_verdicts_find(branch_sink *sink,
             s = verdict_find(&q->point.params, &q->point.root, bv->tol, TRACK_PER_KAPPA, &q->verdict, err);
         }
         if (s) break;
-        if (r->verdict.why.status == BKF_EBUDGET) refused_mu = r->point.root.mu;
+        if (r->verdict.why.status == BKF_EBUDGET) {
+            refused_mu = r->point.root.mu;
+            bkf_error_set(&skip_why, BKF_EBUDGET,
+                          "not tried: mu beyond %.6g, where the spectrum outgrew its budget "
+                          "(thinner fronts need a finer mesh)", refused_mu);
+        } else if (verdict_resolved(&r->verdict) && r->verdict.spectrum.work > RING_WORK_LAST) {
+            refused_mu = nextafter(r->point.root.mu, INFINITY);
+            bkf_error_set(&skip_why, BKF_EBUDGET,
+                          "not tried: mu beyond %.6g, whose ring spectrum took %.3g Radau steps, "
+                          "a quarter of its budget (thinner fronts need a finer mesh: the next "
+                          "would cost many times as much)", r->point.root.mu,
+                          r->verdict.spectrum.work);
+        }
         set.count = 0;
         since = 0;
         if (verdict_resolved(&r->verdict)) {

@@ -400,3 +400,38 @@ TEST(products_branch_followed_verdicts_are_the_ring_spectra)
         free(tsv);
     }
 }
+
+/* Issue 33: the paper scene's n = 6 branch (gamma 1.5) a hair from the
+ * sonic limit, mu 155 to 174.  Its first point's ring spectrum was refused
+ * after its whole budget (the monodromy's noise left of Re sigma -0.045,
+ * test_trainspec.c); now answered (unstable, its rightmost that eigenvalue
+ * solved alone on a mesh eight times finer, within the error), and as it
+ * took a quarter of the budget the points of larger mu are not tried, one
+ * comment saying so. */
+TEST(products_branch_past_a_quarter_budget_ring_spectrum)
+{
+    bkf_fronts_branch_spec b = paper_branch(6, 7.36, 7.355);
+    b.gamma = 1.5;
+    b.tol = 1e-8;
+    b.stability = 1;
+    char *tsv = library_output(write_branch, &b, BKF_IO_TSV);
+    char cell[64];
+    CHECK(bkf_tsv_cell(tsv, 0, "stable", NULL, cell, sizeof cell) && strcmp(cell, "no") == 0);
+    double sigma = NAN, err = NAN, kappa = NAN, v = NAN;
+    CHECK(bkf_tsv_cell(tsv, 0, "sigma_max", &sigma, NULL, 0) && bkf_tsv_cell(tsv, 0, "sigma_max_err", &err, NULL, 0));
+    CHECK(bkf_tsv_cell(tsv, 0, "kappa_max", &kappa, NULL, 0) && bkf_tsv_cell(tsv, 0, "v", &v, NULL, 0));
+    CHECK(bkf_tsv_cell(tsv, 1, "stable", NULL, cell, sizeof cell) && strcmp(cell, "unresolved") == 0);
+    CHECK_MSG(strstr(tsv, "a quarter of its budget"), "%s", tsv);
+    bkf_model_params p = {1.5, 0.3, -0.96, 7.36, 0, BKF_MODEL_CONTINUUM};
+    bkf_trainspec_train t = {6, v};
+    double re, im;
+    size_t j = (size_t)lround(kappa * p.S / 6.283185307179586);
+    CHECK(j == 3);
+    /* the row has Re sigma alone: Newton from it and the class's pair's Im
+     * at mu 147.5, 0.0132 (j = 3 = n / 2 holds both of the pair) */
+    bkf_error e;
+    CHECK_MSG(bkf_trainspec_eigenvalue_at(&p, &t, j, sigma, 0.0132, 16, &re, &im, NULL, &e) == BKF_OK, "%s", e.message);
+    bkf_test_note("mu 155.3: sigma_max %.10g (err %.2g) j %zu; alone %.10g%+.8gi", sigma, err, j, re, im);
+    CHECK_MSG(fabs(re - sigma) <= err, "row %.10g, alone %.10g, err %.2g", sigma, re, err);
+    free(tsv);
+}
