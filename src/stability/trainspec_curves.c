@@ -323,7 +323,11 @@ static double edge_noise(ctx *x, double a, double y)
     trainspec_monodromy(x, &x->coarse, a + I * y, w, dw);
     trainspec_monodromy(x, &x->coarse, a + EDGE_PROBE_STEP + I * y, w2, NULL);
     double noise = 0.0;
-    for (int f = 0; f < FAMILIES; f++) noise = fmax(noise, cabs(w2[f] - w[f] - EDGE_PROBE_STEP * dw[f]));
+    for (int f = 0; f < FAMILIES; f++) {
+        /* Im w is a principal phase: a step across -pi is no noise */
+        double complex d = w2[f] - w[f] - EDGE_PROBE_STEP * dw[f];
+        noise = fmax(noise, hypot(creal(d), trainspec_wrap(cimag(d))));
+    }
     return isfinite(noise) ? noise : INFINITY;
 }
 
