@@ -240,19 +240,22 @@ int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *o
  *     times (a beating mode's peaks lie on its exponential wherever they
  *     fall in their windows); rate_err: its standard error from the
  *     residuals and half the bend, the difference of the two halves'
- *     (4 windows each) slopes;
- *   - limit = max(2.5 rate_err, ln 2 / L): 2.5 is the two-sided 95% point of
- *     Student's t at 6 degrees of freedom (8 windows, 2 parameters), and a
- *     rate below ln 2 / L changes the amplitude by less than a factor 2 over
- *     the whole fit, which the residual wobble of an envelope can fake;
+ *     (4 windows each) slopes, and at least ln 2 / (2.5 L), the fit's
+ *     resolution (a transient slower than the fit, or two modes closer
+ *     than about 1 / L, give an envelope as straight as one mode's);
+ *   - limit = 2.5 rate_err, so at least ln 2 / L: 2.5 is the two-sided 95%
+ *     point of Student's t at 6 degrees of freedom (8 windows, 2
+ *     parameters), and a rate below ln 2 / L changes the amplitude by less
+ *     than a factor 2 over the whole fit, which the residual wobble of an
+ *     envelope can fake;
  *   - unless the envelope bends: the bend beyond its noise (2.78 times its
  *     standard error from the halves' residuals, Student's t at 4 degrees
  *     of freedom) and beyond 0.1 / L.  Then it is not one exponential over
  *     the fit (a start-up transient still rising, a slower mode still
  *     fading) and the whole slope is a mixture of rates: rate is the later
  *     half's slope, rate_err its standard error and the whole bend (the
- *     slope may move as much again), limit = max(2.5 rate_err,
- *     ln 2 / (L/2));
+ *     slope may move as much again), at least ln 2 / (2.5 L/2), and
+ *     limit = 2.5 rate_err;
  *   - verdict: grows when rate > limit, decays when rate < -limit, else
  *     undecided (also when there are fewer than 2 samples per window, or an
  *     amplitude is not finite and positive).

@@ -261,8 +261,8 @@ void bkf_check_fit_growth(const double *t, const double *a, size_t count, double
     for (size_t k = 0; k < W; k++)
         if (in[k] < 2) return;
     double se, rss, stt, rate = ls_slope(tm, env, W, &se, &rss, &stt);
-    double se1, rss1, stt1, se2, rss2, stt2, slope1 = ls_slope(tm, env, H, &se1, &rss1, &stt1),
-                                             slope2 = ls_slope(tm + H, env + H, H, &se2, &rss2, &stt2);
+    double se1, rss1, stt1, slope1 = ls_slope(tm, env, H, &se1, &rss1, &stt1);
+    double se2, rss2, stt2, slope2 = ls_slope(tm + H, env + H, H, &se2, &rss2, &stt2);
     /* Whether the envelope is one exponential over the fit: the two halves'
      * slopes equal within their noise (the halves' residuals pooled, Student's
      * t at 4 degrees of freedom).  A start-up transient still rising into the
