@@ -346,8 +346,10 @@ static size_t children_of(pid_t parent, pid_t *pids, size_t max)
 }
 
 /* mpirun -np 2 stopped three ways, each after at least two more rows:
- * SIGTERM and SIGINT to mpirun (which sends the ranks SIGTERM, then
- * SIGKILL a second later), then kill -9 of mpirun and every rank at once.
+ * SIGTERM and SIGINT to mpirun (which sends the ranks SIGCONT, SIGTERM a
+ * second later, and SIGKILL as soon as the first rank ends: rank 0, after
+ * its "interrupted" line, see sweep_mpi_end), then kill -9 of mpirun and
+ * every rank at once.
  * Each time the table holds only whole rows, each the serial run's row of
  * its point, and --resume under mpirun goes on from there; the last
  * resume gives the serial table, and its fields, byte for byte, with no
