@@ -226,11 +226,10 @@ static void manage(farm *f)
 }
 
 /* Rank 0's answer to a message of this thread, waited for as probe waits
- * (a blocking receive polls in OpenMPI); 0, the request withdrawn, once
- * the sweep is canceled: rank 0 no longer answers then (see probe), and a
- * rank left in its receive kept mpirun waiting a second after its SIGTERM
- * for its SIGKILL, the teardown in which rank 0's "interrupted" line,
- * written already, was sometimes never forwarded to mpirun's stderr. */
+ * (a blocking receive polls in OpenMPI: a core spinning beside the
+ * compute threads); 0, the request withdrawn, once the sweep is canceled:
+ * rank 0 no longer answers then (see probe), and the rank goes on to wait
+ * in sweep_mpi_end without spinning. */
 static int answer(const bkf_sweep_spec *sp, uint64_t *i, MPI_Status *st)
 {
     MPI_Request rq;
