@@ -111,6 +111,9 @@ typedef struct {
     size_t curve_points;             /* heights y sampled (0: Hill's band alone, see below) */
     size_t hill_modes;               /* Hill's method's Fourier modes -M..M whose eigenvalues were
                                         candidates too (0: not used, mu > 6 or too many classes) */
+    int edge_moved;                  /* a_lo was moved right of where the monodromy is rounding
+                                        noise (thin trains: docs/numerics.md, "The window's edge
+                                        stops short of the monodromy's noise") */
 } bkf_trainspec_result;
 
 /* Validation alone: BKF_EINPUT with a one-line message naming the parameter. */

@@ -1097,13 +1097,19 @@ typedef struct {
  * its first (gamma 4, c 0.15, nu -0.7, n = 2 near S 27.4, j = 0) is then
  * seen. */
 #define TRACK_PER_KAPPA 8
-/* Past a ring spectrum that took more than this many Radau steps (a
- * quarter of its default budget, 2.5e7) the points of larger mu are not
- * tried: the next ring spectrum, at twice the mu or more, costs many times
- * as much, and its time outgrows its work (the meshes' building is not in
- * it).  n = 6 at gamma 1.5 towards the sonic limit: 2.6e6 steps and 0.6 s
- * at mu 66, 7.4e6 and 1.6 s at mu 147.5, 2.3e7 and 13 s at mu 328, then
- * refused after 30 s at mu 401. */
+/* Past a ring spectrum whose window had to stop short of the monodromy's
+ * rounding noise (trainspec_curves.c) and that took more than this many
+ * Radau steps (a quarter of its default budget, 2.5e7) the points of
+ * larger mu are not tried: the noise's edge moves towards 0 as mu grows
+ * (Re sigma -0.052 at mu 120.8, -0.044 at 147.5 on the branch below), the
+ * next ring spectrum, at twice the mu, costs many times as much and its
+ * time outgrows its work (the meshes' building is not in it), and the
+ * eigenvalues followed there cost about as much as a ring spectrum did.
+ * n = 6 at gamma 1.5 towards the sonic limit: 2.6e6 steps and 0.6 s at mu
+ * 66, 7.4e6 and 1.6 s at mu 147.5 (whose window stops short of the noise:
+ * before, refused after its budget), then followed 0.4-1.7 s a point at mu
+ * 180-268, a ring spectrum of 2.3e7 steps and 13 s at mu 328, refused
+ * after 30 s at mu 401. */
 #define RING_WORK_LAST 6.25e6
 
 /* The check at a ring spectrum after followed points.  Where the set was
@@ -1219,13 +1225,14 @@ static int branch_verdicts_find(branch_sink *sink,
             bkf_error_set(&skip_why, BKF_EBUDGET,
                           "not tried: mu beyond %.6g, where the spectrum outgrew its budget "
                           "(thinner fronts need a finer mesh)", refused_mu);
-        } else if (verdict_resolved(&r->verdict) && r->verdict.spectrum.work > RING_WORK_LAST) {
+        } else if (verdict_resolved(&r->verdict) && r->verdict.spectrum.edge_moved &&
+                   r->verdict.spectrum.work > RING_WORK_LAST) {
             refused_mu = nextafter(r->point.root.mu, INFINITY);
             bkf_error_set(&skip_why, BKF_EBUDGET,
-                          "not tried: mu beyond %.6g, whose ring spectrum took %.3g Radau steps, "
-                          "a quarter of its budget (thinner fronts need a finer mesh: the next "
-                          "would cost many times as much)", r->point.root.mu,
-                          r->verdict.spectrum.work);
+                          "not tried: mu beyond %.6g, whose ring spectrum took %.3g Radau steps, a "
+                          "quarter of its budget, its window stopped short of the monodromy's "
+                          "rounding noise (thinner fronts need a finer mesh: the next would cost "
+                          "many times as much)", r->point.root.mu, r->verdict.spectrum.work);
         }
         set.count = 0;
         since = 0;

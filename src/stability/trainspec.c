@@ -634,6 +634,7 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
     ctx x;
     rc = trainspec_ctx_init(&x, p, t, o.tol, &o, err);
     window win = trainspec_initial_window(&x, &r->r_inf);
+    double a_lo0 = win.a_lo;
     if (rc == BKF_OK)
         rc = spectrum(&x, t->n, o.per_kappa, &r->eigenvalues, &r->count, &win, &r->y_max,
                       &r->curve_points, &r->hill_modes, err);
@@ -646,6 +647,7 @@ int bkf_trainspec_ring(const bkf_model_params *p, const bkf_trainspec_train *t,
         r->T = x.T;
         r->L = x.L;
         r->a_lo = win.a_lo;
+        r->edge_moved = win.a_lo > a_lo0;
         r->mesh_steps = x.fine.steps;
         r->liouville_residual = fabs(x.fine.trace_sum - x.log_m);
         for (size_t i = 0; i < r->count; i++)
