@@ -512,7 +512,7 @@ TEST(trainspec_window_stops_short_of_the_monodromys_noise_mu_147)
     bkf_trainspec_result r = ring(p, t.n, t.v, 1e-6);
     bkf_test_note("mu %.5g: sigma_max %.10g%+.8gi (err %.2g), edge %.4g, work %.3g", r.mu, r.sigma_max,
                   r.sigma_max_im, r.sigma_max_err, r.a_lo, r.work);
-    CHECK_MSG(r.a_lo > -0.075 && r.a_lo < 0.25 * -0.075, "edge %g", r.a_lo);
+    CHECK_MSG(r.a_lo > -0.075 && r.a_lo < 0.25 * -0.075 && r.edge_moved, "edge %g", r.a_lo);
     CHECK(r.verdict == BKF_TRAINSPEC_UNSTABLE && r.kappa_max > 0);
     double re, im;
     size_t steps;
