@@ -35,6 +35,12 @@ typedef struct {
     double im;
     int have_mode;
     int tracked; /* f is that one eigenvalue continued (trace_tracked), no full spectrum */
+    int vouched; /* trace: tracked, and the runner-up continued left of it (trace_vouch) */
+    /* a ring spectrum's runner-up: the rightmost eigenvalue but the
+     * translation, the rightmost and its conjugate (have_second 0: none) */
+    int have_second;
+    size_t j2;
+    double f2, im2;
 } sample;
 
 /* Roots of one speeds table kept (a table has one to three here). */
@@ -136,6 +142,25 @@ static int trainspec_root(const bkf_model_params *params, const bkf_speeds_root 
     return bkf_trainspec_root(params, root, tol, 1, result, err);
 }
 
+/* The ring spectrum r's runner-up to its eigenvalue `top` into out (j2,
+ * f2, im2): the rightmost of the others but the translation and top's
+ * conjugate (class n - j, -Im sigma: the same real part). */
+static void runner_up(const bkf_trainspec_result *r, size_t top, size_t n, sample *out)
+{
+    const bkf_trainspec_eigenvalue *t = &r->eigenvalues[top];
+    for (size_t i = 0; i < r->count; i++) {
+        const bkf_trainspec_eigenvalue *ev = &r->eigenvalues[i];
+        int conjugate = ev->j == (n - t->j) % n && fabs(ev->im + t->im) <= 1e-6 * (1 + fabs(t->im)) &&
+                        fabs(ev->re - t->re) <= 1e-6 * (1 + fabs(t->re));
+        if (i == top || ev->translation || conjugate || (out->have_second && ev->re <= out->f2))
+            continue;
+        out->have_second = 1;
+        out->j2 = ev->j;
+        out->f2 = ev->re;
+        out->im2 = ev->im;
+    }
+}
+
 /* sigma_max of the root nearest v_near into *out (S, f, err, v, mu, bound,
  * the rightmost's class). */
 static int spectrum_sample(sigma_fn *fn, const bkf_model_params *params, double v_near,
@@ -164,8 +189,10 @@ static int spectrum_sample(sigma_fn *fn, const bkf_model_params *params, double 
             out->j = i; /* the index for now, the class below */
         }
         if (out->have_mode) {
-            out->im = r.eigenvalues[out->j].im;
-            out->j = r.eigenvalues[out->j].j;
+            size_t top = out->j;
+            out->im = r.eigenvalues[top].im;
+            out->j = r.eigenvalues[top].j;
+            runner_up(&r, top, fn->n, out);
         }
         fn->ring[fn->ring_next] = *out;
         fn->ring_nu[fn->ring_next] = params->nu;
@@ -605,6 +632,16 @@ typedef struct {
     double tangent[2];     /* the last point's unit tangent (scaled), as the driver gave it */
     int skip_start;        /* a restart: the driver's first point is the last one kept */
     size_t cap, turns;     /* max_points as asked, and the turns in nu that added to it */
+    /* Every other point without its ring spectrum (trace_vouch): the last
+     * ring spectrum's runner-up, continued; whether the next point may be
+     * vouched (the last was a ring spectrum); the vouched point held until
+     * the next ring spectrum, and whether a ring spectrum since disagreed
+     * with the eigenvalue tracked (another overtook it: the held point
+     * then gets its own) */
+    sample second;
+    int may_vouch, have_pend, switched;
+    bkf_stabmap_point pend;
+    trace_eval pend_e;
 } trace_ctx;
 
 /* A cached evaluation at (nu, S), a ring spectrum's first; with `full`,
@@ -659,6 +696,9 @@ static void trace_keep(trace_ctx *t, const trace_eval *e)
     t->fn.v_ref = e->s.v;
     t->fn.S_ref = e->S;
     t->mode = e->s;
+    if (!e->s.tracked)
+        t->second = (sample){.f = e->s.f2, .im = e->s.im2, .j = e->s.j2,
+                             .have_mode = e->s.have_second};
     t->cache[t->next] = *e;
     t->next = (t->next + 1) % TRACE_CACHE;
     if (t->cached < TRACE_CACHE) t->cached++;
@@ -682,6 +722,22 @@ static int near_converged(const trace_ctx *t, const double *u, double f)
     return 1;
 }
 
+/* Whether the point where Newton stops on the tracked eigenvalue s may be
+ * drawn without its ring spectrum: the last point was one, and that ring
+ * spectrum's runner-up, continued here, lies left of s beyond tol and four
+ * times their errors.  The ring spectrum of the next point checks that
+ * the eigenvalue tracked is still the rightmost (trace_flush). */
+static int trace_vouch(trace_ctx *t, double S, const sample *s)
+{
+    sample sec;
+    bkf_error e;
+    if (!t->may_vouch || !t->second.have_mode || tracked_at(&t->fn, S, &t->second, &sec, &e))
+        return 0;
+    if (!(sec.f < s->f - (t->fn.tol + 4 * (s->err + sec.err)))) return 0;
+    t->second = sec;
+    return 1;
+}
+
 static int trace_eval_at(trace_ctx *t, double nu, double S, int full, trace_eval *out,
                          bkf_error *err)
 {
@@ -690,6 +746,10 @@ static int trace_eval_at(trace_ctx *t, double nu, double S, int full, trace_eval
         *out = *hit;
         return BKF_OK;
     }
+    /* the eigenvalue tracked here, if it was: a ring spectrum that
+     * disagrees with it says another eigenvalue overtook it */
+    hit = trace_cached(t, nu, S, 0);
+    sample here = hit ? hit->s : (sample){0};
     out->nu = nu;
     out->S = S;
     t->fn.p.nu = nu;
@@ -700,9 +760,19 @@ static int trace_eval_at(trace_ctx *t, double nu, double S, int full, trace_eval
             trace_keep(t, out);
             /* the gradient as the driver will take it, updated by this value */
             if (full == TRACE_TRACKED || !near_converged(t, u, out->s.f)) return BKF_OK;
+            here = out->s;
+            if (trace_vouch(t, S, &out->s)) {
+                out->s.vouched = 1;
+                t->last.s.vouched = 1;
+                t->cache[(t->next + TRACE_CACHE - 1) % TRACE_CACHE].s.vouched = 1;
+                return BKF_OK;
+            }
         }
     }
     int s = eval_at(&t->fn, S, &out->s, err);
+    if (!s && here.tracked &&
+        fabs(out->s.f - here.f) > t->fn.tol + 4 * (out->s.err + here.err))
+        t->switched = 1;
     if (s) {
         t->failed = end_of(s);
         if (t->failed >= 0) {
@@ -860,6 +930,43 @@ static double chord_distance(const trace_ctx *t, const trace_eval *a, const trac
     return hypot(f[0] - x * d[0], f[1] - x * d[1]);
 }
 
+/* The vouched point held, drawn (visit) once the ring spectrum after it
+ * agrees with the eigenvalue tracked (`confirmed`); else (the curve ends
+ * there, or another eigenvalue overtook) only if its own ring spectrum
+ * agrees with its tracked eigenvalue, and then with that spectrum's sigma:
+ * one that disagrees is not a point of the curve and is left out.  The
+ * continuation's state is left as it is.  Nonzero: visit asked to stop. */
+static int trace_flush(trace_ctx *t, int confirmed)
+{
+    if (!t->have_pend) return 0;
+    t->have_pend = 0;
+    bkf_stabmap_point pt = t->pend;
+    if (t->switched || !confirmed) {
+        sigma_fn fn = t->fn;
+        fn.p.nu = t->pend_e.nu;
+        fn.v_ref = t->pend_e.s.v;
+        fn.S_ref = t->pend_e.S;
+        sample full;
+        bkf_error e;
+        const sample *held = &t->pend_e.s;
+        int s = eval_at(&fn, held->S, &full, &e);
+        t->fn.spectra = fn.spectra;
+        t->fn.tracked = fn.tracked;
+        pt.evaluations++;
+        if (s || isfinite(full.bound) ||
+            fabs(full.f - held->f) > t->fn.tol + 4 * (full.err + held->err)) {
+            t->rep.points--;
+            return 0;
+        }
+        double miss = fabs(full.f) + full.err;
+        pt.sigma = full.f;
+        pt.sigma_err = full.err;
+        pt.S_err = miss / fabs(pt.slope);
+        pt.nu_err = miss / fabs(pt.nu_slope);
+    }
+    return t->visit && t->visit(&pt, t->data);
+}
+
 static int trace_accept(const double *u, const double *tangent, int is_fold, void *data)
 {
     (void)is_fold;
@@ -890,8 +997,9 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
         e = t->last;
     else
         s = trace_eval_at(t, u[0], u[1], TRACE_FULL, &e, &err);
-    if (!s && e.s.tracked) s = trace_eval_at(t, e.nu, e.S, TRACE_FULL, &e, &err);
+    if (!s && e.s.tracked && !e.s.vouched) s = trace_eval_at(t, e.nu, e.S, TRACE_FULL, &e, &err);
     if (s) {
+        trace_flush(t, 0);
         t->rep.end = t->failed >= 0 ? (bkf_stabmap_end)t->failed : BKF_STABMAP_END_STALLED;
         snprintf(t->rep.note, sizeof t->rep.note, "%.250s",
                  t->failed >= 0 ? t->why.message : err.message);
@@ -901,6 +1009,7 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
         /* the point outside is not drawn; the crossing of the edge is */
         double Sb = e.S > t->S_hi ? t->S_hi : t->S_lo;
         trace_eval edge;
+        if (trace_flush(t, 0)) return 1;
         int landed = t->have_prev && trace_land(t, &e, Sb, &edge);
         t->rep.end = BKF_STABMAP_END_WINDOW;
         snprintf(t->rep.note, sizeof t->rep.note,
@@ -928,7 +1037,18 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
     t->have_prev = 1;
     t->rep.points++;
     t->rep.nu_end = pt.nu;
-    if (t->visit && t->visit(&pt, t->data)) return 1;
+    if (e.s.vouched) {
+        t->pend = pt;
+        t->pend_e = e;
+        t->have_pend = 1;
+        t->switched = 0;
+        t->may_vouch = 0;
+    } else {
+        if (trace_flush(t, 1)) return 1;
+        if (t->visit && t->visit(&pt, t->data)) return 1;
+        t->may_vouch = 1;
+    }
+    if ((closed || t->rep.points >= t->max_points) && trace_flush(t, 0)) return 1;
     if (closed) {
         t->rep.end = BKF_STABMAP_END_CLOSED;
         snprintf(t->rep.note, sizeof t->rep.note,
@@ -1084,6 +1204,7 @@ failed:
         bkf_error_set(err, s, "%s", e.message);
     }
 done:
+    trace_flush(&t, 0);
     t.rep.evaluations = t.fn.spectra;
     t.rep.tracked = t.fn.tracked;
     if (report) *report = t.rep;
