@@ -600,6 +600,12 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
 /* Turns in nu that each add half the work cap. */
 #define TRACE_TURNS 2
 #define TRACE_RETRY_STEP 0.25
+/* Ring spectra at most to correct a point whose own ring spectrum showed
+ * another eigenvalue right of the one tracked (trace_flush). */
+#define TRACE_FIX 4
+/* Ring spectra in a row agreeing with the eigenvalue tracked before a
+ * point may go without one (trace_vouch). */
+#define TRACE_CALM 2
 /* A closed curve's chord passes its first point within this (scaled). */
 #define TRACE_CLOSE 0.25
 
@@ -639,7 +645,10 @@ typedef struct {
      * with the eigenvalue tracked (another overtook it: the held point
      * then gets its own) */
     sample second;
+    double ring_top;       /* that ring spectrum's sigma_max */
     int may_vouch, have_pend, switched;
+    int calm;              /* ring spectra in a row that agreed with the eigenvalue tracked */
+    int side, side_run;    /* the last point's stable side, and points in a row on it */
     bkf_stabmap_point pend;
     trace_eval pend_e;
 } trace_ctx;
@@ -696,9 +705,11 @@ static void trace_keep(trace_ctx *t, const trace_eval *e)
     t->fn.v_ref = e->s.v;
     t->fn.S_ref = e->S;
     t->mode = e->s;
-    if (!e->s.tracked)
+    if (!e->s.tracked) {
         t->second = (sample){.f = e->s.f2, .im = e->s.im2, .j = e->s.j2,
                              .have_mode = e->s.have_second};
+        t->ring_top = e->s.f;
+    }
     t->cache[t->next] = *e;
     t->next = (t->next + 1) % TRACE_CACHE;
     if (t->cached < TRACE_CACHE) t->cached++;
@@ -725,15 +736,24 @@ static int near_converged(const trace_ctx *t, const double *u, double f)
 /* Whether the point where Newton stops on the tracked eigenvalue s may be
  * drawn without its ring spectrum: the last point was one, and that ring
  * spectrum's runner-up, continued here, lies left of s beyond tol and four
- * times their errors.  The ring spectrum of the next point checks that
- * the eigenvalue tracked is still the rightmost (trace_flush). */
+ * times their errors, having moved less than half its distance below the
+ * rightmost there (along the paper scene's curves it moves 15 to 25% of
+ * it a step; where two classes cross 0 together, as n = 2, 3 at gamma 4,
+ * c 0.15, nu -0.985, it was 1e-6 below and moved 1e-3), and the last
+ * TRACE_CALM ring spectra agreed with the eigenvalue tracked (there a
+ * third eigenvalue overtook the two, again and again).  The ring spectrum
+ * of the next point checks that the eigenvalue tracked is still the
+ * rightmost (trace_flush). */
 static int trace_vouch(trace_ctx *t, double S, const sample *s)
 {
     sample sec;
     bkf_error e;
-    if (!t->may_vouch || !t->second.have_mode || tracked_at(&t->fn, S, &t->second, &sec, &e))
+    if (!t->may_vouch || t->calm < TRACE_CALM || !t->second.have_mode ||
+        tracked_at(&t->fn, S, &t->second, &sec, &e))
         return 0;
-    if (!(sec.f < s->f - (t->fn.tol + 4 * (s->err + sec.err)))) return 0;
+    if (!(sec.f < s->f - (t->fn.tol + 4 * (s->err + sec.err))) ||
+        !(fabs(sec.f - t->second.f) < 0.5 * (t->ring_top - t->second.f)))
+        return 0;
     t->second = sec;
     return 1;
 }
@@ -770,9 +790,11 @@ static int trace_eval_at(trace_ctx *t, double nu, double S, int full, trace_eval
         }
     }
     int s = eval_at(&t->fn, S, &out->s, err);
-    if (!s && here.tracked &&
-        fabs(out->s.f - here.f) > t->fn.tol + 4 * (out->s.err + here.err))
-        t->switched = 1;
+    if (!s && here.tracked) {
+        int agree = fabs(out->s.f - here.f) <= t->fn.tol + 4 * (out->s.err + here.err);
+        t->switched |= !agree;
+        t->calm = agree ? t->calm + 1 : 0;
+    }
     if (s) {
         t->failed = end_of(s);
         if (t->failed >= 0) {
@@ -946,22 +968,44 @@ static int trace_flush(trace_ctx *t, int confirmed)
         fn.p.nu = t->pend_e.nu;
         fn.v_ref = t->pend_e.s.v;
         fn.S_ref = t->pend_e.S;
-        sample full;
+        sample full, prev = {0};
         bkf_error e;
         const sample *held = &t->pend_e.s;
+        size_t before = fn.spectra;
         int s = eval_at(&fn, held->S, &full, &e);
+        /* Another eigenvalue is right of the one tracked: the point is
+         * corrected in S at its nu on ring spectra, by the secant from the
+         * gradient's slope in S, to land_tol (at most
+         * TRACE_FIX steps, each a ring spectrum, as the corrections there
+         * were before a point went without one); a point that does not
+         * get there is left out. */
+        int agree = !s && fabs(full.f - held->f) <= t->fn.tol + 4 * (full.err + held->err);
+        double slope = pt.slope;
+        for (int it = 0; !s && !agree && it < TRACE_FIX; it++) {
+            if (it) slope = (full.f - prev.f) / (full.S - prev.S);
+            double step = -full.f / slope, S = full.S + step;
+            if (!isfinite(step) || fabs(step) > t->scale[1] || !(S > 0)) break;
+            prev = full;
+            s = eval_at(&fn, S, &full, &e);
+            agree = !s && fabs(step) <= t->land_tol * fmax(S, t->scale[1]);
+        }
         t->fn.spectra = fn.spectra;
         t->fn.tracked = fn.tracked;
-        pt.evaluations++;
-        if (s || isfinite(full.bound) ||
-            fabs(full.f - held->f) > t->fn.tol + 4 * (full.err + held->err)) {
+        pt.evaluations += fn.spectra - before;
+        if (!agree || isfinite(full.bound)) {
             t->rep.points--;
             return 0;
         }
+        if (prev.S > 0 && full.S != prev.S) slope = (full.f - prev.f) / (full.S - prev.S);
         double miss = fabs(full.f) + full.err;
+        pt.S = full.S;
+        pt.v = full.v;
+        pt.mu = full.mu;
         pt.sigma = full.f;
         pt.sigma_err = full.err;
-        pt.S_err = miss / fabs(pt.slope);
+        pt.slope = slope;
+        pt.stable_above = slope < 0;
+        pt.S_err = miss / fabs(slope);
         pt.nu_err = miss / fabs(pt.nu_slope);
     }
     return t->visit && t->visit(&pt, t->data);
@@ -1037,6 +1081,8 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
     t->have_prev = 1;
     t->rep.points++;
     t->rep.nu_end = pt.nu;
+    t->side_run = t->side_run && pt.stable_above == t->side ? t->side_run + 1 : 1;
+    t->side = pt.stable_above;
     if (e.s.vouched) {
         t->pend = pt;
         t->pend_e = e;
@@ -1046,7 +1092,9 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
     } else {
         if (trace_flush(t, 1)) return 1;
         if (t->visit && t->visit(&pt, t->data)) return 1;
-        t->may_vouch = 1;
+        /* not where the stable side flips from point to point: a corner
+         * of sigma_max followed, two classes crossing 0 together */
+        t->may_vouch = t->side_run >= 2;
     }
     if ((closed || t->rep.points >= t->max_points) && trace_flush(t, 0)) return 1;
     if (closed) {
