@@ -246,6 +246,9 @@ int hill_nearest(bkf_cycle *cycle, double gamma, double theta, size_t modes, con
     gsl_permutation *perm = gsl_permutation_alloc(n);
     if (!A || !v || !w || !B || !perm) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory (Hill matrix of size %zu)", n);
     if (rc == BKF_OK) rc = hill_matrix(cycle, gamma, theta, modes, A, err);
+    /* GSL reports a singular LU (a shift on an eigenvalue) through its
+     * handler: a NaN here, never an abort */
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
     double a_norm = 0.0;
     for (size_t i = 0; rc == BKF_OK && i < n * n; i++) a_norm += pow(cabs(A[i]), 2);
     a_norm = sqrt(a_norm);
@@ -254,6 +257,7 @@ int hill_nearest(bkf_cycle *cycle, double gamma, double theta, size_t modes, con
         out[k].re = creal(l);
         out[k].im = cimag(l);
     }
+    bkf_gsl_handler_pop(handler);
     free(A);
     free(v);
     free(w);
