@@ -236,13 +236,26 @@ int bkf_check_validate(const bkf_model_params *model, const bkf_check_options *o
  *     run, after the initial transient), L = their time span;
  *   - their envelope: the largest a in each of BKF_CHECK_GROWTH_WINDOWS
  *     equal windows of [t_from, t_to];
- *   - rate: least-squares slope of ln(envelope) against the windows'
- *     centres (a constant offset of the maximum within its window does not
- *     change it); rate_err: its standard error from the residuals;
- *   - limit = max(2.5 rate_err, ln 2 / L): 2.5 is the two-sided 95% point of
- *     Student's t at 6 degrees of freedom (8 windows, 2 parameters), and a
- *     rate below ln 2 / L changes the amplitude by less than a factor 2 over
- *     the whole fit, which the residual wobble of an envelope can fake;
+ *   - rate: least-squares slope of ln(envelope) against the maxima's
+ *     times (a beating mode's peaks lie on its exponential wherever they
+ *     fall in their windows); rate_err: its standard error from the
+ *     residuals and half the bend, the difference of the two halves'
+ *     (4 windows each) slopes, and at least ln 2 / (2.5 L), the fit's
+ *     resolution (a transient slower than the fit, or two modes closer
+ *     than about 1 / L, give an envelope as straight as one mode's);
+ *   - limit = 2.5 rate_err, so at least ln 2 / L: 2.5 is the two-sided 95%
+ *     point of Student's t at 6 degrees of freedom (8 windows, 2
+ *     parameters), and a rate below ln 2 / L changes the amplitude by less
+ *     than a factor 2 over the whole fit, which the residual wobble of an
+ *     envelope can fake;
+ *   - unless the envelope bends: the bend beyond its noise (2.78 times its
+ *     standard error from the halves' residuals, Student's t at 4 degrees
+ *     of freedom) and beyond 0.1 / L.  Then it is not one exponential over
+ *     the fit (a start-up transient still rising, a slower mode still
+ *     fading) and the whole slope is a mixture of rates: rate is the later
+ *     half's slope, rate_err its standard error and the whole bend (the
+ *     slope may move as much again), at least ln 2 / (2.5 L/2), and
+ *     limit = 2.5 rate_err;
  *   - verdict: grows when rate > limit, decays when rate < -limit, else
  *     undecided (also when there are fewer than 2 samples per window, or an
  *     amplitude is not finite and positive).
@@ -263,6 +276,9 @@ typedef struct {
     double limit;            /* the detection limit above; NaN when not fitted */
     double from, to;         /* the samples' time span */
     bkf_check_growth_verdict verdict;
+    double bend;             /* the later half's slope minus the earlier's; NaN when
+                                not fitted */
+    int bends;               /* 1: bend beyond its noise, rate the later half's */
 } bkf_check_growth;
 
 /* Fits `count` samples (t increasing) as above into *growth (always

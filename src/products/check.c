@@ -43,6 +43,18 @@ static int check_one(const check_ctx *c, const bkf_speeds_table *tab, size_t i,
                    bkf_format_number(row->sigma_max, d, sizeof d),
                    bkf_format_number(row->sigma_max_err, f, sizeof f));
     }
+    if (!s && row->growth.bends && row->growth.verdict == BKF_CHECK_GROWTH_UNDECIDED) {
+        char a[32], b[32];
+        check_warn(c,
+                   "n = %zu, root %zu: growth undecided: the perturbation's envelope still "
+                   "bends over t in [%g, %g] (its slope moved by %s between the fit's halves): "
+                   "not yet one exponential (a start-up transient, or a slower mode fading), "
+                   "so growth is the later half's slope, %s, its error the bend; a longer "
+                   "run (--runs full, --tmax) would measure the rate",
+                   row->n, row->root, row->growth.from, row->growth.to,
+                   bkf_format_number(row->growth.bend, a, sizeof a),
+                   bkf_format_number(row->growth.rate, b, sizeof b));
+    }
     if (!s) check_explain_undecided(c, row);
     return s;
 }

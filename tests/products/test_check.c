@@ -30,7 +30,7 @@
 
 static bkf_check_growth growth_of(bkf_check_growth_verdict v, double rate, double limit)
 {
-    return (bkf_check_growth){rate, limit / 2.5, limit, 10, 125, v};
+    return (bkf_check_growth){rate, limit / 2.5, limit, 10, 125, v, 0, 0};
 }
 
 TEST(check_judge_each_branch)
