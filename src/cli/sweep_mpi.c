@@ -88,9 +88,17 @@ int sweep_mpi_agree(int status)
 
 int sweep_mpi_end(int status)
 {
-    /* Stopped by a signal: mpirun forwards SIGTERM and SIGINT while it
-     * tears the job down, and MPI_Finalize would then wait for it until
-     * its SIGKILL a second later; the table is closed already. */
+    /* Stopped by a signal: mpirun (Open MPI 4) answers its SIGTERM or
+     * SIGINT with SIGCONT to every rank, SIGTERM a second later, and
+     * SIGKILL to every rank as soon as the first of them ends.  Rank 0
+     * must be that one, its "interrupted" line written: a rank with no
+     * point in flight ended within a millisecond, and under load rank 0,
+     * still closing its table, was killed before its line.  The others
+     * have nothing to write; they wait for that SIGKILL (at most 10 s,
+     * under a launcher that sends none).  MPI_Finalize would wait for
+     * the torn-down job; the table is closed already. */
+    if (started && status == BKF_ECANCELED && rank != 0)
+        for (int i = 0; i < 1000; i++) nanosleep(&(struct timespec){0, 10000000}, NULL);
     if (started && status != BKF_ECANCELED) MPI_Finalize();
     return status;
 }
@@ -217,6 +225,27 @@ static void manage(farm *f)
     free(buf);
 }
 
+/* Rank 0's answer to a message of this thread, waited for as probe waits
+ * (a blocking receive polls in OpenMPI: a core spinning beside the
+ * compute threads); 0, the request withdrawn, once the sweep is canceled:
+ * rank 0 no longer answers then (see probe), and the rank goes on to wait
+ * in sweep_mpi_end without spinning. */
+static int answer(const bkf_sweep_spec *sp, uint64_t *i, MPI_Status *st)
+{
+    MPI_Request rq;
+    MPI_Irecv(i, 1, MPI_UINT64_T, 0, MPI_ANY_TAG, MPI_COMM_WORLD, &rq);
+    for (int flag = 0;;) {
+        MPI_Test(&rq, &flag, st);
+        if (flag) return 1;
+        if (sp->cancel && *sp->cancel) {
+            MPI_Cancel(&rq);
+            MPI_Wait(&rq, MPI_STATUS_IGNORE);
+            return 0;
+        }
+        nanosleep(&(struct timespec){0, 1000000}, NULL);
+    }
+}
+
 /* A compute thread of ranks 1 .. K-1: its message (the first: the rank's
  * thread count) and the answer, a point or stop, are one exchange that
  * the rank's other threads do not interleave with theirs. */
@@ -232,14 +261,15 @@ static void serve(const bkf_sweep_spec *sp)
         const char *out = msg ? msg : ready;
         /* stopped by a signal: rank 0 no longer listens (see probe) */
         if (sp->cancel && *sp->cancel) break;
+        int answered = 0;
 #pragma omp critical(bkf_sweep_mpi)
-        {
+        if (!(sp->cancel && *sp->cancel)) {
             MPI_Send(out, (int)strlen(out), MPI_CHAR, 0, tag, MPI_COMM_WORLD);
-            MPI_Recv(&i, 1, MPI_UINT64_T, 0, MPI_ANY_TAG, MPI_COMM_WORLD, &st);
+            answered = answer(sp, &i, &st);
         }
         free(msg);
         msg = NULL;
-        if (st.MPI_TAG == TAG_STOP) break;
+        if (!answered || st.MPI_TAG == TAG_STOP) break;
         bkf_error e = {0};
         if ((msg = bkf_sweep_row(sp, (size_t)i, &e))) {
             tag = TAG_ROW;

@@ -49,6 +49,7 @@ static const struct {
     {"docs/python.md", "within 0.5 s", "the test's requirement"},
     {"docs/cli/run.md", "at 0.05 .. 0.3 s into", "the delays the signal test sends at"},
     {"docs/cli/simulate.md", "has already taken 0.5 s", "the progress bar's delay (a constant)"},
+    {"docs/cli/sweep.md", "(at most 10 s", "how long MPI ranks wait for mpirun's SIGKILL (sweep_mpi_end)"},
 };
 #define N_SETTINGS (sizeof settings / sizeof settings[0])
 
