@@ -1099,18 +1099,19 @@ typedef struct {
 #define TRACK_PER_KAPPA 8
 /* Past a ring spectrum whose window had to stop short of the monodromy's
  * rounding noise (trainspec_curves.c) and that took more than this many
- * Radau steps (a quarter of its default budget, 2.5e7) the points of
+ * Radau steps (an eighth of its default budget, 2.5e7) the points of
  * larger mu are not tried: the noise's edge moves towards 0 as mu grows
- * (Re sigma -0.052 at mu 120.8, -0.044 at 147.5 on the branch below), the
- * next ring spectrum, at twice the mu, costs many times as much and its
- * time outgrows its work (the meshes' building is not in it), and the
+ * (Re sigma -0.052 at mu 120.8, -0.045 at 147.5 on the branch below), the
+ * ring spectra past it cost many times as much or are refused, their time
+ * outgrowing their work (the meshes' building is not in it), and the
  * eigenvalues followed there cost about as much as a ring spectrum did.
- * n = 6 at gamma 1.5 towards the sonic limit: 2.6e6 steps and 0.6 s at mu
- * 66, 7.4e6 and 1.6 s at mu 147.5 (whose window stops short of the noise:
- * before, refused after its budget), then followed 0.4-1.7 s a point at mu
- * 180-268, a ring spectrum of 2.3e7 steps and 13 s at mu 328, refused
- * after 30 s at mu 401. */
-#define RING_WORK_LAST 6.25e6
+ * n = 6 at gamma 1.5 towards the sonic limit (tol 1e-6): ring spectra of
+ * 2.9e6 steps at mu 120.8, 3.7e6 at 147.5 (both stopped short of the
+ * noise; main refused 147.5 after its budget); without this rule the
+ * branch then took ring spectra refused at mu 220 and 268 (an eigenvalue's
+ * error 0.05 at 57000 steps a period) and 1.1e7 steps at mu 328: 18 s
+ * for the branch against 7. */
+#define RING_WORK_LAST 3e6
 
 /* The check at a ring spectrum after followed points.  Where the set was
  * followed to this point too (every one of them), the ring's rightmost
@@ -1229,8 +1230,8 @@ static int branch_verdicts_find(branch_sink *sink,
                    r->verdict.spectrum.work > RING_WORK_LAST) {
             refused_mu = nextafter(r->point.root.mu, INFINITY);
             bkf_error_set(&skip_why, BKF_EBUDGET,
-                          "not tried: mu beyond %.6g, whose ring spectrum took %.3g Radau steps, a "
-                          "quarter of its budget, its window stopped short of the monodromy's "
+                          "not tried: mu beyond %.6g, whose ring spectrum took %.3g Radau steps, an "
+                          "eighth of its budget, its window stopped short of the monodromy's "
                           "rounding noise (thinner fronts need a finer mesh: the next would cost "
                           "many times as much)", r->point.root.mu, r->verdict.spectrum.work);
         }

@@ -421,7 +421,7 @@ TEST(products_branch_past_a_quarter_budget_ring_spectrum)
     CHECK(bkf_tsv_cell(tsv, 0, "sigma_max", &sigma, NULL, 0) && bkf_tsv_cell(tsv, 0, "sigma_max_err", &err, NULL, 0));
     CHECK(bkf_tsv_cell(tsv, 0, "kappa_max", &kappa, NULL, 0) && bkf_tsv_cell(tsv, 0, "v", &v, NULL, 0));
     CHECK(bkf_tsv_cell(tsv, 1, "stable", NULL, cell, sizeof cell) && strcmp(cell, "unresolved") == 0);
-    CHECK_MSG(strstr(tsv, "a quarter of its budget"), "%s", tsv);
+    CHECK_MSG(strstr(tsv, "an eighth of its budget"), "%s", tsv);
     bkf_model_params p = {1.5, 0.3, -0.96, 7.36, 0, BKF_MODEL_CONTINUUM};
     bkf_trainspec_train t = {6, v};
     double re, im;
