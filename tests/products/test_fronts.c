@@ -406,9 +406,10 @@ TEST(products_branch_followed_verdicts_are_the_ring_spectra)
  * after its whole budget (the monodromy's noise left of Re sigma -0.045,
  * test_trainspec.c); now answered (unstable, its rightmost that eigenvalue
  * solved alone on a mesh eight times finer, within the error), and as it
- * took a quarter of the budget the points of larger mu are not tried, one
+ * stopped short of the noise and took an eighth of the budget the points
+ * of larger mu are not tried, one
  * comment saying so. */
-TEST(products_branch_past_a_quarter_budget_ring_spectrum)
+TEST(products_branch_past_a_costly_ring_spectrum_short_of_the_noise)
 {
     bkf_fronts_branch_spec b = paper_branch(6, 7.36, 7.355);
     b.gamma = 1.5;
