@@ -166,7 +166,10 @@ typedef struct {
  * corrections take the last spectrum's rightmost eigenvalue continued
  * (bkf_trainspec_track, about 1/20 of a ring spectrum), the ring
  * spectrum only where Newton stops: a point costs about one spectrum
- * (report->evaluations counts ring spectra).  Steps are at most
+ * (report->evaluations counts ring spectra), every other point none where
+ * the last ring spectrum's runner-up, continued there, stays left of the
+ * eigenvalue continued (checked by the next ring spectrum, else the point
+ * gets its own; docs/cli/stability.md).  Steps are at most
  * options->nu_step in nu and options->S_step in S; Newton stops when
  * its step in S is below about options->S_tol / 8.  Every point is a computed
  * sigma_max (never an interpolation), its S_err = (|sigma| + sigma_err) /

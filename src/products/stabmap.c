@@ -35,10 +35,20 @@ typedef struct {
     double im;
     int have_mode;
     int tracked; /* f is that one eigenvalue continued (trace_tracked), no full spectrum */
+    int vouched; /* trace: tracked, and the runner-up continued left of it (trace_vouch) */
+    /* a ring spectrum's runner-up: the rightmost eigenvalue but the
+     * translation, the rightmost and its conjugate (have_second 0: none) */
+    int have_second;
+    size_t j2;
+    double f2, im2;
 } sample;
 
 /* Roots of one speeds table kept (a table has one to three here). */
 #define ROOT_MEMO 4
+/* Ring spectra kept: a bracket's end is asked for again by the Illinois
+ * method that closes it (the paper scene's seeds: 3 of 62 ring spectra
+ * were a second one at the same point and root). */
+#define RING_MEMO 4
 
 /* sigma_max along S at fixed nu, the root continued by v ~ S (v = S/(n T)
  * at slowly varying T); every ring spectrum and tracked eigenvalue of the
@@ -60,6 +70,9 @@ typedef struct {
     double memo_nu, memo_S;
     size_t memo_count;
     bkf_speeds_root memo[ROOT_MEMO];
+    sample ring[RING_MEMO]; /* the last ring spectra (nu in ring_nu), oldest overwritten */
+    double ring_nu[RING_MEMO];
+    size_t rings, ring_next;
 } sigma_fn;
 
 static sigma_fn sigma_fn_of(const bkf_model_params *params, size_t n,
@@ -129,6 +142,25 @@ static int trainspec_root(const bkf_model_params *params, const bkf_speeds_root 
     return bkf_trainspec_root(params, root, tol, 1, result, err);
 }
 
+/* The ring spectrum r's runner-up to its eigenvalue `top` into out (j2,
+ * f2, im2): the rightmost of the others but the translation and top's
+ * conjugate (class n - j, -Im sigma: the same real part). */
+static void runner_up(const bkf_trainspec_result *r, size_t top, size_t n, sample *out)
+{
+    const bkf_trainspec_eigenvalue *t = &r->eigenvalues[top];
+    for (size_t i = 0; i < r->count; i++) {
+        const bkf_trainspec_eigenvalue *ev = &r->eigenvalues[i];
+        int conjugate = ev->j == (n - t->j) % n && fabs(ev->im + t->im) <= 1e-6 * (1 + fabs(t->im)) &&
+                        fabs(ev->re - t->re) <= 1e-6 * (1 + fabs(t->re));
+        if (i == top || ev->translation || conjugate || (out->have_second && ev->re <= out->f2))
+            continue;
+        out->have_second = 1;
+        out->j2 = ev->j;
+        out->f2 = ev->re;
+        out->im2 = ev->im;
+    }
+}
+
 /* sigma_max of the root nearest v_near into *out (S, f, err, v, mu, bound,
  * the rightmost's class). */
 static int spectrum_sample(sigma_fn *fn, const bkf_model_params *params, double v_near,
@@ -137,6 +169,11 @@ static int spectrum_sample(sigma_fn *fn, const bkf_model_params *params, double 
     bkf_speeds_root root;
     int s = root_near(fn, params, v_near, &root, err);
     if (s) return s;
+    for (size_t i = 0; i < fn->rings; i++)
+        if (fn->ring_nu[i] == params->nu && fn->ring[i].S == params->S && fn->ring[i].v == root.v) {
+            *out = fn->ring[i];
+            return BKF_OK;
+        }
     bkf_trainspec_result r;
     bkf_stabmap_spectrum_fn spectrum = fn->spectrum ? fn->spectrum : trainspec_root;
     s = spectrum(params, &root, fn->tol, &r, err, fn->spectrum_data);
@@ -152,9 +189,15 @@ static int spectrum_sample(sigma_fn *fn, const bkf_model_params *params, double 
             out->j = i; /* the index for now, the class below */
         }
         if (out->have_mode) {
-            out->im = r.eigenvalues[out->j].im;
-            out->j = r.eigenvalues[out->j].j;
+            size_t top = out->j;
+            out->im = r.eigenvalues[top].im;
+            out->j = r.eigenvalues[top].j;
+            runner_up(&r, top, fn->n, out);
         }
+        fn->ring[fn->ring_next] = *out;
+        fn->ring_nu[fn->ring_next] = params->nu;
+        fn->ring_next = (fn->ring_next + 1) % RING_MEMO;
+        if (fn->rings < RING_MEMO) fn->rings++;
     }
     bkf_trainspec_result_free(&r);
     return s;
@@ -309,10 +352,27 @@ static int close_bracket(sigma_fn *fn, sample a, sample b, double S_tol, bkf_sta
             int s = eval_at(fn, ta.S, &fa, err);
             if (!s) s = eval_at(fn, tb.S, &fb, err);
             if (s) return s;
+            /* the end of the closed bracket whose sign the two ring
+             * spectra do not share, and the ring spectrum at its S */
+            const sample *odd = sign_of(ta.f) != sign_of(fa.f) ? &ta : &tb;
+            const sample *there = odd == &ta ? &fa : &fb;
             if (sign_of(fa.f) != sign_of(fb.f)) {
                 a = fa;
                 b = fb;
                 best = fabs(fa.f) < fabs(fb.f) ? fa : fb;
+                closed = 1;
+            } else if (roots_apart(odd, there) &&
+                       (!odd->tracked || odd->f - 4 * odd->err > fn->tol) &&
+                       fabs(fa.f) > fa.err && fabs(fb.f) > fb.err) {
+                /* Two roots at odd's S of opposite signs (odd's a ring
+                 * spectrum, or an eigenvalue right of 0: proof), and the
+                 * bracket's root of one sign across it: sigma_max jumps
+                 * from one root to the other, no zero.  Closing it on ring
+                 * spectra came to that after 1 to 7 more (the paper
+                 * scene's seeds at nu -0.98, n = 2 to 6). */
+                a = *odd;
+                b = there == &fa ? fb : fa;
+                best = b;
                 closed = 1;
             }
         } else if (fabs(tb.S - ta.S) <= S_tol || fabs(best.f) <= best.err) {
@@ -540,6 +600,12 @@ int bkf_stabmap_follow(const bkf_model_params *params, size_t n,
 /* Turns in nu that each add half the work cap. */
 #define TRACE_TURNS 2
 #define TRACE_RETRY_STEP 0.25
+/* Ring spectra at most to correct a point whose own ring spectrum showed
+ * another eigenvalue right of the one tracked (trace_flush). */
+#define TRACE_FIX 4
+/* Ring spectra in a row agreeing with the eigenvalue tracked before a
+ * point may go without one (trace_vouch). */
+#define TRACE_CALM 2
 /* A closed curve's chord passes its first point within this (scaled). */
 #define TRACE_CLOSE 0.25
 
@@ -572,6 +638,19 @@ typedef struct {
     double tangent[2];     /* the last point's unit tangent (scaled), as the driver gave it */
     int skip_start;        /* a restart: the driver's first point is the last one kept */
     size_t cap, turns;     /* max_points as asked, and the turns in nu that added to it */
+    /* Every other point without its ring spectrum (trace_vouch): the last
+     * ring spectrum's runner-up, continued; whether the next point may be
+     * vouched (the last was a ring spectrum); the vouched point held until
+     * the next ring spectrum, and whether a ring spectrum since disagreed
+     * with the eigenvalue tracked (another overtook it: the held point
+     * then gets its own) */
+    sample second;
+    double ring_top;       /* that ring spectrum's sigma_max */
+    int may_vouch, have_pend, switched;
+    int calm;              /* ring spectra in a row that agreed with the eigenvalue tracked */
+    int side, side_run;    /* the last point's stable side, and points in a row on it */
+    bkf_stabmap_point pend;
+    trace_eval pend_e;
 } trace_ctx;
 
 /* A cached evaluation at (nu, S), a ring spectrum's first; with `full`,
@@ -626,6 +705,11 @@ static void trace_keep(trace_ctx *t, const trace_eval *e)
     t->fn.v_ref = e->s.v;
     t->fn.S_ref = e->S;
     t->mode = e->s;
+    if (!e->s.tracked) {
+        t->second = (sample){.f = e->s.f2, .im = e->s.im2, .j = e->s.j2,
+                             .have_mode = e->s.have_second};
+        t->ring_top = e->s.f;
+    }
     t->cache[t->next] = *e;
     t->next = (t->next + 1) % TRACE_CACHE;
     if (t->cached < TRACE_CACHE) t->cached++;
@@ -649,6 +733,31 @@ static int near_converged(const trace_ctx *t, const double *u, double f)
     return 1;
 }
 
+/* Whether the point where Newton stops on the tracked eigenvalue s may be
+ * drawn without its ring spectrum: the last point was one, and that ring
+ * spectrum's runner-up, continued here, lies left of s beyond tol and four
+ * times their errors, having moved less than half its distance below the
+ * rightmost there (along the paper scene's curves it moves 15 to 25% of
+ * it a step; where two classes cross 0 together, as n = 2, 3 at gamma 4,
+ * c 0.15, nu -0.985, it was 1e-6 below and moved 1e-3), and the last
+ * TRACE_CALM ring spectra agreed with the eigenvalue tracked (there a
+ * third eigenvalue overtook the two, again and again).  The ring spectrum
+ * of the next point checks that the eigenvalue tracked is still the
+ * rightmost (trace_flush). */
+static int trace_vouch(trace_ctx *t, double S, const sample *s)
+{
+    sample sec;
+    bkf_error e;
+    if (!t->may_vouch || t->calm < TRACE_CALM || !t->second.have_mode ||
+        tracked_at(&t->fn, S, &t->second, &sec, &e))
+        return 0;
+    if (!(sec.f < s->f - (t->fn.tol + 4 * (s->err + sec.err))) ||
+        !(fabs(sec.f - t->second.f) < 0.5 * (t->ring_top - t->second.f)))
+        return 0;
+    t->second = sec;
+    return 1;
+}
+
 static int trace_eval_at(trace_ctx *t, double nu, double S, int full, trace_eval *out,
                          bkf_error *err)
 {
@@ -657,6 +766,10 @@ static int trace_eval_at(trace_ctx *t, double nu, double S, int full, trace_eval
         *out = *hit;
         return BKF_OK;
     }
+    /* the eigenvalue tracked here, if it was: a ring spectrum that
+     * disagrees with it says another eigenvalue overtook it */
+    hit = trace_cached(t, nu, S, 0);
+    sample here = hit ? hit->s : (sample){0};
     out->nu = nu;
     out->S = S;
     t->fn.p.nu = nu;
@@ -667,9 +780,21 @@ static int trace_eval_at(trace_ctx *t, double nu, double S, int full, trace_eval
             trace_keep(t, out);
             /* the gradient as the driver will take it, updated by this value */
             if (full == TRACE_TRACKED || !near_converged(t, u, out->s.f)) return BKF_OK;
+            here = out->s;
+            if (trace_vouch(t, S, &out->s)) {
+                out->s.vouched = 1;
+                t->last.s.vouched = 1;
+                t->cache[(t->next + TRACE_CACHE - 1) % TRACE_CACHE].s.vouched = 1;
+                return BKF_OK;
+            }
         }
     }
     int s = eval_at(&t->fn, S, &out->s, err);
+    if (!s && here.tracked) {
+        int agree = fabs(out->s.f - here.f) <= t->fn.tol + 4 * (out->s.err + here.err);
+        t->switched |= !agree;
+        t->calm = agree ? t->calm + 1 : 0;
+    }
     if (s) {
         t->failed = end_of(s);
         if (t->failed >= 0) {
@@ -827,6 +952,65 @@ static double chord_distance(const trace_ctx *t, const trace_eval *a, const trac
     return hypot(f[0] - x * d[0], f[1] - x * d[1]);
 }
 
+/* The vouched point held, drawn (visit) once the ring spectrum after it
+ * agrees with the eigenvalue tracked (`confirmed`); else (the curve ends
+ * there, or another eigenvalue overtook) only if its own ring spectrum
+ * agrees with its tracked eigenvalue, and then with that spectrum's sigma:
+ * one that disagrees is not a point of the curve and is left out.  The
+ * continuation's state is left as it is.  Nonzero: visit asked to stop. */
+static int trace_flush(trace_ctx *t, int confirmed)
+{
+    if (!t->have_pend) return 0;
+    t->have_pend = 0;
+    bkf_stabmap_point pt = t->pend;
+    if (t->switched || !confirmed) {
+        sigma_fn fn = t->fn;
+        fn.p.nu = t->pend_e.nu;
+        fn.v_ref = t->pend_e.s.v;
+        fn.S_ref = t->pend_e.S;
+        sample full, prev = {0};
+        bkf_error e;
+        const sample *held = &t->pend_e.s;
+        size_t before = fn.spectra;
+        int s = eval_at(&fn, held->S, &full, &e);
+        /* Another eigenvalue is right of the one tracked: the point is
+         * corrected in S at its nu on ring spectra, by the secant from the
+         * gradient's slope in S, to land_tol (at most
+         * TRACE_FIX steps, each a ring spectrum, as the corrections there
+         * were before a point went without one); a point that does not
+         * get there is left out. */
+        int agree = !s && fabs(full.f - held->f) <= t->fn.tol + 4 * (full.err + held->err);
+        double slope = pt.slope;
+        for (int it = 0; !s && !agree && it < TRACE_FIX; it++) {
+            if (it) slope = (full.f - prev.f) / (full.S - prev.S);
+            double step = -full.f / slope, S = full.S + step;
+            if (!isfinite(step) || fabs(step) > t->scale[1] || !(S > 0)) break;
+            prev = full;
+            s = eval_at(&fn, S, &full, &e);
+            agree = !s && fabs(step) <= t->land_tol * fmax(S, t->scale[1]);
+        }
+        t->fn.spectra = fn.spectra;
+        t->fn.tracked = fn.tracked;
+        pt.evaluations += fn.spectra - before;
+        if (!agree || isfinite(full.bound)) {
+            t->rep.points--;
+            return 0;
+        }
+        if (prev.S > 0 && full.S != prev.S) slope = (full.f - prev.f) / (full.S - prev.S);
+        double miss = fabs(full.f) + full.err;
+        pt.S = full.S;
+        pt.v = full.v;
+        pt.mu = full.mu;
+        pt.sigma = full.f;
+        pt.sigma_err = full.err;
+        pt.slope = slope;
+        pt.stable_above = slope < 0;
+        pt.S_err = miss / fabs(slope);
+        pt.nu_err = miss / fabs(pt.nu_slope);
+    }
+    return t->visit && t->visit(&pt, t->data);
+}
+
 static int trace_accept(const double *u, const double *tangent, int is_fold, void *data)
 {
     (void)is_fold;
@@ -857,8 +1041,9 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
         e = t->last;
     else
         s = trace_eval_at(t, u[0], u[1], TRACE_FULL, &e, &err);
-    if (!s && e.s.tracked) s = trace_eval_at(t, e.nu, e.S, TRACE_FULL, &e, &err);
+    if (!s && e.s.tracked && !e.s.vouched) s = trace_eval_at(t, e.nu, e.S, TRACE_FULL, &e, &err);
     if (s) {
+        trace_flush(t, 0);
         t->rep.end = t->failed >= 0 ? (bkf_stabmap_end)t->failed : BKF_STABMAP_END_STALLED;
         snprintf(t->rep.note, sizeof t->rep.note, "%.250s",
                  t->failed >= 0 ? t->why.message : err.message);
@@ -868,6 +1053,7 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
         /* the point outside is not drawn; the crossing of the edge is */
         double Sb = e.S > t->S_hi ? t->S_hi : t->S_lo;
         trace_eval edge;
+        if (trace_flush(t, 0)) return 1;
         int landed = t->have_prev && trace_land(t, &e, Sb, &edge);
         t->rep.end = BKF_STABMAP_END_WINDOW;
         snprintf(t->rep.note, sizeof t->rep.note,
@@ -895,7 +1081,22 @@ static int trace_accept(const double *u, const double *tangent, int is_fold, voi
     t->have_prev = 1;
     t->rep.points++;
     t->rep.nu_end = pt.nu;
-    if (t->visit && t->visit(&pt, t->data)) return 1;
+    t->side_run = t->side_run && pt.stable_above == t->side ? t->side_run + 1 : 1;
+    t->side = pt.stable_above;
+    if (e.s.vouched) {
+        t->pend = pt;
+        t->pend_e = e;
+        t->have_pend = 1;
+        t->switched = 0;
+        t->may_vouch = 0;
+    } else {
+        if (trace_flush(t, 1)) return 1;
+        if (t->visit && t->visit(&pt, t->data)) return 1;
+        /* not where the stable side flips from point to point: a corner
+         * of sigma_max followed, two classes crossing 0 together */
+        t->may_vouch = t->side_run >= 2;
+    }
+    if ((closed || t->rep.points >= t->max_points) && trace_flush(t, 0)) return 1;
     if (closed) {
         t->rep.end = BKF_STABMAP_END_CLOSED;
         snprintf(t->rep.note, sizeof t->rep.note,
@@ -1051,6 +1252,7 @@ failed:
         bkf_error_set(err, s, "%s", e.message);
     }
 done:
+    trace_flush(&t, 0);
     t.rep.evaluations = t.fn.spectra;
     t.rep.tracked = t.fn.tracked;
     if (report) *report = t.rep;

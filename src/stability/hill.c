@@ -11,10 +11,15 @@
 #include "bkfront/hill.h"
 #include "bkfront/lazylib.h" /* before lapacke.h: zgeev, dgeev are lazylib.c's */
 
+#include <gsl/gsl_complex_math.h>
+#include <gsl/gsl_linalg.h>
+
 #include <complex.h>
 #include <lapacke.h>
 #include <math.h>
 #include <stdlib.h>
+
+#include "hill_internal.h"
 
 /* M_PI is not C11 */
 #define TWO_PI 6.283185307179586476925286766559
@@ -126,22 +131,16 @@ static lapack_int real_eigenvalues(const double complex *A, size_t M, double com
     return info;
 }
 
-static int spectrum_body(bkf_cycle *cycle, double gamma, double theta, size_t M,
-                         bkf_hill_eigenvalue *out, bkf_error *err)
+/* The Hill matrix of class theta at M modes into A (column-major, size
+ * n = 2(2M + 1), zeroed by the caller). */
+static int hill_matrix(bkf_cycle *cycle, double gamma, double theta, size_t M, double complex *A, bkf_error *err)
 {
     const bkf_cycle_result *r = bkf_cycle_get(cycle);
     double mu = r->mu, T = r->period;
     double s = gamma / mu, beta = (mu - gamma) * (mu + gamma) / (gamma * gamma);
     size_t nm = 2 * M + 1, n = 2 * nm;
     double complex *g = malloc(sizeof(double complex) * (2 * M + 1));
-    double complex *A = calloc(n * n, sizeof(double complex));
-    double complex *w = malloc(sizeof(double complex) * n);
-    if (!g || !A || !w) {
-        free(g);
-        free(A);
-        free(w);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory (Hill matrix of size %zu)", n);
-    }
+    if (!g) return bkf_error_set(err, BKF_ENOMEM, "out of memory (Hill matrix of size %zu)", n);
     int rc = profile_coefficients(cycle, M, g, err);
     if (rc == BKF_OK) {
         /* column-major: A[row + col n] */
@@ -157,6 +156,24 @@ static int spectrum_body(bkf_cycle *cycle, double gamma, double theta, size_t M,
             A[(c + nm) + c * n] = -(1.0 + beta * k * k) / gamma;
             A[(c + nm) + (c + nm) * n] = -I * k / s;
         }
+    }
+    free(g);
+    return rc;
+}
+
+static int spectrum_body(bkf_cycle *cycle, double gamma, double theta, size_t M,
+                         bkf_hill_eigenvalue *out, bkf_error *err)
+{
+    size_t nm = 2 * M + 1, n = 2 * nm;
+    double complex *A = calloc(n * n, sizeof(double complex));
+    double complex *w = malloc(sizeof(double complex) * n);
+    if (!A || !w) {
+        free(A);
+        free(w);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory (Hill matrix of size %zu)", n);
+    }
+    int rc = hill_matrix(cycle, gamma, theta, M, A, err);
+    if (rc == BKF_OK) {
         lapack_int info = theta == 0.0 ? real_eigenvalues(A, M, w)
                                        : LAPACKE_zgeev(LAPACK_COL_MAJOR, 'N', 'N', (lapack_int)n, A, (lapack_int)n,
                                                        w, NULL, 1, NULL, 1);
@@ -171,9 +188,81 @@ static int spectrum_body(bkf_cycle *cycle, double gamma, double theta, size_t M,
             rc = bkf_error_set(err, BKF_ENUMERIC, "non-finite eigenvalue of the Hill matrix");
     }
     if (rc == BKF_OK) qsort(out, n, sizeof *out, by_real_part);
-    free(g);
     free(A);
     free(w);
+    return rc;
+}
+
+/* Inverse iteration on A - shift, v from a fixed start: the eigenvalue
+ * nearest the shift as the Rayleigh quotient of v, once A v - lambda v is
+ * below NEAR_RESIDUAL times |A|_F (a backward-stable eigenpair); else NaN.
+ * A column-major (n x n); B and the permutation are scratch. */
+#define NEAR_ITERATIONS 12
+#define NEAR_RESIDUAL 1e-12
+static double complex nearest_one(const double complex *A, size_t n, double a_norm, double complex shift,
+                                  gsl_matrix_complex *B, gsl_permutation *perm, double complex *v,
+                                  double complex *w)
+{
+    /* an exact eigenvalue as the shift makes the LU singular: nudge it */
+    shift += 1e-12 * (1.0 + cabs(shift));
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = 0; j < n; j++) {
+            double complex a = A[i + j * n] - (i == j ? shift : 0.0);
+            gsl_matrix_complex_set(B, i, j, gsl_complex_rect(creal(a), cimag(a)));
+        }
+    int sign;
+    if (gsl_linalg_complex_LU_decomp(B, perm, &sign) != GSL_SUCCESS) return NAN;
+    /* a start no eigenvector of the structured matrix is orthogonal to in practice */
+    for (size_t i = 0; i < n; i++) v[i] = cexp(I * 2.399963229728653 * (double)i) / sqrt((double)n);
+    gsl_vector_complex_view vv = gsl_vector_complex_view_array((double *)v, n);
+    for (int it = 0; it < NEAR_ITERATIONS; it++) {
+        if (gsl_linalg_complex_LU_svx(B, perm, &vv.vector) != GSL_SUCCESS) return NAN;
+        double norm = 0.0;
+        for (size_t i = 0; i < n; i++) norm += creal(v[i]) * creal(v[i]) + cimag(v[i]) * cimag(v[i]);
+        norm = sqrt(norm);
+        if (!(norm > 0.0) || !isfinite(norm)) return NAN;
+        for (size_t i = 0; i < n; i++) v[i] /= norm;
+        /* w = A v, lambda = v^H A v, residual |A v - lambda v| */
+        double complex lambda = 0.0;
+        for (size_t i = 0; i < n; i++) w[i] = 0.0;
+        for (size_t j = 0; j < n; j++)
+            for (size_t i = 0; i < n; i++) w[i] += A[i + j * n] * v[j];
+        for (size_t i = 0; i < n; i++) lambda += conj(v[i]) * w[i];
+        double res = 0.0;
+        for (size_t i = 0; i < n; i++) res += pow(cabs(w[i] - lambda * v[i]), 2);
+        if (sqrt(res) <= NEAR_RESIDUAL * a_norm) return lambda;
+    }
+    return NAN;
+}
+
+int hill_nearest(bkf_cycle *cycle, double gamma, double theta, size_t modes, const bkf_hill_eigenvalue *at,
+                 size_t count, bkf_hill_eigenvalue *out, bkf_error *err)
+{
+    int rc = check_inputs(cycle, gamma, theta, modes, BKF_HILL_MODES_MAX, err);
+    if (rc != BKF_OK) return rc;
+    size_t n = 2 * (2 * modes + 1);
+    double complex *A = calloc(n * n, sizeof *A), *v = malloc(n * sizeof *v), *w = malloc(n * sizeof *w);
+    gsl_matrix_complex *B = gsl_matrix_complex_alloc(n, n);
+    gsl_permutation *perm = gsl_permutation_alloc(n);
+    if (!A || !v || !w || !B || !perm) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory (Hill matrix of size %zu)", n);
+    if (rc == BKF_OK) rc = hill_matrix(cycle, gamma, theta, modes, A, err);
+    /* GSL reports a singular LU (a shift on an eigenvalue) through its
+     * handler: a NaN here, never an abort */
+    bkf_gsl_handler *handler = bkf_gsl_handler_push();
+    double a_norm = 0.0;
+    for (size_t i = 0; rc == BKF_OK && i < n * n; i++) a_norm += pow(cabs(A[i]), 2);
+    a_norm = sqrt(a_norm);
+    for (size_t k = 0; rc == BKF_OK && k < count; k++) {
+        double complex l = nearest_one(A, n, a_norm, at[k].re + I * at[k].im, B, perm, v, w);
+        out[k].re = creal(l);
+        out[k].im = cimag(l);
+    }
+    bkf_gsl_handler_pop(handler);
+    free(A);
+    free(v);
+    free(w);
+    if (B) gsl_matrix_complex_free(B);
+    if (perm) gsl_permutation_free(perm);
     return rc;
 }
 

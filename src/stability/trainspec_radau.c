@@ -85,14 +85,18 @@ int trainspec_mesh_needs(ctx *x, double reach, bkf_error *err)
         rate[i] = 0.5 * a + sqrt(0.25 * a * a + b);
         slow[i] = b_fixed + reach * (reach + x->gamma * fabs(phi[i])); /* bounds |bp| */
     }
+    /* the non-stiff steps' limits loosened for a looser tol (COARSEN_TOL) */
+    double g = fmin(COARSEN_MAX, fmax(1.0, pow(x->tol / COARSEN_TOL, 0.2)));
     for (size_t i = 0; rc == BKF_OK && i + 1 < n; i++) {
         double len = x->nodes[i + 1] - x->nodes[i];
-        double plain = len * fmax(rate[i], rate[i + 1]) / RESOLVE_TURN;
+        double plain = len * fmax(rate[i], rate[i + 1]) / (g * RESOLVE_TURN);
         double decay = x->mu * (fmin(phi[i], phi[i + 1]) + 2.0 * x->re_floor / x->gamma);
         double stiff = decay > 0.0 ? len * fmax(slow[i], slow[i + 1]) / decay / RESOLVE_TURN : INFINITY;
         /* stiff steps, of length len / stiff, must damp the fast solution */
         int use_stiff = stiff < plain && decay * len >= STIFF_MIN * fmax(stiff, 1.0);
-        need[i] = fmax(fmax(use_stiff ? stiff : plain, fabs(f[i + 1] - f[i]) / PROFILE_TURN), NODE_SHARE);
+        double loose = use_stiff ? 1.0 : g;
+        need[i] = fmax(fmax(use_stiff ? stiff : plain, fabs(f[i + 1] - f[i]) / (loose * PROFILE_TURN)),
+                       NODE_SHARE / loose);
         x->stiff[i] = (unsigned char)use_stiff;
     }
     if (rc == BKF_OK) whole_runs(x);

@@ -414,20 +414,39 @@ int bkf_cycle_estimate(bkf_cycle *c, double mu, double nu, const bkf_cycle_optio
 
 /* ------------------------------------------------------------- profile */
 
-/* Past mu 100 the profile's stepper is the stiff one (cycle_store_result):
- * from the nearest node to a lone point it takes a few steps where rk8pd
- * would take its stability-limited ones (about 140 a unit of mu per
- * period).  But bsimp pays a Jacobian and an LU a step, and among dense
- * points it steps from each to the next: 27 us a point at mu 120.8 where
- * rk8pd takes 2 (24000 points, a spectrum's Radau mesh: 0.65 s against
- * 0.045 s; at mu 150 on 3000 points, 20 a unit of mu, 0.082 s against
- * 0.025; at mu 1000 on 65536 points, 0.62 s against 1.86 s).  From this
- * many points a unit of mu rk8pd samples them, its stability-limited steps
- * then no more than the points themselves cost bsimp (its values within
- * 1e-10 of bsimp's single points at mu 120.8, the profile's within 1e-12
- * of 16 times denser samples at mu 120.8 and 1000, 3.4e-11 at mu 300,
- * nu 0.9). */
+/* Past mu 100 the profile's stepper is the solve's stiff one
+ * (cycle_store_result): from the nearest node to a lone point it takes a
+ * few steps where rk8pd would take its stability-limited ones (about 140 a
+ * unit of mu per period).  Among dense points it steps from each to the
+ * next, and what a point costs depends on which stiff stepper it is:
+ * - bsimp (GSL's, a Jacobian and an LU a step) about 27 us a point at any
+ *   mu: rk8pd is as fast from about 20 points a unit of mu on (mu 300 on
+ *   6000 points: 0.185 s against 0.165; mu 3000 on 60000: 1.72 against
+ *   1.65) and far faster above at moderate mu (mu 120.8 on 24000, a
+ *   spectrum's Radau mesh: 0.032 s against 0.66; mu 300 on 30000: 0.087
+ *   against 0.84);
+ * - bd2x2 (the same method written for this system, the automatic choice
+ *   past mu 100) about 1 us a point at any mu, while rk8pd's cost a point
+ *   grows with mu (its step-size control restarts at each point below its
+ *   stability limit: about 28 us a point at mu 1000 on 24000 to 65536
+ *   points, 30 at mu 3000): rk8pd wins only from about 2 mu^2 points on
+ *   (points a unit of mu where the two cost the same: 250 at mu 100, 300 at
+ *   150, 320 at 200, 500 at 300, 900 at 500, 1000 at 1000; at mu 1000 on
+ *   65536 points 0.068 s against 1.83).
+ * Measured 2026-11-29 (CPU, best of 3, points spread over the cycle's
+ * node mesh, nu -0.5 and -0.96, tol 1e-10).  rk8pd's values within 1e-10 of
+ * the stiff stepper's (tests/wave/test_cycle_profile_dense.c). */
 #define PROFILE_DENSE_PER_MU 20.0
+#define PROFILE_DENSE_PER_MU2_BD 2.0
+
+/* The stepper for `count` sorted points over a period: rk8pd from the
+ * count where it costs less than the stiff stepper `stiff`. */
+static bkf_stepper_kind profile_stepper_for(bkf_stepper_kind stiff, double mu, size_t count)
+{
+    double dense = stiff == BKF_STEPPER_EXTRAPOLATION ? PROFILE_DENSE_PER_MU2_BD * mu * mu
+                                                      : PROFILE_DENSE_PER_MU * mu;
+    return (double)count >= dense ? BKF_STEPPER_EXPLICIT : stiff;
+}
 
 /* One integrator for all the points, each continued from the previous one
  * unless a stored node lies between them (a restart there keeps the error
@@ -442,8 +461,7 @@ static int cycle_sample_body(bkf_cycle *c, const double *z, size_t count, double
         if (!(z[i] >= 0.0 && z[i] <= T) || (i && z[i] < z[i - 1]))
             return bkf_error_set(err, BKF_EINPUT, "sample points must increase within [0, T = %.15g]", T);
     int rc = BKF_OK;
-    bkf_stepper_kind first =
-        (double)count >= PROFILE_DENSE_PER_MU * c->flow.mu ? BKF_STEPPER_EXPLICIT : c->profile_stepper;
+    bkf_stepper_kind first = profile_stepper_for(c->profile_stepper, c->flow.mu, count);
     for (int attempt = 0; attempt < 2; attempt++) {
         bkf_stepper_kind kind = attempt ? BKF_STEPPER_IMPLICIT : first;
         if (attempt && kind == first) break;
