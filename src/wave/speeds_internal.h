@@ -19,6 +19,9 @@
 #define GRID_STEP 0.3
 #define CELL_MIN 1e-6
 #define MAX_SAMPLES 4000
+/* A cell's enclosure within this many times its ends' noise of their
+ * values is not bisected (speeds_search.c, noise_bound). */
+#define NOISE_BAND 2.0
 /* Tail certificate (A3). */
 #define TAIL_MU_MIN 10.0
 #define TAIL_KNEE_FRACTION 0.25
