@@ -10,19 +10,7 @@
 
 #include "bkfront/speeds.h"
 #include "bkfront/trainspec.h"
-
-/* The reported rightmost of class j (the translation aside), or -inf. */
-static double class_top(const bkf_trainspec_result *r, size_t j, double *err)
-{
-    double top = -INFINITY;
-    for (size_t k = 0; k < r->count; k++) {
-        const bkf_trainspec_eigenvalue *e = &r->eigenvalues[k];
-        if (e->j != j || e->translation || !(e->re > top)) continue;
-        top = e->re;
-        *err = e->err;
-    }
-    return top;
-}
+#include "trainspec_support.h"
 
 /* Root n of p at tol 1e-5 and 1e-8: every class's rightmost within both
  * errors, the loose one on fewer steps; 1 when compared. */

@@ -17,6 +17,7 @@
 #include "bkfront/hill.h"
 #include "bkfront/speeds.h"
 #include "bkfront/trainspec.h"
+#include "trainspec_support.h"
 
 #define TWO_PI 6.283185307179586476925286766559
 
@@ -29,19 +30,6 @@ static bkf_cycle *profile_of(bkf_model_params p, double v)
     bkf_error e;
     CHECK_MSG(bkf_cycle_solve(cy, mu, p.nu, &co, &e) == BKF_OK, "%s", e.message);
     return cy;
-}
-
-/* The reported rightmost of class j (the translation aside), or -inf. */
-static double class_top(const bkf_trainspec_result *r, size_t j, double *err)
-{
-    double top = -INFINITY;
-    for (size_t k = 0; k < r->count; k++) {
-        const bkf_trainspec_eigenvalue *e = &r->eigenvalues[k];
-        if (e->j != j || e->translation || !(e->re > top)) continue;
-        top = e->re;
-        *err = e->err;
-    }
-    return top;
 }
 
 TEST(trainspec_newton_curves_and_polish_cut_match_hill_per_class_on_random_sets)
