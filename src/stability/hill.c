@@ -52,11 +52,12 @@ static int profile_coefficients(bkf_cycle *cycle, size_t M, double complex *g, b
         free(cs);
         return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
-    int rc = BKF_OK;
+    /* the samples in one pass (bkf_cycle_profile_sample): point by point
+     * each was an integrator of its own from the nearest node */
+    for (size_t j = 0; j < ns; j++) cs[j] = T * (double)j / (double)ns;
+    int rc = bkf_cycle_profile_sample(cycle, cs, ns, h, NULL, err);
     for (size_t j = 0; j < ns && rc == BKF_OK; j++) {
-        double f;
-        rc = bkf_cycle_profile(cycle, T * (double)j / (double)ns, &f, NULL, err);
-        h[j] = f * f - 1.0;
+        h[j] = h[j] * h[j] - 1.0;
         /* twiddles by exact index, so that (k j mod ns) carries no rounding */
         cs[2 * j] = cos(TWO_PI * (double)j / (double)ns);
         cs[2 * j + 1] = sin(TWO_PI * (double)j / (double)ns);
