@@ -111,8 +111,9 @@ int bkf_trainspec_check(const bkf_model_params *p, const bkf_trainspec_train *t,
     if (o) {
         if (!(o->tol >= TOL_MIN && o->tol <= TOL_MAX))
             return bkf_error_set(err, BKF_EINPUT, "tol must be in [%g, %g]", TOL_MIN, TOL_MAX);
-        if (o->per_kappa < 1 || o->per_kappa > PER_KAPPA_MAX)
-            return bkf_error_set(err, BKF_EINPUT, "per_kappa must be in [1, %d]", PER_KAPPA_MAX);
+        if (o->per_kappa > PER_KAPPA_MAX)
+            return bkf_error_set(err, BKF_EINPUT, "per_kappa must be in [0, %d] (0: the rightmost alone)",
+                                 PER_KAPPA_MAX);
         if (o->max_work != 0 && !(o->max_work >= 1e5 && o->max_work <= 1e12))
             return bkf_error_set(err, BKF_EINPUT, "max_work must be 0 (default) or in [1e5, 1e12]");
     }
@@ -399,19 +400,42 @@ static void drop_hidden(bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig
     *n_eig = w;
 }
 
+/* The rightmost alone (per_kappa 0): the eigenvalues that lie left of
+ * another beyond both errors can be no rightmost whatever the finer meshes
+ * make of them, and are dropped (with on, their meshes in refine) before
+ * each refinement, which then refines the mesh for the others alone (the
+ * paper's n = 12: 3 of 12 polished on its two finer meshes).  The
+ * translation stays: it gauges the mesh. */
+static void drop_dominated(bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *on, size_t *n_eig)
+{
+    double left = -INFINITY; /* the largest Re sigma - err */
+    for (size_t k = 0; k < *n_eig; k++)
+        if (!eig[k].translation) left = fmax(left, eig[k].re - eig[k].err);
+    size_t w = 0;
+    for (size_t i = 0; i < *n_eig; i++)
+        if (eig[i].translation || !(eig[i].re + eig[i].err < left)) {
+            dv[w] = dv[i], on[w] = on[i];
+            eig[w++] = eig[i];
+        }
+    *n_eig = w;
+}
+
 /* The mesh refined until every estimate meets tol and the translation
  * mode sits at 0 within it.  Each refinement halves every step: the new
  * coarse mesh is the old fine one, on which the values in hand were
  * polished, so only the fine polish is redone, and only for the
  * eigenvalues whose estimate is still above tol (the others keep theirs). */
-static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, derivs *dv, size_t n_eig, bkf_error *err)
+static int refine(ctx *x, size_t classes, int rightmost, bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *count,
+                  bkf_error *err)
 {
+    size_t n_eig = *count;
     /* per eigenvalue, the substeps of the fine mesh its value was polished on */
     size_t *on = malloc((n_eig ? n_eig : 1) * sizeof *on);
     if (!on) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     for (size_t k = 0; k < n_eig; k++) on[k] = 2 * x->substeps;
     int rc = BKF_OK;
     for (int r = 0;; r++) {
+        if (rightmost) drop_dominated(eig, dv, on, &n_eig);
         double worst = 0.0;
         for (size_t k = 0; k < n_eig; k++) {
             worst = fmax(worst, eig[k].err);
@@ -459,6 +483,7 @@ static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, derivs 
         }
     }
     free(on);
+    *count = n_eig;
     return rc;
 }
 
@@ -553,10 +578,14 @@ int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, const candidat
 }
 
 /* Spectrum in `classes` phase classes: per class the `keep` rightmost
- * eigenvalues, polished on the fine mesh with error estimates. */
+ * eigenvalues, polished on the fine mesh with error estimates; keep 0:
+ * found and polished as for 1, the rightmost alone refined and kept
+ * (drop_dominated). */
 static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
                     window *win, double *y_max, size_t *curve_points, size_t *hill_modes, bkf_error *err)
 {
+    int rightmost = keep == 0;
+    if (rightmost) keep = 1;
     candidates cs = {0};
     hill_stage hs;
     bkf_error trace_err = {0};
@@ -580,7 +609,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     if (rc == BKF_OK) {
         translation(x, eig, dv, &n_eig);
         drop_hidden(eig, dv, &n_eig, keep);
-        rc = refine(x, classes, eig, dv, n_eig, err);
+        rc = refine(x, classes, rightmost, eig, dv, &n_eig, err);
     }
     if (rc == BKF_OK) mirror_and_cut(classes, keep, eig, &n_eig);
     if (rc == BKF_OK && fallback) rc = confirm_band(&hs, eig, n_eig, &trace_err, err);
