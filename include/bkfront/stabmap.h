@@ -36,9 +36,11 @@
 extern "C" {
 #endif
 
-/* The ring spectrum of a root, as bkf_trainspec_root (per_kappa 1): every
- * ring spectrum the map computes is one call, which a caller may count or
- * wrap (a test's independent count of the work). */
+/* The ring spectrum of a root, as bkf_trainspec_root (the default: per_kappa
+ * 0, the rightmost alone, where only sigma_max and its class are read; 1 in
+ * bkf_stabmap_trace, which also reads the runner-up): every ring spectrum
+ * the map computes is one call, which a caller may count or wrap (a test's
+ * independent count of the work). */
 typedef int (*bkf_stabmap_spectrum_fn)(const bkf_model_params *params,
                                        const bkf_speeds_root *root, double tol,
                                        bkf_trainspec_result *result, bkf_error *err,

@@ -553,7 +553,8 @@ static void spectrum_of(const check_ctx *c, bkf_check_row *row, int status, cons
  * only grow with a tighter tol; nor is a window's edge (the window does not
  * depend on tol).  Both rates are far below any a run resolves.  A refusal
  * leaves the row's spectrum unresolved, with a warning: the run still
- * judges. */
+ * judges.  The row reads sigma_max and the verdict alone: the rightmost
+ * alone (per_kappa 0) is asked, whose other eigenvalues are not refined. */
 #define CHECK_SPECTRUM_TOL_FIRST 1e-4
 
 void check_spectrum(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row *row)
@@ -563,11 +564,11 @@ void check_spectrum(const check_ctx *c, const bkf_speeds_root *sr, bkf_check_row
     bkf_trainspec_result res;
     bkf_error e;
     double tol = CHECK_SPECTRUM_TOL_FIRST;
-    int s = bkf_trainspec_root(&p, sr, tol, 1, &res, &e);
+    int s = bkf_trainspec_root(&p, sr, tol, 0, &res, &e);
     bkf_trainspec_shown shown = bkf_trainspec_shown_of(&res);
     if (!s && res.verdict == BKF_TRAINSPEC_UNRESOLVED && !isfinite(shown.bound)) {
         bkf_trainspec_result_free(&res);
-        s = bkf_trainspec_root(&p, sr, bkf_trainspec_options_default().tol, 1, &res, &e);
+        s = bkf_trainspec_root(&p, sr, bkf_trainspec_options_default().tol, 0, &res, &e);
         shown = bkf_trainspec_shown_of(&res);
     }
     if (s) spectrum_of(c, row, s, e.message, BKF_TRAINSPEC_UNRESOLVED, NAN, NAN, NAN);

@@ -60,6 +60,10 @@ typedef struct {
     double v_ref, S_ref;   /* the root followed; v_ref 0: the fastest */
     bkf_stabmap_spectrum_fn spectrum;
     void *spectrum_data;
+    /* the ring spectrum's per_kappa (the default spectrum's): 0, the
+     * rightmost alone, where sigma_max and its class are all that is read;
+     * 1 in the trace, which also reads the runner-up (trace_vouch) */
+    size_t per_kappa;
     size_t spectra;        /* ring spectra computed (a refused one too) */
     size_t tracked;        /* eigenvalues continued alone (tracked_sample) */
     double fastest_S, fastest_v; /* a scan down in S: the last sample's fastest root */
@@ -135,13 +139,6 @@ static int root_near(sigma_fn *fn, const bkf_model_params *params, double v_near
     return s;
 }
 
-static int trainspec_root(const bkf_model_params *params, const bkf_speeds_root *root,
-                          double tol, bkf_trainspec_result *result, bkf_error *err, void *data)
-{
-    (void)data;
-    return bkf_trainspec_root(params, root, tol, 1, result, err);
-}
-
 /* The ring spectrum r's runner-up to its eigenvalue `top` into out (j2,
  * f2, im2): the rightmost of the others but the translation and top's
  * conjugate (class n - j, -Im sigma: the same real part). */
@@ -175,8 +172,8 @@ static int spectrum_sample(sigma_fn *fn, const bkf_model_params *params, double 
             return BKF_OK;
         }
     bkf_trainspec_result r;
-    bkf_stabmap_spectrum_fn spectrum = fn->spectrum ? fn->spectrum : trainspec_root;
-    s = spectrum(params, &root, fn->tol, &r, err, fn->spectrum_data);
+    s = fn->spectrum ? fn->spectrum(params, &root, fn->tol, &r, err, fn->spectrum_data)
+                     : bkf_trainspec_root(params, &root, fn->tol, fn->per_kappa, &r, err);
     fn->spectra++;
     if (!s) {
         *out = (sample){.S = params->S, .f = r.sigma_max, .err = r.sigma_max_err, .v = root.v,
@@ -1135,6 +1132,7 @@ int bkf_stabmap_trace(const bkf_model_params *params, size_t n, const bkf_stabma
     trace_ctx t;
     memset(&t, 0, sizeof t);
     t.fn = sigma_fn_of(params, n, &o, first->v, first->S);
+    t.fn.per_kappa = 1;
     t.scale[0] = o.nu_step;
     t.scale[1] = o.S_step;
     t.failed = -1;
