@@ -125,6 +125,15 @@ int bkf_cycle_profile(bkf_cycle *cycle, double z, double *f, double *fprime,
 int bkf_cycle_profile_sample(bkf_cycle *cycle, const double *z, size_t count, double *f,
                              double *fprime, bkf_error *err);
 
+/* The profile at any real points z[0..count) (periodic, in any order), in
+ * one pass as bkf_cycle_profile_sample: f and f' (either may be NULL, f may
+ * be z itself) to
+ * the same accuracy as bkf_cycle_profile point by point, which integrates
+ * from the nearest stored node for each (a simulation's seed on 8192 grid
+ * points: that many short integrations, against about one period's). */
+int bkf_cycle_profile_points(bkf_cycle *cycle, const double *z, size_t count, double *f,
+                             double *fprime, bkf_error *err);
+
 /* The steps of the last solve's final integration, z from 0 to T: a mesh
  * adapted to the cycle (short on the fast jumps).  Writes at most capacity
  * values and returns how many there are (0 before a solve). */

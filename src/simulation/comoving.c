@@ -274,15 +274,10 @@ done:
 /* The seed at the map's points, from the cycle. */
 static int seed_profile(bkf_comoving *m, bkf_cycle *cycle, bkf_error *err)
 {
-    for (size_t j = 0; j < m->m; j++) {
-        double z = m->T / m->lambda * m->xi[j], f, fp;
-        bkf_error e;
-        int s = bkf_cycle_profile(cycle, z, &f, &fp, &e);
-        if (s) return bkf_error_set(err, s, "seed profile: %s", e.message);
-        m->f0[j] = f;
-        m->f1[j] = fp;
-    }
-    return BKF_OK;
+    for (size_t j = 0; j < m->m; j++) m->f0[j] = m->T / m->lambda * m->xi[j];
+    bkf_error e;
+    int s = bkf_cycle_profile_points(cycle, m->f0, m->m, m->f0, m->f1, &e);
+    return s ? bkf_error_set(err, s, "seed profile: %s", e.message) : BKF_OK;
 }
 
 /* ------------------------------------------------------------ operators */

@@ -809,18 +809,21 @@ static int pde_init_front_body(bkf_pde *m, const bkf_pde_wave *wave, bkf_pde_fro
     double stretch = sqrt((v - c) * (v + c)) / v;
     size_t N = m->N;
     double g = m->p.gamma;
-    for (size_t i = 0; i < N; i++) {
-        double x = (double)i * m->h;
-        double z = (double)sp.direction * -1.0 * (x / v) / stretch;
-        double f, fp;
-        s = bkf_cycle_profile(cy, z, &f, &fp, &e);
-        if (s) {
-            bkf_cycle_free(cy);
-            return bkf_error_set(err, s, "cycle profile: %s", e.message);
-        }
-        m->y[i] = f;
-        m->y[N + i] = fp / stretch / g + bkf_model_friction(f);
+    /* the grid's points in z, sampled in one pass (m->y's second half, f'
+     * there once sampled) */
+    double *z = malloc(N * sizeof *z);
+    if (!z) {
+        bkf_cycle_free(cy);
+        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     }
+    for (size_t i = 0; i < N; i++) z[i] = (double)sp.direction * -1.0 * ((double)i * m->h / v) / stretch;
+    s = bkf_cycle_profile_points(cy, z, N, m->y, m->y + N, &e);
+    free(z);
+    if (s) {
+        bkf_cycle_free(cy);
+        return bkf_error_set(err, s, "cycle profile: %s", e.message);
+    }
+    for (size_t i = 0; i < N; i++) m->y[N + i] = m->y[N + i] / stretch / g + bkf_model_friction(m->y[i]);
     /* a tenth of the profile's accuracy, relative to each field's size */
     if (m->p.kind == BKF_MODEL_CONTINUUM)
         for (int field = 0; field < 2; field++) {

@@ -501,6 +501,53 @@ int bkf_cycle_profile_sample(bkf_cycle *c, const double *z, size_t count, double
     return rc;
 }
 
+typedef struct {
+    double z; /* within [0, T] */
+    size_t at;
+} profile_point;
+
+static int by_profile_z(const void *pa, const void *pb)
+{
+    const profile_point *a = pa, *b = pb;
+    return (a->z > b->z) - (a->z < b->z);
+}
+
+int bkf_cycle_profile_points(bkf_cycle *c, const double *z, size_t count, double *f, double *fprime,
+                             bkf_error *err)
+{
+    if (!c || !c->have_solution)
+        return bkf_error_set(err, BKF_EINPUT, "profile requested before a successful solve");
+    double T = c->result.period;
+    for (size_t i = 0; i < count; i++)
+        if (!isfinite(z[i])) return bkf_error_set(err, BKF_EINPUT, "z[%zu] must be finite", i);
+    size_t cap = count ? count : 1;
+    profile_point *pt = malloc(cap * sizeof *pt);
+    double *zs = malloc(cap * sizeof *zs), *fs = malloc(cap * sizeof *fs), *fps = malloc(cap * sizeof *fps);
+    int rc = BKF_OK;
+    if (!pt || !zs || !fs || !fps) {
+        rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
+        goto done;
+    }
+    for (size_t i = 0; i < count; i++) {
+        double zr = fmod(z[i], T); /* as bkf_cycle_profile wraps it */
+        if (zr < 0) zr += T;
+        pt[i] = (profile_point){fmin(zr, T), i};
+    }
+    qsort(pt, count, sizeof *pt, by_profile_z);
+    for (size_t k = 0; k < count; k++) zs[k] = pt[k].z;
+    rc = bkf_cycle_profile_sample(c, zs, count, fs, fps, err);
+    for (size_t k = 0; rc == BKF_OK && k < count; k++) {
+        if (f) f[pt[k].at] = fs[k];
+        if (fprime) fprime[pt[k].at] = fps[k];
+    }
+done:
+    free(pt);
+    free(zs);
+    free(fs);
+    free(fps);
+    return rc;
+}
+
 size_t bkf_cycle_mesh(const bkf_cycle *c, double *z, size_t capacity)
 {
     if (!c || !c->have_solution) return 0;

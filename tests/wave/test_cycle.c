@@ -354,6 +354,35 @@ TEST(cycle_profile_sample_matches_single_points)
     bkf_cycle_free(cy);
 }
 
+/* Points in any order and any period (a simulation's grid, z = -x / v
+ * over n wavelengths, backwards) in one pass, against the single-point
+ * profile, each integrated from its nearest node; f may be z itself. */
+TEST(cycle_profile_points_any_order_and_period)
+{
+    bkf_cycle *cy = bkf_cycle_alloc();
+    bkf_error e;
+    CHECK(bkf_cycle_solve(cy, 5.0, 0.3, NULL, &e) == BKF_OK);
+    double T = bkf_cycle_get(cy)->period;
+    enum { N = 300 };
+    double z[N], f[N], fp[N];
+    for (int i = 0; i < N; i++) z[i] = -3.7 * T * i / (N - 1.0) + (i % 7 == 3 ? 9.0 * T : 0.0);
+    CHECK(bkf_cycle_profile_points(cy, z, N, f, fp, &e) == BKF_OK);
+    for (int i = 0; i < N; i++) {
+        double f1, fp1;
+        CHECK(bkf_cycle_profile(cy, z[i], &f1, &fp1, &e) == BKF_OK);
+        CHECK_CLOSE(f[i], f1, 0, 1e-8);
+        CHECK_CLOSE(fp[i], fp1, 0, 1e-7);
+    }
+    double zf[N];
+    memcpy(zf, z, sizeof zf);
+    CHECK(bkf_cycle_profile_points(cy, zf, N, zf, NULL, &e) == BKF_OK);
+    for (int i = 0; i < N; i++) CHECK(zf[i] == f[i]);
+    z[5] = NAN;
+    CHECK(bkf_cycle_profile_points(cy, z, N, f, fp, &e) == BKF_EINPUT);
+    CHECK(bkf_cycle_profile_points(cy, z, 0, f, fp, &e) == BKF_OK);
+    bkf_cycle_free(cy);
+}
+
 /* Past mu 100 the profile's stepper is bsimp; points as dense as a
  * spectrum's Radau mesh (24000 over a period at mu 120.8, the paper
  * scene's n = 6 branch near the sonic limit) are sampled by rk8pd (27
