@@ -74,7 +74,8 @@ static int compare_entries(const void *a, const void *b)
  * their new cost (suitefast2: the extremes matrices, the threshold sweep;
  * canardfast: the canard jump; suitefast3, 2026-11-30: the check's auto
  * runs, the train spectra against simulation, the stability boundary, and
- * three now under 2.5 s);
+ * three now under 2.5 s; hillreal, 2026-11-30: the audit's sample, Hill's
+ * class pi real);
  * the ones not listed take under 2.5 s.  The sanitized
  * build at -O1 takes about 1.4 times as long, in the same order.  Only the
  * start order depends on it, and only until a run has written
@@ -89,10 +90,10 @@ static const struct {
     {"speeds_canard_jump_rows_honest_or_unresolved", 5.7},
     {"extremes_floquet_matrix_gamma_100", 18.1},
     {"extremes_floquet_matrix_gamma_to_30", 13.6},
-    {"audit_fixed_sample_set_1", 13.2},
     {"cli_sweep_mpi_signals_and_kill_keep_rows_and_resume_completes", 10.5},
     {"figures_keep_every_point_in_view_at_gamma_6_c_0_1", 10.0},
     {"extremes_floquet_matrix_gamma_100_near_hopf", 9.1},
+    {"audit_fixed_sample_set_1", 9.0},
     {"products_orbits_coexistence_sets_regimes_beside_the_solutions", 8.2},
     {"extremes_period_matrix", 7.2},
     {"cli_sweep_threshold_product_is_floquet_threshold_at_each_point", 7.2},
