@@ -231,6 +231,13 @@ static int spectrum_body(bkf_cycle *cycle, double gamma, double theta, size_t M,
     return rc;
 }
 
+/* |z|^2 without cabs's hypot and pow: the norms below took 2.6% of
+ * speeds --stability's samples */
+static double abs2(double complex z)
+{
+    return creal(z) * creal(z) + cimag(z) * cimag(z);
+}
+
 /* Inverse iteration on A - shift, v from a fixed start: the eigenvalue
  * nearest the shift as the Rayleigh quotient of v, once A v - lambda v is
  * below NEAR_RESIDUAL times |A|_F (a backward-stable eigenpair); else NaN.
@@ -275,7 +282,7 @@ static double complex nearest_one(const double complex *A, size_t n, double a_no
         if (gsl_linalg_complex_LU_svx(S, perm, &xv.vector) != GSL_SUCCESS) return NAN;
         for (size_t i = 0; i < nm; i++) v[nm + i] = (v[nm + i] - A[(nm + i) + i * n] * v[i]) * q[i];
         double norm = 0.0;
-        for (size_t i = 0; i < n; i++) norm += creal(v[i]) * creal(v[i]) + cimag(v[i]) * cimag(v[i]);
+        for (size_t i = 0; i < n; i++) norm += abs2(v[i]);
         norm = sqrt(norm);
         if (!(norm > 0.0) || !isfinite(norm)) return NAN;
         for (size_t i = 0; i < n; i++) v[i] /= norm;
@@ -289,7 +296,7 @@ static double complex nearest_one(const double complex *A, size_t n, double a_no
         double complex lambda = 0.0;
         for (size_t i = 0; i < n; i++) lambda += conj(v[i]) * w[i];
         double res = 0.0;
-        for (size_t i = 0; i < n; i++) res += pow(cabs(w[i] - lambda * v[i]), 2);
+        for (size_t i = 0; i < n; i++) res += abs2(w[i] - lambda * v[i]);
         if (sqrt(res) <= NEAR_RESIDUAL * a_norm) return lambda;
     }
     return NAN;
@@ -313,7 +320,7 @@ int hill_nearest(bkf_cycle *cycle, double gamma, double theta, size_t modes, con
      * handler: a NaN here, never an abort */
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     double a_norm = 0.0;
-    for (size_t i = 0; rc == BKF_OK && i < n * n; i++) a_norm += pow(cabs(A[i]), 2);
+    for (size_t i = 0; rc == BKF_OK && i < n * n; i++) a_norm += abs2(A[i]);
     a_norm = sqrt(a_norm);
     for (size_t k = 0; rc == BKF_OK && k < count; k++) {
         double complex l = nearest_one(A, n, a_norm, at[k].re + I * at[k].im, S, perm, v, w, q);
