@@ -222,8 +222,8 @@ TEST(cycle_engine_canard_floor_matches_taylor_slope)
     int rc = solve_with(mu, nu, 1e-9, BKF_STEPPER_AUTO, &r, &e);
     CHECK_MSG(rc == BKF_OK, "%s", e.message);
     if (rc != BKF_OK) return;
-    long double up = taylor_period_eps(mu, nu + h, r.section_slope, 1e-21L, NULL, NULL);
-    long double down = taylor_period_eps(mu, nu - h, r.section_slope, 1e-21L, NULL, NULL);
+    long double up = taylor_period_eps(mu, nu + h, r.section_slope, 1e-21L, NULL, NULL, NULL);
+    long double down = taylor_period_eps(mu, nu - h, r.section_slope, 1e-21L, NULL, NULL, NULL);
     double slope = (double)((up - down) / (2.0L * h)), floor = DBL_EPSILON * fabs(slope);
     bkf_test_note("dlnT/dnu %.4g (Taylor), estimate %.3g T, eps |dT/dnu| %.3g T", slope / r.period,
                   r.period_err / r.period, floor / r.period);
