@@ -96,7 +96,7 @@ static const struct {
     {"products_orbits_coexistence_sets_regimes_beside_the_solutions", 8.2},
     {"trainspec_sim_paper", 7.4},
     {"extremes_period_matrix", 7.2},
-    {"cli_sweep_threshold_product_is_floquet_threshold_at_each_point", 7.2},
+    {"cli_sweep_threshold_product_is_floquet_threshold_at_each_point", 5.6},
     {"cli_period_continue_stuck_in_the_canard_names_mu_and_nu", 7.1},
     {"cycle_branch_stuck_in_the_canard_fails_fast", 6.9},
     {"figures_keep_every_point_in_view_at_gamma_0_7_c_0_8", 6.8},
