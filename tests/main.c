@@ -107,7 +107,7 @@ static const struct {
     {"stabmap_diagram_followed_curves_are_the_scans_crossings", 5.0},
     {"products_stability_ring_agrees_with_hills_method", 4.8},
     {"chainwave_large_multiplier_tolerance_is_relative", 1.1},
-    {"chainwave_implicit_stepper", 4.5},
+    {"chainwave_implicit_stepper", 1.2},
     {"cli_sweep_sigterm_keeps_finished_rows_and_resume_completes", 4.0},
     {"trainspec_rightmost_beside_the_translation_and_where_curves_fail", 4.0},
     {"lawson_steps_do_not_depend_on_N", 4.0},
