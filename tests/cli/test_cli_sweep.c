@@ -246,14 +246,17 @@ TEST(cli_sweep_mpi_farm_equals_serial)
     if (!mpi_cli()) return;
     char dir[] = "/tmp/bkf_sweep_XXXXXX";
     CHECK(mkdtemp(dir));
-    char *serial = serial_table(dir);
-    CHECK(serial);
-    /* the fields of a serial run, to be the MPI workers' byte for byte */
+    /* the table and fields of a serial run, to be the MPI workers' byte
+     * for byte (one run: -np 1 and 2 write no fields and must give its
+     * table, so the fields do not change it; a second serial run without
+     * them cost 0.9 s of CPU) */
     char *serial_fields = path_in(dir, "serial_fields"), *mpi_fields = path_in(dir, "mpi_fields");
     char *fields_table = path_in(dir, "fields.tsv"), *log = path_in(dir, "mpi.log");
     CHECK(mkdir(serial_fields, 0755) == 0 && mkdir(mpi_fields, 0755) == 0);
     CHECK(run_ok(BKF_CLI_ARGS("sweep", GRID, "--threads", "1", "--fields", serial_fields,
                               "--out", fields_table)));
+    char *serial = bkf_cli_read_file(fields_table);
+    CHECK(serial);
     const struct {
         int np;
         const char *extra;
@@ -440,14 +443,15 @@ TEST(cli_sweep_mpi_signals_and_kill_keep_rows_and_resume_completes)
 }
 
 /* SIGTERM in the middle: exit 143, one line, every row on disk whole; the
- * resumed table is the uninterrupted one.  The runs are short (tmax 50, 0.1
- * s of CPU a point): what is checked is the signal's path, and 17 points
- * are left when the first row is in (at tmax 150 the test took 16 s). */
+ * resumed table is the uninterrupted one.  The runs are short (tmax 30,
+ * 0.06 s of CPU a point): what is checked is the signal's path, and 17
+ * points, 0.5 s on two threads, are left when the first row is in (at
+ * tmax 150 the test took 16 s, at tmax 50 4.1 s). */
 TEST(cli_sweep_sigterm_keeps_finished_rows_and_resume_completes)
 {
     char dir[] = "/tmp/bkf_sweep_XXXXXX";
     CHECK(mkdtemp(dir));
-#define LONG_GRID "--x", "nu=-0.98:-0.82:9", "--seeds", "1,2", "--tmax", "50", "--N", "256", \
+#define LONG_GRID "--x", "nu=-0.98:-0.82:9", "--seeds", "1,2", "--tmax", "30", "--N", "256", \
                   "--init", "uniform:amp=0.01", "--no-progress"
     char *whole = path_in(dir, "whole.tsv"), *cut = path_in(dir, "cut.tsv");
     char *err = path_in(dir, "err.txt");
