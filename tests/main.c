@@ -72,7 +72,9 @@ static int compare_entries(const void *a, const void *b)
 /* CPU seconds of the slowest tests (-O2): docs/timings.md's run of
  * 2026-11-29 (5ebcaa7, quiet machine), the tests made cheaper since at
  * their new cost (suitefast2: the extremes matrices, the threshold sweep;
- * canardfast: the canard jump);
+ * canardfast: the canard jump; clifast: the stuck canard, the Taylor and
+ * chainwave tests, the figures, the sweep's threshold, SIGTERM and MPI
+ * farm tests);
  * the ones not listed take under 2.5 s.  The sanitized
  * build at -O1 takes about 1.4 times as long, in the same order.  Only the
  * start order depends on it, and only until a run has written
