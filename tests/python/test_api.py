@@ -83,20 +83,21 @@ def test_speeds_satisfy_the_speed_condition_and_the_paper():
 
 
 def test_speeds_refused_rows_stay_rows_with_a_warning():
-    # issue 31, R1: one root near the canard cannot be had to tol 1e-10;
-    # the table keeps it as a row flagged refused (v nan), every other row
-    # stands (a root of the condition), and a RuntimeWarning says why
-    gamma, c, nu, S = 0.567489, 0.432606, 0.989398, 59.5575
+    # issue 31, R1: a root that cannot be had to tol stays a row flagged
+    # refused (v nan), every other row stands (a root of the condition),
+    # and a RuntimeWarning says why.  The paper's parameters at tol 1e-13
+    # refuse n = 1 (had to 1e-12: docs/cli/speeds.md) in 0.05 s; the
+    # issue's canard point (0.9 s) is the CLI's test and the page's example.
+    gamma, c, nu, S = 2, 0.3, -0.96, 20
     with pytest.warns(RuntimeWarning, match="roots refused"):
-        t = bkfront.speeds(gamma, c, nu, S)
+        t = bkfront.speeds(gamma, c, nu, S, tol=1e-13)
     refused = np.char.find(t["flags"], "refused") >= 0
     assert t.results["refused"] == refused.sum() >= 1
     assert np.all(np.isnan(t["v"][refused])) and np.all(t["model"][refused] == "")
-    good = ~refused & (t["n"] <= 20)
-    v, n = t["v"][good], t["n"][good]
+    v, n = t["v"][~refused], t["n"][~refused]
     root = np.sqrt(1 - c**2 / v**2)
     T = bkfront.period(gamma / root, nu)
-    assert len(v) == 20 and np.all(np.abs(n * T * v * root / S - 1) < 1e-8)
+    assert len(v) >= 8 and np.all(np.abs(n * T * v * root / S - 1) < 1e-8)
 
 
 def test_floquet_threshold_is_the_period_doubling(cli):
