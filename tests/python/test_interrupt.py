@@ -1,6 +1,6 @@
 """Ctrl-C never crashes (issue 32 item 3): every product of the catalogue,
 interrupted by real SIGINTs at moments spread over the call (one at a
-random point of each k-th of 1.2 times its length), leaves the process
+random point of each k-th of it, or of 1.2 times it), leaves the process
 alive, and the next call gives the uninterrupted call's table.  A product
 that polls the cancel flag must have stopped there (the KeyboardInterrupt's
 cause is the library's Cancelled) in some of those calls; one that has no
@@ -8,7 +8,7 @@ cancel point never does (it runs to its end, then KeyboardInterrupt).
 
 Each product runs in its own process, forked from one that imported the
 package once (a crash is the child's exit status, not the test runner's),
-at inputs small enough for a call of 0.01-0.15 s: the interrupts land in
+at inputs small enough for a call of 0.01-0.1 s: the interrupts land in
 the C call, in the JSON decoding and between calls.
 
 What Ctrl-C meets differs by product only where the catalogue's adapter
@@ -60,24 +60,26 @@ REPRESENTS = {
     "simulate": "the cancel flag at each step; progress; a warning through the warn callback",
     "check": "the cancel flag between roots (OpenMP threads) and in their simulations; "
              "a warning through its hooks",
-    "profile": "no cancel point; the spec owns lists; a 340 kB table to decode",
+    "floquet": "no cancel point; the spec owns lists (its q); a warn callback",
 }
 # product: the representative of its path
 SHARES = {
-    "asymptotics": "profile",  # no cancel point, lists owned (approx_free)
-    "floquet": "profile",      # the same, with a warn callback as simulate's
-    "speeds": "profile",       # no cancel point, a warn callback, nothing owned
-    "branch": "profile",       # no cancel point, nothing owned
-    "stability": "profile",
-    "friction": "profile",
-    "bench": "profile",
+    "profile": "floquet",      # no cancel point, lists owned; a 340 kB table to decode
+    "asymptotics": "floquet",  # no cancel point, lists owned (approx_free)
+    "speeds": "floquet",       # no cancel point, a warn callback, nothing owned
+    "branch": "floquet",       # no cancel point, nothing owned
+    "stability": "floquet",
+    "friction": "floquet",     # a 400 kB table to decode
+    "bench": "floquet",
 }
 
+# Moments over 1.2 times a representative's call (the last few between
+# calls), over the call itself for the products sharing a path.
 CALLS = 30
 SHARED_CALLS = 4
 
 SERVER = r"""
-import json, os, random, signal, sys, tempfile, threading, time, traceback
+import json, os, random, signal, statistics, sys, tempfile, threading, time, traceback
 import numpy as np
 import bkfront
 
@@ -89,7 +91,7 @@ def same(a, b):
         for c in a.columns if c != "cpu_seconds")
 
 
-def interrupt(name, keys, calls):
+def interrupt(name, keys, calls, span):
     def run():
         return bkfront.product(name, **keys)
 
@@ -97,14 +99,15 @@ def interrupt(name, keys, calls):
     ref = run()
     t1 = time.monotonic()
     run()
-    # the shorter of two calls, so that a call slowed by a busy machine
-    # does not spread the moments past the calls
-    duration = min(t1 - t0, time.monotonic() - t1)
+    whole = [t1 - t0, time.monotonic() - t1]
+    # the shorter first call, then the median of the whole calls: a call
+    # slowed by a busy machine does not spread the moments past the calls
+    duration = min(whole)
     rng = random.Random(7)
     interrupted = canceled = completed = 0
     for i in range(calls):
         fired = threading.Event()
-        delay = (i + rng.random()) / calls * 1.2 * duration
+        delay = (i + rng.random()) / calls * span * duration
 
         def kill():
             time.sleep(delay)
@@ -114,8 +117,11 @@ def interrupt(name, keys, calls):
         try:  # a signal anywhere in the loop is one the test sent: not a failure
             threading.Thread(target=kill).start()
             try:
+                t0 = time.monotonic()
                 run()
                 completed += 1
+                whole.append(time.monotonic() - t0)
+                duration = statistics.median(whole)
             except KeyboardInterrupt as e:
                 interrupted += 1
                 # the library stopped at a cancel point, not at its end
@@ -132,7 +138,7 @@ def interrupt(name, keys, calls):
 
 # The children are forked before any product ran here: no thread (the
 # library's OpenMP pool included) exists to be lost in the fork.
-for name, keys, calls in json.loads(sys.argv[1]):
+for name, keys, calls, span in json.loads(sys.argv[1]):
     r, w = os.pipe()
     err = tempfile.TemporaryFile()
     pid = os.fork()
@@ -141,7 +147,7 @@ for name, keys, calls in json.loads(sys.argv[1]):
         try:
             os.close(r)
             os.dup2(err.fileno(), 2)  # this product's messages apart
-            os.write(w, json.dumps(interrupt(name, keys, calls)).encode())
+            os.write(w, json.dumps(interrupt(name, keys, calls, span)).encode())
             code = 0
         except BaseException:
             traceback.print_exc()
@@ -171,7 +177,8 @@ def interrupted(request):
     all from one process."""
     names = [item.callspec.params["name"] for item in request.session.items
              if getattr(item, "originalname", None) == "test_interrupted_calls_never_crash"]
-    plan = [[n, PRODUCTS[n], CALLS if n in REPRESENTS else SHARED_CALLS] for n in names]
+    plan = [[n, PRODUCTS[n]] + ([CALLS, 1.2] if n in REPRESENTS else [SHARED_CALLS, 1.0])
+            for n in names]
     p = subprocess.run([sys.executable, "-c", SERVER, json.dumps(plan)], capture_output=True,
                        text=True, timeout=600, env=dict(os.environ), preexec_fn=sigint_default)
     records = {}
@@ -221,8 +228,9 @@ for i in range(calls):
     fired = threading.Event()
     sent = []
     # once the worker runs (the call is past its 8 MB mu list, in the
-    # library), at a moment spread over its first 0.05 s
-    delay = 0.05 * (i + rng.random()) / calls
+    # library), at a moment spread over its first 0.02 s (some hundreds of
+    # its points)
+    delay = 0.02 * (i + rng.random()) / calls
 
     def kill():
         while len(sys._current_frames()) < 3:  # the main thread, this one, the worker
