@@ -60,7 +60,8 @@ REPRESENTS = {
     "simulate": "the cancel flag at each step; progress; a warning through the warn callback",
     "check": "the cancel flag between roots (OpenMP threads) and in their simulations; "
              "a warning through its hooks",
-    "floquet": "no cancel point; the spec owns lists (its q); a warn callback",
+    "floquet": "no cancel point; the spec owns lists (its q); a warn callback set "
+               "(called here by simulate's and check's paths only)",
 }
 # product: the representative of its path
 SHARES = {
