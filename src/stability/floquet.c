@@ -854,6 +854,14 @@ static int floquet_eval_body(bkf_floquet *f, double q, bkf_floquet_point *pt, bk
             }
         } else if (cycle_matters && !measured) {
             measured = 1;
+            /* At the tightest retry tolerance, where the integrations'
+             * noise stands lowest under the cycle's effect.  It was the
+             * last retry's, whatever K that was: 0 on an object's first
+             * retry (integrations at tol 0 that ran out of steps, 2 s at
+             * gamma 100, nu -0.99, c q 0.3, and no share), a looser one
+             * after a wavenumber that settled early (a share lost in the
+             * noise, and a refusal at c q 100 that a 1e-13 pair answers). */
+            f->tol_retry = tl_min;
             double cm_m1 = INFINITY, cm = cycle_measured(f, K, &cm_m1);
             if (!f->ready) break;
             if (cm < rb.cyc) {
@@ -863,6 +871,13 @@ static int floquet_eval_body(bkf_floquet *f, double q, bkf_floquet_point *pt, bk
                 rb.cyc_measured_m1 = cm_m1;
             }
             continue;
+        } else if (measured && (cycle_stuck || f->cycle_opt.tol <= CYCLE_TOL_MIN) &&
+                   fmin(cycle_term(f, K, 1.0), rb.cyc_measured) > tol) {
+            /* The cycle is as tight as it gets and every attempt with it
+             * carries at least this share (the bound at |M| = |m1|, or the
+             * measured one): no integration can meet tol (the last 1e-13
+             * pair at gamma 30, c q 100 cost 2.5 s for a refusal). */
+            break;
         } else if (tl > tl_min) {
             tl = fmax((near_miss ? 0.1 : 0.01) * tl, tl_min);
             /* 0.01 * 1e-11 is an ulp above 1e-13: without the snap the

@@ -809,3 +809,38 @@ TEST(floquet_keeps_its_cycle_when_a_tighter_one_is_refused)
         bkf_floquet_free(f);
     }
 }
+
+/* The first retry of a new object measured the cycle's share of lambda's
+ * error with integrations at tolerance 0 (the retry tolerance was not yet
+ * set): they ran out of steps, the share stayed at its bound and the answer
+ * was refused, or answered only after a later wavenumber had set that
+ * tolerance.  At the paper's gamma 2, c q 0.3, tol 1e-10 a fresh object
+ * refused (estimate 1.6e-10, 0.14 s); at gamma 30, nu 0.9, c q 3 it
+ * refused at 1.7e-8.  Each must now answer, within tol of the other
+ * stepper (its estimate allowed), its estimate not optimistic by 10. */
+TEST(floquet_first_retry_of_an_object_measures_the_cycle_share)
+{
+    const double cases[][3] = {{2.0, -0.96, 0.3}, {30.0, 0.9, 3.0}}; /* gamma, nu, c q */
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        double gamma = cases[k][0], nu = cases[k][1], cq = cases[k][2];
+        bkf_floquet *f = setup(gamma, 1.0, nu, 1e-10);
+        bkf_floquet_point p;
+        bkf_error e;
+        int rc = bkf_floquet_eval(f, cq, &p, &e);
+        CHECK_MSG(rc == BKF_OK, "gamma %g nu %g c q %g, a fresh object: %s", gamma, nu, cq, e.message);
+        bkf_floquet_options o = bkf_floquet_options_default();
+        o.tol = 1e-10;
+        o.stepper = BKF_STEPPER_IMPLICIT;
+        bkf_floquet *g = bkf_floquet_alloc();
+        CHECK(g);
+        CHECK_MSG(bkf_floquet_set(g, gamma, 1.0, nu, &o, &e) == BKF_OK, "%s", e.message);
+        bkf_floquet_point r = eval_ref(g, cq);
+        double d = fabs(p.lambda - r.lambda);
+        bkf_test_note("gamma %g nu %g c q %g: lambda %.14g +- %.2g, bsimp %.14g +- %.2g", gamma, nu, cq,
+                      p.lambda, p.lambda_err, r.lambda, r.lambda_err);
+        CHECK_MSG(d <= 1e-10 + r.lambda_err, "%.3g from the other stepper (+- %.2g)", d, r.lambda_err);
+        CHECK_MSG(fmax(d - r.lambda_err, 0.0) <= 10.0 * p.lambda_err, "lambda_err %.2g optimistic", p.lambda_err);
+        bkf_floquet_free(g);
+        bkf_floquet_free(f);
+    }
+}
