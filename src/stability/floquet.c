@@ -265,6 +265,7 @@ static int floquet_set_body(bkf_floquet *f, double gamma, double c, double nu,
     rc = solve_backing_off(f->cycle, gamma, nu, &co, 3, err);
     if (rc != BKF_OK) return rc;
     f->cycle_opt = co;
+    f->refused_tol = 0.0;
     const bkf_cycle_result *r = bkf_cycle_get(f->cycle);
     f->gamma = gamma;
     f->c = c;
@@ -677,6 +678,13 @@ static int eval_trivial(bkf_floquet *f, bkf_floquet_point *pt, bkf_error *err)
  * is restored (it succeeded at its tolerance before). */
 static int resolve_cycle(bkf_floquet *f, double tol, bkf_error *err)
 {
+    /* A tolerance the cycle refused is refused again: each wavenumber asked
+     * it anew, and each refusal's restore solved the cycle again and voided
+     * the looser one kept for cycle_measured (at gamma 100, nu 0.9999 a
+     * fifth of the extremes matrix's time went to these solves). */
+    if (tol == f->refused_tol)
+        return bkf_error_set(err, BKF_ETOL, "the cycle at gamma = %.15g, nu = %.15g was refused tol %.3g",
+                             f->gamma, f->nu, tol);
     f->cycle_gen++;
     bkf_cycle_options co = f->cycle_opt;
     co.tol = tol;
@@ -692,6 +700,7 @@ static int resolve_cycle(bkf_floquet *f, double tol, bkf_error *err)
         f->ready = 0;
         return rc;
     }
+    if (rc != BKF_OK) f->refused_tol = tol;
     const bkf_cycle_result *r = bkf_cycle_get(f->cycle);
     f->cycle_opt = co;
     f->y0 = r->section_slope / f->gamma + lienard_F(f->nu);
