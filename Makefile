@@ -410,6 +410,9 @@ $(AUDIT): $(BUILD)/tests/audit/audit_main.o $(BUILD)/tests/audit/audit.o $(LIB)
 # The monodromy's complex products need no C99 Annex G infinity recovery
 # (its matrices are rescaled and finite); without it they run ~2x faster.
 $(BUILD)/src/stability/trainspec_radau.o $(BUILD)/src/stability/trainspec.o: override CFLAGS += -fcx-limited-range
+# ETDRK4's products over the modes likewise: a field that is not finite
+# stops the step (nonlinear) before a product sees it; about 18% of a run.
+$(BUILD)/src/simulation/pde_etd.o: override CFLAGS += -fcx-limited-range
 # The Radau step's 3x3 loops unrolled: the monodromy 17% faster (same values).
 $(BUILD)/src/stability/trainspec_radau.o: override CFLAGS += -funroll-loops
 $(BUILD)/tests/%.o: override CFLAGS += -Itests -Isrc/cli -DBKF_CLI_PATH='"$(abspath $(CLI))"' \

@@ -72,7 +72,9 @@ static int compare_entries(const void *a, const void *b)
 /* CPU seconds of the slowest tests (-O2): docs/timings.md's run of
  * 2026-11-29 (5ebcaa7, quiet machine), the tests made cheaper since at
  * their new cost (suitefast2: the extremes matrices, the threshold sweep;
- * canardfast: the canard jump; floquetfast: the extremes matrices again);
+ * canardfast: the canard jump; suitefast3, 2026-11-30: the check's auto
+ * runs, the train spectra against simulation, the stability boundary, and
+ * three now under 2.5 s; floquetfast: the extremes matrices again);
  * the ones not listed take under 2.5 s.  The sanitized
  * build at -O1 takes about 1.4 times as long, in the same order.  Only the
  * start order depends on it, and only until a run has written
@@ -87,25 +89,20 @@ static const struct {
     {"speeds_canard_jump_rows_honest_or_unresolved", 5.7},
     {"extremes_floquet_matrix_gamma_100", 12.0},
     {"extremes_floquet_matrix_gamma_to_30", 7.4},
-    {"check_auto_runs_keep_verdicts_and_speeds", 13.6},
     {"audit_fixed_sample_set_1", 13.2},
     {"cli_sweep_mpi_signals_and_kill_keep_rows_and_resume_completes", 10.5},
     {"figures_keep_every_point_in_view_at_gamma_6_c_0_1", 10.0},
     {"extremes_floquet_matrix_gamma_100_near_hopf", 8.2},
-    {"stabmap_boundary_point_recomputed", 9.1},
     {"products_orbits_coexistence_sets_regimes_beside_the_solutions", 8.2},
-    {"trainspec_sim_paper", 7.4},
     {"extremes_period_matrix", 4.7},
     {"cli_sweep_threshold_product_is_floquet_threshold_at_each_point", 7.2},
     {"cli_period_continue_stuck_in_the_canard_names_mu_and_nu", 7.1},
     {"cycle_branch_stuck_in_the_canard_fails_fast", 6.9},
     {"figures_keep_every_point_in_view_at_gamma_0_7_c_0_8", 6.8},
-    {"check_sigma_max_is_an_eigenvalue_or_nan", 6.8},
     {"cli_sweep_mpi_farm_equals_serial", 6.4},
     {"cli_check_adapted_grid_error_covers_the_grid_thin_fronts", 5.8},
     {"cycle_engine_bd2x2_meets_tol_against_taylor", 5.4},
     {"stabmap_diagram_followed_curves_are_the_scans_crossings", 5.0},
-    {"products_stability_ring_agrees_with_hills_method", 4.8},
     {"chainwave_large_multiplier_tolerance_is_relative", 4.7},
     {"chainwave_implicit_stepper", 4.5},
     {"cli_sweep_sigterm_keeps_finished_rows_and_resume_completes", 4.0},
@@ -119,10 +116,12 @@ static const struct {
     {"cli_speeds_refused_row_keeps_the_table_exit_3", 3.2},
     {"products_threshold_and_diagram_library_rows_are_the_cli_rows", 3.1},
     {"cli_chain_branch_ends_on_the_table", 3.1},
+    {"check_auto_runs_keep_verdicts_and_speeds", 3.1},
+    {"trainspec_sim_paper", 3.1},
     {"cycle_tolerance_honoured_on_extremes", 3.0},
     {"orbit_travelling_train_has_the_speeds_root", 3.0},
+    {"stabmap_boundary_point_recomputed", 3.0},
     {"cli_sweep_scene_gives_the_cli_table", 2.9},
-    {"trainspec_sim_other_parameters", 2.8},
     {"products_orbits_tsv_json_and_library_agree", 2.8},
     {"extremes_period_estimates_never_flatter", 2.8},
     {"floquet_collocation_cycle_in_the_band_against_shooting", 2.7},

@@ -50,8 +50,12 @@ extern "C" {
 
 typedef struct {
     double tol;        /* absolute accuracy asked of each sigma, [1e-8, 1e-2]; default 1e-6 */
-    size_t per_kappa;  /* leading eigenvalues reported per Bloch number, [1, 50]; default 3
-                          (one more where the cut would split a conjugate pair) */
+    size_t per_kappa;  /* leading eigenvalues reported per Bloch number, [0, 50]; default 3
+                          (one more where the cut would split a conjugate pair); 0: the
+                          rightmost alone, found as for 1 but only it (with its conjugate,
+                          any other it is not told apart from within the errors, and the
+                          translation) refined to tol and reported: cheaper where the
+                          meshes must be refined, sigma_max as for 1 within its error */
     double max_work;   /* Radau steps in all, the work budget (a step that also carries
                           the sigma-derivative counts twice), [1e5, 1e12]; 0 (default):
                           2.5e7, about 2 s (the paper's n = 11, mu 14, takes 5e6, n = 12,
@@ -133,7 +137,8 @@ void bkf_trainspec_result_free(bkf_trainspec_result *result);
  * takes (`bkfront stability`, `speeds --stability`, `branch --stability`,
  * `check`, the stability map): bkf_trainspec_ring on the train
  * n = root->n, v = root->v at tol and per_kappa, the other options their
- * defaults.  Its sigma_max does not depend on per_kappa.  A refused root
+ * defaults.  Its sigma_max does not depend on per_kappa (beyond its error,
+ * per_kappa 0: see bkf_trainspec_options).  A refused root
  * (bkf_speeds_root.status) has no spectrum: its refusal, result empty. */
 int bkf_trainspec_root(const bkf_model_params *params, const bkf_speeds_root *root, double tol,
                        size_t per_kappa, bkf_trainspec_result *result, bkf_error *err);

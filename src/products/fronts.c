@@ -338,9 +338,10 @@ static int verdict_find(const bkf_model_params *p, const bkf_speeds_root *root, 
                         size_t per_kappa, root_verdict *r, bkf_error *err)
 {
     if (bkf_speeds_root_status(root, &r->why)) return BKF_OK;
-    /* per_kappa 1: the rows show sigma_max alone, which does not depend on
-     * it, and fewer eigenvalues to refine cost less (the paper's n = 12:
-     * 0.8 s for 1.1 s at 3); a branch's ring spectra 2 (TRACK_PER_KAPPA) */
+    /* per_kappa 1 (or 0, speeds' rows): where sigma_max alone is shown,
+     * which does not depend on it beyond its error, fewer eigenvalues to
+     * refine cost less (the paper's n = 12: 0.8 s for 1.1 s at 3); a
+     * branch's ring spectra 2 (TRACK_PER_KAPPA) */
     int s = bkf_trainspec_root(p, root, tol, per_kappa, &r->spectrum, &r->why);
     r->why.status = s;
     if (s && s != BKF_ETOL && s != BKF_EBUDGET) return bkf_error_set(err, s, "%s", r->why.message);
@@ -404,8 +405,11 @@ static int find_spectra(const bkf_model_params *p, const bkf_speeds_table *t, do
     r->verdicts = calloc(t->count ? t->count : 1, sizeof *r->verdicts);
     if (!r->verdicts) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     int s = BKF_OK;
+    /* per_kappa 0: the rows show sigma_max alone, and the rightmost alone
+     * refined costs less (the paper's n = 12: 3 eigenvalues of 12 on its
+     * two finer meshes) */
     for (size_t i = 0; !s && i < t->count; i++)
-        s = verdict_find(p, &t->roots[i], r->tol, 1, &r->verdicts[i], err);
+        s = verdict_find(p, &t->roots[i], r->tol, 0, &r->verdicts[i], err);
     return s;
 }
 

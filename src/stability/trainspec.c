@@ -111,8 +111,9 @@ int bkf_trainspec_check(const bkf_model_params *p, const bkf_trainspec_train *t,
     if (o) {
         if (!(o->tol >= TOL_MIN && o->tol <= TOL_MAX))
             return bkf_error_set(err, BKF_EINPUT, "tol must be in [%g, %g]", TOL_MIN, TOL_MAX);
-        if (o->per_kappa < 1 || o->per_kappa > PER_KAPPA_MAX)
-            return bkf_error_set(err, BKF_EINPUT, "per_kappa must be in [1, %d]", PER_KAPPA_MAX);
+        if (o->per_kappa > PER_KAPPA_MAX)
+            return bkf_error_set(err, BKF_EINPUT, "per_kappa must be in [0, %d] (0: the rightmost alone)",
+                                 PER_KAPPA_MAX);
         if (o->max_work != 0 && !(o->max_work >= 1e5 && o->max_work <= 1e12))
             return bkf_error_set(err, BKF_EINPUT, "max_work must be 0 (default) or in [1e5, 1e12]");
     }
@@ -299,6 +300,23 @@ static double kth_re(const ctx *x, const bkf_trainspec_eigenvalue *eig, size_t f
     return n == keep ? top[keep - 1] : -INFINITY;
 }
 
+/* The first candidate of each class of cs (sorted by by_a_desc), the
+ * classes by their best candidate's a, descending: the rightmost alone
+ * (per_kappa 0) polishes the likeliest rightmost first, and the classes
+ * left of it are cut at it (polish_candidates).  NULL when out of memory:
+ * then in cs's order, the same values at more cost. */
+static size_t *class_order(const candidates *cs)
+{
+    size_t *first = malloc((cs->count ? cs->count : 1) * sizeof *first), n = 0;
+    for (size_t i = 0; first && i < cs->count; i++)
+        if (i == 0 || cs->items[i].cls != cs->items[i - 1].cls) {
+            size_t at = n++;
+            while (at > 0 && cs->items[first[at - 1]].a < cs->items[i].a) first[at] = first[at - 1], at--;
+            first[at] = i;
+        }
+    return first;
+}
+
 /* The best few candidates of each class polished on both meshes into eig
  * (*n_eig of them), duplicates dropped; mirrored classes (j > classes/2)
  * come out of their partners by conjugation later.  How many are polished
@@ -311,13 +329,16 @@ static double kth_re(const ctx *x, const bkf_trainspec_eigenvalue *eig, size_t f
  * the cut to keep per class would drop either whatever its value, and
  * those polishes were most of the polish (paper table: 5 per class polished
  * for 1 reported). */
-static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *cs, bkf_trainspec_eigenvalue *eig,
-                              derivs *dv, size_t *n_eig)
+static void polish_candidates(ctx *x, size_t classes, size_t keep, int rightmost, candidates *cs,
+                              bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig)
 {
     size_t polish_n = (keep > 3 ? keep : 3) + 2;
     double coarse_err = 0.0;
     if (cs->count) qsort(cs->items, cs->count, sizeof *cs->items, by_a_desc);
-    for (size_t i = 0; i < cs->count;) {
+    size_t *order = rightmost ? class_order(cs) : NULL, n_cls = 0;
+    for (size_t i = 0; i < cs->count; i++) n_cls += i == 0 || cs->items[i].cls != cs->items[i - 1].cls;
+    for (size_t c = 0, i = 0; c < n_cls; c++) {
+        if (order) i = order[c];
         size_t cls = cs->items[i].cls, taken = 0, tried = 0, start_n = *n_eig;
         for (; i < cs->count && cs->items[i].cls == cls; i++) {
             /* Hill's candidates are few and accurate: every one is polished,
@@ -327,6 +348,9 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
                 continue;
             candidate cd = cs->items[i];
             double kth = kth_re(x, eig, start_n, *n_eig, keep);
+            /* the rightmost alone: every class's values cut as the keep-th of
+             * its own would be, at the rightmost of all so far */
+            if (rightmost) kth = fmax(kth, kth_re(x, eig, 0, *n_eig, 1));
             if (cd.a < kth - (POLISH_SKIP_REL * fabs(kth) + POLISH_SKIP_ABS)) continue;
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
             double complex sc = cd.a + I * cd.y, sf, d[2] = {NAN, NAN};
@@ -352,6 +376,7 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, candidates *c
             taken++;
         }
     }
+    free(order);
 }
 
 /* The translation mode, polished from 0 where the candidates missed it:
@@ -399,19 +424,42 @@ static void drop_hidden(bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig
     *n_eig = w;
 }
 
+/* The rightmost alone (per_kappa 0): the eigenvalues that lie left of
+ * another beyond both errors can be no rightmost whatever the finer meshes
+ * make of them, and are dropped (with on, their meshes in refine) before
+ * each refinement, which then refines the mesh for the others alone (the
+ * paper's n = 12: 3 of 12 polished on its two finer meshes).  The
+ * translation stays: it gauges the mesh. */
+static void drop_dominated(bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *on, size_t *n_eig)
+{
+    double left = -INFINITY; /* the largest Re sigma - err */
+    for (size_t k = 0; k < *n_eig; k++)
+        if (!eig[k].translation) left = fmax(left, eig[k].re - eig[k].err);
+    size_t w = 0;
+    for (size_t i = 0; i < *n_eig; i++)
+        if (eig[i].translation || !(eig[i].re + eig[i].err < left)) {
+            dv[w] = dv[i], on[w] = on[i];
+            eig[w++] = eig[i];
+        }
+    *n_eig = w;
+}
+
 /* The mesh refined until every estimate meets tol and the translation
  * mode sits at 0 within it.  Each refinement halves every step: the new
  * coarse mesh is the old fine one, on which the values in hand were
  * polished, so only the fine polish is redone, and only for the
  * eigenvalues whose estimate is still above tol (the others keep theirs). */
-static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, derivs *dv, size_t n_eig, bkf_error *err)
+static int refine(ctx *x, size_t classes, int rightmost, bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *count,
+                  bkf_error *err)
 {
+    size_t n_eig = *count;
     /* per eigenvalue, the substeps of the fine mesh its value was polished on */
     size_t *on = malloc((n_eig ? n_eig : 1) * sizeof *on);
     if (!on) return bkf_error_set(err, BKF_ENOMEM, "out of memory");
     for (size_t k = 0; k < n_eig; k++) on[k] = 2 * x->substeps;
     int rc = BKF_OK;
     for (int r = 0;; r++) {
+        if (rightmost) drop_dominated(eig, dv, on, &n_eig);
         double worst = 0.0;
         for (size_t k = 0; k < n_eig; k++) {
             worst = fmax(worst, eig[k].err);
@@ -459,6 +507,7 @@ static int refine(ctx *x, size_t classes, bkf_trainspec_eigenvalue *eig, derivs 
         }
     }
     free(on);
+    *count = n_eig;
     return rc;
 }
 
@@ -522,7 +571,7 @@ static double class_top(const ctx *x, const bkf_trainspec_eigenvalue *eig, size_
     return top;
 }
 
-int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, const candidates *cs,
+int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, double floor, const candidates *cs,
                             bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig, bkf_error *err)
 {
     for (size_t i = 0; i < cs->count; i++) {
@@ -531,7 +580,7 @@ int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, const candidat
         /* the translation itself (Hill's value of it within its own
          * HILL_CONVERGED): translation() finds or polishes it */
         int translation_mode = c->cls == 0 && hypot(c->a, c->y) < HILL_CONVERGED + 10.0 * x->tol;
-        if (c->fam >= 0 || 2 * c->cls > classes || translation_mode ||
+        if (c->fam >= 0 || 2 * c->cls > classes || translation_mode || c->a < floor ||
             !(c->a > top + top_err + HILL_CONVERGED))
             continue;
         double theta = 2.0 * M_PI * (double)c->cls / (double)classes;
@@ -553,10 +602,14 @@ int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, const candidat
 }
 
 /* Spectrum in `classes` phase classes: per class the `keep` rightmost
- * eigenvalues, polished on the fine mesh with error estimates. */
+ * eigenvalues, polished on the fine mesh with error estimates; keep 0:
+ * found and polished as for 1, the rightmost alone refined and kept
+ * (drop_dominated). */
 static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalue **out, size_t *count,
                     window *win, double *y_max, size_t *curve_points, size_t *hill_modes, bkf_error *err)
 {
+    int rightmost = keep == 0;
+    if (rightmost) keep = 1;
     candidates cs = {0};
     hill_stage hs;
     bkf_error trace_err = {0};
@@ -574,13 +627,17 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
     }
     if (rc == BKF_OK) rc = meshes_for_polish(x, classes, polish_n, &cs, err);
     if (rc == BKF_OK) {
-        polish_candidates(x, classes, keep, &cs, eig, dv, &n_eig);
-        if (hs.modes) rc = trainspec_hill_validate(x, classes, hs.modes, &cs, eig, dv, &n_eig, err);
+        polish_candidates(x, classes, keep, rightmost, &cs, eig, dv, &n_eig);
+        /* the rightmost alone: Hill's candidates that polish_candidates would
+         * have cut at the rightmost need no validation either */
+        double top = rightmost ? kth_re(x, eig, 0, n_eig, 1) : -INFINITY;
+        double floor = top - (POLISH_SKIP_REL * fabs(top) + POLISH_SKIP_ABS);
+        if (hs.modes) rc = trainspec_hill_validate(x, classes, hs.modes, floor, &cs, eig, dv, &n_eig, err);
     }
     if (rc == BKF_OK) {
         translation(x, eig, dv, &n_eig);
         drop_hidden(eig, dv, &n_eig, keep);
-        rc = refine(x, classes, eig, dv, n_eig, err);
+        rc = refine(x, classes, rightmost, eig, dv, &n_eig, err);
     }
     if (rc == BKF_OK) mirror_and_cut(classes, keep, eig, &n_eig);
     if (rc == BKF_OK && fallback) rc = confirm_band(&hs, eig, n_eig, &trace_err, err);

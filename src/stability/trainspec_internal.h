@@ -262,8 +262,10 @@ void trainspec_hill_stage_free(hill_stage *h);
  * spectrum is refused (BKF_ETOL).  The traced curves can step over an
  * eigenvalue (two of one class closer than the sampled phase tells):
  * where Hill has converged, the rightmost never rests on them alone.
- * eig and dv must hold one more entry per Hill candidate. */
-int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, const candidates *cs,
+ * eig and dv must hold one more entry per Hill candidate.  Candidates
+ * left of floor are not validated (-inf: none; the rightmost alone cuts
+ * them at the rightmost polished, as polish_candidates does). */
+int trainspec_hill_validate(ctx *x, size_t classes, size_t modes, double floor, const candidates *cs,
                             bkf_trainspec_eigenvalue *eig, derivs *dv, size_t *n_eig, bkf_error *err);
 
 #endif

@@ -174,7 +174,7 @@ TEST(trainspec_refuses_bad_input)
     bad.tol = 1e-20;
     CHECK(bkf_trainspec_ring(&p, &t, &bad, &r, &e) == BKF_EINPUT && strstr(e.message, "tol"));
     bad = o;
-    bad.per_kappa = 0;
+    bad.per_kappa = 51;
     CHECK(bkf_trainspec_ring(&p, &t, &bad, &r, &e) == BKF_EINPUT && strstr(e.message, "per_kappa"));
     bkf_model_params nu1 = p;
     nu1.nu = 1.0;

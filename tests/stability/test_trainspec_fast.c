@@ -112,3 +112,43 @@ TEST(trainspec_newton_curves_and_polish_cut_match_hill_per_class_on_random_sets)
     }
     CHECK_MSG(compared == 3 && classes >= 5, "only %zu sets (%zu classes) held to Hill", compared, classes);
 }
+
+/* per_kappa 0 (speeds --stability's rows): the rightmost alone, the other
+ * classes cut at it in the polish and dropped before the refinement.  On
+ * the paper's n = 10 (the cut polishes less) and n = 12 (mu 47, two
+ * refinements) it keeps fewer eigenvalues and works less than per_kappa
+ * 1, and its sigma_max, kappa, kind and verdict are those of the whole
+ * spectrum at tol 1e-8 (finer meshes, every class refined) within both
+ * errors; nothing per_kappa 1 reports lies right of it beyond the errors.
+ * It failed with the comparison in drop_dominated reversed (the rightmost
+ * dropped: sigma_max 0.00156 against 0.00230). */
+TEST(trainspec_rightmost_alone_is_the_whole_spectrums_rightmost)
+{
+    bkf_model_params p = bkf_model_params_paper();
+    bkf_speeds_options so = bkf_speeds_options_default();
+    so.n_from = 10, so.n_to = 12;
+    bkf_speeds_table t;
+    bkf_error e;
+    CHECK_MSG(bkf_speeds_find(&p, &so, &t, &e) == BKF_OK && t.count == 3, "%s", e.message);
+    for (size_t i = 0; i < t.count; i += 2) {
+        bkf_trainspec_result r[3];
+        const size_t per[3] = {0, 1, 1};
+        const double tol[3] = {1e-6, 1e-6, 1e-8};
+        for (int k = 0; k < 3; k++)
+            CHECK_MSG(bkf_trainspec_root(&p, &t.roots[i], tol[k], per[k], &r[k], &e) == BKF_OK, "%s", e.message);
+        bkf_test_note("n %zu: per_kappa 0 %zu values, work %.4g, sigma_max %.10g (err %.2g); per_kappa 1 %zu, "
+                      "work %.4g; tol 1e-8 %.10g (err %.2g)",
+                      t.roots[i].n, r[0].count, r[0].work, r[0].sigma_max, r[0].sigma_max_err, r[1].count,
+                      r[1].work, r[2].sigma_max, r[2].sigma_max_err);
+        CHECK(r[0].count < r[1].count && r[0].work < r[1].work);
+        CHECK_CLOSE(r[0].sigma_max, r[2].sigma_max, 0, r[0].sigma_max_err + r[2].sigma_max_err);
+        CHECK(r[0].sigma_max_err <= 1e-6 && r[0].kappa_max == r[2].kappa_max && r[0].verdict == r[2].verdict &&
+              r[0].complex_pair == r[2].complex_pair);
+        for (size_t k = 0; k < r[0].count; k++) CHECK(r[0].eigenvalues[k].err <= 1e-6);
+        for (size_t k = 0; k < r[1].count; k++)
+            if (!r[1].eigenvalues[k].translation)
+                CHECK(r[1].eigenvalues[k].re <= r[0].sigma_max + r[0].sigma_max_err + r[1].eigenvalues[k].err);
+        for (int k = 0; k < 3; k++) bkf_trainspec_result_free(&r[k]);
+    }
+    bkf_speeds_table_free(&t);
+}

@@ -80,7 +80,7 @@ TEST(trainspec_hill_validates_a_rightmost_the_curves_stepped_over)
     n_eig++;
     CHECK_MSG(fabs(eig[0].re - 0.0106571) < 1e-6, "the neighbour polished to %.10g", eig[0].re);
     CHECK(cs.count + n_eig <= 16);
-    int rc = trainspec_hill_validate(&x, 1, hs.modes, &cs, eig, dv, &n_eig, &e);
+    int rc = trainspec_hill_validate(&x, 1, hs.modes, -INFINITY, &cs, eig, dv, &n_eig, &e);
     CHECK_MSG(rc == BKF_OK, "%s", e.message);
     double top = -INFINITY, top_im = NAN, top_err = NAN;
     for (size_t i = 0; i < n_eig; i++)
@@ -95,7 +95,7 @@ TEST(trainspec_hill_validates_a_rightmost_the_curves_stepped_over)
     candidates one = {&fake, 1, 1};
     n_eig = 1;
     e.message[0] = 0;
-    CHECK(trainspec_hill_validate(&x, 1, hs.modes, &one, eig, dv, &n_eig, &e) == BKF_ETOL);
+    CHECK(trainspec_hill_validate(&x, 1, hs.modes, -INFINITY, &one, eig, dv, &n_eig, &e) == BKF_ETOL);
     CHECK_MSG(strstr(e.message, "do not confirm") != NULL, "%s", e.message);
 
     /* the translation (sigma 0, class 0) hides nothing: with it alone
@@ -107,7 +107,7 @@ TEST(trainspec_hill_validates_a_rightmost_the_curves_stepped_over)
     candidates behind = {&left, 1, 1};
     n_eig = 1;
     e.message[0] = 0;
-    CHECK_MSG(trainspec_hill_validate(&x, 1, hs.modes, &behind, eig, dv, &n_eig, &e) == BKF_ETOL,
+    CHECK_MSG(trainspec_hill_validate(&x, 1, hs.modes, -INFINITY, &behind, eig, dv, &n_eig, &e) == BKF_ETOL,
               "a candidate left of the translation: %zu values, %s", n_eig, e.message);
 
     trainspec_hill_stage_free(&hs);
