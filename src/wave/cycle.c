@@ -281,6 +281,18 @@ static int cycle_solve_body(bkf_cycle *c, double mu, double nu, const bkf_cycle_
     if (rc == BKF_OK)
         rc = cycle_conditioning_floor(p, kind, S.tol_int, S.y0, &S.cond_floor, &S.coarse.steps,
                                       err);
+    /* Every estimate of a pair is at least the rounding floor
+     * (cycle_period_error), which no tighter local tolerance lowers: where
+     * it alone, times the safety factor, exceeds tol at twice the coarse
+     * T (the pair's T is the coarse one's to t_goal 1e-3), no pair can
+     * meet tol.  They were solved and thrown away: in the canard explosion
+     * at nu 0.9999 (mu 35.366) the floor is 2-1e11 times tol, and a branch
+     * stuck there spent 4 of its 7 s on such pairs. */
+    if (rc == BKF_OK && ACCEPT_MARGIN * S.cond_floor > 2.0 * opt.tol * S.a.period)
+        rc = bkf_error_set(err, BKF_ETOL,
+                           "cycle at mu = %.15g, nu = %.15g: the rounding floor %.2g of T's estimated "
+                           "relative error, times the safety factor %g, exceeds tol = %g",
+                           mu, nu, S.cond_floor / S.a.period, ACCEPT_MARGIN, opt.tol);
     if (rc == BKF_OK) rc = shoot_fast(&S, &stored, err);
     if (rc == BKF_OK && !stored) rc = shoot_pair(&S, err);
     cycle_integrator_free(&S.coarse);

@@ -83,20 +83,21 @@ def test_speeds_satisfy_the_speed_condition_and_the_paper():
 
 
 def test_speeds_refused_rows_stay_rows_with_a_warning():
-    # issue 31, R1: one root near the canard cannot be had to tol 1e-10;
-    # the table keeps it as a row flagged refused (v nan), every other row
-    # stands (a root of the condition), and a RuntimeWarning says why
-    gamma, c, nu, S = 0.567489, 0.432606, 0.989398, 59.5575
+    # issue 31, R1: a root that cannot be had to tol stays a row flagged
+    # refused (v nan), every other row stands (a root of the condition),
+    # and a RuntimeWarning says why.  The paper's parameters at tol 1e-13
+    # refuse n = 1 (had to 1e-12: docs/cli/speeds.md) in 0.05 s; the
+    # issue's canard point (0.9 s) is the CLI's test and the page's example.
+    gamma, c, nu, S = 2, 0.3, -0.96, 20
     with pytest.warns(RuntimeWarning, match="roots refused"):
-        t = bkfront.speeds(gamma, c, nu, S)
+        t = bkfront.speeds(gamma, c, nu, S, tol=1e-13)
     refused = np.char.find(t["flags"], "refused") >= 0
     assert t.results["refused"] == refused.sum() >= 1
     assert np.all(np.isnan(t["v"][refused])) and np.all(t["model"][refused] == "")
-    good = ~refused & (t["n"] <= 20)
-    v, n = t["v"][good], t["n"][good]
+    v, n = t["v"][~refused], t["n"][~refused]
     root = np.sqrt(1 - c**2 / v**2)
     T = bkfront.period(gamma / root, nu)
-    assert len(v) == 20 and np.all(np.abs(n * T * v * root / S - 1) < 1e-8)
+    assert len(v) >= 8 and np.all(np.abs(n * T * v * root / S - 1) < 1e-8)
 
 
 def test_floquet_threshold_is_the_period_doubling(cli):
@@ -168,19 +169,24 @@ def test_errors_are_exceptions_of_their_class():
 
 
 def test_ctrl_c_cancels_a_long_call():
-    code = ("import bkfront, sys, time\n"
-            "print('go', flush=True)\n"
-            "t = time.time()\n"
+    # a run of 1e5 time units (minutes): a SIGINT from outside, sent once the
+    # worker thread runs (the call is in the library), stops it at the
+    # library's cancel point (the KeyboardInterrupt's cause) within seconds
+    code = ("import bkfront, sys, threading, time\n"
+            "def running():\n"
+            "    while len(sys._current_frames()) < 3:  # main, this thread, the worker\n"
+            "        time.sleep(0.001)\n"
+            "    print('running', flush=True)\n"
+            "threading.Thread(target=running).start()\n"
             "try:\n"
             "    bkfront.simulate(N=4096, tmax=1e5, frames=2)\n"
-            "except KeyboardInterrupt:\n"
-            "    print('interrupted after %.1f s' % (time.time() - t), flush=True)\n"
+            "except KeyboardInterrupt as e:\n"
+            "    print('interrupted:', repr(e.__cause__), flush=True)\n"
             "    sys.exit(3)\n")
     p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True,
                          env=dict(os.environ), preexec_fn=sigint_default)
     try:
-        assert p.stdout.readline().strip() == "go"
-        time.sleep(1.5)
+        assert p.stdout.readline().strip() == "running"
         t0 = time.time()
         p.send_signal(signal.SIGINT)
         out, _ = p.communicate(timeout=30)
@@ -189,6 +195,7 @@ def test_ctrl_c_cancels_a_long_call():
             p.kill()
             p.wait()
     assert p.returncode == 3, out
+    assert "interrupted: Cancelled(" in out, out
     assert time.time() - t0 < 5
 
 

@@ -2,6 +2,8 @@
 floquet puts the multiplier at -1."""
 import math
 
+import pytest
+
 import bkfront
 from conftest import tsv
 
@@ -10,8 +12,14 @@ from conftest import tsv
 ARGS = dict(max_points=4, no_stability=True, N=72)
 
 
-def test_orbit_equals_the_cli(cli):
-    t = bkfront.orbit(**ARGS)
+@pytest.fixture(scope="module")
+def table():
+    """One call's table, which both tests read (0.26 s of CPU a call)."""
+    return bkfront.orbit(**ARGS)
+
+
+def test_orbit_equals_the_cli(cli, table):
+    t = table
     cols, rows = tsv(cli("orbit", "--max-points", 4, "--no-stability", "--N", 72).stdout)
     assert list(t.columns) == cols
     assert len(t) == len(rows) >= 5
@@ -23,8 +31,8 @@ def test_orbit_equals_the_cli(cli):
     assert t.results["j"] == 9
 
 
-def test_orbit_starts_where_floquet_has_minus_one():
-    t = bkfront.orbit(**ARGS)
+def test_orbit_starts_where_floquet_has_minus_one(table):
+    t = table
     nu, j = t.results["p_pd"], int(t.results["j"])
     q = 2 * math.pi * j / 20
     d = bkfront.floquet(2, 0.3, nu=nu, q=[q])
