@@ -103,7 +103,7 @@ static const struct {
     {"cycle_branch_stuck_in_the_canard_fails_fast", 3.2},
     {"figures_keep_every_point_in_view_at_gamma_0_7_c_0_8", 3.9},
     {"cli_sweep_mpi_farm_equals_serial", 5.5},
-    {"cli_check_adapted_grid_error_covers_the_grid_thin_fronts", 5.8},
+    {"cli_check_adapted_grid_error_covers_the_grid_thin_fronts", 5.2},
     {"cycle_engine_bd2x2_meets_tol_against_taylor", 2.2},
     {"stabmap_diagram_followed_curves_are_the_scans_crossings", 5.0},
     {"chainwave_large_multiplier_tolerance_is_relative", 1.1},
