@@ -76,7 +76,8 @@ static int compare_entries(const void *a, const void *b)
  * runs, the train spectra against simulation, the stability boundary, and
  * three now under 2.5 s; clifast, 2026-11-30: the stuck canard, the Taylor
  * and chainwave tests, the figures, the sweep's threshold, SIGTERM and MPI
- * farm tests);
+ * farm tests; floquetfast: the extremes matrices again; hillreal: the
+ * audit's sample, Hill's class pi real);
  * the ones not listed take under 2.5 s.  The sanitized
  * build at -O1 takes about 1.4 times as long, in the same order.  Only the
  * start order depends on it, and only until a run has written
@@ -89,14 +90,14 @@ static const struct {
     double secs;
 } known_slow[] = {
     {"speeds_canard_jump_rows_honest_or_unresolved", 5.7},
-    {"extremes_floquet_matrix_gamma_100", 18.1},
-    {"extremes_floquet_matrix_gamma_to_30", 13.6},
-    {"audit_fixed_sample_set_1", 13.2},
+    {"extremes_floquet_matrix_gamma_100", 12.0},
+    {"extremes_floquet_matrix_gamma_to_30", 7.4},
+    {"audit_fixed_sample_set_1", 9.0},
     {"cli_sweep_mpi_signals_and_kill_keep_rows_and_resume_completes", 10.5},
     {"figures_keep_every_point_in_view_at_gamma_6_c_0_1", 5.7},
-    {"extremes_floquet_matrix_gamma_100_near_hopf", 9.1},
+    {"extremes_floquet_matrix_gamma_100_near_hopf", 8.2},
     {"products_orbits_coexistence_sets_regimes_beside_the_solutions", 8.2},
-    {"extremes_period_matrix", 7.2},
+    {"extremes_period_matrix", 4.7},
     {"cli_sweep_threshold_product_is_floquet_threshold_at_each_point", 5.6},
     {"cli_period_continue_stuck_in_the_canard_names_mu_and_nu", 3.3},
     {"cycle_branch_stuck_in_the_canard_fails_fast", 3.2},
@@ -111,7 +112,7 @@ static const struct {
     {"trainspec_rightmost_beside_the_translation_and_where_curves_fail", 4.0},
     {"lawson_steps_do_not_depend_on_N", 4.0},
     {"stabmap_trace_points_straddle_the_sign_change", 3.8},
-    {"extremes_speeds_matrix", 3.5},
+    {"extremes_speeds_matrix", 2.6},
     {"orbit_stable_pacemaker_kept_by_simulation_sectors_and_grid", 3.5},
     {"stabmap_diagram_no_states_for_an_n_whose_curve_stalled", 3.5},
     {"trainspec_hill_grows_where_the_curves_run_out_mu_4_9", 3.4},

@@ -265,6 +265,7 @@ static int floquet_set_body(bkf_floquet *f, double gamma, double c, double nu,
     rc = solve_backing_off(f->cycle, gamma, nu, &co, 3, err);
     if (rc != BKF_OK) return rc;
     f->cycle_opt = co;
+    f->refused_tol = 0.0;
     const bkf_cycle_result *r = bkf_cycle_get(f->cycle);
     f->gamma = gamma;
     f->c = c;
@@ -677,6 +678,13 @@ static int eval_trivial(bkf_floquet *f, bkf_floquet_point *pt, bkf_error *err)
  * is restored (it succeeded at its tolerance before). */
 static int resolve_cycle(bkf_floquet *f, double tol, bkf_error *err)
 {
+    /* A tolerance the cycle refused is refused again: each wavenumber asked
+     * it anew, and each refusal's restore solved the cycle again and voided
+     * the looser one kept for cycle_measured (at gamma 100, nu 0.9999 a
+     * fifth of the extremes matrix's time went to these solves). */
+    if (tol == f->refused_tol)
+        return bkf_error_set(err, BKF_ETOL, "the cycle at gamma = %.15g, nu = %.15g was refused tol %.3g",
+                             f->gamma, f->nu, tol);
     f->cycle_gen++;
     bkf_cycle_options co = f->cycle_opt;
     co.tol = tol;
@@ -692,6 +700,7 @@ static int resolve_cycle(bkf_floquet *f, double tol, bkf_error *err)
         f->ready = 0;
         return rc;
     }
+    if (rc != BKF_OK) f->refused_tol = tol;
     const bkf_cycle_result *r = bkf_cycle_get(f->cycle);
     f->cycle_opt = co;
     f->y0 = r->section_slope / f->gamma + lienard_F(f->nu);
@@ -854,6 +863,14 @@ static int floquet_eval_body(bkf_floquet *f, double q, bkf_floquet_point *pt, bk
             }
         } else if (cycle_matters && !measured) {
             measured = 1;
+            /* At the tightest retry tolerance, where the integrations'
+             * noise stands lowest under the cycle's effect.  It was the
+             * last retry's, whatever K that was: 0 on an object's first
+             * retry (integrations at tol 0 that ran out of steps, 2 s at
+             * gamma 100, nu -0.99, c q 0.3, and no share), a looser one
+             * after a wavenumber that settled early (a share lost in the
+             * noise, and a refusal at c q 100 that a 1e-13 pair answers). */
+            f->tol_retry = tl_min;
             double cm_m1 = INFINITY, cm = cycle_measured(f, K, &cm_m1);
             if (!f->ready) break;
             if (cm < rb.cyc) {
@@ -863,6 +880,13 @@ static int floquet_eval_body(bkf_floquet *f, double q, bkf_floquet_point *pt, bk
                 rb.cyc_measured_m1 = cm_m1;
             }
             continue;
+        } else if (measured && (cycle_stuck || f->cycle_opt.tol <= CYCLE_TOL_MIN) &&
+                   fmin(cycle_term(f, K, 1.0), rb.cyc_measured) > tol) {
+            /* The cycle is as tight as it gets and every attempt with it
+             * carries at least this share (the bound at |M| = |m1|, or the
+             * measured one): no integration can meet tol (the last 1e-13
+             * pair at gamma 30, c q 100 cost 2.5 s for a refusal). */
+            break;
         } else if (tl > tl_min) {
             tl = fmax((near_miss ? 0.1 : 0.01) * tl, tl_min);
             /* 0.01 * 1e-11 is an ulp above 1e-13: without the snap the

@@ -81,6 +81,7 @@ struct bkf_floquet {
     size_t retry_nmax;        /* step budget of one retry integration */
     size_t log_fine_steps;    /* steps of this wavenumber's last finer log integration (0: none) */
     bkf_cycle_options cycle_opt; /* of the cycle solved last */
+    double refused_tol;          /* a tighter cycle refused since the set (0: none) */
     unsigned cycle_gen;          /* counts the cycles solved */
     /* The finer integration of the last eval_trace: a retry 10 times
      * tighter than that attempt integrates at exactly its tolerance, so

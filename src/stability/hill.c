@@ -15,6 +15,7 @@
 #include <gsl/gsl_linalg.h>
 
 #include <complex.h>
+#include <float.h>
 #include <lapacke.h>
 #include <math.h>
 #include <stdlib.h>
@@ -83,16 +84,47 @@ static int by_real_part(const void *a, const void *b)
     return 0;
 }
 
-/* The eigenvalues of the Hill matrix A (column-major, size n = 2(2M + 1))
- * at theta = 0, where the operator is real: A commutes with the
- * conjugation J (J x)_m = conj(x_{-m}) within each of the p and q blocks,
- * so in the basis of J's fixed vectors (e_0, (e_m + e_{-m})/sqrt 2,
- * i (e_m - e_{-m})/sqrt 2 per block; unitary, two entries a column) it is
- * real, and dgeev solves it in about a quarter of zgeev's time (issue 31:
- * the single front at mu 4.9 grows to 156 modes).  Into w (n values). */
-static lapack_int real_eigenvalues(const double complex *A, size_t M, double complex *w)
+/* The truncation of class theta at M modes: the modes m0..m0 + nm - 1
+ * with wavenumbers k_m = (theta + 2 pi m)/T.  At theta an odd multiple of
+ * pi (to a few ulps: 2 pi j/n rounds) the 2M modes of k = +-pi/T, ...,
+ * +-(2M - 1) pi/T, closed under k -> -k as the operator is (-M..M there
+ * reached 2M + 1 on one side and 2M - 1 on the other, and its spectrum
+ * was not conjugate-symmetric); elsewhere -M..M.  *real: the truncation
+ * is closed under k -> -k (theta 0 or pi), and the matrix is real in the
+ * basis real_eigenvalues uses. */
+typedef struct {
+    double theta;
+    long m0;
+    size_t nm;
+    int real;
+} truncation;
+
+static truncation truncation_of(double theta, size_t M)
 {
-    size_t nm = 2 * M + 1, n = 2 * nm;
+    double r = remainder(theta, TWO_PI);
+    if (fabs(fabs(r) - TWO_PI / 2) <= 4.0 * DBL_EPSILON * fmax(1.0, fabs(theta)))
+        return (truncation){TWO_PI / 2, -(long)M, 2 * M, 1};
+    return (truncation){theta, -(long)M, 2 * M + 1, theta == 0.0};
+}
+
+size_t hill_count(double theta, size_t modes)
+{
+    return 2 * truncation_of(theta, modes).nm;
+}
+
+/* The eigenvalues of the Hill matrix A (column-major, size n = 2 nm) of a
+ * truncation closed under k -> -k (theta 0 or pi), where the operator is
+ * real: mode i of a block (from the lowest) has wavenumber -k of mode
+ * nm - 1 - i's, so A commutes with the conjugation J, (J x)_i =
+ * conj(x_{nm-1-i}) within each of the p and q blocks, and in the basis of
+ * J's fixed vectors (e_i + e_{nm-1-i})/sqrt 2, i (e_i - e_{nm-1-i})/sqrt 2
+ * and, at theta 0, e_M (unitary, two entries a column) it is real: dgeev
+ * solves it in about a quarter of zgeev's time (issue 31: the single front
+ * at mu 4.9 grows to 156 modes; issue 33: the audit's even trains at pi).
+ * Into w (n values). */
+static lapack_int real_eigenvalues(const double complex *A, size_t nm, double complex *w)
+{
+    size_t n = 2 * nm;
     double *R = malloc(n * n * sizeof *R), *wr = malloc(n * sizeof *wr), *wi = malloc(n * sizeof *wi);
     /* basis vector b: up to two (row, coefficient) pairs of A's index space */
     size_t (*idx)[2] = malloc(n * sizeof *idx);
@@ -101,15 +133,16 @@ static lapack_int real_eigenvalues(const double complex *A, size_t M, double com
     if (R && wr && wi && idx && cf) {
         const double h = 0.70710678118654752440;
         for (size_t blk = 0; blk < 2; blk++) {
-            size_t o = blk * nm; /* mode m sits at o + M + m */
-            idx[o][0] = idx[o][1] = o + M;
-            cf[o][0] = 1.0, cf[o][1] = 0.0;
-            for (size_t m = 1; m <= M; m++) {
-                size_t c = o + 2 * m - 1, s = o + 2 * m;
-                idx[c][0] = idx[s][0] = o + M + m;
-                idx[c][1] = idx[s][1] = o + M - m;
-                cf[c][0] = h, cf[c][1] = h;
-                cf[s][0] = I * h, cf[s][1] = -I * h;
+            size_t o = blk * nm, b = o;
+            for (size_t i = 0; i < nm / 2; i++, b += 2) {
+                idx[b][0] = idx[b + 1][0] = o + nm - 1 - i;
+                idx[b][1] = idx[b + 1][1] = o + i;
+                cf[b][0] = h, cf[b][1] = h;
+                cf[b + 1][0] = I * h, cf[b + 1][1] = -I * h;
+            }
+            if (nm % 2) {
+                idx[b][0] = idx[b][1] = o + nm / 2;
+                cf[b][0] = 1.0, cf[b][1] = 0.0;
             }
         }
         for (size_t b = 0; b < n; b++)
@@ -132,21 +165,22 @@ static lapack_int real_eigenvalues(const double complex *A, size_t M, double com
     return info;
 }
 
-/* The Hill matrix of class theta at M modes into A (column-major, size
- * n = 2(2M + 1), zeroed by the caller). */
-static int hill_matrix(bkf_cycle *cycle, double gamma, double theta, size_t M, double complex *A, bkf_error *err)
+/* The Hill matrix of truncation tr at M modes into A (column-major, size
+ * n = 2 tr.nm, zeroed by the caller). */
+static int hill_matrix(bkf_cycle *cycle, double gamma, truncation tr, size_t M, double complex *A, bkf_error *err)
 {
     const bkf_cycle_result *r = bkf_cycle_get(cycle);
     double mu = r->mu, T = r->period;
     double s = gamma / mu, beta = (mu - gamma) * (mu + gamma) / (gamma * gamma);
-    size_t nm = 2 * M + 1, n = 2 * nm;
+    size_t nm = tr.nm, n = 2 * nm;
     double complex *g = malloc(sizeof(double complex) * (2 * M + 1));
     if (!g) return bkf_error_set(err, BKF_ENOMEM, "out of memory (Hill matrix of size %zu)", n);
+    /* differences of mode indices up to nm - 1 <= 2M */
     int rc = profile_coefficients(cycle, M, g, err);
     if (rc == BKF_OK) {
         /* column-major: A[row + col n] */
         for (size_t c = 0; c < nm; c++) {
-            double k = (theta + TWO_PI * ((double)c - (double)M)) / T;
+            double k = (tr.theta + TWO_PI * (double)(tr.m0 + (long)c)) / T;
             for (size_t row = 0; row < nm; row++) {
                 long d = (long)row - (long)c;
                 double complex gd = d >= 0 ? g[d] : conj(g[-d]);
@@ -162,10 +196,13 @@ static int hill_matrix(bkf_cycle *cycle, double gamma, double theta, size_t M, d
     return rc;
 }
 
+/* Every eigenvalue of class theta at M modes into out (hill_count's
+ * number of them). */
 static int spectrum_body(bkf_cycle *cycle, double gamma, double theta, size_t M,
                          bkf_hill_eigenvalue *out, bkf_error *err)
 {
-    size_t nm = 2 * M + 1, n = 2 * nm;
+    truncation tr = truncation_of(theta, M);
+    size_t nm = tr.nm, n = 2 * nm;
     double complex *A = calloc(n * n, sizeof(double complex));
     double complex *w = malloc(sizeof(double complex) * n);
     if (!A || !w) {
@@ -173,9 +210,9 @@ static int spectrum_body(bkf_cycle *cycle, double gamma, double theta, size_t M,
         free(w);
         return bkf_error_set(err, BKF_ENOMEM, "out of memory (Hill matrix of size %zu)", n);
     }
-    int rc = hill_matrix(cycle, gamma, theta, M, A, err);
+    int rc = hill_matrix(cycle, gamma, tr, M, A, err);
     if (rc == BKF_OK) {
-        lapack_int info = theta == 0.0 ? real_eigenvalues(A, M, w)
+        lapack_int info = tr.real ? real_eigenvalues(A, nm, w)
                                        : LAPACKE_zgeev(LAPACK_COL_MAJOR, 'N', 'N', (lapack_int)n, A, (lapack_int)n,
                                                        w, NULL, 1, NULL, 1);
         if (info != 0)
@@ -192,6 +229,13 @@ static int spectrum_body(bkf_cycle *cycle, double gamma, double theta, size_t M,
     free(A);
     free(w);
     return rc;
+}
+
+/* |z|^2 without cabs's hypot and pow: the norms below took 2.6% of
+ * speeds --stability's samples */
+static double abs2(double complex z)
+{
+    return creal(z) * creal(z) + cimag(z) * cimag(z);
 }
 
 /* Inverse iteration on A - shift, v from a fixed start: the eigenvalue
@@ -238,7 +282,7 @@ static double complex nearest_one(const double complex *A, size_t n, double a_no
         if (gsl_linalg_complex_LU_svx(S, perm, &xv.vector) != GSL_SUCCESS) return NAN;
         for (size_t i = 0; i < nm; i++) v[nm + i] = (v[nm + i] - A[(nm + i) + i * n] * v[i]) * q[i];
         double norm = 0.0;
-        for (size_t i = 0; i < n; i++) norm += creal(v[i]) * creal(v[i]) + cimag(v[i]) * cimag(v[i]);
+        for (size_t i = 0; i < n; i++) norm += abs2(v[i]);
         norm = sqrt(norm);
         if (!(norm > 0.0) || !isfinite(norm)) return NAN;
         for (size_t i = 0; i < n; i++) v[i] /= norm;
@@ -252,7 +296,7 @@ static double complex nearest_one(const double complex *A, size_t n, double a_no
         double complex lambda = 0.0;
         for (size_t i = 0; i < n; i++) lambda += conj(v[i]) * w[i];
         double res = 0.0;
-        for (size_t i = 0; i < n; i++) res += pow(cabs(w[i] - lambda * v[i]), 2);
+        for (size_t i = 0; i < n; i++) res += abs2(w[i] - lambda * v[i]);
         if (sqrt(res) <= NEAR_RESIDUAL * a_norm) return lambda;
     }
     return NAN;
@@ -263,19 +307,20 @@ int hill_nearest(bkf_cycle *cycle, double gamma, double theta, size_t modes, con
 {
     int rc = check_inputs(cycle, gamma, theta, modes, BKF_HILL_MODES_MAX, err);
     if (rc != BKF_OK) return rc;
-    size_t nm = 2 * modes + 1, n = 2 * nm;
+    truncation tr = truncation_of(theta, modes);
+    size_t nm = tr.nm, n = 2 * nm;
     double complex *A = calloc(n * n, sizeof *A), *v = malloc(n * sizeof *v), *w = malloc(n * sizeof *w);
     double complex *q = malloc(nm * sizeof *q);
     gsl_matrix_complex *S = gsl_matrix_complex_alloc(nm, nm);
     gsl_permutation *perm = gsl_permutation_alloc(nm);
     if (!A || !v || !w || !q || !S || !perm)
         rc = bkf_error_set(err, BKF_ENOMEM, "out of memory (Hill matrix of size %zu)", n);
-    if (rc == BKF_OK) rc = hill_matrix(cycle, gamma, theta, modes, A, err);
+    if (rc == BKF_OK) rc = hill_matrix(cycle, gamma, tr, modes, A, err);
     /* GSL reports a singular LU (a shift on an eigenvalue) through its
      * handler: a NaN here, never an abort */
     bkf_gsl_handler *handler = bkf_gsl_handler_push();
     double a_norm = 0.0;
-    for (size_t i = 0; rc == BKF_OK && i < n * n; i++) a_norm += pow(cabs(A[i]), 2);
+    for (size_t i = 0; rc == BKF_OK && i < n * n; i++) a_norm += abs2(A[i]);
     a_norm = sqrt(a_norm);
     for (size_t k = 0; rc == BKF_OK && k < count; k++) {
         double complex l = nearest_one(A, n, a_norm, at[k].re + I * at[k].im, S, perm, v, w, q);
@@ -300,7 +345,7 @@ int bkf_hill_spectrum(bkf_cycle *cycle, double gamma, double theta, size_t modes
     if (rc != BKF_OK) return rc;
     if (!out || !count) return bkf_error_set(err, BKF_EINPUT, "out and count must not be NULL");
     rc = spectrum_body(cycle, gamma, theta, modes, out, err);
-    if (rc == BKF_OK) *count = 2 * (2 * modes + 1);
+    if (rc == BKF_OK) *count = hill_count(theta, modes);
     return rc;
 }
 
@@ -346,7 +391,7 @@ int bkf_hill_leading_pair(bkf_cycle *cycle, double gamma, double theta, size_t m
     if (!(tol > 0 && isfinite(tol))) return bkf_error_set(err, BKF_EINPUT, "tol must be positive and finite");
     if (k < 1) return bkf_error_set(err, BKF_EINPUT, "k must be at least 1");
     if (!out || !found) return bkf_error_set(err, BKF_EINPUT, "out and found must not be NULL");
-    size_t n1 = 2 * (2 * modes + 1), n2 = 2 * (2 * modes_fine + 1);
+    size_t n1 = hill_count(theta, modes), n2 = hill_count(theta, modes_fine);
     bkf_hill_eigenvalue *coarse = malloc(sizeof *coarse * n1), *fine = malloc(sizeof *fine * n2);
     if (!coarse || !fine) rc = bkf_error_set(err, BKF_ENOMEM, "out of memory");
     if (rc == BKF_OK) rc = spectrum_body(cycle, gamma, theta, modes, coarse, err);

@@ -9,6 +9,11 @@
 #include "bkfront/cycle.h"
 #include "bkfront/hill.h"
 
+/* How many eigenvalues bkf_hill_spectrum returns at class theta and
+ * `modes` modes: 2 (2 modes + 1), but 4 modes at theta an odd multiple of
+ * pi (hill.h). */
+size_t hill_count(double theta, size_t modes);
+
 /* For each of at[0..count), the eigenvalue of the Hill matrix of class
  * theta at `modes` modes nearest it, by inverse iteration, into out (NaN
  * where the iteration found no eigenpair of small residual): a few

@@ -88,7 +88,7 @@ static int near_candidates(ctx *x, double theta, size_t cls, const window *win, 
                            const bkf_hill_eigenvalue *coarse, candidates *cs, hill_stage *h, double *top, int *done,
                            bkf_error *err)
 {
-    size_t n1 = hill_size(M), count = 0;
+    size_t n1 = hill_count(theta, M), count = 0;
     *done = 0;
     /* coarse is sorted by decreasing Re */
     while (count < n1 && coarse[count].re >= win->a_lo - HILL_CONVERGED) count++;
@@ -120,6 +120,7 @@ static int near_candidates(ctx *x, double theta, size_t cls, const window *win, 
 static int hill_round(ctx *x, size_t classes, const window *win, size_t M, size_t Mf, int near, candidates *cs,
                       hill_stage *h, bkf_error *err)
 {
+    /* per class at most this many (hill_count: fewer at theta = pi) */
     size_t n1 = hill_size(M), n2 = hill_size(Mf);
     int reuse = h->fine && h->modes_fine == M;
     bkf_hill_eigenvalue *coarse = malloc(n1 * sizeof *coarse);
@@ -142,9 +143,9 @@ static int hill_round(ctx *x, size_t classes, const window *win, size_t M, size_
     int partial = 0; /* a class's finer spectrum not solved (near_candidates) */
     for (size_t cls = 0; cls < h->thetas && rc == BKF_OK; cls++) {
         double theta = 2.0 * M_PI * (double)cls / (double)classes;
-        size_t got = 0, found = 0, unresolved = 0;
+        size_t got = 0, found = 0, unresolved = 0, c1 = hill_count(theta, M), c2 = hill_count(theta, Mf);
         bkf_hill_eigenvalue *f = fine + cls * n2, *c = conv + n_conv;
-        if (reuse) memcpy(coarse, h->fine + cls * n1, n1 * sizeof *coarse);
+        if (reuse) memcpy(coarse, h->fine + cls * n1, c1 * sizeof *coarse);
         else if ((rc = bkf_hill_spectrum(x->cycle, x->gamma, theta, M, coarse, &got, err)) != BKF_OK) break;
         if (near && !reuse && !h->complete) {
             int done = 0;
@@ -159,7 +160,7 @@ static int hill_round(ctx *x, size_t classes, const window *win, size_t M, size_
         h->work += (reuse ? 0.0 : hill_cost(M)) + hill_cost(Mf);
         /* one more at class 0: the translation is among them */
         size_t k = HILL_PER_CLASS + (cls == 0);
-        rc = bkf_hill_converged(coarse, n1, f, n2, HILL_CONVERGED, k, c, NULL, &found, &unresolved, err);
+        rc = bkf_hill_converged(coarse, c1, f, c2, HILL_CONVERGED, k, c, NULL, &found, &unresolved, err);
         if (rc != BKF_OK) break;
         if (unresolved > 0 || found == 0) h->complete = 0;
         for (size_t i = 0; i < found; i++) {
@@ -173,7 +174,7 @@ static int hill_round(ctx *x, size_t classes, const window *win, size_t M, size_
             if (h->count < h->thetas * HILL_PER_CLASS) h->at[h->count++] = re + I * im;
         }
         if (rc == BKF_OK)
-            rc = bkf_hill_converged(coarse, n1, f, n2, HILL_BAND_TOL, n2, c, NULL, &found, NULL, err);
+            rc = bkf_hill_converged(coarse, c1, f, c2, HILL_BAND_TOL, c2, c, NULL, &found, NULL, err);
         n_conv += rc == BKF_OK ? found : 0;
     }
     if (rc == BKF_OK) {

@@ -809,3 +809,76 @@ TEST(floquet_keeps_its_cycle_when_a_tighter_one_is_refused)
         bkf_floquet_free(f);
     }
 }
+
+/* The first retry of a new object measured the cycle's share of lambda's
+ * error with integrations at tolerance 0 (the retry tolerance was not yet
+ * set): they ran out of steps, the share stayed at its bound and the answer
+ * was refused, or answered only after a later wavenumber had set that
+ * tolerance.  At the paper's gamma 2, c q 0.3, tol 1e-10 a fresh object
+ * refused (estimate 1.6e-10, 0.14 s); at gamma 30, nu 0.9, c q 3 it
+ * refused at 1.7e-8.  Each must now answer, within tol of the other
+ * stepper (its estimate allowed), its estimate not optimistic by 10. */
+TEST(floquet_first_retry_of_an_object_measures_the_cycle_share)
+{
+    const double cases[][3] = {{2.0, -0.96, 0.3}, {30.0, 0.9, 3.0}}; /* gamma, nu, c q */
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        double gamma = cases[k][0], nu = cases[k][1], cq = cases[k][2];
+        bkf_floquet *f = setup(gamma, 1.0, nu, 1e-10);
+        bkf_floquet_point p;
+        bkf_error e;
+        int rc = bkf_floquet_eval(f, cq, &p, &e);
+        CHECK_MSG(rc == BKF_OK, "gamma %g nu %g c q %g, a fresh object: %s", gamma, nu, cq, e.message);
+        bkf_floquet_options o = bkf_floquet_options_default();
+        o.tol = 1e-10;
+        o.stepper = BKF_STEPPER_IMPLICIT;
+        bkf_floquet *g = bkf_floquet_alloc();
+        CHECK(g);
+        CHECK_MSG(bkf_floquet_set(g, gamma, 1.0, nu, &o, &e) == BKF_OK, "%s", e.message);
+        bkf_floquet_point r = eval_ref(g, cq);
+        double d = fabs(p.lambda - r.lambda);
+        bkf_test_note("gamma %g nu %g c q %g: lambda %.14g +- %.2g, bsimp %.14g +- %.2g", gamma, nu, cq,
+                      p.lambda, p.lambda_err, r.lambda, r.lambda_err);
+        CHECK_MSG(d <= 1e-10 + r.lambda_err, "%.3g from the other stepper (+- %.2g)", d, r.lambda_err);
+        CHECK_MSG(fmax(d - r.lambda_err, 0.0) <= 10.0 * p.lambda_err, "lambda_err %.2g optimistic", p.lambda_err);
+        bkf_floquet_free(g);
+        bkf_floquet_free(f);
+    }
+}
+
+/* Near the canard a tighter cycle is refused (gamma 100, nu 0.9999: 1e-10
+ * from 1e-8).  Every wavenumber asked it again, and each refusal's restore
+ * solved the cycle anew, once looser (T_err 3e-11 -> 3e-9): at tol 1e-6
+ * q = 0.3 after q = 0.15 was refused (1.3e-5), and a 20-point dispersion at
+ * tol 1e-8 took 14.7 s for 2 answers (now 8.0 s, 5 answers).  The cycle
+ * must now stay as it was, and q = 0.3 answer within tol of the explicit
+ * stepper. */
+TEST(floquet_refused_tighter_cycle_is_not_asked_again)
+{
+    bkf_floquet *f = setup(100.0, 1.0, 0.9999, 1e-6);
+    bkf_floquet_point p;
+    bkf_error e;
+    CHECK_MSG(bkf_floquet_eval(f, 0.15, &p, &e) == BKF_OK, "q 0.15: %s", e.message);
+    const bkf_cycle_result *cy = bkf_floquet_cycle(f);
+    CHECK(cy);
+    double T = cy->period, T_err = cy->period_err;
+    CHECK_MSG(bkf_floquet_eval(f, 0.3, &p, &e) == BKF_OK, "q 0.3 after 0.15: %s", e.message);
+    cy = bkf_floquet_cycle(f);
+    CHECK(cy);
+    CHECK_MSG(cy->period == T && cy->period_err == T_err, "the cycle moved: T %.17g +- %.2g, was %.17g +- %.2g",
+              cy->period, cy->period_err, T, T_err);
+    bkf_floquet_options o = bkf_floquet_options_default();
+    o.tol = 1e-8;
+    o.stepper = BKF_STEPPER_EXPLICIT;
+    bkf_floquet *g = bkf_floquet_alloc();
+    CHECK(g);
+    CHECK_MSG(bkf_floquet_set(g, 100.0, 1.0, 0.9999, &o, &e) == BKF_OK, "%s", e.message);
+    bkf_floquet_point r;
+    int rc = bkf_floquet_eval(g, 0.3, &r, &e);
+    CHECK_MSG(rc == BKF_OK || (rc == BKF_ETOL && r.lambda_err <= 1e-7), "explicit: %s", e.message);
+    double d = fabs(p.lambda - r.lambda);
+    bkf_test_note("q 0.3: lambda %.12g +- %.2g, explicit %.12g +- %.2g", p.lambda, p.lambda_err, r.lambda,
+                  r.lambda_err);
+    CHECK_MSG(d <= 1e-6 + r.lambda_err, "%.3g from the explicit stepper (+- %.2g)", d, r.lambda_err);
+    bkf_floquet_free(g);
+    bkf_floquet_free(f);
+}
