@@ -569,14 +569,22 @@ static int branch_solve_q(branch_ctx *b, double ln_w0, double q0, double step, i
         *q = a;
         return BKF_OK;
     }
+    /* A canard narrower than its noise (mu 10, nu 0.998740451245: ~1e-12
+     * in nu; at nu 0.9999 up to 4e-8 in ln mu 3.5657) may hold the last
+     * point past this amplitude's root, but only by that much: a root
+     * farther back is the branch behind the last point, reached by an
+     * amplitude step the wrong way (a dG/dq of the wrong sign at the
+     * explosion: mu 36 -> 35 at nu 0.9999, tol 1e-7, found mu 36.11 and
+     * walked back up to mu 145, past the branch's start). */
+    const double back = fmin(reach, 1e-6 * fmax(1.0, fabs(q0)));
     double d = fmax(fabs(step), band), g0 = ga;
     for (int way = dir;;) {
-        if (d > reach) {
-            /* a canard narrower than its noise (mu 10, nu 0.998740451245:
-             * ~1e-12 in nu) may hold the last point past this amplitude's root */
-            if (way != dir) return bkf_error_set(err, BKF_ENUMERIC, "no root of G within %g of q = %.15g", reach, q0);
+        if (d > (way == dir ? reach : back)) {
+            if (way != dir)
+                return bkf_error_set(err, BKF_ENUMERIC, "no root of G within %g of q = %.15g (%g behind it)", reach,
+                                     q0, back);
             way = -dir;
-            d = fmax(fabs(step), band);
+            d = fmin(fmax(fabs(step), band), back);
             a = q0;
             ga = g0;
         }
@@ -630,7 +638,7 @@ static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced,
 {
     /* entered after a failed stretch: not back before the canard */
     int seen_steep = !forced, shots = 0, tries = 0;
-    double u[2] = {b->last_u[0], b->last_u[1]}, dg[2], g;
+    double u[2] = {b->last_u[0], b->last_u[1]}, dg[2], g, front = u[1];
     const double h_min = 1e-6, h_max = 0.25, tol = fmax(1e-10, 10.0 * b->options.tol);
     int rc = branch_shot(b, u[0], u[1], &g, dg, NULL, NULL, err);
     if (rc != BKF_OK) return rc;
@@ -639,6 +647,13 @@ static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced,
         double lw = u[0] + sign * h, q = u[1];
         double reach = fmax(1e-6 * fmax(1.0, fabs(u[1])), 8.0 * slope * h);
         rc = branch_solve_q(b, lw, u[1], slope * h, dir, tol, reach, &q, dg, &shots, err);
+        /* No row behind the walk's front by more than the noise band
+         * branch_solve_q searches behind the last point, nor before the
+         * branch's start: roots a little behind one another add up to the
+         * branch walked backwards (mu 40 -> 35 at nu 0.9999, tol 1e-7: from
+         * mu 35.2848 back up to 35.3242 in 1529 rows). */
+        int back = rc == BKF_OK && ((q - front) * dir < -1e-6 * fmax(1.0, fabs(front)) || (q - b->q_from) * dir < 0);
+        if (back) rc = bkf_error_set(err, BKF_ENUMERIC, "the amplitude walk turned back at q = %.15g", q);
         if (rc == BKF_OK && (q - b->q_to) * dir >= 0) {
             /* the end lies inside the canard: land on it, ln w0 by Newton
              * at q = q_to (dG/d ln w0 = P' - 1 is well away from 0) */
@@ -658,7 +673,7 @@ static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced,
         }
         if (rc != BKF_OK) {
             if (rc == BKF_ENOMEM) return rc;
-            if (steps == 0 && tries++ == 0) {
+            if ((steps == 0 || back) && tries++ == 0) {
                 sign = -sign; /* at the corner dG/dq's sign said nothing */
                 continue;
             }
@@ -671,6 +686,7 @@ static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced,
         double dq = q - u[1], secant = fabs(dq) / hypot(lw - u[0], dq);
         u[0] = lw;
         u[1] = q;
+        front = dir > 0 ? fmax(front, q) : fmin(front, q);
         double norm = hypot(dg[0], dg[1]);
         /* the unit null vector of (dG/d ln w0, dG/dq), pointing along the walk */
         double t[2] = {sign * fabs(dg[1]) / norm, dir * fabs(dg[0]) / norm};
@@ -1142,6 +1158,13 @@ static int cycle_branch_body(bkf_cycle_param along, double from, double to, doub
         co.max_points = limit - b.rows + (b.skip_visit ? 1 : 0);
         b.steep = 0;
         rc = bkf_cont_run(branch_residual, branch_accept, &b, u0, 1, dir, &co, &report, err);
+        /* the user's input was checked above: a stretch the continuation
+         * refuses as bad input is the branch's own failure */
+        if (rc == BKF_EINPUT) {
+            char why[BKF_ERROR_LEN];
+            snprintf(why, sizeof why, "%s", err ? err->message : "");
+            rc = bkf_error_set(err, BKF_ENUMERIC, "the continuation refused the branch's stretch: %.200s", why);
+        }
         if (b.visit_status != 0 || b.rows >= limit) break;
         if (b.stuck) {
             if (branch_over(&b, dir, limit, &rc, err)) continue;

@@ -386,6 +386,45 @@ TEST(cycle_branch_stuck_in_the_canard_fails_fast)
     CHECK(rows >= 20);
 }
 
+/* From the relaxation side at nu 0.9999, tol 1e-7, the shooting stretch
+ * stopped at mu 35.37625 and the amplitude walk's first step, on a dG/dq
+ * of the wrong sign there, found its root behind the last row (mu 36.11,
+ * before the branch's start at 36) and walked back up to mu 145, visiting
+ * those rows; the next stretch was refused as bad input (EINPUT, exit 2 in
+ * `period --continue mu`).  The first 16 rows: none outside [35, 36], none
+ * behind the lowest mu so far by more than the walk's noise band (1e-6 of
+ * ln mu), and T at the last row
+ * before the walk's crossing, the first after it and the last against the
+ * long-double Taylor reference, within three times the rows' estimates. */
+TEST(cycle_branch_walk_stays_inside_its_stretch)
+{
+    static canard_rows got;
+    memset(&got, 0, sizeof got);
+    bkf_cycle_options o = bkf_cycle_options_default();
+    o.tol = 1e-7;
+    bkf_error e;
+    int rc = bkf_cycle_branch(BKF_CYCLE_ALONG_MU, 36.0, 35.0, 0.9999, &o, 16, collect_canard, &got, &e);
+    CHECK_MSG(rc == BKF_OK, "%s", e.message);
+    CHECK_MSG(got.n == 16 && got.refused == 0, "%zu rows, %zu refused", got.n, got.refused);
+    size_t jump = 0;
+    double front = 36.0;
+    for (size_t i = 0; i < got.n; i++) {
+        CHECK_MSG(got.mu[i] >= 35.0 && got.mu[i] <= 36.0, "row %zu at mu %.17g", i, got.mu[i]);
+        CHECK_MSG(got.mu[i] <= front * (1.0 + 4e-6), "row %zu at mu %.17g, behind %.17g", i, got.mu[i], front);
+        front = fmin(front, got.mu[i]);
+        if (i && got.period[i] < 0.5 * got.period[i - 1]) jump = i;
+    }
+    CHECK_MSG(jump > 0 && jump + 1 < got.n, "the rows crossed no explosion (%zu)", jump);
+    size_t rows[3] = {jump - 1, jump, got.n - 1};
+    for (size_t k = 0; k < 3 && jump; k++) {
+        size_t i = rows[k];
+        double unc, ref = taylor_period(got.mu[i], got.nu[i], got.slope[i], &unc);
+        CHECK_MSG(fabs(got.period[i] - ref) <= 3.0 * got.err[i] + unc,
+                  "mu %.17g: T %.17g ref %.17g (unc %.2g) err %.2g", got.mu[i], got.period[i], ref, unc, got.err[i]);
+        CHECK(got.err[i] <= o.tol * got.period[i]);
+    }
+}
+
 
 /* Towards nu -0.999 at mu >= 1e3 the direct shots' steps shrank to 1e-12
  * near -0.9982 and spent the driver's 10000 rows (60 s); the branch's shots
