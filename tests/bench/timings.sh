@@ -21,18 +21,26 @@ rows=$dir/rows
 load() { cut -d' ' -f1-3 /proc/loadavg; }
 load_start=$(load)
 
-# row KEY WHAT COMMAND...: one run, its wall and CPU seconds as a row; a
-# failed command fails the table (a timing of a failure is not a timing).
+# row KEY WHAT COMMAND...: RUNS runs (default 1), the one of median CPU, its
+# wall and CPU seconds as a row; a failed command fails the table (a timing
+# of a failure is not a timing).  Under a second the cells keep two decimals:
+# the goals there (issue 33's 0.5 s) sit closer than one decimal can tell.
 row() {
-    local key=$1 what=$2
+    local key=$1 what=$2 runs=${RUNS:-1} i
     shift 2
-    if ! /usr/bin/time -o "$dir/time" -f "%e %U %S" "$@" >"$dir/stdout" 2>"$dir/stderr"; then
-        echo "timings: $key failed: $*" >&2
-        tail -n 5 "$dir/stderr" >&2
-        exit 1
-    fi
-    awk -v k="$key" -v w="$what" 'END { printf "| %s | %s | %.1f s | %.1f s |\n", k, w, $1, $2 + $3 }' \
-        "$dir/time" >>"$rows"
+    : >"$dir/times"
+    for ((i = 0; i < runs; i++)); do
+        if ! /usr/bin/time -o "$dir/time" -f "%e %U %S" "$@" >"$dir/stdout" 2>"$dir/stderr"; then
+            echo "timings: $key failed: $*" >&2
+            tail -n 5 "$dir/stderr" >&2
+            exit 1
+        fi
+        awk 'END { print $1, $2 + $3 }' "$dir/time" >>"$dir/times"
+    done
+    sort -k2,2 -g "$dir/times" | awk -v n="$runs" 'NR == int((n + 1) / 2)' |
+        awk -v k="$key" -v w="$what" '
+            function cell(x) { return sprintf(x < 1 ? "%.2f s" : "%.1f s", x) }
+            { printf "| %s | %s | %s | %s |\n", k, w, cell($1), cell($2) }' >>"$rows"
 }
 
 : >"$rows"
@@ -44,9 +52,9 @@ row '`run chain.scene`' '`bkfront run fronts/chain.scene`: the chain scene' \
     "$cli" run --out "$dir/chain" fronts/chain.scene
 row '`check`' '`bkfront check` at the paper'"'"'s parameters (gamma 2, c 0.3, nu -0.96, S 20)' \
     "$cli" check --no-progress
-row '`speeds --stability`' '`bkfront speeds --stability`, the paper'"'"'s table' \
+RUNS=5 row '`speeds --stability`' '`bkfront speeds --stability`, the paper'"'"'s table' \
     "$cli" speeds --stability
-row '`branch --stability`' '`bkfront branch --param S --from 20 --to 15 --n 3 --stability` (paper'"'"'s gamma, c, nu)' \
+RUNS=5 row '`branch --stability`' '`bkfront branch --param S --from 20 --to 15 --n 3 --stability` (paper'"'"'s gamma, c, nu)' \
     "$cli" branch --param S --from 20 --to 15 --n 3 --gamma 2 --c 0.3 --nu -0.96 --stability
 # a process start: 100 of them, the mean, in ms
 /usr/bin/time -o "$dir/time" -f "%e %U %S" sh -c \
@@ -80,7 +88,8 @@ dirty=$(git status --porcelain --untracked-files=no 2>/dev/null | head -n 1)
     echo "Measured $(date -u '+%Y-%m-%d %H:%M UTC') at commit $commit on $machine ($(nproc) cores,"
     echo "$(${CC:-cc} --version | head -n 1)); load average $load_start at the start, $load_end at the end"
     echo '(the machine may be shared: a load above the cores stretches the wall times, not the CPU).'
-    echo 'Each command ran once, one after another; CPU is user + system time of the command and its'
+    echo 'Each command ran once, one after another (`speeds --stability` and `branch --stability` five'
+    echo 'times: the run of median CPU); CPU is user + system time of the command and its'
     echo 'children.  Pages of the manual quote a timing only through a row of this table'
     echo '([testing](testing.md#timings-in-the-manual)).'
     echo
