@@ -76,7 +76,9 @@ load_end=$(load)
 
 machine=$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -n 1)
 commit=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
-dirty=$(git status --porcelain --untracked-files=no 2>/dev/null | head -n 1)
+# the table itself is not a change of the code it timed (an earlier run may
+# have rewritten it)
+dirty=$(git status --porcelain --untracked-files=no -- . ":(exclude)$out" 2>/dev/null | head -n 1)
 [ -n "$dirty" ] && commit="$commit (with uncommitted changes)"
 {
     echo '# Timings'
