@@ -809,16 +809,10 @@ static int pde_init_front_body(bkf_pde *m, const bkf_pde_wave *wave, bkf_pde_fro
     double stretch = sqrt((v - c) * (v + c)) / v;
     size_t N = m->N;
     double g = m->p.gamma;
-    /* the grid's points in z, sampled in one pass (m->y's second half, f'
-     * there once sampled) */
-    double *z = malloc(N * sizeof *z);
-    if (!z) {
-        bkf_cycle_free(cy);
-        return bkf_error_set(err, BKF_ENOMEM, "out of memory");
-    }
-    for (size_t i = 0; i < N; i++) z[i] = (double)sp.direction * -1.0 * ((double)i * m->h / v) / stretch;
-    s = bkf_cycle_profile_points(cy, z, N, m->y, m->y + N, &e);
-    free(z);
+    /* the grid's points in z, sampled in one pass: f over them in m->y,
+     * f' in its second half */
+    for (size_t i = 0; i < N; i++) m->y[i] = (double)sp.direction * -1.0 * ((double)i * m->h / v) / stretch;
+    s = bkf_cycle_profile_points(cy, m->y, N, m->y, m->y + N, &e);
     if (s) {
         bkf_cycle_free(cy);
         return bkf_error_set(err, s, "cycle profile: %s", e.message);

@@ -267,6 +267,10 @@ static int meshes_for_polish(ctx *x, size_t classes, size_t polish_n, candidates
  * random sets (mu 0.56-462), a quarter of this. */
 #define POLISH_SKIP_REL 0.2
 #define POLISH_SKIP_ABS 0.01
+static double polish_cut(double kth)
+{
+    return kth - (POLISH_SKIP_REL * fabs(kth) + POLISH_SKIP_ABS);
+}
 /* ... and a coarse value further left of it than this many times the
  * largest coarse-fine difference of the spectrum's polishes so far
  * (plus 10 tol) is not polished on the fine mesh. */
@@ -351,7 +355,7 @@ static void polish_candidates(ctx *x, size_t classes, size_t keep, int rightmost
             /* the rightmost alone: every class's values cut as the keep-th of
              * its own would be, at the rightmost of all so far */
             if (rightmost) kth = fmax(kth, kth_re(x, eig, 0, *n_eig, 1));
-            if (cd.a < kth - (POLISH_SKIP_REL * fabs(kth) + POLISH_SKIP_ABS)) continue;
+            if (cd.a < polish_cut(kth)) continue;
             double theta = 2.0 * M_PI * (double)cls / (double)classes;
             double complex sc = cd.a + I * cd.y, sf, d[2] = {NAN, NAN};
             double step_c, step_f;
@@ -630,8 +634,7 @@ static int spectrum(ctx *x, size_t classes, size_t keep, bkf_trainspec_eigenvalu
         polish_candidates(x, classes, keep, rightmost, &cs, eig, dv, &n_eig);
         /* the rightmost alone: Hill's candidates that polish_candidates would
          * have cut at the rightmost need no validation either */
-        double top = rightmost ? kth_re(x, eig, 0, n_eig, 1) : -INFINITY;
-        double floor = top - (POLISH_SKIP_REL * fabs(top) + POLISH_SKIP_ABS);
+        double floor = rightmost ? polish_cut(kth_re(x, eig, 0, n_eig, 1)) : -INFINITY;
         if (hs.modes) rc = trainspec_hill_validate(x, classes, hs.modes, floor, &cs, eig, dv, &n_eig, err);
     }
     if (rc == BKF_OK) {

@@ -548,6 +548,14 @@ static int branch_accept(const double *u, const double *tangent, int is_fold, vo
     return 0;
 }
 
+/* The noise band of a canard narrower than its noise around q: how far
+ * the last point may sit past an amplitude's root (branch_solve_q), the
+ * least the amplitude walk reaches and the most it may fall back. */
+static double canard_band(double q)
+{
+    return 1e-6 * fmax(1.0, fabs(q));
+}
+
 /* q where G(ln w0, q) = 0 at a fixed amplitude ln w0, beyond q0 in the
  * direction dir (q is monotone on the branch: dG/d ln w0 = P' - 1 < 0 on an
  * attracting cycle, so q never folds), by a bracket grown from the
@@ -576,7 +584,7 @@ static int branch_solve_q(branch_ctx *b, double ln_w0, double q0, double step, i
      * amplitude step the wrong way (a dG/dq of the wrong sign at the
      * explosion: mu 36 -> 35 at nu 0.9999, tol 1e-7, found mu 36.11 and
      * walked back up to mu 145, past the branch's start). */
-    const double back = fmin(reach, 1e-6 * fmax(1.0, fabs(q0)));
+    const double back = fmin(reach, canard_band(q0));
     double d = fmax(fabs(step), band), g0 = ga;
     for (int way = dir;;) {
         if (d > (way == dir ? reach : back)) {
@@ -645,14 +653,14 @@ static int branch_amplitude(branch_ctx *b, int dir, size_t max_rows, int forced,
     double sign = (dg[1] > 0 ? 1.0 : -1.0) * dir, h = 0.02, slope = fabs(dg[0] / dg[1]);
     for (int steps = 0; b->rows < max_rows;) {
         double lw = u[0] + sign * h, q = u[1];
-        double reach = fmax(1e-6 * fmax(1.0, fabs(u[1])), 8.0 * slope * h);
+        double reach = fmax(canard_band(u[1]), 8.0 * slope * h);
         rc = branch_solve_q(b, lw, u[1], slope * h, dir, tol, reach, &q, dg, &shots, err);
         /* No row behind the walk's front by more than the noise band
          * branch_solve_q searches behind the last point, nor before the
          * branch's start: roots a little behind one another add up to the
          * branch walked backwards (mu 40 -> 35 at nu 0.9999, tol 1e-7: from
          * mu 35.2848 back up to 35.3242 in 1529 rows). */
-        int back = rc == BKF_OK && ((q - front) * dir < -1e-6 * fmax(1.0, fabs(front)) || (q - b->q_from) * dir < 0);
+        int back = rc == BKF_OK && ((q - front) * dir < -canard_band(front) || (q - b->q_from) * dir < 0);
         if (back) rc = bkf_error_set(err, BKF_ENUMERIC, "the amplitude walk turned back at q = %.15g", q);
         if (rc == BKF_OK && (q - b->q_to) * dir >= 0) {
             /* the end lies inside the canard: land on it, ln w0 by Newton
